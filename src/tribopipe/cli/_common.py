@@ -1,0 +1,54 @@
+"""Shared pieces of the CLI: error translation and common options.
+
+Only click and the standard library are imported here (see ``tribopipe.cli``).
+"""
+
+from __future__ import annotations
+
+import functools
+from collections.abc import Callable
+from typing import Any, TypeVar
+
+import click
+
+F = TypeVar("F", bound=Callable[..., Any])
+
+DEFAULT_MAP = "processed/friction_map.parquet"
+
+
+def friendly_errors(func: F) -> F:
+    """Turn library errors (:class:`tribopipe.errors.TribopipeError`) into one clean line."""
+
+    @functools.wraps(func)
+    def wrapper(*args: Any, **kwargs: Any) -> Any:
+        from ..errors import TribopipeError
+
+        try:
+            return func(*args, **kwargs)
+        except TribopipeError as exc:
+            raise click.ClickException(str(exc)) from None
+
+    return wrapper  # type: ignore[return-value]
+
+
+def map_option(func: F) -> F:
+    """``--map PATH``: the friction map file every map-touching command takes."""
+    return click.option(
+        "--map",
+        "map_path",
+        type=click.Path(dir_okay=False),
+        default=DEFAULT_MAP,
+        show_default=True,
+        help="Friction map (Parquet) to read or update.",
+    )(func)
+
+
+def config_option(func: F) -> F:
+    """``--config FILE``: an instrument config (TOML); default: the founding T-PID/44 cell."""
+    return click.option(
+        "--config",
+        "config_path",
+        type=click.Path(exists=True, dir_okay=False),
+        default=None,
+        help="Instrument config (TOML, see configs/instruments/). Default: T-PID/44, 3 pins.",
+    )(func)

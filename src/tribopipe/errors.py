@@ -1,0 +1,75 @@
+"""Typed, user-facing errors.
+
+Every problem a user can cause (a bad file, a bad config, a map that is not ours) is raised
+as a :class:`TribopipeError` whose ``str()`` is one line naming the file, the place in it
+(line and/or column where known) and what was expected. The CLI prints that line; it never
+shows a traceback for these.
+"""
+
+from __future__ import annotations
+
+from os import PathLike
+
+
+class TribopipeError(Exception):
+    """Base class: a problem the user can fix, described in one line."""
+
+    def __init__(
+        self,
+        problem: str,
+        *,
+        path: str | PathLike[str] | None = None,
+        line: int | None = None,
+        column: str | None = None,
+        hint: str | None = None,
+    ) -> None:
+        self.problem = problem
+        self.path = None if path is None else str(path)
+        self.line = line
+        self.column = column
+        self.hint = hint
+        super().__init__(self._format())
+
+    def _format(self) -> str:
+        where = ""
+        if self.path is not None:
+            where = self.path
+            if self.line is not None:
+                where += f":{self.line}"
+            where += ": "
+        elif self.line is not None:
+            where = f"line {self.line}: "
+        text = where + self.problem
+        if self.column is not None:
+            text += f" (column {self.column!r})"
+        if self.hint:
+            text += f"; hint: {self.hint}"
+        return text.replace("\n", " ")
+
+
+class ReadError(TribopipeError):
+    """A raw export could not be read: wrong encoding, not an export, truncated, ..."""
+
+
+class MissingQuantityError(ReadError):
+    """A required quantity (torque, normal force, ...) has no matching column."""
+
+
+class ConfigError(TribopipeError):
+    """A config file (instrument, campaign, aliases) is missing a key or has a bad value."""
+
+
+class ReductionError(TribopipeError):
+    """A measurement could be read but not reduced to mu_s / mu_k (no contact, no sliding...)."""
+
+
+class MapError(TribopipeError):
+    """The friction map at a path is corrupt, foreign, or an operation on it was refused."""
+
+
+class CampaignError(TribopipeError):
+    """A campaign's files or metadata are missing or contradictory."""
+
+
+class ExportError(TribopipeError):
+    """Simulator input or a table cannot be written for the requested selection."""

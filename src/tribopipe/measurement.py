@@ -1,0 +1,93 @@
+"""The in-memory measurement: one interval of one export, in SI units, with its metadata.
+
+A reader returns a list of :class:`Measurement` objects (one per interval of every test and
+result in a file). ``data`` is a DataFrame whose columns are snake_case and unit-suffixed.
+The canonical quantities, when present, use exactly these names:
+
+==================  =====================================================
+``time_s``          time since the start of the interval or test [s]
+``torque_Nm``       torque [N·m]
+``normal_force_N``  normal force [N]
+``angle_rad``       deflection angle [rad]
+``speed_rad_s``     rotational speed [rad/s]
+``temperature_C``   temperature [°C]
+==================  =====================================================
+
+Any other column keeps a snake_case name with its (converted where known) unit suffix,
+e.g. ``shear_stress_Pa``. ``point_no`` holds the instrument's point number.
+
+Nothing downstream of a reader knows which instrument or software wrote the file.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    import pandas as pd
+
+TIME = "time_s"
+TORQUE = "torque_Nm"
+NORMAL_FORCE = "normal_force_N"
+ANGLE = "angle_rad"
+SPEED = "speed_rad_s"
+TEMPERATURE = "temperature_C"
+CANONICAL_COLUMNS: tuple[str, ...] = (TIME, TORQUE, NORMAL_FORCE, ANGLE, SPEED, TEMPERATURE)
+
+
+@dataclass(frozen=True)
+class MeasurementMeta:
+    """Where a measurement came from and how it was read.
+
+    ``original_columns`` and ``original_units`` are the names and unit strings exactly as
+    the file wrote them, in file order; ``column_map`` maps each original column name to
+    the DataFrame column it became (absent when the column was dropped).
+    """
+
+    source_file: str
+    file_format: str
+    encoding: str | None = None
+    delimiter: str | None = None
+    decimal: str | None = None
+    project: str | None = None
+    test: str | None = None
+    result: str | None = None
+    interval: int | None = None
+    sample: str | None = None
+    original_columns: tuple[str, ...] = ()
+    original_units: tuple[str, ...] = ()
+    column_map: tuple[tuple[str, str], ...] = ()
+    n_points_declared: int | None = None
+    n_invalid_points: int = 0
+    n_waveform_rows: int = 0
+    header_line: int | None = None
+    extra: tuple[tuple[str, str], ...] = field(default=())
+
+    @property
+    def label(self) -> str:
+        """A short human label: ``file [test / result / interval i]``."""
+        parts = [p for p in (self.test, self.result) if p]
+        if self.interval is not None:
+            parts.append(f"interval {self.interval}")
+        return f"{self.source_file} [{' / '.join(parts)}]" if parts else self.source_file
+
+
+@dataclass(frozen=True)
+class Measurement:
+    """One interval's data (SI, unit-suffixed columns) with its metadata."""
+
+    data: pd.DataFrame
+    meta: MeasurementMeta
+
+    def has(self, *columns: str) -> bool:
+        """True when every named column exists and holds at least one finite value."""
+        import numpy as np
+
+        for col in columns:
+            if col not in self.data.columns:
+                return False
+            values = np.asarray(self.data[col], dtype=float)
+            if not np.isfinite(values).any():
+                return False
+        return True

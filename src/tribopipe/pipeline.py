@@ -1,0 +1,125 @@
+"""One run from raw file to friction-map record: read → select interval → reduce → record.
+
+This is the orchestration of a single file used by ``tribopipe reduce`` and by campaigns.
+Readers and writers stay at the edges; :mod:`tribopipe.reduce` does the physics.
+"""
+
+from __future__ import annotations
+
+import hashlib
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from .config import Settings
+    from .measurement import Measurement
+    from .reduce import ReductionResult
+
+
+@dataclass(frozen=True)
+class RunLabels:
+    """What a run is: contact pair and nominal conditions (not measured values).
+
+    ``normal_force_N`` is the nominal total normal force on the three pins [N] and
+    ``temperature_C`` the nominal chamber temperature [°C]; both define the condition
+    group in the friction map. ``None`` means unknown.
+    """
+
+    pin: str | None = None
+    disc: str | None = None
+    normal_force_N: float | None = None
+    temperature_C: float | None = None
+    repeat: int | None = None
+
+    @property
+    def complete(self) -> bool:
+        """True when pin and disc are known (the minimum for a friction-map row)."""
+        return bool(self.pin) and bool(self.disc)
+
+
+@dataclass(frozen=True)
+class ReadOptions:
+    """Forced reader settings; ``None`` means detect."""
+
+    encoding: str | None = None
+    delimiter: str | None = None
+    decimal: str | None = None
+
+
+@dataclass(frozen=True)
+class RunOutcome:
+    """A reduced run with everything needed to store and explain it."""
+
+    path: str
+    measurement: Measurement
+    result: ReductionResult
+    labels: RunLabels
+    file_hash: str
+    config_hash: str
+    record: dict[str, Any] = field(repr=False)
+
+
+def file_sha256(path: str | Path) -> str:
+    """SHA-256 hex digest of a file's bytes."""
+    digest = hashlib.sha256()
+    with open(path, "rb") as fh:
+        for chunk in iter(lambda: fh.read(1 << 20), b""):
+            digest.update(chunk)
+    return digest.hexdigest()
+
+
+def reduce_file(
+    path: str | Path,
+    settings: Settings,
+    labels: RunLabels | None = None,
+    read_options: ReadOptions | None = None,
+) -> RunOutcome:
+    """Read an export, pick its friction interval, reduce it and build its map record.
+
+    Raises :class:`tribopipe.errors.TribopipeError` subclasses for every bad input.
+    """
+    from .frictionmap import make_record
+    from .readers import read_export
+    from .reduce import reduce_measurement, select_friction_interval
+
+    labels = labels or RunLabels()
+    opts = read_options or ReadOptions()
+    measurements = read_export(
+        path, encoding=opts.encoding, delimiter=opts.delimiter, decimal=opts.decimal
+    )
+    measurement = select_friction_interval(measurements)
+    result = reduce_measurement(measurement, settings.instrument, settings.reduction)
+    file_hash = file_sha256(path)
+    record = make_record(
+        result=result,
+        labels=labels,
+        meta=measurement.meta,
+        file_hash=file_hash,
+        settings=settings,
+    )
+    return RunOutcome(
+        path=str(path),
+        measurement=measurement,
+        result=result,
+        labels=labels,
+        file_hash=file_hash,
+        config_hash=settings.config_hash,
+        record=record,
+    )
+
+
+def trace_path(out_dir: str | Path, outcome: RunOutcome) -> Path:
+    """Where a run's reduced trace is written: ``<out_dir>/traces/<stem>_<id8>.parquet``."""
+    stem = Path(outcome.path).stem
+    return Path(out_dir) / "traces" / f"{stem}_{outcome.record['measurement_id'][:8]}.parquet"
+
+
+def write_trace(out_dir: str | Path, outcome: RunOutcome) -> Path:
+    """Write the reduced trace (Parquet, unit-suffixed columns) and return its path."""
+    target = trace_path(out_dir, outcome)
+    target.parent.mkdir(parents=True, exist_ok=True)
+    tmp = target.with_suffix(".parquet.tmp")
+    outcome.result.trace.to_parquet(tmp, index=False)
+    tmp.replace(target)
+    return target

@@ -1,0 +1,1 @@
+"""Outputs regenerated from the friction map: tables, simulator input, plots."""

@@ -1,0 +1,40 @@
+"""Shared test fixtures.
+
+``shared_dir`` points at the project's read-only real-world material (``../shared``): the
+published friction map and real instrument exports. It exists in CI and on the developers'
+machines, not on a user's clone, so tests that need it skip with a reason when it is absent.
+Files whose licence allows it are also copied into ``tests/data/`` (see its README).
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import pytest
+
+REPO = Path(__file__).resolve().parents[1]
+DATA = Path(__file__).resolve().parent / "data"
+SHARED = Path(os.environ.get("TRIBOPIPE_SHARED", REPO.parent / "shared"))
+
+
+@pytest.fixture(scope="session")
+def data_dir() -> Path:
+    """``tests/data``: small real files we may ship, with their licence notices."""
+    return DATA
+
+
+@pytest.fixture(scope="session")
+def shared_dir() -> Path:
+    """``../shared``; skips the test when it is absent (e.g. on a user's clone)."""
+    if not SHARED.is_dir():
+        pytest.skip(f"../shared not found at {SHARED} (only in CI and on developer machines)")
+    return SHARED
+
+
+def shared_file(*parts: str) -> Path:
+    """A file under ``../shared``; skips the calling test when it is absent."""
+    path = SHARED.joinpath(*parts)
+    if not path.exists():
+        pytest.skip(f"{path} not found (../shared exists only in CI and on developer machines)")
+    return path

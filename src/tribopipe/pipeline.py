@@ -123,3 +123,67 @@ def write_trace(out_dir: str | Path, outcome: RunOutcome) -> Path:
     outcome.result.trace.to_parquet(tmp, index=False)
     tmp.replace(target)
     return target
+
+
+def _finite_or_none(value: float | None) -> float | None:
+    import math
+
+    if value is None:
+        return None
+    value = float(value)
+    return value if math.isfinite(value) else None
+
+
+def run_summary(outcome: RunOutcome) -> dict[str, Any]:
+    """A JSON-ready summary of a reduced run: the numbers and the evidence behind them.
+
+    Keys: ``file, measurement_id, mu_s, mu_k, pressure_kPa`` (measured mean, per pin),
+    ``normal_force_N`` (measured mean, total), ``temperature_C`` (measured mean or
+    ``None``), ``flags`` (list), the μ_S position (``mu_s_distance_mm``, ``mu_s_time_s``),
+    the μ_K window (``mu_k_window_mm``, ``mu_k_window_s``), plateau std and drift, sliding
+    speed, labels, interval, method, parameters, file and config hashes.
+    """
+    r = outcome.result
+    meta = outcome.measurement.meta
+    return {
+        "file": outcome.path,
+        "measurement_id": outcome.record.get("measurement_id"),
+        "mu_s": float(r.mu_s),
+        "mu_k": float(r.mu_k),
+        "pressure_kPa": float(r.pressure_kPa),
+        "normal_force_N": float(r.normal_force_mean_N),
+        "temperature_C": _finite_or_none(r.temperature_C),
+        "flags": list(r.flags),
+        "mu_s_distance_mm": float(r.mu_s_distance_mm),
+        "mu_s_time_s": float(r.mu_s_time_s),
+        "mu_k_window_mm": [float(v) for v in r.mu_k_window_mm],
+        "mu_k_window_s": [float(v) for v in r.mu_k_window_s],
+        "plateau_std": float(r.plateau_std),
+        "plateau_drift_per_mm": float(r.plateau_drift_per_mm),
+        "sliding_speed_mm_s": float(r.sliding_speed_mm_s),
+        "sliding_distance_mm": float(r.sliding_distance_mm),
+        "pin": outcome.labels.pin,
+        "disc": outcome.labels.disc,
+        "nominal_normal_force_N": outcome.labels.normal_force_N,
+        "nominal_temperature_C": outcome.labels.temperature_C,
+        "repeat": outcome.labels.repeat,
+        "test": meta.test,
+        "result": meta.result,
+        "interval": meta.interval,
+        "method": r.method,
+        "parameters": dict(r.parameters),
+        "file_hash": outcome.file_hash,
+        "config_hash": outcome.config_hash,
+    }
+
+
+def write_summary(out_dir: str | Path, outcome: RunOutcome) -> Path:
+    """Write :func:`run_summary` as JSON beside the trace: ``<out_dir>/summaries/...json``."""
+    import json
+
+    target = Path(out_dir) / "summaries" / trace_path(out_dir, outcome).with_suffix(".json").name
+    target.parent.mkdir(parents=True, exist_ok=True)
+    tmp = target.with_suffix(".json.tmp")
+    tmp.write_text(json.dumps(run_summary(outcome), indent=2, default=str), encoding="utf-8")
+    tmp.replace(target)
+    return target

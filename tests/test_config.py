@@ -1,0 +1,71 @@
+"""Instrument configs: the founding defaults, the shipped TOML, and refusal of bad keys."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import pytest
+
+from tribopipe.config import InstrumentConfig, load_settings, settings_from_dict
+from tribopipe.errors import ConfigError
+
+REPO = Path(__file__).resolve().parents[1]
+
+
+def test_founding_friction_radius_follows_from_paper_speed() -> None:
+    # 0.005 rpm must give 0.007 mm/s at the friction radius (the paper's statement).
+    inst = InstrumentConfig()
+    assert inst.friction_radius_mm == pytest.approx(13.37, abs=0.005)
+    assert inst.nominal_sliding_speed_mm_s == pytest.approx(0.007, abs=5e-6)
+
+
+def test_pin_area_is_28_27_mm2() -> None:
+    assert InstrumentConfig().pin_area_mm2 == pytest.approx(28.27, abs=0.005)
+
+
+def test_shipped_tpid44_config_equals_defaults() -> None:
+    shipped = load_settings(REPO / "configs" / "instruments" / "t-pid44.toml")
+    assert shipped.instrument == InstrumentConfig()
+    assert shipped.config_hash == load_settings(None).config_hash
+
+
+def test_config_hash_changes_with_geometry() -> None:
+    a = settings_from_dict({})
+    b = settings_from_dict({"instrument": {"friction_radius_mm": 15.0}})
+    assert a.config_hash != b.config_hash
+    assert b.instrument.friction_radius_mm == 15.0
+
+
+def test_unknown_key_is_refused_with_file_and_key(tmp_path: Path) -> None:
+    cfg = tmp_path / "cell.toml"
+    cfg.write_text("[instrument]\npin_radius_m = 0.003\n", encoding="utf-8")
+    with pytest.raises(ConfigError) as err:
+        load_settings(cfg)
+    text = str(err.value)
+    assert str(cfg) in text and "pin_radius_m" in text and "pin_radius_mm" in text
+
+
+@pytest.mark.parametrize("value", ["0", "-3.0", "nan"])
+def test_non_positive_radius_is_refused(tmp_path: Path, value: str) -> None:
+    cfg = tmp_path / "cell.toml"
+    cfg.write_text(f"[instrument]\npin_radius_mm = {value}\n", encoding="utf-8")
+    with pytest.raises(ConfigError, match="pin_radius_mm"):
+        load_settings(cfg)
+
+
+def test_broken_toml_names_the_file(tmp_path: Path) -> None:
+    cfg = tmp_path / "broken.toml"
+    cfg.write_text("[instrument\n", encoding="utf-8")
+    with pytest.raises(ConfigError, match="broken.toml.*not valid TOML"):
+        load_settings(cfg)
+
+
+def test_missing_config_file_is_a_config_error(tmp_path: Path) -> None:
+    with pytest.raises(ConfigError, match="not found"):
+        load_settings(tmp_path / "nope.toml")
+
+
+def test_other_pin_count_changes_area_not_radius() -> None:
+    inst = InstrumentConfig(n_pins=1, pin_radius_mm=2.0)
+    assert inst.pin_area_mm2 == pytest.approx(math.pi * 4.0)

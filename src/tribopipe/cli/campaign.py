@@ -1,0 +1,200 @@
+"""``tribopipe batch`` and ``tribopipe campaign list|run``: a whole campaign, incrementally."""
+
+from __future__ import annotations
+
+import json
+import os
+import sys
+from typing import Any
+
+import click
+
+from ._common import friendly_errors
+
+#: options that describe a campaign, so they only make sense with a FOLDER
+_FOLDER_ONLY = {"manifest": "--manifest", "filename_pattern": "--pattern", "glob": "--glob",
+                "config_path": "--config", "output_dir": "--out"}
+
+
+def _open(target: str, options: dict[str, Any]) -> Any:
+    """A :class:`tribopipe.campaign.Campaign` from a config file or a folder + options."""
+    from pathlib import Path
+
+    from ..campaign import folder_campaign, load_campaign
+
+    if Path(target).is_dir():
+        campaign = folder_campaign(
+            target,
+            manifest=options.get("manifest"),
+            filename_pattern=options.get("filename_pattern"),
+            map_path=options.get("map_path"),
+            output_dir=options.get("output_dir") or "processed",
+            glob=options.get("glob") or "*.csv",
+            instrument=options.get("config_path"),
+        )
+        return campaign
+    given = [flag for name, flag in _FOLDER_ONLY.items() if options.get(name)]
+    if given:
+        flags = ", ".join(given)
+        raise click.UsageError(f"{flags}: only with a FOLDER; a campaign config sets these "
+                               "in its [campaign] table")
+    campaign = load_campaign(target)
+    if options.get("map_path"):
+        from dataclasses import replace
+
+        campaign = replace(campaign, map_path=Path(options["map_path"]).resolve())
+    return campaign
+
+
+def _shorten(path: Any) -> str:
+    """A path relative to the current directory when it is below it."""
+    text = str(path)
+    try:
+        rel = os.path.relpath(text)
+    except ValueError:
+        return text
+    return text if rel.startswith("..") else rel
+
+
+def _run(campaign: Any, jobs: int | None, plots: bool | None) -> None:
+    from ..campaign import run_campaign
+
+    bar: Any = None
+
+    def progress(done: int, total: int) -> None:
+        nonlocal bar
+        if bar is None:
+            bar = click.progressbar(length=total, label="reducing", file=sys.stderr,
+                                    show_pos=True)
+            bar.__enter__()
+        bar.update(done - bar.pos)
+
+    use_bar = sys.stderr.isatty()
+    try:
+        report = run_campaign(campaign, jobs=jobs, plots=plots,
+                              progress=progress if use_bar else None)
+    finally:
+        if bar is not None:
+            bar.__exit__(None, None, None)
+    for note in report.notes:
+        click.echo(f"note: {note}", err=True)
+    for file, reason in report.failures:
+        text = reason if reason.startswith(file) or file in reason else f"{file}: {reason}"
+        click.echo(f"failed: {text}", err=True)
+    click.echo(report.summary())
+    click.echo(f"map {_shorten(report.map_path)}: {report.map_summary}")
+    click.echo(f"outputs in {_shorten(report.output_dir)}/: runs.csv, failures.csv, traces/"
+               + (", plots/traces/" if (report.output_dir / "plots").is_dir() else ""))
+    if not report.ok:
+        click.echo(f"{len(report.failures)} run(s) failed; see "
+                   f"{_shorten(campaign.failures_csv)}", err=True)
+        sys.exit(1)
+
+
+def _common_run_options(func: Any) -> Any:
+    func = click.option(
+        "--plots/--no-plots", default=None,
+        help="Draw a trace plot per reduced run (default: the config's `plots`, else on).",
+    )(func)
+    func = click.option(
+        "--jobs", "-j", type=click.IntRange(min=1), default=None,
+        help="Worker processes (default: one per available CPU).",
+    )(func)
+    func = click.option(
+        "--map", "map_path", type=click.Path(dir_okay=False), default=None,
+        help="Friction map to update (default: the config's, else processed/friction_map.parquet).",
+    )(func)
+    return func
+
+
+@click.command("batch")
+@click.argument("target", type=click.Path(exists=True))
+@click.option("--manifest", type=click.Path(exists=True, dir_okay=False),
+              help="FOLDER only: manifest CSV (file, pin, disc, normal_force_N, "
+                   "temperature_C, repeat).")
+@click.option("--pattern", "filename_pattern",
+              help="FOLDER only: file-name pattern, e.g. "
+                   "'{pin}_{disc}_{force}N_{temperature}C_r{repeat}'.")
+@click.option("--glob", help="FOLDER only: which files are exports (default *.csv).")
+@click.option("--config", "config_path", type=click.Path(exists=True, dir_okay=False),
+              help="FOLDER only: instrument config (TOML). Default: T-PID/44, 3 pins.")
+@click.option("--out", "output_dir", type=click.Path(file_okay=False),
+              help="FOLDER only: output folder (default processed/).")
+@_common_run_options
+@friendly_errors
+def batch_cmd(target: str, manifest: str | None, filename_pattern: str | None,
+              glob: str | None, config_path: str | None, output_dir: str | None,
+              map_path: str | None, jobs: int | None, plots: bool | None) -> None:
+    """Reduce a whole campaign: TARGET is a campaign CONFIG (TOML) or a FOLDER of exports.
+
+    Only new and changed runs are reduced (content + config hash); the others are skipped.
+    A bad file is listed with its reason and the good ones still land; the map is updated
+    once. Writes traces/, runs.csv and failures.csv to the output folder. Exit code 1 when
+    any run failed.
+
+    \b
+      tribopipe batch configs/example.toml
+      tribopipe batch raw/mine --manifest raw/mine/manifest.csv --map processed/map.parquet
+    """
+    campaign = _open(target, {
+        "manifest": manifest, "filename_pattern": filename_pattern, "glob": glob,
+        "config_path": config_path, "output_dir": output_dir, "map_path": map_path,
+    })
+    _run(campaign, jobs, plots)
+
+
+@click.group("campaign")
+def campaign_group() -> None:
+    """Look at a campaign before running it, and run it (same as `tribopipe batch`)."""
+
+
+@campaign_group.command("run")
+@click.argument("config", type=click.Path(exists=True, dir_okay=False))
+@_common_run_options
+@friendly_errors
+def run_cmd(config: str, map_path: str | None, jobs: int | None, plots: bool | None) -> None:
+    """Reduce the new and changed runs of a campaign CONFIG (alias of `tribopipe batch`)."""
+    _run(_open(config, {"map_path": map_path}), jobs, plots)
+
+
+@campaign_group.command("list")
+@click.argument("config", type=click.Path(exists=True, dir_okay=False))
+@click.option("--json", "as_json", is_flag=True, help="Print a JSON list instead of a table.")
+@friendly_errors
+def list_cmd(config: str, as_json: bool) -> None:
+    """Show a campaign CONFIG as a table: one row per file, its metadata and status
+    (new, reduced, changed, failed). Nothing is reduced."""
+    from ..campaign import campaign_listing, load_campaign
+
+    rows = campaign_listing(load_campaign(config))
+    if as_json:
+        click.echo(json.dumps(rows, indent=2))
+        return
+    _print_table(rows)
+
+
+def _print_table(rows: list[dict[str, Any]]) -> None:
+    columns = ("file", "status", "pin", "disc", "normal_force_N", "temperature_C", "repeat",
+               "mu_k", "reason")
+    heads = {"normal_force_N": "F_N", "temperature_C": "T_C"}
+
+    def cell(row: dict[str, Any], col: str) -> str:
+        value = row.get(col)
+        if value is None:
+            return "-"
+        if isinstance(value, float):
+            return f"{value:.3f}" if col == "mu_k" else f"{value:g}"
+        return str(value)
+
+    body = [[cell(r, c) for c in columns] for r in rows]
+    widths = [max([len(heads.get(c, c))] + [len(b[i]) for b in body]) for i, c in
+              enumerate(columns[:-1])]
+    click.echo("  ".join(heads.get(c, c).ljust(w) for c, w in zip(columns, widths, strict=False))
+               + "  reason")
+    for b in body:
+        click.echo("  ".join(v.ljust(w) for v, w in zip(b, widths, strict=False)) + "  "
+                   + (b[-1] if b[-1] != "-" else ""))
+    counts: dict[str, int] = {}
+    for r in rows:
+        counts[r["status"]] = counts.get(r["status"], 0) + 1
+    click.echo(f"{len(rows)} file(s): " + ", ".join(f"{n} {s}" for s, n in sorted(counts.items())))

@@ -76,7 +76,8 @@ def test_reduction_table_overrides_the_instrument_config(tmp_path: Path) -> None
     (tmp_path / "inst.toml").write_text(
         "[instrument]\npin_radius_mm = 4.0\n[reduction]\nmedian_window = 9\n", encoding="utf-8"
     )
-    base = f'[campaign]\nraw_dir = "raw"\ninstrument = "inst.toml"\nfilename_pattern = "{PATTERN}"\n'
+    base = (f'[campaign]\nraw_dir = "raw"\ninstrument = "inst.toml"\n'
+            f'filename_pattern = "{PATTERN}"\n')
     plain = load_campaign(write_config(tmp_path, base))
     assert plain.settings.instrument.pin_radius_mm == 4.0
     assert plain.settings.reduction.median_window == 9

@@ -1,0 +1,144 @@
+"""Power-law pressure dependence of μ_K: μ = k·p^(n−1), fitted per pair and temperature.
+
+Elastomer friction falls with contact pressure; a Hertz-type contact gives
+n − 1 ≈ −1/3. We fit on the individual runs (not the group means) as a straight line in
+log–log space,
+
+    ln μ = ln k + (n − 1)·ln p,        p in kPa,
+
+by ordinary least squares. Why log–log rather than ``curve_fit`` on μ: the scatter of μ
+between repeats grows with μ (multiplicative error), the problem is then linear (no
+starting values, no convergence failures), and the 95 % confidence intervals follow
+exactly from the t-distribution with N − 2 degrees of freedom. ``k`` is μ at 1 kPa; its
+interval is the exponentiated interval of ln k (so it is asymmetric). ``r_squared`` is the
+coefficient of determination of the log–log regression.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    import numpy as np
+    import pandas as pd
+
+FIT_COLUMNS: tuple[str, ...] = (
+    "pin",
+    "disc",
+    "temperature_C",
+    "k",
+    "k_ci95_low",
+    "k_ci95_high",
+    "exponent",
+    "exponent_ci95_low",
+    "exponent_ci95_high",
+    "r_squared",
+    "n_points",
+    "n_pressures",
+    "pressure_min_kPa",
+    "pressure_max_kPa",
+    "note",
+)
+
+MIN_POINTS = 3
+
+
+def power_law(pressure_kPa: np.ndarray | float, k: float, exponent: float) -> Any:
+    """μ = k·p^exponent for contact pressure(s) ``pressure_kPa`` [kPa] (same shape out)."""
+    import numpy as np
+
+    return k * np.power(np.asarray(pressure_kPa, dtype=float), exponent)
+
+
+def fit_one(pressure_kPa: np.ndarray, mu: np.ndarray) -> dict[str, float]:
+    """Fit μ = k·p^exponent to paired arrays (shape ``(N,)``, p in kPa, μ > 0).
+
+    Returns ``k, k_ci95_low, k_ci95_high, exponent, exponent_ci95_low,
+    exponent_ci95_high, r_squared`` (floats). Needs N ≥ 3 points at ≥ 2 pressures; the
+    caller checks that. With a perfect fit the intervals collapse to the estimate.
+    """
+    import numpy as np
+    from scipy import stats
+
+    x = np.log(np.asarray(pressure_kPa, dtype=float))
+    y = np.log(np.asarray(mu, dtype=float))
+    n = len(x)
+    x_mean = x.mean()
+    sxx = float(((x - x_mean) ** 2).sum())
+    slope = float(((x - x_mean) * (y - y.mean())).sum() / sxx)
+    intercept = float(y.mean() - slope * x_mean)
+    resid = y - (intercept + slope * x)
+    ss_res = float((resid**2).sum())
+    ss_tot = float(((y - y.mean()) ** 2).sum())
+    dof = n - 2
+    s2 = ss_res / dof
+    se_slope = math.sqrt(s2 / sxx)
+    se_intercept = math.sqrt(s2 * (1.0 / n + x_mean**2 / sxx))
+    t = float(stats.t.ppf(0.975, dof))
+    # ss_tot == 0: every μ equal, the flat line explains everything there is
+    r2 = 1.0 - ss_res / ss_tot if ss_tot > 0 else 1.0
+    return {
+        "k": math.exp(intercept),
+        "k_ci95_low": math.exp(intercept - t * se_intercept),
+        "k_ci95_high": math.exp(intercept + t * se_intercept),
+        "exponent": slope,
+        "exponent_ci95_low": slope - t * se_slope,
+        "exponent_ci95_high": slope + t * se_slope,
+        "r_squared": r2,
+    }
+
+
+def fit_power_law(runs: pd.DataFrame, *, quantity: str = "mu_k") -> pd.DataFrame:
+    """Fit μ = k·p^(n−1) per (pin, disc, temperature) on the individual runs.
+
+    ``runs`` has the friction-map run columns ``pin, disc, pressure_kPa`` (nominal, kPa),
+    ``temperature_C`` (nominal, °C; NaN = unknown, fitted as its own set) and ``quantity``
+    (default ``mu_k``); runs with ``excluded`` True and rows with a missing or
+    non-positive μ or pressure are left out. Returns one row per set with the columns
+    :data:`FIT_COLUMNS`; a set with fewer than 3 runs or a single pressure keeps NaN
+    parameters and says why in ``note`` (empty when fitted). ``runs`` is not modified.
+    """
+    import numpy as np
+    import pandas as pd
+
+    if runs.empty:
+        return pd.DataFrame(columns=list(FIT_COLUMNS))
+    data = pd.DataFrame(
+        {
+            "pin": runs["pin"].astype(str),
+            "disc": runs["disc"].astype(str),
+            "temperature_C": pd.to_numeric(runs["temperature_C"], errors="coerce"),
+            "p": pd.to_numeric(runs["pressure_kPa"], errors="coerce"),
+            "mu": pd.to_numeric(runs[quantity], errors="coerce"),
+        }
+    )
+    keep = np.isfinite(data["p"]) & np.isfinite(data["mu"]) & (data["p"] > 0) & (data["mu"] > 0)
+    if "excluded" in runs.columns:
+        keep &= ~runs["excluded"].fillna(False).astype(bool).to_numpy()
+    data = data[keep]
+    rows = []
+    t_key = data["temperature_C"].fillna(-math.inf)
+    for (pin, disc, _), grp in data.groupby([data["pin"], data["disc"], t_key], sort=True):
+        t_val = float(grp["temperature_C"].iloc[0])
+        n_pressures = int(grp["p"].nunique())
+        row: dict[str, Any] = {
+            "pin": pin,
+            "disc": disc,
+            "temperature_C": t_val,
+            "n_points": len(grp),
+            "n_pressures": n_pressures,
+            "pressure_min_kPa": float(grp["p"].min()),
+            "pressure_max_kPa": float(grp["p"].max()),
+            "note": "",
+        }
+        if len(grp) < MIN_POINTS or n_pressures < 2:
+            row["note"] = (
+                f"not fitted: {len(grp)} run(s) at {n_pressures} pressure(s); "
+                f"need >= {MIN_POINTS} runs at >= 2 pressures"
+            )
+            row.update({c: math.nan for c in FIT_COLUMNS if c not in row})
+        else:
+            row.update(fit_one(grp["p"].to_numpy(), grp["mu"].to_numpy()))
+        rows.append(row)
+    return pd.DataFrame(rows, columns=list(FIT_COLUMNS))

@@ -1,0 +1,243 @@
+"""Repeat statistics per condition group of the friction map, and the pooled repeatability.
+
+A condition group is one contact pair (pin, disc) at one nominal normal force [N] (hence
+one nominal pressure [kPa]) and one nominal temperature [°C]; optionally also one sliding
+speed [mm/s]. Nominal values are rounded before grouping (force to 1e-6 N, temperature to
+0.01 °C, speed to two significant digits) so 11.79 vs 11.7893 kPa never splits a group.
+
+With two or three repeats per group no statistical outlier test is meaningful (ISO 5725,
+ASTM E178). Instead, the within-group standard deviations are pooled over all groups into
+a repeatability standard deviation s_r, and groups whose range exceeds the repeatability
+limit r = 2.8·s_r are flagged, as are groups holding runs with QC flags. Runs excluded by
+id (with a recorded reason) are left out of everything here.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    import pandas as pd
+
+QUANTITIES: tuple[str, ...] = ("mu_k", "mu_s")
+STAT_FIELDS: tuple[str, ...] = (
+    "n", "mean", "std", "sem", "ci95_low", "ci95_high", "cv", "min", "max", "values",
+)
+#: Repeatability limit factor: r = 2.8·s_r (≈ 1.96·√2, ISO 5725-6).
+R_FACTOR = 2.8
+#: Two nominal pressures of one force group more than this fraction apart are different
+#: conditions (e.g. two cells with different pin radii in one map).
+PRESSURE_SPLIT = 0.01
+FORCE_DECIMALS = 6
+TEMPERATURE_DECIMALS = 2
+SPEED_SIGNIFICANT = 2
+
+
+def describe_values(values: Sequence[float]) -> dict[str, Any]:
+    """Statistics of one group's values (finite floats; missing ones already removed).
+
+    Returns ``n, mean, std`` (sample, n−1), ``sem`` (std/√n), ``ci95_low, ci95_high``
+    (mean ∓ t₀.₉₇₅,ₙ₋₁·sem, Student t), ``cv`` (std/mean), ``min, max`` and ``values``
+    (``;``-joined shortest round-trip text, in the given order). With n = 1, std, sem, CI
+    and cv are NaN (unknown, not zero); with n = 0 everything but n is NaN.
+    """
+    import numpy as np
+    from scipy import stats as sps
+
+    x = np.asarray(values, dtype=float)
+    n = int(x.size)
+    out: dict[str, Any] = dict.fromkeys(STAT_FIELDS, math.nan)
+    out["n"] = n
+    out["values"] = ";".join(repr(float(v)) for v in x)
+    if n == 0:
+        return out
+    mean = float(np.mean(x))
+    out.update(mean=mean, min=float(np.min(x)), max=float(np.max(x)))
+    if n < 2:
+        return out
+    std = float(np.std(x, ddof=1))
+    sem = std / math.sqrt(n)
+    half = float(sps.t.ppf(0.975, n - 1)) * sem
+    out.update(
+        std=std,
+        sem=sem,
+        ci95_low=mean - half,
+        ci95_high=mean + half,
+        cv=std / mean if mean != 0 else math.nan,
+    )
+    return out
+
+
+@dataclass(frozen=True)
+class Repeatability:
+    """Pooled within-group standard deviation of one quantity over the groups with n ≥ 2.
+
+    ``s_r = sqrt(Σ (nᵢ−1)·sᵢ² / Σ (nᵢ−1))`` with ``dof = Σ (nᵢ−1)``; ``r = 2.8·s_r``.
+    NaN when no group has two values.
+    """
+
+    quantity: str
+    s_r: float
+    r: float
+    dof: int
+    n_groups: int
+
+
+def repeatability(groups: pd.DataFrame, quantity: str = "mu_k") -> Repeatability:
+    """The pooled repeatability of ``quantity`` ('mu_k' or 'mu_s') from a
+    :func:`group_statistics` table."""
+    import numpy as np
+
+    n = groups[f"{quantity}_n"].to_numpy(dtype=float)
+    s = groups[f"{quantity}_std"].to_numpy(dtype=float)
+    use = (n >= 2) & np.isfinite(s)
+    dof = int(np.sum(n[use] - 1))
+    if dof == 0:
+        return Repeatability(quantity, math.nan, math.nan, 0, 0)
+    s_r = math.sqrt(float(np.sum((n[use] - 1) * s[use] ** 2)) / dof)
+    return Repeatability(quantity, s_r, R_FACTOR * s_r, dof, int(use.sum()))
+
+
+def _round_significant(value: float, digits: int) -> float:
+    if not math.isfinite(value) or value == 0:
+        return value
+    return round(value, digits - 1 - math.floor(math.log10(abs(value))))
+
+
+def _group_keys(runs: pd.DataFrame, by_speed: bool) -> pd.DataFrame:
+    """The rounded grouping keys of each run (a new frame; ``runs`` is not modified)."""
+    import pandas as pd
+
+    keys = pd.DataFrame(
+        {
+            "pin": runs["pin"].to_numpy(dtype=object),
+            "disc": runs["disc"].to_numpy(dtype=object),
+            "normal_force_N": runs["normal_force_N"].round(FORCE_DECIMALS).to_numpy(),
+            "temperature_C": runs["temperature_C"].round(TEMPERATURE_DECIMALS).to_numpy(),
+        },
+        index=runs.index,
+    )
+    if by_speed:
+        keys["sliding_speed_mm_s"] = [
+            _round_significant(float(v), SPEED_SIGNIFICANT) for v in runs["sliding_speed_mm_s"]
+        ]
+    return keys
+
+
+def _pressure_clusters(pressures: Sequence[float]) -> list[int]:
+    """Cluster numbers for the nominal pressures of one force group: sorted, a new cluster
+    starts where a pressure is more than :data:`PRESSURE_SPLIT` above the previous one."""
+    order = sorted(range(len(pressures)), key=lambda i: (math.isnan(pressures[i]), pressures[i]))
+    labels = [0] * len(pressures)
+    cluster = 0
+    previous = None
+    for i in order:
+        p = pressures[i]
+        same = previous is not None and (
+            math.isclose(p, previous, rel_tol=PRESSURE_SPLIT)
+            or (math.isnan(p) and math.isnan(previous))
+        )
+        if previous is not None and not same:
+            cluster += 1
+        labels[i] = cluster
+        previous = p
+    return labels
+
+
+def group_statistics(runs: pd.DataFrame, *, by_speed: bool = False) -> pd.DataFrame:
+    """Repeat statistics per condition group of a friction map (see module docstring).
+
+    ``runs`` is a map DataFrame (:func:`tribopipe.frictionmap.read_map`); it is not
+    modified. Excluded runs are left out; groups with no remaining run are dropped.
+    Columns: ``pin, disc, normal_force_N, pressure_kPa, temperature_C``
+    (+ ``sliding_speed_mm_s`` with ``by_speed``), then for q in ``mu_k``, ``mu_s``:
+    ``q_n, q_mean, q_std, q_sem, q_ci95_low, q_ci95_high, q_cv, q_min, q_max, q_values``,
+    then ``range_exceeds_r, qc_flagged, run_ids``. Within a group, values and ids are in
+    (repeat, measurement_id) order, so the result does not depend on the row order.
+    Rows are sorted by pin, disc, temperature, pressure, force (and speed).
+    """
+    import numpy as np
+    import pandas as pd
+
+    condition_cols = ["pin", "disc", "normal_force_N", "pressure_kPa", "temperature_C"]
+    if by_speed:
+        condition_cols.append("sliding_speed_mm_s")
+    stat_cols = [f"{q}_{f}" for q in QUANTITIES for f in STAT_FIELDS]
+    columns = condition_cols + stat_cols + ["range_exceeds_r", "qc_flagged", "run_ids"]
+
+    included = runs.loc[~runs["excluded"].astype(bool)]
+    keys = _group_keys(included, by_speed)
+    key_cols = list(keys.columns)
+    rows: list[dict[str, Any]] = []
+    for key, idx in keys.groupby(key_cols, dropna=False, sort=False).groups.items():
+        members = included.loc[idx]
+        pressures = [float(p) for p in members["pressure_kPa"]]
+        clusters = _pressure_clusters(pressures)
+        for c in sorted(set(clusters)):
+            sub = members.iloc[[i for i, k in enumerate(clusters) if k == c]]
+            rows.append(_group_row(dict(zip(key_cols, key, strict=True)), sub))
+    if not rows:
+        return pd.DataFrame({c: pd.Series(dtype=_dtype(c)) for c in columns})
+    groups = pd.DataFrame(rows)
+    groups = groups.sort_values(
+        ["pin", "disc", "temperature_C", "pressure_kPa", "normal_force_N"]
+        + (["sliding_speed_mm_s"] if by_speed else []),
+        na_position="last",
+        kind="mergesort",
+    ).reset_index(drop=True)
+    flagged = np.zeros(len(groups), dtype=bool)
+    for q in QUANTITIES:
+        rep = repeatability(groups, q)
+        if math.isfinite(rep.r):
+            spread = (groups[f"{q}_max"] - groups[f"{q}_min"]).to_numpy(dtype=float)
+            flagged |= np.nan_to_num(spread, nan=0.0) > rep.r
+    groups["range_exceeds_r"] = flagged
+    for c in ("pin", "disc", "run_ids") + tuple(f"{q}_values" for q in QUANTITIES):
+        groups[c] = groups[c].astype("str")
+    for q in QUANTITIES:
+        groups[f"{q}_n"] = groups[f"{q}_n"].astype("int64")
+    groups["qc_flagged"] = groups["qc_flagged"].astype(bool)
+    return groups.loc[:, columns]
+
+
+def _dtype(column: str) -> str:
+    if column in ("pin", "disc", "run_ids") or column.endswith("_values"):
+        return "str"
+    if column.endswith("_n"):
+        return "int64"
+    if column in ("range_exceeds_r", "qc_flagged"):
+        return "bool"
+    return "float64"
+
+
+def _group_row(key: dict[str, Any], members: pd.DataFrame) -> dict[str, Any]:
+    import numpy as np
+
+    order = sorted(
+        range(len(members)),
+        key=lambda i: (
+            _repeat_key(members["repeat"].iloc[i]),
+            str(members["measurement_id"].iloc[i]),
+        ),
+    )
+    sub = members.iloc[order]
+    row: dict[str, Any] = dict(key)
+    row["pressure_kPa"] = float(np.median(sub["pressure_kPa"].to_numpy(dtype=float)))
+    for q in QUANTITIES:
+        values = sub[q].to_numpy(dtype=float)
+        stats = describe_values(values[np.isfinite(values)])
+        row.update({f"{q}_{f}": v for f, v in stats.items()})
+    flags = sub["flags"].fillna("").astype(str)
+    row["qc_flagged"] = bool((flags.str.strip() != "").any())
+    row["run_ids"] = ";".join(sub["measurement_id"].astype(str))
+    row["range_exceeds_r"] = False
+    return row
+
+
+def _repeat_key(value: Any) -> tuple[int, int]:
+    import pandas as pd
+
+    return (1, 0) if pd.isna(value) else (0, int(value))

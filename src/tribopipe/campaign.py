@@ -13,9 +13,9 @@ A campaign is described by a TOML file (``configs/*.toml``)::
     filename_pattern = "{pin}_{disc}_{force}N_{temperature}C_r{repeat}"
     use_export_names = false             # also read metadata from the export's Test name
     export_pattern = "..."               # pattern for the Test name (default: filename_pattern)
-    force_tolerance_N = 0.2              # QC: measured F_N may stray max(tol_N, tol_rel·F_nom)
-    force_tolerance_rel = 0.05
-    temperature_tolerance_C = 1.0        # QC: measured T may stray this far from nominal
+    force_tolerance_N = 0.0              # QC: measured F_N may stray max(tol_N, tol_rel·F_nom)
+    force_tolerance_rel = 0.10
+    temperature_tolerance_C = 2.0        # QC: measured T may stray this far from nominal
     plots = true                         # per-run trace plots under <output_dir>/plots/traces
 
     [reduction]                          # optional: overrides the instrument config's table
@@ -63,6 +63,7 @@ from .pipeline import ReadOptions, RunLabels
 
 if TYPE_CHECKING:
     from .config import Settings
+    from .pipeline import RunOutcome
 
 STATE_FILE = ".tribopipe-state.json"
 STATE_VERSION = 1
@@ -114,12 +115,13 @@ class Tolerances:
     """How far a run's measured conditions may stray from nominal before it is flagged.
 
     The normal force limit is ``max(force_N, force_rel · F_nominal)`` [N]; the temperature
-    limit is ``temperature_C`` [K, as a difference in °C].
+    limit is ``temperature_C`` [K, as a difference in °C]. The defaults are those of
+    :func:`tribopipe.frictionmap.make_record` (10 % of the nominal force, 2 K).
     """
 
-    force_N: float = 0.2
-    force_rel: float = 0.05
-    temperature_C: float = 1.0
+    force_N: float = 0.0
+    force_rel: float = 0.10
+    temperature_C: float = 2.0
 
     def force_limit_N(self, nominal_N: float) -> float:
         """Allowed |F_measured − F_nominal| [N] at a nominal total force [N]."""
@@ -785,12 +787,18 @@ def qc_flags(labels: RunLabels, normal_force_measured_N: float | None,
     return flags
 
 
-def _join_flags(existing: Any, extra: Iterable[str]) -> str:
-    flags = [f for f in str(existing or "").split(";") if f]
-    for flag in extra:
-        if flag not in flags:
-            flags.append(flag)
-    return ";".join(flags)
+QC_FLAGS: tuple[str, ...] = ("normal_force_off_nominal", "temperature_off_nominal")
+
+
+def with_qc_flags(existing: str | None, qc: Iterable[str]) -> str:
+    """A record's ``;``-joined flags with the off-nominal flags replaced by ``qc``.
+
+    :func:`tribopipe.frictionmap.make_record` flags with its own fixed tolerances; a
+    campaign states its own, so its verdict replaces that one. Sorted and unique, like
+    the map's flags.
+    """
+    kept = {f for f in str(existing or "").split(";") if f and f not in QC_FLAGS}
+    return ";".join(sorted(kept | set(qc)))
 
 
 def _float_or_none(value: Any) -> float | None:
@@ -805,49 +813,28 @@ def _float_or_none(value: Any) -> float | None:
 
 def _reduce_one(job: _Job, ctx: _Context) -> dict[str, Any]:
     """Reduce one file in a worker; returns a small picklable result (never the trace)."""
-    from .frictionmap import make_record
     from .pipeline import reduce_file, write_trace
 
     campaign = ctx.campaign
     merged = merge_metadata(job.file, job.sources, campaign)
-    if not campaign.use_export_names:
-        labels_from(job.file, merged, hints=job.hints)
-    outcome = reduce_file(job.path, campaign.settings, labels_from_partial(merged),
-                          campaign.read_options)
     if campaign.use_export_names:
-        meta = outcome.measurement.meta
-        sources = list(job.sources)
-        found = None
-        if meta.test and campaign.export_pattern:
-            found = match_pattern(campaign.export_pattern, meta.test)
-        hints = list(job.hints)
-        if found is None:
-            hints.append(f"export Test name {meta.test!r} does not match pattern "
-                         f"{campaign.export_pattern!r}")
-        else:
-            sources.append((f"export Test name {meta.test!r}", found))
-        merged = merge_metadata(job.file, sources, campaign)
-        labels = labels_from(job.file, merged, hints=hints)
-        if labels != outcome.labels:
-            record = make_record(result=outcome.result, labels=labels, meta=meta,
-                                 file_hash=outcome.file_hash, settings=campaign.settings)
-            outcome = replace(outcome, labels=labels, record=record)
+        outcome = _reduce_with_export_names(job, campaign)
+    else:
+        labels = labels_from(job.file, merged, hints=job.hints)
+        outcome = reduce_file(job.path, campaign.settings, labels, campaign.read_options)
     result = outcome.result
     record = dict(outcome.record)
-    flags = qc_flags(outcome.labels, _float_or_none(result.normal_force_mean_N),
-                     _float_or_none(result.temperature_C), campaign.tolerances)
-    record["flags"] = _join_flags(record.get("flags"), flags)
+    qc = qc_flags(outcome.labels, _float_or_none(result.normal_force_mean_N),
+                  _float_or_none(result.temperature_C), campaign.tolerances)
+    record["flags"] = with_qc_flags(record.get("flags"), qc)
     outcome = replace(outcome, record=record)
     trace = write_trace(campaign.output_dir, outcome)
-    plot_note = None
-    if ctx.plots:
-        plot_note = _plot(campaign, outcome, trace)
-    labels = outcome.labels
+    plot_note = _plot(campaign, outcome, trace) if ctx.plots else None
     return {
         "file": job.file,
         "ok": True,
         "record": record,
-        "labels": asdict(labels),
+        "labels": asdict(outcome.labels),
         "measurement_id": record.get("measurement_id"),
         "sha256": outcome.file_hash,
         "trace": trace.relative_to(campaign.output_dir).as_posix(),
@@ -862,13 +849,35 @@ def _reduce_one(job: _Job, ctx: _Context) -> dict[str, Any]:
     }
 
 
-def labels_from_partial(merged: Mapping[str, Any]) -> RunLabels:
-    """:class:`RunLabels` from whatever fields are known (missing ones ``None``)."""
-    return RunLabels(
-        pin=merged.get("pin"), disc=merged.get("disc"),
-        normal_force_N=merged.get("normal_force_N"), temperature_C=merged.get("temperature_C"),
-        repeat=merged.get("repeat"),
-    )
+def _reduce_with_export_names(job: _Job, campaign: Campaign) -> RunOutcome:
+    """:func:`tribopipe.pipeline.reduce_file` with the export's Test name as a third
+    metadata source: the labels are only complete once the file has been read."""
+    from .frictionmap import make_record
+    from .pipeline import RunOutcome, file_sha256
+    from .readers import read_export
+    from .reduce import reduce_measurement, select_friction_interval
+
+    opts = campaign.read_options
+    measurement = select_friction_interval(read_export(
+        job.path, encoding=opts.encoding, delimiter=opts.delimiter, decimal=opts.decimal
+    ))
+    meta = measurement.meta
+    sources = list(job.sources)
+    hints = list(job.hints)
+    found = match_pattern(campaign.export_pattern or "", meta.test) if meta.test else None
+    if found is None:
+        hints.append(f"export Test name {meta.test!r} does not match pattern "
+                     f"{campaign.export_pattern!r}")
+    else:
+        sources.append((f"export Test name {meta.test!r}", found))
+    labels = labels_from(job.file, merge_metadata(job.file, sources, campaign), hints=hints)
+    settings = campaign.settings
+    result = reduce_measurement(measurement, settings.instrument, settings.reduction)
+    file_hash = file_sha256(job.path)
+    record = make_record(result=result, labels=labels, meta=meta, file_hash=file_hash,
+                         settings=settings)
+    return RunOutcome(path=job.path, measurement=measurement, result=result, labels=labels,
+                      file_hash=file_hash, config_hash=settings.config_hash, record=record)
 
 
 def _plot(campaign: Campaign, outcome: Any, trace: Path) -> str | None:
@@ -1135,15 +1144,21 @@ def _map_lost(campaign: Campaign, state: Mapping[str, Any]) -> bool:
 
 def _update_map(campaign: Campaign, records: list[dict[str, Any]],
                 stale_ids: set[str]) -> tuple[str, int]:
-    """Append the new records in one atomic update and drop the rows of runs whose raw
-    file changed; returns the map's summary line and the number of rows removed."""
+    """Fold the new records into the map in one atomic write, dropping the rows of runs
+    whose raw file changed (their measurement id changed with the content); returns the
+    map's summary line and the number of rows removed."""
     from . import frictionmap
 
-    new_ids = {r.get("measurement_id") for r in records}
-    stale = sorted(stale_ids - new_ids)
-    report = frictionmap.append_records(campaign.map_path, records, replace=True,
-                                        remove_ids=stale)
-    return report.summary(), len(stale)
+    stale = stale_ids - {r.get("measurement_id") for r in records}
+    if not stale:
+        report = frictionmap.append_records(campaign.map_path, records, replace=True)
+        return report.summary(), 0
+    # append_records cannot remove rows: fold and drop in memory, then one atomic write
+    current = frictionmap.read_map(campaign.map_path)
+    gone = current["measurement_id"].isin(sorted(stale))
+    merged, report = frictionmap.fold_records(current.loc[~gone], records, replace=True)
+    frictionmap.write_map(campaign.map_path, merged)
+    return report.summary(), int(gone.sum())
 
 
 # --------------------------------------------------------------------------- outputs

@@ -1,0 +1,162 @@
+"""``tribopipe map``: import, merge, tabulate, show and curate the friction map."""
+
+from __future__ import annotations
+
+import click
+
+from ._common import friendly_errors, map_option
+
+
+@click.group("map")
+def map_group() -> None:
+    """The friction map: one row per reduced run (Parquet), repeat statistics, tables.
+
+    \b
+    Examples:
+      tribopipe map import --published            start from the founding paper's map
+      tribopipe map import FrictionMap.mat        the published MATLAB table (or its CSV)
+      tribopipe map merge other_lab.parquet       fold in another lab's map
+      tribopipe map table --format markdown --pin "Dragonskin 30" --temperature 20
+      tribopipe map show
+      tribopipe map exclude 3fa2c1d09e --reason "pin slipped in the holder"
+    """
+
+
+@map_group.command("import")
+@click.argument("file", required=False, type=click.Path(dir_okay=False))
+@click.option(
+    "--published",
+    is_flag=True,
+    help="Import the founding paper's published map shipped with tribopipe.",
+)
+@click.option(
+    "--source",
+    help="Label for where the rows come from (default: published:Berthold2023 for the "
+    "published rows, else import:<file name>).",
+)
+@click.option("--replace", is_flag=True, help="Overwrite rows whose content differs.")
+@map_option
+@friendly_errors
+def import_cmd(
+    file: str | None, published: bool, source: str | None, replace: bool, map_path: str
+) -> None:
+    """Import a FrictionMap table (.mat or CSV, 7 columns: pin, disc, contactForce,
+    contactPressure, temperature, measurementNo, cof) into the map.
+
+    Imported rows carry their origin and μ_S as missing. Importing the same rows again
+    changes nothing.
+    """
+    from ..frictionmap import import_table
+
+    if published == (file is not None):
+        raise click.UsageError("give a FILE or --published (not both)")
+    report = import_table(map_path, file, source=source, replace=replace)
+    click.echo(f"map {map_path}: {report.summary()}")
+
+
+@map_group.command("merge")
+@click.argument("other", type=click.Path(dir_okay=False))
+@click.option("--replace", is_flag=True, help="Overwrite our rows where OTHER's content differs.")
+@map_option
+@friendly_errors
+def merge_cmd(other: str, replace: bool, map_path: str) -> None:
+    """Fold another friction map (Parquet) into the map; runs with the same id are stored
+    once and conflicting rows are reported (exit code 1 when any were kept)."""
+    from ..frictionmap import merge_map
+
+    report = merge_map(map_path, other, replace=replace)
+    click.echo(f"map {map_path}: {report.summary()}")
+    if report.kept_conflicting:
+        raise SystemExit(1)
+
+
+@map_group.command("table")
+@click.option(
+    "--format",
+    "fmt",
+    type=click.Choice(["csv", "markdown", "latex", "frictionmap"]),
+    default="csv",
+    show_default=True,
+    help="Output format; 'frictionmap' is the published 7-column CSV, one row per run.",
+)
+@click.option(
+    "--layout",
+    type=click.Choice(["group", "abstract"]),
+    default="group",
+    show_default=True,
+    help="'group': conditions + repeat statistics; 'abstract': pin, disc, pressure, "
+    "temperature, mean μ_K (the paper's Table 2).",
+)
+@click.option("--pin", multiple=True, help="Only this pin material (repeatable).")
+@click.option("--disc", multiple=True, help="Only this disc material (repeatable).")
+@click.option(
+    "--temperature", "temperature_C", type=float, multiple=True, help="Only this nominal °C."
+)
+@click.option("--by-speed", is_flag=True, help="Also split condition groups by sliding speed.")
+@click.option("-o", "--output", type=click.Path(dir_okay=False), help="Write to FILE.")
+@map_option
+@friendly_errors
+def table_cmd(
+    fmt: str,
+    layout: str,
+    pin: tuple[str, ...],
+    disc: tuple[str, ...],
+    temperature_C: tuple[float, ...],
+    by_speed: bool,
+    output: str | None,
+    map_path: str,
+) -> None:
+    """Regenerate a table from the friction map (to stdout, or -o FILE)."""
+    from ..export.tables import export_table
+
+    text = export_table(
+        map_path,
+        output,
+        fmt=fmt,
+        layout=layout,
+        pin=pin,
+        disc=disc,
+        temperature_C=temperature_C,
+        by_speed=by_speed,
+    )
+    if output is None:
+        click.echo(text, nl=False)
+    else:
+        click.echo(f"wrote {output}", err=True)
+
+
+@map_group.command("show")
+@map_option
+@friendly_errors
+def show_cmd(map_path: str) -> None:
+    """Summarise the map: runs, contact pairs, conditions, sources, flags, excluded runs
+    and the pooled repeatability."""
+    from ..frictionmap import map_summary
+
+    click.echo(map_summary(map_path))
+
+
+@map_group.command("exclude")
+@click.argument("ids", nargs=-1, required=True)
+@click.option("--reason", required=True, help="Why the runs are left out (recorded).")
+@map_option
+@friendly_errors
+def exclude_cmd(ids: tuple[str, ...], reason: str, map_path: str) -> None:
+    """Leave runs (by measurement id or a unique prefix of 6+ digits) out of the statistics.
+    They stay in the map with the reason."""
+    from ..frictionmap import exclude_runs
+
+    changed = exclude_runs(map_path, ids, reason)
+    click.echo(f"excluded {len(changed)} run(s)" + (": " + ", ".join(changed) if changed else ""))
+
+
+@map_group.command("include")
+@click.argument("ids", nargs=-1, required=True)
+@map_option
+@friendly_errors
+def include_cmd(ids: tuple[str, ...], map_path: str) -> None:
+    """Take excluded runs back into the statistics."""
+    from ..frictionmap import include_runs
+
+    changed = include_runs(map_path, ids)
+    click.echo(f"included {len(changed)} run(s)" + (": " + ", ".join(changed) if changed else ""))

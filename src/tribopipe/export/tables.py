@@ -1,0 +1,306 @@
+"""Tables regenerated from the friction map: group statistics, the paper's abstract layout
+and the published 7-column FrictionMap schema, as CSV, Markdown or LaTeX.
+
+Layouts (each a DataFrame; units in the column names):
+
+``group``
+    :func:`tribopipe.stats.group_statistics`: conditions, then n, mean, std, sem, 95 % CI,
+    cv, min, max and values of μ_K and μ_S, the r and QC flags, the run ids.
+``abstract``
+    like Table 2 of the founding paper: ``pin, disc, pressure_kPa, temperature_C, mu_k``
+    (group mean of μ_K, rounded to two decimals).
+``frictionmap``
+    one row per included run in the published schema ``pin, disc, contactForce,
+    contactPressure, temperature, measurementNo, cof`` (force [N], pressure [kPa],
+    temperature [°C], μ_K), so the MATLAB FrictionMap app keeps working. Importing it
+    again (:func:`tribopipe.frictionmap.import_records`) gives the same runs.
+
+Markdown and LaTeX are written here (no jinja2 / tabulate needed); numbers there are shown
+with four significant digits, in CSV with ten (``frictionmap``: shortest round-trip).
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from collections.abc import Sequence
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from ..errors import ExportError
+
+if TYPE_CHECKING:
+    import pandas as pd
+
+LAYOUTS: tuple[str, ...] = ("group", "abstract")
+FORMATS: tuple[str, ...] = ("csv", "markdown", "latex", "frictionmap")
+#: Temperatures closer than this [K] to a --temperature filter value match it.
+TEMPERATURE_MATCH_K = 0.005
+
+
+def _select(
+    frame: pd.DataFrame,
+    pin: Sequence[str] | None,
+    disc: Sequence[str] | None,
+    temperature_C: Sequence[float] | None,
+) -> pd.DataFrame:
+    """Rows matching every given filter (materials case-insensitively; a new frame)."""
+    import numpy as np
+
+    keep = np.ones(len(frame), dtype=bool)
+    for column, wanted in (("pin", pin), ("disc", disc)):
+        if wanted:
+            names = {w.strip().casefold() for w in wanted}
+            keep &= frame[column].astype(str).str.casefold().isin(names).to_numpy()
+    if temperature_C:
+        t = frame["temperature_C"].to_numpy(dtype=float)
+        hit = np.zeros(len(frame), dtype=bool)
+        for value in temperature_C:
+            hit |= np.abs(t - float(value)) <= TEMPERATURE_MATCH_K
+        keep &= hit
+    return frame.loc[keep].reset_index(drop=True)
+
+
+def group_table(
+    runs: pd.DataFrame,
+    *,
+    pin: Sequence[str] | None = None,
+    disc: Sequence[str] | None = None,
+    temperature_C: Sequence[float] | None = None,
+    by_speed: bool = False,
+) -> pd.DataFrame:
+    """The group-statistics table of a map, filtered after the statistics are computed
+    (so the pooled repeatability s_r and the r flags always use the whole map)."""
+    from ..stats import group_statistics
+
+    return _select(group_statistics(runs, by_speed=by_speed), pin, disc, temperature_C)
+
+
+def abstract_table(
+    runs: pd.DataFrame,
+    *,
+    pin: Sequence[str] | None = None,
+    disc: Sequence[str] | None = None,
+    temperature_C: Sequence[float] | None = None,
+) -> pd.DataFrame:
+    """The paper's Table 2 layout: ``pin, disc, pressure_kPa, temperature_C, mu_k`` with
+    μ_K the group mean rounded to two decimals."""
+    groups = group_table(runs, pin=pin, disc=disc, temperature_C=temperature_C)
+    table = groups.loc[:, ["pin", "disc", "pressure_kPa", "temperature_C"]].copy()
+    table["mu_k"] = groups["mu_k_mean"].round(2)
+    return table
+
+
+def frictionmap_table(
+    runs: pd.DataFrame,
+    *,
+    pin: Sequence[str] | None = None,
+    disc: Sequence[str] | None = None,
+    temperature_C: Sequence[float] | None = None,
+) -> pd.DataFrame:
+    """The included runs in the published 7-column schema, in map order.
+
+    ``measurementNo`` is the run's repeat number; runs without one are numbered after the
+    highest repeat of their condition, in map order.
+    """
+    import pandas as pd
+
+    from ..frictionmap import FRICTIONMAP_COLUMNS
+    from ..stats import _group_keys
+
+    included = runs.loc[~runs["excluded"].astype(bool)].reset_index(drop=True)
+    included = _select(included, pin, disc, temperature_C)
+    keys = _group_keys(included, by_speed=False)
+    numbers: list[float] = []
+    next_free: dict[tuple[Any, ...], int] = {}
+    for key, idx in keys.groupby(list(keys.columns), dropna=False, sort=False).groups.items():
+        repeats = included.loc[idx, "repeat"]
+        next_free[key] = int(repeats.max()) if repeats.notna().any() else 0
+    for i, key in enumerate(keys.itertuples(index=False, name=None)):
+        repeat = included["repeat"].iloc[i]
+        if pd.isna(repeat):
+            next_free[key] += 1
+            numbers.append(float(next_free[key]))
+        else:
+            numbers.append(float(repeat))
+    table = pd.DataFrame(
+        {
+            "pin": included["pin"].to_numpy(dtype=object),
+            "disc": included["disc"].to_numpy(dtype=object),
+            "contactForce": included["normal_force_N"].to_numpy(dtype=float),
+            "contactPressure": included["pressure_kPa"].to_numpy(dtype=float),
+            "temperature": included["temperature_C"].to_numpy(dtype=float),
+            "measurementNo": numbers,
+            "cof": included["mu_k"].to_numpy(dtype=float),
+        },
+        columns=list(FRICTIONMAP_COLUMNS),
+    )
+    return table
+
+
+# --------------------------------------------------------------------------- writers
+
+
+def _cell(value: Any, spec: str = ".4g") -> str:
+    import numpy as np
+
+    if value is None:
+        return ""
+    if isinstance(value, bool | np.bool_):
+        return "yes" if value else "no"
+    if isinstance(value, int | np.integer):
+        return str(int(value))
+    if isinstance(value, float | np.floating):
+        return "" if not math.isfinite(value) else format(float(value), spec)
+    try:
+        import pandas as pd
+
+        if pd.isna(value):
+            return ""
+    except (TypeError, ValueError):
+        pass
+    return str(value)
+
+
+def _numeric(frame: pd.DataFrame, column: str) -> bool:
+    import pandas as pd
+
+    dtype = frame[column].dtype
+    return bool(pd.api.types.is_numeric_dtype(dtype)) and not pd.api.types.is_bool_dtype(dtype)
+
+
+def to_csv(table: pd.DataFrame, formats: dict[str, str] | None = None) -> str:
+    """CSV text (``\\n`` line ends); floats with ten significant digits, missing as empty.
+
+    ``formats`` is accepted for a uniform writer signature and ignored: CSV is for machines.
+    """
+    return table.to_csv(index=False, lineterminator="\n", float_format="%.10g")
+
+
+def frictionmap_csv(table: pd.DataFrame) -> str:
+    """CSV text in the published FrictionMap style: floats as shortest round-trip text."""
+    return table.to_csv(index=False, lineterminator="\n")
+
+
+def _specs(table: pd.DataFrame, formats: dict[str, str] | None) -> list[str]:
+    formats = formats or {}
+    return [formats.get(str(c), ".4g") for c in table.columns]
+
+
+def to_markdown(table: pd.DataFrame, formats: dict[str, str] | None = None) -> str:
+    """A GitHub-flavoured Markdown table; numeric columns right-aligned. Floats use
+    ``formats[column]`` (a format spec) or four significant digits."""
+    header = [str(c) for c in table.columns]
+    align = ["---:" if _numeric(table, c) else "---" for c in table.columns]
+
+    def esc(text: str) -> str:
+        return text.replace("|", "\\|").replace("\n", " ")
+
+    specs = _specs(table, formats)
+    lines = ["| " + " | ".join(esc(h) for h in header) + " |", "| " + " | ".join(align) + " |"]
+    for row in table.itertuples(index=False, name=None):
+        cells = (esc(_cell(v, f)) for v, f in zip(row, specs, strict=True))
+        lines.append("| " + " | ".join(cells) + " |")
+    return "\n".join(lines) + "\n"
+
+
+_LATEX_SPECIAL = {
+    "\\": r"\textbackslash{}",
+    "&": r"\&",
+    "%": r"\%",
+    "$": r"\$",
+    "#": r"\#",
+    "_": r"\_",
+    "{": r"\{",
+    "}": r"\}",
+    "~": r"\textasciitilde{}",
+    "^": r"\textasciicircum{}",
+}
+
+
+def latex_escape(text: str) -> str:
+    """Escape LaTeX's special characters in plain text."""
+    return "".join(_LATEX_SPECIAL.get(ch, ch) for ch in text)
+
+
+def to_latex(table: pd.DataFrame, formats: dict[str, str] | None = None) -> str:
+    """A booktabs ``tabular`` (needs ``\\usepackage{booktabs}``); numbers right-aligned,
+    floats formatted as in :func:`to_markdown`."""
+    specs = _specs(table, formats)
+    spec = "".join("r" if _numeric(table, c) else "l" for c in table.columns)
+    lines = [
+        f"\\begin{{tabular}}{{{spec}}}",
+        "\\toprule",
+        " & ".join(latex_escape(str(c)) for c in table.columns) + " \\\\",
+        "\\midrule",
+    ]
+    for row in table.itertuples(index=False, name=None):
+        cells = (latex_escape(_cell(v, f)) for v, f in zip(row, specs, strict=True))
+        lines.append(" & ".join(cells) + " \\\\")
+    lines += ["\\bottomrule", "\\end{tabular}"]
+    return "\n".join(lines) + "\n"
+
+
+def render_table(
+    runs: pd.DataFrame,
+    *,
+    fmt: str = "csv",
+    layout: str = "group",
+    pin: Sequence[str] | None = None,
+    disc: Sequence[str] | None = None,
+    temperature_C: Sequence[float] | None = None,
+    by_speed: bool = False,
+) -> str:
+    """A table of the map as text: ``fmt`` one of :data:`FORMATS`, ``layout`` one of
+    :data:`LAYOUTS` (``frictionmap`` has its own layout). Raises :class:`ExportError` for an
+    unknown format/layout or when no row matches the filters."""
+    if fmt not in FORMATS:
+        raise ExportError(f"unknown table format {fmt!r}; expected one of {', '.join(FORMATS)}")
+    if layout not in LAYOUTS:
+        raise ExportError(f"unknown table layout {layout!r}; expected one of {', '.join(LAYOUTS)}")
+    filters = {"pin": pin, "disc": disc, "temperature_C": temperature_C}
+    if fmt == "frictionmap":
+        if layout != "group" or by_speed:
+            raise ExportError(
+                "the frictionmap format has its own 7-column layout",
+                hint="drop --layout / --by-speed",
+            )
+        table = frictionmap_table(runs, **filters)
+    elif layout == "abstract":
+        if by_speed:
+            raise ExportError("the abstract layout does not split by speed", hint="drop --by-speed")
+        table = abstract_table(runs, **filters)
+    else:
+        table = group_table(runs, by_speed=by_speed, **filters)
+    if table.empty:
+        given = ", ".join(f"{k}={list(v)}" for k, v in filters.items() if v) or "no filter"
+        raise ExportError(
+            f"no rows to tabulate ({given}; the map holds {len(runs)} runs)",
+            hint="check `tribopipe map show` for the pins, discs and temperatures",
+        )
+    if fmt == "frictionmap":
+        return frictionmap_csv(table)
+    # The paper prints μ_K with two decimals; keep "0.30", not "0.3".
+    formats = {"mu_k": ".2f"} if layout == "abstract" else None
+    return {"csv": to_csv, "markdown": to_markdown, "latex": to_latex}[fmt](table, formats)
+
+
+def export_table(
+    map_path: str | os.PathLike[str],
+    output: str | os.PathLike[str] | None = None,
+    **options: Any,
+) -> str:
+    """Read the map at ``map_path``, render a table (options of :func:`render_table`) and,
+    when ``output`` is given, write it there (UTF-8). Returns the text."""
+    from ..frictionmap import read_map
+
+    if not Path(map_path).exists():
+        raise ExportError("friction map not found", path=map_path, hint="pass --map PATH")
+    text = render_table(read_map(map_path), **options)
+    if output is not None:
+        target = Path(output)
+        target.parent.mkdir(parents=True, exist_ok=True)
+        tmp = target.with_name(f".{target.name}.tmp")
+        tmp.write_text(text, encoding="utf-8", newline="")
+        tmp.replace(target)
+    return text

@@ -1,15 +1,861 @@
 """Pure physics of a pin-on-disc run: pressure, COF trace, sliding distance, μ_S and μ_K.
 
-(Placeholder to be replaced by the reduction implementation.)
+Physics (T-PID/44 cell: ``n_pins`` pins of radius ``r`` on a disc, friction radius R_eff)
+-----------------------------------------------------------------------------------------
+* contact pressure per pin ``p = (F_N / n_pins) / (π r²)``: N/mm² = MPa, ×1000 → kPa
+  (1 N on three pins of r = 3 mm → 11.79 kPa);
+* friction force ``F_R = M / R_eff`` (M in N·m, R_eff in m), COF ``μ = F_R / F_N``;
+* sliding distance ``s = φ · R_eff`` from the deflection angle (rad × mm → mm); else the
+  integral of the rotational speed; else nominal speed × time.
+
+Signs. The rotation direction decides the signs of angle, speed and torque. Distance is
+counted along the direction of travel (``s`` grows from 0); the friction force takes the
+sign that makes the median offset-corrected torque of the sliding part positive. We use
+that sign, not ``|M|``, so that noise around zero is not rectified into a positive bias.
+A negative median normal force (compression written as negative) is flipped likewise.
+
+Torque zero offset. A torque offset shows up as torque while the disc does not move. It is
+estimated (median torque, robust to spikes) from, in this order: an explicit value; the
+set-up interval before the friction interval (attached by
+:func:`select_friction_interval` to ``meta.extra`` as ``torque_offset_Nm``); the samples
+of the friction interval before the disc starts to move (at least
+``ReductionParams.offset_min_samples``). If neither exists the offset is taken as 0 and
+``parameters["torque_offset_source"]`` says it could not be estimated.
+
+Contact. Samples with ``F_N`` below ``InstrumentConfig.contact_threshold_N`` are masked
+(``in_contact`` False, ``mu`` NaN in the trace) and take no part in any statistic.
+
+Detection of μ_S and μ_K (method ``"tribopipe-v1"``)
+----------------------------------------------------
+1. Light median filter (``median_window`` samples) on μ removes spikes → ``mu_smooth``.
+2. Noise level σ: robust (MAD) standard deviation of the first differences of μ / √2.
+3. μ_S is the static peak at the start of sliding — the maximum transmittable friction
+   force before gross sliding, the reading "at the instant the block slips" of ASTM D1894
+   and ISO 8295. It is the maximum of a quadratic Savitzky–Golay smoothing
+   (``peak_window_mm`` wide: keeps rounded peaks, averages noise) of ``mu_smooth`` within
+   the first ``static_search_mm`` of sliding.
+4. μ_K is the mean of μ over the steady sliding plateau, the "average during uniform
+   sliding" of ASTM D1894; as in ASTM D2534 the plateau starts only after a run-in
+   distance (``run_in_mm``) and after the static peak. Its start is where the transient
+   has settled: the post-run-in trace is cut in blocks of ``block_mm``; the plateau starts
+   at the first block from which every later block mean lies within a tolerance of their
+   median (tolerance = the largest of ``settle_tol``, 3× the standard error of a block
+   mean, and 3× the detrended block-to-block scatter of the second half, which is what
+   stick-slip produces). It ends at the end of the trace.
+5. Drift test: least-squares slope of μ over s in the plateau [1/mm]; a slope larger than
+   ``max_drift_per_mm`` and than 3 standard errors means the plateau is not steady.
+6. μ_S is *distinct* when the peak stands above the plateau's own highs (its 99th
+   percentile after the same smoothing) by more than ``static_min_prominence`` and
+   ``static_prominence_sigma`` × the smoothed noise. Otherwise μ_S is reported equal to
+   μ_K (the peak is not resolved) and ``static_not_distinct`` is flagged; the raw peak is
+   kept in ``parameters["mu_s_peak_raw"]``.
+
+Flags (thresholds in :class:`ReductionParams`)
+----------------------------------------------
+``static_not_distinct``  step 6 failed.
+``no_steady_state``      no plateau of at least ``plateau_min_mm`` settles (step 4), or
+                         the drift test fails (step 5).
+``stick_slip``           the plateau oscillates: the standard deviation of μ averaged over
+                         ``stick_slip_average_s`` and detrended exceeds both
+                         ``stick_slip_min_std`` and ``stick_slip_ratio`` × what white
+                         noise of level σ would give.
+``normal_force_unstable`` the coefficient of variation of F_N over the sliding contact
+                         samples exceeds ``normal_force_cv_max``.
+``short_trace``          the sliding distance is below ``run_in_mm + plateau_min_mm`` or
+                         the plateau holds fewer than ``min_plateau_samples`` samples.
+
+References: ASTM D1894 (static and kinetic COF of plastic film: static = initial peak,
+kinetic = average during uniform sliding); ISO 8295 (same principle for plastics film);
+ASTM D2534 (kinetic COF of wax coatings: averaging after a run-in distance).
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import math
+from dataclasses import asdict, dataclass, field, replace
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from .errors import MissingQuantityError, ReductionError
+from .measurement import ANGLE, NORMAL_FORCE, SPEED, TEMPERATURE, TIME, TORQUE, Measurement
+
+if TYPE_CHECKING:
+    from collections.abc import Sequence
+
+    import pandas as pd
+
+    from .config import InstrumentConfig
+
+METHOD = "tribopipe-v1: median filter + Savitzky-Golay static peak; settled-plateau mean"
+
+#: keys of ``MeasurementMeta.extra`` written by :func:`select_friction_interval`
+OFFSET_KEY = "torque_offset_Nm"
+OFFSET_SOURCE_KEY = "torque_offset_source"
+
+#: an interval "rotates" when its deflection angle travels at least this far [rad]
+#: (0.002 rad ≈ 0.027 mm at R = 13.37 mm, ~4 s at 0.005 rpm) ...
+ROTATION_MIN_ANGLE_RAD = 2e-3
+#: ... or its median |rotational speed| reaches this [rad/s] (0.005 rpm = 5.2e-4 rad/s)
+ROTATION_MIN_SPEED_RAD_S = 5e-5
+
+FLAGS: tuple[str, ...] = (
+    "static_not_distinct",
+    "no_steady_state",
+    "stick_slip",
+    "normal_force_unstable",
+    "short_trace",
+)
 
 
 @dataclass(frozen=True)
 class ReductionParams:
-    """Parameters of the μ_S / μ_K detection."""
+    """Parameters of the μ_S / μ_K detection (the ``[reduction]`` table of a config).
+
+    Attributes
+    ----------
+    median_window
+        Width of the light median filter on μ [samples, odd]; removes spikes.
+    peak_window_mm
+        Width of the quadratic Savitzky–Golay smoothing used to read the static peak [mm].
+    static_search_mm
+        The static peak is searched within this sliding distance from the start [mm].
+    run_in_mm
+        The μ_K plateau never starts before this sliding distance (ASTM D2534 run-in) [mm].
+    plateau_min_mm
+        Shortest acceptable plateau [mm]; shorter → ``no_steady_state``/``short_trace``.
+    block_mm
+        Block length of the settling test that finds the plateau start [mm].
+    settle_tol
+        Smallest tolerance of the settling test [COF].
+    max_drift_per_mm
+        Largest plateau slope of μ over s still called steady [1/mm].
+    static_min_prominence
+        μ_S is distinct when it exceeds the plateau's highs by more than this [COF] ...
+    static_prominence_sigma
+        ... and by more than this many standard deviations of the smoothed noise [-].
+    stick_slip_average_s
+        Averaging time before the stick-slip test [s] (removes white noise, keeps slips).
+    stick_slip_ratio
+        Stick-slip when the averaged plateau scatter exceeds white noise by this factor [-] ...
+    stick_slip_min_std
+        ... and is larger than this [COF].
+    normal_force_cv_max
+        Largest coefficient of variation of F_N over sliding still called stable [-].
+    min_contact_samples
+        Fewer samples in contact than this is an error, not a result [samples].
+    min_plateau_samples
+        A plateau with fewer samples than this is flagged ``short_trace`` [samples].
+    min_travel_mm
+        A measured sliding distance below this means "no rotation" (an error) [mm].
+    motion_tol_mm
+        Samples before the disc has moved this far count as "at rest" [mm].
+    offset_min_samples
+        At-rest samples needed to estimate a torque offset from the friction interval.
+    max_missing_fraction
+        More missing torque or normal-force values than this fraction is an error [-].
+    """
 
     median_window: int = 5
+    peak_window_mm: float = 0.02
+    static_search_mm: float = 0.5
+    run_in_mm: float = 0.25
+    plateau_min_mm: float = 0.3
+    block_mm: float = 0.05
+    settle_tol: float = 0.01
+    max_drift_per_mm: float = 0.02
+    static_min_prominence: float = 0.02
+    static_prominence_sigma: float = 3.0
+    stick_slip_average_s: float = 1.0
+    stick_slip_ratio: float = 3.0
+    stick_slip_min_std: float = 0.01
+    normal_force_cv_max: float = 0.05
+    min_contact_samples: int = 20
+    min_plateau_samples: int = 30
+    min_travel_mm: float = 0.01
+    motion_tol_mm: float = 1e-3
+    offset_min_samples: int = 5
+    max_missing_fraction: float = 0.5
+
+    def __post_init__(self) -> None:
+        from .errors import ConfigError
+
+        for f_name, value in asdict(self).items():
+            if not (isinstance(value, int | float) and math.isfinite(value) and value >= 0):
+                raise ConfigError(f"[reduction] {f_name} must be a number >= 0, got {value!r}")
+        if not (isinstance(self.median_window, int) and self.median_window >= 1):
+            raise ConfigError(
+                f"[reduction] median_window must be a whole number >= 1, "
+                f"got {self.median_window!r}"
+            )
+        if self.block_mm <= 0 or self.peak_window_mm <= 0:
+            raise ConfigError("[reduction] block_mm and peak_window_mm must be > 0")
+
+
+@dataclass(frozen=True)
+class ReductionResult:
+    """μ_S and μ_K of one run with the evidence behind them.
+
+    Distances in mm along the sliding path, times in s of the measurement's ``time_s``,
+    forces in N (total on all pins), pressure in kPa per pin. ``plateau_std`` is the
+    standard deviation of μ in the μ_K window (not an error of the mean);
+    ``plateau_drift_per_mm`` the slope of μ over s there [1/mm]. ``trace`` has the columns
+    ``time_s, sliding_distance_mm, normal_force_N, pressure_kPa, friction_force_N, mu,
+    mu_smooth, in_contact`` (μ is NaN where not in contact).
+    """
+
+    mu_s: float
+    mu_s_distance_mm: float
+    mu_s_time_s: float
+    mu_k: float
+    mu_k_window_mm: tuple[float, float]
+    mu_k_window_s: tuple[float, float]
+    plateau_std: float
+    plateau_drift_per_mm: float
+    normal_force_mean_N: float
+    pressure_kPa: float
+    temperature_C: float | None
+    sliding_speed_mm_s: float
+    sliding_distance_mm: float
+    flags: tuple[str, ...]
+    method: str
+    parameters: dict[str, Any]
+    trace: pd.DataFrame = field(repr=False)
+
+
+# --------------------------------------------------------------------------- unit physics
+
+
+def contact_pressure_kPa(normal_force_N: Any, n_pins: int, pin_radius_mm: float) -> Any:
+    """Contact pressure per pin [kPa] of a total normal force [N] shared by ``n_pins`` pins
+    of radius ``pin_radius_mm`` [mm]: ``(F/n) / (π r²)`` N/mm² × 1000. Scalar or array."""
+    return np.asarray(normal_force_N, dtype=float) / n_pins / (math.pi * pin_radius_mm**2) * 1e3
+
+
+def friction_force_N(torque_Nm: Any, friction_radius_mm: float) -> Any:
+    """Friction force [N] from a torque [N·m] at the friction radius [mm]: ``M / R``."""
+    return np.asarray(torque_Nm, dtype=float) / (friction_radius_mm * 1e-3)
+
+
+def coefficient_of_friction(friction_force_N: Any, normal_force_N: Any) -> Any:
+    """COF μ = F_R / F_N (both in N; arrays of the same shape). NaN where F_N is 0."""
+    f_r = np.asarray(friction_force_N, dtype=float)
+    f_n = np.asarray(normal_force_N, dtype=float)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        mu = f_r / f_n
+    return np.where(f_n != 0, mu, np.nan)
+
+
+def rpm_to_rad_s(speed_rpm: Any) -> Any:
+    """Rotational speed: revolutions per minute → rad/s (× 2π/60)."""
+    return np.asarray(speed_rpm, dtype=float) * (2 * math.pi / 60)
+
+
+def sliding_speed_mm_s(speed_rpm: float, friction_radius_mm: float) -> float:
+    """Sliding speed [mm/s] at the friction radius [mm] of a disc turning at ``speed_rpm``
+    (0.005 rpm at 13.37 mm → 0.0070 mm/s)."""
+    return float(rpm_to_rad_s(speed_rpm)) * friction_radius_mm
+
+
+def distance_from_angle_mm(angle_rad: Any, friction_radius_mm: float) -> np.ndarray:
+    """Sliding distance [mm] from a deflection angle [rad] (shape (n,)): ``(φ − φ₀)·R``,
+    counted along the direction of travel (so it grows whichever way the disc turns)."""
+    phi = np.asarray(angle_rad, dtype=float)
+    travel = phi - phi[0]
+    direction = 1.0 if travel[-1] >= 0 else -1.0
+    return direction * travel * friction_radius_mm
+
+
+def distance_from_speed_mm(
+    time_s: Any, speed_rad_s: Any, friction_radius_mm: float
+) -> np.ndarray:
+    """Sliding distance [mm] by integrating the rotational speed [rad/s] over time [s]
+    (trapezoids, shape (n,), 0 at the first sample) times the friction radius [mm]."""
+    t = np.asarray(time_s, dtype=float)
+    w = np.asarray(speed_rad_s, dtype=float)
+    if np.nanmedian(w) < 0:
+        w = -w
+    steps = 0.5 * (w[1:] + w[:-1]) * np.diff(t)
+    return np.concatenate([[0.0], np.cumsum(steps)]) * friction_radius_mm
+
+
+def distance_from_nominal_mm(
+    time_s: Any, speed_rpm: float, friction_radius_mm: float
+) -> np.ndarray:
+    """Sliding distance [mm] assuming the nominal speed [rpm] from the first sample on."""
+    t = np.asarray(time_s, dtype=float)
+    return (t - t[0]) * sliding_speed_mm_s(speed_rpm, friction_radius_mm)
+
+
+def sliding_distance_mm(
+    time_s: Any,
+    friction_radius_mm: float,
+    *,
+    angle_rad: Any = None,
+    speed_rad_s: Any = None,
+    nominal_speed_rpm: float | None = None,
+) -> tuple[np.ndarray, str]:
+    """Sliding distance [mm] (shape (n,)) and its source: ``"angle"`` when a finite angle
+    [rad] is given, else ``"speed"`` (integrated rad/s), else ``"nominal"`` (rpm × time).
+    Missing angle/speed values are interpolated over time."""
+    t = np.asarray(time_s, dtype=float)
+    for values, source in ((angle_rad, "angle"), (speed_rad_s, "speed")):
+        if values is None:
+            continue
+        v = np.asarray(values, dtype=float)
+        ok = np.isfinite(v)
+        if ok.sum() < 2:
+            continue
+        v = np.interp(t, t[ok], v[ok]) if not ok.all() else v
+        if source == "angle":
+            return distance_from_angle_mm(v, friction_radius_mm), source
+        return distance_from_speed_mm(t, v, friction_radius_mm), source
+    if nominal_speed_rpm is None:
+        raise ValueError("no angle, no speed and no nominal speed: sliding distance unknown")
+    return distance_from_nominal_mm(t, nominal_speed_rpm, friction_radius_mm), "nominal"
+
+
+# --------------------------------------------------------------------------- signal helpers
+
+
+def noise_std(mu: Any) -> float:
+    """Robust white-noise level of a signal (shape (n,)): 1.4826·MAD of its first
+    differences / √2. Slow trends and rare jumps (slips) hardly affect it. NaN-free input."""
+    d = np.diff(np.asarray(mu, dtype=float))
+    if d.size < 2:
+        return 0.0
+    mad = np.median(np.abs(d - np.median(d)))
+    return float(1.4826 * mad / math.sqrt(2))
+
+
+def median_smooth(values: Any, window: int) -> np.ndarray:
+    """Running median over ``window`` samples (made odd), edges by nearest value; a new
+    array of the same shape (n,). NaN-free input."""
+    from scipy.ndimage import median_filter
+
+    v = np.asarray(values, dtype=float)
+    w = max(1, int(window) | 1)
+    if w <= 1 or v.size < w:
+        return v.copy()
+    return median_filter(v, size=w, mode="nearest")
+
+
+def peak_smooth(values: Any, window: int) -> np.ndarray:
+    """Quadratic Savitzky–Golay smoothing over ``window`` samples (made odd, ≥ 5); keeps
+    rounded peaks while averaging noise. A new array of shape (n,). NaN-free input."""
+    from scipy.signal import savgol_filter
+
+    v = np.asarray(values, dtype=float)
+    w = max(5, int(window) | 1)
+    if v.size < w:
+        return v.copy()
+    return savgol_filter(v, w, 2, mode="interp")
+
+
+def static_peak_curve(values: Any, window: int) -> np.ndarray:
+    """The curve whose maximum is read as μ_S (shape (n,), NaN-free input): a quadratic
+    Savitzky–Golay smoothing over ``window`` samples, capped by the running maximum (same
+    window) of a moving average over a third of it. The smoothing averages the noise
+    without flattening a rounded peak; the cap stops the polynomial from overshooting
+    where a peak ends in a sudden slip (stick-slip), so μ_S never exceeds what was
+    measured."""
+    from scipy.ndimage import maximum_filter1d, uniform_filter1d
+
+    v = np.asarray(values, dtype=float)
+    w = max(5, int(window) | 1)
+    smooth = peak_smooth(v, w)
+    if v.size < w:
+        return smooth
+    averaged = uniform_filter1d(v, size=max(3, (w // 3) | 1), mode="nearest")
+    return np.minimum(smooth, maximum_filter1d(averaged, size=w, mode="nearest"))
+
+
+def linear_slope(x: Any, y: Any) -> tuple[float, float]:
+    """Least-squares slope of y over x and its standard error (white-noise model)."""
+    x = np.asarray(x, dtype=float)
+    y = np.asarray(y, dtype=float)
+    if x.size < 3 or np.ptp(x) == 0:
+        return 0.0, math.inf
+    xc = x - x.mean()
+    sxx = float(np.dot(xc, xc))
+    slope = float(np.dot(xc, y - y.mean()) / sxx)
+    resid = y - y.mean() - slope * xc
+    se = math.sqrt(float(np.dot(resid, resid)) / (x.size - 2) / sxx)
+    return slope, se
+
+
+def find_plateau_start(
+    s_mm: Any, mu: Any, start_mm: float, noise: float, params: ReductionParams
+) -> tuple[float | None, float]:
+    """Start [mm] of the settled plateau in ``mu`` over ``s_mm`` (both shape (n,), valid
+    samples only) searched from ``start_mm`` on, and the tolerance used [COF].
+
+    Returns ``(None, tol)`` when no run of blocks reaching to the end and at least
+    ``plateau_min_mm`` long stays within the tolerance.
+    """
+    s = np.asarray(s_mm, dtype=float)
+    m = np.asarray(mu, dtype=float)
+    end = float(s[-1]) if s.size else start_mm
+    n_blocks = int((end - start_mm) // params.block_mm)
+    if n_blocks < 2:
+        return None, params.settle_tol
+    edges = start_mm + params.block_mm * np.arange(n_blocks + 1)
+    edges[-1] = end + 1e-12
+    idx = np.searchsorted(s, edges)
+    counts = np.diff(idx)
+    sums = np.add.reduceat(m, idx[:-1]) if m.size else np.zeros(n_blocks)
+    means = np.where(counts > 0, sums / np.maximum(counts, 1), np.nan)
+    good = counts >= 3
+    centres = 0.5 * (edges[:-1] + edges[1:])
+    means, centres, counts = means[good], centres[good], counts[good]
+    if means.size < 2:
+        return None, params.settle_tol
+    half = means[means.size // 2 :]
+    scatter = 0.0
+    if half.size >= 4:
+        x = np.arange(half.size, dtype=float)
+        resid = half - np.polyval(np.polyfit(x, half, 1), x)
+        scatter = float(np.std(resid, ddof=2))
+    se_block = noise / math.sqrt(float(np.median(counts)))
+    tol = max(params.settle_tol, 3 * se_block, 3 * scatter)
+    min_blocks = max(2, math.ceil(params.plateau_min_mm / params.block_mm - 1e-9))
+    for k in range(means.size - min_blocks + 1):
+        rest = means[k:]
+        if np.all(np.abs(rest - np.median(rest)) <= tol):
+            return float(centres[k] - 0.5 * params.block_mm), tol
+    return None, tol
+
+
+# --------------------------------------------------------------------------- interval choice
+
+
+def _column(m: Measurement, name: str) -> np.ndarray | None:
+    if name not in m.data.columns:
+        return None
+    values = np.array(m.data[name], dtype=float)
+    return values if np.isfinite(values).any() else None
+
+
+def _rotation_known(m: Measurement) -> bool:
+    return _column(m, ANGLE) is not None or _column(m, SPEED) is not None
+
+
+def _rotates(m: Measurement) -> bool:
+    angle = _column(m, ANGLE)
+    if angle is not None:
+        finite = angle[np.isfinite(angle)]
+        if finite.size >= 2 and abs(finite[-1] - finite[0]) >= ROTATION_MIN_ANGLE_RAD:
+            return True
+    speed = _column(m, SPEED)
+    if speed is not None:
+        finite = speed[np.isfinite(speed)]
+        if finite.size and float(np.median(np.abs(finite))) >= ROTATION_MIN_SPEED_RAD_S:
+            return True
+    return False
+
+
+def _angle_travel(m: Measurement) -> float:
+    angle = _column(m, ANGLE)
+    if angle is not None:
+        finite = angle[np.isfinite(angle)]
+        return float(abs(finite[-1] - finite[0]))
+    speed = _column(m, SPEED)
+    time = _column(m, TIME)
+    if speed is None or time is None:
+        return 0.0
+    ok = np.isfinite(speed) & np.isfinite(time)
+    return float(abs(np.trapezoid(speed[ok], time[ok]))) if ok.sum() >= 2 else 0.0
+
+
+def setup_torque_offset_Nm(setup: Measurement) -> float | None:
+    """Median torque [N·m] of a set-up interval (disc not rotating), or ``None`` without
+    torque values. With the disc at rest the true friction torque is zero, so this is the
+    instrument's torque zero offset."""
+    torque = _column(setup, TORQUE)
+    if torque is None:
+        return None
+    return float(np.median(torque[np.isfinite(torque)]))
+
+
+def select_friction_interval(measurements: Sequence[Measurement]) -> Measurement:
+    """The friction interval of an export: the interval with rotation.
+
+    Among the intervals having time, torque and normal force, the one whose disc rotates
+    (deflection angle travels ≥ ``ROTATION_MIN_ANGLE_RAD`` or median speed ≥
+    ``ROTATION_MIN_SPEED_RAD_S``) is chosen; if several rotate, the one travelling
+    farthest. Without any angle or speed column the interval with the largest median
+    |torque| is taken (a normal-force set-up interval carries almost none).
+
+    When the interval right before it in the same test and result is verified at rest
+    (a normal-force set-up), its median torque is attached to the returned measurement's
+    ``meta.extra`` as ``torque_offset_Nm`` (with ``torque_offset_source``) for
+    :func:`reduce_measurement`. The input measurements are not modified.
+
+    Raises :class:`ReductionError` when no interval has the quantities or none rotates.
+    """
+    items = list(measurements)
+    if not items:
+        raise ReductionError("no intervals to choose the friction interval from")
+    usable = [i for i, m in enumerate(items) if m.has(TIME, TORQUE, NORMAL_FORCE)]
+    source = items[0].meta.source_file
+    if not usable:
+        found = sorted({c for m in items for c in m.data.columns})
+        raise MissingQuantityError(
+            "no interval has time, torque and normal force; columns found: "
+            + (", ".join(found) or "none"),
+            path=source,
+            hint="check the column names or pass an alias table",
+        )
+    known = [i for i in usable if _rotation_known(items[i])]
+    if known:
+        rotating = [i for i in known if _rotates(items[i])]
+        if not rotating:
+            raise ReductionError(
+                f"no rotation in any of the {len(known)} interval(s) with an angle or speed: "
+                "the disc never turned, so there is no friction interval",
+                path=source,
+            )
+        chosen = max(rotating, key=lambda i: (_angle_travel(items[i]), -i))
+    else:
+        chosen = max(usable, key=lambda i: (_median_abs_torque(items[i]), -i))
+    picked = items[chosen]
+    previous = chosen - 1
+    if previous >= 0:
+        before = items[previous]
+        same_run = (before.meta.test, before.meta.result) == (picked.meta.test, picked.meta.result)
+        if same_run and _rotation_known(before) and not _rotates(before):
+            offset = setup_torque_offset_Nm(before)
+            if offset is not None:
+                where = f"set-up interval {before.meta.interval}" if before.meta.interval else (
+                    "set-up interval"
+                )
+                extra = tuple(
+                    (k, v) for k, v in picked.meta.extra if k not in (OFFSET_KEY, OFFSET_SOURCE_KEY)
+                ) + ((OFFSET_KEY, repr(offset)), (OFFSET_SOURCE_KEY, where))
+                picked = Measurement(data=picked.data, meta=replace(picked.meta, extra=extra))
+    return picked
+
+
+def _median_abs_torque(m: Measurement) -> float:
+    torque = _column(m, TORQUE)
+    return float(np.nanmedian(np.abs(torque))) if torque is not None else 0.0
+
+
+# --------------------------------------------------------------------------- the reduction
+
+
+def _require(m: Measurement) -> None:
+    try:
+        from .readers import require_columns  # type: ignore[attr-defined]
+    except ImportError:
+        require_columns = None
+    if require_columns is not None:
+        require_columns(m, (TIME, TORQUE, NORMAL_FORCE))
+        return
+    missing = [c for c in (TIME, TORQUE, NORMAL_FORCE) if not m.has(c)]
+    if missing:
+        raise MissingQuantityError(
+            f"{m.meta.label}: no values for {', '.join(missing)}; columns found: "
+            + (", ".join(map(str, m.data.columns)) or "none"),
+            hint="check the column names or pass an alias table",
+        )
+
+
+def _offset_from_meta(m: Measurement) -> tuple[float | None, str | None]:
+    extra = dict(m.meta.extra)
+    if OFFSET_KEY not in extra:
+        return None, None
+    try:
+        value = float(extra[OFFSET_KEY])
+    except ValueError:
+        return None, None
+    if not math.isfinite(value):
+        return None, None
+    return value, extra.get(OFFSET_SOURCE_KEY, "set-up interval")
+
+
+def reduce_measurement(
+    m: Measurement,
+    instrument: InstrumentConfig,
+    params: ReductionParams,
+    *,
+    torque_offset_Nm: float | None = None,
+) -> ReductionResult:
+    """Reduce one friction interval to μ_S and μ_K with their evidence (see module doc).
+
+    ``m.data`` needs ``time_s`` [s], ``torque_Nm`` [N·m], ``normal_force_N`` [N] and uses
+    ``angle_rad`` or ``speed_rad_s`` (else the nominal speed) and ``temperature_C`` when
+    present. ``torque_offset_Nm`` overrides the offset estimate. ``m`` is not modified.
+
+    Raises :class:`ReductionError` (naming ``m.meta.label``) for zero normal force, more
+    than half of torque or normal force missing, no rotation, or too few contact samples.
+    """
+    _require(m)
+    label = m.meta.label
+    data = m.data
+    t_all = np.array(data[TIME], dtype=float)
+    torque_all = np.array(data[TORQUE], dtype=float)
+    force_all = np.array(data[NORMAL_FORCE], dtype=float)
+    n_total = t_all.size
+    for name, values in ((TORQUE, torque_all), (NORMAL_FORCE, force_all)):
+        missing = int((~np.isfinite(values)).sum())
+        if n_total and missing > params.max_missing_fraction * n_total:
+            raise ReductionError(
+                f"{label}: {missing} of {n_total} {name} values are missing "
+                f"(more than {params.max_missing_fraction:.0%}); cannot reduce"
+            )
+    keep = np.isfinite(t_all) & np.isfinite(torque_all) & np.isfinite(force_all)
+    n_dropped = int(n_total - keep.sum())
+    t = t_all[keep]
+    torque = torque_all[keep]
+    force = force_all[keep]
+    if t.size < params.min_contact_samples:
+        raise ReductionError(
+            f"{label}: only {t.size} complete samples (need at least "
+            f"{params.min_contact_samples})"
+        )
+    order = np.argsort(t, kind="stable")
+    if not np.all(order == np.arange(t.size)):
+        t, torque, force = t[order], torque[order], force[order]
+    else:
+        order = None
+
+    def column(name: str) -> np.ndarray | None:
+        if name not in data.columns:
+            return None
+        values = np.array(data[name], dtype=float)[keep]
+        values = values[order] if order is not None else values
+        return values if np.isfinite(values).any() else None
+
+    force_sign = -1.0 if np.median(force) < 0 else 1.0
+    force = force_sign * force
+    threshold = instrument.contact_threshold_N
+    in_contact = force >= threshold
+    if max(threshold, 1e-9) > force.max():
+        raise ReductionError(
+            f"{label}: the normal force never reaches the contact threshold "
+            f"{threshold:g} N (largest {force.max():.3g} N); no contact, no friction",
+            hint="check the normal-force column or lower contact_threshold_N",
+        )
+    n_contact = int(in_contact.sum())
+    if n_contact < params.min_contact_samples:
+        raise ReductionError(
+            f"{label}: only {n_contact} samples in contact (F_N ≥ {threshold:g} N); "
+            f"need at least {params.min_contact_samples}"
+        )
+
+    R = instrument.friction_radius_mm
+    angle = column(ANGLE)
+    speed = column(SPEED)
+    s, distance_source = sliding_distance_mm(
+        t, R, angle_rad=angle, speed_rad_s=speed, nominal_speed_rpm=instrument.nominal_speed_rpm
+    )
+    total_mm = float(s[-1] - s[0]) if s.size else 0.0
+    if distance_source != "nominal" and s.max() < params.min_travel_mm:
+        raise ReductionError(
+            f"{label}: no rotation: the disc travelled {s.max():.3g} mm "
+            f"(< {params.min_travel_mm:g} mm); this is not a friction interval"
+        )
+
+    # torque offset: explicit > set-up interval > at-rest samples of this interval
+    at_rest = s < params.motion_tol_mm if distance_source != "nominal" else np.zeros_like(in_contact)
+    if distance_source != "nominal":
+        # only the leading rest, not a stop later in the run
+        first_move = int(np.argmax(~at_rest)) if (~at_rest).any() else at_rest.size
+        at_rest = np.arange(at_rest.size) < first_move
+    offset_source: str
+    if torque_offset_Nm is not None:
+        offset, offset_source = float(torque_offset_Nm), "given"
+    else:
+        meta_offset, meta_source = _offset_from_meta(m)
+        if meta_offset is not None:
+            offset, offset_source = meta_offset, str(meta_source)
+        elif int(at_rest.sum()) >= params.offset_min_samples:
+            offset = float(np.median(torque[at_rest]))
+            offset_source = f"at-rest start ({int(at_rest.sum())} samples)"
+        else:
+            offset = 0.0
+            offset_source = "not estimated (no set-up interval, no at-rest samples): 0 assumed"
+
+    corrected = torque - offset
+    moving = ~at_rest
+    sliding = moving & in_contact
+    if int(sliding.sum()) < params.min_contact_samples:
+        raise ReductionError(
+            f"{label}: only {int(sliding.sum())} samples in contact while sliding; need at "
+            f"least {params.min_contact_samples}"
+        )
+    torque_sign = -1.0 if np.median(corrected[sliding]) < 0 else 1.0
+    f_r = torque_sign * friction_force_N(corrected, R)
+    mu = np.where(in_contact, coefficient_of_friction(f_r, force), np.nan)
+    pressure = contact_pressure_kPa(force, instrument.n_pins, instrument.pin_radius_mm)
+
+    # the analysis runs on the valid (in-contact, moving) samples only
+    idx = np.flatnonzero(sliding & np.isfinite(mu))
+    s_v, t_v, mu_v = s[idx], t[idx], mu[idx]
+    mu_med = median_smooth(mu_v, params.median_window)
+    mu_smooth = np.full(t.size, np.nan)
+    mu_smooth[idx] = mu_med
+    sigma = noise_std(mu_v)
+    step_mm = float(np.median(np.diff(s_v))) if s_v.size > 1 else 0.0
+    step_mm = step_mm if step_mm > 0 else max(total_mm / max(s_v.size, 1), 1e-9)
+    dt_s = float(np.median(np.diff(t_v))) if t_v.size > 1 else 1.0
+    peak_n = int(round(params.peak_window_mm / step_mm))
+    mu_peak_curve = static_peak_curve(mu_med, peak_n)
+    sg_w = max(5, peak_n | 1)
+    # noise left after quadratic SG of width w (centre point): ~ sqrt(9 / (4 w)) σ
+    sigma_peak = sigma * math.sqrt(min(1.0, 9.0 / (4.0 * sg_w)))
+
+    # static peak within the search distance
+    search = s_v <= params.static_search_mm
+    if not search.any():
+        search = np.zeros(s_v.size, dtype=bool)
+        search[: max(1, s_v.size // 4)] = True
+    k_peak = int(np.argmax(np.where(search, mu_peak_curve, -np.inf)))
+    mu_peak = float(mu_peak_curve[k_peak])
+    s_peak = float(s_v[k_peak])
+
+    flags: list[str] = []
+    # plateau
+    start_from = max(params.run_in_mm, s_peak)
+    post = s_v >= start_from
+    plateau_start, tol = (
+        find_plateau_start(s_v[post], mu_v[post], start_from, sigma, params)
+        if post.any()
+        else (None, params.settle_tol)
+    )
+    short = total_mm < params.run_in_mm + params.plateau_min_mm
+    settled = plateau_start is not None
+    if plateau_start is None:
+        # fall back to the last plateau_min_mm (or the second half of a short trace)
+        end_mm = float(s_v[-1])
+        plateau_start = max(start_from if not short else 0.0, end_mm - params.plateau_min_mm)
+        if short:
+            plateau_start = max(min(start_from, end_mm / 2), end_mm / 2)
+    window = s_v >= plateau_start
+    if window.sum() < 3:
+        window = np.zeros(s_v.size, dtype=bool)
+        window[s_v.size // 2 :] = True
+    mu_w = mu_v[window]
+    mu_k = float(np.mean(mu_w))
+    plateau_std = float(np.std(mu_w, ddof=1)) if mu_w.size > 1 else 0.0
+    drift, drift_se = linear_slope(s_v[window], mu_w)
+    if short or int(window.sum()) < params.min_plateau_samples:
+        flags.append("short_trace")
+
+    # static peak vs the plateau's own highs
+    plateau_high = float(np.percentile(mu_peak_curve[window], 99))
+    prominence = mu_peak - max(plateau_high, mu_k)
+    distinct = prominence > max(
+        params.static_min_prominence, params.static_prominence_sigma * sigma_peak
+    )
+    if distinct:
+        mu_s, k_s = mu_peak, k_peak
+    else:
+        flags.append("static_not_distinct")
+        mu_s = mu_k
+        # where the smoothed trace first reaches μ_K: the onset of sliding at μ_S = μ_K
+        reached = np.flatnonzero(mu_peak_curve >= mu_k)
+        k_s = int(reached[0]) if reached.size else k_peak
+
+    if not settled or (
+        abs(drift) > params.max_drift_per_mm and abs(drift) > 3 * drift_se
+    ) or float(s_v[window][-1] - s_v[window][0]) < params.plateau_min_mm * 0.999:
+        flags.append("no_steady_state")
+
+    # stick-slip: slow, large oscillation of the plateau beyond white noise
+    n_avg = max(1, int(round(params.stick_slip_average_s / dt_s)))
+    ss_std = 0.0
+    if mu_w.size >= 3 * n_avg and mu_w.size >= 10:
+        kernel = np.ones(n_avg) / n_avg
+        averaged = np.convolve(mu_w, kernel, mode="valid")
+        x = s_v[window][n_avg - 1 :] if n_avg > 1 else s_v[window]
+        x = x[: averaged.size]
+        slope_fit = np.polyfit(x, averaged, 1)
+        ss_std = float(np.std(averaged - np.polyval(slope_fit, x)))
+        white = sigma / math.sqrt(n_avg)
+        if ss_std > params.stick_slip_min_std and ss_std > params.stick_slip_ratio * white:
+            flags.append("stick_slip")
+
+    f_slide = force[sliding]
+    f_mean = float(np.mean(f_slide))
+    cv = float(np.std(f_slide) / f_mean) if f_mean > 0 else math.inf
+    if cv > params.normal_force_cv_max:
+        flags.append("normal_force_unstable")
+
+    temperature = column(TEMPERATURE)
+    temp_mean: float | None = None
+    if temperature is not None:
+        tc = temperature[in_contact & np.isfinite(temperature)]
+        if tc.size:
+            temp_mean = float(np.mean(tc))
+
+    moving_t = t[moving]
+    moving_s = s[moving]
+    if moving_t.size >= 2 and moving_t[-1] > moving_t[0]:
+        speed_mm_s = float((moving_s[-1] - moving_s[0]) / (moving_t[-1] - moving_t[0]))
+    else:
+        speed_mm_s = instrument.nominal_sliding_speed_mm_s
+
+    import pandas as pd
+
+    trace = pd.DataFrame(
+        {
+            "time_s": t,
+            "sliding_distance_mm": s,
+            "normal_force_N": force,
+            "pressure_kPa": pressure,
+            "friction_force_N": f_r,
+            "mu": mu,
+            "mu_smooth": mu_smooth,
+            "in_contact": in_contact,
+        }
+    )
+    w_s, w_t = s_v[window], t_v[window]
+    parameters: dict[str, Any] = dict(asdict(params))
+    parameters.update(
+        {
+            "contact_threshold_N": threshold,
+            "friction_radius_mm": R,
+            "n_pins": instrument.n_pins,
+            "pin_radius_mm": instrument.pin_radius_mm,
+            "distance_source": distance_source,
+            "torque_offset_Nm": offset,
+            "torque_offset_source": offset_source,
+            "torque_sign": torque_sign,
+            "normal_force_sign": force_sign,
+            "noise_std": sigma,
+            "settle_tolerance": tol,
+            "plateau_settled": settled,
+            "plateau_drift_se_per_mm": drift_se if math.isfinite(drift_se) else None,
+            "mu_s_peak_raw": mu_peak,
+            "mu_s_peak_distance_mm": s_peak,
+            "static_prominence": prominence,
+            "stick_slip_std": ss_std,
+            "normal_force_cv": cv,
+            "n_samples": int(n_total),
+            "n_dropped_incomplete": n_dropped,
+            "n_in_contact": n_contact,
+            "n_plateau": int(window.sum()),
+        }
+    )
+    return ReductionResult(
+        mu_s=float(mu_s),
+        mu_s_distance_mm=float(s_v[k_s]),
+        mu_s_time_s=float(t_v[k_s]),
+        mu_k=mu_k,
+        mu_k_window_mm=(float(w_s[0]), float(w_s[-1])),
+        mu_k_window_s=(float(w_t[0]), float(w_t[-1])),
+        plateau_std=plateau_std,
+        plateau_drift_per_mm=float(drift),
+        normal_force_mean_N=f_mean,
+        pressure_kPa=float(contact_pressure_kPa(f_mean, instrument.n_pins,
+                                                instrument.pin_radius_mm)),
+        temperature_C=temp_mean,
+        sliding_speed_mm_s=speed_mm_s,
+        sliding_distance_mm=total_mm,
+        flags=tuple(f for f in FLAGS if f in flags),
+        method=METHOD,
+        parameters=parameters,
+        trace=trace,
+    )

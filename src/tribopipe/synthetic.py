@@ -1,0 +1,337 @@
+"""Seeded synthetic pin-on-disc runs with known truth, and a RheoCompass export writer.
+
+A :class:`SyntheticRun` describes a run (true μ_S, μ_K, the shape of the μ(s) curve, noise,
+torque offset, ...); :func:`make_intervals` turns it into the intervals an instrument would
+record (an optional normal-force set-up interval, then the friction interval) as DataFrames
+with the canonical SI columns of :mod:`tribopipe.measurement`; :func:`truth` gives what a
+correct reduction must find. :func:`write_rheocompass_export` writes the run the way Anton
+Paar RheoCompass exports it (UTF-16 LE with BOM, TAB, CRLF, ``Project:``/``Test:``/
+``Result:`` blocks, one ``Interval data:`` table per interval with a unit row).
+
+The model (s = sliding distance at the friction radius, s_pk = static peak distance):
+
+``overshoot``     μ rises (elastic pre-sliding, quadratic) to μ_S at s_pk, then decays to
+                  μ_K with a short length λ (0.03–0.08 mm);
+``no_overshoot``  μ rises monotonically to μ_K (no static peak: truth μ_S = μ_K);
+``stick_slip``    as overshoot up to s_pk, then a saw-tooth of amplitude A around μ_K
+                  (slow stick rise, sudden slip) with period 0.02–0.04 mm; μ_K is its mean;
+``drift``         as overshoot, but the decay to μ_K is slow (λ = 0.2–0.3 mm): the
+                  plateau is reached late.
+
+The torque is ``dir·μ(s)·F_N·R + offset + noise·F_nominal·R·N(0,1)``, so ``noise`` is the
+per-sample standard deviation in COF units at the nominal force.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from .config import FOUNDING_FRICTION_RADIUS_MM
+from .measurement import ANGLE, NORMAL_FORCE, SPEED, TEMPERATURE, TIME, TORQUE
+
+if TYPE_CHECKING:
+    from os import PathLike
+
+    import pandas as pd
+
+SHAPES: tuple[str, ...] = ("overshoot", "no_overshoot", "stick_slip", "drift")
+
+
+@dataclass(frozen=True)
+class SyntheticRun:
+    """One synthetic run and its true friction.
+
+    ``mu_s``/``mu_k`` are the true static and kinetic COF (``mu_s`` is ignored by the
+    ``no_overshoot`` shape), ``noise`` the torque noise in COF units, ``torque_offset_Nm``
+    the instrument's torque zero offset [N·m], ``setup_interval`` whether a normal-force
+    set-up interval (``setup_s`` long, ramp then hold, no rotation) precedes the friction
+    interval of ``duration_s`` [s]. The disc rests for ``rest_s`` [s] at the start of the
+    friction interval, then turns at ``speed_rpm`` in ``direction`` (+1/−1).
+    ``normal_force_wobble`` is a relative slow fluctuation of F_N (0.15 = ±15 %).
+    ``peak_distance_mm``, ``stick_slip_amplitude`` and ``stick_slip_period_mm`` default
+    to seeded draws.
+    """
+
+    mu_s: float = 0.8
+    mu_k: float = 0.55
+    shape: str = "overshoot"
+    noise: float = 0.005
+    torque_offset_Nm: float = 0.0
+    setup_interval: bool = True
+    normal_force_N: float = 3.0
+    temperature_C: float = 20.0
+    duration_s: float = 300.0
+    sample_rate_Hz: float = 10.0
+    speed_rpm: float = 0.005
+    friction_radius_mm: float = FOUNDING_FRICTION_RADIUS_MM
+    seed: int = 0
+    setup_s: float = 20.0
+    rest_s: float = 2.0
+    direction: int = 1
+    normal_force_wobble: float = 0.0
+    peak_distance_mm: float | None = None
+    stick_slip_amplitude: float | None = None
+    stick_slip_period_mm: float | None = None
+
+    def __post_init__(self) -> None:
+        if self.shape not in SHAPES:
+            raise ValueError(f"shape must be one of {', '.join(SHAPES)}, got {self.shape!r}")
+        if self.direction not in (1, -1):
+            raise ValueError(f"direction must be +1 or -1, got {self.direction!r}")
+        if self.duration_s <= 0 or self.sample_rate_Hz <= 0 or self.normal_force_N <= 0:
+            raise ValueError("duration_s, sample_rate_Hz and normal_force_N must be > 0")
+
+    def truth(self) -> SyntheticTruth:
+        """What a correct reduction of this run must find."""
+        return truth(self)
+
+
+@dataclass(frozen=True)
+class SyntheticTruth:
+    """The known answer for a :class:`SyntheticRun`.
+
+    ``mu_s_distance_mm`` is where the static peak sits (for ``no_overshoot``: where μ
+    reaches 95 % of μ_K); ``static_distinct`` says whether a reduction should report a
+    distinct μ_S; ``shape_params`` the seeded shape constants (mm, COF).
+    """
+
+    mu_s: float
+    mu_k: float
+    mu_s_distance_mm: float
+    static_distinct: bool
+    stick_slip: bool
+    sliding_distance_mm: float
+    shape_params: dict[str, float]
+
+
+def _shape_params(run: SyntheticRun) -> dict[str, float]:
+    # a separate stream so the shape does not change with the noise draws
+    rng = np.random.default_rng([run.seed, 1])
+    p_pk, lam_fast, lam_slow, period = rng.uniform(size=4)
+    s_pk = run.peak_distance_mm if run.peak_distance_mm is not None else 0.05 + 0.2 * p_pk
+    amplitude = run.stick_slip_amplitude
+    if amplitude is None:
+        amplitude = float(np.clip(0.6 * (run.mu_s - run.mu_k), 0.08, 0.2))
+    return {
+        "peak_distance_mm": float(s_pk),
+        "decay_mm": 0.03 + 0.05 * float(lam_fast),
+        "slow_decay_mm": 0.2 + 0.1 * float(lam_slow),
+        "stick_slip_amplitude": float(amplitude),
+        "stick_slip_period_mm": float(
+            run.stick_slip_period_mm
+            if run.stick_slip_period_mm is not None
+            else 0.02 + 0.02 * period
+        ),
+    }
+
+
+def mu_curve(run: SyntheticRun, s_mm: np.ndarray) -> np.ndarray:
+    """The true μ at sliding distances ``s_mm`` [mm] (shape (n,)) for ``run``'s shape."""
+    p = _shape_params(run)
+    s = np.asarray(s_mm, dtype=float)
+    s_pk = p["peak_distance_mm"]
+    if run.shape == "no_overshoot":
+        return run.mu_k * (1.0 - np.exp(-3.0 * s / s_pk))
+    x = np.clip(s / s_pk, 0.0, 1.0)
+    rise = run.mu_s * (1.0 - (1.0 - x) ** 2)
+    after = np.maximum(s - s_pk, 0.0)
+    if run.shape == "stick_slip":
+        a, period = p["stick_slip_amplitude"], p["stick_slip_period_mm"]
+        tooth = run.mu_k - a / 2 + a * np.mod(after / period, 1.0)
+        return np.where(s < s_pk, rise, tooth)
+    decay = p["slow_decay_mm"] if run.shape == "drift" else p["decay_mm"]
+    fall = run.mu_k + (run.mu_s - run.mu_k) * np.exp(-after / decay)
+    return np.where(s < s_pk, rise, fall)
+
+
+def truth(run: SyntheticRun) -> SyntheticTruth:
+    """The known μ_S, μ_K, peak position and expected behaviour of ``run``."""
+    p = _shape_params(run)
+    v = run.speed_rpm * 2 * math.pi / 60 * run.friction_radius_mm
+    total = v * max(0.0, run.duration_s - run.rest_s)
+    if run.shape == "no_overshoot":
+        return SyntheticTruth(
+            mu_s=run.mu_k, mu_k=run.mu_k, mu_s_distance_mm=p["peak_distance_mm"],
+            static_distinct=False, stick_slip=False, sliding_distance_mm=total, shape_params=p,
+        )
+    return SyntheticTruth(
+        mu_s=run.mu_s, mu_k=run.mu_k, mu_s_distance_mm=p["peak_distance_mm"],
+        static_distinct=run.mu_s > run.mu_k, stick_slip=run.shape == "stick_slip",
+        sliding_distance_mm=total, shape_params=p,
+    )
+
+
+def make_intervals(run: SyntheticRun) -> list[pd.DataFrame]:
+    """The intervals the instrument records for ``run``: [set-up,] friction.
+
+    Each DataFrame has ``time_s`` [s, from 1/rate], ``torque_Nm``, ``normal_force_N``,
+    ``angle_rad``, ``speed_rad_s``, ``temperature_C``. Same seed, same numbers.
+    """
+    import pandas as pd
+
+    rng = np.random.default_rng(run.seed)
+    R_m = run.friction_radius_mm * 1e-3
+    omega = run.speed_rpm * 2 * math.pi / 60
+    torque_noise = run.noise * run.normal_force_N * R_m
+    force_noise = 0.002 * run.normal_force_N
+    frames: list[pd.DataFrame] = []
+
+    if run.setup_interval:
+        n = max(2, int(round(run.setup_s * run.sample_rate_Hz)))
+        t = np.arange(1, n + 1) / run.sample_rate_Hz
+        ramp = np.clip(t / (0.6 * run.setup_s), 0.0, 1.0)
+        force = run.normal_force_N * ramp + force_noise * rng.standard_normal(n)
+        frames.append(
+            pd.DataFrame(
+                {
+                    TIME: t,
+                    TORQUE: run.torque_offset_Nm + torque_noise * rng.standard_normal(n),
+                    NORMAL_FORCE: force,
+                    ANGLE: np.zeros(n),
+                    SPEED: np.zeros(n),
+                    TEMPERATURE: run.temperature_C + 0.05 * rng.standard_normal(n),
+                }
+            )
+        )
+
+    n = max(2, int(round(run.duration_s * run.sample_rate_Hz)))
+    t = np.arange(1, n + 1) / run.sample_rate_Hz
+    moving_t = np.maximum(t - run.rest_s, 0.0)
+    phi = omega * moving_t
+    s = phi * run.friction_radius_mm
+    speed = np.where(t > run.rest_s, omega, 0.0)
+    wobble = run.normal_force_wobble * np.sin(2 * math.pi * t / 40.0 + rng.uniform(0, 2 * math.pi))
+    force = run.normal_force_N * (1.0 + wobble) + force_noise * rng.standard_normal(n)
+    mu = mu_curve(run, s)
+    torque = (
+        run.direction * mu * force * R_m
+        + run.torque_offset_Nm
+        + torque_noise * rng.standard_normal(n)
+    )
+    frames.append(
+        pd.DataFrame(
+            {
+                TIME: t,
+                TORQUE: torque,
+                NORMAL_FORCE: force,
+                ANGLE: run.direction * phi,
+                SPEED: run.direction * speed,
+                TEMPERATURE: run.temperature_C + 0.05 * rng.standard_normal(n),
+            }
+        )
+    )
+    return frames
+
+
+# --------------------------------------------------------------------------- the writer
+
+_LABELS = {
+    "en": {
+        "project": "Project:",
+        "test": "Test:",
+        "result": "Result:",
+        "interval": "Interval and data points:",
+        "data": "Interval data:",
+        "columns": (
+            "Point No.", "Time", "Torque", "Normal Force", "Deflection Angle",
+            "Rotational Speed", "Temperature", "Status",
+        ),
+    },
+    "fr": {
+        "project": "Projet:",
+        "test": "Test:",
+        "result": "Résultat:",
+        "interval": "Intervalle et points de données:",
+        "data": "Interval données:",
+        "columns": (
+            "Point No.", "Temps", "Couple", "Force Normale", "Angle de Déflexion",
+            "Vitesse de Rotation", "Température", "Etat",
+        ),
+    },
+}
+_UNITS = ("", "[s]", "[mN·m]", "[N]", "[mrad]", "[1/min]", "[°C]", "")
+#: decimals written per column (time, torque mN·m, force, angle mrad, speed rpm, temperature)
+_DECIMALS = (2, 5, 4, 4, 6, 2)
+
+
+def _fixed(values: np.ndarray, decimals: int, comma: bool) -> np.ndarray:
+    """Fixed-point text of a float array, in bulk; ``-0`` is written as ``0``."""
+    text = np.char.mod(f"%.{decimals}f", np.round(values, decimals) + 0.0)
+    return np.char.replace(text, ".", ",") if comma else text
+
+
+def _interval_block(
+    index: int, frame: pd.DataFrame, labels: dict, comma: bool
+) -> list[str]:
+    n = len(frame)
+    columns = [
+        np.asarray(frame[TIME], dtype=float),
+        np.asarray(frame[TORQUE], dtype=float) * 1e3,  # N·m → mN·m
+        np.asarray(frame[NORMAL_FORCE], dtype=float),
+        np.asarray(frame[ANGLE], dtype=float) * 1e3,  # rad → mrad
+        np.asarray(frame[SPEED], dtype=float) * 60 / (2 * math.pi),  # rad/s → 1/min
+        np.asarray(frame[TEMPERATURE], dtype=float),
+    ]
+    cells = [np.arange(1, n + 1).astype(str)]
+    cells += [_fixed(c, d, comma) for c, d in zip(columns, _DECIMALS, strict=True)]
+    rows = cells[0]
+    for c in cells[1:]:
+        rows = np.char.add(np.char.add(rows, "\t"), c)
+    rows = np.char.add(np.char.add("\t", rows), "\t")  # empty first cell, empty Status
+    width = len(labels["columns"])
+    return [
+        f"{labels['interval']}\t{index}\t{n}",
+        labels["data"] + "\t" + "\t".join(labels["columns"]),
+        "\t" * width,
+        "\t" + "\t".join(_UNITS),
+        *rows.tolist(),
+    ]
+
+
+def rheocompass_text(
+    run: SyntheticRun, *, project: str, test: str, sample: str, language: str = "en"
+) -> str:
+    """The text (CRLF line ends, no BOM) of a RheoCompass export of ``run``.
+
+    One project, one test, one result named ``"<sample> 1"``; the set-up interval (if
+    any) is interval 1, the friction interval follows.
+    """
+    if language not in _LABELS:
+        raise ValueError(f"language must be 'en' or 'fr', got {language!r}")
+    labels = _LABELS[language]
+    comma = language == "fr"
+    lines = [
+        f"{labels['project']}\t{project}",
+        "",
+        f"{labels['test']}\t{test}",
+        "",
+        f"{labels['result']}\t{sample} 1",
+        "",
+    ]
+    for i, frame in enumerate(make_intervals(run), start=1):
+        if i > 1:
+            lines.append("")
+        lines.extend(_interval_block(i, frame, labels, comma))
+    return "\r\n".join(lines) + "\r\n"
+
+
+def write_rheocompass_export(
+    path: str | PathLike[str],
+    run: SyntheticRun,
+    *,
+    project: str,
+    test: str,
+    sample: str,
+    language: str = "en",
+) -> Path:
+    """Write ``run`` as a RheoCompass export (UTF-16 LE with BOM, TAB, CRLF) and return
+    its path. ``language="fr"`` writes French labels and decimal commas."""
+    target = Path(path)
+    text = rheocompass_text(run, project=project, test=test, sample=sample, language=language)
+    target.write_bytes(b"\xff\xfe" + text.encode("utf-16-le"))
+    return target

@@ -1,0 +1,411 @@
+"""Readers: raw instrument exports → :class:`tribopipe.measurement.Measurement` objects.
+
+Every vendor quirk lives in this package. :func:`read_export` detects the format
+(RheoCompass text or Excel, Rheoplus, plain CSV), the encoding, the cell delimiter and the
+decimal mark (each can be forced), and returns one Measurement per interval, in file
+order, with canonical SI columns (``time_s``, ``torque_Nm``, ``normal_force_N``,
+``angle_rad``, ``speed_rad_s``, ``temperature_C``), ``point_no`` and the other columns
+snake_cased with an SI unit suffix. :func:`describe_export` tells what a file holds
+(``tribopipe inspect``); :func:`require_columns` is the check a reduction makes.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from os import PathLike
+from pathlib import Path
+from typing import Any
+
+from ..errors import MissingQuantityError, ReadError
+from ..measurement import NORMAL_FORCE, TORQUE, Measurement
+from . import plaincsv, rheocompass, rheoplus
+from .aliases import AliasTable, load_aliases, resolve_aliases
+from .common import FileInfo, RawInterval, build_measurement
+from .textio import decode, detect_decimal, detect_delimiter, read_bytes, split_cells
+from .xlsx import XLSX_MAGIC, workbook_rows
+
+__all__ = [
+    "FORMATS",
+    "AliasTable",
+    "ColumnSummary",
+    "ExportSummary",
+    "IntervalSummary",
+    "describe_export",
+    "load_aliases",
+    "read_export",
+    "require_columns",
+]
+
+#: format names accepted by ``fmt=`` / ``--format``
+FORMATS: tuple[str, ...] = (
+    rheocompass.FORMAT,
+    rheocompass.FORMAT_XLSX,
+    rheoplus.FORMAT,
+    plaincsv.FORMAT,
+)
+
+_OLE_MAGIC = b"\xd0\xcf\x11\xe0"  # legacy .xls
+
+
+def _normalise_delimiter(delimiter: str | None, path: str) -> str | None:
+    if delimiter is None:
+        return None
+    named = {"tab": "\t", "\\t": "\t", "comma": ",", "semicolon": ";", "space": " "}
+    value = named.get(delimiter.lower(), delimiter)
+    if len(value) != 1:
+        raise ReadError(
+            f"delimiter must be one character, got {delimiter!r}",
+            path=path,
+            hint="use 'tab', ';' or ','",
+        )
+    return value
+
+
+def _parse(
+    path: str,
+    encoding: str | None,
+    delimiter: str | None,
+    decimal: str | None,
+    fmt: str | None,
+    aliases: AliasTable,
+) -> tuple[FileInfo, list[RawInterval]]:
+    """Detect format, encoding, delimiter and decimal mark; find the intervals."""
+    if decimal not in (None, ".", ","):
+        raise ReadError(f"decimal mark must be '.' or ',', got {decimal!r}", path=path)
+    if fmt is not None and fmt not in FORMATS:
+        raise ReadError(
+            f"unknown format {fmt!r}", path=path, hint=f"expected one of {', '.join(FORMATS)}"
+        )
+    delimiter = _normalise_delimiter(delimiter, path)
+    raw = read_bytes(path)
+    if raw.startswith(_OLE_MAGIC):
+        raise ReadError(
+            "legacy Excel .xls workbook", path=path, hint="save it as .xlsx or export text"
+        )
+    if fmt == rheocompass.FORMAT_XLSX or (fmt is None and raw.startswith(XLSX_MAGIC)):
+        _, rows = workbook_rows(path)
+        info = FileInfo(path, rheocompass.FORMAT_XLSX, None, None, decimal or ".")
+        return info, rheocompass.parse_intervals(rows, path)
+
+    decoded = decode(raw, path, encoding)
+    lines = decoded.text.splitlines()
+    delim = delimiter or detect_delimiter(lines)
+    if delim is None:
+        raise ReadError(
+            "no cell delimiter (TAB, ';' or ',') found: not a table export",
+            path=path,
+            hint="pass --delimiter if the file uses another one",
+        )
+    rows = split_cells(lines, delim, path)
+    if fmt is None:
+        if rheocompass.looks_like(rows):
+            fmt = rheocompass.FORMAT
+        elif rheoplus.looks_like(rows):
+            fmt = rheoplus.FORMAT
+        elif plaincsv.looks_like(rows, aliases):
+            fmt = plaincsv.FORMAT
+        else:
+            first = next((ln for ln in lines if ln.strip()), "")[:60]
+            raise ReadError(
+                f"not a recognised export (first line {first!r})",
+                path=path,
+                hint="expected a RheoCompass table export ('Project:' ... 'Interval data:'), "
+                "a Rheoplus export ('Meas. Pts.') or a CSV naming time, torque and "
+                "normal-force columns with units",
+            )
+    if decimal is None:
+        default = "." if fmt == rheoplus.FORMAT or delim == "," else ","
+        sample = [c for _, cells in rows[:2000] for c in cells[1:]]
+        decimal = "." if delim == "," else detect_decimal(sample, default=default)
+    info = FileInfo(path, fmt, decoded.encoding, delim, decimal)
+    if fmt == rheocompass.FORMAT:
+        intervals = rheocompass.parse_intervals(rows, path)
+    elif fmt == rheoplus.FORMAT:
+        intervals = rheoplus.parse_intervals(rows, path)
+    else:
+        intervals = plaincsv.parse_intervals(rows, path, aliases)
+    return info, intervals
+
+
+def read_export(
+    path: str | PathLike[str],
+    *,
+    encoding: str | None = None,
+    delimiter: str | None = None,
+    decimal: str | None = None,
+    fmt: str | None = None,
+    aliases: AliasTable | str | PathLike[str] | None = None,
+) -> list[Measurement]:
+    """Read a raw export into one :class:`Measurement` per interval, in file order.
+
+    Parameters
+    ----------
+    path
+        The export (RheoCompass ``.csv``/``.txt``/``.xlsx``, Rheoplus ``.txt``/``.csv``, or
+        a plain CSV with units in the header).
+    encoding, delimiter, decimal
+        Force the text encoding (``"utf-16"``, ``"cp1252"``…), the cell delimiter
+        (``"\\t"``/``"tab"``, ``";"``, ``","``) or the decimal mark (``"."``, ``","``);
+        ``None`` detects them.
+    fmt
+        Force the format, one of :data:`FORMATS`.
+    aliases
+        An :class:`AliasTable` or a user alias file extending the built-in names;
+        ``None`` uses ``configs/aliases.toml`` in the working directory when it exists.
+
+    Returns
+    -------
+    list of Measurement
+        Never empty. Data columns are SI (``torque_Nm`` in N·m ...); invalid points and
+        raw-waveform sub-rows are counted in ``meta``, not returned as rows.
+
+    Raises
+    ------
+    ReadError
+        For every problem of the file, as one line naming it (and line/column).
+    """
+    p = str(path)
+    table = resolve_aliases(aliases)
+    info, intervals = _parse(p, encoding, delimiter, decimal, fmt, table)
+    measurements = [build_measurement(raw, info, table) for raw in intervals]
+    if not any(len(m.data) for m in measurements):
+        raise ReadError(
+            f"header without data: {len(measurements)} interval(s), no valid data point",
+            path=p,
+        )
+    return measurements
+
+
+def require_columns(measurement: Measurement, *columns: str) -> None:
+    """Raise :class:`MissingQuantityError` unless every column exists with a finite value.
+
+    The message names the file, the interval and the columns that were found, e.g.
+    ``run.csv: interval 2 has no torque_Nm column (columns found: Time [s] → time_s, ...)``.
+    """
+    missing = [c for c in columns if not measurement.has(c)]
+    if not missing:
+        return
+    meta = measurement.meta
+    found = ", ".join(
+        f"{orig} → {new}" for orig, new in meta.column_map
+    ) or ", ".join(measurement.data.columns)
+    where = " / ".join(p for p in (meta.test, meta.result) if p)
+    where = f"{where} / interval {meta.interval}" if where else f"interval {meta.interval}"
+    raise MissingQuantityError(
+        f"{where} has no {' or '.join(missing)} values (columns found: {found or 'none'})",
+        path=meta.source_file,
+        line=meta.header_line,
+        hint="add the column's name to configs/aliases.toml if it is there under another name",
+    )
+
+
+@dataclass(frozen=True)
+class ColumnSummary:
+    """One column of an interval: its name and unit in the file and what it became."""
+
+    original: str
+    unit: str
+    column: str | None
+
+
+@dataclass(frozen=True)
+class IntervalSummary:
+    """What one interval holds."""
+
+    test: str | None
+    result: str | None
+    interval: int | None
+    n_points: int
+    n_points_declared: int | None
+    n_invalid_points: int
+    n_waveform_rows: int
+    header_line: int | None
+    columns: tuple[ColumnSummary, ...]
+    notes: tuple[tuple[str, str], ...]
+
+    @property
+    def friction_ready(self) -> bool:
+        """True when the interval has torque and normal force columns (what reduce needs)."""
+        names = {c.column for c in self.columns}
+        return TORQUE in names and NORMAL_FORCE in names
+
+
+@dataclass(frozen=True)
+class ExportSummary:
+    """What an export holds, as :func:`read_export` reads it."""
+
+    path: str
+    file_format: str
+    encoding: str | None
+    delimiter: str | None
+    decimal: str | None
+    project: str | None
+    intervals: tuple[IntervalSummary, ...]
+
+    @property
+    def tests(self) -> tuple[str, ...]:
+        """Distinct test names, in file order."""
+        return tuple(dict.fromkeys(i.test for i in self.intervals if i.test))
+
+    @property
+    def results(self) -> tuple[tuple[str | None, str | None], ...]:
+        """``(test, result)`` per result, in file order; a result ends where the names
+        change or the interval numbering restarts (two tests may hold equal names)."""
+        runs: list[tuple[str | None, str | None]] = []
+        previous: IntervalSummary | None = None
+        for i in self.intervals:
+            key = (i.test, i.result)
+            restarted = (
+                previous is not None
+                and i.interval is not None
+                and previous.interval is not None
+                and i.interval <= previous.interval
+            )
+            if previous is None or key != (previous.test, previous.result) or restarted:
+                runs.append(key)
+            previous = i
+        return tuple(runs)
+
+    @property
+    def n_points(self) -> int:
+        """Data points over all intervals (invalid points and waveform rows excluded)."""
+        return sum(i.n_points for i in self.intervals)
+
+    def to_dict(self) -> dict[str, Any]:
+        """A JSON-ready dict: file facts, counts and every interval with its columns."""
+        return {
+            "file": self.path,
+            "format": self.file_format,
+            "encoding": self.encoding,
+            "delimiter": self.delimiter,
+            "decimal": self.decimal,
+            "project": self.project,
+            "n_tests": len(self.tests),
+            "n_results": len(self.results),
+            "n_intervals": len(self.intervals),
+            "n_points": self.n_points,
+            "intervals": [
+                {
+                    "test": i.test,
+                    "result": i.result,
+                    "interval": i.interval,
+                    "n_points": i.n_points,
+                    "n_points_declared": i.n_points_declared,
+                    "n_invalid_points": i.n_invalid_points,
+                    "n_waveform_rows": i.n_waveform_rows,
+                    "header_line": i.header_line,
+                    "friction_ready": i.friction_ready,
+                    "columns": [
+                        {"original": c.original, "unit": c.unit, "column": c.column}
+                        for c in i.columns
+                    ],
+                    "notes": dict(i.notes),
+                }
+                for i in self.intervals
+            ],
+        }
+
+    def to_text(self) -> str:
+        """A human-readable listing (what ``tribopipe inspect`` prints)."""
+        delim = {"\t": "TAB", None: "-"}.get(self.delimiter, repr(self.delimiter))
+        invalid = sum(i.n_invalid_points for i in self.intervals)
+        waveform = sum(i.n_waveform_rows for i in self.intervals)
+        lines = [
+            f"file:      {self.path}",
+            f"format:    {self.file_format}",
+            f"encoding:  {self.encoding or '-'}   delimiter: {delim}   "
+            f"decimal: {self.decimal or '-'}",
+        ]
+        if self.project:
+            lines.append(f"project:   {self.project}")
+        lines.append(
+            f"contents:  {len(self.tests)} test(s), {len(self.results)} result(s), "
+            f"{len(self.intervals)} interval(s), {self.n_points} point(s)"
+            f" ({invalid} invalid, {waveform} waveform rows skipped)"
+        )
+        previous: tuple[ColumnSummary, ...] | None = None
+        previous_notes: set[tuple[str, str]] = set()
+        for i in self.intervals:
+            label = " / ".join(x for x in (i.test, i.result) if x)
+            label = f"{label} / interval {i.interval}" if label else f"interval {i.interval}"
+            declared = "" if i.n_points_declared is None else f" of {i.n_points_declared}"
+            skipped = []
+            if i.n_invalid_points:
+                skipped.append(f"{i.n_invalid_points} invalid")
+            if i.n_waveform_rows:
+                skipped.append(f"{i.n_waveform_rows} waveform rows")
+            ready = "  [torque + normal force]" if i.friction_ready else ""
+            lines.append("")
+            lines.append(
+                f"{label}: {i.n_points}{declared} points"
+                f"{' (' + ', '.join(skipped) + ')' if skipped else ''}"
+                f", header at line {i.header_line}{ready}"
+            )
+            for key, value in i.notes:
+                if (key, value) not in previous_notes:
+                    lines.append(f"  note: {key.replace('_', ' ')}: {value}")
+            previous_notes = set(i.notes)
+            if i.columns == previous:
+                lines.append("  columns as above")
+                continue
+            previous = i.columns
+            width = max((len(c.original) + len(c.unit) for c in i.columns), default=0) + 1
+            for c in i.columns:
+                shown = f"{c.original} {c.unit}".strip()
+                lines.append(f"  {shown:<{width}} → {c.column or '(dropped)'}")
+        return "\n".join(lines)
+
+
+def describe_export(
+    path: str | PathLike[str],
+    *,
+    encoding: str | None = None,
+    delimiter: str | None = None,
+    decimal: str | None = None,
+    fmt: str | None = None,
+    aliases: AliasTable | str | PathLike[str] | None = None,
+) -> ExportSummary:
+    """Read an export (as :func:`read_export` does) and summarise what it holds: format,
+    encoding, delimiter, decimal mark, tests, results, intervals, points and every column
+    with its original unit and the column it maps to."""
+    measurements = read_export(
+        path, encoding=encoding, delimiter=delimiter, decimal=decimal, fmt=fmt, aliases=aliases
+    )
+    first = measurements[0].meta
+    intervals = []
+    for m in measurements:
+        meta = m.meta
+        mapped = dict.fromkeys(range(len(meta.original_columns)))
+        targets = list(meta.column_map)
+        k = 0
+        for j, name in enumerate(meta.original_columns):
+            if k < len(targets) and targets[k][0] == name:
+                mapped[j] = targets[k][1]
+                k += 1
+        columns = tuple(
+            ColumnSummary(name, meta.original_units[j], mapped[j])
+            for j, name in enumerate(meta.original_columns)
+        )
+        intervals.append(
+            IntervalSummary(
+                test=meta.test,
+                result=meta.result,
+                interval=meta.interval,
+                n_points=len(m.data),
+                n_points_declared=meta.n_points_declared,
+                n_invalid_points=meta.n_invalid_points,
+                n_waveform_rows=meta.n_waveform_rows,
+                header_line=meta.header_line,
+                columns=columns,
+                notes=meta.extra,
+            )
+        )
+    return ExportSummary(
+        path=str(Path(path)),
+        file_format=first.file_format,
+        encoding=first.encoding,
+        delimiter=first.delimiter,
+        decimal=first.decimal,
+        project=first.project,
+        intervals=tuple(intervals),
+    )

@@ -1,0 +1,151 @@
+"""Anton Paar Rheoplus "Data Series Information" exports (older installations).
+
+Layout: a metadata block per data series (``Name:``, ``Device:``, ``Measuring System:``…,
+key and value separated by several delimiters), then per interval ``Interval:`` and
+``Number of Data Points:`` lines, a profile description, and a table: a ``Meas. Pts.``
+header row, a unit row, data rows starting with the point number. ``******`` marks a
+missing value, numbers may carry English thousands separators (``1,460``), and column
+names repeat (two ``Relaxation Modulus`` columns).
+
+A table that went through Excel loses the header block of its first interval and shows
+``#NAME?`` where Excel evaluated profile lines as formulas; such a file is read (the
+damage is noted in the metadata) unless a data cell itself was destroyed.
+"""
+
+from __future__ import annotations
+
+import re
+
+from ..errors import ReadError
+from .aliases import name_key
+from .common import RawInterval
+
+FORMAT = "rheoplus"
+
+SERIES = "dataseriesinformation"
+POINT_HEADERS = frozenset({"measpts", "measpt", "messpkt", "messpunkte", "ptsdemesure"})
+_META_KEYS = {
+    "name": "name",
+    "numberofintervals": "number_of_intervals",
+    "application": "application",
+    "device": "device",
+    "measuringdatetime": "measuring_date_time",
+    "measuringsystem": "measuring_system",
+    "accessories": "accessories",
+}
+_DIGITS = re.compile(r"^\d+$")
+
+
+def looks_like(rows: list[tuple[int, list[str]]]) -> bool:
+    """True when the first rows hold a Rheoplus series title or ``Meas. Pts.`` header."""
+    for _, cells in rows[:80]:
+        if cells and name_key(cells[0]) in POINT_HEADERS | {SERIES}:
+            return True
+    return False
+
+
+def _value(cells: list[str]) -> str | None:
+    return next((c for c in cells[1:] if c), None)
+
+
+def _whole(cell: str | None, what: str, path: str, line: int) -> int:
+    try:
+        return int((cell or "").replace(",", ""))
+    except ValueError:
+        raise ReadError(
+            f"expected {what} as a whole number, got {cell!r}", path=path, line=line
+        ) from None
+
+
+def parse_intervals(rows: list[tuple[int, list[str]]], path: str) -> list[RawInterval]:
+    """Find every table of a Rheoplus export and return its header and rows in file order."""
+    out: list[RawInterval] = []
+    meta: dict[str, str] = {}
+    sample: str | None = None
+    interval: int | None = None
+    declared: int | None = None
+    last_interval = 0
+    saw_series = False
+    excel_cells = 0
+    n = len(rows)
+    i = 0
+    while i < n:
+        line, cells = rows[i]
+        first = cells[0] if cells else ""
+        key = name_key(first)
+        if first == "#NAME?":
+            excel_cells += 1
+        if key == SERIES:
+            saw_series = True
+            meta, sample, interval, declared, last_interval = {}, None, None, None, 0
+        elif first.endswith(":") and key in _META_KEYS:
+            value = _value(cells)
+            if key == "name":
+                sample = value
+            elif value is not None:
+                meta[_META_KEYS[key]] = value
+        elif first.endswith(":") and key == "interval":
+            interval = _whole(_value(cells), "the interval number", path, line)
+        elif first.endswith(":") and key == "numberofdatapoints":
+            declared = _whole(_value(cells), "the number of data points", path, line)
+        elif key in POINT_HEADERS:
+            raw, i = _read_table(rows, i, path)
+            # a Rheoplus series is one test; its name is the sample's
+            raw.sample = raw.test = sample
+            raw.extra = dict(meta)
+            if interval is None:
+                # the header block was lost (an Excel round trip): number on from the last
+                raw.interval = last_interval + 1
+                raw.extra["interval_header"] = "missing; number inferred"
+            else:
+                raw.interval = interval
+                raw.n_declared = declared
+            last_interval = raw.interval
+            out.append(raw)
+            interval, declared = None, None
+            continue
+        i += 1
+    if not out:
+        raise ReadError(
+            "no 'Meas. Pts.' table found: a Rheoplus header without data?", path=path
+        )
+    if excel_cells or not saw_series:
+        note = []
+        if not saw_series:
+            note.append("'Data Series Information' block missing")
+        if excel_cells:
+            note.append(f"{excel_cells} '#NAME?' cell(s) in the profile lines")
+        for raw in out:
+            raw.extra["excel_damage"] = "; ".join(note)
+    return out
+
+
+def _read_table(
+    rows: list[tuple[int, list[str]]], start: int, path: str
+) -> tuple[RawInterval, int]:
+    header_line, header = rows[start]
+    names = list(header)
+    while names and not names[-1]:
+        names.pop()
+    i = start + 1
+    if i >= len(rows) or (rows[i][1] and rows[i][1][0]):
+        raise ReadError(
+            "expected a unit row ([s], [µNm], ...) under the 'Meas. Pts.' header",
+            path=path,
+            line=header_line,
+            hint="the file is truncated or its header was edited",
+        )
+    units = list(rows[i][1][: len(names)])
+    i += 1
+    data: list[tuple[int, list[str]]] = []
+    while i < len(rows):
+        line, cells = rows[i]
+        first = cells[0] if cells else ""
+        if not any(cells) or (first and not _DIGITS.match(first) and "(" not in first):
+            break
+        data.append((line, cells))
+        i += 1
+    raw = RawInterval(
+        names=names, units=units, rows=data, point_col=0, header_line=header_line
+    )
+    return raw, i

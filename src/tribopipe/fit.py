@@ -17,6 +17,7 @@ coefficient of determination of the log–log regression.
 from __future__ import annotations
 
 import math
+from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
@@ -142,3 +143,18 @@ def fit_power_law(runs: pd.DataFrame, *, quantity: str = "mu_k") -> pd.DataFrame
             row.update(fit_one(grp["p"].to_numpy(), grp["mu"].to_numpy()))
         rows.append(row)
     return pd.DataFrame(rows, columns=list(FIT_COLUMNS))
+
+
+def fit_map(map_path: str | Path) -> pd.DataFrame:
+    """:func:`fit_power_law` on the runs of the friction map (Parquet) at ``map_path``."""
+    from .errors import MapError
+    from .frictionmap import read_map
+
+    runs = read_map(map_path)
+    if runs.empty:
+        raise MapError(
+            "the friction map is empty or absent",
+            path=map_path,
+            hint="reduce runs first (tribopipe reduce / batch) or import the published map",
+        )
+    return fit_power_law(runs)

@@ -425,3 +425,43 @@ def load_groups(map_path: str | Path) -> pd.DataFrame:
             hint="reduce runs first (tribopipe reduce / batch) or import the published map",
         )
     return group_statistics(runs)
+
+
+def query_map(
+    map_path: str | Path,
+    pin: str,
+    disc: str,
+    pressure_kPa: float,
+    temperature_C: float | None = None,
+) -> QueryResult:
+    """:func:`query` on the friction map (Parquet) at ``map_path``."""
+    return query(load_groups(map_path), pin, disc, pressure_kPa, temperature_C)
+
+
+def format_result(res: QueryResult) -> str:
+    """A short human-readable report of a query (several lines, no trailing newline)."""
+
+    def est_text(name: str, est: Estimate | None) -> str:
+        if est is None:
+            return f"{name} = unknown (no group of this pair holds it)"
+        unc = "" if est.uncertainty is None else f" ± {est.uncertainty:.3f} (95 % CI, interpolated)"
+        return f"{name} = {est.value:.3f}{unc}"
+
+    t = "" if res.temperature_C is None else f", {res.temperature_C:g} °C"
+    lines = [
+        f"{res.pin} on {res.disc} at {res.pressure_kPa:g} kPa{t}",
+        "  " + est_text("mu_k", res.mu_k),
+        "  " + est_text("mu_s", res.mu_s),
+        "  from measured groups (pressure, temperature, mean, n, weight):",
+    ]
+    for u in res.mu_k.used:
+        t_u = "?" if u.temperature_C is None else f"{u.temperature_C:g} °C"
+        lines.append(
+            f"    {u.pressure_kPa:g} kPa, {t_u}, {u.mean:.3f}, n={u.n}, w={u.weight:.3f}"
+        )
+    lo, hi = res.pressure_range_kPa
+    temps = ", ".join(f"{v:g}" for v in res.temperatures_C) or "unknown"
+    lines.append(f"  measured: {lo:g}–{hi:g} kPa at {temps} °C")
+    lines.append(f"  clamped: {'yes' if res.clamped else 'no'}")
+    lines += [f"  note: {n}" for n in res.notes]
+    return "\n".join(lines)

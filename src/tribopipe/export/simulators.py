@@ -21,7 +21,8 @@ import math
 import re
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 from .. import __version__
 from ..errors import ExportError
@@ -239,7 +240,7 @@ def write_abaqus_decay(
         raise ExportError(
             f"pin {res.pin!r} on disc {res.disc!r} has no mu_s in the map: "
             "EXPONENTIAL DECAY needs a static coefficient",
-            hint="export the mu_k table instead (leave out --decay)",
+            hint="export the mu_k table instead (leave out --exponential-decay)",
         )
     d_c = default_decay_s_per_mm(slip_rate_mm_s) if decay_s_per_mm is None else decay_s_per_mm
     if not (math.isfinite(d_c) and d_c > 0):
@@ -442,3 +443,70 @@ SINGLE_VALUE_WRITERS: dict[str, Callable[..., str]] = {
     "sofa": write_sofa,
     "pyelastica": write_pyelastica,
 }
+
+
+def export_simulator_input(
+    groups: pd.DataFrame,
+    fmt: str,
+    *,
+    pin: str | None = None,
+    disc: str | None = None,
+    pressure_kPa: float | None = None,
+    temperature_C: float | None = None,
+    units: str = "mm-N-s",
+    exponential_decay: bool = False,
+    decay_s_per_mm: float | None = None,
+    material_id: int = 1,
+    geom1: str = "pin",
+    geom2: str = "disc",
+    source: str | None = None,
+) -> str:
+    """The input text for simulator ``fmt`` (one of :data:`FORMATS`).
+
+    Tables (``abaqus``, ``ansys``) take any selection of pairs; single-value formats
+    (``mujoco``, ``sofa``, ``pyelastica``) and ABAQUS's exponential decay need ``pin``,
+    ``disc`` and ``pressure_kPa`` [kPa] (a missing one is an :class:`ExportError` that
+    lists what the map holds).
+    """
+    if fmt not in FORMATS:
+        raise ExportError(f"unknown simulator {fmt!r}; expected one of {', '.join(FORMATS)}")
+    unit_system(units)
+    if fmt == "abaqus" and not exponential_decay:
+        return write_abaqus(groups, pin=pin, disc=disc, temperature_C=temperature_C,
+                            units=units, source=source)
+    if fmt == "ansys":
+        return write_ansys(groups, pin=pin, disc=disc, temperature_C=temperature_C,
+                           units=units, material_id=material_id, source=source)
+    what = "ABAQUS EXPONENTIAL DECAY" if fmt == "abaqus" else fmt
+    if pin is None or disc is None:
+        listing = "; ".join(f"{p} on {d}" for p, d in pairs(groups)) or "nothing"
+        raise ExportError(
+            f"{what} takes one condition: give the pin and the disc; the map holds: {listing}",
+            hint="pass --pin and --disc",
+        )
+    if pressure_kPa is None:
+        pair = select_pair(groups, pin, disc)
+        measured = ", ".join(f"{p:g}" for p in sorted(set(pair["pressure_kPa"])))
+        raise ExportError(
+            f"{what} takes one condition: give the contact pressure; "
+            f"{pin} on {disc} is measured at {measured} kPa",
+            hint="pass --pressure KPA",
+        )
+    if fmt == "abaqus":
+        return write_abaqus_decay(groups, pin=pin, disc=disc, pressure_kPa=pressure_kPa,
+                                  temperature_C=temperature_C, units=units,
+                                  decay_s_per_mm=decay_s_per_mm, source=source)
+    if fmt == "mujoco":
+        return write_mujoco(groups, pin=pin, disc=disc, pressure_kPa=pressure_kPa,
+                            temperature_C=temperature_C, geom1=geom1, geom2=geom2,
+                            source=source)
+    writer = SINGLE_VALUE_WRITERS[fmt]
+    return writer(groups, pin=pin, disc=disc, pressure_kPa=pressure_kPa,
+                  temperature_C=temperature_C, source=source)
+
+
+def export_from_map(map_path: str | Path, fmt: str, **options: Any) -> str:
+    """:func:`export_simulator_input` on the friction map (Parquet) at ``map_path``."""
+    from ..query import load_groups
+
+    return export_simulator_input(load_groups(map_path), fmt, source=str(map_path), **options)

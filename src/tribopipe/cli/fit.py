@@ -1,0 +1,64 @@
+"""``tribopipe map fit``: power-law μ_K(p) per pair and temperature (attached to ``map``)."""
+
+from __future__ import annotations
+
+import json
+import math
+
+import click
+
+from ._common import friendly_errors, map_option
+
+
+def _fmt(value: float, spec: str) -> str:
+    return "-" if value is None or math.isnan(value) else format(value, spec)
+
+
+@click.command("fit")
+@map_option
+@click.option("--pin", help="Only this pin material.")
+@click.option("--disc", help="Only this disc material.")
+@click.option("--json", "as_json", is_flag=True, help="Print JSON records instead of a table.")
+@click.option(
+    "-o", "--output", type=click.Path(dir_okay=False), help="Also write the fits as CSV."
+)
+@friendly_errors
+def fit_cmd(
+    map_path: str, pin: str | None, disc: str | None, as_json: bool, output: str | None
+) -> None:
+    """Fit μ_K = k·p^(n−1) per pair and temperature on the individual runs.
+
+    Log–log least squares (p in kPa, so k is μ_K at 1 kPa); 95 % confidence intervals of
+    k and of the exponent n−1 from the t-distribution; R² of the log–log fit.
+    Hertz-type contact of an elastomer gives n−1 ≈ −1/3.
+    """
+    from ..fit import fit_map
+
+    fits = fit_map(map_path)
+    if pin is not None:
+        fits = fits[fits["pin"].str.casefold() == pin.casefold()]
+    if disc is not None:
+        fits = fits[fits["disc"].str.casefold() == disc.casefold()]
+    if output:
+        fits.to_csv(output, index=False)
+        click.echo(f"wrote {output}", err=True)
+    if as_json:
+        records = [
+            {k: (None if isinstance(v, float) and math.isnan(v) else v) for k, v in r.items()}
+            for r in fits.to_dict(orient="records")
+        ]
+        click.echo(json.dumps(records, indent=2, default=str))
+        return
+    click.echo(
+        f"{'pin':<16} {'disc':<22} {'T_C':>5} {'k':>7} {'k 95% CI':>17} "
+        f"{'n-1':>7} {'n-1 95% CI':>17} {'R2':>6} {'N':>3}"
+    )
+    for r in fits.itertuples(index=False):
+        k_ci = f"[{_fmt(r.k_ci95_low, '.3f')}, {_fmt(r.k_ci95_high, '.3f')}]"
+        e_ci = f"[{_fmt(r.exponent_ci95_low, '.3f')}, {_fmt(r.exponent_ci95_high, '.3f')}]"
+        click.echo(
+            f"{r.pin[:16]:<16} {r.disc[:22]:<22} {_fmt(r.temperature_C, '5.1f'):>5} "
+            f"{_fmt(r.k, '7.3f'):>7} {k_ci:>17} {_fmt(r.exponent, '7.3f'):>7} {e_ci:>17} "
+            f"{_fmt(r.r_squared, '6.3f'):>6} {r.n_points:>3}"
+            + (f"  {r.note}" if r.note else "")
+        )

@@ -1,0 +1,164 @@
+"""`tribopipe query`, `tribopipe export ...` and the `map fit` command, end to end on a real
+Parquet map imported from the published friction map."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import pandas as pd
+import pytest
+from click.testing import CliRunner
+
+from conftest import shared_file
+from published_map import group_table, published_runs, write_published_map
+from tribopipe.cli import main
+from tribopipe.cli.fit import fit_cmd
+from tribopipe.query import query
+
+PIN, DISC = "Dragonskin 30", "steel"
+
+
+@pytest.fixture(scope="module")
+def map_path(tmp_path_factory) -> Path:
+    csv = shared_file("reference", "frictionmap_published.csv")
+    return write_published_map(csv, tmp_path_factory.mktemp("map") / "friction_map.parquet")
+
+
+@pytest.fixture(scope="module")
+def groups() -> pd.DataFrame:
+    return group_table(published_runs(shared_file("reference", "frictionmap_published.csv")))
+
+
+def _run(*args: str):
+    return CliRunner().invoke(main, list(args), catch_exceptions=False)
+
+
+def test_query_json_matches_the_library(map_path, groups):
+    result = _run("query", "--map", str(map_path), "--pin", PIN, "--disc", DISC,
+                  "--pressure", "47.16", "--temperature", "12.5", "--json")
+    assert result.exit_code == 0, result.output
+    data = json.loads(result.output)
+    expected = query(groups, PIN, DISC, 47.16, 12.5)
+    assert data["mu_k"]["value"] == pytest.approx(expected.mu_k.value)
+    assert data["mu_k"]["uncertainty"] == pytest.approx(expected.mu_k.uncertainty)
+    assert data["clamped"] is False
+    assert data["mu_s"] is None
+    assert len(data["mu_k"]["used"]) == 4
+
+
+def test_query_text_says_what_it_used_and_that_it_clamped(map_path):
+    result = _run("query", "--map", str(map_path), "--pin", PIN, "--disc", DISC,
+                  "--pressure", "200", "--temperature", "20")
+    assert result.exit_code == 0
+    assert "mu_k = 0.260" in result.output
+    assert "clamped: yes" in result.output
+    assert "106.1 kPa, 20 °C, 0.260, n=2, w=1.000" in result.output
+
+
+def test_query_unknown_pair_is_one_friendly_line(map_path):
+    result = CliRunner().invoke(main, ["query", "--map", str(map_path), "--pin", PIN,
+                                       "--disc", "glass", "--pressure", "20",
+                                       "--temperature", "20"])
+    assert result.exit_code == 1
+    assert "Traceback" not in result.output
+    lines = [ln for ln in result.output.splitlines() if ln.strip()]
+    assert len(lines) == 1
+    assert "the map holds" in lines[0] and "Dragonskin 30 on acrylic glass" in lines[0]
+
+
+def test_query_without_map_says_so(tmp_path):
+    result = CliRunner().invoke(main, ["query", "--map", str(tmp_path / "none.parquet"),
+                                       "--pin", PIN, "--disc", DISC, "--pressure", "20"])
+    assert result.exit_code == 1
+    assert "empty or absent" in result.output
+
+
+@pytest.mark.parametrize("units,factor", [("mm-N-s", 1e-3), ("m-N-s", 1e3)])
+def test_export_abaqus_to_file(map_path, groups, tmp_path, units, factor):
+    out = tmp_path / "friction.inp"
+    result = _run("export", "abaqus", "--map", str(map_path), "--pin", PIN, "--disc", DISC,
+                  "--units", units, "-o", str(out))
+    assert result.exit_code == 0
+    rows = [
+        [float(v) for v in line.split(",")]
+        for line in out.read_text().splitlines()
+        if line and not line.startswith("*")
+    ]
+    assert len(rows) == 10
+    for mu, _, p, t in rows:
+        assert mu == pytest.approx(query(groups, PIN, DISC, p / factor, t).mu_k.value, rel=1e-5)
+    assert str(map_path) in out.read_text()
+
+
+def test_export_ansys_stdout(map_path):
+    result = _run("export", "ansys", "--map", str(map_path), "--pin", "Ecoflex 00-50",
+                  "--material-id", "7")
+    assert result.exit_code == 0
+    assert result.output.count("TB,FRIC,") == 2
+    assert "TB,FRIC,7,,,ISO" in result.output and "TB,FRIC,8,,,ISO" in result.output
+
+
+def test_export_single_values(map_path):
+    common = ["--map", str(map_path), "--pin", PIN, "--disc", DISC, "--pressure", "106.1",
+              "--temperature", "20"]
+    mujoco = _run("export", "mujoco", *common, "--geom1", "finger").output
+    assert 'geom1="finger"' in mujoco and 'friction="0.26 0.26 0.005 0.0001 0.0001"' in mujoco
+    assert 'responseParams="mu=0.26"' in _run("export", "sofa", *common).output
+    assert "kinetic_mu_array = np.array([0.26, 0.26, 0.26])" in _run(
+        "export", "pyelastica", *common).output
+
+
+def test_export_single_value_without_pressure_lists_the_pressures(map_path):
+    result = CliRunner().invoke(main, ["export", "mujoco", "--map", str(map_path),
+                                       "--pin", PIN, "--disc", DISC])
+    assert result.exit_code == 1
+    assert "11.79, 35.37, 58.95, 82.52, 106.1 kPa" in result.output
+    assert "--pressure" in result.output
+
+
+def test_export_exponential_decay_without_mu_s_is_refused(map_path):
+    result = CliRunner().invoke(main, ["export", "abaqus", "--exponential-decay", "--map",
+                                       str(map_path), "--pin", PIN, "--disc", DISC,
+                                       "--pressure", "20", "--temperature", "20"])
+    assert result.exit_code == 1
+    assert "no mu_s" in result.output and "Traceback" not in result.output
+
+
+def test_fit_command_json_and_csv(map_path, tmp_path):
+    out = tmp_path / "fits.csv"
+    result = CliRunner().invoke(fit_cmd, ["--map", str(map_path), "--pin", PIN, "--json",
+                                          "-o", str(out)], catch_exceptions=False)
+    assert result.exit_code == 0
+    records = json.loads(result.stdout)
+    assert {r["disc"] for r in records} >= {"steel", "acrylic glass"}
+    assert all(r["pin"] == PIN for r in records)
+    assert all(r["exponent"] < 0 for r in records)
+    written = pd.read_csv(out)
+    assert len(written) == len(records)
+    table = CliRunner().invoke(fit_cmd, ["--map", str(map_path), "--disc", "steel"])
+    assert table.exit_code == 0
+    assert "Ecoflex 00-50" in table.output and "n-1" in table.output
+
+
+@pytest.mark.slow
+def test_query_and_export_in_a_real_process(map_path, tmp_path):
+    out = tmp_path / "contact.xml"
+    proc = subprocess.run(
+        [sys.executable, "-m", "tribopipe", "export", "mujoco", "--map", str(map_path),
+         "--pin", PIN, "--disc", DISC, "--pressure", "35.37", "--temperature", "20",
+         "-o", str(out)],
+        capture_output=True, text=True, timeout=120,
+    )
+    assert proc.returncode == 0, proc.stderr
+    assert 'friction="0.45 0.45' in out.read_text()
+    proc = subprocess.run(
+        [sys.executable, "-m", "tribopipe", "query", "--map", str(map_path), "--pin", PIN,
+         "--disc", "steal", "--pressure", "35.37", "--temperature", "20"],
+        capture_output=True, text=True, timeout=120,
+    )
+    assert proc.returncode == 1
+    assert "did you mean 'Dragonskin 30 on steel'" in proc.stderr
+    assert "Traceback" not in proc.stderr

@@ -1,0 +1,296 @@
+"""Batch a campaign like a lab would: good runs land, bad files are listed, re-runs only do
+what changed. Real synthetic RheoCompass exports, real Parquet maps, no mocks."""
+
+from __future__ import annotations
+
+import csv
+import os
+import shutil
+from pathlib import Path
+
+import pandas as pd
+import pytest
+
+from tribopipe.campaign import (
+    CHANGED,
+    FAILED,
+    NEW,
+    REDUCED,
+    campaign_listing,
+    campaign_table,
+    load_campaign,
+    run_campaign,
+)
+from tribopipe.synthetic import SyntheticRun, write_rheocompass_export
+
+PATTERN = "{pin}_{disc}_{force}N_{temperature}C_r{repeat}"
+DURATION_S = 150.0
+
+#: file stem -> (true mu_s, true mu_k, applied total normal force [N])
+GOOD = {
+    "DS30_steel_1N_20C_r1": (0.80, 0.62, 1.0),
+    "DS30_steel_1N_20C_r2": (0.82, 0.64, 1.0),
+    "DS30_steel_5N_20C_r1": (0.47, 0.36, 5.0),
+    "EF50_steel_5N_20C_r1": (0.55, 0.42, 5.75),  # 15 % above nominal: QC flag
+}
+
+
+def write_run(path: Path, mu_s: float, mu_k: float, force_N: float, seed: int,
+              test: str = "friction") -> Path:
+    run = SyntheticRun(mu_s=mu_s, mu_k=mu_k, normal_force_N=force_N, temperature_C=20.0,
+                       duration_s=DURATION_S, noise=0.004, seed=seed)
+    return write_rheocompass_export(path, run, project="campaign test", test=test,
+                                    sample="pin")
+
+
+def write_config(root: Path, extra: str = "", instrument: str | None = None) -> Path:
+    lines = [
+        "[campaign]",
+        'name = "lab check"',
+        'raw_dir = "raw"',
+        'output_dir = "out"',
+        f'filename_pattern = "{PATTERN}"',
+        "plots = false",
+    ]
+    if instrument:
+        lines.append(f'instrument = "{instrument}"')
+    body = "\n".join(lines) + "\n" + extra + '\n[names]\nDS30 = "Dragonskin 30"\n' \
+        'EF50 = "Ecoflex 00-50"\n'
+    cfg = root / "campaign.toml"
+    cfg.write_text(body, encoding="utf-8")
+    return cfg
+
+
+@pytest.fixture(scope="module")
+def exports(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """Four good exports, one truncated export and one text file that is no export."""
+    folder = tmp_path_factory.mktemp("exports")
+    for seed, (stem, (mu_s, mu_k, force)) in enumerate(GOOD.items()):
+        write_run(folder / f"{stem}.csv", mu_s, mu_k, force, seed=seed)
+    # truncated mid-file, as when a USB stick is pulled during the copy
+    whole = (folder / "DS30_steel_1N_20C_r1.csv").read_bytes()
+    (folder / "DS30_steel_9N_20C_r1.csv").write_bytes(whole[: len(whole) // 40])
+    (folder / "DS30_steel_3N_20C_r1.csv").write_text("operator notes: disc re-polished\n",
+                                                     encoding="utf-8")
+    return folder
+
+
+@pytest.fixture()
+def campaign_dir(exports: Path, tmp_path: Path) -> Path:
+    shutil.copytree(exports, tmp_path / "raw")
+    write_config(tmp_path)
+    return tmp_path
+
+
+def read_runs_csv(path: Path) -> dict[str, dict[str, str]]:
+    with path.open(encoding="utf-8", newline="") as fh:
+        return {row["file"]: row for row in csv.DictReader(fh)}
+
+
+def test_bad_files_are_listed_and_the_good_runs_land(campaign_dir: Path) -> None:
+    campaign = load_campaign(campaign_dir / "campaign.toml")
+    seen: list[tuple[int, int]] = []
+    report = run_campaign(campaign, jobs=1, progress=lambda d, t: seen.append((d, t)))
+
+    assert sorted(report.reduced) == sorted(f"{s}.csv" for s in GOOD)
+    assert report.skipped == []
+    failed = dict(report.failures)
+    assert set(failed) == {"DS30_steel_9N_20C_r1.csv", "DS30_steel_3N_20C_r1.csv"}
+    for file, reason in failed.items():
+        assert file in reason and "\n" not in reason
+    assert not report.ok
+    # 3 condition groups: DS30 1 N, DS30 5 N, EF50 5 N
+    assert report.groups_updated == 3
+
+    runs = pd.read_parquet(campaign.map_path)
+    assert len(runs) == len(GOOD)
+    for _, row in runs.iterrows():
+        stem = Path(row["source_file"]).stem
+        mu_s, mu_k, _ = GOOD[stem]
+        assert row["mu_k"] == pytest.approx(mu_k, abs=0.02)
+        assert row["mu_s"] == pytest.approx(mu_s, abs=0.04)
+    by_stem = {Path(r.source_file).stem: r for r in runs.itertuples()}
+    assert by_stem["DS30_steel_1N_20C_r2"].pin == "Dragonskin 30"
+    assert by_stem["DS30_steel_1N_20C_r2"].repeat == 2
+    # nominal 1 N on three pins of r = 3 mm: 11.79 kPa per pin
+    assert by_stem["DS30_steel_1N_20C_r2"].pressure_kPa == pytest.approx(11.79, abs=0.01)
+    assert "normal_force_off_nominal" in by_stem["EF50_steel_5N_20C_r1"].flags.split(";")
+    assert "normal_force_off_nominal" not in by_stem["DS30_steel_5N_20C_r1"].flags.split(";")
+
+    table = read_runs_csv(campaign.runs_csv)
+    assert len(table) == 6
+    assert table["DS30_steel_3N_20C_r1.csv"]["status"] == "failed"
+    assert table["DS30_steel_3N_20C_r1.csv"]["reason"]
+    good = table["DS30_steel_5N_20C_r1.csv"]
+    assert good["status"] == "reduced"
+    assert float(good["mu_k"]) == pytest.approx(0.36, abs=0.02)
+    assert (campaign.output_dir / good["trace"]).is_file()
+    trace = pd.read_parquet(campaign.output_dir / good["trace"])
+    assert {"sliding_distance_mm", "mu", "pressure_kPa"} <= set(trace.columns)
+    failures = read_runs_csv_like(campaign.failures_csv)
+    assert [f["file"] for f in failures] == sorted(failed)
+    assert seen[-1] == (6, 6)
+    assert [d for d, _ in seen] == sorted(d for d, _ in seen)
+
+
+def read_runs_csv_like(path: Path) -> list[dict[str, str]]:
+    with path.open(encoding="utf-8", newline="") as fh:
+        return list(csv.DictReader(fh))
+
+
+def test_rerun_skips_everything_and_leaves_the_map_alone(campaign_dir: Path) -> None:
+    campaign = load_campaign(campaign_dir / "campaign.toml")
+    run_campaign(campaign, jobs=1)
+    before = campaign.map_path.read_bytes()
+    mtime = campaign.map_path.stat().st_mtime_ns
+
+    again = run_campaign(campaign, jobs=1)
+    assert again.reduced == []
+    assert sorted(again.skipped) == sorted(f"{s}.csv" for s in GOOD)
+    # unchanged failures stay listed (and keep the exit code non-zero) without a retry
+    assert {f for f, _ in again.failures} == {"DS30_steel_9N_20C_r1.csv",
+                                              "DS30_steel_3N_20C_r1.csv"}
+    assert again.groups_updated == 0
+    assert campaign.map_path.read_bytes() == before
+    assert campaign.map_path.stat().st_mtime_ns == mtime
+    statuses = {r.file: r.status for r in campaign_table(campaign)}
+    assert statuses["DS30_steel_1N_20C_r1.csv"] == REDUCED
+    assert statuses["DS30_steel_3N_20C_r1.csv"] == FAILED
+    assert {r["status"] for r in read_runs_csv(campaign.runs_csv).values()} == {"skipped",
+                                                                              "failed"}
+
+
+def test_changed_content_reduces_only_that_file_and_replaces_its_row(campaign_dir: Path) -> None:
+    campaign = load_campaign(campaign_dir / "campaign.toml")
+    run_campaign(campaign, jobs=1)
+    old = pd.read_parquet(campaign.map_path)
+    target = campaign_dir / "raw" / "DS30_steel_1N_20C_r2.csv"
+    old_id = old.loc[old["source_file"] == target.name, "measurement_id"].item()
+
+    # the lab re-measured this run: new content, same name
+    write_run(target, 0.90, 0.70, 1.0, seed=99)
+    # and merely touched another one (copied back, same bytes, new mtime)
+    other = campaign_dir / "raw" / "DS30_steel_5N_20C_r1.csv"
+    os.utime(other, ns=(other.stat().st_atime_ns, other.stat().st_mtime_ns + 10**9))
+    assert {r.file: r.status for r in campaign_table(campaign)}[target.name] == CHANGED
+
+    report = run_campaign(campaign, jobs=1)
+    assert report.reduced == [target.name]
+    assert other.name in report.skipped
+    assert report.removed == 1
+    new = pd.read_parquet(campaign.map_path)
+    assert len(new) == len(old)
+    assert old_id not in set(new["measurement_id"])
+    row = new.loc[new["source_file"] == target.name].iloc[0]
+    assert row["mu_k"] == pytest.approx(0.70, abs=0.02)
+    # the others are untouched
+    keep = old.loc[old["source_file"] != target.name].set_index("measurement_id")
+    assert set(keep.index) <= set(new["measurement_id"])
+
+
+def test_a_fixed_bad_file_is_retried(campaign_dir: Path) -> None:
+    campaign = load_campaign(campaign_dir / "campaign.toml")
+    first = run_campaign(campaign, jobs=1)
+    assert "DS30_steel_9N_20C_r1.csv" in dict(first.failures)
+    write_run(campaign_dir / "raw" / "DS30_steel_9N_20C_r1.csv", 0.40, 0.30, 9.0, seed=5)
+    report = run_campaign(campaign, jobs=1)
+    assert report.reduced == ["DS30_steel_9N_20C_r1.csv"]
+    assert dict(report.failures).keys() == {"DS30_steel_3N_20C_r1.csv"}
+    assert len(pd.read_parquet(campaign.map_path)) == len(GOOD) + 1
+
+
+def test_config_change_re_reduces_every_run_in_place(campaign_dir: Path) -> None:
+    campaign = load_campaign(campaign_dir / "campaign.toml")
+    run_campaign(campaign, jobs=1)
+    before = pd.read_parquet(campaign.map_path)
+    (campaign_dir / "wide.toml").write_text("[instrument]\ncontact_threshold_N = 0.3\n",
+                                            encoding="utf-8")
+    write_config(campaign_dir, instrument="wide.toml")
+    changed = load_campaign(campaign_dir / "campaign.toml")
+    assert changed.settings.config_hash != campaign.settings.config_hash
+    assert {r.status for r in campaign_table(changed) if r.file.startswith(("DS30_steel_1",
+                                                                             "EF50"))} \
+        == {CHANGED}
+    report = run_campaign(changed, jobs=1)
+    assert sorted(report.reduced) == sorted(f"{s}.csv" for s in GOOD)
+    after = pd.read_parquet(campaign.map_path)
+    # same raw files, same ids: rows replaced, not duplicated
+    assert sorted(after["measurement_id"]) == sorted(before["measurement_id"])
+    assert set(after["config_hash"]) == {changed.settings.config_hash}
+
+
+def test_tolerance_decides_the_qc_flag(campaign_dir: Path) -> None:
+    write_config(campaign_dir, extra="force_tolerance_rel = 0.2")
+    campaign = load_campaign(campaign_dir / "campaign.toml")
+    run_campaign(campaign, jobs=1)
+    runs = pd.read_parquet(campaign.map_path)
+    flags = runs.loc[runs["source_file"] == "EF50_steel_5N_20C_r1.csv", "flags"].item()
+    # 0.75 N off at 5 N is within 20 %: the campaign's tolerance overrules the default
+    assert "normal_force_off_nominal" not in flags.split(";")
+
+
+def test_lost_map_makes_the_runs_land_again(campaign_dir: Path) -> None:
+    campaign = load_campaign(campaign_dir / "campaign.toml")
+    run_campaign(campaign, jobs=1)
+    campaign.map_path.unlink()
+    report = run_campaign(campaign, jobs=1)
+    assert len(report.reduced) == len(GOOD)
+    assert len(pd.read_parquet(campaign.map_path)) == len(GOOD)
+
+
+def test_parallel_batch_matches_sequential(exports: Path, tmp_path: Path) -> None:
+    results = {}
+    for jobs in (1, 2):
+        root = tmp_path / f"j{jobs}"
+        shutil.copytree(exports, root / "raw")
+        campaign = load_campaign(write_config(root))
+        report = run_campaign(campaign, jobs=jobs)
+        assert len(report.reduced) == len(GOOD) and len(report.failures) == 2
+        runs = pd.read_parquet(campaign.map_path).sort_values("measurement_id")
+        results[jobs] = runs[["measurement_id", "mu_s", "mu_k", "flags"]].reset_index(drop=True)
+    pd.testing.assert_frame_equal(results[1], results[2])
+
+
+def test_listing_before_and_after(campaign_dir: Path) -> None:
+    campaign = load_campaign(campaign_dir / "campaign.toml")
+    rows = {r["file"]: r for r in campaign_listing(campaign)}
+    assert len(rows) == 6
+    assert rows["DS30_steel_5N_20C_r1.csv"]["status"] == NEW
+    assert rows["DS30_steel_5N_20C_r1.csv"]["pin"] == "Dragonskin 30"
+    assert rows["DS30_steel_5N_20C_r1.csv"]["normal_force_N"] == 5.0
+    assert rows["DS30_steel_5N_20C_r1.csv"]["mu_k"] is None
+    run_campaign(campaign, jobs=1)
+    rows = {r["file"]: r for r in campaign_listing(campaign)}
+    assert rows["DS30_steel_5N_20C_r1.csv"]["status"] == REDUCED
+    assert rows["DS30_steel_5N_20C_r1.csv"]["mu_k"] == pytest.approx(0.36, abs=0.02)
+    assert rows["DS30_steel_3N_20C_r1.csv"]["status"] == FAILED
+    assert rows["DS30_steel_3N_20C_r1.csv"]["reason"]
+
+
+def test_export_test_names_as_a_metadata_source(tmp_path: Path) -> None:
+    raw = tmp_path / "raw"
+    raw.mkdir()
+    write_run(raw / "run01.csv", 0.8, 0.6, 3.0, seed=1, test="DS30_steel_3N_20C_r1")
+    write_run(raw / "run02.csv", 0.8, 0.6, 3.0, seed=2, test="DS30_steel_3N_20C_r2")
+    # the manifest says 5 N where the export's own Test name says 3 N
+    (raw / "manifest.csv").write_text(
+        "file,pin,disc,normal_force_N,temperature_C,repeat\nrun02.csv,,,5,,\n",
+        encoding="utf-8",
+    )
+    cfg = tmp_path / "c.toml"
+    cfg.write_text(
+        '[campaign]\nraw_dir = "raw"\noutput_dir = "out"\nplots = false\n'
+        'manifest = "raw/manifest.csv"\nuse_export_names = true\n'
+        f'export_pattern = "{PATTERN}"\n[names]\nDS30 = "Dragonskin 30"\n',
+        encoding="utf-8",
+    )
+    campaign = load_campaign(cfg)
+    report = run_campaign(campaign, jobs=1)
+    assert report.reduced == ["run01.csv"]
+    (file, reason), = report.failures
+    assert file == "run02.csv"
+    assert "contradictory normal_force_N" in reason and "export Test name" in reason
+    runs = pd.read_parquet(campaign.map_path)
+    assert runs["pin"].tolist() == ["Dragonskin 30"]
+    assert runs["normal_force_N"].tolist() == [3.0]
+    assert runs["repeat"].tolist() == [1]

@@ -69,7 +69,8 @@ def exports(tmp_path_factory: pytest.TempPathFactory) -> Path:
         write_run(folder / f"{stem}.csv", mu_s, mu_k, force, seed=seed)
     # truncated mid-file, as when a USB stick is pulled during the copy
     whole = (folder / "DS30_steel_1N_20C_r1.csv").read_bytes()
-    (folder / "DS30_steel_9N_20C_r1.csv").write_bytes(whole[: len(whole) // 40])
+    cut = len(whole) // 2 // 2 * 2  # whole UTF-16 code units
+    (folder / "DS30_steel_9N_20C_r1.csv").write_bytes(whole[:cut])
     (folder / "DS30_steel_3N_20C_r1.csv").write_text("operator notes: disc re-polished\n",
                                                      encoding="utf-8")
     return folder
@@ -97,7 +98,8 @@ def test_bad_files_are_listed_and_the_good_runs_land(campaign_dir: Path) -> None
     failed = dict(report.failures)
     assert set(failed) == {"DS30_steel_9N_20C_r1.csv", "DS30_steel_3N_20C_r1.csv"}
     for file, reason in failed.items():
-        assert file in reason and "\n" not in reason
+        assert reason.startswith(f"{file}") and "\n" not in reason
+    assert "truncated" in failed["DS30_steel_9N_20C_r1.csv"]
     assert not report.ok
     # 3 condition groups: DS30 1 N, DS30 5 N, EF50 5 N
     assert report.groups_updated == 3

@@ -891,6 +891,17 @@ def _plot(campaign: Campaign, outcome: Any, trace: Path) -> str | None:
     return None
 
 
+def _reason(exc: TribopipeError, job: _Job) -> str:
+    """The one-line reason of a failed run, starting with the file's campaign-relative
+    name (readers name the absolute path, which is long and machine-specific)."""
+    text = str(exc)
+    if exc.path is None:
+        return f"{job.file}: {text}"
+    if exc.path == job.path and text.startswith(exc.path):
+        return job.file + text[len(exc.path):]
+    return text
+
+
 def _reduce_chunk(jobs: Sequence[_Job], ctx: _Context) -> list[dict[str, Any]]:
     """Reduce a chunk of files; each failure is caught and returned with its reason."""
     out: list[dict[str, Any]] = []
@@ -898,10 +909,7 @@ def _reduce_chunk(jobs: Sequence[_Job], ctx: _Context) -> list[dict[str, Any]]:
         try:
             out.append(_reduce_one(job, ctx))
         except TribopipeError as exc:
-            reason = str(exc)
-            if exc.path is None:
-                reason = f"{job.file}: {reason}"
-            out.append({"file": job.file, "ok": False, "reason": reason})
+            out.append({"file": job.file, "ok": False, "reason": _reason(exc, job)})
         except OSError as exc:
             out.append({"file": job.file, "ok": False,
                         "reason": f"{job.file}: cannot read: {exc.strerror or exc}"})

@@ -877,18 +877,23 @@ def _where(path: Path, first_line: int | None, i: int, col: str, problem: str) -
 
 
 def _read_mat_table(path: Path) -> pd.DataFrame:
+    import warnings
+
     import pandas as pd
 
-    try:
-        import matio
-    except ImportError:  # pragma: no cover - mat-io is a dependency
-        raise MapError("reading .mat files needs the mat-io package", path=path,
-                       hint="pip install mat-io") from None
-    try:
-        contents = matio.load_from_mat(str(path))
-    except Exception as exc:  # mat-io raises many types for foreign files
-        raise MapError(f"not a readable MATLAB file ({type(exc).__name__}: {exc})",
-                       path=path) from None
+    with warnings.catch_warnings():
+        # mat-io sets a pandas option that pandas 3 deprecates; not our users' concern
+        warnings.simplefilter("ignore", DeprecationWarning)
+        try:
+            import matio
+        except ImportError:  # pragma: no cover - mat-io is a dependency
+            raise MapError("reading .mat files needs the mat-io package", path=path,
+                           hint="pip install mat-io") from None
+        try:
+            contents = matio.load_from_mat(str(path))
+        except Exception as exc:  # mat-io raises many types for foreign files
+            raise MapError(f"not a readable MATLAB file ({type(exc).__name__}: {exc})",
+                           path=path) from None
     tables = [v for v in contents.values() if isinstance(v, pd.DataFrame)]
     if not tables:
         raise MapError(
@@ -979,10 +984,11 @@ def import_records(
                 "exclusion_reason": None,
             }
         )
-    ids = [r["measurement_id"] for r in records]
-    if len(set(ids)) != len(ids):
-        dup = next(i for i in ids if ids.count(i) > 1)
-        row = ids.index(dup)
+    seen: set[str] = set()
+    for row, rec in enumerate(records):
+        if rec["measurement_id"] not in seen:
+            seen.add(rec["measurement_id"])
+            continue
         raise MapError(
             "two rows have the same pin, disc, force, temperature and measurementNo",
             path=p,

@@ -546,11 +546,11 @@ def _median_abs_torque(m: Measurement) -> float:
 
 def _require(m: Measurement) -> None:
     try:
-        from .readers import require_columns  # type: ignore[attr-defined]
-    except ImportError:
+        from .readers import require_columns
+    except ImportError:  # the readers are optional for reducing in-memory data
         require_columns = None
     if require_columns is not None:
-        require_columns(m, (TIME, TORQUE, NORMAL_FORCE))
+        require_columns(m, TIME, TORQUE, NORMAL_FORCE)
         return
     missing = [c for c in (TIME, TORQUE, NORMAL_FORCE) if not m.has(c)]
     if missing:
@@ -561,17 +561,231 @@ def _require(m: Measurement) -> None:
         )
 
 
+@dataclass(frozen=True)
+class _Samples:
+    """The complete samples of one interval, time-ordered, as new float arrays."""
+
+    t: np.ndarray
+    torque: np.ndarray
+    force: np.ndarray  # made positive in compression
+    angle: np.ndarray | None
+    speed: np.ndarray | None
+    temperature: np.ndarray | None
+    n_total: int
+    n_dropped: int
+    force_sign: float
+
+
+def _samples(m: Measurement, params: ReductionParams) -> _Samples:
+    """Validate and copy the quantities of ``m`` (raises ReductionError for bad input)."""
+    label = m.meta.label
+    data = m.data
+    t = np.array(data[TIME], dtype=float)
+    torque = np.array(data[TORQUE], dtype=float)
+    force = np.array(data[NORMAL_FORCE], dtype=float)
+    n_total = int(t.size)
+    for name, values in ((TORQUE, torque), (NORMAL_FORCE, force)):
+        missing = int((~np.isfinite(values)).sum())
+        if missing > params.max_missing_fraction * n_total:
+            raise ReductionError(
+                f"{label}: {missing} of {n_total} {name} values are missing "
+                f"(more than {params.max_missing_fraction:.0%}); cannot reduce"
+            )
+    keep = np.isfinite(t) & np.isfinite(torque) & np.isfinite(force)
+    order = np.argsort(t[keep], kind="stable")
+
+    def pick(values: np.ndarray) -> np.ndarray:
+        return values[keep][order]
+
+    def optional(name: str) -> np.ndarray | None:
+        if name not in data.columns:
+            return None
+        values = pick(np.array(data[name], dtype=float))
+        return values if np.isfinite(values).any() else None
+
+    t, torque, force = pick(t), pick(torque), pick(force)
+    if t.size < params.min_contact_samples:
+        raise ReductionError(
+            f"{label}: only {t.size} complete samples (time, torque and normal force); "
+            f"need at least {params.min_contact_samples}"
+        )
+    force_sign = -1.0 if np.median(force) < 0 else 1.0
+    return _Samples(
+        t=t,
+        torque=torque,
+        force=force_sign * force,
+        angle=optional(ANGLE),
+        speed=optional(SPEED),
+        temperature=optional(TEMPERATURE),
+        n_total=n_total,
+        n_dropped=int(n_total - t.size),
+        force_sign=force_sign,
+    )
+
+
 def _offset_from_meta(m: Measurement) -> tuple[float | None, str | None]:
     extra = dict(m.meta.extra)
-    if OFFSET_KEY not in extra:
-        return None, None
     try:
         value = float(extra[OFFSET_KEY])
-    except ValueError:
+    except (KeyError, ValueError):
         return None, None
     if not math.isfinite(value):
         return None, None
     return value, extra.get(OFFSET_SOURCE_KEY, "set-up interval")
+
+
+def leading_rest(s_mm: Any, motion_tol_mm: float) -> np.ndarray:
+    """Boolean mask (shape (n,)) of the samples before the disc first moves
+    ``motion_tol_mm`` [mm] along ``s_mm``; a stop later in the run is not "rest"."""
+    s = np.asarray(s_mm, dtype=float)
+    moved = s >= motion_tol_mm
+    first = int(np.argmax(moved)) if moved.any() else s.size
+    return np.arange(s.size) < first
+
+
+def estimate_torque_offset_Nm(
+    torque_Nm: Any, at_rest: Any, min_samples: int
+) -> tuple[float | None, int]:
+    """Median torque [N·m] of the at-rest samples (boolean mask), or ``None`` when fewer
+    than ``min_samples`` are at rest; and the number of samples used."""
+    torque = np.asarray(torque_Nm, dtype=float)
+    rest = np.asarray(at_rest, dtype=bool)
+    n = int(rest.sum())
+    if n < min_samples:
+        return None, n
+    return float(np.median(torque[rest])), n
+
+
+@dataclass(frozen=True)
+class _Detection:
+    """μ_S / μ_K detection on the valid samples (arrays of the valid samples)."""
+
+    mu_s: float
+    k_s: int
+    mu_peak: float
+    s_peak: float
+    prominence: float
+    distinct: bool
+    mu_k: float
+    window: np.ndarray
+    settled: bool
+    tol: float
+    plateau_std: float
+    drift: float
+    drift_se: float
+    sigma: float
+    stick_slip_std: float
+    mu_med: np.ndarray
+
+
+def _detect(
+    s_v: np.ndarray, t_v: np.ndarray, mu_v: np.ndarray, total_mm: float, params: ReductionParams
+) -> _Detection:
+    mu_med = median_smooth(mu_v, params.median_window)
+    sigma = noise_std(mu_v)
+    step_mm = float(np.median(np.diff(s_v))) if s_v.size > 1 else 0.0
+    if step_mm <= 0:
+        step_mm = max(total_mm / max(s_v.size, 1), 1e-9)
+    peak_n = max(5, int(round(params.peak_window_mm / step_mm)) | 1)
+    curve = static_peak_curve(mu_med, peak_n)
+    # noise left by a quadratic SG of width w at its centre: ~ sqrt(9 / (4 w)) σ
+    sigma_peak = sigma * math.sqrt(min(1.0, 9.0 / (4.0 * peak_n)))
+
+    search = s_v <= params.static_search_mm
+    if not search.any():
+        search = np.arange(s_v.size) < max(1, s_v.size // 4)
+    k_peak = int(np.argmax(np.where(search, curve, -np.inf)))
+    mu_peak, s_peak = float(curve[k_peak]), float(s_v[k_peak])
+
+    start_from = max(params.run_in_mm, s_peak)
+    post = s_v >= start_from
+    tol = params.settle_tol
+    plateau_start: float | None = None
+    if post.sum() >= 3:
+        plateau_start, tol = find_plateau_start(s_v[post], mu_v[post], start_from, sigma, params)
+    settled = plateau_start is not None
+    if plateau_start is None:
+        # not settled: the last plateau_min_mm after the peak (or the second half of the
+        # trace when that is all there is); flagged below
+        end = float(s_v[-1])
+        plateau_start = max(start_from, end - params.plateau_min_mm)
+        if plateau_start >= end:
+            plateau_start = max(s_peak, end / 2) if s_peak < end else end / 2
+    window = s_v >= plateau_start
+    if window.sum() < 3:
+        window = np.arange(s_v.size) >= s_v.size // 2
+    mu_w = mu_v[window]
+    mu_k = float(np.mean(mu_w))
+    drift, drift_se = linear_slope(s_v[window], mu_w)
+
+    plateau_high = float(np.percentile(curve[window], 99))
+    prominence = mu_peak - max(plateau_high, mu_k)
+    distinct = prominence > max(
+        params.static_min_prominence, params.static_prominence_sigma * sigma_peak
+    )
+    if distinct:
+        mu_s, k_s = mu_peak, k_peak
+    else:
+        # μ_S = μ_K; its place is where the smoothed trace first reaches μ_K
+        mu_s = mu_k
+        reached = np.flatnonzero(curve >= mu_k)
+        k_s = int(reached[0]) if reached.size else k_peak
+
+    dt_s = float(np.median(np.diff(t_v))) if t_v.size > 1 else 1.0
+    n_average = max(1, int(round(params.stick_slip_average_s / max(dt_s, 1e-9))))
+    ss_std = stick_slip_std(s_v[window], mu_w, n_average)
+    return _Detection(
+        mu_s=float(mu_s), k_s=k_s, mu_peak=mu_peak, s_peak=s_peak, prominence=prominence,
+        distinct=bool(distinct), mu_k=mu_k, window=window, settled=settled, tol=tol,
+        plateau_std=float(np.std(mu_w, ddof=1)) if mu_w.size > 1 else 0.0,
+        drift=drift, drift_se=drift_se, sigma=sigma, stick_slip_std=ss_std, mu_med=mu_med,
+    )
+
+
+def stick_slip_std(s_mm: Any, mu: Any, n_average: int) -> float:
+    """Standard deviation of μ (shape (n,)) after a moving average over ``n_average``
+    samples and removal of a linear trend in s [mm]: the slow oscillation left once white
+    noise is averaged out. 0 when the window is too short to tell."""
+    s = np.asarray(s_mm, dtype=float)
+    m = np.asarray(mu, dtype=float)
+    if m.size < max(10, 3 * n_average):
+        return 0.0
+    averaged = np.convolve(m, np.ones(n_average) / n_average, mode="valid")
+    x = s[n_average // 2 : n_average // 2 + averaged.size]
+    trend = np.polyval(np.polyfit(x, averaged, 1), x)
+    return float(np.std(averaged - trend))
+
+
+def _flags(
+    det: _Detection, s_v: np.ndarray, f_slide: np.ndarray, total_mm: float, dt_s: float,
+    params: ReductionParams,
+) -> tuple[list[str], float]:
+    flags: list[str] = []
+    n_window = int(det.window.sum())
+    w_s = s_v[det.window]
+    short = total_mm < params.run_in_mm + params.plateau_min_mm
+    if not det.distinct:
+        flags.append("static_not_distinct")
+    drifting = abs(det.drift) > params.max_drift_per_mm and abs(det.drift) > 3 * det.drift_se
+    too_short = float(w_s[-1] - w_s[0]) < params.plateau_min_mm * 0.999
+    if not det.settled or drifting or too_short:
+        flags.append("no_steady_state")
+    n_average = max(1, int(round(params.stick_slip_average_s / max(dt_s, 1e-9))))
+    white = det.sigma / math.sqrt(n_average)
+    # only a settled plateau can tell an oscillation from a transient
+    if (
+        det.settled
+        and det.stick_slip_std > params.stick_slip_min_std
+        and det.stick_slip_std > params.stick_slip_ratio * white
+    ):
+        flags.append("stick_slip")
+    f_mean = float(np.mean(f_slide))
+    cv = float(np.std(f_slide) / f_mean) if f_mean > 0 else math.inf
+    if cv > params.normal_force_cv_max:
+        flags.append("normal_force_unstable")
+    if short or n_window < params.min_plateau_samples:
+        flags.append("short_trace")
+    return flags, cv
 
 
 def reduce_measurement(
@@ -585,233 +799,101 @@ def reduce_measurement(
 
     ``m.data`` needs ``time_s`` [s], ``torque_Nm`` [N·m], ``normal_force_N`` [N] and uses
     ``angle_rad`` or ``speed_rad_s`` (else the nominal speed) and ``temperature_C`` when
-    present. ``torque_offset_Nm`` overrides the offset estimate. ``m`` is not modified.
+    present. ``torque_offset_Nm`` [N·m] overrides the offset estimate. ``m`` is not
+    modified.
 
     Raises :class:`ReductionError` (naming ``m.meta.label``) for zero normal force, more
     than half of torque or normal force missing, no rotation, or too few contact samples.
     """
+    import pandas as pd
+
     _require(m)
     label = m.meta.label
-    data = m.data
-    t_all = np.array(data[TIME], dtype=float)
-    torque_all = np.array(data[TORQUE], dtype=float)
-    force_all = np.array(data[NORMAL_FORCE], dtype=float)
-    n_total = t_all.size
-    for name, values in ((TORQUE, torque_all), (NORMAL_FORCE, force_all)):
-        missing = int((~np.isfinite(values)).sum())
-        if n_total and missing > params.max_missing_fraction * n_total:
-            raise ReductionError(
-                f"{label}: {missing} of {n_total} {name} values are missing "
-                f"(more than {params.max_missing_fraction:.0%}); cannot reduce"
-            )
-    keep = np.isfinite(t_all) & np.isfinite(torque_all) & np.isfinite(force_all)
-    n_dropped = int(n_total - keep.sum())
-    t = t_all[keep]
-    torque = torque_all[keep]
-    force = force_all[keep]
-    if t.size < params.min_contact_samples:
-        raise ReductionError(
-            f"{label}: only {t.size} complete samples (need at least "
-            f"{params.min_contact_samples})"
-        )
-    order = np.argsort(t, kind="stable")
-    if not np.all(order == np.arange(t.size)):
-        t, torque, force = t[order], torque[order], force[order]
-    else:
-        order = None
-
-    def column(name: str) -> np.ndarray | None:
-        if name not in data.columns:
-            return None
-        values = np.array(data[name], dtype=float)[keep]
-        values = values[order] if order is not None else values
-        return values if np.isfinite(values).any() else None
-
-    force_sign = -1.0 if np.median(force) < 0 else 1.0
-    force = force_sign * force
+    x = _samples(m, params)
     threshold = instrument.contact_threshold_N
-    in_contact = force >= threshold
-    if max(threshold, 1e-9) > force.max():
+    in_contact = x.force >= threshold
+    if not in_contact.any() or x.force.max() <= 0:
         raise ReductionError(
             f"{label}: the normal force never reaches the contact threshold "
-            f"{threshold:g} N (largest {force.max():.3g} N); no contact, no friction",
+            f"{threshold:g} N (largest {x.force.max():.3g} N): no contact, no friction",
             hint="check the normal-force column or lower contact_threshold_N",
-        )
-    n_contact = int(in_contact.sum())
-    if n_contact < params.min_contact_samples:
-        raise ReductionError(
-            f"{label}: only {n_contact} samples in contact (F_N ≥ {threshold:g} N); "
-            f"need at least {params.min_contact_samples}"
         )
 
     R = instrument.friction_radius_mm
-    angle = column(ANGLE)
-    speed = column(SPEED)
     s, distance_source = sliding_distance_mm(
-        t, R, angle_rad=angle, speed_rad_s=speed, nominal_speed_rpm=instrument.nominal_speed_rpm
+        x.t, R, angle_rad=x.angle, speed_rad_s=x.speed,
+        nominal_speed_rpm=instrument.nominal_speed_rpm,
     )
-    total_mm = float(s[-1] - s[0]) if s.size else 0.0
-    if distance_source != "nominal" and s.max() < params.min_travel_mm:
+    total_mm = float(s[-1] - s[0])
+    if distance_source != "nominal" and float(s.max()) < params.min_travel_mm:
         raise ReductionError(
-            f"{label}: no rotation: the disc travelled {s.max():.3g} mm "
+            f"{label}: no rotation: the disc travelled {float(s.max()):.3g} mm "
             f"(< {params.min_travel_mm:g} mm); this is not a friction interval"
         )
+    if distance_source == "nominal":
+        at_rest = np.zeros(s.size, dtype=bool)
+    else:
+        at_rest = leading_rest(s, params.motion_tol_mm)
 
-    # torque offset: explicit > set-up interval > at-rest samples of this interval
-    at_rest = s < params.motion_tol_mm if distance_source != "nominal" else np.zeros_like(in_contact)
-    if distance_source != "nominal":
-        # only the leading rest, not a stop later in the run
-        first_move = int(np.argmax(~at_rest)) if (~at_rest).any() else at_rest.size
-        at_rest = np.arange(at_rest.size) < first_move
-    offset_source: str
+    # torque offset: given > set-up interval > at-rest start of this interval > none
+    meta_offset, meta_source = _offset_from_meta(m)
+    rest_offset, n_rest = estimate_torque_offset_Nm(x.torque, at_rest, params.offset_min_samples)
     if torque_offset_Nm is not None:
         offset, offset_source = float(torque_offset_Nm), "given"
+    elif meta_offset is not None:
+        offset, offset_source = meta_offset, str(meta_source)
+    elif rest_offset is not None:
+        offset, offset_source = rest_offset, f"at-rest start ({n_rest} samples)"
     else:
-        meta_offset, meta_source = _offset_from_meta(m)
-        if meta_offset is not None:
-            offset, offset_source = meta_offset, str(meta_source)
-        elif int(at_rest.sum()) >= params.offset_min_samples:
-            offset = float(np.median(torque[at_rest]))
-            offset_source = f"at-rest start ({int(at_rest.sum())} samples)"
-        else:
-            offset = 0.0
-            offset_source = "not estimated (no set-up interval, no at-rest samples): 0 assumed"
+        offset = 0.0
+        offset_source = "not estimated (no set-up interval, no at-rest samples): 0 assumed"
 
-    corrected = torque - offset
-    moving = ~at_rest
-    sliding = moving & in_contact
-    if int(sliding.sum()) < params.min_contact_samples:
+    corrected = x.torque - offset
+    sliding = ~at_rest & in_contact
+    n_sliding = int(sliding.sum())
+    if n_sliding < params.min_contact_samples:
         raise ReductionError(
-            f"{label}: only {int(sliding.sum())} samples in contact while sliding; need at "
-            f"least {params.min_contact_samples}"
+            f"{label}: only {n_sliding} samples in contact (F_N ≥ {threshold:g} N) while "
+            f"sliding; need at least {params.min_contact_samples}"
         )
     torque_sign = -1.0 if np.median(corrected[sliding]) < 0 else 1.0
     f_r = torque_sign * friction_force_N(corrected, R)
-    mu = np.where(in_contact, coefficient_of_friction(f_r, force), np.nan)
-    pressure = contact_pressure_kPa(force, instrument.n_pins, instrument.pin_radius_mm)
+    mu = np.where(in_contact, coefficient_of_friction(f_r, x.force), np.nan)
 
-    # the analysis runs on the valid (in-contact, moving) samples only
-    idx = np.flatnonzero(sliding & np.isfinite(mu))
-    s_v, t_v, mu_v = s[idx], t[idx], mu[idx]
-    mu_med = median_smooth(mu_v, params.median_window)
-    mu_smooth = np.full(t.size, np.nan)
-    mu_smooth[idx] = mu_med
-    sigma = noise_std(mu_v)
-    step_mm = float(np.median(np.diff(s_v))) if s_v.size > 1 else 0.0
-    step_mm = step_mm if step_mm > 0 else max(total_mm / max(s_v.size, 1), 1e-9)
-    dt_s = float(np.median(np.diff(t_v))) if t_v.size > 1 else 1.0
-    peak_n = int(round(params.peak_window_mm / step_mm))
-    mu_peak_curve = static_peak_curve(mu_med, peak_n)
-    sg_w = max(5, peak_n | 1)
-    # noise left after quadratic SG of width w (centre point): ~ sqrt(9 / (4 w)) σ
-    sigma_peak = sigma * math.sqrt(min(1.0, 9.0 / (4.0 * sg_w)))
-
-    # static peak within the search distance
-    search = s_v <= params.static_search_mm
-    if not search.any():
-        search = np.zeros(s_v.size, dtype=bool)
-        search[: max(1, s_v.size // 4)] = True
-    k_peak = int(np.argmax(np.where(search, mu_peak_curve, -np.inf)))
-    mu_peak = float(mu_peak_curve[k_peak])
-    s_peak = float(s_v[k_peak])
-
-    flags: list[str] = []
-    # plateau
-    start_from = max(params.run_in_mm, s_peak)
-    post = s_v >= start_from
-    plateau_start, tol = (
-        find_plateau_start(s_v[post], mu_v[post], start_from, sigma, params)
-        if post.any()
-        else (None, params.settle_tol)
-    )
-    short = total_mm < params.run_in_mm + params.plateau_min_mm
-    settled = plateau_start is not None
-    if plateau_start is None:
-        # fall back to the last plateau_min_mm (or the second half of a short trace)
-        end_mm = float(s_v[-1])
-        plateau_start = max(start_from if not short else 0.0, end_mm - params.plateau_min_mm)
-        if short:
-            plateau_start = max(min(start_from, end_mm / 2), end_mm / 2)
-    window = s_v >= plateau_start
-    if window.sum() < 3:
-        window = np.zeros(s_v.size, dtype=bool)
-        window[s_v.size // 2 :] = True
-    mu_w = mu_v[window]
-    mu_k = float(np.mean(mu_w))
-    plateau_std = float(np.std(mu_w, ddof=1)) if mu_w.size > 1 else 0.0
-    drift, drift_se = linear_slope(s_v[window], mu_w)
-    if short or int(window.sum()) < params.min_plateau_samples:
-        flags.append("short_trace")
-
-    # static peak vs the plateau's own highs
-    plateau_high = float(np.percentile(mu_peak_curve[window], 99))
-    prominence = mu_peak - max(plateau_high, mu_k)
-    distinct = prominence > max(
-        params.static_min_prominence, params.static_prominence_sigma * sigma_peak
-    )
-    if distinct:
-        mu_s, k_s = mu_peak, k_peak
-    else:
-        flags.append("static_not_distinct")
-        mu_s = mu_k
-        # where the smoothed trace first reaches μ_K: the onset of sliding at μ_S = μ_K
-        reached = np.flatnonzero(mu_peak_curve >= mu_k)
-        k_s = int(reached[0]) if reached.size else k_peak
-
-    if not settled or (
-        abs(drift) > params.max_drift_per_mm and abs(drift) > 3 * drift_se
-    ) or float(s_v[window][-1] - s_v[window][0]) < params.plateau_min_mm * 0.999:
-        flags.append("no_steady_state")
-
-    # stick-slip: slow, large oscillation of the plateau beyond white noise
-    n_avg = max(1, int(round(params.stick_slip_average_s / dt_s)))
-    ss_std = 0.0
-    if mu_w.size >= 3 * n_avg and mu_w.size >= 10:
-        kernel = np.ones(n_avg) / n_avg
-        averaged = np.convolve(mu_w, kernel, mode="valid")
-        x = s_v[window][n_avg - 1 :] if n_avg > 1 else s_v[window]
-        x = x[: averaged.size]
-        slope_fit = np.polyfit(x, averaged, 1)
-        ss_std = float(np.std(averaged - np.polyval(slope_fit, x)))
-        white = sigma / math.sqrt(n_avg)
-        if ss_std > params.stick_slip_min_std and ss_std > params.stick_slip_ratio * white:
-            flags.append("stick_slip")
-
-    f_slide = force[sliding]
+    idx = np.flatnonzero(sliding)
+    s_v, t_v, mu_v = s[idx], x.t[idx], mu[idx]
+    det = _detect(s_v, t_v, mu_v, total_mm, params)
+    dt_s = float(np.median(np.diff(t_v)))
+    f_slide = x.force[sliding]
+    flags, cv = _flags(det, s_v, f_slide, total_mm, dt_s, params)
     f_mean = float(np.mean(f_slide))
-    cv = float(np.std(f_slide) / f_mean) if f_mean > 0 else math.inf
-    if cv > params.normal_force_cv_max:
-        flags.append("normal_force_unstable")
 
-    temperature = column(TEMPERATURE)
-    temp_mean: float | None = None
-    if temperature is not None:
-        tc = temperature[in_contact & np.isfinite(temperature)]
-        if tc.size:
-            temp_mean = float(np.mean(tc))
+    temperature_mean: float | None = None
+    if x.temperature is not None:
+        tc = x.temperature[in_contact & np.isfinite(x.temperature)]
+        temperature_mean = float(np.mean(tc)) if tc.size else None
 
-    moving_t = t[moving]
-    moving_s = s[moving]
+    moving_t, moving_s = x.t[~at_rest], s[~at_rest]
     if moving_t.size >= 2 and moving_t[-1] > moving_t[0]:
         speed_mm_s = float((moving_s[-1] - moving_s[0]) / (moving_t[-1] - moving_t[0]))
     else:
         speed_mm_s = instrument.nominal_sliding_speed_mm_s
 
-    import pandas as pd
-
+    mu_smooth = np.full(x.t.size, np.nan)
+    mu_smooth[idx] = det.mu_med
     trace = pd.DataFrame(
         {
-            "time_s": t,
+            "time_s": x.t,
             "sliding_distance_mm": s,
-            "normal_force_N": force,
-            "pressure_kPa": pressure,
+            "normal_force_N": x.force,
+            "pressure_kPa": contact_pressure_kPa(x.force, instrument.n_pins,
+                                                 instrument.pin_radius_mm),
             "friction_force_N": f_r,
             "mu": mu,
             "mu_smooth": mu_smooth,
             "in_contact": in_contact,
         }
     )
-    w_s, w_t = s_v[window], t_v[window]
     parameters: dict[str, Any] = dict(asdict(params))
     parameters.update(
         {
@@ -823,35 +905,37 @@ def reduce_measurement(
             "torque_offset_Nm": offset,
             "torque_offset_source": offset_source,
             "torque_sign": torque_sign,
-            "normal_force_sign": force_sign,
-            "noise_std": sigma,
-            "settle_tolerance": tol,
-            "plateau_settled": settled,
-            "plateau_drift_se_per_mm": drift_se if math.isfinite(drift_se) else None,
-            "mu_s_peak_raw": mu_peak,
-            "mu_s_peak_distance_mm": s_peak,
-            "static_prominence": prominence,
-            "stick_slip_std": ss_std,
+            "normal_force_sign": x.force_sign,
+            "noise_std": det.sigma,
+            "settle_tolerance": det.tol,
+            "plateau_settled": det.settled,
+            "plateau_drift_se_per_mm": det.drift_se if math.isfinite(det.drift_se) else None,
+            "mu_s_peak_raw": det.mu_peak,
+            "mu_s_peak_distance_mm": det.s_peak,
+            "static_prominence": det.prominence,
+            "stick_slip_std": det.stick_slip_std,
             "normal_force_cv": cv,
-            "n_samples": int(n_total),
-            "n_dropped_incomplete": n_dropped,
-            "n_in_contact": n_contact,
-            "n_plateau": int(window.sum()),
+            "n_samples": x.n_total,
+            "n_dropped_incomplete": x.n_dropped,
+            "n_in_contact": int(in_contact.sum()),
+            "n_plateau": int(det.window.sum()),
         }
     )
+    w_s, w_t = s_v[det.window], t_v[det.window]
     return ReductionResult(
-        mu_s=float(mu_s),
-        mu_s_distance_mm=float(s_v[k_s]),
-        mu_s_time_s=float(t_v[k_s]),
-        mu_k=mu_k,
+        mu_s=det.mu_s,
+        mu_s_distance_mm=float(s_v[det.k_s]),
+        mu_s_time_s=float(t_v[det.k_s]),
+        mu_k=det.mu_k,
         mu_k_window_mm=(float(w_s[0]), float(w_s[-1])),
         mu_k_window_s=(float(w_t[0]), float(w_t[-1])),
-        plateau_std=plateau_std,
-        plateau_drift_per_mm=float(drift),
+        plateau_std=det.plateau_std,
+        plateau_drift_per_mm=float(det.drift),
         normal_force_mean_N=f_mean,
-        pressure_kPa=float(contact_pressure_kPa(f_mean, instrument.n_pins,
-                                                instrument.pin_radius_mm)),
-        temperature_C=temp_mean,
+        pressure_kPa=float(
+            contact_pressure_kPa(f_mean, instrument.n_pins, instrument.pin_radius_mm)
+        ),
+        temperature_C=temperature_mean,
         sliding_speed_mm_s=speed_mm_s,
         sliding_distance_mm=total_mm,
         flags=tuple(f for f in FLAGS if f in flags),

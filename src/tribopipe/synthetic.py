@@ -54,7 +54,8 @@ class SyntheticRun:
     friction interval, then turns at ``speed_rpm`` in ``direction`` (+1/−1).
     ``normal_force_wobble`` is a relative slow fluctuation of F_N (0.15 = ±15 %).
     ``peak_distance_mm``, ``stick_slip_amplitude`` and ``stick_slip_period_mm`` default
-    to seeded draws.
+    to seeded draws. ``drift_per_mm`` adds a steady linear drift of μ after the peak
+    [1/mm] (a run that never reaches a steady state; μ_K is then its value at the peak).
     """
 
     mu_s: float = 0.8
@@ -77,6 +78,7 @@ class SyntheticRun:
     peak_distance_mm: float | None = None
     stick_slip_amplitude: float | None = None
     stick_slip_period_mm: float | None = None
+    drift_per_mm: float = 0.0
 
     def __post_init__(self) -> None:
         if self.shape not in SHAPES:
@@ -131,9 +133,15 @@ def _shape_params(run: SyntheticRun) -> dict[str, float]:
 
 
 def mu_curve(run: SyntheticRun, s_mm: np.ndarray) -> np.ndarray:
-    """The true μ at sliding distances ``s_mm`` [mm] (shape (n,)) for ``run``'s shape."""
-    p = _shape_params(run)
+    """The true μ at sliding distances ``s_mm`` [mm] (shape (n,)) for ``run``'s shape,
+    plus the linear drift ``drift_per_mm`` after the static peak."""
     s = np.asarray(s_mm, dtype=float)
+    drift = run.drift_per_mm * np.maximum(s - _shape_params(run)["peak_distance_mm"], 0.0)
+    return _shape_curve(run, s) + drift
+
+
+def _shape_curve(run: SyntheticRun, s: np.ndarray) -> np.ndarray:
+    p = _shape_params(run)
     s_pk = p["peak_distance_mm"]
     if run.shape == "no_overshoot":
         return run.mu_k * (1.0 - np.exp(-3.0 * s / s_pk))

@@ -1,0 +1,56 @@
+"""``tribopipe inspect``: what a raw export holds, as ``reduce`` will read it."""
+
+from __future__ import annotations
+
+import json
+
+import click
+
+from ._common import friendly_errors
+
+
+@click.command("inspect")
+@click.argument("file", type=click.Path(dir_okay=False))
+@click.option("--encoding", help="Force the file encoding (e.g. utf-16, utf-8-sig, cp1252).")
+@click.option("--delimiter", help="Force the cell delimiter (e.g. ';', ',' or 'tab').")
+@click.option("--decimal", type=click.Choice([".", ","]), help="Force the decimal mark.")
+@click.option(
+    "--format",
+    "fmt",
+    type=click.Choice(["rheocompass", "rheocompass-xlsx", "rheoplus", "csv"]),
+    help="Force the export format instead of detecting it.",
+)
+@click.option(
+    "--aliases",
+    "aliases_path",
+    type=click.Path(exists=True, dir_okay=False),
+    help="A column-alias file extending the built-in names (default: configs/aliases.toml).",
+)
+@click.option("--json", "as_json", is_flag=True, help="Print the summary as JSON.")
+@friendly_errors
+def inspect_cmd(
+    file: str,
+    encoding: str | None,
+    delimiter: str | None,
+    decimal: str | None,
+    fmt: str | None,
+    aliases_path: str | None,
+    as_json: bool,
+) -> None:
+    """List what an export holds: detected format, encoding, delimiter and decimal mark,
+    its tests, results and intervals with their point counts, and every column with its
+    original unit and the SI column it becomes."""
+    from ..readers import describe_export
+
+    summary = describe_export(
+        file,
+        encoding=encoding,
+        delimiter=delimiter,
+        decimal=decimal,
+        fmt=fmt,
+        aliases=aliases_path,
+    )
+    if as_json:
+        click.echo(json.dumps(summary.to_dict(), indent=2, ensure_ascii=False))
+    else:
+        click.echo(summary.to_text())

@@ -1086,7 +1086,8 @@ def run_campaign(
     # files that vanished from the folder leave the state (their map rows stay)
     present = set(by_file)
     for gone in sorted(set(entries) - present):
-        notes.append(f"{gone}: no longer in {campaign.raw_dir}; its map row is kept")
+        if entries[gone].get("status") == REDUCED:
+            notes.append(f"{gone}: no longer in {campaign.raw_dir}; its map row is kept")
         del entries[gone]
 
     map_summary = "unchanged"

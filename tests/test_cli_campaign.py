@@ -1,0 +1,155 @@
+"""`tribopipe batch` / `tribopipe campaign list|run` end to end, as a user types them."""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import pandas as pd
+import pytest
+from click.testing import CliRunner
+
+from tribopipe.cli import main
+from tribopipe.synthetic import SyntheticRun, write_rheocompass_export
+
+PATTERN = "{pin}_{disc}_{force}N_{temperature}C_r{repeat}"
+GOOD = {"DS30_steel_1N_20C_r1": 0.62, "DS30_steel_5N_20C_r1": 0.36, "DS30_steel_5N_20C_r2": 0.37}
+BAD = "DS30_steel_9N_20C_r1.csv"
+
+
+@pytest.fixture(scope="module")
+def exports(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    folder = tmp_path_factory.mktemp("cli_exports")
+    for seed, (stem, mu_k) in enumerate(GOOD.items()):
+        force = float(stem.split("_")[2].rstrip("N"))
+        run = SyntheticRun(mu_s=1.3 * mu_k, mu_k=mu_k, normal_force_N=force, temperature_C=20.0,
+                           duration_s=150.0, noise=0.004, seed=seed)
+        write_rheocompass_export(folder / f"{stem}.csv", run, project="cli", test="t",
+                                 sample="DS30")
+    (folder / BAD).write_text("this is a lab note, not an export\n", encoding="utf-8")
+    return folder
+
+
+@pytest.fixture()
+def config(exports: Path, tmp_path: Path) -> Path:
+    shutil.copytree(exports, tmp_path / "raw")
+    cfg = tmp_path / "campaign.toml"
+    cfg.write_text(
+        f'[campaign]\nname = "cli"\nraw_dir = "raw"\noutput_dir = "out"\n'
+        f'filename_pattern = "{PATTERN}"\nplots = false\n[names]\nDS30 = "Dragonskin 30"\n',
+        encoding="utf-8",
+    )
+    return cfg
+
+
+def invoke(*args: str):
+    return CliRunner().invoke(main, list(args))
+
+
+def test_batch_config_lands_good_runs_and_lists_the_bad_one(config: Path) -> None:
+    result = invoke("batch", str(config))
+    assert result.exit_code == 1, result.output
+    assert "3 reduced, 0 skipped (unchanged), 1 failed" in result.stdout
+    assert f"failed: {BAD}: " in result.stderr
+    assert "Traceback" not in result.output
+    out = config.parent / "out"
+    runs = pd.read_parquet(out / "friction_map.parquet")
+    assert sorted(Path(f).stem for f in runs["source_file"]) == sorted(GOOD)
+    assert (out / "failures.csv").read_text(encoding="utf-8").splitlines()[1].startswith(BAD)
+    assert len(list((out / "traces").glob("*.parquet"))) == len(GOOD)
+
+    again = invoke("batch", str(config))
+    assert again.exit_code == 1  # the bad file still fails and is still listed
+    assert "0 reduced, 3 skipped (unchanged), 1 failed" in again.stdout
+    assert f"failed: {BAD}: " in again.stderr
+
+
+def test_campaign_run_is_batch(config: Path) -> None:
+    (config.parent / "raw" / BAD).unlink()
+    result = invoke("campaign", "run", str(config), "--jobs", "2")
+    assert result.exit_code == 0, result.output
+    assert "3 reduced" in result.stdout
+    assert invoke("campaign", "run", str(config)).stdout.count("3 skipped") == 1
+
+
+def test_campaign_list_shows_metadata_and_status(config: Path) -> None:
+    before = invoke("campaign", "list", str(config))
+    assert before.exit_code == 0, before.output
+    lines = before.stdout.splitlines()
+    assert lines[0].split()[:4] == ["file", "status", "pin", "disc"]
+    row = next(line for line in lines if line.startswith("DS30_steel_5N_20C_r2.csv"))
+    assert row.split()[1] == "new" and "Dragonskin 30" in row
+    assert "4 file(s): 4 new" in before.stdout
+
+    invoke("batch", str(config))
+    after = invoke("campaign", "list", str(config), "--json")
+    rows = {r["file"]: r for r in json.loads(after.stdout)}
+    assert rows[BAD]["status"] == "failed" and rows[BAD]["reason"]
+    assert rows["DS30_steel_5N_20C_r1.csv"]["status"] == "reduced"
+    assert rows["DS30_steel_5N_20C_r1.csv"]["mu_k"] == pytest.approx(0.36, abs=0.02)
+    assert rows["DS30_steel_5N_20C_r1.csv"]["normal_force_N"] == 5.0
+
+
+def test_quick_batch_of_a_folder_with_a_manifest(exports: Path, tmp_path: Path) -> None:
+    folder = tmp_path / "runs"
+    shutil.copytree(exports, folder)
+    manifest = tmp_path / "manifest.csv"
+    manifest.write_text(
+        "file,pin,disc,normal_force_N,temperature_C,repeat,operator\n"
+        "DS30_steel_1N_20C_r1.csv,Dragonskin 30,steel,1,20,1,RB\n"
+        "DS30_steel_5N_20C_r1.csv,Dragonskin 30,steel,5,20,1,RB\n",
+        encoding="utf-8",
+    )
+    map_path = tmp_path / "lab" / "map.parquet"
+    result = invoke("batch", str(folder), "--manifest", str(manifest), "--map", str(map_path),
+                    "--out", str(tmp_path / "proc"), "--no-plots")
+    assert result.exit_code == 1  # two files have no manifest row
+    assert "2 reduced" in result.stdout and "2 failed" in result.stdout
+    assert "no row for it in manifest manifest.csv" in result.stderr
+    runs = pd.read_parquet(map_path)
+    assert sorted(runs["normal_force_N"]) == [1.0, 5.0]
+    # the default instrument: 3 pins of r = 3 mm, 5 N -> 58.95 kPa per pin
+    assert sorted(runs["pressure_kPa"].round(2)) == [11.79, 58.95]
+
+
+def test_folder_without_metadata_source_is_one_clear_line(exports: Path) -> None:
+    result = invoke("batch", str(exports))
+    assert result.exit_code == 1
+    assert "no metadata source" in result.output and "--manifest" in result.output
+    assert "Traceback" not in result.output
+
+
+def test_folder_options_are_refused_with_a_config(config: Path) -> None:
+    result = invoke("batch", str(config), "--manifest", str(config))
+    assert result.exit_code == 2
+    assert "--manifest: only with a FOLDER" in result.output
+
+
+def test_bad_config_names_the_file_and_key(tmp_path: Path) -> None:
+    cfg = tmp_path / "bad.toml"
+    cfg.write_text('[campaign]\nraw_dir = "."\nfilename_pattern = "{pin}"\nglobb = "*"\n',
+                   encoding="utf-8")
+    result = invoke("campaign", "list", str(cfg))
+    assert result.exit_code == 1
+    assert str(cfg) in result.output and "globb" in result.output
+    assert "Traceback" not in result.output
+
+
+def test_batch_in_a_real_process(config: Path) -> None:
+    """The installed entry point, as `make demo` calls it: no TTY, so no progress bar."""
+    env = {**os.environ, "PYTHONIOENCODING": "utf-8"}
+    cmd = [sys.executable, "-m", "tribopipe", "batch", str(config), "--jobs", "2"]
+    first = subprocess.run(cmd, capture_output=True, text=True, env=env, timeout=300)
+    assert first.returncode == 1, first.stderr
+    assert "3 reduced" in first.stdout and "1 failed" in first.stdout
+    assert BAD in first.stderr and "Traceback" not in first.stderr
+    assert "reducing" not in first.stderr  # the progress bar is for terminals only
+
+    (config.parent / "raw" / BAD).unlink()
+    second = subprocess.run(cmd, capture_output=True, text=True, env=env, timeout=300)
+    assert second.returncode == 0, second.stderr
+    assert "0 reduced, 3 skipped (unchanged), 0 failed" in second.stdout

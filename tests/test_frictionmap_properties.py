@@ -1,0 +1,106 @@
+"""Invariants of the store, checked with hypothesis: write → read is lossless, appending the
+same runs again changes nothing, and a failing append changes no byte of the map."""
+
+from __future__ import annotations
+
+import math
+import tempfile
+from pathlib import Path
+
+import pandas as pd
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from tribopipe import frictionmap as fm
+from tribopipe.errors import MapError
+
+# Arrow stores text as UTF-8: any character but lone surrogates.
+TEXT = st.text(st.characters(blacklist_categories=("Cs",)), max_size=12)
+NAME = TEXT.filter(lambda s: s.strip() != "")
+FLOAT = st.floats(allow_nan=True, allow_infinity=False, width=64)
+FINITE = st.floats(allow_nan=False, allow_infinity=False, width=64)
+MAYBE_INT = st.none() | st.integers(min_value=-(2**62), max_value=2**62)
+MAYBE_TEXT = st.none() | TEXT
+
+
+@st.composite
+def records(draw, min_size: int = 0, max_size: int = 6) -> list[dict]:
+    """Arbitrary valid map records with unique ids."""
+    ids = draw(st.lists(NAME, min_size=min_size, max_size=max_size, unique=True))
+    out = []
+    for mid in ids:
+        rec: dict = {}
+        for name in fm.RUN_COLUMNS:
+            kind = fm._KIND[name]
+            if kind == "float":
+                rec[name] = draw(FLOAT)
+            elif kind == "int":
+                rec[name] = draw(MAYBE_INT)
+            elif kind == "bool":
+                rec[name] = draw(st.booleans())
+            else:
+                rec[name] = draw(MAYBE_TEXT)
+        source = draw(st.sampled_from([fm.SOURCE_REDUCED, fm.SOURCE_PUBLISHED]) | NAME)
+        rec.update(
+            measurement_id=mid,
+            source=source,
+            pin=draw(NAME),
+            disc=draw(NAME),
+            mu_k=draw(FINITE),
+        )
+        if source == fm.SOURCE_REDUCED and math.isnan(rec["mu_s"]):
+            rec["mu_s"] = draw(FINITE)
+        out.append(rec)
+    return out
+
+
+@settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(records(min_size=1))
+def test_write_then_read_is_lossless(recs):
+    with tempfile.TemporaryDirectory() as tmp:
+        path = Path(tmp) / "map.parquet"
+        report = fm.append_records(path, recs)
+        assert report.added == len(recs)
+        pd.testing.assert_frame_equal(fm.read_map(path), fm.records_frame(recs))
+
+
+@settings(max_examples=30, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(records(min_size=1), st.randoms(use_true_random=False))
+def test_appending_the_same_runs_again_changes_nothing(recs, rnd):
+    with tempfile.TemporaryDirectory() as tmp:
+        path = Path(tmp) / "map.parquet"
+        fm.append_records(path, recs)
+        before = path.read_bytes()
+        again = list(recs)
+        rnd.shuffle(again)
+        report = fm.append_records(path, again)
+        assert report.added == report.replaced == report.kept_conflicting == 0
+        assert report.unchanged == len(recs)
+        assert path.read_bytes() == before
+
+
+BREAKERS = {
+    "mu_k is NaN": lambda r: r.update(mu_k=float("nan")),
+    "no pin": lambda r: r.update(pin=" "),
+    "reduced without mu_s": lambda r: r.update(source=fm.SOURCE_REDUCED, mu_s=None),
+    "text in a number column": lambda r: r.update(normal_force_N="3 N"),
+    "half a repeat": lambda r: r.update(repeat=1.5),
+    "a column missing": lambda r: r.pop("flags"),
+}
+
+
+@settings(max_examples=30, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(records(min_size=1), records(min_size=1), st.sampled_from(sorted(BREAKERS)),
+       st.data())
+def test_a_failing_append_changes_no_byte_of_the_map(existing, new, breaker, data):
+    with tempfile.TemporaryDirectory() as tmp:
+        path = Path(tmp) / "map.parquet"
+        fm.append_records(path, existing)
+        before = path.read_bytes()
+        bad = [dict(r) for r in new]
+        BREAKERS[breaker](bad[data.draw(st.integers(0, len(bad) - 1))])
+        with pytest.raises(MapError):
+            fm.append_records(path, bad, replace=data.draw(st.booleans()))
+        assert path.read_bytes() == before
+        assert not [p.name for p in Path(tmp).iterdir() if p.name.endswith(".tmp")]

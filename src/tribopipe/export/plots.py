@@ -1,0 +1,357 @@
+"""Pictures of the friction map: per-run traces (Fig. 3 style) and per-pair μ_K(p) (Fig. 5).
+
+Rendering is headless: figures are built with :class:`matplotlib.figure.Figure` on the
+Agg canvas, never through ``pyplot`` (no global state, no display needed, safe in worker
+processes), and matplotlib is imported only inside the functions. Output format follows
+the target's suffix (``.png``, ``.svg``, ``.pdf``) or ``fmt``; a file-like target (e.g.
+``io.BytesIO`` for the HTML report) needs ``fmt``.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from collections.abc import Mapping
+from pathlib import Path
+from typing import IO, TYPE_CHECKING, Any
+
+from ..errors import ExportError
+
+if TYPE_CHECKING:
+    import pandas as pd
+    from matplotlib.figure import Figure
+
+    from ..reduce import ReductionResult
+
+FORMATS = ("png", "svg", "pdf")
+DPI = 120
+#: μ axis label used on every plot
+MU_LABEL = "coefficient of friction μ"
+
+Target = str | Path | IO[bytes]
+
+
+def _figure(width_in: float, height_in: float) -> Figure:
+    """A new figure on the Agg canvas (headless)."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(width_in, height_in), dpi=DPI, layout="constrained")
+    FigureCanvasAgg(fig)
+    return fig
+
+
+def _format_of(target: Target, fmt: str | None) -> str:
+    if fmt is None:
+        if isinstance(target, str | Path):
+            fmt = Path(target).suffix.lstrip(".").lower() or "png"
+        else:
+            raise ExportError("a plot written to a stream needs a format (png, svg or pdf)")
+    fmt = fmt.lower()
+    if fmt not in FORMATS:
+        raise ExportError(f"unknown plot format {fmt!r}; expected one of {', '.join(FORMATS)}")
+    return fmt
+
+
+def _save(fig: Figure, target: Target, fmt: str | None, dpi: int = DPI) -> Target:
+    """Write ``fig`` to ``target`` (creating parent folders) and return the target."""
+    fmt = _format_of(target, fmt)
+    if isinstance(target, str | Path):
+        target = Path(target)
+        if target.suffix.lower() != f".{fmt}":
+            target = target.with_suffix(f".{fmt}")
+        target.parent.mkdir(parents=True, exist_ok=True)
+    # a fixed date keeps PDF/SVG output byte-stable for identical input
+    metadata: dict[str, Any] = {"png": {"Software": "tribopipe"}, "svg": {"Date": None},
+                                "pdf": {"CreationDate": None}}[fmt]
+    fig.savefig(target, format=fmt, dpi=dpi, metadata=metadata)
+    return target
+
+
+def slug(text: str) -> str:
+    """A file-name-safe slug: ``'Dragonskin 30'`` → ``'dragonskin-30'``."""
+    return re.sub(r"[^a-z0-9]+", "-", text.casefold()).strip("-") or "x"
+
+
+# ---------------------------------------------------------------------------- per run
+
+
+def _finite(value: Any) -> bool:
+    try:
+        return value is not None and math.isfinite(float(value))
+    except (TypeError, ValueError):
+        return False
+
+
+def draw_trace(
+    ax: Any,
+    trace: pd.DataFrame,
+    *,
+    mu_s: float | None,
+    mu_s_distance_mm: float | None,
+    mu_k: float | None,
+    mu_k_window_mm: tuple[float, float] | None,
+    flags: str = "",
+) -> None:
+    """Draw μ over sliding distance on ``ax`` with the μ_S peak and the μ_K window.
+
+    ``trace`` needs ``sliding_distance_mm`` and ``mu`` (``mu_smooth`` drawn when present);
+    distances in mm.
+    """
+    import numpy as np
+
+    s = np.asarray(trace["sliding_distance_mm"], dtype=float)
+    mu = np.asarray(trace["mu"], dtype=float)
+    ax.plot(s, mu, color="0.75", lw=0.8, label="μ (raw)")
+    if "mu_smooth" in trace.columns:
+        ax.plot(s, np.asarray(trace["mu_smooth"], dtype=float), color="0.15", lw=1.2,
+                label="μ (smoothed)")
+    if mu_k_window_mm is not None and all(_finite(v) for v in mu_k_window_mm):
+        start, end = (float(v) for v in mu_k_window_mm)
+        ax.axvspan(start, end, color="tab:blue", alpha=0.12, label="$\\mu_K$ window")
+        if _finite(mu_k):
+            ax.hlines(float(mu_k), start, end, color="tab:blue", lw=2.0,
+                      label=f"$\\mu_K$ = {float(mu_k):.3f}")
+    elif _finite(mu_k):
+        ax.axhline(float(mu_k), color="tab:blue", lw=1.5, ls="--",
+                   label=f"$\\mu_K$ = {float(mu_k):.3f}")
+    if _finite(mu_s) and _finite(mu_s_distance_mm):
+        ax.plot([float(mu_s_distance_mm)], [float(mu_s)], "o", color="tab:red", ms=7,
+                label=f"$\\mu_S$ = {float(mu_s):.3f}")
+    ax.set_xlabel("sliding distance s [mm]")
+    ax.set_ylabel(MU_LABEL)
+    finite = mu[np.isfinite(mu)]
+    if finite.size:
+        top = max(float(finite.max()), float(mu_s) if _finite(mu_s) else 0.0)
+        ax.set_ylim(min(0.0, float(finite.min())), top * 1.15 + 1e-9)
+    ax.grid(True, alpha=0.3)
+    ax.legend(loc="lower right", fontsize="small")
+    if flags:
+        ax.text(0.01, 0.98, "flags: " + flags.replace(";", ", "), transform=ax.transAxes,
+                va="top", ha="left", fontsize="small", color="tab:red")
+
+
+def plot_trace(
+    result: ReductionResult,
+    target: Target,
+    *,
+    title: str | None = None,
+    fmt: str | None = None,
+) -> Target:
+    """Plot a reduced run (μ over sliding distance, μ_S peak, μ_K window) to ``target``."""
+    fig = _figure(7.0, 3.6)
+    ax = fig.add_subplot()
+    draw_trace(ax, result.trace, mu_s=result.mu_s, mu_s_distance_mm=result.mu_s_distance_mm,
+               mu_k=result.mu_k, mu_k_window_mm=result.mu_k_window_mm,
+               flags=";".join(result.flags))
+    if title:
+        ax.set_title(title, fontsize="medium")
+    return _save(fig, target, fmt)
+
+
+def plot_trace_row(
+    trace: pd.DataFrame,
+    row: Mapping[str, Any],
+    target: Target,
+    *,
+    title: str | None = None,
+    fmt: str | None = None,
+    dpi: int = DPI,
+) -> Target:
+    """Plot a stored trace (Parquet columns) with its friction-map row's μ_S and μ_K window.
+
+    ``row`` needs ``mu_s, mu_s_distance_mm, mu_k, mu_k_window_start_mm,
+    mu_k_window_end_mm`` and optionally ``flags``.
+    """
+    fig = _figure(7.0, 3.6)
+    ax = fig.add_subplot()
+    flags = row.get("flags")
+    draw_trace(
+        ax, trace, mu_s=row.get("mu_s"), mu_s_distance_mm=row.get("mu_s_distance_mm"),
+        mu_k=row.get("mu_k"),
+        mu_k_window_mm=(row.get("mu_k_window_start_mm"), row.get("mu_k_window_end_mm")),
+        flags=flags if isinstance(flags, str) else "",
+    )
+    if title:
+        ax.set_title(title, fontsize="medium")
+    return _save(fig, target, fmt, dpi)
+
+
+def find_trace(traces_dir: str | Path, measurement_id: str) -> Path | None:
+    """The trace Parquet of a run under ``traces_dir`` (``<stem>_<id[:8]>.parquet``)."""
+    matches = sorted(Path(traces_dir).glob(f"*_{measurement_id[:8]}.parquet"))
+    return matches[0] if matches else None
+
+
+def plot_runs(
+    runs: pd.DataFrame,
+    traces_dir: str | Path,
+    out_dir: str | Path,
+    *,
+    fmt: str = "png",
+) -> tuple[list[Path], list[str]]:
+    """Trace plots of every run of ``runs`` whose trace Parquet is in ``traces_dir``.
+
+    Returns ``(written paths, measurement ids without a trace)``; files are named like
+    the traces (``<stem>_<id8>.<fmt>``) in ``out_dir``.
+    """
+    import pandas as pd
+
+    _format_of("x", fmt)
+    written: list[Path] = []
+    missing: list[str] = []
+    for row in runs.to_dict(orient="records"):
+        mid = str(row["measurement_id"])
+        path = find_trace(traces_dir, mid)
+        if path is None:
+            missing.append(mid)
+            continue
+        trace = pd.read_parquet(path)
+        title = f"{row.get('source_file') or path.stem}: {row['pin']} on {row['disc']}"
+        target = Path(out_dir) / f"{path.stem}.{fmt}"
+        written.append(Path(plot_trace_row(trace, row, target, title=title, fmt=fmt)))
+    return written, missing
+
+
+# ---------------------------------------------------------------------------- per pair
+
+
+def draw_pair(ax: Any, runs: pd.DataFrame, fits: pd.DataFrame | None) -> None:
+    """Draw μ_K against contact pressure for one pair's runs on ``ax``.
+
+    One colour per temperature: the runs (small dots), the group means with error bars of
+    ±1 standard deviation of the repeats, and the fitted power law over the measured
+    pressure range when ``fits`` (from :func:`tribopipe.fit.fit_power_law`) has a row for
+    the temperature.
+    """
+    import numpy as np
+
+    from ..fit import power_law
+
+    data = runs.assign(
+        _t=runs["temperature_C"].astype(float),
+        _p=runs["pressure_kPa"].astype(float),
+        _mu=runs["mu_k"].astype(float),
+    )
+    colours = ["tab:blue", "tab:red", "tab:green", "tab:purple", "tab:orange", "tab:brown"]
+    temps = sorted(data["_t"].dropna().unique()) + ([math.nan] if data["_t"].isna().any() else [])
+    for i, t in enumerate(temps):
+        at = data[data["_t"].isna()] if math.isnan(t) else data[data["_t"] == t]
+        colour = colours[i % len(colours)]
+        label_t = "T unknown" if math.isnan(t) else f"{t:g} °C"
+        ax.plot(at["_p"], at["_mu"], ".", color=colour, alpha=0.45, ms=5)
+        stats = at.groupby("_p")["_mu"].agg(["mean", "std", "count"]).reset_index()
+        ax.errorbar(stats["_p"], stats["mean"], yerr=stats["std"].fillna(0.0), fmt="o",
+                    color=colour, capsize=3, ms=6, label=f"{label_t}: mean ± SD of repeats")
+        if fits is None or fits.empty:
+            continue
+        match = fits[fits["temperature_C"].isna()] if math.isnan(t) else fits[
+            fits["temperature_C"] == t]
+        if match.empty or not _finite(match["k"].iloc[0]):
+            continue
+        f = match.iloc[0]
+        p = np.geomspace(float(f["pressure_min_kPa"]), float(f["pressure_max_kPa"]), 100)
+        ax.plot(p, power_law(p, float(f["k"]), float(f["exponent"])), "-", color=colour,
+                lw=1.3, label=(f"{label_t}: fit μ = {f['k']:.2f}·p$^{{{f['exponent']:.3f}}}$, "
+                               f"R² = {f['r_squared']:.3f}"))
+    ax.set_xlabel("contact pressure p [kPa]")
+    ax.set_ylabel("kinetic coefficient of friction $\\mu_K$")
+    ax.set_xlim(left=0)
+    ax.set_ylim(bottom=0)
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize="small", loc="upper right")
+
+
+def _pair_runs(runs: pd.DataFrame, pin: str, disc: str) -> pd.DataFrame:
+    included = runs
+    if "excluded" in runs.columns:
+        included = runs[~runs["excluded"].fillna(False).astype(bool)]
+    mask = (included["pin"].astype(str).str.casefold() == pin.casefold()) & (
+        included["disc"].astype(str).str.casefold() == disc.casefold()
+    )
+    sel = included[mask]
+    if sel.empty:
+        held = sorted({f"{p} on {d}" for p, d in zip(included["pin"], included["disc"],
+                                                    strict=True)})
+        raise ExportError(f"no runs for pin {pin!r} on disc {disc!r}; the map holds: "
+                          + ("; ".join(held) or "nothing"))
+    return sel
+
+
+def plot_pair(
+    runs: pd.DataFrame,
+    pin: str,
+    disc: str,
+    target: Target,
+    *,
+    fits: pd.DataFrame | None = None,
+    fmt: str | None = None,
+    dpi: int = DPI,
+) -> Target:
+    """μ_K against contact pressure for one pair (Fig. 5 style) to ``target``.
+
+    ``runs`` are friction-map rows (excluded runs are left out); ``fits`` defaults to
+    :func:`tribopipe.fit.fit_power_law` of the pair's runs.
+    """
+    from ..fit import fit_power_law
+
+    sel = _pair_runs(runs, pin, disc)
+    if fits is None:
+        fits = fit_power_law(sel)
+    else:
+        fits = fits[(fits["pin"].str.casefold() == pin.casefold())
+                    & (fits["disc"].str.casefold() == disc.casefold())]
+    fig = _figure(6.4, 4.2)
+    ax = fig.add_subplot()
+    draw_pair(ax, sel, fits)
+    ax.set_title(f"{sel['pin'].iloc[0]} on {sel['disc'].iloc[0]}", fontsize="medium")
+    return _save(fig, target, fmt, dpi)
+
+
+def plot_pairs(
+    runs: pd.DataFrame, out_dir: str | Path, *, fmt: str = "png"
+) -> list[Path]:
+    """One μ_K(p) plot per pair of ``runs`` in ``out_dir`` (``pair_<pin>__<disc>.<fmt>``)."""
+    from ..fit import fit_power_law
+
+    _format_of("x", fmt)
+    fits = fit_power_law(runs)
+    written = []
+    for pin, disc in sorted({(str(p), str(d)) for p, d in zip(runs["pin"], runs["disc"],
+                                                              strict=True)}):
+        target = Path(out_dir) / f"pair_{slug(pin)}__{slug(disc)}.{fmt}"
+        written.append(Path(plot_pair(runs, pin, disc, target, fits=fits, fmt=fmt)))
+    return written
+
+
+def plot_map_pairs(map_path: str | Path, out_dir: str | Path, *, fmt: str = "png",
+                   pin: str | None = None, disc: str | None = None) -> list[Path]:
+    """:func:`plot_pairs` for the friction map (Parquet) at ``map_path``, optionally one
+    pin and/or disc."""
+    runs = _read_runs(map_path)
+    if pin is not None:
+        runs = runs[runs["pin"].str.casefold() == pin.casefold()]
+    if disc is not None:
+        runs = runs[runs["disc"].str.casefold() == disc.casefold()]
+    if runs.empty:
+        raise ExportError("no runs match the selection", path=map_path)
+    return plot_pairs(runs, out_dir, fmt=fmt)
+
+
+def plot_map_runs(map_path: str | Path, traces_dir: str | Path, out_dir: str | Path, *,
+                  fmt: str = "png") -> tuple[list[Path], list[str]]:
+    """:func:`plot_runs` for the friction map (Parquet) at ``map_path``."""
+    if not Path(traces_dir).is_dir():
+        raise ExportError("trace folder not found", path=traces_dir,
+                          hint="pass --processed DIR, the campaign's output folder")
+    return plot_runs(_read_runs(map_path), traces_dir, out_dir, fmt=fmt)
+
+
+def _read_runs(map_path: str | Path) -> pd.DataFrame:
+    from ..frictionmap import read_map
+
+    runs = read_map(map_path)
+    if runs.empty:
+        raise ExportError("the friction map is empty or absent", path=map_path,
+                          hint="reduce runs first (tribopipe reduce / batch)")
+    return runs

@@ -90,7 +90,7 @@ def decode(raw: bytes, path: str, encoding: str | None = None) -> DecodedText:
                 f"unknown encoding {encoding!r}", path=path, hint="try utf-16, utf-8 or cp1252"
             ) from None
         try:
-            text = raw.decode(encoding)
+            text = _trim_utf16(raw, codecs.lookup(encoding).name).decode(encoding)
         except UnicodeDecodeError as exc:
             guess = _guess_encoding(raw)
             raise ReadError(
@@ -106,7 +106,7 @@ def decode(raw: bytes, path: str, encoding: str | None = None) -> DecodedText:
         raise ReadError(
             "binary file (NUL bytes), expected a text or Excel export", path=path
         )
-    text = raw.decode(guess, errors="strict").removeprefix("\ufeff")
+    text = _trim_utf16(raw, guess).decode(guess, errors="strict").removeprefix("\ufeff")
     _refuse_binary(text, path, forced=None)
     return DecodedText(text, guess, True)
 
@@ -116,14 +116,14 @@ def _guess_encoding(raw: bytes) -> str | None:
     for bom, name in _BOMS:
         if raw.startswith(bom):
             try:
-                raw.decode(name)
+                _trim_utf16(raw, name).decode(name)
             except UnicodeDecodeError:
                 return None
             return name
     utf16 = _utf16_without_bom(raw)
     if utf16 is not None:
         try:
-            raw.decode(utf16)
+            _trim_utf16(raw, utf16).decode(utf16)
             return utf16
         except UnicodeDecodeError:
             return None
@@ -136,6 +136,14 @@ def _guess_encoding(raw: bytes) -> str | None:
         except UnicodeDecodeError:
             continue
     return "latin-1"
+
+
+def _trim_utf16(raw: bytes, encoding: str) -> bytes:
+    """A UTF-16 file cut after an odd number of bytes loses its half character, so that
+    the reader can report the truncation itself (declared vs found points)."""
+    if encoding.startswith("utf-16") and len(raw) % 2:
+        return raw[:-1]
+    return raw
 
 
 def _refuse_binary(text: str, path: str, *, forced: str | None) -> None:

@@ -131,6 +131,13 @@ def build_measurement(raw: RawInterval, info: FileInfo, aliases: AliasTable) -> 
     lines = [ln for ln, _ in rows]
     width = len(raw.names)
     for line, cells in rows:
+        if len(cells) < width:
+            # instrument software always writes every cell (empty ones too)
+            raise ReadError(
+                f"row has {len(cells)} of the header's {width} cells: truncated file?",
+                path=info.path,
+                line=line,
+            )
         extra_cells = [c for c in cells[width:] if c]
         if extra_cells:
             raise ReadError(

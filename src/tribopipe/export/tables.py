@@ -84,11 +84,22 @@ def abstract_table(
     temperature_C: Sequence[float] | None = None,
 ) -> pd.DataFrame:
     """The paper's Table 2 layout: ``pin, disc, pressure_kPa, temperature_C, mu_k`` with
-    μ_K the group mean rounded to two decimals."""
+    μ_K the group mean rounded half-up to two decimals, as printed in the paper."""
     groups = group_table(runs, pin=pin, disc=disc, temperature_C=temperature_C)
     table = groups.loc[:, ["pin", "disc", "pressure_kPa", "temperature_C"]].copy()
-    table["mu_k"] = groups["mu_k_mean"].round(2)
+    table["mu_k"] = [round_half_up(v, 2) for v in groups["mu_k_mean"]]
     return table
+
+
+def round_half_up(value: float, decimals: int) -> float:
+    """Round as a person would from the printed value: 0.825 → 0.83 (binary ``round``
+    gives 0.82 because 0.825 is stored as 0.82499…)."""
+    from decimal import ROUND_HALF_UP, Decimal
+
+    if not math.isfinite(value):
+        return value
+    step = Decimal(1).scaleb(-decimals)
+    return float(Decimal(repr(float(value))).quantize(step, rounding=ROUND_HALF_UP))
 
 
 def frictionmap_table(

@@ -265,18 +265,17 @@ _LABELS = {
 _UNITS = ("", "[s]", "[mN·m]", "[N]", "[mrad]", "[1/min]", "[°C]", "")
 #: decimals written per column (time, torque mN·m, force, angle mrad, speed rpm, temperature)
 _DECIMALS = (2, 5, 4, 4, 6, 2)
+#: one data row: empty first cell, point number, six numbers, empty Status
+_ROW = "\t%d\t" + "\t".join(f"%.{d}f" for d in _DECIMALS) + "\t"
 
 
-def _fixed(values: np.ndarray, decimals: int, comma: bool) -> np.ndarray:
-    """Fixed-point text of a float array, in bulk; ``-0`` is written as ``0``."""
-    text = np.char.mod(f"%.{decimals}f", np.round(values, decimals) + 0.0)
-    return np.char.replace(text, ".", ",") if comma else text
+def _data_rows(frame: pd.DataFrame, comma: bool) -> str:
+    """The data rows of one interval as one CRLF-joined string.
 
-
-def _interval_block(
-    index: int, frame: pd.DataFrame, labels: dict, comma: bool
-) -> list[str]:
-    n = len(frame)
+    Numbers are converted to the export units and rounded as whole arrays (``+ 0.0``
+    turns ``-0`` into ``0``); each row is then one C-level ``%`` format, which is several
+    times faster than formatting and joining per cell.
+    """
     columns = [
         np.asarray(frame[TIME], dtype=float),
         np.asarray(frame[TORQUE], dtype=float) * 1e3,  # N·m → mN·m
@@ -285,19 +284,20 @@ def _interval_block(
         np.asarray(frame[SPEED], dtype=float) * 60 / (2 * math.pi),  # rad/s → 1/min
         np.asarray(frame[TEMPERATURE], dtype=float),
     ]
-    cells = [np.arange(1, n + 1).astype(str)]
-    cells += [_fixed(c, d, comma) for c, d in zip(columns, _DECIMALS, strict=True)]
-    rows = cells[0]
-    for c in cells[1:]:
-        rows = np.char.add(np.char.add(rows, "\t"), c)
-    rows = np.char.add(np.char.add("\t", rows), "\t")  # empty first cell, empty Status
+    rounded = [(np.round(c, d) + 0.0).tolist() for c, d in zip(columns, _DECIMALS, strict=True)]
+    text = "\r\n".join(_ROW % row for row in zip(range(1, len(frame) + 1), *rounded, strict=True))
+    return text.replace(".", ",") if comma else text
+
+
+def _interval_block(index: int, frame: pd.DataFrame, labels: dict, comma: bool) -> list[str]:
+    """The lines of one interval: count line, names, meaning row, unit row, data."""
     width = len(labels["columns"])
     return [
-        f"{labels['interval']}\t{index}\t{n}",
+        f"{labels['interval']}\t{index}\t{len(frame)}",
         labels["data"] + "\t" + "\t".join(labels["columns"]),
         "\t" * width,
         "\t" + "\t".join(_UNITS),
-        *rows.tolist(),
+        _data_rows(frame, comma),
     ]
 
 

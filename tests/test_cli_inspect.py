@@ -1,0 +1,126 @@
+"""``tribopipe inspect``: real files through the real command line."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+from click.testing import CliRunner
+
+from tribopipe.cli import main
+from tribopipe.readers import FORMATS
+
+VENV_BIN = Path(sys.executable).parent
+
+
+def run(*args: str):
+    return CliRunner().invoke(main, ["inspect", *args])
+
+
+def test_inspect_lists_format_intervals_and_column_mapping(data_dir: Path) -> None:
+    result = run(str(data_dir / "rheocompass_en_utf16_two_tests.csv"))
+    assert result.exit_code == 0, result.output
+    out = result.output
+    assert "format:    rheocompass" in out
+    assert "encoding:  utf-16" in out and "delimiter: TAB" in out and "decimal: ." in out
+    assert "2 test(s), 2 result(s), 2 interval(s), 606 point(s)" in out
+    assert "Stress Relaxation 1 / Step strain 1 / interval 1: 451 of 451 points" in out
+    assert "Torque [mN·m]" in out and "→ torque_Nm" in out
+    assert "Relaxation Modulus [Pa]" in out and "→ relaxation_modulus_Pa" in out
+
+
+def test_inspect_json_matches_the_file(data_dir: Path) -> None:
+    result = run(str(data_dir / "rheoplus_mcr302_stress_relaxation.txt"), "--json")
+    assert result.exit_code == 0, result.output
+    summary = json.loads(result.output)
+    assert summary["format"] == "rheoplus" and summary["n_intervals"] == 6
+    assert [i["n_points"] for i in summary["intervals"]] == [100, 100, 100, 99, 100, 100]
+    columns = {c["original"]: c for c in summary["intervals"][0]["columns"][:10]}
+    assert columns["Torque"] == {"original": "Torque", "unit": "[µNm]", "column": "torque_Nm"}
+    assert columns["Deflection Angle"]["column"] == "angle_rad"
+
+
+def test_forced_options_reach_the_reader(tmp_path: Path) -> None:
+    path = tmp_path / "plain.csv"
+    path.write_text("Time [s];Torque [mN·m];Normal Force [N]\n0,5;1,25;3\n", encoding="utf-8")
+    ok = run(str(path), "--delimiter", ";", "--decimal", ",", "--format", "csv",
+             "--encoding", "utf-8", "--json")
+    assert ok.exit_code == 0, ok.output
+    summary = json.loads(ok.output)
+    assert (summary["delimiter"], summary["decimal"], summary["encoding"]) == (";", ",", "utf-8")
+    assert summary["intervals"][0]["friction_ready"] is True
+    bad = run(str(path), "--decimal", ".")
+    assert bad.exit_code != 0
+    assert "expected a number" in bad.output and "Traceback" not in bad.output
+
+
+def test_user_alias_file_option(tmp_path: Path) -> None:
+    aliases = tmp_path / "aliases.toml"
+    aliases.write_text('[canonical.torque]\nnames = ["Momento"]\n', encoding="utf-8")
+    path = tmp_path / "it.csv"
+    path.write_text("Time [s],Momento [mN·m]\n0,1\n", encoding="utf-8")
+    result = run(str(path), "--aliases", str(aliases))
+    assert result.exit_code == 0, result.output
+    assert "Momento [mN·m]" in result.output and "→ torque_Nm" in result.output
+
+
+@pytest.mark.parametrize(
+    ("content", "problem"),
+    [(b"", "empty file"), (b"\x00\x01\x02\x03" * 50, "binary file"),
+     (b"item,price\napple,1\n", "not a recognised export")],
+)
+def test_bad_files_give_one_line_and_a_nonzero_exit(
+    tmp_path: Path, content: bytes, problem: str
+) -> None:
+    path = tmp_path / "bad.csv"
+    path.write_bytes(content)
+    result = run(str(path))
+    assert result.exit_code == 1
+    lines = [ln for ln in result.output.splitlines() if ln.strip()]
+    assert len(lines) == 1 and problem in lines[0] and str(path) in lines[0]
+
+
+def test_wrong_encoding_gives_a_hint(data_dir: Path) -> None:
+    result = run(str(data_dir / "rheocompass_en_utf16_small.txt"), "--encoding", "utf-8")
+    assert result.exit_code == 1
+    assert "--encoding utf-16" in result.output
+
+
+def test_format_choices_are_the_readers_formats() -> None:
+    from tribopipe.cli.inspect import inspect_cmd
+
+    option = next(p for p in inspect_cmd.params if p.name == "fmt")
+    assert tuple(option.type.choices) == FORMATS
+
+
+@pytest.mark.slow
+def test_inspect_in_a_subprocess(data_dir: Path) -> None:
+    exe = VENV_BIN / "tribopipe"
+    ok = subprocess.run(
+        [str(exe), "inspect", str(data_dir / "rheocompass_en_two_tests.xlsx")],
+        capture_output=True, text=True, check=False,
+    )
+    assert ok.returncode == 0, ok.stderr
+    assert "format:    rheocompass-xlsx" in ok.stdout and "606 point(s)" in ok.stdout
+    bad = subprocess.run(
+        [str(exe), "inspect", str(data_dir / "README.md")],
+        capture_output=True, text=True, check=False,
+    )
+    assert bad.returncode != 0
+    assert "Traceback" not in bad.stderr
+    assert len(bad.stderr.strip().splitlines()) == 1 and "not a recognised export" in bad.stderr
+
+
+@pytest.mark.slow
+def test_the_command_module_loads_no_heavy_library() -> None:
+    code = (
+        "import sys, tribopipe.cli.inspect\n"
+        "heavy = {'numpy', 'pandas', 'scipy', 'matplotlib', 'openpyxl'} & set(sys.modules)\n"
+        "print(sorted(heavy))"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True)
+    assert out.stdout.strip() == "[]"

@@ -470,3 +470,35 @@ def test_map_summary_lists_pairs_flags_exclusions_and_repeatability(tmp_path):
     assert "disc not cleaned" in text and run_record(2)["measurement_id"] in text
     assert "repeatability mu_k: s_r =" in text
     assert Path(path).exists()
+
+
+# --------------------------------------------------------------------------- end to end
+
+
+def test_real_exports_reduced_by_the_pipeline_land_once_in_the_map(tmp_path):
+    from tribopipe.pipeline import reduce_file
+    from tribopipe.synthetic import write_rheocompass_export
+
+    path = tmp_path / "map.parquet"
+    settings = load_settings()
+    labels = RunLabels(pin="Ecoflex 00-50", disc="steel", normal_force_N=3.0,
+                       temperature_C=20.0, repeat=1)
+    raw = write_rheocompass_export(tmp_path / "run1.txt", SyntheticRun(seed=3, duration_s=120),
+                                   project="p", test="friction", sample="EF50")
+    first = reduce_file(raw, settings, labels)
+    assert fm.append_records(path, [first.record]).added == 1
+    row = fm.read_map(path).iloc[0]
+    assert row["file_hash"] == first.file_hash
+    assert row["interval"] == first.measurement.meta.interval
+    assert row["mu_k"] == pytest.approx(0.55, abs=0.02)
+
+    copy = tmp_path / "copy of run1.txt"
+    copy.write_bytes(raw.read_bytes())
+    again = reduce_file(copy, settings, labels)
+    assert fm.append_records(path, [again.record]).unchanged == 1
+
+    stricter = settings_from_dict({"reduction": {"median_window": 9}})
+    redo = reduce_file(raw, stricter, labels)
+    assert fm.append_records(path, [redo.record]).kept_conflicting == 1
+    assert fm.append_records(path, [redo.record], replace=True).replaced == 1
+    assert fm.read_map(path)["config_hash"].tolist() == [stricter.config_hash]

@@ -104,3 +104,36 @@ def test_a_failing_append_changes_no_byte_of_the_map(existing, new, breaker, dat
             fm.append_records(path, bad, replace=data.draw(st.booleans()))
         assert path.read_bytes() == before
         assert not [p.name for p in Path(tmp).iterdir() if p.name.endswith(".tmp")]
+
+
+@pytest.fixture(scope="module")
+def map_with_runs(tmp_path_factory) -> Path:
+    """A map holding the published rows and one reduced run."""
+    from test_frictionmap import run_record
+
+    path = tmp_path_factory.mktemp("prop") / "friction_map.parquet"
+    fm.import_table(path)
+    fm.append_records(path, [run_record(1)])
+    return path
+
+
+@settings(max_examples=25, deadline=None,
+          suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture])
+@given(st.binary(max_size=400) | st.text(max_size=400).map(str.encode))
+def test_a_raw_file_that_fails_to_reduce_changes_no_byte_of_the_map(map_with_runs, content):
+    from click.testing import CliRunner
+
+    from tribopipe.cli import main
+
+    before = map_with_runs.read_bytes()
+    with tempfile.TemporaryDirectory() as tmp:
+        raw = Path(tmp) / "broken_export.csv"
+        raw.write_bytes(content)
+        result = CliRunner().invoke(
+            main,
+            ["reduce", str(raw), "--pin", "Ecoflex 00-50", "--disc", "steel", "--force", "3",
+             "--map", str(map_with_runs), "--out", str(Path(tmp) / "out")],
+        )
+    assert result.exit_code == 1, result.output
+    assert "Traceback" not in result.output
+    assert map_with_runs.read_bytes() == before

@@ -115,7 +115,7 @@ def _parse(
             )
     if decimal is None:
         default = "." if fmt == rheoplus.FORMAT or delim == "," else ","
-        sample = [c for _, cells in rows[:400] for c in cells[1:]]
+        sample = [c for _, cells in rows[:300] for c in cells[1:] if c][:2000]
         decimal = "." if delim == "," else detect_decimal(sample, default=default)
     info = FileInfo(path, fmt, decoded.encoding, delim, decimal)
     if fmt == rheocompass.FORMAT:

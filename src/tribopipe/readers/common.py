@@ -22,7 +22,6 @@ from .textio import EXCEL_ERRORS, is_missing, to_numbers
 LOSS_FACTOR_PLACEHOLDER = 20000.0
 
 _INVALID_POINT = re.compile(r"\((?:invalid|invalide|ung[üu]ltig|non valide)\)", re.IGNORECASE)
-_POINT_NO = re.compile(r"^\d+$")
 # Rheoplus writes the point number, then this text in the next cell
 _INVALID_CELL = re.compile(
     r"^(?:invalid point|point invalide|ung[üu]ltiger (?:mess)?punkt)$", re.IGNORECASE
@@ -73,7 +72,7 @@ def _classify_rows(raw: RawInterval, info: FileInfo) -> tuple[list[int], int, in
     pc = raw.point_col
     for i, (line, cells) in enumerate(raw.rows):
         cell = cells[pc] if pc < len(cells) else ""
-        if _POINT_NO.match(cell):
+        if cell.isascii() and cell.isdigit():
             after = cells[pc + 1] if pc + 1 < len(cells) else ""
             if after and after[0].isalpha() and _INVALID_CELL.match(after):
                 invalid += 1
@@ -146,6 +145,8 @@ def build_measurement(raw: RawInterval, info: FileInfo, aliases: AliasTable) -> 
                 line=line,
             )
 
+    # transpose once (C speed); every data row has at least `width` cells (checked above)
+    by_column = list(zip(*(cells[:width] for _, cells in rows), strict=True)) if rows else []
     columns: dict[str, object] = {}
     column_map: list[tuple[str, str]] = []
     used: set[str] = set()
@@ -154,7 +155,7 @@ def build_measurement(raw: RawInterval, info: FileInfo, aliases: AliasTable) -> 
     for j, name in enumerate(raw.names):
         unit = raw.units[j] if j < len(raw.units) else ""
         meaning = raw.meanings[j] if j < len(raw.meanings) else ""
-        cells = [c[j] if j < len(c) else "" for _, c in rows]
+        cells = list(by_column[j]) if by_column else []
         if j == raw.point_col:
             points = np.array([int(c) for c in cells], dtype=np.int64)
             columns["point_no"] = points
@@ -163,16 +164,17 @@ def build_measurement(raw: RawInterval, info: FileInfo, aliases: AliasTable) -> 
             continue
         if not name and not unit and not any(cells):
             continue  # padding column
-        for k, cell in enumerate(cells):
-            if cell in EXCEL_ERRORS:
-                raise ReadError(
-                    f"cell {cell!r} where a value was expected: the table went through "
-                    "Excel, which replaced it by an error",
-                    path=info.path,
-                    line=lines[k],
-                    column=name,
-                    hint="re-export from the instrument software and do not open it in Excel",
-                )
+        damaged = EXCEL_ERRORS.intersection(cells)
+        if damaged:
+            k = next(k for k, c in enumerate(cells) if c in damaged)
+            raise ReadError(
+                f"cell {cells[k]!r} where a value was expected: the table went through "
+                "Excel, which replaced it by an error",
+                path=info.path,
+                line=lines[k],
+                column=name,
+                hint="re-export from the instrument software and do not open it in Excel",
+            )
         quantity = aliases.quantity(name)
         base = aliases.base_name(name)
         if quantity is not None:
@@ -203,7 +205,8 @@ def build_measurement(raw: RawInterval, info: FileInfo, aliases: AliasTable) -> 
             target = _free(base, "", used)
             columns[target] = pd.array(cells, dtype="string")
         else:
-            missing_cells += sum(1 for c in cells if c and is_missing(c))
+            if "*" in "".join(cells):
+                missing_cells += sum(1 for c in cells if c and is_missing(c))
             # an unknown unit keeps its values and a sanitised unit suffix
             si = spec.to_si(values) if spec is not None else values
             if base == "loss_factor":

@@ -34,6 +34,8 @@ _COMMA_THOUSANDS = re.compile(r"^[-+]?\d{1,3}(?:,\d{3})+(?:\.\d*)?(?:[eE][-+]?\d
 _DOT_THOUSANDS = re.compile(r"^[-+]?\d{1,3}(?:\.\d{3})+(?:,\d*)?(?:[eE][-+]?\d+)?$")
 _BOTH = re.compile(r"^[-+]?[\d.,]*\d(?:[eE][-+]?\d+)?$")
 
+_CONTROL = re.compile("[\x00-\x08\x0b\x0c\x0e-\x1f\ufffd]")
+
 #: cells Excel writes when it could not evaluate a formula
 EXCEL_ERRORS = frozenset({"#NAME?", "#VALUE!", "#DIV/0!", "#REF!", "#N/A", "#NUM!", "#NULL!"})
 
@@ -150,7 +152,7 @@ def _refuse_binary(text: str, path: str, *, forced: str | None) -> None:
     sample = text[:20000]
     if not sample:
         raise ReadError("empty file", path=path)
-    control = sum(1 for c in sample if (ord(c) < 32 and c not in "\t\r\n") or c == "\ufffd")
+    control = len(_CONTROL.findall(sample))
     if "\x00" in sample or control > 0.01 * len(sample):
         if forced:
             raise ReadError(
@@ -245,13 +247,16 @@ def to_numbers(cells: Sequence[str], decimal: str) -> tuple[np.ndarray, int | No
     Returns ``(values, None)``, or ``(partial, i)`` where ``i`` is the index of the first
     cell that is not a number (the caller names it in its error).
     """
-    if decimal == ".":
-        cleaned = [
-            "nan" if is_missing(c) else (_normalise_number(c, ".") if "," in c else c)
-            for c in cells
-        ]
+    joined = "".join(cells)
+    if "*" in joined:
+        # only cells made of stars are "no value"; "*5" stays an error below
+        cells = ["" if c[:1] == "*" and is_missing(c) else c for c in cells]
+    if decimal == "." and "," not in joined:
+        cleaned = [c or "nan" for c in cells]
+    elif decimal == ".":
+        cleaned = [(_normalise_number(c, ".") if "," in c else c) or "nan" for c in cells]
     else:
-        cleaned = ["nan" if is_missing(c) else _normalise_number(c, decimal) for c in cells]
+        cleaned = [_normalise_number(c, decimal) or "nan" for c in cells]
     try:
         return np.array(cleaned, dtype=float), None
     except ValueError:

@@ -256,8 +256,10 @@ def draw_pair(ax: Any, runs: pd.DataFrame, fits: pd.DataFrame | None) -> None:
                                f"R² = {f['r_squared']:.3f}"))
     ax.set_xlabel("contact pressure p [kPa]")
     ax.set_ylabel("kinetic coefficient of friction $\\mu_K$")
-    ax.set_xlim(left=0)
-    ax.set_ylim(bottom=0)
+    ax.set_xlim(left=0, right=float(data["_p"].max()) * 1.08)
+    # headroom above the highest point for the legend
+    top = float(np.nanmax(data["_mu"])) if data["_mu"].notna().any() else 1.0
+    ax.set_ylim(bottom=0, top=top * 1.35)
     ax.grid(True, alpha=0.3)
     ax.legend(fontsize="small", loc="upper right")
 

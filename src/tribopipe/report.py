@@ -1,0 +1,490 @@
+"""A self-contained HTML report of a campaign: one file, plots embedded, no external resources.
+
+Sections: campaign summary, group table (each group links to its runs), power-law fits,
+per-pair plots (μ_K against pressure), flagged runs, failures with their reasons, and
+every run with its trace plot (μ over sliding distance, μ_S peak, μ_K window). Images are
+base64 PNG ``data:`` URIs; every piece of text from the map or the file system is escaped
+with :func:`html.escape`.
+
+:func:`build_report` turns tables into the HTML text (it renders plots but writes no
+file); :func:`write_report` and :func:`make_report` read the map, ``failures.csv`` and
+the traces of a processed folder and write the page.
+"""
+
+from __future__ import annotations
+
+import base64
+import csv
+import io
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+from datetime import UTC, datetime
+from html import escape
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from . import __version__
+from .errors import ExportError, MapError
+
+if TYPE_CHECKING:
+    import pandas as pd
+
+#: resolution of embedded plots: pairs sharp, traces small (there can be hundreds)
+PAIR_DPI = 100
+TRACE_DPI = 72
+
+_CSS = """
+body{font-family:system-ui,-apple-system,'Segoe UI',Roboto,Helvetica,Arial,sans-serif;
+ margin:0 auto;max-width:1200px;padding:1.5em;color:#1d1d1f;line-height:1.4}
+h1{font-size:1.6em;margin-bottom:.2em}h2{border-bottom:2px solid #d0d7de;padding-bottom:.2em;
+ margin-top:2em}nav a{margin-right:1em}
+table{border-collapse:collapse;font-size:.88em;margin:.5em 0}
+th,td{border:1px solid #d0d7de;padding:.25em .5em;text-align:right;vertical-align:top}
+th{background:#f6f8fa;position:sticky;top:0}td.t,th.t{text-align:left}
+tr.flag td{background:#fff4e5}tr.excl td{background:#f0f0f0;color:#666}
+.muted{color:#666}.bad{color:#b42318;font-weight:600}
+dl.summary{display:grid;grid-template-columns:max-content auto;gap:.2em 1.5em}
+dl.summary dt{font-weight:600}dl.summary dd{margin:0}
+.pairs{display:flex;flex-wrap:wrap;gap:1em}.pairs figure{margin:0;max-width:100%}
+figure img{max-width:100%;height:auto;border:1px solid #e5e5e5}
+figcaption{font-size:.85em;color:#444}
+details.run{border:1px solid #d0d7de;border-radius:4px;margin:.4em 0;padding:.3em .6em}
+details.run summary{cursor:pointer}details.run div:target{outline:3px solid #0969da}
+"""
+
+#: opens the run a link points to, for browsers that do not expand <details> themselves
+_OPEN_TARGET_JS = (
+    "function o(){var e=location.hash&&document.getElementById(location.hash.slice(1));"
+    "if(e){var d=e.closest('details');if(d){d.open=true;e.scrollIntoView();}}}"
+    "window.addEventListener('hashchange',o);o();"
+)
+
+
+@dataclass(frozen=True)
+class ReportInputs:
+    """Everything a report shows: runs (map rows), groups, fits, failures and traces.
+
+    ``failures`` is a list of ``(file, reason)``; ``traces_dir`` the folder with
+    ``<stem>_<id8>.parquet`` traces (``None``: no trace plots); ``source`` a label
+    (config or map path) for the header.
+    """
+
+    runs: pd.DataFrame
+    groups: pd.DataFrame
+    fits: pd.DataFrame
+    failures: tuple[tuple[str, str], ...] = ()
+    failures_known: bool = False
+    traces_dir: Path | None = None
+    title: str = "tribopipe campaign report"
+    source: str | None = None
+
+
+# ---------------------------------------------------------------------------- helpers
+
+
+def _e(value: Any) -> str:
+    """Escaped text of a cell: '' for missing, 3 decimals for floats."""
+    if value is None:
+        return ""
+    if isinstance(value, float):
+        return "" if math.isnan(value) else f"{value:.3f}"
+    try:
+        import pandas as pd
+
+        if pd.isna(value):
+            return ""
+    except (TypeError, ValueError):
+        pass
+    return escape(str(value))
+
+
+def _num(value: Any, spec: str) -> str:
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        return ""
+    return "" if math.isnan(v) else format(v, spec)
+
+
+def _interval(low: Any, high: Any) -> str:
+    lo, hi = _num(low, ".3f"), _num(high, ".3f")
+    return f"[{lo}, {hi}]" if lo and hi else ""
+
+
+def run_anchor(measurement_id: str) -> str:
+    """The HTML id of a run's section: ``run-<measurement_id>``."""
+    return "run-" + "".join(c if c.isalnum() or c in "-_" else "_" for c in measurement_id)
+
+
+def pair_anchor(pin: str, disc: str) -> str:
+    """The HTML id of a pair's plot: ``pair-<pin>--<disc>`` (slugs)."""
+    from .export.plots import slug
+
+    return f"pair-{slug(pin)}--{slug(disc)}"
+
+
+def _png_data_uri(draw: Any) -> str:
+    """Call ``draw(buffer)`` (which writes a PNG into it) and return a ``data:`` URI."""
+    buf = io.BytesIO()
+    draw(buf)
+    return "data:image/png;base64," + base64.b64encode(buf.getvalue()).decode("ascii")
+
+
+def _img(uri: str, alt: str) -> str:
+    return f'<img src="{uri}" alt="{escape(alt)}">'
+
+
+def _flag_list(value: Any) -> list[str]:
+    if not isinstance(value, str):
+        return []
+    return [f for f in value.split(";") if f]
+
+
+# ---------------------------------------------------------------------------- sections
+
+
+def _summary(inp: ReportInputs) -> str:
+    from .stats import repeatability
+
+    runs = inp.runs
+    excluded = runs["excluded"].fillna(False).astype(bool)
+    flagged = runs["flags"].map(lambda f: bool(_flag_list(f)))
+    pairs = runs[["pin", "disc"]].drop_duplicates()
+    temps = sorted({float(t) for t in runs["temperature_C"] if not math.isnan(float(t))})
+    p = runs["pressure_kPa"].astype(float)
+    rep = repeatability(inp.groups, "mu_k") if len(inp.groups) else None
+    sources = runs["source"].value_counts().to_dict()
+    items = [
+        ("runs", f"{len(runs)} ({int(excluded.sum())} excluded)"),
+        ("contact pairs", str(len(pairs))),
+        ("condition groups", str(len(inp.groups))),
+        ("pins", ", ".join(sorted(runs["pin"].astype(str).unique()))),
+        ("discs", ", ".join(sorted(runs["disc"].astype(str).unique()))),
+        ("contact pressure", f"{p.min():.4g} – {p.max():.4g} kPa" if len(p) else "–"),
+        ("temperatures", ", ".join(f"{t:g} °C" for t in temps) or "unknown"),
+        ("sources", ", ".join(f"{k}: {v}" for k, v in sorted(sources.items()))),
+        ("runs with QC flags", str(int(flagged.sum()))),
+        ("failures", str(len(inp.failures)) if inp.failures_known else "no failures.csv"),
+    ]
+    if rep is not None and not math.isnan(rep.s_r):
+        items.append(
+            ("repeatability of μ_K",
+             f"s_r = {rep.s_r:.4f}, r = 2.8·s_r = {rep.r:.4f} ({rep.n_groups} groups, "
+             f"{rep.dof} degrees of freedom)")
+        )
+    body = "".join(f"<dt>{escape(k)}</dt><dd>{escape(v)}</dd>" for k, v in items)
+    return (
+        '<section id="summary"><h2>Campaign summary</h2>'
+        f'<dl class="summary">{body}</dl></section>'
+    )
+
+
+def _group_table(inp: ReportInputs) -> str:
+    head = (
+        "<tr><th class=t>pin</th><th class=t>disc</th><th>F [N]</th><th>p [kPa]</th>"
+        "<th>T [°C]</th><th>n</th><th>μ_K mean</th><th>μ_K SD</th><th>μ_K 95 % CI</th>"
+        "<th>μ_K CV</th><th>μ_S n</th><th>μ_S mean</th><th class=t>QC</th>"
+        "<th class=t>runs</th></tr>"
+    )
+    rows = []
+    for g in inp.groups.to_dict(orient="records"):
+        ids = [i for i in str(g.get("run_ids") or "").split(";") if i]
+        links = " ".join(
+            f'<a href="#{run_anchor(i)}">{escape(i[:8])}</a>' for i in ids
+        )
+        qc = []
+        if g.get("range_exceeds_r"):
+            qc.append("range &gt; r")
+        if g.get("qc_flagged"):
+            qc.append("flagged run")
+        ci = _interval(g["mu_k_ci95_low"], g["mu_k_ci95_high"])
+        pair = f'<a href="#{pair_anchor(str(g["pin"]), str(g["disc"]))}">{_e(g["disc"])}</a>'
+        cls = ' class="flag"' if qc else ""
+        rows.append(
+            f"<tr{cls}><td class=t>{_e(g['pin'])}</td><td class=t>{pair}</td>"
+            f"<td>{_num(g['normal_force_N'], 'g')}</td><td>{_num(g['pressure_kPa'], '.4g')}</td>"
+            f"<td>{_num(g['temperature_C'], 'g')}</td><td>{g['mu_k_n']}</td>"
+            f"<td>{_num(g['mu_k_mean'], '.3f')}</td><td>{_num(g['mu_k_std'], '.3f')}</td>"
+            f"<td>{ci}</td><td>{_num(g['mu_k_cv'], '.3f')}</td><td>{g['mu_s_n']}</td>"
+            f"<td>{_num(g['mu_s_mean'], '.3f')}</td><td class=t>{', '.join(qc)}</td>"
+            f"<td class=t>{links}</td></tr>"
+        )
+    return (
+        '<section id="groups"><h2>Condition groups</h2>'
+        "<p class=muted>One row per pair, nominal force and temperature; statistics over "
+        "the repeats (excluded runs left out). QC: the group's range exceeds the "
+        "repeatability limit r, or it holds a run with QC flags. Run ids link to the "
+        "runs and their trace plots.</p>"
+        f"<table id=group-table><thead>{head}</thead><tbody>{''.join(rows)}</tbody></table>"
+        "</section>"
+    )
+
+
+def _fits_table(inp: ReportInputs) -> str:
+    head = (
+        "<tr><th class=t>pin</th><th class=t>disc</th><th>T [°C]</th><th>k</th>"
+        "<th>k 95 % CI</th><th>n−1</th><th>n−1 95 % CI</th><th>R²</th><th>runs</th>"
+        "<th class=t>note</th></tr>"
+    )
+    rows = []
+    for f in inp.fits.to_dict(orient="records"):
+        rows.append(
+            f"<tr><td class=t>{_e(f['pin'])}</td><td class=t>{_e(f['disc'])}</td>"
+            f"<td>{_num(f['temperature_C'], 'g')}</td><td>{_num(f['k'], '.3f')}</td>"
+            f"<td>{_interval(f['k_ci95_low'], f['k_ci95_high'])}</td>"
+            f"<td>{_num(f['exponent'], '.3f')}</td>"
+            f"<td>{_interval(f['exponent_ci95_low'], f['exponent_ci95_high'])}</td>"
+            f"<td>{_num(f['r_squared'], '.3f')}</td><td>{f['n_points']}</td>"
+            f"<td class=t>{_e(f['note'])}</td></tr>"
+        )
+    return (
+        '<section id="fits"><h2>Pressure dependence: μ_K = k·p<sup>n−1</sup></h2>'
+        "<p class=muted>Least squares in log–log space on the individual runs, p in kPa "
+        "(k is μ_K at 1 kPa); 95 % intervals from the t-distribution. Hertz-type contact "
+        "of an elastomer gives n−1 ≈ −1/3.</p>"
+        f"<table id=fit-table><thead>{head}</thead><tbody>{''.join(rows)}</tbody></table>"
+        "</section>"
+    )
+
+
+def _pair_plots(inp: ReportInputs) -> str:
+    from .export.plots import plot_pair
+
+    included = inp.runs[~inp.runs["excluded"].fillna(False).astype(bool)]
+    figures = []
+    for pin, disc in sorted({(str(p), str(d)) for p, d in
+                             zip(included["pin"], included["disc"], strict=True)}):
+        uri = _png_data_uri(
+            lambda buf, pin=pin, disc=disc: plot_pair(
+                included, pin, disc, buf, fits=inp.fits, fmt="png", dpi=PAIR_DPI)
+        )
+        figures.append(
+            f'<figure id="{pair_anchor(pin, disc)}">{_img(uri, f"{pin} on {disc}")}'
+            f"<figcaption>{escape(pin)} on {escape(disc)}: μ_K against contact pressure, "
+            "mean ± SD of repeats per temperature, fitted power law</figcaption></figure>"
+        )
+    return (
+        '<section id="pairs"><h2>μ_K against contact pressure, per pair</h2>'
+        f'<div class="pairs">{"".join(figures)}</div></section>'
+    )
+
+
+def _flagged(inp: ReportInputs) -> str:
+    runs = inp.runs
+    mask = runs["flags"].map(lambda f: bool(_flag_list(f))) | runs["excluded"].fillna(
+        False).astype(bool)
+    sel = runs[mask]
+    if sel.empty:
+        body = "<p>No run carries a QC flag or is excluded.</p>"
+    else:
+        rows = []
+        for r in sel.to_dict(orient="records"):
+            mid = str(r["measurement_id"])
+            excluded = bool(r.get("excluded"))
+            reason = _e(r.get("exclusion_reason")) if excluded else ""
+            rows.append(
+                f'<tr class="{"excl" if excluded else "flag"}"><td class=t>'
+                f'<a href="#{run_anchor(mid)}">{escape(mid[:8])}</a></td>'
+                f"<td class=t>{_e(r.get('source_file'))}</td><td class=t>{_e(r['pin'])}</td>"
+                f"<td class=t>{_e(r['disc'])}</td><td>{_num(r['pressure_kPa'], '.4g')}</td>"
+                f"<td>{_num(r['mu_k'], '.3f')}</td>"
+                f"<td class=t>{escape(', '.join(_flag_list(r.get('flags'))))}</td>"
+                f"<td class=t>{'excluded: ' + reason if excluded else ''}</td></tr>"
+            )
+        body = (
+            "<table id=flagged-table><thead><tr><th class=t>run</th><th class=t>file</th>"
+            "<th class=t>pin</th><th class=t>disc</th><th>p [kPa]</th><th>μ_K</th>"
+            "<th class=t>flags</th><th class=t>exclusion</th></tr></thead>"
+            f"<tbody>{''.join(rows)}</tbody></table>"
+        )
+    return f'<section id="flagged"><h2>Flagged and excluded runs</h2>{body}</section>'
+
+
+def _failures(inp: ReportInputs) -> str:
+    if not inp.failures_known:
+        body = "<p class=muted>No failures.csv in the processed folder (no batch run).</p>"
+    elif not inp.failures:
+        body = "<p>Every file of the last batch was reduced.</p>"
+    else:
+        rows = "".join(
+            f"<tr><td class=t>{escape(f)}</td><td class=t>{escape(r)}</td></tr>"
+            for f, r in inp.failures
+        )
+        body = (
+            "<table id=failure-table><thead><tr><th class=t>file</th><th class=t>reason</th>"
+            f"</tr></thead><tbody>{rows}</tbody></table>"
+        )
+    return f'<section id="failures"><h2>Failures</h2>{body}</section>'
+
+
+def _runs(inp: ReportInputs) -> str:
+    import pandas as pd
+
+    from .export.plots import find_trace, plot_trace_row
+
+    blocks = []
+    n_plots = 0
+    ordered = inp.runs.sort_values(
+        ["pin", "disc", "temperature_C", "pressure_kPa", "repeat"], kind="mergesort"
+    )
+    for r in ordered.to_dict(orient="records"):
+        mid = str(r["measurement_id"])
+        trace_path = find_trace(inp.traces_dir, mid) if inp.traces_dir is not None else None
+        if trace_path is not None:
+            trace = pd.read_parquet(trace_path)
+            uri = _png_data_uri(
+                lambda buf, trace=trace, r=r: plot_trace_row(trace, r, buf, fmt="png",
+                                                             dpi=TRACE_DPI)
+            )
+            figure = _img(uri, f"trace of run {mid}")
+            n_plots += 1
+        else:
+            figure = "<p class=muted>no trace (imported row or trace not found)</p>"
+        flags = ", ".join(_flag_list(r.get("flags"))) or "none"
+        repeat = "" if pd.isna(r.get("repeat")) else f", repeat {r['repeat']}"
+        summary = (
+            f"{escape(mid[:8])} · {_e(r['pin'])} on {_e(r['disc'])} · "
+            f"{_num(r['pressure_kPa'], '.4g')} kPa · {_num(r['temperature_C'], 'g')} °C"
+            f"{escape(repeat)} · μ_K {_num(r['mu_k'], '.3f')}"
+            + (f" · μ_S {_num(r['mu_s'], '.3f')}" if _num(r["mu_s"], ".3f") else "")
+        )
+        facts = (
+            f"<p>file: {_e(r.get('source_file'))}; source: {_e(r.get('source'))}; "
+            f"flags: {escape(flags)}; μ_K window: {_num(r.get('mu_k_window_start_mm'), '.3f')}"
+            f"–{_num(r.get('mu_k_window_end_mm'), '.3f')} mm; method: {_e(r.get('method'))}"
+            "</p>"
+        )
+        # the id sits inside the <details> so that following a link opens it
+        blocks.append(
+            f'<details class="run"><summary>{summary}</summary>'
+            f'<div id="{run_anchor(mid)}">{facts}{figure}</div></details>'
+        )
+    return (
+        f'<section id="runs"><h2>Runs ({len(blocks)}; {n_plots} with trace plots)</h2>'
+        "<p class=muted>μ over sliding distance with the μ_S peak (red) and the μ_K window "
+        "(blue). Click a run to open it.</p>"
+        f"{''.join(blocks)}</section>"
+    )
+
+
+def build_report(inp: ReportInputs) -> str:
+    """The report's HTML text (UTF-8, self-contained). Inputs are not modified."""
+    stamp = datetime.now(UTC).strftime("%Y-%m-%d %H:%M UTC")
+    source = f" from {escape(inp.source)}" if inp.source else ""
+    nav = "".join(
+        f'<a href="#{a}">{t}</a>' for a, t in [
+            ("summary", "Summary"), ("groups", "Groups"), ("fits", "Fits"),
+            ("pairs", "Pair plots"), ("flagged", "Flagged"), ("failures", "Failures"),
+            ("runs", "Runs"),
+        ]
+    )
+    sections = [
+        _summary(inp), _group_table(inp), _fits_table(inp), _pair_plots(inp), _flagged(inp),
+        _failures(inp), _runs(inp),
+    ]
+    return (
+        "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">"
+        "<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">"
+        f"<title>{escape(inp.title)}</title><style>{_CSS}</style></head><body>"
+        f"<header><h1>{escape(inp.title)}</h1><p class=muted>tribopipe {escape(__version__)}"
+        f"{source}, {stamp}</p><nav>{nav}</nav></header>"
+        + "".join(sections)
+        + f"<script>{_OPEN_TARGET_JS}</script></body></html>\n"
+    )
+
+
+# ---------------------------------------------------------------------------- I/O edge
+
+
+def read_failures(path: str | Path) -> tuple[tuple[str, str], ...] | None:
+    """``(file, reason)`` rows of a campaign's ``failures.csv``; ``None`` if it is absent."""
+    p = Path(path)
+    if not p.is_file():
+        return None
+    with p.open(encoding="utf-8", newline="") as fh:
+        reader = csv.reader(fh)
+        header = next(reader, None)
+        if header is None:
+            return ()
+        if [h.strip() for h in header[:2]] != ["file", "reason"]:
+            raise ExportError("expected the header 'file,reason'", path=p, line=1)
+        return tuple((row[0], row[1] if len(row) > 1 else "") for row in reader if row)
+
+
+def report_inputs(
+    map_path: str | Path,
+    processed_dir: str | Path | None = None,
+    *,
+    title: str | None = None,
+    source: str | None = None,
+) -> ReportInputs:
+    """Read what a report shows from a map and a processed folder (default: the map's)."""
+    from .fit import fit_power_law
+    from .frictionmap import read_map
+    from .stats import group_statistics
+
+    runs = read_map(map_path)
+    if runs.empty:
+        raise MapError("the friction map is empty or absent", path=map_path,
+                       hint="run tribopipe batch first, or pass --map")
+    processed = Path(processed_dir) if processed_dir is not None else Path(map_path).parent
+    failures = read_failures(processed / "failures.csv")
+    traces = processed / "traces"
+    return ReportInputs(
+        runs=runs,
+        groups=group_statistics(runs),
+        fits=fit_power_law(runs),
+        failures=failures or (),
+        failures_known=failures is not None,
+        traces_dir=traces if traces.is_dir() else None,
+        title=title or "tribopipe campaign report",
+        source=source or str(map_path),
+    )
+
+
+def write_report(output: str | Path, inputs: ReportInputs) -> Path:
+    """Write :func:`build_report` to ``output`` (atomically) and return its path."""
+    out = Path(output)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    tmp = out.with_suffix(out.suffix + ".tmp")
+    tmp.write_text(build_report(inputs), encoding="utf-8")
+    tmp.replace(out)
+    return out
+
+
+def make_report(
+    output: str | Path | None = None,
+    *,
+    config: str | Path | None = None,
+    map_path: str | Path | None = None,
+    processed_dir: str | Path | None = None,
+) -> Path:
+    """Write the HTML report of a campaign config or of a map + processed folder.
+
+    With ``config`` (a campaign TOML) the map and processed folder come from it (explicit
+    ``map_path`` / ``processed_dir`` win); ``output`` defaults to
+    ``<processed>/report.html``.
+    """
+    title = None
+    source = None
+    if config is not None:
+        from .campaign import load_campaign
+
+        campaign = load_campaign(config)
+        map_path = map_path or campaign.map_path
+        processed_dir = processed_dir or campaign.output_dir
+        title = f"{campaign.name}: campaign report"
+        source = str(config)
+    if map_path is None:
+        raise ExportError("no friction map given", hint="pass a campaign CONFIG or --map")
+    inputs = report_inputs(map_path, processed_dir, title=title, source=source)
+    if output is None:
+        base = Path(processed_dir) if processed_dir is not None else Path(map_path).parent
+        output = base / "report.html"
+    return write_report(output, inputs)
+
+
+def report_sections() -> Sequence[str]:
+    """The ids of the report's sections, in page order."""
+    return ("summary", "groups", "fits", "pairs", "flagged", "failures", "runs")

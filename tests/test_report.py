@@ -1,0 +1,232 @@
+"""The HTML campaign report: one self-contained page whose sections, group rows, links,
+escaping and embedded images are checked — from a real batch run and from the published map."""
+
+from __future__ import annotations
+
+import base64
+import subprocess
+import sys
+from html.parser import HTMLParser
+from pathlib import Path
+
+import pytest
+from click.testing import CliRunner
+
+from conftest import shared_file
+from published_map import write_published_map
+from reduced_runs import RUNS, make_processed
+from tribopipe.campaign import load_campaign, run_campaign
+from tribopipe.cli import main
+from tribopipe.frictionmap import read_map
+from tribopipe.report import (
+    build_report,
+    make_report,
+    report_inputs,
+    report_sections,
+    run_anchor,
+)
+from tribopipe.stats import group_statistics
+from tribopipe.synthetic import SyntheticRun, write_rheocompass_export
+
+PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
+
+
+class Page(HTMLParser):
+    """Collects what the tests look at: ids, links, images, table rows, external refs."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.ids: list[str] = []
+        self.hrefs: list[str] = []
+        self.images: list[tuple[str, str]] = []
+        self.sections: list[str] = []
+        self.rows: dict[str, int] = {}
+        self.external: list[str] = []
+        self.tags: set[str] = set()
+        self._table: str | None = None
+        self._in_body = False
+
+    def handle_starttag(self, tag, attrs):
+        a = dict(attrs)
+        self.tags.add(tag)
+        if "id" in a:
+            self.ids.append(a["id"])
+        if tag == "section":
+            self.sections.append(a.get("id", ""))
+        if tag == "a" and "href" in a:
+            self.hrefs.append(a["href"])
+        if tag == "img":
+            self.images.append((a.get("src", ""), a.get("alt", "")))
+        for key in ("src", "href"):
+            value = a.get(key) or ""
+            if value and not value.startswith(("#", "data:")):
+                self.external.append(value)
+        if tag == "table":
+            self._table = a.get("id")
+            self.rows.setdefault(self._table, 0)
+        if tag == "tbody":
+            self._in_body = True
+        if tag == "tr" and self._in_body and self._table:
+            self.rows[self._table] += 1
+
+    def handle_endtag(self, tag):
+        if tag == "tbody":
+            self._in_body = False
+
+
+def parse(html: str) -> Page:
+    page = Page()
+    page.feed(html)
+    return page
+
+
+def decoded_png(uri: str) -> bytes:
+    assert uri.startswith("data:image/png;base64,")
+    data = base64.b64decode(uri.split(",", 1)[1], validate=True)
+    assert data[:8] == PNG_SIGNATURE
+    return data
+
+
+@pytest.fixture(scope="module")
+def processed(tmp_path_factory) -> tuple[Path, Path]:
+    map_path, proc = make_processed(tmp_path_factory.mktemp("campaign"))
+    (proc / "failures.csv").write_text(
+        'file,reason\nraw/odd.csv,"raw/odd.csv:3: no torque column <script>x</script>"\n',
+        encoding="utf-8",
+    )
+    return map_path, proc
+
+
+@pytest.fixture(scope="module")
+def html(processed) -> str:
+    map_path, proc = processed
+    return build_report(report_inputs(map_path, proc))
+
+
+def test_sections_in_order_and_self_contained(html):
+    page = parse(html)
+    assert page.sections == list(report_sections())
+    assert page.external == []  # no http(s), no file links, no external scripts or styles
+    assert "link" not in page.tags
+    assert html.startswith("<!DOCTYPE html>")
+
+
+def test_group_table_has_one_row_per_group_and_links_to_every_run(processed, html):
+    map_path, _ = processed
+    runs = read_map(map_path)
+    groups = group_statistics(runs)
+    page = parse(html)
+    assert page.rows["group-table"] == len(groups) == 3
+    ids = set(page.ids)
+    for mid in runs["measurement_id"]:
+        assert f"#{run_anchor(mid)}" in page.hrefs
+        assert run_anchor(mid) in ids
+    # every internal link lands on something
+    for href in page.hrefs:
+        assert href.startswith("#") and href[1:] in ids, href
+
+
+def test_images_decode_pair_plots_and_one_trace_per_run(html):
+    page = parse(html)
+    pairs = [src for src, alt in page.images if " on " in alt]
+    traces = [src for src, alt in page.images if alt.startswith("trace of run")]
+    assert len(pairs) == 2
+    assert len(traces) == len(RUNS)
+    for src in pairs + traces:
+        assert len(decoded_png(src)) > 5_000
+
+
+def test_flagged_runs_and_failures_are_listed_and_escaped(html):
+    page = parse(html)
+    assert page.rows["flagged-table"] == 1  # the stick-slip run
+    assert "stick_slip" in html
+    assert page.rows["failure-table"] == 1
+    assert "&lt;script&gt;x&lt;/script&gt;" in html
+    assert "<script>x</script>" not in html
+
+
+def test_fits_and_summary(html):
+    page = parse(html)
+    assert page.rows["fit-table"] == 2
+    assert "not fitted" in html  # Ecoflex on wood: one run
+    assert "6 (0 excluded)" in html
+    assert "repeatability of μ_K" in html
+
+
+def test_excluded_run_is_shown_with_its_reason(processed, tmp_path):
+    from tribopipe.frictionmap import exclude_runs
+
+    map_path, proc = processed
+    copy = tmp_path / "friction_map.parquet"
+    copy.write_bytes(map_path.read_bytes())
+    victim = read_map(copy)["measurement_id"].iloc[0]
+    exclude_runs(copy, [victim], "pin torn <after> run")
+    html = build_report(report_inputs(copy, proc))
+    assert "6 (1 excluded)" in html
+    assert "excluded: pin torn &lt;after&gt; run" in html
+    assert parse(html).rows["flagged-table"] == 2
+
+
+def test_published_map_report_without_traces_or_failures(tmp_path):
+    map_path = write_published_map(shared_file("reference", "frictionmap_published.csv"),
+                                   tmp_path / "friction_map.parquet")
+    out = make_report(map_path=map_path)
+    assert out == tmp_path / "report.html"
+    html = out.read_text(encoding="utf-8")
+    page = parse(html)
+    assert page.rows["group-table"] == 76
+    assert page.rows["fit-table"] == 17
+    assert len([1 for _, alt in page.images if " on " in alt]) == 11
+    assert "No failures.csv" in html
+    assert html.count("no trace (imported row") == 169
+
+
+def _campaign(root: Path) -> Path:
+    raw = root / "raw"
+    raw.mkdir()
+    for name, run in [
+        ("DS30_steel_3N_20C_r1", SyntheticRun(mu_s=0.8, mu_k=0.55, normal_force_N=3.0, seed=1)),
+        ("DS30_steel_3N_20C_r2", SyntheticRun(mu_s=0.8, mu_k=0.56, normal_force_N=3.0, seed=2)),
+        ("DS30_steel_9N_20C_r1", SyntheticRun(mu_s=0.6, mu_k=0.41, normal_force_N=9.0, seed=3)),
+    ]:
+        write_rheocompass_export(raw / f"{name}.csv", run, project="p", test=name, sample="s")
+    (raw / "DS30_steel_5N_20C_r1.csv").write_text("not an export\n", encoding="utf-8")
+    cfg = root / "campaign.toml"
+    cfg.write_text(
+        '[campaign]\nname = "report test"\nraw_dir = "raw"\nglob = "*.csv"\n'
+        'output_dir = "processed"\n'
+        'filename_pattern = "{pin}_{disc}_{force}N_{temperature}C_r{repeat}"\n'
+        'plots = false\n\n[names]\nDS30 = "Dragonskin 30"\n',
+        encoding="utf-8",
+    )
+    run_campaign(load_campaign(cfg), jobs=1)
+    return cfg
+
+
+@pytest.mark.slow
+def test_report_command_from_a_campaign_config(tmp_path):
+    cfg = _campaign(tmp_path)
+    result = CliRunner().invoke(main, ["report", str(cfg)], catch_exceptions=False)
+    assert result.exit_code == 0, result.output
+    out = tmp_path / "processed" / "report.html"
+    assert out.exists()
+    html = out.read_text(encoding="utf-8")
+    page = parse(html)
+    assert "report test: campaign report" in html
+    assert page.rows["failure-table"] == 1
+    assert "DS30_steel_5N_20C_r1.csv" in html
+    assert len([1 for _, alt in page.images if alt.startswith("trace of run")]) == 3
+    # a real process, writing elsewhere
+    other = tmp_path / "elsewhere" / "r.html"
+    proc = subprocess.run(
+        [sys.executable, "-m", "tribopipe", "report", str(cfg), "-o", str(other)],
+        capture_output=True, text=True, timeout=180,
+    )
+    assert proc.returncode == 0, proc.stderr
+    assert parse(other.read_text(encoding="utf-8")).rows["group-table"] == 2
+
+
+def test_report_command_errors_are_one_line(tmp_path):
+    result = CliRunner().invoke(main, ["report", "--map", str(tmp_path / "none.parquet")])
+    assert result.exit_code == 1
+    assert "empty or absent" in result.output and "Traceback" not in result.output

@@ -8,6 +8,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from tribopipe.errors import ConfigError, ReadError
 from tribopipe.measurement import ANGLE, NORMAL_FORCE, SPEED, TEMPERATURE, TIME, TORQUE
@@ -387,3 +389,46 @@ def test_reading_does_not_depend_on_row_content_order_of_columns(tmp_path: Path)
     mb = read_export(write(tmp_path, "b.csv", b))[0].data
     for col in (TIME, TORQUE, NORMAL_FORCE):
         assert ma[col].tolist() == mb[col].tolist()
+
+
+# --- properties ------------------------------------------------------------------------
+
+_VALUES = st.lists(
+    st.floats(min_value=-1e4, max_value=1e4, allow_nan=False).map(lambda v: round(v, 6)),
+    min_size=1,
+    max_size=30,
+)
+
+
+@settings(max_examples=40, deadline=None)
+@given(
+    torque_mNm=_VALUES,
+    decimal=st.sampled_from([".", ","]),
+    encoding=st.sampled_from(["utf-16", "utf-8-sig", "cp1252"]),
+)
+def test_written_values_read_back_in_si(
+    torque_mNm: list[float], decimal: str, encoding: str
+) -> None:
+    """Whatever the values, decimal mark and encoding: torque in mN·m reads back ×1e-3,
+    in file order, with one row per point."""
+    import tempfile
+
+    def fmt(v: float) -> str:
+        return repr(v).replace(".", decimal)
+
+    rows = tuple(
+        (str(k + 1), fmt(0.1 * k), fmt(v), fmt(3.0), "Dy_auto")
+        for k, v in enumerate(torque_mNm)
+    )
+    text = rheocompass(rows=rows)
+    with tempfile.TemporaryDirectory() as tmp:
+        m = read_export(
+            write(Path(tmp), "p.csv", text, encoding), decimal=None if len(rows) > 3 else decimal
+        )[0]
+    assert m.data["point_no"].tolist() == list(range(1, len(rows) + 1))
+    assert m.data[TORQUE].to_numpy() == pytest.approx(np.array(torque_mNm) * 1e-3, rel=1e-12)
+
+
+def test_three_decimals_after_a_point_are_not_thousands() -> None:
+    assert detect_decimal(["2.398", "12"], default=",") == "."
+    assert detect_decimal(["0,005"], default=".") == ","  # a leading zero never groups

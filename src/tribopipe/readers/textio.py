@@ -29,9 +29,9 @@ _BOMS: tuple[tuple[bytes, str], ...] = (
 # a number with a decimal point / comma, optionally in E notation
 _DOT_DECIMAL = re.compile(r"^[-+]?\d*\.\d+(?:[eE][-+]?\d+)?$")
 _COMMA_DECIMAL = re.compile(r"^[-+]?\d*,\d+(?:[eE][-+]?\d+)?$")
-# English thousands grouping: 1,460 or 9,945.692
-_COMMA_THOUSANDS = re.compile(r"^[-+]?\d{1,3}(?:,\d{3})+(?:\.\d*)?(?:[eE][-+]?\d+)?$")
-_DOT_THOUSANDS = re.compile(r"^[-+]?\d{1,3}(?:\.\d{3})+(?:,\d*)?(?:[eE][-+]?\d+)?$")
+# thousands grouping: 1,460 or 9,945.692 (never 0,005, which is a decimal comma)
+_COMMA_THOUSANDS = re.compile(r"^[-+]?[1-9]\d{0,2}(?:,\d{3})+(?:\.\d*)?(?:[eE][-+]?\d+)?$")
+_DOT_THOUSANDS = re.compile(r"^[-+]?[1-9]\d{0,2}(?:\.\d{3})+(?:,\d*)?(?:[eE][-+]?\d+)?$")
 _BOTH = re.compile(r"^[-+]?[\d.,]*\d(?:[eE][-+]?\d+)?$")
 
 _CONTROL = re.compile("[\x00-\x08\x0b\x0c\x0e-\x1f\ufffd]")
@@ -203,6 +203,7 @@ def detect_decimal(cells: Sequence[str], default: str = ".") -> str:
     ambiguous and leaves ``default``.
     """
     dot = comma = 0
+    ambiguous_dot = 0  # 2.398: a decimal point, or (rarely) a dotted thousands group
     for cell in cells:
         if not cell or cell[0] not in "+-.0123456789,":
             continue
@@ -214,14 +215,20 @@ def detect_decimal(cells: Sequence[str], default: str = ".") -> str:
                 else:
                     dot += 1
         elif has_dot:
-            if _DOT_DECIMAL.match(cell) and not _DOT_THOUSANDS.match(cell):
-                dot += 1
+            if _DOT_DECIMAL.match(cell):
+                if _DOT_THOUSANDS.match(cell):
+                    ambiguous_dot += 1
+                else:
+                    dot += 1
         elif has_comma:
             if _COMMA_DECIMAL.match(cell) and not _COMMA_THOUSANDS.match(cell):
                 comma += 1
     if comma > dot:
         return ","
     if dot > comma:
+        return "."
+    if ambiguous_dot and not comma:
+        # instrument software does not group thousands with dots: 2.398 is 2.398
         return "."
     return default
 

@@ -162,3 +162,48 @@ def test_query_and_export_in_a_real_process(map_path, tmp_path):
     assert proc.returncode == 1
     assert "did you mean 'Dragonskin 30 on steel'" in proc.stderr
     assert "Traceback" not in proc.stderr
+
+
+@pytest.fixture(scope="module")
+def reduced_map(tmp_path_factory) -> Path:
+    from reduced_runs import make_processed
+
+    return make_processed(tmp_path_factory.mktemp("reduced"))[0]
+
+
+def test_query_on_reduced_runs_reports_mu_s(reduced_map):
+    from tribopipe.frictionmap import read_map
+    from tribopipe.stats import group_statistics
+
+    groups = group_statistics(read_map(reduced_map))
+    steel = groups[groups.disc == "steel"].sort_values("pressure_kPa")
+    p_lo, p_hi = steel["pressure_kPa"].tolist()
+    mid = (p_lo + p_hi) / 2
+    result = _run("query", "--map", str(reduced_map), "--pin", PIN, "--disc", DISC,
+                  "--pressure", repr(mid), "--json")
+    assert result.exit_code == 0, result.output
+    data = json.loads(result.output)
+    # one temperature measured: no --temperature needed; halfway between the two groups
+    assert data["mu_s"]["value"] == pytest.approx(steel["mu_s_mean"].mean())
+    assert data["mu_k"]["value"] == pytest.approx(steel["mu_k_mean"].mean())
+    assert data["temperatures_C"] == [20.0]
+
+
+def test_export_exponential_decay_from_reduced_runs(reduced_map, tmp_path):
+    from tribopipe.frictionmap import read_map
+    from tribopipe.stats import group_statistics
+
+    groups = group_statistics(read_map(reduced_map))
+    g = groups[(groups.disc == "steel")].sort_values("pressure_kPa").iloc[0]
+    out = tmp_path / "decay.inp"
+    result = _run("export", "abaqus", "--exponential-decay", "--map", str(reduced_map),
+                  "--pin", PIN, "--disc", DISC, "--pressure", repr(float(g.pressure_kPa)),
+                  "--units", "m-N-s", "--decay", "500", "-o", str(out))
+    assert result.exit_code == 0, result.output
+    lines = [ln for ln in out.read_text().splitlines() if not ln.startswith("**")]
+    assert lines[1] == "*FRICTION, EXPONENTIAL DECAY"
+    mu_s, mu_k, d_c = (float(v) for v in lines[2].split(","))
+    assert mu_s == pytest.approx(g.mu_s_mean, rel=1e-5)
+    assert mu_k == pytest.approx(g.mu_k_mean, rel=1e-5)
+    assert d_c == pytest.approx(500e3)  # 500 s/mm = 5e5 s/m
+    assert mu_s > mu_k

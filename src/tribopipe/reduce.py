@@ -156,8 +156,8 @@ class ReductionParams:
         More missing torque or normal-force values than this fraction is an error [-].
     """
 
-    median_window: int = 5
-    peak_window_mm: float = 0.02
+    median_window: int = 3
+    peak_window_mm: float = 0.015
     static_search_mm: float = 0.5
     run_in_mm: float = 0.25
     plateau_min_mm: float = 0.3
@@ -355,10 +355,10 @@ def peak_smooth(values: Any, window: int) -> np.ndarray:
 def static_peak_curve(values: Any, window: int) -> np.ndarray:
     """The curve whose maximum is read as μ_S (shape (n,), NaN-free input): a quadratic
     Savitzky–Golay smoothing over ``window`` samples, capped by the running maximum (same
-    window) of a moving average over a third of it. The smoothing averages the noise
-    without flattening a rounded peak; the cap stops the polynomial from overshooting
-    where a peak ends in a sudden slip (stick-slip), so μ_S never exceeds what was
-    measured."""
+    window) of a short moving average (a fifth of the window, at least 3 samples). The
+    smoothing averages the noise without flattening a rounded peak; the cap stops the
+    polynomial from overshooting where a peak ends in a sudden slip, so μ_S never exceeds
+    what was (lightly averaged) measured."""
     from scipy.ndimage import maximum_filter1d, uniform_filter1d
 
     v = np.asarray(values, dtype=float)
@@ -366,7 +366,7 @@ def static_peak_curve(values: Any, window: int) -> np.ndarray:
     smooth = peak_smooth(v, w)
     if v.size < w:
         return smooth
-    averaged = uniform_filter1d(v, size=max(3, (w // 3) | 1), mode="nearest")
+    averaged = uniform_filter1d(v, size=max(3, (w // 5) | 1), mode="nearest")
     return np.minimum(smooth, maximum_filter1d(averaged, size=w, mode="nearest"))
 
 

@@ -124,3 +124,28 @@ def test_the_command_module_loads_no_heavy_library() -> None:
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          check=True)
     assert out.stdout.strip() == "[]"
+
+
+@pytest.mark.parametrize("language", ["en", "fr"])
+def test_inspect_names_the_interval_reduce_will_read(tmp_path: Path, language: str) -> None:
+    from tribopipe.synthetic import SyntheticRun, write_rheocompass_export
+
+    run_ = SyntheticRun(normal_force_N=3.0, duration_s=60.0, setup_interval=True, seed=3)
+    path = write_rheocompass_export(
+        tmp_path / f"run_{language}.csv", run_, project="P", test="Ecoflex on steel",
+        sample="Ecoflex", language=language,
+    )
+    result = run(str(path), "--json")
+    assert result.exit_code == 0, result.output
+    summary = json.loads(result.output)
+    assert summary["decimal"] == ("," if language == "fr" else ".")
+    assert summary["n_intervals"] == 2
+    assert summary["friction_interval"] == 1  # the set-up interval comes first
+    text = run(str(path)).output
+    assert "reduce reads: Ecoflex on steel / Ecoflex 1 / interval 2" in text
+
+
+def test_inspect_says_why_reduce_would_stop(data_dir: Path) -> None:
+    result = run(str(data_dir / "rheocompass_en_utf16_small.txt"))
+    assert result.exit_code == 0
+    assert "reduce would stop: no interval has time, torque and normal force" in result.output

@@ -38,9 +38,10 @@ def inspect_cmd(
     as_json: bool,
 ) -> None:
     """List what an export holds: detected format, encoding, delimiter and decimal mark,
-    its tests, results and intervals with their point counts, and every column with its
-    original unit and the SI column it becomes."""
+    its tests, results and intervals with their point counts, every column with its
+    original unit and the SI column it becomes, and the interval `reduce` will read."""
     from ..readers import describe_export
+    from ..reduce import select_friction_interval
 
     summary = describe_export(
         file,
@@ -49,6 +50,7 @@ def inspect_cmd(
         decimal=decimal,
         fmt=fmt,
         aliases=aliases_path,
+        choose=select_friction_interval,
     )
     if as_json:
         click.echo(json.dumps(summary.to_dict(), indent=2, ensure_ascii=False))

@@ -11,12 +11,13 @@ snake_cased with an SI unit suffix. :func:`describe_export` tells what a file ho
 
 from __future__ import annotations
 
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from os import PathLike
 from pathlib import Path
 from typing import Any
 
-from ..errors import MissingQuantityError, ReadError
+from ..errors import MissingQuantityError, ReadError, TribopipeError
 from ..measurement import NORMAL_FORCE, TORQUE, Measurement
 from . import plaincsv, rheocompass, rheoplus
 from .aliases import AliasTable, load_aliases, resolve_aliases
@@ -241,6 +242,10 @@ class ExportSummary:
     decimal: str | None
     project: str | None
     intervals: tuple[IntervalSummary, ...]
+    #: index in ``intervals`` of the interval a reduction would read (see describe_export)
+    chosen: int | None = None
+    #: why no interval would be chosen, when a chooser refused
+    chosen_note: str | None = None
 
     @property
     def tests(self) -> tuple[str, ...]:
@@ -284,6 +289,8 @@ class ExportSummary:
             "n_results": len(self.results),
             "n_intervals": len(self.intervals),
             "n_points": self.n_points,
+            "friction_interval": self.chosen,
+            "friction_interval_note": self.chosen_note,
             "intervals": [
                 {
                     "test": i.test,
@@ -353,6 +360,12 @@ class ExportSummary:
             for c in i.columns:
                 shown = f"{c.original} {c.unit}".strip()
                 lines.append(f"  {shown:<{width}} → {c.column or '(dropped)'}")
+        if self.chosen is not None:
+            i = self.intervals[self.chosen]
+            label = " / ".join(x for x in (i.test, i.result) if x)
+            lines += ["", f"reduce reads: {label} / interval {i.interval}"]
+        elif self.chosen_note:
+            lines += ["", f"reduce would stop: {self.chosen_note}"]
         return "\n".join(lines)
 
 
@@ -364,10 +377,15 @@ def describe_export(
     decimal: str | None = None,
     fmt: str | None = None,
     aliases: AliasTable | str | PathLike[str] | None = None,
+    choose: Callable[[Sequence[Measurement]], Measurement] | None = None,
 ) -> ExportSummary:
     """Read an export (as :func:`read_export` does) and summarise what it holds: format,
     encoding, delimiter, decimal mark, tests, results, intervals, points and every column
-    with its original unit and the column it maps to."""
+    with its original unit and the column it maps to.
+
+    ``choose`` (e.g. :func:`tribopipe.reduce.select_friction_interval`) picks the interval
+    a reduction reads; its pick, or the one-line reason it refuses, goes into the summary.
+    """
     measurements = read_export(
         path, encoding=encoding, delimiter=delimiter, decimal=decimal, fmt=fmt, aliases=aliases
     )
@@ -400,7 +418,25 @@ def describe_export(
                 notes=meta.extra,
             )
         )
+    chosen: int | None = None
+    note: str | None = None
+    if choose is not None:
+        try:
+            picked = choose(measurements)
+        except TribopipeError as exc:
+            note = exc.problem
+        else:
+            # the chooser may return a copy with notes added to its meta: match the place
+            place = (picked.meta.test, picked.meta.result, picked.meta.interval,
+                     picked.meta.header_line)
+            chosen = next(
+                (k for k, m in enumerate(measurements)
+                 if (m.meta.test, m.meta.result, m.meta.interval, m.meta.header_line) == place),
+                None,
+            )
     return ExportSummary(
+        chosen=chosen,
+        chosen_note=note,
         path=str(Path(path)),
         file_format=first.file_format,
         encoding=first.encoding,

@@ -432,3 +432,10 @@ def test_written_values_read_back_in_si(
 def test_three_decimals_after_a_point_are_not_thousands() -> None:
     assert detect_decimal(["2.398", "12"], default=",") == "."
     assert detect_decimal(["0,005"], default=".") == ","  # a leading zero never groups
+
+
+def test_an_absurd_point_number_is_refused_not_overflowed(tmp_path: Path) -> None:
+    text = "Time [s],Torque [mNm],Point No.\n1,2,99999999999999999999999\n"
+    message = assert_one_line_error(write(tmp_path, "big.csv", text, "utf-8"),
+                                    "expected a point number")
+    assert "big.csv:2" in message

@@ -60,7 +60,8 @@ def test_random_text(text: str, encoding: str) -> None:
 
 _CELL = st.sampled_from(["", "1", "0,5", "2.5", "******", "#NAME?", "x", "(invalid)",
                          "[s]", "[mN·m]", "Torque", "Time", "Interval data:", "Test:",
-                         "1  (invalide)", "1,460", "-", "nan", "1e400"])
+                         "1  (invalide)", "1,460", "-", "nan", "1e400",
+                         "99999999999999999999999", "Point No.", "[µN·m]"])
 
 
 @FUZZ

@@ -72,7 +72,7 @@ def _classify_rows(raw: RawInterval, info: FileInfo) -> tuple[list[int], int, in
     pc = raw.point_col
     for i, (line, cells) in enumerate(raw.rows):
         cell = cells[pc] if pc < len(cells) else ""
-        if cell.isascii() and cell.isdigit():
+        if cell.isascii() and cell.isdigit() and len(cell) < 16:
             after = cells[pc + 1] if pc + 1 < len(cells) else ""
             if after and after[0].isalpha() and _INVALID_CELL.match(after):
                 invalid += 1

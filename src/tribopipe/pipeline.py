@@ -57,7 +57,9 @@ class RunOutcome:
     labels: RunLabels
     file_hash: str
     config_hash: str
-    record: dict[str, Any] = field(repr=False)
+    measurement_id: str
+    #: the friction-map row; ``None`` when pin or disc is unknown (the run cannot be stored)
+    record: dict[str, Any] | None = field(repr=False)
 
 
 def file_sha256(path: str | Path) -> str:
@@ -77,9 +79,10 @@ def reduce_file(
 ) -> RunOutcome:
     """Read an export, pick its friction interval, reduce it and build its map record.
 
-    Raises :class:`tribopipe.errors.TribopipeError` subclasses for every bad input.
+    The map record is built only when ``labels`` name pin and disc. Raises
+    :class:`tribopipe.errors.TribopipeError` subclasses for every bad input.
     """
-    from .frictionmap import make_record
+    from .frictionmap import make_record, measurement_id
     from .readers import read_export
     from .reduce import reduce_measurement, select_friction_interval
 
@@ -91,13 +94,15 @@ def reduce_file(
     measurement = select_friction_interval(measurements)
     result = reduce_measurement(measurement, settings.instrument, settings.reduction)
     file_hash = file_sha256(path)
-    record = make_record(
-        result=result,
-        labels=labels,
-        meta=measurement.meta,
-        file_hash=file_hash,
-        settings=settings,
-    )
+    record = None
+    if labels.complete:
+        record = make_record(
+            result=result,
+            labels=labels,
+            meta=measurement.meta,
+            file_hash=file_hash,
+            settings=settings,
+        )
     return RunOutcome(
         path=str(path),
         measurement=measurement,
@@ -105,6 +110,7 @@ def reduce_file(
         labels=labels,
         file_hash=file_hash,
         config_hash=settings.config_hash,
+        measurement_id=measurement_id(file_hash, measurement.meta),
         record=record,
     )
 
@@ -112,7 +118,7 @@ def reduce_file(
 def trace_path(out_dir: str | Path, outcome: RunOutcome) -> Path:
     """Where a run's reduced trace is written: ``<out_dir>/traces/<stem>_<id8>.parquet``."""
     stem = Path(outcome.path).stem
-    return Path(out_dir) / "traces" / f"{stem}_{outcome.record['measurement_id'][:8]}.parquet"
+    return Path(out_dir) / "traces" / f"{stem}_{outcome.measurement_id[:8]}.parquet"
 
 
 def write_trace(out_dir: str | Path, outcome: RunOutcome) -> Path:
@@ -147,7 +153,7 @@ def run_summary(outcome: RunOutcome) -> dict[str, Any]:
     meta = outcome.measurement.meta
     return {
         "file": outcome.path,
-        "measurement_id": outcome.record.get("measurement_id"),
+        "measurement_id": outcome.measurement_id,
         "mu_s": float(r.mu_s),
         "mu_k": float(r.mu_k),
         "pressure_kPa": float(r.pressure_kPa),

@@ -1,0 +1,135 @@
+"""`tribopipe reduce` end to end: a RheoCompass export in, μ_S/μ_K, trace, summary, map out."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import pandas as pd
+import pytest
+from click.testing import CliRunner
+
+from tribopipe.cli import main
+from tribopipe.synthetic import SyntheticRun, write_rheocompass_export
+
+RUN = SyntheticRun(
+    mu_s=0.80, mu_k=0.55, shape="overshoot", noise=0.005, torque_offset_Nm=0.0,
+    setup_interval=True, normal_force_N=3.0, temperature_C=20.0, seed=7,
+)
+
+
+@pytest.fixture()
+def export(tmp_path: Path) -> Path:
+    path = tmp_path / "DS30_steel_3N_20C_r1.csv"
+    write_rheocompass_export(path, RUN, project="cli test", test="DS30 steel", sample="DS30")
+    return path
+
+
+def _invoke(args: list[str], cwd: Path):
+    runner = CliRunner()
+    with runner.isolated_filesystem(temp_dir=cwd):
+        result = runner.invoke(main, args, catch_exceptions=False)
+        files = sorted(str(p) for p in Path(".").rglob("*") if p.is_file())
+        return result, files
+
+
+def test_reduce_json_reports_the_known_truth(export: Path, tmp_path: Path) -> None:
+    out = tmp_path / "out"
+    result = CliRunner().invoke(
+        main, ["reduce", str(export), "--json", "--no-map", "--out", str(out)]
+    )
+    assert result.exit_code == 0, result.output
+    rows = json.loads(result.stdout)
+    assert len(rows) == 1
+    row = rows[0]
+    for key in ("file", "mu_s", "mu_k", "pressure_kPa", "normal_force_N", "temperature_C",
+                "flags"):
+        assert key in row
+    assert row["mu_k"] == pytest.approx(RUN.mu_k, abs=0.01)
+    assert row["mu_s"] == pytest.approx(RUN.mu_s, abs=0.02)
+    # 3 N on three pins of r = 3 mm: 35.37 kPa each
+    assert row["pressure_kPa"] == pytest.approx(35.37, abs=0.5)
+    assert isinstance(row["flags"], list)
+    traces = list((out / "traces").glob("*.parquet"))
+    assert len(traces) == 1
+    trace = pd.read_parquet(traces[0])
+    assert {"sliding_distance_mm", "mu", "pressure_kPa"} <= set(trace.columns)
+    summary = json.loads(next((out / "summaries").glob("*.json")).read_text())
+    assert summary["mu_k"] == row["mu_k"]
+    assert summary["mu_k_window_mm"][0] < summary["mu_k_window_mm"][1]
+
+
+def test_reduce_appends_to_the_map_once(export: Path, tmp_path: Path) -> None:
+    map_path = tmp_path / "map.parquet"
+    args = ["reduce", str(export), "--pin", "Dragonskin 30", "--disc", "steel", "--force", "3",
+            "--temperature", "20", "--repeat", "1", "--map", str(map_path),
+            "--out", str(tmp_path / "out")]
+    first = CliRunner().invoke(main, args)
+    assert first.exit_code == 0, first.output
+    second = CliRunner().invoke(main, args)
+    assert second.exit_code == 0, second.output
+    runs = pd.read_parquet(map_path)
+    assert len(runs) == 1
+    assert runs.loc[0, "pin"] == "Dragonskin 30"
+    assert runs.loc[0, "pressure_kPa"] == pytest.approx(35.37, abs=0.01)
+
+
+def test_reduce_without_pin_and_disc_does_not_touch_the_map(export: Path, tmp_path: Path) -> None:
+    map_path = tmp_path / "map.parquet"
+    result = CliRunner().invoke(
+        main, ["reduce", str(export), "--map", str(map_path), "--out", str(tmp_path / "o")]
+    )
+    assert result.exit_code == 0, result.output
+    assert "pin and disc unknown" in result.stderr
+    assert not map_path.exists()
+
+
+def test_bad_file_gives_one_line_and_exit_1_but_good_files_still_reduce(
+    export: Path, tmp_path: Path
+) -> None:
+    bad = tmp_path / "notes.csv"
+    bad.write_text("this is a lab note, not an export\n", encoding="utf-8")
+    empty = tmp_path / "empty.csv"
+    empty.write_bytes(b"")
+    result = CliRunner().invoke(
+        main, ["reduce", str(bad), str(export), str(empty), "--no-map", "--json",
+               "--out", str(tmp_path / "o")]
+    )
+    assert result.exit_code == 1
+    errors = [line for line in result.stderr.splitlines() if line.startswith("error:")]
+    assert len(errors) == 2
+    assert "notes.csv" in errors[0] and "empty.csv" in errors[1]
+    assert "Traceback" not in result.output
+    assert len(json.loads(result.stdout)) == 1
+
+
+def test_missing_file_is_one_line(tmp_path: Path) -> None:
+    result = CliRunner().invoke(main, ["reduce", str(tmp_path / "nope.csv"), "--no-map"])
+    assert result.exit_code == 1
+    assert "nope.csv" in result.stderr
+    assert "Traceback" not in result.output
+
+
+def test_plot_writes_a_png(export: Path, tmp_path: Path) -> None:
+    out = tmp_path / "out"
+    result = CliRunner().invoke(
+        main, ["reduce", str(export), "--no-map", "--plot", "--out", str(out)]
+    )
+    assert result.exit_code == 0, result.output
+    pngs = list((out / "plots" / "traces").glob("*.png"))
+    assert len(pngs) == 1
+    assert pngs[0].read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_reduce_as_a_subprocess(export: Path, tmp_path: Path) -> None:
+    proc = subprocess.run(
+        [sys.executable, "-m", "tribopipe", "reduce", str(export), "--no-map",
+         "--out", str(tmp_path / "o")],
+        capture_output=True, text=True,
+    )
+    assert proc.returncode == 0, proc.stderr
+    lines = proc.stdout.strip().splitlines()
+    assert lines[0].split()[:3] == ["file", "mu_s", "mu_k"]
+    assert export.name in lines[1]

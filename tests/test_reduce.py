@@ -19,6 +19,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from conftest import shared_file
 from tribopipe.config import InstrumentConfig, settings_from_dict
 from tribopipe.errors import ConfigError, MissingQuantityError, ReductionError
 from tribopipe.measurement import Measurement, MeasurementMeta
@@ -364,6 +365,23 @@ def test_intervals_without_torque_are_a_missing_quantity() -> None:
              for i, f in enumerate(frames, start=1)]
     with pytest.raises(MissingQuantityError, match="nt.csv: no interval has time, torque"):
         select_friction_interval(items)
+
+
+def test_real_rheometer_files_that_are_not_friction_runs_are_refused_in_one_line() -> None:
+    """Real RheoCompass exports (shear and LAOS tests, no pin-on-disc run) must be
+    refused with the file and the reason, not reduced to a number."""
+    readers = pytest.importorskip("tribopipe.readers")
+    small = shared_file("real-exports", "rheocompass_en_utf16_small.txt")
+    with pytest.raises(MissingQuantityError) as err:
+        select_friction_interval(readers.read_export(small))
+    assert str(small) in str(err.value) and "missing: normal_force_N" in str(err.value)
+    laos = shared_file("real-exports", "rheocompass_fr_utf16_laos.csv")
+    with pytest.raises(ReductionError) as err:
+        picked = select_friction_interval(readers.read_export(laos))
+        reduce_measurement(picked, INSTRUMENT, PARAMS)
+    message = str(err.value)
+    assert message.startswith(str(laos)) and "contact threshold" in message
+    assert "\n" not in message
 
 
 # --------------------------------------------------------------------------- purity

@@ -500,9 +500,11 @@ def select_friction_interval(measurements: Sequence[Measurement]) -> Measurement
     source = items[0].meta.source_file
     if not usable:
         found = sorted({c for m in items for c in m.data.columns})
+        absent = [c for c in (TIME, TORQUE, NORMAL_FORCE) if not any(m.has(c) for m in items)]
+        lacking = ", ".join(absent) if absent else "all three together"
         raise MissingQuantityError(
-            "no interval has time, torque and normal force; columns found: "
-            + (", ".join(found) or "none"),
+            f"no interval has time, torque and normal force (missing: {lacking}); "
+            "columns found: " + (", ".join(found) or "none"),
             path=source,
             hint="check the column names or pass an alias table",
         )

@@ -31,9 +31,14 @@ Detection of μ_S and μ_K (method ``"tribopipe-v1"``)
 2. Noise level σ: robust (MAD) standard deviation of the first differences of μ / √2.
 3. μ_S is the static peak at the start of sliding — the maximum transmittable friction
    force before gross sliding, the reading "at the instant the block slips" of ASTM D1894
-   and ISO 8295. It is the maximum of a quadratic Savitzky–Golay smoothing
-   (``peak_window_mm`` wide: keeps rounded peaks, averages noise) of ``mu_smooth`` within
-   the first ``static_search_mm`` of sliding.
+   and ISO 8295. It is the maximum, within the first ``static_search_mm`` of sliding, of
+   a quadratic Savitzky–Golay smoothing of ``mu_smooth`` (``peak_window_mm`` wide: it
+   averages the noise and keeps a rounded peak) capped by the running maximum of a
+   3-sample moving average (so the polynomial cannot overshoot a peak that ends in a
+   sudden slip). The window is short (0.015 mm ≈ 21 samples at 0.007 mm/s and 10 Hz)
+   because a static peak can be sharp: wider smoothing shaves it, narrower lets the
+   noise lift it (bias ≤ ~0.015 at noise 0.015 on rounded peaks; a peak that rises
+   linearly and collapses within ~0.01 mm reads up to ~0.04 low).
 4. μ_K is the mean of μ over the steady sliding plateau, the "average during uniform
    sliding" of ASTM D1894; as in ASTM D2534 the plateau starts only after a run-in
    distance (``run_in_mm``) and after the static peak. Its start is where the transient
@@ -41,14 +46,16 @@ Detection of μ_S and μ_K (method ``"tribopipe-v1"``)
    at the first block from which every later block mean lies within a tolerance of their
    median (tolerance = the largest of ``settle_tol``, 3× the standard error of a block
    mean, and 3× the detrended block-to-block scatter of the second half, which is what
-   stick-slip produces). It ends at the end of the trace.
+   stick-slip produces). It ends at the end of the trace. When nothing settles, the
+   last ``plateau_min_mm`` after the peak is used (and flagged).
 5. Drift test: least-squares slope of μ over s in the plateau [1/mm]; a slope larger than
    ``max_drift_per_mm`` and than 3 standard errors means the plateau is not steady.
 6. μ_S is *distinct* when the peak stands above the plateau's own highs (its 99th
    percentile after the same smoothing) by more than ``static_min_prominence`` and
    ``static_prominence_sigma`` × the smoothed noise. Otherwise μ_S is reported equal to
-   μ_K (the peak is not resolved) and ``static_not_distinct`` is flagged; the raw peak is
-   kept in ``parameters["mu_s_peak_raw"]``.
+   μ_K (the peak is not resolved), placed where the smoothed trace first reaches μ_K,
+   and ``static_not_distinct`` is flagged; the raw peak is kept in
+   ``parameters["mu_s_peak_raw"]``. So μ_S ≥ μ_K always.
 
 Flags (thresholds in :class:`ReductionParams`)
 ----------------------------------------------
@@ -683,6 +690,8 @@ class _Detection:
 def _detect(
     s_v: np.ndarray, t_v: np.ndarray, mu_v: np.ndarray, total_mm: float, params: ReductionParams
 ) -> _Detection:
+    """Steps 1–6 of the module docstring on the valid samples: distance [mm], time [s]
+    and μ, all shape (n,), in contact and moving."""
     mu_med = median_smooth(mu_v, params.median_window)
     sigma = noise_std(mu_v)
     step_mm = float(np.median(np.diff(s_v))) if s_v.size > 1 else 0.0
@@ -762,6 +771,8 @@ def _flags(
     det: _Detection, s_v: np.ndarray, f_slide: np.ndarray, total_mm: float, dt_s: float,
     params: ReductionParams,
 ) -> tuple[list[str], float]:
+    """The QC flags of a detection (definitions in the module docstring) and the normal
+    force's coefficient of variation over the sliding contact samples ``f_slide`` [N]."""
     flags: list[str] = []
     n_window = int(det.window.sum())
     w_s = s_v[det.window]

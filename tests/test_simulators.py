@@ -258,3 +258,21 @@ def test_writers_do_not_modify_groups(groups):
     write_ansys(groups)
     write_mujoco(groups, pin=PIN, disc=DISC, pressure_kPa=40.0, temperature_C=12.0)
     pd.testing.assert_frame_equal(groups, before)
+
+
+def test_options_that_do_not_apply_are_refused(groups):
+    from tribopipe.export.simulators import export_simulator_input
+
+    with pytest.raises(ExportError, match="every measured pressure"):
+        export_simulator_input(groups, "abaqus", pin=PIN, disc=DISC, pressure_kPa=20.0)
+    with pytest.raises(ExportError, match="exponential-decay"):
+        export_simulator_input(groups, "ansys", decay_s_per_mm=10.0)
+    with pytest.raises(ExportError, match="unknown simulator"):
+        export_simulator_input(groups, "comsol")
+
+
+def test_mujoco_geom_names_are_escaped(groups):
+    text = write_mujoco(groups, pin=PIN, disc=DISC, pressure_kPa=35.37, temperature_C=20.0,
+                        geom1='pin"1', geom2="a<b")
+    pair = ET.fromstring(text[text.index("<mujoco>"):]).find("contact/pair")
+    assert pair.get("geom1") == 'pin"1' and pair.get("geom2") == "a<b"

@@ -21,6 +21,7 @@ import math
 import re
 from collections.abc import Callable
 from dataclasses import dataclass
+from html import escape
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -358,7 +359,7 @@ def write_mujoco(
         _xml_comment("torsional 0.005 and rolling 0.0001 are MuJoCo defaults, not measured"),
         "<mujoco>",
         "  <contact>",
-        f'    <pair geom1="{geom1}" geom2="{geom2}" condim="3" '
+        f'    <pair geom1="{escape(geom1)}" geom2="{escape(geom2)}" condim="3" '
         f'friction="{mu} {mu} 0.005 0.0001 0.0001"/>',
         "  </contact>",
         "</mujoco>",
@@ -471,6 +472,15 @@ def export_simulator_input(
     if fmt not in FORMATS:
         raise ExportError(f"unknown simulator {fmt!r}; expected one of {', '.join(FORMATS)}")
     unit_system(units)
+    table = fmt == "ansys" or (fmt == "abaqus" and not exponential_decay)
+    if table and pressure_kPa is not None:
+        raise ExportError(
+            f"the {fmt} table covers every measured pressure; a single pressure is for "
+            "mujoco, sofa, pyelastica or abaqus --exponential-decay",
+            hint="leave out --pressure",
+        )
+    if decay_s_per_mm is not None and not (fmt == "abaqus" and exponential_decay):
+        raise ExportError("a decay coefficient only applies to abaqus --exponential-decay")
     if fmt == "abaqus" and not exponential_decay:
         return write_abaqus(groups, pin=pin, disc=disc, temperature_C=temperature_C,
                             units=units, source=source)

@@ -47,6 +47,7 @@ file is retried once it changes.
 from __future__ import annotations
 
 import csv
+import functools
 import hashlib
 import io
 import json
@@ -429,6 +430,12 @@ def _compile_pattern(pattern: str, *, key: str, path: Path | None) -> re.Pattern
     return re.compile("".join(parts), re.IGNORECASE)
 
 
+@functools.lru_cache(maxsize=32)
+def _pattern_regex(pattern: str) -> re.Pattern[str]:
+    # a campaign matches one pattern against every file: build its regex once
+    return _compile_pattern(pattern, key="pattern", path=None)
+
+
 def _parse_number(text: str) -> float:
     # file names cannot hold '.' comfortably in every lab: accept 0p5 and 0,5 too
     return float(text.strip().replace(",", ".").replace("p", "."))
@@ -437,7 +444,7 @@ def _parse_number(text: str) -> float:
 def match_pattern(pattern: str, text: str) -> dict[str, Any] | None:
     """The label fields a pattern finds in ``text`` (e.g. a file stem), or ``None`` if the
     text does not match. Forces are in N, temperatures in °C, repeat an int."""
-    regex = _compile_pattern(pattern, key="pattern", path=None)
+    regex = _pattern_regex(pattern)
     m = regex.fullmatch(text.strip())
     if m is None:
         return None
@@ -634,16 +641,23 @@ def recipe_hash(campaign: Campaign, merged: Mapping[str, Any]) -> str:
     """Hash of everything besides the raw bytes that a run's record depends on: the
     settings' config hash, the labels known before reading, the QC tolerances and the
     export-name rules (16 hex digits)."""
+    payload = {"campaign": _campaign_key(campaign),
+               "labels": {k: merged.get(k) for k in LABEL_FIELDS}}
+    text = json.dumps(payload, sort_keys=True, default=str)
+    return hashlib.sha256(text.encode()).hexdigest()[:16]
+
+
+@functools.lru_cache(maxsize=8)
+def _campaign_key(campaign: Campaign) -> str:
+    # the part of recipe_hash shared by every run of a campaign, computed once per campaign
     payload = {
         "config": campaign.settings.config_hash,
-        "labels": {k: merged.get(k) for k in LABEL_FIELDS},
         "tolerances": asdict(campaign.tolerances),
         "export_names": [campaign.use_export_names, campaign.export_pattern,
                          list(campaign.names)],
         "read": asdict(campaign.read_options),
     }
-    text = json.dumps(payload, sort_keys=True, default=str)
-    return hashlib.sha256(text.encode()).hexdigest()[:16]
+    return hashlib.sha256(json.dumps(payload, sort_keys=True, default=str).encode()).hexdigest()
 
 
 def _relative(path: Path, root: Path) -> str:
@@ -1041,9 +1055,15 @@ def run_campaign(
             from concurrent.futures import ProcessPoolExecutor, as_completed
 
             with ProcessPoolExecutor(max_workers=workers) as pool:
-                futures = [pool.submit(_reduce_chunk, chunk, ctx) for chunk in chunks]
+                futures = {pool.submit(_reduce_chunk, chunk, ctx): chunk for chunk in chunks}
                 for future in as_completed(futures):
-                    part = future.result()
+                    try:
+                        part = future.result()
+                    except Exception as exc:  # noqa: BLE001 - e.g. a worker killed (OOM)
+                        part = [{"file": job.file, "ok": False,
+                                 "reason": f"{job.file}: worker process failed "
+                                           f"({type(exc).__name__}: {exc}); run again"}
+                                for job in futures[future]]
                     results.extend(part)
                     done += len(part)
                     if progress:

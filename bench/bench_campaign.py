@@ -1,0 +1,309 @@
+"""Campaign benchmark: 1,000 synthetic exports, measured in one run.
+
+Measures, on the same files:
+
+* **parse-only** — ``tribopipe.readers.read_export`` over every file (read the bytes, parse
+  the tables, nothing else), sequentially in this process and with a process pool of the
+  same size and chunking as the batch (pool start-up included, as in the batch);
+* **batch** — ``tribopipe batch <config> --no-plots --jobs N`` end to end in a fresh process
+  (start-up, imports, hashing, reduction, traces, one map update, runs.csv);
+* **incremental re-run** — the same command again with nothing changed;
+* **one file changed** — the same command after rewriting one export;
+* **peak memory** of the batch — the largest single process's max RSS (``os.wait4``
+  rusage, which covers the batch process and its workers) and the peak sum of PSS
+  (proportional set size, so pages shared after ``fork`` count once) over the process
+  tree, sampled every 50 ms from ``/proc/<pid>/smaps_rollup``;
+* ``tribopipe --help`` wall time, best of 5.
+
+Targets: batch ≤ 2 × parse-only (pool); incremental re-run ≤ 1 s; ``--help`` ≤ 0.3 s;
+peak memory ≤ 500 MB. Prints a table and writes ``bench/results.json``.
+
+    python bench/bench_campaign.py [--n 1000] [--jobs 2] [--out bench/out]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import platform
+import shutil
+import subprocess
+import sys
+import threading
+import time
+from concurrent.futures import ProcessPoolExecutor
+from pathlib import Path
+
+HERE = Path(__file__).resolve().parent
+PATTERN = "{pin}_{disc}_{force}N_{temperature}C_r{repeat}"
+PINS = ("DS30", "EF50")
+DISCS = ("steel", "acrylic", "alusheet", "alulathed", "cardboard", "woodsmooth",
+         "woodstruct", "ds30disc", "ef50disc")
+FORCES_N = (1, 3, 5, 7, 9)
+TEMPERATURES_C = (10, 20)
+DURATION_S = 180.0
+
+
+# --------------------------------------------------------------------------- the files
+
+
+def _plan(n: int) -> list[tuple[str, dict]]:
+    """``n`` runs over the founding grid (2 pins × 9 discs × 5 forces × 2 temperatures),
+    repeats numbered on: (file stem, SyntheticRun keyword arguments)."""
+    grid = [(p, d, f, t) for p in PINS for d in DISCS for f in FORCES_N for t in TEMPERATURES_C]
+    runs = []
+    for i in range(n):
+        pin, disc, force, temperature = grid[i % len(grid)]
+        repeat = i // len(grid) + 1
+        mu_k = 0.25 + 0.8 / force**0.5 * (0.8 if temperature == 10 else 1.0)
+        runs.append((
+            f"{pin}_{disc}_{force}N_{temperature}C_r{repeat}",
+            {"mu_s": round(1.3 * mu_k, 4), "mu_k": round(mu_k, 4), "normal_force_N": float(force),
+             "temperature_C": float(temperature), "duration_s": DURATION_S, "noise": 0.006,
+             "seed": 1000 + i},
+        ))
+    return runs
+
+
+def _write_chunk(folder: str, chunk: list[tuple[str, dict]]) -> int:
+    from tribopipe.synthetic import SyntheticRun, write_rheocompass_export
+
+    total = 0
+    for stem, kwargs in chunk:
+        path = write_rheocompass_export(Path(folder) / f"{stem}.csv", SyntheticRun(**kwargs),
+                                        project="bench", test=stem, sample=stem.split("_")[0])
+        total += path.stat().st_size
+    return total
+
+
+def generate(raw: Path, n: int, jobs: int) -> int:
+    """Write the ``n`` exports into ``raw`` (kept between runs when already complete);
+    returns their total size [bytes]."""
+    info = raw / ".bench-info.json"
+    want = {"n": n, "duration_s": DURATION_S, "version": 1}
+    if info.exists() and json.loads(info.read_text()) == want:
+        return sum(p.stat().st_size for p in raw.glob("*.csv"))
+    shutil.rmtree(raw, ignore_errors=True)
+    raw.mkdir(parents=True)
+    plan = _plan(n)
+    chunks = [plan[i : i + 50] for i in range(0, len(plan), 50)]
+    with ProcessPoolExecutor(max_workers=jobs) as pool:
+        total = sum(pool.map(_write_chunk, [str(raw)] * len(chunks), chunks))
+    info.write_text(json.dumps(want))
+    return total
+
+
+def write_config(out: Path) -> Path:
+    """The benchmark's campaign config (plots off: the benchmark measures the reduction)."""
+    cfg = out / "campaign.toml"
+    cfg.write_text(
+        "[campaign]\n"
+        'name = "bench"\nraw_dir = "raw"\nglob = "*.csv"\noutput_dir = "processed"\n'
+        f'filename_pattern = "{PATTERN}"\nplots = false\n'
+        '[names]\nDS30 = "Dragonskin 30"\nEF50 = "Ecoflex 00-50"\n',
+        encoding="utf-8",
+    )
+    return cfg
+
+
+# --------------------------------------------------------------------------- parse-only
+
+
+def _parse_chunk(paths: list[str]) -> int:
+    from tribopipe.readers import read_export
+
+    rows = 0
+    for p in paths:
+        rows += sum(len(m.data) for m in read_export(p))
+    return rows
+
+
+def parse_only(files: list[Path], jobs: int) -> dict[str, float]:
+    """Wall time [s] of read_export over all files: sequential (readers already imported)
+    and with a fresh pool of ``jobs`` workers chunked like the batch (start-up included)."""
+    import tribopipe.readers  # noqa: F401 - import cost is not parsing
+
+    paths = [str(p) for p in files]
+    t0 = time.perf_counter()
+    rows = _parse_chunk(paths)
+    sequential = time.perf_counter() - t0
+
+    size = max(1, min(16, -(-len(paths) // (jobs * 4))))  # the batch's chunking
+    chunks = [paths[i : i + size] for i in range(0, len(paths), size)]
+    t0 = time.perf_counter()
+    with ProcessPoolExecutor(max_workers=jobs) as pool:
+        pooled_rows = sum(pool.map(_parse_chunk, chunks))
+    pooled = time.perf_counter() - t0
+    assert pooled_rows == rows
+    return {"sequential_s": sequential, "pool_s": pooled, "rows": rows}
+
+
+# --------------------------------------------------------------------------- processes
+
+
+def _children(pid: int) -> list[int]:
+    out = []
+    try:
+        for task in os.listdir(f"/proc/{pid}/task"):
+            with open(f"/proc/{pid}/task/{task}/children") as fh:
+                out += [int(c) for c in fh.read().split()]
+    except OSError:
+        pass
+    return out
+
+
+def _pss_kB(pid: int) -> int:
+    try:
+        with open(f"/proc/{pid}/smaps_rollup") as fh:
+            for line in fh:
+                if line.startswith("Pss:"):
+                    return int(line.split()[1])
+    except OSError:
+        pass
+    return 0
+
+
+def run_measured(cmd: list[str], cwd: Path) -> dict[str, float]:
+    """Run ``cmd``; wall time [s], exit code, largest single-process max RSS [MB] and the
+    peak PSS summed over the process tree [MB] (sampled every 50 ms)."""
+    import tempfile
+
+    peak = 0
+    stop = threading.Event()
+    out_fh, err_fh = tempfile.TemporaryFile(), tempfile.TemporaryFile()
+    t0 = time.perf_counter()
+    proc = subprocess.Popen(cmd, cwd=cwd, stdout=out_fh, stderr=err_fh)
+
+    def sample() -> None:
+        nonlocal peak
+        while not stop.is_set():
+            pids, todo = [], [proc.pid]
+            while todo:
+                pid = todo.pop()
+                pids.append(pid)
+                todo += _children(pid)
+            peak = max(peak, sum(_pss_kB(p) for p in pids))
+            stop.wait(0.05)
+
+    sampler = threading.Thread(target=sample, daemon=True)
+    sampler.start()
+    # wait4 (not Popen.wait) so that we get the rusage of the child, which includes the
+    # largest RSS among it and the workers it reaped
+    _, status, usage = os.wait4(proc.pid, 0)
+    wall = time.perf_counter() - t0
+    proc.returncode = code = os.waitstatus_to_exitcode(status)
+    maxrss_mb = usage.ru_maxrss / 1024  # Linux reports kB
+    stop.set()
+    sampler.join()
+    out_fh.seek(0)
+    err_fh.seek(0)
+    stdout, stderr = out_fh.read(), err_fh.read()
+    return {"wall_s": wall, "exit_code": code, "max_rss_MB": maxrss_mb,
+            "peak_pss_tree_MB": peak / 1024, "stdout": stdout.decode(errors="replace").strip(),
+            "stderr_tail": stderr.decode(errors="replace").strip()[-500:]}
+
+
+def help_time(exe: list[str]) -> float:
+    """Best of 5 wall times [s] of ``tribopipe --help``."""
+    best = float("inf")
+    for _ in range(5):
+        t0 = time.perf_counter()
+        subprocess.run([*exe, "--help"], check=True, capture_output=True)
+        best = min(best, time.perf_counter() - t0)
+    return best
+
+
+# --------------------------------------------------------------------------- main
+
+
+def main(argv: list[str] | None = None) -> dict:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--n", type=int, default=1000, help="number of exports (1000)")
+    parser.add_argument("--jobs", type=int, default=None, help="workers (default: all CPUs)")
+    parser.add_argument("--out", type=Path, default=HERE / "out")
+    parser.add_argument("--results", type=Path, default=HERE / "results.json")
+    args = parser.parse_args(argv)
+
+    from tribopipe.campaign import default_jobs
+
+    jobs = args.jobs or default_jobs()
+    out: Path = args.out.resolve()
+    raw = out / "raw"
+    print(f"generating {args.n} exports in {raw} ...", flush=True)
+    t0 = time.perf_counter()
+    size = generate(raw, args.n, jobs)
+    print(f"  {size / 1e6:.0f} MB in {time.perf_counter() - t0:.1f} s", flush=True)
+    cfg = write_config(out)
+    shutil.rmtree(out / "processed", ignore_errors=True)
+    files = sorted(raw.glob("*.csv"))
+
+    print("parse-only ...", flush=True)
+    parse = parse_only(files, jobs)
+
+    exe_path = Path(sys.executable).with_name("tribopipe")
+    exe = [str(exe_path)] if exe_path.exists() else [sys.executable, "-m", "tribopipe"]
+    batch_cmd = [*exe, "batch", str(cfg), "--no-plots", "--jobs", str(jobs)]
+    print("batch ...", flush=True)
+    batch = run_measured(batch_cmd, out)
+    print("incremental re-run ...", flush=True)
+    rerun = run_measured(batch_cmd, out)
+    # one export re-measured: new content under the same name
+    victim = files[len(files) // 2]
+    victim.write_bytes(victim.read_bytes().replace(b"b\x00e\x00n\x00c\x00h\x00",
+                                                   b"B\x00E\x00N\x00C\x00H\x00", 1))
+    one = run_measured(batch_cmd, out)
+    (raw / ".bench-info.json").unlink()  # the files are no longer the generated ones
+    print("tribopipe --help ...", flush=True)
+    help_s = help_time(exe)
+
+    results = {
+        "files": len(files),
+        "bytes": size,
+        "jobs": jobs,
+        "cpus": os.cpu_count(),
+        "python": platform.python_version(),
+        "machine": platform.platform(),
+        "when_utc": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
+        "parse_only_sequential_s": parse["sequential_s"],
+        "parse_only_pool_s": parse["pool_s"],
+        "rows_parsed": parse["rows"],
+        "batch": batch,
+        "incremental": rerun,
+        "one_changed": one,
+        "help_best_of_5_s": help_s,
+        "ratio_batch_to_parse_pool": batch["wall_s"] / parse["pool_s"],
+        "targets": {
+            "batch_le_2x_parse": batch["wall_s"] <= 2 * parse["pool_s"],
+            "incremental_le_1s": rerun["wall_s"] <= 1.0,
+            "help_le_0.3s": help_s <= 0.3,
+            "peak_memory_le_500MB": max(batch["peak_pss_tree_MB"], batch["max_rss_MB"]) <= 500,
+        },
+    }
+    args.results.write_text(json.dumps(results, indent=2) + "\n", encoding="utf-8")
+
+    rows = [
+        ("files (MB)", f"{len(files)} ({size / 1e6:.0f} MB)", ""),
+        ("parse-only, sequential", f"{parse['sequential_s']:.1f} s", ""),
+        (f"parse-only, pool of {jobs}", f"{parse['pool_s']:.1f} s", ""),
+        (f"batch, --jobs {jobs}", f"{batch['wall_s']:.1f} s",
+         f"{results['ratio_batch_to_parse_pool']:.2f}× parse (≤ 2×)"),
+        ("incremental re-run", f"{rerun['wall_s']:.2f} s", "≤ 1 s"),
+        ("one file changed", f"{one['wall_s']:.2f} s", ""),
+        ("peak memory, batch (PSS, tree)", f"{batch['peak_pss_tree_MB']:.0f} MB", "≤ 500 MB"),
+        ("max RSS, largest process", f"{batch['max_rss_MB']:.0f} MB", ""),
+        ("tribopipe --help (best of 5)", f"{help_s:.3f} s", "≤ 0.3 s"),
+    ]
+    width = max(len(r[0]) for r in rows)
+    print()
+    for name, value, target in rows:
+        print(f"{name:<{width}}  {value:>14}  {target}")
+    print(f"\nbatch said: {batch['stdout'].splitlines()[0] if batch['stdout'] else '-'}")
+    print(f"re-run said: {rerun['stdout'].splitlines()[0] if rerun['stdout'] else '-'}")
+    print(f"targets met: {results['targets']}")
+    print(f"wrote {args.results}")
+    return results
+
+
+if __name__ == "__main__":
+    main()

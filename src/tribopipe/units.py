@@ -42,7 +42,7 @@ class UnitSpec:
 _REV_PER_MIN = 2 * math.pi / 60  # one revolution per minute in rad/s
 
 #: normalised unit (see :func:`normalize_unit`) → (factor, SI suffix[, offset])
-_GENERIC: dict[str, tuple[float, ...] | tuple[float, str] | tuple[float, str, float]] = {
+_GENERIC: dict[str, tuple] = {
     # time
     "s": (1.0, "s"),
     "ms": (1e-3, "s"),

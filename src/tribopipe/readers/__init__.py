@@ -7,6 +7,20 @@ order, with canonical SI columns (``time_s``, ``torque_Nm``, ``normal_force_N``,
 ``angle_rad``, ``speed_rad_s``, ``temperature_C``), ``point_no`` and the other columns
 snake_cased with an SI unit suffix. :func:`describe_export` tells what a file holds
 (``tribopipe inspect``); :func:`require_columns` is the check a reduction makes.
+
+Quirks handled (each seen in a real export, see ``tests/data/README.md``):
+
+- UTF-16 LE + BOM, UTF-8 + BOM, cp1252 re-saves; TAB, ';' or ',' cells, quoted and padded;
+- decimal comma vs English thousands separators (``2,3981`` vs ``1,460``/``9,945.692``);
+- invalid points (``1  (invalide)``, Rheoplus ``invalid point``) and raw-waveform sub-rows
+  with an empty point number: counted in ``meta``, not data;
+- ``******`` (no value) → NaN, counted in ``meta.extra["missing_cells"]``; a Loss Factor
+  of exactly 20000 (RheoCompass's placeholder when tan δ is undetermined, status ``taD``)
+  → NaN, counted in ``meta.extra["loss_factor_placeholders"]``;
+- duplicate column names (``relaxation_modulus_Pa``, ``relaxation_modulus_2_Pa``; a
+  non-empty meaning row names the duplicate instead);
+- Excel round trips: a lost Rheoplus header block is noted (``excel_damage``); an Excel
+  error (``#NAME?``) in a data cell is refused.
 """
 
 from __future__ import annotations

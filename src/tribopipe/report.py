@@ -32,7 +32,7 @@ if TYPE_CHECKING:
 
 #: resolution of embedded plots: pairs sharp, traces small (there can be hundreds)
 PAIR_DPI = 100
-TRACE_DPI = 72
+TRACE_DPI = 80
 
 _CSS = """
 body{font-family:system-ui,-apple-system,'Segoe UI',Roboto,Helvetica,Arial,sans-serif;
@@ -46,7 +46,8 @@ tr.flag td{background:#fff4e5}tr.excl td{background:#f0f0f0;color:#666}
 .muted{color:#666}.bad{color:#b42318;font-weight:600}
 dl.summary{display:grid;grid-template-columns:max-content auto;gap:.2em 1.5em}
 dl.summary dt{font-weight:600}dl.summary dd{margin:0}
-.pairs{display:flex;flex-wrap:wrap;gap:1em}.pairs figure{margin:0;max-width:100%}
+.pairs{display:grid;grid-template-columns:repeat(auto-fill,minmax(520px,1fr));gap:1em}
+.pairs figure{margin:0}
 figure img{max-width:100%;height:auto;border:1px solid #e5e5e5}
 figcaption{font-size:.85em;color:#444}
 details.run{border:1px solid #d0d7de;border-radius:4px;margin:.4em 0;padding:.3em .6em}

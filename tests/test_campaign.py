@@ -296,3 +296,32 @@ def test_export_test_names_as_a_metadata_source(tmp_path: Path) -> None:
     assert runs["pin"].tolist() == ["Dragonskin 30"]
     assert runs["normal_force_N"].tolist() == [3.0]
     assert runs["repeat"].tolist() == [1]
+
+
+def test_a_row_removed_from_the_map_lands_again_alone(campaign_dir: Path) -> None:
+    from tribopipe.frictionmap import read_map, write_map
+
+    campaign = load_campaign(campaign_dir / "campaign.toml")
+    run_campaign(campaign, jobs=1)
+    runs = read_map(campaign.map_path)
+    gone = runs["source_file"] == "DS30_steel_5N_20C_r1.csv"
+    write_map(campaign.map_path, runs.loc[~gone])  # e.g. another tool dropped it
+    report = run_campaign(campaign, jobs=1)
+    assert report.reduced == ["DS30_steel_5N_20C_r1.csv"]
+    assert len(report.skipped) == len(GOOD) - 1
+    assert len(pd.read_parquet(campaign.map_path)) == len(GOOD)
+
+
+def test_a_foreign_file_at_the_map_path_stops_the_batch_before_any_work(
+    campaign_dir: Path,
+) -> None:
+    from tribopipe.errors import MapError
+
+    campaign = load_campaign(campaign_dir / "campaign.toml")
+    campaign.map_path.parent.mkdir(parents=True)
+    pd.DataFrame({"a": [1]}).to_parquet(campaign.map_path)
+    foreign = campaign.map_path.read_bytes()
+    with pytest.raises(MapError, match="friction_map.parquet"):
+        run_campaign(campaign, jobs=1)
+    assert campaign.map_path.read_bytes() == foreign
+    assert not (campaign.output_dir / "traces").exists()

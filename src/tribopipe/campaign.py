@@ -832,7 +832,7 @@ def _reduce_one(job: _Job, ctx: _Context) -> dict[str, Any]:
     campaign = ctx.campaign
     merged = merge_metadata(job.file, job.sources, campaign)
     if campaign.use_export_names:
-        outcome = _reduce_with_export_names(job, campaign)
+        outcome = _reduce_with_export_names(job, campaign, merged)
     else:
         labels = labels_from(job.file, merged, hints=job.hints)
         outcome = reduce_file(job.path, campaign.settings, labels, campaign.read_options)
@@ -863,19 +863,16 @@ def _reduce_one(job: _Job, ctx: _Context) -> dict[str, Any]:
     }
 
 
-def _reduce_with_export_names(job: _Job, campaign: Campaign) -> RunOutcome:
+def _reduce_with_export_names(job: _Job, campaign: Campaign, merged: Mapping[str, Any]
+                              ) -> RunOutcome:
     """:func:`tribopipe.pipeline.reduce_file` with the export's Test name as a third
     metadata source: the labels are only complete once the file has been read."""
     from .frictionmap import make_record
-    from .pipeline import RunOutcome, file_sha256
-    from .readers import read_export
-    from .reduce import reduce_measurement, select_friction_interval
+    from .pipeline import reduce_file
 
-    opts = campaign.read_options
-    measurement = select_friction_interval(read_export(
-        job.path, encoding=opts.encoding, delimiter=opts.delimiter, decimal=opts.decimal
-    ))
-    meta = measurement.meta
+    partial = RunLabels(**{k: merged.get(k) for k in LABEL_FIELDS})
+    outcome = reduce_file(job.path, campaign.settings, partial, campaign.read_options)
+    meta = outcome.measurement.meta
     sources = list(job.sources)
     hints = list(job.hints)
     found = match_pattern(campaign.export_pattern or "", meta.test) if meta.test else None
@@ -885,13 +882,9 @@ def _reduce_with_export_names(job: _Job, campaign: Campaign) -> RunOutcome:
     else:
         sources.append((f"export Test name {meta.test!r}", found))
     labels = labels_from(job.file, merge_metadata(job.file, sources, campaign), hints=hints)
-    settings = campaign.settings
-    result = reduce_measurement(measurement, settings.instrument, settings.reduction)
-    file_hash = file_sha256(job.path)
-    record = make_record(result=result, labels=labels, meta=meta, file_hash=file_hash,
-                         settings=settings)
-    return RunOutcome(path=job.path, measurement=measurement, result=result, labels=labels,
-                      file_hash=file_hash, config_hash=settings.config_hash, record=record)
+    record = make_record(result=outcome.result, labels=labels, meta=meta,
+                         file_hash=outcome.file_hash, settings=campaign.settings)
+    return replace(outcome, labels=labels, record=record)
 
 
 def _plot(campaign: Campaign, outcome: Any, trace: Path) -> str | None:
@@ -928,7 +921,7 @@ def _reduce_chunk(jobs: Sequence[_Job], ctx: _Context) -> list[dict[str, Any]]:
             out.append({"file": job.file, "ok": False,
                         "reason": f"{job.file}: cannot read: {exc.strerror or exc}"})
         except Exception as exc:  # noqa: BLE001 - one broken file must not stop a campaign
-            out.append({"file": job.file, "ok": False,
+            out.append({"file": job.file, "ok": False, "transient": True,
                         "reason": f"{job.file}: internal error {type(exc).__name__}: {exc} "
                                   "(please report with the file)"})
     return out
@@ -1006,7 +999,7 @@ def run_campaign(
     plots = campaign.plots if plots is None else plots
     state = load_state(campaign)
     entries: dict[str, Any] = dict(state.get("entries", {}))
-    map_stale = _map_lost(campaign, state)
+    missing_ids, map_checked = _ids_missing_from_map(campaign, state)
     rows = campaign_table(campaign, state=state)
     todo: list[_Job] = []
     skipped: list[str] = []
@@ -1014,7 +1007,8 @@ def run_campaign(
     for row in rows:
         if row.problem is not None:
             failures[row.file] = row.problem
-        elif row.status == REDUCED and not map_stale:
+        elif row.status == REDUCED and (row.previous or {}).get("measurement_id") \
+                not in missing_ids:
             skipped.append(row.file)
         elif row.status == FAILED:
             # unchanged and failed before: do not retry, keep it listed
@@ -1037,6 +1031,10 @@ def run_campaign(
     if progress:
         progress(done, total)
 
+    if todo and not map_checked and campaign.map_path.exists():
+        from .frictionmap import read_map
+
+        read_map(campaign.map_path)  # refuse a foreign or corrupt map before any work
     ctx = _Context(campaign=campaign, plots=plots)
     results: list[dict[str, Any]] = []
     campaign.output_dir.mkdir(parents=True, exist_ok=True)
@@ -1062,7 +1060,8 @@ def run_campaign(
                     except Exception as exc:  # noqa: BLE001 - e.g. a worker killed (OOM)
                         part = [{"file": job.file, "ok": False,
                                  "reason": f"{job.file}: worker process failed "
-                                           f"({type(exc).__name__}: {exc}); run again"}
+                                           f"({type(exc).__name__}: {exc}); run again",
+                                 "transient": True}
                                 for job in futures[future]]
                     results.extend(part)
                     done += len(part)
@@ -1093,6 +1092,9 @@ def run_campaign(
                 **base, "sha256": res["sha256"], "status": REDUCED,
                 **{k: res[k] for k in _SUMMARY_KEYS},
             }
+        elif res.get("transient"):
+            # not the file's fault: listed now, retried next time (the state is left as is)
+            failures[row.file] = res["reason"]
         else:
             failures[row.file] = res["reason"]
             if old_id:
@@ -1127,7 +1129,7 @@ def run_campaign(
     this_batch = {f: REDUCED for f in reduced} | {f: SKIPPED for f in skipped} | {
         f: FAILED for f in failures
     }
-    _write_runs_csv(campaign, rows, entries, this_batch)
+    _write_runs_csv(campaign, rows, entries, this_batch, failures)
     _write_failures_csv(campaign, failures)
     return BatchReport(
         campaign=campaign.name,
@@ -1150,25 +1152,28 @@ _SUMMARY_KEYS = (
 )
 
 
-def _map_lost(campaign: Campaign, state: Mapping[str, Any]) -> bool:
-    """True when the map this state was written with is gone or was replaced by a file we
-    cannot vouch for, so every run must land again. A map only touched by other commands
-    (size or mtime changed) is checked for our measurement ids."""
+def _ids_missing_from_map(campaign: Campaign, state: Mapping[str, Any]) -> tuple[set[str], bool]:
+    """The measurement ids of runs the state calls reduced that are not in the map (so
+    they must land again), and whether the map was read (and so validated) to tell.
+
+    A map whose size and ``mtime_ns`` are those the last batch left is trusted without
+    reading it; a missing map misses every run.
+    """
     entries = state.get("entries", {})
     ids = {e.get("measurement_id") for e in entries.values() if e.get("status") == REDUCED}
     ids.discard(None)
     if not ids:
-        return False
+        return set(), False
     if not campaign.map_path.exists():
-        return True
+        return ids, False
     st = campaign.map_path.stat()
     seen = state.get("map") or {}
     if seen.get("size") == st.st_size and seen.get("mtime_ns") == st.st_mtime_ns:
-        return False
+        return set(), False
     from .frictionmap import read_map
 
     present = set(read_map(campaign.map_path)["measurement_id"].astype(str))
-    return not ids <= present
+    return ids - present, True
 
 
 def _update_map(campaign: Campaign, records: list[dict[str, Any]],
@@ -1208,7 +1213,8 @@ def _cell(value: Any) -> str:
 
 
 def _write_runs_csv(campaign: Campaign, rows: Sequence[CampaignRow],
-                    entries: Mapping[str, Any], this_batch: Mapping[str, str]) -> None:
+                    entries: Mapping[str, Any], this_batch: Mapping[str, str],
+                    failures: Mapping[str, str]) -> None:
     buf = io.StringIO()
     writer = csv.writer(buf, lineterminator="\n")
     writer.writerow(RUNS_COLUMNS)
@@ -1221,10 +1227,8 @@ def _write_runs_csv(campaign: Campaign, rows: Sequence[CampaignRow],
         values = {
             "file": row.file, "status": status, **labels,
             **({k: entry.get(k) for k in _SUMMARY_KEYS if k != "labels"} if ok else {}),
-            "reason": entry.get("reason") if not ok else None,
+            "reason": failures.get(row.file),
         }
-        if status == FAILED and values.get("reason") is None:
-            values["reason"] = row.reason
         writer.writerow([_cell(values.get(c)) for c in RUNS_COLUMNS])
     _atomic_write_text(campaign.runs_csv, buf.getvalue())
 

@@ -9,6 +9,8 @@ import xml.etree.ElementTree as ET
 import numpy as np
 import pandas as pd
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from conftest import shared_file
 from published_map import group_table, published_runs
@@ -276,3 +278,32 @@ def test_mujoco_geom_names_are_escaped(groups):
                         geom1='pin"1', geom2="a<b")
     pair = ET.fromstring(text[text.index("<mujoco>"):]).find("contact/pair")
     assert pair.get("geom1") == 'pin"1' and pair.get("geom2") == "a<b"
+
+
+@settings(max_examples=30, deadline=None)
+@given(
+    st.lists(st.floats(1, 300), min_size=1, max_size=5, unique=True),
+    st.lists(st.floats(-20, 80), min_size=1, max_size=3, unique=True),
+    st.data(),
+)
+def test_abaqus_grid_property(pressures, temps, data):
+    """Any grid with holes: the table is full, ordered, and every value is query's."""
+    cells = [(p, t) for t in temps for p in pressures]
+    keep = data.draw(st.lists(st.booleans(), min_size=len(cells), max_size=len(cells)))
+    kept = [c for c, k in zip(cells, keep, strict=True) if k] or cells[:1]
+    groups = pd.DataFrame(
+        [{"pin": "A", "disc": "B", "pressure_kPa": p, "temperature_C": t,
+          "mu_k_mean": data.draw(st.floats(0.05, 3.0)), "mu_k_n": 2,
+          "mu_k_ci95_low": math.nan, "mu_k_ci95_high": math.nan} for p, t in kept]
+    )
+    rows = np.array(parse_abaqus(write_abaqus(groups))[abaqus_name("A", "B")]["rows"])
+    p_kept = sorted({p for p, _ in kept})
+    t_kept = sorted({t for _, t in kept})
+    assert len(rows) == len(p_kept) * len(t_kept)
+    expected_t = [t for t in t_kept for _ in p_kept]
+    expected_p = [p for _ in t_kept for p in p_kept]
+    assert rows[:, 3] == pytest.approx(expected_t, rel=1e-5, abs=1e-5)
+    assert rows[:, 2] * 1e3 == pytest.approx(expected_p, rel=1e-5)
+    for mu, _, p_mpa, t in rows:
+        assert mu == pytest.approx(query(groups, "A", "B", p_mpa * 1e3, t).mu_k.value,
+                                   rel=1e-4)

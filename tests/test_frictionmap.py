@@ -502,3 +502,14 @@ def test_real_exports_reduced_by_the_pipeline_land_once_in_the_map(tmp_path):
     assert fm.append_records(path, [redo.record]).kept_conflicting == 1
     assert fm.append_records(path, [redo.record], replace=True).replaced == 1
     assert fm.read_map(path)["config_hash"].tolist() == [stricter.config_hash]
+
+
+def test_a_map_with_a_text_column_stored_as_numbers_is_refused(tmp_path):
+    path = tmp_path / "map.parquet"
+    fm.append_records(path, [run_record(1)])
+    table = pq.read_table(path)
+    i = table.column_names.index("pin")
+    pq.write_table(table.set_column(i, "pin", pa.array([7])), path)
+    with pytest.raises(MapError, match="stored as int64, not text") as err:
+        fm.read_map(path)
+    assert err.value.column == "pin" and str(path) in str(err.value)

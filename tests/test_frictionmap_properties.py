@@ -137,3 +137,35 @@ def test_a_raw_file_that_fails_to_reduce_changes_no_byte_of_the_map(map_with_run
     assert result.exit_code == 1, result.output
     assert "Traceback" not in result.output
     assert map_with_runs.read_bytes() == before
+
+
+@settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(records(min_size=1, max_size=8), records(max_size=8), st.booleans(), st.data())
+def test_folding_keeps_first_seen_order_and_the_latest_or_first_content(first, second,
+                                                                         replace, data):
+    # let part of the second batch re-use ids of the first, with another μ_K
+    reused = data.draw(st.lists(st.sampled_from(first), unique_by=lambda r: r["measurement_id"]))
+    taken = {r["measurement_id"] for r in first}
+    second = [r for r in second if r["measurement_id"] not in taken]
+    second += [{**r, "mu_k": r["mu_k"] + 1.0} for r in reused]
+    runs = fm.records_frame(first)
+    merged, report = fm.fold_records(runs, second, replace=replace)
+
+    order = [r["measurement_id"] for r in first] + [
+        r["measurement_id"] for r in second if r["measurement_id"] not in taken
+    ]
+    assert merged["measurement_id"].tolist() == order
+    expected = {r["measurement_id"]: r["mu_k"] for r in first}
+    for r in second:
+        if r["measurement_id"] not in taken or replace:
+            expected[r["measurement_id"]] = r["mu_k"]
+    assert merged["mu_k"].tolist() == [expected[m] for m in order]
+    assert set(report.replaced_ids if replace else report.conflicting_ids) <= {
+        r["measurement_id"] for r in reused
+    }
+    assert report.added == len(order) - len(first)
+    # exclusion state of a replaced row is the map's, not the newcomer's
+    if replace:
+        old = {r["measurement_id"]: r["excluded"] for r in first}
+        got = dict(zip(merged["measurement_id"], merged["excluded"], strict=True))
+        assert all(got[m] == old[m] for m in report.replaced_ids)

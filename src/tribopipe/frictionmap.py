@@ -298,7 +298,6 @@ def records_frame(records: Sequence[Mapping[str, Any]], *, where: str = "record"
     the row was imported (``source`` other than ``'reduced'``). Raises :class:`MapError`
     naming the record and column otherwise; nothing is written on error.
     """
-    import numpy as np
     import pandas as pd
 
     columns: dict[str, Any] = {}
@@ -322,6 +321,13 @@ def records_frame(records: Sequence[Mapping[str, Any]], *, where: str = "record"
                 column=name,
             ) from None
     frame = pd.DataFrame(columns, columns=list(RUN_COLUMNS), index=pd.RangeIndex(len(records)))
+    return _validated(frame, where)
+
+
+def _validated(frame: pd.DataFrame, where: str) -> pd.DataFrame:
+    """``frame`` (schema dtypes) after the row rules of :func:`records_frame`."""
+    import numpy as np
+
     for name in ("measurement_id", "source", "pin", "disc"):
         empty = frame[name].isna() | (frame[name].str.strip() == "")
         if empty.any():
@@ -437,9 +443,8 @@ def read_map(path: str | os.PathLike[str]) -> pd.DataFrame:
         raise MapError(
             f"friction map lacks column(s) {', '.join(absent)}", path=p, column=absent[0]
         )
-    frame = table.select(list(RUN_COLUMNS)).to_pandas()
     try:
-        runs = records_frame(frame_records(frame), where="row")
+        runs = _from_arrow(table.select(list(RUN_COLUMNS)))
     except MapError as exc:
         raise MapError(exc.problem, path=p, column=exc.column) from None
     if runs["measurement_id"].duplicated().any():
@@ -447,6 +452,41 @@ def read_map(path: str | os.PathLike[str]) -> pd.DataFrame:
         raise MapError(f"duplicate measurement_id {dup}", path=p, column="measurement_id")
     runs.attrs["frictionmap"] = info
     return runs
+
+
+def _from_arrow(table: Any) -> pd.DataFrame:
+    """The map DataFrame of an Arrow table of the run columns, coerced column by column
+    (vectorised: the read path of every command) and validated."""
+    import pandas as pd
+    import pyarrow as pa
+
+    frame = table.to_pandas()
+    columns: dict[str, Any] = {}
+    for name in RUN_COLUMNS:
+        kind = _KIND[name]
+        col = frame[name]
+        try:
+            if kind == "float":
+                columns[name] = pd.to_numeric(col, errors="raise").astype("float64").to_numpy()
+            elif kind == "int":
+                columns[name] = pd.array(col, dtype="Int64")
+            elif kind == "bool":
+                if col.isna().any():
+                    raise ValueError("missing true/false")
+                columns[name] = col.astype(bool).to_numpy()
+            else:
+                arrow_type = table.schema.field(name).type
+                if not (
+                    pa.types.is_string(arrow_type)
+                    or pa.types.is_large_string(arrow_type)
+                    or pa.types.is_null(arrow_type)
+                ):
+                    raise ValueError(f"stored as {arrow_type}, not text")
+                columns[name] = pd.array(col.astype(object).where(col.notna(), None), dtype="str")
+        except (TypeError, ValueError) as exc:
+            raise MapError(f"expected {kind} values ({exc})", column=name) from None
+    runs = pd.DataFrame(columns, columns=list(RUN_COLUMNS), index=pd.RangeIndex(len(frame)))
+    return _validated(runs, "row")
 
 
 def _check_metadata(metadata: Mapping[bytes, bytes], path: Path) -> dict[str, Any]:
@@ -664,9 +704,13 @@ def fold_records(
     A replaced row keeps the map's exclusion state (a human decision about the run).
     Neither input is modified.
     """
+    import pandas as pd
+
     new_frame = records_frame(records)
-    rows = frame_records(runs)
-    position = {r["measurement_id"]: i for i, r in enumerate(rows)}
+    base = runs.loc[:, list(RUN_COLUMNS)].reset_index(drop=True)
+    position = {m: i for i, m in enumerate(base["measurement_id"])}
+    touched: dict[int, dict[str, Any]] = {}  # map rows looked at or replaced, by position
+    fresh: dict[str, dict[str, Any]] = {}  # runs new to the map, in order
     added: list[str] = []
     unchanged: list[str] = []
     replaced: list[str] = []
@@ -674,23 +718,31 @@ def fold_records(
     differences: dict[str, tuple[str, ...]] = {}
     for rec in frame_records(new_frame):
         mid = rec["measurement_id"]
-        if mid not in position:
-            position[mid] = len(rows)
-            rows.append(rec)
+        if mid in fresh:
+            old = fresh[mid]
+        elif mid in position:
+            pos = position[mid]
+            if pos not in touched:
+                touched[pos] = frame_records(base.iloc[[pos]])[0]
+            old = touched[pos]
+        else:
+            fresh[mid] = rec
             added.append(mid)
             continue
-        old = rows[position[mid]]
         diff = _differences(old, rec)
         if not diff:
-            if mid not in added:
+            if mid not in added and mid not in unchanged:
                 unchanged.append(mid)
             continue
         differences[mid] = diff
         if replace:
             rec = {**rec, "excluded": old["excluded"], "exclusion_reason": old["exclusion_reason"]}
-            rows[position[mid]] = rec
-            if mid not in added and mid not in replaced:
-                replaced.append(mid)
+            if mid in fresh:
+                fresh[mid] = rec
+            else:
+                touched[position[mid]] = rec
+                if mid not in replaced:
+                    replaced.append(mid)
         elif mid not in conflicting:
             conflicting.append(mid)
     report = AppendReport(
@@ -700,7 +752,17 @@ def fold_records(
         conflicting_ids=tuple(conflicting),
         differences=differences,
     )
-    return records_frame(rows, where="row"), report
+    merged = base
+    if replaced:
+        where = [position[mid] for mid in replaced]
+        swapped = records_frame([touched[i] for i in where], where="row")
+        swapped.index = pd.Index(where)
+        merged = pd.concat([merged.drop(index=where), swapped]).sort_index()
+    if fresh:
+        extra = records_frame(list(fresh.values()), where="record")
+        merged = pd.concat([merged, extra], ignore_index=True) if len(merged) else extra
+    merged = merged.reset_index(drop=True)
+    return _validated(merged, "row"), report
 
 
 def append_records(

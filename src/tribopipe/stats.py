@@ -14,6 +14,7 @@ id (with a recorded reason) are left out of everything here.
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -45,7 +46,6 @@ def describe_values(values: Sequence[float]) -> dict[str, Any]:
     and cv are NaN (unknown, not zero); with n = 0 everything but n is NaN.
     """
     import numpy as np
-    from scipy import stats as sps
 
     x = np.asarray(values, dtype=float)
     n = int(x.size)
@@ -60,7 +60,7 @@ def describe_values(values: Sequence[float]) -> dict[str, Any]:
         return out
     std = float(np.std(x, ddof=1))
     sem = std / math.sqrt(n)
-    half = float(sps.t.ppf(0.975, n - 1)) * sem
+    half = _t975(n - 1) * sem
     out.update(
         std=std,
         sem=sem,
@@ -69,6 +69,14 @@ def describe_values(values: Sequence[float]) -> dict[str, Any]:
         cv=std / mean if mean != 0 else math.nan,
     )
     return out
+
+
+@functools.lru_cache(maxsize=256)
+def _t975(dof: int) -> float:
+    """Student-t 97.5 % quantile for ``dof`` degrees of freedom (two-sided 95 % CI)."""
+    from scipy import stats as sps
+
+    return float(sps.t.ppf(0.975, dof))
 
 
 @dataclass(frozen=True)
@@ -171,14 +179,24 @@ def group_statistics(runs: pd.DataFrame, *, by_speed: bool = False) -> pd.DataFr
     included = runs.loc[~runs["excluded"].astype(bool)]
     keys = _group_keys(included, by_speed)
     key_cols = list(keys.columns)
+    # plain arrays once; per-group pandas slicing is what makes large maps slow
+    data = {
+        "pressure_kPa": included["pressure_kPa"].to_numpy(dtype=float),
+        "repeat": included["repeat"].astype("Float64").to_numpy(dtype=float, na_value=np.nan),
+        "measurement_id": included["measurement_id"].astype(str).to_numpy(dtype=object),
+        "flags": included["flags"].fillna("").astype(str).to_numpy(dtype=object),
+    }
+    for q in QUANTITIES:
+        data[q] = included[q].to_numpy(dtype=float)
     rows: list[dict[str, Any]] = []
-    for key, idx in keys.groupby(key_cols, dropna=False, sort=False).groups.items():
-        members = included.loc[idx]
-        pressures = [float(p) for p in members["pressure_kPa"]]
-        clusters = _pressure_clusters(pressures)
-        for c in sorted(set(clusters)):
-            sub = members.iloc[[i for i, k in enumerate(clusters) if k == c]]
-            rows.append(_group_row(dict(zip(key_cols, key, strict=True)), sub))
+    if len(included):
+        grouped = keys.groupby(key_cols, dropna=False, sort=False).indices
+        for key, positions in grouped.items():
+            key = key if isinstance(key, tuple) else (key,)
+            clusters = _pressure_clusters([float(p) for p in data["pressure_kPa"][positions]])
+            for c in sorted(set(clusters)):
+                members = positions[[i for i, k in enumerate(clusters) if k == c]]
+                rows.append(_group_row(dict(zip(key_cols, key, strict=True)), members, data))
     if not rows:
         return pd.DataFrame({c: pd.Series(dtype=_dtype(c)) for c in columns})
     groups = pd.DataFrame(rows)
@@ -213,31 +231,27 @@ def _dtype(column: str) -> str:
     return "float64"
 
 
-def _group_row(key: dict[str, Any], members: pd.DataFrame) -> dict[str, Any]:
+def _group_row(
+    key: dict[str, Any], members: Any, data: dict[str, Any]
+) -> dict[str, Any]:
+    """One output row: ``members`` are positions into the per-run arrays of ``data``."""
     import numpy as np
 
     order = sorted(
-        range(len(members)),
-        key=lambda i: (
-            _repeat_key(members["repeat"].iloc[i]),
-            str(members["measurement_id"].iloc[i]),
-        ),
+        members,
+        key=lambda i: (_repeat_key(data["repeat"][i]), data["measurement_id"][i]),
     )
-    sub = members.iloc[order]
     row: dict[str, Any] = dict(key)
-    row["pressure_kPa"] = float(np.median(sub["pressure_kPa"].to_numpy(dtype=float)))
+    row["pressure_kPa"] = float(np.median(data["pressure_kPa"][order]))
     for q in QUANTITIES:
-        values = sub[q].to_numpy(dtype=float)
+        values = data[q][order]
         stats = describe_values(values[np.isfinite(values)])
         row.update({f"{q}_{f}": v for f, v in stats.items()})
-    flags = sub["flags"].fillna("").astype(str)
-    row["qc_flagged"] = bool((flags.str.strip() != "").any())
-    row["run_ids"] = ";".join(sub["measurement_id"].astype(str))
+    row["qc_flagged"] = any(str(f).strip() for f in data["flags"][order])
+    row["run_ids"] = ";".join(data["measurement_id"][order])
     row["range_exceeds_r"] = False
     return row
 
 
-def _repeat_key(value: Any) -> tuple[int, int]:
-    import pandas as pd
-
-    return (1, 0) if pd.isna(value) else (0, int(value))
+def _repeat_key(value: float) -> tuple[int, int]:
+    return (1, 0) if math.isnan(value) else (0, int(value))

@@ -513,3 +513,20 @@ def test_a_map_with_a_text_column_stored_as_numbers_is_refused(tmp_path):
     with pytest.raises(MapError, match="stored as int64, not text") as err:
         fm.read_map(path)
     assert err.value.column == "pin" and str(path) in str(err.value)
+
+
+def test_update_map_drops_stale_runs_and_adds_new_ones_in_one_write(tmp_path):
+    path = tmp_path / "map.parquet"
+    old = [run_record(1), run_record(2), run_record(3)]
+    fm.append_records(path, old)
+    stale = [old[0]["measurement_id"], old[1]["measurement_id"], "not-in-the-map"]
+    report = fm.update_map(path, [run_record(4), old[1]], drop_ids=stale)
+    assert report.dropped_ids == (old[0]["measurement_id"],)  # old[1] is re-supplied: kept
+    assert report.added == 1 and report.unchanged == 1
+    assert "1 dropped" in report.summary()
+    ids = fm.read_map(path)["measurement_id"].tolist()
+    assert ids == [old[1]["measurement_id"], old[2]["measurement_id"],
+                   run_record(4)["measurement_id"]]
+    before = path.read_bytes()
+    assert not fm.update_map(path, [], drop_ids=["not-in-the-map"]).changed
+    assert path.read_bytes() == before

@@ -630,7 +630,8 @@ class AppendReport:
     ``added``: new runs; ``unchanged``: already in the map with the same content;
     ``replaced``: content differed and ``replace=True``; ``kept_conflicting``: content
     differed and the map's row was kept. ``differences`` maps each conflicting or replaced
-    id to the names of the columns that differ.
+    id to the names of the columns that differ. ``dropped_ids``: rows removed by
+    :func:`update_map`.
     """
 
     added_ids: tuple[str, ...] = ()
@@ -638,6 +639,7 @@ class AppendReport:
     replaced_ids: tuple[str, ...] = ()
     conflicting_ids: tuple[str, ...] = ()
     differences: dict[str, tuple[str, ...]] = field(default_factory=dict)
+    dropped_ids: tuple[str, ...] = ()
 
     @property
     def added(self) -> int:
@@ -662,7 +664,7 @@ class AppendReport:
     @property
     def changed(self) -> bool:
         """True when the map file was rewritten."""
-        return bool(self.added_ids or self.replaced_ids)
+        return bool(self.added_ids or self.replaced_ids or self.dropped_ids)
 
     def summary(self) -> str:
         """One line: ``3 added, 1 unchanged, 0 replaced, 1 kept (conflicting: ...)``."""
@@ -670,6 +672,8 @@ class AppendReport:
             f"{self.added} added, {self.unchanged} unchanged, {self.replaced} replaced, "
             f"{self.kept_conflicting} kept conflicting"
         )
+        if self.dropped_ids:
+            text += f", {len(self.dropped_ids)} dropped"
         if self.conflicting_ids:
             details = "; ".join(
                 f"{i} differs in {', '.join(self.differences.get(i, ()))}"
@@ -778,11 +782,34 @@ def append_records(
     validated before the lock is taken, and the file is rewritten (atomically) only when
     something was added or replaced, so a failing append leaves the map byte-identical.
     """
+    return update_map(path, records, replace=replace)
+
+
+def update_map(
+    path: str | os.PathLike[str],
+    records: Sequence[Mapping[str, Any]],
+    *,
+    replace: bool = False,
+    drop_ids: Iterable[str] = (),
+) -> AppendReport:
+    """:func:`append_records` that also removes the rows ``drop_ids`` (e.g. runs whose raw
+    file changed), in the same locked read-modify-write and one atomic write.
+
+    Ids in ``drop_ids`` that are also among ``records`` are not dropped; unknown ids are
+    ignored. Validation happens before anything is touched.
+    """
+    import dataclasses
+
     p = Path(path)
     records_frame(records)  # validate before touching anything
     with _locked(p):
         current = read_map(p)
-        merged, report = fold_records(current, records, replace=replace)
+        drop = set(drop_ids) - {str(r["measurement_id"]) for r in records}
+        gone = current["measurement_id"].isin(sorted(drop)).to_numpy()
+        merged, report = fold_records(current.loc[~gone], records, replace=replace)
+        report = dataclasses.replace(
+            report, dropped_ids=tuple(current.loc[gone, "measurement_id"].astype(str))
+        )
         if report.changed:
             _write_atomic(p, merged)
     return report

@@ -14,6 +14,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from conftest import shared_file
 from tribopipe.config import InstrumentConfig
@@ -253,3 +255,30 @@ def test_export_read_select_reduce_gives_the_truth(
     assert got.temperature_C == pytest.approx(run.temperature_C, abs=0.05)
     assert got.pressure_kPa == pytest.approx(11.789 * run.normal_force_N, rel=0.01)
     assert got.sliding_distance_mm == pytest.approx(want.sliding_distance_mm, abs=0.002)
+
+
+@settings(max_examples=10, deadline=None)
+@given(
+    seed=st.integers(0, 10_000),
+    language=st.sampled_from(["en", "fr"]),
+    direction=st.sampled_from([-1, 1]),
+    setup=st.booleans(),
+)
+def test_what_is_written_reads_back_as_the_generated_si_data(
+    tmp_path_factory: pytest.TempPathFactory, seed: int, language: str, direction: int,
+    setup: bool,
+) -> None:
+    readers = pytest.importorskip("tribopipe.readers")
+    run = SyntheticRun(seed=seed, direction=direction, setup_interval=setup, duration_s=60.0)
+    path = tmp_path_factory.mktemp("rt") / "run.csv"
+    write_rheocompass_export(path, run, project="P", test="T", sample="S", language=language)
+    items = readers.read_export(path)
+    frames = make_intervals(run)
+    assert len(items) == len(frames)
+    # the written precision: 0.01 s, 1e-5 mN·m, 1e-4 N, 1e-4 mrad, 1e-6 rpm, 0.01 °C
+    tolerance = {"time_s": 0.006, "torque_Nm": 6e-9, "normal_force_N": 6e-5,
+                 "angle_rad": 6e-8, "speed_rad_s": 1e-7, "temperature_C": 0.006}
+    for measurement, frame in zip(items, frames, strict=True):
+        for column, atol in tolerance.items():
+            np.testing.assert_allclose(measurement.data[column], frame[column], atol=atol,
+                                       err_msg=column)

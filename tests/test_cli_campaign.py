@@ -153,3 +153,21 @@ def test_batch_in_a_real_process(config: Path) -> None:
     second = subprocess.run(cmd, capture_output=True, text=True, env=env, timeout=300)
     assert second.returncode == 0, second.stderr
     assert "0 reduced, 3 skipped (unchanged), 0 failed" in second.stdout
+
+
+def test_plots_only_for_runs_reduced_now(config: Path) -> None:
+    plots = config.parent / "out" / "plots" / "traces"
+    assert invoke("batch", str(config), "--no-plots").exit_code == 1
+    assert not plots.exists()
+
+    target = config.parent / "raw" / "DS30_steel_5N_20C_r2.csv"
+    run = SyntheticRun(mu_s=0.5, mu_k=0.4, normal_force_N=5.0, temperature_C=20.0,
+                       duration_s=150.0, noise=0.004, seed=42)
+    write_rheocompass_export(target, run, project="cli", test="t", sample="DS30")
+    result = invoke("batch", str(config), "--plots")
+    assert "1 reduced, 2 skipped" in result.stdout
+    pngs = sorted(plots.glob("*.png"))
+    # only the re-measured run is drawn; unchanged runs keep (here: lack) their plot
+    assert [p.name.rsplit("_", 1)[0] for p in pngs] == ["DS30_steel_5N_20C_r2"]
+    assert pngs[0].read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert "plots/traces/" in result.stdout

@@ -208,7 +208,8 @@ class ReductionResult:
     standard deviation of μ in the μ_K window (not an error of the mean);
     ``plateau_drift_per_mm`` the slope of μ over s there [1/mm]. ``trace`` has the columns
     ``time_s, sliding_distance_mm, normal_force_N, pressure_kPa, friction_force_N, mu,
-    mu_smooth, in_contact`` (μ is NaN where not in contact).
+    mu_smooth, in_contact`` (one row per complete sample, time-ordered; μ is NaN where
+    not in contact).
     """
 
     mu_s: float

@@ -15,11 +15,14 @@ The model (s = sliding distance at the friction radius, s_pk = static peak dista
 ``no_overshoot``  μ rises monotonically to μ_K (no static peak: truth μ_S = μ_K);
 ``stick_slip``    as overshoot up to s_pk, then a saw-tooth of amplitude A around μ_K
                   (slow stick rise, sudden slip) with period 0.02–0.04 mm; μ_K is its mean;
+                  A defaults to 0.6·(μ_S − μ_K) within 0.08–0.2;
 ``drift``         as overshoot, but the decay to μ_K is slow (λ = 0.2–0.3 mm): the
                   plateau is reached late.
 
-The torque is ``dir·μ(s)·F_N·R + offset + noise·F_nominal·R·N(0,1)``, so ``noise`` is the
-per-sample standard deviation in COF units at the nominal force.
+s_pk is drawn in 0.05–0.25 mm unless given. The torque is
+``dir·μ(s)·F_N·R + offset + noise·F_nominal·R·N(0,1)``, so ``noise`` is the per-sample
+standard deviation in COF units at the nominal force; F_N carries 0.2 % noise, the
+temperature 0.05 °C.
 """
 
 from __future__ import annotations

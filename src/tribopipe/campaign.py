@@ -653,8 +653,10 @@ def _campaign_key(campaign: Campaign) -> str:
     payload = {
         "config": campaign.settings.config_hash,
         "tolerances": asdict(campaign.tolerances),
-        "export_names": [campaign.use_export_names, campaign.export_pattern,
-                         list(campaign.names)],
+        # the labels in recipe_hash already carry the [names] aliases, except those read
+        # from export names, so the aliases only matter with use_export_names
+        "export_names": [campaign.export_pattern, list(campaign.names)]
+        if campaign.use_export_names else None,
         "read": asdict(campaign.read_options),
     }
     return hashlib.sha256(json.dumps(payload, sort_keys=True, default=str).encode()).hexdigest()

@@ -168,7 +168,12 @@ def test_append_then_read_gives_the_same_rows_and_schema_metadata(tmp_path):
     pd.testing.assert_frame_equal(runs, fm.records_frame(records))
     info = pq.read_schema(path).metadata[fm.META_KEY]
     assert b'"schema_version": 1' in info and b'"unit": "kPa"' in info
-    assert runs.attrs["frictionmap"]["n_runs"] == 3
+    meta = fm.map_metadata(path)
+    assert meta["n_runs"] == 3 and meta["sources"] == ["reduced"]
+    assert meta["tribopipe_version"] == __version__
+    units = {c["name"]: c["unit"] for c in meta["columns"]}
+    assert units["pressure_kPa"] == "kPa" and units["sliding_speed_mm_s"] == "mm/s"
+    assert [c["name"] for c in meta["columns"]] == list(fm.RUN_COLUMNS)
 
 
 def test_read_map_of_an_absent_file_is_an_empty_map(tmp_path):

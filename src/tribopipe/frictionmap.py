@@ -437,7 +437,7 @@ def read_map(path: str | os.PathLike[str]) -> pd.DataFrame:
             path=p,
             hint="this path holds something else; pass another --map (it is never overwritten)",
         ) from None
-    info = _check_metadata(table.schema.metadata or {}, p)
+    _check_metadata(table.schema.metadata or {}, p)
     absent = [c for c in RUN_COLUMNS if c not in table.column_names]
     if absent:
         raise MapError(
@@ -450,8 +450,23 @@ def read_map(path: str | os.PathLike[str]) -> pd.DataFrame:
     if runs["measurement_id"].duplicated().any():
         dup = runs.loc[runs["measurement_id"].duplicated(), "measurement_id"].iloc[0]
         raise MapError(f"duplicate measurement_id {dup}", path=p, column="measurement_id")
-    runs.attrs["frictionmap"] = info
     return runs
+
+
+def map_metadata(path: str | os.PathLike[str]) -> dict[str, Any]:
+    """The schema and provenance a map carries in its Parquet metadata: ``schema``,
+    ``schema_version``, ``columns`` (name, kind, unit, meaning), ``tribopipe_version`` and
+    ``written_at`` of the last write, ``n_runs``, ``sources``. Validated like
+    :func:`read_map`."""
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    p = Path(path)
+    try:
+        schema = pq.read_schema(p)
+    except (pa.ArrowException, OSError) as exc:
+        raise MapError(f"not a readable Parquet file ({exc})", path=p) from None
+    return _check_metadata(schema.metadata or {}, p)
 
 
 def _from_arrow(table: Any) -> pd.DataFrame:

@@ -325,3 +325,18 @@ def test_a_foreign_file_at_the_map_path_stops_the_batch_before_any_work(
         run_campaign(campaign, jobs=1)
     assert campaign.map_path.read_bytes() == foreign
     assert not (campaign.output_dir / "traces").exists()
+
+
+def test_two_batches_of_one_campaign_do_not_interleave(campaign_dir: Path) -> None:
+    from filelock import FileLock
+
+    from tribopipe.campaign import BATCH_LOCK
+    from tribopipe.errors import CampaignError
+
+    campaign = load_campaign(campaign_dir / "campaign.toml")
+    campaign.output_dir.mkdir(parents=True)
+    with FileLock(str(campaign.output_dir / BATCH_LOCK)):
+        with pytest.raises(CampaignError, match="another batch"):
+            run_campaign(campaign, jobs=1)
+    assert not campaign.map_path.exists()
+    assert len(run_campaign(campaign, jobs=1).reduced) == len(GOOD)

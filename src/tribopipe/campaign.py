@@ -67,6 +67,8 @@ if TYPE_CHECKING:
     from .pipeline import RunOutcome
 
 STATE_FILE = ".tribopipe-state.json"
+#: held while a batch runs, so two batches of one campaign never interleave their state
+BATCH_LOCK = ".tribopipe-batch.lock"
 STATE_VERSION = 1
 
 #: the statuses of a campaign row before a batch (``campaign list``)
@@ -994,9 +996,27 @@ def run_campaign(
     plots are on and available; only for runs reduced now), ``runs.csv`` (one row per
     file), ``failures.csv`` (``file,reason``) and the state file; appends the new records
     to ``campaign.map_path`` in one atomic update (replacing the rows of changed runs).
-    ``progress(done, total)`` is called as runs finish. Failures never raise: they are in
-    the report.
+    ``progress(done, total)`` is called as runs finish. Failures of single runs never
+    raise: they are in the report. Raises :class:`CampaignError` when another batch of
+    the same campaign is running, :class:`MapError` when the map path holds a foreign file.
     """
+    from filelock import FileLock, Timeout
+
+    campaign.output_dir.mkdir(parents=True, exist_ok=True)
+    lock = FileLock(str(campaign.output_dir / BATCH_LOCK), timeout=0)
+    try:
+        with lock:
+            return _run_locked(campaign, jobs=jobs, plots=plots, progress=progress)
+    except Timeout:
+        raise CampaignError(
+            "another batch of this campaign is running (its output folder is locked)",
+            path=campaign.output_dir, hint="wait for it to finish",
+        ) from None
+
+
+def _run_locked(campaign: Campaign, *, jobs: int | None, plots: bool | None,
+                progress: ProgressCallback | None) -> BatchReport:
+    """:func:`run_campaign` while holding the output folder's batch lock."""
     jobs = default_jobs() if jobs is None else max(1, int(jobs))
     plots = campaign.plots if plots is None else plots
     state = load_state(campaign)

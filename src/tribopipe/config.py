@@ -56,7 +56,9 @@ class InstrumentConfig:
             if not (isinstance(value, int | float) and math.isfinite(value) and value > 0):
                 raise ConfigError(f"[instrument] {name} must be a positive number, got {value!r}")
         if not (isinstance(self.n_pins, int) and self.n_pins >= 1):
-            raise ConfigError(f"[instrument] n_pins must be a whole number >= 1, got {self.n_pins!r}")
+            raise ConfigError(
+                f"[instrument] n_pins must be a whole number >= 1, got {self.n_pins!r}"
+            )
         if not (math.isfinite(self.contact_threshold_N) and self.contact_threshold_N >= 0):
             raise ConfigError(
                 f"[instrument] contact_threshold_N must be >= 0, got {self.contact_threshold_N!r}"

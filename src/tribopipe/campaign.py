@@ -603,7 +603,8 @@ class CampaignRow:
 
     ``sources`` are the metadata sources consulted so far (name, fields) in priority order;
     ``problem`` is a metadata error known before reading; ``status`` is one of
-    ``new, reduced, changed, failed``; ``reason`` why a run failed (last batch or now).
+    ``new, reduced, changed, failed``; ``reason`` why a run failed (last batch or now);
+    ``previous`` the file's entry in the state; ``hints`` why a source said nothing.
     """
 
     file: str
@@ -617,6 +618,7 @@ class CampaignRow:
     reason: str | None = None
     sha256: str | None = None
     previous: dict[str, Any] | None = None
+    hints: tuple[str, ...] = ()
 
     @property
     def labels(self) -> RunLabels:
@@ -668,16 +670,16 @@ def _relative(path: Path, root: Path) -> str:
     return path.relative_to(root).as_posix()
 
 
-def campaign_table(campaign: Campaign, *, state: Mapping[str, Any] | None = None,
-                   hash_files: bool = True) -> list[CampaignRow]:
+def campaign_table(campaign: Campaign, *, state: Mapping[str, Any] | None = None
+                   ) -> list[CampaignRow]:
     """The campaign as a table, before anything runs: one row per file with its metadata
     and status (``new, reduced, changed, failed``).
 
     A file counts as ``reduced`` when its content (SHA-256, trusted from the state while
     size and ``mtime_ns`` are unchanged) and its recipe hash match the last successful
     batch and its trace still exists; ``failed`` when the same holds for a failed run or
-    its metadata is already known to be wrong. ``hash_files=False`` treats any file whose
-    size or ``mtime_ns`` changed as ``changed`` without reading it.
+    its metadata is already known to be wrong. ``state`` defaults to the campaign's state
+    file.
     """
     from .pipeline import file_sha256
 
@@ -718,10 +720,7 @@ def campaign_table(campaign: Campaign, *, state: Mapping[str, Any] | None = None
         if previous is not None:
             same_stat = previous.get("size") == st.st_size and \
                 previous.get("mtime_ns") == st.st_mtime_ns
-            if same_stat:
-                sha = previous.get("sha256")
-            elif hash_files:
-                sha = file_sha256(path)
+            sha = previous.get("sha256") if same_stat else file_sha256(path)
             same = sha is not None and sha == previous.get("sha256") and \
                 previous.get("recipe") == recipe_hash(campaign, merged)
             if same and previous.get("status") == REDUCED:
@@ -737,7 +736,7 @@ def campaign_table(campaign: Campaign, *, state: Mapping[str, Any] | None = None
         rows.append(CampaignRow(
             file=rel, path=path, size=st.st_size, mtime_ns=st.st_mtime_ns,
             sources=tuple(sources), merged=merged, problem=problem, status=status,
-            reason=reason, sha256=sha, previous=previous,
+            reason=reason, sha256=sha, previous=previous, hints=tuple(hints),
         ))
     return rows
 
@@ -1036,17 +1035,8 @@ def _run_locked(campaign: Campaign, *, jobs: int | None, plots: bool | None,
             # unchanged and failed before: do not retry, keep it listed
             failures[row.file] = row.reason or "failed in an earlier batch"
         else:
-            hints = []
-            if campaign.manifest is not None and not any(
-                s.startswith("manifest") for s, _ in row.sources
-            ):
-                hints.append(f"no row for it in manifest {campaign.manifest.name}")
-            if campaign.filename_pattern is not None and not any(
-                s == "file name" for s, _ in row.sources
-            ):
-                hints.append(f"name does not match pattern {campaign.filename_pattern!r}")
             todo.append(_Job(file=row.file, path=str(row.path), sources=row.sources,
-                             hints=tuple(hints)))
+                             hints=row.hints))
     by_file = {row.file: row for row in rows}
     done = len(rows) - len(todo)
     total = len(rows)
@@ -1272,7 +1262,7 @@ def campaign_listing(campaign: Campaign) -> list[dict[str, Any]]:
     batch (so they include fields read from export names); μ values only for reduced runs.
     """
     out: list[dict[str, Any]] = []
-    for row in campaign_table(campaign, hash_files=True):
+    for row in campaign_table(campaign):
         entry = row.previous or {}
         reduced = row.status == REDUCED
         labels = (entry.get("labels") if reduced else None) or {

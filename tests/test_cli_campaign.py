@@ -171,3 +171,26 @@ def test_plots_only_for_runs_reduced_now(config: Path) -> None:
     assert [p.name.rsplit("_", 1)[0] for p in pngs] == ["DS30_steel_5N_20C_r2"]
     assert pngs[0].read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert "plots/traces/" in result.stdout
+
+
+def test_quick_batch_of_a_folder_by_file_names(exports: Path, tmp_path: Path) -> None:
+    folder = tmp_path / "runs"
+    shutil.copytree(exports, folder)
+    for p in folder.glob("*.csv"):
+        p.rename(p.with_suffix(".txt"))
+    result = invoke("batch", str(folder), "--pattern", PATTERN, "--glob", "*_r1.txt",
+                    "--out", str(tmp_path / "proc"), "--no-plots", "--jobs", "1")
+    # the r2 run is outside the glob; the bad r1 file fails
+    assert "3 run(s): 2 reduced" in result.stdout, result.output
+    runs = pd.read_parquet(tmp_path / "proc" / "friction_map.parquet")
+    # no [names] table for a folder: the short name stays
+    assert set(runs["pin"]) == {"DS30"}
+    assert sorted(runs["normal_force_N"]) == [1.0, 5.0]
+
+
+def test_map_option_overrides_the_config(config: Path, tmp_path: Path) -> None:
+    elsewhere = tmp_path / "shared" / "lab_map.parquet"
+    result = invoke("campaign", "run", str(config), "--map", str(elsewhere), "--no-plots")
+    assert result.exit_code == 1
+    assert len(pd.read_parquet(elsewhere)) == len(GOOD)
+    assert not (config.parent / "out" / "friction_map.parquet").exists()

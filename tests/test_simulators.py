@@ -304,6 +304,5 @@ def test_abaqus_grid_property(pressures, temps, data):
     expected_p = [p for _ in t_kept for p in p_kept]
     assert rows[:, 3] == pytest.approx(expected_t, rel=1e-5, abs=1e-5)
     assert rows[:, 2] * 1e3 == pytest.approx(expected_p, rel=1e-5)
-    for mu, _, p_mpa, t in rows:
-        assert mu == pytest.approx(query(groups, "A", "B", p_mpa * 1e3, t).mu_k.value,
-                                   rel=1e-4)
+    for mu, p, t in zip(rows[:, 0], expected_p, expected_t, strict=True):
+        assert mu == pytest.approx(query(groups, "A", "B", p, t).mu_k.value, rel=1e-8)

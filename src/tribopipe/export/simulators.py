@@ -72,8 +72,12 @@ def convert_pressure_kPa(pressure_kPa: float, units: str) -> float:
 
 
 def _num(value: float) -> str:
-    """A number as ABAQUS/Ansys read it: 6 significant digits, no thousands separators."""
-    return f"{value:.6g}"
+    """A number as ABAQUS/Ansys read it: up to 10 significant digits, no separators.
+
+    10 digits keep the grid's pressures exact enough that a solver's interpolation
+    between them matches ours; short values (0.01179) stay short.
+    """
+    return f"{value:.10g}"
 
 
 def _selected_pairs(

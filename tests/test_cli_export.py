@@ -207,3 +207,17 @@ def test_export_exponential_decay_from_reduced_runs(reduced_map, tmp_path):
     assert mu_k == pytest.approx(g.mu_k_mean, rel=1e-5)
     assert d_c == pytest.approx(500e3)  # 500 s/mm = 5e5 s/m
     assert mu_s > mu_k
+
+
+def test_abaqus_slip_rate_is_the_runs_measured_speed(reduced_map):
+    from tribopipe.frictionmap import read_map
+
+    runs = read_map(reduced_map)
+    result = _run("export", "abaqus", "--map", str(reduced_map), "--pin", PIN, "--disc", DISC,
+                  "--units", "m-N-s")
+    assert result.exit_code == 0
+    rows = [ln.split(",") for ln in result.output.splitlines() if ln and not ln.startswith("*")]
+    speeds = {float(r[1]) for r in rows}
+    assert len(speeds) == 1
+    # mm/s in the map, m/s in the file
+    assert speeds.pop() == pytest.approx(runs["sliding_speed_mm_s"].median() * 1e-3, rel=1e-8)

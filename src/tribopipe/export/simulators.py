@@ -464,6 +464,7 @@ def export_simulator_input(
     material_id: int = 1,
     geom1: str = "pin",
     geom2: str = "disc",
+    slip_rate_mm_s: float = FOUNDING_SLIP_RATE_MM_S,
     source: str | None = None,
 ) -> str:
     """The input text for simulator ``fmt`` (one of :data:`FORMATS`).
@@ -487,7 +488,7 @@ def export_simulator_input(
         raise ExportError("a decay coefficient only applies to abaqus --exponential-decay")
     if fmt == "abaqus" and not exponential_decay:
         return write_abaqus(groups, pin=pin, disc=disc, temperature_C=temperature_C,
-                            units=units, source=source)
+                            units=units, slip_rate_mm_s=slip_rate_mm_s, source=source)
     if fmt == "ansys":
         return write_ansys(groups, pin=pin, disc=disc, temperature_C=temperature_C,
                            units=units, material_id=material_id, source=source)
@@ -509,7 +510,8 @@ def export_simulator_input(
     if fmt == "abaqus":
         return write_abaqus_decay(groups, pin=pin, disc=disc, pressure_kPa=pressure_kPa,
                                   temperature_C=temperature_C, units=units,
-                                  decay_s_per_mm=decay_s_per_mm, source=source)
+                                  decay_s_per_mm=decay_s_per_mm,
+                                  slip_rate_mm_s=slip_rate_mm_s, source=source)
     if fmt == "mujoco":
         return write_mujoco(groups, pin=pin, disc=disc, pressure_kPa=pressure_kPa,
                             temperature_C=temperature_C, geom1=geom1, geom2=geom2,
@@ -519,8 +521,25 @@ def export_simulator_input(
                   temperature_C=temperature_C, source=source)
 
 
+def measured_slip_rate_mm_s(runs: pd.DataFrame) -> float:
+    """The median sliding speed [mm/s] of the included runs; the founding 0.007 mm/s when
+    no run records one."""
+    import numpy as np
+
+    speed = runs["sliding_speed_mm_s"].to_numpy(dtype=float)
+    if "excluded" in runs.columns:
+        speed = speed[~runs["excluded"].fillna(False).astype(bool).to_numpy()]
+    speed = speed[np.isfinite(speed) & (speed > 0)]
+    return float(np.median(speed)) if speed.size else FOUNDING_SLIP_RATE_MM_S
+
+
 def export_from_map(map_path: str | Path, fmt: str, **options: Any) -> str:
-    """:func:`export_simulator_input` on the friction map (Parquet) at ``map_path``."""
+    """:func:`export_simulator_input` on the friction map (Parquet) at ``map_path``; the
+    slip rate of ABAQUS tables is the runs' median sliding speed."""
+    from ..frictionmap import read_map
     from ..query import load_groups
 
-    return export_simulator_input(load_groups(map_path), fmt, source=str(map_path), **options)
+    groups = load_groups(map_path)
+    slip = measured_slip_rate_mm_s(read_map(map_path))
+    return export_simulator_input(groups, fmt, source=str(map_path), slip_rate_mm_s=slip,
+                                  **options)

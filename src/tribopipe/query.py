@@ -108,6 +108,7 @@ def pairs(groups: pd.DataFrame) -> list[tuple[str, str]]:
 
 
 def _held_pairs_text(groups: pd.DataFrame) -> str:
+    """One clause listing the pairs a group table holds."""
     held = pairs(groups)
     if not held:
         return "the map holds no groups"
@@ -226,6 +227,7 @@ def _points(pair_groups: pd.DataFrame, quantity: str) -> pd.DataFrame:
     import pandas as pd
 
     def column(name: str, default: float) -> pd.Series:
+        """A numeric column of the pair's groups, or ``default`` when it is absent."""
         if name not in pair_groups.columns:
             return pd.Series(default, index=pair_groups.index, dtype=float)
         return pd.to_numeric(pair_groups[name], errors="coerce").astype(float)
@@ -264,6 +266,7 @@ def _points(pair_groups: pd.DataFrame, quantity: str) -> pd.DataFrame:
 
 
 def _estimate(points: pd.DataFrame, pressure_kPa: float, temperature_C: float | None) -> Estimate:
+    """Interpolate one quantity's points at (pressure [kPa], temperature [°C])."""
     import numpy as np
 
     weights, clamped_p, clamped_t = interpolation_weights(
@@ -291,6 +294,7 @@ def _estimate(points: pd.DataFrame, pressure_kPa: float, temperature_C: float | 
 
 
 def _finite(value: Any) -> float | None:
+    """``float(value)``, or ``None`` when it is NaN or infinite."""
     value = float(value)
     return value if math.isfinite(value) else None
 
@@ -442,6 +446,7 @@ def format_result(res: QueryResult) -> str:
     """A short human-readable report of a query (several lines, no trailing newline)."""
 
     def est_text(name: str, est: Estimate | None) -> str:
+        """One line for an estimate: value ± uncertainty, or 'unknown'."""
         if est is None:
             return f"{name} = unknown (no group of this pair holds it)"
         unc = "" if est.uncertainty is None else f" ± {est.uncertainty:.3f} (95 % CI, interpolated)"

@@ -101,6 +101,7 @@ def _e(value: Any) -> str:
 
 
 def _num(value: Any, spec: str) -> str:
+    """``value`` formatted with ``spec``; '' when missing or NaN."""
     try:
         v = float(value)
     except (TypeError, ValueError):
@@ -109,6 +110,7 @@ def _num(value: Any, spec: str) -> str:
 
 
 def _interval(low: Any, high: Any) -> str:
+    """``[low, high]`` with 3 decimals; '' when either end is missing."""
     lo, hi = _num(low, ".3f"), _num(high, ".3f")
     return f"[{lo}, {hi}]" if lo and hi else ""
 
@@ -133,10 +135,12 @@ def _png_data_uri(draw: Any) -> str:
 
 
 def _img(uri: str, alt: str) -> str:
+    """An ``<img>`` element for a ``data:`` URI."""
     return f'<img src="{uri}" alt="{escape(alt)}">'
 
 
 def _flag_list(value: Any) -> list[str]:
+    """The QC flags of a ``;``-joined flags cell."""
     if not isinstance(value, str):
         return []
     return [f for f in value.split(";") if f]
@@ -146,6 +150,7 @@ def _flag_list(value: Any) -> list[str]:
 
 
 def _summary(inp: ReportInputs) -> str:
+    """The campaign-summary section."""
     from .stats import repeatability
 
     runs = inp.runs
@@ -182,6 +187,7 @@ def _summary(inp: ReportInputs) -> str:
 
 
 def _group_table(inp: ReportInputs) -> str:
+    """The group-table section; each group links to its pair plot and runs."""
     head = (
         "<tr><th class=t>pin</th><th class=t>disc</th><th>F [N]</th><th>p [kPa]</th>"
         "<th>T [°C]</th><th>n</th><th>μ_K mean</th><th>μ_K SD</th><th>μ_K 95 % CI</th>"
@@ -223,6 +229,7 @@ def _group_table(inp: ReportInputs) -> str:
 
 
 def _fits_table(inp: ReportInputs) -> str:
+    """The power-law fit section."""
     head = (
         "<tr><th class=t>pin</th><th class=t>disc</th><th>T [°C]</th><th>k</th>"
         "<th>k 95 % CI</th><th>n−1</th><th>n−1 95 % CI</th><th>R²</th><th>runs</th>"
@@ -250,6 +257,7 @@ def _fits_table(inp: ReportInputs) -> str:
 
 
 def _pair_plots(inp: ReportInputs) -> str:
+    """The per-pair μ_K(p) plots, embedded as PNG."""
     from .export.plots import plot_pair
 
     included = inp.runs[~inp.runs["excluded"].fillna(False).astype(bool)]
@@ -272,6 +280,7 @@ def _pair_plots(inp: ReportInputs) -> str:
 
 
 def _flagged(inp: ReportInputs) -> str:
+    """The flagged and excluded runs section."""
     runs = inp.runs
     mask = runs["flags"].map(lambda f: bool(_flag_list(f))) | runs["excluded"].fillna(
         False).astype(bool)
@@ -303,6 +312,7 @@ def _flagged(inp: ReportInputs) -> str:
 
 
 def _failures(inp: ReportInputs) -> str:
+    """The failures section (``failures.csv`` of the last batch)."""
     if not inp.failures_known:
         body = "<p class=muted>No failures.csv in the processed folder (no batch run).</p>"
     elif not inp.failures:
@@ -320,6 +330,7 @@ def _failures(inp: ReportInputs) -> str:
 
 
 def _runs(inp: ReportInputs) -> str:
+    """One collapsible block per run, with its embedded trace plot when found."""
     import pandas as pd
 
     from .export.plots import find_trace, plot_trace_row

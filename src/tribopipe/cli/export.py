@@ -49,6 +49,7 @@ def _selection(func: Callable[..., Any]) -> Callable[..., Any]:
 
 
 def _units(func: Callable[..., Any]) -> Callable[..., Any]:
+    """--units: the unit system of table formats."""
     return click.option(
         "--units",
         type=click.Choice(UNITS),
@@ -59,6 +60,7 @@ def _units(func: Callable[..., Any]) -> Callable[..., Any]:
 
 
 def _emit(text: str, output: str | None) -> None:
+    """Print ``text`` or write it to ``output`` (UTF-8, LF)."""
     if output is None:
         click.echo(text, nl=False)
         return
@@ -68,6 +70,7 @@ def _emit(text: str, output: str | None) -> None:
 
 
 def _run(fmt: str, output: str | None, map_path: str, **options: Any) -> None:
+    """Export ``fmt`` from the map and emit it."""
     from ..export.simulators import export_from_map
 
     _emit(export_from_map(map_path, fmt, **options), output)

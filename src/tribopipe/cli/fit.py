@@ -11,6 +11,7 @@ from ._common import friendly_errors, map_option
 
 
 def _fmt(value: float, spec: str) -> str:
+    """A number for the table, '-' when missing."""
     return "-" if value is None or math.isnan(value) else format(value, spec)
 
 

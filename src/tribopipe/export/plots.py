@@ -42,6 +42,7 @@ def _figure(width_in: float, height_in: float) -> Figure:
 
 
 def _format_of(target: Target, fmt: str | None) -> str:
+    """The image format of ``target`` (suffix) or ``fmt``, checked."""
     if fmt is None:
         if isinstance(target, str | Path):
             fmt = Path(target).suffix.lstrip(".").lower() or "png"
@@ -77,6 +78,7 @@ def slug(text: str) -> str:
 
 
 def _finite(value: Any) -> bool:
+    """True when ``value`` is a finite number."""
     try:
         return value is not None and math.isfinite(float(value))
     except (TypeError, ValueError):
@@ -265,6 +267,7 @@ def draw_pair(ax: Any, runs: pd.DataFrame, fits: pd.DataFrame | None) -> None:
 
 
 def _pair_runs(runs: pd.DataFrame, pin: str, disc: str) -> pd.DataFrame:
+    """The included runs of one pair; :class:`ExportError` listing the pairs if none."""
     included = runs
     if "excluded" in runs.columns:
         included = runs[~runs["excluded"].fillna(False).astype(bool)]
@@ -350,6 +353,7 @@ def plot_map_runs(map_path: str | Path, traces_dir: str | Path, out_dir: str | P
 
 
 def _read_runs(map_path: str | Path) -> pd.DataFrame:
+    """The runs of the map at ``map_path``; :class:`ExportError` when it is empty."""
     from ..frictionmap import read_map
 
     runs = read_map(map_path)

@@ -135,6 +135,7 @@ def abaqus_name(pin: str, disc: str) -> str:
 
 
 def _provenance(comment: str, source: str | None, what: str) -> list[str]:
+    """Comment lines saying what the file is and where its values came from."""
     lines = [
         f"{comment} {what}",
         f"{comment} written by tribopipe {__version__} from the friction map"
@@ -145,6 +146,7 @@ def _provenance(comment: str, source: str | None, what: str) -> list[str]:
 
 
 def _filled_comments(comment: str, table: pd.DataFrame, units: UnitSystem) -> list[str]:
+    """Comment lines listing the table cells filled by interpolation."""
     filled = table[~table["measured"]]
     if filled.empty:
         return [f"{comment} every cell of this table was measured"]
@@ -326,6 +328,7 @@ def _condition_comments(comment: str, res: object) -> list[str]:
 
 
 def _xml_comment(text: str) -> str:
+    """``text`` as one XML comment."""
     # "--" may not appear inside an XML comment
     return "<!-- " + text.replace("--", "- -") + " -->"
 

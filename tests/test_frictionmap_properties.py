@@ -86,6 +86,7 @@ BREAKERS = {
     "reduced without mu_s": lambda r: r.update(source=fm.SOURCE_REDUCED, mu_s=None),
     "text in a number column": lambda r: r.update(normal_force_N="3 N"),
     "half a repeat": lambda r: r.update(repeat=1.5),
+    "an infinite repeat": lambda r: r.update(repeat=float("inf")),
     "a column missing": lambda r: r.pop("flags"),
 }
 

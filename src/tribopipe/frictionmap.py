@@ -313,7 +313,7 @@ def records_frame(records: Sequence[Mapping[str, Any]], *, where: str = "record"
         values = [rec[name] for rec in records]
         try:
             columns[name] = _column(values, kind)
-        except (TypeError, ValueError) as exc:
+        except (TypeError, ValueError, OverflowError) as exc:
             bad = next((i for i, v in enumerate(values) if not _ok(v, kind)), None)
             row = "" if bad is None else f"{where} {bad + 1}: "
             raise MapError(
@@ -355,7 +355,7 @@ def _validated(frame: pd.DataFrame, where: str) -> pd.DataFrame:
 def _ok(value: Any, kind: str) -> bool:
     try:
         _column([value], kind)
-    except (TypeError, ValueError):
+    except (TypeError, ValueError, OverflowError):
         return False
     return True
 

@@ -309,3 +309,42 @@ def test_force_flag_iff_outside_the_limit(nominal: float, measured: float) -> No
     tol = Tolerances()
     flagged = "normal_force_off_nominal" in qc_flags(labels, measured, 20.0, tol)
     assert flagged == (abs(measured - nominal) > tol.force_limit_N(nominal))
+
+
+manifest_rows = st.lists(
+    st.tuples(
+        st.text(alphabet="abcdefghij_-0123456789", min_size=1, max_size=10),
+        names,
+        names,
+        st.one_of(st.none(), st.floats(0.01, 100, allow_nan=False).map(lambda v: round(v, 3))),
+        st.one_of(st.none(), st.integers(-20, 80).map(float)),
+        st.one_of(st.none(), st.integers(1, 9)),
+    ),
+    min_size=1, max_size=8, unique_by=lambda r: r[0],
+)
+
+
+@given(rows=manifest_rows, semicolon=st.booleans())
+def test_manifest_round_trip(tmp_path_factory: pytest.TempPathFactory, rows: list,
+                             semicolon: bool) -> None:
+    """What a lab writes into a manifest (comma, or semicolon with decimal comma) reads back;
+    empty cells stay unknown."""
+    import csv
+
+    sep = ";" if semicolon else ","
+    path = tmp_path_factory.mktemp("m") / "manifest.csv"
+    with path.open("w", encoding="utf-8", newline="") as fh:
+        writer = csv.writer(fh, delimiter=sep)
+        writer.writerow(["file", "pin", "disc", "normal_force_N", "temperature_C", "repeat"])
+        for file, pin, disc, force, temperature, repeat in rows:
+            cells = ["" if v is None else (str(v).replace(".", ",") if semicolon else str(v))
+                     for v in (force, temperature)]
+            writer.writerow([f"{file}.csv", pin, disc, *cells,
+                             "" if repeat is None else repeat])
+    read = read_manifest(path)
+    assert len(read) == len(rows)
+    for file, pin, disc, force, temperature, repeat in rows:
+        fields = read[f"{file}.csv"].fields
+        expected = {"pin": pin, "disc": disc, "normal_force_N": force,
+                    "temperature_C": temperature, "repeat": repeat}
+        assert fields == {k: v for k, v in expected.items() if v is not None}

@@ -1136,14 +1136,14 @@ def map_summary(path: str | os.PathLike[str]) -> str:
     pairs = runs.groupby(["pin", "disc"], sort=True)
     lines.append(f"  contact pairs: {pairs.ngroups}; condition groups: {len(groups)}")
     for source, n in runs["source"].value_counts().sort_index().items():
-        lines.append(f"  source {source}: {n} runs")
+        lines.append(f"  source {source}: {_runs(n)}")
     lines.append("")
     lines.append("  pin / disc: runs, conditions, force [N], temperature [°C]")
     for (pin, disc), sub in pairs:
         forces = ", ".join(f"{f:g}" for f in sorted(sub["normal_force_N"].dropna().unique()))
         temps = ", ".join(f"{t:g}" for t in sorted(sub["temperature_C"].dropna().unique()))
         n_cond = int(((groups["pin"] == pin) & (groups["disc"] == disc)).sum())
-        lines.append(f"    {pin} / {disc}: {len(sub)} runs, {n_cond} conditions, "
+        lines.append(f"    {pin} / {disc}: {_runs(len(sub))}, {n_cond} conditions, "
                      f"F {forces or '-'}, T {temps or '-'}")
     flag_counts: dict[str, int] = {}
     for text in runs["flags"].dropna():
@@ -1173,6 +1173,10 @@ def map_summary(path: str | os.PathLike[str]) -> str:
                          f"{row.normal_force_N:g} N, {_fmt_t(row.temperature_C)}, "
                          f"repeat {_fmt_repeat(row.repeat)}: {row.exclusion_reason}")
     return "\n".join(lines)
+
+
+def _runs(n: int) -> str:
+    return f"{n} run" if n == 1 else f"{n} runs"
 
 
 def _fmt_t(value: float) -> str:

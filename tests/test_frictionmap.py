@@ -535,3 +535,12 @@ def test_update_map_drops_stale_runs_and_adds_new_ones_in_one_write(tmp_path):
     before = path.read_bytes()
     assert not fm.update_map(path, [], drop_ids=["not-in-the-map"]).changed
     assert path.read_bytes() == before
+
+
+def test_a_map_path_inside_a_file_is_a_clean_error(tmp_path):
+    blocker = tmp_path / "processed"
+    blocker.write_text("not a directory")
+    with pytest.raises(MapError, match="cannot lock the friction map") as err:
+        fm.append_records(blocker / "friction_map.parquet", [run_record(1)])
+    assert "friction_map.parquet" in str(err.value)
+    assert blocker.read_text() == "not a directory"

@@ -555,17 +555,23 @@ def _metadata(runs: pd.DataFrame) -> bytes:
 def _locked(path: Path) -> Iterator[None]:
     from filelock import FileLock, Timeout
 
-    path.parent.mkdir(parents=True, exist_ok=True)
     lock = FileLock(str(path) + ".lock", timeout=LOCK_TIMEOUT_S)
     try:
-        with lock:
-            yield
+        path.parent.mkdir(parents=True, exist_ok=True)
+        lock.acquire()
     except Timeout:
         raise MapError(
             f"friction map is locked by another process for more than {LOCK_TIMEOUT_S:g} s",
             path=path,
             hint="wait for the other tribopipe command to finish",
         ) from None
+    except OSError as exc:
+        raise MapError(f"cannot lock the friction map ({exc.strerror or exc})", path=path,
+                       hint="is the directory writable?") from None
+    try:
+        yield
+    finally:
+        lock.release()
 
 
 def _clean_stale_temps(path: Path) -> None:
@@ -604,7 +610,11 @@ def _write_atomic(path: Path, runs: pd.DataFrame) -> None:
     meta[META_KEY] = _metadata(runs)
     table = table.replace_schema_metadata(meta)
     _clean_stale_temps(path)
-    fd, tmp_name = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    try:
+        fd, tmp_name = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    except OSError as exc:
+        raise MapError(f"cannot write the friction map ({exc.strerror or exc})",
+                       path=path) from None
     tmp = Path(tmp_name)
     try:
         with os.fdopen(fd, "wb") as fh:
@@ -616,9 +626,12 @@ def _write_atomic(path: Path, runs: pd.DataFrame) -> None:
             Path(marker).write_text(str(os.getpid()))
             time.sleep(120)
         os.replace(tmp, path)
-    except BaseException:
+    except BaseException as exc:
         with suppress(OSError):
             tmp.unlink()
+        if isinstance(exc, OSError):  # disk full, permissions: the old map is untouched
+            raise MapError(f"cannot write the friction map ({exc.strerror or exc})",
+                           path=path) from None
         raise
     _fsync_dir(path.parent)
 

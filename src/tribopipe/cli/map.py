@@ -5,6 +5,7 @@ from __future__ import annotations
 import click
 
 from ._common import friendly_errors, map_option
+from .fit import fit_cmd
 
 
 @click.group("map")
@@ -19,7 +20,11 @@ def map_group() -> None:
       tribopipe map table --format markdown --pin "Dragonskin 30" --temperature 20
       tribopipe map show
       tribopipe map exclude 3fa2c1d09e --reason "pin slipped in the holder"
+      tribopipe map fit --pin "Dragonskin 30"     power law μ_K = k·p^(n−1) per pair
     """
+
+
+map_group.add_command(fit_cmd)
 
 
 @map_group.command("import")

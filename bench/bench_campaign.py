@@ -12,8 +12,8 @@ Measures, on the same files:
   update, runs.csv); parse-only and batch alternate, best of ``--repeat`` (2) each;
 * **incremental re-run** — the same command again with nothing changed;
 * **one file changed** — the same command after rewriting one export;
-* **peak memory** of the batch — the largest single process's max RSS (``os.wait4``
-  rusage, which covers the batch process and its workers) and the peak sum of PSS
+* **peak memory** of the batch — the largest single process's max RSS (``getrusage`` of
+  the children of a small launcher: the batch process and its workers) and the peak sum of PSS
   (proportional set size, so pages shared after ``fork`` count once) over the process
   tree, sampled every 50 ms from ``/proc/<pid>/smaps_rollup``;
 * ``tribopipe --help`` wall time, best of 5.
@@ -178,6 +178,21 @@ def _pss_kB(pid: int) -> int:
     return 0
 
 
+#: A small launcher: runs the command, then reports its wall time and the largest max RSS
+#: among it and its workers. Linux carries a process's RSS high-water mark over fork and
+#: exec, so launching from this (large) benchmark process would inflate the figure by the
+#: benchmark's own size; from this launcher, by ~10 MB at most.
+_LAUNCHER = """
+import json, resource, subprocess, sys, time
+t0 = time.perf_counter()
+code = subprocess.call(sys.argv[2:])
+wall = time.perf_counter() - t0
+with open(sys.argv[1], "w") as fh:
+    json.dump({"wall_s": wall, "exit_code": code,
+               "max_rss_kB": resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss}, fh)
+"""
+
+
 def run_measured(cmd: list[str], cwd: Path) -> dict[str, float]:
     """Run ``cmd``; wall time [s], exit code, largest single-process max RSS [MB] and the
     peak PSS summed over the process tree [MB] (sampled every 50 ms)."""
@@ -186,13 +201,14 @@ def run_measured(cmd: list[str], cwd: Path) -> dict[str, float]:
     peak = 0
     stop = threading.Event()
     out_fh, err_fh = tempfile.TemporaryFile(), tempfile.TemporaryFile()
-    t0 = time.perf_counter()
-    proc = subprocess.Popen(cmd, cwd=cwd, stdout=out_fh, stderr=err_fh)
+    report = Path(tempfile.mkstemp(suffix=".json")[1])
+    launcher = subprocess.Popen([sys.executable, "-c", _LAUNCHER, str(report), *cmd],
+                                cwd=cwd, stdout=out_fh, stderr=err_fh)
 
     def sample() -> None:
         nonlocal peak
         while not stop.is_set():
-            pids, todo = [], [proc.pid]
+            pids, todo = [], _children(launcher.pid)  # the launcher itself is not counted
             while todo:
                 pid = todo.pop()
                 pids.append(pid)
@@ -202,18 +218,16 @@ def run_measured(cmd: list[str], cwd: Path) -> dict[str, float]:
 
     sampler = threading.Thread(target=sample, daemon=True)
     sampler.start()
-    # wait4 (not Popen.wait) so that we get the rusage of the child, which includes the
-    # largest RSS among it and the workers it reaped
-    _, status, usage = os.wait4(proc.pid, 0)
-    wall = time.perf_counter() - t0
-    proc.returncode = code = os.waitstatus_to_exitcode(status)
-    maxrss_mb = usage.ru_maxrss / 1024  # Linux reports kB
+    launcher.wait()
     stop.set()
     sampler.join()
+    measured = json.loads(report.read_text())
+    report.unlink()
     out_fh.seek(0)
     err_fh.seek(0)
     stdout, stderr = out_fh.read(), err_fh.read()
-    return {"wall_s": wall, "exit_code": code, "max_rss_MB": maxrss_mb,
+    return {"wall_s": measured["wall_s"], "exit_code": measured["exit_code"],
+            "max_rss_MB": measured["max_rss_kB"] / 1024,  # Linux reports kB
             "peak_pss_tree_MB": peak / 1024, "stdout": stdout.decode(errors="replace").strip(),
             "stderr_tail": stderr.decode(errors="replace").strip()[-500:]}
 

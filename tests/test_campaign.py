@@ -340,3 +340,26 @@ def test_two_batches_of_one_campaign_do_not_interleave(campaign_dir: Path) -> No
             run_campaign(campaign, jobs=1)
     assert not campaign.map_path.exists()
     assert len(run_campaign(campaign, jobs=1).reduced) == len(GOOD)
+
+
+def test_campaigns_sharing_an_output_folder_keep_their_own_state(
+    campaign_dir: Path, tmp_path_factory: pytest.TempPathFactory
+) -> None:
+    first = load_campaign(campaign_dir / "campaign.toml")
+    other_raw = campaign_dir / "raw2"
+    other_raw.mkdir()
+    write_run(other_raw / "EF50_steel_1N_20C_r1.csv", 1.2, 0.9, 1.0, seed=11)
+    cfg = campaign_dir / "second.toml"
+    cfg.write_text(
+        f'[campaign]\nname = "second lab"\nraw_dir = "raw2"\noutput_dir = "out"\n'
+        f'filename_pattern = "{PATTERN}"\nplots = false\n', encoding="utf-8")
+    second = load_campaign(cfg)
+    assert second.state_path != first.state_path
+    assert second.state_path.name == ".tribopipe-state.second-lab.json"
+
+    run_campaign(first, jobs=1)
+    assert run_campaign(second, jobs=1).reduced == ["EF50_steel_1N_20C_r1.csv"]
+    again = run_campaign(first, jobs=1)
+    assert again.reduced == [] and len(again.skipped) == len(GOOD)
+    # one shared map with both campaigns' runs
+    assert len(pd.read_parquet(first.map_path)) == len(GOOD) + 1

@@ -36,12 +36,14 @@ that file only*: it is listed with its reason and the other runs still land.
 
 Incremental batches
 -------------------
-``<output_dir>/.tribopipe-state.json`` remembers, per file: size, ``mtime_ns``, SHA-256,
-the config hash, a recipe hash (config + labels + QC tolerances), the status and the
-measurement id. Like git's index, the cached hash is trusted while size and ``mtime_ns``
-are unchanged, so an unchanged campaign is checked with one ``stat`` per file. A file whose
-content, labels or config changed is reduced again and its old map row replaced; a failed
-file is retried once it changes.
+``<output_dir>/.tribopipe-state.<name>.json`` remembers, per file: size, ``mtime_ns``,
+SHA-256, the config hash, a recipe hash (config + labels + QC tolerances), the status and
+the measurement id (one state per campaign name, so campaigns may share an output folder
+and a map; ``runs.csv`` and ``failures.csv`` describe the folder's last batch). Like git's
+index, the cached hash is trusted while size and ``mtime_ns`` are unchanged, so an
+unchanged campaign is checked with one ``stat`` per file. A file whose content, labels or
+config changed is reduced again and its old map row replaced; a failed file is retried
+once it changes.
 """
 
 from __future__ import annotations
@@ -68,7 +70,8 @@ if TYPE_CHECKING:
     from .config import Settings
     from .pipeline import RunOutcome
 
-STATE_FILE = ".tribopipe-state.json"
+#: the incremental state, one file per campaign name (campaigns may share an output folder)
+STATE_FILE = ".tribopipe-state.{name}.json"
 #: held while a batch runs, so two batches of one campaign never interleave their state
 BATCH_LOCK = ".tribopipe-batch.lock"
 STATE_VERSION = 1
@@ -158,8 +161,10 @@ class Campaign:
 
     @property
     def state_path(self) -> Path:
-        """The incremental state file: ``<output_dir>/.tribopipe-state.json``."""
-        return self.output_dir / STATE_FILE
+        """The incremental state file: ``<output_dir>/.tribopipe-state.<name>.json``
+        (the name reduced to letters, digits, ``-`` and ``_``)."""
+        slug = re.sub(r"[^A-Za-z0-9_-]+", "-", self.name).strip("-") or "campaign"
+        return self.output_dir / STATE_FILE.format(name=slug)
 
     @property
     def runs_csv(self) -> Path:

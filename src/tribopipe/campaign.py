@@ -5,8 +5,8 @@ A campaign is described by a TOML file (``configs/*.toml``)::
     [campaign]
     name = "example"
     raw_dir = "../raw/example"           # paths are relative to the config file's folder
-    glob = "*.csv"
-    instrument = "instruments/t-pid44.toml"
+    glob = "*.csv"                       # default; the manifest itself is never a run
+    instrument = "instruments/t-pid44.toml"     # default: the founding T-PID/44 cell
     output_dir = "../processed"          # default: processed/ beside the config's folder
     map = "../processed/friction_map.parquet"   # default: <output_dir>/friction_map.parquet
     manifest = "../raw/example/manifest.csv"
@@ -17,6 +17,9 @@ A campaign is described by a TOML file (``configs/*.toml``)::
     force_tolerance_rel = 0.10
     temperature_tolerance_C = 2.0        # QC: measured T may stray this far from nominal
     plots = true                         # per-run trace plots under <output_dir>/plots/traces
+    encoding = "utf-16"                  # optional: force the reader's encoding, delimiter
+    delimiter = "tab"                    # ("tab", ";", ",") or decimal mark (".", ","),
+    decimal = ","                        # else they are detected per file
 
     [reduction]                          # optional: overrides the instrument config's table
     median_window = 5

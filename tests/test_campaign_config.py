@@ -348,3 +348,12 @@ def test_manifest_round_trip(tmp_path_factory: pytest.TempPathFactory, rows: lis
         expected = {"pin": pin, "disc": disc, "normal_force_N": force,
                     "temperature_C": temperature, "repeat": repeat}
         assert fields == {k: v for k, v in expected.items() if v is not None}
+
+
+def test_reader_overrides(tmp_path: Path) -> None:
+    campaign = make_campaign(tmp_path, extra='encoding = "utf-16"\ndelimiter = "tab"\n'
+                                             'decimal = ","\n')
+    assert (campaign.read_options.encoding, campaign.read_options.delimiter,
+            campaign.read_options.decimal) == ("utf-16", "\t", ",")
+    with pytest.raises(ConfigError, match="decimal"):
+        make_campaign(tmp_path, extra='decimal = ";"\n')

@@ -363,3 +363,17 @@ def test_campaigns_sharing_an_output_folder_keep_their_own_state(
     assert again.reduced == [] and len(again.skipped) == len(GOOD)
     # one shared map with both campaigns' runs
     assert len(pd.read_parquet(first.map_path)) == len(GOOD) + 1
+
+
+def test_lost_state_costs_a_re_run_but_changes_no_group(campaign_dir: Path) -> None:
+    campaign = load_campaign(campaign_dir / "campaign.toml")
+    run_campaign(campaign, jobs=1)
+    before = pd.read_parquet(campaign.map_path)
+    campaign.state_path.unlink()
+    report = run_campaign(campaign, jobs=1)
+    assert len(report.reduced) == len(GOOD)
+    # the same files give the same rows: nothing in the map changed
+    assert report.groups_updated == 0
+    assert "0 added" in report.map_summary and f"{len(GOOD)} unchanged" in report.map_summary
+    after = pd.read_parquet(campaign.map_path)
+    assert sorted(after["measurement_id"]) == sorted(before["measurement_id"])

@@ -1158,13 +1158,18 @@ def _run_locked(campaign: Campaign, *, jobs: int | None, plots: bool | None,
         del entries[gone]
 
     map_summary = "unchanged"
-    removed = 0
+    removed: set[str] = set()
+    landed: set[str] = set()
     if records or stale_ids:
-        map_summary, removed = _update_map(campaign, records, stale_ids)
-    groups = {
-        (r.get("pin"), r.get("disc"), r.get("normal_force_N"), r.get("temperature_C"))
-        for r in records
+        map_summary, landed, removed = _update_map(campaign, records, stale_ids)
+    # a group is updated when one of its rows was added, replaced or removed
+    old_groups = {
+        _group_key(e.get("labels") or {}) for e in state.get("entries", {}).values()
+        if e.get("measurement_id") in removed
     }
+    groups = {
+        _group_key(r) for r in records if r.get("measurement_id") in landed
+    } | old_groups
     new_state = {"version": STATE_VERSION, "campaign": campaign.name, "entries": entries}
     if campaign.map_path.exists():
         st = campaign.map_path.stat()
@@ -1183,7 +1188,7 @@ def _run_locked(campaign: Campaign, *, jobs: int | None, plots: bool | None,
         skipped=skipped,
         failures=sorted(failures.items()),
         groups_updated=len(groups),
-        removed=removed,
+        removed=len(removed),
         map_path=campaign.map_path,
         map_summary=map_summary,
         output_dir=campaign.output_dir,
@@ -1222,22 +1227,30 @@ def _ids_missing_from_map(campaign: Campaign, state: Mapping[str, Any]) -> tuple
 
 
 def _update_map(campaign: Campaign, records: list[dict[str, Any]],
-                stale_ids: set[str]) -> tuple[str, int]:
+                stale_ids: set[str]) -> tuple[str, set[str], set[str]]:
     """Fold the new records into the map in one atomic write, dropping the rows of runs
-    whose raw file changed (their measurement id changed with the content); returns the
-    map's summary line and the number of rows removed."""
+    whose raw file changed (their measurement id changed with the content).
+
+    Returns the map's summary line, the ids added or replaced, and the ids removed.
+    """
     from . import frictionmap
 
     stale = stale_ids - {r.get("measurement_id") for r in records}
     if not stale:
         report = frictionmap.append_records(campaign.map_path, records, replace=True)
-        return report.summary(), 0
+        return report.summary(), set(report.added_ids) | set(report.replaced_ids), set()
     # append_records cannot remove rows: fold and drop in memory, then one atomic write
     current = frictionmap.read_map(campaign.map_path)
     gone = current["measurement_id"].isin(sorted(stale))
     merged, report = frictionmap.fold_records(current.loc[~gone], records, replace=True)
     frictionmap.write_map(campaign.map_path, merged)
-    return report.summary(), int(gone.sum())
+    removed = set(current.loc[gone, "measurement_id"].astype(str))
+    return report.summary(), set(report.added_ids) | set(report.replaced_ids), removed
+
+
+def _group_key(row: Mapping[str, Any]) -> tuple[Any, ...]:
+    """The condition group of a record or label dict: pin, disc, nominal F [N], T [°C]."""
+    return (row.get("pin"), row.get("disc"), row.get("normal_force_N"), row.get("temperature_C"))
 
 
 # --------------------------------------------------------------------------- outputs

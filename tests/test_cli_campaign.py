@@ -194,3 +194,11 @@ def test_map_option_overrides_the_config(config: Path, tmp_path: Path) -> None:
     assert result.exit_code == 1
     assert len(pd.read_parquet(elsewhere)) == len(GOOD)
     assert not (config.parent / "out" / "friction_map.parquet").exists()
+
+
+def test_an_export_given_as_campaign_gets_a_hint(exports: Path) -> None:
+    result = invoke("batch", str(exports / "DS30_steel_5N_20C_r1.csv"))
+    assert result.exit_code == 1
+    assert "DS30_steel_5N_20C_r1.csv" in result.output
+    assert "expected a campaign config (TOML" in result.output
+    assert "Traceback" not in result.output

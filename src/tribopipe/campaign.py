@@ -222,7 +222,15 @@ def load_campaign(path: str | Path) -> Campaign:
     from .config import read_toml, settings_from_dict
 
     cfg_path = Path(path).resolve()
-    data = read_toml(cfg_path)
+    try:
+        data = read_toml(cfg_path)
+    except ConfigError as exc:
+        if exc.hint or cfg_path.suffix.lower() == ".toml":
+            raise
+        # e.g. `tribopipe batch run.csv`: an export given where a campaign config belongs
+        raise ConfigError(exc.problem, path=exc.path,
+                          hint="expected a campaign config (TOML, see configs/example.toml) "
+                               "or a folder of exports") from None
     unknown_tables = sorted(set(data) - _TOP_LEVEL_TABLES)
     if unknown_tables:
         raise ConfigError(

@@ -79,8 +79,8 @@ def _run(campaign: Any, jobs: int | None, plots: bool | None) -> None:
     for note in report.notes:
         click.echo(f"note: {note}", err=True)
     for file, reason in report.failures:
-        text = reason if reason.startswith(file) or file in reason else f"{file}: {reason}"
-        click.echo(f"failed: {text}", err=True)
+        # reasons name their file already (campaign-relative), except rare library ones
+        click.echo(f"failed: {reason if file in reason else f'{file}: {reason}'}", err=True)
     click.echo(report.summary())
     click.echo(f"map {_shorten(report.map_path)}: {report.map_summary}")
     click.echo(f"outputs in {_shorten(report.output_dir)}/: runs.csv, failures.csv, traces/"

@@ -155,7 +155,8 @@ def readme_text(runs: list[ExampleRun]) -> str:
         "real Anton Paar RheoCompass export (UTF-16 LE with BOM, TAB-separated, CRLF; a "
         "normal-force set-up interval followed by the friction interval, "
         f"{DURATION_S:g} s at 10 Hz, torque in mN·m) and a realistic friction trace "
-        "(static overshoot, kinetic plateau, torque noise).",
+        f"(static overshoot, kinetic plateau, torque noise of σ = {NOISE:g} in COF units; "
+        f"seeds {BASE_SEED}…{BASE_SEED + len(runs) - 1}).",
         "",
         "- 2 pins × 2 discs × 3 normal forces × 2 temperatures × 2 repeats = "
         f"{len(runs)} runs; file names follow `{{pin}}_{{disc}}_{{force}}N_{{temperature}}C_"

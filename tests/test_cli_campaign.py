@@ -202,3 +202,13 @@ def test_an_export_given_as_campaign_gets_a_hint(exports: Path) -> None:
     assert "DS30_steel_5N_20C_r1.csv" in result.output
     assert "expected a campaign config (TOML" in result.output
     assert "Traceback" not in result.output
+
+
+def test_a_glob_that_matches_nothing_says_so(config: Path) -> None:
+    text = config.read_text(encoding="utf-8").replace('raw_dir = "raw"',
+                                                      'raw_dir = "raw"\nglob = "*.txt"')
+    config.write_text(text, encoding="utf-8")
+    result = invoke("batch", str(config))
+    assert result.exit_code == 0
+    assert "0 run(s)" in result.stdout
+    assert "no file matches '*.txt'" in result.stderr

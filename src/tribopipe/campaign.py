@@ -1122,6 +1122,8 @@ def _run_locked(campaign: Campaign, *, jobs: int | None, plots: bool | None,
                         progress(done, total)
 
     notes: list[str] = []
+    if not rows:
+        notes.append(f"no file matches {campaign.glob!r} in {campaign.raw_dir}")
     records: list[dict[str, Any]] = []
     stale_ids: set[str] = set()
     reduced: list[str] = []

@@ -1238,24 +1238,15 @@ def _ids_missing_from_map(campaign: Campaign, state: Mapping[str, Any]) -> tuple
 
 def _update_map(campaign: Campaign, records: list[dict[str, Any]],
                 stale_ids: set[str]) -> tuple[str, set[str], set[str]]:
-    """Fold the new records into the map in one atomic write, dropping the rows of runs
-    whose raw file changed (their measurement id changed with the content).
-
-    Returns the map's summary line, the ids added or replaced, and the ids removed.
+    """Fold the new records into the map and drop the rows of runs whose raw file changed
+    (their measurement id changed with the content), under the map's lock, in one atomic
+    write. Returns the map's summary line, the ids added or replaced, and the ids removed.
     """
-    from . import frictionmap
+    from .frictionmap import update_map
 
-    stale = stale_ids - {r.get("measurement_id") for r in records}
-    if not stale:
-        report = frictionmap.append_records(campaign.map_path, records, replace=True)
-        return report.summary(), set(report.added_ids) | set(report.replaced_ids), set()
-    # append_records cannot remove rows: fold and drop in memory, then one atomic write
-    current = frictionmap.read_map(campaign.map_path)
-    gone = current["measurement_id"].isin(sorted(stale))
-    merged, report = frictionmap.fold_records(current.loc[~gone], records, replace=True)
-    frictionmap.write_map(campaign.map_path, merged)
-    removed = set(current.loc[gone, "measurement_id"].astype(str))
-    return report.summary(), set(report.added_ids) | set(report.replaced_ids), removed
+    report = update_map(campaign.map_path, records, replace=True, drop_ids=sorted(stale_ids))
+    return (report.summary(), set(report.added_ids) | set(report.replaced_ids),
+            set(report.dropped_ids))
 
 
 def _group_key(row: Mapping[str, Any]) -> tuple[Any, ...]:

@@ -67,6 +67,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from .errors import CampaignError, ConfigError, TribopipeError
+from .frictionmap import FLAG_FORCE_OFF, FLAG_TEMPERATURE_OFF
 from .pipeline import ReadOptions, RunLabels
 
 if TYPE_CHECKING:
@@ -814,15 +815,15 @@ def qc_flags(labels: RunLabels, normal_force_measured_N: float | None,
             math.isfinite(normal_force_measured_N):
         if abs(normal_force_measured_N - labels.normal_force_N) > \
                 tolerances.force_limit_N(labels.normal_force_N):
-            flags.append("normal_force_off_nominal")
+            flags.append(FLAG_FORCE_OFF)
     if labels.temperature_C is not None and temperature_measured_C is not None and \
             math.isfinite(temperature_measured_C):
         if abs(temperature_measured_C - labels.temperature_C) > tolerances.temperature_C:
-            flags.append("temperature_off_nominal")
+            flags.append(FLAG_TEMPERATURE_OFF)
     return flags
 
 
-QC_FLAGS: tuple[str, ...] = ("normal_force_off_nominal", "temperature_off_nominal")
+QC_FLAGS: tuple[str, ...] = (FLAG_FORCE_OFF, FLAG_TEMPERATURE_OFF)
 
 
 def with_qc_flags(existing: str | None, qc: Iterable[str]) -> str:

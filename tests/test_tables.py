@@ -216,3 +216,14 @@ def test_export_table_writes_the_file_it_returns(tmp_path):
 )
 def test_abstract_means_round_half_up_like_the_printed_table(value, expected):
     assert tables.round_half_up(value, 2) == expected
+
+
+def test_markdown_and_latex_show_individual_values_to_four_digits() -> None:
+    import pandas as pd
+
+    from tribopipe.export.tables import to_csv, to_latex, to_markdown
+
+    table = pd.DataFrame({"pin": ["DS30"], "mu_k_values": ["0.5705877189722872;0.57008255"]})
+    assert "0.5706;0.5701" in to_markdown(table)
+    assert "0.5706;0.5701" in to_latex(table)
+    assert "0.5705877189722872" in to_csv(table)  # machines keep every digit

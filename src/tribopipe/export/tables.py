@@ -193,6 +193,27 @@ def frictionmap_csv(table: pd.DataFrame) -> str:
     return table.to_csv(index=False, lineterminator="\n")
 
 
+def _short_values(table: pd.DataFrame) -> pd.DataFrame:
+    """For people: ``;``-joined individual values (``mu_k_values``...) with four significant
+    digits, like the other floats of a Markdown or LaTeX table."""
+
+    def shorten(text: Any) -> Any:
+        if not isinstance(text, str) or not text:
+            return text
+        try:
+            return ";".join(format(float(v), ".4g") for v in text.split(";"))
+        except ValueError:
+            return text
+
+    columns = [c for c in table.columns if str(c).endswith("_values")]
+    if not columns:
+        return table
+    table = table.copy()
+    for column in columns:
+        table[column] = table[column].map(shorten)
+    return table
+
+
 def _specs(table: pd.DataFrame, formats: dict[str, str] | None) -> list[str]:
     formats = formats or {}
     return [formats.get(str(c), ".4g") for c in table.columns]
@@ -201,6 +222,7 @@ def _specs(table: pd.DataFrame, formats: dict[str, str] | None) -> list[str]:
 def to_markdown(table: pd.DataFrame, formats: dict[str, str] | None = None) -> str:
     """A GitHub-flavoured Markdown table; numeric columns right-aligned. Floats use
     ``formats[column]`` (a format spec) or four significant digits."""
+    table = _short_values(table)
     header = [str(c) for c in table.columns]
     align = ["---:" if _numeric(table, c) else "---" for c in table.columns]
 
@@ -237,6 +259,7 @@ def latex_escape(text: str) -> str:
 def to_latex(table: pd.DataFrame, formats: dict[str, str] | None = None) -> str:
     """A booktabs ``tabular`` (needs ``\\usepackage{booktabs}``); numbers right-aligned,
     floats formatted as in :func:`to_markdown`."""
+    table = _short_values(table)
     specs = _specs(table, formats)
     spec = "".join("r" if _numeric(table, c) else "l" for c in table.columns)
     lines = [

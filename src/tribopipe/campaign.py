@@ -910,13 +910,17 @@ def _reduce_with_export_names(job: _Job, campaign: Campaign, merged: Mapping[str
 
 
 def _plot(campaign: Campaign, outcome: Any, trace: Path) -> str | None:
+    """Draw a run's trace plot beside its trace; returns a note when it could not."""
     try:
         from .export.plots import plot_trace
     except ImportError:
         return "plots skipped: tribopipe.export.plots.plot_trace is not available"
     target = campaign.plots_dir / trace.with_suffix(".png").name
     target.parent.mkdir(parents=True, exist_ok=True)
-    plot_trace(outcome.result, target, title=Path(outcome.path).name)
+    try:
+        plot_trace(outcome.result, target, title=Path(outcome.path).name)
+    except Exception as exc:  # noqa: BLE001 - a picture must not cost the run its map row
+        return f"{Path(outcome.path).name}: trace plot failed ({type(exc).__name__}: {exc})"
     return None
 
 
@@ -980,8 +984,10 @@ class BatchReport:
 
     ``reduced``/``skipped``: files reduced now / unchanged since the last batch;
     ``failures``: ``(file, reason)`` of every run that failed now or earlier and is
-    unchanged; ``groups_updated``: condition groups (pin, disc, force, temperature) that
-    received a new or replaced map row; ``map_summary``: the map's own account.
+    unchanged; ``groups_updated``: condition groups (pin, disc, force, temperature) with a
+    map row added, replaced or removed; ``removed``: map rows dropped because their raw
+    file changed; ``map_summary``: the map's own account; ``notes``: things worth saying
+    that are not failures (plots skipped, files gone from the folder).
     """
 
     campaign: str

@@ -122,11 +122,20 @@ def trace_path(out_dir: str | Path, outcome: RunOutcome) -> Path:
 
 
 def write_trace(out_dir: str | Path, outcome: RunOutcome) -> Path:
-    """Write the reduced trace (Parquet, unit-suffixed columns) and return its path."""
+    """Write the reduced trace (Parquet, unit-suffixed columns) and return its path.
+
+    The columns go to Arrow as plain arrays (no pandas metadata round trip): a campaign
+    writes one trace per run, so this is on the hot path of a batch.
+    """
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
     target = trace_path(out_dir, outcome)
     target.parent.mkdir(parents=True, exist_ok=True)
+    trace = outcome.result.trace
+    table = pa.table({str(c): trace[c].to_numpy() for c in trace.columns})
     tmp = target.with_suffix(".parquet.tmp")
-    outcome.result.trace.to_parquet(tmp, index=False)
+    pq.write_table(table, tmp)
     tmp.replace(target)
     return target
 

@@ -18,8 +18,16 @@ demo: install
 	$(VENV)/bin/tribopipe batch configs/example.toml
 	$(VENV)/bin/tribopipe map table --map processed/friction_map.parquet --format markdown -o processed/friction_map_groups.md
 	$(VENV)/bin/tribopipe export abaqus --map processed/friction_map.parquet -o processed/friction.inp
+	$(VENV)/bin/tribopipe plot pairs --map processed/friction_map.parquet -o processed/plots/pairs
 	$(VENV)/bin/tribopipe report configs/example.toml -o processed/report.html
-	@echo "Outputs are in processed/: friction_map.parquet, friction_map_groups.md, friction.inp, report.html, plots/"
+	@echo ""
+	@echo "Done. Outputs in processed/:"
+	@echo "  friction_map.parquet     the friction map (one row per run)"
+	@echo "  runs.csv, failures.csv   the campaign's runs and failures"
+	@echo "  friction_map_groups.md   group table with repeat statistics"
+	@echo "  friction.inp             ABAQUS *FRICTION tables"
+	@echo "  plots/traces, plots/pairs  trace and pressure plots (PNG)"
+	@echo "  report.html              the campaign report (open it in a browser)"
 
 test: install
 	$(PY) -m pytest

@@ -220,7 +220,7 @@ def load_campaign(path: str | Path) -> Campaign:
 
     Raises :class:`ConfigError` naming the file and the key for every problem.
     """
-    from .config import read_toml, settings_from_dict
+    from .config import read_toml, reject_unknown_keys, settings_from_dict
 
     cfg_path = Path(path).resolve()
     try:
@@ -244,13 +244,7 @@ def load_campaign(path: str | Path) -> Campaign:
         raise ConfigError(
             "missing [campaign] table", path=cfg_path, hint="see configs/example.toml"
         )
-    unknown = sorted(set(table) - _CAMPAIGN_KEYS)
-    if unknown:
-        raise ConfigError(
-            f"unknown key(s) {', '.join(unknown)} in [campaign]; expected some of "
-            f"{', '.join(sorted(_CAMPAIGN_KEYS))}",
-            path=cfg_path,
-        )
+    reject_unknown_keys(table, _CAMPAIGN_KEYS, "campaign", cfg_path)
     base = cfg_path.parent
 
     def rel(key: str, default: str | None = None) -> Path | None:

@@ -91,15 +91,22 @@ class Settings:
         return hashlib.sha256(text.encode()).hexdigest()[:16]
 
 
-def _build(cls: type, table: dict[str, Any], section: str, path: str | None) -> Any:
-    known = {f.name for f in fields(cls)}
-    unknown = sorted(set(table) - known)
+def reject_unknown_keys(
+    table: dict[str, Any], known: set[str] | frozenset[str], section: str,
+    path: str | Path | None,
+) -> None:
+    """Raise :class:`ConfigError` naming the file, the table and the keys a typo produced."""
+    unknown = sorted(set(table) - set(known))
     if unknown:
         raise ConfigError(
             f"unknown key(s) {', '.join(unknown)} in [{section}]; expected some of "
             f"{', '.join(sorted(known))}",
             path=path,
         )
+
+
+def _build(cls: type, table: dict[str, Any], section: str, path: str | None) -> Any:
+    reject_unknown_keys(table, {f.name for f in fields(cls)}, section, path)
     try:
         return cls(**table)
     except ConfigError as exc:

@@ -133,3 +133,15 @@ def test_reduce_as_a_subprocess(export: Path, tmp_path: Path) -> None:
     lines = proc.stdout.strip().splitlines()
     assert lines[0].split()[:3] == ["file", "mu_s", "mu_k"]
     assert export.name in lines[1]
+
+
+def test_an_export_without_contact_is_refused_naming_the_file_once(tmp_path: Path) -> None:
+    run = SyntheticRun(normal_force_N=0.05, seed=11)  # below the 0.2 N contact threshold
+    path = tmp_path / "lifted.csv"
+    write_rheocompass_export(path, run, project="p", test="t", sample="s")
+    result = CliRunner().invoke(main, ["reduce", str(path), "--no-map",
+                                       "--out", str(tmp_path / "o")])
+    assert result.exit_code == 1
+    line = result.stderr.splitlines()[0]
+    assert line.count(str(path)) == 1
+    assert "contact threshold" in line

@@ -101,7 +101,7 @@ def reduce_cmd(
                 _plot(out_dir, outcome)
         except TribopipeError as exc:
             message = str(exc)
-            if exc.path is None:
+            if str(path) not in message:  # every line names its file, once
                 message = f"{path}: {message}"
             failures.append(message)
             click.echo(f"error: {message}", err=True)

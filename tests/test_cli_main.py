@@ -67,3 +67,14 @@ def test_unknown_command_is_a_usage_error() -> None:
     result = CliRunner().invoke(main, ["frobnicate"])
     assert result.exit_code == 2
     assert "No such command" in result.output
+
+
+def test_cli_reference_in_docs_is_current() -> None:
+    from pathlib import Path
+
+    from tribopipe.cli.reference import render_reference
+
+    doc = Path(__file__).resolve().parents[1] / "docs" / "CLI.md"
+    assert doc.read_text(encoding="utf-8") == render_reference(), (
+        "docs/CLI.md is stale: run `python -m tribopipe.cli.reference > docs/CLI.md`"
+    )

@@ -97,9 +97,11 @@ def test_batch_of_the_example_recovers_the_stated_values(tmp_path: Path) -> None
     for row in runs.itertuples():
         stated = truth[row.source_file]
         assert row.pin == stated["pin"] and row.disc == stated["disc"]
-        assert row.mu_k == pytest.approx(float(stated["mu_k_true"]), abs=0.02), row.source_file
-        assert row.mu_s == pytest.approx(float(stated["mu_s_true"]), abs=0.03), row.source_file
+        # the targets: μ_K within ±0.01, a distinct μ_S within ±0.02
+        assert row.mu_k == pytest.approx(float(stated["mu_k_true"]), abs=0.01), row.source_file
+        assert row.mu_s == pytest.approx(float(stated["mu_s_true"]), abs=0.02), row.source_file
     flagged = runs.loc[runs["flags"].str.contains("normal_force_off_nominal"), "source_file"]
     assert flagged.tolist() == ["EF50_steel_1N_20C_r2.csv"]
+    assert report.flagged == [("EF50_steel_1N_20C_r2.csv", "normal_force_off_nominal")]
     french = runs.loc[runs["source_file"] == "EF50_acrylic_9N_20C_r2.csv"].iloc[0]
     assert french["mu_k"] == pytest.approx(0.43, abs=0.02)

@@ -981,7 +981,8 @@ class BatchReport:
     unchanged; ``groups_updated``: condition groups (pin, disc, force, temperature) with a
     map row added, replaced or removed; ``removed``: map rows dropped because their raw
     file changed; ``map_summary``: the map's own account; ``notes``: things worth saying
-    that are not failures (plots skipped, files gone from the folder).
+    that are not failures (plots skipped, files gone from the folder); ``flagged``:
+    ``(file, flags)`` of the runs reduced now that carry QC flags (";"-joined).
     """
 
     campaign: str
@@ -995,6 +996,7 @@ class BatchReport:
     map_summary: str
     output_dir: Path
     notes: list[str]
+    flagged: list[tuple[str, str]] = field(default_factory=list)
 
     @property
     def ok(self) -> bool:
@@ -1128,6 +1130,7 @@ def _run_locked(campaign: Campaign, *, jobs: int | None, plots: bool | None,
     records: list[dict[str, Any]] = []
     stale_ids: set[str] = set()
     reduced: list[str] = []
+    flagged: list[tuple[str, str]] = []
     for res in sorted(results, key=lambda r: r["file"]):
         row = by_file[res["file"]]
         old = entries.get(row.file) or {}
@@ -1140,6 +1143,8 @@ def _run_locked(campaign: Campaign, *, jobs: int | None, plots: bool | None,
         if res["ok"]:
             reduced.append(row.file)
             records.append(res["record"])
+            if res["record"].get("flags"):
+                flagged.append((row.file, res["record"]["flags"]))
             if old_id and old_id != res["measurement_id"]:
                 stale_ids.add(old_id)
             if res.get("plot_note") and res["plot_note"] not in notes:
@@ -1204,6 +1209,7 @@ def _run_locked(campaign: Campaign, *, jobs: int | None, plots: bool | None,
         map_summary=map_summary,
         output_dir=campaign.output_dir,
         notes=notes,
+        flagged=flagged,
     )
 
 

@@ -82,6 +82,8 @@ def _run(campaign: Any, jobs: int | None, plots: bool | None) -> None:
         # reasons name their file already (campaign-relative), except rare library ones
         click.echo(f"failed: {reason if file in reason else f'{file}: {reason}'}", err=True)
     click.echo(report.summary())
+    for file, flags in report.flagged:
+        click.echo(f"flagged: {file}: {flags.replace(';', ', ')}")
     click.echo(f"map {_shorten(report.map_path)}: {report.map_summary}")
     click.echo(f"outputs in {_shorten(report.output_dir)}/: runs.csv, failures.csv, traces/"
                + (", plots/traces/" if (report.output_dir / "plots").is_dir() else ""))

@@ -2,10 +2,11 @@
 
 Every run is written as a real RheoCompass export (UTF-16, TAB; every other one in French
 with decimal commas), read back with ``read_export``, and reduced with the default
-T-PID/44 settings, exactly as ``tribopipe reduce`` does. The grid spans the four shapes
-(clear overshoot, no overshoot, stick-slip, slow drift), noise 0.003–0.015 (COF units),
-five (μ_S, μ_K) pairs from 0.25 to 1.4, a torque zero offset of 0 or 0.5 mN·m, with and
-without a normal-force set-up interval, at 1, 5 and 9 N, with two seeds each.
+T-PID/44 settings, exactly as ``tribopipe reduce`` does. The grid spans the five shapes
+(clear overshoot, no overshoot, stick-slip, slow drift, a peak ending in a sudden slip),
+noise 0.003–0.015 (COF units), five (μ_S, μ_K) pairs from 0.25 to 1.4, a torque zero
+offset of 0 or 0.5 mN·m, with and without a normal-force set-up interval, at 1, 5 and
+9 N, with two seeds each.
 
 Targets (issue #2): μ_K within ±0.01; a distinct μ_S within ±0.02.
 
@@ -26,7 +27,7 @@ from tribopipe.readers import read_export
 from tribopipe.reduce import reduce_measurement, select_friction_interval
 from tribopipe.synthetic import SyntheticRun, truth, write_rheocompass_export
 
-SHAPES = ("overshoot", "no_overshoot", "stick_slip", "drift")
+SHAPES = ("overshoot", "no_overshoot", "stick_slip", "drift", "cliff")
 NOISES = (0.003, 0.008, 0.015)
 MU_PAIRS = ((0.33, 0.25), (0.45, 0.30), (0.80, 0.55), (1.20, 0.95), (1.40, 1.08))
 OFFSETS_NM = (0.0, 5e-4)

@@ -117,7 +117,7 @@ def test_bad_runs_are_refused() -> None:
         SyntheticRun(shape="wobbly")
     with pytest.raises(ValueError, match="direction"):
         SyntheticRun(direction=0)
-    assert set(SHAPES) == {"overshoot", "no_overshoot", "stick_slip", "drift"}
+    assert set(SHAPES) == {"overshoot", "no_overshoot", "stick_slip", "drift", "cliff"}
 
 
 # --------------------------------------------------------------------------- the writer
@@ -282,3 +282,16 @@ def test_what_is_written_reads_back_as_the_generated_si_data(
         for column, atol in tolerance.items():
             np.testing.assert_allclose(measurement.data[column], frame[column], atol=atol,
                                        err_msg=column)
+
+
+def test_a_cliff_run_rises_linearly_and_slips_within_0_01_mm() -> None:
+    run = SyntheticRun(shape="cliff", mu_s=0.9, mu_k=0.6, seed=4)
+    want = run.truth()
+    s_pk = want.mu_s_distance_mm
+    s = np.array([0.5 * s_pk, s_pk, s_pk + 0.01, s_pk + 0.2])
+    mu = mu_curve(run, s)
+    assert mu[0] == pytest.approx(0.45)  # half way up a linear rise
+    assert mu[1] == pytest.approx(0.9)
+    assert mu[2] < 0.6 + 0.3 * np.exp(-1)  # most of the drop within 0.01 mm
+    assert mu[3] == pytest.approx(0.6, abs=1e-6)
+    assert want.static_distinct and not want.stick_slip

@@ -37,8 +37,11 @@ Detection of μ_S and μ_K (method ``"tribopipe-v1"``)
    3-sample moving average (so the polynomial cannot overshoot a peak that ends in a
    sudden slip). The window is short (0.015 mm ≈ 21 samples at 0.007 mm/s and 10 Hz)
    because a static peak can be sharp: wider smoothing shaves it, narrower lets the
-   noise lift it (bias ≤ ~0.015 at noise 0.015 on rounded peaks; a peak that rises
-   linearly and collapses within ~0.01 mm reads up to ~0.04 low).
+   noise lift it (bias ≤ ~0.015 at noise 0.015 on rounded peaks). A peak that ends in a
+   sudden slip would still read low (the window reaches past the slip): where the
+   quadratic fit of the ``cliff_window_mm`` before a sample exceeds the fit of the
+   ``cliff_window_mm`` after it by more than ``cliff_sigma`` standard deviations, the
+   sample is the top of a cliff and its value is the left fit's (when higher).
 4. μ_K is the mean of μ over the steady sliding plateau, the "average during uniform
    sliding" of ASTM D1894; as in ASTM D2534 the plateau starts only after a run-in
    distance (``run_in_mm``) and after the static peak. Its start is where the transient
@@ -125,6 +128,11 @@ class ReductionParams:
         Width of the light median filter on μ [samples, odd]; removes spikes.
     peak_window_mm
         Width of the quadratic Savitzky–Golay smoothing used to read the static peak [mm].
+    cliff_window_mm
+        Length of the one-sided quadratic fits that read a peak ending in a sudden slip [mm].
+    cliff_sigma
+        A sudden slip (cliff) is a drop between the fits left and right of a sample larger
+        than this many standard deviations of their difference [-].
     static_search_mm
         The static peak is searched within this sliding distance from the start [mm].
     run_in_mm
@@ -165,6 +173,8 @@ class ReductionParams:
 
     median_window: int = 3
     peak_window_mm: float = 0.015
+    cliff_window_mm: float = 0.045
+    cliff_sigma: float = 4.0
     static_search_mm: float = 0.5
     run_in_mm: float = 0.25
     plateau_min_mm: float = 0.3
@@ -195,8 +205,10 @@ class ReductionParams:
                 f"[reduction] median_window must be a whole number >= 1, "
                 f"got {self.median_window!r}"
             )
-        if self.block_mm <= 0 or self.peak_window_mm <= 0:
-            raise ConfigError("[reduction] block_mm and peak_window_mm must be > 0")
+        if self.block_mm <= 0 or self.peak_window_mm <= 0 or self.cliff_window_mm <= 0:
+            raise ConfigError(
+                "[reduction] block_mm, peak_window_mm and cliff_window_mm must be > 0"
+            )
 
 
 @dataclass(frozen=True)
@@ -376,6 +388,61 @@ def static_peak_curve(values: Any, window: int) -> np.ndarray:
         return smooth
     averaged = uniform_filter1d(v, size=max(3, (w // 5) | 1), mode="nearest")
     return np.minimum(smooth, maximum_filter1d(averaged, size=w, mode="nearest"))
+
+
+def end_point_weights(window: int, degree: int = 2) -> np.ndarray:
+    """Weights (shape (window,)) that give the value at the last sample of the
+    least-squares polynomial of ``degree`` through ``window`` equally spaced samples."""
+    x = np.linspace(0.0, 1.0, int(window))
+    basis = np.vander(x, degree + 1, increasing=True)
+    return np.ones(degree + 1) @ np.linalg.solve(basis.T @ basis, basis.T)
+
+
+def one_sided_fits(values: Any, window: int) -> tuple[np.ndarray, np.ndarray]:
+    """Quadratic least-squares fits over ``window`` samples on one side only (shape (n,)
+    each, -inf where the window does not fit): ``left[k]`` is the fit over samples
+    ``k-window+1 … k`` read at ``k``, ``right[k]`` the fit over ``k … k+window-1`` read at
+    ``k``. Unlike a centred smoothing, neither averages across a sudden slip."""
+    v = np.asarray(values, dtype=float)
+    w = int(window)
+    left = np.full(v.size, -np.inf)
+    right = np.full(v.size, -np.inf)
+    if v.size >= w:
+        weights = end_point_weights(w)
+        left[w - 1 :] = np.correlate(v, weights, mode="valid")
+        right[: v.size - w + 1] = np.correlate(v[::-1], weights, mode="valid")[::-1]
+    return left, right
+
+
+def cliff_peak_curve(
+    values: Any, smooth_curve: Any, window: int, sigma: float, cliff_sigma: float
+) -> np.ndarray:
+    """``smooth_curve`` (shape (n,)) with the value at each sudden slip replaced by the
+    one-sided fit of the rising flank when that is higher.
+
+    A centred smoothing averages the low values after a slip into the peak and reads it
+    low; the fit of the flank alone up to the last sample before the slip does not. A
+    sample ``k`` is the top of a cliff when the left fit at ``k`` exceeds the right fit
+    at ``k+1`` by more than ``cliff_sigma`` standard deviations of that difference (from
+    the noise level ``sigma`` [COF]); elsewhere the smooth curve is kept unchanged, so
+    rounded peaks read as before. The left fit is capped by the highest sample of its
+    window, so a polynomial can never read above what was measured."""
+    from scipy.ndimage import maximum_filter1d
+
+    v = np.asarray(values, dtype=float)
+    curve = np.array(smooth_curve, dtype=float)
+    w = max(5, int(window))
+    left, right = one_sided_fits(v, w)
+    if v.size < w + 1:
+        return curve
+    # trailing maximum: the highest of samples k-w+1 … k
+    left = np.minimum(left, maximum_filter1d(v, size=w, mode="nearest", origin=(w - 1) // 2))
+    sd_difference = sigma * math.sqrt(2.0 * float(np.sum(end_point_weights(w) ** 2)))
+    drop = left[:-1] - right[1:]
+    cliff = np.zeros(v.size, dtype=bool)
+    cliff[:-1] = np.isfinite(drop) & (drop > cliff_sigma * sd_difference)
+    curve[cliff] = np.maximum(curve[cliff], left[cliff])
+    return curve
 
 
 def linear_slope(x: Any, y: Any) -> tuple[float, float]:
@@ -710,7 +777,10 @@ def _detect(
     if step_mm <= 0:
         step_mm = max(total_mm / max(s_v.size, 1), 1e-9)
     peak_n = max(5, int(round(params.peak_window_mm / step_mm)) | 1)
-    curve = static_peak_curve(mu_med, peak_n)
+    cliff_n = max(5, int(round(params.cliff_window_mm / step_mm)))
+    curve = cliff_peak_curve(
+        mu_v, static_peak_curve(mu_med, peak_n), cliff_n, sigma, params.cliff_sigma
+    )
     # noise left by a quadratic SG of width w at its centre: ~ sqrt(9 / (4 w)) σ
     sigma_peak = sigma * math.sqrt(min(1.0, 9.0 / (4.0 * peak_n)))
 

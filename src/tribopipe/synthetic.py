@@ -17,7 +17,9 @@ The model (s = sliding distance at the friction radius, s_pk = static peak dista
                   (slow stick rise, sudden slip) with period 0.02–0.04 mm; μ_K is its mean;
                   A defaults to 0.6·(μ_S − μ_K) within 0.08–0.2;
 ``drift``         as overshoot, but the decay to μ_K is slow (λ = 0.2–0.3 mm): the
-                  plateau is reached late.
+                  plateau is reached late;
+``cliff``         μ rises linearly (stiff loading) to μ_S at s_pk, then a sudden slip
+                  drops it to μ_K within λ = 0.002–0.01 mm.
 
 s_pk is drawn in 0.05–0.25 mm unless given. The torque is
 ``dir·μ(s)·F_N·R + offset + noise·F_nominal·R·N(0,1)``, so ``noise`` is the per-sample
@@ -42,7 +44,7 @@ if TYPE_CHECKING:
 
     import pandas as pd
 
-SHAPES: tuple[str, ...] = ("overshoot", "no_overshoot", "stick_slip", "drift")
+SHAPES: tuple[str, ...] = ("overshoot", "no_overshoot", "stick_slip", "drift", "cliff")
 
 
 @dataclass(frozen=True)
@@ -125,6 +127,8 @@ def _shape_params(run: SyntheticRun) -> dict[str, float]:
     return {
         "peak_distance_mm": float(s_pk),
         "decay_mm": 0.03 + 0.05 * float(lam_fast),
+        # "cliff": the static peak ends in a sudden slip, over 0.002-0.01 mm
+        "slip_decay_mm": 0.002 + 0.008 * float(lam_fast),
         "slow_decay_mm": 0.2 + 0.1 * float(lam_slow),
         "stick_slip_amplitude": float(amplitude),
         "stick_slip_period_mm": float(
@@ -149,8 +153,11 @@ def _shape_curve(run: SyntheticRun, s: np.ndarray) -> np.ndarray:
     if run.shape == "no_overshoot":
         return run.mu_k * (1.0 - np.exp(-3.0 * s / s_pk))
     x = np.clip(s / s_pk, 0.0, 1.0)
-    rise = run.mu_s * (1.0 - (1.0 - x) ** 2)
     after = np.maximum(s - s_pk, 0.0)
+    if run.shape == "cliff":  # stiff linear loading, then a sudden slip
+        fall = run.mu_k + (run.mu_s - run.mu_k) * np.exp(-after / p["slip_decay_mm"])
+        return np.where(s < s_pk, run.mu_s * x, fall)
+    rise = run.mu_s * (1.0 - (1.0 - x) ** 2)
     if run.shape == "stick_slip":
         a, period = p["stick_slip_amplitude"], p["stick_slip_period_mm"]
         tooth = run.mu_k - a / 2 + a * np.mod(after / period, 1.0)

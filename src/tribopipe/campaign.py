@@ -67,6 +67,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from .errors import CampaignError, ConfigError, TribopipeError
+from .files import write_text_atomic
 from .frictionmap import FLAG_FORCE_OFF, FLAG_TEMPERATURE_OFF
 from .pipeline import ReadOptions, RunLabels
 
@@ -770,16 +771,9 @@ def load_state(campaign: Campaign) -> dict[str, Any]:
     return data
 
 
-def _atomic_write_text(target: Path, text: str) -> None:
-    target.parent.mkdir(parents=True, exist_ok=True)
-    tmp = target.with_name(f".{target.name}.{os.getpid()}.tmp")
-    tmp.write_text(text, encoding="utf-8")
-    os.replace(tmp, target)
-
-
 def save_state(campaign: Campaign, state: Mapping[str, Any]) -> None:
     """Write the incremental state atomically (temporary file + rename)."""
-    _atomic_write_text(campaign.state_path, json.dumps(state, indent=1, sort_keys=True))
+    write_text_atomic(campaign.state_path, json.dumps(state, indent=1, sort_keys=True))
 
 
 # --------------------------------------------------------------------------- workers
@@ -1296,7 +1290,7 @@ def _write_runs_csv(campaign: Campaign, rows: Sequence[CampaignRow],
             "reason": failures.get(row.file),
         }
         writer.writerow([_cell(values.get(c)) for c in RUNS_COLUMNS])
-    _atomic_write_text(campaign.runs_csv, buf.getvalue())
+    write_text_atomic(campaign.runs_csv, buf.getvalue())
 
 
 def _write_failures_csv(campaign: Campaign, failures: Mapping[str, str]) -> None:
@@ -1305,7 +1299,7 @@ def _write_failures_csv(campaign: Campaign, failures: Mapping[str, str]) -> None
     writer.writerow(("file", "reason"))
     for file, reason in sorted(failures.items()):
         writer.writerow((file, reason))
-    _atomic_write_text(campaign.failures_csv, buf.getvalue())
+    write_text_atomic(campaign.failures_csv, buf.getvalue())
 
 
 def campaign_listing(campaign: Campaign) -> list[dict[str, Any]]:

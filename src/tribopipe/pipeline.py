@@ -196,9 +196,7 @@ def write_summary(out_dir: str | Path, outcome: RunOutcome) -> Path:
     """Write :func:`run_summary` as JSON beside the trace: ``<out_dir>/summaries/...json``."""
     import json
 
+    from .files import write_text_atomic
+
     target = Path(out_dir) / "summaries" / trace_path(out_dir, outcome).with_suffix(".json").name
-    target.parent.mkdir(parents=True, exist_ok=True)
-    tmp = target.with_suffix(".json.tmp")
-    tmp.write_text(json.dumps(run_summary(outcome), indent=2, default=str), encoding="utf-8")
-    tmp.replace(target)
-    return target
+    return write_text_atomic(target, json.dumps(run_summary(outcome), indent=2, default=str))

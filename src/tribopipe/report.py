@@ -457,12 +457,9 @@ def report_inputs(
 
 def write_report(output: str | Path, inputs: ReportInputs) -> Path:
     """Write :func:`build_report` to ``output`` (atomically) and return its path."""
-    out = Path(output)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    tmp = out.with_suffix(out.suffix + ".tmp")
-    tmp.write_text(build_report(inputs), encoding="utf-8")
-    tmp.replace(out)
-    return out
+    from .files import write_text_atomic
+
+    return write_text_atomic(output, build_report(inputs))
 
 
 def make_report(

@@ -332,9 +332,7 @@ def export_table(
         raise ExportError("friction map not found", path=map_path, hint="pass --map PATH")
     text = render_table(read_map(map_path), **options)
     if output is not None:
-        target = Path(output)
-        target.parent.mkdir(parents=True, exist_ok=True)
-        tmp = target.with_name(f".{target.name}.tmp")
-        tmp.write_text(text, encoding="utf-8", newline="")
-        tmp.replace(target)
+        from ..files import write_text_atomic
+
+        write_text_atomic(output, text, newline="")
     return text

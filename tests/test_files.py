@@ -1,0 +1,25 @@
+"""Output files are replaced whole: no temp file left behind, the folder made if needed."""
+
+from pathlib import Path
+
+from tribopipe.files import write_text_atomic
+
+
+def test_write_creates_the_folder_and_leaves_no_temp_file(tmp_path: Path) -> None:
+    target = tmp_path / "deep" / "er" / "table.md"
+    assert write_text_atomic(target, "| a |\n") == target
+    assert target.read_text(encoding="utf-8") == "| a |\n"
+    assert [p.name for p in target.parent.iterdir()] == ["table.md"]
+
+
+def test_write_replaces_the_old_content_entirely(tmp_path: Path) -> None:
+    target = tmp_path / "state.json"
+    write_text_atomic(target, "x" * 1000)
+    write_text_atomic(target, "µ_K ≈ 0.55")
+    assert target.read_text(encoding="utf-8") == "µ_K ≈ 0.55"
+
+
+def test_newline_empty_keeps_line_ends_as_given(tmp_path: Path) -> None:
+    target = tmp_path / "t.csv"
+    write_text_atomic(target, "a,b\r\n1,2\n", newline="")
+    assert target.read_bytes() == b"a,b\r\n1,2\n"

@@ -133,7 +133,9 @@ def nominal_pressure_kPa(force_N: float, instrument: InstrumentConfig) -> float:
     p = (F / n_pins) / (π r²); with F in N and r in mm, N/mm² = MPa, hence × 1000 → kPa.
     The founding cell (3 pins, r = 3 mm) gives 1 N → 11.79 kPa.
     """
-    return force_N / instrument.n_pins / instrument.pin_area_mm2 * 1000.0
+    from .reduce import contact_pressure_kPa
+
+    return float(contact_pressure_kPa(force_N, instrument.n_pins, instrument.pin_radius_mm))
 
 
 def measurement_id(file_hash: str, meta: MeasurementMeta) -> str:

@@ -126,6 +126,22 @@ def test_off_nominal_force_and_temperature_are_flagged():
     assert run_record(force_N=3.0, temperature_C=20.0)["flags"] == ""
 
 
+def test_off_nominal_flags_follow_the_tolerances_given():
+    # the run measured ~3 N at 20 °C; nominal 3.2 N is 6 % off: within 10 %, not within 5 %
+    result = replace(reduced_result(), normal_force_mean_N=3.0, temperature_C=20.0)
+    meta = MeasurementMeta(source_file="data/run.txt", file_format="synthetic", interval=2)
+    labels = RunLabels(pin="Ecoflex 00-50", disc="steel", normal_force_N=3.2,
+                       temperature_C=21.5, repeat=1)
+
+    def flags(tolerances):
+        return fm.make_record(result=result, labels=labels, meta=meta, file_hash=file_hash_of(0),
+                              settings=load_settings(), tolerances=tolerances)["flags"]
+
+    assert flags(None) == ""
+    assert flags(fm.Tolerances(force_rel=0.05)) == "normal_force_off_nominal"
+    assert flags(fm.Tolerances(temperature_C=1.0)) == "temperature_off_nominal"
+
+
 def test_nominal_pressure_follows_the_instrument_geometry():
     two_mm = settings_from_dict({"instrument": {"pin_radius_mm": 2.0}})
     rec = run_record(force_N=3.0, settings=two_mm)

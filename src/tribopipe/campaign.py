@@ -61,14 +61,14 @@ import json
 import math
 import os
 import re
-from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from .errors import CampaignError, ConfigError, TribopipeError
 from .files import write_text_atomic
-from .frictionmap import FLAG_FORCE_OFF, FLAG_TEMPERATURE_OFF
+from .frictionmap import Tolerances, qc_flags  # noqa: F401  (public here too)
 from .pipeline import ReadOptions, RunLabels
 
 if TYPE_CHECKING:
@@ -121,24 +121,6 @@ ProgressCallback = Callable[[int, int], None]
 
 
 # --------------------------------------------------------------------------- config
-
-
-@dataclass(frozen=True)
-class Tolerances:
-    """How far a run's measured conditions may stray from nominal before it is flagged.
-
-    The normal force limit is ``max(force_N, force_rel · F_nominal)`` [N]; the temperature
-    limit is ``temperature_C`` [K, as a difference in °C]. The defaults are those of
-    :func:`tribopipe.frictionmap.make_record` (10 % of the nominal force, 2 K).
-    """
-
-    force_N: float = 0.0
-    force_rel: float = 0.10
-    temperature_C: float = 2.0
-
-    def force_limit_N(self, nominal_N: float) -> float:
-        """Allowed |F_measured − F_nominal| [N] at a nominal total force [N]."""
-        return max(self.force_N, self.force_rel * abs(nominal_N))
 
 
 @dataclass(frozen=True)
@@ -793,38 +775,6 @@ class _Context:
     plots: bool
 
 
-def qc_flags(labels: RunLabels, normal_force_measured_N: float | None,
-             temperature_measured_C: float | None, tolerances: Tolerances) -> list[str]:
-    """The campaign QC flags of a run: ``normal_force_off_nominal`` when the measured mean
-    normal force [N] strays more than the tolerance from nominal, ``temperature_off_nominal``
-    likewise for the temperature [°C]. Unknown measured values raise no flag."""
-    flags: list[str] = []
-    if labels.normal_force_N is not None and normal_force_measured_N is not None and \
-            math.isfinite(normal_force_measured_N):
-        if abs(normal_force_measured_N - labels.normal_force_N) > \
-                tolerances.force_limit_N(labels.normal_force_N):
-            flags.append(FLAG_FORCE_OFF)
-    if labels.temperature_C is not None and temperature_measured_C is not None and \
-            math.isfinite(temperature_measured_C):
-        if abs(temperature_measured_C - labels.temperature_C) > tolerances.temperature_C:
-            flags.append(FLAG_TEMPERATURE_OFF)
-    return flags
-
-
-QC_FLAGS: tuple[str, ...] = (FLAG_FORCE_OFF, FLAG_TEMPERATURE_OFF)
-
-
-def with_qc_flags(existing: str | None, qc: Iterable[str]) -> str:
-    """A record's ``;``-joined flags with the off-nominal flags replaced by ``qc``.
-
-    :func:`tribopipe.frictionmap.make_record` flags with its own fixed tolerances; a
-    campaign states its own, so its verdict replaces that one. Sorted and unique, like
-    the map's flags.
-    """
-    kept = {f for f in str(existing or "").split(";") if f and f not in QC_FLAGS}
-    return ";".join(sorted(kept | set(qc)))
-
-
 def _float_or_none(value: Any) -> float | None:
     if value is None:
         return None
@@ -845,13 +795,10 @@ def _reduce_one(job: _Job, ctx: _Context) -> dict[str, Any]:
         outcome = _reduce_with_export_names(job, campaign, merged)
     else:
         labels = labels_from(job.file, merged, hints=job.hints)
-        outcome = reduce_file(job.path, campaign.settings, labels, campaign.read_options)
+        outcome = reduce_file(job.path, campaign.settings, labels, campaign.read_options,
+                              tolerances=campaign.tolerances)
     result = outcome.result
-    record = dict(outcome.record)
-    qc = qc_flags(outcome.labels, _float_or_none(result.normal_force_mean_N),
-                  _float_or_none(result.temperature_C), campaign.tolerances)
-    record["flags"] = with_qc_flags(record.get("flags"), qc)
-    outcome = replace(outcome, record=record)
+    record = outcome.record
     trace = write_trace(campaign.output_dir, outcome)
     plot_note = _plot(campaign, outcome, trace) if ctx.plots else None
     return {
@@ -893,7 +840,8 @@ def _reduce_with_export_names(job: _Job, campaign: Campaign, merged: Mapping[str
         sources.append((f"export Test name {meta.test!r}", found))
     labels = labels_from(job.file, merge_metadata(job.file, sources, campaign), hints=hints)
     record = make_record(result=outcome.result, labels=labels, meta=meta,
-                         file_hash=outcome.file_hash, settings=campaign.settings)
+                         file_hash=outcome.file_hash, settings=campaign.settings,
+                         tolerances=campaign.tolerances)
     return replace(outcome, labels=labels, record=record)
 
 

@@ -67,10 +67,6 @@ FLAG_FORCE_ESTIMATED = "nominal_force_estimated"
 #: Flags added by :func:`make_record` when a run strays from its nominal conditions.
 FLAG_FORCE_OFF = "normal_force_off_nominal"
 FLAG_TEMPERATURE_OFF = "temperature_off_nominal"
-#: A measured mean force more than this fraction away from nominal is flagged.
-FORCE_TOLERANCE = 0.10
-#: A measured mean temperature more than this many kelvin from nominal is flagged.
-TEMPERATURE_TOLERANCE_K = 2.0
 
 #: Seconds to wait for another process's lock on the map before giving up.
 LOCK_TIMEOUT_S = 60.0
@@ -125,6 +121,43 @@ _CONTENT_COLUMNS: tuple[str, ...] = tuple(c for c in RUN_COLUMNS if c not in PRO
 
 
 # --------------------------------------------------------------------------- records
+
+
+@dataclass(frozen=True)
+class Tolerances:
+    """How far a run's measured conditions may stray from nominal before it is flagged.
+
+    The normal force limit is ``max(force_N, force_rel · F_nominal)`` [N]; the temperature
+    limit is ``temperature_C`` [K, as a difference in °C]. Defaults: 10 % of the nominal
+    force, 2 K (a campaign config may state its own).
+    """
+
+    force_N: float = 0.0
+    force_rel: float = 0.10
+    temperature_C: float = 2.0
+
+    def force_limit_N(self, nominal_N: float) -> float:
+        """Allowed |F_measured − F_nominal| [N] at a nominal total force [N]."""
+        return max(self.force_N, self.force_rel * abs(nominal_N))
+
+
+def qc_flags(labels: RunLabels, normal_force_measured_N: float | None,
+             temperature_measured_C: float | None, tolerances: Tolerances) -> list[str]:
+    """The off-nominal QC flags of a run: ``normal_force_off_nominal`` when the measured
+    mean normal force [N] strays more than the tolerance from nominal,
+    ``temperature_off_nominal`` likewise for the temperature [°C]. Unknown nominal or
+    measured values (``None`` or NaN) raise no flag."""
+    flags: list[str] = []
+    if labels.normal_force_N is not None and normal_force_measured_N is not None and \
+            math.isfinite(normal_force_measured_N):
+        if abs(normal_force_measured_N - labels.normal_force_N) > \
+                tolerances.force_limit_N(labels.normal_force_N):
+            flags.append(FLAG_FORCE_OFF)
+    if labels.temperature_C is not None and temperature_measured_C is not None and \
+            math.isfinite(temperature_measured_C):
+        if abs(temperature_measured_C - labels.temperature_C) > tolerances.temperature_C:
+            flags.append(FLAG_TEMPERATURE_OFF)
+    return flags
 
 
 def nominal_pressure_kPa(force_N: float, instrument: InstrumentConfig) -> float:
@@ -185,14 +218,15 @@ def make_record(
     meta: MeasurementMeta,
     file_hash: str,
     settings: Settings,
+    tolerances: Tolerances | None = None,
 ) -> dict[str, Any]:
     """One friction-map row (a dict keyed by :data:`RUN_COLUMNS`) for a reduced run.
 
     The nominal force comes from ``labels``; when absent, the measured mean rounded to
     0.1 N is used and the run is flagged ``nominal_force_estimated``. The nominal pressure
     [kPa] follows from the nominal force and ``settings.instrument``. Runs whose measured
-    force or temperature stray from nominal (more than :data:`FORCE_TOLERANCE` relative,
-    :data:`TEMPERATURE_TOLERANCE_K` absolute) are flagged.
+    force or temperature stray from nominal by more than ``tolerances`` (default
+    :class:`Tolerances`: 10 %, 2 K) are flagged (:func:`qc_flags`).
 
     Raises :class:`MapError` when pin or disc is unknown or μ_K is not a finite number.
     """
@@ -212,12 +246,10 @@ def make_record(
         )
     flags = list(result.flags)
     measured_force = _finite(result.normal_force_mean_N)
+    measured_temperature = _finite(result.temperature_C)
+    flags += qc_flags(labels, measured_force, measured_temperature, tolerances or Tolerances())
     if labels.normal_force_N is not None:
         force = float(labels.normal_force_N)
-        if math.isfinite(measured_force) and abs(measured_force - force) > FORCE_TOLERANCE * abs(
-            force
-        ):
-            flags.append(FLAG_FORCE_OFF)
     elif math.isfinite(measured_force):
         force = round(measured_force, 1)
         flags.append(FLAG_FORCE_ESTIMATED)
@@ -228,13 +260,6 @@ def make_record(
             hint="pass --force",
         )
     temperature = _finite(labels.temperature_C)
-    measured_temperature = _finite(result.temperature_C)
-    if (
-        math.isfinite(temperature)
-        and math.isfinite(measured_temperature)
-        and abs(measured_temperature - temperature) > TEMPERATURE_TOLERANCE_K
-    ):
-        flags.append(FLAG_TEMPERATURE_OFF)
     k_start_mm, k_end_mm = result.mu_k_window_mm
     k_start_s, k_end_s = result.mu_k_window_s
     return {

@@ -13,6 +13,7 @@ from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
     from .config import Settings
+    from .frictionmap import Tolerances
     from .measurement import Measurement
     from .reduce import ReductionResult
 
@@ -76,10 +77,13 @@ def reduce_file(
     settings: Settings,
     labels: RunLabels | None = None,
     read_options: ReadOptions | None = None,
+    *,
+    tolerances: Tolerances | None = None,
 ) -> RunOutcome:
     """Read an export, pick its friction interval, reduce it and build its map record.
 
-    The map record is built only when ``labels`` name pin and disc. Raises
+    The map record is built only when ``labels`` name pin and disc; ``tolerances``
+    (default: the map's 10 %, 2 K) decide its off-nominal QC flags. Raises
     :class:`tribopipe.errors.TribopipeError` subclasses for every bad input.
     """
     from .frictionmap import make_record, measurement_id
@@ -102,6 +106,7 @@ def reduce_file(
             meta=measurement.meta,
             file_hash=file_hash,
             settings=settings,
+            tolerances=tolerances,
         )
     return RunOutcome(
         path=str(path),

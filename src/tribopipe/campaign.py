@@ -69,7 +69,7 @@ from typing import TYPE_CHECKING, Any
 from .errors import CampaignError, ConfigError, TribopipeError
 from .files import write_text_atomic
 from .frictionmap import Tolerances, qc_flags  # noqa: F401  (public here too)
-from .pipeline import ReadOptions, RunLabels
+from .pipeline import ReadOptions, RunLabels, finite_or_none
 
 if TYPE_CHECKING:
     from .config import Settings
@@ -775,16 +775,6 @@ class _Context:
     plots: bool
 
 
-def _float_or_none(value: Any) -> float | None:
-    if value is None:
-        return None
-    try:
-        value = float(value)
-    except (TypeError, ValueError):
-        return None
-    return value if math.isfinite(value) else None
-
-
 def _reduce_one(job: _Job, ctx: _Context) -> dict[str, Any]:
     """Reduce one file in a worker; returns a small picklable result (never the trace)."""
     from .pipeline import reduce_file, write_trace
@@ -809,12 +799,12 @@ def _reduce_one(job: _Job, ctx: _Context) -> dict[str, Any]:
         "measurement_id": record.get("measurement_id"),
         "sha256": outcome.file_hash,
         "trace": trace.relative_to(campaign.output_dir).as_posix(),
-        "mu_s": _float_or_none(result.mu_s),
-        "mu_k": _float_or_none(result.mu_k),
-        "pressure_kPa": _float_or_none(record.get("pressure_kPa")),
-        "pressure_measured_kPa": _float_or_none(result.pressure_kPa),
-        "normal_force_measured_N": _float_or_none(result.normal_force_mean_N),
-        "temperature_measured_C": _float_or_none(result.temperature_C),
+        "mu_s": finite_or_none(result.mu_s),
+        "mu_k": finite_or_none(result.mu_k),
+        "pressure_kPa": finite_or_none(record.get("pressure_kPa")),
+        "pressure_measured_kPa": finite_or_none(result.pressure_kPa),
+        "normal_force_measured_N": finite_or_none(result.normal_force_mean_N),
+        "temperature_measured_C": finite_or_none(result.temperature_C),
         "flags": record["flags"],
         "plot_note": plot_note,
     }

@@ -145,12 +145,17 @@ def write_trace(out_dir: str | Path, outcome: RunOutcome) -> Path:
     return target
 
 
-def _finite_or_none(value: float | None) -> float | None:
+def finite_or_none(value: Any) -> float | None:
+    """``float(value)`` for JSON and CSV outputs; ``None`` for a missing, non-numeric,
+    NaN or infinite value."""
     import math
 
     if value is None:
         return None
-    value = float(value)
+    try:
+        value = float(value)
+    except (TypeError, ValueError):
+        return None
     return value if math.isfinite(value) else None
 
 
@@ -172,7 +177,7 @@ def run_summary(outcome: RunOutcome) -> dict[str, Any]:
         "mu_k": float(r.mu_k),
         "pressure_kPa": float(r.pressure_kPa),
         "normal_force_N": float(r.normal_force_mean_N),
-        "temperature_C": _finite_or_none(r.temperature_C),
+        "temperature_C": finite_or_none(r.temperature_C),
         "flags": list(r.flags),
         "mu_s_distance_mm": float(r.mu_s_distance_mm),
         "mu_s_time_s": float(r.mu_s_time_s),

@@ -417,9 +417,15 @@ def friction_table(
 def load_groups(map_path: str | Path) -> pd.DataFrame:
     """Read a friction map (Parquet) and return its group statistics (excluded runs out)."""
     from .frictionmap import read_map
+
+    return groups_of(read_map(map_path), map_path)
+
+
+def groups_of(runs: pd.DataFrame, map_path: str | Path) -> pd.DataFrame:
+    """Group statistics of friction-map ``runs`` (excluded runs out); an
+    :class:`ExportError` naming ``map_path`` when no run is left."""
     from .stats import group_statistics
 
-    runs = read_map(map_path)
     if "excluded" in runs.columns:
         runs = runs[~runs["excluded"].fillna(False).astype(bool)]
     if runs.empty:

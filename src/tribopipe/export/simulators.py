@@ -540,9 +540,10 @@ def export_from_map(map_path: str | Path, fmt: str, **options: Any) -> str:
     """:func:`export_simulator_input` on the friction map (Parquet) at ``map_path``; the
     slip rate of ABAQUS tables is the runs' median sliding speed."""
     from ..frictionmap import read_map
-    from ..query import load_groups
+    from ..query import groups_of
 
-    groups = load_groups(map_path)
-    slip = measured_slip_rate_mm_s(read_map(map_path))
+    runs = read_map(map_path)
+    groups = groups_of(runs, map_path)
+    slip = measured_slip_rate_mm_s(runs)
     return export_simulator_input(groups, fmt, source=str(map_path), slip_rate_mm_s=slip,
                                   **options)

@@ -95,10 +95,10 @@ def reduce_cmd(
     for path in files:
         try:
             outcome = reduce_file(path, settings, labels, options)
-            write_trace(out_dir, outcome)
+            trace = write_trace(out_dir, outcome)
             write_summary(out_dir, outcome)
             if plot:
-                _plot(out_dir, outcome)
+                _plot(out_dir, outcome, trace)
         except TribopipeError as exc:
             message = str(exc)
             if str(path) not in message:  # every line names its file, once
@@ -119,15 +119,12 @@ def reduce_cmd(
         sys.exit(1)
 
 
-def _plot(out_dir: str, outcome: object) -> None:
+def _plot(out_dir: str, outcome: object, trace: object) -> None:
     from pathlib import Path
 
     from ..export.plots import plot_trace
-    from ..pipeline import trace_path
 
-    target = Path(out_dir) / "plots" / "traces" / trace_path(out_dir, outcome).with_suffix(
-        ".png"
-    ).name
+    target = Path(out_dir) / "plots" / "traces" / Path(trace).with_suffix(".png").name
     plot_trace(outcome.result, target, title=Path(outcome.path).name)
     click.echo(f"plot: {target}", err=True)
 

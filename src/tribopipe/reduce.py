@@ -89,6 +89,7 @@ import numpy as np
 
 from .errors import MissingQuantityError, ReductionError
 from .measurement import ANGLE, NORMAL_FORCE, SPEED, TEMPERATURE, TIME, TORQUE, Measurement
+from .readers import require_columns
 
 if TYPE_CHECKING:
     from collections.abc import Sequence
@@ -621,23 +622,6 @@ def _median_abs_torque(m: Measurement) -> float:
 # --------------------------------------------------------------------------- the reduction
 
 
-def _require(m: Measurement) -> None:
-    try:
-        from .readers import require_columns
-    except ImportError:  # the readers are optional for reducing in-memory data
-        require_columns = None
-    if require_columns is not None:
-        require_columns(m, TIME, TORQUE, NORMAL_FORCE)
-        return
-    missing = [c for c in (TIME, TORQUE, NORMAL_FORCE) if not m.has(c)]
-    if missing:
-        raise MissingQuantityError(
-            f"{m.meta.label}: no values for {', '.join(missing)}; columns found: "
-            + (", ".join(map(str, m.data.columns)) or "none"),
-            hint="check the column names or pass an alias table",
-        )
-
-
 @dataclass(frozen=True)
 class _Samples:
     """The complete samples of one interval, time-ordered, as new float arrays."""
@@ -902,7 +886,7 @@ def reduce_measurement(
     """
     import pandas as pd
 
-    _require(m)
+    require_columns(m, TIME, TORQUE, NORMAL_FORCE)
     label = m.meta.label
     x = _samples(m, params)
     threshold = instrument.contact_threshold_N

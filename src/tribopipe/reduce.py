@@ -747,6 +747,7 @@ class _Detection:
     drift_se: float
     sigma: float
     stick_slip_std: float
+    n_average: int
     mu_med: np.ndarray
 
 
@@ -815,7 +816,8 @@ def _detect(
         mu_s=float(mu_s), k_s=k_s, mu_peak=mu_peak, s_peak=s_peak, prominence=prominence,
         distinct=bool(distinct), mu_k=mu_k, window=window, settled=settled, tol=tol,
         plateau_std=float(np.std(mu_w, ddof=1)) if mu_w.size > 1 else 0.0,
-        drift=drift, drift_se=drift_se, sigma=sigma, stick_slip_std=ss_std, mu_med=mu_med,
+        drift=drift, drift_se=drift_se, sigma=sigma, stick_slip_std=ss_std,
+        n_average=n_average, mu_med=mu_med,
     )
 
 
@@ -834,11 +836,11 @@ def stick_slip_std(s_mm: Any, mu: Any, n_average: int) -> float:
 
 
 def _flags(
-    det: _Detection, s_v: np.ndarray, f_slide: np.ndarray, total_mm: float, dt_s: float,
+    det: _Detection, s_v: np.ndarray, total_mm: float, force_cv: float,
     params: ReductionParams,
-) -> tuple[list[str], float]:
-    """The QC flags of a detection (definitions in the module docstring) and the normal
-    force's coefficient of variation over the sliding contact samples ``f_slide`` [N]."""
+) -> list[str]:
+    """The QC flags of a detection (definitions in the module docstring); ``force_cv`` is
+    the normal force's coefficient of variation over the sliding contact samples."""
     flags: list[str] = []
     n_window = int(det.window.sum())
     w_s = s_v[det.window]
@@ -849,8 +851,7 @@ def _flags(
     too_short = float(w_s[-1] - w_s[0]) < params.plateau_min_mm * 0.999
     if not det.settled or drifting or too_short:
         flags.append("no_steady_state")
-    n_average = max(1, int(round(params.stick_slip_average_s / max(dt_s, 1e-9))))
-    white = det.sigma / math.sqrt(n_average)
+    white = det.sigma / math.sqrt(det.n_average)
     # only a settled plateau can tell an oscillation from a transient
     if (
         det.settled
@@ -858,13 +859,11 @@ def _flags(
         and det.stick_slip_std > params.stick_slip_ratio * white
     ):
         flags.append("stick_slip")
-    f_mean = float(np.mean(f_slide))
-    cv = float(np.std(f_slide) / f_mean) if f_mean > 0 else math.inf
-    if cv > params.normal_force_cv_max:
+    if force_cv > params.normal_force_cv_max:
         flags.append("normal_force_unstable")
     if short or n_window < params.min_plateau_samples:
         flags.append("short_trace")
-    return flags, cv
+    return flags
 
 
 def reduce_measurement(
@@ -942,10 +941,10 @@ def reduce_measurement(
     idx = np.flatnonzero(sliding)
     s_v, t_v, mu_v = s[idx], x.t[idx], mu[idx]
     det = _detect(s_v, t_v, mu_v, total_mm, params)
-    dt_s = float(np.median(np.diff(t_v)))
     f_slide = x.force[sliding]
-    flags, cv = _flags(det, s_v, f_slide, total_mm, dt_s, params)
     f_mean = float(np.mean(f_slide))
+    cv = float(np.std(f_slide) / f_mean) if f_mean > 0 else math.inf
+    flags = _flags(det, s_v, total_mm, cv, params)
 
     temperature_mean: float | None = None
     if x.temperature is not None:

@@ -60,7 +60,8 @@ def fit_one(pressure_kPa: np.ndarray, mu: np.ndarray) -> dict[str, float]:
     caller checks that. With a perfect fit the intervals collapse to the estimate.
     """
     import numpy as np
-    from scipy import stats
+
+    from .stats import t975
 
     x = np.log(np.asarray(pressure_kPa, dtype=float))
     y = np.log(np.asarray(mu, dtype=float))
@@ -76,7 +77,7 @@ def fit_one(pressure_kPa: np.ndarray, mu: np.ndarray) -> dict[str, float]:
     s2 = ss_res / dof
     se_slope = math.sqrt(s2 / sxx)
     se_intercept = math.sqrt(s2 * (1.0 / n + x_mean**2 / sxx))
-    t = float(stats.t.ppf(0.975, dof))
+    t = t975(dof)
     # ss_tot == 0: every μ equal, the flat line explains everything there is
     r2 = 1.0 - ss_res / ss_tot if ss_tot > 0 else 1.0
     return {

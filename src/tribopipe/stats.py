@@ -60,7 +60,7 @@ def describe_values(values: Sequence[float]) -> dict[str, Any]:
         return out
     std = float(np.std(x, ddof=1))
     sem = std / math.sqrt(n)
-    half = _t975(n - 1) * sem
+    half = t975(n - 1) * sem
     out.update(
         std=std,
         sem=sem,
@@ -72,7 +72,7 @@ def describe_values(values: Sequence[float]) -> dict[str, Any]:
 
 
 @functools.lru_cache(maxsize=256)
-def _t975(dof: int) -> float:
+def t975(dof: int) -> float:
     """Student-t 97.5 % quantile for ``dof`` degrees of freedom (two-sided 95 % CI)."""
     from scipy import stats as sps
 

@@ -143,12 +143,12 @@ def mu_curve(run: SyntheticRun, s_mm: np.ndarray) -> np.ndarray:
     """The true μ at sliding distances ``s_mm`` [mm] (shape (n,)) for ``run``'s shape,
     plus the linear drift ``drift_per_mm`` after the static peak."""
     s = np.asarray(s_mm, dtype=float)
-    drift = run.drift_per_mm * np.maximum(s - _shape_params(run)["peak_distance_mm"], 0.0)
-    return _shape_curve(run, s) + drift
-
-
-def _shape_curve(run: SyntheticRun, s: np.ndarray) -> np.ndarray:
     p = _shape_params(run)
+    drift = run.drift_per_mm * np.maximum(s - p["peak_distance_mm"], 0.0)
+    return _shape_curve(run, s, p) + drift
+
+
+def _shape_curve(run: SyntheticRun, s: np.ndarray, p: dict[str, float]) -> np.ndarray:
     s_pk = p["peak_distance_mm"]
     if run.shape == "no_overshoot":
         return run.mu_k * (1.0 - np.exp(-3.0 * s / s_pk))

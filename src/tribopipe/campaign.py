@@ -629,10 +629,12 @@ class CampaignRow:
 def discover_files(campaign: Campaign) -> list[Path]:
     """The campaign's raw exports: ``raw_dir`` globbed, sorted, without the manifest,
     hidden files and folders."""
-    skip = {campaign.manifest} if campaign.manifest else set()
+    manifest = campaign.manifest
     files = [
         p for p in campaign.raw_dir.glob(campaign.glob)
-        if p.is_file() and not p.name.startswith(".") and p.resolve() not in skip
+        if p.is_file() and not p.name.startswith(".")
+        # resolving costs a few syscalls per file: only when there is a manifest to skip
+        and (manifest is None or p.resolve() != manifest)
     ]
     return sorted(files, key=lambda p: p.relative_to(campaign.raw_dir).as_posix())
 

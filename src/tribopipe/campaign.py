@@ -1026,7 +1026,6 @@ def _run_locked(campaign: Campaign, *, jobs: int | None, plots: bool | None,
         read_map(campaign.map_path)  # refuse a foreign or corrupt map before any work
     ctx = _Context(campaign=campaign, plots=plots)
     results: list[dict[str, Any]] = []
-    campaign.output_dir.mkdir(parents=True, exist_ok=True)
     if todo:
         workers = min(jobs, len(todo))
         # a few chunks per worker: small enough to balance, large enough to amortise pickling

@@ -46,7 +46,6 @@ class DecodedText:
 
     text: str
     encoding: str
-    encoding_detected: bool
 
 
 def read_bytes(path: str) -> bytes:
@@ -102,7 +101,7 @@ def decode(raw: bytes, path: str, encoding: str | None = None) -> DecodedText:
             ) from None
         text = text.removeprefix("\ufeff")
         _refuse_binary(text, path, forced=encoding)
-        return DecodedText(text, encoding, False)
+        return DecodedText(text, encoding)
     guess = _guess_encoding(raw)
     if guess is None:
         raise ReadError(
@@ -110,7 +109,7 @@ def decode(raw: bytes, path: str, encoding: str | None = None) -> DecodedText:
         )
     text = _trim_utf16(raw, guess).decode(guess, errors="strict").removeprefix("\ufeff")
     _refuse_binary(text, path, forced=None)
-    return DecodedText(text, guess, True)
+    return DecodedText(text, guess)
 
 
 def _guess_encoding(raw: bytes) -> str | None:
@@ -275,14 +274,3 @@ def to_numbers(cells: Sequence[str], decimal: str) -> tuple[np.ndarray, int | No
             return np.full(len(cells), np.nan), i
     return np.full(len(cells), np.nan), 0  # pragma: no cover - numpy and float disagree
 
-
-def looks_numeric(cell: str) -> bool:
-    """True when a cell reads as a number with either decimal mark."""
-    if is_missing(cell):
-        return False
-    try:
-        float(_normalise_number(cell, ".") if "," not in cell or _COMMA_THOUSANDS.match(cell)
-              else _normalise_number(cell, ","))
-    except ValueError:
-        return False
-    return True

@@ -768,7 +768,9 @@ def fold_records(
     new_frame = records_frame(records)
     base = runs.loc[:, list(RUN_COLUMNS)].reset_index(drop=True)
     position = {m: i for i, m in enumerate(base["measurement_id"])}
-    touched: dict[int, dict[str, Any]] = {}  # map rows looked at or replaced, by position
+    # map rows looked at (then replaced), by position: converted in one pass, not per record
+    hits = sorted({position[m] for m in new_frame["measurement_id"] if m in position})
+    touched = dict(zip(hits, frame_records(base.iloc[hits]), strict=True))
     fresh: dict[str, dict[str, Any]] = {}  # runs new to the map, in order
     added: list[str] = []
     unchanged: list[str] = []
@@ -780,10 +782,7 @@ def fold_records(
         if mid in fresh:
             old = fresh[mid]
         elif mid in position:
-            pos = position[mid]
-            if pos not in touched:
-                touched[pos] = frame_records(base.iloc[[pos]])[0]
-            old = touched[pos]
+            old = touched[position[mid]]
         else:
             fresh[mid] = rec
             added.append(mid)

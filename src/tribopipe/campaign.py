@@ -1064,13 +1064,13 @@ def _run_locked(campaign: Campaign, *, jobs: int | None, plots: bool | None,
     stale_ids: set[str] = set()
     reduced: list[str] = []
     flagged: list[tuple[str, str]] = []
+    config_hash = campaign.settings.config_hash  # hashes the settings: once, not per run
     for res in sorted(results, key=lambda r: r["file"]):
         row = by_file[res["file"]]
         old = entries.get(row.file) or {}
         old_id = old.get("measurement_id") if old.get("status") == REDUCED else None
         base = {
-            "size": row.size, "mtime_ns": row.mtime_ns,
-            "config_hash": campaign.settings.config_hash,
+            "size": row.size, "mtime_ns": row.mtime_ns, "config_hash": config_hash,
             "recipe": recipe_hash(campaign, row.merged),
         }
         if res["ok"]:

@@ -183,14 +183,11 @@ def interpolation_weights(
     t = np.asarray(temperatures_C, dtype=float)
     weights = np.zeros(len(p))
     known_t = np.isfinite(t)
-    if known_t.any():
-        candidates = known_t
-    else:
-        candidates = np.ones(len(p), dtype=bool)
-    temps = np.unique(t[candidates]) if known_t.any() else np.array([math.nan])
-
+    # (points at one temperature, weight of that temperature); no temperature known: one set
+    t_sets = [(np.ones(len(p), dtype=bool), 1.0)]
     clamped_t = False
     if known_t.any():
+        temps = np.unique(t[known_t])
         if temperature_C is None:
             if len(temps) > 1:
                 listed = ", ".join(f"{v:g}" for v in temps)
@@ -201,15 +198,12 @@ def interpolation_weights(
             t_brackets = [(0, 1.0)]
         else:
             t_brackets, clamped_t = _bracket(temps, float(temperature_C))
-    else:
-        t_brackets = [(0, 1.0)]
+        t_sets = [(t == temps[ti], wt) for ti, wt in t_brackets]
 
     clamped_p = False
-    for ti, wt in t_brackets:
-        at_t = candidates & (t == temps[ti]) if known_t.any() else candidates
+    for at_t, wt in t_sets:
         idx = np.flatnonzero(at_t)
-        order = np.argsort(p[idx])
-        idx = idx[order]
+        idx = idx[np.argsort(p[idx])]
         p_brackets, c = _bracket(p[idx], float(pressure_kPa))
         clamped_p = clamped_p or c
         for pi, wp in p_brackets:

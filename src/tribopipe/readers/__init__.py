@@ -128,10 +128,11 @@ def _parse(
                 "a Rheoplus export ('Meas. Pts.') or a CSV naming time, torque and "
                 "normal-force columns with units",
             )
-    if decimal is None:
-        default = "." if fmt == rheoplus.FORMAT or delim == "," else ","
+    if decimal is None and delim == ",":
+        decimal = "."
+    elif decimal is None:
         sample = [c for _, cells in rows[:300] for c in cells[1:] if c][:2000]
-        decimal = "." if delim == "," else detect_decimal(sample, default=default)
+        decimal = detect_decimal(sample, default="." if fmt == rheoplus.FORMAT else ",")
     info = FileInfo(path, fmt, decoded.encoding, delim, decimal)
     if fmt == rheocompass.FORMAT:
         intervals = rheocompass.parse_intervals(rows, path)

@@ -22,7 +22,7 @@ from __future__ import annotations
 import re
 
 from ..errors import ReadError
-from .aliases import name_key
+from .aliases import builtin_aliases, name_key
 from .common import RawInterval
 
 FORMAT = "rheocompass"
@@ -74,9 +74,6 @@ def _is_blank(cells: list[str]) -> bool:
 def parse_intervals(rows: list[tuple[int, list[str]]], path: str) -> list[RawInterval]:
     """Find every interval of a RheoCompass export (rows of stripped cells with their line
     numbers) and return its header and rows, in file order."""
-    from .aliases import builtin_aliases
-
-    point_key = {k for k, v in builtin_aliases().names.items() if v == "point_no"}
     project = test = result = None
     interval: int | None = None
     declared: int | None = None
@@ -112,7 +109,7 @@ def parse_intervals(rows: list[tuple[int, list[str]]], path: str) -> list[RawInt
             interval = _int(cells[1], "the interval number", path, line)
             declared = _int(cells[2], "the number of points", path, line)
         elif key in INTERVAL_DATA:
-            raw, i = _read_table(rows, i, path, point_key)
+            raw, i = _read_table(rows, i, path)
             raw.project, raw.test, raw.result = project, test, result
             raw.interval = interval if interval is not None else len(out) + 1
             raw.n_declared = declared
@@ -130,7 +127,7 @@ def parse_intervals(rows: list[tuple[int, list[str]]], path: str) -> list[RawInt
 
 
 def _read_table(
-    rows: list[tuple[int, list[str]]], start: int, path: str, point_key: set[str]
+    rows: list[tuple[int, list[str]]], start: int, path: str
 ) -> tuple[RawInterval, int]:
     """Read one ``Interval data:`` header (names, meaning row, unit row) and its rows."""
     header_line, header = rows[start]
@@ -171,7 +168,10 @@ def _read_table(
             break
         data.append((line, cells[1:]))
         i += 1
-    point_col = next((j for j, nm in enumerate(names) if name_key(nm) in point_key), None)
+    known = builtin_aliases().names
+    point_col = next(
+        (j for j, nm in enumerate(names) if known.get(name_key(nm)) == "point_no"), None
+    )
     raw = RawInterval(
         names=names,
         units=list(units[: len(names)]),

@@ -27,12 +27,14 @@ from typing import TYPE_CHECKING, Any
 
 from .. import __version__
 from ..errors import ExportError
+from ..frictionmap import PUBLISHED_SLIDING_SPEED_MM_S
 from ..query import friction_table, pairs, query, select_pair
 
 if TYPE_CHECKING:
     import pandas as pd
 
-FOUNDING_SLIP_RATE_MM_S = 0.007
+#: The founding paper's sliding speed [mm/s]: the slip rate when no run records one.
+FOUNDING_SLIP_RATE_MM_S = PUBLISHED_SLIDING_SPEED_MM_S
 
 
 @dataclass(frozen=True)

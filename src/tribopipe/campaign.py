@@ -68,12 +68,25 @@ from typing import TYPE_CHECKING, Any
 
 from .errors import CampaignError, ConfigError, TribopipeError
 from .files import write_text_atomic
-from .frictionmap import Tolerances, qc_flags  # noqa: F401  (public here too)
-from .pipeline import ReadOptions, RunLabels, finite_or_none
+from .frictionmap import (
+    Tolerances,
+    make_record,
+    qc_flags,  # noqa: F401  (public here too)
+    read_map,
+    update_map,
+)
+from .pipeline import (
+    ReadOptions,
+    RunLabels,
+    RunOutcome,
+    file_sha256,
+    finite_or_none,
+    reduce_file,
+    write_trace,
+)
 
 if TYPE_CHECKING:
     from .config import Settings
-    from .pipeline import RunOutcome
 
 #: the incremental state, one file per campaign name (campaigns may share an output folder)
 STATE_FILE = ".tribopipe-state.{name}.json"
@@ -679,8 +692,6 @@ def campaign_table(campaign: Campaign, *, state: Mapping[str, Any] | None = None
     its metadata is already known to be wrong. ``state`` defaults to the campaign's state
     file.
     """
-    from .pipeline import file_sha256
-
     entries = (state if state is not None else load_state(campaign)).get("entries", {})
     manifest = read_manifest(campaign.manifest) if campaign.manifest else {}
     rows: list[CampaignRow] = []
@@ -779,8 +790,6 @@ class _Context:
 
 def _reduce_one(job: _Job, ctx: _Context) -> dict[str, Any]:
     """Reduce one file in a worker; returns a small picklable result (never the trace)."""
-    from .pipeline import reduce_file, write_trace
-
     campaign = ctx.campaign
     merged = merge_metadata(job.file, job.sources, campaign)
     if campaign.use_export_names:
@@ -816,9 +825,6 @@ def _reduce_with_export_names(job: _Job, campaign: Campaign, merged: Mapping[str
                               ) -> RunOutcome:
     """:func:`tribopipe.pipeline.reduce_file` with the export's Test name as a third
     metadata source: the labels are only complete once the file has been read."""
-    from .frictionmap import make_record
-    from .pipeline import reduce_file
-
     partial = RunLabels(**{k: merged.get(k) for k in LABEL_FIELDS})
     outcome = reduce_file(job.path, campaign.settings, partial, campaign.read_options)
     meta = outcome.measurement.meta
@@ -1021,8 +1027,6 @@ def _run_locked(campaign: Campaign, *, jobs: int | None, plots: bool | None,
         progress(done, total)
 
     if todo and not map_checked and campaign.map_path.exists():
-        from .frictionmap import read_map
-
         read_map(campaign.map_path)  # refuse a foreign or corrupt map before any work
     ctx = _Context(campaign=campaign, plots=plots)
     results: list[dict[str, Any]] = []
@@ -1093,8 +1097,6 @@ def _run_locked(campaign: Campaign, *, jobs: int | None, plots: bool | None,
             failures[row.file] = res["reason"]
             if old_id:
                 stale_ids.add(old_id)
-            from .pipeline import file_sha256
-
             entries[row.file] = {
                 **base, "sha256": row.sha256 or file_sha256(row.path), "status": FAILED,
                 "reason": res["reason"],
@@ -1170,8 +1172,6 @@ def _ids_missing_from_map(campaign: Campaign, state: Mapping[str, Any]) -> tuple
     seen = state.get("map") or {}
     if seen.get("size") == st.st_size and seen.get("mtime_ns") == st.st_mtime_ns:
         return set(), False
-    from .frictionmap import read_map
-
     present = set(read_map(campaign.map_path)["measurement_id"].astype(str))
     return ids - present, True
 
@@ -1182,8 +1182,6 @@ def _update_map(campaign: Campaign, records: list[dict[str, Any]],
     (their measurement id changed with the content), under the map's lock, in one atomic
     write. Returns the map's summary line, the ids added or replaced, and the ids removed.
     """
-    from .frictionmap import update_map
-
     report = update_map(campaign.map_path, records, replace=True, drop_ids=sorted(stale_ids))
     return (report.summary(), set(report.added_ids) | set(report.replaced_ids),
             set(report.dropped_ids))

@@ -254,6 +254,15 @@ def test_user_alias_file_extends_the_builtin_table(tmp_path: Path) -> None:
     assert load_aliases(user).quantity("Couple") == "torque"  # built-ins still there
 
 
+def test_an_edited_alias_file_is_read_again(tmp_path: Path) -> None:
+    user = tmp_path / "aliases.toml"
+    user.write_text('[canonical.torque]\nnames = ["Par"]\n', encoding="utf-8")
+    assert load_aliases(user) is load_aliases(user)  # one parse for a batch of files
+    user.write_text('[canonical.torque]\nnames = ["Drehmo"]\n', encoding="utf-8")
+    assert load_aliases(user).quantity("Drehmo") == "torque"
+    assert load_aliases(user).quantity("Par") is None
+
+
 def test_project_example_alias_file_is_valid() -> None:
     table = load_aliases(REPO / "configs" / "aliases.toml")
     assert table.quantity("Par") == "torque"

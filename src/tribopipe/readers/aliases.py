@@ -126,19 +126,24 @@ def load_aliases(path: str | Path | None = None) -> AliasTable:
     ``path=None`` uses ``configs/aliases.toml`` in the working directory when it exists.
     Raises :class:`ConfigError` for a missing (explicit) or malformed file.
     """
-    table = builtin_aliases()
     if path is None:
         if not DEFAULT_USER_FILE.is_file():
-            return table
+            return builtin_aliases()
         path = DEFAULT_USER_FILE
     p = Path(path)
     try:
-        data = tomllib.loads(p.read_text(encoding="utf-8"))
+        return _extend_builtin(p.read_text(encoding="utf-8"), str(p))
     except FileNotFoundError:
         raise ConfigError("alias file not found", path=p) from None
     except (tomllib.TOMLDecodeError, UnicodeDecodeError, OSError) as exc:
         raise ConfigError(f"cannot read alias file: {exc}", path=p) from None
-    return table.extended(data, str(p))
+
+
+@functools.lru_cache(maxsize=8)
+def _extend_builtin(text: str, source: str) -> AliasTable:
+    """The built-in table extended by a user file's text; parsed once per distinct text,
+    since every file of a batch reads the same ``configs/aliases.toml``."""
+    return builtin_aliases().extended(tomllib.loads(text), source)
 
 
 def resolve_aliases(aliases: AliasTable | str | Path | None) -> AliasTable:

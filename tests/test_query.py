@@ -171,6 +171,33 @@ def test_friction_table_is_full_and_rectangular(groups):
     assert hole["mu_k"].iloc[0] == pytest.approx(_mean(groups, "Dragonskin 30", "steel", 35.37, 10))
 
 
+def test_groups_without_a_temperature_are_left_out_when_others_have_one():
+    def group(p, t, mu_k, mu_s):
+        return {"pin": "A", "disc": "B", "pressure_kPa": p, "temperature_C": t,
+                "mu_k_mean": mu_k, "mu_k_ci95_low": mu_k - 0.01, "mu_k_ci95_high": mu_k + 0.01,
+                "mu_k_n": 2, "mu_s_mean": mu_s, "mu_s_ci95_low": math.nan,
+                "mu_s_ci95_high": math.nan, "mu_s_n": 1}
+
+    groups = pd.DataFrame([
+        group(10.0, 20.0, 0.5, 0.7), group(20.0, 20.0, 0.4, 0.6),
+        group(15.0, math.nan, 9.0, 9.0), group(30.0, math.nan, 9.0, 9.0),
+    ])
+    res = query(groups, "A", "B", 15.0, 20.0)
+    assert res.mu_k.value == pytest.approx(0.45)
+    assert res.mu_s is not None and res.mu_s.value == pytest.approx(0.65)
+    assert "2 group(s) without a temperature were left out" in res.notes
+    assert res.pressure_range_kPa == (10.0, 20.0)
+    table = friction_table(groups, "A", "B")
+    assert list(table["pressure_kPa"]) == [10.0, 20.0]
+    assert list(table["temperature_C"]) == [20.0, 20.0]
+    # with no temperature anywhere every group is used, and nothing is said to be left out
+    unknown = groups.assign(temperature_C=math.nan)
+    res = query(unknown, "A", "B", 15.0)
+    assert res.mu_k.value == pytest.approx(9.0)
+    assert not any("left out" in n for n in res.notes)
+    assert len(friction_table(unknown, "A", "B")) == 4
+
+
 def test_result_to_dict_is_json_ready(groups):
     import json
 

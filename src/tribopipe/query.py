@@ -259,6 +259,13 @@ def _points(pair_groups: pd.DataFrame, quantity: str) -> pd.DataFrame:
     return pd.DataFrame(rows)
 
 
+def _with_temperature(points: pd.DataFrame) -> pd.DataFrame:
+    """The points that have a temperature, or all of them when none has one (a point of
+    unknown temperature cannot be placed among measured ones)."""
+    known = points["temperature_C"].notna()
+    return points[known] if known.any() else points
+
+
 def _estimate(points: pd.DataFrame, pressure_kPa: float, temperature_C: float | None) -> Estimate:
     """Interpolate one quantity's points at (pressure [kPa], temperature [°C])."""
     import numpy as np
@@ -320,17 +327,15 @@ def query(
     if mu_k_points.empty:
         raise ExportError(f"pin {pin!r} on disc {disc!r} has no group with a finite mu_k")
     notes: list[str] = []
-    if mu_k_points["temperature_C"].notna().any() and mu_k_points["temperature_C"].isna().any():
-        n_unknown = int(mu_k_points["temperature_C"].isna().sum())
-        notes.append(f"{n_unknown} group(s) without a temperature were left out")
-        mu_k_points = mu_k_points[mu_k_points["temperature_C"].notna()]
+    kept = _with_temperature(mu_k_points)
+    if len(kept) < len(mu_k_points):
+        notes.append(f"{len(mu_k_points) - len(kept)} group(s) without a temperature were left out")
+        mu_k_points = kept
     mu_k = _estimate(mu_k_points, pressure_kPa, temperature_C)
 
     mu_s = None
     if "mu_s_mean" in pair.columns:
-        mu_s_points = _points(pair, "mu_s")
-        if mu_s_points["temperature_C"].notna().any():
-            mu_s_points = mu_s_points[mu_s_points["temperature_C"].notna()]
+        mu_s_points = _with_temperature(_points(pair, "mu_s"))
         if not mu_s_points.empty:
             mu_s = _estimate(mu_s_points, pressure_kPa, temperature_C)
     if mu_s is None:
@@ -384,8 +389,7 @@ def friction_table(
     points = _points(pair, quantity)
     if points.empty:
         raise ExportError(f"pin {pin!r} on disc {disc!r} has no group with a finite {quantity}")
-    if points["temperature_C"].notna().any():
-        points = points[points["temperature_C"].notna()]
+    points = _with_temperature(points)
     pressures = sorted(set(points["pressure_kPa"]))
     temps: list[float | None] = sorted(set(points["temperature_C"].dropna())) or [None]
     measured = {

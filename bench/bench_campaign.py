@@ -126,31 +126,22 @@ def parse_only(files: list[Path], jobs: int) -> dict[str, float]:
     """Wall time [s] of read_export over all files: sequential (readers already imported)
     and with a fresh pool of ``jobs`` workers chunked like the batch (start-up included)."""
     import tribopipe.readers  # noqa: F401 - import cost is not parsing
+    from tribopipe.campaign import _chunks, _worker_init  # the batch's own chunking and set-up
 
     paths = [str(p) for p in files]
     t0 = time.perf_counter()
     rows = _parse_chunk(paths)
     sequential = time.perf_counter() - t0
 
-    size = max(1, min(16, -(-len(paths) // (jobs * 4))))  # the batch's chunking
-    chunks = [paths[i : i + size] for i in range(0, len(paths), size)]
+    chunks = _chunks(paths, jobs)
     out = {"sequential_s": sequential, "rows": rows}
-    for name, init in (("pool_s", None), ("pool_gc_tuned_s", _gc_tuned)):
+    for name, init in (("pool_s", None), ("pool_gc_tuned_s", _worker_init)):
         t0 = time.perf_counter()
         with ProcessPoolExecutor(max_workers=jobs, initializer=init) as pool:
             pooled_rows = sum(pool.map(_parse_chunk, chunks))
         out[name] = time.perf_counter() - t0
         assert pooled_rows == rows
     return out
-
-
-def _gc_tuned() -> None:
-    """The batch workers' garbage-collector setting, for a like-for-like parse-only."""
-    import gc
-
-    from tribopipe.campaign import GC_THRESHOLDS
-
-    gc.set_threshold(*GC_THRESHOLDS)
 
 
 # --------------------------------------------------------------------------- processes

@@ -953,7 +953,10 @@ class BatchReport:
         return text
 
 
-def _chunks(items: Sequence[_Job], size: int) -> list[list[_Job]]:
+def _chunks(items: Sequence[Any], workers: int) -> list[list[Any]]:
+    """``items`` cut into a few chunks per worker: small enough to balance, large enough to
+    amortise pickling (the benchmark's parse-only pool uses the same cut)."""
+    size = max(1, min(16, math.ceil(len(items) / (workers * 4))))
     return [list(items[i : i + size]) for i in range(0, len(items), size)]
 
 
@@ -1032,9 +1035,7 @@ def _run_locked(campaign: Campaign, *, jobs: int | None, plots: bool | None,
     results: list[dict[str, Any]] = []
     if todo:
         workers = min(jobs, len(todo))
-        # a few chunks per worker: small enough to balance, large enough to amortise pickling
-        size = max(1, min(16, math.ceil(len(todo) / (workers * 4))))
-        chunks = _chunks(todo, size)
+        chunks = _chunks(todo, workers)
         if workers == 1:
             with _fewer_gc_passes():
                 for chunk in chunks:

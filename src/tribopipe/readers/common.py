@@ -185,10 +185,9 @@ def build_measurement(raw: RawInterval, info: FileInfo, aliases: AliasTable) -> 
         else:
             spec = parse_unit(unit)
             suffix = spec.suffix if spec is not None else sanitize_suffix(unit)
-            target = _column_name(base, suffix)
-            if target in used and meaning:
-                target = _free(f"{base}_{snake_case(meaning)}", suffix, used)
-            target = _free(target.removesuffix(f"_{suffix}") if suffix else target, suffix, used)
+            # a repeated name takes its meaning row (when there is one) before a number
+            taken = meaning and _column_name(base, suffix) in used
+            target = _free(f"{base}_{snake_case(meaning)}" if taken else base, suffix, used)
         values, bad = to_numbers(cells, info.decimal or ".")
         if bad is not None:
             textual = quantity is None and (base == "status" or spec is None or not spec.suffix)

@@ -20,6 +20,7 @@ from __future__ import annotations
 import argparse
 import csv
 import io
+import itertools
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -94,25 +95,18 @@ class ExampleRun:
 def example_runs() -> list[ExampleRun]:
     """The 48 runs of the example, in file-name order."""
     runs = []
-    index = 0
-    for pin in PINS:
-        for disc in DISCS:
-            for force in FORCES_N:
-                for temperature in TEMPERATURES_C:
-                    values, source = MU_K[(pin, disc, force, temperature)]
-                    for repeat in REPEATS:
-                        stem = f"{pin}_{disc}_{force:g}N_{temperature:g}C_r{repeat}"
-                        mu_k = values[repeat - 1]
-                        measured = OFF_NOMINAL_RUN[1] if stem == OFF_NOMINAL_RUN[0] else force
-                        runs.append(ExampleRun(
-                            stem=stem, pin=pin, disc=disc, force_N=force,
-                            temperature_C=temperature, repeat=repeat, mu_k=mu_k,
-                            mu_s=round(MU_S_FACTOR * mu_k, 4), source=source,
-                            measured_force_N=measured,
-                            language="fr" if stem == FRENCH_RUN else "en",
-                            seed=BASE_SEED + index,
-                        ))
-                        index += 1
+    grid = itertools.product(PINS, DISCS, FORCES_N, TEMPERATURES_C, REPEATS)
+    for index, (pin, disc, force, temperature, repeat) in enumerate(grid):
+        values, source = MU_K[(pin, disc, force, temperature)]
+        stem = f"{pin}_{disc}_{force:g}N_{temperature:g}C_r{repeat}"
+        mu_k = values[repeat - 1]
+        measured = OFF_NOMINAL_RUN[1] if stem == OFF_NOMINAL_RUN[0] else force
+        runs.append(ExampleRun(
+            stem=stem, pin=pin, disc=disc, force_N=force, temperature_C=temperature,
+            repeat=repeat, mu_k=mu_k, mu_s=round(MU_S_FACTOR * mu_k, 4), source=source,
+            measured_force_N=measured, language="fr" if stem == FRENCH_RUN else "en",
+            seed=BASE_SEED + index,
+        ))
     return sorted(runs, key=lambda r: r.stem)
 
 

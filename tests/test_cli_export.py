@@ -93,6 +93,18 @@ def test_export_abaqus_to_file(map_path, groups, tmp_path, units, factor):
     assert str(map_path) in out.read_text()
 
 
+def test_export_and_fit_write_into_a_new_folder(map_path, tmp_path):
+    # -o goes through the shared atomic writer, like `map table -o`: the folder is made
+    out = tmp_path / "new" / "friction.inp"
+    result = _run("export", "abaqus", "--map", str(map_path), "-o", str(out))
+    assert result.exit_code == 0
+    assert out.read_text() == _run("export", "abaqus", "--map", str(map_path)).stdout
+    fits = tmp_path / "new" / "fits" / "fits.csv"
+    assert _run("map", "fit", "--map", str(map_path), "-o", str(fits)).exit_code == 0
+    assert len(pd.read_csv(fits)) > 0
+    assert not list(tmp_path.rglob("*.tmp"))
+
+
 def test_export_ansys_stdout(map_path):
     result = _run("export", "ansys", "--map", str(map_path), "--pin", "Ecoflex 00-50",
                   "--material-id", "7")

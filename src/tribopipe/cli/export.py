@@ -60,12 +60,13 @@ def _units(func: Callable[..., Any]) -> Callable[..., Any]:
 
 
 def _emit(text: str, output: str | None) -> None:
-    """Print ``text`` or write it to ``output`` (UTF-8, LF)."""
+    """Print ``text`` or write it to ``output`` (UTF-8, LF, atomically)."""
     if output is None:
         click.echo(text, nl=False)
         return
-    with open(output, "w", encoding="utf-8", newline="\n") as fh:
-        fh.write(text)
+    from ..files import write_text_atomic
+
+    write_text_atomic(output, text, newline="\n")
     click.echo(f"wrote {output}", err=True)
 
 

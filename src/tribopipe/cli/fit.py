@@ -41,7 +41,9 @@ def fit_cmd(
     if disc is not None:
         fits = fits[fits["disc"].str.casefold() == disc.casefold()]
     if output:
-        fits.to_csv(output, index=False)
+        from ..files import write_text_atomic
+
+        write_text_atomic(output, fits.to_csv(index=False), newline="")
         click.echo(f"wrote {output}", err=True)
     if as_json:
         records = [

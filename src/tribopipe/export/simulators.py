@@ -517,13 +517,9 @@ def export_simulator_input(
                                   temperature_C=temperature_C, units=units,
                                   decay_s_per_mm=decay_s_per_mm,
                                   slip_rate_mm_s=slip_rate_mm_s, source=source)
-    if fmt == "mujoco":
-        return write_mujoco(groups, pin=pin, disc=disc, pressure_kPa=pressure_kPa,
-                            temperature_C=temperature_C, geom1=geom1, geom2=geom2,
-                            source=source)
-    writer = SINGLE_VALUE_WRITERS[fmt]
-    return writer(groups, pin=pin, disc=disc, pressure_kPa=pressure_kPa,
-                  temperature_C=temperature_C, source=source)
+    extra = {"geom1": geom1, "geom2": geom2} if fmt == "mujoco" else {}
+    return SINGLE_VALUE_WRITERS[fmt](groups, pin=pin, disc=disc, pressure_kPa=pressure_kPa,
+                                     temperature_C=temperature_C, source=source, **extra)
 
 
 def measured_slip_rate_mm_s(runs: pd.DataFrame) -> float:

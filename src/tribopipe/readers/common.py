@@ -21,6 +21,9 @@ from .textio import EXCEL_ERRORS, is_missing, to_numbers
 #: the value RheoCompass writes for a loss factor it could not determine (status ``taD``)
 LOSS_FACTOR_PLACEHOLDER = 20000.0
 
+#: a unit cell as instrument software writes it under a header: ``[s]``, ``[mN·m]``
+UNIT_CELL = re.compile(r"^\[.*\]$")
+
 _INVALID_POINT = re.compile(r"\((?:invalid|invalide|ung[üu]ltig|non valide)\)", re.IGNORECASE)
 # Rheoplus writes the point number, then this text in the next cell
 _INVALID_CELL = re.compile(
@@ -61,6 +64,12 @@ class FileInfo:
     encoding: str | None
     delimiter: str | None
     decimal: str | None
+
+
+def label_value(cells: list[str]) -> str | None:
+    """The value of a labelled line (``Test:<TAB><TAB>name``): its first non-empty cell
+    after the label."""
+    return next((c for c in cells[1:] if c), None)
 
 
 def _classify_rows(raw: RawInterval, info: FileInfo) -> tuple[list[int], int, int]:

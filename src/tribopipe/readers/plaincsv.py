@@ -14,13 +14,12 @@ import re
 from ..errors import ReadError
 from ..units import parse_unit
 from .aliases import AliasTable
-from .common import RawInterval
+from .common import UNIT_CELL, RawInterval
 
 FORMAT = "csv"
 
 _BRACKETED = re.compile(r"^(?P<name>.*?)\s*[\[(](?P<unit>[^\[\]()]*)[\])]\s*$")
 _SLASHED = re.compile(r"^(?P<name>.*?)\s+/\s*(?P<unit>\S+)$")
-_UNIT_CELL = re.compile(r"^\[.*\]$")
 
 
 def split_header(cell: str, aliases: AliasTable) -> tuple[str, str]:
@@ -74,7 +73,7 @@ def parse_intervals(
             " or add your names to configs/aliases.toml",
         )
     data = body[1:]
-    if data and all(_UNIT_CELL.match(c) or not c for c in data[0][1]):
+    if data and all(UNIT_CELL.match(c) or not c for c in data[0][1]):
         units = [c or u for c, u in zip(data[0][1], units, strict=False)] + units[
             len(data[0][1]) :
         ]

@@ -19,11 +19,9 @@ counted in the metadata, not returned as data.
 
 from __future__ import annotations
 
-import re
-
 from ..errors import ReadError
 from .aliases import builtin_aliases, name_key
-from .common import RawInterval
+from .common import UNIT_CELL, RawInterval, label_value
 
 FORMAT = "rheocompass"
 FORMAT_XLSX = "rheocompass-xlsx"
@@ -44,8 +42,6 @@ INTERVAL_DATA = frozenset(
 )
 LABELS = PROJECT | TEST | RESULT | INTERVAL_POINTS | INTERVAL_DATA
 
-_UNIT_CELL = re.compile(r"^\[.*\]$")
-
 
 def looks_like(rows: list[tuple[int, list[str]]]) -> bool:
     """True when the first rows carry RheoCompass labels (``Project:``, ``Interval data:``…)."""
@@ -53,10 +49,6 @@ def looks_like(rows: list[tuple[int, list[str]]]) -> bool:
         if cells and cells[0].endswith(":") and name_key(cells[0]) in LABELS:
             return True
     return False
-
-
-def _value(cells: list[str]) -> str | None:
-    return next((c for c in cells[1:] if c), None)
 
 
 def _int(cell: str, what: str, path: str, line: int) -> int:
@@ -94,11 +86,11 @@ def parse_intervals(rows: list[tuple[int, list[str]]], path: str) -> list[RawInt
             continue
         key = name_key(first)
         if key in PROJECT:
-            project = _value(cells)
+            project = label_value(cells)
         elif key in TEST:
-            test, result, interval, declared = _value(cells), None, None, None
+            test, result, interval, declared = label_value(cells), None, None, None
         elif key in RESULT:
-            result, interval, declared = _value(cells), None, None
+            result, interval, declared = label_value(cells), None, None
         elif key in INTERVAL_POINTS:
             if len(cells) < 3 or not cells[1] or not cells[2]:
                 raise ReadError(
@@ -146,7 +138,7 @@ def _read_table(
         if cells and cells[0]:
             break
         rest = cells[1:]
-        if any(_UNIT_CELL.match(c) for c in rest):
+        if any(UNIT_CELL.match(c) for c in rest):
             units = rest
             i += 1
             break

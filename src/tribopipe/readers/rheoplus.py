@@ -18,7 +18,7 @@ import re
 
 from ..errors import ReadError
 from .aliases import name_key
-from .common import RawInterval
+from .common import RawInterval, label_value
 
 FORMAT = "rheoplus"
 
@@ -42,10 +42,6 @@ def looks_like(rows: list[tuple[int, list[str]]]) -> bool:
         if cells and name_key(cells[0]) in POINT_HEADERS | {SERIES}:
             return True
     return False
-
-
-def _value(cells: list[str]) -> str | None:
-    return next((c for c in cells[1:] if c), None)
 
 
 def _whole(cell: str | None, what: str, path: str, line: int) -> int:
@@ -79,15 +75,15 @@ def parse_intervals(rows: list[tuple[int, list[str]]], path: str) -> list[RawInt
             saw_series = True
             meta, sample, interval, declared, last_interval = {}, None, None, None, 0
         elif first.endswith(":") and key in _META_KEYS:
-            value = _value(cells)
+            value = label_value(cells)
             if key == "name":
                 sample = value
             elif value is not None:
                 meta[_META_KEYS[key]] = value
         elif first.endswith(":") and key == "interval":
-            interval = _whole(_value(cells), "the interval number", path, line)
+            interval = _whole(label_value(cells), "the interval number", path, line)
         elif first.endswith(":") and key == "numberofdatapoints":
-            declared = _whole(_value(cells), "the number of data points", path, line)
+            declared = _whole(label_value(cells), "the number of data points", path, line)
         elif key in POINT_HEADERS:
             raw, i = _read_table(rows, i, path)
             # a Rheoplus series is one test; its name is the sample's

@@ -213,12 +213,9 @@ def group_statistics(runs: pd.DataFrame, *, by_speed: bool = False) -> pd.DataFr
             spread = (groups[f"{q}_max"] - groups[f"{q}_min"]).to_numpy(dtype=float)
             flagged |= np.nan_to_num(spread, nan=0.0) > rep.r
     groups["range_exceeds_r"] = flagged
-    for c in ("pin", "disc", "run_ids") + tuple(f"{q}_values" for q in QUANTITIES):
-        groups[c] = groups[c].astype("str")
-    for q in QUANTITIES:
-        groups[f"{q}_n"] = groups[f"{q}_n"].astype("int64")
-    groups["qc_flagged"] = groups["qc_flagged"].astype(bool)
-    return groups.loc[:, columns]
+    # the types of _dtype, as for an empty table; numeric columns are left as computed
+    non_float = {c: _dtype(c) for c in columns if _dtype(c) != "float64"}
+    return groups.astype(non_float).loc[:, columns]
 
 
 def _dtype(column: str) -> str:

@@ -231,7 +231,8 @@ def _dtype(column: str) -> str:
 def _group_row(
     key: dict[str, Any], members: Any, data: dict[str, Any]
 ) -> dict[str, Any]:
-    """One output row: ``members`` are positions into the per-run arrays of ``data``."""
+    """One output row (``range_exceeds_r`` comes later, from all groups): ``members`` are
+    positions into the per-run arrays of ``data``."""
     import numpy as np
 
     order = sorted(
@@ -246,7 +247,6 @@ def _group_row(
         row.update({f"{q}_{f}": v for f, v in stats.items()})
     row["qc_flagged"] = any(str(f).strip() for f in data["flags"][order])
     row["run_ids"] = ";".join(data["measurement_id"][order])
-    row["range_exceeds_r"] = False
     return row
 
 

@@ -79,6 +79,8 @@ def test_unknown_units_are_not_guessed(unit: str) -> None:
 def test_normalisation_unifies_dots_micro_and_brackets() -> None:
     assert normalize_unit("[µN·m]") == normalize_unit("[μN.m]") == normalize_unit(" µNm ")
     assert normalize_unit("[Âµ NÂ·m]") == "µNm"
+    assert normalize_unit("[deg]") == normalize_unit("[º]") == "°"
+    assert parse_unit("[deg]") == parse_unit("[°]")
 
 
 def test_unknown_units_get_a_safe_suffix() -> None:

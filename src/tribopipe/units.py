@@ -62,8 +62,7 @@ _GENERIC: dict[str, tuple] = {
     "rad": (1.0, "rad"),
     "mrad": (1e-3, "rad"),
     "µrad": (1e-6, "rad"),
-    "°": (math.pi / 180, "rad"),
-    "deg": (math.pi / 180, "rad"),
+    "°": (math.pi / 180, "rad"),  # also "deg" (normalize_unit)
     # angular velocity, frequency, rates
     "rad/s": (1.0, "rad_s"),
     "mrad/s": (1e-3, "rad_s"),
@@ -139,9 +138,7 @@ def normalize_unit(text: str) -> str:
     unit = re.sub(r"(?<=[A-Za-zµ])[·.*](?=[A-Za-z])", "", unit)
     if unit.lower() == "rpm":
         unit = "rpm"
-    if unit in {"deg", "°"}:
-        return "°"
-    return unit
+    return "°" if unit == "deg" else unit
 
 
 def parse_unit(text: str, quantity: str | None = None) -> UnitSpec | None:

@@ -380,21 +380,21 @@ def _runs(inp: ReportInputs) -> str:
     )
 
 
+#: the page's sections in order: (id, navigation label, builder)
+_SECTIONS = (
+    ("summary", "Summary", _summary), ("groups", "Groups", _group_table),
+    ("fits", "Fits", _fits_table), ("pairs", "Pair plots", _pair_plots),
+    ("flagged", "Flagged", _flagged), ("failures", "Failures", _failures),
+    ("runs", "Runs", _runs),
+)
+
+
 def build_report(inp: ReportInputs) -> str:
     """The report's HTML text (UTF-8, self-contained). Inputs are not modified."""
     stamp = datetime.now(UTC).strftime("%Y-%m-%d %H:%M UTC")
     source = f" from {escape(inp.source)}" if inp.source else ""
-    nav = "".join(
-        f'<a href="#{a}">{t}</a>' for a, t in [
-            ("summary", "Summary"), ("groups", "Groups"), ("fits", "Fits"),
-            ("pairs", "Pair plots"), ("flagged", "Flagged"), ("failures", "Failures"),
-            ("runs", "Runs"),
-        ]
-    )
-    sections = [
-        _summary(inp), _group_table(inp), _fits_table(inp), _pair_plots(inp), _flagged(inp),
-        _failures(inp), _runs(inp),
-    ]
+    nav = "".join(f'<a href="#{a}">{t}</a>' for a, t, _ in _SECTIONS)
+    sections = [build(inp) for _, _, build in _SECTIONS]
     return (
         "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">"
         "<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">"
@@ -496,4 +496,4 @@ def make_report(
 
 def report_sections() -> Sequence[str]:
     """The ids of the report's sections, in page order."""
-    return ("summary", "groups", "fits", "pairs", "flagged", "failures", "runs")
+    return tuple(a for a, _, _ in _SECTIONS)

@@ -98,9 +98,8 @@ def _parse(
             "legacy Excel .xls workbook", path=path, hint="save it as .xlsx or export text"
         )
     if fmt == rheocompass.FORMAT_XLSX or (fmt is None and raw.startswith(XLSX_MAGIC)):
-        _, rows = workbook_rows(path)
         info = FileInfo(path, rheocompass.FORMAT_XLSX, None, None, decimal or ".")
-        return info, rheocompass.parse_intervals(rows, path)
+        return info, rheocompass.parse_intervals(workbook_rows(path), path)
 
     decoded = decode(raw, path, encoding)
     lines = decoded.text.splitlines()

@@ -22,9 +22,9 @@ def _cell_text(value: object) -> str:
     return str(value).strip()
 
 
-def workbook_rows(path: str) -> tuple[str, list[tuple[int, list[str]]]]:
-    """``(sheet name, rows)`` of the first sheet whose first column holds a RheoCompass
-    label; rows are ``(1-based row number, text cells)``."""
+def workbook_rows(path: str) -> list[tuple[int, list[str]]]:
+    """The rows of the first sheet whose first column holds a RheoCompass label, as
+    ``(1-based row number, text cells)``."""
     import openpyxl
 
     from .rheocompass import looks_like
@@ -46,7 +46,7 @@ def workbook_rows(path: str) -> tuple[str, list[tuple[int, list[str]]]]:
                 for k, values in enumerate(sheet.iter_rows(values_only=True), start=1)
             ]
             if looks_like(rows):
-                return sheet.title, rows
+                return rows
     finally:
         workbook.close()
     raise ReadError(

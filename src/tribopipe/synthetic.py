@@ -172,15 +172,11 @@ def truth(run: SyntheticRun) -> SyntheticTruth:
     p = _shape_params(run)
     v = run.speed_rpm * 2 * math.pi / 60 * run.friction_radius_mm
     total = v * max(0.0, run.duration_s - run.rest_s)
-    if run.shape == "no_overshoot":
-        return SyntheticTruth(
-            mu_s=run.mu_k, mu_k=run.mu_k, mu_s_distance_mm=p["peak_distance_mm"],
-            static_distinct=False, stick_slip=False, sliding_distance_mm=total, shape_params=p,
-        )
+    peak = run.shape != "no_overshoot"  # no_overshoot has no static peak: μ_S = μ_K
     return SyntheticTruth(
-        mu_s=run.mu_s, mu_k=run.mu_k, mu_s_distance_mm=p["peak_distance_mm"],
-        static_distinct=run.mu_s > run.mu_k, stick_slip=run.shape == "stick_slip",
-        sliding_distance_mm=total, shape_params=p,
+        mu_s=run.mu_s if peak else run.mu_k, mu_k=run.mu_k,
+        mu_s_distance_mm=p["peak_distance_mm"], static_distinct=peak and run.mu_s > run.mu_k,
+        stick_slip=run.shape == "stick_slip", sliding_distance_mm=total, shape_params=p,
     )
 
 

@@ -87,7 +87,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from .errors import MissingQuantityError, ReductionError
+from .errors import ConfigError, MissingQuantityError, ReductionError
 from .measurement import ANGLE, NORMAL_FORCE, SPEED, TEMPERATURE, TIME, TORQUE, Measurement
 from .readers import require_columns
 
@@ -196,8 +196,6 @@ class ReductionParams:
     max_missing_fraction: float = 0.5
 
     def __post_init__(self) -> None:
-        from .errors import ConfigError
-
         for f_name, value in asdict(self).items():
             if not (isinstance(value, int | float) and math.isfinite(value) and value >= 0):
                 raise ConfigError(f"[reduction] {f_name} must be a number >= 0, got {value!r}")

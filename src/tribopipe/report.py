@@ -259,11 +259,11 @@ def _fits_table(inp: ReportInputs) -> str:
 def _pair_plots(inp: ReportInputs) -> str:
     """The per-pair μ_K(p) plots, embedded as PNG."""
     from .export.plots import plot_pair
+    from .query import pairs
 
     included = inp.runs[~inp.runs["excluded"].fillna(False).astype(bool)]
     figures = []
-    for pin, disc in sorted({(str(p), str(d)) for p, d in
-                             zip(included["pin"], included["disc"], strict=True)}):
+    for pin, disc in pairs(included):
         uri = _png_data_uri(
             lambda buf, pin=pin, disc=disc: plot_pair(
                 included, pin, disc, buf, fits=inp.fits, fmt="png", dpi=PAIR_DPI)

@@ -318,12 +318,12 @@ def plot_pairs(
 ) -> list[Path]:
     """One μ_K(p) plot per pair of ``runs`` in ``out_dir`` (``pair_<pin>__<disc>.<fmt>``)."""
     from ..fit import fit_power_law
+    from ..query import pairs
 
     _format_of("x", fmt)
     fits = fit_power_law(runs)
     written = []
-    for pin, disc in sorted({(str(p), str(d)) for p, d in zip(runs["pin"], runs["disc"],
-                                                              strict=True)}):
+    for pin, disc in pairs(runs):
         target = Path(out_dir) / f"pair_{slug(pin)}__{slug(disc)}.{fmt}"
         written.append(Path(plot_pair(runs, pin, disc, target, fits=fits, fmt=fmt)))
     return written

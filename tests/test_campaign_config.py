@@ -89,6 +89,17 @@ def test_reduction_table_overrides_the_instrument_config(tmp_path: Path) -> None
     assert over.settings.config_hash != plain.settings.config_hash
 
 
+@pytest.mark.parametrize("section", ["reduction", "instrument"])
+def test_an_instrument_file_whose_section_is_not_a_table_is_a_config_error(
+    tmp_path: Path, section: str
+) -> None:
+    (tmp_path / "inst.toml").write_text(f"{section} = 3\n", encoding="utf-8")
+    cfg = write_config(tmp_path, f'[campaign]\nraw_dir = "raw"\ninstrument = "inst.toml"\n'
+                                 f'filename_pattern = "{PATTERN}"\n')
+    with pytest.raises(ConfigError, match=rf"inst\.toml: \[{section}\] must be a table"):
+        load_campaign(cfg)
+
+
 @pytest.mark.parametrize(
     ("body", "expected"),
     [

@@ -69,3 +69,10 @@ def test_missing_config_file_is_a_config_error(tmp_path: Path) -> None:
 def test_other_pin_count_changes_area_not_radius() -> None:
     inst = InstrumentConfig(n_pins=1, pin_radius_mm=2.0)
     assert inst.pin_area_mm2 == pytest.approx(math.pi * 4.0)
+
+
+def test_config_hash_is_computed_once_and_stays_stable() -> None:
+    settings = settings_from_dict({"reduction": {"run_in_mm": 0.3}})
+    first = settings.config_hash
+    assert settings.config_hash is first  # cached on the object
+    assert settings_from_dict({"reduction": {"run_in_mm": 0.3}}).config_hash == first

@@ -264,7 +264,10 @@ def load_campaign(path: str | Path) -> Campaign:
         instrument_data = read_toml(instrument_path)
     else:
         instrument_data = {}
-    reduction = dict(instrument_data.get("reduction", {}) or {})
+    for section in ("instrument", "reduction"):
+        if not isinstance(instrument_data.get(section, {}), dict):
+            raise ConfigError(f"[{section}] must be a table", path=instrument_path)
+    reduction = dict(instrument_data.get("reduction", {}))
     if "reduction" in data:
         if not isinstance(data["reduction"], dict):
             raise ConfigError("[reduction] must be a table", path=cfg_path)

@@ -13,6 +13,7 @@ error (a typo must not silently fall back to a default).
 
 from __future__ import annotations
 
+import functools
 import hashlib
 import json
 import math
@@ -83,9 +84,10 @@ class Settings:
     reduction: ReductionParams
     source: str | None = None
 
-    @property
+    @functools.cached_property
     def config_hash(self) -> str:
-        """A stable 16-hex-digit hash of the instrument and reduction parameters."""
+        """A stable 16-hex-digit hash of the instrument and reduction parameters (computed
+        once per settings object: every run of a batch asks for it)."""
         payload = {"instrument": asdict(self.instrument), "reduction": asdict(self.reduction)}
         text = json.dumps(payload, sort_keys=True, default=str)
         return hashlib.sha256(text.encode()).hexdigest()[:16]

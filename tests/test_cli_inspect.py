@@ -149,3 +149,17 @@ def test_inspect_says_why_reduce_would_stop(data_dir: Path) -> None:
     result = run(str(data_dir / "rheocompass_en_utf16_small.txt"))
     assert result.exit_code == 0
     assert "reduce would stop: no interval has time, torque and normal force" in result.output
+
+
+def test_inspect_of_a_plain_csv_names_the_interval_reduce_reads(tmp_path) -> None:
+    # a plain CSV has no test or result name: the line must not start with " / "
+    from click.testing import CliRunner
+
+    from tribopipe.cli import main
+
+    path = tmp_path / "other_instrument.csv"
+    rows = "\n".join(f"{t / 10},{0.02 + 1e-5 * t},3.0" for t in range(600))
+    path.write_text("Time [s],Torque [N·m],Normal Force [N]\n" + rows + "\n", encoding="utf-8")
+    result = CliRunner().invoke(main, ["inspect", str(path)])
+    assert result.exit_code == 0, result.output
+    assert "reduce reads: interval 1" in result.output

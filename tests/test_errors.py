@@ -18,3 +18,4 @@ def test_error_is_always_one_line() -> None:
 def test_subclasses_are_tribopipe_errors() -> None:
     assert issubclass(MissingQuantityError, ReadError)
     assert issubclass(ReadError, TribopipeError)
+

@@ -36,6 +36,14 @@ TEMPERATURE = "temperature_C"
 CANONICAL_COLUMNS: tuple[str, ...] = (TIME, TORQUE, NORMAL_FORCE, ANGLE, SPEED, TEMPERATURE)
 
 
+def interval_label(test: str | None, result: str | None, interval: int | None) -> str:
+    """``test / result / interval i``, leaving out what is unknown (``""`` when all are)."""
+    parts = [p for p in (test, result) if p]
+    if interval is not None:
+        parts.append(f"interval {interval}")
+    return " / ".join(parts)
+
+
 @dataclass(frozen=True)
 class MeasurementMeta:
     """Where a measurement came from and how it was read.
@@ -67,10 +75,8 @@ class MeasurementMeta:
     @property
     def label(self) -> str:
         """A short human label: ``file [test / result / interval i]``."""
-        parts = [p for p in (self.test, self.result) if p]
-        if self.interval is not None:
-            parts.append(f"interval {self.interval}")
-        return f"{self.source_file} [{' / '.join(parts)}]" if parts else self.source_file
+        where = interval_label(self.test, self.result, self.interval)
+        return f"{self.source_file} [{where}]" if where else self.source_file
 
 
 @dataclass(frozen=True)

@@ -32,7 +32,7 @@ from pathlib import Path
 from typing import Any
 
 from ..errors import MissingQuantityError, ReadError, TribopipeError
-from ..measurement import NORMAL_FORCE, TORQUE, Measurement
+from ..measurement import NORMAL_FORCE, TORQUE, Measurement, interval_label
 from . import plaincsv, rheocompass, rheoplus
 from .aliases import AliasTable, load_aliases, resolve_aliases
 from .common import FileInfo, RawInterval, build_measurement
@@ -204,8 +204,7 @@ def require_columns(measurement: Measurement, *columns: str) -> None:
     found = ", ".join(
         f"{orig} → {new}" for orig, new in meta.column_map
     ) or ", ".join(measurement.data.columns)
-    where = " / ".join(p for p in (meta.test, meta.result) if p)
-    where = f"{where} / interval {meta.interval}" if where else f"interval {meta.interval}"
+    where = interval_label(meta.test, meta.result, meta.interval)
     raise MissingQuantityError(
         f"{where} has no {' or '.join(missing)} values (columns found: {found or 'none'})",
         path=meta.source_file,
@@ -347,8 +346,7 @@ class ExportSummary:
         previous: tuple[ColumnSummary, ...] | None = None
         previous_notes: set[tuple[str, str]] = set()
         for i in self.intervals:
-            label = " / ".join(x for x in (i.test, i.result) if x)
-            label = f"{label} / interval {i.interval}" if label else f"interval {i.interval}"
+            label = interval_label(i.test, i.result, i.interval)
             declared = "" if i.n_points_declared is None else f" of {i.n_points_declared}"
             skipped = []
             if i.n_invalid_points:
@@ -376,8 +374,7 @@ class ExportSummary:
                 lines.append(f"  {shown:<{width}} → {c.column or '(dropped)'}")
         if self.chosen is not None:
             i = self.intervals[self.chosen]
-            label = " / ".join(x for x in (i.test, i.result) if x)
-            lines += ["", f"reduce reads: {label} / interval {i.interval}"]
+            lines += ["", f"reduce reads: {interval_label(i.test, i.result, i.interval)}"]
         elif self.chosen_note:
             lines += ["", f"reduce would stop: {self.chosen_note}"]
         return "\n".join(lines)

@@ -89,7 +89,6 @@ import numpy as np
 
 from .errors import ConfigError, MissingQuantityError, ReductionError
 from .measurement import ANGLE, NORMAL_FORCE, SPEED, TEMPERATURE, TIME, TORQUE, Measurement
-from .readers import require_columns
 
 if TYPE_CHECKING:
     from collections.abc import Sequence
@@ -882,6 +881,8 @@ def reduce_measurement(
     than half of torque or normal force missing, no rotation, or too few contact samples.
     """
     import pandas as pd
+
+    from .readers import require_columns
 
     require_columns(m, TIME, TORQUE, NORMAL_FORCE)
     label = m.meta.label

@@ -145,3 +145,15 @@ def test_an_export_without_contact_is_refused_naming_the_file_once(tmp_path: Pat
     line = result.stderr.splitlines()[0]
     assert line.count(str(path)) == 1
     assert "contact threshold" in line
+
+
+def test_forced_reader_settings_reach_the_reader(export: Path, tmp_path: Path) -> None:
+    ok = CliRunner().invoke(main, ["reduce", str(export), "--no-map", "--json",
+                                   "--encoding", "utf-16", "--delimiter", "tab",
+                                   "--decimal", ".", "--out", str(tmp_path / "o")])
+    assert ok.exit_code == 0, ok.output
+    assert json.loads(ok.stdout)[0]["mu_k"] == pytest.approx(RUN.mu_k, abs=0.01)
+    wrong = CliRunner().invoke(main, ["reduce", str(export), "--no-map",
+                                      "--delimiter", ";", "--out", str(tmp_path / "o")])
+    assert wrong.exit_code == 1
+    assert str(export) in wrong.stderr and "Traceback" not in wrong.output

@@ -43,6 +43,17 @@ def map_option(func: F) -> F:
     )(func)
 
 
+def read_options(func: F) -> F:
+    """``--encoding``, ``--delimiter``, ``--decimal``: force what the readers detect."""
+    func = click.option("--decimal", type=click.Choice([".", ","]),
+                        help="Force the decimal mark.")(func)
+    func = click.option("--delimiter",
+                        help="Force the cell delimiter (e.g. ';', ',' or 'tab').")(func)
+    return click.option(
+        "--encoding", help="Force the file encoding (e.g. utf-16, utf-8-sig, cp1252)."
+    )(func)
+
+
 def config_option(func: F) -> F:
     """``--config FILE``: an instrument config (TOML); default: the founding T-PID/44 cell."""
     return click.option(

@@ -6,14 +6,12 @@ import json
 
 import click
 
-from ._common import friendly_errors
+from ._common import friendly_errors, read_options
 
 
 @click.command("inspect")
 @click.argument("file", type=click.Path(dir_okay=False))
-@click.option("--encoding", help="Force the file encoding (e.g. utf-16, utf-8-sig, cp1252).")
-@click.option("--delimiter", help="Force the cell delimiter (e.g. ';', ',' or 'tab').")
-@click.option("--decimal", type=click.Choice([".", ","]), help="Force the decimal mark.")
+@read_options
 @click.option(
     "--format",
     "fmt",

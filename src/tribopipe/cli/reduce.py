@@ -7,7 +7,7 @@ import sys
 
 import click
 
-from ._common import config_option, friendly_errors, map_option
+from ._common import config_option, friendly_errors, map_option, read_options
 
 
 def _fmt(value: object, spec: str) -> str:
@@ -49,9 +49,7 @@ def _fmt(value: object, spec: str) -> str:
 )
 @click.option("--json", "as_json", is_flag=True, help="Print a JSON list instead of a table.")
 @click.option("--plot", is_flag=True, help="Also draw μ over sliding distance (PNG) per run.")
-@click.option("--encoding", help="Force the file encoding (e.g. utf-16, utf-8-sig, cp1252).")
-@click.option("--delimiter", help="Force the cell delimiter (e.g. ';' or 'tab').")
-@click.option("--decimal", type=click.Choice([".", ","]), help="Force the decimal mark.")
+@read_options
 @friendly_errors
 def reduce_cmd(
     files: tuple[str, ...],
@@ -82,8 +80,6 @@ def reduce_cmd(
     from ..errors import TribopipeError
     from ..pipeline import ReadOptions, RunLabels, reduce_file, write_summary, write_trace
 
-    if delimiter is not None and delimiter.lower() in {"tab", "\\t"}:
-        delimiter = "\t"
     settings = load_settings(config_path)
     labels = RunLabels(
         pin=pin, disc=disc, normal_force_N=force_N, temperature_C=temperature_C, repeat=repeat

@@ -73,7 +73,9 @@ class InstrumentConfig:
     @property
     def nominal_sliding_speed_mm_s(self) -> float:
         """Nominal sliding speed at the friction radius, ω·R_eff [mm/s]."""
-        return self.nominal_speed_rpm * 2 * math.pi / 60 * self.friction_radius_mm
+        from .reduce import sliding_speed_mm_s
+
+        return sliding_speed_mm_s(self.nominal_speed_rpm, self.friction_radius_mm)
 
 
 @dataclass(frozen=True)

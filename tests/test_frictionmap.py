@@ -560,3 +560,18 @@ def test_a_map_path_inside_a_file_is_a_clean_error(tmp_path):
         fm.append_records(blocker / "friction_map.parquet", [run_record(1)])
     assert "friction_map.parquet" in str(err.value)
     assert blocker.read_text() == "not a directory"
+
+
+def test_fold_reports_each_id_once_in_first_seen_order_when_records_repeat():
+    a, b = run_record(1), run_record(2)
+    a2, b2 = run_record(1, mu_k=0.5), run_record(2, mu_k=0.5)
+    runs = fm.records_frame([a])
+    merged, report = fm.fold_records(runs, [b, a, a2, b2, a, a2], replace=True)
+    assert report.added_ids == (b["measurement_id"],)
+    assert report.unchanged_ids == (a["measurement_id"],)
+    assert report.replaced_ids == (a["measurement_id"],)
+    assert list(merged["measurement_id"]) == [a["measurement_id"], b["measurement_id"]]
+    assert list(merged["mu_k"]) == [0.5, 0.5]
+    _, kept = fm.fold_records(runs, [a2, a, a2], replace=False)
+    assert kept.conflicting_ids == (a["measurement_id"],) and kept.unchanged_ids == (
+        a["measurement_id"],)

@@ -771,11 +771,11 @@ def fold_records(
     # map rows looked at (then replaced), by position: converted in one pass, not per record
     hits = sorted({position[m] for m in new_frame["measurement_id"] if m in position})
     touched = dict(zip(hits, frame_records(base.iloc[hits]), strict=True))
-    fresh: dict[str, dict[str, Any]] = {}  # runs new to the map, in order
-    added: list[str] = []
-    unchanged: list[str] = []
-    replaced: list[str] = []
-    conflicting: list[str] = []
+    fresh: dict[str, dict[str, Any]] = {}  # runs new to the map, in order (= the added ids)
+    # ids in first-seen order (dicts as ordered sets: a repeated id keeps its place)
+    unchanged: dict[str, None] = {}
+    replaced: dict[str, None] = {}
+    conflicting: dict[str, None] = {}
     differences: dict[str, tuple[str, ...]] = {}
     for rec in frame_records(new_frame):
         mid = rec["measurement_id"]
@@ -785,12 +785,11 @@ def fold_records(
             old = touched[position[mid]]
         else:
             fresh[mid] = rec
-            added.append(mid)
             continue
         diff = _differences(old, rec)
         if not diff:
-            if mid not in added and mid not in unchanged:
-                unchanged.append(mid)
+            if mid not in fresh:
+                unchanged[mid] = None
             continue
         differences[mid] = diff
         if replace:
@@ -799,12 +798,11 @@ def fold_records(
                 fresh[mid] = rec
             else:
                 touched[position[mid]] = rec
-                if mid not in replaced:
-                    replaced.append(mid)
-        elif mid not in conflicting:
-            conflicting.append(mid)
+                replaced[mid] = None
+        else:
+            conflicting[mid] = None
     report = AppendReport(
-        added_ids=tuple(added),
+        added_ids=tuple(fresh),
         unchanged_ids=tuple(unchanged),
         replaced_ids=tuple(replaced),
         conflicting_ids=tuple(conflicting),

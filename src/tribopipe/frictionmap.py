@@ -763,9 +763,15 @@ def fold_records(
     A replaced row keeps the map's exclusion state (a human decision about the run).
     Neither input is modified.
     """
+    return _fold(runs, records_frame(records), replace=replace)
+
+
+def _fold(
+    runs: pd.DataFrame, new_frame: pd.DataFrame, *, replace: bool
+) -> tuple[pd.DataFrame, AppendReport]:
+    """:func:`fold_records` of records already validated into ``new_frame``."""
     import pandas as pd
 
-    new_frame = records_frame(records)
     base = runs.loc[:, list(RUN_COLUMNS)].reset_index(drop=True)
     position = {m: i for i, m in enumerate(base["measurement_id"])}
     # map rows looked at (then replaced), by position: converted in one pass, not per record
@@ -853,12 +859,12 @@ def update_map(
     import dataclasses
 
     p = Path(path)
-    records_frame(records)  # validate before touching anything
+    new_frame = records_frame(records)  # validate before touching anything
     with _locked(p):
         current = read_map(p)
-        drop = set(drop_ids) - {str(r["measurement_id"]) for r in records}
+        drop = set(drop_ids) - set(new_frame["measurement_id"])
         gone = current["measurement_id"].isin(sorted(drop)).to_numpy()
-        merged, report = fold_records(current.loc[~gone], records, replace=replace)
+        merged, report = _fold(current.loc[~gone], new_frame, replace=replace)
         report = dataclasses.replace(
             report, dropped_ids=tuple(current.loc[gone, "measurement_id"].astype(str))
         )

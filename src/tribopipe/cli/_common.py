@@ -39,7 +39,7 @@ def map_option(func: F) -> F:
         type=click.Path(dir_okay=False),
         default=DEFAULT_MAP,
         show_default=True,
-        help="Friction map (Parquet) to read or update.",
+        help="The friction map (Parquet file).",
     )(func)
 
 

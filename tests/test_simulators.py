@@ -1,10 +1,8 @@
-"""Simulator input: parse what we write and check every number against the map."""
+"""Simulator input: read back every file we write and check every number against the map."""
 
 from __future__ import annotations
 
-import ast
 import math
-import xml.etree.ElementTree as ET
 
 import numpy as np
 import pandas as pd
@@ -14,15 +12,30 @@ from hypothesis import strategies as st
 
 from conftest import shared_file
 from published_map import group_table, published_runs
+from sim_files import (
+    lsdyna_contact,
+    mujoco_pair,
+    parse_abaqus,
+    parse_ansys,
+    parse_lsdyna,
+    pyelastica_values,
+    sofa_response,
+)
 from tribopipe.errors import ExportError
+from tribopipe.export.fe_decks import deck_names, field10
+from tribopipe.export.simbase import FOUNDING_SLIP_RATE, SlipRate, safe_text, xml_comment
 from tribopipe.export.simulators import (
+    FORMATS,
     UNIT_SYSTEMS,
     abaqus_name,
     convert_pressure_kPa,
     default_decay_s_per_mm,
+    export_simulator_input,
+    pair_slip_rates,
     write_abaqus,
     write_abaqus_decay,
     write_ansys,
+    write_lsdyna,
     write_mujoco,
     write_pyelastica,
     write_sofa,
@@ -33,8 +46,13 @@ PIN, DISC = "Dragonskin 30", "steel"
 
 
 @pytest.fixture(scope="module")
-def groups() -> pd.DataFrame:
-    return group_table(published_runs(shared_file("reference", "frictionmap_published.csv")))
+def runs() -> pd.DataFrame:
+    return published_runs(shared_file("reference", "frictionmap_published.csv"))
+
+
+@pytest.fixture(scope="module")
+def groups(runs) -> pd.DataFrame:
+    return group_table(runs)
 
 
 @pytest.fixture(scope="module")
@@ -48,56 +66,8 @@ def groups_with_mu_s(groups) -> pd.DataFrame:
     return g
 
 
-# ---------------------------------------------------------------------------- parsers
-
-
-def parse_abaqus(text: str) -> dict[str, dict]:
-    """{interaction name: {"options": [...], "rows": [[floats], ...]}} from an .inp text."""
-    blocks: dict[str, dict] = {}
-    current = None
-    for raw in text.splitlines():
-        line = raw.strip()
-        if not line or line.startswith("**"):
-            continue
-        if line.startswith("*"):
-            keyword, *params = [p.strip() for p in line.split(",")]
-            if keyword.upper() == "*SURFACE INTERACTION":
-                name = dict(p.split("=") for p in params)["NAME"]
-                current = blocks.setdefault(name, {"options": [], "rows": []})
-            else:
-                assert current is not None, f"{line} outside a *SURFACE INTERACTION"
-                current["options"].append((keyword.upper(), [p.upper() for p in params]))
-            continue
-        current["rows"].append([float(v) for v in line.split(",")])
-    return blocks
-
-
-def parse_ansys(text: str) -> dict[int, list[tuple[float | None, float, float]]]:
-    """{material: [(temperature, pressure, mu), ...]} from TB/TBFIELD/TBDATA commands."""
-    tables: dict[int, list] = {}
-    mat = temp = pres = None
-    for raw in text.splitlines():
-        line = raw.split("!")[0].strip()
-        if not line:
-            continue
-        cmd, *args = line.split(",")
-        if cmd == "TB":
-            assert args[0] == "FRIC" and args[4] == "ISO"
-            mat = int(args[1])
-            tables[mat] = []
-            temp = pres = None
-        elif cmd == "TBFIELD":
-            if args[0] == "TEMP":
-                temp = float(args[1])
-            else:
-                assert args[0] == "NPRES"
-                pres = float(args[1])
-        elif cmd == "TBDATA":
-            assert args[0] == "1"
-            tables[mat].append((temp, pres, float(args[1])))
-        else:
-            raise AssertionError(f"unexpected command {cmd}")
-    return tables
+def _steel_rates() -> dict[tuple[str, str], SlipRate]:
+    return {(PIN, DISC): SlipRate(0.021, 4, 0.02, 0.022)}
 
 
 # ---------------------------------------------------------------------------- ABAQUS
@@ -125,10 +95,40 @@ def test_abaqus_table_matches_the_map_in_both_unit_systems(groups, units, factor
     assert "1 cell(s) not measured" in text  # 11.79 kPa at 10 °C
 
 
+def test_abaqus_slip_rate_is_each_pairs_own(groups, runs):
+    """Steel ran three times faster: its table says so, the other pairs keep theirs."""
+    faster = runs.copy()
+    faster.loc[faster["disc"] == DISC, "sliding_speed_mm_s"] = 0.021
+    rates = pair_slip_rates(faster)
+    assert rates[(PIN, DISC)] == SlipRate(0.021, 18, 0.021, 0.021)
+    blocks = parse_abaqus(write_abaqus(groups, pin=PIN, units="m-N-s", slip_rates=rates))
+    assert len(blocks) == 7
+    for pin, disc in pairs(groups[groups.pin == PIN]):
+        slips = [row[1] for row in blocks[abaqus_name(pin, disc)]["rows"]]
+        assert slips == pytest.approx([(0.021 if disc == DISC else 0.007) * 1e-3] * len(slips))
+
+
+def test_slip_rates_flag_a_pair_run_at_different_speeds(runs):
+    mixed = runs.copy()
+    steel = mixed.index[mixed["disc"] == DISC]
+    mixed.loc[steel[:4], "sliding_speed_mm_s"] = 0.05
+    rate = pair_slip_rates(mixed)[(PIN, DISC)]
+    assert (rate.n_runs, rate.min_mm_s, rate.max_mm_s) == (18, 0.007, 0.05)
+    assert "FLAG" in rate.describe() and "no slip-rate dependence" in rate.describe()
+    # excluded runs and missing speeds do not count; no speed at all: the founding 0.007
+    mixed["excluded"] = False
+    mixed.loc[steel[:4], "excluded"] = True
+    assert pair_slip_rates(mixed)[(PIN, DISC)].max_mm_s == 0.007
+    mixed["sliding_speed_mm_s"] = np.nan
+    assert pair_slip_rates(mixed) == {}
+    assert "founding paper" in FOUNDING_SLIP_RATE.describe()
+
+
 def test_abaqus_pressure_units_are_converted():
     assert convert_pressure_kPa(11.79, "mm-N-s") == pytest.approx(0.01179)
     assert convert_pressure_kPa(11.79, "m-N-s") == pytest.approx(11790.0)
     assert UNIT_SYSTEMS["m-N-s"].speed_per_mm_s == 1e-3
+    assert UNIT_SYSTEMS["m-N-s"].decay_per_s_per_mm == 1e3  # 1 s/mm = 1000 s/m
     with pytest.raises(ExportError, match="unit system"):
         convert_pressure_kPa(1.0, "in-lbf-s")
 
@@ -161,8 +161,18 @@ def test_abaqus_selection_by_pin_only(groups):
         write_abaqus(groups, pin="Sylgard 184")
 
 
-@pytest.mark.parametrize("units,decay_factor", [("mm-N-s", 1.0), ("m-N-s", 1e3)])
-def test_abaqus_exponential_decay(groups_with_mu_s, units, decay_factor):
+def test_abaqus_says_it_is_not_calculix_input(groups, groups_with_mu_s):
+    for text in (write_abaqus(groups, pin=PIN, disc=DISC),
+                 write_abaqus_decay(groups_with_mu_s, pin=PIN, disc=DISC, pressure_kPa=35.37,
+                                    temperature_C=20.0)):
+        flat = " ".join(line.lstrip("* ") for line in text.splitlines())
+        assert "Abaqus input only, not for CalculiX" in flat
+        assert "stick slope" in flat and "keeps only the last data line" in flat
+
+
+@pytest.mark.parametrize("units,decay_factor,unit", [("mm-N-s", 1.0, "s/mm"),
+                                                     ("m-N-s", 1e3, "s/m")])
+def test_abaqus_exponential_decay(groups_with_mu_s, units, decay_factor, unit):
     text = write_abaqus_decay(
         groups_with_mu_s, pin=PIN, disc=DISC, pressure_kPa=35.37, temperature_C=20.0, units=units
     )
@@ -172,13 +182,33 @@ def test_abaqus_exponential_decay(groups_with_mu_s, units, decay_factor):
     assert mu_k == pytest.approx(0.45)
     assert mu_s == pytest.approx(0.45 * 1.4)
     assert d_c == pytest.approx(default_decay_s_per_mm() * decay_factor, rel=1e-5)
+    # the comment gives d_c in the file's own units, the number of the data line
+    stated = next(ln for ln in text.splitlines() if ln.startswith("** d_c = "))
+    value, stated_unit = stated.split()[3:5]
+    assert float(value) == pytest.approx(d_c) and stated_unit == unit
     # the default d_c makes μ 99 % kinetic at the measured sliding speed
     assert math.exp(-default_decay_s_per_mm() * 0.007) == pytest.approx(0.01)
+
+
+def test_abaqus_exponential_decay_at_the_pairs_own_speed(groups_with_mu_s):
+    text = write_abaqus_decay(groups_with_mu_s, pin=PIN, disc=DISC, pressure_kPa=35.37,
+                              temperature_C=20.0, slip_rate=_steel_rates()[(PIN, DISC)])
+    (_, _, d_c), = parse_abaqus(text)[abaqus_name(PIN, DISC)]["rows"]
+    assert math.exp(-d_c * 0.021) == pytest.approx(0.01)
 
 
 def test_abaqus_exponential_decay_needs_mu_s(groups):
     with pytest.raises(ExportError, match="no mu_s"):
         write_abaqus_decay(groups, pin=PIN, disc=DISC, pressure_kPa=35.37, temperature_C=20.0)
+
+
+def test_deck_names_stay_unique_when_sanitised_names_collide():
+    names = deck_names([("a b", "steel"), ("a_b", "steel"), ("c", "steel")])
+    assert len(set(names.values())) == 3
+    assert names[("c", "steel")] == abaqus_name("c", "steel")
+    assert all(len(n) <= 80 for n in names.values())
+    long = deck_names([("x" * 100, "y"), ("x" * 100 + "!", "y")], limit=70)
+    assert len(set(long.values())) == 2 and all(len(n) <= 70 for n in long.values())
 
 
 # ---------------------------------------------------------------------------- Ansys
@@ -199,56 +229,135 @@ def test_ansys_tables_match_the_map(groups, units, factor):
             assert mu == pytest.approx(query(groups, pin, disc, p / factor, t).mu_k.value, rel=1e-5)
 
 
+# ---------------------------------------------------------------------------- LS-DYNA
+
+
+def test_lsdyna_default_is_kinetic_coulomb_friction(groups):
+    text = write_lsdyna(groups, pin=PIN, disc=DISC, pressure_kPa=47.16, temperature_C=20.0,
+                        pin_part=11, disc_part=12, contact_id=7)
+    card = lsdyna_contact(text)
+    expected = query(groups, PIN, DISC, 47.16, 20.0).mu_k.value
+    assert expected == pytest.approx((0.45 + 0.36) / 2)
+    assert card["fs"] == pytest.approx(expected, rel=1e-6)
+    assert card["fd"] == card["fs"] and card["dc"] == 0.0
+    assert (card["cid"], card["surfa"], card["surfb"]) == (7, 11, 12)
+    assert (card["surfatyp"], card["surfbtyp"]) == (3, 3)  # part IDs
+    assert card["heading"] == abaqus_name(PIN, DISC)
+    assert "holds: FS = FD = mu_k" in text
+
+
+@pytest.mark.parametrize("units,factor,unit", [("mm-N-s", 1.0, "s/mm"), ("m-N-s", 1e3, "s/m")])
+def test_lsdyna_static_dynamic_and_decay(groups_with_mu_s, units, factor, unit):
+    text = write_lsdyna(groups_with_mu_s, pin=PIN, disc=DISC, pressure_kPa=35.37,
+                        temperature_C=20.0, units=units, coefficient="mu_s",
+                        slip_rate=_steel_rates()[(PIN, DISC)])
+    card = lsdyna_contact(text)
+    assert card["fs"] == pytest.approx(0.45 * 1.4) and card["fd"] == pytest.approx(0.45)
+    # DC in 1/velocity of the unit system: 99 % decayed at the pair's 0.021 mm/s
+    assert card["dc"] == pytest.approx(math.log(100) / 0.021 * factor, rel=1e-6)
+    assert f"DC = {card['dc']:.6g}"[:8] in text.replace("\n$   ", " ")
+    assert f" {unit} " in text
+    given = lsdyna_contact(write_lsdyna(groups_with_mu_s, pin=PIN, disc=DISC, pressure_kPa=35.37,
+                                        temperature_C=20.0, units=units, coefficient="mu_s",
+                                        decay_s_per_mm=2.5))
+    assert given["dc"] == pytest.approx(2.5 * factor)
+
+
+def test_lsdyna_refusals_are_one_line(groups, groups_with_mu_s):
+    cond = {"pin": PIN, "disc": DISC, "pressure_kPa": 35.37, "temperature_C": 20.0}
+    with pytest.raises(ExportError, match="no mu_s in the map") as err:
+        write_lsdyna(groups, coefficient="mu_s", **cond)
+    assert "\n" not in str(err.value) and "--coefficient mu_s" in str(err.value)
+    with pytest.raises(ExportError, match="needs FS = mu_s"):
+        write_lsdyna(groups_with_mu_s, decay_s_per_mm=3.0, **cond)
+    with pytest.raises(ExportError, match="from 1 to"):
+        write_lsdyna(groups, pin_part=0, **cond)
+    with pytest.raises(ExportError, match="positive"):
+        write_lsdyna(groups_with_mu_s, coefficient="mu_s", decay_s_per_mm=-1.0, **cond)
+
+
+@pytest.mark.parametrize("value", [0.45, 0.0, 1.0, 657.8814551, 657881.4551, 1.234567e-7,
+                                   0.7033333333, 12345678901.0, -0.5])
+def test_lsdyna_fields_are_ten_columns_with_a_blank(value):
+    text = field10(value)
+    assert len(text) == 10 and text[0] == " "
+    assert float(text) == pytest.approx(value, rel=1e-3)
+    assert "." in text or "e" in text  # a real, not an integer
+    assert field10(3) == "         3"
+    with pytest.raises(ExportError):
+        field10(math.nan)
+
+
 # ---------------------------------------------------------------------------- single values
 
 
 def test_mujoco_pair_friction(groups):
     text = write_mujoco(groups, pin=PIN, disc=DISC, pressure_kPa=47.16, temperature_C=20.0,
                         geom1="finger", geom2="table")
-    root = ET.fromstring(text[text.index("<mujoco>"):])
-    pair = root.find("contact/pair")
+    pair = mujoco_pair(text)
     assert pair.get("geom1") == "finger" and pair.get("geom2") == "table"
     friction = [float(v) for v in pair.get("friction").split()]
     expected = query(groups, PIN, DISC, 47.16, 20.0).mu_k.value
-    assert friction[:2] == pytest.approx([expected, expected], rel=1e-5)
+    assert friction == pytest.approx([expected, expected, 0.005, 0.0001, 0.0001], rel=1e-5)
     assert expected == pytest.approx((0.45 + 0.36) / 2)
-    assert "maximum" in text and "product" in text
+    assert "element-wise maximum" in text and "overrides both" in text
 
 
-def test_sofa_response_mu(groups):
+def test_sofa_response_mu_and_the_solvers_that_use_it(groups):
     text = write_sofa(groups, pin=PIN, disc=DISC, pressure_kPa=106.1, temperature_C=20.0)
-    root = ET.fromstring(text[text.index("<Node"):])
-    response = root.find("CollisionResponse")
+    response = sofa_response(text)
     assert response.get("response") == "FrictionContactConstraint"
     key, value = response.get("responseParams").split("=")
     assert key == "mu" and float(value) == pytest.approx(0.26)
+    assert "LCPConstraintSolver applies its own mu (default 0.6)" in text
+    assert "GenericConstraintSolver" in text and "BlockGaussSeidelConstraintSolver" in text
 
 
-def _pyelastica_arrays(text: str) -> dict[str, list[float]]:
-    found = {}
-    for node in ast.parse(text).body:
-        if isinstance(node, ast.Assign):
-            call = node.value
-            assert isinstance(call, ast.Call) and call.func.attr == "array"
-            found[node.targets[0].id] = ast.literal_eval(call.args[0])
-    return found
+def test_pyelastica_arrays(groups, groups_with_mu_s):
+    cond = {"pin": PIN, "disc": DISC, "pressure_kPa": 11.79, "temperature_C": 20.0}
+    default = pyelastica_values(write_pyelastica(groups_with_mu_s, **cond))
+    assert default["kinetic_mu_array"] == pytest.approx([0.63] * 3)
+    assert default["static_mu_array"] == pytest.approx([0.63] * 3)  # mu_k unless asked
+    assert default["PAIR"] == (PIN, DISC)
+    breakaway = pyelastica_values(write_pyelastica(groups_with_mu_s, coefficient="mu_s", **cond))
+    assert breakaway["static_mu_array"] == pytest.approx([0.63 * 1.4] * 3)
+    assert breakaway["kinetic_mu_array"] == pytest.approx([0.63] * 3)
+    text = write_pyelastica(groups, **cond)
+    assert "RodPlaneContactWithAnisotropicFriction" in text
+    assert "detect_contact_between(rod, plane)" in text
+    assert "AnisotropicFrictionalPlane is gone" in text
 
 
-def test_pyelastica_static_and_kinetic_arrays(groups, groups_with_mu_s):
-    arrays = _pyelastica_arrays(
-        write_pyelastica(groups_with_mu_s, pin=PIN, disc=DISC, pressure_kPa=11.79,
-                         temperature_C=20.0)
-    )
-    assert arrays["kinetic_mu_array"] == pytest.approx([0.63] * 3)
-    assert arrays["static_mu_array"] == pytest.approx([0.63 * 1.4] * 3)
-    # no μ_S in the published map: static = kinetic, and the file says so
-    text = write_pyelastica(groups, pin=PIN, disc=DISC, pressure_kPa=11.79, temperature_C=20.0)
-    assert _pyelastica_arrays(text)["static_mu_array"] == pytest.approx([0.63] * 3)
-    assert "mu_s unknown" in text
+def _onset_mu(text: str) -> float:
+    """The coefficient for the onset of slip a MuJoCo, SOFA or PyElastica file holds."""
+    if text.lstrip().startswith("#"):
+        return pyelastica_values(text)["static_mu_array"][0]
+    if "<mujoco>" in text:
+        return float(mujoco_pair(text).get("friction").split()[0])
+    return float(sofa_response(text).get("responseParams").split("=")[1])
+
+
+@pytest.mark.parametrize("writer", [write_mujoco, write_sofa, write_pyelastica])
+def test_coefficient_mu_s_writes_the_breakaway_value(groups_with_mu_s, writer):
+    cond = {"pin": PIN, "disc": DISC, "pressure_kPa": 35.37, "temperature_C": 20.0}
+    kinetic, static = (writer(groups_with_mu_s, coefficient=c, **cond) for c in ("mu_k", "mu_s"))
+    assert _onset_mu(kinetic) == pytest.approx(0.45)
+    assert _onset_mu(static) == pytest.approx(0.45 * 1.4)
+    assert "= mu_k, the kinetic" in kinetic and "= mu_s, the static (breakaway)" in static
+
+
+@pytest.mark.parametrize("fmt", ["mujoco", "sofa", "pyelastica", "lsdyna"])
+def test_coefficient_mu_s_is_refused_where_the_map_has_none(groups, fmt):
+    with pytest.raises(ExportError) as err:
+        export_simulator_input(groups, fmt, pin=PIN, disc=DISC, pressure_kPa=35.37,
+                               temperature_C=20.0, coefficient="mu_s")
+    message = str(err.value)
+    assert "\n" not in message and "no mu_s in the map" in message
+    assert "'Dragonskin 30' on disc 'steel'" in message
 
 
 def test_single_value_writers_reject_unknown_pairs(groups):
-    for writer in (write_mujoco, write_sofa, write_pyelastica):
+    for writer in (write_mujoco, write_sofa, write_pyelastica, write_lsdyna):
         with pytest.raises(ExportError, match="Dragonskin 30 on steel"):
             writer(groups, pin="Ecoflex 00-50", disc="acrylic", pressure_kPa=10.0,
                    temperature_C=20.0)
@@ -259,25 +368,134 @@ def test_writers_do_not_modify_groups(groups):
     write_abaqus(groups)
     write_ansys(groups)
     write_mujoco(groups, pin=PIN, disc=DISC, pressure_kPa=40.0, temperature_C=12.0)
+    write_lsdyna(groups, pin=PIN, disc=DISC, pressure_kPa=40.0, temperature_C=12.0)
     pd.testing.assert_frame_equal(groups, before)
 
 
 def test_options_that_do_not_apply_are_refused(groups):
-    from tribopipe.export.simulators import export_simulator_input
-
     with pytest.raises(ExportError, match="every measured pressure"):
         export_simulator_input(groups, "abaqus", pin=PIN, disc=DISC, pressure_kPa=20.0)
     with pytest.raises(ExportError, match="exponential-decay"):
         export_simulator_input(groups, "ansys", decay_s_per_mm=10.0)
+    with pytest.raises(ExportError, match="exponential-decay"):
+        export_simulator_input(groups, "mujoco", pin=PIN, disc=DISC, pressure_kPa=20.0,
+                               decay_s_per_mm=10.0)
+    for fmt in ("abaqus", "ansys"):
+        with pytest.raises(ExportError, match="--coefficient is for"):
+            export_simulator_input(groups, fmt, coefficient="mu_s")
+    with pytest.raises(ExportError, match="unknown coefficient"):
+        export_simulator_input(groups, "mujoco", coefficient="mu")
     with pytest.raises(ExportError, match="unknown simulator"):
         export_simulator_input(groups, "comsol")
 
 
-def test_mujoco_geom_names_are_escaped(groups):
-    text = write_mujoco(groups, pin=PIN, disc=DISC, pressure_kPa=35.37, temperature_C=20.0,
-                        geom1='pin"1', geom2="a<b")
-    pair = ET.fromstring(text[text.index("<mujoco>"):]).find("contact/pair")
-    assert pair.get("geom1") == 'pin"1' and pair.get("geom2") == "a<b"
+def test_mujoco_geom_names_are_escaped_or_refused(groups):
+    cond = {"pin": PIN, "disc": DISC, "pressure_kPa": 35.37, "temperature_C": 20.0}
+    pair = mujoco_pair(write_mujoco(groups, geom1='pin"1', geom2="a<b&'c", **cond))
+    assert pair.get("geom1") == 'pin"1' and pair.get("geom2") == "a<b&'c"
+    with pytest.raises(ExportError, match="control character"):
+        write_mujoco(groups, geom1="pin\n<x/>", **cond)
+
+
+# ---------------------------------------------------------------------------- headers
+
+
+def _all_files(groups, groups_with_mu_s) -> dict[str, str]:
+    """One file of every kind the exporters write."""
+    cond = {"pin": PIN, "disc": DISC, "pressure_kPa": 35.37, "temperature_C": 20.0}
+    return {
+        "abaqus": write_abaqus(groups, pin=PIN, disc=DISC),
+        "abaqus decay": write_abaqus_decay(groups_with_mu_s, **cond),
+        "ansys": write_ansys(groups, pin=PIN, disc=DISC),
+        "lsdyna": write_lsdyna(groups, **cond),
+        "lsdyna mu_s": write_lsdyna(groups_with_mu_s, coefficient="mu_s", **cond),
+        "mujoco": write_mujoco(groups, **cond),
+        "sofa": write_sofa(groups, **cond),
+        "pyelastica": write_pyelastica(groups, **cond),
+    }
+
+
+def test_every_header_names_engine_version_coefficient_and_combination(
+    groups, groups_with_mu_s
+):
+    versions = {"abaqus": "2017-2024", "ansys": "2025 R1", "lsdyna": "R14",
+                "mujoco": "mujoco 4.0.0", "sofa": "v24.12", "pyelastica": "pyelastica 1.0.0"}
+    for kind, text in _all_files(groups, groups_with_mu_s).items():
+        head = " ".join(text.splitlines()[:12])
+        assert "checked against:" in head, kind
+        assert versions[kind.split()[0]] in head, kind
+        holds = head.split("holds:")[1][:120]
+        assert "mu_k" in holds, kind
+        assert ("mu_s" in holds) == (kind in ("abaqus decay", "lsdyna mu_s")
+                                     or kind in ("mujoco", "sofa", "pyelastica")), kind
+        assert "two surfaces:" in head, kind
+    assert set(FORMATS) == {k.split()[0] for k in versions}
+
+
+# ---------------------------------------------------------------------------- hostile names
+
+HOSTILE = "Evil\n*HEADING\r\n** x'\"</pair><!-- -->--$ import os\x00\x1b\u2028end"
+
+
+@pytest.fixture(scope="module")
+def hostile_groups(groups_with_mu_s) -> pd.DataFrame:
+    g = groups_with_mu_s.copy()
+    g.loc[(g.pin == PIN) & (g.disc == DISC), "pin"] = HOSTILE
+    return g
+
+
+def test_safe_text_leaves_no_line_break_or_control_character():
+    for text in (safe_text(HOSTILE), safe_text(HOSTILE, ascii_only=True)):
+        assert all(ch.isprintable() for ch in text)
+        assert "\n" not in text and "\r" not in text and "\u2028" not in text
+    assert safe_text(HOSTILE, ascii_only=True).isascii()
+    assert "--" not in xml_comment(HOSTILE)[4:-3]
+
+
+def test_hostile_names_stay_data_in_every_file(hostile_groups):
+    cond = {"pin": HOSTILE, "disc": DISC, "pressure_kPa": 35.37, "temperature_C": 20.0}
+    source = "maps/" + HOSTILE + ".parquet"
+    files = {
+        "abaqus": write_abaqus(hostile_groups, pin=HOSTILE, disc=DISC, source=source),
+        "abaqus decay": write_abaqus_decay(hostile_groups, source=source, **cond),
+        "ansys": write_ansys(hostile_groups, pin=HOSTILE, disc=DISC, source=source),
+        "lsdyna": write_lsdyna(hostile_groups, coefficient="mu_s", source=source, **cond),
+        "mujoco": write_mujoco(hostile_groups, source=source, **cond),
+        "sofa": write_sofa(hostile_groups, source=source, **cond),
+        "pyelastica": write_pyelastica(hostile_groups, source=source, **cond),
+    }
+    expected_mu_k = query(hostile_groups, HOSTILE, DISC, 35.37, 20.0).mu_k.value
+    for kind, text in files.items():
+        assert "\r" not in text and "\x00" not in text and "\u2028" not in text, kind
+        assert not any(line.startswith("*HEADING") for line in text.split("\n")), kind
+    # each file reads back with its strict parser: only our keywords, commands, elements
+    abaqus = parse_abaqus(files["abaqus"])
+    assert list(abaqus) == [abaqus_name(HOSTILE, DISC)]
+    assert abaqus_name(HOSTILE, DISC).replace("_", "").isalnum()
+    assert list(parse_abaqus(files["abaqus decay"])) == [abaqus_name(HOSTILE, DISC)]
+    assert list(parse_ansys(files["ansys"])) == [1]
+    assert files["abaqus"].isascii() and files["ansys"].isascii()
+    card = lsdyna_contact(files["lsdyna"])
+    assert card["fd"] == pytest.approx(expected_mu_k)
+    assert card["heading"].replace("_", "").isalnum()
+    assert files["lsdyna"].isascii()
+    assert all(ln.startswith("$") for ln in files["lsdyna"].split("*KEYWORD")[0].splitlines())
+    assert float(mujoco_pair(files["mujoco"]).get("friction").split()[0]) == pytest.approx(
+        expected_mu_k)
+    assert sofa_response(files["sofa"]).get("responseParams") == f"mu={expected_mu_k:.10g}"
+    values = pyelastica_values(files["pyelastica"])
+    assert values["PAIR"] == (HOSTILE, DISC)  # the exact name, as a Python literal
+    assert values["kinetic_mu_array"] == pytest.approx([expected_mu_k] * 3)
+
+
+@pytest.mark.parametrize("fmt", ["abaqus", "ansys"])
+def test_hostile_names_in_tables_of_every_pair(hostile_groups, fmt):
+    text = export_simulator_input(hostile_groups, fmt)
+    parsed = parse_abaqus(text) if fmt == "abaqus" else parse_ansys(text)
+    assert len(parsed) == len(pairs(hostile_groups))
+
+
+# ---------------------------------------------------------------------------- properties
 
 
 @settings(max_examples=30, deadline=None)
@@ -306,3 +524,20 @@ def test_abaqus_grid_property(pressures, temps, data):
     assert rows[:, 2] * 1e3 == pytest.approx(expected_p, rel=1e-5)
     for mu, p, t in zip(rows[:, 0], expected_p, expected_t, strict=True):
         assert mu == pytest.approx(query(groups, "A", "B", p, t).mu_k.value, rel=1e-8)
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.text(min_size=1, max_size=40))
+def test_any_name_stays_a_comment_or_a_literal(name):
+    """Whatever a pin is called, the files parse back with only what we write."""
+    groups = pd.DataFrame([{"pin": name, "disc": "B", "pressure_kPa": 10.0,
+                            "temperature_C": 20.0, "mu_k_mean": 0.5, "mu_k_n": 2,
+                            "mu_k_ci95_low": 0.4, "mu_k_ci95_high": 0.6}])
+    cond = {"pin": name, "disc": "B", "pressure_kPa": 10.0, "temperature_C": 20.0}
+    assert len(parse_abaqus(write_abaqus(groups))) == 1
+    assert len(parse_ansys(write_ansys(groups))) == 1
+    assert lsdyna_contact(write_lsdyna(groups, **cond))["fs"] == 0.5
+    assert mujoco_pair(write_mujoco(groups, **cond)).get("friction").startswith("0.5 0.5")
+    assert sofa_response(write_sofa(groups, **cond)).get("responseParams") == "mu=0.5"
+    assert pyelastica_values(write_pyelastica(groups, **cond))["PAIR"] == (name, "B")
+    assert parse_lsdyna(write_lsdyna(groups, **cond))[0][0] == "*KEYWORD"

@@ -1,0 +1,377 @@
+"""Friction input for the finite-element solvers: ABAQUS, Ansys MAPDL, LS-DYNA.
+
+Each writer returns the text of one input file (nothing here touches the file system);
+every header says which engine and version the format was checked against, which
+coefficient the file holds and how the engine combines two surfaces' values. Names from
+the map reach these decks only as ASCII comments (:func:`simbase.safe_text`) or as
+sanitised identifiers (:func:`abaqus_name`, :func:`deck_names`).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import math
+import re
+from collections.abc import Mapping
+from functools import partial
+from typing import TYPE_CHECKING
+
+from ..errors import ExportError
+from ..query import query
+from .simbase import (
+    FOUNDING_SLIP_RATE,
+    Engine,
+    SlipRate,
+    breakaway,
+    check_decay,
+    comment_block,
+    condition_lines,
+    default_decay_s_per_mm,
+    filled_lines,
+    header_bodies,
+    num,
+    safe_text,
+    selected_pairs,
+    slip_rate_of,
+    table_at,
+    unit_system,
+)
+
+if TYPE_CHECKING:
+    import pandas as pd
+
+#: ASCII-only inert text for the fixed-format decks
+deck_safe = partial(safe_text, ascii_only=True)
+
+ABAQUS = Engine(
+    name="ABAQUS",
+    checked=(
+        "Abaqus Keywords Reference 2017-2024, *FRICTION (data lines: friction coefficient, "
+        "slip rate, contact pressure, temperature; EXPONENTIAL DECAY: mu_s, mu_k, d_c); "
+        "not run in Abaqus"
+    ),
+    combination=(
+        "*FRICTION belongs to a *SURFACE INTERACTION, one per contact pair: the value is "
+        "the pair's own, nothing is combined"
+    ),
+)
+
+#: Said in every ABAQUS file: the same keyword means something else to CalculiX.
+CALCULIX_WARNING = (
+    "Abaqus input only, not for CalculiX: ccx 2.x (src/frictions.f) reads just the first two "
+    "columns of a *FRICTION data line, as mu and stick slope [force/volume], keeps only the "
+    "last data line, takes no pressure or temperature dependence and ignores EXPONENTIAL "
+    "DECAY - it would read this file's slip rate (or mu_k) as a stick slope"
+)
+
+ANSYS = Engine(
+    name="Ansys MAPDL",
+    checked=(
+        "Ansys MAPDL 2025 R1 Command Reference, TB,FRIC,mat,,,ISO with TBFIELD,TEMP and "
+        "TBFIELD,NPRES; not run in Ansys"
+    ),
+    combination=(
+        "TB,FRIC is the material of a contact pair's contact elements: the value is the "
+        "pair's own, nothing is combined"
+    ),
+)
+
+LSDYNA = Engine(
+    name="LS-DYNA",
+    checked=(
+        "LS-DYNA Keyword User's Manual R14, *CONTACT_AUTOMATIC_SURFACE_TO_SURFACE_ID "
+        "(ID card CID/HEADING; card 1 SURFA SURFB SURFATYP SURFBTYP; card 2 FS FD DC; "
+        "standard format, 10-character fields); not run in LS-DYNA"
+    ),
+    combination=(
+        "FS/FD/DC belong to the *CONTACT definition, not to a part: the values are the "
+        "pair's own, nothing is combined (FS = -1 would take *PART friction instead; "
+        "not used here)"
+    ),
+)
+
+
+# ---------------------------------------------------------------------------- names
+
+
+def abaqus_name(pin: str, disc: str) -> str:
+    """An ABAQUS-safe interaction name for a pair (letters, digits, underscores; ≤ 80 chars)."""
+    text = re.sub(r"[^A-Za-z0-9]+", "_", f"{pin}__ON__{disc}").strip("_").upper()
+    return ("FRIC_" + text)[:80]
+
+
+def deck_names(selected: list[tuple[str, str]], limit: int = 80) -> dict[tuple[str, str], str]:
+    """:func:`abaqus_name` of every pair, made unique: pairs whose sanitised names collide
+    ("a b" and "a_b") get a short hash of their exact names appended; ≤ ``limit`` chars."""
+    base = {pair: abaqus_name(*pair)[:limit] for pair in selected}
+    counts: dict[str, int] = {}
+    for name in base.values():
+        counts[name] = counts.get(name, 0) + 1
+    names = {}
+    for pair, name in base.items():
+        if counts[name] > 1:
+            tag = hashlib.sha256("\0".join(pair).encode()).hexdigest()[:8].upper()
+            name = name[: limit - 9] + "_" + tag
+        names[pair] = name
+    return names
+
+
+# ---------------------------------------------------------------------------- ABAQUS
+
+
+def write_abaqus(
+    groups: pd.DataFrame,
+    *,
+    pin: str | None = None,
+    disc: str | None = None,
+    temperature_C: float | None = None,
+    units: str = "mm-N-s",
+    slip_rates: Mapping[tuple[str, str], SlipRate] | None = None,
+    source: str | None = None,
+) -> str:
+    """ABAQUS ``*SURFACE INTERACTION`` + ``*FRICTION`` tables of μ_K, one per selected pair.
+
+    Data lines follow the *FRICTION keyword's documented order: friction coefficient,
+    slip rate, contact pressure, average temperature (then field variables, which we do
+    not use: ``DEPENDENCIES`` counts field variables only, temperature is always column 4,
+    so the parameter is omitted). The grid is full and rectangular — every measured
+    pressure at every measured temperature, temperature outer and pressure inner (ABAQUS
+    wants the first variable to vary fastest). ``temperature_C`` restricts the table to
+    one interpolated temperature. The slip rate is each pair's own measured sliding speed
+    (``slip_rates``, keyed by the map's pin and disc names; the founding 0.007 mm/s where
+    a pair records none): one value per pair means no slip-rate dependence.
+    """
+    u = unit_system(units)
+    selected = selected_pairs(groups, pin, disc)
+    names = deck_names(selected)
+    bodies = header_bodies(ABAQUS, "mu_k, the kinetic (sliding) Coulomb coefficient",
+                           source, deck_safe)
+    bodies += [
+        CALCULIX_WARNING,
+        f"units {u.name}: contact pressure in {u.pressure_unit}, slip rate in "
+        f"{u.speed_unit}, temperature in C",
+        "outside the table ABAQUS holds the end values constant (as tribopipe query does)",
+    ]
+    lines = comment_block("**", bodies)
+    for pin_name, disc_name in selected:
+        table = table_at(groups, pin_name, disc_name, temperature_C)
+        rate = slip_rate_of(slip_rates, pin_name, disc_name)
+        pair_bodies = [
+            "",
+            f"pair: pin {deck_safe(pin_name)} on disc {deck_safe(disc_name)}",
+            rate.describe(),
+            *filled_lines(table, u),
+        ]
+        lines += comment_block("**", pair_bodies)
+        lines += [f"*SURFACE INTERACTION, NAME={names[(pin_name, disc_name)]}", "*FRICTION"]
+        slip = rate.value_mm_s * u.speed_per_mm_s
+        for _, row in table.iterrows():
+            fields = [num(row["mu_k"]), num(slip), num(row["pressure_kPa"] * u.pressure_per_kPa)]
+            if not math.isnan(row["temperature_C"]):
+                fields.append(num(row["temperature_C"]))
+            lines.append(", ".join(fields))
+    return "\n".join(lines) + "\n"
+
+
+def write_abaqus_decay(
+    groups: pd.DataFrame,
+    *,
+    pin: str,
+    disc: str,
+    pressure_kPa: float,
+    temperature_C: float | None = None,
+    units: str = "mm-N-s",
+    decay_s_per_mm: float | None = None,
+    slip_rate: SlipRate = FOUNDING_SLIP_RATE,
+    source: str | None = None,
+) -> str:
+    """ABAQUS ``*FRICTION, EXPONENTIAL DECAY`` (μ_s, μ_k, d_c) for one condition.
+
+    Needs μ_S in the map (raises :class:`ExportError` otherwise). ``decay_s_per_mm``
+    [s/mm] defaults to :func:`default_decay_s_per_mm` at the pair's ``slip_rate``; it is
+    written, and said in the comments, in the unit system's 1/slip-rate unit (s/mm or s/m).
+    """
+    u = unit_system(units)
+    res = query(groups, pin, disc, pressure_kPa, temperature_C)
+    if res.mu_s is None:
+        raise ExportError(
+            f"pin {deck_safe(res.pin)!r} on disc {deck_safe(res.disc)!r} has no mu_s in the "
+            "map: EXPONENTIAL DECAY needs a static coefficient",
+            hint="export the mu_k table instead (leave out --exponential-decay)",
+        )
+    d_c = check_decay(
+        default_decay_s_per_mm(slip_rate.value_mm_s) if decay_s_per_mm is None
+        else decay_s_per_mm
+    )
+    d_c_out = d_c * u.decay_per_s_per_mm
+    how = ("default: 99 % of the decay reached at this pair's sliding speed"
+           if decay_s_per_mm is None else "given")
+    bodies = header_bodies(ABAQUS, "mu_s (static, breakaway) decaying to mu_k (kinetic)",
+                           source, deck_safe)
+    bodies += [CALCULIX_WARNING, *condition_lines(res, deck_safe), slip_rate.describe()]
+    bodies += [
+        f"model: mu = mu_k + (mu_s - mu_k) * exp(-d_c * slip rate), slip rate in "
+        f"{u.speed_unit}",
+        f"d_c = {num(d_c_out)} {u.decay_unit} ({how})",
+    ]
+    lines = comment_block("**", bodies)
+    lines += [
+        f"*SURFACE INTERACTION, NAME={abaqus_name(res.pin, res.disc)}",
+        "*FRICTION, EXPONENTIAL DECAY",
+        ", ".join([num(res.mu_s.value), num(res.mu_k.value), num(d_c_out)]),
+    ]
+    return "\n".join(lines) + "\n"
+
+
+# ---------------------------------------------------------------------------- Ansys
+
+
+def ansys_safe(value: object) -> str:
+    """ASCII inert text for an MAPDL ``!`` comment (``$``, the command separator, escaped)."""
+    return deck_safe(value).replace("$", "\\x24")
+
+
+def write_ansys(
+    groups: pd.DataFrame,
+    *,
+    pin: str | None = None,
+    disc: str | None = None,
+    temperature_C: float | None = None,
+    units: str = "mm-N-s",
+    material_id: int = 1,
+    source: str | None = None,
+) -> str:
+    """Ansys MAPDL ``TB,FRIC,mat,,,ISO`` tables with ``TBFIELD`` on temperature and pressure.
+
+    One material per selected pair, numbered from ``material_id``. Per the MAPDL
+    reference the field name for contact (normal) pressure is ``NPRES``; fields are given
+    in ascending order, temperature (rows) outer and pressure inner.
+    """
+    u = unit_system(units)
+    if material_id < 1:
+        raise ExportError(f"material number must be >= 1, got {material_id}")
+    bodies = header_bodies(ANSYS, "mu_k, the kinetic (sliding) Coulomb coefficient (MU)",
+                           source, ansys_safe)
+    bodies.append(f"units {u.name}: NPRES in {u.pressure_unit}, TEMP in C")
+    lines = comment_block("!", bodies)
+    for offset, (pin_name, disc_name) in enumerate(selected_pairs(groups, pin, disc)):
+        mat = material_id + offset
+        table = table_at(groups, pin_name, disc_name, temperature_C)
+        lines += comment_block("!", [
+            "",
+            f"material {mat}: pin {ansys_safe(pin_name)} on disc {ansys_safe(disc_name)}",
+            *filled_lines(table, u),
+        ])
+        lines.append(f"TB,FRIC,{mat},,,ISO")
+        last_t: float | None = None
+        for _, row in table.iterrows():
+            t = row["temperature_C"]
+            if not math.isnan(t) and t != last_t:
+                lines.append(f"TBFIELD,TEMP,{num(t)}")
+                last_t = t
+            lines.append(f"TBFIELD,NPRES,{num(row['pressure_kPa'] * u.pressure_per_kPa)}")
+            lines.append(f"TBDATA,1,{num(row['mu_k'])}")
+    return "\n".join(lines) + "\n"
+
+
+# ---------------------------------------------------------------------------- LS-DYNA
+
+
+def field10(value: float | int) -> str:
+    """``value`` right-aligned in one 10-character LS-DYNA field (standard format), with
+    as many significant digits as leave a blank before it (at least 3)."""
+    if isinstance(value, int):
+        text = str(value)
+    else:
+        if not math.isfinite(value):
+            raise ExportError(f"LS-DYNA field must be a finite number, got {value}")
+        for digits in range(8, 2, -1):
+            text = f"{value:.{digits}g}"
+            if len(text) <= 9:
+                break
+        if "." not in text and "e" not in text:
+            text += "."  # a real, not an integer
+    if len(text) > 10:
+        raise ExportError(f"{value} does not fit a 10-character LS-DYNA field")
+    return text.rjust(10)
+
+
+def write_lsdyna(
+    groups: pd.DataFrame,
+    *,
+    pin: str,
+    disc: str,
+    pressure_kPa: float,
+    temperature_C: float | None = None,
+    units: str = "mm-N-s",
+    coefficient: str = "mu_k",
+    decay_s_per_mm: float | None = None,
+    slip_rate: SlipRate = FOUNDING_SLIP_RATE,
+    contact_id: int = 1,
+    pin_part: int = 1,
+    disc_part: int = 2,
+    source: str | None = None,
+) -> str:
+    """LS-DYNA ``*CONTACT_AUTOMATIC_SURFACE_TO_SURFACE_ID`` with the pair's FS, FD, DC.
+
+    LS-DYNA's friction is μ_c = FD + (FS − FD)·exp(−DC·|v_rel|), with DC in 1/velocity.
+    ``coefficient="mu_k"`` (default) writes FS = FD = μ_K and DC = 0 (kinetic Coulomb
+    friction, no breakaway peak); ``"mu_s"`` writes FS = μ_S, FD = μ_K and DC from
+    ``decay_s_per_mm`` [s/mm] (default :func:`default_decay_s_per_mm` at the pair's
+    ``slip_rate``), in the unit system's s/mm or s/m. SURFA and SURFB are the part IDs
+    ``pin_part`` and ``disc_part`` (SURFATYP = SURFBTYP = 3). Standard format: every
+    field 10 characters wide, blank fields take LS-DYNA's defaults.
+    """
+    u = unit_system(units)
+    for what, value in (("contact id", contact_id), ("pin part", pin_part),
+                        ("disc part", disc_part)):
+        if not 1 <= value < 10**10:
+            raise ExportError(f"LS-DYNA {what} must be an integer from 1 to 9999999999, "
+                              f"got {value}")
+    res = query(groups, pin, disc, pressure_kPa, temperature_C)
+    fs = breakaway(res, coefficient, "LS-DYNA FS")
+    fd = res.mu_k.value
+    if coefficient == "mu_k":
+        if decay_s_per_mm is not None:
+            raise ExportError("a decay coefficient needs FS = mu_s",
+                              hint="add --coefficient mu_s, or leave out --decay")
+        dc = 0.0
+        holds = "FS = FD = mu_k (kinetic Coulomb friction, no breakaway peak), DC = 0"
+        model = ["--coefficient mu_s writes FS = mu_s (breakaway) with a decay to FD = mu_k"]
+    else:
+        d_c = check_decay(
+            default_decay_s_per_mm(slip_rate.value_mm_s) if decay_s_per_mm is None
+            else decay_s_per_mm
+        )
+        dc = d_c * u.decay_per_s_per_mm
+        how = ("default: 99 % of the decay reached at this pair's sliding speed"
+               if decay_s_per_mm is None else "given")
+        holds = "FS = mu_s (static, breakaway), FD = mu_k (kinetic), DC = decay coefficient"
+        model = [slip_rate.describe(),
+                 f"DC = {num(dc)} {u.decay_unit} ({how}); for a model in ms, DC in ms/mm is "
+                 "this s/mm value x 1000"]
+    heading = deck_names([(res.pin, res.disc)], limit=70)[(res.pin, res.disc)]
+    bodies = header_bodies(LSDYNA, holds, source, deck_safe)
+    bodies += condition_lines(res, deck_safe)
+    bodies += [
+        "model: mu_c = FD + (FS - FD) * exp(-DC * |v_rel|), DC in 1/velocity "
+        f"({u.decay_unit} with units {u.name})",
+        *model,
+        f"SURFA = part {pin_part} (pin), SURFB = part {disc_part} (disc), both by part ID "
+        "(type 3): set them to your model's parts",
+    ]
+    lines = comment_block("$", bodies, width=80)
+    lines += [
+        "*KEYWORD",
+        "*CONTACT_AUTOMATIC_SURFACE_TO_SURFACE_ID",
+        "$#     cid   heading",
+        field10(contact_id) + heading,
+        "$#   surfa     surfb  surfatyp  surfbtyp",
+        field10(pin_part) + field10(disc_part) + field10(3) + field10(3),
+        "$#      fs        fd        dc",
+        field10(fs) + field10(fd) + field10(dc),
+        "$#    sfsa      sfsb      sast      sbst     sfsat     sfsbt       fsf       vsf",
+        "",
+        "*END",
+    ]
+    return "\n".join(lines) + "\n"

@@ -1,0 +1,379 @@
+"""What every simulator writer shares: units, the pair selection, slip rates, safe text.
+
+Nothing here writes a file. The writers live in :mod:`tribopipe.export.fe_decks`
+(ABAQUS, Ansys, LS-DYNA) and :mod:`tribopipe.export.scenes` (MuJoCo, SOFA, PyElastica);
+:mod:`tribopipe.export.simulators` is the entry point.
+
+Unit systems (``units``): the map stores contact pressure in kPa and sliding speed in mm/s.
+
+==========  ===================  ==============  ======================
+``units``   contact pressure     slip rate       decay coefficient d_c
+==========  ===================  ==============  ======================
+mm-N-s      MPa (kPa × 1e-3)     mm/s (× 1)      s/mm (× 1)
+m-N-s       Pa  (kPa × 1e3)      m/s (× 1e-3)    s/m  (× 1e3)
+==========  ===================  ==============  ======================
+
+Names that come from the map (pin, disc, the map's path) are data, never code: every
+writer passes them through :func:`safe_text` (Python-repr escapes: no newline, no control
+character survives) before they reach a comment, and they appear nowhere else except as
+a quoted literal (:func:`repr` in Python, XML-escaped attributes) or as a sanitised
+identifier (letters, digits, underscores).
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+from .. import __version__
+from ..errors import ExportError
+from ..frictionmap import PUBLISHED_SLIDING_SPEED_MM_S
+from ..query import QueryResult, friction_table, pairs, query, select_pair
+
+if TYPE_CHECKING:
+    import pandas as pd
+
+#: The founding paper's sliding speed [mm/s]: the slip rate where no run records one.
+FOUNDING_SLIP_RATE_MM_S = PUBLISHED_SLIDING_SPEED_MM_S
+
+#: Which measured coefficient a single-coefficient engine gets for the onset of slip.
+COEFFICIENTS = ("mu_k", "mu_s")
+
+
+@dataclass(frozen=True)
+class UnitSystem:
+    """Conversion factors from the map's units (kPa, mm/s, s/mm) to a simulator's."""
+
+    name: str
+    pressure_unit: str
+    pressure_per_kPa: float
+    speed_unit: str
+    speed_per_mm_s: float
+    decay_unit: str
+    decay_per_s_per_mm: float
+
+
+UNIT_SYSTEMS: dict[str, UnitSystem] = {
+    "mm-N-s": UnitSystem("mm-N-s", "MPa", 1e-3, "mm/s", 1.0, "s/mm", 1.0),
+    "m-N-s": UnitSystem("m-N-s", "Pa", 1e3, "m/s", 1e-3, "s/m", 1e3),
+}
+
+
+def unit_system(units: str) -> UnitSystem:
+    """The :class:`UnitSystem` named ``units`` (``mm-N-s`` or ``m-N-s``)."""
+    try:
+        return UNIT_SYSTEMS[units]
+    except KeyError:
+        raise ExportError(
+            f"unknown unit system {units!r}; expected one of {', '.join(UNIT_SYSTEMS)}"
+        ) from None
+
+
+def convert_pressure_kPa(pressure_kPa: float, units: str) -> float:
+    """Contact pressure [kPa] in the unit system's pressure unit (MPa or Pa)."""
+    return pressure_kPa * unit_system(units).pressure_per_kPa
+
+
+def num(value: float) -> str:
+    """A number as the solvers read it: up to 10 significant digits, no separators.
+
+    10 digits keep the grid's pressures exact enough that a solver's interpolation
+    between them matches ours; short values (0.01179) stay short.
+    """
+    return f"{value:.10g}"
+
+
+# ---------------------------------------------------------------------------- safe text
+
+
+def safe_text(value: object, *, ascii_only: bool = False) -> str:
+    """``value`` as one line of inert text for a comment, whatever it holds.
+
+    Python's string escapes (``repr`` without the quotes) turn newlines, carriage
+    returns, tabs, every other control or format character and the Unicode line
+    separators into visible ``\\n``, ``\\x1b``, ``\\u2028`` …; ``ascii_only`` escapes
+    every non-ASCII character too (for the fixed-format decks of ABAQUS, Ansys, LS-DYNA).
+    """
+    text = str(value)
+    escaped = ascii(text) if ascii_only else repr(text)
+    # repr picks its quote character by content; what is inside is the text itself
+    return escaped[1:-1]
+
+
+def xml_comment(text: str) -> str:
+    """``text`` as one XML comment that no content can close or break."""
+    # "--" may not occur inside a comment: a space after every hyphen that precedes one
+    body = re.sub(r"-(?=-)", "- ", safe_text(text))
+    return "<!-- " + body + " -->"
+
+
+def xml_name(name: str, what: str) -> str:
+    """An XML attribute value for a user-given element name, or an :class:`ExportError`
+    when it holds a control character (which XML cannot carry)."""
+    from xml.sax.saxutils import quoteattr
+
+    if any(not ch.isprintable() for ch in name):
+        raise ExportError(
+            f"{what} {safe_text(name)!r} holds a control character; a name must be printable"
+        )
+    return quoteattr(name)
+
+
+# ---------------------------------------------------------------------------- headers
+
+
+@dataclass(frozen=True)
+class Engine:
+    """What a writer's header says about its engine (one line each)."""
+
+    name: str
+    checked: str
+    combination: str
+
+
+def header_bodies(
+    engine: Engine,
+    holds: str,
+    source: str | None,
+    safe: Callable[[object], str] = safe_text,
+) -> list[str]:
+    """The comment bodies every file opens with: engine, version checked against,
+    coefficient held, how the engine combines two surfaces' values, and where the
+    numbers came from (``source``, the map's path, made inert by ``safe``)."""
+    origin = f" {safe(source)}" if source else ""
+    return [
+        f"{engine.name} input written by tribopipe {__version__} from the friction "
+        f"map{origin}",
+        f"checked against: {engine.checked}",
+        f"holds: {holds}",
+        f"two surfaces: {engine.combination}",
+        "values: group means of the runs (repeats) at each nominal condition",
+    ]
+
+
+def condition_lines(res: QueryResult, safe: Callable[[object], str] = safe_text) -> list[str]:
+    """Comment bodies naming the pair, the condition, both coefficients and the measured
+    groups they were interpolated from."""
+    t = "unknown" if res.temperature_C is None else f"{res.temperature_C:g} C"
+    lines = [
+        f"pair: pin {safe(res.pin)} on disc {safe(res.disc)}",
+        f"condition: contact pressure {res.pressure_kPa:g} kPa, temperature {t}",
+        f"mu_k = {num(res.mu_k.value)}"
+        + ("" if res.mu_k.uncertainty is None else f" +/- {num(res.mu_k.uncertainty)} (95 % CI)"),
+        "mu_s = " + ("unknown (not in the map)" if res.mu_s is None else num(res.mu_s.value)),
+    ]
+    used = ", ".join(
+        f"{u.pressure_kPa:g} kPa"
+        + ("" if u.temperature_C is None else f"/{u.temperature_C:g} C")
+        + f" (w={u.weight:.3g})"
+        for u in res.mu_k.used
+    )
+    lines.append(f"from measured groups: {used}")
+    if res.clamped:
+        lines.append("outside the measured range: edge value held constant")
+    return lines
+
+
+# ---------------------------------------------------------------------------- coefficients
+
+
+def check_coefficient(coefficient: str) -> str:
+    """``coefficient`` when it is one of :data:`COEFFICIENTS`, else an :class:`ExportError`."""
+    if coefficient not in COEFFICIENTS:
+        raise ExportError(
+            f"unknown coefficient {coefficient!r}; expected one of {', '.join(COEFFICIENTS)}"
+        )
+    return coefficient
+
+
+def breakaway(res: QueryResult, coefficient: str, engine: str) -> float:
+    """The coefficient for the onset of slip: μ_K, or μ_S where asked (``"mu_s"``).
+
+    Refuses ``"mu_s"`` in one line when the map holds no μ_S for the pair (a published map
+    holds μ_K only): never a silent μ_K in its place.
+    """
+    if check_coefficient(coefficient) == "mu_k":
+        return res.mu_k.value
+    if res.mu_s is None:
+        raise ExportError(
+            f"pin {safe_text(res.pin)!r} on disc {safe_text(res.disc)!r} has no mu_s in the "
+            f"map (e.g. an imported published map holds mu_k only): {engine} cannot get the "
+            "breakaway coefficient",
+            hint="leave out --coefficient mu_s to write mu_k",
+        )
+    return res.mu_s.value
+
+
+def default_decay_s_per_mm(slip_rate_mm_s: float = FOUNDING_SLIP_RATE_MM_S) -> float:
+    """d_c [s/mm] that lets μ decay 99 % of the way from μ_S to μ_K at the measured slip rate.
+
+    The exponential model (ABAQUS, LS-DYNA) is μ = μ_k + (μ_s − μ_k)·exp(−d_c·v); a
+    single-speed test cannot measure d_c, so we pick the value for which the measured
+    μ_K holds at the test's sliding speed v: exp(−d_c·v) = 0.01.
+    """
+    return math.log(100.0) / slip_rate_mm_s
+
+
+def check_decay(decay_s_per_mm: float) -> float:
+    """``decay_s_per_mm`` when it is a positive finite number, else an :class:`ExportError`."""
+    if not (math.isfinite(decay_s_per_mm) and decay_s_per_mm > 0):
+        raise ExportError(
+            f"decay coefficient must be a positive number of s/mm, got {decay_s_per_mm}"
+        )
+    return decay_s_per_mm
+
+
+# ---------------------------------------------------------------------------- slip rates
+
+
+@dataclass(frozen=True)
+class SlipRate:
+    """One pair's sliding speed [mm/s]: the median of its runs, with their range.
+
+    ``n_runs == 0`` means no run of the pair records a speed and the founding paper's
+    0.007 mm/s stands in (said so in the file).
+    """
+
+    value_mm_s: float
+    n_runs: int
+    min_mm_s: float
+    max_mm_s: float
+
+    @property
+    def measured(self) -> bool:
+        """True when the value comes from the pair's own runs."""
+        return self.n_runs > 0
+
+    def describe(self) -> str:
+        """One comment line saying where the slip rate came from."""
+        if not self.measured:
+            return (f"slip rate {self.value_mm_s:g} mm/s: no run of this pair records its "
+                    "sliding speed, the founding paper's speed stands in")
+        spread = (f"all at {self.min_mm_s:.4g} mm/s" if self.min_mm_s == self.max_mm_s
+                  else f"{self.min_mm_s:.4g}-{self.max_mm_s:.4g} mm/s")
+        text = (f"slip rate {self.value_mm_s:.4g} mm/s: median recorded sliding speed of this "
+                f"pair's {self.n_runs} run(s), {spread}")
+        if self.max_mm_s > 1.25 * self.min_mm_s:
+            text += ("; FLAG: runs at speeds more than 25 % apart, the file holds no "
+                     "slip-rate dependence")
+        return text
+
+
+FOUNDING_SLIP_RATE = SlipRate(FOUNDING_SLIP_RATE_MM_S, 0, math.nan, math.nan)
+
+
+def slip_rate_of(rates: Mapping[tuple[str, str], SlipRate] | None, pin: str, disc: str) -> SlipRate:
+    """The pair's :class:`SlipRate` from ``rates`` (keyed by the map's pin and disc names),
+    or the founding paper's speed where the pair has none."""
+    if rates is None:
+        return FOUNDING_SLIP_RATE
+    return rates.get((pin, disc), FOUNDING_SLIP_RATE)
+
+
+def pair_slip_rates(runs: pd.DataFrame) -> dict[tuple[str, str], SlipRate]:
+    """Each pair's :class:`SlipRate` from friction-map ``runs`` (excluded runs left out;
+    runs without a positive finite ``sliding_speed_mm_s`` do not count)."""
+    import numpy as np
+
+    if runs.empty or "sliding_speed_mm_s" not in runs.columns:
+        return {}
+    if "excluded" in runs.columns:
+        runs = runs[~runs["excluded"].fillna(False).astype(bool)]
+    rates = {}
+    for (pin, disc), group in runs.groupby(["pin", "disc"], sort=True):
+        speed = group["sliding_speed_mm_s"].to_numpy(dtype=float)
+        speed = speed[np.isfinite(speed) & (speed > 0)]
+        if speed.size:
+            rates[(str(pin), str(disc))] = SlipRate(
+                float(np.median(speed)), int(speed.size), float(speed.min()), float(speed.max())
+            )
+    return rates
+
+
+# ---------------------------------------------------------------------------- selection
+
+
+def selected_pairs(
+    groups: pd.DataFrame, pin: str | None, disc: str | None
+) -> list[tuple[str, str]]:
+    """The pairs matching ``pin`` / ``disc`` (either may be ``None`` = all)."""
+    held = pairs(groups)
+    if pin is not None and disc is not None:
+        first = select_pair(groups, pin, disc).iloc[0]
+        return [(str(first["pin"]), str(first["disc"]))]
+    chosen = [
+        (p, d)
+        for p, d in held
+        if (pin is None or p.casefold() == pin.strip().casefold())
+        and (disc is None or d.casefold() == disc.strip().casefold())
+    ]
+    if not chosen:
+        wanted = f"pin {pin!r}" if pin is not None else f"disc {disc!r}"
+        listing = "; ".join(f"{p} on {d}" for p, d in held) or "nothing"
+        raise ExportError(f"no pair with {wanted}; the map holds: {listing}")
+    return chosen
+
+
+def table_at(
+    groups: pd.DataFrame, pin: str, disc: str, temperature_C: float | None
+) -> pd.DataFrame:
+    """The pair's μ_K table (``pressure_kPa, temperature_C, mu_k, uncertainty, measured``),
+    or its single-temperature slice interpolated at ``temperature_C`` [°C]."""
+    import pandas as pd
+
+    table = friction_table(groups, pin, disc, "mu_k")
+    if temperature_C is None:
+        return table
+    rows = []
+    for p in sorted(set(table["pressure_kPa"])):
+        res = query(groups, pin, disc, p, temperature_C)
+        measured = any(
+            u.weight == 1.0 and u.temperature_C == temperature_C for u in res.mu_k.used
+        )
+        rows.append(
+            {
+                "pressure_kPa": p,
+                "temperature_C": temperature_C,
+                "mu_k": res.mu_k.value,
+                "uncertainty": math.nan if res.mu_k.uncertainty is None else res.mu_k.uncertainty,
+                "measured": measured,
+            }
+        )
+    return pd.DataFrame(rows)
+
+
+def filled_lines(table: pd.DataFrame, units: UnitSystem) -> list[str]:
+    """Comment bodies listing the table cells filled by interpolation."""
+    filled = table[~table["measured"]]
+    if filled.empty:
+        return ["every cell of this table was measured"]
+    lines = [
+        f"{len(filled)} cell(s) not measured, filled by linear interpolation in "
+        "temperature and pressure (held constant outside the measured range):"
+    ]
+    for _, row in filled.iterrows():
+        t = row["temperature_C"]
+        t_text = "" if math.isnan(t) else f", T = {t:g} C"
+        lines.append(
+            f"  p = {row['pressure_kPa']:g} kPa "
+            f"({num(row['pressure_kPa'] * units.pressure_per_kPa)} {units.pressure_unit})"
+            f"{t_text}: mu = {num(row['mu_k'])}"
+        )
+    return lines
+
+
+def comment_block(comment: str, bodies: list[str], width: int = 100) -> list[str]:
+    """``bodies`` as comment lines of at most ``width`` characters (long ones wrapped,
+    continuation lines indented), each starting with ``comment`` and a space."""
+    import textwrap
+
+    lines = []
+    for body in bodies:
+        indent = " " * (len(body) - len(body.lstrip(" ")))
+        wrapped = textwrap.wrap(body, width=width - len(comment) - 1,
+                                subsequent_indent=indent + "  ") or [""]
+        lines += [f"{comment} {w}".rstrip() for w in wrapped]
+    return lines

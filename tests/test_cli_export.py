@@ -4,6 +4,7 @@ Parquet map imported from the published friction map."""
 from __future__ import annotations
 
 import json
+import math
 import subprocess
 import sys
 from pathlib import Path
@@ -14,6 +15,13 @@ from click.testing import CliRunner
 
 from conftest import shared_file
 from published_map import group_table, published_runs, write_published_map
+from sim_files import (
+    lsdyna_contact,
+    mujoco_pair,
+    parse_abaqus,
+    parse_ansys,
+    pyelastica_values,
+)
 from tribopipe.cli import main
 from tribopipe.cli.fit import fit_cmd
 from tribopipe.query import query
@@ -109,8 +117,7 @@ def test_export_ansys_stdout(map_path):
     result = _run("export", "ansys", "--map", str(map_path), "--pin", "Ecoflex 00-50",
                   "--material-id", "7")
     assert result.exit_code == 0
-    assert result.output.count("TB,FRIC,") == 2
-    assert "TB,FRIC,7,,,ISO" in result.output and "TB,FRIC,8,,,ISO" in result.output
+    assert sorted(parse_ansys(result.output)) == [7, 8]
 
 
 def test_export_single_values(map_path):
@@ -119,8 +126,23 @@ def test_export_single_values(map_path):
     mujoco = _run("export", "mujoco", *common, "--geom1", "finger").output
     assert 'geom1="finger"' in mujoco and 'friction="0.26 0.26 0.005 0.0001 0.0001"' in mujoco
     assert 'responseParams="mu=0.26"' in _run("export", "sofa", *common).output
-    assert "kinetic_mu_array = np.array([0.26, 0.26, 0.26])" in _run(
-        "export", "pyelastica", *common).output
+    assert pyelastica_values(_run("export", "pyelastica", *common).output)[
+        "kinetic_mu_array"] == [0.26, 0.26, 0.26]
+    card = lsdyna_contact(_run("export", "lsdyna", *common, "--pin-part", "4",
+                               "--disc-part", "9").output)
+    assert (card["fs"], card["fd"], card["dc"]) == (0.26, 0.26, 0.0)
+    assert (card["surfa"], card["surfb"]) == (4, 9)
+
+
+@pytest.mark.parametrize("fmt", ["mujoco", "sofa", "pyelastica", "lsdyna"])
+def test_export_mu_s_from_a_map_without_it_is_one_line(map_path, fmt):
+    result = CliRunner().invoke(main, ["export", fmt, "--map", str(map_path), "--pin", PIN,
+                                       "--disc", DISC, "--pressure", "35.37", "--temperature",
+                                       "20", "--coefficient", "mu_s"])
+    assert result.exit_code == 1
+    lines = [ln for ln in result.output.splitlines() if ln.strip()]
+    assert len(lines) == 1 and "Traceback" not in result.output
+    assert "no mu_s in the map" in lines[0] and "leave out --coefficient mu_s" in lines[0]
 
 
 def test_export_single_value_without_pressure_lists_the_pressures(map_path):
@@ -166,6 +188,13 @@ def test_query_and_export_in_a_real_process(map_path, tmp_path):
     )
     assert proc.returncode == 0, proc.stderr
     assert 'friction="0.45 0.45' in out.read_text()
+    proc = subprocess.run(
+        [sys.executable, "-m", "tribopipe", "export", "lsdyna", "--map", str(map_path),
+         "--pin", PIN, "--disc", DISC, "--pressure", "35.37", "--temperature", "20"],
+        capture_output=True, text=True, timeout=120,
+    )
+    assert proc.returncode == 0, proc.stderr
+    assert lsdyna_contact(proc.stdout)["fd"] == 0.45
     proc = subprocess.run(
         [sys.executable, "-m", "tribopipe", "query", "--map", str(map_path), "--pin", PIN,
          "--disc", "steal", "--pressure", "35.37", "--temperature", "20"],
@@ -221,6 +250,27 @@ def test_export_exponential_decay_from_reduced_runs(reduced_map, tmp_path):
     assert mu_s > mu_k
 
 
+def test_export_mu_s_from_reduced_runs(reduced_map, tmp_path):
+    from tribopipe.frictionmap import read_map
+    from tribopipe.stats import group_statistics
+
+    groups = group_statistics(read_map(reduced_map))
+    g = groups[(groups.disc == "steel")].sort_values("pressure_kPa").iloc[0]
+    common = ["--map", str(reduced_map), "--pin", PIN, "--disc", DISC, "--pressure",
+              repr(float(g.pressure_kPa)), "--coefficient", "mu_s"]
+    pair = mujoco_pair(_run("export", "mujoco", *common).output)
+    assert float(pair.get("friction").split()[0]) == pytest.approx(g.mu_s_mean, rel=1e-8)
+    out = tmp_path / "contact.k"
+    result = _run("export", "lsdyna", *common, "--units", "m-N-s", "-o", str(out))
+    assert result.exit_code == 0, result.output
+    card = lsdyna_contact(out.read_text())
+    assert card["fs"] == pytest.approx(g.mu_s_mean, rel=1e-6)
+    assert card["fd"] == pytest.approx(g.mu_k_mean, rel=1e-6)
+    # DC [s/m]: 99 % decayed at the pair's measured speed (mm/s in the map, m/s in the file)
+    speed_m_s = read_map(reduced_map).query("disc == @DISC")["sliding_speed_mm_s"].median() * 1e-3
+    assert card["dc"] == pytest.approx(math.log(100) / speed_m_s, rel=1e-6)
+
+
 def test_abaqus_slip_rate_is_the_runs_measured_speed(reduced_map):
     from tribopipe.frictionmap import read_map
 
@@ -232,4 +282,24 @@ def test_abaqus_slip_rate_is_the_runs_measured_speed(reduced_map):
     speeds = {float(r[1]) for r in rows}
     assert len(speeds) == 1
     # mm/s in the map, m/s in the file
-    assert speeds.pop() == pytest.approx(runs["sliding_speed_mm_s"].median() * 1e-3, rel=1e-8)
+    steel = runs[runs["disc"] == DISC]
+    assert speeds.pop() == pytest.approx(steel["sliding_speed_mm_s"].median() * 1e-3, rel=1e-8)
+
+
+def test_abaqus_slip_rate_per_pair_from_a_real_map(tmp_path):
+    """Steel runs recorded at three times the speed: only the steel table says so."""
+    from tribopipe.frictionmap import append_records, import_records
+
+    records = import_records(shared_file("reference", "frictionmap_published.csv"))
+    for record in records:
+        if record["disc"] == DISC:
+            record["sliding_speed_mm_s"] = 0.021
+    map_path = tmp_path / "friction_map.parquet"
+    append_records(map_path, records)
+    result = _run("export", "abaqus", "--map", str(map_path), "--pin", PIN)
+    assert result.exit_code == 0, result.output
+    blocks = parse_abaqus(result.output)
+    assert len(blocks) == 9
+    for name, block in blocks.items():
+        expected = 0.021 if name.endswith("_ON_STEEL") else 0.007
+        assert {row[1] for row in block["rows"]} == {expected}, name

@@ -373,7 +373,9 @@ def comment_block(comment: str, bodies: list[str], width: int = 100) -> list[str
     lines = []
     for body in bodies:
         indent = " " * (len(body) - len(body.lstrip(" ")))
+        # words (a path, a name) are split only when longer than a whole line
         wrapped = textwrap.wrap(body, width=width - len(comment) - 1,
-                                subsequent_indent=indent + "  ") or [""]
+                                subsequent_indent=indent + "  ",
+                                break_on_hyphens=False) or [""]
         lines += [f"{comment} {w}".rstrip() for w in wrapped]
     return lines

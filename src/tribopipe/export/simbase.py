@@ -27,6 +27,7 @@ import re
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
+from xml.sax.saxutils import quoteattr
 
 from .. import __version__
 from ..errors import ExportError
@@ -113,8 +114,6 @@ def xml_comment(text: str) -> str:
 def xml_name(name: str, what: str) -> str:
     """An XML attribute value for a user-given element name, or an :class:`ExportError`
     when it holds a control character (which XML cannot carry)."""
-    from xml.sax.saxutils import quoteattr
-
     if any(not ch.isprintable() for ch in name):
         raise ExportError(
             f"{what} {safe_text(name)!r} holds a control character; a name must be printable"

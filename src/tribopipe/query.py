@@ -266,6 +266,19 @@ def _with_temperature(points: pd.DataFrame) -> pd.DataFrame:
     return points[known] if known.any() else points
 
 
+def pair_points(pair_groups: pd.DataFrame, quantity: str = "mu_k") -> pd.DataFrame:
+    """The measured points :func:`query` interpolates ``quantity`` over, for one pair.
+
+    ``pair_groups`` are the pair's groups (:func:`select_pair`). One row per (pressure
+    [kPa], temperature [°C]) with ``pressure_kPa, temperature_C, mean, half`` (95 % CI
+    half-width, NaN when unknown) and ``n``, sorted by pressure then temperature — the
+    row order the interpolation sums in. Points without a temperature are left out when
+    others have one, as :func:`query` does. For pages that redo the interpolation (the
+    explorer); :func:`query` itself is the reference.
+    """
+    return _with_temperature(_points(pair_groups, quantity))
+
+
 def _estimate(points: pd.DataFrame, pressure_kPa: float, temperature_C: float | None) -> Estimate:
     """Interpolate one quantity's points at (pressure [kPa], temperature [°C])."""
     import numpy as np

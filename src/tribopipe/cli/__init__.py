@@ -21,6 +21,7 @@ COMMANDS: dict[str, str] = {
     "campaign": "tribopipe.cli.campaign:campaign_group",
     "map": "tribopipe.cli.map:map_group",
     "query": "tribopipe.cli.query:query_cmd",
+    "explore": "tribopipe.cli.explore:explore_cmd",
     "export": "tribopipe.cli.export:export_group",
     "plot": "tribopipe.cli.plot:plot_group",
     "report": "tribopipe.cli.report:report_cmd",

@@ -1,0 +1,406 @@
+"""The friction-map explorer: one self-contained HTML page to browse a map in a browser.
+
+The page needs no network and no server (it opens from disk or from any static host) and
+uses plain JavaScript and SVG. Its parts are package data beside this module
+(``assets/explorer.js``, ``explorer.css``, ``explorer.html``, ``explorer_fragment.html``);
+this module fills them with the map's data:
+
+* what :func:`tribopipe.query.query` interpolates over — each pair's measured points
+  (:func:`tribopipe.query.pair_points`: pressure [kPa], temperature [°C], group mean, 95 %
+  CI half-width, n), in the order the interpolation sums them. The page redoes
+  ``query``'s interpolation on them (bilinear, held at the ends and said so, the
+  uncertainty carried with the same weights); a browser test holds the two equal.
+* each pair's included runs (the repeats), the group table of
+  :func:`tribopipe.stats.group_statistics` and the power-law fits of
+  :func:`tribopipe.fit.fit_power_law` with their curves sampled here in Python.
+
+The data travel as one JSON document in a ``<script type="application/json">`` element.
+Everything in it may come from someone else's map, so :func:`embed_json` escapes ``<``,
+``>``, ``&``, U+2028 and U+2029 (a name cannot close the element), and the page's script
+puts text into the DOM with ``textContent`` only. The standalone page carries a
+Content-Security-Policy that allows its own script and style (by hash) and nothing else:
+no request leaves the page.
+
+:func:`explorer_data` is pure (tables in, a JSON-ready dict out); :func:`explorer_page` and
+:func:`explorer_fragment` turn it into HTML; :func:`write_explorer` reads a map and writes
+the page.
+"""
+
+from __future__ import annotations
+
+import base64
+import hashlib
+import json
+import math
+import re
+from datetime import UTC, datetime
+from html import escape
+from importlib.resources import files
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from .. import __version__
+from ..errors import ExportError
+
+if TYPE_CHECKING:
+    import pandas as pd
+
+#: identifies the embedded JSON document and its layout
+DATA_FORMAT = "tribopipe-explorer/1"
+#: id of the ``<script type="application/json">`` element that holds the data
+DATA_ELEMENT_ID = "explorer-data"
+#: points per fitted power-law curve (log-spaced over the fitted pressure range)
+FIT_CURVE_POINTS = 48
+
+#: characters that must not appear literally in JSON inside a <script> element
+_JSON_ESCAPES = str.maketrans(
+    {"<": "\\u003c", ">": "\\u003e", "&": "\\u0026", "\u2028": "\\u2028", "\u2029": "\\u2029"}
+)
+_PLACEHOLDER = re.compile(r"\{\{(\w+)\}\}")
+#: group-table columns carried to the page (the others stay in the map's own tables)
+GROUP_FIELDS = (
+    "normal_force_N", "pressure_kPa", "temperature_C",
+    "mu_k_n", "mu_k_mean", "mu_k_std", "mu_k_ci95_low", "mu_k_ci95_high", "mu_k_cv",
+    "mu_s_n", "mu_s_mean", "mu_s_std", "mu_s_ci95_low", "mu_s_ci95_high",
+    "range_exceeds_r", "qc_flagged",
+)
+FIT_FIELDS = (
+    "temperature_C", "k", "k_ci95_low", "k_ci95_high", "exponent", "exponent_ci95_low",
+    "exponent_ci95_high", "r_squared", "n_points", "pressure_min_kPa", "pressure_max_kPa",
+    "note",
+)
+
+
+# ---------------------------------------------------------------------------- the data
+
+
+def _plain(value: Any) -> Any:
+    """``value`` as a JSON-ready Python value: NaN/inf and missing → ``None``, numpy
+    scalars → ``int``/``float``/``bool``."""
+    if value is None:
+        return None
+    if isinstance(value, bool | str):
+        return value
+    if hasattr(value, "item"):  # numpy scalar
+        value = value.item()
+    if isinstance(value, float):
+        return value if math.isfinite(value) else None
+    if isinstance(value, int | bool):
+        return value
+    try:
+        import pandas as pd
+
+        if pd.isna(value):
+            return None
+    except (TypeError, ValueError):
+        pass
+    return str(value)
+
+
+def _key(name: Any) -> str:
+    """A pin or disc name as :func:`tribopipe.query.select_pair` matches it."""
+    return str(name).strip().casefold()
+
+
+def _points(points: pd.DataFrame, pair_groups: pd.DataFrame) -> list[dict[str, Any]]:
+    """Rows of :func:`tribopipe.query.pair_points` as dicts, in their order, each with the
+    ids of the runs behind it (``run_ids`` of the groups at its pressure and temperature)."""
+    import pandas as pd
+
+    p = pd.to_numeric(pair_groups["pressure_kPa"], errors="coerce").to_numpy(dtype=float)
+    t = pd.to_numeric(pair_groups["temperature_C"], errors="coerce").to_numpy(dtype=float)
+    ids = pair_groups["run_ids"].astype(str).to_numpy() if "run_ids" in pair_groups else None
+    out = []
+    for r in points.to_dict(orient="records"):
+        at = p == r["pressure_kPa"]
+        at &= (t == r["temperature_C"]) if math.isfinite(r["temperature_C"]) else (t != t)
+        run_ids = [] if ids is None else [i for cell in ids[at] for i in cell.split(";") if i]
+        out.append(
+            {
+                "pressure_kPa": _plain(r["pressure_kPa"]),
+                "temperature_C": _plain(r["temperature_C"]),
+                "mean": _plain(r["mean"]),
+                "half": _plain(r["half"]),
+                "n": int(r["n"]),
+                "run_ids": run_ids,
+            }
+        )
+    return out
+
+
+def _left_out(pair_groups: pd.DataFrame) -> int:
+    """How many μ_K points of a pair :func:`tribopipe.query.query` leaves out for lack of
+    a temperature (points: distinct pressures of the groups without one)."""
+    import pandas as pd
+
+    p = pd.to_numeric(pair_groups["pressure_kPa"], errors="coerce")
+    t = pd.to_numeric(pair_groups["temperature_C"], errors="coerce")
+    m = pd.to_numeric(pair_groups["mu_k_mean"], errors="coerce")
+    finite = m.notna() & p.notna() & m.abs().ne(math.inf) & p.abs().ne(math.inf)
+    if not (finite & t.notna()).any():
+        return 0
+    return int(p[finite & t.isna()].nunique())
+
+
+def _flags(value: Any) -> list[str]:
+    """The QC flags of a ``;``-joined flags cell (``[]`` when missing)."""
+    return [f for f in value.split(";") if f] if isinstance(value, str) else []
+
+
+def _runs(pair_runs: pd.DataFrame) -> list[dict[str, Any]]:
+    """The pair's included runs (the repeats) for the page, in a stable order."""
+    ordered = pair_runs.sort_values(
+        ["temperature_C", "pressure_kPa", "repeat", "measurement_id"], kind="mergesort"
+    )
+    return [
+        {
+            "id": str(r["measurement_id"]),
+            "pressure_kPa": _plain(r["pressure_kPa"]),
+            "temperature_C": _plain(r["temperature_C"]),
+            "mu_k": _plain(r["mu_k"]),
+            "mu_s": _plain(r["mu_s"]),
+            "repeat": _plain(r["repeat"]),
+            "flags": _flags(r.get("flags")),
+        }
+        for r in ordered.to_dict(orient="records")
+    ]
+
+
+def _fits(pair_fits: pd.DataFrame) -> list[dict[str, Any]]:
+    """The pair's power-law fits with their curves μ = k·p^(n−1) sampled over the fitted
+    pressure range (log-spaced, :data:`FIT_CURVE_POINTS` points)."""
+    import numpy as np
+
+    from ..fit import power_law
+
+    out = []
+    for f in pair_fits.to_dict(orient="records"):
+        row = {name: _plain(f[name]) for name in FIT_FIELDS}
+        curve: list[list[float]] = []
+        k, exponent = row["k"], row["exponent"]
+        lo, hi = row["pressure_min_kPa"], row["pressure_max_kPa"]
+        if None not in (k, exponent, lo, hi) and 0 < lo < hi:
+            p = np.geomspace(lo, hi, FIT_CURVE_POINTS)
+            mu = power_law(p, k, exponent)
+            curve = [[float(a), float(b)] for a, b in zip(p, mu, strict=True)]
+        row["curve"] = curve
+        out.append(row)
+    return out
+
+
+def explorer_data(
+    runs: pd.DataFrame,
+    *,
+    groups: pd.DataFrame | None = None,
+    fits: pd.DataFrame | None = None,
+    title: str = "tribopipe friction-map explorer",
+    source: str | None = None,
+) -> dict[str, Any]:
+    """The explorer's JSON document for friction-map ``runs`` (excluded runs left out).
+
+    ``groups`` defaults to :func:`tribopipe.stats.group_statistics` of the included runs
+    and ``fits`` to :func:`tribopipe.fit.fit_power_law` of ``runs``. Returns a dict of
+    plain values (``None`` for missing numbers): ``format, title, source,
+    tribopipe_version, generated, pairs`` (per pair: ``pin, disc, mu_k_points,
+    mu_s_points, left_out, runs, fits``) and ``groups`` (the group table, each row with
+    the index of its ``pair``). Pressures in kPa, temperatures in °C. Raises
+    :class:`ExportError` when no run is left. Inputs are not modified.
+    """
+    from ..fit import fit_power_law
+    from ..query import pair_points, pairs, select_pair
+    from ..stats import group_statistics
+
+    included = runs
+    if "excluded" in runs.columns:
+        included = runs[~runs["excluded"].fillna(False).astype(bool)]
+    if included.empty:
+        raise ExportError(
+            "the friction map holds no included run to explore",
+            hint="reduce runs first (tribopipe reduce / batch) or import the published map",
+        )
+    if groups is None:
+        groups = group_statistics(included)
+    if fits is None:
+        fits = fit_power_law(runs)
+    run_pin, run_disc = included["pin"].map(_key), included["disc"].map(_key)
+    fit_pin, fit_disc = fits["pin"].map(_key), fits["disc"].map(_key)
+
+    pair_index: dict[tuple[str, str], int] = {}
+    pair_rows: list[dict[str, Any]] = []
+    for pin, disc in pairs(groups):
+        key = (_key(pin), _key(disc))
+        if key in pair_index:  # another spelling of a pair already listed (query merges them)
+            continue
+        pair_groups = select_pair(groups, pin, disc)
+        mu_k_points = pair_points(pair_groups, "mu_k")
+        if mu_k_points.empty:
+            continue
+        first = pair_groups.iloc[0]
+        pair_index[key] = len(pair_rows)
+        pair_rows.append(
+            {
+                "pin": str(first["pin"]),
+                "disc": str(first["disc"]),
+                "mu_k_points": _points(mu_k_points, pair_groups),
+                "mu_s_points": _points(pair_points(pair_groups, "mu_s"), pair_groups)
+                if "mu_s_mean" in pair_groups.columns else [],
+                "left_out": _left_out(pair_groups),
+                "runs": _runs(included[(run_pin == key[0]) & (run_disc == key[1])]),
+                "fits": _fits(fits[(fit_pin == key[0]) & (fit_disc == key[1])]),
+            }
+        )
+    group_rows = []
+    for g in groups.to_dict(orient="records"):
+        index = pair_index.get((_key(g["pin"]), _key(g["disc"])))
+        if index is None:
+            continue
+        row = {"pin": str(g["pin"]), "disc": str(g["disc"]), "pair": index}
+        row.update({name: _plain(g.get(name)) for name in GROUP_FIELDS})
+        group_rows.append(row)
+    return {
+        "format": DATA_FORMAT,
+        "title": title,
+        "source": source,
+        "tribopipe_version": __version__,
+        "generated": datetime.now(UTC).strftime("%Y-%m-%d %H:%M UTC"),
+        "pairs": pair_rows,
+        "groups": group_rows,
+    }
+
+
+# ---------------------------------------------------------------------------- the page
+
+
+def embed_json(data: Any) -> str:
+    """``data`` as JSON text that is safe inside a ``<script>`` element.
+
+    ``<``, ``>`` and ``&`` (so no ``</script>`` or ``<!--`` can appear) and the line
+    separators U+2028/U+2029 are written as ``\\uXXXX`` escapes, which JSON reads back
+    as the same characters. These characters can only occur inside JSON strings, so the
+    document parses to ``data`` unchanged. NaN and infinities are refused (``None`` is
+    the missing value).
+    """
+    text = json.dumps(data, ensure_ascii=False, allow_nan=False, separators=(",", ":"))
+    return text.translate(_JSON_ESCAPES)
+
+
+def _asset(name: str) -> str:
+    """The text of one of the page's package-data files (``assets/<name>``)."""
+    return (files("tribopipe.export") / "assets" / name).read_text(encoding="utf-8")
+
+
+def _fill(template: str, values: dict[str, str]) -> str:
+    """``template`` with each ``{{name}}`` replaced by ``values[name]``, in one pass (a
+    value that itself contains ``{{...}}`` is never expanded)."""
+    return _PLACEHOLDER.sub(lambda m: values[m.group(1)], template)
+
+
+def _script() -> str:
+    """The page's JavaScript, checked to be safe inside a ``<script>`` element."""
+    js = _asset("explorer.js")
+    if re.search(r"</script|<!--", js, re.IGNORECASE):
+        raise AssertionError("explorer.js may not contain '</script' or '<!--'")
+    return js
+
+
+def _style() -> str:
+    """The page's CSS, checked to be safe inside a ``<style>`` element."""
+    css = _asset("explorer.css")
+    if "</style" in css.lower():
+        raise AssertionError("explorer.css may not contain '</style'")
+    return css
+
+
+def _sha256(text: str) -> str:
+    """A Content-Security-Policy source expression for inline ``text``."""
+    digest = hashlib.sha256(text.encode("utf-8")).digest()
+    return "'sha256-" + base64.b64encode(digest).decode("ascii") + "'"
+
+
+def explorer_fragment(data: dict[str, Any]) -> str:
+    """The explorer as a block of HTML for a page that already has a ``<head>``: its
+    markup, the data element and the script. The page must also carry
+    :func:`explorer_style` (the rules are scoped to the block's ``.tpx`` class). One
+    explorer per page (its elements have fixed ids such as ``mu-k``)."""
+    return _fragment(data, _script())
+
+
+def _fragment(data: dict[str, Any], js: str) -> str:
+    """The fragment template filled with ``data`` (embedded JSON) and the script ``js``."""
+    return _fill(_asset("explorer_fragment.html"),
+                 {"data": embed_json(data), "script": js, "data_id": DATA_ELEMENT_ID})
+
+
+def explorer_style() -> str:
+    """The explorer's CSS (rules scoped to ``.tpx``), for a page embedding the fragment."""
+    return _style()
+
+
+def explorer_page(data: dict[str, Any]) -> str:
+    """The standalone explorer page (UTF-8 HTML text) for :func:`explorer_data` ``data``.
+
+    Its Content-Security-Policy allows only its own inline script and style (by SHA-256)
+    and ``data:`` images: the page loads nothing from anywhere.
+    """
+    js, css = _script(), _style()
+    csp = (
+        f"default-src 'none'; script-src {_sha256(js)}; style-src {_sha256(css)}; "
+        "img-src data:; base-uri 'none'; form-action 'none'"
+    )
+    source = data.get("source")
+    subtitle = (
+        f"tribopipe {__version__}" + (f" · map {source}" if source else "")
+        + f" · {data.get('generated', '')}"
+    )
+    return _fill(
+        _asset("explorer.html"),
+        {
+            "csp": escape(csp),
+            "title": escape(str(data.get("title", ""))),
+            "subtitle": escape(subtitle),
+            "style": css,
+            "fragment": _fragment(data, js),
+        },
+    )
+
+
+def read_embedded_data(html: str) -> dict[str, Any]:
+    """The JSON document embedded in an explorer page or a report that holds one.
+
+    Raises :class:`ExportError` when the page has no explorer data element.
+    """
+    match = re.search(
+        r'<script type="application/json" id="' + re.escape(DATA_ELEMENT_ID) + r'">(.*?)</script>',
+        html,
+        re.DOTALL,
+    )
+    if match is None:
+        raise ExportError(f"no explorer data (script element #{DATA_ELEMENT_ID}) in the page")
+    return json.loads(match.group(1))
+
+
+# ---------------------------------------------------------------------------- I/O edge
+
+
+def build_explorer(map_path: str | Path, *, title: str | None = None) -> str:
+    """The explorer page (HTML text) of the friction map (Parquet) at ``map_path``."""
+    from ..frictionmap import read_map
+
+    runs = read_map(map_path)
+    if runs.empty:
+        raise ExportError(
+            "the friction map is empty or absent",
+            path=map_path,
+            hint="reduce runs first (tribopipe reduce / batch) or import the published map",
+        )
+    data = explorer_data(
+        runs, title=title or "tribopipe friction-map explorer", source=str(map_path)
+    )
+    return explorer_page(data)
+
+
+def write_explorer(map_path: str | Path, output: str | Path, *, title: str | None = None) -> Path:
+    """Write the explorer page of the map at ``map_path`` to ``output`` (atomically)."""
+    from ..files import write_text_atomic
+
+    return write_text_atomic(output, build_explorer(map_path, title=title))

@@ -1,10 +1,11 @@
 """A self-contained HTML report of a campaign: one file, plots embedded, no external resources.
 
-Sections: campaign summary, group table (each group links to its runs), power-law fits,
-per-pair plots (μ_K against pressure), flagged runs, failures with their reasons, and
-every run with its trace plot (μ over sliding distance, μ_S peak, μ_K window). Images are
-base64 PNG ``data:`` URIs; every piece of text from the map or the file system is escaped
-with :func:`html.escape`.
+Sections: campaign summary, the friction-map explorer (:mod:`tribopipe.export.explorer`,
+inline), group table (each group links to its runs), power-law fits, per-pair plots (μ_K
+against pressure), flagged runs, failures with their reasons, and every run with its trace
+plot (μ over sliding distance, μ_S peak, μ_K window). Images are base64 PNG ``data:`` URIs;
+every piece of text from the map or the file system is escaped with :func:`html.escape`
+(the explorer's data travel as escaped JSON and reach the page as text only).
 
 :func:`build_report` turns tables into the HTML text (it renders plots but writes no
 file); :func:`write_report` and :func:`make_report` read the map, ``failures.csv`` and
@@ -380,9 +381,26 @@ def _runs(inp: ReportInputs) -> str:
     )
 
 
+def _explorer(inp: ReportInputs) -> str:
+    """The friction-map explorer of :mod:`tribopipe.export.explorer` for the report's runs,
+    inline (its style, data and script travel with it, so the page stays one file)."""
+    from .export.explorer import explorer_data, explorer_fragment, explorer_style
+
+    data = explorer_data(inp.runs, groups=inp.groups, fits=inp.fits, title=inp.title,
+                         source=inp.source)
+    return (
+        '<section id="explorer"><h2>Explorer</h2>'
+        "<p class=muted>μ_K and μ_S at any pressure and temperature, interpolated as "
+        "<code>tribopipe query</code> does; the selection is kept in the page's address, so "
+        "a link reproduces it. The same page stands alone with <code>tribopipe explore</code>."
+        f"</p><style>{explorer_style()}</style>{explorer_fragment(data)}</section>"
+    )
+
+
 #: the page's sections in order: (id, navigation label, builder)
 _SECTIONS = (
-    ("summary", "Summary", _summary), ("groups", "Groups", _group_table),
+    ("summary", "Summary", _summary), ("explorer", "Explorer", _explorer),
+    ("groups", "Groups", _group_table),
     ("fits", "Fits", _fits_table), ("pairs", "Pair plots", _pair_plots),
     ("flagged", "Flagged", _flagged), ("failures", "Failures", _failures),
     ("runs", "Runs", _runs),

@@ -466,12 +466,12 @@
     box.appendChild(document.createTextNode("measured temperatures: "));
     if (!temps.length) box.appendChild(document.createTextNode("unknown "));
     temps.forEach(function (v) {
-      box.appendChild(chip(pyG(v) + " °C", v === t, function () { tInput.value = String(v); update(); }));
+      box.appendChild(chip(pyG(v) + " °C", v === t, function () { tInput.value = String(v); update(false); }));
     });
     var p = inputNumber(pInput);
     box.appendChild(document.createTextNode(" · pressures: "));
     pairPressures(pair).forEach(function (v) {
-      box.appendChild(chip(pyG(v) + " kPa", v === p, function () { pInput.value = String(v); update(); }));
+      box.appendChild(chip(pyG(v) + " kPa", v === p, function () { pInput.value = String(v); update(false); }));
     });
     var tl = $("tpx-temperature-list");
     var pl = $("tpx-pressure-list");
@@ -794,7 +794,7 @@
       var choose = function () {
         state.pair = i;
         discSelect.value = String(i);
-        update();
+        update(true);
       };
       panel.addEventListener("click", choose);
       panel.addEventListener("keydown", function (ev) {
@@ -907,7 +907,7 @@
         discSelect.value = String(g.pair);
         tInput.value = finite(g.temperature_C) ? String(g.temperature_C) : "";
         pInput.value = String(g.pressure_kPa);
-        update();
+        update(false);
       };
       tr.addEventListener("click", choose);
       tr.addEventListener("keydown", function (ev) { if (ev.key === "Enter") choose(); });
@@ -933,9 +933,12 @@
     }
   }
 
-  function update() {
+  /* Recompute and redraw everything; `withDefaults` fills an empty temperature and
+     pressure with measured ones (on load and when the pair changes, not while typing, so
+     a cleared field is answered as query answers it). */
+  function update(withDefaults) {
     var pair = PAIRS[state.pair];
-    fillDefaults(pair);
+    if (withDefaults === true) fillDefaults(pair);
     var out = compute();
     state.result = out[0];
     renderMeasured(pair);
@@ -951,16 +954,15 @@
   pinSelect.addEventListener("change", function () {
     setPin(Number(pinSelect.value), key(PAIRS[state.pair].disc));
     note("");
-    update();
+    update(true);
   });
   discSelect.addEventListener("change", function () {
     state.pair = Number(discSelect.value);
     note("");
-    update();
+    update(true);
   });
   [tInput, pInput].forEach(function (input) {
-    input.addEventListener("input", update);
-    input.addEventListener("change", update);
+    input.addEventListener("input", function () { update(false); });
   });
   $("tpx-form").addEventListener("submit", function (ev) { ev.preventDefault(); });
   $("tpx-export-format").addEventListener("change", renderExport);
@@ -974,7 +976,7 @@
     return;
   }
   readUrl();
-  update();
+  update(true);
 
   /* For scripts and tests: the page's own computation, and its current selection. */
   window.tribopipeExplorer = Object.freeze({

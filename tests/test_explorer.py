@@ -1,0 +1,292 @@
+"""The explorer page without a browser: it is one self-contained file, its embedded data
+read back exactly, carry query's own points, survive hostile names, and the command
+writes it (in-process and as a subprocess). The page's behaviour in a real browser is
+checked in test_explorer_browser.py."""
+
+from __future__ import annotations
+
+import base64
+import hashlib
+import json
+import math
+import re
+import subprocess
+import sys
+from html.parser import HTMLParser
+from pathlib import Path
+
+import pandas as pd
+import pytest
+from click.testing import CliRunner
+
+from reduced_runs import make_processed
+from tribopipe.cli import main
+from tribopipe.export.explorer import (
+    DATA_ELEMENT_ID,
+    embed_json,
+    explorer_data,
+    explorer_page,
+    read_embedded_data,
+    write_explorer,
+)
+from tribopipe.fit import fit_power_law, power_law
+from tribopipe.frictionmap import exclude_runs, import_table, published_csv_path, read_map
+from tribopipe.query import pair_points, select_pair
+from tribopipe.stats import group_statistics
+
+#: the only absolute URL the page may contain: the SVG namespace name (never fetched)
+SVG_NAMESPACE = "http://www.w3.org/2000/svg"
+HOSTILE_PIN = "</script><script>alert(1)</script>"
+HOSTILE_DISC = "<img src=x onerror=alert(2)> & co\u2028line"
+
+
+class Page(HTMLParser):
+    """What the checks look at: tags, attributes that load things, scripts and styles."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.tags: list[str] = []
+        self.loads: list[str] = []
+        self.scripts: list[tuple[dict[str, str | None], str]] = []
+        self.styles: list[str] = []
+        self.meta: list[dict[str, str | None]] = []
+        self._open: tuple[str, dict[str, str | None]] | None = None
+        self._text: list[str] = []
+
+    def handle_starttag(self, tag, attrs):
+        a = dict(attrs)
+        self.tags.append(tag)
+        for name in ("src", "href", "action", "poster", "srcset", "data"):
+            if a.get(name):
+                self.loads.append(a[name])
+        if tag == "meta":
+            self.meta.append(a)
+        if tag in ("script", "style"):
+            self._open = (tag, a)
+            self._text = []
+
+    def handle_data(self, data):
+        if self._open is not None:
+            self._text.append(data)
+
+    def handle_endtag(self, tag):
+        if self._open is not None and tag == self._open[0]:
+            text = "".join(self._text)
+            if tag == "script":
+                self.scripts.append((self._open[1], text))
+            else:
+                self.styles.append(text)
+            self._open = None
+
+
+def parse(html: str) -> Page:
+    page = Page()
+    page.feed(html)
+    page.close()
+    return page
+
+
+def csp_hash(text: str) -> str:
+    return "'sha256-" + base64.b64encode(hashlib.sha256(text.encode()).digest()).decode() + "'"
+
+
+@pytest.fixture(scope="module")
+def published(tmp_path_factory) -> tuple[Path, pd.DataFrame]:
+    """The shipped published map imported into a real Parquet map, and its runs."""
+    map_path = tmp_path_factory.mktemp("published") / "friction_map.parquet"
+    import_table(map_path, published_csv_path())
+    return map_path, read_map(map_path)
+
+
+@pytest.fixture(scope="module")
+def published_html(published) -> tuple[dict, str]:
+    _, runs = published
+    data = explorer_data(runs, source="friction_map.parquet")
+    return data, explorer_page(data)
+
+
+def test_the_page_loads_nothing_from_anywhere(published_html):
+    _, html = published_html
+    page = parse(html)
+    assert html.startswith("<!DOCTYPE html>")
+    # the only attribute that names a resource is the empty data: icon (no favicon request)
+    assert page.loads == ["data:,"]
+    assert "link" in page.tags and "iframe" not in page.tags and "img" not in page.tags
+    assert re.findall(r"https?://[^\s\"'<>]+", html) == [SVG_NAMESPACE]
+    assert "@import" not in html and "url(" not in html
+    # no fetch, XHR, websocket, beacon or worker in the script
+    script = page.scripts[1][1]
+    for call in ("fetch(", "XMLHttpRequest", "WebSocket", "sendBeacon", "Worker(", "import("):
+        assert call not in script, call
+
+
+def test_the_content_security_policy_admits_exactly_the_page_own_script_and_style(
+    published_html,
+):
+    _, html = published_html
+    page = parse(html)
+    policy = next(m["content"] for m in page.meta
+                  if (m.get("http-equiv") or "").lower() == "content-security-policy")
+    rules = dict(r.strip().split(" ", 1) for r in policy.split(";"))
+    assert rules["default-src"] == "'none'"
+    assert rules["img-src"] == "data:"
+    executable = [text for attrs, text in page.scripts if attrs.get("type") != "application/json"]
+    assert len(executable) == 1 and len(page.styles) == 1
+    assert rules["script-src"] == csp_hash(executable[0])
+    assert rules["style-src"] == csp_hash(page.styles[0])
+
+
+def test_embedded_json_round_trips(published_html):
+    data, html = published_html
+    page = parse(html)
+    blocks = [text for attrs, text in page.scripts if attrs.get("type") == "application/json"]
+    assert len(blocks) == 1
+    assert json.loads(blocks[0]) == data
+    assert read_embedded_data(html) == data
+    assert f'id="{DATA_ELEMENT_ID}"' in html
+
+
+def test_the_data_hold_query_points_runs_groups_and_fits(published, published_html):
+    _, runs = published
+    data, _ = published_html
+    groups = group_statistics(runs)
+    assert data["format"] == "tribopipe-explorer/1"
+    assert len(data["pairs"]) == 11
+    assert len(data["groups"]) == len(groups) == 76
+    assert sum(len(p["runs"]) for p in data["pairs"]) == 169
+    for pair in data["pairs"]:
+        points = pair_points(select_pair(groups, pair["pin"], pair["disc"]), "mu_k")
+        assert [(p["pressure_kPa"], p["temperature_C"], p["mean"], p["n"])
+                for p in pair["mu_k_points"]] == list(
+            zip(points["pressure_kPa"], points["temperature_C"], points["mean"], points["n"],
+                strict=True))
+        assert pair["mu_s_points"] == []  # the published map holds no μ_S
+        ids = {r["id"] for r in pair["runs"]}
+        for point in pair["mu_k_points"]:
+            # the repeats behind a point are the pair's runs at its condition
+            behind = [r for r in pair["runs"] if r["id"] in point["run_ids"]]
+            assert len(behind) == point["n"]
+            assert all(r["pressure_kPa"] == pytest.approx(point["pressure_kPa"], rel=1e-3)
+                       and r["temperature_C"] == point["temperature_C"] for r in behind)
+            assert math.fsum(r["mu_k"] for r in behind) / len(behind) == pytest.approx(
+                point["mean"], rel=1e-12)
+            assert set(point["run_ids"]) <= ids
+
+
+def test_fits_are_fit_py_fits_with_their_curves(published, published_html):
+    _, runs = published
+    data, _ = published_html
+    fits = fit_power_law(runs)
+    embedded = [(p["pin"], p["disc"], f) for p in data["pairs"] for f in p["fits"]]
+    assert len(embedded) == len(fits) == 17
+    for pin, disc, f in embedded:
+        row = fits[(fits["pin"] == pin) & (fits["disc"] == disc)
+                   & (fits["temperature_C"] == f["temperature_C"])].iloc[0]
+        assert f["k"] == row["k"] and f["exponent"] == row["exponent"]
+        (p0, mu0), (p1, mu1) = f["curve"][0], f["curve"][-1]
+        assert (p0, p1) == pytest.approx((row["pressure_min_kPa"], row["pressure_max_kPa"]))
+        assert mu0 == pytest.approx(power_law(p0, row["k"], row["exponent"]), rel=1e-12)
+        assert mu1 == pytest.approx(power_law(p1, row["k"], row["exponent"]), rel=1e-12)
+
+
+def test_missing_numbers_are_null_never_nan(tmp_path):
+    map_path, _ = make_processed(tmp_path)
+    data = explorer_data(read_map(map_path))
+    text = embed_json(data)
+    assert "NaN" not in text and "Infinity" not in text
+    one_run = next(p for p in data["pairs"] if p["pin"] == "Ecoflex 00-50")
+    assert one_run["mu_k_points"][0]["half"] is None  # one run: CI unknown
+    assert one_run["fits"][0]["k"] is None and one_run["fits"][0]["curve"] == []
+    ds = next(p for p in data["pairs"] if p["pin"] == "Dragonskin 30")
+    assert len(ds["mu_s_points"]) == 2  # reduced runs hold μ_S
+
+
+def test_excluded_runs_are_left_out(tmp_path):
+    map_path, _ = make_processed(tmp_path)
+    runs = read_map(map_path)
+    victim = runs.loc[runs["pin"] == "Dragonskin 30", "measurement_id"].iloc[0]
+    exclude_runs(map_path, [victim], "pin torn")
+    data = explorer_data(read_map(map_path))
+    ids = {r["id"] for p in data["pairs"] for r in p["runs"]}
+    assert victim not in ids and len(ids) == len(runs) - 1
+    assert all(victim not in pt["run_ids"] for p in data["pairs"] for pt in p["mu_k_points"])
+
+
+def test_embed_json_escapes_what_could_close_the_element():
+    value = {"a": "</script><!-- & \u2028\u2029 >", "b": [1.5, None, True]}
+    text = embed_json(value)
+    for raw in ("<", ">", "&", "\u2028", "\u2029"):
+        assert raw not in text
+    assert json.loads(text) == value
+    with pytest.raises(ValueError):
+        embed_json({"x": math.nan})
+
+
+def hostile_map(root: Path) -> Path:
+    """A published-schema table whose names are markup, imported into a real map."""
+    csv = root / "hostile.csv"
+    rows = ["pin,disc,contactForce,contactPressure,temperature,measurementNo,cof"]
+    for force, pressure, mu in ((1.0, 11.79, 0.6), (3.0, 35.37, 0.4)):
+        for repeat in (1, 2):
+            rows.append(f'"{HOSTILE_PIN}","{HOSTILE_DISC}",{force},{pressure},20,{repeat},'
+                        f"{mu + 0.01 * repeat}")
+    csv.write_text("\n".join(rows) + "\n", encoding="utf-8")
+    map_path = root / "friction_map.parquet"
+    import_table(map_path, csv)
+    return map_path
+
+
+def test_hostile_names_never_become_markup(tmp_path):
+    map_path = hostile_map(tmp_path)
+    html = write_explorer(map_path, tmp_path / "explorer.html").read_text(encoding="utf-8")
+    page = parse(html)
+    assert len(page.scripts) == 2  # the data and the page's own script, nothing injected
+    assert "img" not in page.tags
+    assert HOSTILE_PIN not in html and "<img" not in html and "\u2028" not in html
+    data = read_embedded_data(html)
+    assert data["pairs"][0]["pin"] == HOSTILE_PIN
+    assert data["pairs"][0]["disc"] == HOSTILE_DISC
+
+
+def test_the_command_writes_the_page(published, tmp_path):
+    map_path, _ = published
+    out = tmp_path / "site" / "index.html"
+    result = CliRunner().invoke(main, ["explore", "--map", str(map_path), "-o", str(out),
+                                       "--title", "Our <lab> map"])
+    assert result.exit_code == 0, result.output
+    assert result.output.strip() == str(out)
+    html = out.read_text(encoding="utf-8")
+    assert "<title>Our &lt;lab&gt; map</title>" in html
+    assert len(read_embedded_data(html)["groups"]) == 76
+
+
+def test_the_command_defaults_to_explorer_html_beside_the_map(published, tmp_path):
+    map_path, _ = published
+    copy = tmp_path / "friction_map.parquet"
+    copy.write_bytes(map_path.read_bytes())
+    proc = subprocess.run(
+        [sys.executable, "-m", "tribopipe", "explore", "--map", str(copy)],
+        capture_output=True, text=True, cwd=tmp_path,
+    )
+    assert proc.returncode == 0, proc.stderr
+    assert (tmp_path / "explorer.html").is_file()
+    assert proc.stdout.strip() == str(tmp_path / "explorer.html")
+
+
+def test_an_absent_map_is_one_line(tmp_path):
+    result = CliRunner().invoke(main, ["explore", "--map", str(tmp_path / "none.parquet"),
+                                       "-o", str(tmp_path / "x.html")])
+    assert result.exit_code == 1
+    assert "friction map is empty or absent" in result.output
+    assert len(result.output.strip().splitlines()) == 1
+    assert "Traceback" not in result.output
+    assert not (tmp_path / "x.html").exists()
+
+
+def test_a_foreign_file_at_the_map_path_is_refused(tmp_path):
+    bogus = tmp_path / "friction_map.parquet"
+    bogus.write_text("not parquet", encoding="utf-8")
+    result = CliRunner().invoke(main, ["explore", "--map", str(bogus)])
+    assert result.exit_code == 1
+    assert len(result.output.strip().splitlines()) == 1
+    assert "Traceback" not in result.output

@@ -1,0 +1,509 @@
+"""The explorer page in a real headless browser (Debian's ``chromium``, driven by
+Playwright with the system browser — no browser is downloaded).
+
+The page's μ_K, uncertainty and clamping must equal ``tribopipe query``'s over a grid of
+conditions (measured, between groups, between temperatures, outside the range), on the
+shipped published map and on a small map of really reduced runs; a link must restore a
+selection; hostile names must stay text; nothing may be logged as an error and no request
+may leave the page. Where no browser exists the tests skip and say why (CI sets
+``TRIBOPIPE_REQUIRE_BROWSER=1`` and so fails instead).
+"""
+
+from __future__ import annotations
+
+import functools
+import http.server
+import math
+import os
+import shutil
+import threading
+from pathlib import Path
+from urllib.parse import urlencode
+
+import pytest
+
+from reduced_runs import make_processed
+from tribopipe.export.explorer import write_explorer
+from tribopipe.export.simulators import condition_snippet
+from tribopipe.frictionmap import import_table, published_csv_path, read_map
+from tribopipe.query import groups_of, pairs, query
+from tribopipe.report import make_report
+
+CHROMIUM_ARGS = [
+    "--headless", "--no-sandbox", "--disable-gpu", "--disable-background-networking",
+    "--disable-component-update", "--disable-sync", "--no-first-run",
+]
+HOSTILE_PIN = "</script><script>alert(1)</script>"
+HOSTILE_DISC = "<img src=x onerror=alert(2)> & co"
+#: values agree to rounding: numpy's dot may fuse multiply-adds, JavaScript never does
+REL = 1e-12
+
+
+def _unavailable(reason: str) -> None:
+    if os.environ.get("TRIBOPIPE_REQUIRE_BROWSER") == "1":
+        pytest.fail(f"TRIBOPIPE_REQUIRE_BROWSER=1 but {reason}")
+    pytest.skip(reason)
+
+
+@pytest.fixture(scope="session")
+def browser():
+    """A headless Chromium (the system's ``chromium``) under Playwright."""
+    executable = os.environ.get("TRIBOPIPE_CHROMIUM") or shutil.which("chromium")
+    if not executable:
+        _unavailable("no chromium on PATH (Debian: apt-get install chromium)")
+    try:
+        from playwright.sync_api import sync_playwright
+    except ImportError:
+        _unavailable("playwright is not installed (pip install -e '.[test]')")
+    manager = sync_playwright().start()
+    try:
+        instance = manager.chromium.launch(executable_path=executable, args=CHROMIUM_ARGS)
+    except Exception as exc:  # the browser exists but cannot start here
+        manager.stop()
+        _unavailable(f"chromium at {executable} did not start: {str(exc).splitlines()[0]}")
+    yield instance
+    instance.close()
+    manager.stop()
+
+
+class Tab:
+    """A page with everything it logs, raises or requests collected."""
+
+    def __init__(self, browser, **context) -> None:
+        self.context = browser.new_context(accept_downloads=True, **context)
+        self.page = self.context.new_page()
+        self.problems: list[str] = []
+        self.requests: list[str] = []
+        self.dialogs: list[str] = []
+        self.page.on("console", self._console)
+        self.page.on("pageerror", lambda exc: self.problems.append(f"page error: {exc}"))
+        self.page.on("request", lambda req: self.requests.append(req.url))
+
+        def dialog(d) -> None:
+            self.dialogs.append(d.message)
+            d.dismiss()
+
+        self.page.on("dialog", dialog)
+
+    def _console(self, msg) -> None:
+        if msg.type in ("error", "warning"):
+            self.problems.append(f"console {msg.type}: {msg.text}")
+
+    def open(self, url: str) -> None:
+        self.page.goto(url)
+        self.page.wait_for_function("window.tribopipeExplorer !== undefined")
+
+    def check_clean(self, *, origin: str = "file://") -> None:
+        assert self.problems == []
+        assert self.dialogs == []
+        foreign = [u for u in self.requests if not u.startswith((origin, "blob:", "data:"))]
+        assert foreign == []
+
+    def close(self) -> None:
+        self.context.close()
+
+
+@pytest.fixture
+def tab(browser):
+    t = Tab(browser)
+    yield t
+    t.check_clean()
+    t.close()
+
+
+def page_url(path: Path, **selection) -> str:
+    query_string = urlencode({k: v for k, v in selection.items() if v is not None})
+    return path.resolve().as_uri() + (f"?{query_string}" if query_string else "")
+
+
+@pytest.fixture(scope="module")
+def published(tmp_path_factory):
+    """The shipped published map, imported, and its explorer page."""
+    root = tmp_path_factory.mktemp("published")
+    map_path = root / "friction_map.parquet"
+    import_table(map_path, published_csv_path())
+    page = write_explorer(map_path, root / "explorer.html")
+    return map_path, page, groups_of(read_map(map_path), map_path)
+
+
+@pytest.fixture(scope="module")
+def reduced(tmp_path_factory):
+    """A small map of really reduced synthetic runs (μ_S known, one temperature, a pair
+    with a single run), its processed folder and its explorer page."""
+    map_path, processed = make_processed(tmp_path_factory.mktemp("reduced"))
+    page = write_explorer(map_path, processed / "explorer.html")
+    return map_path, page, groups_of(read_map(map_path), map_path), processed
+
+
+def grid(groups) -> list[tuple[str, str, float, float | None]]:
+    """Conditions per pair: each measured pressure, points between and beyond them, zero;
+    each measured temperature, between them, below and above, and none where allowed."""
+    out = []
+    for pin, disc in pairs(groups):
+        pair = groups[(groups["pin"] == pin) & (groups["disc"] == disc)]
+        ps = sorted(set(pair["pressure_kPa"]))
+        ts = sorted(set(pair["temperature_C"].dropna()))
+        pressures = ps + [(a + b) / 2 for a, b in zip(ps, ps[1:], strict=False)]
+        pressures += [0.0, ps[0] * 0.5, ps[-1] * 1.7, 1000.0]
+        temps: list[float | None] = ts + [ts[0] - 7.5, ts[-1] + 12.25]
+        temps += [(a + b) / 2 for a, b in zip(ts, ts[1:], strict=False)] + [ts[0] + 0.3]
+        if len(ts) == 1:
+            temps.append(None)
+        out += [(pin, disc, p, t) for p in pressures for t in temps]
+    return out
+
+
+PAGE_QUERY = """conditions => conditions.map(([pin, disc, p, t]) => {
+  try { return {ok: window.tribopipeExplorer.query(pin, disc, p, t)}; }
+  catch (e) { return {error: e.message}; }
+})"""
+
+
+def same(a: float | None, b: float | None) -> bool:
+    if a is None or b is None:
+        return a is None and b is None
+    return math.isclose(a, b, rel_tol=REL, abs_tol=1e-15)
+
+
+def assert_same_estimate(page_est: dict | None, est) -> None:
+    if est is None:
+        assert page_est is None
+        return
+    assert same(page_est["value"], est.value)
+    assert same(page_est["uncertainty"], est.uncertainty)
+    assert page_est["clamped_pressure"] == est.clamped_pressure
+    assert page_est["clamped_temperature"] == est.clamped_temperature
+    assert len(page_est["used"]) == len(est.used)
+    for mine, theirs in zip(page_est["used"], est.used, strict=True):
+        assert mine["pressure_kPa"] == theirs.pressure_kPa
+        assert mine["temperature_C"] == theirs.temperature_C
+        assert mine["mean"] == theirs.mean and mine["n"] == theirs.n
+        assert same(mine["weight"], theirs.weight)
+        assert same(mine["ci95_half_width"], theirs.ci95_half_width)
+
+
+def assert_page_equals_query(tab, groups, conditions) -> int:
+    answers = tab.page.evaluate(PAGE_QUERY, [list(c) for c in conditions])
+    clamped = 0
+    for (pin, disc, p, t), answer in zip(conditions, answers, strict=True):
+        try:
+            res = query(groups, pin, disc, p, t)
+        except Exception as exc:  # the page must refuse with the same words
+            assert answer.get("error") == exc.problem, (pin, disc, p, t)
+            continue
+        assert "ok" in answer, (pin, disc, p, t, answer)
+        mine = answer["ok"]
+        assert_same_estimate(mine["mu_k"], res.mu_k)
+        assert_same_estimate(mine["mu_s"], res.mu_s)
+        assert mine["clamped"] == res.clamped
+        assert mine["notes"] == list(res.notes)
+        assert tuple(mine["pressure_range_kPa"]) == res.pressure_range_kPa
+        assert tuple(mine["temperatures_C"]) == res.temperatures_C
+        clamped += res.clamped
+    return clamped
+
+
+def test_page_equals_query_on_the_published_map(tab, published):
+    _, page, groups = published
+    tab.open(page_url(page))
+    conditions = grid(groups)
+    clamped = assert_page_equals_query(tab, groups, conditions)
+    assert len(conditions) > 700 and 300 < clamped < len(conditions)
+
+
+def test_page_equals_query_on_a_reduced_map(tab, reduced):
+    _, page, groups, _ = reduced
+    tab.open(page_url(page))
+    conditions = grid(groups) + [("Dragonskin 30", "steel", -1.0, 20.0),
+                                 ("dragonskin 30", " STEEL ", 40.0, None)]
+    assert_page_equals_query(tab, groups, conditions)
+    res = tab.page.evaluate(PAGE_QUERY, [["Ecoflex 00-50", "wood (smooth)", 20.0, 20.0]])[0]["ok"]
+    assert "uncertainty unknown: a group used has fewer than 2 runs" in res["notes"]
+
+
+def shown(tab) -> dict:
+    return tab.page.evaluate("""() => {
+      const e = document.getElementById('mu-k');
+      return {text: e.textContent, value: e.dataset.value, uncertainty: e.dataset.uncertainty,
+              clampedPressure: e.dataset.clampedPressure,
+              clampedTemperature: e.dataset.clampedTemperature,
+              clamped: document.getElementById('clamped').textContent,
+              muS: document.getElementById('mu-s').textContent,
+              pin: document.getElementById('pin').selectedOptions[0].textContent,
+              disc: document.getElementById('disc').selectedOptions[0].textContent,
+              pressure: document.getElementById('pressure').value,
+              temperature: document.getElementById('temperature').value};
+    }""")
+
+
+def assert_shows(tab, res) -> None:
+    s = shown(tab)
+    unc = "" if res.mu_k.uncertainty is None else f" ± {res.mu_k.uncertainty:.3f}"
+    assert s["text"] == f"{res.mu_k.value:.3f}{unc}"
+    assert float(s["text"].split()[0]) == pytest.approx(res.mu_k.value, abs=5e-4)
+    assert same(float(s["value"]), res.mu_k.value)
+    assert s["clampedPressure"] == str(res.mu_k.clamped_pressure).lower()
+    assert s["clampedTemperature"] == str(res.mu_k.clamped_temperature).lower()
+    assert s["clamped"].startswith("yes" if res.clamped else "no")
+    if res.mu_s is None:
+        assert s["muS"].startswith("unknown")
+    else:
+        assert s["muS"].startswith(f"{res.mu_s.value:.3f}")
+
+
+def choose(tab, pin: str, disc: str, pressure: float, temperature: float | None) -> None:
+    page = tab.page
+    page.select_option("#pin", label=pin)
+    page.select_option("#disc", label=disc)
+    page.fill("#temperature", "" if temperature is None else repr(temperature))
+    page.fill("#pressure", repr(pressure))
+
+
+def test_the_shown_mu_k_is_query_s_through_the_controls(tab, published):
+    _, page, groups = published
+    tab.open(page_url(page))
+    conditions = [
+        ("Dragonskin 30", "steel", 35.37, 20.0),       # measured
+        ("Dragonskin 30", "steel", 50.0, 15.0),        # between pressures and temperatures
+        ("Dragonskin 30", "steel", 5.0, 20.0),         # below the pressures: held
+        ("Dragonskin 30", "acrylic glass", 150.0, 30.0),  # beyond both: held
+        ("Dragonskin 30", "cardboard", 70.0, 10.0),
+        ("Dragonskin 30", "wood (smooth)", 20.0, 10.0),   # one temperature, asked another
+        ("Ecoflex 00-50", "steel", 47.0, 10.0),
+        ("Ecoflex 00-50", "wood (smooth)", 0.0, 20.0),
+    ]
+    for pin, disc, p, t in conditions:
+        choose(tab, pin, disc, p, t)
+        assert_shows(tab, query(groups, pin, disc, p, t))
+
+
+def test_a_link_restores_the_selection_and_the_url_follows_the_controls(browser, published):
+    _, page, groups = published
+    first = Tab(browser)
+    first.open(page_url(page, pin="dragonskin 30", disc="Lathed Aluminium Disk",
+                        pressure="64.5", temperature="12.5"))
+    s = shown(first)
+    assert (s["pin"], s["disc"], s["pressure"], s["temperature"]) == (
+        "Dragonskin 30", "lathed aluminium disk", "64.5", "12.5")
+    assert_shows(first, query(groups, "Dragonskin 30", "lathed aluminium disk", 64.5, 12.5))
+    # change the selection with the controls: the address follows
+    choose(first, "Dragonskin 30", "cardboard", 99.0, 17.0)
+    link = first.page.url
+    assert "disc=cardboard" in link and "pressure=99.0" in link and "temperature=17.0" in link
+    first.check_clean()
+    first.close()
+    # the link in a fresh tab shows the same
+    second = Tab(browser)
+    second.open(link)
+    s = shown(second)
+    assert (s["pin"], s["disc"], s["pressure"], s["temperature"]) == (
+        "Dragonskin 30", "cardboard", "99.0", "17.0")
+    assert_shows(second, query(groups, "Dragonskin 30", "cardboard", 99.0, 17.0))
+    second.check_clean()
+    second.close()
+
+
+def test_a_link_to_something_the_map_lacks_says_so(tab, published):
+    _, page, _ = published
+    tab.open(page_url(page, pin="Unobtainium", disc="steel", pressure="abc"))
+    note = tab.page.text_content("#tpx-selection-note")
+    assert "pin “Unobtainium” is not in this map" in note
+    assert "pressure “abc” is not a number" in note
+    assert float(shown(tab)["text"].split()[0]) > 0  # a valid default is shown
+
+
+def test_temperature_needed_and_bad_pressure_are_said(tab, published):
+    _, page, _ = published
+    tab.open(page_url(page, pin="Dragonskin 30", disc="steel", pressure="20"))
+    tab.page.fill("#temperature", "")
+    assert tab.page.text_content("#tpx-error") == (
+        "temperature needed: this pair is measured at 10, 20 °C")
+    assert shown(tab)["text"] == "–"
+    tab.page.fill("#temperature", "20")
+    tab.page.fill("#pressure", "-3")
+    assert tab.page.text_content("#tpx-error") == (
+        "contact pressure must be a finite number >= 0 kPa, got -3.0")
+
+
+def test_downloads_and_snippets_are_the_python_writers(tab, reduced):
+    map_path, page, groups, _ = reduced
+    tab.open(page_url(page, pin="Dragonskin 30", disc="steel", pressure="60", temperature="20"))
+    res = query(groups, "Dragonskin 30", "steel", 60.0, 20.0)
+    for fmt, suffix in (("abaqus", ".inp"), ("ansys", ".mac")):
+        tab.page.select_option("#tpx-export-format", fmt)
+        with tab.page.expect_download() as info:
+            tab.page.click("#tpx-download")
+        download = info.value
+        assert download.suggested_filename == f"tribopipe_dragonskin-30_steel_60kPa_20C{suffix}"
+        text = Path(download.path()).read_text(encoding="utf-8")
+        assert text == condition_snippet(res, fmt, source=str(map_path))
+    tab.page.select_option("#tpx-export-format", "csv")
+    with tab.page.expect_download() as info:
+        tab.page.click("#tpx-download")
+    import csv
+
+    with open(info.value.path(), encoding="utf-8", newline="") as fh:
+        rows = list(csv.DictReader(fh))
+    assert len(rows) == 1
+    row = rows[0]
+    assert (row["pin"], row["disc"]) == ("Dragonskin 30", "steel")
+    assert float(row["pressure_kPa"]) == 60.0 and float(row["temperature_C"]) == 20.0
+    assert same(float(row["mu_k"]), res.mu_k.value)
+    assert same(float(row["mu_k_ci95_half_width"]), res.mu_k.uncertainty)
+    assert same(float(row["mu_s"]), res.mu_s.value)
+    assert row["clamped_pressure"] == "False" and row["clamped_temperature"] == "False"
+    assert row["map"] == str(map_path)
+
+
+def test_copy_puts_the_text_on_the_clipboard(browser, reduced):
+    _, page, _, _ = reduced
+    t = Tab(browser, permissions=["clipboard-read", "clipboard-write"])
+    t.open(page_url(page, pin="Dragonskin 30", disc="steel", pressure="30", temperature="20"))
+    t.page.select_option("#tpx-export-format", "abaqus")
+    t.page.click("#tpx-copy")
+    t.page.wait_for_function(
+        "document.getElementById('tpx-export-status').textContent !== ''")
+    assert t.page.text_content("#tpx-export-status") == "copied"
+    copied = t.page.evaluate("navigator.clipboard.readText()")
+    assert copied == t.page.input_value("#tpx-export-text")
+    assert "*FRICTION" in copied
+    t.check_clean()
+    t.close()
+
+
+def group_rows(tab) -> list[list[str]]:
+    return tab.page.evaluate("""() => Array.from(
+      document.querySelectorAll('#tpx-group-table tbody tr'),
+      tr => Array.from(tr.cells, td => td.textContent))""")
+
+
+def test_the_group_table_sorts_filters_and_selects(tab, published):
+    _, page, groups = published
+    tab.open(page_url(page))
+    assert len(group_rows(tab)) == len(groups) == 76
+    # every word must occur in the row's pin, disc, QC, pressure or temperature
+    tab.page.fill("#tpx-group-filter", "STEEL dragon")
+    rows = group_rows(tab)
+    expected = groups[(groups["disc"] == "steel") & (groups["pin"] == "Dragonskin 30")]
+    assert len(rows) == len(expected) == 9
+    assert {(r[0], r[1]) for r in rows} == {("Dragonskin 30", "steel")}
+    assert tab.page.text_content("#tpx-group-count") == "9 of 76 groups"
+    header = tab.page.locator("#tpx-group-table th", has_text="μ_K mean")
+    header.click()
+    means = [float(r[6]) for r in group_rows(tab)]
+    assert means == sorted(means) and means[0] < means[-1]
+    header.click()
+    assert [float(r[6]) for r in group_rows(tab)] == sorted(means, reverse=True)
+    # a row selects its condition: a measured group, weight 1, its own mean
+    row = tab.page.locator("#tpx-group-table tbody tr").first
+    cells = row.locator("td").all_text_contents()
+    row.click()
+    s = shown(tab)
+    assert (s["pin"], s["disc"]) == (cells[0], cells[1])
+    res = query(groups, cells[0], cells[1], float(s["pressure"]), float(s["temperature"]))
+    assert len(res.mu_k.used) == 1 and not res.clamped
+    assert_shows(tab, res)
+    assert tab.page.locator("#tpx-group-table tbody tr.tpx-used").count() == 1
+    tab.page.select_option("#tpx-group-scope", "pair")
+    assert {(r[0], r[1]) for r in group_rows(tab)} == {(cells[0], cells[1])}
+
+
+def test_plots_show_the_pair_and_every_disc_of_the_pin(tab, published):
+    _, page, groups = published
+    tab.open(page_url(page, pin="Dragonskin 30", disc="steel", pressure="50",
+                      temperature="20"))
+    pair = tab.page.locator("#tpx-pair-plot svg")
+    assert pair.count() == 1
+    # the repeats, the group means and one fitted curve per temperature
+    runs = groups[(groups["pin"] == "Dragonskin 30") & (groups["disc"] == "steel")]
+    assert pair.locator("circle").count() == int(runs["mu_k_n"].sum()) + len(runs)
+    assert pair.locator("path[fill='none'][stroke-width]").count() >= 2
+    assert "Dragonskin 30 on steel" in pair.text_content()
+    panels = tab.page.locator("#tpx-overview .tpx-panel")
+    discs = sorted(d for p, d in pairs(groups) if p == "Dragonskin 30")
+    assert panels.count() == len(discs) == 9
+    assert sorted(panels.locator("svg > text").all_text_contents()) == discs
+    panels.filter(has_text="cardboard").click()
+    assert shown(tab)["disc"] == "cardboard"
+    assert "disc=cardboard" in tab.page.url
+    tab.page.screenshot(path=str(page.parent / "explorer.png"), full_page=True)
+
+
+def test_hostile_names_render_as_text(tab, tmp_path):
+    csv = tmp_path / "hostile.csv"
+    rows = ["pin,disc,contactForce,contactPressure,temperature,measurementNo,cof"]
+    for force, pressure, mu in ((1.0, 11.79, 0.6), (3.0, 35.37, 0.4)):
+        for repeat in (1, 2):
+            rows.append(f'"{HOSTILE_PIN}","{HOSTILE_DISC}",{force},{pressure},20,{repeat},'
+                        f"{mu + 0.01 * repeat}")
+    csv.write_text("\n".join(rows) + "\n", encoding="utf-8")
+    map_path = tmp_path / "friction_map.parquet"
+    import_table(map_path, csv)
+    page = write_explorer(map_path, tmp_path / "explorer.html")
+    tab.open(page_url(page, pin=HOSTILE_PIN, disc=HOSTILE_DISC, pressure="20"))
+    s = shown(tab)
+    assert (s["pin"], s["disc"]) == (HOSTILE_PIN, HOSTILE_DISC)
+    counts = tab.page.evaluate("""() => ({scripts: document.scripts.length,
+      images: document.images.length, onerror: document.querySelectorAll('[onerror]').length})""")
+    assert counts == {"scripts": 2, "images": 0, "onerror": 0}
+    assert f"{HOSTILE_PIN} on {HOSTILE_DISC}" in tab.page.text_content("#tpx-pair-plot")
+    assert tab.page.text_content("#tpx-group-table tbody td") == HOSTILE_PIN
+    assert_shows(tab, query(groups_of(read_map(map_path), map_path), HOSTILE_PIN, HOSTILE_DISC,
+                            20.0, None))
+    # the CSV keeps the names as data: quoted where needed, no cell starts a formula
+    tab.page.select_option("#tpx-export-format", "csv")
+    assert HOSTILE_PIN in tab.page.input_value("#tpx-export-text")
+
+
+class _Quiet(http.server.SimpleHTTPRequestHandler):
+    def log_message(self, *args) -> None:  # keep pytest's output clean
+        pass
+
+
+def test_the_page_works_from_a_static_web_host(browser, published):
+    _, page, groups = published
+    handler = functools.partial(_Quiet, directory=str(page.parent))
+    server = http.server.ThreadingHTTPServer(("127.0.0.1", 0), handler)
+    thread = threading.Thread(target=server.serve_forever, daemon=True)
+    thread.start()
+    origin = f"http://127.0.0.1:{server.server_address[1]}"
+    try:
+        t = Tab(browser)
+        t.open(f"{origin}/{page.name}?pin=Dragonskin+30&disc=steel&pressure=50&temperature=15")
+        assert_shows(t, query(groups, "Dragonskin 30", "steel", 50.0, 15.0))
+        choose(t, "Dragonskin 30", "steel", 80.0, 20.0)
+        assert t.page.url.startswith(f"{origin}/{page.name}?") and "pressure=80.0" in t.page.url
+        t.check_clean(origin=origin)
+        t.close()
+    finally:
+        server.shutdown()
+        server.server_close()
+
+
+def test_the_report_embeds_the_explorer_for_its_campaign(tab, reduced):
+    map_path, _, groups, processed = reduced
+    report = make_report(map_path=map_path, processed_dir=processed)
+    tab.open(page_url(report, pin="Dragonskin 30", disc="steel", pressure="45",
+                      temperature="20"))
+    assert_shows(tab, query(groups, "Dragonskin 30", "steel", 45.0, 20.0))
+    assert tab.page.locator("#explorer #tpx-overview .tpx-panel").count() == 1
+    choose(tab, "Ecoflex 00-50", "wood (smooth)", 10.0, 20.0)
+    assert "pin=Ecoflex+00-50" in tab.page.url
+    assert_shows(tab, query(groups, "Ecoflex 00-50", "wood (smooth)", 10.0, 20.0))
+
+
+def test_numbers_are_printed_as_python_prints_them(tab, reduced):
+    _, page, _, _ = reduced
+    tab.open(page_url(page))
+    import random
+
+    rng = random.Random(11)
+    values = [0.0, -0.0, 0.5625, 0.0625, 2.5, 3.5, 0.125, 1e-5, 0.0001, 123456789.0, 1e16,
+              1.5e16, 11.79, 106.1, 35.37, -3.0, 0.9995, 9.9999995, 1e21, 2.5e-30, 0.3]
+    values += [rng.uniform(-2, 2) for _ in range(200)]
+    values += [rng.uniform(0, 1) * 10 ** rng.randint(-8, 20) for _ in range(200)]
+    got = tab.page.evaluate("""vs => { const f = window.tribopipeExplorer.format;
+      return vs.map(v => [f.fixed(v, 3), f.g(v), f.g(v, 3), f.g(v, 10), f.repr(v)]); }""", values)
+    for v, (fixed3, g6, g3, g10, text) in zip(values, got, strict=True):
+        assert (fixed3, g6, g3, g10, text) == (
+            f"{v:.3f}", f"{v:g}", f"{v:.3g}", f"{v:.10g}", repr(v)), v

@@ -2,7 +2,7 @@
 
 The page needs no network and no server (it opens from disk or from any static host) and
 uses plain JavaScript and SVG. Its parts are package data beside this module
-(``assets/explorer.js``, ``explorer.css``, ``explorer.html``, ``explorer_fragment.html``);
+(``assets/js/*.js``, ``explorer.css``, ``explorer.html``, ``explorer_fragment.html``);
 this module fills them with the map's data:
 
 * what :func:`tribopipe.query.query` interpolates over — each pair's measured points
@@ -49,6 +49,11 @@ if TYPE_CHECKING:
 DATA_FORMAT = "tribopipe-explorer/1"
 #: id of the ``<script type="application/json">`` element that holds the data
 DATA_ELEMENT_ID = "explorer-data"
+#: the parts of the page's script (``assets/js/``), in the order they are joined
+SCRIPT_PARTS = (
+    "prelude.js", "pyformat.js", "query.js", "snippets.js", "dom.js", "plots.js", "table.js",
+    "page.js",
+)
 #: points per fitted power-law curve (log-spaced over the fitted pressure range)
 FIT_CURVE_POINTS = 48
 
@@ -286,7 +291,8 @@ def embed_json(data: Any) -> str:
 
 def _asset(name: str) -> str:
     """The text of one of the page's package-data files (``assets/<name>``)."""
-    return (files("tribopipe.export") / "assets" / name).read_text(encoding="utf-8")
+    return files("tribopipe.export").joinpath("assets", *name.split("/")).read_text(
+        encoding="utf-8")
 
 
 def _fill(template: str, values: dict[str, str]) -> str:
@@ -296,10 +302,12 @@ def _fill(template: str, values: dict[str, str]) -> str:
 
 
 def _script() -> str:
-    """The page's JavaScript, checked to be safe inside a ``<script>`` element."""
-    js = _asset("explorer.js")
+    """The page's JavaScript: :data:`SCRIPT_PARTS` in one function scope, checked to be
+    safe inside a ``<script>`` element."""
+    parts = [_asset(f"js/{name}") for name in SCRIPT_PARTS]
+    js = '(function () {\n"use strict";\n\n' + "\n".join(parts) + "})();\n"
     if re.search(r"</script|<!--", js, re.IGNORECASE):
-        raise AssertionError("explorer.js may not contain '</script' or '<!--'")
+        raise AssertionError("the explorer's script may not contain '</script' or '<!--'")
     return js
 
 

@@ -507,3 +507,30 @@ def test_numbers_are_printed_as_python_prints_them(tab, reduced):
     for v, (fixed3, g6, g3, g10, text) in zip(values, got, strict=True):
         assert (fixed3, g6, g3, g10, text) == (
             f"{v:.3f}", f"{v:g}", f"{v:.3g}", f"{v:.10g}", repr(v)), v
+
+
+def test_page_equals_query_where_temperatures_are_unknown(tab, tmp_path):
+    # pair A/b: two groups without a temperature beside one with (query leaves them out and
+    # says so); pair C/d: no temperature at all (any asked temperature is ignored)
+    csv = tmp_path / "no_temperature.csv"
+    csv.write_text(
+        "pin,disc,contactForce,contactPressure,temperature,measurementNo,cof\n"
+        "A,b,1,11.79,,1,0.5\nA,b,1,11.79,,2,0.52\nA,b,3,35.37,,1,0.4\n"
+        "A,b,3,35.37,20,1,0.41\nA,b,3,35.37,20,2,0.43\nA,b,5,58.95,20,1,0.35\n"
+        "C,d,1,11.79,,1,0.9\nC,d,1,11.79,,2,0.8\nC,d,5,58.95,,1,0.6\n",
+        encoding="utf-8",
+    )
+    map_path = tmp_path / "friction_map.parquet"
+    import_table(map_path, csv)
+    groups = groups_of(read_map(map_path), map_path)
+    page = write_explorer(map_path, tmp_path / "explorer.html")
+    tab.open(page_url(page, pin="C", disc="d", pressure="30"))
+    conditions = [(pin, disc, p, t) for pin, disc in (("A", "b"), ("C", "d"))
+                  for p in (0.0, 11.79, 20.0, 35.37, 50.0, 58.95, 80.0)
+                  for t in (None, 5.0, 20.0, 31.0)]
+    assert_page_equals_query(tab, groups, conditions)
+    assert "2 group(s) without a temperature were left out" in query(
+        groups, "A", "b", 20.0, 20.0).notes
+    assert shown(tab)["temperature"] == ""
+    assert_shows(tab, query(groups, "C", "d", 30.0, None))
+    assert "T unknown" in tab.page.text_content("#tpx-pair-plot")

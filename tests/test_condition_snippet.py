@@ -8,12 +8,14 @@ import pytest
 
 from published_map import group_table, published_runs
 from tribopipe.errors import ExportError
-from tribopipe.export.simulators import (
-    _condition_comments,
+from tribopipe.export.fe_decks import (
     abaqus_name,
+    condition_header,
     condition_snippet,
+    deck_safe,
     write_condition,
 )
+from tribopipe.export.simbase import comment_block, condition_lines
 from tribopipe.frictionmap import published_csv_path
 from tribopipe.query import query
 
@@ -34,12 +36,14 @@ def test_abaqus_constant_friction_at_an_interpolated_condition(groups):
         f"{res.mu_k.value:.10g}",
     ]
     assert float(lines[-1]) == pytest.approx(res.mu_k.value, rel=1e-9)
-    # every line before the keywords is a comment, and the condition's comments are those
-    # of the other single-condition writers
-    assert all(line.startswith("**") for line in lines[:-3])
-    for comment in _condition_comments("**", res):
-        assert comment in lines
-    assert "** written by tribopipe" in text and "map.parquet" in text
+    # every line before the keywords is a comment of at most 100 characters: the header,
+    # then the condition as the other single-condition writers say it
+    assert all(line.startswith("**") and len(line) <= 100 for line in lines[:-3])
+    header = condition_header("abaqus", "map.parquet")
+    assert lines[:len(header)] == header
+    assert comment_block("**", condition_lines(res, deck_safe)) == lines[
+        len(header):len(header) + len(comment_block("**", condition_lines(res, deck_safe)))]
+    assert "map.parquet" in text and "not for CalculiX" in text
     assert "35.37 kPa/10 C (w=0.19)" in text  # the measured groups used, with weights
     assert "outside the measured range" not in text
 
@@ -52,21 +56,26 @@ def test_ansys_constant_friction_says_when_it_held_the_edge(groups):
     assert lines[-2:] == ["TB,FRIC,7,,,ISO", f"TBDATA,1,{res.mu_k.value:.10g}"]
     assert all(line.startswith("!") for line in lines[:-2])
     assert "! outside the measured range: edge value held constant" in lines
+    assert "! material 7: pin Dragonskin 30 on disc steel" in lines
     assert res.mu_k.value == pytest.approx(0.26)  # 106.1 kPa at 20 °C, the published edge
 
 
 def test_a_name_with_line_breaks_stays_inside_its_comment(groups):
     res = query(groups, "Dragonskin 30", "steel", 35.37, 20.0)
-    hostile = res.__class__(**{**res.__dict__, "pin": "x\n*INCLUDE, INPUT=evil.inp\r\u2028y"})
+    hostile = res.__class__(**{**res.__dict__, "pin": "x\n*INCLUDE, INPUT=evil.inp\r$y"})
     for fmt, comment, n_data in (("abaqus", "**", 3), ("ansys", "!", 2)):
         lines = condition_snippet(hostile, fmt).splitlines()
         # only the writer's own keyword and data lines are not comments
         assert [line for line in lines if not line.startswith(comment)] == lines[-n_data:]
         assert not any(line.startswith("*INCLUDE") for line in lines), fmt
-        assert any("pin x *INCLUDE, INPUT=evil.inp  y on disc steel" in line for line in lines)
+    assert "x\\n*INCLUDE, INPUT=evil.inp\\r\\x24y" in condition_snippet(hostile, "ansys")
 
 
-def test_unknown_format_is_refused(groups):
+def test_unknown_format_or_material_is_refused(groups):
     res = query(groups, "Dragonskin 30", "steel", 35.37, 20.0)
     with pytest.raises(ExportError, match="expected one of abaqus, ansys"):
         condition_snippet(res, "mujoco")
+    with pytest.raises(ExportError, match="expected one of abaqus, ansys"):
+        write_condition(groups, "lsdyna", pin="Dragonskin 30", disc="steel", pressure_kPa=20.0)
+    with pytest.raises(ExportError, match="material number must be >= 1"):
+        condition_snippet(res, "ansys", material_id=0)

@@ -24,7 +24,7 @@ import pytest
 
 from reduced_runs import make_processed
 from tribopipe.export.explorer import write_explorer
-from tribopipe.export.simulators import condition_snippet
+from tribopipe.export.fe_decks import condition_snippet
 from tribopipe.frictionmap import import_table, published_csv_path, read_map
 from tribopipe.query import groups_of, pairs, query
 from tribopipe.report import make_report
@@ -203,12 +203,28 @@ def assert_page_equals_query(tab, groups, conditions) -> int:
     return clamped
 
 
+PAGE_SNIPPETS = """([conditions, fmts]) => conditions.map(([pin, disc, p, t]) => {
+  const res = window.tribopipeExplorer.query(pin, disc, p, t);
+  return fmts.map(fmt => window.tribopipeExplorer.exportText(fmt, res));
+})"""
+
+
+def assert_snippets_are_the_writer_s(tab, groups, conditions, source: str) -> None:
+    """The page's ABAQUS and Ansys text equals fe_decks.condition_snippet's."""
+    texts = tab.page.evaluate(PAGE_SNIPPETS, [[list(c) for c in conditions], ["abaqus", "ansys"]])
+    for (pin, disc, p, t), (abaqus, ansys) in zip(conditions, texts, strict=True):
+        res = query(groups, pin, disc, p, t)
+        assert abaqus == condition_snippet(res, "abaqus", source=source), (pin, disc, p, t)
+        assert ansys == condition_snippet(res, "ansys", source=source), (pin, disc, p, t)
+
+
 def test_page_equals_query_on_the_published_map(tab, published):
-    _, page, groups = published
+    map_path, page, groups = published
     tab.open(page_url(page))
     conditions = grid(groups)
     clamped = assert_page_equals_query(tab, groups, conditions)
     assert len(conditions) > 700 and 300 < clamped < len(conditions)
+    assert_snippets_are_the_writer_s(tab, groups, conditions[::7], str(map_path))
 
 
 def test_page_equals_query_on_a_reduced_map(tab, reduced):
@@ -534,3 +550,29 @@ def test_page_equals_query_where_temperatures_are_unknown(tab, tmp_path):
     assert shown(tab)["temperature"] == ""
     assert_shows(tab, query(groups, "C", "d", 30.0, None))
     assert "T unknown" in tab.page.text_content("#tpx-pair-plot")
+
+
+def test_copied_snippets_equal_the_python_writer_for_any_name(tab, tmp_path):
+    # quotes, the MAPDL command separator, a backslash, non-ASCII, an emoji, and a name
+    # longer than a comment line (wrapped, its longest word cut)
+    pin = 'Ecoflex "00-50" it\'s $5 \\ ' + "x" * 120
+    disc = "Stahl – gebürstet 🙂 & <b>"
+    csv = tmp_path / "names.csv"
+    quoted = '"' + pin.replace('"', '""') + '"'
+    csv.write_text(
+        "pin,disc,contactForce,contactPressure,temperature,measurementNo,cof\n"
+        + "".join(f"{quoted},{disc},{f},{p},20,{r},{mu + 0.01 * r}\n"
+                  for f, p, mu in ((1.0, 11.79, 0.6), (3.0, 35.37, 0.4)) for r in (1, 2)),
+        encoding="utf-8",
+    )
+    map_path = tmp_path / "friction_map.parquet"
+    import_table(map_path, csv)
+    groups = groups_of(read_map(map_path), map_path)
+    assert pairs(groups) == [(pin, disc)]
+    page = write_explorer(map_path, tmp_path / "explorer.html")
+    tab.open(page_url(page))
+    conditions = [(pin, disc, p, t) for p in (5.0, 20.0, 35.37, 90.0) for t in (None, 20.0, 31.5)]
+    assert_snippets_are_the_writer_s(tab, groups, conditions, str(map_path))
+    text = tab.page.evaluate("window.tribopipeExplorer.exportText('ansys')")
+    assert max(len(line) for line in text.splitlines()) <= 100
+    assert "\\x24" in text and "\\U0001f642" in text

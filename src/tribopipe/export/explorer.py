@@ -207,13 +207,16 @@ def explorer_data(
     and ``fits`` to :func:`tribopipe.fit.fit_power_law` of ``runs``. Returns a dict of
     plain values (``None`` for missing numbers): ``format, title, source,
     tribopipe_version, generated, pairs`` (per pair: ``pin, disc, mu_k_points,
-    mu_s_points, left_out, runs, fits``) and ``groups`` (the group table, each row with
-    the index of its ``pair``). Pressures in kPa, temperatures in °C. Raises
-    :class:`ExportError` when no run is left. Inputs are not modified.
+    mu_s_points, left_out, runs, fits``), ``groups`` (the group table, each row with
+    the index of its ``pair``) and ``snippet_headers`` (the opening comment lines of
+    :func:`tribopipe.export.fe_decks.condition_snippet` per format). Pressures in kPa,
+    temperatures in °C. Raises :class:`ExportError` when no run is left. Inputs are not
+    modified.
     """
     from ..fit import fit_power_law
     from ..query import pair_points, pairs, select_pair
     from ..stats import group_statistics
+    from .fe_decks import CONDITION_FORMATS, condition_header
 
     included = runs
     if "excluded" in runs.columns:
@@ -270,6 +273,9 @@ def explorer_data(
         "generated": datetime.now(UTC).strftime("%Y-%m-%d %H:%M UTC"),
         "pairs": pair_rows,
         "groups": group_rows,
+        # the opening comments of the copied ABAQUS/Ansys text do not depend on the
+        # condition: rendered here by the writer itself, the page adds the rest
+        "snippet_headers": {fmt: condition_header(fmt, source) for fmt in CONDITION_FORMATS},
     }
 
 

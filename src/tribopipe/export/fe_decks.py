@@ -17,7 +17,7 @@ from functools import partial
 from typing import TYPE_CHECKING
 
 from ..errors import ExportError
-from ..query import query
+from ..query import QueryResult, query
 from .simbase import (
     FOUNDING_SLIP_RATE,
     Engine,
@@ -375,3 +375,80 @@ def write_lsdyna(
         "*END",
     ]
     return "\n".join(lines) + "\n"
+
+
+# ---------------------------------------------------------------------------- one condition
+
+#: formats of :func:`condition_snippet`: a constant μ_K at one condition
+CONDITION_FORMATS = ("abaqus", "ansys")
+
+#: said in every single-condition file, after the condition
+CONSTANT_NOTE = (
+    "a constant coefficient: the solver uses it at every pressure and temperature; for the "
+    "dependence export the pair's table (tribopipe export {fmt} --pin PIN --disc DISC)"
+)
+
+
+def condition_header(fmt: str, source: str | None = None) -> list[str]:
+    """The comment lines that open :func:`condition_snippet` for ``fmt`` (``abaqus`` or
+    ``ansys``): engine, version checked, coefficient held, combination, provenance.
+    They do not depend on the condition (the explorer page embeds them as they are)."""
+    if fmt == "abaqus":
+        bodies = header_bodies(
+            ABAQUS, "mu_k, the kinetic (sliding) Coulomb coefficient, held constant at one "
+            "condition", source, deck_safe)
+        return comment_block("**", [*bodies, CALCULIX_WARNING])
+    if fmt == "ansys":
+        return comment_block("!", header_bodies(
+            ANSYS, "mu_k, the kinetic (sliding) Coulomb coefficient (MU), held constant at "
+            "one condition", source, ansys_safe))
+    raise ExportError(
+        f"unknown single-condition format {fmt!r}; expected one of {', '.join(CONDITION_FORMATS)}"
+    )
+
+
+def condition_snippet(
+    res: QueryResult, fmt: str, *, source: str | None = None, material_id: int = 1
+) -> str:
+    """ABAQUS or Ansys input holding the constant μ_K of one query result ``res`` (one pair
+    at one contact pressure [kPa] and temperature [°C]): what the explorer page copies.
+
+    ``abaqus``: ``*SURFACE INTERACTION`` + ``*FRICTION`` with one coefficient; ``ansys``:
+    ``TB,FRIC,mat,,,ISO`` + ``TBDATA,1,mu``. The comments are :func:`condition_header`
+    and the single-condition writers' :func:`simbase.condition_lines` (pair, condition,
+    μ_K ± CI, μ_S, the measured groups used with their weights, clamping). A constant
+    carries no pressure or temperature dependence, so no unit system enters.
+    """
+    lines = condition_header(fmt, source)
+    note = CONSTANT_NOTE.format(fmt=fmt)
+    mu = num(res.mu_k.value)
+    if fmt == "abaqus":
+        lines += comment_block("**", [*condition_lines(res, deck_safe), note])
+        lines += [f"*SURFACE INTERACTION, NAME={abaqus_name(res.pin, res.disc)}", "*FRICTION", mu]
+    else:
+        if material_id < 1:
+            raise ExportError(f"material number must be >= 1, got {material_id}")
+        lines += comment_block("!", [
+            *condition_lines(res, ansys_safe), note,
+            f"material {material_id}: pin {ansys_safe(res.pin)} on disc {ansys_safe(res.disc)}",
+        ])
+        lines += [f"TB,FRIC,{material_id},,,ISO", f"TBDATA,1,{mu}"]
+    return "\n".join(lines) + "\n"
+
+
+def write_condition(
+    groups: pd.DataFrame,
+    fmt: str,
+    *,
+    pin: str,
+    disc: str,
+    pressure_kPa: float,
+    temperature_C: float | None = None,
+    material_id: int = 1,
+    source: str | None = None,
+) -> str:
+    """:func:`condition_snippet` of :func:`tribopipe.query.query` for one pair at one
+    contact pressure [kPa] and temperature [°C]."""
+    condition_header(fmt)  # an unknown format is refused before the query
+    res = query(groups, pin, disc, pressure_kPa, temperature_C)
+    return condition_snippet(res, fmt, source=source, material_id=material_id)

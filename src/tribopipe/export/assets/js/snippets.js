@@ -1,14 +1,79 @@
-/* The selection as CSV and as the ABAQUS/Ansys text of simulators.condition_snippet. */
+/* The selection as CSV and as the ABAQUS/Ansys text of fe_decks.condition_snippet. */
 
-/* simulators._one_line: no name may end a comment line. */
-function oneLine(text) { return text.replace(/[\u0000-\u001f\u007f-\u009f\u2028\u2029]/g, " "); }
+/* simbase.safe_text(value, ascii_only=True): Python's ascii() without the quotes, so no
+   newline, control or non-ASCII character of a name survives into a deck's comment. */
+function deckSafe(value) {
+  var s = String(value);
+  var quote = s.indexOf("'") >= 0 && s.indexOf('"') < 0 ? '"' : "'";
+  var out = "";
+  var hex = function (c, n) { return c.toString(16).padStart(n, "0"); };
+  for (var ch of s) {
+    var c = ch.codePointAt(0);
+    if (ch === "\\") out += "\\\\";
+    else if (ch === quote) out += "\\" + ch;
+    else if (ch === "\t") out += "\\t";
+    else if (ch === "\n") out += "\\n";
+    else if (ch === "\r") out += "\\r";
+    else if (c < 0x20 || c >= 0x7f) {
+      out += c < 0x100 ? "\\x" + hex(c, 2) : c < 0x10000 ? "\\u" + hex(c, 4) : "\\U" + hex(c, 8);
+    } else out += ch;
+  }
+  return out;
+}
 
+/* fe_decks.ansys_safe: also "$", MAPDL's command separator. */
+function ansysSafe(value) { return deckSafe(value).replace(/\$/g, "\\x24"); }
+
+/* textwrap.wrap(text, width, subsequent_indent=indent, break_on_hyphens=False), for text
+   whose only whitespace is ASCII (what the deck-safe comment bodies hold). */
+function wrap(text, width, indent) {
+  var chunks = text.split(/([\t\n\x0b\x0c\r ]+)/).filter(function (c) { return c !== ""; });
+  chunks.reverse();
+  var lines = [];
+  var top = function () { return chunks[chunks.length - 1]; };
+  while (chunks.length) {
+    var cur = [];
+    var curLen = 0;
+    var prefix = lines.length ? indent : "";
+    var w = width - prefix.length;
+    if (top().trim() === "" && lines.length) chunks.pop();
+    while (chunks.length && curLen + top().length <= w) {
+      curLen += top().length;
+      cur.push(chunks.pop());
+    }
+    if (chunks.length && top().length > w) { // a word longer than a line is cut
+      var left = w < 1 ? 1 : w - curLen;
+      cur.push(top().slice(0, left));
+      chunks[chunks.length - 1] = top().slice(left);
+      curLen = cur.join("").length;
+    }
+    if (cur.length && cur[cur.length - 1].trim() === "") cur.pop();
+    if (cur.length) lines.push(prefix + cur.join(""));
+  }
+  return lines;
+}
+
+/* simbase.comment_block: comment lines of at most `width` (100) characters. */
+function commentBlock(comment, bodies, width) {
+  if (width === undefined) width = 100;
+  var out = [];
+  bodies.forEach(function (body) {
+    var indent = " ".repeat(body.length - body.replace(/^ +/, "").length);
+    var wrapped = wrap(body, width - comment.length - 1, indent + "  ");
+    (wrapped.length ? wrapped : [""]).forEach(function (w) {
+      out.push((comment + " " + w).replace(/\s+$/, ""));
+    });
+  });
+  return out;
+}
+
+/* fe_decks.abaqus_name */
 function abaqusName(pin, disc) {
   var text = (pin + "__ON__" + disc).replace(/[^A-Za-z0-9]+/g, "_").replace(/^_+|_+$/g, "");
   return ("FRIC_" + text.toUpperCase()).slice(0, 80);
 }
 
-function num(x) { return pyG(x, 10); } // simulators._num
+function num(x) { return pyG(x, 10); } // simbase.num
 
 function usedText(res) {
   return res.mu_k.used.map(function (u) {
@@ -17,34 +82,35 @@ function usedText(res) {
   }).join(", ");
 }
 
-/* simulators.condition_snippet(res, fmt, source=map): a constant mu_K for ABAQUS or Ansys. */
-function conditionSnippet(res, fmt) {
-  var c = fmt === "abaqus" ? "**" : "!";
-  var what = (fmt === "abaqus" ? "ABAQUS friction input" : "Ansys MAPDL friction input") +
-    " at one condition (kinetic coefficient mu_k, held constant)";
+/* simbase.condition_lines */
+function conditionLines(res, safe) {
   var t = res.temperature_C === null ? "unknown" : pyG(res.temperature_C) + " C";
   var lines = [
-    c + " " + what,
-    c + " written by tribopipe " + DATA.tribopipe_version + " from the friction map" +
-      (DATA.source ? " " + DATA.source : ""),
-    c + " values: group means of the runs (repeats) at each nominal condition",
-    c + " pair: pin " + res.pin + " on disc " + res.disc,
-    c + " condition: contact pressure " + pyG(res.pressure_kPa) + " kPa, temperature " + t,
-    c + " mu_k = " + num(res.mu_k.value) +
+    "pair: pin " + safe(res.pin) + " on disc " + safe(res.disc),
+    "condition: contact pressure " + pyG(res.pressure_kPa) + " kPa, temperature " + t,
+    "mu_k = " + num(res.mu_k.value) +
       (res.mu_k.uncertainty === null ? "" : " +/- " + num(res.mu_k.uncertainty) + " (95 % CI)"),
-    c + " mu_s = " + (res.mu_s === null ? "unknown (not in the map)" : num(res.mu_s.value)),
-    c + " from measured groups: " + usedText(res),
+    "mu_s = " + (res.mu_s === null ? "unknown (not in the map)" : num(res.mu_s.value)),
+    "from measured groups: " + usedText(res),
   ];
-  if (res.clamped) lines.push(c + " outside the measured range: edge value held constant");
-  lines.push(c + " a constant coefficient: the solver uses it at every pressure and temperature; " +
-    "for the dependence export the pair's table (tribopipe export " + fmt + " --pin PIN --disc DISC)");
-  lines = lines.map(oneLine);
+  if (res.clamped) lines.push("outside the measured range: edge value held constant");
+  return lines;
+}
+
+/* fe_decks.condition_snippet(res, fmt, source=map): a constant mu_K for ABAQUS or Ansys;
+   the header lines, which do not depend on the condition, come rendered from Python. */
+function conditionSnippet(res, fmt) {
+  var lines = DATA.snippet_headers[fmt].slice();
+  var note = "a constant coefficient: the solver uses it at every pressure and temperature; for " +
+    "the dependence export the pair's table (tribopipe export " + fmt + " --pin PIN --disc DISC)";
   var mu = num(res.mu_k.value);
   if (fmt === "abaqus") {
+    lines = lines.concat(commentBlock("**", conditionLines(res, deckSafe).concat([note])));
     lines.push("*SURFACE INTERACTION, NAME=" + abaqusName(res.pin, res.disc), "*FRICTION", mu);
   } else {
-    lines.push(oneLine("! material 1: pin " + res.pin + " on disc " + res.disc),
-      "TB,FRIC,1,,,ISO", "TBDATA,1," + mu);
+    lines = lines.concat(commentBlock("!", conditionLines(res, ansysSafe).concat([note,
+      "material 1: pin " + ansysSafe(res.pin) + " on disc " + ansysSafe(res.disc)])));
+    lines.push("TB,FRIC,1,,,ISO", "TBDATA,1," + mu);
   }
   return lines.join("\n") + "\n";
 }

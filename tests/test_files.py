@@ -23,3 +23,14 @@ def test_newline_empty_keeps_line_ends_as_given(tmp_path: Path) -> None:
     target = tmp_path / "t.csv"
     write_text_atomic(target, "a,b\r\n1,2\n", newline="")
     assert target.read_bytes() == b"a,b\r\n1,2\n"
+
+
+def test_file_sha256_is_the_content_hash(tmp_path: Path) -> None:
+    import hashlib
+
+    from tribopipe.files import file_sha256
+
+    a, b = tmp_path / "a.csv", tmp_path / "renamed.csv"
+    a.write_bytes(b"x" * 3_000_000)  # more than one read chunk
+    b.write_bytes(a.read_bytes())
+    assert file_sha256(a) == file_sha256(b) == hashlib.sha256(b"x" * 3_000_000).hexdigest()

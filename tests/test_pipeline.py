@@ -54,14 +54,3 @@ def test_summary_is_json_and_carries_the_evidence(export: Path, tmp_path: Path) 
     assert 0 < start < end <= summary["sliding_distance_mm"] + 1e-9
     assert summary["mu_s_distance_mm"] < start
     assert summary["file_hash"] and len(summary["config_hash"]) == 16
-
-
-@pytest.mark.parametrize(
-    ("value", "expected"),
-    [(0.55, 0.55), ("0.55", 0.55), (None, None), (float("nan"), None), (float("inf"), None),
-     ("n/a", None)],
-)
-def test_finite_or_none_keeps_numbers_and_drops_the_rest(value, expected) -> None:
-    from tribopipe.pipeline import finite_or_none
-
-    assert finite_or_none(value) == expected

@@ -1,4 +1,4 @@
-"""Writing output files so a reader never sees half of one.
+"""Files on disk: written so a reader never sees half of one, and hashed by content.
 
 Every text output (summaries, tables, reports, a campaign's CSVs and state) is written to a
 temporary file beside its target and renamed over it: the rename is atomic, so a crash or
@@ -8,6 +8,7 @@ own, stricter writer with fsync and a lock: :mod:`tribopipe.frictionmap`.)
 
 from __future__ import annotations
 
+import hashlib
 import os
 from pathlib import Path
 
@@ -23,3 +24,12 @@ def write_text_atomic(target: str | Path, text: str, *, newline: str | None = No
         fh.write(text)
     os.replace(tmp, path)
     return path
+
+
+def file_sha256(path: str | Path) -> str:
+    """SHA-256 hex digest of a file's bytes."""
+    digest = hashlib.sha256()
+    with open(path, "rb") as fh:
+        for chunk in iter(lambda: fh.read(1 << 20), b""):
+            digest.update(chunk)
+    return digest.hexdigest()

@@ -31,6 +31,8 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from .errors import MapError
+from .files import file_sha256
+from .numeric import finite_or_nan
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -195,13 +197,6 @@ def _num_key(value: float) -> str:
     return "nan" if value is None or not math.isfinite(value) else format(round(value, 6), ".6f")
 
 
-def _finite(value: Any) -> float:
-    if value is None:
-        return math.nan
-    value = float(value)
-    return value if math.isfinite(value) else math.nan
-
-
 def _join_flags(flags: Iterable[str]) -> str:
     # Sorted and unique so the same run always gets the same string.
     return ";".join(sorted({f for f in flags if f}))
@@ -238,15 +233,15 @@ def make_record(
             path=meta.source_file,
             hint="pass --pin and --disc (or --no-map)",
         )
-    mu_k = _finite(result.mu_k)
+    mu_k = finite_or_nan(result.mu_k)
     if math.isnan(mu_k):
         raise MapError(
             f"mu_k is {result.mu_k!r}, expected a finite number: the run cannot be recorded",
             path=meta.source_file,
         )
     flags = list(result.flags)
-    measured_force = _finite(result.normal_force_mean_N)
-    measured_temperature = _finite(result.temperature_C)
+    measured_force = finite_or_nan(result.normal_force_mean_N)
+    measured_temperature = finite_or_nan(result.temperature_C)
     flags += qc_flags(labels, measured_force, measured_temperature, tolerances or Tolerances())
     if labels.normal_force_N is not None:
         force = float(labels.normal_force_N)
@@ -259,7 +254,7 @@ def make_record(
             path=meta.source_file,
             hint="pass --force",
         )
-    temperature = _finite(labels.temperature_C)
+    temperature = finite_or_nan(labels.temperature_C)
     k_start_mm, k_end_mm = result.mu_k_window_mm
     k_start_s, k_end_s = result.mu_k_window_s
     return {
@@ -270,21 +265,21 @@ def make_record(
         "normal_force_N": force,
         "pressure_kPa": nominal_pressure_kPa(force, settings.instrument),
         "normal_force_measured_N": measured_force,
-        "pressure_measured_kPa": _finite(result.pressure_kPa),
+        "pressure_measured_kPa": finite_or_nan(result.pressure_kPa),
         "temperature_C": temperature,
         "temperature_measured_C": measured_temperature,
-        "sliding_speed_mm_s": _finite(result.sliding_speed_mm_s),
+        "sliding_speed_mm_s": finite_or_nan(result.sliding_speed_mm_s),
         "repeat": labels.repeat,
-        "mu_s": _finite(result.mu_s),
+        "mu_s": finite_or_nan(result.mu_s),
         "mu_k": mu_k,
-        "mu_s_distance_mm": _finite(result.mu_s_distance_mm),
-        "mu_s_time_s": _finite(result.mu_s_time_s),
-        "mu_k_window_start_mm": _finite(k_start_mm),
-        "mu_k_window_end_mm": _finite(k_end_mm),
-        "mu_k_window_start_s": _finite(k_start_s),
-        "mu_k_window_end_s": _finite(k_end_s),
-        "plateau_std": _finite(result.plateau_std),
-        "plateau_drift_per_mm": _finite(result.plateau_drift_per_mm),
+        "mu_s_distance_mm": finite_or_nan(result.mu_s_distance_mm),
+        "mu_s_time_s": finite_or_nan(result.mu_s_time_s),
+        "mu_k_window_start_mm": finite_or_nan(k_start_mm),
+        "mu_k_window_end_mm": finite_or_nan(k_end_mm),
+        "mu_k_window_start_s": finite_or_nan(k_start_s),
+        "mu_k_window_end_s": finite_or_nan(k_end_s),
+        "plateau_std": finite_or_nan(result.plateau_std),
+        "plateau_drift_per_mm": finite_or_nan(result.plateau_drift_per_mm),
         "flags": _join_flags(flags),
         "method": result.method,
         "source_file": Path(meta.source_file).name,
@@ -1081,7 +1076,6 @@ def import_records(
     record the paper's sliding speed (0.007 mm/s), others leave it missing.
     """
     from . import __version__
-    from .pipeline import file_sha256
 
     p = Path(path)
     table = read_frictionmap_table(p)

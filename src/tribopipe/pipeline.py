@@ -6,10 +6,12 @@ Readers and writers stay at the edges; :mod:`tribopipe.reduce` does the physics.
 
 from __future__ import annotations
 
-import hashlib
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
+
+from .files import file_sha256
+from .numeric import finite_or_none
 
 if TYPE_CHECKING:
     from .config import Settings
@@ -61,15 +63,6 @@ class RunOutcome:
     measurement_id: str
     #: the friction-map row; ``None`` when pin or disc is unknown (the run cannot be stored)
     record: dict[str, Any] | None = field(repr=False)
-
-
-def file_sha256(path: str | Path) -> str:
-    """SHA-256 hex digest of a file's bytes."""
-    digest = hashlib.sha256()
-    with open(path, "rb") as fh:
-        for chunk in iter(lambda: fh.read(1 << 20), b""):
-            digest.update(chunk)
-    return digest.hexdigest()
 
 
 def reduce_file(
@@ -143,20 +136,6 @@ def write_trace(out_dir: str | Path, outcome: RunOutcome) -> Path:
     pq.write_table(table, tmp)
     tmp.replace(target)
     return target
-
-
-def finite_or_none(value: Any) -> float | None:
-    """``float(value)`` for JSON and CSV outputs; ``None`` for a missing, non-numeric,
-    NaN or infinite value."""
-    import math
-
-    if value is None:
-        return None
-    try:
-        value = float(value)
-    except (TypeError, ValueError):
-        return None
-    return value if math.isfinite(value) else None
 
 
 def run_summary(outcome: RunOutcome) -> dict[str, Any]:

@@ -31,6 +31,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from .errors import ExportError
+from .numeric import finite_or_none
 
 if TYPE_CHECKING:
     import numpy as np
@@ -296,21 +297,15 @@ def _estimate(points: pd.DataFrame, pressure_kPa: float, temperature_C: float | 
     used = tuple(
         UsedPoint(
             pressure_kPa=float(points["pressure_kPa"].iloc[i]),
-            temperature_C=_finite(points["temperature_C"].iloc[i]),
+            temperature_C=finite_or_none(points["temperature_C"].iloc[i]),
             mean=float(points["mean"].iloc[i]),
-            ci95_half_width=_finite(points["half"].iloc[i]),
+            ci95_half_width=finite_or_none(points["half"].iloc[i]),
             n=int(points["n"].iloc[i]),
             weight=float(weights[i]),
         )
         for i in used_idx
     )
     return Estimate(value, uncertainty, used, clamped_p, clamped_t)
-
-
-def _finite(value: Any) -> float | None:
-    """``float(value)``, or ``None`` when it is NaN or infinite."""
-    value = float(value)
-    return value if math.isfinite(value) else None
 
 
 # ---------------------------------------------------------------------------- public API

@@ -16,6 +16,7 @@ from pathlib import Path
 from typing import IO, TYPE_CHECKING, Any
 
 from ..errors import ExportError
+from ..numeric import is_finite
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -77,14 +78,6 @@ def slug(text: str) -> str:
 # ---------------------------------------------------------------------------- per run
 
 
-def _finite(value: Any) -> bool:
-    """True when ``value`` is a finite number."""
-    try:
-        return value is not None and math.isfinite(float(value))
-    except (TypeError, ValueError):
-        return False
-
-
 def draw_trace(
     ax: Any,
     trace: pd.DataFrame,
@@ -108,23 +101,23 @@ def draw_trace(
     if "mu_smooth" in trace.columns:
         ax.plot(s, np.asarray(trace["mu_smooth"], dtype=float), color="0.15", lw=1.2,
                 label="μ (smoothed)")
-    if mu_k_window_mm is not None and all(_finite(v) for v in mu_k_window_mm):
+    if mu_k_window_mm is not None and all(is_finite(v) for v in mu_k_window_mm):
         start, end = (float(v) for v in mu_k_window_mm)
         ax.axvspan(start, end, color="tab:blue", alpha=0.12, label="$\\mu_K$ window")
-        if _finite(mu_k):
+        if is_finite(mu_k):
             ax.hlines(float(mu_k), start, end, color="tab:blue", lw=2.0,
                       label=f"$\\mu_K$ = {float(mu_k):.3f}")
-    elif _finite(mu_k):
+    elif is_finite(mu_k):
         ax.axhline(float(mu_k), color="tab:blue", lw=1.5, ls="--",
                    label=f"$\\mu_K$ = {float(mu_k):.3f}")
-    if _finite(mu_s) and _finite(mu_s_distance_mm):
+    if is_finite(mu_s) and is_finite(mu_s_distance_mm):
         ax.plot([float(mu_s_distance_mm)], [float(mu_s)], "o", color="tab:red", ms=7,
                 label=f"$\\mu_S$ = {float(mu_s):.3f}")
     ax.set_xlabel("sliding distance s [mm]")
     ax.set_ylabel(MU_LABEL)
     finite = mu[np.isfinite(mu)]
     if finite.size:
-        top = max(float(finite.max()), float(mu_s) if _finite(mu_s) else 0.0)
+        top = max(float(finite.max()), float(mu_s) if is_finite(mu_s) else 0.0)
         ax.set_ylim(min(0.0, float(finite.min())), top * 1.15 + 1e-9)
     ax.grid(True, alpha=0.3)
     ax.legend(loc="lower right", fontsize="small")
@@ -249,7 +242,7 @@ def draw_pair(ax: Any, runs: pd.DataFrame, fits: pd.DataFrame | None) -> None:
             continue
         match = fits[fits["temperature_C"].isna()] if math.isnan(t) else fits[
             fits["temperature_C"] == t]
-        if match.empty or not _finite(match["k"].iloc[0]):
+        if match.empty or not is_finite(match["k"].iloc[0]):
             continue
         f = match.iloc[0]
         p = np.geomspace(float(f["pressure_min_kPa"]), float(f["pressure_max_kPa"]), 100)

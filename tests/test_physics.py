@@ -17,20 +17,25 @@ from hypothesis import strategies as st
 
 from conftest import shared_file
 from tribopipe.config import InstrumentConfig
-from tribopipe.reduce import (
+from tribopipe.physics import (
+    FOUNDING_FRICTION_RADIUS_MM,
+    FOUNDING_SLIDING_SPEED_MM_S,
+    FOUNDING_SPEED_RPM,
     coefficient_of_friction,
     contact_pressure_kPa,
     distance_from_angle_mm,
     distance_from_nominal_mm,
     distance_from_speed_mm,
     friction_force_N,
+    rpm_to_rad_s,
+    sliding_distance_mm,
+    sliding_speed_mm_s,
+)
+from tribopipe.reduce import (
     leading_rest,
     linear_slope,
     median_smooth,
     noise_std,
-    rpm_to_rad_s,
-    sliding_distance_mm,
-    sliding_speed_mm_s,
     static_peak_curve,
 )
 
@@ -87,6 +92,19 @@ def test_founding_speed_is_0_007_mm_per_s() -> None:
     assert InstrumentConfig().nominal_sliding_speed_mm_s == pytest.approx(
         sliding_speed_mm_s(0.005, InstrumentConfig().friction_radius_mm)
     )
+
+
+def test_the_founding_speeds_are_defined_once() -> None:
+    # 0.005 rpm and 0.007 mm/s are the paper's two numbers; the friction radius follows
+    assert (FOUNDING_SPEED_RPM, FOUNDING_SLIDING_SPEED_MM_S) == (0.005, 0.007)
+    assert sliding_speed_mm_s(FOUNDING_SPEED_RPM, FOUNDING_FRICTION_RADIUS_MM) == pytest.approx(
+        FOUNDING_SLIDING_SPEED_MM_S, abs=5e-6)
+    from tribopipe import config, frictionmap, reduce, synthetic
+
+    assert config.FOUNDING_FRICTION_RADIUS_MM is FOUNDING_FRICTION_RADIUS_MM
+    assert frictionmap.PUBLISHED_SLIDING_SPEED_MM_S is FOUNDING_SLIDING_SPEED_MM_S
+    assert synthetic.SyntheticRun().speed_rpm is FOUNDING_SPEED_RPM
+    assert reduce.sliding_speed_mm_s is sliding_speed_mm_s  # the old import still works
 
 
 def test_angle_in_rad_times_radius_in_mm_is_mm() -> None:

@@ -23,18 +23,15 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from .errors import ConfigError
+from .physics import (  # noqa: F401 - the founding constants are importable from here too
+    FOUNDING_FRICTION_RADIUS_MM,
+    FOUNDING_SLIDING_SPEED_MM_S,
+    FOUNDING_SPEED_RPM,
+    sliding_speed_mm_s,
+)
 
 if TYPE_CHECKING:
     from .reduce import ReductionParams
-
-#: The founding paper sets the disc to 0.005 rpm and reports 0.007 mm/s of sliding.
-#: v = ω·R  ⇒  R = 0.007 mm/s / (0.005 · 2π / 60 s⁻¹) = 13.37 mm.
-FOUNDING_SPEED_RPM = 0.005
-FOUNDING_SLIDING_SPEED_MM_S = 0.007
-FOUNDING_FRICTION_RADIUS_MM = round(
-    FOUNDING_SLIDING_SPEED_MM_S / (FOUNDING_SPEED_RPM * 2 * math.pi / 60), 2
-)
-
 
 @dataclass(frozen=True)
 class InstrumentConfig:
@@ -73,8 +70,6 @@ class InstrumentConfig:
     @property
     def nominal_sliding_speed_mm_s(self) -> float:
         """Nominal sliding speed at the friction radius, ω·R_eff [mm/s]."""
-        from .reduce import sliding_speed_mm_s
-
         return sliding_speed_mm_s(self.nominal_speed_rpm, self.friction_radius_mm)
 
 

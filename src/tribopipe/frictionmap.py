@@ -33,6 +33,7 @@ from typing import TYPE_CHECKING, Any
 from .errors import MapError
 from .files import file_sha256
 from .numeric import finite_or_nan
+from .physics import FOUNDING_SLIDING_SPEED_MM_S, contact_pressure_kPa
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -52,7 +53,7 @@ SOURCE_REDUCED = "reduced"
 #: ``source`` of the founding paper's published map.
 SOURCE_PUBLISHED = "published:Berthold2023"
 #: The founding paper's fixed sliding speed [mm/s] (recorded for published rows).
-PUBLISHED_SLIDING_SPEED_MM_S = 0.007
+PUBLISHED_SLIDING_SPEED_MM_S = FOUNDING_SLIDING_SPEED_MM_S
 #: The published map's 7-column schema (RebeccaBerthold/FrictionMap).
 FRICTIONMAP_COLUMNS: tuple[str, ...] = (
     "pin",
@@ -168,8 +169,6 @@ def nominal_pressure_kPa(force_N: float, instrument: InstrumentConfig) -> float:
     p = (F / n_pins) / (π r²); with F in N and r in mm, N/mm² = MPa, hence × 1000 → kPa.
     The founding cell (3 pins, r = 3 mm) gives 1 N → 11.79 kPa.
     """
-    from .reduce import contact_pressure_kPa
-
     return float(contact_pressure_kPa(force_N, instrument.n_pins, instrument.pin_radius_mm))
 
 

@@ -1,6 +1,6 @@
-"""Pure physics of a pin-on-disc run: pressure, COF trace, sliding distance, μ_S and μ_K.
+"""The reduction of a pin-on-disc run: the COF trace, μ_S and μ_K with their evidence.
 
-Physics (T-PID/44 cell: ``n_pins`` pins of radius ``r`` on a disc, friction radius R_eff)
+Physics (formulas in :mod:`tribopipe.physics`; ``n_pins`` pins of radius ``r``, R_eff)
 -----------------------------------------------------------------------------------------
 * contact pressure per pin ``p = (F_N / n_pins) / (π r²)``: N/mm² = MPa, ×1000 → kPa
   (1 N on three pins of r = 3 mm → 11.79 kPa);
@@ -89,6 +89,17 @@ import numpy as np
 
 from .errors import ConfigError, MissingQuantityError, ReductionError
 from .measurement import ANGLE, NORMAL_FORCE, SPEED, TEMPERATURE, TIME, TORQUE, Measurement
+from .physics import (  # noqa: F401 - the formulas are importable from here too
+    coefficient_of_friction,
+    contact_pressure_kPa,
+    distance_from_angle_mm,
+    distance_from_nominal_mm,
+    distance_from_speed_mm,
+    friction_force_N,
+    rpm_to_rad_s,
+    sliding_distance_mm,
+    sliding_speed_mm_s,
+)
 
 if TYPE_CHECKING:
     from collections.abc import Sequence
@@ -239,98 +250,6 @@ class ReductionResult:
     method: str
     parameters: dict[str, Any]
     trace: pd.DataFrame = field(repr=False)
-
-
-# --------------------------------------------------------------------------- unit physics
-
-
-def contact_pressure_kPa(normal_force_N: Any, n_pins: int, pin_radius_mm: float) -> Any:
-    """Contact pressure per pin [kPa] of a total normal force [N] shared by ``n_pins`` pins
-    of radius ``pin_radius_mm`` [mm]: ``(F/n) / (π r²)`` N/mm² × 1000. Scalar or array."""
-    return np.asarray(normal_force_N, dtype=float) / n_pins / (math.pi * pin_radius_mm**2) * 1e3
-
-
-def friction_force_N(torque_Nm: Any, friction_radius_mm: float) -> Any:
-    """Friction force [N] from a torque [N·m] at the friction radius [mm]: ``M / R``."""
-    return np.asarray(torque_Nm, dtype=float) / (friction_radius_mm * 1e-3)
-
-
-def coefficient_of_friction(friction_force_N: Any, normal_force_N: Any) -> Any:
-    """COF μ = F_R / F_N (both in N; arrays of the same shape). NaN where F_N is 0."""
-    f_r = np.asarray(friction_force_N, dtype=float)
-    f_n = np.asarray(normal_force_N, dtype=float)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        mu = f_r / f_n
-    return np.where(f_n != 0, mu, np.nan)
-
-
-def rpm_to_rad_s(speed_rpm: Any) -> Any:
-    """Rotational speed: revolutions per minute → rad/s (× 2π/60)."""
-    return np.asarray(speed_rpm, dtype=float) * (2 * math.pi / 60)
-
-
-def sliding_speed_mm_s(speed_rpm: float, friction_radius_mm: float) -> float:
-    """Sliding speed [mm/s] at the friction radius [mm] of a disc turning at ``speed_rpm``
-    (0.005 rpm at 13.37 mm → 0.0070 mm/s)."""
-    return float(rpm_to_rad_s(speed_rpm)) * friction_radius_mm
-
-
-def distance_from_angle_mm(angle_rad: Any, friction_radius_mm: float) -> np.ndarray:
-    """Sliding distance [mm] from a deflection angle [rad] (shape (n,)): ``(φ − φ₀)·R``,
-    counted along the direction of travel (so it grows whichever way the disc turns)."""
-    phi = np.asarray(angle_rad, dtype=float)
-    travel = phi - phi[0]
-    direction = 1.0 if travel[-1] >= 0 else -1.0
-    return direction * travel * friction_radius_mm
-
-
-def distance_from_speed_mm(
-    time_s: Any, speed_rad_s: Any, friction_radius_mm: float
-) -> np.ndarray:
-    """Sliding distance [mm] by integrating the rotational speed [rad/s] over time [s]
-    (trapezoids, shape (n,), 0 at the first sample) times the friction radius [mm]."""
-    t = np.asarray(time_s, dtype=float)
-    w = np.asarray(speed_rad_s, dtype=float)
-    if np.nanmedian(w) < 0:
-        w = -w
-    steps = 0.5 * (w[1:] + w[:-1]) * np.diff(t)
-    return np.concatenate([[0.0], np.cumsum(steps)]) * friction_radius_mm
-
-
-def distance_from_nominal_mm(
-    time_s: Any, speed_rpm: float, friction_radius_mm: float
-) -> np.ndarray:
-    """Sliding distance [mm] assuming the nominal speed [rpm] from the first sample on."""
-    t = np.asarray(time_s, dtype=float)
-    return (t - t[0]) * sliding_speed_mm_s(speed_rpm, friction_radius_mm)
-
-
-def sliding_distance_mm(
-    time_s: Any,
-    friction_radius_mm: float,
-    *,
-    angle_rad: Any = None,
-    speed_rad_s: Any = None,
-    nominal_speed_rpm: float | None = None,
-) -> tuple[np.ndarray, str]:
-    """Sliding distance [mm] (shape (n,)) and its source: ``"angle"`` when a finite angle
-    [rad] is given, else ``"speed"`` (integrated rad/s), else ``"nominal"`` (rpm × time).
-    Missing angle/speed values are interpolated over time."""
-    t = np.asarray(time_s, dtype=float)
-    for values, source in ((angle_rad, "angle"), (speed_rad_s, "speed")):
-        if values is None:
-            continue
-        v = np.asarray(values, dtype=float)
-        ok = np.isfinite(v)
-        if ok.sum() < 2:
-            continue
-        v = np.interp(t, t[ok], v[ok]) if not ok.all() else v
-        if source == "angle":
-            return distance_from_angle_mm(v, friction_radius_mm), source
-        return distance_from_speed_mm(t, v, friction_radius_mm), source
-    if nominal_speed_rpm is None:
-        raise ValueError("no angle, no speed and no nominal speed: sliding distance unknown")
-    return distance_from_nominal_mm(t, nominal_speed_rpm, friction_radius_mm), "nominal"
 
 
 # --------------------------------------------------------------------------- signal helpers

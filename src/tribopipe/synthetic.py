@@ -36,8 +36,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from .config import FOUNDING_FRICTION_RADIUS_MM
 from .measurement import ANGLE, NORMAL_FORCE, SPEED, TEMPERATURE, TIME, TORQUE
+from .physics import FOUNDING_FRICTION_RADIUS_MM, FOUNDING_SPEED_RPM
 
 if TYPE_CHECKING:
     from os import PathLike
@@ -73,7 +73,7 @@ class SyntheticRun:
     temperature_C: float = 20.0
     duration_s: float = 300.0
     sample_rate_Hz: float = 10.0
-    speed_rpm: float = 0.005
+    speed_rpm: float = FOUNDING_SPEED_RPM
     friction_radius_mm: float = FOUNDING_FRICTION_RADIUS_MM
     seed: int = 0
     setup_s: float = 20.0

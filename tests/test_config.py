@@ -76,3 +76,27 @@ def test_config_hash_is_computed_once_and_stays_stable() -> None:
     first = settings.config_hash
     assert settings.config_hash is first  # cached on the object
     assert settings_from_dict({"reduction": {"run_in_mm": 0.3}}).config_hash == first
+
+
+def test_the_one_merge_overrides_key_by_key_and_copies() -> None:
+    from tribopipe.config import merge_tables, settings_tables
+
+    base = settings_tables({"instrument": {"pin_radius_mm": 4.0},
+                            "reduction": {"median_window": 9, "run_in_mm": 0.5}}, "inst.toml")
+    ours = settings_tables({"campaign": {}, "reduction": {"median_window": 5}}, "c.toml")
+    merged = merge_tables(base, ours)
+    assert merged == {"instrument": {"pin_radius_mm": 4.0},
+                      "reduction": {"median_window": 5, "run_in_mm": 0.5}}
+    assert base["reduction"]["median_window"] == 9  # inputs untouched
+    settings = settings_from_dict(merged)
+    assert (settings.reduction.median_window, settings.reduction.run_in_mm) == (5, 0.5)
+    with pytest.raises(ConfigError, match=r"c\.toml: \[reduction\] must be a table"):
+        settings_tables({"reduction": 3}, "c.toml")
+
+
+def test_reduction_params_live_in_config_and_import_from_reduce_too() -> None:
+    from tribopipe.config import ReductionParams
+    from tribopipe.reduce import ReductionParams as from_reduce
+
+    assert from_reduce is ReductionParams
+    assert load_settings().reduction == ReductionParams()

@@ -216,7 +216,13 @@ def load_campaign(path: str | Path) -> Campaign:
 
     Raises :class:`ConfigError` naming the file and the key for every problem.
     """
-    from .config import read_toml, reject_unknown_keys, settings_from_dict
+    from .config import (
+        merge_tables,
+        read_toml,
+        reject_unknown_keys,
+        settings_from_dict,
+        settings_tables,
+    )
 
     cfg_path = Path(path).resolve()
     try:
@@ -260,19 +266,9 @@ def load_campaign(path: str | Path) -> Campaign:
 
     # the instrument config's own [reduction] table, overridden key by key by ours
     instrument_path = rel("instrument")
-    if instrument_path is not None:
-        instrument_data = read_toml(instrument_path)
-    else:
-        instrument_data = {}
-    for section in ("instrument", "reduction"):
-        if not isinstance(instrument_data.get(section, {}), dict):
-            raise ConfigError(f"[{section}] must be a table", path=instrument_path)
-    reduction = dict(instrument_data.get("reduction", {}))
-    if "reduction" in data:
-        if not isinstance(data["reduction"], dict):
-            raise ConfigError("[reduction] must be a table", path=cfg_path)
-        reduction.update(data["reduction"])
-    merged = {"instrument": instrument_data.get("instrument", {}), "reduction": reduction}
+    instrument_data = read_toml(instrument_path) if instrument_path is not None else {}
+    merged = merge_tables(settings_tables(instrument_data, instrument_path),
+                          settings_tables(data, cfg_path))
     try:
         settings = settings_from_dict(
             merged, source=str(instrument_path) if instrument_path else None

@@ -87,7 +87,8 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from .errors import ConfigError, MissingQuantityError, ReductionError
+from .config import InstrumentConfig, ReductionParams
+from .errors import MissingQuantityError, ReductionError
 from .measurement import ANGLE, NORMAL_FORCE, SPEED, TEMPERATURE, TIME, TORQUE, Measurement
 from .physics import (  # noqa: F401 - the formulas are importable from here too
     coefficient_of_friction,
@@ -105,8 +106,6 @@ if TYPE_CHECKING:
     from collections.abc import Sequence
 
     import pandas as pd
-
-    from .config import InstrumentConfig
 
 METHOD = "tribopipe-v1: median filter + Savitzky-Golay static peak; settled-plateau mean"
 
@@ -127,97 +126,6 @@ FLAGS: tuple[str, ...] = (
     "normal_force_unstable",
     "short_trace",
 )
-
-
-@dataclass(frozen=True)
-class ReductionParams:
-    """Parameters of the μ_S / μ_K detection (the ``[reduction]`` table of a config).
-
-    Attributes
-    ----------
-    median_window
-        Width of the light median filter on μ [samples, odd]; removes spikes.
-    peak_window_mm
-        Width of the quadratic Savitzky–Golay smoothing used to read the static peak [mm].
-    cliff_window_mm
-        Length of the one-sided quadratic fits that read a peak ending in a sudden slip [mm].
-    cliff_sigma
-        A sudden slip (cliff) is a drop between the fits left and right of a sample larger
-        than this many standard deviations of their difference [-].
-    static_search_mm
-        The static peak is searched within this sliding distance from the start [mm].
-    run_in_mm
-        The μ_K plateau never starts before this sliding distance (ASTM D2534 run-in) [mm].
-    plateau_min_mm
-        Shortest acceptable plateau [mm]; shorter → ``no_steady_state``/``short_trace``.
-    block_mm
-        Block length of the settling test that finds the plateau start [mm].
-    settle_tol
-        Smallest tolerance of the settling test [COF].
-    max_drift_per_mm
-        Largest plateau slope of μ over s still called steady [1/mm].
-    static_min_prominence
-        μ_S is distinct when it exceeds the plateau's highs by more than this [COF] ...
-    static_prominence_sigma
-        ... and by more than this many standard deviations of the smoothed noise [-].
-    stick_slip_average_s
-        Averaging time before the stick-slip test [s] (removes white noise, keeps slips).
-    stick_slip_ratio
-        Stick-slip when the averaged plateau scatter exceeds white noise by this factor [-] ...
-    stick_slip_min_std
-        ... and is larger than this [COF].
-    normal_force_cv_max
-        Largest coefficient of variation of F_N over sliding still called stable [-].
-    min_contact_samples
-        Fewer samples in contact than this is an error, not a result [samples].
-    min_plateau_samples
-        A plateau with fewer samples than this is flagged ``short_trace`` [samples].
-    min_travel_mm
-        A measured sliding distance below this means "no rotation" (an error) [mm].
-    motion_tol_mm
-        Samples before the disc has moved this far count as "at rest" [mm].
-    offset_min_samples
-        At-rest samples needed to estimate a torque offset from the friction interval.
-    max_missing_fraction
-        More missing torque or normal-force values than this fraction is an error [-].
-    """
-
-    median_window: int = 3
-    peak_window_mm: float = 0.015
-    cliff_window_mm: float = 0.045
-    cliff_sigma: float = 4.0
-    static_search_mm: float = 0.5
-    run_in_mm: float = 0.25
-    plateau_min_mm: float = 0.3
-    block_mm: float = 0.05
-    settle_tol: float = 0.006
-    max_drift_per_mm: float = 0.02
-    static_min_prominence: float = 0.02
-    static_prominence_sigma: float = 3.0
-    stick_slip_average_s: float = 1.0
-    stick_slip_ratio: float = 3.0
-    stick_slip_min_std: float = 0.01
-    normal_force_cv_max: float = 0.05
-    min_contact_samples: int = 20
-    min_plateau_samples: int = 30
-    min_travel_mm: float = 0.01
-    motion_tol_mm: float = 1e-3
-    offset_min_samples: int = 5
-    max_missing_fraction: float = 0.5
-
-    def __post_init__(self) -> None:
-        for f_name, value in asdict(self).items():
-            if not (isinstance(value, int | float) and math.isfinite(value) and value >= 0):
-                raise ConfigError(f"[reduction] {f_name} must be a number >= 0, got {value!r}")
-        if not (isinstance(self.median_window, int) and self.median_window >= 1):
-            raise ConfigError(
-                f"[reduction] median_window must be a whole number >= 1, "
-                f"got {self.median_window!r}"
-            )
-        if self.block_mm <= 0 or self.peak_window_mm <= 0 or self.cliff_window_mm <= 0:
-            raise ConfigError(
-                "[reduction] block_mm, peak_window_mm and cliff_window_mm must be > 0"
-            )
 
 
 @dataclass(frozen=True)

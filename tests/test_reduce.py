@@ -25,7 +25,6 @@ from tribopipe.errors import ConfigError, MissingQuantityError, ReductionError
 from tribopipe.measurement import Measurement, MeasurementMeta
 from tribopipe.reduce import (
     FLAGS,
-    OFFSET_KEY,
     ReductionParams,
     ReductionResult,
     reduce_measurement,
@@ -337,13 +336,16 @@ def test_a_missing_torque_column_names_what_was_found() -> None:
 
 def test_the_rotating_interval_is_chosen_and_the_set_up_gives_the_offset() -> None:
     items = measurements(SyntheticRun(torque_offset_Nm=3e-4, seed=41))
-    before = [dict(m.meta.extra) for m in items]
+    before = [m.meta for m in items]
     picked = select_friction_interval(items)
     assert picked.meta.interval == 2
     assert picked.data is items[1].data
     # 200 set-up samples with 0.2 mN·m noise: the median is good to ~0.02 mN·m
-    assert float(dict(picked.meta.extra)[OFFSET_KEY]) == pytest.approx(3e-4, abs=5e-5)
-    assert [dict(m.meta.extra) for m in items] == before  # inputs untouched
+    offset = picked.meta.torque_offset
+    assert offset is not None and offset.torque_Nm == pytest.approx(3e-4, abs=5e-5)
+    assert offset.source == "set-up interval 1"
+    assert [m.meta for m in items] == before  # inputs untouched
+    assert items[1].meta.torque_offset is None
 
 
 def test_without_angle_or_speed_the_interval_with_torque_is_chosen() -> None:
@@ -355,7 +357,7 @@ def test_without_angle_or_speed_the_interval_with_torque_is_chosen() -> None:
     ]
     picked = select_friction_interval(items)
     assert picked.meta.interval == 2
-    assert OFFSET_KEY not in dict(picked.meta.extra)  # rest of the set-up is not verified
+    assert picked.meta.torque_offset is None  # rest of the set-up is not verified
 
 
 def test_intervals_without_torque_are_a_missing_quantity() -> None:

@@ -24,6 +24,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
+from .errors import MissingQuantityError
+
 if TYPE_CHECKING:
     import pandas as pd
 
@@ -42,6 +44,15 @@ def interval_label(test: str | None, result: str | None, interval: int | None) -
     if interval is not None:
         parts.append(f"interval {interval}")
     return " / ".join(parts)
+
+
+@dataclass(frozen=True)
+class TorqueOffset:
+    """The instrument's torque zero offset [N·m] measured outside a friction interval, and
+    where (e.g. ``"set-up interval 1"``: the disc at rest under load before sliding)."""
+
+    torque_Nm: float
+    source: str
 
 
 @dataclass(frozen=True)
@@ -71,6 +82,9 @@ class MeasurementMeta:
     n_waveform_rows: int = 0
     header_line: int | None = None
     extra: tuple[tuple[str, str], ...] = field(default=())
+    #: set by :func:`tribopipe.intervals.select_friction_interval` from the set-up interval
+    #: before a friction interval; read by the reduction (``None``: not measured)
+    torque_offset: TorqueOffset | None = None
 
     @property
     def label(self) -> str:
@@ -97,3 +111,25 @@ class Measurement:
             if not np.isfinite(values).any():
                 return False
         return True
+
+
+def require_columns(measurement: Measurement, *columns: str) -> None:
+    """Raise :class:`MissingQuantityError` unless every column exists with a finite value.
+
+    The message names the file, the interval and the columns that were found, e.g.
+    ``run.csv: interval 2 has no torque_Nm column (columns found: Time [s] → time_s, ...)``.
+    """
+    missing = [c for c in columns if not measurement.has(c)]
+    if not missing:
+        return
+    meta = measurement.meta
+    found = ", ".join(
+        f"{orig} → {new}" for orig, new in meta.column_map
+    ) or ", ".join(measurement.data.columns)
+    where = interval_label(meta.test, meta.result, meta.interval)
+    raise MissingQuantityError(
+        f"{where} has no {' or '.join(missing)} values (columns found: {found or 'none'})",
+        path=meta.source_file,
+        line=meta.header_line,
+        hint="add the column's name to configs/aliases.toml if it is there under another name",
+    )

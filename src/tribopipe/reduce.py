@@ -17,7 +17,7 @@ A negative median normal force (compression written as negative) is flipped like
 Torque zero offset. A torque offset shows up as torque while the disc does not move. It is
 estimated (:func:`robust_mean` of the torque: efficient on noise, deaf to spikes) from, in
 this order: an explicit value; the set-up interval before the friction interval (attached
-by :func:`select_friction_interval` to ``meta.extra`` as ``torque_offset_Nm``); the
+by :func:`select_friction_interval` as ``meta.torque_offset``); the
 samples of the friction interval before the disc starts to move (at least
 ``ReductionParams.offset_min_samples``). If neither exists the offset is taken as 0 and
 ``parameters["torque_offset_source"]`` says it could not be estimated.
@@ -89,7 +89,17 @@ import numpy as np
 
 from .config import InstrumentConfig, ReductionParams
 from .errors import MissingQuantityError, ReductionError
-from .measurement import ANGLE, NORMAL_FORCE, SPEED, TEMPERATURE, TIME, TORQUE, Measurement
+from .measurement import (
+    ANGLE,
+    NORMAL_FORCE,
+    SPEED,
+    TEMPERATURE,
+    TIME,
+    TORQUE,
+    Measurement,
+    TorqueOffset,
+    require_columns,
+)
 from .physics import (  # noqa: F401 - the formulas are importable from here too
     coefficient_of_friction,
     contact_pressure_kPa,
@@ -108,10 +118,6 @@ if TYPE_CHECKING:
     import pandas as pd
 
 METHOD = "tribopipe-v1: median filter + Savitzky-Golay static peak; settled-plateau mean"
-
-#: keys of ``MeasurementMeta.extra`` written by :func:`select_friction_interval`
-OFFSET_KEY = "torque_offset_Nm"
-OFFSET_SOURCE_KEY = "torque_offset_source"
 
 #: an interval "rotates" when its deflection angle travels at least this far [rad]
 #: (0.002 rad ≈ 0.027 mm at R = 13.37 mm, ~4 s at 0.005 rpm) ...
@@ -388,8 +394,9 @@ def select_friction_interval(measurements: Sequence[Measurement]) -> Measurement
 
     When the interval right before it in the same test and result is verified at rest
     (a normal-force set-up), its mean torque is attached to the returned measurement's
-    ``meta.extra`` as ``torque_offset_Nm`` (with ``torque_offset_source``) for
-    :func:`reduce_measurement`. The input measurements are not modified.
+    ``meta.torque_offset`` (a :class:`~tribopipe.measurement.TorqueOffset` naming the
+    set-up interval) for :func:`reduce_measurement`. The input measurements are not
+    modified.
 
     Raises :class:`ReductionError` when no interval has the quantities or none rotates.
     """
@@ -431,10 +438,8 @@ def select_friction_interval(measurements: Sequence[Measurement]) -> Measurement
                 where = f"set-up interval {before.meta.interval}" if before.meta.interval else (
                     "set-up interval"
                 )
-                extra = tuple(
-                    (k, v) for k, v in picked.meta.extra if k not in (OFFSET_KEY, OFFSET_SOURCE_KEY)
-                ) + ((OFFSET_KEY, repr(offset)), (OFFSET_SOURCE_KEY, where))
-                picked = Measurement(data=picked.data, meta=replace(picked.meta, extra=extra))
+                picked = Measurement(data=picked.data, meta=replace(
+                    picked.meta, torque_offset=TorqueOffset(torque_Nm=offset, source=where)))
     return picked
 
 
@@ -509,14 +514,10 @@ def _samples(m: Measurement, params: ReductionParams) -> _Samples:
 
 
 def _offset_from_meta(m: Measurement) -> tuple[float | None, str | None]:
-    extra = dict(m.meta.extra)
-    try:
-        value = float(extra[OFFSET_KEY])
-    except (KeyError, ValueError):
+    offset = m.meta.torque_offset
+    if offset is None or not math.isfinite(offset.torque_Nm):
         return None, None
-    if not math.isfinite(value):
-        return None, None
-    return value, extra.get(OFFSET_SOURCE_KEY, "set-up interval")
+    return offset.torque_Nm, offset.source
 
 
 def leading_rest(s_mm: Any, motion_tol_mm: float) -> np.ndarray:
@@ -708,8 +709,6 @@ def reduce_measurement(
     than half of torque or normal force missing, no rotation, or too few contact samples.
     """
     import pandas as pd
-
-    from .readers import require_columns
 
     require_columns(m, TIME, TORQUE, NORMAL_FORCE)
     label = m.meta.label

@@ -6,7 +6,8 @@ decimal mark (each can be forced), and returns one Measurement per interval, in 
 order, with canonical SI columns (``time_s``, ``torque_Nm``, ``normal_force_N``,
 ``angle_rad``, ``speed_rad_s``, ``temperature_C``), ``point_no`` and the other columns
 snake_cased with an SI unit suffix. :func:`describe_export` tells what a file holds
-(``tribopipe inspect``); :func:`require_columns` is the check a reduction makes.
+(``tribopipe inspect``); :func:`require_columns` (from :mod:`tribopipe.measurement`) is
+the check a reduction makes.
 
 Quirks handled (each seen in a real export, see ``tests/data/README.md``):
 
@@ -31,8 +32,14 @@ from os import PathLike
 from pathlib import Path
 from typing import Any
 
-from ..errors import MissingQuantityError, ReadError, TribopipeError
-from ..measurement import NORMAL_FORCE, TORQUE, Measurement, interval_label
+from ..errors import ReadError, TribopipeError
+from ..measurement import (  # noqa: F401 - require_columns is importable from here too
+    NORMAL_FORCE,
+    TORQUE,
+    Measurement,
+    interval_label,
+    require_columns,
+)
 from . import plaincsv, rheocompass, rheoplus
 from .aliases import AliasTable, load_aliases, resolve_aliases
 from .common import FileInfo, RawInterval, build_measurement
@@ -189,28 +196,6 @@ def read_export(
             path=p,
         )
     return measurements
-
-
-def require_columns(measurement: Measurement, *columns: str) -> None:
-    """Raise :class:`MissingQuantityError` unless every column exists with a finite value.
-
-    The message names the file, the interval and the columns that were found, e.g.
-    ``run.csv: interval 2 has no torque_Nm column (columns found: Time [s] → time_s, ...)``.
-    """
-    missing = [c for c in columns if not measurement.has(c)]
-    if not missing:
-        return
-    meta = measurement.meta
-    found = ", ".join(
-        f"{orig} → {new}" for orig, new in meta.column_map
-    ) or ", ".join(measurement.data.columns)
-    where = interval_label(meta.test, meta.result, meta.interval)
-    raise MissingQuantityError(
-        f"{where} has no {' or '.join(missing)} values (columns found: {found or 'none'})",
-        path=meta.source_file,
-        line=meta.header_line,
-        hint="add the column's name to configs/aliases.toml if it is there under another name",
-    )
 
 
 @dataclass(frozen=True)

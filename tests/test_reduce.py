@@ -19,7 +19,6 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from conftest import shared_file
 from tribopipe.config import InstrumentConfig, settings_from_dict
 from tribopipe.errors import ConfigError, MissingQuantityError, ReductionError
 from tribopipe.measurement import Measurement, MeasurementMeta
@@ -331,66 +330,12 @@ def test_a_missing_torque_column_names_what_was_found() -> None:
     assert "bad.csv" in str(err.value) and "normal_force_N" in str(err.value)
 
 
-# --------------------------------------------------------------------------- interval choice
-
-
-def test_the_rotating_interval_is_chosen_and_the_set_up_gives_the_offset() -> None:
-    items = measurements(SyntheticRun(torque_offset_Nm=3e-4, seed=41))
-    before = [m.meta for m in items]
-    picked = select_friction_interval(items)
-    assert picked.meta.interval == 2
-    assert picked.data is items[1].data
-    # 200 set-up samples with 0.2 mN·m noise: the median is good to ~0.02 mN·m
-    offset = picked.meta.torque_offset
-    assert offset is not None and offset.torque_Nm == pytest.approx(3e-4, abs=5e-5)
-    assert offset.source == "set-up interval 1"
-    assert [m.meta for m in items] == before  # inputs untouched
-    assert items[1].meta.torque_offset is None
-
-
-def test_without_angle_or_speed_the_interval_with_torque_is_chosen() -> None:
-    frames = make_intervals(SyntheticRun(seed=42))
-    items = [
-        Measurement(f.drop(columns=["angle_rad", "speed_rad_s"]),
-                    MeasurementMeta("plain.csv", "synthetic", interval=i))
-        for i, f in enumerate(frames, start=1)
-    ]
-    picked = select_friction_interval(items)
-    assert picked.meta.interval == 2
-    assert picked.meta.torque_offset is None  # rest of the set-up is not verified
-
-
-def test_intervals_without_torque_are_a_missing_quantity() -> None:
-    frames = make_intervals(SyntheticRun(seed=43))
-    items = [Measurement(f.drop(columns=["torque_Nm"]),
-                         MeasurementMeta("nt.csv", "synthetic", interval=i))
-             for i, f in enumerate(frames, start=1)]
-    with pytest.raises(MissingQuantityError, match="nt.csv: no interval has time, torque"):
-        select_friction_interval(items)
-
-
-def test_real_rheometer_files_that_are_not_friction_runs_are_refused_in_one_line() -> None:
-    """Real RheoCompass exports (shear and LAOS tests, no pin-on-disc run) must be
-    refused with the file and the reason, not reduced to a number."""
-    readers = pytest.importorskip("tribopipe.readers")
-    small = shared_file("real-exports", "rheocompass_en_utf16_small.txt")
-    with pytest.raises(MissingQuantityError) as err:
-        select_friction_interval(readers.read_export(small))
-    assert str(small) in str(err.value) and "missing: normal_force_N" in str(err.value)
-    laos = shared_file("real-exports", "rheocompass_fr_utf16_laos.csv")
-    with pytest.raises(ReductionError) as err:
-        picked = select_friction_interval(readers.read_export(laos))
-        reduce_measurement(picked, INSTRUMENT, PARAMS)
-    message = str(err.value)
-    assert message.startswith(str(laos)) and "contact threshold" in message
-    assert "\n" not in message
-
-
 # --------------------------------------------------------------------------- purity
 
 
 def test_no_reduction_function_mutates_its_inputs() -> None:
     """astropy/pybaselines style: every input array is read-only; nothing may write."""
+    from tribopipe import intervals, physics
     from tribopipe import reduce as r
 
     frames = []
@@ -414,14 +359,14 @@ def test_no_reduction_function_mutates_its_inputs() -> None:
     speed = frames[1]["speed_rad_s"].to_numpy()
     force = frames[1]["normal_force_N"].to_numpy()
     torque = frames[1]["torque_Nm"].to_numpy()
-    r.contact_pressure_kPa(force, 3, 3.0)
-    r.friction_force_N(torque, 13.37)
-    r.coefficient_of_friction(torque, force)
-    r.rpm_to_rad_s(speed)
-    r.distance_from_angle_mm(angle, 13.37)
-    r.distance_from_speed_mm(t, speed, 13.37)
-    r.distance_from_nominal_mm(t, 0.005, 13.37)
-    s, _ = r.sliding_distance_mm(t, 13.37, angle_rad=angle, speed_rad_s=speed)
+    physics.contact_pressure_kPa(force, 3, 3.0)
+    physics.friction_force_N(torque, 13.37)
+    physics.coefficient_of_friction(torque, force)
+    physics.rpm_to_rad_s(speed)
+    physics.distance_from_angle_mm(angle, 13.37)
+    physics.distance_from_speed_mm(t, speed, 13.37)
+    physics.distance_from_nominal_mm(t, 0.005, 13.37)
+    s, _ = physics.sliding_distance_mm(t, 13.37, angle_rad=angle, speed_rad_s=speed)
     s.flags.writeable = False
     r.noise_std(mu)
     r.median_smooth(mu, 5)
@@ -432,7 +377,8 @@ def test_no_reduction_function_mutates_its_inputs() -> None:
     r.stick_slip_std(s[100:], mu, 10)
     r.leading_rest(s, 1e-3)
     r.estimate_torque_offset_Nm(torque, r.leading_rest(s, 1e-3), 5)
-    r.setup_torque_offset_Nm(items[0])
+    intervals.setup_torque_offset_Nm(items[0])
+    intervals.robust_mean(torque)
     for before, after in zip(snapshot, frames, strict=True):
         pd.testing.assert_frame_equal(before, after)
 

@@ -38,8 +38,8 @@ def inspect_cmd(
     """List what an export holds: detected format, encoding, delimiter and decimal mark,
     its tests, results and intervals with their point counts, every column with its
     original unit and the SI column it becomes, and the interval `reduce` will read."""
+    from ..intervals import select_friction_interval
     from ..readers import describe_export
-    from ..reduce import select_friction_interval
 
     summary = describe_export(
         file,

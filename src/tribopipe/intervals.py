@@ -1,4 +1,4 @@
-"""The friction interval of an export, and the torque offset its set-up interval measured.
+"""The friction interval of an export: which one, its complete samples, its torque offset.
 
 An export holds several intervals (of one or more tests and results): typically a
 normal-force set-up with the disc at rest, then the friction interval with the disc
@@ -6,17 +6,34 @@ turning. :func:`select_friction_interval` picks the interval with rotation; when
 interval right before it is verified at rest, its robust mean torque is the instrument's
 torque zero offset (with the disc at rest the true friction torque is zero), attached as
 ``meta.torque_offset`` for :func:`tribopipe.reduce.reduce_measurement`.
+
+What the reduction reads of the chosen interval is prepared here too:
+:func:`interval_samples` (the complete samples as new float arrays, time-ordered, force
+positive in compression) and :func:`choose_torque_offset` (given > set-up interval >
+the at-rest start of the interval, :func:`leading_rest` and
+:func:`estimate_torque_offset_Nm` > none).
 """
 
 from __future__ import annotations
 
-from dataclasses import replace
+import math
+from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from .config import ReductionParams
 from .errors import MissingQuantityError, ReductionError
-from .measurement import ANGLE, NORMAL_FORCE, SPEED, TIME, TORQUE, Measurement, TorqueOffset
+from .measurement import (
+    ANGLE,
+    NORMAL_FORCE,
+    SPEED,
+    TEMPERATURE,
+    TIME,
+    TORQUE,
+    Measurement,
+    TorqueOffset,
+)
 
 if TYPE_CHECKING:
     from collections.abc import Sequence
@@ -150,3 +167,117 @@ def select_friction_interval(measurements: Sequence[Measurement]) -> Measurement
 def _median_abs_torque(m: Measurement) -> float:
     torque = _column(m, TORQUE)
     return float(np.nanmedian(np.abs(torque))) if torque is not None else 0.0
+
+
+# ------------------------------------------------------------------ what the reduction reads
+
+
+@dataclass(frozen=True)
+class IntervalSamples:
+    """The complete samples of one interval, time-ordered, as new float arrays."""
+
+    t: np.ndarray
+    torque: np.ndarray
+    force: np.ndarray  # made positive in compression
+    angle: np.ndarray | None
+    speed: np.ndarray | None
+    temperature: np.ndarray | None
+    n_total: int
+    n_dropped: int
+    force_sign: float
+
+
+def interval_samples(m: Measurement, params: ReductionParams) -> IntervalSamples:
+    """Validate and copy the quantities of ``m`` (raises ReductionError for bad input)."""
+    label = m.meta.label
+    data = m.data
+    t = np.array(data[TIME], dtype=float)
+    torque = np.array(data[TORQUE], dtype=float)
+    force = np.array(data[NORMAL_FORCE], dtype=float)
+    n_total = int(t.size)
+    for name, values in ((TORQUE, torque), (NORMAL_FORCE, force)):
+        missing = int((~np.isfinite(values)).sum())
+        if missing > params.max_missing_fraction * n_total:
+            raise ReductionError(
+                f"{label}: {missing} of {n_total} {name} values are missing "
+                f"(more than {params.max_missing_fraction:.0%}); cannot reduce"
+            )
+    keep = np.isfinite(t) & np.isfinite(torque) & np.isfinite(force)
+    order = np.argsort(t[keep], kind="stable")
+
+    def pick(values: np.ndarray) -> np.ndarray:
+        return values[keep][order]
+
+    def optional(name: str) -> np.ndarray | None:
+        if name not in data.columns:
+            return None
+        values = pick(np.array(data[name], dtype=float))
+        return values if np.isfinite(values).any() else None
+
+    t, torque, force = pick(t), pick(torque), pick(force)
+    if t.size < params.min_contact_samples:
+        raise ReductionError(
+            f"{label}: only {t.size} complete samples (time, torque and normal force); "
+            f"need at least {params.min_contact_samples}"
+        )
+    force_sign = -1.0 if np.median(force) < 0 else 1.0
+    return IntervalSamples(
+        t=t,
+        torque=torque,
+        force=force_sign * force,
+        angle=optional(ANGLE),
+        speed=optional(SPEED),
+        temperature=optional(TEMPERATURE),
+        n_total=n_total,
+        n_dropped=int(n_total - t.size),
+        force_sign=force_sign,
+    )
+
+
+def _offset_from_meta(m: Measurement) -> tuple[float | None, str | None]:
+    offset = m.meta.torque_offset
+    if offset is None or not math.isfinite(offset.torque_Nm):
+        return None, None
+    return offset.torque_Nm, offset.source
+
+
+def leading_rest(s_mm: Any, motion_tol_mm: float) -> np.ndarray:
+    """Boolean mask (shape (n,)) of the samples before the disc first moves
+    ``motion_tol_mm`` [mm] along ``s_mm``; a stop later in the run is not "rest"."""
+    s = np.asarray(s_mm, dtype=float)
+    moved = s >= motion_tol_mm
+    first = int(np.argmax(moved)) if moved.any() else s.size
+    return np.arange(s.size) < first
+
+
+def estimate_torque_offset_Nm(
+    torque_Nm: Any, at_rest: Any, min_samples: int
+) -> tuple[float | None, int]:
+    """Robust mean torque [N·m] of the at-rest samples (boolean mask), or ``None`` when fewer
+    than ``min_samples`` are at rest; and the number of samples used."""
+    torque = np.asarray(torque_Nm, dtype=float)
+    rest = np.asarray(at_rest, dtype=bool)
+    n = int(rest.sum())
+    if n < min_samples:
+        return None, n
+    return robust_mean(torque[rest]), n
+
+
+def choose_torque_offset(
+    m: Measurement, x: IntervalSamples, at_rest: np.ndarray, given_Nm: float | None,
+    params: ReductionParams,
+) -> tuple[float, str]:
+    """The torque zero offset [N·m] and where it came from: given > set-up interval >
+    at-rest start of this interval > none (0)."""
+    meta_offset, meta_source = _offset_from_meta(m)
+    rest_offset, n_rest = estimate_torque_offset_Nm(x.torque, at_rest, params.offset_min_samples)
+    if given_Nm is not None:
+        offset, offset_source = float(given_Nm), "given"
+    elif meta_offset is not None:
+        offset, offset_source = meta_offset, str(meta_source)
+    elif rest_offset is not None:
+        offset, offset_source = rest_offset, f"at-rest start ({n_rest} samples)"
+    else:
+        offset = 0.0
+        offset_source = "not estimated (no set-up interval, no at-rest samples): 0 assumed"
+    return offset, offset_source

@@ -90,15 +90,17 @@ import numpy as np
 from .config import InstrumentConfig, ReductionParams
 from .errors import ReductionError
 from .intervals import (  # noqa: F401 - interval choice is importable from here too
+    IntervalSamples,
+    choose_torque_offset,
+    estimate_torque_offset_Nm,
+    interval_samples,
+    leading_rest,
     robust_mean,
     select_friction_interval,
     setup_torque_offset_Nm,
 )
 from .measurement import (
-    ANGLE,
     NORMAL_FORCE,
-    SPEED,
-    TEMPERATURE,
     TIME,
     TORQUE,
     Measurement,
@@ -333,97 +335,6 @@ def find_plateau_start(
 
 
 @dataclass(frozen=True)
-class _Samples:
-    """The complete samples of one interval, time-ordered, as new float arrays."""
-
-    t: np.ndarray
-    torque: np.ndarray
-    force: np.ndarray  # made positive in compression
-    angle: np.ndarray | None
-    speed: np.ndarray | None
-    temperature: np.ndarray | None
-    n_total: int
-    n_dropped: int
-    force_sign: float
-
-
-def _samples(m: Measurement, params: ReductionParams) -> _Samples:
-    """Validate and copy the quantities of ``m`` (raises ReductionError for bad input)."""
-    label = m.meta.label
-    data = m.data
-    t = np.array(data[TIME], dtype=float)
-    torque = np.array(data[TORQUE], dtype=float)
-    force = np.array(data[NORMAL_FORCE], dtype=float)
-    n_total = int(t.size)
-    for name, values in ((TORQUE, torque), (NORMAL_FORCE, force)):
-        missing = int((~np.isfinite(values)).sum())
-        if missing > params.max_missing_fraction * n_total:
-            raise ReductionError(
-                f"{label}: {missing} of {n_total} {name} values are missing "
-                f"(more than {params.max_missing_fraction:.0%}); cannot reduce"
-            )
-    keep = np.isfinite(t) & np.isfinite(torque) & np.isfinite(force)
-    order = np.argsort(t[keep], kind="stable")
-
-    def pick(values: np.ndarray) -> np.ndarray:
-        return values[keep][order]
-
-    def optional(name: str) -> np.ndarray | None:
-        if name not in data.columns:
-            return None
-        values = pick(np.array(data[name], dtype=float))
-        return values if np.isfinite(values).any() else None
-
-    t, torque, force = pick(t), pick(torque), pick(force)
-    if t.size < params.min_contact_samples:
-        raise ReductionError(
-            f"{label}: only {t.size} complete samples (time, torque and normal force); "
-            f"need at least {params.min_contact_samples}"
-        )
-    force_sign = -1.0 if np.median(force) < 0 else 1.0
-    return _Samples(
-        t=t,
-        torque=torque,
-        force=force_sign * force,
-        angle=optional(ANGLE),
-        speed=optional(SPEED),
-        temperature=optional(TEMPERATURE),
-        n_total=n_total,
-        n_dropped=int(n_total - t.size),
-        force_sign=force_sign,
-    )
-
-
-def _offset_from_meta(m: Measurement) -> tuple[float | None, str | None]:
-    offset = m.meta.torque_offset
-    if offset is None or not math.isfinite(offset.torque_Nm):
-        return None, None
-    return offset.torque_Nm, offset.source
-
-
-def leading_rest(s_mm: Any, motion_tol_mm: float) -> np.ndarray:
-    """Boolean mask (shape (n,)) of the samples before the disc first moves
-    ``motion_tol_mm`` [mm] along ``s_mm``; a stop later in the run is not "rest"."""
-    s = np.asarray(s_mm, dtype=float)
-    moved = s >= motion_tol_mm
-    first = int(np.argmax(moved)) if moved.any() else s.size
-    return np.arange(s.size) < first
-
-
-def estimate_torque_offset_Nm(
-    torque_Nm: Any, at_rest: Any, min_samples: int
-) -> tuple[float | None, int]:
-    """Robust mean torque [N·m] of the at-rest samples (boolean mask), or ``None`` when fewer
-    than ``min_samples`` are at rest; and the number of samples used."""
-    torque = np.asarray(torque_Nm, dtype=float)
-    rest = np.asarray(at_rest, dtype=bool)
-    n = int(rest.sum())
-    if n < min_samples:
-        return None, n
-    return robust_mean(torque[rest]), n
-
-
-@dataclass(frozen=True)
 class _Detection:
     """μ_S / μ_K detection on the valid samples (arrays of the valid samples)."""
 
@@ -561,28 +472,9 @@ def _flags(
     return flags
 
 
-def reduce_measurement(
-    m: Measurement,
-    instrument: InstrumentConfig,
-    params: ReductionParams,
-    *,
-    torque_offset_Nm: float | None = None,
-) -> ReductionResult:
-    """Reduce one friction interval to μ_S and μ_K with their evidence (see module doc).
-
-    ``m.data`` needs ``time_s`` [s], ``torque_Nm`` [N·m], ``normal_force_N`` [N] and uses
-    ``angle_rad`` or ``speed_rad_s`` (else the nominal speed) and ``temperature_C`` when
-    present. ``torque_offset_Nm`` [N·m] overrides the offset estimate. ``m`` is not
-    modified.
-
-    Raises :class:`ReductionError` (naming ``m.meta.label``) for zero normal force, more
-    than half of torque or normal force missing, no rotation, or too few contact samples.
-    """
-    import pandas as pd
-
-    require_columns(m, TIME, TORQUE, NORMAL_FORCE)
-    label = m.meta.label
-    x = _samples(m, params)
+def _in_contact(x: IntervalSamples, instrument: InstrumentConfig, label: str) -> np.ndarray:
+    """Boolean mask (shape (n,)) of the samples with F_N ≥ the contact threshold [N];
+    :class:`ReductionError` when there is none."""
     threshold = instrument.contact_threshold_N
     in_contact = x.force >= threshold
     if not in_contact.any() or x.force.max() <= 0:
@@ -591,13 +483,19 @@ def reduce_measurement(
             f"{threshold:g} N (largest {x.force.max():.3g} N): no contact, no friction",
             hint="check the normal-force column or lower contact_threshold_N",
         )
+    return in_contact
 
-    R = instrument.friction_radius_mm
+
+def _travel(
+    x: IntervalSamples, instrument: InstrumentConfig, params: ReductionParams, label: str
+) -> tuple[np.ndarray, str, np.ndarray]:
+    """Sliding distance [mm] (shape (n,)), its source (``angle``, ``speed``, ``nominal``)
+    and the mask of the samples at rest before the disc moves; :class:`ReductionError`
+    when a measured distance shows no rotation."""
     s, distance_source = sliding_distance_mm(
-        x.t, R, angle_rad=x.angle, speed_rad_s=x.speed,
+        x.t, instrument.friction_radius_mm, angle_rad=x.angle, speed_rad_s=x.speed,
         nominal_speed_rpm=instrument.nominal_speed_rpm,
     )
-    total_mm = float(s[-1] - s[0])
     if distance_source != "nominal" and float(s.max()) < params.min_travel_mm:
         raise ReductionError(
             f"{label}: no rotation: the disc travelled {float(s.max()):.3g} mm "
@@ -607,54 +505,38 @@ def reduce_measurement(
         at_rest = np.zeros(s.size, dtype=bool)
     else:
         at_rest = leading_rest(s, params.motion_tol_mm)
+    return s, distance_source, at_rest
 
-    # torque offset: given > set-up interval > at-rest start of this interval > none
-    meta_offset, meta_source = _offset_from_meta(m)
-    rest_offset, n_rest = estimate_torque_offset_Nm(x.torque, at_rest, params.offset_min_samples)
-    if torque_offset_Nm is not None:
-        offset, offset_source = float(torque_offset_Nm), "given"
-    elif meta_offset is not None:
-        offset, offset_source = meta_offset, str(meta_source)
-    elif rest_offset is not None:
-        offset, offset_source = rest_offset, f"at-rest start ({n_rest} samples)"
-    else:
-        offset = 0.0
-        offset_source = "not estimated (no set-up interval, no at-rest samples): 0 assumed"
 
-    corrected = x.torque - offset
-    sliding = ~at_rest & in_contact
-    n_sliding = int(sliding.sum())
-    if n_sliding < params.min_contact_samples:
-        raise ReductionError(
-            f"{label}: only {n_sliding} samples in contact (F_N ≥ {threshold:g} N) while "
-            f"sliding; need at least {params.min_contact_samples}"
-        )
-    torque_sign = -1.0 if np.median(corrected[sliding]) < 0 else 1.0
-    f_r = torque_sign * friction_force_N(corrected, R)
-    mu = np.where(in_contact, coefficient_of_friction(f_r, x.force), np.nan)
-
-    idx = np.flatnonzero(sliding)
-    s_v, t_v, mu_v = s[idx], x.t[idx], mu[idx]
-    det = _detect(s_v, t_v, mu_v, total_mm, params)
-    f_slide = x.force[sliding]
-    f_mean = float(np.mean(f_slide))
-    cv = float(np.std(f_slide) / f_mean) if f_mean > 0 else math.inf
-    flags = _flags(det, s_v, total_mm, cv, params)
-
+def _mean_temperature(x: IntervalSamples, in_contact: np.ndarray) -> float | None:
+    """Mean measured temperature [°C] of the contact samples (``None`` without any)."""
     temperature_mean: float | None = None
     if x.temperature is not None:
         tc = x.temperature[in_contact & np.isfinite(x.temperature)]
         temperature_mean = float(np.mean(tc)) if tc.size else None
+    return temperature_mean
 
+
+def _measured_speed(
+    x: IntervalSamples, s: np.ndarray, at_rest: np.ndarray, instrument: InstrumentConfig
+) -> float:
+    """Mean sliding speed [mm/s] while moving; the nominal speed when it cannot be told."""
     moving_t, moving_s = x.t[~at_rest], s[~at_rest]
     if moving_t.size >= 2 and moving_t[-1] > moving_t[0]:
-        speed_mm_s = float((moving_s[-1] - moving_s[0]) / (moving_t[-1] - moving_t[0]))
-    else:
-        speed_mm_s = instrument.nominal_sliding_speed_mm_s
+        return float((moving_s[-1] - moving_s[0]) / (moving_t[-1] - moving_t[0]))
+    return instrument.nominal_sliding_speed_mm_s
+
+
+def _trace_frame(
+    x: IntervalSamples, s: np.ndarray, f_r: np.ndarray, mu: np.ndarray, in_contact: np.ndarray,
+    idx: np.ndarray, det: _Detection, instrument: InstrumentConfig,
+) -> pd.DataFrame:
+    """The reduced trace (columns of :class:`ReductionResult`), one row per sample."""
+    import pandas as pd
 
     mu_smooth = np.full(x.t.size, np.nan)
     mu_smooth[idx] = det.mu_med
-    trace = pd.DataFrame(
+    return pd.DataFrame(
         {
             "time_s": x.t,
             "sliding_distance_mm": s,
@@ -667,11 +549,20 @@ def reduce_measurement(
             "in_contact": in_contact,
         }
     )
+
+
+def _parameters(
+    params: ReductionParams, instrument: InstrumentConfig, x: IntervalSamples, det: _Detection, *,
+    distance_source: str, offset: float, offset_source: str, torque_sign: float,
+    cv: float, in_contact: np.ndarray,
+) -> dict[str, Any]:
+    """``ReductionResult.parameters``: the method's parameters and the diagnostics of
+    this run."""
     parameters: dict[str, Any] = dict(asdict(params))
     parameters.update(
         {
-            "contact_threshold_N": threshold,
-            "friction_radius_mm": R,
+            "contact_threshold_N": instrument.contact_threshold_N,
+            "friction_radius_mm": instrument.friction_radius_mm,
             "n_pins": instrument.n_pins,
             "pin_radius_mm": instrument.pin_radius_mm,
             "distance_source": distance_source,
@@ -694,6 +585,55 @@ def reduce_measurement(
             "n_plateau": int(det.window.sum()),
         }
     )
+    return parameters
+
+
+def reduce_measurement(
+    m: Measurement,
+    instrument: InstrumentConfig,
+    params: ReductionParams,
+    *,
+    torque_offset_Nm: float | None = None,
+) -> ReductionResult:
+    """Reduce one friction interval to μ_S and μ_K with their evidence (see module doc).
+
+    ``m.data`` needs ``time_s`` [s], ``torque_Nm`` [N·m], ``normal_force_N`` [N] and uses
+    ``angle_rad`` or ``speed_rad_s`` (else the nominal speed) and ``temperature_C`` when
+    present. ``torque_offset_Nm`` [N·m] overrides the offset estimate. ``m`` is not
+    modified.
+
+    Raises :class:`ReductionError` (naming ``m.meta.label``) for zero normal force, more
+    than half of torque or normal force missing, no rotation, or too few contact samples.
+    """
+    require_columns(m, TIME, TORQUE, NORMAL_FORCE)
+    label = m.meta.label
+    x = interval_samples(m, params)
+    in_contact = _in_contact(x, instrument, label)
+    s, distance_source, at_rest = _travel(x, instrument, params, label)
+    total_mm = float(s[-1] - s[0])
+    offset, offset_source = choose_torque_offset(m, x, at_rest, torque_offset_Nm, params)
+
+    corrected = x.torque - offset
+    sliding = ~at_rest & in_contact
+    n_sliding = int(sliding.sum())
+    if n_sliding < params.min_contact_samples:
+        raise ReductionError(
+            f"{label}: only {n_sliding} samples in contact "
+            f"(F_N ≥ {instrument.contact_threshold_N:g} N) while "
+            f"sliding; need at least {params.min_contact_samples}"
+        )
+    torque_sign = -1.0 if np.median(corrected[sliding]) < 0 else 1.0
+    f_r = torque_sign * friction_force_N(corrected, instrument.friction_radius_mm)
+    mu = np.where(in_contact, coefficient_of_friction(f_r, x.force), np.nan)
+
+    idx = np.flatnonzero(sliding)
+    s_v, t_v, mu_v = s[idx], x.t[idx], mu[idx]
+    det = _detect(s_v, t_v, mu_v, total_mm, params)
+    f_slide = x.force[sliding]
+    f_mean = float(np.mean(f_slide))
+    cv = float(np.std(f_slide) / f_mean) if f_mean > 0 else math.inf
+    flags = _flags(det, s_v, total_mm, cv, params)
+
     w_s, w_t = s_v[det.window], t_v[det.window]
     return ReductionResult(
         mu_s=det.mu_s,
@@ -708,11 +648,15 @@ def reduce_measurement(
         pressure_kPa=float(
             contact_pressure_kPa(f_mean, instrument.n_pins, instrument.pin_radius_mm)
         ),
-        temperature_C=temperature_mean,
-        sliding_speed_mm_s=speed_mm_s,
+        temperature_C=_mean_temperature(x, in_contact),
+        sliding_speed_mm_s=_measured_speed(x, s, at_rest, instrument),
         sliding_distance_mm=total_mm,
         flags=tuple(f for f in FLAGS if f in flags),
         method=METHOD,
-        parameters=parameters,
-        trace=trace,
+        parameters=_parameters(
+            params, instrument, x, det, distance_source=distance_source, offset=offset,
+            offset_source=offset_source, torque_sign=torque_sign, cv=cv,
+            in_contact=in_contact,
+        ),
+        trace=_trace_frame(x, s, f_r, mu, in_contact, idx, det, instrument),
     )

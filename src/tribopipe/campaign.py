@@ -75,6 +75,12 @@ from .frictionmap import (
     read_map,
     update_map,
 )
+from .layout import (  # noqa: F401 - BATCH_LOCK is importable from here too
+    BATCH_LOCK,
+    DEFAULT_OUTPUT_DIR,
+    OutputLayout,
+    write_failures,
+)
 from .pipeline import (
     ReadOptions,
     RunLabels,
@@ -88,10 +94,6 @@ from .pipeline import (
 if TYPE_CHECKING:
     from .config import Settings
 
-#: the incremental state, one file per campaign name (campaigns may share an output folder)
-STATE_FILE = ".tribopipe-state.{name}.json"
-#: held while a batch runs, so two batches of one campaign never interleave their state
-BATCH_LOCK = ".tribopipe-batch.lock"
 STATE_VERSION = 1
 
 #: the statuses of a campaign row before a batch (``campaign list``)
@@ -160,26 +162,30 @@ class Campaign:
     source: Path | None = None
 
     @property
+    def layout(self) -> OutputLayout:
+        """The paths of the output folder (:class:`tribopipe.layout.OutputLayout`)."""
+        return OutputLayout(self.output_dir)
+
+    @property
     def state_path(self) -> Path:
         """The incremental state file: ``<output_dir>/.tribopipe-state.<name>.json``
         (the name reduced to letters, digits, ``-`` and ``_``)."""
-        slug = re.sub(r"[^A-Za-z0-9_-]+", "-", self.name).strip("-") or "campaign"
-        return self.output_dir / STATE_FILE.format(name=slug)
+        return self.layout.state_path(self.name)
 
     @property
     def runs_csv(self) -> Path:
         """Per-run summary table of the last batch: ``<output_dir>/runs.csv``."""
-        return self.output_dir / "runs.csv"
+        return self.layout.runs_csv
 
     @property
     def failures_csv(self) -> Path:
         """Failure list of the last batch (``file,reason``): ``<output_dir>/failures.csv``."""
-        return self.output_dir / "failures.csv"
+        return self.layout.failures_csv
 
     @property
     def plots_dir(self) -> Path:
         """Per-run trace plots: ``<output_dir>/plots/traces``."""
-        return self.output_dir / "plots" / "traces"
+        return self.layout.trace_plots_dir
 
     def alias(self, name: str) -> str:
         """The full material name for a short one from ``[names]`` (unchanged if unknown)."""
@@ -285,8 +291,8 @@ def load_campaign(path: str | Path) -> Campaign:
         raise ConfigError('[names] must map short names to full names, e.g. DS30 = '
                           '"Dragonskin 30"', path=cfg_path)
 
-    output_dir = rel("output_dir") or (base.parent / "processed").resolve()
-    map_path = rel("map") or output_dir / "friction_map.parquet"
+    output_dir = rel("output_dir") or (base.parent / DEFAULT_OUTPUT_DIR).resolve()
+    map_path = rel("map") or OutputLayout(output_dir).map_path
     manifest = rel("manifest")
     if manifest is not None and not manifest.is_file():
         raise ConfigError(f"[campaign] manifest: file {manifest} not found", path=cfg_path)
@@ -365,7 +371,7 @@ def folder_campaign(
     manifest: str | Path | None = None,
     filename_pattern: str | None = None,
     map_path: str | Path | None = None,
-    output_dir: str | Path = "processed",
+    output_dir: str | Path = DEFAULT_OUTPUT_DIR,
     glob: str = "*.csv",
     instrument: str | Path | None = None,
     plots: bool = True,
@@ -398,7 +404,7 @@ def folder_campaign(
         glob=glob,
         settings=load_settings(instrument),
         output_dir=out,
-        map_path=Path(map_path).resolve() if map_path else out / "friction_map.parquet",
+        map_path=Path(map_path).resolve() if map_path else OutputLayout(out).map_path,
         manifest=manifest_path,
         filename_pattern=filename_pattern,
         plots=plots,
@@ -987,7 +993,7 @@ def run_campaign(
     from filelock import FileLock, Timeout
 
     campaign.output_dir.mkdir(parents=True, exist_ok=True)
-    lock = FileLock(str(campaign.output_dir / BATCH_LOCK), timeout=0)
+    lock = FileLock(str(campaign.layout.batch_lock), timeout=0)
     try:
         with lock:
             return _run_locked(campaign, jobs=jobs, plots=plots, progress=progress)
@@ -1231,12 +1237,7 @@ def _write_runs_csv(campaign: Campaign, rows: Sequence[CampaignRow],
 
 
 def _write_failures_csv(campaign: Campaign, failures: Mapping[str, str]) -> None:
-    buf = io.StringIO()
-    writer = csv.writer(buf, lineterminator="\n")
-    writer.writerow(("file", "reason"))
-    for file, reason in sorted(failures.items()):
-        writer.writerow((file, reason))
-    write_text_atomic(campaign.failures_csv, buf.getvalue())
+    write_failures(campaign.failures_csv, failures)
 
 
 def campaign_listing(campaign: Campaign) -> list[dict[str, Any]]:

@@ -6,11 +6,13 @@ Readers and writers stay at the edges; :mod:`tribopipe.reduce` does the physics.
 
 from __future__ import annotations
 
+import json
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from .files import file_sha256
+from .files import file_sha256, write_text_atomic
+from .layout import OutputLayout
 from .numeric import finite_or_none
 
 if TYPE_CHECKING:
@@ -113,13 +115,13 @@ def reduce_file(
     )
 
 
-def trace_path(out_dir: str | Path, outcome: RunOutcome) -> Path:
-    """Where a run's reduced trace is written: ``<out_dir>/traces/<stem>_<id8>.parquet``."""
-    stem = Path(outcome.path).stem
-    return Path(out_dir) / "traces" / f"{stem}_{outcome.measurement_id[:8]}.parquet"
+def trace_path(out_dir: str | Path | OutputLayout, outcome: RunOutcome) -> Path:
+    """Where a run's reduced trace is written: ``<out_dir>/traces/<stem>_<id8>.parquet``
+    (:meth:`tribopipe.layout.OutputLayout.trace_path`)."""
+    return OutputLayout.of(out_dir).trace_path(outcome.path, outcome.measurement_id)
 
 
-def write_trace(out_dir: str | Path, outcome: RunOutcome) -> Path:
+def write_trace(out_dir: str | Path | OutputLayout, outcome: RunOutcome) -> Path:
     """Write the reduced trace (Parquet, unit-suffixed columns) and return its path.
 
     The columns go to Arrow as plain arrays (no pandas metadata round trip): a campaign
@@ -181,11 +183,7 @@ def run_summary(outcome: RunOutcome) -> dict[str, Any]:
     }
 
 
-def write_summary(out_dir: str | Path, outcome: RunOutcome) -> Path:
-    """Write :func:`run_summary` as JSON beside the trace: ``<out_dir>/summaries/...json``."""
-    import json
-
-    from .files import write_text_atomic
-
-    target = Path(out_dir) / "summaries" / trace_path(out_dir, outcome).with_suffix(".json").name
+def write_summary(out_dir: str | Path | OutputLayout, outcome: RunOutcome) -> Path:
+    """Write :func:`run_summary` as JSON: ``<out_dir>/summaries/<stem>_<id8>.json``."""
+    target = OutputLayout.of(out_dir).summary_path(outcome.path, outcome.measurement_id)
     return write_text_atomic(target, json.dumps(run_summary(outcome), indent=2, default=str))

@@ -15,7 +15,6 @@ the traces of a processed folder and write the page.
 from __future__ import annotations
 
 import base64
-import csv
 import io
 import math
 from collections.abc import Sequence
@@ -27,6 +26,7 @@ from typing import TYPE_CHECKING, Any
 
 from . import __version__
 from .errors import ExportError, MapError
+from .layout import OutputLayout, read_failures
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -427,21 +427,6 @@ def build_report(inp: ReportInputs) -> str:
 # ---------------------------------------------------------------------------- I/O edge
 
 
-def read_failures(path: str | Path) -> tuple[tuple[str, str], ...] | None:
-    """``(file, reason)`` rows of a campaign's ``failures.csv``; ``None`` if it is absent."""
-    p = Path(path)
-    if not p.is_file():
-        return None
-    with p.open(encoding="utf-8", newline="") as fh:
-        reader = csv.reader(fh)
-        header = next(reader, None)
-        if header is None:
-            return ()
-        if [h.strip() for h in header[:2]] != ["file", "reason"]:
-            raise ExportError("expected the header 'file,reason'", path=p, line=1)
-        return tuple((row[0], row[1] if len(row) > 1 else "") for row in reader if row)
-
-
 def report_inputs(
     map_path: str | Path,
     processed_dir: str | Path | None = None,
@@ -458,9 +443,10 @@ def report_inputs(
     if runs.empty:
         raise MapError("the friction map is empty or absent", path=map_path,
                        hint="run tribopipe batch first, or pass --map")
-    processed = Path(processed_dir) if processed_dir is not None else Path(map_path).parent
-    failures = read_failures(processed / "failures.csv")
-    traces = processed / "traces"
+    processed = OutputLayout(
+        Path(processed_dir) if processed_dir is not None else Path(map_path).parent)
+    failures = read_failures(processed.failures_csv)
+    traces = processed.traces_dir
     return ReportInputs(
         runs=runs,
         groups=group_statistics(runs),
@@ -508,7 +494,7 @@ def make_report(
     inputs = report_inputs(map_path, processed_dir, title=title, source=source)
     if output is None:
         base = Path(processed_dir) if processed_dir is not None else Path(map_path).parent
-        output = base / "report.html"
+        output = OutputLayout(base).report_html
     return write_report(output, inputs)
 
 

@@ -58,6 +58,7 @@ def _shorten(path: Any) -> str:
 
 def _run(campaign: Any, jobs: int | None, plots: bool | None) -> None:
     from ..campaign import run_campaign
+    from ..layout import OutputLayout
 
     bar: Any = None
 
@@ -86,7 +87,7 @@ def _run(campaign: Any, jobs: int | None, plots: bool | None) -> None:
         click.echo(f"flagged: {file}: {flags.replace(';', ', ')}")
     click.echo(f"map {_shorten(report.map_path)}: {report.map_summary}")
     click.echo(f"outputs in {_shorten(report.output_dir)}/: runs.csv, failures.csv, traces/"
-               + (", plots/traces/" if (report.output_dir / "plots").is_dir() else ""))
+               + (", plots/traces/" if OutputLayout(report.output_dir).plots_dir.is_dir() else ""))
     if not report.ok:
         click.echo(f"{len(report.failures)} run(s) failed; see "
                    f"{_shorten(campaign.failures_csv)}", err=True)

@@ -68,11 +68,11 @@ def pairs_cmd(map_path: str, pin: str | None, disc: str | None, out_dir: str, fm
 @friendly_errors
 def runs_cmd(map_path: str, processed_dir: str, out_dir: str, fmt: str) -> None:
     """μ over sliding distance per run with the μ_S peak and the μ_K window (like Fig. 3)."""
-    from pathlib import Path
-
     from ..export.plots import plot_map_runs
+    from ..layout import OutputLayout
 
-    written, missing = plot_map_runs(map_path, Path(processed_dir) / "traces", out_dir, fmt=fmt)
+    written, missing = plot_map_runs(map_path, OutputLayout.of(processed_dir).traces_dir, out_dir,
+                                     fmt=fmt)
     for path in written:
         click.echo(str(path))
     if missing:

@@ -119,8 +119,9 @@ def _plot(out_dir: str, outcome: object, trace: object) -> None:
     from pathlib import Path
 
     from ..export.plots import plot_trace
+    from ..layout import OutputLayout
 
-    target = Path(out_dir) / "plots" / "traces" / Path(trace).with_suffix(".png").name
+    target = OutputLayout(Path(out_dir)).trace_plot_path(outcome.path, outcome.measurement_id)
     plot_trace(outcome.result, target, title=Path(outcome.path).name)
     click.echo(f"plot: {target}", err=True)
 

@@ -16,6 +16,7 @@ from pathlib import Path
 from typing import IO, TYPE_CHECKING, Any
 
 from ..errors import ExportError
+from ..layout import find_trace  # noqa: F401 - importable from here too
 from ..numeric import is_finite
 
 if TYPE_CHECKING:
@@ -170,12 +171,6 @@ def plot_trace_row(
     if title:
         ax.set_title(title, fontsize="medium")
     return _save(fig, target, fmt, dpi)
-
-
-def find_trace(traces_dir: str | Path, measurement_id: str) -> Path | None:
-    """The trace Parquet of a run under ``traces_dir`` (``<stem>_<id[:8]>.parquet``)."""
-    matches = sorted(Path(traces_dir).glob(f"*_{measurement_id[:8]}.parquet"))
-    return matches[0] if matches else None
 
 
 def plot_runs(

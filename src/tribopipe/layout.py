@@ -1,0 +1,171 @@
+"""The output folder, named in one place.
+
+Everything tribopipe writes for a reduction or a campaign goes below one folder
+(``processed/`` by default)::
+
+    <output>/
+      friction_map.parquet               the friction map (a campaign may keep it elsewhere)
+      traces/<stem>_<id8>.parquet        each reduced trace
+      summaries/<stem>_<id8>.json        each run's summary (``tribopipe reduce``)
+      plots/traces/<stem>_<id8>.png      each run's trace plot
+      plots/pairs/pair_<pin>__<disc>.png μ_K(p) per pair (``tribopipe plot pairs``)
+      runs.csv, failures.csv             the runs and the failures of the last batch
+      report.html                        the campaign report
+      .tribopipe-state.<name>.json       a campaign's incremental state
+      .tribopipe-batch.lock              held while a batch of the folder runs
+
+``<stem>`` is the raw file's name without its suffix and ``<id8>`` the first 8 hex digits of
+the run's measurement id, so a run's files share one name and two runs of one file name
+(another folder, another interval) do not collide. :class:`OutputLayout` names every path;
+:func:`write_failures` and :func:`read_failures` are the one writer and reader of
+``failures.csv`` (the campaign writes it, the report reads it).
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import re
+from collections.abc import Mapping
+from dataclasses import dataclass
+from pathlib import Path
+
+from .errors import ExportError
+from .files import write_text_atomic
+
+#: the output folder when none is given (relative to the working folder)
+DEFAULT_OUTPUT_DIR = "processed"
+MAP_FILE = "friction_map.parquet"
+TRACES_DIR = "traces"
+SUMMARIES_DIR = "summaries"
+PLOTS_DIR = "plots"
+RUNS_CSV = "runs.csv"
+FAILURES_CSV = "failures.csv"
+REPORT_HTML = "report.html"
+#: the incremental state, one file per campaign name (campaigns may share an output folder)
+STATE_FILE = ".tribopipe-state.{name}.json"
+#: held while a batch runs, so two batches of one campaign never interleave their state
+BATCH_LOCK = ".tribopipe-batch.lock"
+#: the header of ``failures.csv``
+FAILURES_HEADER: tuple[str, str] = ("file", "reason")
+
+
+def run_stem(source: str | Path, measurement_id: str) -> str:
+    """The name every file of a run shares: ``<raw file stem>_<first 8 digits of its id>``."""
+    return f"{Path(source).stem}_{measurement_id[:8]}"
+
+
+def find_trace(traces_dir: str | Path, measurement_id: str) -> Path | None:
+    """The trace Parquet of a run under ``traces_dir`` (``<stem>_<id[:8]>.parquet``)."""
+    matches = sorted(Path(traces_dir).glob(f"*_{measurement_id[:8]}.parquet"))
+    return matches[0] if matches else None
+
+
+@dataclass(frozen=True)
+class OutputLayout:
+    """The paths of one output folder (``root``); nothing is created by naming them."""
+
+    root: Path
+
+    @classmethod
+    def of(cls, folder: str | Path | OutputLayout) -> OutputLayout:
+        """The layout of ``folder`` (a layout is returned as it is)."""
+        return folder if isinstance(folder, OutputLayout) else cls(Path(folder))
+
+    @property
+    def map_path(self) -> Path:
+        """The default friction map: ``<root>/friction_map.parquet``."""
+        return self.root / MAP_FILE
+
+    @property
+    def traces_dir(self) -> Path:
+        """Reduced traces: ``<root>/traces``."""
+        return self.root / TRACES_DIR
+
+    @property
+    def summaries_dir(self) -> Path:
+        """Run summaries (JSON): ``<root>/summaries``."""
+        return self.root / SUMMARIES_DIR
+
+    @property
+    def plots_dir(self) -> Path:
+        """All plots: ``<root>/plots``."""
+        return self.root / PLOTS_DIR
+
+    @property
+    def trace_plots_dir(self) -> Path:
+        """Per-run trace plots: ``<root>/plots/traces``."""
+        return self.plots_dir / TRACES_DIR
+
+    @property
+    def pair_plots_dir(self) -> Path:
+        """Per-pair μ_K(p) plots: ``<root>/plots/pairs``."""
+        return self.plots_dir / "pairs"
+
+    @property
+    def runs_csv(self) -> Path:
+        """Per-run table of the last batch: ``<root>/runs.csv``."""
+        return self.root / RUNS_CSV
+
+    @property
+    def failures_csv(self) -> Path:
+        """Failure list of the last batch (``file,reason``): ``<root>/failures.csv``."""
+        return self.root / FAILURES_CSV
+
+    @property
+    def report_html(self) -> Path:
+        """The campaign report: ``<root>/report.html``."""
+        return self.root / REPORT_HTML
+
+    @property
+    def batch_lock(self) -> Path:
+        """The lock a batch holds: ``<root>/.tribopipe-batch.lock``."""
+        return self.root / BATCH_LOCK
+
+    def state_path(self, campaign_name: str) -> Path:
+        """A campaign's incremental state: ``<root>/.tribopipe-state.<name>.json`` (the
+        name reduced to letters, digits, ``-`` and ``_``)."""
+        slug = re.sub(r"[^A-Za-z0-9_-]+", "-", campaign_name).strip("-") or "campaign"
+        return self.root / STATE_FILE.format(name=slug)
+
+    def trace_path(self, source: str | Path, measurement_id: str) -> Path:
+        """A run's reduced trace: ``<root>/traces/<stem>_<id8>.parquet``."""
+        return self.traces_dir / f"{run_stem(source, measurement_id)}.parquet"
+
+    def summary_path(self, source: str | Path, measurement_id: str) -> Path:
+        """A run's summary: ``<root>/summaries/<stem>_<id8>.json``."""
+        return self.summaries_dir / f"{run_stem(source, measurement_id)}.json"
+
+    def trace_plot_path(self, source: str | Path, measurement_id: str) -> Path:
+        """A run's trace plot: ``<root>/plots/traces/<stem>_<id8>.png``."""
+        return self.trace_plots_dir / f"{run_stem(source, measurement_id)}.png"
+
+    def find_trace(self, measurement_id: str) -> Path | None:
+        """The trace Parquet of a run in this folder, found by its measurement id."""
+        return find_trace(self.traces_dir, measurement_id)
+
+
+def write_failures(path: str | Path, failures: Mapping[str, str]) -> Path:
+    """Write ``failures.csv``: the header ``file,reason``, then one row per failed file,
+    sorted by file (atomically). Returns the path."""
+    buf = io.StringIO()
+    writer = csv.writer(buf, lineterminator="\n")
+    writer.writerow(FAILURES_HEADER)
+    for file, reason in sorted(failures.items()):
+        writer.writerow((file, reason))
+    return write_text_atomic(path, buf.getvalue())
+
+
+def read_failures(path: str | Path) -> tuple[tuple[str, str], ...] | None:
+    """``(file, reason)`` rows of a campaign's ``failures.csv``; ``None`` if it is absent."""
+    p = Path(path)
+    if not p.is_file():
+        return None
+    with p.open(encoding="utf-8", newline="") as fh:
+        reader = csv.reader(fh)
+        header = next(reader, None)
+        if header is None:
+            return ()
+        if [h.strip() for h in header[:2]] != list(FAILURES_HEADER):
+            raise ExportError("expected the header 'file,reason'", path=p, line=1)
+        return tuple((row[0], row[1] if len(row) > 1 else "") for row in reader if row)

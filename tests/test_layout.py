@@ -1,0 +1,88 @@
+"""The output folder is named in one place: every writer and reader agrees on its paths."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from tribopipe.errors import ExportError
+from tribopipe.layout import (
+    DEFAULT_OUTPUT_DIR,
+    OutputLayout,
+    find_trace,
+    read_failures,
+    run_stem,
+    write_failures,
+)
+
+MID = "c5fe21dcc5e014de"
+
+
+def test_every_file_of_a_run_shares_one_name(tmp_path: Path) -> None:
+    out = OutputLayout(tmp_path)
+    raw = Path("/lab/raw/DS30_steel_1N_10C_r1.csv")
+    assert run_stem(raw, MID) == "DS30_steel_1N_10C_r1_c5fe21dc"
+    name = "DS30_steel_1N_10C_r1_c5fe21dc"
+    assert out.trace_path(raw, MID) == tmp_path / "traces" / f"{name}.parquet"
+    assert out.summary_path(raw, MID) == tmp_path / "summaries" / f"{name}.json"
+    assert out.trace_plot_path(raw, MID) == tmp_path / "plots" / "traces" / f"{name}.png"
+    assert not list(tmp_path.iterdir())  # naming a path creates nothing
+
+
+def test_the_folder_level_files(tmp_path: Path) -> None:
+    out = OutputLayout.of(tmp_path)
+    assert OutputLayout.of(out) is out
+    assert (out.map_path.name, out.runs_csv.name, out.failures_csv.name, out.report_html.name) \
+        == ("friction_map.parquet", "runs.csv", "failures.csv", "report.html")
+    assert out.pair_plots_dir == tmp_path / "plots" / "pairs"
+    assert out.batch_lock == tmp_path / ".tribopipe-batch.lock"
+    # a campaign name becomes a safe file name: never a path, never empty
+    assert out.state_path("example") == tmp_path / ".tribopipe-state.example.json"
+    assert out.state_path("../../etc/x y").name == ".tribopipe-state.etc-x-y.json"
+    assert out.state_path("///").name == ".tribopipe-state.campaign.json"
+
+
+def test_a_trace_is_found_by_its_measurement_id(tmp_path: Path) -> None:
+    out = OutputLayout(tmp_path)
+    assert out.find_trace(MID) is None
+    target = out.trace_path("run.csv", MID)
+    target.parent.mkdir(parents=True)
+    target.write_bytes(b"PAR1")
+    assert out.find_trace(MID) == target == find_trace(out.traces_dir, MID[:8] + "ffff")
+    assert out.find_trace("0123456789abcdef") is None
+
+
+def test_failures_csv_round_trips_through_the_one_writer_and_reader(tmp_path: Path) -> None:
+    path = OutputLayout(tmp_path).failures_csv
+    assert read_failures(path) is None  # no batch ran
+    failures = {"b.csv": 'b.csv: not a number "x", line 3', "a.csv": "a.csv: metadata missing"}
+    write_failures(path, failures)
+    assert path.read_text(encoding="utf-8").splitlines()[0] == "file,reason"
+    assert read_failures(path) == tuple(sorted(failures.items()))
+    write_failures(path, {})
+    assert read_failures(path) == ()
+
+
+def test_a_foreign_failures_csv_is_refused_in_one_line(tmp_path: Path) -> None:
+    path = tmp_path / "failures.csv"
+    path.write_text("name,why\nx,y\n", encoding="utf-8")
+    with pytest.raises(ExportError, match=r"failures\.csv:1: expected the header 'file,reason'"):
+        read_failures(path)
+
+
+def test_the_cli_defaults_are_the_layout(tmp_path: Path) -> None:
+    """The CLI spells its defaults as text (it imports only click at module level): they
+    must be the layout's paths."""
+    from click.testing import CliRunner
+
+    from tribopipe.cli import main
+    from tribopipe.cli._common import DEFAULT_MAP
+
+    default = OutputLayout(Path(DEFAULT_OUTPUT_DIR))
+    assert Path(DEFAULT_MAP) == default.map_path
+    helps = {cmd: CliRunner().invoke(main, [*cmd.split(), "--help"], terminal_width=200).output
+             for cmd in ("reduce", "plot pairs", "plot runs")}
+    assert f"[default: {DEFAULT_OUTPUT_DIR}]" in helps["reduce"]
+    assert f"[default: {default.pair_plots_dir}]" in helps["plot pairs"]
+    assert f"[default: {default.trace_plots_dir}]" in helps["plot runs"]

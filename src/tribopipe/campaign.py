@@ -87,6 +87,7 @@ from .pipeline import (
     RunOutcome,
     file_sha256,
     finite_or_none,
+    plot_run,
     reduce_file,
     write_trace,
 )
@@ -806,7 +807,7 @@ def _reduce_one(job: _Job, ctx: _Context) -> dict[str, Any]:
     result = outcome.result
     record = outcome.record
     trace = write_trace(campaign.output_dir, outcome)
-    plot_note = _plot(campaign, outcome, trace) if ctx.plots else None
+    plot_note = _plot(campaign, outcome) if ctx.plots else None
     return {
         "file": job.file,
         "ok": True,
@@ -848,16 +849,10 @@ def _reduce_with_export_names(job: _Job, campaign: Campaign, merged: Mapping[str
     return replace(outcome, labels=labels, record=record)
 
 
-def _plot(campaign: Campaign, outcome: Any, trace: Path) -> str | None:
+def _plot(campaign: Campaign, outcome: RunOutcome) -> str | None:
     """Draw a run's trace plot beside its trace; returns a note when it could not."""
     try:
-        from .export.plots import plot_trace
-    except ImportError:
-        return "plots skipped: tribopipe.export.plots.plot_trace is not available"
-    target = campaign.plots_dir / trace.with_suffix(".png").name
-    target.parent.mkdir(parents=True, exist_ok=True)
-    try:
-        plot_trace(outcome.result, target, title=Path(outcome.path).name)
+        plot_run(campaign.layout, outcome)
     except Exception as exc:  # noqa: BLE001 - a picture must not cost the run its map row
         return f"{Path(outcome.path).name}: trace plot failed ({type(exc).__name__}: {exc})"
     return None

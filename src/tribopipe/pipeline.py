@@ -11,6 +11,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from .figures import plot_trace
 from .files import file_sha256, write_text_atomic
 from .layout import OutputLayout
 from .numeric import finite_or_none
@@ -187,3 +188,12 @@ def write_summary(out_dir: str | Path | OutputLayout, outcome: RunOutcome) -> Pa
     """Write :func:`run_summary` as JSON: ``<out_dir>/summaries/<stem>_<id8>.json``."""
     target = OutputLayout.of(out_dir).summary_path(outcome.path, outcome.measurement_id)
     return write_text_atomic(target, json.dumps(run_summary(outcome), indent=2, default=str))
+
+
+def plot_run(out_dir: str | Path | OutputLayout, outcome: RunOutcome) -> Path:
+    """Draw a run's trace plot (μ over sliding distance with the μ_S peak and the μ_K
+    window, :func:`tribopipe.figures.plot_trace`) to
+    ``<out_dir>/plots/traces/<stem>_<id8>.png`` and return its path."""
+    target = OutputLayout.of(out_dir).trace_plot_path(outcome.path, outcome.measurement_id)
+    plot_trace(outcome.result, target, title=Path(outcome.path).name)
+    return target

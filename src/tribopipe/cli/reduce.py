@@ -91,10 +91,10 @@ def reduce_cmd(
     for path in files:
         try:
             outcome = reduce_file(path, settings, labels, options)
-            trace = write_trace(out_dir, outcome)
+            write_trace(out_dir, outcome)
             write_summary(out_dir, outcome)
             if plot:
-                _plot(out_dir, outcome, trace)
+                _plot(out_dir, outcome)
         except TribopipeError as exc:
             message = str(exc)
             if str(path) not in message:  # every line names its file, once
@@ -115,14 +115,10 @@ def reduce_cmd(
         sys.exit(1)
 
 
-def _plot(out_dir: str, outcome: object, trace: object) -> None:
-    from pathlib import Path
+def _plot(out_dir: str, outcome: object) -> None:
+    from ..pipeline import plot_run
 
-    from ..export.plots import plot_trace
-    from ..layout import OutputLayout
-
-    target = OutputLayout(Path(out_dir)).trace_plot_path(outcome.path, outcome.measurement_id)
-    plot_trace(outcome.result, target, title=Path(outcome.path).name)
+    target = plot_run(out_dir, outcome)
     click.echo(f"plot: {target}", err=True)
 
 

@@ -1,74 +1,37 @@
-"""Pictures of the friction map: per-run traces (Fig. 3 style) and per-pair μ_K(p) (Fig. 5).
+"""Pictures of the friction map: per-pair μ_K(p) (Fig. 5 style) and its runs' traces.
 
-Rendering is headless: figures are built with :class:`matplotlib.figure.Figure` on the
-Agg canvas, never through ``pyplot`` (no global state, no display needed, safe in worker
-processes), and matplotlib is imported only inside the functions. Output format follows
-the target's suffix (``.png``, ``.svg``, ``.pdf``) or ``fmt``; a file-like target (e.g.
-``io.BytesIO`` for the HTML report) needs ``fmt``.
+The figure of one run (μ over sliding distance, Fig. 3 style) and the headless canvas every
+plot shares live in :mod:`tribopipe.figures`, below the pipeline that draws it per run;
+they are importable from here too. Output format follows the target's suffix (``.png``,
+``.svg``, ``.pdf``) or ``fmt``; a file-like target (e.g. ``io.BytesIO`` for the HTML
+report) needs ``fmt``.
 """
 
 from __future__ import annotations
 
 import math
 import re
-from collections.abc import Mapping
 from pathlib import Path
-from typing import IO, TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any
 
 from ..errors import ExportError
-from ..layout import find_trace  # noqa: F401 - importable from here too
+from ..figures import (  # noqa: F401 - the per-run plot is importable from here too
+    DPI,
+    FORMATS,
+    MU_LABEL,
+    Target,
+    draw_trace,
+    image_format,
+    new_figure,
+    plot_trace,
+    plot_trace_row,
+    save_figure,
+)
+from ..layout import find_trace
 from ..numeric import is_finite
 
 if TYPE_CHECKING:
     import pandas as pd
-    from matplotlib.figure import Figure
-
-    from ..reduce import ReductionResult
-
-FORMATS = ("png", "svg", "pdf")
-DPI = 120
-#: μ axis label used on every plot
-MU_LABEL = "coefficient of friction μ"
-
-Target = str | Path | IO[bytes]
-
-
-def _figure(width_in: float, height_in: float) -> Figure:
-    """A new figure on the Agg canvas (headless)."""
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.figure import Figure
-
-    fig = Figure(figsize=(width_in, height_in), dpi=DPI, layout="constrained")
-    FigureCanvasAgg(fig)
-    return fig
-
-
-def _format_of(target: Target, fmt: str | None) -> str:
-    """The image format of ``target`` (suffix) or ``fmt``, checked."""
-    if fmt is None:
-        if isinstance(target, str | Path):
-            fmt = Path(target).suffix.lstrip(".").lower() or "png"
-        else:
-            raise ExportError("a plot written to a stream needs a format (png, svg or pdf)")
-    fmt = fmt.lower()
-    if fmt not in FORMATS:
-        raise ExportError(f"unknown plot format {fmt!r}; expected one of {', '.join(FORMATS)}")
-    return fmt
-
-
-def _save(fig: Figure, target: Target, fmt: str | None, dpi: int = DPI) -> Target:
-    """Write ``fig`` to ``target`` (creating parent folders) and return the target."""
-    fmt = _format_of(target, fmt)
-    if isinstance(target, str | Path):
-        target = Path(target)
-        if target.suffix.lower() != f".{fmt}":
-            target = target.with_suffix(f".{fmt}")
-        target.parent.mkdir(parents=True, exist_ok=True)
-    # a fixed date keeps PDF/SVG output byte-stable for identical input
-    metadata: dict[str, Any] = {"png": {"Software": "tribopipe"}, "svg": {"Date": None},
-                                "pdf": {"CreationDate": None}}[fmt]
-    fig.savefig(target, format=fmt, dpi=dpi, metadata=metadata)
-    return target
 
 
 def slug(text: str) -> str:
@@ -77,100 +40,6 @@ def slug(text: str) -> str:
 
 
 # ---------------------------------------------------------------------------- per run
-
-
-def draw_trace(
-    ax: Any,
-    trace: pd.DataFrame,
-    *,
-    mu_s: float | None,
-    mu_s_distance_mm: float | None,
-    mu_k: float | None,
-    mu_k_window_mm: tuple[float, float] | None,
-    flags: str = "",
-) -> None:
-    """Draw μ over sliding distance on ``ax`` with the μ_S peak and the μ_K window.
-
-    ``trace`` needs ``sliding_distance_mm`` and ``mu`` (``mu_smooth`` drawn when present);
-    distances in mm.
-    """
-    import numpy as np
-
-    s = np.asarray(trace["sliding_distance_mm"], dtype=float)
-    mu = np.asarray(trace["mu"], dtype=float)
-    ax.plot(s, mu, color="0.75", lw=0.8, label="μ (raw)")
-    if "mu_smooth" in trace.columns:
-        ax.plot(s, np.asarray(trace["mu_smooth"], dtype=float), color="0.15", lw=1.2,
-                label="μ (smoothed)")
-    if mu_k_window_mm is not None and all(is_finite(v) for v in mu_k_window_mm):
-        start, end = (float(v) for v in mu_k_window_mm)
-        ax.axvspan(start, end, color="tab:blue", alpha=0.12, label="$\\mu_K$ window")
-        if is_finite(mu_k):
-            ax.hlines(float(mu_k), start, end, color="tab:blue", lw=2.0,
-                      label=f"$\\mu_K$ = {float(mu_k):.3f}")
-    elif is_finite(mu_k):
-        ax.axhline(float(mu_k), color="tab:blue", lw=1.5, ls="--",
-                   label=f"$\\mu_K$ = {float(mu_k):.3f}")
-    if is_finite(mu_s) and is_finite(mu_s_distance_mm):
-        ax.plot([float(mu_s_distance_mm)], [float(mu_s)], "o", color="tab:red", ms=7,
-                label=f"$\\mu_S$ = {float(mu_s):.3f}")
-    ax.set_xlabel("sliding distance s [mm]")
-    ax.set_ylabel(MU_LABEL)
-    finite = mu[np.isfinite(mu)]
-    if finite.size:
-        top = max(float(finite.max()), float(mu_s) if is_finite(mu_s) else 0.0)
-        ax.set_ylim(min(0.0, float(finite.min())), top * 1.15 + 1e-9)
-    ax.grid(True, alpha=0.3)
-    ax.legend(loc="lower right", fontsize="small")
-    if flags:
-        ax.text(0.01, 0.98, "flags: " + flags.replace(";", ", "), transform=ax.transAxes,
-                va="top", ha="left", fontsize="small", color="tab:red")
-
-
-def plot_trace(
-    result: ReductionResult,
-    target: Target,
-    *,
-    title: str | None = None,
-    fmt: str | None = None,
-) -> Target:
-    """Plot a reduced run (μ over sliding distance, μ_S peak, μ_K window) to ``target``."""
-    fig = _figure(7.0, 3.6)
-    ax = fig.add_subplot()
-    draw_trace(ax, result.trace, mu_s=result.mu_s, mu_s_distance_mm=result.mu_s_distance_mm,
-               mu_k=result.mu_k, mu_k_window_mm=result.mu_k_window_mm,
-               flags=";".join(result.flags))
-    if title:
-        ax.set_title(title, fontsize="medium")
-    return _save(fig, target, fmt)
-
-
-def plot_trace_row(
-    trace: pd.DataFrame,
-    row: Mapping[str, Any],
-    target: Target,
-    *,
-    title: str | None = None,
-    fmt: str | None = None,
-    dpi: int = DPI,
-) -> Target:
-    """Plot a stored trace (Parquet columns) with its friction-map row's μ_S and μ_K window.
-
-    ``row`` needs ``mu_s, mu_s_distance_mm, mu_k, mu_k_window_start_mm,
-    mu_k_window_end_mm`` and optionally ``flags``.
-    """
-    fig = _figure(7.0, 3.6)
-    ax = fig.add_subplot()
-    flags = row.get("flags")
-    draw_trace(
-        ax, trace, mu_s=row.get("mu_s"), mu_s_distance_mm=row.get("mu_s_distance_mm"),
-        mu_k=row.get("mu_k"),
-        mu_k_window_mm=(row.get("mu_k_window_start_mm"), row.get("mu_k_window_end_mm")),
-        flags=flags if isinstance(flags, str) else "",
-    )
-    if title:
-        ax.set_title(title, fontsize="medium")
-    return _save(fig, target, fmt, dpi)
 
 
 def plot_runs(
@@ -187,7 +56,7 @@ def plot_runs(
     """
     import pandas as pd
 
-    _format_of("x", fmt)
+    image_format("x", fmt)
     written: list[Path] = []
     missing: list[str] = []
     for row in runs.to_dict(orient="records"):
@@ -294,11 +163,11 @@ def plot_pair(
     else:
         fits = fits[(fits["pin"].str.casefold() == pin.casefold())
                     & (fits["disc"].str.casefold() == disc.casefold())]
-    fig = _figure(6.4, 4.2)
+    fig = new_figure(6.4, 4.2)
     ax = fig.add_subplot()
     draw_pair(ax, sel, fits)
     ax.set_title(f"{sel['pin'].iloc[0]} on {sel['disc'].iloc[0]}", fontsize="medium")
-    return _save(fig, target, fmt, dpi)
+    return save_figure(fig, target, fmt, dpi)
 
 
 def plot_pairs(
@@ -308,7 +177,7 @@ def plot_pairs(
     from ..fit import fit_power_law
     from ..query import pairs
 
-    _format_of("x", fmt)
+    image_format("x", fmt)
     fits = fit_power_law(runs)
     written = []
     for pin, disc in pairs(runs):

@@ -14,6 +14,7 @@ from hypothesis import strategies as st
 
 from tribopipe import frictionmap as fm
 from tribopipe.errors import MapError
+from tribopipe.frictionmap.schema import _KIND as KIND
 
 # Arrow stores text as UTF-8: any character but lone surrogates.
 TEXT = st.text(st.characters(blacklist_categories=("Cs",)), max_size=12)
@@ -32,7 +33,7 @@ def records(draw, min_size: int = 0, max_size: int = 6) -> list[dict]:
     for mid in ids:
         rec: dict = {}
         for name in fm.RUN_COLUMNS:
-            kind = fm._KIND[name]
+            kind = KIND[name]
             if kind == "float":
                 rec[name] = draw(FLOAT)
             elif kind == "int":

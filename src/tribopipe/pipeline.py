@@ -13,35 +13,17 @@ from typing import TYPE_CHECKING, Any
 
 from .figures import plot_trace
 from .files import file_sha256, write_text_atomic
+from .frictionmap.records import RunLabels, Tolerances, make_record, measurement_id
+from .intervals import select_friction_interval
 from .layout import OutputLayout
 from .numeric import finite_or_none
+from .readers import read_export
+from .reduce import reduce_measurement
 
 if TYPE_CHECKING:
     from .config import Settings
-    from .frictionmap import Tolerances
     from .measurement import Measurement
     from .reduce import ReductionResult
-
-
-@dataclass(frozen=True)
-class RunLabels:
-    """What a run is: contact pair and nominal conditions (not measured values).
-
-    ``normal_force_N`` is the nominal total normal force on the three pins [N] and
-    ``temperature_C`` the nominal chamber temperature [°C]; both define the condition
-    group in the friction map. ``None`` means unknown.
-    """
-
-    pin: str | None = None
-    disc: str | None = None
-    normal_force_N: float | None = None
-    temperature_C: float | None = None
-    repeat: int | None = None
-
-    @property
-    def complete(self) -> bool:
-        """True when pin and disc are known (the minimum for a friction-map row)."""
-        return bool(self.pin) and bool(self.disc)
 
 
 @dataclass(frozen=True)
@@ -82,10 +64,6 @@ def reduce_file(
     (default: the map's 10 %, 2 K) decide its off-nominal QC flags. Raises
     :class:`tribopipe.errors.TribopipeError` subclasses for every bad input.
     """
-    from .frictionmap import make_record, measurement_id
-    from .readers import read_export
-    from .reduce import reduce_measurement, select_friction_interval
-
     labels = labels or RunLabels()
     opts = read_options or ReadOptions()
     measurements = read_export(

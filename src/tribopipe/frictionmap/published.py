@@ -1,0 +1,238 @@
+"""The founding paper's published friction map, and any table in its 7-column schema.
+
+:func:`read_frictionmap_table` reads the MATLAB ``FrictionMap.mat`` (with mat-io) or its CSV
+form; :func:`import_records` turns the rows into map records (published rows keep the
+paper's sliding speed); :func:`import_table` folds them into a map. The published CSV ships
+with tribopipe (:func:`published_csv_path`).
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from .. import __version__
+from ..errors import MapError
+from ..files import file_sha256
+from ..physics import FOUNDING_SLIDING_SPEED_MM_S
+from .records import imported_id
+from .schema import SOURCE_PUBLISHED, _missing, _now
+from .store import AppendReport, append_records
+
+if TYPE_CHECKING:
+    import pandas as pd
+
+#: The founding paper's fixed sliding speed [mm/s] (recorded for published rows).
+PUBLISHED_SLIDING_SPEED_MM_S = FOUNDING_SLIDING_SPEED_MM_S
+#: The published map's 7-column schema (RebeccaBerthold/FrictionMap).
+FRICTIONMAP_COLUMNS: tuple[str, ...] = (
+    "pin",
+    "disc",
+    "contactForce",
+    "contactPressure",
+    "temperature",
+    "measurementNo",
+    "cof",
+)
+
+
+def read_frictionmap_table(path: str | os.PathLike[str]) -> pd.DataFrame:
+    """Read a table in the published 7-column schema (:data:`FRICTIONMAP_COLUMNS`) from the
+    MATLAB ``FrictionMap.mat`` (a MATLAB ``table``, read with mat-io) or a CSV file.
+
+    Returns the 7 columns (text, then floats). Raises :class:`MapError` naming the file and
+    the line (CSV) or row (``.mat``) and column of a missing or non-numeric value.
+    """
+    import pandas as pd
+
+    p = Path(path)
+    if not p.is_file():
+        raise MapError("file not found, expected a FrictionMap .mat or CSV", path=p)
+    if p.suffix.lower() == ".mat":
+        table = _read_mat_table(p)
+        first_line = None
+    else:
+        try:
+            table = pd.read_csv(p, dtype=str, keep_default_na=False, skipinitialspace=True)
+        except (ValueError, UnicodeDecodeError, OSError) as exc:
+            raise MapError(
+                f"cannot read as CSV ({exc})",
+                path=p,
+                hint=f"expected columns {', '.join(FRICTIONMAP_COLUMNS)}",
+            ) from None
+        first_line = 2  # line 1 is the header
+    table.columns = [str(c).strip() for c in table.columns]
+    absent = [c for c in FRICTIONMAP_COLUMNS if c not in table.columns]
+    if absent:
+        raise MapError(
+            f"missing column(s) {', '.join(absent)}; expected the FrictionMap schema "
+            f"{', '.join(FRICTIONMAP_COLUMNS)}",
+            path=p,
+            line=1 if first_line else None,
+            column=absent[0],
+        )
+    out: dict[str, Any] = {}
+    for col in FRICTIONMAP_COLUMNS:
+        values = table[col].tolist()
+        if col in ("pin", "disc"):
+            texts = ["" if _missing(v) else str(v).strip() for v in values]
+            for i, text in enumerate(texts):
+                if not text:
+                    raise _where(p, first_line, i, col, "empty, expected a material name")
+            out[col] = texts
+            continue
+        numbers = []
+        for i, v in enumerate(values):
+            text = "" if _missing(v) else str(v).strip()
+            if text == "" and col == "temperature":
+                numbers.append(math.nan)  # unknown temperature is allowed, unknown μ is not
+                continue
+            try:
+                number = float(text) if isinstance(v, str) else float(v)
+            except (TypeError, ValueError):
+                number = math.nan
+            if not math.isfinite(number):
+                raise _where(p, first_line, i, col, f"{text!r} is not a finite number")
+            numbers.append(number)
+        out[col] = numbers
+    return pd.DataFrame(out, columns=list(FRICTIONMAP_COLUMNS))
+
+
+def _where(path: Path, first_line: int | None, i: int, col: str, problem: str) -> MapError:
+    if first_line is None:
+        return MapError(f"row {i + 1}: {problem}", path=path, column=col)
+    return MapError(problem, path=path, line=first_line + i, column=col)
+
+
+def _read_mat_table(path: Path) -> pd.DataFrame:
+    import warnings
+
+    import pandas as pd
+
+    with warnings.catch_warnings():
+        # mat-io sets a pandas option that pandas 3 deprecates; not our users' concern
+        warnings.simplefilter("ignore", DeprecationWarning)
+        try:
+            import matio
+        except ImportError:  # pragma: no cover - mat-io is a dependency
+            raise MapError("reading .mat files needs the mat-io package", path=path,
+                           hint="pip install mat-io") from None
+        try:
+            contents = matio.load_from_mat(str(path))
+        except Exception as exc:  # mat-io raises many types for foreign files
+            raise MapError(f"not a readable MATLAB file ({type(exc).__name__}: {exc})",
+                           path=path) from None
+    tables = [v for v in contents.values() if isinstance(v, pd.DataFrame)]
+    if not tables:
+        raise MapError(
+            f"holds no MATLAB table (variables: {', '.join(contents) or 'none'})",
+            path=path,
+            hint="expected the FrictionMap.mat 'frictionMap' table",
+        )
+    table = contents.get("frictionMap")
+    if not isinstance(table, pd.DataFrame):
+        table = tables[0]
+    return table.astype({c: object for c in table.columns if str(c) in ("pin", "disc")})
+
+
+def _is_published(table: pd.DataFrame) -> bool:
+    """True when every row of ``table`` is a row of the shipped published map."""
+    published = read_frictionmap_table(published_csv_path())
+    def keys(t: pd.DataFrame) -> set[tuple[Any, ...]]:
+        return set(t.itertuples(index=False, name=None))
+    return len(table) > 0 and keys(table) <= keys(published)
+
+
+def published_csv_path() -> Path:
+    """The published map shipped with tribopipe (``tribopipe/data/frictionmap_published.csv``)."""
+    from importlib.resources import files
+
+    return Path(str(files("tribopipe") / "data" / "frictionmap_published.csv"))
+
+
+def import_records(
+    path: str | os.PathLike[str], *, source: str | None = None
+) -> list[dict[str, Any]]:
+    """Friction-map records for a table in the published 7-column schema (.mat or CSV).
+
+    ``source`` labels where the rows came from; by default ``published:Berthold2023`` when
+    every row is one of the published map's rows (whatever the file's name or format),
+    else ``import:<file name>``. Ids hash the source and the conditions, so importing the
+    same rows again is idempotent. μ_S and the measured values are missing; published rows
+    record the paper's sliding speed (0.007 mm/s), others leave it missing.
+    """
+    p = Path(path)
+    table = read_frictionmap_table(p)
+    if source is None:
+        source = SOURCE_PUBLISHED if _is_published(table) else f"import:{p.name}"
+    published = source == SOURCE_PUBLISHED
+    file_hash = file_sha256(p)
+    stamp = _now()
+    records = []
+    for pin, disc, force, pressure, temperature, number, cof in table.itertuples(
+        index=False, name=None
+    ):
+        repeat = int(number) if float(number).is_integer() else None
+        records.append(
+            {
+                "measurement_id": imported_id(source, pin, disc, force, temperature, repeat),
+                "source": source,
+                "pin": pin,
+                "disc": disc,
+                "normal_force_N": force,
+                "pressure_kPa": pressure,
+                "normal_force_measured_N": None,
+                "pressure_measured_kPa": None,
+                "temperature_C": temperature,
+                "temperature_measured_C": None,
+                "sliding_speed_mm_s": PUBLISHED_SLIDING_SPEED_MM_S if published else None,
+                "repeat": repeat,
+                "mu_s": None,
+                "mu_k": cof,
+                "mu_s_distance_mm": None,
+                "mu_s_time_s": None,
+                "mu_k_window_start_mm": None,
+                "mu_k_window_end_mm": None,
+                "mu_k_window_start_s": None,
+                "mu_k_window_end_s": None,
+                "plateau_std": None,
+                "plateau_drift_per_mm": None,
+                "flags": "",
+                "method": "published" if published else "imported",
+                "source_file": p.name,
+                "file_hash": file_hash,
+                "interval": None,
+                "config_hash": None,
+                "tribopipe_version": __version__,
+                "reduced_at": stamp,
+                "excluded": False,
+                "exclusion_reason": None,
+            }
+        )
+    seen: set[str] = set()
+    for row, rec in enumerate(records):
+        if rec["measurement_id"] not in seen:
+            seen.add(rec["measurement_id"])
+            continue
+        raise MapError(
+            "two rows have the same pin, disc, force, temperature and measurementNo",
+            path=p,
+            line=row + 2 if p.suffix.lower() != ".mat" else None,
+            column="measurementNo",
+        )
+    return records
+
+
+def import_table(
+    path: str | os.PathLike[str],
+    file: str | os.PathLike[str] | None = None,
+    *,
+    source: str | None = None,
+    replace: bool = False,
+) -> AppendReport:
+    """Import a 7-column FrictionMap table (.mat or CSV; default: the shipped published
+    map) into the map at ``path``; see :func:`import_records`."""
+    records = import_records(published_csv_path() if file is None else file, source=source)
+    return append_records(path, records, replace=replace)

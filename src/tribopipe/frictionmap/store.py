@@ -1,0 +1,558 @@
+"""The friction map on disk: validated Parquet reads, locked atomic writes, and every change.
+
+Every change to a map — append, update, merge, exclusion — is one read-modify-write under
+a :mod:`filelock` lock on ``<map>.lock``, written to a temporary file in the same folder,
+fsynced and renamed over the map (:func:`_write_atomic`), so a killed writer leaves the
+previous map intact. :func:`fold_records` is the pure core of an append. A file at the map
+path that is not one of our maps is refused, never overwritten.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+from collections.abc import Iterable, Iterator, Mapping, Sequence
+from contextlib import contextmanager, suppress
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from .. import __version__
+from ..errors import MapError
+from .schema import (
+    _CONTENT_COLUMNS,
+    _KIND,
+    _SCHEMA,
+    META_KEY,
+    RUN_COLUMNS,
+    SCHEMA_NAME,
+    SCHEMA_VERSION,
+    _missing,
+    _now,
+    _validated,
+    empty_map,
+    frame_records,
+    records_frame,
+)
+
+if TYPE_CHECKING:
+    import pandas as pd
+
+#: Seconds to wait for another process's lock on the map before giving up.
+LOCK_TIMEOUT_S = 60.0
+#: Test-only hook: when set to a path, the writer creates that file after the temporary map
+#: is written and fsynced, then sleeps, so a test can kill it just before the rename.
+PAUSE_ENV = "TRIBOPIPE_TEST_PAUSE_BEFORE_RENAME"
+
+
+# --------------------------------------------------------------------------- reading
+
+
+def read_map(path: str | os.PathLike[str]) -> pd.DataFrame:
+    """Read and validate a friction map; an absent file is an empty map.
+
+    Raises :class:`MapError` naming the path when the file is not Parquet, is a Parquet
+    file without tribopipe's schema metadata (a foreign file), was written by a newer
+    schema, or lacks columns.
+    """
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    p = Path(path)
+    if not p.exists():
+        return empty_map()
+    if p.is_dir():
+        raise MapError("is a directory, expected a friction-map Parquet file", path=p)
+    try:
+        table = pq.read_table(p)
+    except (pa.ArrowException, OSError) as exc:
+        raise MapError(
+            f"not a readable Parquet file ({str(exc).splitlines()[0] if str(exc) else exc!r})",
+            path=p,
+            hint="this path holds something else; pass another --map (it is never overwritten)",
+        ) from None
+    _check_metadata(table.schema.metadata or {}, p)
+    absent = [c for c in RUN_COLUMNS if c not in table.column_names]
+    if absent:
+        raise MapError(
+            f"friction map lacks column(s) {', '.join(absent)}", path=p, column=absent[0]
+        )
+    try:
+        runs = _from_arrow(table.select(list(RUN_COLUMNS)))
+    except MapError as exc:
+        raise MapError(exc.problem, path=p, column=exc.column) from None
+    if runs["measurement_id"].duplicated().any():
+        dup = runs.loc[runs["measurement_id"].duplicated(), "measurement_id"].iloc[0]
+        raise MapError(f"duplicate measurement_id {dup}", path=p, column="measurement_id")
+    return runs
+
+
+def map_metadata(path: str | os.PathLike[str]) -> dict[str, Any]:
+    """The schema and provenance a map carries in its Parquet metadata: ``schema``,
+    ``schema_version``, ``columns`` (name, kind, unit, meaning), ``tribopipe_version`` and
+    ``written_at`` of the last write, ``n_runs``, ``sources``. Validated like
+    :func:`read_map`."""
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    p = Path(path)
+    try:
+        schema = pq.read_schema(p)
+    except (pa.ArrowException, OSError) as exc:
+        raise MapError(f"not a readable Parquet file ({exc})", path=p) from None
+    return _check_metadata(schema.metadata or {}, p)
+
+
+def _from_arrow(table: Any) -> pd.DataFrame:
+    """The map DataFrame of an Arrow table of the run columns, coerced column by column
+    (vectorised: the read path of every command) and validated."""
+    import pandas as pd
+    import pyarrow as pa
+
+    frame = table.to_pandas()
+    columns: dict[str, Any] = {}
+    for name in RUN_COLUMNS:
+        kind = _KIND[name]
+        col = frame[name]
+        try:
+            if kind == "float":
+                columns[name] = pd.to_numeric(col, errors="raise").astype("float64").to_numpy()
+            elif kind == "int":
+                columns[name] = pd.array(col, dtype="Int64")
+            elif kind == "bool":
+                if col.isna().any():
+                    raise ValueError("missing true/false")
+                columns[name] = col.astype(bool).to_numpy()
+            else:
+                arrow_type = table.schema.field(name).type
+                if not (
+                    pa.types.is_string(arrow_type)
+                    or pa.types.is_large_string(arrow_type)
+                    or pa.types.is_null(arrow_type)
+                ):
+                    raise ValueError(f"stored as {arrow_type}, not text")
+                columns[name] = pd.array(col.astype(object).where(col.notna(), None), dtype="str")
+        except (TypeError, ValueError) as exc:
+            raise MapError(f"expected {kind} values ({exc})", column=name) from None
+    runs = pd.DataFrame(columns, columns=list(RUN_COLUMNS), index=pd.RangeIndex(len(frame)))
+    return _validated(runs, "row")
+
+
+def _check_metadata(metadata: Mapping[bytes, bytes], path: Path) -> dict[str, Any]:
+    raw = metadata.get(META_KEY)
+    if raw is None:
+        raise MapError(
+            "a Parquet file, but not a tribopipe friction map (no 'tribopipe.frictionmap' "
+            "schema metadata); refusing to read or overwrite it",
+            path=path,
+            hint="pass another --map",
+        )
+    try:
+        info = json.loads(raw)
+    except (ValueError, UnicodeDecodeError):
+        raise MapError("friction-map metadata is not valid JSON", path=path) from None
+    if not isinstance(info, dict) or info.get("schema") != SCHEMA_NAME:
+        raise MapError("friction-map metadata names another schema", path=path)
+    version = info.get("schema_version")
+    if not isinstance(version, int) or version > SCHEMA_VERSION:
+        raise MapError(
+            f"friction-map schema version {version!r}; this tribopipe reads up to "
+            f"{SCHEMA_VERSION}",
+            path=path,
+            hint="upgrade tribopipe",
+        )
+    return info
+
+
+# --------------------------------------------------------------------------- writing
+
+
+def _metadata(runs: pd.DataFrame) -> bytes:
+    info = {
+        "schema": SCHEMA_NAME,
+        "schema_version": SCHEMA_VERSION,
+        "columns": [
+            {"name": name, "kind": kind, "unit": unit, "meaning": meaning}
+            for name, kind, unit, meaning in _SCHEMA
+        ],
+        "tribopipe_version": __version__,
+        "written_at": _now(),
+        "n_runs": len(runs),
+        "sources": sorted(set(runs["source"].dropna())),
+    }
+    return json.dumps(info, ensure_ascii=False).encode()
+
+
+@contextmanager
+def _locked(path: Path) -> Iterator[None]:
+    from filelock import FileLock, Timeout
+
+    lock = FileLock(str(path) + ".lock", timeout=LOCK_TIMEOUT_S)
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        lock.acquire()
+    except Timeout:
+        raise MapError(
+            f"friction map is locked by another process for more than {LOCK_TIMEOUT_S:g} s",
+            path=path,
+            hint="wait for the other tribopipe command to finish",
+        ) from None
+    except OSError as exc:
+        raise MapError(f"cannot lock the friction map ({exc.strerror or exc})", path=path,
+                       hint="is the directory writable?") from None
+    try:
+        yield
+    finally:
+        lock.release()
+
+
+def _clean_stale_temps(path: Path) -> None:
+    # Under the lock, any temporary map beside ours belongs to a writer that died.
+    for stale in path.parent.glob(f".{path.name}.*.tmp"):
+        with suppress(OSError):
+            stale.unlink()
+
+
+def _fsync_dir(directory: Path) -> None:
+    try:
+        fd = os.open(directory, os.O_RDONLY)
+    except OSError:  # some platforms cannot open directories; the rename is still atomic
+        return
+    try:
+        os.fsync(fd)
+    except OSError:
+        pass
+    finally:
+        os.close(fd)
+
+
+def _write_atomic(path: Path, runs: pd.DataFrame) -> None:
+    """Write ``runs`` to ``path`` via a fsynced temporary file and an atomic rename.
+
+    The caller holds the lock.
+    """
+    import tempfile
+    import time
+
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    table = pa.Table.from_pandas(runs.loc[:, list(RUN_COLUMNS)], preserve_index=False)
+    meta = dict(table.schema.metadata or {})
+    meta[META_KEY] = _metadata(runs)
+    table = table.replace_schema_metadata(meta)
+    _clean_stale_temps(path)
+    try:
+        fd, tmp_name = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    except OSError as exc:
+        raise MapError(f"cannot write the friction map ({exc.strerror or exc})",
+                       path=path) from None
+    tmp = Path(tmp_name)
+    try:
+        with os.fdopen(fd, "wb") as fh:
+            pq.write_table(table, fh)
+            fh.flush()
+            os.fsync(fh.fileno())
+        marker = os.environ.get(PAUSE_ENV)
+        if marker:
+            Path(marker).write_text(str(os.getpid()))
+            time.sleep(120)
+        os.replace(tmp, path)
+    except BaseException as exc:
+        with suppress(OSError):
+            tmp.unlink()
+        if isinstance(exc, OSError):  # disk full, permissions: the old map is untouched
+            raise MapError(f"cannot write the friction map ({exc.strerror or exc})",
+                           path=path) from None
+        raise
+    _fsync_dir(path.parent)
+
+
+def write_map(path: str | os.PathLike[str], runs: pd.DataFrame) -> None:
+    """Replace the map at ``path`` with ``runs`` (validated), atomically and under the lock.
+
+    Refuses (``MapError``) to overwrite a file that is not a friction map.
+    """
+    p = Path(path)
+    frame = records_frame(frame_records(runs), where="row")
+    with _locked(p):
+        read_map(p)  # refuse foreign or corrupt files before replacing them
+        _write_atomic(p, frame)
+
+
+# --------------------------------------------------------------------------- appending
+
+
+@dataclass(frozen=True)
+class AppendReport:
+    """What an append or merge did, by measurement id.
+
+    ``added``: new runs; ``unchanged``: already in the map with the same content;
+    ``replaced``: content differed and ``replace=True``; ``kept_conflicting``: content
+    differed and the map's row was kept. ``differences`` maps each conflicting or replaced
+    id to the names of the columns that differ. ``dropped_ids``: rows removed by
+    :func:`update_map`.
+    """
+
+    added_ids: tuple[str, ...] = ()
+    unchanged_ids: tuple[str, ...] = ()
+    replaced_ids: tuple[str, ...] = ()
+    conflicting_ids: tuple[str, ...] = ()
+    differences: dict[str, tuple[str, ...]] = field(default_factory=dict)
+    dropped_ids: tuple[str, ...] = ()
+
+    @property
+    def added(self) -> int:
+        """Number of runs added."""
+        return len(self.added_ids)
+
+    @property
+    def unchanged(self) -> int:
+        """Number of runs already present with identical content."""
+        return len(self.unchanged_ids)
+
+    @property
+    def replaced(self) -> int:
+        """Number of rows replaced (``replace=True``)."""
+        return len(self.replaced_ids)
+
+    @property
+    def kept_conflicting(self) -> int:
+        """Number of runs whose content differs from the map's row, which was kept."""
+        return len(self.conflicting_ids)
+
+    @property
+    def changed(self) -> bool:
+        """True when the map file was rewritten."""
+        return bool(self.added_ids or self.replaced_ids or self.dropped_ids)
+
+    def summary(self) -> str:
+        """One line: ``3 added, 1 unchanged, 0 replaced, 1 kept (conflicting: ...)``."""
+        text = (
+            f"{self.added} added, {self.unchanged} unchanged, {self.replaced} replaced, "
+            f"{self.kept_conflicting} kept conflicting"
+        )
+        if self.dropped_ids:
+            text += f", {len(self.dropped_ids)} dropped"
+        if self.conflicting_ids:
+            details = "; ".join(
+                f"{i} differs in {', '.join(self.differences.get(i, ()))}"
+                for i in self.conflicting_ids[:5]
+            )
+            more = " …" if len(self.conflicting_ids) > 5 else ""
+            text += f" ({details}{more}; pass --replace to overwrite)"
+        return text
+
+
+def _same(a: Any, b: Any) -> bool:
+    if _missing(a) and _missing(b):
+        return True
+    if _missing(a) or _missing(b):
+        return False
+    if isinstance(a, float) or isinstance(b, float):
+        # Platform noise in a re-reduction is not a different result.
+        return math.isclose(float(a), float(b), rel_tol=1e-9, abs_tol=1e-12)
+    return a == b
+
+
+def _differences(old: Mapping[str, Any], new: Mapping[str, Any]) -> tuple[str, ...]:
+    return tuple(c for c in _CONTENT_COLUMNS if not _same(old[c], new[c]))
+
+
+def fold_records(
+    runs: pd.DataFrame, records: Sequence[Mapping[str, Any]], *, replace: bool = False
+) -> tuple[pd.DataFrame, AppendReport]:
+    """Pure core of :func:`append_records`: the map with ``records`` folded in, and the report.
+
+    Existing rows keep their position; new runs are added at the end in the given order.
+    A replaced row keeps the map's exclusion state (a human decision about the run).
+    Neither input is modified.
+    """
+    return _fold(runs, records_frame(records), replace=replace)
+
+
+def _fold(
+    runs: pd.DataFrame, new_frame: pd.DataFrame, *, replace: bool
+) -> tuple[pd.DataFrame, AppendReport]:
+    """:func:`fold_records` of records already validated into ``new_frame``."""
+    import pandas as pd
+
+    base = runs.loc[:, list(RUN_COLUMNS)].reset_index(drop=True)
+    position = {m: i for i, m in enumerate(base["measurement_id"])}
+    # map rows looked at (then replaced), by position: converted in one pass, not per record
+    hits = sorted({position[m] for m in new_frame["measurement_id"] if m in position})
+    touched = dict(zip(hits, frame_records(base.iloc[hits]), strict=True))
+    fresh: dict[str, dict[str, Any]] = {}  # runs new to the map, in order (= the added ids)
+    # ids in first-seen order (dicts as ordered sets: a repeated id keeps its place)
+    unchanged: dict[str, None] = {}
+    replaced: dict[str, None] = {}
+    conflicting: dict[str, None] = {}
+    differences: dict[str, tuple[str, ...]] = {}
+    for rec in frame_records(new_frame):
+        mid = rec["measurement_id"]
+        if mid in fresh:
+            old = fresh[mid]
+        elif mid in position:
+            old = touched[position[mid]]
+        else:
+            fresh[mid] = rec
+            continue
+        diff = _differences(old, rec)
+        if not diff:
+            if mid not in fresh:
+                unchanged[mid] = None
+            continue
+        differences[mid] = diff
+        if replace:
+            rec = {**rec, "excluded": old["excluded"], "exclusion_reason": old["exclusion_reason"]}
+            if mid in fresh:
+                fresh[mid] = rec
+            else:
+                touched[position[mid]] = rec
+                replaced[mid] = None
+        else:
+            conflicting[mid] = None
+    report = AppendReport(
+        added_ids=tuple(fresh),
+        unchanged_ids=tuple(unchanged),
+        replaced_ids=tuple(replaced),
+        conflicting_ids=tuple(conflicting),
+        differences=differences,
+    )
+    merged = base
+    if replaced:
+        where = [position[mid] for mid in replaced]
+        swapped = records_frame([touched[i] for i in where], where="row")
+        swapped.index = pd.Index(where)
+        merged = pd.concat([merged.drop(index=where), swapped]).sort_index()
+    if fresh:
+        extra = records_frame(list(fresh.values()), where="record")
+        merged = pd.concat([merged, extra], ignore_index=True) if len(merged) else extra
+    merged = merged.reset_index(drop=True)
+    return _validated(merged, "row"), report
+
+
+def append_records(
+    path: str | os.PathLike[str],
+    records: Sequence[Mapping[str, Any]],
+    *,
+    replace: bool = False,
+) -> AppendReport:
+    """Append run records to the map at ``path`` (created if absent).
+
+    Idempotent: a run already present with the same content is left alone; a run whose
+    content differs replaces its row only when ``replace`` is true. The records are
+    validated before the lock is taken, and the file is rewritten (atomically) only when
+    something was added or replaced, so a failing append leaves the map byte-identical.
+    """
+    return update_map(path, records, replace=replace)
+
+
+def update_map(
+    path: str | os.PathLike[str],
+    records: Sequence[Mapping[str, Any]],
+    *,
+    replace: bool = False,
+    drop_ids: Iterable[str] = (),
+) -> AppendReport:
+    """:func:`append_records` that also removes the rows ``drop_ids`` (e.g. runs whose raw
+    file changed), in the same locked read-modify-write and one atomic write.
+
+    Ids in ``drop_ids`` that are also among ``records`` are not dropped; unknown ids are
+    ignored. Validation happens before anything is touched.
+    """
+    import dataclasses
+
+    p = Path(path)
+    new_frame = records_frame(records)  # validate before touching anything
+    with _locked(p):
+        current = read_map(p)
+        drop = set(drop_ids) - set(new_frame["measurement_id"])
+        gone = current["measurement_id"].isin(sorted(drop)).to_numpy()
+        merged, report = _fold(current.loc[~gone], new_frame, replace=replace)
+        report = dataclasses.replace(
+            report, dropped_ids=tuple(current.loc[gone, "measurement_id"].astype(str))
+        )
+        if report.changed:
+            _write_atomic(p, merged)
+    return report
+
+
+def merge_map(
+    path: str | os.PathLike[str], other: str | os.PathLike[str], *, replace: bool = False
+) -> AppendReport:
+    """Fold another friction map (another lab's Parquet map) into the map at ``path``.
+
+    Runs with the same id are stored once; rows whose content differs are reported as
+    conflicting (and replaced only with ``replace``). The other map is validated first.
+    """
+    if Path(other).resolve() == Path(path).resolve():
+        raise MapError("cannot merge a friction map into itself", path=other)
+    if not Path(other).exists():
+        raise MapError("file not found, expected a friction map to merge", path=other)
+    return append_records(path, frame_records(read_map(other)), replace=replace)
+
+
+# --------------------------------------------------------------------------- exclusions
+
+
+def _resolve_ids(runs: pd.DataFrame, ids: Iterable[str], path: Path) -> list[int]:
+    known = list(runs["measurement_id"])
+    positions = []
+    for given in ids:
+        hits = [i for i, m in enumerate(known) if m == given]
+        if not hits and len(given) >= 6:
+            hits = [i for i, m in enumerate(known) if m.startswith(given)]
+        if not hits:
+            raise MapError(
+                f"no run with measurement id {given!r}",
+                path=path,
+                hint="`tribopipe map show` lists the ids",
+            )
+        if len(hits) > 1:
+            raise MapError(f"id prefix {given!r} matches {len(hits)} runs", path=path,
+                           hint="give more digits")
+        positions.append(hits[0])
+    return positions
+
+
+def set_excluded(
+    path: str | os.PathLike[str], ids: Sequence[str], *, reason: str | None
+) -> list[str]:
+    """Exclude runs from the statistics (``reason`` given) or include them again
+    (``reason=None``). Ids may be given as unique prefixes of at least 6 digits.
+
+    The runs stay in the map with the reason recorded; returns the full ids changed.
+    Raises :class:`MapError` for an unknown id or an empty reason.
+    """
+    p = Path(path)
+    if reason is not None and not reason.strip():
+        raise MapError("an exclusion needs a reason", path=p, hint="pass --reason TEXT")
+    if not p.exists():
+        raise MapError("friction map not found", path=p, hint="pass --map PATH")
+    with _locked(p):
+        runs = read_map(p)
+        positions = _resolve_ids(runs, ids, p)
+        rows = frame_records(runs)
+        changed = []
+        for i in positions:
+            new_state = (reason is not None, None if reason is None else reason.strip())
+            if (rows[i]["excluded"], rows[i]["exclusion_reason"]) != new_state:
+                rows[i] = {**rows[i], "excluded": new_state[0], "exclusion_reason": new_state[1]}
+                changed.append(rows[i]["measurement_id"])
+        if changed:
+            _write_atomic(p, records_frame(rows, where="row"))
+    return changed
+
+
+def exclude_runs(path: str | os.PathLike[str], ids: Sequence[str], reason: str) -> list[str]:
+    """Leave runs out of the statistics, recording why; returns the ids changed."""
+    if reason is None:
+        raise MapError("an exclusion needs a reason", path=path, hint="pass --reason TEXT")
+    return set_excluded(path, ids, reason=reason)
+
+
+def include_runs(path: str | os.PathLike[str], ids: Sequence[str]) -> list[str]:
+    """Take excluded runs back into the statistics; returns the ids changed."""
+    return set_excluded(path, ids, reason=None)

@@ -54,3 +54,30 @@ def test_summary_is_json_and_carries_the_evidence(export: Path, tmp_path: Path) 
     assert 0 < start < end <= summary["sliding_distance_mm"] + 1e-9
     assert summary["mu_s_distance_mm"] < start
     assert summary["file_hash"] and len(summary["config_hash"]) == 16
+
+
+def test_reduce_files_writes_each_run_and_reports_a_bad_file_in_one_line(
+    export: Path, tmp_path: Path
+) -> None:
+    from tribopipe.layout import OutputLayout
+    from tribopipe.pipeline import reduce_files
+
+    notes = tmp_path / "notes.csv"
+    notes.write_text("a lab note, not an export\n", encoding="utf-8")
+    seen = []
+    results = reduce_files([notes, export, tmp_path / "gone.csv"], load_settings(),
+                           out_dir=tmp_path / "out", plots=True, on_file=seen.append)
+    assert seen == results
+    assert [r.ok for r in results] == [False, True, False]
+    assert results[0].error.count(str(notes)) == 1 and "\n" not in results[0].error
+    assert results[2].error.startswith(str(tmp_path / "gone.csv"))
+    good = results[1]
+    layout = OutputLayout(tmp_path / "out")
+    mid = good.outcome.measurement_id
+    assert good.trace == layout.trace_path(export, mid) and good.trace.is_file()
+    assert good.summary == layout.summary_path(export, mid) and good.summary.is_file()
+    assert good.plot == layout.trace_plot_path(export, mid)
+    assert good.plot.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    quiet = reduce_files([export], load_settings(), out_dir=tmp_path / "q", summaries=False)
+    assert quiet[0].ok and quiet[0].summary is None and quiet[0].plot is None
+    assert not (tmp_path / "q" / "summaries").exists()

@@ -2,15 +2,23 @@
 
 This is the orchestration of a single file used by ``tribopipe reduce`` and by campaigns.
 Readers and writers stay at the edges; :mod:`tribopipe.reduce` does the physics.
+
+Per run, both ``tribopipe reduce`` and the batch workers call :func:`reduce_file`, then
+write what the output folder holds for it at the paths of :mod:`tribopipe.layout`:
+:func:`write_trace`, :func:`write_summary` (``tribopipe reduce`` only) and
+:func:`plot_run`. :func:`reduce_files` is the whole ``tribopipe reduce`` over several
+files: each file alone, a failing one reported in one line and skipped.
 """
 
 from __future__ import annotations
 
 import json
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from .errors import TribopipeError
 from .figures import plot_trace
 from .files import file_sha256, write_text_atomic
 from .frictionmap.records import RunLabels, Tolerances, make_record, measurement_id
@@ -175,3 +183,64 @@ def plot_run(out_dir: str | Path | OutputLayout, outcome: RunOutcome) -> Path:
     target = OutputLayout.of(out_dir).trace_plot_path(outcome.path, outcome.measurement_id)
     plot_trace(outcome.result, target, title=Path(outcome.path).name)
     return target
+
+
+@dataclass(frozen=True)
+class FileResult:
+    """What :func:`reduce_files` made of one file: the reduced run and the files written
+    for it, or ``error``, one line naming the file and the problem."""
+
+    path: str
+    outcome: RunOutcome | None = None
+    error: str | None = None
+    trace: Path | None = None
+    summary: Path | None = None
+    plot: Path | None = None
+
+    @property
+    def ok(self) -> bool:
+        """True when the file was reduced and its outputs written."""
+        return self.error is None
+
+
+def reduce_files(
+    paths: Sequence[str | Path],
+    settings: Settings,
+    labels: RunLabels | None = None,
+    read_options: ReadOptions | None = None,
+    *,
+    out_dir: str | Path | OutputLayout,
+    summaries: bool = True,
+    plots: bool = False,
+    on_file: Callable[[FileResult], None] | None = None,
+) -> list[FileResult]:
+    """Reduce each file alone (:func:`reduce_file`) and write its trace, its summary
+    (``summaries``) and its trace plot (``plots``) below ``out_dir``.
+
+    A file that cannot be read, reduced or written gives a :class:`FileResult` with its
+    one-line ``error`` (naming the file once) and the others still go through; nothing
+    raises for a bad file. ``on_file`` is called with each result as it is done (in the
+    order of ``paths``), e.g. to print progress.
+    """
+    layout = OutputLayout.of(out_dir)
+    results: list[FileResult] = []
+    for path in paths:
+        try:
+            outcome = reduce_file(path, settings, labels, read_options)
+            trace = write_trace(layout, outcome)
+            summary = write_summary(layout, outcome) if summaries else None
+            plot = plot_run(layout, outcome) if plots else None
+        except TribopipeError as exc:
+            message = str(exc)
+            if str(path) not in message:  # every line names its file, once
+                message = f"{path}: {message}"
+            result = FileResult(path=str(path), error=message)
+        except OSError as exc:
+            result = FileResult(path=str(path), error=f"{path}: {exc.strerror or exc}")
+        else:
+            result = FileResult(path=str(path), outcome=outcome, trace=trace, summary=summary,
+                                plot=plot)
+        if on_file is not None:
+            on_file(result)
+        results.append(result)
+    return results

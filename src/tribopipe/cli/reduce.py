@@ -77,49 +77,31 @@ def reduce_cmd(
     could not be reduced; the others are still reduced and stored.
     """
     from ..config import load_settings
-    from ..errors import TribopipeError
-    from ..pipeline import ReadOptions, RunLabels, reduce_file, write_summary, write_trace
+    from ..pipeline import ReadOptions, RunLabels, reduce_files
 
-    settings = load_settings(config_path)
     labels = RunLabels(
         pin=pin, disc=disc, normal_force_N=force_N, temperature_C=temperature_C, repeat=repeat
     )
-    options = ReadOptions(encoding=encoding, delimiter=delimiter, decimal=decimal)
-
-    outcomes = []
-    failures: list[str] = []
-    for path in files:
-        try:
-            outcome = reduce_file(path, settings, labels, options)
-            write_trace(out_dir, outcome)
-            write_summary(out_dir, outcome)
-            if plot:
-                _plot(out_dir, outcome)
-        except TribopipeError as exc:
-            message = str(exc)
-            if str(path) not in message:  # every line names its file, once
-                message = f"{path}: {message}"
-            failures.append(message)
-            click.echo(f"error: {message}", err=True)
-            continue
-        except OSError as exc:
-            failures.append(f"{path}: {exc.strerror or exc}")
-            click.echo(f"error: {path}: {exc.strerror or exc}", err=True)
-            continue
-        outcomes.append(outcome)
-
+    results = reduce_files(
+        files, load_settings(config_path), labels,
+        ReadOptions(encoding=encoding, delimiter=delimiter, decimal=decimal),
+        out_dir=out_dir, plots=plot, on_file=_echo_file,
+    )
+    outcomes = [r.outcome for r in results if r.ok]
     _print(outcomes, as_json)
     _store(outcomes, map_path, no_map, replace, labels)
+    failures = [r for r in results if not r.ok]
     if failures:
         click.echo(f"{len(failures)} of {len(files)} file(s) failed.", err=True)
         sys.exit(1)
 
 
-def _plot(out_dir: str, outcome: object) -> None:
-    from ..pipeline import plot_run
-
-    target = plot_run(out_dir, outcome)
-    click.echo(f"plot: {target}", err=True)
+def _echo_file(result: object) -> None:
+    """One file done: its plot, or its error, on stderr as it happens."""
+    if result.error is not None:
+        click.echo(f"error: {result.error}", err=True)
+    elif result.plot is not None:
+        click.echo(f"plot: {result.plot}", err=True)
 
 
 def _print(outcomes: list, as_json: bool) -> None:

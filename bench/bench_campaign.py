@@ -126,7 +126,7 @@ def parse_only(files: list[Path], jobs: int) -> dict[str, float]:
     """Wall time [s] of read_export over all files: sequential (readers already imported)
     and with a fresh pool of ``jobs`` workers chunked like the batch (start-up included)."""
     import tribopipe.readers  # noqa: F401 - import cost is not parsing
-    from tribopipe.campaign import _chunks, _worker_init  # the batch's own chunking and set-up
+    from tribopipe.campaign.batch import _chunks, _worker_init  # the batch's chunking, set-up
 
     paths = [str(p) for p in files]
     t0 = time.perf_counter()

@@ -1,0 +1,130 @@
+"""A campaign: a table of raw exports with their metadata, reduced incrementally in parallel.
+
+A campaign is described by a TOML file (``configs/*.toml``)::
+
+    [campaign]
+    name = "example"
+    raw_dir = "../raw/example"           # paths are relative to the config file's folder
+    glob = "*.csv"                       # default; the manifest itself is never a run
+    instrument = "instruments/t-pid44.toml"     # default: the founding T-PID/44 cell
+    output_dir = "../processed"          # default: processed/ beside the config's folder
+    map = "../processed/friction_map.parquet"   # default: <output_dir>/friction_map.parquet
+    manifest = "../raw/example/manifest.csv"
+    filename_pattern = "{pin}_{disc}_{force}N_{temperature}C_r{repeat}"
+    use_export_names = false             # also read metadata from the export's Test name
+    export_pattern = "..."               # pattern for the Test name (default: filename_pattern)
+    force_tolerance_N = 0.0              # QC: measured F_N may stray max(tol_N, tol_rel·F_nom)
+    force_tolerance_rel = 0.10
+    temperature_tolerance_C = 2.0        # QC: measured T may stray this far from nominal
+    plots = true                         # per-run trace plots under <output_dir>/plots/traces
+    encoding = "utf-16"                  # optional: force the reader's encoding, delimiter
+    delimiter = "tab"                    # ("tab", ";", ",") or decimal mark (".", ","),
+    decimal = ","                        # else they are detected per file
+
+    [reduction]                          # optional: overrides the instrument config's table
+    median_window = 5
+
+    [names]                              # optional: short names in file names -> full names
+    DS30 = "Dragonskin 30"
+
+The package's rooms, each importing only those above it:
+
+* :mod:`~tribopipe.campaign.patterns` — the label fields and the file-name patterns;
+* :mod:`~tribopipe.campaign.spec` — :class:`Campaign`, :func:`load_campaign`,
+  :func:`folder_campaign`;
+* :mod:`~tribopipe.campaign.metadata` — the manifest, the merge of metadata sources
+  (which must agree; a file whose metadata is missing or contradictory fails alone);
+* :mod:`~tribopipe.campaign.table` — the campaign as a table (:func:`campaign_table`) and
+  its incremental state (content hash trusted while size and ``mtime_ns`` are unchanged);
+* :mod:`~tribopipe.campaign.outputs` — ``runs.csv`` and ``failures.csv``;
+* :mod:`~tribopipe.campaign.batch` — :func:`run_campaign`, the parallel batch.
+
+A file whose content, labels or config changed is reduced again and its old map row
+replaced; a failed file is retried once it changes. Every public name is importable from
+``tribopipe.campaign`` itself.
+"""
+
+from __future__ import annotations
+
+from ..frictionmap.records import Tolerances, qc_flags
+from ..layout import BATCH_LOCK
+from .batch import (
+    GC_THRESHOLDS,
+    BatchReport,
+    ProgressCallback,
+    default_jobs,
+    run_campaign,
+)
+from .metadata import (
+    MANIFEST_COLUMNS,
+    ManifestRow,
+    labels_from,
+    merge_metadata,
+    read_manifest,
+)
+from .outputs import (
+    RUNS_COLUMNS,
+)
+from .patterns import (
+    LABEL_FIELDS,
+    PATTERN_FIELDS,
+    REQUIRED_FIELDS,
+    match_pattern,
+)
+from .spec import (
+    Campaign,
+    folder_campaign,
+    load_campaign,
+)
+from .table import (
+    CHANGED,
+    FAILED,
+    NEW,
+    REDUCED,
+    SKIPPED,
+    STATE_VERSION,
+    CampaignRow,
+    campaign_listing,
+    campaign_table,
+    discover_files,
+    load_state,
+    recipe_hash,
+    save_state,
+)
+
+__all__ = [
+    "BATCH_LOCK",
+    "Tolerances",
+    "qc_flags",
+    "REQUIRED_FIELDS",
+    "LABEL_FIELDS",
+    "PATTERN_FIELDS",
+    "match_pattern",
+    "Campaign",
+    "load_campaign",
+    "folder_campaign",
+    "MANIFEST_COLUMNS",
+    "ManifestRow",
+    "read_manifest",
+    "merge_metadata",
+    "labels_from",
+    "STATE_VERSION",
+    "NEW",
+    "REDUCED",
+    "CHANGED",
+    "FAILED",
+    "SKIPPED",
+    "CampaignRow",
+    "discover_files",
+    "recipe_hash",
+    "campaign_table",
+    "load_state",
+    "save_state",
+    "campaign_listing",
+    "RUNS_COLUMNS",
+    "ProgressCallback",
+    "GC_THRESHOLDS",
+    "BatchReport",
+    "default_jobs",
+    "run_campaign",
+]

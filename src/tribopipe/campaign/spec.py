@@ -1,0 +1,302 @@
+"""A campaign's description: its config file (or a folder + options) as a :class:`Campaign`.
+
+The keys of the ``[campaign]`` table are described in :mod:`tribopipe.campaign`; the
+``[reduction]`` table overrides the instrument config's key by key through
+:func:`tribopipe.config.merge_tables`, the same merge every instrument file goes through.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from ..config import (
+    Settings,
+    load_settings,
+    merge_tables,
+    read_toml,
+    reject_unknown_keys,
+    settings_from_dict,
+    settings_tables,
+)
+from ..errors import CampaignError, ConfigError
+from ..frictionmap.records import Tolerances
+from ..layout import DEFAULT_OUTPUT_DIR, OutputLayout
+from ..pipeline import ReadOptions
+from .patterns import _compile_pattern
+
+_CAMPAIGN_KEYS = frozenset(
+    {
+        "name", "raw_dir", "glob", "instrument", "output_dir", "map", "manifest",
+        "filename_pattern", "use_export_names", "export_pattern", "force_tolerance_N",
+        "force_tolerance_rel", "temperature_tolerance_C", "plots", "encoding", "delimiter",
+        "decimal",
+    }
+)
+_TOP_LEVEL_TABLES = frozenset({"campaign", "reduction", "names"})
+
+
+@dataclass(frozen=True)
+class Campaign:
+    """A campaign's description: where its files are, how to label and reduce them.
+
+    All paths are absolute (resolved against the config file's folder).
+    """
+
+    name: str
+    raw_dir: Path
+    glob: str
+    settings: Settings
+    output_dir: Path
+    map_path: Path
+    manifest: Path | None = None
+    filename_pattern: str | None = None
+    use_export_names: bool = False
+    export_pattern: str | None = None
+    names: tuple[tuple[str, str], ...] = ()
+    tolerances: Tolerances = field(default_factory=Tolerances)
+    plots: bool = True
+    read_options: ReadOptions = field(default_factory=ReadOptions)
+    source: Path | None = None
+
+    @property
+    def layout(self) -> OutputLayout:
+        """The paths of the output folder (:class:`tribopipe.layout.OutputLayout`)."""
+        return OutputLayout(self.output_dir)
+
+    @property
+    def state_path(self) -> Path:
+        """The incremental state file: ``<output_dir>/.tribopipe-state.<name>.json``
+        (the name reduced to letters, digits, ``-`` and ``_``)."""
+        return self.layout.state_path(self.name)
+
+    @property
+    def runs_csv(self) -> Path:
+        """Per-run summary table of the last batch: ``<output_dir>/runs.csv``."""
+        return self.layout.runs_csv
+
+    @property
+    def failures_csv(self) -> Path:
+        """Failure list of the last batch (``file,reason``): ``<output_dir>/failures.csv``."""
+        return self.layout.failures_csv
+
+    @property
+    def plots_dir(self) -> Path:
+        """Per-run trace plots: ``<output_dir>/plots/traces``."""
+        return self.layout.trace_plots_dir
+
+    def alias(self, name: str) -> str:
+        """The full material name for a short one from ``[names]`` (unchanged if unknown)."""
+        key = name.strip().casefold()
+        for short, full in self.names:
+            if short.casefold() == key:
+                return full
+        return name.strip()
+
+
+def _check_type(value: Any, kind: type | tuple[type, ...], key: str, path: Path) -> Any:
+    # bool is an int in Python; a number key must not accept `true`
+    if isinstance(value, bool) and kind is not bool:
+        ok = False
+    else:
+        ok = isinstance(value, kind)
+    if not ok:
+        names = kind.__name__ if isinstance(kind, type) else " or ".join(k.__name__ for k in kind)
+        raise ConfigError(
+            f"[campaign] {key} must be a {names}, got {value!r}", path=path, column=None
+        )
+    return value
+
+
+def _non_negative(value: Any, key: str, path: Path) -> float:
+    _check_type(value, (int, float), key, path)
+    if not (math.isfinite(value) and value >= 0):
+        raise ConfigError(f"[campaign] {key} must be a number >= 0, got {value!r}", path=path)
+    return float(value)
+
+
+def load_campaign(path: str | Path) -> Campaign:
+    """Load and validate a campaign config (TOML); see the module docstring for the keys.
+
+    Raises :class:`ConfigError` naming the file and the key for every problem.
+    """
+    cfg_path = Path(path).resolve()
+    try:
+        data = read_toml(cfg_path)
+    except ConfigError as exc:
+        if exc.hint or cfg_path.suffix.lower() == ".toml":
+            raise
+        # e.g. `tribopipe batch run.csv`: an export given where a campaign config belongs
+        raise ConfigError(exc.problem, path=exc.path,
+                          hint="expected a campaign config (TOML, see configs/example.toml) "
+                               "or a folder of exports") from None
+    unknown_tables = sorted(set(data) - _TOP_LEVEL_TABLES)
+    if unknown_tables:
+        raise ConfigError(
+            f"unknown table(s) {', '.join(unknown_tables)}; expected [campaign], "
+            "optional [reduction] and [names]",
+            path=cfg_path,
+        )
+    table = data.get("campaign")
+    if not isinstance(table, dict):
+        raise ConfigError(
+            "missing [campaign] table", path=cfg_path, hint="see configs/example.toml"
+        )
+    reject_unknown_keys(table, _CAMPAIGN_KEYS, "campaign", cfg_path)
+    base = cfg_path.parent
+
+    def rel(key: str, default: str | None = None) -> Path | None:
+        value = table.get(key, default)
+        if value is None:
+            return None
+        _check_type(value, str, key, cfg_path)
+        return (base / value).resolve()
+
+    if "raw_dir" not in table:
+        raise ConfigError("[campaign] raw_dir is required (folder of the raw exports)",
+                          path=cfg_path)
+    raw_dir = rel("raw_dir")
+    assert raw_dir is not None
+    if not raw_dir.is_dir():
+        raise ConfigError(f"[campaign] raw_dir: folder {raw_dir} not found", path=cfg_path)
+
+    # the instrument config's own [reduction] table, overridden key by key by ours
+    instrument_path = rel("instrument")
+    instrument_data = read_toml(instrument_path) if instrument_path is not None else {}
+    merged = merge_tables(settings_tables(instrument_data, instrument_path),
+                          settings_tables(data, cfg_path))
+    try:
+        settings = settings_from_dict(
+            merged, source=str(instrument_path) if instrument_path else None
+        )
+    except ConfigError as exc:
+        # a bad [reduction] key may be ours or the instrument file's: name both
+        where = cfg_path if instrument_path is None else f"{cfg_path} (+ {instrument_path})"
+        raise ConfigError(exc.problem, path=where, hint=exc.hint) from None
+
+    names_table = data.get("names", {})
+    if not isinstance(names_table, dict) or not all(
+        isinstance(v, str) for v in names_table.values()
+    ):
+        raise ConfigError('[names] must map short names to full names, e.g. DS30 = '
+                          '"Dragonskin 30"', path=cfg_path)
+
+    output_dir = rel("output_dir") or (base.parent / DEFAULT_OUTPUT_DIR).resolve()
+    map_path = rel("map") or OutputLayout(output_dir).map_path
+    manifest = rel("manifest")
+    if manifest is not None and not manifest.is_file():
+        raise ConfigError(f"[campaign] manifest: file {manifest} not found", path=cfg_path)
+    pattern = table.get("filename_pattern")
+    if pattern is not None:
+        _check_type(pattern, str, "filename_pattern", cfg_path)
+        _compile_pattern(pattern, key="filename_pattern", path=cfg_path)
+    use_export_names = _check_type(table.get("use_export_names", False), bool,
+                                   "use_export_names", cfg_path)
+    export_pattern = table.get("export_pattern", pattern if use_export_names else None)
+    if export_pattern is not None:
+        _check_type(export_pattern, str, "export_pattern", cfg_path)
+        _compile_pattern(export_pattern, key="export_pattern", path=cfg_path)
+    if use_export_names and export_pattern is None:
+        raise ConfigError("[campaign] use_export_names needs export_pattern or filename_pattern",
+                          path=cfg_path)
+    if manifest is None and pattern is None and not use_export_names:
+        raise ConfigError(
+            "[campaign] no metadata source: set manifest, filename_pattern and/or "
+            "use_export_names",
+            path=cfg_path,
+        )
+    defaults = Tolerances()
+    tolerances = Tolerances(
+        force_N=_non_negative(table.get("force_tolerance_N", defaults.force_N),
+                              "force_tolerance_N", cfg_path),
+        force_rel=_non_negative(table.get("force_tolerance_rel", defaults.force_rel),
+                                "force_tolerance_rel", cfg_path),
+        temperature_C=_non_negative(
+            table.get("temperature_tolerance_C", defaults.temperature_C),
+            "temperature_tolerance_C", cfg_path,
+        ),
+    )
+    glob = _check_type(table.get("glob", "*.csv"), str, "glob", cfg_path)
+    name = _check_type(table.get("name", cfg_path.stem), str, "name", cfg_path)
+    plots = _check_type(table.get("plots", True), bool, "plots", cfg_path)
+    decimal = table.get("decimal")
+    if decimal not in (None, ".", ","):
+        raise ConfigError(f"[campaign] decimal must be '.' or ',', got {decimal!r}",
+                          path=cfg_path)
+    options = ReadOptions(
+        encoding=_optional_str(table, "encoding", cfg_path),
+        delimiter=_optional_str(table, "delimiter", cfg_path),
+        decimal=decimal,
+    )
+    return Campaign(
+        name=name,
+        raw_dir=raw_dir,
+        glob=glob,
+        settings=settings,
+        output_dir=output_dir,
+        map_path=map_path,
+        manifest=manifest,
+        filename_pattern=pattern,
+        use_export_names=use_export_names,
+        export_pattern=export_pattern,
+        names=tuple(sorted(names_table.items())),
+        tolerances=tolerances,
+        plots=plots,
+        read_options=options,
+        source=cfg_path,
+    )
+
+
+def _optional_str(table: Mapping[str, Any], key: str, path: Path) -> str | None:
+    value = table.get(key)
+    if value is None:
+        return None
+    _check_type(value, str, key, path)
+    return "\t" if value.lower() in {"tab", "\\t"} else value
+
+
+def folder_campaign(
+    folder: str | Path,
+    *,
+    manifest: str | Path | None = None,
+    filename_pattern: str | None = None,
+    map_path: str | Path | None = None,
+    output_dir: str | Path = DEFAULT_OUTPUT_DIR,
+    glob: str = "*.csv",
+    instrument: str | Path | None = None,
+    plots: bool = True,
+) -> Campaign:
+    """A quick campaign without a config file: a folder of exports plus a manifest CSV
+    and/or a file-name pattern, reduced with an instrument config (default T-PID/44).
+
+    Relative paths are taken relative to the current directory.
+    """
+    raw_dir = Path(folder).resolve()
+    if not raw_dir.is_dir():
+        raise CampaignError("folder not found", path=folder)
+    manifest_path = None if manifest is None else Path(manifest).resolve()
+    if manifest_path is not None and not manifest_path.is_file():
+        raise CampaignError("manifest not found", path=manifest)
+    if manifest_path is None and filename_pattern is None:
+        raise CampaignError(
+            "no metadata source for the runs", path=folder,
+            hint="pass --manifest FILE.csv (columns file, pin, disc, normal_force_N, "
+                 "temperature_C, repeat) or --pattern",
+        )
+    if filename_pattern is not None:
+        _compile_pattern(filename_pattern, key="pattern", path=None)
+    out = Path(output_dir).resolve()
+    return Campaign(
+        name=raw_dir.name,
+        raw_dir=raw_dir,
+        glob=glob,
+        settings=load_settings(instrument),
+        output_dir=out,
+        map_path=Path(map_path).resolve() if map_path else OutputLayout(out).map_path,
+        manifest=manifest_path,
+        filename_pattern=filename_pattern,
+        plots=plots,
+    )

@@ -377,3 +377,29 @@ def test_lost_state_costs_a_re_run_but_changes_no_group(campaign_dir: Path) -> N
     assert "0 added" in report.map_summary and f"{len(GOOD)} unchanged" in report.map_summary
     after = pd.read_parquet(campaign.map_path)
     assert sorted(after["measurement_id"]) == sorted(before["measurement_id"])
+
+
+def test_workers_return_typed_picklable_results(campaign_dir: Path) -> None:
+    """What crosses the process boundary is a frozen dataclass per file: a reduced run
+    with its record and state entry, or a failure with its one-line reason."""
+    import pickle
+
+    from tribopipe.campaign.batch import (
+        FailedRun,
+        ReducedRun,
+        _Context,
+        _Job,
+        _reduce_chunk,
+    )
+
+    campaign = load_campaign(campaign_dir / "campaign.toml")
+    jobs = [_Job(file=row.file, path=str(row.path), sources=row.sources, hints=row.hints)
+            for row in campaign_table(campaign)
+            if row.file in ("DS30_steel_5N_20C_r1.csv", "DS30_steel_9N_20C_r1.csv")]
+    good, bad = pickle.loads(pickle.dumps(_reduce_chunk(jobs, _Context(campaign, False))))
+    assert isinstance(good, ReducedRun) and isinstance(bad, FailedRun)
+    assert good.entry.measurement_id == good.record["measurement_id"]
+    assert good.entry.labels["pin"] == "Dragonskin 30"
+    assert good.entry.mu_k == pytest.approx(0.36, abs=0.01)
+    assert (campaign.output_dir / good.entry.trace).is_file()
+    assert bad.reason.startswith("DS30_steel_9N_20C_r1.csv") and not bad.transient

@@ -28,11 +28,12 @@ from .outputs import _write_failures_csv, _write_runs_csv
 from .patterns import LABEL_FIELDS, match_pattern
 from .spec import Campaign
 from .table import (
-    _SUMMARY_KEYS,
     FAILED,
     REDUCED,
     SKIPPED,
     STATE_VERSION,
+    CampaignRow,
+    RunEntry,
     campaign_table,
     load_state,
     recipe_hash,
@@ -56,7 +57,34 @@ class _Context:
     plots: bool
 
 
-def _reduce_one(job: _Job, ctx: _Context) -> dict[str, Any]:
+@dataclass(frozen=True)
+class ReducedRun:
+    """A worker's result for a file it reduced: the map record, the file's SHA-256, what
+    the state keeps of the run, and a note when its trace plot could not be drawn."""
+
+    file: str
+    record: dict[str, Any]
+    sha256: str
+    entry: RunEntry
+    plot_note: str | None = None
+
+
+@dataclass(frozen=True)
+class FailedRun:
+    """A worker's result for a file it could not reduce: the one-line reason; ``transient``
+    when it was not the file's fault (a crashed worker, an internal error), so the state is
+    left alone and the file is tried again next time."""
+
+    file: str
+    reason: str
+    transient: bool = False
+
+
+#: what a worker returns per file (small and picklable: never the trace)
+RunResult = ReducedRun | FailedRun
+
+
+def _reduce_one(job: _Job, ctx: _Context) -> ReducedRun:
     """Reduce one file in a worker; returns a small picklable result (never the trace)."""
     campaign = ctx.campaign
     merged = merge_metadata(job.file, job.sources, campaign)
@@ -68,25 +96,22 @@ def _reduce_one(job: _Job, ctx: _Context) -> dict[str, Any]:
                               tolerances=campaign.tolerances)
     result = outcome.result
     record = outcome.record
-    trace = write_trace(campaign.output_dir, outcome)
+    trace = write_trace(campaign.layout, outcome)
     plot_note = _plot(campaign, outcome) if ctx.plots else None
-    return {
-        "file": job.file,
-        "ok": True,
-        "record": record,
-        "labels": asdict(outcome.labels),
-        "measurement_id": record.get("measurement_id"),
-        "sha256": outcome.file_hash,
-        "trace": trace.relative_to(campaign.output_dir).as_posix(),
-        "mu_s": finite_or_none(result.mu_s),
-        "mu_k": finite_or_none(result.mu_k),
-        "pressure_kPa": finite_or_none(record.get("pressure_kPa")),
-        "pressure_measured_kPa": finite_or_none(result.pressure_kPa),
-        "normal_force_measured_N": finite_or_none(result.normal_force_mean_N),
-        "temperature_measured_C": finite_or_none(result.temperature_C),
-        "flags": record["flags"],
-        "plot_note": plot_note,
-    }
+    entry = RunEntry(
+        labels=asdict(outcome.labels),
+        measurement_id=record["measurement_id"],
+        trace=trace.relative_to(campaign.output_dir).as_posix(),
+        mu_s=finite_or_none(result.mu_s),
+        mu_k=finite_or_none(result.mu_k),
+        pressure_kPa=finite_or_none(record.get("pressure_kPa")),
+        pressure_measured_kPa=finite_or_none(result.pressure_kPa),
+        normal_force_measured_N=finite_or_none(result.normal_force_mean_N),
+        temperature_measured_C=finite_or_none(result.temperature_C),
+        flags=record["flags"],
+    )
+    return ReducedRun(file=job.file, record=record, sha256=outcome.file_hash, entry=entry,
+                      plot_note=plot_note)
 
 
 def _reduce_with_export_names(job: _Job, campaign: Campaign, merged: Mapping[str, Any]
@@ -153,21 +178,21 @@ def _reason(exc: TribopipeError, job: _Job) -> str:
     return text
 
 
-def _reduce_chunk(jobs: Sequence[_Job], ctx: _Context) -> list[dict[str, Any]]:
+def _reduce_chunk(jobs: Sequence[_Job], ctx: _Context) -> list[RunResult]:
     """Reduce a chunk of files; each failure is caught and returned with its reason."""
-    out: list[dict[str, Any]] = []
+    out: list[RunResult] = []
     for job in jobs:
         try:
             out.append(_reduce_one(job, ctx))
         except TribopipeError as exc:
-            out.append({"file": job.file, "ok": False, "reason": _reason(exc, job)})
+            out.append(FailedRun(file=job.file, reason=_reason(exc, job)))
         except OSError as exc:
-            out.append({"file": job.file, "ok": False,
-                        "reason": f"{job.file}: cannot read: {exc.strerror or exc}"})
+            out.append(FailedRun(file=job.file,
+                                 reason=f"{job.file}: cannot read: {exc.strerror or exc}"))
         except Exception as exc:  # noqa: BLE001 - one broken file must not stop a campaign
-            out.append({"file": job.file, "ok": False, "transient": True,
-                        "reason": f"{job.file}: internal error {type(exc).__name__}: {exc} "
-                                  "(please report with the file)"})
+            out.append(FailedRun(file=job.file, transient=True,
+                                 reason=f"{job.file}: internal error {type(exc).__name__}: "
+                                        f"{exc} (please report with the file)"))
     return out
 
 
@@ -267,6 +292,67 @@ def _run_locked(campaign: Campaign, *, jobs: int | None, plots: bool | None,
     entries: dict[str, Any] = dict(state.get("entries", {}))
     missing_ids, map_checked = _ids_missing_from_map(campaign, state)
     rows = campaign_table(campaign, state=state)
+    plan = _plan(rows, missing_ids)
+    total = len(rows)
+    done = total - len(plan.todo)
+    if progress:
+        progress(done, total)
+
+    if plan.todo and not map_checked and campaign.map_path.exists():
+        read_map(campaign.map_path)  # refuse a foreign or corrupt map before any work
+    results = _execute(plan.todo, _Context(campaign=campaign, plots=plots), jobs,
+                       progress, done, total)
+
+    notes: list[str] = []
+    if not rows:
+        notes.append(f"no file matches {campaign.glob!r} in {campaign.raw_dir}")
+    by_file = {row.file: row for row in rows}
+    failures = plan.failures
+    landing = _apply(campaign, results, by_file, entries, failures, notes)
+    _forget_vanished(campaign, entries, set(by_file), notes)
+
+    map_summary = "unchanged"
+    removed: set[str] = set()
+    landed: set[str] = set()
+    if landing.records or landing.stale_ids:
+        map_summary, landed, removed = _update_map(campaign, landing.records, landing.stale_ids)
+    groups = _groups_updated(state, landing.records, landed, removed)
+    _save_state_with_map(campaign, entries)
+
+    this_batch = {f: REDUCED for f in landing.reduced} | {f: SKIPPED for f in plan.skipped} | {
+        f: FAILED for f in failures
+    }
+    _write_runs_csv(campaign, rows, entries, this_batch, failures)
+    _write_failures_csv(campaign, failures)
+    return BatchReport(
+        campaign=campaign.name,
+        total=total,
+        reduced=landing.reduced,
+        skipped=plan.skipped,
+        failures=sorted(failures.items()),
+        groups_updated=len(groups),
+        removed=len(removed),
+        map_path=campaign.map_path,
+        map_summary=map_summary,
+        output_dir=campaign.output_dir,
+        notes=notes,
+        flagged=landing.flagged,
+    )
+
+
+@dataclass(frozen=True)
+class _Plan:
+    """What a batch does with each row: reduce it (``todo``), skip it (unchanged since it
+    was reduced), or list it as failed without reading it (``failures``: file → reason)."""
+
+    todo: list[_Job]
+    skipped: list[str]
+    failures: dict[str, str]
+
+
+def _plan(rows: Sequence[CampaignRow], missing_ids: set[str]) -> _Plan:
+    """Sort the campaign's rows into work, skips and known failures; a reduced run whose
+    map row went missing (``missing_ids``) is reduced again."""
     todo: list[_Job] = []
     skipped: list[str] = []
     failures: dict[str, str] = {}
@@ -282,130 +368,130 @@ def _run_locked(campaign: Campaign, *, jobs: int | None, plots: bool | None,
         else:
             todo.append(_Job(file=row.file, path=str(row.path), sources=row.sources,
                              hints=row.hints))
-    by_file = {row.file: row for row in rows}
-    done = len(rows) - len(todo)
-    total = len(rows)
-    if progress:
-        progress(done, total)
+    return _Plan(todo=todo, skipped=skipped, failures=failures)
 
-    if todo and not map_checked and campaign.map_path.exists():
-        read_map(campaign.map_path)  # refuse a foreign or corrupt map before any work
-    ctx = _Context(campaign=campaign, plots=plots)
-    results: list[dict[str, Any]] = []
-    if todo:
-        workers = min(jobs, len(todo))
-        chunks = _chunks(todo, workers)
-        if workers == 1:
-            with _fewer_gc_passes():
-                for chunk in chunks:
-                    results.extend(_reduce_chunk(chunk, ctx))
-                    done += len(chunk)
-                    if progress:
-                        progress(done, total)
-        else:
-            from concurrent.futures import ProcessPoolExecutor, as_completed
 
-            with ProcessPoolExecutor(max_workers=workers, initializer=_worker_init) as pool:
-                futures = {pool.submit(_reduce_chunk, chunk, ctx): chunk for chunk in chunks}
-                for future in as_completed(futures):
-                    try:
-                        part = future.result()
-                    except Exception as exc:  # noqa: BLE001 - e.g. a worker killed (OOM)
-                        part = [{"file": job.file, "ok": False,
-                                 "reason": f"{job.file}: worker process failed "
-                                           f"({type(exc).__name__}: {exc}); run again",
-                                 "transient": True}
-                                for job in futures[future]]
-                    results.extend(part)
-                    done += len(part)
-                    if progress:
-                        progress(done, total)
+def _execute(todo: list[_Job], ctx: _Context, jobs: int, progress: ProgressCallback | None,
+             done: int, total: int) -> list[RunResult]:
+    """Reduce the jobs: in this process for one worker, else in a pool of ``jobs``
+    processes; ``progress(done, total)`` after every chunk. A crashed worker's files come
+    back as transient failures."""
+    results: list[RunResult] = []
+    if not todo:
+        return results
+    workers = min(jobs, len(todo))
+    chunks = _chunks(todo, workers)
+    if workers == 1:
+        with _fewer_gc_passes():
+            for chunk in chunks:
+                results.extend(_reduce_chunk(chunk, ctx))
+                done += len(chunk)
+                if progress:
+                    progress(done, total)
+        return results
+    from concurrent.futures import ProcessPoolExecutor, as_completed
 
-    notes: list[str] = []
-    if not rows:
-        notes.append(f"no file matches {campaign.glob!r} in {campaign.raw_dir}")
+    with ProcessPoolExecutor(max_workers=workers, initializer=_worker_init) as pool:
+        futures = {pool.submit(_reduce_chunk, chunk, ctx): chunk for chunk in chunks}
+        for future in as_completed(futures):
+            try:
+                part = future.result()
+            except Exception as exc:  # noqa: BLE001 - e.g. a worker killed (OOM)
+                part = [FailedRun(file=job.file, transient=True,
+                                  reason=f"{job.file}: worker process failed "
+                                         f"({type(exc).__name__}: {exc}); run again")
+                        for job in futures[future]]
+            results.extend(part)
+            done += len(part)
+            if progress:
+                progress(done, total)
+    return results
+
+
+@dataclass(frozen=True)
+class _Landing:
+    """What the workers' results bring to the map: the new records, the ids of rows to
+    drop (their raw file changed or now fails), the files reduced and the flagged ones."""
+
+    records: list[dict[str, Any]]
+    stale_ids: set[str]
+    reduced: list[str]
+    flagged: list[tuple[str, str]]
+
+
+def _apply(campaign: Campaign, results: Sequence[RunResult], by_file: Mapping[str, CampaignRow],
+           entries: dict[str, Any], failures: dict[str, str], notes: list[str]) -> _Landing:
+    """Fold the workers' results into the state ``entries`` and ``failures`` (in file
+    order, both updated in place; plot notes added to ``notes``)."""
     records: list[dict[str, Any]] = []
     stale_ids: set[str] = set()
     reduced: list[str] = []
     flagged: list[tuple[str, str]] = []
     config_hash = campaign.settings.config_hash  # hashes the settings: once, not per run
-    for res in sorted(results, key=lambda r: r["file"]):
-        row = by_file[res["file"]]
+    for res in sorted(results, key=lambda r: r.file):
+        row = by_file[res.file]
         old = entries.get(row.file) or {}
         old_id = old.get("measurement_id") if old.get("status") == REDUCED else None
         base = {
             "size": row.size, "mtime_ns": row.mtime_ns, "config_hash": config_hash,
             "recipe": recipe_hash(campaign, row.merged),
         }
-        if res["ok"]:
+        if isinstance(res, ReducedRun):
             reduced.append(row.file)
-            records.append(res["record"])
-            if res["record"].get("flags"):
-                flagged.append((row.file, res["record"]["flags"]))
-            if old_id and old_id != res["measurement_id"]:
+            records.append(res.record)
+            if res.record.get("flags"):
+                flagged.append((row.file, res.record["flags"]))
+            if old_id and old_id != res.entry.measurement_id:
                 stale_ids.add(old_id)
-            if res.get("plot_note") and res["plot_note"] not in notes:
-                notes.append(res["plot_note"])
+            if res.plot_note and res.plot_note not in notes:
+                notes.append(res.plot_note)
             entries[row.file] = {
-                **base, "sha256": res["sha256"], "status": REDUCED,
-                **{k: res[k] for k in _SUMMARY_KEYS},
+                **base, "sha256": res.sha256, "status": REDUCED, **res.entry.as_dict(),
             }
-        elif res.get("transient"):
+        elif res.transient:
             # not the file's fault: listed now, retried next time (the state is left as is)
-            failures[row.file] = res["reason"]
+            failures[row.file] = res.reason
         else:
-            failures[row.file] = res["reason"]
+            failures[row.file] = res.reason
             if old_id:
                 stale_ids.add(old_id)
             entries[row.file] = {
                 **base, "sha256": row.sha256 or file_sha256(row.path), "status": FAILED,
-                "reason": res["reason"],
+                "reason": res.reason,
             }
-    # files that vanished from the folder leave the state (their map rows stay)
-    present = set(by_file)
+    return _Landing(records=records, stale_ids=stale_ids, reduced=reduced, flagged=flagged)
+
+
+def _forget_vanished(campaign: Campaign, entries: dict[str, Any], present: set[str],
+                     notes: list[str]) -> None:
+    """Files that vanished from the folder leave the state (their map rows stay)."""
     for gone in sorted(set(entries) - present):
         if entries[gone].get("status") == REDUCED:
             notes.append(f"{gone}: no longer in {campaign.raw_dir}; its map row is kept")
         del entries[gone]
 
-    map_summary = "unchanged"
-    removed: set[str] = set()
-    landed: set[str] = set()
-    if records or stale_ids:
-        map_summary, landed, removed = _update_map(campaign, records, stale_ids)
-    # a group is updated when one of its rows was added, replaced or removed
+
+def _groups_updated(state: Mapping[str, Any], records: Sequence[Mapping[str, Any]],
+                    landed: set[str], removed: set[str]) -> set[tuple[Any, ...]]:
+    """The condition groups with a map row added, replaced or removed by this batch."""
     old_groups = {
         _group_key(e.get("labels") or {}) for e in state.get("entries", {}).values()
         if e.get("measurement_id") in removed
     }
-    groups = {
+    return {
         _group_key(r) for r in records if r.get("measurement_id") in landed
     } | old_groups
-    new_state = {"version": STATE_VERSION, "campaign": campaign.name, "entries": entries}
+
+
+def _save_state_with_map(campaign: Campaign, entries: Mapping[str, Any]) -> None:
+    """Save the state with the map's size and ``mtime_ns`` as this batch leaves it (so the
+    next batch trusts an untouched map without reading it)."""
+    new_state: dict[str, Any] = {"version": STATE_VERSION, "campaign": campaign.name,
+                                 "entries": dict(entries)}
     if campaign.map_path.exists():
         st = campaign.map_path.stat()
         new_state["map"] = {"size": st.st_size, "mtime_ns": st.st_mtime_ns}
     save_state(campaign, new_state)
-
-    this_batch = {f: REDUCED for f in reduced} | {f: SKIPPED for f in skipped} | {
-        f: FAILED for f in failures
-    }
-    _write_runs_csv(campaign, rows, entries, this_batch, failures)
-    _write_failures_csv(campaign, failures)
-    return BatchReport(
-        campaign=campaign.name,
-        total=total,
-        reduced=reduced,
-        skipped=skipped,
-        failures=sorted(failures.items()),
-        groups_updated=len(groups),
-        removed=len(removed),
-        map_path=campaign.map_path,
-        map_summary=map_summary,
-        output_dir=campaign.output_dir,
-        notes=notes,
-        flagged=flagged,
-    )
 
 
 def _ids_missing_from_map(campaign: Campaign, state: Mapping[str, Any]) -> tuple[set[str], bool]:

@@ -15,7 +15,7 @@ import functools
 import hashlib
 import json
 from collections.abc import Mapping
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, fields
 from pathlib import Path
 from typing import Any
 
@@ -33,11 +33,33 @@ NEW, REDUCED, CHANGED, FAILED = "new", "reduced", "changed", "failed"
 #: what a batch did with a run (``runs.csv``)
 SKIPPED = "skipped"
 
-#: what the state keeps of a reduced run (and ``runs.csv`` shows), from its worker's result
-_SUMMARY_KEYS = (
-    "labels", "measurement_id", "trace", "mu_s", "mu_k", "pressure_kPa",
-    "pressure_measured_kPa", "normal_force_measured_N", "temperature_measured_C", "flags",
-)
+
+
+@dataclass(frozen=True)
+class RunEntry:
+    """What the state keeps of a reduced run (and ``runs.csv`` shows), as its worker
+    found it: the labels, the id, the trace (relative to the output folder), μ_S and μ_K,
+    the nominal pressure [kPa], the measured pressure [kPa], normal force [N] and
+    temperature [°C] (``None`` when not finite) and the ``;``-joined flags."""
+
+    labels: dict[str, Any]
+    measurement_id: str
+    trace: str
+    mu_s: float | None
+    mu_k: float | None
+    pressure_kPa: float | None
+    pressure_measured_kPa: float | None
+    normal_force_measured_N: float | None
+    temperature_measured_C: float | None
+    flags: str
+
+    def as_dict(self) -> dict[str, Any]:
+        """The entry's fields as the state's JSON keys."""
+        return asdict(self)
+
+
+#: the keys of a state entry that come from a :class:`RunEntry`
+_SUMMARY_KEYS: tuple[str, ...] = tuple(f.name for f in fields(RunEntry))
 
 
 @dataclass(frozen=True)

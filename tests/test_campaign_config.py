@@ -203,6 +203,37 @@ def test_semicolon_manifest_with_decimal_comma(tmp_path: Path) -> None:
     assert read_manifest(path)["a.csv"].fields["normal_force_N"] == 2.5
 
 
+@pytest.mark.parametrize(
+    ("encoding", "sep", "newline"),
+    [("utf-8", ",", "\n"), ("utf-8-sig", ";", "\r\n"), ("utf-16", "\t", "\r\n"),
+     ("cp1252", ";", "\n")],
+)
+def test_manifests_as_spreadsheets_save_them_are_read_like_exports(
+    tmp_path: Path, encoding: str, sep: str, newline: str
+) -> None:
+    """Excel and LibreOffice save CSV as UTF-8 (with BOM), cp1252 or 'Unicode text'
+    (UTF-16, TAB): the manifest goes through the readers' own detection."""
+    rows = [["file", "pin", "disc", "normal_force_N", "temperature_C", "repeat"],
+            ["a.csv", "Ecoflex 00-50 (µ-batch)", "steel", "2,5" if sep == ";" else "2.5",
+             "20", "1"]]
+    path = tmp_path / "m.csv"
+    path.write_bytes(newline.join(sep.join(r) for r in rows).encode(encoding) + b"")
+    row = read_manifest(path)["a.csv"]
+    assert row.fields == {"pin": "Ecoflex 00-50 (µ-batch)", "disc": "steel",
+                          "normal_force_N": 2.5, "temperature_C": 20.0, "repeat": 1}
+
+
+def test_an_empty_or_binary_manifest_is_one_config_error(tmp_path: Path) -> None:
+    empty = tmp_path / "empty.csv"
+    empty.write_bytes(b"")
+    with pytest.raises(ConfigError, match=r"empty\.csv:1: manifest is empty"):
+        read_manifest(empty)
+    binary = tmp_path / "photo.csv"
+    binary.write_bytes(b"\x89PNG\r\n\x1a\n\x00\x00\x00\rIHDR" * 20)
+    with pytest.raises(ConfigError, match=r"photo\.csv: cannot read manifest: binary file"):
+        read_manifest(binary)
+
+
 def test_manifest_missing_column_is_a_config_error(tmp_path: Path) -> None:
     path = tmp_path / "m.csv"
     path.write_text("file,pin,disc,force,temperature_C,repeat\n", encoding="utf-8")

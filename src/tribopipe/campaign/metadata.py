@@ -22,8 +22,9 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from ..errors import CampaignError, ConfigError
+from ..errors import CampaignError, ConfigError, ReadError
 from ..frictionmap.records import RunLabels
+from ..readers.textio import decode, detect_delimiter
 from .patterns import LABEL_FIELDS, REQUIRED_FIELDS, _parse_number
 
 if TYPE_CHECKING:
@@ -45,21 +46,27 @@ def read_manifest(path: str | Path) -> dict[str, ManifestRow]:
     """Read a manifest CSV: one row per file, columns ``file, pin, disc, normal_force_N,
     temperature_C, repeat`` (more allowed, ignored; empty cells mean unknown).
 
-    Comma or semicolon separated (semicolon files may use a decimal comma). Returns
-    ``{file as written: ManifestRow}``. A missing column or duplicate file is a
-    :class:`ConfigError` naming the manifest; a bad value is recorded as that row's
-    ``problem`` (an error for that file only).
+    The encoding and the delimiter are detected as the readers detect them in an export
+    (:mod:`tribopipe.readers.textio`): UTF-8 with or without BOM, UTF-16, cp1252; the
+    header line decides between TAB, semicolon and comma (semicolon files may use a
+    decimal comma). Returns ``{file as written: ManifestRow}``. An unreadable file, a
+    missing column or a duplicate file is a :class:`ConfigError` naming the manifest; a
+    bad value is recorded as that row's ``problem`` (an error for that file only).
     """
     p = Path(path)
     try:
-        text = p.read_text(encoding="utf-8-sig")
-    except UnicodeDecodeError:
-        text = p.read_text(encoding="cp1252")
+        raw = p.read_bytes()
     except OSError as exc:
         raise ConfigError(f"cannot read manifest: {exc.strerror or exc}", path=p) from None
-    first = text.split("\n", 1)[0]
-    delimiter = ";" if first.count(";") > first.count(",") else ","
-    reader = csv.reader(io.StringIO(text), delimiter=delimiter)
+    if not raw:
+        raise ConfigError("manifest is empty", path=p, line=1)
+    try:
+        text = decode(raw, str(p)).text
+    except ReadError as exc:
+        raise ConfigError(f"cannot read manifest: {exc.problem}", path=p,
+                          hint=exc.hint) from None
+    delimiter = detect_delimiter(text.splitlines()[:1]) or ","
+    reader = csv.reader(io.StringIO(text, newline=""), delimiter=delimiter)
     try:
         header = [h.strip() for h in next(reader)]
     except StopIteration:

@@ -20,6 +20,10 @@ import math
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from .errors import MapError
+from .frictionmap import read_map
+from .stats import t975
+
 if TYPE_CHECKING:
     import numpy as np
     import pandas as pd
@@ -60,8 +64,6 @@ def fit_one(pressure_kPa: np.ndarray, mu: np.ndarray) -> dict[str, float]:
     caller checks that. With a perfect fit the intervals collapse to the estimate.
     """
     import numpy as np
-
-    from .stats import t975
 
     x = np.log(np.asarray(pressure_kPa, dtype=float))
     y = np.log(np.asarray(mu, dtype=float))
@@ -148,9 +150,6 @@ def fit_power_law(runs: pd.DataFrame, *, quantity: str = "mu_k") -> pd.DataFrame
 
 def fit_map(map_path: str | Path) -> pd.DataFrame:
     """:func:`fit_power_law` on the runs of the friction map (Parquet) at ``map_path``."""
-    from .errors import MapError
-    from .frictionmap import read_map
-
     runs = read_map(map_path)
     if runs.empty:
         raise MapError(

@@ -31,7 +31,9 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from .errors import ExportError
+from .frictionmap import read_map
 from .numeric import finite_or_none
+from .stats import group_statistics
 
 if TYPE_CHECKING:
     import numpy as np
@@ -422,16 +424,12 @@ def friction_table(
 
 def load_groups(map_path: str | Path) -> pd.DataFrame:
     """Read a friction map (Parquet) and return its group statistics (excluded runs out)."""
-    from .frictionmap import read_map
-
     return groups_of(read_map(map_path), map_path)
 
 
 def groups_of(runs: pd.DataFrame, map_path: str | Path) -> pd.DataFrame:
     """Group statistics of friction-map ``runs`` (excluded runs out); an
     :class:`ExportError` naming ``map_path`` when no run is left."""
-    from .stats import group_statistics
-
     if "excluded" in runs.columns:
         runs = runs[~runs["excluded"].fillna(False).astype(bool)]
     if runs.empty:

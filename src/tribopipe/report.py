@@ -25,8 +25,15 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from . import __version__
+from .campaign import load_campaign
 from .errors import ExportError, MapError
+from .export.plots import find_trace, plot_pair, plot_trace_row, slug
+from .files import write_text_atomic
+from .fit import fit_power_law
+from .frictionmap import read_map
 from .layout import OutputLayout, read_failures
+from .query import pairs
+from .stats import group_statistics, repeatability
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -123,8 +130,6 @@ def run_anchor(measurement_id: str) -> str:
 
 def pair_anchor(pin: str, disc: str) -> str:
     """The HTML id of a pair's plot: ``pair-<pin>--<disc>`` (slugs)."""
-    from .export.plots import slug
-
     return f"pair-{slug(pin)}--{slug(disc)}"
 
 
@@ -152,8 +157,6 @@ def _flag_list(value: Any) -> list[str]:
 
 def _summary(inp: ReportInputs) -> str:
     """The campaign-summary section."""
-    from .stats import repeatability
-
     runs = inp.runs
     excluded = runs["excluded"].fillna(False).astype(bool)
     flagged = runs["flags"].map(lambda f: bool(_flag_list(f)))
@@ -259,9 +262,6 @@ def _fits_table(inp: ReportInputs) -> str:
 
 def _pair_plots(inp: ReportInputs) -> str:
     """The per-pair μ_K(p) plots, embedded as PNG."""
-    from .export.plots import plot_pair
-    from .query import pairs
-
     included = inp.runs[~inp.runs["excluded"].fillna(False).astype(bool)]
     figures = []
     for pin, disc in pairs(included):
@@ -333,8 +333,6 @@ def _failures(inp: ReportInputs) -> str:
 def _runs(inp: ReportInputs) -> str:
     """One collapsible block per run, with its embedded trace plot when found."""
     import pandas as pd
-
-    from .export.plots import find_trace, plot_trace_row
 
     blocks = []
     n_plots = 0
@@ -435,10 +433,6 @@ def report_inputs(
     source: str | None = None,
 ) -> ReportInputs:
     """Read what a report shows from a map and a processed folder (default: the map's)."""
-    from .fit import fit_power_law
-    from .frictionmap import read_map
-    from .stats import group_statistics
-
     runs = read_map(map_path)
     if runs.empty:
         raise MapError("the friction map is empty or absent", path=map_path,
@@ -461,8 +455,6 @@ def report_inputs(
 
 def write_report(output: str | Path, inputs: ReportInputs) -> Path:
     """Write :func:`build_report` to ``output`` (atomically) and return its path."""
-    from .files import write_text_atomic
-
     return write_text_atomic(output, build_report(inputs))
 
 
@@ -482,7 +474,6 @@ def make_report(
     title = None
     source = None
     if config is not None:
-        from .campaign import load_campaign
 
         campaign = load_campaign(config)
         map_path = map_path or campaign.map_path

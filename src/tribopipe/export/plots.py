@@ -27,8 +27,11 @@ from ..figures import (  # noqa: F401 - the per-run plot is importable from here
     plot_trace_row,
     save_figure,
 )
+from ..fit import fit_power_law, power_law
+from ..frictionmap import read_map
 from ..layout import find_trace
 from ..numeric import is_finite
+from ..query import pairs
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -84,8 +87,6 @@ def draw_pair(ax: Any, runs: pd.DataFrame, fits: pd.DataFrame | None) -> None:
     the temperature.
     """
     import numpy as np
-
-    from ..fit import power_law
 
     data = runs.assign(
         _t=runs["temperature_C"].astype(float),
@@ -155,8 +156,6 @@ def plot_pair(
     ``runs`` are friction-map rows (excluded runs are left out); ``fits`` defaults to
     :func:`tribopipe.fit.fit_power_law` of the pair's runs.
     """
-    from ..fit import fit_power_law
-
     sel = _pair_runs(runs, pin, disc)
     if fits is None:
         fits = fit_power_law(sel)
@@ -174,9 +173,6 @@ def plot_pairs(
     runs: pd.DataFrame, out_dir: str | Path, *, fmt: str = "png"
 ) -> list[Path]:
     """One μ_K(p) plot per pair of ``runs`` in ``out_dir`` (``pair_<pin>__<disc>.<fmt>``)."""
-    from ..fit import fit_power_law
-    from ..query import pairs
-
     image_format("x", fmt)
     fits = fit_power_law(runs)
     written = []
@@ -211,8 +207,6 @@ def plot_map_runs(map_path: str | Path, traces_dir: str | Path, out_dir: str | P
 
 def _read_runs(map_path: str | Path) -> pd.DataFrame:
     """The runs of the map at ``map_path``; :class:`ExportError` when it is empty."""
-    from ..frictionmap import read_map
-
     runs = read_map(map_path)
     if runs.empty:
         raise ExportError("the friction map is empty or absent", path=map_path,

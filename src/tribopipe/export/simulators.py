@@ -29,7 +29,8 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from ..errors import ExportError
-from ..query import pairs, select_pair
+from ..frictionmap import read_map
+from ..query import groups_of, pairs, select_pair
 from .fe_decks import abaqus_name, write_abaqus, write_abaqus_decay, write_ansys, write_lsdyna
 from .scenes import write_mujoco, write_pyelastica, write_sofa
 from .simbase import (
@@ -166,9 +167,6 @@ def export_simulator_input(
 def export_from_map(map_path: str | Path, fmt: str, **options: Any) -> str:
     """:func:`export_simulator_input` on the friction map (Parquet) at ``map_path``; every
     pair's slip rate is the median sliding speed of its own runs."""
-    from ..frictionmap import read_map
-    from ..query import groups_of
-
     runs = read_map(map_path)
     groups = groups_of(runs, map_path)
     return export_simulator_input(groups, fmt, source=str(map_path),

@@ -28,6 +28,9 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from ..errors import ExportError
+from ..files import write_text_atomic
+from ..frictionmap import FRICTIONMAP_COLUMNS, read_map
+from ..stats import _group_keys, group_statistics
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -71,8 +74,6 @@ def group_table(
 ) -> pd.DataFrame:
     """The group-statistics table of a map, filtered after the statistics are computed
     (so the pooled repeatability s_r and the r flags always use the whole map)."""
-    from ..stats import group_statistics
-
     return _select(group_statistics(runs, by_speed=by_speed), pin, disc, temperature_C)
 
 
@@ -115,9 +116,6 @@ def frictionmap_table(
     highest repeat of their condition, in map order.
     """
     import pandas as pd
-
-    from ..frictionmap import FRICTIONMAP_COLUMNS
-    from ..stats import _group_keys
 
     included = runs.loc[~runs["excluded"].astype(bool)].reset_index(drop=True)
     included = _select(included, pin, disc, temperature_C)
@@ -326,13 +324,10 @@ def export_table(
 ) -> str:
     """Read the map at ``map_path``, render a table (options of :func:`render_table`) and,
     when ``output`` is given, write it there (UTF-8). Returns the text."""
-    from ..frictionmap import read_map
-
     if not Path(map_path).exists():
         raise ExportError("friction map not found", path=map_path, hint="pass --map PATH")
     text = render_table(read_map(map_path), **options)
     if output is not None:
-        from ..files import write_text_atomic
 
         write_text_atomic(output, text, newline="")
     return text

@@ -10,6 +10,7 @@ from __future__ import annotations
 import zipfile
 
 from ..errors import ReadError
+from .rheocompass import looks_like
 
 XLSX_MAGIC = b"PK\x03\x04"
 
@@ -26,8 +27,6 @@ def workbook_rows(path: str) -> list[tuple[int, list[str]]]:
     """The rows of the first sheet whose first column holds a RheoCompass label, as
     ``(1-based row number, text cells)``."""
     import openpyxl
-
-    from .rheocompass import looks_like
 
     try:
         workbook = openpyxl.load_workbook(path, read_only=True, data_only=True)

@@ -27,6 +27,7 @@ from typing import TYPE_CHECKING, Any
 from . import __version__
 from .campaign import load_campaign
 from .errors import ExportError, MapError
+from .export.explorer import explorer_data, explorer_fragment, explorer_style
 from .export.plots import find_trace, plot_pair, plot_trace_row, slug
 from .files import write_text_atomic
 from .fit import fit_power_law
@@ -382,8 +383,6 @@ def _runs(inp: ReportInputs) -> str:
 def _explorer(inp: ReportInputs) -> str:
     """The friction-map explorer of :mod:`tribopipe.export.explorer` for the report's runs,
     inline (its style, data and script travel with it, so the page stays one file)."""
-    from .export.explorer import explorer_data, explorer_fragment, explorer_style
-
     data = explorer_data(inp.runs, groups=inp.groups, fits=inp.fits, title=inp.title,
                          source=inp.source)
     return (

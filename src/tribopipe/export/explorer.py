@@ -41,6 +41,12 @@ from typing import TYPE_CHECKING, Any
 
 from .. import __version__
 from ..errors import ExportError
+from ..files import write_text_atomic
+from ..fit import fit_power_law, power_law
+from ..frictionmap import read_map
+from ..query import pair_points, pairs, select_pair
+from ..stats import group_statistics
+from .fe_decks import CONDITION_FORMATS, condition_header
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -176,8 +182,6 @@ def _fits(pair_fits: pd.DataFrame) -> list[dict[str, Any]]:
     pressure range (log-spaced, :data:`FIT_CURVE_POINTS` points)."""
     import numpy as np
 
-    from ..fit import power_law
-
     out = []
     for f in pair_fits.to_dict(orient="records"):
         row = {name: _plain(f[name]) for name in FIT_FIELDS}
@@ -213,11 +217,6 @@ def explorer_data(
     temperatures in °C. Raises :class:`ExportError` when no run is left. Inputs are not
     modified.
     """
-    from ..fit import fit_power_law
-    from ..query import pair_points, pairs, select_pair
-    from ..stats import group_statistics
-    from .fe_decks import CONDITION_FORMATS, condition_header
-
     included = runs
     if "excluded" in runs.columns:
         included = runs[~runs["excluded"].fillna(False).astype(bool)]
@@ -398,8 +397,6 @@ def read_embedded_data(html: str) -> dict[str, Any]:
 
 def build_explorer(map_path: str | Path, *, title: str | None = None) -> str:
     """The explorer page (HTML text) of the friction map (Parquet) at ``map_path``."""
-    from ..frictionmap import read_map
-
     runs = read_map(map_path)
     if runs.empty:
         raise ExportError(
@@ -415,6 +412,4 @@ def build_explorer(map_path: str | Path, *, title: str | None = None) -> str:
 
 def write_explorer(map_path: str | Path, output: str | Path, *, title: str | None = None) -> Path:
     """Write the explorer page of the map at ``map_path`` to ``output`` (atomically)."""
-    from ..files import write_text_atomic
-
     return write_text_atomic(output, build_explorer(map_path, title=title))

@@ -1,9 +1,11 @@
 """Shared test fixtures.
 
 ``shared_dir`` points at the project's read-only real-world material (``../shared``): the
-published friction map and real instrument exports. It exists in CI and on the developers'
-machines, not on a user's clone, so tests that need it skip with a reason when it is absent.
-Files whose licence allows it are also copied into ``tests/data/`` (see its README).
+founding paper's ``FrictionMap.mat`` and real instrument exports that may not be copied. It
+exists in CI and on the developers' machines, not on a user's clone, so tests that need it
+skip with a reason when it is absent. Files whose licence allows it are copied into
+``tests/data/`` (see its README); the published map's CSV ships with the package and is
+read from there (``published_map.PUBLISHED_CSV``).
 """
 
 from __future__ import annotations

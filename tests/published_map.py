@@ -1,7 +1,10 @@
-"""Test inputs from the founding paper's published friction map (../shared/reference).
+"""Test inputs from the founding paper's published friction map.
 
-The published CSV holds one μ_K per run (no μ_S). These helpers import it with the real
-friction-map code into a real Parquet map and compute the real group statistics.
+The published CSV holds one μ_K per run (no μ_S). tribopipe ships it
+(``src/tribopipe/data/frictionmap_published.csv``, :data:`PUBLISHED_CSV`), so these tests
+run on every clone; ``test_frictionmap`` checks that the shipped copy is byte for byte the
+reference file in ``../shared/reference`` where that exists. These helpers import it with
+the real friction-map code into a real Parquet map and compute the real group statistics.
 """
 
 from __future__ import annotations
@@ -10,8 +13,17 @@ from pathlib import Path
 
 import pandas as pd
 
-from tribopipe.frictionmap import import_records, import_table, read_map, records_frame
+from tribopipe.frictionmap import (
+    import_records,
+    import_table,
+    published_csv_path,
+    read_map,
+    records_frame,
+)
 from tribopipe.stats import group_statistics
+
+#: the published map as tribopipe ships it
+PUBLISHED_CSV: Path = published_csv_path()
 
 
 def published_runs(csv_path: Path) -> pd.DataFrame:

@@ -13,8 +13,7 @@ import pandas as pd
 import pytest
 from click.testing import CliRunner
 
-from conftest import shared_file
-from published_map import group_table, published_runs, write_published_map
+from published_map import PUBLISHED_CSV, group_table, published_runs, write_published_map
 from sim_files import (
     lsdyna_contact,
     mujoco_pair,
@@ -31,13 +30,13 @@ PIN, DISC = "Dragonskin 30", "steel"
 
 @pytest.fixture(scope="module")
 def map_path(tmp_path_factory) -> Path:
-    csv = shared_file("reference", "frictionmap_published.csv")
-    return write_published_map(csv, tmp_path_factory.mktemp("map") / "friction_map.parquet")
+    return write_published_map(PUBLISHED_CSV,
+                               tmp_path_factory.mktemp("map") / "friction_map.parquet")
 
 
 @pytest.fixture(scope="module")
 def groups() -> pd.DataFrame:
-    return group_table(published_runs(shared_file("reference", "frictionmap_published.csv")))
+    return group_table(published_runs(PUBLISHED_CSV))
 
 
 def _run(*args: str):
@@ -290,7 +289,7 @@ def test_abaqus_slip_rate_per_pair_from_a_real_map(tmp_path):
     """Steel runs recorded at three times the speed: only the steel table says so."""
     from tribopipe.frictionmap import append_records, import_records
 
-    records = import_records(shared_file("reference", "frictionmap_published.csv"))
+    records = import_records(PUBLISHED_CSV)
     for record in records:
         if record["disc"] == DISC:
             record["sliding_speed_mm_s"] = 0.021

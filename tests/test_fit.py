@@ -11,8 +11,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from conftest import shared_file
-from published_map import published_runs
+from published_map import PUBLISHED_CSV, published_runs
 from tribopipe.fit import FIT_COLUMNS, fit_one, fit_power_law, power_law
 
 PRESSURES = np.array([11.79, 35.37, 58.95, 82.52, 106.1])
@@ -100,7 +99,7 @@ def test_one_row_per_pair_and_temperature_with_all_columns():
 
 
 def test_published_map_friction_falls_with_pressure():
-    runs = published_runs(shared_file("reference", "frictionmap_published.csv"))
+    runs = published_runs(PUBLISHED_CSV)
     fit = fit_power_law(runs)
     assert len(fit) == 17  # pair × temperature sets in the published map
     assert (fit["note"] == "").all()

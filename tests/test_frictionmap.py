@@ -334,6 +334,8 @@ def test_excluding_an_unknown_id_names_it(tmp_path):
 
 
 def test_the_shipped_published_csv_is_the_reference_file_byte_for_byte():
+    """Every other test reads the shipped copy; this one (skipped without ../shared) ties
+    it to the reference file."""
     reference = shared_file("reference", "frictionmap_published.csv")
     assert PUBLISHED_CSV.read_bytes() == reference.read_bytes()
 

@@ -15,7 +15,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from conftest import shared_file
+from published_map import PUBLISHED_CSV
 from tribopipe.config import InstrumentConfig
 from tribopipe.physics import (
     FOUNDING_FRICTION_RADIUS_MM,
@@ -56,8 +56,7 @@ def test_pressure_of_an_array_and_of_one_pin() -> None:
 
 
 def test_published_map_pressures_follow_from_its_forces() -> None:
-    path = shared_file("reference", "frictionmap_published.csv")
-    with path.open(encoding="utf-8") as fh:
+    with PUBLISHED_CSV.open(encoding="utf-8") as fh:
         rows = list(csv.DictReader(fh))
     assert len(rows) == 169
     for row in rows:

@@ -14,8 +14,7 @@ import pandas as pd
 import pytest
 from click.testing import CliRunner
 
-from conftest import shared_file
-from published_map import published_runs, write_published_map
+from published_map import PUBLISHED_CSV, published_runs, write_published_map
 from reduced_runs import RUNS, make_processed
 from tribopipe.cli import main
 from tribopipe.config import load_settings
@@ -61,7 +60,7 @@ def processed(tmp_path_factory) -> tuple[Path, Path]:
 
 @pytest.fixture(scope="module")
 def published() -> pd.DataFrame:
-    return published_runs(shared_file("reference", "frictionmap_published.csv"))
+    return published_runs(PUBLISHED_CSV)
 
 
 def test_trace_plot_from_a_reduction_result(tmp_path):
@@ -161,7 +160,7 @@ def test_plot_commands(processed, tmp_path):
 
 @pytest.mark.slow
 def test_plot_pairs_in_a_real_process_and_no_matplotlib_at_import(tmp_path):
-    map_path = write_published_map(shared_file("reference", "frictionmap_published.csv"),
+    map_path = write_published_map(PUBLISHED_CSV,
                                    tmp_path / "map.parquet")
     proc = subprocess.run(
         [sys.executable, "-m", "tribopipe", "plot", "pairs", "--map", str(map_path),

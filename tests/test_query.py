@@ -11,15 +11,14 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from conftest import shared_file
-from published_map import group_table, published_runs
+from published_map import PUBLISHED_CSV, group_table, published_runs
 from tribopipe.errors import ExportError, TribopipeError
 from tribopipe.query import friction_table, interpolation_weights, query, select_pair
 
 
 @pytest.fixture(scope="module")
 def groups() -> pd.DataFrame:
-    runs = published_runs(shared_file("reference", "frictionmap_published.csv"))
+    runs = published_runs(PUBLISHED_CSV)
     return group_table(runs)
 
 

@@ -12,8 +12,7 @@ from pathlib import Path
 import pytest
 from click.testing import CliRunner
 
-from conftest import shared_file
-from published_map import write_published_map
+from published_map import PUBLISHED_CSV, write_published_map
 from reduced_runs import RUNS, make_processed
 from tribopipe.campaign import load_campaign, run_campaign
 from tribopipe.cli import main
@@ -168,7 +167,7 @@ def test_excluded_run_is_shown_with_its_reason(processed, tmp_path):
 
 
 def test_published_map_report_without_traces_or_failures(tmp_path):
-    map_path = write_published_map(shared_file("reference", "frictionmap_published.csv"),
+    map_path = write_published_map(PUBLISHED_CSV,
                                    tmp_path / "friction_map.parquet")
     out = make_report(map_path=map_path)
     assert out == tmp_path / "report.html"

@@ -10,8 +10,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from conftest import shared_file
-from published_map import group_table, published_runs
+from published_map import PUBLISHED_CSV, group_table, published_runs
 from sim_files import (
     lsdyna_contact,
     mujoco_pair,
@@ -47,7 +46,7 @@ PIN, DISC = "Dragonskin 30", "steel"
 
 @pytest.fixture(scope="module")
 def runs() -> pd.DataFrame:
-    return published_runs(shared_file("reference", "frictionmap_published.csv"))
+    return published_runs(PUBLISHED_CSV)
 
 
 @pytest.fixture(scope="module")

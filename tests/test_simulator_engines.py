@@ -15,8 +15,7 @@ import runpy
 import pandas as pd
 import pytest
 
-from conftest import shared_file
-from published_map import group_table, published_runs
+from published_map import PUBLISHED_CSV, group_table, published_runs
 from sim_files import pyelastica_values
 from tribopipe.export.simulators import write_mujoco, write_pyelastica
 from tribopipe.query import query
@@ -28,7 +27,7 @@ HOSTILE = "Evil\n*HEADING\r\n'\"</pair><!-- -->--$ import os\x1b\u2028end"
 @pytest.fixture(scope="module")
 def groups() -> pd.DataFrame:
     """The published groups with a μ_S 1.4 × μ_K, and one pin renamed to a hostile name."""
-    g = group_table(published_runs(shared_file("reference", "frictionmap_published.csv")))
+    g = group_table(published_runs(PUBLISHED_CSV))
     g["mu_s_n"] = g["mu_k_n"]
     g["mu_s_mean"] = g["mu_k_mean"] * 1.4
     g["mu_s_ci95_low"] = g["mu_s_mean"] - 0.02

@@ -1,0 +1,323 @@
+"""The shape of the house, read from the source with ``ast``: data flows one way.
+
+Every ``import`` in ``src/tribopipe`` counts, at any depth: at module level, inside
+functions and in ``if TYPE_CHECKING:`` blocks (a type-only import is still a dependency;
+a cycle through one says a type lives in the wrong room). Importing ``a.b.c`` also runs the
+packages ``a.b`` above it, so that counts as depending on them too.
+
+The checks: no import cycle; no module imports one from a higher layer of :data:`LAYERS`;
+click only under ``tribopipe.cli``, whose modules import only click and the standard
+library at module level (so ``tribopipe --help`` stays light); no library module imports
+the package's own modules inside a function (that is how cycles hide); no module over
+:data:`MAX_LINES` lines.
+"""
+
+from __future__ import annotations
+
+import ast
+import sys
+from collections.abc import Iterator
+from dataclasses import dataclass
+from pathlib import Path
+
+import pytest
+
+SRC = Path(__file__).resolve().parents[1] / "src"
+PACKAGE = "tribopipe"
+MAX_LINES = 700
+
+#: The import layers, bottom to top: a module may import its own layer and those below,
+#: never one above. A module belongs to the layer of the longest name that prefixes it.
+LAYERS: tuple[tuple[str, ...], ...] = (
+    # the base: errors, files on disk, numbers from outside, units, the output folder
+    ("tribopipe", "tribopipe.errors", "tribopipe.files", "tribopipe.numeric",
+     "tribopipe.units", "tribopipe.layout"),
+    ("tribopipe.measurement",),
+    ("tribopipe.physics",),
+    ("tribopipe.config",),
+    # raw exports in (readers) and out (synthetic test exports)
+    ("tribopipe.readers", "tribopipe.synthetic"),
+    ("tribopipe.intervals",),
+    ("tribopipe.reduce",),
+    ("tribopipe.figures",),
+    # pure statistics over map rows: below the map, whose printed summary uses them
+    ("tribopipe.stats",),
+    ("tribopipe.frictionmap",),
+    ("tribopipe.pipeline",),
+    ("tribopipe.campaign",),
+    ("tribopipe.query", "tribopipe.fit"),
+    ("tribopipe.export",),
+    ("tribopipe.report",),
+    ("tribopipe.cli", "tribopipe.__main__"),
+)
+
+#: own-module imports a library module may make inside a function, with the reason
+#: (only to keep a heavy third-party package off the ``tribopipe --help`` path)
+LAZY_IMPORTS_ALLOWED: dict[tuple[str, str], str] = {}
+
+
+@dataclass(frozen=True)
+class Import:
+    """One import of one of the package's modules."""
+
+    importer: str
+    target: str
+    line: int
+    in_function: bool
+    type_only: bool
+
+
+def module_name(path: Path) -> str:
+    parts = list(path.relative_to(SRC).with_suffix("").parts)
+    if parts[-1] == "__init__":
+        parts = parts[:-1]
+    return ".".join(parts)
+
+
+MODULES: dict[str, Path] = {module_name(p): p for p in sorted((SRC / PACKAGE).rglob("*.py"))}
+
+
+def is_package(name: str) -> bool:
+    return MODULES[name].name == "__init__.py"
+
+
+def _is_type_checking(node: ast.If) -> bool:
+    test = node.test
+    return (isinstance(test, ast.Name) and test.id == "TYPE_CHECKING") or (
+        isinstance(test, ast.Attribute) and test.attr == "TYPE_CHECKING")
+
+
+def _walk(node: ast.AST, in_function: bool = False,
+          type_only: bool = False) -> Iterator[tuple[ast.AST, bool, bool]]:
+    for child in ast.iter_child_nodes(node):
+        yield child, in_function, type_only
+        yield from _walk(
+            child,
+            in_function or isinstance(child, ast.FunctionDef | ast.AsyncFunctionDef | ast.Lambda),
+            type_only or (isinstance(child, ast.If) and _is_type_checking(child)),
+        )
+
+
+def _resolve(importer: str, node: ast.ImportFrom) -> str:
+    if not node.level:
+        return node.module or ""
+    base = importer.split(".")
+    if not is_package(importer):
+        base = base[:-1]
+    base = base[: len(base) - (node.level - 1)]
+    return ".".join(base + ([node.module] if node.module else []))
+
+
+def imports_of(name: str) -> list[Import]:
+    """Every import of a package module by module ``name`` (own ancestors excluded)."""
+    tree = ast.parse(MODULES[name].read_text(encoding="utf-8"))
+    found: list[Import] = []
+    for node, in_function, type_only in _walk(tree):
+        targets: list[str] = []
+        if isinstance(node, ast.Import):
+            targets = [a.name for a in node.names]
+        elif isinstance(node, ast.ImportFrom):
+            base = _resolve(name, node)
+            for alias in node.names:
+                sub = f"{base}.{alias.name}"
+                targets.append(sub if sub in MODULES else base)
+        for target in targets:
+            if target != PACKAGE and not target.startswith(PACKAGE + "."):
+                continue
+            # importing a.b.c runs a and a.b first: depending on them, unless they are
+            # the importer's own packages (already running when it is imported)
+            parts = target.split(".")
+            for k in range(1, len(parts) + 1):
+                dep = ".".join(parts[:k])
+                if dep in MODULES and dep != name and not name.startswith(dep + "."):
+                    found.append(Import(name, dep, node.lineno, in_function, type_only))
+    return list(dict.fromkeys(found))  # one per target and line
+
+
+GRAPH: dict[str, list[Import]] = {name: imports_of(name) for name in MODULES}
+
+
+def layer_of(name: str) -> int:
+    best, best_len = None, -1
+    for index, members in enumerate(LAYERS):
+        for prefix in members:
+            if (name == prefix or name.startswith(prefix + ".")) and len(prefix) > best_len:
+                best, best_len = index, len(prefix)
+    assert best is not None, f"{name} is in no layer of LAYERS: add it"
+    return best
+
+
+def cycles() -> list[list[str]]:
+    """The strongly connected components with more than one module (Tarjan)."""
+    index: dict[str, int] = {}
+    low: dict[str, int] = {}
+    stack: list[str] = []
+    on_stack: set[str] = set()
+    found: list[list[str]] = []
+
+    def visit(v: str) -> None:
+        index[v] = low[v] = len(index)
+        stack.append(v)
+        on_stack.add(v)
+        for imp in GRAPH[v]:
+            w = imp.target
+            if w not in index:
+                visit(w)
+                low[v] = min(low[v], low[w])
+            elif w in on_stack:
+                low[v] = min(low[v], index[w])
+        if low[v] == index[v]:
+            component = []
+            while True:
+                w = stack.pop()
+                on_stack.discard(w)
+                component.append(w)
+                if w == v:
+                    break
+            if len(component) > 1:
+                found.append(sorted(component))
+
+    for v in sorted(GRAPH):
+        if v not in index:
+            visit(v)
+    return found
+
+
+def _where(imp: Import) -> str:
+    kind = " (type-only)" if imp.type_only else " (in a function)" if imp.in_function else ""
+    where = f"{MODULES[imp.importer].relative_to(SRC)}:{imp.line}"
+    return f"{where}: {imp.importer} -> {imp.target}{kind}"
+
+
+# ----------------------------------------------------------------------------- the checks
+
+
+def test_the_graph_sees_every_kind_of_import() -> None:
+    """The checks below are only as good as this walk: it must see imports in functions,
+    under TYPE_CHECKING, relative and absolute, of packages and of their modules."""
+    pipeline = {(i.target, i.in_function, i.type_only) for i in GRAPH["tribopipe.pipeline"]}
+    assert ("tribopipe.reduce", False, False) in pipeline
+    assert ("tribopipe.config", False, True) in pipeline  # under TYPE_CHECKING
+    assert ("tribopipe.frictionmap.records", False, False) in pipeline
+    assert ("tribopipe.frictionmap", False, False) in pipeline  # its package runs first
+    readers = {i.target for i in GRAPH["tribopipe.readers"]}
+    assert {"tribopipe.readers.plaincsv", "tribopipe.readers.textio"} <= readers
+    cli_reduce = {(i.target, i.in_function) for i in GRAPH["tribopipe.cli.reduce"]}
+    assert ("tribopipe.pipeline", True) in cli_reduce
+    # a package's own modules do not depend on the package they are in
+    assert "tribopipe.frictionmap" not in {i.target for i in GRAPH["tribopipe.frictionmap.store"]}
+
+
+def test_there_is_no_import_cycle() -> None:
+    found = cycles()
+    details = []
+    for component in found:
+        inside = set(component)
+        details += [_where(i) for m in component for i in GRAPH[m] if i.target in inside]
+    assert not found, "import cycles:\n" + "\n".join(details)
+
+
+def test_no_module_imports_from_a_higher_layer() -> None:
+    upward = [
+        f"{_where(i)}: layer {layer_of(i.importer)} imports layer {layer_of(i.target)}"
+        for imports in GRAPH.values() for i in imports
+        if layer_of(i.target) > layer_of(i.importer)
+    ]
+    assert not upward, "imports against the data flow:\n" + "\n".join(upward)
+
+
+def test_every_module_has_a_layer() -> None:
+    for name in MODULES:
+        layer_of(name)
+
+
+def _third_party_imports(name: str) -> Iterator[tuple[str, int, bool, bool]]:
+    tree = ast.parse(MODULES[name].read_text(encoding="utf-8"))
+    for node, in_function, type_only in _walk(tree):
+        if isinstance(node, ast.Import):
+            for alias in node.names:
+                yield alias.name.split(".")[0], node.lineno, in_function, type_only
+        elif isinstance(node, ast.ImportFrom) and not node.level and node.module:
+            yield node.module.split(".")[0], node.lineno, in_function, type_only
+
+
+def test_only_the_cli_imports_click() -> None:
+    offenders = [
+        f"{MODULES[name].relative_to(SRC)}:{line}"
+        for name in MODULES if not (name == "tribopipe.cli" or name.startswith("tribopipe.cli."))
+        for top, line, _, _ in _third_party_imports(name) if top == "click"
+    ]
+    assert not offenders, "library modules importing click: " + ", ".join(offenders)
+
+
+def test_cli_modules_import_only_click_and_the_standard_library_at_module_level() -> None:
+    """What ``tribopipe --help`` loads: the CLI modules' module-level imports."""
+    allowed = set(sys.stdlib_module_names) | {"click", "__future__"}
+    offenders = []
+    for name in MODULES:
+        if not name.startswith("tribopipe.cli"):
+            continue
+        for top, line, in_function, type_only in _third_party_imports(name):
+            if not in_function and not type_only and top not in allowed:
+                offenders.append(f"{MODULES[name].relative_to(SRC)}:{line}: {top}")
+        for imp in GRAPH[name]:
+            light = imp.target == PACKAGE or imp.target.startswith("tribopipe.cli")
+            if not imp.in_function and not imp.type_only and not light:
+                offenders.append(_where(imp))
+    assert not offenders, "heavy imports on the --help path:\n" + "\n".join(offenders)
+
+
+def test_library_modules_import_their_own_package_at_the_top() -> None:
+    """An import inside a function is how a cycle hides; the CLI's are the exception
+    (they keep numpy, pandas and friends off the --help path)."""
+    lazy = [
+        _where(i) for imports in GRAPH.values() for i in imports
+        if i.in_function and not i.importer.startswith("tribopipe.cli")
+        and (i.importer, i.target) not in LAZY_IMPORTS_ALLOWED
+    ]
+    assert not lazy, "own-module imports inside library functions:\n" + "\n".join(lazy)
+
+
+def test_no_module_is_over_700_lines() -> None:
+    long = []
+    for path in MODULES.values():
+        n_lines = len(path.read_text(encoding="utf-8").splitlines())
+        if n_lines > MAX_LINES:
+            long.append(f"{path.relative_to(SRC)}: {n_lines} lines")
+    assert not long, f"modules over {MAX_LINES} lines (each probably holds two concepts): " \
+        + ", ".join(long)
+
+
+def test_the_checks_catch_what_they_are_for(tmp_path: Path) -> None:
+    """Each rule fails on a small house built to break it (so a pass above means something)."""
+    global MODULES, GRAPH, SRC
+    saved = MODULES, GRAPH, SRC
+    pkg = tmp_path / "tribopipe"
+    (pkg / "cli").mkdir(parents=True)
+    (pkg / "__init__.py").write_text("")
+    (pkg / "errors.py").write_text("")
+    (pkg / "config.py").write_text("from typing import TYPE_CHECKING\n"
+                                   "if TYPE_CHECKING:\n    from .reduce import X\n")
+    (pkg / "reduce.py").write_text("import click\nfrom .config import Y\n"
+                                   "def f():\n    from .report import Z\n")
+    (pkg / "report.py").write_text("x = 1\n" * (MAX_LINES + 1))
+    (pkg / "cli" / "__init__.py").write_text("import numpy\nfrom ..report import W\n")
+    try:
+        SRC = tmp_path
+        MODULES = {module_name(p): p for p in sorted(pkg.rglob("*.py"))}
+        GRAPH = {name: imports_of(name) for name in MODULES}
+        assert cycles() == [["tribopipe.config", "tribopipe.reduce"]]
+        with pytest.raises(AssertionError, match=r"config.py:3: .*\(type-only\)"):
+            test_there_is_no_import_cycle()
+        with pytest.raises(AssertionError, match="layer 6 imports layer 14"):
+            test_no_module_imports_from_a_higher_layer()
+        with pytest.raises(AssertionError, match=r"reduce\.py:1"):
+            test_only_the_cli_imports_click()
+        with pytest.raises(AssertionError, match=r"numpy(.|\n)*cli -> tribopipe\.report"):
+            test_cli_modules_import_only_click_and_the_standard_library_at_module_level()
+        with pytest.raises(AssertionError, match=r"reduce -> tribopipe\.report \(in a"):
+            test_library_modules_import_their_own_package_at_the_top()
+        with pytest.raises(AssertionError, match=rf"report\.py: {MAX_LINES + 1} lines"):
+            test_no_module_is_over_700_lines()
+    finally:
+        MODULES, GRAPH, SRC = saved

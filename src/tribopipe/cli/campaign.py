@@ -21,6 +21,7 @@ def _open(target: str, options: dict[str, Any]) -> Any:
     from pathlib import Path
 
     from ..campaign import folder_campaign, load_campaign
+    from ..layout import DEFAULT_OUTPUT_DIR
 
     if Path(target).is_dir():
         campaign = folder_campaign(
@@ -28,7 +29,7 @@ def _open(target: str, options: dict[str, Any]) -> Any:
             manifest=options.get("manifest"),
             filename_pattern=options.get("filename_pattern"),
             map_path=options.get("map_path"),
-            output_dir=options.get("output_dir") or "processed",
+            output_dir=options.get("output_dir") or DEFAULT_OUTPUT_DIR,
             glob=options.get("glob") or "*.csv",
             instrument=options.get("config_path"),
         )

@@ -183,7 +183,7 @@ def test_append_then_read_gives_the_same_rows_and_schema_metadata(tmp_path):
     runs = fm.read_map(path)
     pd.testing.assert_frame_equal(runs, fm.records_frame(records))
     info = pq.read_schema(path).metadata[fm.META_KEY]
-    assert b'"schema_version": 1' in info and b'"unit": "kPa"' in info
+    assert f'"schema_version": {fm.SCHEMA_VERSION}'.encode() in info and b'"unit": "kPa"' in info
     meta = fm.map_metadata(path)
     assert meta["n_runs"] == 3 and meta["sources"] == ["reduced"]
     assert meta["tribopipe_version"] == __version__
@@ -577,3 +577,38 @@ def test_fold_reports_each_id_once_in_first_seen_order_when_records_repeat():
     _, kept = fm.fold_records(runs, [a2, a, a2], replace=False)
     assert kept.conflicting_ids == (a["measurement_id"],) and kept.unchanged_ids == (
         a["measurement_id"],)
+
+
+# --------------------------------------------------------------------------- schema versions
+
+
+def test_a_version_1_map_written_by_the_old_code_still_reads_and_upgrades_on_write(tmp_path):
+    # tests/data/friction_map_v1.parquet was written by tribopipe at commit 064bf4b
+    # (scripts/make_v1_map.py): schema version 1, no `lab` column
+    old = Path(__file__).parent / "data" / "friction_map_v1.parquet"
+    assert fm.map_metadata(old)["schema_version"] == 1
+    assert "lab" not in pq.read_schema(old).names
+    runs = fm.read_map(old)
+    assert list(runs.columns) == list(fm.RUN_COLUMNS) and len(runs) == 171
+    assert runs["lab"].isna().all()
+    assert int(runs["excluded"].sum()) == 1
+    assert (runs["source"] == fm.SOURCE_PUBLISHED).sum() == 169
+    copy = tmp_path / "friction_map.parquet"
+    copy.write_bytes(old.read_bytes())
+    # the same published rows imported again by the new code (which names their lab) are
+    # the same runs: `lab` is provenance, not content
+    assert fm.import_table(copy).unchanged == 169
+    report = fm.append_records(copy, [run_record(1)])
+    assert report.added == 1
+    assert fm.map_metadata(copy)["schema_version"] == fm.SCHEMA_VERSION
+    upgraded = fm.read_map(copy)
+    pd.testing.assert_frame_equal(upgraded.iloc[:171], runs)
+
+
+def test_a_record_built_without_the_columns_added_later_reads_them_as_missing():
+    rec = run_record(1)
+    rec.pop("lab")
+    frame = fm.records_frame([rec])
+    assert frame["lab"].isna().all()
+    with pytest.raises(MapError, match="lacks column"):
+        fm.records_frame([{k: v for k, v in rec.items() if k != "mu_k"}])

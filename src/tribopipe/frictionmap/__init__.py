@@ -33,7 +33,9 @@ Guarantees of the store:
 from __future__ import annotations
 
 from .published import (
+    FOUNDING_PAPER,
     FRICTIONMAP_COLUMNS,
+    PUBLISHED_LAB,
     PUBLISHED_SLIDING_SPEED_MM_S,
     import_records,
     import_table,
@@ -57,6 +59,7 @@ from .schema import (
     PROVENANCE_COLUMNS,
     RUN_COLUMNS,
     SCHEMA_NAME,
+    ADDED_IN_VERSION,
     SCHEMA_VERSION,
     SOURCE_PUBLISHED,
     SOURCE_REDUCED,
@@ -87,6 +90,7 @@ __all__ = [
     "META_KEY",
     "SCHEMA_NAME",
     "SCHEMA_VERSION",
+    "ADDED_IN_VERSION",
     "SOURCE_REDUCED",
     "SOURCE_PUBLISHED",
     "RUN_COLUMNS",
@@ -119,6 +123,8 @@ __all__ = [
     "include_runs",
     "PUBLISHED_SLIDING_SPEED_MM_S",
     "FRICTIONMAP_COLUMNS",
+    "FOUNDING_PAPER",
+    "PUBLISHED_LAB",
     "read_frictionmap_table",
     "published_csv_path",
     "import_records",

@@ -26,6 +26,17 @@ if TYPE_CHECKING:
 
 #: The founding paper's fixed sliding speed [mm/s] (recorded for published rows).
 PUBLISHED_SLIDING_SPEED_MM_S = FOUNDING_SLIDING_SPEED_MM_S
+#: ``lab`` of the published rows: the founding paper's authors measured them.
+PUBLISHED_LAB = "Berthold et al. (founding paper)"
+#: The founding paper, cited wherever its rows are published again.
+FOUNDING_PAPER = {
+    # (family name, given names as published)
+    "authors": (("Berthold", "R."), ("Burgner-Kahrs", "J."), ("Wangenheim", "M."),
+                ("Kahms", "S.")),
+    "title": "Investigating frictional contact behavior for soft material robot simulations",
+    "year": 2023,
+    "data": "https://github.com/RebeccaBerthold/FrictionMap",
+}
 #: The published map's 7-column schema (RebeccaBerthold/FrictionMap).
 FRICTIONMAP_COLUMNS: tuple[str, ...] = (
     "pin",
@@ -179,6 +190,7 @@ def import_records(
             {
                 "measurement_id": imported_id(source, pin, disc, force, temperature, repeat),
                 "source": source,
+                "lab": PUBLISHED_LAB if published else None,
                 "pin": pin,
                 "disc": disc,
                 "normal_force_N": force,

@@ -182,6 +182,7 @@ def make_record(
     return {
         "measurement_id": measurement_id(file_hash, meta),
         "source": SOURCE_REDUCED,
+        "lab": None,
         "pin": labels.pin,
         "disc": labels.disc,
         "normal_force_N": force,

@@ -21,7 +21,7 @@ if TYPE_CHECKING:
 #: Parquet key-value metadata key holding the schema and provenance (JSON).
 META_KEY = b"tribopipe.frictionmap"
 SCHEMA_NAME = "tribopipe.frictionmap"
-SCHEMA_VERSION = 1
+SCHEMA_VERSION = 2
 
 #: ``source`` of runs reduced by tribopipe (imported rows name their origin instead).
 SOURCE_REDUCED = "reduced"
@@ -31,6 +31,7 @@ SOURCE_PUBLISHED = "published:Berthold2023"
 _SCHEMA: tuple[tuple[str, str, str, str], ...] = (
     ("measurement_id", "str", "", "hash of the raw file content + interval (or import origin)"),
     ("source", "str", "", "'reduced' or the origin of an imported row"),
+    ("lab", "str", "", "laboratory that measured the run (missing: the map's own lab)"),
     ("pin", "str", "", "pin material"),
     ("disc", "str", "", "disc material"),
     ("normal_force_N", "float", "N", "nominal total normal force"),
@@ -64,11 +65,16 @@ _SCHEMA: tuple[tuple[str, str, str, str], ...] = (
 )
 
 RUN_COLUMNS: tuple[str, ...] = tuple(name for name, *_ in _SCHEMA)
+#: Columns added after schema version 1, with the version that added them: a map written
+#: before that version lacks them and reads with them missing, and a record built by older
+#: code may leave them out.
+ADDED_IN_VERSION: dict[str, int] = {"lab": 2}
 _KIND: dict[str, str] = {name: kind for name, kind, *_ in _SCHEMA}
 #: Columns that say where a row came from, not what was measured: two rows with the same
 #: id that differ only here are the same run (a renamed file, a later import).
 PROVENANCE_COLUMNS: frozenset[str] = frozenset(
-    {"source_file", "file_hash", "tribopipe_version", "reduced_at", "excluded", "exclusion_reason"}
+    {"lab", "source_file", "file_hash", "tribopipe_version", "reduced_at", "excluded",
+     "exclusion_reason"}
 )
 _CONTENT_COLUMNS: tuple[str, ...] = tuple(c for c in RUN_COLUMNS if c not in PROVENANCE_COLUMNS)
 
@@ -96,7 +102,8 @@ def _missing(value: Any) -> bool:
 def records_frame(records: Sequence[Mapping[str, Any]], *, where: str = "record") -> pd.DataFrame:
     """Validate run records and return them as a map DataFrame (schema dtypes, in order).
 
-    Every record needs every column of :data:`RUN_COLUMNS`; ``measurement_id``, ``source``,
+    Every record needs every column of :data:`RUN_COLUMNS` (those of
+    :data:`ADDED_IN_VERSION` may be left out: missing); ``measurement_id``, ``source``,
     ``pin`` and ``disc`` must be non-empty text, ``mu_k`` finite, ``mu_s`` finite unless
     the row was imported (``source`` other than ``'reduced'``). Raises :class:`MapError`
     naming the record and column otherwise; nothing is written on error.
@@ -105,7 +112,7 @@ def records_frame(records: Sequence[Mapping[str, Any]], *, where: str = "record"
 
     columns: dict[str, Any] = {}
     for i, rec in enumerate(records):
-        absent = [c for c in RUN_COLUMNS if c not in rec]
+        absent = [c for c in RUN_COLUMNS if c not in rec and c not in ADDED_IN_VERSION]
         if absent:
             raise MapError(
                 f"{where} {i + 1} lacks column(s) {', '.join(absent)}",
@@ -113,7 +120,7 @@ def records_frame(records: Sequence[Mapping[str, Any]], *, where: str = "record"
             )
     for name in RUN_COLUMNS:
         kind = _KIND[name]
-        values = [rec[name] for rec in records]
+        values = [rec.get(name) for rec in records]
         try:
             columns[name] = _column(values, kind)
         except (TypeError, ValueError, OverflowError) as exc:

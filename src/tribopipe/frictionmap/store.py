@@ -22,6 +22,7 @@ from .. import __version__
 from ..errors import MapError
 from .schema import (
     _CONTENT_COLUMNS,
+    ADDED_IN_VERSION,
     _KIND,
     _SCHEMA,
     META_KEY,
@@ -72,7 +73,8 @@ def read_map(path: str | os.PathLike[str]) -> pd.DataFrame:
             path=p,
             hint="this path holds something else; pass another --map (it is never overwritten)",
         ) from None
-    _check_metadata(table.schema.metadata or {}, p)
+    info = _check_metadata(table.schema.metadata or {}, p)
+    table = _with_added_columns(table, info["schema_version"])
     absent = [c for c in RUN_COLUMNS if c not in table.column_names]
     if absent:
         raise MapError(
@@ -102,6 +104,18 @@ def map_metadata(path: str | os.PathLike[str]) -> dict[str, Any]:
     except (pa.ArrowException, OSError) as exc:
         raise MapError(f"not a readable Parquet file ({exc})", path=p) from None
     return _check_metadata(schema.metadata or {}, p)
+
+
+def _with_added_columns(table: Any, version: int) -> Any:
+    """``table`` with the columns a map of schema ``version`` could not have had (those of
+    :data:`ADDED_IN_VERSION` added later) appended as all missing."""
+    import pyarrow as pa
+
+    types = {"str": pa.string(), "float": pa.float64(), "int": pa.int64()}
+    for name in RUN_COLUMNS:
+        if name not in table.column_names and ADDED_IN_VERSION.get(name, 1) > version:
+            table = table.append_column(name, pa.nulls(table.num_rows, types[_KIND[name]]))
+    return table
 
 
 def _from_arrow(table: Any) -> pd.DataFrame:

@@ -5,7 +5,8 @@ written by the old code still reads.
 Run it against that commit's source, not the current one::
 
     git archive 064bf4b src | tar -x -C /tmp/v1src
-    PYTHONPATH=/tmp/v1src/src python scripts/make_v1_map.py tests/data/friction_map_v1.parquet /tmp/v1raw
+    PYTHONPATH=/tmp/v1src/src python scripts/make_v1_map.py \
+        tests/data/friction_map_v1.parquet /tmp/v1raw
 
 It reduces two seeded synthetic runs (Dragonskin 30 on steel, 3 N and 9 N, 20 °C), imports
 the published map (169 rows) and excludes the first run, so the file holds reduced,

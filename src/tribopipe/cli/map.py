@@ -17,6 +17,9 @@ def map_group() -> None:
       tribopipe map import --published            start from the founding paper's map
       tribopipe map import FrictionMap.mat        the published MATLAB table (or its CSV)
       tribopipe map merge other_lab.parquet       fold in another lab's map
+      tribopipe map publish contribution --lab "Soft Robotics Lab"   a data package
+      tribopipe map validate their_package/      check a package someone sent
+      tribopipe map merge their_package/          fold it in, each lab's rows kept
       tribopipe map table --format markdown --pin "Dragonskin 30" --temperature 20
       tribopipe map show
       tribopipe map exclude 3fa2c1d09e --reason "pin slipped in the holder"
@@ -60,19 +63,89 @@ def import_cmd(
 
 
 @map_group.command("merge")
-@click.argument("other", type=click.Path(dir_okay=False))
+@click.argument("other", type=click.Path())
 @click.option("--replace", is_flag=True, help="Overwrite our rows where OTHER's content differs.")
 @map_option
 @friendly_errors
 def merge_cmd(other: str, replace: bool, map_path: str) -> None:
-    """Fold another friction map (Parquet) into the map; runs with the same id are stored
-    once and conflicting rows are reported (exit code 1 when any were kept)."""
+    """Fold another friction map (Parquet) or a data package (its folder or
+    datapackage.json, as `map publish` writes it) into the map.
+
+    A package is checked first (as `map validate` does) and refused whole when anything is
+    wrong; its rows keep their lab. Runs with the same id are stored once; each conflicting
+    run (same id, other values) is listed with both values (exit code 1 when any were
+    kept).
+    """
     from ..frictionmap import merge_map
 
     report = merge_map(map_path, other, replace=replace)
+    for line in report.conflict_lines(theirs=other):
+        click.echo(line)
     click.echo(f"map {map_path}: {report.summary()}")
     if report.kept_conflicting:
         raise SystemExit(1)
+
+
+@map_group.command("publish")
+@click.argument("folder", type=click.Path(file_okay=False))
+@click.option("--lab", required=True,
+              help="The laboratory that measured the runs (named in every row and the "
+              "citation).")
+@click.option("--contact", help="Contact person for the data.")
+@click.option("--email", help="Contact email address.")
+@click.option("--licence", "licence", default="CC-BY-4.0", show_default=True,
+              help="Licence of the data (SPDX id): CC-BY-4.0 (reuse with attribution), "
+              "CC0-1.0, CC-BY-SA-4.0, ODC-By-1.0, ODbL-1.0 or PDDL-1.0.")
+@click.option("--title", help="Title of the package (default: '<lab> friction map').")
+@click.option("--overwrite", is_flag=True, help="Replace a package already in FOLDER.")
+@map_option
+@friendly_errors
+def publish_cmd(folder: str, lab: str, contact: str | None, email: str | None, licence: str,
+                title: str | None, overwrite: bool, map_path: str) -> None:
+    """Write the map as a Frictionless Data Package in FOLDER: datapackage.json (schema,
+    units, licence, sources, size and SHA-256 of every file), the runs and groups as CSV
+    and Parquet, the 7-column FrictionMap table, the explorer page, a README and a
+    CITATION.cff that cites the founding paper.
+
+    The data licence defaults to CC-BY-4.0. The package is checked as `map validate`
+    would before it is moved into place; it is never half-written.
+
+    \b
+    Example:
+      tribopipe map publish contribution --lab "Soft Robotics Lab, Uni X" \\
+          --contact "A. Person" --email a.person@uni-x.example
+    """
+    from ..export.citation import Publisher
+    from ..export.publish import publish_map
+
+    done = publish_map(map_path, folder, Publisher(lab, contact, email, licence, title),
+                       overwrite=overwrite)
+    click.echo(f"wrote {done.path}: {done.n_runs} runs in {len(done.files)} files "
+               f"(check it with `tribopipe map validate {done.path}`)")
+
+
+@map_group.command("validate")
+@click.argument("path", type=click.Path())
+@friendly_errors
+def validate_cmd(path: str) -> None:
+    """Check a data package someone sent (its folder or datapackage.json): schema and
+    units of every field, physical ranges, duplicate ids, provenance (lab, hashes,
+    versions, times), licences, the size and SHA-256 of every file, and that the Parquet,
+    group and FrictionMap tables agree with the runs.
+
+    Prints one line per problem, naming the file, row and field; exit code 1 on any. The
+    package is treated as hostile: paths outside it, URLs, huge files and deeply nested
+    JSON are refused, never followed.
+    """
+    from ..frictionmap import check_package
+
+    result = check_package(path)
+    for line in result.lines():
+        click.echo(line)
+    if not result.ok:
+        raise SystemExit(1)
+    n = 0 if result.runs is None else len(result.runs)
+    click.echo(f"{result.path}: valid friction-map package, {n} runs from {result.lab}")
 
 
 @map_group.command("table")

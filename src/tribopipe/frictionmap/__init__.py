@@ -14,6 +14,11 @@ The package's rooms, each importing only those above it:
 * :mod:`~tribopipe.frictionmap.store` — Parquet reads and locked atomic writes, the pure
   :func:`fold_records`, append/update/merge and exclusions;
 * :mod:`~tribopipe.frictionmap.published` — the founding paper's map (``.mat`` or CSV);
+* :mod:`~tribopipe.frictionmap.checks` — row checks of data from elsewhere (ranges,
+  duplicates, provenance);
+* :mod:`~tribopipe.frictionmap.datapackage` — the Data Package standard's JSON and reading
+  a package without trusting it; :mod:`~tribopipe.frictionmap.package` — checking one;
+  :mod:`~tribopipe.frictionmap.merge` — merging a map or a package into the map;
 * :mod:`~tribopipe.frictionmap.summary` — the printed account (``tribopipe map show``).
 
 Every public name is importable from ``tribopipe.frictionmap`` itself.
@@ -32,6 +37,10 @@ Guarantees of the store:
 
 from __future__ import annotations
 
+from .checks import MU_MAX, RANGES, RowProblem, validate_runs
+from .datapackage import DESCRIPTOR, PackageLimits, PackageRefused, Problem
+from .merge import is_package, merge_map
+from .package import PackageCheck, PackageInvalid, check_package, package_runs
 from .published import (
     FOUNDING_PAPER,
     FRICTIONMAP_COLUMNS,
@@ -55,11 +64,11 @@ from .records import (
     qc_flags,
 )
 from .schema import (
+    ADDED_IN_VERSION,
     META_KEY,
     PROVENANCE_COLUMNS,
     RUN_COLUMNS,
     SCHEMA_NAME,
-    ADDED_IN_VERSION,
     SCHEMA_VERSION,
     SOURCE_PUBLISHED,
     SOURCE_REDUCED,
@@ -76,11 +85,12 @@ from .store import (
     fold_records,
     include_runs,
     map_metadata,
-    merge_map,
+    merge_map_file,
     read_map,
     set_excluded,
     update_map,
     write_map,
+    write_map_copy,
 )
 from .summary import (
     map_summary,
@@ -113,11 +123,26 @@ __all__ = [
     "read_map",
     "map_metadata",
     "write_map",
+    "write_map_copy",
     "AppendReport",
     "fold_records",
     "append_records",
     "update_map",
     "merge_map",
+    "merge_map_file",
+    "is_package",
+    "MU_MAX",
+    "RANGES",
+    "RowProblem",
+    "validate_runs",
+    "DESCRIPTOR",
+    "PackageLimits",
+    "PackageRefused",
+    "Problem",
+    "PackageCheck",
+    "PackageInvalid",
+    "check_package",
+    "package_runs",
     "set_excluded",
     "exclude_runs",
     "include_runs",

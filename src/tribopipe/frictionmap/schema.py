@@ -108,6 +108,16 @@ def records_frame(records: Sequence[Mapping[str, Any]], *, where: str = "record"
     the row was imported (``source`` other than ``'reduced'``). Raises :class:`MapError`
     naming the record and column otherwise; nothing is written on error.
     """
+    return _validated(unvalidated_frame(records, where=where), where)
+
+
+def unvalidated_frame(
+    records: Sequence[Mapping[str, Any]], *, where: str = "record"
+) -> pd.DataFrame:
+    """:func:`records_frame` without its row rules: the schema's columns and dtypes only
+    (a value of the wrong kind is still a :class:`MapError`). For checks that want to see
+    every problem of the rows (:func:`tribopipe.frictionmap.checks.validate_runs`) rather
+    than the first."""
     import pandas as pd
 
     columns: dict[str, Any] = {}
@@ -130,8 +140,7 @@ def records_frame(records: Sequence[Mapping[str, Any]], *, where: str = "record"
                 f"{row}expected {kind} values, got {values[bad] if bad is not None else exc!r}",
                 column=name,
             ) from None
-    frame = pd.DataFrame(columns, columns=list(RUN_COLUMNS), index=pd.RangeIndex(len(records)))
-    return _validated(frame, where)
+    return pd.DataFrame(columns, columns=list(RUN_COLUMNS), index=pd.RangeIndex(len(records)))
 
 
 def _validated(frame: pd.DataFrame, where: str) -> pd.DataFrame:

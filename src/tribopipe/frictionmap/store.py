@@ -22,9 +22,9 @@ from .. import __version__
 from ..errors import MapError
 from .schema import (
     _CONTENT_COLUMNS,
-    ADDED_IN_VERSION,
     _KIND,
     _SCHEMA,
+    ADDED_IN_VERSION,
     META_KEY,
     RUN_COLUMNS,
     SCHEMA_NAME,
@@ -295,6 +295,17 @@ def write_map(path: str | os.PathLike[str], runs: pd.DataFrame) -> None:
         _write_atomic(p, frame)
 
 
+def write_map_copy(path: str | os.PathLike[str], runs: pd.DataFrame) -> Path:
+    """Write ``runs`` (validated) as a new friction-map file at ``path`` without the map's
+    lock: for a file in a folder no other process uses (a data package being written).
+    Refuses (``MapError``) to replace an existing file."""
+    p = Path(path)
+    if p.exists():
+        raise MapError("exists already; a map copy is written only to a new path", path=p)
+    _write_atomic(p, records_frame(frame_records(runs), where="row"))
+    return p
+
+
 # --------------------------------------------------------------------------- appending
 
 
@@ -305,8 +316,8 @@ class AppendReport:
     ``added``: new runs; ``unchanged``: already in the map with the same content;
     ``replaced``: content differed and ``replace=True``; ``kept_conflicting``: content
     differed and the map's row was kept. ``differences`` maps each conflicting or replaced
-    id to the names of the columns that differ. ``dropped_ids``: rows removed by
-    :func:`update_map`.
+    id to the names of the columns that differ, ``values`` to ``(column, map's value, new
+    value)`` for each of them. ``dropped_ids``: rows removed by :func:`update_map`.
     """
 
     added_ids: tuple[str, ...] = ()
@@ -315,6 +326,7 @@ class AppendReport:
     conflicting_ids: tuple[str, ...] = ()
     differences: dict[str, tuple[str, ...]] = field(default_factory=dict)
     dropped_ids: tuple[str, ...] = ()
+    values: dict[str, tuple[tuple[str, Any, Any], ...]] = field(default_factory=dict)
 
     @property
     def added(self) -> int:
@@ -357,6 +369,25 @@ class AppendReport:
             more = " …" if len(self.conflicting_ids) > 5 else ""
             text += f" ({details}{more}; pass --replace to overwrite)"
         return text
+
+    def conflict_lines(self, theirs: str = "the new rows") -> list[str]:
+        """One line per conflicting run: its id and, per differing column, the map's value
+        and the value in ``theirs``."""
+        lines = []
+        for mid in self.conflicting_ids:
+            cells = "; ".join(
+                f"{column} {_show(ours)} in the map, {_show(new)} in {theirs}"
+                for column, ours, new in self.values.get(mid, ())
+            )
+            lines.append(f"conflict: run {mid}: {cells}; kept the map's row")
+        return lines
+
+
+def _show(value: Any) -> str:
+    """A cell for a message: missing as 'missing', floats by repr, text quoted."""
+    if _missing(value):
+        return "missing"
+    return repr(value) if isinstance(value, str) else str(value)
 
 
 def _same(a: Any, b: Any) -> bool:
@@ -403,6 +434,7 @@ def _fold(
     replaced: dict[str, None] = {}
     conflicting: dict[str, None] = {}
     differences: dict[str, tuple[str, ...]] = {}
+    values: dict[str, tuple[tuple[str, Any, Any], ...]] = {}
     for rec in frame_records(new_frame):
         mid = rec["measurement_id"]
         if mid in fresh:
@@ -418,6 +450,7 @@ def _fold(
                 unchanged[mid] = None
             continue
         differences[mid] = diff
+        values[mid] = tuple((c, old[c], rec[c]) for c in diff)
         if replace:
             rec = {**rec, "excluded": old["excluded"], "exclusion_reason": old["exclusion_reason"]}
             if mid in fresh:
@@ -433,6 +466,7 @@ def _fold(
         replaced_ids=tuple(replaced),
         conflicting_ids=tuple(conflicting),
         differences=differences,
+        values=values,
     )
     merged = base
     if replaced:
@@ -493,7 +527,7 @@ def update_map(
     return report
 
 
-def merge_map(
+def merge_map_file(
     path: str | os.PathLike[str], other: str | os.PathLike[str], *, replace: bool = False
 ) -> AppendReport:
     """Fold another friction map (another lab's Parquet map) into the map at ``path``.

@@ -1,0 +1,374 @@
+"""``tribopipe map publish``: the friction map as a Frictionless Data Package.
+
+A package is a folder::
+
+    datapackage.json        the descriptor: every file with its size, SHA-256, licence and
+                            sources; the tables with a Table Schema whose fields have units
+    README.md               who, what, licence, how to cite, the columns
+    CITATION.cff            Citation File Format 1.2.0 (the founding paper under references)
+    explorer.html           the explorer page of the map (tribopipe explore)
+    data/runs.csv           one row per run (the map's columns; every row names its lab)
+    data/runs.parquet       the same rows as a friction map (query, explore, merge read it)
+    data/groups.csv         the repeat statistics per condition group
+    data/groups.parquet     the same
+    data/frictionmap.csv    the 7-column table of the founding paper's MATLAB app
+
+:func:`publish_map` reads the map once, fills the ``lab`` of the rows that have none with the
+publisher's lab, refuses a map whose rows fail
+:func:`tribopipe.frictionmap.checks.validate_runs`, writes every file into a temporary folder
+beside the target, checks the result with :func:`tribopipe.frictionmap.check_package` (so a
+package tribopipe writes always validates) and only then renames it into place: a package
+is never half-written. The descriptor is written here as plain JSON (see ``docs/DESIGN.md``
+for why not through the ``frictionless`` library).
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+import math
+import os
+import re
+import shutil
+import tempfile
+from collections.abc import Sequence
+from dataclasses import dataclass
+from datetime import UTC, datetime
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from .. import __version__
+from ..errors import ExportError
+from ..fit import fit_power_law
+from ..frictionmap import (
+    FOUNDING_PAPER,
+    PUBLISHED_LAB,
+    RUN_COLUMNS,
+    SCHEMA_NAME,
+    SCHEMA_VERSION,
+    SOURCE_PUBLISHED,
+    check_package,
+    read_map,
+    validate_runs,
+    write_map_copy,
+)
+from ..frictionmap.datapackage import (
+    DESCRIPTOR,
+    FALSE,
+    FRICTIONMAP_FIELDS,
+    PROFILE,
+    TRIBOPIPE_KEY,
+    TRUE,
+    groups_fields,
+    runs_fields,
+    sha256_hash,
+    table_schema,
+)
+from ..frictionmap.package import (
+    FRICTIONMAP_APP,
+    GROUPS,
+    GROUPS_PARQUET,
+    RUNS,
+    RUNS_PARQUET,
+)
+from ..frictionmap.schema import _KIND
+from ..query import pairs
+from ..stats import group_statistics
+from .citation import (
+    CODE_LICENCE,
+    Publisher,
+    citation_cff,
+    citation_text,
+    founding_paper_text,
+    package_readme,
+)
+from .explorer import explorer_data, explorer_page
+from .tables import frictionmap_csv, frictionmap_table
+
+if TYPE_CHECKING:
+    import pandas as pd
+
+
+@dataclass(frozen=True)
+class PublishedPackage:
+    """What :func:`publish_map` wrote: the package folder, its number of runs and the
+    files (paths relative to the folder)."""
+
+    path: Path
+    n_runs: int
+    files: tuple[str, ...]
+
+
+# --------------------------------------------------------------------------- CSV
+
+
+def csv_cell(value: Any, kind: str) -> str:
+    """One CSV cell of a value of map column kind ``kind``: missing as empty, floats by
+    their shortest round-trip text, booleans ``true``/``false``."""
+    if value is None or (kind != "str" and _isna(value)):
+        return ""
+    if kind == "bool":
+        return TRUE if bool(value) else FALSE
+    if kind == "int":
+        return str(int(value))
+    if kind == "float":
+        number = float(value)
+        if math.isinf(number):
+            raise ExportError(f"cannot publish an infinite number ({number})")
+        return repr(number)
+    return "" if _isna(value) else str(value)
+
+
+def _isna(value: Any) -> bool:
+    import pandas as pd
+
+    try:
+        return bool(pd.isna(value))
+    except (TypeError, ValueError):
+        return False
+
+
+def table_csv(table: pd.DataFrame, kinds: Sequence[str]) -> str:
+    """CSV text (``\\n`` line ends, UTF-8) of ``table`` with one map kind per column."""
+    buf = io.StringIO()
+    writer = csv.writer(buf, lineterminator="\n")
+    writer.writerow([str(c) for c in table.columns])
+    for row in table.itertuples(index=False, name=None):
+        writer.writerow([csv_cell(v, k) for v, k in zip(row, kinds, strict=True)])
+    return buf.getvalue()
+
+
+def column_kind(series: pd.Series) -> str:
+    """The map kind (str, float, int, bool) of a table column, from its dtype."""
+    import pandas as pd
+
+    dtype = series.dtype
+    if pd.api.types.is_bool_dtype(dtype):
+        return "bool"
+    if pd.api.types.is_integer_dtype(dtype):
+        return "int"
+    if pd.api.types.is_float_dtype(dtype):
+        return "float"
+    return "str"
+
+
+# --------------------------------------------------------------------------- the package
+
+
+def package_runs_table(runs: pd.DataFrame, lab: str) -> pd.DataFrame:
+    """The map's runs with every missing ``lab`` filled: the founding paper's authors for
+    its published rows, ``lab`` for the others; empty texts other than ``flags`` missing
+    (a new frame)."""
+    out = runs.loc[:, list(RUN_COLUMNS)].copy()
+    missing = out["lab"].isna() | (out["lab"].astype(str).str.strip() == "")
+    published = (out["source"] == SOURCE_PUBLISHED).to_numpy()
+    out.loc[missing & published, "lab"] = PUBLISHED_LAB
+    out.loc[missing & ~published, "lab"] = lab
+    # a CSV cell cannot tell an empty text from a missing one: flags are "" when there are
+    # none (never missing), every other empty text is written as missing
+    out["flags"] = out["flags"].fillna("")
+    for name in RUN_COLUMNS:
+        if _KIND[name] == "str" and name != "flags":
+            out.loc[out[name].astype(str) == "", name] = None
+    return out
+
+
+def _slug(text: str) -> str:
+    return re.sub(r"[^a-z0-9]+", "-", text.casefold()).strip("-") or "lab"
+
+
+def _sources(publisher: Publisher, year: int) -> list[dict[str, str]]:
+    """The Data Package ``sources``: the lab's citation, the founding paper, tribopipe."""
+    return [
+        {"title": citation_text(publisher, year)},
+        {"title": founding_paper_text(), "path": FOUNDING_PAPER["data"]},
+        {"title": f"tribopipe {__version__} (reduction of the raw exports)"},
+    ]
+
+
+def _resource(name: str, path: str, data: bytes, *, title: str, fmt: str, mediatype: str,
+              licences: list[dict[str, str]], sources: list[dict[str, str]],
+              schema: dict[str, Any] | None = None) -> dict[str, Any]:
+    res: dict[str, Any] = {
+        "name": name, "path": path, "title": title,
+        "profile": "tabular-data-resource" if schema is not None else "data-resource",
+        "format": fmt, "mediatype": mediatype, "bytes": len(data), "hash": sha256_hash(data),
+        "licenses": licences, "sources": sources,
+    }
+    if fmt == "csv":
+        res["encoding"] = "utf-8"
+    if fmt == "parquet":
+        # A Parquet file carries its own schema (the runs' with units in the metadata) and
+        # the CSV resource beside it describes the same table; as a "file" the frictionless
+        # tools check its size and hash rather than reading it through their Parquet plugin
+        # (which takes NaN for a value and cannot count its bytes).
+        res["type"] = "file"
+    if schema is not None:
+        res["schema"] = schema
+    return res
+
+
+def build_package(runs: pd.DataFrame, publisher: Publisher, folder: Path, *,
+                  date: str) -> list[str]:
+    """Write the package of ``runs`` (labs filled) into the existing empty ``folder``;
+    returns the files written (relative paths), the descriptor last."""
+    year = int(date[:4])
+    (folder / "data").mkdir()
+    groups = group_statistics(runs)
+    fits = fit_power_law(runs)
+    data_licence = [publisher.licence_entry()]
+    sources = _sources(publisher, year)
+    run_kinds = [_KIND[c] for c in RUN_COLUMNS]
+    group_kinds = [column_kind(groups[c]) for c in groups.columns]
+    files: dict[str, bytes] = {}
+    resources = []
+
+    def add(name: str, path: str, data: bytes, **meta: Any) -> None:
+        (folder / path).write_bytes(data)
+        files[path] = data
+        resources.append(_resource(name, path, data, sources=sources,
+                                   licences=meta.pop("licences", data_licence), **meta))
+
+    runs_schema = table_schema(runs_fields(), primary_key="measurement_id")
+    add(RUNS, "data/runs.csv", table_csv(runs, run_kinds).encode(),
+        title="Runs: one row per friction run", fmt="csv", mediatype="text/csv",
+        schema=runs_schema)
+    write_map_copy(folder / "data/runs.parquet", runs).chmod(0o644)  # a map is 0600
+    add(RUNS_PARQUET, "data/runs.parquet", (folder / "data/runs.parquet").read_bytes(),
+        title="Runs as a tribopipe friction map (Parquet, schema in its metadata)",
+        fmt="parquet", mediatype="application/vnd.apache.parquet")
+    groups_schema = table_schema(groups_fields(list(zip(groups.columns, group_kinds,
+                                                        strict=True))))
+    add(GROUPS, "data/groups.csv", table_csv(groups, group_kinds).encode(),
+        title="Repeat statistics per condition group", fmt="csv", mediatype="text/csv",
+        schema=groups_schema)
+    buf = io.BytesIO()
+    groups.to_parquet(buf, index=False)
+    add(GROUPS_PARQUET, "data/groups.parquet", buf.getvalue(),
+        title="Repeat statistics per condition group (Parquet)", fmt="parquet",
+        mediatype="application/vnd.apache.parquet")
+    add(FRICTIONMAP_APP, "data/frictionmap.csv",
+        frictionmap_csv(frictionmap_table(runs)).encode(),
+        title="The included runs in the 7-column table of the founding paper's MATLAB app",
+        fmt="csv", mediatype="text/csv", schema=table_schema(FRICTIONMAP_FIELDS))
+    page = explorer_page(explorer_data(runs, groups=groups, fits=fits,
+                                       title=publisher.package_title, source=publisher.lab))
+    add("explorer", "explorer.html", page.encode(), title="Explorer page (open in a browser)",
+        fmt="html", mediatype="text/html",
+        licences=[*data_licence, {"name": CODE_LICENCE[0], "title": CODE_LICENCE[1],
+                                  "path": CODE_LICENCE[2]}])
+    pair_list = pairs(runs)
+    add("citation", "CITATION.cff",
+        citation_cff(publisher, date=date, n_runs=len(runs), pairs=pair_list).encode(),
+        title="How to cite (Citation File Format 1.2.0)", fmt="cff",
+        mediatype="application/x-yaml")
+    listing = [(r["path"], r["title"]) for r in resources]
+    listing += [("README.md", "this account"), (DESCRIPTOR, "the Data Package descriptor")]
+    readme = package_readme(
+        publisher, date=date, n_runs=len(runs),
+        n_excluded=int(runs["excluded"].astype(bool).sum()),
+        n_published=int((runs["source"] == SOURCE_PUBLISHED).sum()),
+        pairs=pair_list, files=listing, fields=runs_fields())
+    add("readme", "README.md", readme.encode(), title="About this package", fmt="md",
+        mediatype="text/markdown")
+    descriptor = {
+        "profile": PROFILE,
+        "name": f"{_slug(publisher.lab)}-friction-map",
+        "title": publisher.package_title,
+        "description": (f"Friction map: {len(runs)} runs of {len(pair_list)} contact pairs, "
+                        "μ_S and μ_K by contact pressure and temperature, with repeat "
+                        "statistics and provenance. Written by tribopipe."),
+        "created": f"{date}T00:00:00Z" if len(date) == 10 else date,
+        "version": date,
+        "licenses": data_licence,
+        "contributors": [{
+            "title": publisher.contact or publisher.lab, "role": "publisher",
+            "organization": publisher.lab,
+            **({"email": publisher.email} if publisher.email else {}),
+        }],
+        "sources": sources,
+        "keywords": ["friction", "tribology", "coefficient of friction", "soft robotics"],
+        "citation": citation_text(publisher, year),
+        TRIBOPIPE_KEY: {
+            "schema": SCHEMA_NAME, "schema_version": SCHEMA_VERSION, "lab": publisher.lab,
+            "tribopipe_version": __version__, "n_runs": len(runs),
+            "labs": sorted(set(runs["lab"].dropna().astype(str))),
+        },
+        "resources": resources,
+    }
+    text = json.dumps(descriptor, ensure_ascii=False, indent=2) + "\n"
+    (folder / DESCRIPTOR).write_text(text, encoding="utf-8")
+    return [*files, DESCRIPTOR]
+
+
+def publish_map(map_path: str | os.PathLike[str], out_dir: str | os.PathLike[str],
+                publisher: Publisher, *, overwrite: bool = False,
+                date: str | None = None) -> PublishedPackage:
+    """Write the map at ``map_path`` as a data package in the folder ``out_dir`` (see the
+    module docstring). ``date`` (``YYYY-MM-DD``, default today, UTC) is the release date.
+
+    Raises :class:`ExportError` for an empty map, rows that fail the checks (the first
+    named, the rest counted), a bad publisher, or an ``out_dir`` that exists and is not
+    empty — unless it is a package and ``overwrite`` is given.
+    """
+    publisher = publisher.checked()
+    date = date or datetime.now(UTC).strftime("%Y-%m-%d")
+    if not re.fullmatch(r"\d{4}-\d{2}-\d{2}", date):
+        raise ExportError(f"release date {date!r}, expected YYYY-MM-DD")
+    target = Path(out_dir)
+    _check_target(target, overwrite)
+    runs = read_map(map_path)
+    if runs.empty:
+        raise ExportError("the friction map is empty or absent; nothing to publish",
+                          path=map_path)
+    runs = package_runs_table(runs, publisher.lab)
+    problems = validate_runs(runs, require_lab=True)
+    if problems:
+        more = f" (and {len(problems) - 1} more)" if len(problems) > 1 else ""
+        raise ExportError(f"{problems[0].line('map')}{more}; fix or exclude the run before "
+                          "publishing", path=map_path)
+    target.parent.mkdir(parents=True, exist_ok=True)
+    tmp = Path(tempfile.mkdtemp(prefix=f".{target.name}.", suffix=".tmp", dir=target.parent))
+    try:
+        tmp.chmod(0o755)  # mkdtemp's 0700 would make the published folder private
+        files = build_package(runs, publisher, tmp, date=date)
+        check = check_package(tmp)
+        if not check.ok:  # a package we write must validate: a bug, said plainly
+            raise ExportError("the package written does not validate: "
+                              + "; ".join(check.lines()[:3]))
+        _swap_into_place(tmp, target)
+    except BaseException:
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise
+    return PublishedPackage(target, len(runs), tuple(files))
+
+
+def _check_target(target: Path, overwrite: bool) -> None:
+    if target.is_symlink() or (target.exists() and not target.is_dir()):
+        raise ExportError("exists and is not a folder", path=target)
+    if target.is_dir() and any(target.iterdir()):
+        if not (target / DESCRIPTOR).is_file():
+            raise ExportError("folder exists and is not empty (and not a package); refusing "
+                              "to write into it", path=target, hint="pass a new folder")
+        if not overwrite:
+            raise ExportError("holds a package already", path=target,
+                              hint="pass --overwrite to replace it")
+
+
+def _swap_into_place(tmp: Path, target: Path) -> None:
+    """Rename the finished package ``tmp`` to ``target``; an old package there is moved
+    aside first and removed after."""
+    old = None
+    if target.exists():
+        old = target.with_name(f".{target.name}.old.{os.getpid()}")
+        os.replace(target, old)
+    try:
+        os.replace(tmp, target)
+    except OSError as exc:
+        if old is not None:
+            os.replace(old, target)
+        raise ExportError(f"cannot write the package ({exc.strerror or exc})",
+                          path=target) from None
+    if old is not None:
+        shutil.rmtree(old, ignore_errors=True)

@@ -1,0 +1,475 @@
+"""Checking a friction-map data package someone sent, and its runs for a merge.
+
+:func:`check_package` reads a package (:mod:`tribopipe.frictionmap.datapackage` for the
+standard's JSON and the hostile-input rules) and lists every problem, one line each,
+naming the file, the row and the field: the descriptor (profile, tribopipe's schema version,
+the lab, licences, resource names), each resource's path, size and SHA-256, the runs table's
+schema (every field's name, type and unit against the map's schema of that version), every
+cell of ``data/runs.csv`` (type, required, the row checks of
+:func:`tribopipe.frictionmap.checks.validate_runs`: physical ranges, duplicate ids,
+provenance), the Parquet copy of the runs against the CSV, the group table against the
+statistics of the runs, the 7-column FrictionMap table against the included runs, and the
+founding paper's citation where its rows are republished. :func:`package_runs` is the same
+check for a merge: the runs, or :class:`PackageInvalid` when anything is wrong.
+
+A checksum shows that a file is the one the descriptor describes (nothing lost or changed on
+the way); it is not a signature: whoever can edit the files can edit the descriptor too.
+"""
+
+from __future__ import annotations
+
+import io
+import math
+import os
+import tempfile
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from ..errors import MapError
+from ..stats import group_statistics
+from .checks import validate_runs
+from .datapackage import (
+    DEFAULT_LIMITS,
+    DESCRIPTOR,
+    FRICTIONMAP_FIELDS,
+    PROFILE,
+    TABLE_TYPES,
+    TRIBOPIPE_KEY,
+    PackageLimits,
+    PackageRefused,
+    Problem,
+    csv_rows,
+    descriptor_path,
+    load_descriptor,
+    parse_cell,
+    read_bounded,
+    resource_file,
+    run_columns,
+    runs_fields,
+    sha256_hash,
+)
+from .published import FOUNDING_PAPER
+from .schema import (
+    SCHEMA_NAME,
+    SCHEMA_VERSION,
+    SOURCE_PUBLISHED,
+    frame_records,
+    unvalidated_frame,
+)
+from .store import _same, read_map
+
+if TYPE_CHECKING:
+    import pandas as pd
+
+#: names of the resources tribopipe publishes (``runs`` is the one a package must have)
+RUNS, RUNS_PARQUET = "runs", "runs-parquet"
+GROUPS, GROUPS_PARQUET = "groups", "groups-parquet"
+FRICTIONMAP_APP = "frictionmap-app"
+#: the first schema version a package can declare (version 1 maps had no ``lab``)
+FIRST_PACKAGE_VERSION = 2
+
+
+class PackageInvalid(MapError):
+    """A package with problems; ``problems`` holds every line."""
+
+    def __init__(self, problems: list[str], path: Path) -> None:
+        more = f" (and {len(problems) - 1} more problem(s))" if len(problems) > 1 else ""
+        super().__init__(
+            f"not a valid friction-map package: {problems[0]}{more}",
+            path=path,
+            hint="`tribopipe map validate` lists every problem",
+        )
+        self.problems = problems
+
+
+@dataclass
+class PackageCheck:
+    """What :func:`check_package` found: the descriptor's path, the problems (the first
+    ``limits.problems`` of them, ``more`` counts the rest), the lab and the runs (map
+    DataFrame, ``None`` when the runs table could not be read)."""
+
+    path: Path
+    problems: list[Problem] = field(default_factory=list)
+    more: int = 0
+    lab: str | None = None
+    runs: pd.DataFrame | None = None
+
+    @property
+    def ok(self) -> bool:
+        """True when the package has no problem."""
+        return not self.problems and not self.more
+
+    def lines(self) -> list[str]:
+        """One line per problem (and one counting those beyond the limit)."""
+        out = [str(p) for p in self.problems]
+        if self.more:
+            out.append(f"{self.path}: … and {self.more} more problem(s) not listed")
+        return out
+
+
+class _Checker:
+    """Collects problems up to a limit; each check appends to it."""
+
+    def __init__(self, path: Path, limits: PackageLimits) -> None:
+        self.result = PackageCheck(path)
+        self.limits = limits
+
+    def add(self, where: str, problem: str) -> None:
+        if len(self.result.problems) < self.limits.problems:
+            self.result.problems.append(Problem(where, problem))
+        else:
+            self.result.more += 1
+
+
+def check_package(path: str | os.PathLike[str],
+                  limits: PackageLimits = DEFAULT_LIMITS) -> PackageCheck:
+    """Check the package at ``path`` (its folder or its ``datapackage.json``); see the
+    module docstring for what is checked. Never raises for a bad package: every problem is
+    in the result."""
+    desc = descriptor_path(path)
+    check = _Checker(desc, limits)
+    try:
+        descriptor, base = load_descriptor(desc, limits)
+    except PackageRefused as exc:
+        check.add(DESCRIPTOR, exc.problem)
+        return check.result
+    version = _check_descriptor(check, descriptor)
+    resources = _resources(check, descriptor)
+    if version is None or RUNS not in resources:
+        if version is not None:
+            check.add(DESCRIPTOR, f"no resource named {RUNS!r} (the runs table)")
+        return check.result
+    files = {name: _check_file(check, res, base) for name, res in resources.items()}
+    before = len(check.result.problems) + check.result.more
+    runs = _check_runs(check, resources[RUNS], files[RUNS], version)
+    check.result.runs = runs
+    if runs is None or len(check.result.problems) + check.result.more > before:
+        # the other tables are compared with clean runs only: against faulty ones they
+        # would repeat the runs' problems, not add any
+        return check.result
+    if RUNS_PARQUET in files and files[RUNS_PARQUET] is not None:
+        _check_parquet_copy(check, resources[RUNS_PARQUET], files[RUNS_PARQUET], runs)
+    if GROUPS in files and files[GROUPS] is not None:
+        _check_groups(check, resources[GROUPS], files[GROUPS], runs)
+    if FRICTIONMAP_APP in files and files[FRICTIONMAP_APP] is not None:
+        _check_frictionmap_table(check, resources[FRICTIONMAP_APP], files[FRICTIONMAP_APP],
+                                 runs)
+    if (runs["source"] == SOURCE_PUBLISHED).any() and not _cites_founding_paper(descriptor):
+        check.add(DESCRIPTOR, "holds the founding paper's published rows but does not cite "
+                  f"it in 'sources' (expected {FOUNDING_PAPER['title']!r})")
+    return check.result
+
+
+def package_runs(path: str | os.PathLike[str],
+                 limits: PackageLimits = DEFAULT_LIMITS) -> tuple[pd.DataFrame, str]:
+    """The runs (map DataFrame) and the lab of a package that passes
+    :func:`check_package`; :class:`PackageInvalid` (every problem line) otherwise."""
+    result = check_package(path, limits)
+    if not result.ok or result.runs is None:
+        raise PackageInvalid(result.lines() or ["the runs table could not be read"],
+                             result.path)
+    return result.runs, str(result.lab)
+
+
+# --------------------------------------------------------------------------- descriptor
+
+
+def _text(value: Any) -> bool:
+    return isinstance(value, str) and bool(value.strip())
+
+
+def _check_descriptor(check: _Checker, d: dict[str, Any]) -> int | None:
+    """Profile, tribopipe block, lab, licences; the declared schema version (``None``
+    when it cannot be read further)."""
+    where = DESCRIPTOR
+    if d.get("profile") != PROFILE:
+        check.add(where, f"profile {d.get('profile')!r}, expected {PROFILE!r}")
+    if not _licences_ok(d.get("licenses")):
+        check.add(where, "no licence: expected 'licenses' with a name or path")
+    info = d.get(TRIBOPIPE_KEY)
+    if not isinstance(info, dict) or info.get("schema") != SCHEMA_NAME:
+        check.add(where, f"no {TRIBOPIPE_KEY!r} block naming the schema {SCHEMA_NAME!r}; "
+                  "not a friction-map package")
+        return None
+    version = info.get("schema_version")
+    if isinstance(version, bool) or not isinstance(version, int) or not (
+            FIRST_PACKAGE_VERSION <= version <= SCHEMA_VERSION):
+        check.add(where, f"schema version {version!r}; this tribopipe reads packages of "
+                  f"versions {FIRST_PACKAGE_VERSION} to {SCHEMA_VERSION} (upgrade tribopipe "
+                  "for a newer one)")
+        return None
+    if not _text(info.get("lab")):
+        check.add(where, "provenance: no lab named in the tribopipe block")
+    else:
+        check.result.lab = str(info["lab"]).strip()
+    return version
+
+
+def _licences_ok(value: Any) -> bool:
+    return isinstance(value, list) and bool(value) and all(
+        isinstance(x, dict) and (_text(x.get("name")) or _text(x.get("path"))) for x in value)
+
+
+def _resources(check: _Checker, d: dict[str, Any]) -> dict[str, dict[str, Any]]:
+    """The resources by name (unique, bounded in number)."""
+    items = d.get("resources")
+    if not isinstance(items, list) or not items:
+        check.add(DESCRIPTOR, "no 'resources' list")
+        return {}
+    if len(items) > check.limits.resources:
+        check.add(DESCRIPTOR, f"{len(items)} resources, more than the limit of "
+                  f"{check.limits.resources}")
+        return {}
+    out: dict[str, dict[str, Any]] = {}
+    for i, res in enumerate(items, 1):
+        name = res.get("name") if isinstance(res, dict) else None
+        if not _text(name):
+            check.add(DESCRIPTOR, f"resource {i} has no name")
+        elif name in out:
+            check.add(DESCRIPTOR, f"resource name {name!r} appears twice")
+        else:
+            out[name] = res
+    return out
+
+
+def _check_file(check: _Checker, res: dict[str, Any], base: Path) -> bytes | None:
+    """The bytes of a resource's file after its path, size and checksum checks (``None``
+    when refused)."""
+    where = f"{DESCRIPTOR}: resource {res['name']!r}"
+    if "data" in res:
+        check.add(where, "inline 'data' is not accepted; expected a file")
+        return None
+    try:
+        target = resource_file(base, res.get("path"))
+        data = read_bounded(target, check.limits.resource_bytes, what="resource file")
+    except PackageRefused as exc:
+        check.add(where, exc.problem)
+        return None
+    shown = str(res["path"])
+    if not _licences_ok(res.get("licenses")):
+        check.add(shown, "no licence: expected 'licenses' with a name or path")
+    # a file that is not the one described is reported once; its content is not read
+    expected = res.get("hash")
+    if not isinstance(expected, str) or not expected.startswith("sha256:"):
+        check.add(shown, "checksum: expected 'hash' as 'sha256:<64 hex digits>'")
+        return None
+    if sha256_hash(data) != expected.lower():
+        check.add(shown, f"checksum: SHA-256 is {sha256_hash(data)[7:19]}…, the descriptor "
+                  f"says {expected[7:19]}… (the file was changed or damaged)")
+        return None
+    size = res.get("bytes")
+    if isinstance(size, bool) or not isinstance(size, int):
+        check.add(shown, "checksum: expected 'bytes', the file's size")
+        return None
+    if size != len(data):
+        check.add(shown, f"checksum: {len(data)} bytes, the descriptor says {size}")
+        return None
+    return data
+
+
+# --------------------------------------------------------------------------- runs
+
+
+def _check_fields(check: _Checker, schema: Any, expected: list[dict[str, Any]],
+                  where: str) -> list[dict[str, Any]] | None:
+    """The descriptor's fields after comparing each with ``expected`` (name, type, unit);
+    ``None`` when they cannot be used."""
+    fields = schema.get("fields") if isinstance(schema, dict) else None
+    if not isinstance(fields, list) or not fields or len(fields) > check.limits.fields:
+        check.add(where, "schema: expected 'fields', a list of at most "
+                  f"{check.limits.fields} fields")
+        return None
+    by_name = {f["name"]: f for f in expected}
+    seen: set[str] = set()
+    usable = True
+    for f in fields:
+        name = f.get("name") if isinstance(f, dict) else None
+        if not isinstance(name, str) or name in seen:
+            check.add(where, f"schema: field {name!r} is unnamed or appears twice")
+            usable = False
+            continue
+        seen.add(name)
+        want = by_name.get(name)
+        if want is None:
+            check.add(where, f"schema: field {name!r} is not a column of this schema version")
+            usable = False
+            continue
+        if f.get("type") != want["type"]:
+            check.add(where, f"schema: field {name!r} has type {f.get('type')!r}, expected "
+                      f"{want['type']!r}")
+            usable = False
+        if (f.get("unit") or "") != want.get("unit", ""):
+            check.add(where, f"schema: field {name!r} has unit {f.get('unit')!r}, expected "
+                      f"{want.get('unit', '')!r}")
+            usable = False
+    for name in by_name:
+        if name not in seen:
+            check.add(where, f"schema: field {name!r} is missing")
+            usable = False
+    return fields if usable else None
+
+
+def _table(check: _Checker, data: bytes, fields: list[dict[str, Any]],
+           shown: str) -> list[dict[str, Any]] | None:
+    """The rows of a CSV resource as dicts of typed values, every cell problem reported
+    (a bad cell is ``None``); ``None`` when the header is wrong or the text unreadable."""
+    rows, stopped = csv_rows(data, shown, check.limits)
+    if stopped is not None:
+        check.add(stopped.where, stopped.problem)
+        return None
+    names = [f["name"] for f in fields]
+    if not rows or rows[0] != names:
+        check.add(shown, "line 1: header does not list the schema's fields in order "
+                  f"(expected {', '.join(names)[:200]})")
+        return None
+    types = [f["type"] for f in fields]
+    required = [bool((f.get("constraints") or {}).get("required")) for f in fields]
+    out = []
+    for n, cells in enumerate(rows[1:], 1):
+        if len(cells) != len(names):
+            check.add(shown, f"row {n}: {len(cells)} cells, expected {len(names)}")
+            continue
+        row: dict[str, Any] = {}
+        for name, ftype, need, text in zip(names, types, required, cells, strict=True):
+            try:
+                row[name] = parse_cell(text, ftype)
+            except ValueError as exc:
+                check.add(shown, f"row {n}, field {name}: {exc}, expected a {ftype}")
+                row[name] = None
+                continue
+            if need and row[name] is None:
+                check.add(shown, f"row {n}, field {name}: missing, expected a value")
+        out.append(row)
+    return out
+
+
+def _check_runs(check: _Checker, res: dict[str, Any], data: bytes | None,
+                version: int) -> pd.DataFrame | None:
+    """The runs table: schema against the map's, every cell, then the row checks."""
+    if data is None:
+        return None
+    shown = str(res.get("path"))
+    fields = _check_fields(check, res.get("schema"), runs_fields(version), shown)
+    if fields is None:
+        return None
+    rows = _table(check, data, fields, shown)
+    if rows is None:
+        return None
+    if not set(run_columns(version)) <= {f["name"] for f in fields}:
+        return None
+    try:
+        runs = unvalidated_frame(rows, where="row")
+    except MapError as exc:  # cannot happen after the cell checks; said in one line anyway
+        check.add(shown, exc.problem)
+        return None
+    # CSV cannot tell an empty text from a missing one: flags are never missing in a map
+    # ("" is a run without flags), every other text is missing rather than empty
+    runs["flags"] = runs["flags"].fillna("")
+    for problem in validate_runs(runs, require_lab=True):
+        check.add(shown, f"row {problem.row}, field {problem.field}: {problem.problem}")
+    return runs
+
+
+def _check_parquet_copy(check: _Checker, res: dict[str, Any], data: bytes,
+                        runs: pd.DataFrame) -> None:
+    """The Parquet copy of the runs holds the same rows as the CSV."""
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    shown = str(res.get("path"))
+    try:
+        meta = pq.ParquetFile(io.BytesIO(data)).metadata
+        unpacked = sum(meta.row_group(i).total_byte_size for i in range(meta.num_row_groups))
+    except (pa.ArrowException, OSError, ValueError) as exc:
+        check.add(shown, f"not a readable Parquet file ({str(exc)[:120]})")
+        return
+    if unpacked > check.limits.resource_bytes:
+        check.add(shown, f"unpacks to {unpacked} bytes, more than the limit of "
+                  f"{check.limits.resource_bytes}")
+        return
+    with tempfile.TemporaryDirectory() as tmp:
+        copy = Path(tmp) / "runs.parquet"
+        copy.write_bytes(data)
+        try:
+            parquet = read_map(copy)
+        except MapError as exc:
+            check.add(shown, exc.problem)
+            return
+    if len(parquet) != len(runs):
+        check.add(shown, f"{len(parquet)} rows, the CSV has {len(runs)}")
+        return
+    pairs = zip(frame_records(runs), frame_records(parquet), strict=True)
+    for n, (ours, theirs) in enumerate(pairs, 1):
+        for name, value in ours.items():
+            if not _same(value, theirs[name]):
+                check.add(shown, f"row {n}, field {name}: {theirs[name]!r} differs from "
+                          f"the CSV's {value!r}")
+
+
+def _check_groups(check: _Checker, res: dict[str, Any], data: bytes,
+                  runs: pd.DataFrame) -> None:
+    """The group table parses by its own schema, and its μ_K n and mean follow from the
+    runs."""
+    shown = str(res.get("path"))
+    schema = res.get("schema")
+    fields = schema.get("fields") if isinstance(schema, dict) else None
+    if not isinstance(fields, list) or not all(
+            isinstance(f, dict) and isinstance(f.get("name"), str)
+            and f.get("type") in TABLE_TYPES.values() for f in fields):
+        check.add(shown, "schema: expected 'fields' with a name and a Table Schema type each")
+        return
+    rows = _table(check, data, fields, shown)
+    if rows is None:
+        return
+    keys = ("pin", "disc", "normal_force_N", "temperature_C")
+    if not {*keys, "mu_k_n", "mu_k_mean"} <= {f["name"] for f in fields}:
+        check.add(shown, "schema: expected the fields pin, disc, normal_force_N, "
+                  "temperature_C, mu_k_n and mu_k_mean")
+        return
+    computed = {_key(g, keys): g for g in group_statistics(runs).to_dict(orient="records")}
+    if len(rows) != len(computed):
+        check.add(shown, f"{len(rows)} groups, the runs make {len(computed)}")
+    for n, row in enumerate(rows, 1):
+        g = computed.get(_key(row, keys))
+        if g is None:
+            check.add(shown, f"row {n}: no runs of this group in the runs table")
+            continue
+        for name in ("mu_k_n", "mu_k_mean"):
+            if not _same(row[name], g[name]):
+                check.add(shown, f"row {n}, field {name}: {row[name]!r} does not follow "
+                          f"from the runs ({g[name]!r})")
+
+
+def _key(row: dict[str, Any], keys: tuple[str, ...]) -> tuple[Any, ...]:
+    out = []
+    for k in keys:
+        v = row[k]
+        if isinstance(v, float) and math.isnan(v):
+            v = None
+        out.append(round(float(v), 9) if isinstance(v, int | float) and v is not None else v)
+    return tuple(out)
+
+
+def _check_frictionmap_table(check: _Checker, res: dict[str, Any], data: bytes,
+                             runs: pd.DataFrame) -> None:
+    """The 7-column table holds the included runs' μ_K in map order."""
+    shown = str(res.get("path"))
+    rows = _table(check, data, list(FRICTIONMAP_FIELDS), shown)
+    if rows is None:
+        return
+    included = runs.loc[~runs["excluded"].astype(bool), "mu_k"].tolist()
+    if len(rows) != len(included):
+        check.add(shown, f"{len(rows)} rows, the runs table has {len(included)} included runs")
+        return
+    for n, (row, mu_k) in enumerate(zip(rows, included, strict=True), 1):
+        if not _same(row["cof"], mu_k):
+            check.add(shown, f"row {n}, field cof: {row['cof']!r} differs from the run's "
+                      f"mu_k {mu_k!r}")
+
+
+def _cites_founding_paper(d: dict[str, Any]) -> bool:
+    sources = d.get("sources")
+    return isinstance(sources, list) and any(
+        isinstance(s, dict) and FOUNDING_PAPER["title"] in str(s.get("title", ""))
+        for s in sources)

@@ -109,13 +109,15 @@ def citation_text(publisher: Publisher, year: int) -> str:
 
 # --------------------------------------------------------------------------- CITATION.cff
 
+# what YAML may hold literally in a quoted scalar, less NEL (U+0085, a line break in YAML 1.1)
 _YAML_PRINTABLE = re.compile(
-    "[^\t\n\r\x20-\x7e\x85\xa0-\ud7ff\ue000-\ufffd\U00010000-\U0010ffff]")
+    "[^\t\n\r\x20-\x7e\xa0-\ud7ff\ue000-\ufffd\U00010000-\U0010ffff]")
 
 
 def yaml_text(text: str) -> str:
     """``text`` as a YAML double-quoted scalar: JSON's escapes (valid YAML) plus ``\\uXXXX``
-    for what YAML does not allow literally (C1 controls, U+2028/9, surrogates, U+FFFE/F)."""
+    for what YAML does not allow literally or reads as a line break (C1 controls with NEL,
+    U+2028/9, surrogates, U+FFFE/F)."""
     quoted = json.dumps(text, ensure_ascii=False)
     quoted = quoted.replace("\u2028", "\\u2028").replace("\u2029", "\\u2029")
     return _YAML_PRINTABLE.sub(lambda m: f"\\u{ord(m.group()):04x}", quoted)

@@ -19,6 +19,7 @@ the way); it is not a signature: whoever can edit the files can edit the descrip
 from __future__ import annotations
 
 import io
+import json
 import math
 import os
 import tempfile
@@ -242,9 +243,13 @@ def _check_file(check: _Checker, res: dict[str, Any], base: Path) -> bytes | Non
         return None
     try:
         target = resource_file(base, res.get("path"))
-        data = read_bounded(target, check.limits.resource_bytes, what="resource file")
     except PackageRefused as exc:
         check.add(where, exc.problem)
+        return None
+    try:
+        data = read_bounded(target, check.limits.resource_bytes, what="file")
+    except PackageRefused as exc:
+        check.add(where, f"path {json.dumps(res['path'])}: {exc.problem}")
         return None
     shown = str(res["path"])
     if not _licences_ok(res.get("licenses")):

@@ -32,14 +32,31 @@ RUNS = [
 ]
 
 
-def make_processed(root: Path) -> tuple[Path, Path]:
-    """Write, reduce and store :data:`RUNS` under ``root``; returns ``(map, processed dir)``."""
+#: :data:`RUNS` plus two groups: one whose repeats agree (6 N) and one whose two repeats
+#: disagree by 0.15 (12 N), so that its range exceeds the pooled r = 2.8·s_r (≈ 0.12)
+SPREAD_RUNS = RUNS + [
+    ("ds_steel_6N_r1", "Dragonskin 30", "steel", 6.0, 20.0, 1,
+     SyntheticRun(mu_s=0.70, mu_k=0.470, normal_force_N=6.0, seed=7)),
+    ("ds_steel_6N_r2", "Dragonskin 30", "steel", 6.0, 20.0, 2,
+     SyntheticRun(mu_s=0.70, mu_k=0.480, normal_force_N=6.0, seed=8)),
+    ("ds_steel_6N_r3", "Dragonskin 30", "steel", 6.0, 20.0, 3,
+     SyntheticRun(mu_s=0.70, mu_k=0.475, normal_force_N=6.0, seed=9)),
+    ("ds_steel_12N_r1", "Dragonskin 30", "steel", 12.0, 20.0, 1,
+     SyntheticRun(mu_s=0.50, mu_k=0.30, normal_force_N=12.0, seed=10)),
+    ("ds_steel_12N_r2", "Dragonskin 30", "steel", 12.0, 20.0, 2,
+     SyntheticRun(mu_s=0.65, mu_k=0.45, normal_force_N=12.0, seed=11)),
+]
+
+
+def make_processed(root: Path, runs: list | None = None) -> tuple[Path, Path]:
+    """Write, reduce and store ``runs`` (default :data:`RUNS`) under ``root``; returns
+    ``(map, processed dir)``."""
     raw = root / "raw"
     processed = root / "processed"
     raw.mkdir(parents=True, exist_ok=True)
     settings = load_settings()
     records = []
-    for stem, pin, disc, force, temp, repeat, run in RUNS:
+    for stem, pin, disc, force, temp, repeat, run in (RUNS if runs is None else runs):
         path = raw / f"{stem}.csv"
         write_rheocompass_export(path, run, project="tests", test=stem, sample=pin)
         outcome = reduce_file(path, settings, RunLabels(pin, disc, force, temp, repeat))

@@ -4,21 +4,28 @@ escaping and embedded images are checked — from a real batch run and from the 
 from __future__ import annotations
 
 import base64
+import io
+import re
 import subprocess
 import sys
 from html.parser import HTMLParser
 from pathlib import Path
 
+import pandas as pd
 import pytest
 from click.testing import CliRunner
 
 from published_map import PUBLISHED_CSV, write_published_map
-from reduced_runs import RUNS, make_processed
+from reduced_runs import RUNS, SPREAD_RUNS, make_processed
 from tribopipe.campaign import load_campaign, run_campaign
 from tribopipe.cli import main
+from tribopipe.errors import ExportError
+from tribopipe.export.plots import find_trace
 from tribopipe.frictionmap import read_map
 from tribopipe.report import (
+    MAP_TITLE,
     build_report,
+    group_anchor,
     make_report,
     report_inputs,
     report_sections,
@@ -122,6 +129,8 @@ def test_group_table_has_one_row_per_group_and_links_to_every_run(processed, htm
         assert run_anchor(mid) in ids
     # every internal link lands on something
     for href in page.hrefs:
+        if href.startswith("data:text/csv"):
+            continue  # the tables' CSV downloads
         assert href.startswith("#") and href[1:] in ids, href
 
 
@@ -177,7 +186,15 @@ def test_published_map_report_without_traces_or_failures(tmp_path):
     assert page.rows["fit-table"] == 17
     assert len([1 for _, alt in page.images if " on " in alt]) == 11
     assert "No failures.csv" in html
-    assert html.count("no trace (imported row") == 169
+    # a map report: worded so, no μ_S columns (the published map holds none), no per-run
+    # expanders saying "no trace", no overlays; the runs as one table, each row a link target
+    assert "<title>tribopipe friction-map report</title>" in html
+    assert "Map summary" in html and "Campaign summary" not in html
+    assert page.sections == list(report_sections(map_report=True))
+    assert "μ_S" not in group_header(html) and "μ_S" not in runs_header(html)
+    assert "no trace (" not in html and "<details" not in html
+    assert page.rows["runs-table"] == 169
+    assert all(run_anchor(m) in page.ids for m in read_map(map_path)["measurement_id"])
 
 
 def _campaign(root: Path) -> Path:
@@ -229,3 +246,97 @@ def test_report_command_errors_are_one_line(tmp_path):
     result = CliRunner().invoke(main, ["report", "--map", str(tmp_path / "none.parquet")])
     assert result.exit_code == 1
     assert "empty or absent" in result.output and "Traceback" not in result.output
+
+
+# --------------------------------------------------------------------------- issue 11, part 3
+
+
+def group_header(html: str) -> str:
+    return html.split("<table id=group-table><thead>", 1)[1].split("</thead>", 1)[0]
+
+
+def runs_header(html: str) -> str:
+    return html.split("<table id=runs-table><thead>", 1)[1].split("</thead>", 1)[0]
+
+
+def downloads(html: str) -> dict[str, pd.DataFrame]:
+    """The tables offered for download, by link id, read back as CSV."""
+    out = {}
+    for element_id, uri in re.findall(r'<a id="([\w-]+)" download="[^"]*" href="([^"]+)"', html):
+        head, data = uri.split(",", 1)
+        assert head == "data:text/csv;charset=utf-8;base64"
+        out[element_id] = pd.read_csv(io.BytesIO(base64.b64decode(data, validate=True)))
+    return out
+
+
+@pytest.fixture(scope="module")
+def spread(tmp_path_factory) -> tuple[Path, Path]:
+    """A processed campaign with a group whose repeats disagree beyond r."""
+    return make_processed(tmp_path_factory.mktemp("spread"), SPREAD_RUNS)
+
+
+def test_the_repeats_of_a_group_with_range_above_r_are_overlaid(spread):
+    map_path, proc = spread
+    inputs = report_inputs(map_path, proc)
+    wide = inputs.groups[inputs.groups["range_exceeds_r"]]
+    assert len(wide) == 1 and float(wide["normal_force_N"].iloc[0]) == 12.0
+    html = build_report(inputs)
+    page = parse(html)
+    anchor = group_anchor(wide.iloc[0].to_dict())
+    assert anchor in page.ids and f"#{anchor}" in page.hrefs  # the QC cell links to it
+    overlays = [src for src, alt in page.images if alt.startswith("repeats of ")]
+    assert len(overlays) == 1 and len(decoded_png(overlays[0])) > 5_000
+    section = html.split('<section id="spread">', 1)[1].split("</section>", 1)[0]
+    for mid in wide["run_ids"].iloc[0].split(";"):
+        assert f'href="#{run_anchor(mid)}"' in section
+    # the per-run trace plots are still one per run
+    assert len([1 for _, alt in page.images if alt.startswith("trace of run")]) == len(
+        SPREAD_RUNS)
+
+
+def test_the_overlay_draws_each_repeat_from_its_trace(spread, tmp_path):
+    from tribopipe.export.plots import plot_group_overlay
+
+    map_path, proc = spread
+    runs = read_map(map_path)
+    rows = runs[runs["normal_force_N"] == 12.0].to_dict(orient="records")
+    traces = [(r, pd.read_parquet(find_trace(proc / "traces", r["measurement_id"])))
+              for r in rows]
+    out = plot_group_overlay(traces, tmp_path / "overlay.svg", title="12 N")
+    svg = Path(out).read_text(encoding="utf-8")
+    # one line per repeat plus its dashed μ_K, and a legend entry naming each run
+    for r in rows:
+        assert r["measurement_id"][:8] in svg
+    with pytest.raises(ExportError, match="no traces"):
+        plot_group_overlay([], tmp_path / "none.png", title="x")
+
+
+def test_a_campaign_report_keeps_the_mu_s_columns_and_says_campaign(html):
+    assert "μ_S n" in group_header(html) and "Campaign summary" in html
+    assert "<title>tribopipe campaign report</title>" in html
+    assert 'id="spread"' in html and "No group's repeats spread beyond" in html
+
+
+def test_group_and_fit_tables_download_as_formula_safe_csv(tmp_path):
+    from test_frictionmap import run_record
+    from tribopipe.frictionmap import append_records
+
+    map_path = write_published_map(PUBLISHED_CSV, tmp_path / "friction_map.parquet")
+    append_records(map_path, [run_record(1, pin="=HYPERLINK(\"http://x\")", disc="@steel"),
+                              run_record(2, pin="=HYPERLINK(\"http://x\")", disc="@steel")])
+    inputs = report_inputs(map_path)
+    html = build_report(inputs)
+    tables = downloads(html)
+    assert set(tables) == {"group-csv", "fit-csv"}
+    groups, fits = tables["group-csv"], tables["fit-csv"]
+    assert len(groups) == len(inputs.groups) == 77 and len(fits) == len(inputs.fits)
+    assert list(groups.columns) == list(inputs.groups.columns)
+    hostile = groups[groups["disc"] == "'@steel"]
+    assert list(hostile["pin"]) == ["'=HYPERLINK(\"http://x\")"]
+    assert not groups["pin"].str.startswith(("=", "+", "-", "@")).any()
+    # numbers stay numbers, negative ones too (the fits' exponents are negative)
+    assert (fits["exponent"].dropna() < 0).all() and fits["exponent"].notna().sum() >= 17
+    steel = groups[(groups["pin"] == "Dragonskin 30") & (groups["disc"] == "steel")
+                   & (groups["temperature_C"] == 20)]
+    assert steel["mu_k_mean"].round(2).tolist() == [0.63, 0.45, 0.36, 0.30, 0.26]
+    assert inputs.page_title == MAP_TITLE  # the two reduced rows have no trace either

@@ -1,11 +1,19 @@
-"""A self-contained HTML report of a campaign: one file, plots embedded, no external resources.
+"""A self-contained HTML report of a campaign or a map: one file, plots embedded, no
+external resources.
 
-Sections: campaign summary, the friction-map explorer (:mod:`tribopipe.export.explorer`,
-inline), group table (each group links to its runs), power-law fits, per-pair plots (μ_K
-against pressure), flagged runs, failures with their reasons, and every run with its trace
-plot (μ over sliding distance, μ_S peak, μ_K window). Images are base64 PNG ``data:`` URIs;
-every piece of text from the map or the file system is escaped with :func:`html.escape`
-(the explorer's data travel as escaped JSON and reach the page as text only).
+Sections: summary, the friction-map explorer (:mod:`tribopipe.export.explorer`, inline),
+group table (each group links to its runs; downloadable as CSV), the repeats of groups
+whose range exceeds r overlaid (μ over sliding distance from their traces), power-law fits
+(downloadable as CSV), per-pair plots (μ_K against pressure), flagged runs, failures with
+their reasons, and every run: with its trace plot (μ over sliding distance, μ_S peak, μ_K
+window) where its trace is found, else as a row of a table. A report of a map without any
+trace (an imported map: μ_K only) says so — "friction-map report", not a campaign — and
+leaves out what it cannot fill: the μ_S columns when no group has μ_S, the overlays and
+the per-run plots. Images are base64 PNG ``data:`` URIs, the CSV downloads ``data:`` URIs
+whose text cells cannot run as spreadsheet formulas
+(:func:`tribopipe.export.tables.spreadsheet_csv`); every piece of text from the map or the
+file system is escaped with :func:`html.escape` (the explorer's data travel as escaped JSON
+and reach the page as text only).
 
 :func:`build_report` turns tables into the HTML text (it renders plots but writes no
 file); :func:`write_report` and :func:`make_report` read the map, ``failures.csv`` and
@@ -17,8 +25,8 @@ from __future__ import annotations
 import base64
 import io
 import math
-from collections.abc import Sequence
-from dataclasses import dataclass
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, replace
 from datetime import UTC, datetime
 from html import escape
 from pathlib import Path
@@ -28,7 +36,8 @@ from . import __version__
 from .campaign import load_campaign
 from .errors import ExportError, MapError
 from .export.explorer import explorer_data, explorer_fragment, explorer_style
-from .export.plots import find_trace, plot_pair, plot_trace_row, slug
+from .export.plots import find_trace, plot_group_overlay, plot_pair, plot_trace_row, slug
+from .export.tables import spreadsheet_csv
 from .files import write_text_atomic
 from .fit import fit_power_law
 from .frictionmap import read_map
@@ -42,6 +51,9 @@ if TYPE_CHECKING:
 #: resolution of embedded plots: pairs sharp, traces small (there can be hundreds)
 PAIR_DPI = 100
 TRACE_DPI = 80
+#: default titles of the two kinds of report
+CAMPAIGN_TITLE = "tribopipe campaign report"
+MAP_TITLE = "tribopipe friction-map report"
 
 _CSS = """
 body{font-family:system-ui,-apple-system,'Segoe UI',Roboto,Helvetica,Arial,sans-serif;
@@ -76,8 +88,10 @@ class ReportInputs:
     """Everything a report shows: runs (map rows), groups, fits, failures and traces.
 
     ``failures`` is a list of ``(file, reason)``; ``traces_dir`` the folder with
-    ``<stem>_<id8>.parquet`` traces (``None``: no trace plots); ``source`` a label
-    (config or map path) for the header.
+    ``<stem>_<id8>.parquet`` traces (``None``: no trace plots); ``trace_paths`` the trace of
+    each run found there (filled by :func:`build_report` when ``None``); ``title`` the
+    page's title (``None``: :data:`CAMPAIGN_TITLE` or, without any trace, :data:`MAP_TITLE`);
+    ``source`` a label (config or map path) for the header.
     """
 
     runs: pd.DataFrame
@@ -86,8 +100,19 @@ class ReportInputs:
     failures: tuple[tuple[str, str], ...] = ()
     failures_known: bool = False
     traces_dir: Path | None = None
-    title: str = "tribopipe campaign report"
+    title: str | None = None
     source: str | None = None
+    trace_paths: Mapping[str, Path] | None = None
+
+    @property
+    def map_report(self) -> bool:
+        """True when no run has a trace: a report of a map (e.g. imported), not a campaign."""
+        return not self.trace_paths
+
+    @property
+    def page_title(self) -> str:
+        """The title shown."""
+        return self.title or (MAP_TITLE if self.map_report else CAMPAIGN_TITLE)
 
 
 # ---------------------------------------------------------------------------- helpers
@@ -146,6 +171,21 @@ def _img(uri: str, alt: str) -> str:
     return f'<img src="{uri}" alt="{escape(alt)}">'
 
 
+def _csv_link(table: pd.DataFrame, name: str, element_id: str) -> str:
+    """A link that downloads ``table`` as ``name`` (CSV in a ``data:`` URI, formula-safe)."""
+    data = base64.b64encode(spreadsheet_csv(table).encode("utf-8")).decode("ascii")
+    return (f'<p><a id="{element_id}" download="{escape(name)}" '
+            f'href="data:text/csv;charset=utf-8;base64,{data}">Download this table as CSV'
+            "</a></p>")
+
+
+def group_anchor(group: Mapping[str, Any]) -> str:
+    """The HTML id of a group's overlay of repeats: ``spread-<pin>--<disc>-<F>N-<T>C``."""
+    return (f"spread-{slug(str(group['pin']))}--{slug(str(group['disc']))}-"
+            f"{slug(_num(group['normal_force_N'], 'g'))}N-"
+            f"{slug(_num(group['temperature_C'], 'g') or 'unknown')}C")
+
+
 def _flag_list(value: Any) -> list[str]:
     """The QC flags of a ``;``-joined flags cell."""
     if not isinstance(value, str):
@@ -166,6 +206,7 @@ def _summary(inp: ReportInputs) -> str:
     p = runs["pressure_kPa"].astype(float)
     rep = repeatability(inp.groups, "mu_k") if len(inp.groups) else None
     sources = runs["source"].value_counts().to_dict()
+    labs = runs["lab"].fillna("this lab").value_counts().to_dict() if "lab" in runs else {}
     items = [
         ("runs", f"{len(runs)} ({int(excluded.sum())} excluded)"),
         ("contact pairs", str(len(pairs))),
@@ -175,6 +216,7 @@ def _summary(inp: ReportInputs) -> str:
         ("contact pressure", f"{p.min():.4g} – {p.max():.4g} kPa" if len(p) else "–"),
         ("temperatures", ", ".join(f"{t:g} °C" for t in temps) or "unknown"),
         ("sources", ", ".join(f"{k}: {v}" for k, v in sorted(sources.items()))),
+        ("labs", ", ".join(f"{k}: {v}" for k, v in sorted(labs.items()))),
         ("runs with QC flags", str(int(flagged.sum()))),
         ("failures", str(len(inp.failures)) if inp.failures_known else "no failures.csv"),
     ]
@@ -184,20 +226,27 @@ def _summary(inp: ReportInputs) -> str:
              f"s_r = {rep.s_r:.4f}, r = 2.8·s_r = {rep.r:.4f} ({rep.n_groups} groups, "
              f"{rep.dof} degrees of freedom)")
         )
+    if inp.map_report:
+        items.append(("traces", "none in this map (μ_K per run, nothing to plot per run)"))
     body = "".join(f"<dt>{escape(k)}</dt><dd>{escape(v)}</dd>" for k, v in items)
+    heading = "Map summary" if inp.map_report else "Campaign summary"
     return (
-        '<section id="summary"><h2>Campaign summary</h2>'
+        f'<section id="summary"><h2>{heading}</h2>'
         f'<dl class="summary">{body}</dl></section>'
     )
 
 
 def _group_table(inp: ReportInputs) -> str:
-    """The group-table section; each group links to its pair plot and runs."""
+    """The group-table section; each group links to its pair plot and runs (and to the
+    overlay of its repeats where their range exceeds r). The μ_S columns are left out when
+    no group has a μ_S."""
+    with_mu_s = bool(len(inp.groups)) and bool((inp.groups["mu_s_n"] > 0).any())
+    overlaid = set(_overlay_groups(inp))
     head = (
         "<tr><th class=t>pin</th><th class=t>disc</th><th>F [N]</th><th>p [kPa]</th>"
         "<th>T [°C]</th><th>n</th><th>μ_K mean</th><th>μ_K SD</th><th>μ_K 95 % CI</th>"
-        "<th>μ_K CV</th><th>μ_S n</th><th>μ_S mean</th><th class=t>QC</th>"
-        "<th class=t>runs</th></tr>"
+        "<th>μ_K CV</th>" + ("<th>μ_S n</th><th>μ_S mean</th>" if with_mu_s else "")
+        + "<th class=t>QC</th><th class=t>runs</th></tr>"
     )
     rows = []
     for g in inp.groups.to_dict(orient="records"):
@@ -207,7 +256,9 @@ def _group_table(inp: ReportInputs) -> str:
         )
         qc = []
         if g.get("range_exceeds_r"):
-            qc.append("range &gt; r")
+            anchor = group_anchor(g)
+            qc.append(f'<a href="#{anchor}">range &gt; r</a>' if anchor in overlaid
+                      else "range &gt; r")
         if g.get("qc_flagged"):
             qc.append("flagged run")
         ci = _interval(g["mu_k_ci95_low"], g["mu_k_ci95_high"])
@@ -218,8 +269,10 @@ def _group_table(inp: ReportInputs) -> str:
             f"<td>{_num(g['normal_force_N'], 'g')}</td><td>{_num(g['pressure_kPa'], '.4g')}</td>"
             f"<td>{_num(g['temperature_C'], 'g')}</td><td>{g['mu_k_n']}</td>"
             f"<td>{_num(g['mu_k_mean'], '.3f')}</td><td>{_num(g['mu_k_std'], '.3f')}</td>"
-            f"<td>{ci}</td><td>{_num(g['mu_k_cv'], '.3f')}</td><td>{g['mu_s_n']}</td>"
-            f"<td>{_num(g['mu_s_mean'], '.3f')}</td><td class=t>{', '.join(qc)}</td>"
+            f"<td>{ci}</td><td>{_num(g['mu_k_cv'], '.3f')}</td>"
+            + (f"<td>{g['mu_s_n']}</td><td>{_num(g['mu_s_mean'], '.3f')}</td>" if with_mu_s
+               else "")
+            + f"<td class=t>{', '.join(qc)}</td>"
             f"<td class=t>{links}</td></tr>"
         )
     return (
@@ -227,8 +280,10 @@ def _group_table(inp: ReportInputs) -> str:
         "<p class=muted>One row per pair, nominal force and temperature; statistics over "
         "the repeats (excluded runs left out). QC: the group's range exceeds the "
         "repeatability limit r, or it holds a run with QC flags. Run ids link to the "
-        "runs and their trace plots.</p>"
-        f"<table id=group-table><thead>{head}</thead><tbody>{''.join(rows)}</tbody></table>"
+        "runs" + ("" if inp.map_report else " and their trace plots") + "."
+        + ("" if with_mu_s else " The map holds no μ_S, so its columns are left out.")
+        + "</p>" + _csv_link(inp.groups, "groups.csv", "group-csv")
+        + f"<table id=group-table><thead>{head}</thead><tbody>{''.join(rows)}</tbody></table>"
         "</section>"
     )
 
@@ -255,8 +310,8 @@ def _fits_table(inp: ReportInputs) -> str:
         '<section id="fits"><h2>Pressure dependence: μ_K = k·p<sup>n−1</sup></h2>'
         "<p class=muted>Least squares in log–log space on the individual runs, p in kPa "
         "(k is μ_K at 1 kPa); 95 % intervals from the t-distribution. Hertz-type contact "
-        "of an elastomer gives n−1 ≈ −1/3.</p>"
-        f"<table id=fit-table><thead>{head}</thead><tbody>{''.join(rows)}</tbody></table>"
+        "of an elastomer gives n−1 ≈ −1/3.</p>" + _csv_link(inp.fits, "fits.csv", "fit-csv")
+        + f"<table id=fit-table><thead>{head}</thead><tbody>{''.join(rows)}</tbody></table>"
         "</section>"
     )
 
@@ -332,33 +387,42 @@ def _failures(inp: ReportInputs) -> str:
 
 
 def _runs(inp: ReportInputs) -> str:
-    """One collapsible block per run, with its embedded trace plot when found."""
+    """Every run: a collapsible block with its embedded trace plot where its trace was
+    found, the others (imported rows, lost traces) as rows of one table."""
     import pandas as pd
 
     blocks = []
-    n_plots = 0
+    plain = []
     ordered = inp.runs.sort_values(
         ["pin", "disc", "temperature_C", "pressure_kPa", "repeat"], kind="mergesort"
     )
+    traces = inp.trace_paths or {}
+    with_mu_s = bool(inp.runs["mu_s"].notna().any())  # else the μ_S column is left out
     for r in ordered.to_dict(orient="records"):
         mid = str(r["measurement_id"])
-        trace_path = find_trace(inp.traces_dir, mid) if inp.traces_dir is not None else None
-        if trace_path is not None:
-            trace = pd.read_parquet(trace_path)
-            uri = _png_data_uri(
-                lambda buf, trace=trace, r=r: plot_trace_row(trace, r, buf, fmt="png",
-                                                             dpi=TRACE_DPI)
+        repeat = "" if pd.isna(r.get("repeat")) else str(r["repeat"])
+        if mid not in traces:
+            plain.append(
+                f'<tr id="{run_anchor(mid)}"><td class=t>{escape(mid[:8])}</td>'
+                f"<td class=t>{_e(r['pin'])}</td><td class=t>{_e(r['disc'])}</td>"
+                f"<td>{_num(r['pressure_kPa'], '.4g')}</td>"
+                f"<td>{_num(r['temperature_C'], 'g')}</td><td>{escape(repeat)}</td>"
+                f"<td>{_num(r['mu_k'], '.3f')}</td>"
+                + (f"<td>{_num(r['mu_s'], '.3f')}</td>" if with_mu_s else "")
+                + f"<td class=t>{_e(r.get('source'))}</td><td class=t>{_e(r.get('lab'))}</td>"
+                f"<td class=t>{escape(', '.join(_flag_list(r.get('flags'))))}</td></tr>"
             )
-            figure = _img(uri, f"trace of run {mid}")
-            n_plots += 1
-        else:
-            figure = "<p class=muted>no trace (imported row or trace not found)</p>"
+            continue
+        trace = pd.read_parquet(traces[mid])
+        uri = _png_data_uri(
+            lambda buf, trace=trace, r=r: plot_trace_row(trace, r, buf, fmt="png",
+                                                         dpi=TRACE_DPI)
+        )
         flags = ", ".join(_flag_list(r.get("flags"))) or "none"
-        repeat = "" if pd.isna(r.get("repeat")) else f", repeat {r['repeat']}"
         summary = (
             f"{escape(mid[:8])} · {_e(r['pin'])} on {_e(r['disc'])} · "
             f"{_num(r['pressure_kPa'], '.4g')} kPa · {_num(r['temperature_C'], 'g')} °C"
-            f"{escape(repeat)} · μ_K {_num(r['mu_k'], '.3f')}"
+            f"{escape(', repeat ' + repeat if repeat else '')} · μ_K {_num(r['mu_k'], '.3f')}"
             + (f" · μ_S {_num(r['mu_s'], '.3f')}" if _num(r["mu_s"], ".3f") else "")
         )
         facts = (
@@ -370,20 +434,80 @@ def _runs(inp: ReportInputs) -> str:
         # the id sits inside the <details> so that following a link opens it
         blocks.append(
             f'<details class="run"><summary>{summary}</summary>'
-            f'<div id="{run_anchor(mid)}">{facts}{figure}</div></details>'
+            f'<div id="{run_anchor(mid)}">{facts}{_img(uri, f"trace of run {mid}")}</div>'
+            "</details>"
         )
+    parts = [f'<section id="runs"><h2>Runs ({len(ordered)}; {len(blocks)} with trace '
+             "plots)</h2>"]
+    if blocks:
+        parts.append("<p class=muted>μ over sliding distance with the μ_S peak (red) and the "
+                     "μ_K window (blue). Click a run to open it.</p>" + "".join(blocks))
+    if plain:
+        table = (
+            "<table id=runs-table><thead><tr><th class=t>run</th><th class=t>pin</th>"
+            "<th class=t>disc</th><th>p [kPa]</th><th>T [°C]</th><th>repeat</th><th>μ_K</th>"
+            + ("<th>μ_S</th>" if with_mu_s else "")
+            + "<th class=t>source</th><th class=t>lab</th><th class=t>flags</th>"
+            f"</tr></thead><tbody>{''.join(plain)}</tbody></table>"
+        )
+        heading = ("" if not blocks else
+                   f"<h3>Runs without a trace ({len(plain)}: imported rows or traces not "
+                   "found)</h3>")
+        parts.append(heading + table)
+    parts.append("</section>")
+    return "".join(parts)
+
+
+def _overlay_groups(inp: ReportInputs) -> dict[str, tuple[dict[str, Any], list[str]]]:
+    """The groups whose range exceeds r and that have traces to overlay: anchor → (group
+    row, ids of its runs with a trace)."""
+    out: dict[str, tuple[dict[str, Any], list[str]]] = {}
+    if inp.map_report or not len(inp.groups):
+        return out
+    traces = inp.trace_paths or {}
+    for g in inp.groups[inp.groups["range_exceeds_r"].astype(bool)].to_dict(orient="records"):
+        ids = [i for i in str(g.get("run_ids") or "").split(";") if i in traces]
+        if ids:
+            out[group_anchor(g)] = (g, ids)
+    return out
+
+
+def _spread(inp: ReportInputs) -> str:
+    """The repeats of each group flagged "range > r", overlaid on shared axes (left out of
+    a map report, which has no traces)."""
+    import pandas as pd
+
+    if inp.map_report:
+        return ""
+    groups = _overlay_groups(inp)
+    rows = {str(r["measurement_id"]): r for r in inp.runs.to_dict(orient="records")}
+    rep = repeatability(inp.groups, "mu_k") if len(inp.groups) else None
+    limit = f"{rep.r:.4f}" if rep is not None and not math.isnan(rep.r) else "?"
+    figures = []
+    for anchor, (g, ids) in groups.items():
+        title = (f"{g['pin']} on {g['disc']}, {_num(g['pressure_kPa'], '.4g')} kPa, "
+                 f"{_num(g['temperature_C'], 'g') or '?'} °C: range "
+                 f"{float(g['mu_k_max']) - float(g['mu_k_min']):.4f} > r = {limit}")
+        pairs_ = [(rows[i], pd.read_parquet(inp.trace_paths[i])) for i in ids]  # type: ignore[index]
+        uri = _png_data_uri(lambda buf, t=title, p=pairs_: plot_group_overlay(
+            p, buf, title=t, fmt="png", dpi=PAIR_DPI))
+        links = " ".join(f'<a href="#{run_anchor(i)}">{escape(i[:8])}</a>' for i in ids)
+        figures.append(f'<figure id="{anchor}">{_img(uri, f"repeats of {title}")}'
+                       f"<figcaption>{escape(title)}; runs {links}</figcaption></figure>")
+    body = ("".join(figures) if figures else
+            "<p>No group's repeats spread beyond the repeatability limit r.</p>")
     return (
-        f'<section id="runs"><h2>Runs ({len(blocks)}; {n_plots} with trace plots)</h2>'
-        "<p class=muted>μ over sliding distance with the μ_S peak (red) and the μ_K window "
-        "(blue). Click a run to open it.</p>"
-        f"{''.join(blocks)}</section>"
+        '<section id="spread"><h2>Repeats that disagree (range &gt; r)</h2>'
+        "<p class=muted>The runs of each group whose μ_K range exceeds r = 2.8·s_r, "
+        "overlaid: μ over sliding distance, each run's μ_K dashed over its window.</p>"
+        f'<div class="pairs">{body}</div></section>'
     )
 
 
 def _explorer(inp: ReportInputs) -> str:
     """The friction-map explorer of :mod:`tribopipe.export.explorer` for the report's runs,
     inline (its style, data and script travel with it, so the page stays one file)."""
-    data = explorer_data(inp.runs, groups=inp.groups, fits=inp.fits, title=inp.title,
+    data = explorer_data(inp.runs, groups=inp.groups, fits=inp.fits, title=inp.page_title,
                          source=inp.source)
     return (
         '<section id="explorer"><h2>Explorer</h2>'
@@ -397,26 +521,43 @@ def _explorer(inp: ReportInputs) -> str:
 #: the page's sections in order: (id, navigation label, builder)
 _SECTIONS = (
     ("summary", "Summary", _summary), ("explorer", "Explorer", _explorer),
-    ("groups", "Groups", _group_table),
+    ("groups", "Groups", _group_table), ("spread", "Range > r", _spread),
     ("fits", "Fits", _fits_table), ("pairs", "Pair plots", _pair_plots),
     ("flagged", "Flagged", _flagged), ("failures", "Failures", _failures),
     ("runs", "Runs", _runs),
 )
 
 
+def with_traces(inp: ReportInputs) -> ReportInputs:
+    """``inp`` with ``trace_paths`` filled from ``traces_dir`` (unchanged when given)."""
+    if inp.trace_paths is not None:
+        return inp
+    found: dict[str, Path] = {}
+    if inp.traces_dir is not None:
+        for mid in inp.runs["measurement_id"].astype(str):
+            path = find_trace(inp.traces_dir, mid)
+            if path is not None:
+                found[mid] = path
+    return replace(inp, trace_paths=found)
+
+
 def build_report(inp: ReportInputs) -> str:
-    """The report's HTML text (UTF-8, self-contained). Inputs are not modified."""
+    """The report's HTML text (UTF-8, self-contained). Inputs are not modified; sections
+    with nothing to show in this kind of report are left out, with their links."""
+    inp = with_traces(inp)
     stamp = datetime.now(UTC).strftime("%Y-%m-%d %H:%M UTC")
     source = f" from {escape(inp.source)}" if inp.source else ""
-    nav = "".join(f'<a href="#{a}">{t}</a>' for a, t, _ in _SECTIONS)
-    sections = [build(inp) for _, _, build in _SECTIONS]
+    built = [(a, t, build(inp)) for a, t, build in _SECTIONS]
+    shown = [(a, t, html) for a, t, html in built if html]
+    nav = "".join(f'<a href="#{a}">{t}</a>' for a, t, _ in shown)
+    title = escape(inp.page_title)
     return (
         "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">"
         "<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">"
-        f"<title>{escape(inp.title)}</title><style>{_CSS}</style></head><body>"
-        f"<header><h1>{escape(inp.title)}</h1><p class=muted>tribopipe {escape(__version__)}"
+        f"<title>{title}</title><style>{_CSS}</style></head><body>"
+        f"<header><h1>{title}</h1><p class=muted>tribopipe {escape(__version__)}"
         f"{source}, {stamp}</p><nav>{nav}</nav></header>"
-        + "".join(sections)
+        + "".join(html for _, _, html in shown)
         + f"<script>{_OPEN_TARGET_JS}</script></body></html>\n"
     )
 
@@ -447,7 +588,7 @@ def report_inputs(
         failures=failures or (),
         failures_known=failures is not None,
         traces_dir=traces if traces.is_dir() else None,
-        title=title or "tribopipe campaign report",
+        title=title,
         source=source or str(map_path),
     )
 
@@ -488,6 +629,6 @@ def make_report(
     return write_report(output, inputs)
 
 
-def report_sections() -> Sequence[str]:
-    """The ids of the report's sections, in page order."""
-    return tuple(a for a, _, _ in _SECTIONS)
+def report_sections(*, map_report: bool = False) -> Sequence[str]:
+    """The ids of the report's sections, in page order (a map report has no overlays)."""
+    return tuple(a for a, _, _ in _SECTIONS if not (map_report and a == "spread"))

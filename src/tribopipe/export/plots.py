@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import math
 import re
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -73,6 +74,49 @@ def plot_runs(
         target = Path(out_dir) / f"{path.stem}.{fmt}"
         written.append(Path(plot_trace_row(trace, row, target, title=title, fmt=fmt)))
     return written, missing
+
+
+# ---------------------------------------------------------------------------- per group
+
+
+def plot_group_overlay(
+    traces: Sequence[tuple[Mapping[str, Any], pd.DataFrame]],
+    target: Target,
+    *,
+    title: str,
+    fmt: str | None = None,
+    dpi: int = DPI,
+) -> Target:
+    """The repeats of one condition group on shared axes: μ over sliding distance [mm] of
+    each run (``traces``: its map row and its reduced trace), one colour per run, with its
+    μ_K as a dashed line over its plateau window, so runs that disagree can be compared
+    where they part. The per-run plot (:func:`plot_trace_row`) is not changed by this."""
+    if not traces:
+        raise ExportError("no traces to overlay")
+    fig = new_figure(6.4, 3.8)
+    ax = fig.add_subplot()
+    colours = ["tab:blue", "tab:red", "tab:green", "tab:purple", "tab:orange", "tab:brown",
+               "tab:pink", "tab:gray"]
+    for i, (row, trace) in enumerate(traces):
+        colour = colours[i % len(colours)]
+        column = "mu_smooth" if "mu_smooth" in trace.columns else "mu"
+        mu_k = row.get("mu_k")
+        repeat = row.get("repeat")
+        label = (f"{str(row['measurement_id'])[:8]}"
+                 + ("" if not is_finite(repeat) else f", repeat {int(repeat)}")
+                 + ("" if not is_finite(mu_k) else f": μ_K {float(mu_k):.3f}"))
+        ax.plot(trace["sliding_distance_mm"], trace[column], "-", color=colour, lw=0.9,
+                alpha=0.85, label=label)
+        start, end = row.get("mu_k_window_start_mm"), row.get("mu_k_window_end_mm")
+        if is_finite(mu_k) and is_finite(start) and is_finite(end):
+            ax.plot([float(start), float(end)], [float(mu_k)] * 2, "--", color=colour, lw=1.6)
+    ax.set_xlabel("sliding distance s [mm]")
+    ax.set_ylabel(MU_LABEL)
+    ax.set_ylim(bottom=0)
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize="small", loc="lower right")
+    ax.set_title(title, fontsize="medium")
+    return save_figure(fig, target, fmt, dpi)
 
 
 # ---------------------------------------------------------------------------- per pair

@@ -576,3 +576,37 @@ def test_copied_snippets_equal_the_python_writer_for_any_name(tab, tmp_path):
     text = tab.page.evaluate("window.tribopipeExplorer.exportText('ansys')")
     assert max(len(line) for line in text.splitlines()) <= 100
     assert "\\x24" in text and "\\U0001f642" in text
+
+
+def test_the_reports_tables_download_as_csv_in_a_browser(tab, reduced, tmp_path):
+    import pandas as pd
+
+    from tribopipe.stats import group_statistics
+
+    map_path, _, _, processed = reduced
+    report = make_report(map_path=map_path, processed_dir=processed, output=tmp_path / "r.html")
+    tab.open(page_url(report))
+    with tab.page.expect_download() as info:
+        tab.page.click("#group-csv")
+    download = info.value
+    assert download.suggested_filename == "groups.csv"
+    groups = pd.read_csv(download.path())
+    expected = group_statistics(read_map(map_path))
+    assert list(groups.columns) == list(expected.columns)
+    assert groups["mu_k_mean"].tolist() == pytest.approx(expected["mu_k_mean"].tolist(),
+                                                         rel=1e-9)
+    with tab.page.expect_download() as info:
+        tab.page.click("#fit-csv")
+    assert info.value.suggested_filename == "fits.csv"
+    assert len(pd.read_csv(info.value.path())) == 2
+
+
+def test_a_published_packages_explorer_opens_from_disk(tab, reduced, tmp_path):
+    from tribopipe.export.citation import Publisher
+    from tribopipe.export.publish import publish_map
+
+    map_path, _, groups, _ = reduced
+    package = publish_map(map_path, tmp_path / "pkg", Publisher("Lab <b>X</b>")).path
+    tab.open(page_url(package / "explorer.html", pin="Dragonskin 30", disc="steel",
+                      pressure="45", temperature="20"))
+    assert_shows(tab, query(groups, "Dragonskin 30", "steel", 45.0, 20.0))

@@ -110,6 +110,8 @@ def test_publish_validate_merge_round_trip_gives_identical_runs(source_map, pack
     labs = fm.read_map(merged).groupby("source")["lab"].unique()
     assert list(labs["reduced"]) == [LAB]
     assert list(labs[fm.SOURCE_PUBLISHED]) == [fm.PUBLISHED_LAB]
+    shown = invoke("map", "show", "--map", merged).output
+    assert f"lab {LAB}: 6 runs" in shown and f"lab {fm.PUBLISHED_LAB}: 169 runs" in shown
     # merging it again, or into the map it came from, changes nothing
     again = invoke("map", "merge", package / "datapackage.json", "--map", source_map)
     assert again.exit_code == 0 and "0 added, 175 unchanged" in again.output

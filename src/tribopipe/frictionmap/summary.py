@@ -29,6 +29,8 @@ def map_summary(path: str | os.PathLike[str]) -> str:
     lines.append(f"  contact pairs: {pairs.ngroups}; condition groups: {len(groups)}")
     for source, n in runs["source"].value_counts().sort_index().items():
         lines.append(f"  source {source}: {_runs(n)}")
+    for lab, n in runs["lab"].fillna("(this lab)").value_counts().sort_index().items():
+        lines.append(f"  lab {lab}: {_runs(n)}")
     lines.append("")
     lines.append("  pin / disc: runs, conditions, force [N], temperature [°C]")
     for (pin, disc), sub in pairs:

@@ -17,6 +17,7 @@ import math
 import os
 import shutil
 import threading
+import time
 from pathlib import Path
 from urllib.parse import urlencode
 
@@ -91,7 +92,20 @@ class Tab:
 
     def open(self, url: str) -> None:
         self.page.goto(url)
-        self.page.wait_for_function("window.tribopipeExplorer !== undefined")
+        self.wait_until("window.tribopipeExplorer !== undefined")
+
+    def wait_until(self, expression: str, timeout_s: float = 30.0) -> None:
+        """Poll a JavaScript expression from Python until it is true.
+
+        Playwright's ``wait_for_function`` may fall back to ``eval`` inside the page when
+        it has to poll, which the page's Content-Security-Policy rightly forbids (and
+        which then fails under load); ``page.evaluate`` is not subject to the policy.
+        """
+        deadline = time.monotonic() + timeout_s
+        while not self.page.evaluate(expression):
+            if time.monotonic() > deadline:
+                raise AssertionError(f"page never satisfied: {expression}")
+            time.sleep(0.02)
 
     def check_clean(self, *, origin: str = "file://") -> None:
         assert self.problems == []
@@ -377,8 +391,7 @@ def test_copy_puts_the_text_on_the_clipboard(browser, reduced):
     t.open(page_url(page, pin="Dragonskin 30", disc="steel", pressure="30", temperature="20"))
     t.page.select_option("#tpx-export-format", "abaqus")
     t.page.click("#tpx-copy")
-    t.page.wait_for_function(
-        "document.getElementById('tpx-export-status').textContent !== ''")
+    t.wait_until("document.getElementById('tpx-export-status').textContent !== ''")
     assert t.page.text_content("#tpx-export-status") == "copied"
     copied = t.page.evaluate("navigator.clipboard.readText()")
     assert copied == t.page.input_value("#tpx-export-text")

@@ -100,3 +100,91 @@ def test_the_old_import_place_still_works() -> None:
     from tribopipe import reduce
 
     assert reduce.select_friction_interval is select_friction_interval
+
+
+# --------------------------------------------------------------------------- several tests
+
+
+def session(*runs_per_test: tuple[SyntheticRun, ...]) -> list[Measurement]:
+    """The intervals of several tests, numbered from 1 in each, as a session export reads."""
+    items = []
+    for k, runs in enumerate(runs_per_test, start=1):
+        frames = [f for run in runs for f in make_intervals(run)]
+        items += [Measurement(frame, MeasurementMeta("s.csv", "synthetic", test=f"T{k}",
+                                                     result=f"T{k} 1", interval=i))
+                  for i, frame in enumerate(frames, start=1)]
+    return items
+
+
+def test_every_test_gets_its_friction_interval_and_its_own_set_up_offset() -> None:
+    from tribopipe.intervals import friction_intervals
+
+    items = session(
+        (SyntheticRun(torque_offset_Nm=3e-4, seed=51),),
+        (SyntheticRun(torque_offset_Nm=-2e-4, setup_interval=False, seed=52),),
+        (SyntheticRun(torque_offset_Nm=-2e-4, seed=53),),
+    )
+    found = friction_intervals(items)
+    assert [(r.test, r.result) for r in found] == [("T1", "T1 1"), ("T2", "T2 1"),
+                                                  ("T3", "T3 1")]
+    assert all(r.problem is None and len(r.friction) == 1 for r in found)
+    one, two, three = (r.friction[0] for r in found)
+    assert (one.meta.interval, two.meta.interval, three.meta.interval) == (2, 1, 2)
+    assert one.meta.torque_offset.torque_Nm == pytest.approx(3e-4, abs=5e-5)
+    # T2 has no set-up of its own and never borrows T1's (another test, another zero)
+    assert two.meta.torque_offset is None
+    assert three.meta.torque_offset.torque_Nm == pytest.approx(-2e-4, abs=5e-5)
+    assert three.meta.torque_offset.source == "set-up interval 1"
+
+
+def test_force_steps_in_one_test_are_one_friction_interval_each() -> None:
+    """A set-up, then 3 N and 5 N steps without a new set-up: both steps are friction
+    intervals; the nearest at-rest interval before each (the set-up) zeroes both."""
+    from tribopipe.intervals import friction_intervals
+
+    items = session((SyntheticRun(normal_force_N=3.0, torque_offset_Nm=2e-4, seed=54),
+                     SyntheticRun(normal_force_N=5.0, torque_offset_Nm=2e-4,
+                                  setup_interval=False, duration_s=200.0, seed=55)))
+    (found,) = friction_intervals(items)
+    assert [m.meta.interval for m in found.friction] == [2, 3]
+    for m in found.friction:
+        assert m.meta.torque_offset.source == "set-up interval 1"
+        assert m.meta.torque_offset.torque_Nm == pytest.approx(2e-4, abs=5e-5)
+    # the single choice is still one interval: the one travelling farthest
+    assert select_friction_interval(items).meta.interval == 2
+
+
+def test_a_test_without_rotation_is_its_own_problem_naming_it() -> None:
+    from tribopipe.intervals import friction_intervals
+
+    still = make_intervals(SyntheticRun(seed=56))[0]  # a set-up alone: the disc never turns
+    items = session((SyntheticRun(seed=57),)) + [
+        Measurement(still, MeasurementMeta("s.csv", "synthetic", test="Hold", result="Hold 1",
+                                           interval=1))]
+    good, bad = friction_intervals(items)
+    assert len(good.friction) == 1 and good.problem is None
+    assert bad.friction == () and isinstance(bad.problem, ReductionError)
+    message = str(bad.problem)
+    assert message.startswith("s.csv: Hold / Hold 1: no friction interval: no rotation")
+    # a one-test export keeps the message it always had
+    with pytest.raises(ReductionError, match=r"^s\.csv: no rotation in any of the 1 interval"):
+        select_friction_interval(items[-1:])
+
+
+def test_the_real_two_test_relaxation_export_has_no_friction_interval_in_either_test(
+    data_dir,
+) -> None:
+    """A real session export of two stress-relaxation tests: torque but no normal force
+    and no rotation. Each test is refused on its own, by name."""
+    from tribopipe.intervals import friction_intervals
+    from tribopipe.readers import read_export
+
+    path = data_dir / "rheocompass_en_utf16_two_tests.csv"
+    found = friction_intervals(read_export(path))
+    assert [r.test for r in found] == ["Stress Relaxation 1", "Stress Relaxation"]
+    for r in found:
+        assert r.friction == ()
+        assert isinstance(r.problem, MissingQuantityError)
+        assert str(r.problem).startswith(
+            f"{path}: {r.test} / Step strain 1: no friction interval: no interval has time, "
+            "torque and normal force (missing: normal_force_N)")

@@ -2,10 +2,14 @@
 
 An export holds several intervals (of one or more tests and results): typically a
 normal-force set-up with the disc at rest, then the friction interval with the disc
-turning. :func:`select_friction_interval` picks the interval with rotation; when the
-interval right before it is verified at rest, its robust mean torque is the instrument's
-torque zero offset (with the disc at rest the true friction torque is zero), attached as
-``meta.torque_offset`` for :func:`tribopipe.reduce.reduce_measurement`.
+turning; a test whose method holds force or speed steps has several friction intervals,
+and a session export holds several tests. :func:`friction_intervals` finds every friction
+interval of every test and result (the rule is in its docstring); the nearest interval
+before each in the same test and result that is verified at rest is its set-up, whose
+robust mean torque is the instrument's torque zero offset (with the disc at rest the true
+friction torque is zero), attached as ``meta.torque_offset`` for
+:func:`tribopipe.reduce.reduce_measurement`. :func:`select_friction_interval` is the
+single choice among them (the one travelling farthest).
 
 What the reduction reads of the chosen interval is prepared here too:
 :func:`interval_samples` (the complete samples as new float arrays, time-ordered, force
@@ -23,7 +27,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from .config import ReductionParams
-from .errors import MissingQuantityError, ReductionError
+from .errors import MissingQuantityError, ReductionError, TribopipeError
 from .measurement import (
     ANGLE,
     NORMAL_FORCE,
@@ -33,6 +37,7 @@ from .measurement import (
     TORQUE,
     Measurement,
     TorqueOffset,
+    interval_label,
 )
 
 if TYPE_CHECKING:
@@ -104,64 +109,153 @@ def setup_torque_offset_Nm(setup: Measurement) -> float | None:
     return robust_mean(torque[np.isfinite(torque)])
 
 
-def select_friction_interval(measurements: Sequence[Measurement]) -> Measurement:
-    """The friction interval of an export: the interval with rotation.
+def group_results(measurements: Sequence[Measurement]) -> list[list[Measurement]]:
+    """The intervals cut into their tests and results, in file order: a new group starts
+    where the test or result name changes or the interval numbering restarts (two tests
+    of one export may carry the same names)."""
+    groups: list[list[Measurement]] = []
+    previous: Measurement | None = None
+    for m in measurements:
+        restarted = (
+            previous is not None and m.meta.interval is not None
+            and previous.meta.interval is not None and m.meta.interval <= previous.meta.interval
+        )
+        same = previous is not None and \
+            (m.meta.test, m.meta.result) == (previous.meta.test, previous.meta.result)
+        if not groups or not same or restarted:
+            groups.append([])
+        groups[-1].append(m)
+        previous = m
+    return groups
 
-    Among the intervals having time, torque and normal force, the one whose disc rotates
-    (deflection angle travels ≥ ``ROTATION_MIN_ANGLE_RAD`` or median speed ≥
-    ``ROTATION_MIN_SPEED_RAD_S``) is chosen; if several rotate, the one travelling
-    farthest. Without any angle or speed column the interval with the largest median
-    |torque| is taken (a normal-force set-up interval carries almost none).
 
-    When the interval right before it in the same test and result is verified at rest
-    (a normal-force set-up), its mean torque is attached to the returned measurement's
-    ``meta.torque_offset`` (a :class:`~tribopipe.measurement.TorqueOffset` naming the
-    set-up interval) for :func:`reduce_measurement`. The input measurements are not
-    modified.
+@dataclass(frozen=True)
+class ResultIntervals:
+    """One test/result of an export: its friction intervals, in file order, each carrying
+    its set-up interval's torque offset (``meta.torque_offset``), or ``problem``, why it
+    holds none (then ``friction`` is empty)."""
 
-    Raises :class:`ReductionError` when no interval has the quantities or none rotates.
+    test: str | None
+    result: str | None
+    friction: tuple[Measurement, ...]
+    problem: TribopipeError | None = None
+
+    @property
+    def label(self) -> str:
+        """``test / result`` (``""`` when the export names neither)."""
+        return interval_label(self.test, self.result, None)
+
+
+def friction_intervals(measurements: Sequence[Measurement]) -> list[ResultIntervals]:
+    """Every friction interval of an export, by test and result (:func:`group_results`).
+
+    The rule, applied to each test/result on its own:
+
+    * only intervals with time, torque and normal force count;
+    * where any of them has a deflection angle or a rotational speed, every interval
+      whose disc rotates (angle travels ≥ ``ROTATION_MIN_ANGLE_RAD`` or median speed ≥
+      ``ROTATION_MIN_SPEED_RAD_S``) is a friction interval: one for a plain test, one
+      per step where a test's method holds force or speed steps; none rotating is a
+      ``problem`` (the disc never turned);
+    * without any angle or speed, rest and sliding cannot be told apart: the one
+      interval with the largest median |torque| is taken (a normal-force set-up carries
+      almost none).
+
+    Set-up interval: for each friction interval, the nearest interval before it in the
+    same test and result that is verified at rest (it has an angle or speed, and the disc
+    does not rotate). Its robust mean torque is the instrument's torque zero offset for
+    that friction interval, attached as ``meta.torque_offset`` (a
+    :class:`~tribopipe.measurement.TorqueOffset` naming the set-up interval); a set-up is
+    never borrowed from another test or result. The input measurements are not modified.
+
+    Messages name the test and result when the export holds several.
     """
-    items = list(measurements)
-    if not items:
-        raise ReductionError("no intervals to choose the friction interval from")
+    groups = group_results(measurements)
+    several = len(groups) > 1
+    return [_result_intervals(items, several) for items in groups]
+
+
+def _result_intervals(items: list[Measurement], several: bool) -> ResultIntervals:
+    """The friction intervals of one test/result (see :func:`friction_intervals`)."""
+    first = items[0].meta
+    where = interval_label(first.test, first.result, None)
+    prefix = f"{where}: no friction interval: " if several and where else (
+        "no friction interval: " if several else "")
+    source = first.source_file
     usable = [i for i, m in enumerate(items) if m.has(TIME, TORQUE, NORMAL_FORCE)]
-    source = items[0].meta.source_file
     if not usable:
         found = sorted({c for m in items for c in m.data.columns})
         absent = [c for c in (TIME, TORQUE, NORMAL_FORCE) if not any(m.has(c) for m in items)]
         lacking = ", ".join(absent) if absent else "all three together"
-        raise MissingQuantityError(
-            f"no interval has time, torque and normal force (missing: {lacking}); "
+        return ResultIntervals(first.test, first.result, (), MissingQuantityError(
+            f"{prefix}no interval has time, torque and normal force (missing: {lacking}); "
             "columns found: " + (", ".join(found) or "none"),
             path=source,
             hint="check the column names or pass an alias table",
-        )
+        ))
     known = [i for i in usable if _rotation_known(items[i])]
     if known:
-        rotating = [i for i in known if _rotates(items[i])]
-        if not rotating:
-            raise ReductionError(
-                f"no rotation in any of the {len(known)} interval(s) with an angle or speed: "
-                "the disc never turned, so there is no friction interval",
+        chosen = [i for i in known if _rotates(items[i])]
+        if not chosen:
+            return ResultIntervals(first.test, first.result, (), ReductionError(
+                f"{prefix}no rotation in any of the {len(known)} interval(s) with an angle or "
+                "speed: the disc never turned, so there is no friction interval",
                 path=source,
-            )
-        chosen = max(rotating, key=lambda i: (_angle_travel(items[i]), -i))
+            ))
     else:
-        chosen = max(usable, key=lambda i: (_median_abs_torque(items[i]), -i))
+        chosen = [max(usable, key=lambda i: (_median_abs_torque(items[i]), -i))]
+    return ResultIntervals(first.test, first.result,
+                           tuple(_with_setup_offset(items, i) for i in chosen))
+
+
+def _with_setup_offset(items: list[Measurement], chosen: int) -> Measurement:
+    """``items[chosen]`` with the torque offset of its set-up interval: the nearest
+    interval before it (same test/result) verified at rest."""
     picked = items[chosen]
-    previous = chosen - 1
-    if previous >= 0:
-        before = items[previous]
-        same_run = (before.meta.test, before.meta.result) == (picked.meta.test, picked.meta.result)
-        if same_run and _rotation_known(before) and not _rotates(before):
-            offset = setup_torque_offset_Nm(before)
-            if offset is not None:
-                where = f"set-up interval {before.meta.interval}" if before.meta.interval else (
-                    "set-up interval"
-                )
-                picked = Measurement(data=picked.data, meta=replace(
-                    picked.meta, torque_offset=TorqueOffset(torque_Nm=offset, source=where)))
+    for before in reversed(items[:chosen]):
+        if not _rotation_known(before) or _rotates(before):
+            continue
+        offset = setup_torque_offset_Nm(before)
+        if offset is None:
+            continue
+        where = f"set-up interval {before.meta.interval}" if before.meta.interval else (
+            "set-up interval"
+        )
+        return Measurement(data=picked.data, meta=replace(
+            picked.meta, torque_offset=TorqueOffset(torque_Nm=offset, source=where)))
     return picked
+
+
+def all_friction_intervals(measurements: Sequence[Measurement]) -> list[Measurement]:
+    """The friction intervals of every test and result (:func:`friction_intervals`), in
+    file order. Raises the first test/result's ``problem`` when the export holds none."""
+    found = friction_intervals(measurements)
+    if not found:
+        raise ReductionError("no intervals to choose the friction interval from")
+    out = [m for r in found for m in r.friction]
+    if not out:
+        problem = next(r.problem for r in found if r.problem is not None)
+        raise problem
+    return out
+
+
+def select_friction_interval(measurements: Sequence[Measurement]) -> Measurement:
+    """The one friction interval of an export that travels farthest (ties: the first).
+
+    Of the friction intervals of every test and result (:func:`friction_intervals`:
+    every interval whose disc rotates; without any angle or speed, the interval with the
+    largest median |torque|), the one whose disc travels farthest, else the one with the
+    largest median |torque|, carrying its set-up interval's torque offset. A reduction of
+    the whole export reads them all (:func:`tribopipe.pipeline.read_runs`); this is the
+    single choice for a one-run export.
+
+    Raises :class:`ReductionError` (:class:`MissingQuantityError`) when no interval has
+    the quantities or none rotates.
+    """
+    items = all_friction_intervals(measurements)
+    best = max(range(len(items)),
+               key=lambda i: (_angle_travel(items[i]), _median_abs_torque(items[i]), -i))
+    return items[best]
 
 
 def _median_abs_torque(m: Measurement) -> float:

@@ -40,6 +40,7 @@ from .measurement import ANGLE, NORMAL_FORCE, SPEED, TEMPERATURE, TIME, TORQUE
 from .physics import FOUNDING_FRICTION_RADIUS_MM, FOUNDING_SPEED_RPM
 
 if TYPE_CHECKING:
+    from collections.abc import Sequence
     from os import PathLike
 
     import pandas as pd
@@ -307,6 +308,55 @@ def _interval_block(index: int, frame: pd.DataFrame, labels: dict, comma: bool) 
     ]
 
 
+@dataclass(frozen=True)
+class SyntheticTest:
+    """One ``Test:`` block of a RheoCompass export: its name, the sample (its result is
+    ``"<sample> 1"``) and its runs, each giving ``[set-up,] friction`` intervals
+    (:func:`make_intervals`) in order: one run for a plain test, several for force or
+    speed steps within one test (give the later steps ``setup_interval=False`` for steps
+    that follow each other without a set-up)."""
+
+    name: str
+    sample: str
+    runs: tuple[SyntheticRun, ...]
+
+    def __post_init__(self) -> None:
+        if not self.runs:
+            raise ValueError("a test needs at least one run")
+
+
+def _test_block(test: SyntheticTest, labels: dict, comma: bool) -> list[str]:
+    """The lines of one test: ``Test:``, ``Result:`` and its intervals, numbered from 1."""
+    lines = [f"{labels['test']}\t{test.name}", "", f"{labels['result']}\t{test.sample} 1", ""]
+    frames = [frame for run in test.runs for frame in make_intervals(run)]
+    for i, frame in enumerate(frames, start=1):
+        if i > 1:
+            lines.append("")
+        lines.extend(_interval_block(i, frame, labels, comma))
+    return lines
+
+
+def rheocompass_session_text(
+    tests: Sequence[SyntheticTest], *, project: str, language: str = "en"
+) -> str:
+    """The text (CRLF line ends, no BOM) of a RheoCompass export holding several tests,
+    as RheoCompass writes a whole session into one file: one ``Project:`` line, then per
+    test its ``Test:``/``Result:`` block and intervals (numbered from 1 in every result),
+    tests separated by an empty line."""
+    if language not in _LABELS:
+        raise ValueError(f"language must be 'en' or 'fr', got {language!r}")
+    if not tests:
+        raise ValueError("a session needs at least one test")
+    labels = _LABELS[language]
+    comma = language == "fr"
+    lines = [f"{labels['project']}\t{project}", ""]
+    for k, test in enumerate(tests):
+        if k:
+            lines.append("")
+        lines.extend(_test_block(test, labels, comma))
+    return "\r\n".join(lines) + "\r\n"
+
+
 def rheocompass_text(
     run: SyntheticRun, *, project: str, test: str, sample: str, language: str = "en"
 ) -> str:
@@ -315,23 +365,14 @@ def rheocompass_text(
     One project, one test, one result named ``"<sample> 1"``; the set-up interval (if
     any) is interval 1, the friction interval follows.
     """
-    if language not in _LABELS:
-        raise ValueError(f"language must be 'en' or 'fr', got {language!r}")
-    labels = _LABELS[language]
-    comma = language == "fr"
-    lines = [
-        f"{labels['project']}\t{project}",
-        "",
-        f"{labels['test']}\t{test}",
-        "",
-        f"{labels['result']}\t{sample} 1",
-        "",
-    ]
-    for i, frame in enumerate(make_intervals(run), start=1):
-        if i > 1:
-            lines.append("")
-        lines.extend(_interval_block(i, frame, labels, comma))
-    return "\r\n".join(lines) + "\r\n"
+    return rheocompass_session_text([SyntheticTest(test, sample, (run,))], project=project,
+                                    language=language)
+
+
+def _write_utf16(path: str | PathLike[str], text: str) -> Path:
+    target = Path(path)
+    target.write_bytes(b"\xff\xfe" + text.encode("utf-16-le"))
+    return target
 
 
 def write_rheocompass_export(
@@ -345,7 +386,18 @@ def write_rheocompass_export(
 ) -> Path:
     """Write ``run`` as a RheoCompass export (UTF-16 LE with BOM, TAB, CRLF) and return
     its path. ``language="fr"`` writes French labels and decimal commas."""
-    target = Path(path)
-    text = rheocompass_text(run, project=project, test=test, sample=sample, language=language)
-    target.write_bytes(b"\xff\xfe" + text.encode("utf-16-le"))
-    return target
+    return _write_utf16(path, rheocompass_text(run, project=project, test=test, sample=sample,
+                                               language=language))
+
+
+def write_rheocompass_session(
+    path: str | PathLike[str],
+    tests: Sequence[SyntheticTest],
+    *,
+    project: str,
+    language: str = "en",
+) -> Path:
+    """Write several tests into one RheoCompass export (UTF-16 LE with BOM, TAB, CRLF;
+    :func:`rheocompass_session_text`) and return its path."""
+    return _write_utf16(path, rheocompass_session_text(tests, project=project,
+                                                       language=language))

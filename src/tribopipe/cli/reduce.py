@@ -71,10 +71,15 @@ def reduce_cmd(
 ) -> None:
     """Reduce exported pin-on-disc runs to μ_S and μ_K.
 
-    Prints one row per file (μ_S, μ_K, contact pressure per pin, mean normal force, flags),
-    writes the reduced trace (Parquet) and a JSON summary with the evidence to --out, and
-    appends the runs to the friction map (unless --no-map). Exit code 1 when any file
-    could not be reduced; the others are still reduced and stored.
+    Every friction interval of every test in each file is a run (a session export holds
+    several tests; a test with force or speed steps several intervals). Prints one row per
+    run (μ_S, μ_K, contact pressure per pin, mean normal force, flags; which test and
+    interval when a file holds several), writes each run's reduced trace (Parquet) and a
+    JSON summary with the evidence to --out, and appends the runs to the friction map
+    (unless --no-map). A file whose content an earlier FILE or the map already holds under
+    another name is a duplicate (stored once) or, with other labels, a conflict (refused).
+    Exit code 1 when any file or run could not be reduced, or was refused; the others are
+    still reduced and stored.
     """
     from ..config import load_settings
     from ..pipeline import ReadOptions, RunLabels, reduce_files
@@ -87,21 +92,53 @@ def reduce_cmd(
         ReadOptions(encoding=encoding, delimiter=delimiter, decimal=decimal),
         out_dir=out_dir, plots=plot, on_file=_echo_file,
     )
-    outcomes = [r.outcome for r in results if r.ok]
+    outcomes = [o for r in results for o in r.outcomes]
     _print(outcomes, as_json)
-    _store(outcomes, map_path, no_map, replace, labels)
-    failures = [r for r in results if not r.ok]
-    if failures:
-        click.echo(f"{len(failures)} of {len(files)} file(s) failed.", err=True)
+    _note_alike(results, labels)
+    refused = _store(outcomes, map_path, no_map, replace, labels)
+    failed = [r for r in results if not r.ok]
+    errors = sum(len(r.errors) for r in failed)
+    if failed or refused:
+        parts = []
+        if failed:
+            parts.append(f"{errors} error(s) in {len(failed)} of {len(files)} file(s)")
+        if refused:
+            parts.append(f"{refused} file(s) refused as a conflict")
+        click.echo("; ".join(parts) + ".", err=True)
         sys.exit(1)
 
 
 def _echo_file(result: object) -> None:
-    """One file done: its plot, or its error, on stderr as it happens."""
-    if result.error is not None:
-        click.echo(f"error: {result.error}", err=True)
-    elif result.plot is not None:
-        click.echo(f"plot: {result.plot}", err=True)
+    """One file done: its plots, or its errors, on stderr as it happens."""
+    for error in result.errors:
+        click.echo(f"error: {error}", err=True)
+    if result.duplicate_of is not None:
+        click.echo(f"duplicate: {result.path}: same content as {result.duplicate_of}: "
+                   "its runs are reduced once", err=True)
+    for run in result.runs:
+        if run.plot is not None:
+            click.echo(f"plot: {run.plot}", err=True)
+
+
+def _run_labels(outcomes: list) -> dict[int, str]:
+    """The run column: test and interval (the result too where a test has several) for
+    the runs of files that hold several; empty for one-run files."""
+    results_per_test: dict[tuple[str, object], set] = {}
+    for o in outcomes:
+        results_per_test.setdefault((o.path, o.place.test), set()).add(o.place.result)
+    shown: dict[int, str] = {}
+    for k, o in enumerate(outcomes):
+        if not o.several:
+            continue
+        place = o.place
+        parts = [p for p in (place.test,) if p]
+        if len(results_per_test[(o.path, place.test)]) > 1 and place.result:
+            parts.append(place.result)
+        if place.interval is not None:
+            parts.append(f"interval {place.interval}")
+        text = " / ".join(parts)
+        shown[k] = f"{text} #{place.occurrence}" if place.occurrence > 1 else text
+    return shown
 
 
 def _print(outcomes: list, as_json: bool) -> None:
@@ -113,28 +150,60 @@ def _print(outcomes: list, as_json: bool) -> None:
         return
     if not summaries:
         return
-    header = f"{'file':<40} {'mu_s':>6} {'mu_k':>6} {'p_kPa':>7} {'F_N_N':>6} {'T_C':>6}  flags"
+    runs = _run_labels(outcomes)
+    run_width = max((len(v) for v in runs.values()), default=0)
+    run_head = f" {'run':<{run_width}}" if runs else ""
+    header = (f"{'file':<40}{run_head} {'mu_s':>6} {'mu_k':>6} {'p_kPa':>7} {'F_N_N':>6} "
+              f"{'T_C':>6}  flags")
     click.echo(header)
-    for s in summaries:
+    for k, s in enumerate(summaries):
         name = s["file"] if len(s["file"]) <= 40 else "…" + s["file"][-39:]
+        run = f" {runs.get(k, '-'):<{run_width}}" if runs else ""
         click.echo(
-            f"{name:<40} {s['mu_s']:6.3f} {s['mu_k']:6.3f} {s['pressure_kPa']:7.2f} "
+            f"{name:<40}{run} {s['mu_s']:6.3f} {s['mu_k']:6.3f} {s['pressure_kPa']:7.2f} "
             f"{s['normal_force_N']:6.3f} {_fmt(s['temperature_C'], '6.1f'):>6}  "
             f"{','.join(s['flags']) or '-'}"
         )
 
 
-def _store(outcomes: list, map_path: str, no_map: bool, replace: bool, labels: object) -> None:
-    if no_map or not outcomes:
+def _note_alike(results: list, labels: object) -> None:
+    """Say so when the options label several tests of one file alike."""
+    given = any(v is not None for v in (labels.pin, labels.disc, labels.normal_force_N,
+                                        labels.temperature_C, labels.repeat))
+    if not given:
         return
+    for r in results:
+        if len(r.tests) > 1 and len(r.outcomes) > 1:
+            click.echo(f"note: {r.path} holds {len(r.tests)} tests: --pin/--disc/--force/"
+                       "--temperature/--repeat label each of its runs alike "
+                       "(a campaign can label them per test: manifest 'test' column, "
+                       "--test-pattern)", err=True)
+
+
+def _store(outcomes: list, map_path: str, no_map: bool, replace: bool, labels: object) -> int:
+    """Append the runs to the map; returns the number of files refused as a conflict."""
+    if no_map or not outcomes:
+        return 0
     if not labels.complete:
         click.echo(
             "note: runs not added to the friction map: pin and disc unknown "
             "(pass --pin and --disc, or --no-map)",
             err=True,
         )
-        return
-    from ..frictionmap import append_records
+        return 0
+    from ..pipeline import store_runs
 
-    report = append_records(map_path, [o.record for o in outcomes], replace=replace)
-    click.echo(f"map {map_path}: {report.summary()}", err=True)
+    report = store_runs(map_path, outcomes, replace=replace)
+    refused = 0
+    for same in report.same:
+        if same.conflict and not replace:
+            refused += 1
+            click.echo(f"conflict: {same.message()} (pass --replace to relabel it)", err=True)
+        elif same.conflict:
+            click.echo(f"replaced: {same.file}: same content as {same.other} but other labels "
+                       f"({'; '.join(same.differences)}): its labels replace the map's "
+                       "(--replace)", err=True)
+        else:
+            click.echo(f"duplicate: {same.message()}", err=True)
+    click.echo(f"map {map_path}: {report.appended.summary()}", err=True)
+    return refused

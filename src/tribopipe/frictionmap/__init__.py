@@ -13,6 +13,8 @@ The package's rooms, each importing only those above it:
   :func:`make_record`, the ids and the off-nominal QC flags of a run;
 * :mod:`~tribopipe.frictionmap.store` — Parquet reads and locked atomic writes, the pure
   :func:`fold_records`, append/update/merge and exclusions;
+* :mod:`~tribopipe.frictionmap.duplicates` — the same raw content under two file names:
+  a duplicate (same labels, stored once) or a conflict (other labels, refused);
 * :mod:`~tribopipe.frictionmap.published` — the founding paper's map (``.mat`` or CSV);
 * :mod:`~tribopipe.frictionmap.checks` — row checks of data from elsewhere (ranges,
   duplicates, provenance);
@@ -39,6 +41,14 @@ from __future__ import annotations
 
 from .checks import MU_MAX, RANGES, RowProblem, validate_runs
 from .datapackage import DESCRIPTOR, PackageLimits, PackageRefused, Problem
+from .duplicates import (
+    LABEL_COLUMNS,
+    SameContent,
+    compare_labels,
+    labels_of,
+    map_files_by_hash,
+    same_label,
+)
 from .merge import is_package, merge_map
 from .package import PackageCheck, PackageInvalid, check_package, package_runs
 from .published import (
@@ -155,4 +165,10 @@ __all__ = [
     "import_records",
     "import_table",
     "map_summary",
+    "LABEL_COLUMNS",
+    "SameContent",
+    "compare_labels",
+    "labels_of",
+    "map_files_by_hash",
+    "same_label",
 ]

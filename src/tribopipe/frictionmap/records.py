@@ -101,13 +101,15 @@ def nominal_pressure_kPa(force_N: float, instrument: InstrumentConfig) -> float:
     return float(contact_pressure_kPa(force_N, instrument.n_pins, instrument.pin_radius_mm))
 
 
-def measurement_id(file_hash: str, meta: MeasurementMeta) -> str:
+def measurement_id(file_hash: str, meta: MeasurementMeta, occurrence: int = 1) -> str:
     """Stable id of a run: 16 hex digits of SHA-256 over the raw file's content hash and
-    the test / result / interval the run was taken from."""
-    key = "|".join(
-        ["run", file_hash, meta.test or "", meta.result or "", str(meta.interval)]
-    )
-    return hashlib.sha256(key.encode()).hexdigest()[:16]
+    the test / result / interval the run was taken from. ``occurrence`` counts runs of one
+    export that carry the same test, result and interval (two tests of the same name):
+    the second and later get it in their key, the first keeps the id it always had."""
+    parts = ["run", file_hash, meta.test or "", meta.result or "", str(meta.interval)]
+    if occurrence > 1:
+        parts.append(f"#{occurrence}")
+    return hashlib.sha256("|".join(parts).encode()).hexdigest()[:16]
 
 
 def imported_id(source: str, pin: str, disc: str, force_N: float, temperature_C: float,
@@ -138,6 +140,7 @@ def make_record(
     file_hash: str,
     settings: Settings,
     tolerances: Tolerances | None = None,
+    occurrence: int = 1,
 ) -> dict[str, Any]:
     """One friction-map row (a dict keyed by :data:`RUN_COLUMNS`) for a reduced run.
 
@@ -145,7 +148,9 @@ def make_record(
     0.1 N is used and the run is flagged ``nominal_force_estimated``. The nominal pressure
     [kPa] follows from the nominal force and ``settings.instrument``. Runs whose measured
     force or temperature stray from nominal by more than ``tolerances`` (default
-    :class:`Tolerances`: 10 %, 2 K) are flagged (:func:`qc_flags`).
+    :class:`Tolerances`: 10 %, 2 K) are flagged (:func:`qc_flags`). ``occurrence`` is the
+    run's place among runs of the export with the same test/result/interval
+    (:func:`measurement_id`).
 
     Raises :class:`MapError` when pin or disc is unknown or μ_K is not a finite number.
     """
@@ -180,7 +185,7 @@ def make_record(
     k_start_mm, k_end_mm = result.mu_k_window_mm
     k_start_s, k_end_s = result.mu_k_window_s
     return {
-        "measurement_id": measurement_id(file_hash, meta),
+        "measurement_id": measurement_id(file_hash, meta, occurrence),
         "source": SOURCE_REDUCED,
         "lab": None,
         "pin": labels.pin,

@@ -1,0 +1,114 @@
+"""The same raw content under two file names: a duplicate, or a conflict of labels.
+
+A run's ``measurement_id`` hashes the raw file's content, not its name, so a byte-identical
+copy yields the same runs. When the copy's runs carry the same labels (pin, disc, nominal
+force and temperature, repeat) it is a *duplicate*: stored once, under the first name.
+When the labels differ it is a *conflict*: the two names claim different conditions for
+one measurement, and the second is refused rather than overwrite the first.
+:func:`compare_labels` decides between the two; :func:`map_files_by_hash` tells which
+files a map already holds, by content.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Any
+
+#: the columns that say what a run is (its condition group and repeat)
+LABEL_COLUMNS: tuple[str, ...] = ("pin", "disc", "normal_force_N", "temperature_C", "repeat")
+
+#: {file_hash: {source_file: {measurement_id: labels}}}
+FilesByHash = dict[str, dict[str, dict[str, dict[str, Any]]]]
+
+
+def _value(column: str, value: Any) -> Any:
+    """A label as compared: unknown (``None``, NaN, pandas NA) as ``None``, numbers as float."""
+    if value is None:
+        return None
+    try:
+        if value != value:  # NaN
+            return None
+    except TypeError:  # pandas NA refuses a truth value
+        return None
+    if column in ("normal_force_N", "temperature_C", "repeat"):
+        return float(value)
+    return str(value)
+
+
+def labels_of(row: Mapping[str, Any] | None) -> dict[str, Any]:
+    """The :data:`LABEL_COLUMNS` of a record, a map row or a ``RunLabels`` dict, with
+    unknown values as ``None`` and numbers as float."""
+    return {c: _value(c, (row or {}).get(c)) for c in LABEL_COLUMNS}
+
+
+def same_label(column: str, a: Any, b: Any) -> bool:
+    """True when two values of a label column agree: names ignoring case and surrounding
+    blanks, numbers within 1e-9, unknown equal only to unknown."""
+    a, b = _value(column, a), _value(column, b)
+    if a is None or b is None:
+        return a is b
+    if isinstance(a, float):
+        return math.isclose(a, b, rel_tol=1e-9, abs_tol=1e-9)
+    return a.strip().casefold() == b.strip().casefold()
+
+
+@dataclass(frozen=True)
+class SameContent:
+    """A file whose content (SHA-256) was already seen under another name: a duplicate
+    when the labels of their runs agree, else a conflict (the second is refused)."""
+
+    file: str
+    other: str
+    differences: tuple[str, ...] = ()
+
+    @property
+    def conflict(self) -> bool:
+        """True when the two files' runs carry different labels."""
+        return bool(self.differences)
+
+    def message(self) -> str:
+        """One line naming both files (and, for a conflict, the labels that differ)."""
+        if self.conflict:
+            return (f"{self.file}: same content as {self.other} but other labels "
+                    f"({'; '.join(self.differences)}): refused as a conflict, the map keeps "
+                    f"{self.other}'s")
+        return (f"{self.file}: same content as {self.other} (a duplicate): its runs are "
+                f"{self.other}'s, stored once")
+
+
+def compare_labels(file: str, other: str, new: Mapping[str, Mapping[str, Any]],
+                   old: Mapping[str, Mapping[str, Any]]) -> SameContent:
+    """Compare the labels of two same-content files, run by run: ``new`` and ``old`` map
+    measurement ids to labels (:data:`LABEL_COLUMNS`). Runs only one side holds are not
+    compared (another version may have found other runs in the same bytes)."""
+    differences: list[str] = []
+    for mid in sorted(set(new) & set(old)):
+        for col in LABEL_COLUMNS:
+            a, b = old[mid].get(col), new[mid].get(col)
+            if not same_label(col, a, b):
+                differences.append(f"{col} {_shown(col, a)} vs {_shown(col, b)}")
+    return SameContent(file=file, other=other, differences=tuple(dict.fromkeys(differences)))
+
+
+def _shown(column: str, value: Any) -> str:
+    value = _value(column, value)
+    if value is None:
+        return "unknown"
+    return f"{value:g}" if isinstance(value, float) else repr(value)
+
+
+def map_files_by_hash(runs: Any) -> FilesByHash:
+    """``{file_hash: {source_file: {measurement_id: labels}}}`` of a map's reduced rows
+    (a DataFrame from :func:`tribopipe.frictionmap.read_map`): which files the map holds,
+    by content."""
+    out: FilesByHash = {}
+    columns = ["file_hash", "source_file", "measurement_id", *LABEL_COLUMNS]
+    for row in runs.loc[:, columns].itertuples(index=False, name=None):
+        sha, source, mid, *values = row
+        if not isinstance(sha, str) or not sha or not isinstance(source, str):
+            continue
+        labels = {c: _value(c, v) for c, v in zip(LABEL_COLUMNS, values, strict=True)}
+        out.setdefault(sha, {}).setdefault(source, {})[str(mid)] = labels
+    return out

@@ -80,10 +80,11 @@ def test_campaign_list_shows_metadata_and_status(config: Path) -> None:
     before = invoke("campaign", "list", str(config))
     assert before.exit_code == 0, before.output
     lines = before.stdout.splitlines()
-    assert lines[0].split()[:4] == ["file", "status", "pin", "disc"]
+    assert lines[0].split()[:6] == ["file", "test", "interval", "status", "pin", "disc"]
     row = next(line for line in lines if line.startswith("DS30_steel_5N_20C_r2.csv"))
-    assert row.split()[1] == "new" and "Dragonskin 30" in row
-    assert "4 file(s): 4 new" in before.stdout
+    # not read yet: its tests are not known
+    assert row.split()[1:4] == ["-", "-", "new"] and "Dragonskin 30" in row
+    assert "4 run(s) in 4 file(s): 4 new" in before.stdout
 
     invoke("batch", str(config))
     after = invoke("campaign", "list", str(config), "--json")

@@ -48,6 +48,9 @@ STATE_FILE = ".tribopipe-state.{name}.json"
 BATCH_LOCK = ".tribopipe-batch.lock"
 #: the header of ``failures.csv``
 FAILURES_HEADER: tuple[str, str] = ("file", "reason")
+#: what this tool writes at the top of an output folder, and the folders it fills
+OUTPUT_FILES: frozenset[str] = frozenset({MAP_FILE, RUNS_CSV, FAILURES_CSV, REPORT_HTML})
+OUTPUT_DIRS: frozenset[str] = frozenset({TRACES_DIR, SUMMARIES_DIR, PLOTS_DIR})
 
 
 def run_stem(source: str | Path, measurement_id: str) -> str:
@@ -143,6 +146,20 @@ class OutputLayout:
     def find_trace(self, measurement_id: str) -> Path | None:
         """The trace Parquet of a run in this folder, found by its measurement id."""
         return find_trace(self.traces_dir, measurement_id)
+
+    def written_here(self, path: Path) -> bool:
+        """True when ``path`` (absolute, like ``root``) is one of this folder's outputs:
+        the map, ``runs.csv``, ``failures.csv``, the report, a state or lock file, or
+        anything below ``traces/``, ``summaries/`` or ``plots/``."""
+        try:
+            parts = path.relative_to(self.root).parts
+        except ValueError:
+            return False
+        if len(parts) == 1:
+            name = parts[0]
+            return name in OUTPUT_FILES or name.startswith(".tribopipe-") or \
+                name.endswith(".lock")
+        return bool(parts) and parts[0] in OUTPUT_DIRS
 
 
 def write_failures(path: str | Path, failures: Mapping[str, str]) -> Path:

@@ -1,212 +1,83 @@
-"""The batch: every new or changed run of a campaign reduced in parallel, the map updated once.
+"""The batch: every new or changed file of a campaign reduced in parallel, the map updated once.
 
-Workers (one process per CPU) reduce chunks of files with :func:`tribopipe.pipeline.reduce_file`,
-write each trace and trace plot at the layout's paths and return small picklable results;
-the parent folds the records into the map in one atomic update, then writes the state,
-``runs.csv`` and ``failures.csv``. A failing file is reported and skipped, never fatal.
+Workers (one process per CPU, :mod:`tribopipe.campaign.worker`) read each file once and
+reduce each of its runs (one per friction interval of every test), write each trace and
+trace plot at the layout's paths and return small picklable results; the parent checks
+each file's content against the files seen before it (in this batch, in the state, in
+the map: a duplicate is stored once, a conflict refused), folds the records into the map
+in one atomic update, then writes the state, ``runs.csv`` and ``failures.csv``, and
+accounts for everything in a :class:`BatchReport` whose ledger names what was found and
+what was left out. A failing file, test or run is reported and skipped, never fatal.
 """
 
 from __future__ import annotations
 
-import contextlib
-import gc
 import math
 import os
-from collections.abc import Callable, Iterator, Mapping, Sequence
-from dataclasses import asdict, dataclass, field, replace
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from ..errors import CampaignError, TribopipeError
+from ..errors import CampaignError
 from ..files import file_sha256
-from ..frictionmap.records import RunLabels, make_record
+from ..frictionmap.duplicates import (
+    FilesByHash,
+    SameContent,
+    compare_labels,
+    labels_of,
+    map_files_by_hash,
+)
 from ..frictionmap.store import read_map, update_map
-from ..numeric import finite_or_none
-from ..pipeline import RunOutcome, plot_run, reduce_file, write_trace
-from .metadata import labels_from, merge_metadata
+from .metadata import Manifest, read_manifest
 from .outputs import _write_failures_csv, _write_runs_csv
-from .patterns import LABEL_FIELDS, match_pattern
 from .spec import Campaign
 from .table import (
+    DUPLICATE,
     FAILED,
     REDUCED,
     SKIPPED,
     STATE_VERSION,
     CampaignRow,
-    RunEntry,
     campaign_table,
+    describe_glob,
     load_state,
     recipe_hash,
     save_state,
+)
+from .worker import (  # noqa: F401 - GC_THRESHOLDS, _worker_init: importable from here too
+    GC_THRESHOLDS,
+    FailedRun,
+    FileDone,
+    ReducedRun,
+    RunResult,
+    _Context,
+    _fewer_gc_passes,
+    _Job,
+    _reduce_chunk,
+    _worker_init,
+    crashed,
 )
 
 ProgressCallback = Callable[[int, int], None]
 
 
 @dataclass(frozen=True)
-class _Job:
-    file: str
-    path: str
-    sources: tuple[tuple[str, dict[str, Any]], ...]
-    hints: tuple[str, ...]
-
-
-@dataclass(frozen=True)
-class _Context:
-    campaign: Campaign
-    plots: bool
-
-
-@dataclass(frozen=True)
-class ReducedRun:
-    """A worker's result for a file it reduced: the map record, the file's SHA-256, what
-    the state keeps of the run, and a note when its trace plot could not be drawn."""
-
-    file: str
-    record: dict[str, Any]
-    sha256: str
-    entry: RunEntry
-    plot_note: str | None = None
-
-
-@dataclass(frozen=True)
-class FailedRun:
-    """A worker's result for a file it could not reduce: the one-line reason; ``transient``
-    when it was not the file's fault (a crashed worker, an internal error), so the state is
-    left alone and the file is tried again next time."""
-
-    file: str
-    reason: str
-    transient: bool = False
-
-
-#: what a worker returns per file (small and picklable: never the trace)
-RunResult = ReducedRun | FailedRun
-
-
-def _reduce_one(job: _Job, ctx: _Context) -> ReducedRun:
-    """Reduce one file in a worker; returns a small picklable result (never the trace)."""
-    campaign = ctx.campaign
-    merged = merge_metadata(job.file, job.sources, campaign)
-    if campaign.use_export_names:
-        outcome = _reduce_with_export_names(job, campaign, merged)
-    else:
-        labels = labels_from(job.file, merged, hints=job.hints)
-        outcome = reduce_file(job.path, campaign.settings, labels, campaign.read_options,
-                              tolerances=campaign.tolerances)
-    result = outcome.result
-    record = outcome.record
-    trace = write_trace(campaign.layout, outcome)
-    plot_note = _plot(campaign, outcome) if ctx.plots else None
-    entry = RunEntry(
-        labels=asdict(outcome.labels),
-        measurement_id=record["measurement_id"],
-        trace=trace.relative_to(campaign.output_dir).as_posix(),
-        mu_s=finite_or_none(result.mu_s),
-        mu_k=finite_or_none(result.mu_k),
-        pressure_kPa=finite_or_none(record.get("pressure_kPa")),
-        pressure_measured_kPa=finite_or_none(result.pressure_kPa),
-        normal_force_measured_N=finite_or_none(result.normal_force_mean_N),
-        temperature_measured_C=finite_or_none(result.temperature_C),
-        flags=record["flags"],
-    )
-    return ReducedRun(file=job.file, record=record, sha256=outcome.file_hash, entry=entry,
-                      plot_note=plot_note)
-
-
-def _reduce_with_export_names(job: _Job, campaign: Campaign, merged: Mapping[str, Any]
-                              ) -> RunOutcome:
-    """:func:`tribopipe.pipeline.reduce_file` with the export's Test name as a third
-    metadata source: the labels are only complete once the file has been read."""
-    partial = RunLabels(**{k: merged.get(k) for k in LABEL_FIELDS})
-    outcome = reduce_file(job.path, campaign.settings, partial, campaign.read_options)
-    meta = outcome.measurement.meta
-    sources = list(job.sources)
-    hints = list(job.hints)
-    found = match_pattern(campaign.export_pattern or "", meta.test) if meta.test else None
-    if found is None:
-        hints.append(f"export Test name {meta.test!r} does not match pattern "
-                     f"{campaign.export_pattern!r}")
-    else:
-        sources.append((f"export Test name {meta.test!r}", found))
-    labels = labels_from(job.file, merge_metadata(job.file, sources, campaign), hints=hints)
-    record = make_record(result=outcome.result, labels=labels, meta=meta,
-                         file_hash=outcome.file_hash, settings=campaign.settings,
-                         tolerances=campaign.tolerances)
-    return replace(outcome, labels=labels, record=record)
-
-
-def _plot(campaign: Campaign, outcome: RunOutcome) -> str | None:
-    """Draw a run's trace plot beside its trace; returns a note when it could not."""
-    try:
-        plot_run(campaign.layout, outcome)
-    except Exception as exc:  # noqa: BLE001 - a picture must not cost the run its map row
-        return f"{Path(outcome.path).name}: trace plot failed ({type(exc).__name__}: {exc})"
-    return None
-
-
-#: Cyclic-GC thresholds while reducing. Parsing an export allocates ~10⁵ short-lived
-#: containers (cells, rows), which with the default gen-0 threshold (700) triggers hundreds
-#: of collections per file that find nothing; measured: −20 % CPU per run.
-GC_THRESHOLDS = (100_000, 50, 100)
-
-
-def _worker_init() -> None:
-    """Start a worker process (ours for its whole life): fewer garbage-collector passes."""
-    gc.set_threshold(*GC_THRESHOLDS)
-
-
-@contextlib.contextmanager
-def _fewer_gc_passes() -> Iterator[None]:
-    """:func:`_worker_init`'s tuning for an in-process batch, restored afterwards."""
-    before = gc.get_threshold()
-    gc.set_threshold(*GC_THRESHOLDS)
-    try:
-        yield
-    finally:
-        gc.set_threshold(*before)
-
-
-def _reason(exc: TribopipeError, job: _Job) -> str:
-    """The one-line reason of a failed run, starting with the file's campaign-relative
-    name (readers name the absolute path, which is long and machine-specific)."""
-    text = str(exc)
-    if exc.path is None:
-        return f"{job.file}: {text}"
-    if exc.path == job.path and text.startswith(exc.path):
-        return job.file + text[len(exc.path):]
-    return text
-
-
-def _reduce_chunk(jobs: Sequence[_Job], ctx: _Context) -> list[RunResult]:
-    """Reduce a chunk of files; each failure is caught and returned with its reason."""
-    out: list[RunResult] = []
-    for job in jobs:
-        try:
-            out.append(_reduce_one(job, ctx))
-        except TribopipeError as exc:
-            out.append(FailedRun(file=job.file, reason=_reason(exc, job)))
-        except OSError as exc:
-            out.append(FailedRun(file=job.file,
-                                 reason=f"{job.file}: cannot read: {exc.strerror or exc}"))
-        except Exception as exc:  # noqa: BLE001 - one broken file must not stop a campaign
-            out.append(FailedRun(file=job.file, transient=True,
-                                 reason=f"{job.file}: internal error {type(exc).__name__}: "
-                                        f"{exc} (please report with the file)"))
-    return out
-
-
-@dataclass(frozen=True)
 class BatchReport:
-    """What a batch did.
+    """What a batch did, run by run, and its ledger.
 
-    ``reduced``/``skipped``: files reduced now / unchanged since the last batch;
-    ``failures``: ``(file, reason)`` of every run that failed now or earlier and is
-    unchanged; ``groups_updated``: condition groups (pin, disc, force, temperature) with a
-    map row added, replaced or removed; ``removed``: map rows dropped because their raw
-    file changed; ``map_summary``: the map's own account; ``notes``: things worth saying
-    that are not failures (plots skipped, files gone from the folder); ``flagged``:
-    ``(file, flags)`` of the runs reduced now that carry QC flags (";"-joined).
+    ``reduced``/``skipped``: names of the runs reduced now / unchanged since the last batch
+    (a run's name is its file, with ``[test / result / interval i]`` when the export holds
+    several); ``failures``: ``(name, reason)`` of every file, test or run that failed now
+    or earlier and is unchanged; ``duplicates``: ``(file, reason)`` of files whose content
+    another file already brought (stored once); ``groups_updated``: condition groups
+    (pin, disc, force, temperature) with a map row added, replaced or removed;
+    ``removed``: map rows dropped because their raw file changed; ``map_summary``: the
+    map's own account; ``notes``: things worth saying that are not failures (plots
+    skipped, files gone from the folder, a renamed file); ``flagged``: ``(name, flags)``
+    of the runs reduced now that carry QC flags (";"-joined). The ledger: ``files`` and
+    ``tests`` found, ``unmatched``: manifest rows that matched no file or no test,
+    ``undescribed``: the tests (``file [test]``) no metadata source described.
     """
 
     campaign: str
@@ -221,20 +92,39 @@ class BatchReport:
     output_dir: Path
     notes: list[str]
     flagged: list[tuple[str, str]] = field(default_factory=list)
+    duplicates: list[tuple[str, str]] = field(default_factory=list)
+    files: int = 0
+    tests: int = 0
+    unmatched: list[str] = field(default_factory=list)
+    undescribed: list[str] = field(default_factory=list)
 
     @property
     def ok(self) -> bool:
-        """True when no file failed."""
-        return not self.failures
+        """True when everything the user named was reduced: no file, test or run failed
+        and every manifest row matched a file (and its test)."""
+        return not self.failures and not self.unmatched
 
     def summary(self) -> str:
-        """One line: runs reduced, skipped, failed, groups updated."""
-        text = (f"{self.campaign}: {self.total} run(s): {len(self.reduced)} reduced, "
+        """One line: files and tests found; runs reduced, skipped, failed; duplicate
+        files; groups updated."""
+        text = (f"{self.campaign}: {self.files} file(s), {self.tests} test(s) found; "
+                f"{self.total} run(s): {len(self.reduced)} reduced, "
                 f"{len(self.skipped)} skipped (unchanged), {len(self.failures)} failed; "
+                f"{len(self.duplicates)} duplicate file(s); "
                 f"{self.groups_updated} condition group(s) updated")
         if self.removed:
             text += f"; {self.removed} stale map row(s) removed"
         return text
+
+    def ledger(self) -> list[str]:
+        """The batch's account: :meth:`summary`, then one line per duplicate file, per
+        manifest row that matched no file or no test, and per test no metadata source
+        described."""
+        lines = [self.summary()]
+        lines += [f"  duplicate: {reason}" for _, reason in self.duplicates]
+        lines += [f"  manifest row matching no {what}" for what in self.unmatched]
+        lines += [f"  test no metadata source described: {name}" for name in self.undescribed]
+        return lines
 
 
 def _chunks(items: Sequence[Any], workers: int) -> list[list[Any]]:
@@ -259,15 +149,17 @@ def run_campaign(
     plots: bool | None = None,
     progress: ProgressCallback | None = None,
 ) -> BatchReport:
-    """Reduce every new or changed run of a campaign, in parallel, and update its map once.
+    """Reduce every run of every new or changed file of a campaign, in parallel, and
+    update its map once.
 
     Writes to ``campaign.output_dir``: ``traces/*.parquet``, ``plots/traces/*.png`` (when
-    plots are on and available; only for runs reduced now), ``runs.csv`` (one row per
-    file), ``failures.csv`` (``file,reason``) and the state file; appends the new records
-    to ``campaign.map_path`` in one atomic update (replacing the rows of changed runs).
-    ``progress(done, total)`` is called as runs finish. Failures of single runs never
-    raise: they are in the report. Raises :class:`CampaignError` when another batch of
-    the same campaign is running, :class:`MapError` when the map path holds a foreign file.
+    plots are on; only for runs reduced now), ``runs.csv`` (one row per run),
+    ``failures.csv`` (``file,reason``: the file, or the run's name) and the state file;
+    appends the new records to ``campaign.map_path`` in one atomic update (replacing the
+    rows of changed runs). ``progress(done, total)`` is called as files finish. Failures
+    of single files, tests or runs never raise: they are in the report. Raises
+    :class:`CampaignError` when another batch of the same campaign is running,
+    :class:`MapError` when the map path holds a foreign file.
     """
     from filelock import FileLock, Timeout
 
@@ -291,24 +183,26 @@ def _run_locked(campaign: Campaign, *, jobs: int | None, plots: bool | None,
     state = load_state(campaign)
     entries: dict[str, Any] = dict(state.get("entries", {}))
     missing_ids, map_checked = _ids_missing_from_map(campaign, state)
-    rows = campaign_table(campaign, state=state)
+    manifest = read_manifest(campaign.manifest) if campaign.manifest is not None else None
+    rows = campaign_table(campaign, state=state, manifest=manifest)
     plan = _plan(rows, missing_ids)
-    total = len(rows)
-    done = total - len(plan.todo)
+    files = len(rows)
+    done = files - len(plan.todo)
     if progress:
-        progress(done, total)
+        progress(done, files)
 
     if plan.todo and not map_checked and campaign.map_path.exists():
         read_map(campaign.map_path)  # refuse a foreign or corrupt map before any work
     results = _execute(plan.todo, _Context(campaign=campaign, plots=plots), jobs,
-                       progress, done, total)
+                       progress, done, files)
 
     notes: list[str] = []
     if not rows:
-        notes.append(f"no file matches {campaign.glob!r} in {campaign.raw_dir}")
+        notes.append(f"no file matches {describe_glob(campaign)} in {campaign.raw_dir}")
     by_file = {row.file: row for row in rows}
+    vanished = {f: e for f, e in entries.items() if f not in by_file}
     failures = plan.failures
-    landing = _apply(campaign, results, by_file, entries, failures, notes)
+    landing = _apply(campaign, results, by_file, entries, failures, notes, vanished)
     _forget_vanished(campaign, entries, set(by_file), notes)
 
     map_summary = "unchanged"
@@ -319,14 +213,16 @@ def _run_locked(campaign: Campaign, *, jobs: int | None, plots: bool | None,
     groups = _groups_updated(state, landing.records, landed, removed)
     _save_state_with_map(campaign, entries)
 
-    this_batch = {f: REDUCED for f in landing.reduced} | {f: SKIPPED for f in plan.skipped} | {
-        f: FAILED for f in failures
+    duplicates = {**plan.duplicates, **landing.duplicates}
+    this_batch = {n: REDUCED for n in landing.reduced} | {n: SKIPPED for n in plan.skipped} | {
+        n: FAILED for n in failures
     }
     _write_runs_csv(campaign, rows, entries, this_batch, failures)
     _write_failures_csv(campaign, failures)
+    tests, unmatched, undescribed = _ledger(rows, entries, manifest)
     return BatchReport(
         campaign=campaign.name,
-        total=total,
+        total=len(landing.reduced) + len(plan.skipped) + len(failures),
         reduced=landing.reduced,
         skipped=plan.skipped,
         failures=sorted(failures.items()),
@@ -337,46 +233,68 @@ def _run_locked(campaign: Campaign, *, jobs: int | None, plots: bool | None,
         output_dir=campaign.output_dir,
         notes=notes,
         flagged=landing.flagged,
+        duplicates=sorted(duplicates.items()),
+        files=files,
+        tests=tests,
+        unmatched=unmatched,
+        undescribed=undescribed,
     )
 
 
 @dataclass(frozen=True)
 class _Plan:
-    """What a batch does with each row: reduce it (``todo``), skip it (unchanged since it
-    was reduced), or list it as failed without reading it (``failures``: file → reason)."""
+    """What a batch does with each file: reduce it (``todo``), skip its runs (unchanged
+    since they were reduced: ``skipped`` run names), list it or its runs as failed without
+    reading it (``failures``: name → reason), or as a duplicate (file → reason)."""
 
     todo: list[_Job]
     skipped: list[str]
     failures: dict[str, str]
+    duplicates: dict[str, str]
+
+
+def _run_ids(entry: Mapping[str, Any], statuses: tuple[str, ...] = (REDUCED,)) -> set[str]:
+    """The measurement ids of a state entry's runs with one of ``statuses``."""
+    return {str(r["measurement_id"]) for r in entry.get("runs") or []
+            if r.get("status") in statuses and r.get("measurement_id")}
 
 
 def _plan(rows: Sequence[CampaignRow], missing_ids: set[str]) -> _Plan:
-    """Sort the campaign's rows into work, skips and known failures; a reduced run whose
-    map row went missing (``missing_ids``) is reduced again."""
+    """Sort the campaign's files into work, skips and known failures; a file with a run
+    whose map row went missing (``missing_ids``) is reduced again."""
     todo: list[_Job] = []
     skipped: list[str] = []
     failures: dict[str, str] = {}
+    duplicates: dict[str, str] = {}
     for row in rows:
+        previous = row.previous or {}
+        stored = _run_ids(previous, (REDUCED, DUPLICATE))
         if row.problem is not None:
             failures[row.file] = row.problem
-        elif row.status == REDUCED and (row.previous or {}).get("measurement_id") \
-                not in missing_ids:
-            skipped.append(row.file)
+        elif row.status == REDUCED and not stored & missing_ids:
+            for run in row.runs:
+                name = run.get("name") or row.file
+                if run.get("status") == REDUCED:
+                    skipped.append(name)
+                else:  # unchanged and failed before: not retried, still listed
+                    failures[name] = run.get("reason") or "failed in an earlier batch"
+        elif row.status == DUPLICATE and not stored & missing_ids:
+            duplicates[row.file] = previous.get("reason") or "a duplicate"
         elif row.status == FAILED:
             # unchanged and failed before: do not retry, keep it listed
             failures[row.file] = row.reason or "failed in an earlier batch"
         else:
             todo.append(_Job(file=row.file, path=str(row.path), sources=row.sources,
-                             hints=row.hints))
-    return _Plan(todo=todo, skipped=skipped, failures=failures)
+                             hints=row.hints, test_rows=row.test_rows, sha256=row.sha256))
+    return _Plan(todo=todo, skipped=skipped, failures=failures, duplicates=duplicates)
 
 
 def _execute(todo: list[_Job], ctx: _Context, jobs: int, progress: ProgressCallback | None,
-             done: int, total: int) -> list[RunResult]:
+             done: int, total: int) -> list[FileDone]:
     """Reduce the jobs: in this process for one worker, else in a pool of ``jobs``
     processes; ``progress(done, total)`` after every chunk. A crashed worker's files come
     back as transient failures."""
-    results: list[RunResult] = []
+    results: list[FileDone] = []
     if not todo:
         return results
     workers = min(jobs, len(todo))
@@ -397,10 +315,7 @@ def _execute(todo: list[_Job], ctx: _Context, jobs: int, progress: ProgressCallb
             try:
                 part = future.result()
             except Exception as exc:  # noqa: BLE001 - e.g. a worker killed (OOM)
-                part = [FailedRun(file=job.file, transient=True,
-                                  reason=f"{job.file}: worker process failed "
-                                         f"({type(exc).__name__}: {exc}); run again")
-                        for job in futures[future]]
+                part = crashed(futures[future], exc)
             results.extend(part)
             done += len(part)
             if progress:
@@ -411,72 +326,199 @@ def _execute(todo: list[_Job], ctx: _Context, jobs: int, progress: ProgressCallb
 @dataclass(frozen=True)
 class _Landing:
     """What the workers' results bring to the map: the new records, the ids of rows to
-    drop (their raw file changed or now fails), the files reduced and the flagged ones."""
+    drop (their raw file changed or a run now fails), the runs reduced, the flagged ones
+    and the duplicate files (file → reason)."""
 
     records: list[dict[str, Any]]
     stale_ids: set[str]
     reduced: list[str]
     flagged: list[tuple[str, str]]
+    duplicates: dict[str, str]
 
 
-def _apply(campaign: Campaign, results: Sequence[RunResult], by_file: Mapping[str, CampaignRow],
-           entries: dict[str, Any], failures: dict[str, str], notes: list[str]) -> _Landing:
+class _Owners:
+    """Which file brought each content (SHA-256) to the map, and its runs' labels: the
+    files that landed runs, in the state and in this batch; then the map's own rows."""
+
+    def __init__(self, campaign: Campaign, by_file: Mapping[str, CampaignRow],
+                 redone: set[str], vanished: Mapping[str, Any]) -> None:
+        self.campaign = campaign
+        self.first: dict[str, tuple[str, dict[str, dict[str, Any]]]] = {}
+        for file, row in by_file.items():
+            entry = row.previous or {}
+            if file in redone or entry.get("status") != REDUCED or not row.sha256:
+                continue
+            runs = {str(r["measurement_id"]): labels_of(r.get("labels"))
+                    for r in entry.get("runs") or [] if r.get("status") == REDUCED}
+            if runs:
+                self.first.setdefault(row.sha256, (file, runs))
+        self.renamed_from = {Path(f).name: f for f, e in vanished.items()
+                             if e.get("status") == REDUCED}
+        self.vanished_sha = {f: e.get("sha256") for f, e in vanished.items()}
+        self._map: FilesByHash | None = None
+
+    def _in_map(self) -> FilesByHash:
+        if self._map is None:
+            path = self.campaign.map_path
+            self._map = map_files_by_hash(read_map(path)) if path.exists() else {}
+        return self._map
+
+    def check(self, done: FileDone, runs: Mapping[str, Mapping[str, Any]]
+              ) -> tuple[SameContent | None, str | None]:
+        """The same content seen before under another name (or ``None``), and a note when
+        the other name is a file that left the folder with this content (a rename)."""
+        sha = done.sha256 or ""
+        if sha in self.first and self.first[sha][0] != done.file:
+            other, old = self.first[sha]
+            return compare_labels(done.file, other, runs, old), None
+        name = Path(done.file).name
+        for source, old in sorted(self._in_map().get(sha, {}).items()):
+            if source == name:
+                continue
+            gone = self.renamed_from.get(source)
+            if gone is not None and self.vanished_sha.get(gone) == sha:
+                return None, (f"{done.file}: same content as {gone}, which left the folder: "
+                              "taken as renamed, its runs now name this file")
+            return compare_labels(done.file, source, runs, old), None
+        return None, None
+
+    def landed(self, done: FileDone, runs: dict[str, dict[str, Any]]) -> None:
+        """Record that ``done``'s runs landed: later files with its content are duplicates."""
+        if done.sha256 and runs:
+            self.first.setdefault(done.sha256, (done.file, runs))
+
+
+def _apply(campaign: Campaign, results: Sequence[FileDone], by_file: Mapping[str, CampaignRow],
+           entries: dict[str, Any], failures: dict[str, str], notes: list[str],
+           vanished: Mapping[str, Any]) -> _Landing:
     """Fold the workers' results into the state ``entries`` and ``failures`` (in file
-    order, both updated in place; plot notes added to ``notes``)."""
+    order, both updated in place; plot and rename notes added to ``notes``)."""
     records: list[dict[str, Any]] = []
-    stale_ids: set[str] = set()
+    old_ids: set[str] = set()
     reduced: list[str] = []
     flagged: list[tuple[str, str]] = []
+    duplicates: dict[str, str] = {}
     config_hash = campaign.settings.config_hash  # hashes the settings: once, not per run
-    for res in sorted(results, key=lambda r: r.file):
-        row = by_file[res.file]
+    owners = _Owners(campaign, by_file, {r.file for r in results}, vanished)
+    for done in sorted(results, key=lambda r: r.file):
+        row = by_file[done.file]
         old = entries.get(row.file) or {}
-        old_id = old.get("measurement_id") if old.get("status") == REDUCED else None
+        if done.transient:
+            # not the file's fault: listed now, retried next time (the state is left as is)
+            for failed in [done.error, *done.runs]:
+                if isinstance(failed, FailedRun):
+                    failures[failed.name or failed.file] = failed.reason
+            continue
+        old_ids |= _run_ids(old)
         base = {
             "size": row.size, "mtime_ns": row.mtime_ns, "config_hash": config_hash,
-            "recipe": recipe_hash(campaign, row.merged),
+            "recipe": recipe_hash(campaign, row.merged, row.test_rows),
+            "sha256": done.sha256 or row.sha256 or file_sha256(row.path),
+            "tests": list(done.tests),
         }
-        if isinstance(res, ReducedRun):
-            reduced.append(row.file)
-            records.append(res.record)
-            if res.record.get("flags"):
-                flagged.append((row.file, res.record["flags"]))
-            if old_id and old_id != res.entry.measurement_id:
-                stale_ids.add(old_id)
-            if res.plot_note and res.plot_note not in notes:
-                notes.append(res.plot_note)
-            entries[row.file] = {
-                **base, "sha256": res.sha256, "status": REDUCED, **res.entry.as_dict(),
-            }
-        elif res.transient:
-            # not the file's fault: listed now, retried next time (the state is left as is)
-            failures[row.file] = res.reason
-        else:
-            failures[row.file] = res.reason
-            if old_id:
-                stale_ids.add(old_id)
-            entries[row.file] = {
-                **base, "sha256": row.sha256 or file_sha256(row.path), "status": FAILED,
-                "reason": res.reason,
-            }
-    return _Landing(records=records, stale_ids=stale_ids, reduced=reduced, flagged=flagged)
+        if done.error is not None:
+            failures[row.file] = done.error.reason
+            entries[row.file] = {**base, "status": FAILED, "reason": done.error.reason,
+                                 "runs": []}
+            continue
+        mine = {r.entry.measurement_id: labels_of(r.record) for r in done.reduced}
+        same, note = owners.check(done, mine) if mine else (None, None)
+        if note:
+            notes.append(note)
+        if same is not None:
+            _drop_outputs(campaign, done, keep={rec["measurement_id"] for rec in records})
+            runs = [{"status": DUPLICATE, **{**r.entry.as_dict(), "trace": ""}}
+                    for r in done.reduced]
+            if same.conflict:
+                failures[row.file] = same.message()
+                entries[row.file] = {**base, "status": FAILED, "reason": same.message(),
+                                     "duplicate_of": same.other, "runs": []}
+            else:
+                duplicates[row.file] = same.message()
+                entries[row.file] = {**base, "status": DUPLICATE, "reason": same.message(),
+                                     "duplicate_of": same.other, "runs": runs}
+            continue
+        owners.landed(done, mine)
+        runs_state: list[dict[str, Any]] = []
+        for run in done.runs:
+            if isinstance(run, ReducedRun):
+                reduced.append(run.name)
+                records.append(run.record)
+                if run.record.get("flags"):
+                    flagged.append((run.name, run.record["flags"]))
+                if run.plot_note and run.plot_note not in notes:
+                    notes.append(run.plot_note)
+                runs_state.append({"status": REDUCED, **run.entry.as_dict()})
+            else:
+                failures[run.name or run.file] = run.reason
+                runs_state.append(run.as_state())
+        entries[row.file] = {**base, "status": REDUCED, "runs": runs_state}
+    alive = set().union(*(_run_ids(e) for e in entries.values())) if entries else set()
+    return _Landing(records=records, stale_ids=old_ids - alive, reduced=reduced,
+                    flagged=flagged, duplicates=duplicates)
+
+
+def _drop_outputs(campaign: Campaign, done: FileDone, keep: set[str]) -> None:
+    """Remove the traces and plots a worker wrote for runs that do not land (their file
+    is a duplicate or a conflict), unless a landing run shares the path."""
+    layout = campaign.layout
+    for run in done.reduced:
+        mid = run.entry.measurement_id
+        if mid in keep:
+            continue
+        for path in (layout.trace_path(done.file, mid), layout.trace_plot_path(done.file, mid)):
+            try:
+                path.unlink(missing_ok=True)
+            except OSError:
+                pass  # a stray picture is not worth failing the batch for
 
 
 def _forget_vanished(campaign: Campaign, entries: dict[str, Any], present: set[str],
                      notes: list[str]) -> None:
     """Files that vanished from the folder leave the state (their map rows stay)."""
     for gone in sorted(set(entries) - present):
-        if entries[gone].get("status") == REDUCED:
-            notes.append(f"{gone}: no longer in {campaign.raw_dir}; its map row is kept")
+        if entries[gone].get("status") == REDUCED and _run_ids(entries[gone]):
+            notes.append(f"{gone}: no longer in {campaign.raw_dir}; its map row(s) are kept")
         del entries[gone]
+
+
+def _ledger(rows: Sequence[CampaignRow], entries: Mapping[str, Any],
+            manifest: Manifest | None) -> tuple[int, list[str], list[str]]:
+    """The tests found (over the files whose tests are known), the manifest rows that
+    matched no file or no test, and the runs whose test no metadata source described."""
+    tests = 0
+    undescribed: list[str] = []
+    known: dict[str, set[str | None]] = {}
+    for row in rows:
+        entry = entries.get(row.file) or {}
+        found = entry.get("tests")
+        if found is None:
+            continue
+        known[row.file] = set(found)
+        tests += len(found)
+        undescribed += [row.file if r.get("test") is None else f"{row.file} [{r['test']}]"
+                        for r in entry.get("runs") or [] if r.get("undescribed")]
+    unmatched: list[str] = []
+    if manifest is not None:
+        names = {row.file for row in rows} | {row.path.name for row in rows}
+        for mrow in manifest.rows:
+            if mrow.file not in names:
+                unmatched.append(f"file: {manifest.name} {mrow.describes()}")
+        for row in rows:
+            if row.file not in known:
+                continue
+            for mrow in row.test_rows:
+                if mrow.test not in known[row.file]:
+                    unmatched.append(f"test: {manifest.name} {mrow.describes()}")
+    return tests, unmatched, list(dict.fromkeys(undescribed))
 
 
 def _groups_updated(state: Mapping[str, Any], records: Sequence[Mapping[str, Any]],
                     landed: set[str], removed: set[str]) -> set[tuple[Any, ...]]:
     """The condition groups with a map row added, replaced or removed by this batch."""
     old_groups = {
-        _group_key(e.get("labels") or {}) for e in state.get("entries", {}).values()
-        if e.get("measurement_id") in removed
+        _group_key(r.get("labels") or {}) for e in state.get("entries", {}).values()
+        for r in e.get("runs") or [] if r.get("measurement_id") in removed
     }
     return {
         _group_key(r) for r in records if r.get("measurement_id") in landed
@@ -495,15 +537,17 @@ def _save_state_with_map(campaign: Campaign, entries: Mapping[str, Any]) -> None
 
 
 def _ids_missing_from_map(campaign: Campaign, state: Mapping[str, Any]) -> tuple[set[str], bool]:
-    """The measurement ids of runs the state calls reduced that are not in the map (so
-    they must land again), and whether the map was read (and so validated) to tell.
+    """The measurement ids of runs the state calls reduced (or duplicates of) that are not
+    in the map (so they must land again), and whether the map was read (and so validated)
+    to tell.
 
     A map whose size and ``mtime_ns`` are those the last batch left is trusted without
     reading it; a missing map misses every run.
     """
     entries = state.get("entries", {})
-    ids = {e.get("measurement_id") for e in entries.values() if e.get("status") == REDUCED}
-    ids.discard(None)
+    ids: set[str] = set()
+    for e in entries.values():
+        ids |= _run_ids(e, (REDUCED, DUPLICATE))
     if not ids:
         return set(), False
     if not campaign.map_path.exists():

@@ -3,18 +3,32 @@
 Metadata resolution
 -------------------
 Each run needs ``pin``, ``disc``, ``normal_force_N`` (nominal, total) and ``temperature_C``
-(nominal); ``repeat`` is optional. They come from up to three sources, consulted in this
-order: the manifest row (:func:`read_manifest`), the file-name pattern
-(:func:`~tribopipe.campaign.patterns.match_pattern`), the export's own Test name. Every
-source that gives a field must agree with the others (:func:`merge_metadata`: names
-compared after the ``[names]`` aliases, ignoring case and surrounding blanks; numbers
-compared exactly); the first source that gives a field defines its spelling. A
-disagreement or a missing required field is an error *for that file only*.
+(nominal); ``repeat`` is optional. An export may hold several tests (a session), each
+with its own runs, so metadata is resolved per test. The sources, consulted in this
+order:
+
+1. the manifest row naming the file *and* the test (the manifest's optional ``test``
+   column holds the Test name as the export writes it);
+2. the manifest row naming the file with an empty ``test`` cell (it describes every
+   test of the file);
+3. the file-name pattern (:func:`~tribopipe.campaign.patterns.match_pattern` on the file
+   stem; it describes every test of the file);
+4. the test-name pattern on the Test name (``test_pattern``; the older
+   ``use_export_names`` + ``export_pattern`` spell the same source).
+
+Every source that gives a field must agree with the others (:func:`merge_metadata`:
+names compared after the ``[names]`` aliases, ignoring case and surrounding blanks;
+numbers compared exactly); the first source that gives a field defines its spelling. A
+disagreement or a missing required field is an error *for that test only*: the other
+tests of the file still land. In a file whose several tests hold friction runs, a test
+described only by the file-level sources (2 and 3) fails too: those sources cannot tell
+its tests apart, and the map would hold them under the same labels.
 """
 
 from __future__ import annotations
 
 import csv
+import functools
 import io
 import math
 from collections.abc import Mapping, Sequence
@@ -31,27 +45,92 @@ if TYPE_CHECKING:
     from .spec import Campaign
 
 MANIFEST_COLUMNS: tuple[str, ...] = ("file", *LABEL_FIELDS)
+#: the optional manifest column naming a test of a session export
+TEST_COLUMN = "test"
 
 
 @dataclass(frozen=True)
 class ManifestRow:
-    """One manifest row: the label fields it gives (``None`` cells left out) and its line."""
+    """One manifest row: the label fields it gives (``None`` cells left out), its line,
+    the file it names (as written, ``/`` separators) and the test (``None``: the file's
+    every test); ``problem`` is a bad value in it (an error for what it describes only)."""
 
     line: int
     fields: dict[str, Any]
     problem: str | None = None
+    file: str = ""
+    test: str | None = None
+
+    def describes(self) -> str:
+        """``line N (file)`` or ``line N (file, test 'T')``, for messages."""
+        what = self.file if self.test is None else f"{self.file}, test {self.test!r}"
+        return f"line {self.line} ({what})"
 
 
-def read_manifest(path: str | Path) -> dict[str, ManifestRow]:
+@dataclass(frozen=True)
+class Manifest:
+    """A manifest's rows, found by file (and test).
+
+    ``get(file)`` is the row describing the whole file, ``get(file, test)`` the row of one
+    of its tests; :meth:`for_file` finds both kinds for a file of the campaign, by its
+    path relative to the raw folder or by its name.
+    """
+
+    path: Path
+    rows: tuple[ManifestRow, ...]
+
+    def __len__(self) -> int:
+        return len(self.rows)
+
+    @property
+    def name(self) -> str:
+        """The manifest's file name."""
+        return self.path.name
+
+    def get(self, file: str, test: str | None = None) -> ManifestRow | None:
+        """The row for ``file`` (and ``test``; ``None``: the row with an empty test cell)."""
+        return self._index.get((file.replace("\\", "/"), _test_key(test)))
+
+    def for_file(self, rel: str, name: str) -> tuple[ManifestRow | None,
+                                                     dict[str, ManifestRow]]:
+        """The rows naming a file of the campaign, by its relative path, else its name:
+        the whole-file row (or ``None``) and ``{Test name: row}``."""
+        rows = self._by_file.get(rel) or self._by_file.get(name) or ()
+        whole = next((r for r in rows if r.test is None), None)
+        return whole, {r.test: r for r in rows if r.test is not None}
+
+    @functools.cached_property
+    def _index(self) -> dict[tuple[str, str | None], ManifestRow]:
+        return {(r.file, r.test): r for r in self.rows}
+
+    @functools.cached_property
+    def _by_file(self) -> dict[str, tuple[ManifestRow, ...]]:
+        grouped: dict[str, list[ManifestRow]] = {}
+        for r in self.rows:
+            grouped.setdefault(r.file, []).append(r)
+        return {k: tuple(v) for k, v in grouped.items()}
+
+
+def _test_key(test: str | None) -> str | None:
+    """A Test name as matched: surrounding blanks ignored, an empty cell is ``None``."""
+    if test is None:
+        return None
+    return test.strip() or None
+
+
+def read_manifest(path: str | Path) -> Manifest:
     """Read a manifest CSV: one row per file, columns ``file, pin, disc, normal_force_N,
-    temperature_C, repeat`` (more allowed, ignored; empty cells mean unknown).
+    temperature_C, repeat`` (more allowed, ignored; empty cells mean unknown); with an
+    optional ``test`` column, one row per test of a session export (the Test name as the
+    export writes it; rows with the same file and different tests describe one export's
+    tests, a row with an empty test cell the whole file).
 
     The encoding and the delimiter are detected as the readers detect them in an export
     (:mod:`tribopipe.readers.textio`): UTF-8 with or without BOM, UTF-16, cp1252; the
     header line decides between TAB, semicolon and comma (semicolon files may use a
-    decimal comma). Returns ``{file as written: ManifestRow}``. An unreadable file, a
-    missing column or a duplicate file is a :class:`ConfigError` naming the manifest; a
-    bad value is recorded as that row's ``problem`` (an error for that file only).
+    decimal comma). An unreadable file, a missing column or a file (and test) listed
+    twice is a :class:`ConfigError` naming the manifest; a bad value is recorded as that
+    row's ``problem`` (an error for what the row describes only).
     """
     p = Path(path)
     try:
@@ -79,7 +158,8 @@ def read_manifest(path: str | Path) -> dict[str, ManifestRow]:
             path=p, line=1,
         )
     index = {name: header.index(name) for name in MANIFEST_COLUMNS}
-    rows: dict[str, ManifestRow] = {}
+    test_index = header.index(TEST_COLUMN) if TEST_COLUMN in header else None
+    rows: dict[tuple[str, str | None], ManifestRow] = {}
     for lineno, cells in enumerate(reader, start=2):
         if not any(c.strip() for c in cells):
             continue
@@ -87,11 +167,13 @@ def read_manifest(path: str | Path) -> dict[str, ManifestRow]:
         file = cells[index["file"]].strip()
         if not file:
             raise ConfigError("empty 'file' cell", path=p, line=lineno, column="file")
-        key = file.replace("\\", "/")
+        test = None if test_index is None else _test_key(cells[test_index])
+        key = (file.replace("\\", "/"), test)
         if key in rows:
+            what = f"file {file!r}" if test is None else f"file {file!r} with test {test!r}"
             raise ConfigError(
-                f"file {file!r} listed twice (first on line {rows[key].line})",
-                path=p, line=lineno, column="file",
+                f"{what} listed twice (first on line {rows[key].line})",
+                path=p, line=lineno, column="file" if test is None else TEST_COLUMN,
             )
         fields: dict[str, Any] = {}
         problem = None
@@ -115,8 +197,9 @@ def read_manifest(path: str | Path) -> dict[str, ManifestRow]:
             except ValueError:
                 kind = "a whole number" if name == "repeat" else "a number"
                 problem = f"{p}:{lineno}: {raw!r} is not {kind} (column {name!r})"
-        rows[key] = ManifestRow(line=lineno, fields=fields, problem=problem)
-    return rows
+        rows[key] = ManifestRow(line=lineno, fields=fields, problem=problem, file=key[0],
+                                test=test)
+    return Manifest(path=p, rows=tuple(rows.values()))
 
 
 def _same(field_name: str, a: Any, b: Any, campaign: Campaign) -> bool:

@@ -1,6 +1,7 @@
 """What a batch leaves in its output folder besides traces and plots: ``runs.csv`` (one row
-per file of the campaign) and ``failures.csv`` (``file,reason``, written by
-:func:`tribopipe.layout.write_failures`, read back by the report)."""
+per run of the campaign: per friction interval of every test of every file, and per file
+or test that gave none) and ``failures.csv`` (``file,reason``, the file or the run's name,
+written by :func:`tribopipe.layout.write_failures`, read back by the report)."""
 
 from __future__ import annotations
 
@@ -14,13 +15,16 @@ from ..files import write_text_atomic
 from ..layout import write_failures
 from .patterns import LABEL_FIELDS
 from .spec import Campaign
-from .table import _SUMMARY_KEYS, FAILED, REDUCED, CampaignRow
+from .table import _SUMMARY_KEYS, DUPLICATE, FAILED, REDUCED, CampaignRow
 
 RUNS_COLUMNS: tuple[str, ...] = (
-    "file", "status", "pin", "disc", "normal_force_N", "temperature_C", "repeat", "mu_s",
-    "mu_k", "pressure_kPa", "normal_force_measured_N", "pressure_measured_kPa",
-    "temperature_measured_C", "flags", "measurement_id", "trace", "reason",
+    "file", "test", "result", "interval", "status", "pin", "disc", "normal_force_N",
+    "temperature_C", "repeat", "mu_s", "mu_k", "pressure_kPa", "normal_force_measured_N",
+    "pressure_measured_kPa", "temperature_measured_C", "flags", "measurement_id", "trace",
+    "reason",
 )
+#: the values a run row takes from its state entry (where it sits, what it measured)
+_RUN_KEYS: tuple[str, ...] = tuple(k for k in _SUMMARY_KEYS if k not in ("labels", "name"))
 
 
 def _cell(value: Any) -> str:
@@ -34,22 +38,44 @@ def _cell(value: Any) -> str:
 def _write_runs_csv(campaign: Campaign, rows: Sequence[CampaignRow],
                     entries: Mapping[str, Any], this_batch: Mapping[str, str],
                     failures: Mapping[str, str]) -> None:
+    """``runs.csv``: per file of the campaign, a row per run the state knows of it (its
+    status in this batch: reduced, skipped, failed or duplicate), else one row for the
+    file (failed, with its reason)."""
     buf = io.StringIO()
     writer = csv.writer(buf, lineterminator="\n")
     writer.writerow(RUNS_COLUMNS)
     for row in rows:
         entry = entries.get(row.file) or {}
-        status = this_batch.get(row.file, FAILED)
-        ok = entry.get("status") == REDUCED and status != FAILED
-        labels = entry.get("labels") if ok else None
-        labels = labels or {k: row.merged.get(k) for k in LABEL_FIELDS}
-        values = {
-            "file": row.file, "status": status, **labels,
-            **({k: entry.get(k) for k in _SUMMARY_KEYS if k != "labels"} if ok else {}),
-            "reason": failures.get(row.file),
-        }
-        writer.writerow([_cell(values.get(c)) for c in RUNS_COLUMNS])
+        file_labels = {k: row.merged.get(k) for k in LABEL_FIELDS}
+        runs = entry.get("runs") or []
+        if row.file in failures or not runs:
+            status = this_batch.get(row.file, FAILED)
+            writer.writerow([_cell(v) for v in _values(row.file, {}, status, file_labels,
+                                                       failures.get(row.file))])
+            continue
+        for run in runs:
+            name = run.get("name") or row.file
+            kept = run.get("status")
+            status = DUPLICATE if kept == DUPLICATE else this_batch.get(name, FAILED)
+            ok = kept == REDUCED and status != FAILED
+            labels = (run.get("labels") if ok or kept == DUPLICATE else None) or file_labels
+            reason = failures.get(name) or (entry.get("reason") if kept == DUPLICATE else None)
+            writer.writerow([_cell(v) for v in _values(
+                row.file, run, status, labels, reason, measured=ok or kept == DUPLICATE)])
     write_text_atomic(campaign.runs_csv, buf.getvalue())
+
+
+def _values(file: str, run: Mapping[str, Any], status: str, labels: Mapping[str, Any],
+            reason: str | None, *, measured: bool = False) -> list[Any]:
+    """One ``runs.csv`` row, in :data:`RUNS_COLUMNS` order."""
+    values: dict[str, Any] = {
+        "file": file, "status": status, **labels,
+        "test": run.get("test"), "result": run.get("result"), "interval": run.get("interval"),
+        **({k: run.get(k) for k in _RUN_KEYS if k not in ("test", "result", "interval")}
+           if measured else {}),
+        "reason": reason,
+    }
+    return [values.get(c) for c in RUNS_COLUMNS]
 
 
 def _write_failures_csv(campaign: Campaign, failures: Mapping[str, str]) -> None:

@@ -31,7 +31,8 @@ from .patterns import _compile_pattern
 _CAMPAIGN_KEYS = frozenset(
     {
         "name", "raw_dir", "glob", "instrument", "output_dir", "map", "manifest",
-        "filename_pattern", "use_export_names", "export_pattern", "force_tolerance_N",
+        "filename_pattern", "test_pattern", "use_export_names", "export_pattern",
+        "force_tolerance_N",
         "force_tolerance_rel", "temperature_tolerance_C", "plots", "encoding", "delimiter",
         "decimal",
     }
@@ -43,24 +44,35 @@ _TOP_LEVEL_TABLES = frozenset({"campaign", "reduction", "names"})
 class Campaign:
     """A campaign's description: where its files are, how to label and reduce them.
 
-    All paths are absolute (resolved against the config file's folder).
+    All paths are absolute (resolved against the config file's folder). ``glob`` ``None``
+    takes every export the readers know (:data:`tribopipe.readers.EXPORT_SUFFIXES`, any
+    case); ``test_pattern`` is matched against each test's Test name.
     """
 
     name: str
     raw_dir: Path
-    glob: str
+    glob: str | None
     settings: Settings
     output_dir: Path
     map_path: Path
     manifest: Path | None = None
     filename_pattern: str | None = None
-    use_export_names: bool = False
-    export_pattern: str | None = None
+    test_pattern: str | None = None
     names: tuple[tuple[str, str], ...] = ()
     tolerances: Tolerances = field(default_factory=Tolerances)
     plots: bool = True
     read_options: ReadOptions = field(default_factory=ReadOptions)
     source: Path | None = None
+
+    @property
+    def use_export_names(self) -> bool:
+        """True when the Test names are a metadata source (a test-name pattern is set)."""
+        return self.test_pattern is not None
+
+    @property
+    def export_pattern(self) -> str | None:
+        """The test-name pattern under its older name."""
+        return self.test_pattern
 
     @property
     def layout(self) -> OutputLayout:
@@ -193,19 +205,11 @@ def load_campaign(path: str | Path) -> Campaign:
     if pattern is not None:
         _check_type(pattern, str, "filename_pattern", cfg_path)
         _compile_pattern(pattern, key="filename_pattern", path=cfg_path)
-    use_export_names = _check_type(table.get("use_export_names", False), bool,
-                                   "use_export_names", cfg_path)
-    export_pattern = table.get("export_pattern", pattern if use_export_names else None)
-    if export_pattern is not None:
-        _check_type(export_pattern, str, "export_pattern", cfg_path)
-        _compile_pattern(export_pattern, key="export_pattern", path=cfg_path)
-    if use_export_names and export_pattern is None:
-        raise ConfigError("[campaign] use_export_names needs export_pattern or filename_pattern",
-                          path=cfg_path)
-    if manifest is None and pattern is None and not use_export_names:
+    test_pattern = _test_pattern(table, pattern, cfg_path)
+    if manifest is None and pattern is None and test_pattern is None:
         raise ConfigError(
             "[campaign] no metadata source: set manifest, filename_pattern and/or "
-            "use_export_names",
+            "test_pattern",
             path=cfg_path,
         )
     defaults = Tolerances()
@@ -219,7 +223,9 @@ def load_campaign(path: str | Path) -> Campaign:
             "temperature_tolerance_C", cfg_path,
         ),
     )
-    glob = _check_type(table.get("glob", "*.csv"), str, "glob", cfg_path)
+    glob = table.get("glob")
+    if glob is not None:
+        _check_type(glob, str, "glob", cfg_path)
     name = _check_type(table.get("name", cfg_path.stem), str, "name", cfg_path)
     plots = _check_type(table.get("plots", True), bool, "plots", cfg_path)
     decimal = table.get("decimal")
@@ -240,14 +246,39 @@ def load_campaign(path: str | Path) -> Campaign:
         map_path=map_path,
         manifest=manifest,
         filename_pattern=pattern,
-        use_export_names=use_export_names,
-        export_pattern=export_pattern,
+        test_pattern=test_pattern,
         names=tuple(sorted(names_table.items())),
         tolerances=tolerances,
         plots=plots,
         read_options=options,
         source=cfg_path,
     )
+
+
+def _test_pattern(table: Mapping[str, Any], filename_pattern: str | None,
+                  cfg_path: Path) -> str | None:
+    """The test-name pattern: ``test_pattern``, or its older spelling ``use_export_names =
+    true`` with ``export_pattern`` (default: the file-name pattern)."""
+    use_export_names = _check_type(table.get("use_export_names", False), bool,
+                                   "use_export_names", cfg_path)
+    test_pattern = table.get("test_pattern")
+    export_pattern = table.get("export_pattern")
+    for key, value in (("test_pattern", test_pattern), ("export_pattern", export_pattern)):
+        if value is not None:
+            _check_type(value, str, key, cfg_path)
+            _compile_pattern(value, key=key, path=cfg_path)
+    if test_pattern is not None and export_pattern is not None and \
+            test_pattern != export_pattern:
+        raise ConfigError("[campaign] test_pattern and export_pattern (its older name) "
+                          "differ: keep test_pattern", path=cfg_path)
+    if test_pattern is not None:
+        return str(test_pattern)
+    if not use_export_names:
+        return None  # as before: export_pattern alone names no source
+    if export_pattern is None and filename_pattern is None:
+        raise ConfigError("[campaign] use_export_names needs export_pattern or "
+                          "filename_pattern (or use test_pattern)", path=cfg_path)
+    return str(export_pattern or filename_pattern)
 
 
 def _optional_str(table: Mapping[str, Any], key: str, path: Path) -> str | None:
@@ -265,12 +296,14 @@ def folder_campaign(
     filename_pattern: str | None = None,
     map_path: str | Path | None = None,
     output_dir: str | Path = DEFAULT_OUTPUT_DIR,
-    glob: str = "*.csv",
+    glob: str | None = None,
     instrument: str | Path | None = None,
     plots: bool = True,
+    test_pattern: str | None = None,
 ) -> Campaign:
-    """A quick campaign without a config file: a folder of exports plus a manifest CSV
-    and/or a file-name pattern, reduced with an instrument config (default T-PID/44).
+    """A quick campaign without a config file: a folder of exports plus a manifest CSV,
+    a file-name pattern and/or a test-name pattern, reduced with an instrument config
+    (default T-PID/44). ``glob`` ``None`` takes every export the readers know.
 
     Relative paths are taken relative to the current directory.
     """
@@ -280,14 +313,16 @@ def folder_campaign(
     manifest_path = None if manifest is None else Path(manifest).resolve()
     if manifest_path is not None and not manifest_path.is_file():
         raise CampaignError("manifest not found", path=manifest)
-    if manifest_path is None and filename_pattern is None:
+    if manifest_path is None and filename_pattern is None and test_pattern is None:
         raise CampaignError(
             "no metadata source for the runs", path=folder,
             hint="pass --manifest FILE.csv (columns file, pin, disc, normal_force_N, "
-                 "temperature_C, repeat) or --pattern",
+                 "temperature_C, repeat; optional test), --pattern or --test-pattern",
         )
     if filename_pattern is not None:
         _compile_pattern(filename_pattern, key="pattern", path=None)
+    if test_pattern is not None:
+        _compile_pattern(test_pattern, key="test-pattern", path=None)
     out = Path(output_dir).resolve()
     return Campaign(
         name=raw_dir.name,
@@ -298,5 +333,6 @@ def folder_campaign(
         map_path=Path(map_path).resolve() if map_path else OutputLayout(out).map_path,
         manifest=manifest_path,
         filename_pattern=filename_pattern,
+        test_pattern=test_pattern,
         plots=plots,
     )

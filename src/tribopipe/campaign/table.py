@@ -1,12 +1,24 @@
 """A campaign as a table, before anything runs: one row per file, its metadata and status.
 
+Which files
+-----------
+:func:`discover_files`: by default every export the readers know in the raw folder (the
+suffixes of :data:`tribopipe.readers.EXPORT_SUFFIXES`, in any case: ``.csv``, ``.txt``,
+``.tsv``, ``.xlsx`` and ``.xls``, which is refused with its reason), else the campaign's
+``glob``. Never taken: hidden files, the manifest, campaign configs (``.toml``), and the
+tool's own outputs (the map, anything the output folder holds, ``runs.csv`` and
+``failures.csv`` tables, state and ``.lock`` files). Any other file that matches and is
+not an export fails with the reader's reason.
+
 Incremental state
 -----------------
 ``<output_dir>/.tribopipe-state.<name>.json`` remembers, per file: size, ``mtime_ns``,
-SHA-256, the config hash, a recipe hash (config + labels + QC tolerances), the status and
-the measurement id (one state per campaign name, so campaigns may share an output folder
-and a map). Like git's index, the cached hash is trusted while size and ``mtime_ns`` are
-unchanged, so an unchanged campaign is checked with one ``stat`` per file.
+SHA-256, the config hash, a recipe hash (config + the labels known before reading + QC
+tolerances), the file's status, its tests and, per run, what :class:`RunEntry` holds
+(one state per campaign name, so campaigns may share an output folder and a map). Like
+git's index, the cached hash is trusted while size and ``mtime_ns`` are unchanged, so an
+unchanged campaign is checked with one ``stat`` per file and every run of an unchanged
+file is skipped.
 """
 
 from __future__ import annotations
@@ -14,7 +26,8 @@ from __future__ import annotations
 import functools
 import hashlib
 import json
-from collections.abc import Mapping
+import os
+from collections.abc import Mapping, Sequence
 from dataclasses import asdict, dataclass, fields
 from pathlib import Path
 from typing import Any
@@ -22,17 +35,20 @@ from typing import Any
 from ..errors import CampaignError
 from ..files import file_sha256, write_text_atomic
 from ..frictionmap.records import RunLabels
-from .metadata import labels_from, merge_metadata, read_manifest
+from ..layout import FAILURES_CSV, RUNS_CSV
+from ..readers import EXPORT_SUFFIXES
+from .metadata import Manifest, ManifestRow, labels_from, merge_metadata, read_manifest
 from .patterns import LABEL_FIELDS, match_pattern
 from .spec import Campaign
 
-STATE_VERSION = 1
+STATE_VERSION = 2
 
-#: the statuses of a campaign row before a batch (``campaign list``)
+#: the statuses of a campaign file or run before a batch (``campaign list``)
 NEW, REDUCED, CHANGED, FAILED = "new", "reduced", "changed", "failed"
+#: a file whose content another file of the campaign (or the map) holds: stored once
+DUPLICATE = "duplicate"
 #: what a batch did with a run (``runs.csv``)
 SKIPPED = "skipped"
-
 
 
 @dataclass(frozen=True)
@@ -40,7 +56,8 @@ class RunEntry:
     """What the state keeps of a reduced run (and ``runs.csv`` shows), as its worker
     found it: the labels, the id, the trace (relative to the output folder), μ_S and μ_K,
     the nominal pressure [kPa], the measured pressure [kPa], normal force [N] and
-    temperature [°C] (``None`` when not finite) and the ``;``-joined flags."""
+    temperature [°C] (``None`` when not finite), the ``;``-joined flags, and where the run
+    sits in its export (its name, test, result, interval and occurrence)."""
 
     labels: dict[str, Any]
     measurement_id: str
@@ -52,13 +69,18 @@ class RunEntry:
     normal_force_measured_N: float | None
     temperature_measured_C: float | None
     flags: str
+    name: str = ""
+    test: str | None = None
+    result: str | None = None
+    interval: int | None = None
+    occurrence: int = 1
 
     def as_dict(self) -> dict[str, Any]:
         """The entry's fields as the state's JSON keys."""
         return asdict(self)
 
 
-#: the keys of a state entry that come from a :class:`RunEntry`
+#: the keys of a state run entry that come from a :class:`RunEntry`
 _SUMMARY_KEYS: tuple[str, ...] = tuple(f.name for f in fields(RunEntry))
 
 
@@ -66,10 +88,12 @@ _SUMMARY_KEYS: tuple[str, ...] = tuple(f.name for f in fields(RunEntry))
 class CampaignRow:
     """One file of a campaign: its metadata (as known before reading it) and status.
 
-    ``sources`` are the metadata sources consulted so far (name, fields) in priority order;
-    ``problem`` is a metadata error known before reading; ``status`` is one of
-    ``new, reduced, changed, failed``; ``reason`` why a run failed (last batch or now);
-    ``previous`` the file's entry in the state; ``hints`` why a source said nothing.
+    ``sources`` are the file-level metadata sources (name, fields) in priority order
+    (the manifest's whole-file row, the file name); ``test_rows`` the manifest rows of its
+    tests (their Test names are only checked once the file is read); ``problem`` is a
+    metadata error known before reading; ``status`` is one of ``new, reduced, changed,
+    failed, duplicate``; ``reason`` why the file failed (last batch or now); ``previous``
+    the file's entry in the state; ``hints`` why a source said nothing.
     """
 
     file: str
@@ -84,6 +108,7 @@ class CampaignRow:
     sha256: str | None = None
     previous: dict[str, Any] | None = None
     hints: tuple[str, ...] = ()
+    test_rows: tuple[ManifestRow, ...] = ()
 
     @property
     def labels(self) -> RunLabels:
@@ -94,26 +119,69 @@ class CampaignRow:
             temperature_C=m.get("temperature_C"), repeat=m.get("repeat"),
         )
 
+    @property
+    def runs(self) -> list[dict[str, Any]]:
+        """The runs the state knows of this file (its last batch), in file order."""
+        return list((self.previous or {}).get("runs") or [])
+
+
+def _is_tool_table(path: Path) -> bool:
+    """A ``runs.csv`` or ``failures.csv`` this tool wrote (first cell ``file``)."""
+    if path.name not in (RUNS_CSV, FAILURES_CSV):
+        return False
+    try:
+        with path.open("rb") as fh:
+            return fh.read(5) == b"file,"
+    except OSError:
+        return False
+
 
 def discover_files(campaign: Campaign) -> list[Path]:
-    """The campaign's raw exports: ``raw_dir`` globbed, sorted, without the manifest,
-    hidden files and folders."""
-    manifest = campaign.manifest
+    """The campaign's raw exports, sorted by relative path: every file of ``raw_dir``
+    with a suffix the readers know (any case), or the campaign's ``glob``; never hidden
+    files, the manifest, campaign configs, or the tool's own outputs (see the module
+    docstring)."""
+    root = campaign.raw_dir
+    if campaign.glob is None:
+        # one scandir: the directory entries carry their type, no stat per file
+        with os.scandir(root) as it:
+            candidates = [Path(e.path) for e in it
+                          if os.path.splitext(e.name)[1].lower() in EXPORT_SUFFIXES
+                          and not e.name.startswith(".") and e.is_file()]
+    else:
+        candidates = [p for p in root.glob(campaign.glob)
+                      if not p.name.startswith(".") and p.is_file()]
+    not_runs = {p for p in (campaign.manifest, campaign.source, campaign.map_path) if p}
+    layout = campaign.layout
+    inside = campaign.output_dir != root and campaign.output_dir.is_relative_to(root)
     files = [
-        p for p in campaign.raw_dir.glob(campaign.glob)
-        if p.is_file() and not p.name.startswith(".")
-        # resolving costs a few syscalls per file: only when there is a manifest to skip
-        and (manifest is None or p.resolve() != manifest)
+        p for p in candidates
+        if p.suffix.lower() != ".toml" and not p.name.endswith(".lock")
+        and p not in not_runs
+        and not (inside and p.is_relative_to(campaign.output_dir))
+        and not layout.written_here(p) and not _is_tool_table(p)
     ]
-    return sorted(files, key=lambda p: p.relative_to(campaign.raw_dir).as_posix())
+    return sorted(files, key=lambda p: p.relative_to(root).as_posix())
 
 
-def recipe_hash(campaign: Campaign, merged: Mapping[str, Any]) -> str:
-    """Hash of everything besides the raw bytes that a run's record depends on: the
-    settings' config hash, the labels known before reading, the QC tolerances and the
-    export-name rules (16 hex digits)."""
-    payload = {"campaign": _campaign_key(campaign),
-               "labels": {k: merged.get(k) for k in LABEL_FIELDS}}
+def describe_glob(campaign: Campaign) -> str:
+    """The files a campaign takes, in words: its glob, or the export suffixes."""
+    if campaign.glob is not None:
+        return repr(campaign.glob)
+    return "exports (" + ", ".join(f"*{s}" for s in EXPORT_SUFFIXES) + ", any case)"
+
+
+def recipe_hash(campaign: Campaign, merged: Mapping[str, Any],
+                test_rows: Sequence[ManifestRow] = ()) -> str:
+    """Hash of everything besides the raw bytes that a file's records depend on: the
+    settings' config hash, the labels known before reading (the file-level ones and the
+    manifest rows of its tests), the QC tolerances and the test-name rules (16 hex
+    digits)."""
+    payload: dict[str, Any] = {"campaign": _campaign_key(campaign),
+                               "labels": {k: merged.get(k) for k in LABEL_FIELDS}}
+    if test_rows:
+        payload["tests"] = sorted(
+            [r.test or "", r.line, sorted(r.fields.items()), r.problem] for r in test_rows)
     text = json.dumps(payload, sort_keys=True, default=str)
     return hashlib.sha256(text.encode()).hexdigest()[:16]
 
@@ -125,9 +193,9 @@ def _campaign_key(campaign: Campaign) -> str:
         "config": campaign.settings.config_hash,
         "tolerances": asdict(campaign.tolerances),
         # the labels in recipe_hash already carry the [names] aliases, except those read
-        # from export names, so the aliases only matter with use_export_names
-        "export_names": [campaign.export_pattern, list(campaign.names)]
-        if campaign.use_export_names else None,
+        # from Test names, so the aliases only matter with a test-name pattern
+        "export_names": [campaign.test_pattern, list(campaign.names)]
+        if campaign.test_pattern is not None else None,
         "read": asdict(campaign.read_options),
     }
     return hashlib.sha256(json.dumps(payload, sort_keys=True, default=str).encode()).hexdigest()
@@ -137,19 +205,31 @@ def _relative(path: Path, root: Path) -> str:
     return path.relative_to(root).as_posix()
 
 
-def campaign_table(campaign: Campaign, *, state: Mapping[str, Any] | None = None
-                   ) -> list[CampaignRow]:
-    """The campaign as a table, before anything runs: one row per file with its metadata
-    and status (``new, reduced, changed, failed``).
+def _traces_present(campaign: Campaign, entry: Mapping[str, Any]) -> bool:
+    """True when every reduced run of a state entry still has its trace on disk."""
+    for run in entry.get("runs") or []:
+        if run.get("status") == REDUCED:
+            trace = run.get("trace")
+            if not trace or not (campaign.output_dir / trace).is_file():
+                return False
+    return True
 
-    A file counts as ``reduced`` when its content (SHA-256, trusted from the state while
-    size and ``mtime_ns`` are unchanged) and its recipe hash match the last successful
-    batch and its trace still exists; ``failed`` when the same holds for a failed run or
-    its metadata is already known to be wrong. ``state`` defaults to the campaign's state
-    file.
+
+def campaign_table(campaign: Campaign, *, state: Mapping[str, Any] | None = None,
+                   manifest: Manifest | None = None) -> list[CampaignRow]:
+    """The campaign as a table, before anything runs: one row per file with its metadata
+    and status (``new, reduced, changed, failed, duplicate``).
+
+    A file counts as ``reduced`` (or ``duplicate``) when its content (SHA-256, trusted
+    from the state while size and ``mtime_ns`` are unchanged) and its recipe hash match
+    the last batch and the traces of its reduced runs still exist; ``failed`` when the
+    same holds for a file that failed or its metadata is already known to be wrong.
+    ``state`` defaults to the campaign's state file, ``manifest`` to its manifest.
     """
     entries = (state if state is not None else load_state(campaign)).get("entries", {})
-    manifest = read_manifest(campaign.manifest) if campaign.manifest else {}
+    if manifest is None and campaign.manifest is not None:
+        manifest = read_manifest(campaign.manifest)
+    per_test_possible = campaign.test_pattern is not None
     rows: list[CampaignRow] = []
     for path in discover_files(campaign):
         rel = _relative(path, campaign.raw_dir)
@@ -157,13 +237,14 @@ def campaign_table(campaign: Campaign, *, state: Mapping[str, Any] | None = None
         sources: list[tuple[str, dict[str, Any]]] = []
         hints: list[str] = []
         problem: str | None = None
-        if campaign.manifest is not None:
-            row = manifest.get(rel) or manifest.get(path.name)
-            if row is None:
-                hints.append(f"no row for it in manifest {campaign.manifest.name}")
-            else:
-                sources.append((f"manifest line {row.line}", dict(row.fields)))
-                problem = row.problem
+        test_rows: dict[str, ManifestRow] = {}
+        if manifest is not None:
+            whole, test_rows = manifest.for_file(rel, path.name)
+            if whole is not None:
+                sources.append((f"manifest line {whole.line}", dict(whole.fields)))
+                problem = whole.problem
+            elif not test_rows:
+                hints.append(f"no row for it in manifest {manifest.name}")
         if campaign.filename_pattern is not None:
             found = match_pattern(campaign.filename_pattern, path.stem)
             if found is None:
@@ -174,7 +255,7 @@ def campaign_table(campaign: Campaign, *, state: Mapping[str, Any] | None = None
         if problem is None:
             try:
                 merged = merge_metadata(rel, sources, campaign)
-                if not campaign.use_export_names:
+                if not test_rows and not per_test_possible:
                     labels_from(rel, merged, hints=hints)
             except CampaignError as exc:
                 problem = str(exc)
@@ -187,11 +268,9 @@ def campaign_table(campaign: Campaign, *, state: Mapping[str, Any] | None = None
                 previous.get("mtime_ns") == st.st_mtime_ns
             sha = previous.get("sha256") if same_stat else file_sha256(path)
             same = sha is not None and sha == previous.get("sha256") and \
-                previous.get("recipe") == recipe_hash(campaign, merged)
-            if same and previous.get("status") == REDUCED:
-                trace = previous.get("trace")
-                status = REDUCED if trace and (campaign.output_dir / trace).is_file() \
-                    else CHANGED
+                previous.get("recipe") == recipe_hash(campaign, merged, tuple(test_rows.values()))
+            if same and previous.get("status") in (REDUCED, DUPLICATE):
+                status = previous["status"] if _traces_present(campaign, previous) else CHANGED
             elif same and previous.get("status") == FAILED:
                 status, reason = FAILED, previous.get("reason")
             else:
@@ -202,6 +281,7 @@ def campaign_table(campaign: Campaign, *, state: Mapping[str, Any] | None = None
             file=rel, path=path, size=st.st_size, mtime_ns=st.st_mtime_ns,
             sources=tuple(sources), merged=merged, problem=problem, status=status,
             reason=reason, sha256=sha, previous=previous, hints=tuple(hints),
+            test_rows=tuple(test_rows.values()),
         ))
     return rows
 
@@ -228,28 +308,53 @@ def save_state(campaign: Campaign, state: Mapping[str, Any]) -> None:
 
 
 def campaign_listing(campaign: Campaign) -> list[dict[str, Any]]:
-    """The campaign table as JSON-ready dicts, for ``tribopipe campaign list``.
+    """The campaign table as JSON-ready dicts, for ``tribopipe campaign list``: one per run.
 
-    Keys: ``file, status, pin, disc, normal_force_N, temperature_C, repeat, mu_s, mu_k,
-    flags, measurement_id, sources, reason``. Labels of reduced runs come from the last
-    batch (so they include fields read from export names); μ values only for reduced runs.
+    Keys: ``file, test, result, interval, run, status, pin, disc, normal_force_N,
+    temperature_C, repeat, mu_s, mu_k, flags, measurement_id, sources, reason``. A file
+    the last batch read gives a row per run it found (and per test without a friction
+    interval), with the labels it used (so they include fields read from Test names) and
+    μ values for reduced runs; a file not read yet gives a row per test its manifest rows
+    name, else one row (its tests are known once it is read).
     """
     out: list[dict[str, Any]] = []
     for row in campaign_table(campaign):
-        entry = row.previous or {}
-        reduced = row.status == REDUCED
-        labels = (entry.get("labels") if reduced else None) or {
-            k: row.merged.get(k) for k in LABEL_FIELDS
-        }
-        out.append({
-            "file": row.file,
-            "status": row.status,
-            **{k: labels.get(k) for k in LABEL_FIELDS},
-            "mu_s": entry.get("mu_s") if reduced else None,
-            "mu_k": entry.get("mu_k") if reduced else None,
-            "flags": entry.get("flags") if reduced else None,
-            "measurement_id": entry.get("measurement_id") if reduced else None,
-            "sources": [name for name, _ in row.sources],
-            "reason": row.reason,
-        })
+        base = {k: row.merged.get(k) for k in LABEL_FIELDS}
+        sources = [name for name, _ in row.sources]
+        if row.status in (REDUCED, DUPLICATE) and row.runs:
+            for run in row.runs:
+                reduced = run.get("status") in (REDUCED, DUPLICATE)
+                labels = run.get("labels") or base
+                out.append(_listed(row.file, run, run.get("status", row.status), labels,
+                                   sources, run.get("reason"), values=run if reduced else {}))
+        elif row.status in (NEW, CHANGED) and row.test_rows:
+            for test_row in row.test_rows:
+                labels = {**base, **{k: v for k, v in test_row.fields.items()
+                                     if base.get(k) is None}}
+                out.append(_listed(row.file, {"test": test_row.test}, row.status, labels,
+                                   [*sources, f"manifest line {test_row.line}"], row.reason))
+        else:
+            out.append(_listed(row.file, {}, row.status, base, sources, row.reason))
     return out
+
+
+def _listed(file: str, run: Mapping[str, Any], status: str, labels: Mapping[str, Any],
+            sources: list[str], reason: str | None, *,
+            values: Mapping[str, Any] | None = None) -> dict[str, Any]:
+    """One row of :func:`campaign_listing`."""
+    values = values or {}
+    return {
+        "file": file,
+        "test": run.get("test"),
+        "result": run.get("result"),
+        "interval": run.get("interval"),
+        "run": run.get("name") or file,
+        "status": status,
+        **{k: labels.get(k) for k in LABEL_FIELDS},
+        "mu_s": values.get("mu_s"),
+        "mu_k": values.get("mu_k"),
+        "flags": values.get("flags"),
+        "measurement_id": values.get("measurement_id"),
+        "sources": sources,
+        "reason": reason,
+    }

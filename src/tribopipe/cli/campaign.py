@@ -12,7 +12,8 @@ import click
 from ._common import friendly_errors
 
 #: options that describe a campaign, so they only make sense with a FOLDER
-_FOLDER_ONLY = {"manifest": "--manifest", "filename_pattern": "--pattern", "glob": "--glob",
+_FOLDER_ONLY = {"manifest": "--manifest", "filename_pattern": "--pattern",
+                "test_pattern": "--test-pattern", "glob": "--glob",
                 "config_path": "--config", "output_dir": "--out"}
 
 
@@ -30,8 +31,9 @@ def _open(target: str, options: dict[str, Any]) -> Any:
             filename_pattern=options.get("filename_pattern"),
             map_path=options.get("map_path"),
             output_dir=options.get("output_dir") or DEFAULT_OUTPUT_DIR,
-            glob=options.get("glob") or "*.csv",
+            glob=options.get("glob"),
             instrument=options.get("config_path"),
+            test_pattern=options.get("test_pattern"),
         )
         return campaign
     given = [flag for name, flag in _FOLDER_ONLY.items() if options.get(name)]
@@ -83,15 +85,21 @@ def _run(campaign: Any, jobs: int | None, plots: bool | None) -> None:
     for file, reason in report.failures:
         # reasons name their file already (campaign-relative), except rare library ones
         click.echo(f"failed: {reason if file in reason else f'{file}: {reason}'}", err=True)
-    click.echo(report.summary())
     for file, flags in report.flagged:
         click.echo(f"flagged: {file}: {flags.replace(';', ', ')}")
     click.echo(f"map {_shorten(report.map_path)}: {report.map_summary}")
     click.echo(f"outputs in {_shorten(report.output_dir)}/: runs.csv, failures.csv, traces/"
                + (", plots/traces/" if OutputLayout(report.output_dir).plots_dir.is_dir() else ""))
+    for line in report.ledger():  # the account comes last, where a user looks
+        click.echo(line)
     if not report.ok:
-        click.echo(f"{len(report.failures)} run(s) failed; see "
-                   f"{_shorten(campaign.failures_csv)}", err=True)
+        parts = []
+        if report.failures:
+            parts.append(f"{len(report.failures)} run(s) failed; see "
+                         f"{_shorten(campaign.failures_csv)}")
+        if report.unmatched:
+            parts.append(f"{len(report.unmatched)} manifest row(s) matched nothing")
+        click.echo("; ".join(parts), err=True)
         sys.exit(1)
 
 
@@ -115,11 +123,16 @@ def _common_run_options(func: Any) -> Any:
 @click.argument("target", type=click.Path(exists=True))
 @click.option("--manifest", type=click.Path(exists=True, dir_okay=False),
               help="FOLDER only: manifest CSV (file, pin, disc, normal_force_N, "
-                   "temperature_C, repeat).")
+                   "temperature_C, repeat; optional test: one row per test of a session "
+                   "export).")
 @click.option("--pattern", "filename_pattern",
               help="FOLDER only: file-name pattern, e.g. "
                    "'{pin}_{disc}_{force}N_{temperature}C_r{repeat}'.")
-@click.option("--glob", help="FOLDER only: which files are exports (default *.csv).")
+@click.option("--test-pattern", "test_pattern",
+              help="FOLDER only: pattern for each test's Test name, e.g. "
+                   "'{pin} on {disc}, {force} N, {temperature} °C, #{repeat}'.")
+@click.option("--glob", help="FOLDER only: which files are exports (default: every export "
+                             "the readers know: .csv, .txt, .tsv, .xlsx, .xls, any case).")
 @click.option("--config", "config_path", type=click.Path(exists=True, dir_okay=False),
               help="FOLDER only: instrument config (TOML). Default: T-PID/44, 3 pins.")
 @click.option("--out", "output_dir", type=click.Path(file_okay=False),
@@ -127,22 +140,28 @@ def _common_run_options(func: Any) -> Any:
 @_common_run_options
 @friendly_errors
 def batch_cmd(target: str, manifest: str | None, filename_pattern: str | None,
-              glob: str | None, config_path: str | None, output_dir: str | None,
-              map_path: str | None, jobs: int | None, plots: bool | None) -> None:
+              test_pattern: str | None, glob: str | None, config_path: str | None,
+              output_dir: str | None, map_path: str | None, jobs: int | None,
+              plots: bool | None) -> None:
     """Reduce a whole campaign: TARGET is a campaign CONFIG (TOML) or a FOLDER of exports.
 
-    Only new and changed runs are reduced (content + config hash); the others are skipped.
-    A bad file is listed with its reason and the good ones still land; the map is updated
-    once. Writes traces/, runs.csv and failures.csv to the output folder. Exit code 1 when
-    any run failed.
+    Every friction interval of every test of every export is a run. Only new and changed
+    files are reduced (content + config hash); the others are skipped. A bad file, test
+    or run is listed with its reason and the good ones still land; a file whose content
+    another already brought is a duplicate (stored once) or, with other labels, a
+    conflict (refused); the map is updated once. Writes traces/, runs.csv and
+    failures.csv to the output folder and ends with a ledger: files and tests found,
+    runs reduced, skipped and failed, and every manifest row and test left out. Exit code
+    1 when anything named was not reduced.
 
     \b
       tribopipe batch configs/example.toml
       tribopipe batch raw/mine --manifest raw/mine/manifest.csv --map processed/map.parquet
     """
     campaign = _open(target, {
-        "manifest": manifest, "filename_pattern": filename_pattern, "glob": glob,
-        "config_path": config_path, "output_dir": output_dir, "map_path": map_path,
+        "manifest": manifest, "filename_pattern": filename_pattern,
+        "test_pattern": test_pattern, "glob": glob, "config_path": config_path,
+        "output_dir": output_dir, "map_path": map_path,
     })
     _run(campaign, jobs, plots)
 
@@ -166,8 +185,9 @@ def run_cmd(config: str, map_path: str | None, jobs: int | None, plots: bool | N
 @click.option("--json", "as_json", is_flag=True, help="Print a JSON list instead of a table.")
 @friendly_errors
 def list_cmd(config: str, as_json: bool) -> None:
-    """Show a campaign CONFIG as a table: one row per file, its metadata and status
-    (new, reduced, changed, failed). Nothing is reduced."""
+    """Show a campaign CONFIG as a table: one row per run (file + test), its metadata and
+    status (new, reduced, changed, failed, duplicate). Nothing is reduced: a file not
+    read yet shows one row (or one per test its manifest rows name)."""
     from ..campaign import campaign_listing, load_campaign
 
     rows = campaign_listing(load_campaign(config))
@@ -178,8 +198,8 @@ def list_cmd(config: str, as_json: bool) -> None:
 
 
 def _print_table(rows: list[dict[str, Any]]) -> None:
-    columns = ("file", "status", "pin", "disc", "normal_force_N", "temperature_C", "repeat",
-               "mu_k", "reason")
+    columns = ("file", "test", "interval", "status", "pin", "disc", "normal_force_N",
+               "temperature_C", "repeat", "mu_k", "reason")
     heads = {"normal_force_N": "F_N", "temperature_C": "T_C"}
 
     def cell(row: dict[str, Any], col: str) -> str:
@@ -201,4 +221,6 @@ def _print_table(rows: list[dict[str, Any]]) -> None:
     counts: dict[str, int] = {}
     for r in rows:
         counts[r["status"]] = counts.get(r["status"], 0) + 1
-    click.echo(f"{len(rows)} file(s): " + ", ".join(f"{n} {s}" for s, n in sorted(counts.items())))
+    files = len({r["file"] for r in rows})
+    click.echo(f"{len(rows)} run(s) in {files} file(s): "
+               + ", ".join(f"{n} {s}" for s, n in sorted(counts.items())))

@@ -37,8 +37,9 @@ def inspect_cmd(
 ) -> None:
     """List what an export holds: detected format, encoding, delimiter and decimal mark,
     its tests, results and intervals with their point counts, every column with its
-    original unit and the SI column it becomes, and the interval `reduce` will read."""
-    from ..intervals import select_friction_interval
+    original unit and the SI column it becomes, and the intervals `reduce` will read (one
+    run per friction interval of every test)."""
+    from ..intervals import all_friction_intervals
     from ..readers import describe_export
 
     summary = describe_export(
@@ -48,7 +49,7 @@ def inspect_cmd(
         decimal=decimal,
         fmt=fmt,
         aliases=aliases_path,
-        choose=select_friction_interval,
+        choose=all_friction_intervals,
     )
     if as_json:
         click.echo(json.dumps(summary.to_dict(), indent=2, ensure_ascii=False))

@@ -47,6 +47,7 @@ from .textio import decode, detect_decimal, detect_delimiter, read_bytes, split_
 from .xlsx import XLSX_MAGIC, workbook_rows
 
 __all__ = [
+    "EXPORT_SUFFIXES",
     "FORMATS",
     "AliasTable",
     "ColumnSummary",
@@ -65,6 +66,12 @@ FORMATS: tuple[str, ...] = (
     rheoplus.FORMAT,
     plaincsv.FORMAT,
 )
+
+#: file suffixes (lower case) of what the readers take: text tables (RheoCompass,
+#: Rheoplus, plain CSV) as .csv, .txt or .tsv, RheoCompass workbooks as .xlsx; a legacy .xls
+#: is recognised and refused with the reason (save it as .xlsx). Formats are detected from
+#: the content, so a campaign's folder discovery is all these suffixes stand for.
+EXPORT_SUFFIXES: tuple[str, ...] = (".csv", ".txt", ".tsv", ".xlsx", ".xls")
 
 _OLE_MAGIC = b"\xd0\xcf\x11\xe0"  # legacy .xls
 
@@ -242,6 +249,8 @@ class ExportSummary:
     intervals: tuple[IntervalSummary, ...]
     #: index in ``intervals`` of the interval a reduction would read (see describe_export)
     chosen: int | None = None
+    #: indices of every interval a reduction reads (one run each), when it reads several
+    chosen_all: tuple[int, ...] = ()
     #: why no interval would be chosen, when a chooser refused
     chosen_note: str | None = None
 
@@ -288,6 +297,8 @@ class ExportSummary:
             "n_intervals": len(self.intervals),
             "n_points": self.n_points,
             "friction_interval": self.chosen,
+            "friction_intervals": list(self.chosen_all or
+                                       (() if self.chosen is None else (self.chosen,))),
             "friction_interval_note": self.chosen_note,
             "intervals": [
                 {
@@ -357,7 +368,12 @@ class ExportSummary:
             for c in i.columns:
                 shown = f"{c.original} {c.unit}".strip()
                 lines.append(f"  {shown:<{width}} → {c.column or '(dropped)'}")
-        if self.chosen is not None:
+        if len(self.chosen_all) > 1:
+            lines += ["", f"reduce reads {len(self.chosen_all)} runs:"]
+            for k in self.chosen_all:
+                i = self.intervals[k]
+                lines.append(f"  {interval_label(i.test, i.result, i.interval)}")
+        elif self.chosen is not None:
             i = self.intervals[self.chosen]
             lines += ["", f"reduce reads: {interval_label(i.test, i.result, i.interval)}"]
         elif self.chosen_note:
@@ -373,14 +389,16 @@ def describe_export(
     decimal: str | None = None,
     fmt: str | None = None,
     aliases: AliasTable | str | PathLike[str] | None = None,
-    choose: Callable[[Sequence[Measurement]], Measurement] | None = None,
+    choose: Callable[[Sequence[Measurement]], Measurement | Sequence[Measurement]]
+    | None = None,
 ) -> ExportSummary:
     """Read an export (as :func:`read_export` does) and summarise what it holds: format,
     encoding, delimiter, decimal mark, tests, results, intervals, points and every column
     with its original unit and the column it maps to.
 
-    ``choose`` (e.g. :func:`tribopipe.reduce.select_friction_interval`) picks the interval
-    a reduction reads; its pick, or the one-line reason it refuses, goes into the summary.
+    ``choose`` (e.g. :func:`tribopipe.intervals.all_friction_intervals`) picks the
+    interval(s) a reduction reads; its pick(s), or the one-line reason it refuses, go into
+    the summary.
     """
     measurements = read_export(
         path, encoding=encoding, delimiter=delimiter, decimal=decimal, fmt=fmt, aliases=aliases
@@ -414,7 +432,7 @@ def describe_export(
                 notes=meta.extra,
             )
         )
-    chosen: int | None = None
+    chosen_all: list[int] = []
     note: str | None = None
     if choose is not None:
         try:
@@ -422,16 +440,18 @@ def describe_export(
         except TribopipeError as exc:
             note = exc.problem
         else:
-            # the chooser may return a copy with notes added to its meta: match the place
-            place = (picked.meta.test, picked.meta.result, picked.meta.interval,
-                     picked.meta.header_line)
-            chosen = next(
-                (k for k, m in enumerate(measurements)
-                 if (m.meta.test, m.meta.result, m.meta.interval, m.meta.header_line) == place),
-                None,
-            )
+            # the chooser may return copies with notes added to their meta: match the place
+            places = {
+                (m.meta.test, m.meta.result, m.meta.interval, m.meta.header_line)
+                for m in ([picked] if isinstance(picked, Measurement) else picked)
+            }
+            chosen_all = [
+                k for k, m in enumerate(measurements)
+                if (m.meta.test, m.meta.result, m.meta.interval, m.meta.header_line) in places
+            ]
     return ExportSummary(
-        chosen=chosen,
+        chosen=chosen_all[0] if chosen_all else None,
+        chosen_all=tuple(chosen_all),
         chosen_note=note,
         path=str(Path(path)),
         file_format=first.file_format,

@@ -34,20 +34,22 @@ SESSION_TRUTH = {
 }
 
 
-def session_tests(seed: int = 0) -> list[SyntheticTest]:
-    """The three tests of ``SESSION_TRUTH`` (seeds from ``seed``)."""
+def session_tests(seed: int = 0, repeat: int = 1) -> list[SyntheticTest]:
+    """The three tests of ``SESSION_TRUTH`` (seeds from ``seed``; Test names ending in
+    ``#<repeat>``)."""
     return [
-        SyntheticTest(name, "DS30", (run(mu_s, mu_k, force, seed + k, torque_offset_Nm=offset,
-                                         setup_interval=setup),))
+        SyntheticTest(name.replace("#1", f"#{repeat}"), "DS30",
+                      (run(mu_s, mu_k, force, seed + k, torque_offset_Nm=offset,
+                           setup_interval=setup),))
         for k, (name, (mu_s, mu_k, force, offset, setup)) in enumerate(SESSION_TRUTH.items())
     ]
 
 
-def write_session(path: Path, *, language: str = "en", seed: int = 0,
+def write_session(path: Path, *, language: str = "en", seed: int = 0, repeat: int = 1,
                   tests: list[SyntheticTest] | None = None) -> Path:
     """``SESSION`` (or ``tests``) as one RheoCompass export."""
-    return write_rheocompass_session(path, tests or session_tests(seed), project="session",
-                                     language=language)
+    return write_rheocompass_session(path, tests or session_tests(seed, repeat),
+                                     project="session", language=language)
 
 
 def steps_test(seed: int = 20) -> SyntheticTest:

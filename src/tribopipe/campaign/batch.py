@@ -378,7 +378,7 @@ class _Owners:
             gone = self.renamed_from.get(source)
             if gone is not None and self.vanished_sha.get(gone) == sha:
                 return None, (f"{done.file}: same content as {gone}, which left the folder: "
-                              "taken as renamed, its runs now name this file")
+                              "taken as renamed")
             return compare_labels(done.file, source, runs, old), None
         return None, None
 
@@ -426,7 +426,7 @@ def _apply(campaign: Campaign, results: Sequence[FileDone], by_file: Mapping[str
         if note:
             notes.append(note)
         if same is not None:
-            _drop_outputs(campaign, done, keep={rec["measurement_id"] for rec in records})
+            _drop_outputs(campaign, done, entries)
             runs = [{"status": DUPLICATE, **{**r.entry.as_dict(), "trace": ""}}
                     for r in done.reduced]
             if same.conflict:
@@ -458,14 +458,17 @@ def _apply(campaign: Campaign, results: Sequence[FileDone], by_file: Mapping[str
                     flagged=flagged, duplicates=duplicates)
 
 
-def _drop_outputs(campaign: Campaign, done: FileDone, keep: set[str]) -> None:
+def _drop_outputs(campaign: Campaign, done: FileDone, entries: Mapping[str, Any]) -> None:
     """Remove the traces and plots a worker wrote for runs that do not land (their file
-    is a duplicate or a conflict), unless a landing run shares the path."""
+    is a duplicate or a conflict), unless a landed run has the same file (a file of the
+    same name and content in another subfolder)."""
     layout = campaign.layout
+    kept = {r.get("trace") for e in entries.values() for r in e.get("runs") or []
+            if r.get("status") == REDUCED}
     for run in done.reduced:
-        mid = run.entry.measurement_id
-        if mid in keep:
+        if run.entry.trace in kept:
             continue
+        mid = run.entry.measurement_id
         for path in (layout.trace_path(done.file, mid), layout.trace_plot_path(done.file, mid)):
             try:
                 path.unlink(missing_ok=True)

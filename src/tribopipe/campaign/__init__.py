@@ -5,14 +5,16 @@ A campaign is described by a TOML file (``configs/*.toml``)::
     [campaign]
     name = "example"
     raw_dir = "../raw/example"           # paths are relative to the config file's folder
-    glob = "*.csv"                       # default; the manifest itself is never a run
+    glob = "*.csv"                       # default: every export the readers know (.csv,
+                                         # .txt, .tsv, .xlsx, .xls, any case); never the
+                                         # manifest, configs or the tool's own outputs
     instrument = "instruments/t-pid44.toml"     # default: the founding T-PID/44 cell
     output_dir = "../processed"          # default: processed/ beside the config's folder
     map = "../processed/friction_map.parquet"   # default: <output_dir>/friction_map.parquet
-    manifest = "../raw/example/manifest.csv"
+    manifest = "../raw/example/manifest.csv"   # optional column `test`: one row per test
     filename_pattern = "{pin}_{disc}_{force}N_{temperature}C_r{repeat}"
-    use_export_names = false             # also read metadata from the export's Test name
-    export_pattern = "..."               # pattern for the Test name (default: filename_pattern)
+    test_pattern = "{pin} on {disc}, {force} N, {temperature} °C, #{repeat}"  # each Test name
+    # use_export_names = true + export_pattern = "...": the older spelling of test_pattern
     force_tolerance_N = 0.0              # QC: measured F_N may stray max(tol_N, tol_rel·F_nom)
     force_tolerance_rel = 0.10
     temperature_tolerance_C = 2.0        # QC: measured T may stray this far from nominal
@@ -32,16 +34,23 @@ The package's rooms, each importing only those above it:
 * :mod:`~tribopipe.campaign.patterns` — the label fields and the file-name patterns;
 * :mod:`~tribopipe.campaign.spec` — :class:`Campaign`, :func:`load_campaign`,
   :func:`folder_campaign`;
-* :mod:`~tribopipe.campaign.metadata` — the manifest, the merge of metadata sources
-  (which must agree; a file whose metadata is missing or contradictory fails alone);
-* :mod:`~tribopipe.campaign.table` — the campaign as a table (:func:`campaign_table`) and
-  its incremental state (content hash trusted while size and ``mtime_ns`` are unchanged);
-* :mod:`~tribopipe.campaign.outputs` — ``runs.csv`` and ``failures.csv``;
-* :mod:`~tribopipe.campaign.batch` — :func:`run_campaign`, the parallel batch.
+* :mod:`~tribopipe.campaign.metadata` — the manifest (a row per file, or per test of a
+  session export), the merge of metadata sources per test (which must agree; a test whose
+  metadata is missing or contradictory fails alone);
+* :mod:`~tribopipe.campaign.table` — which files are exports (:func:`discover_files`), the
+  campaign as a table (:func:`campaign_table`, one row per file; :func:`campaign_listing`,
+  one per run) and its incremental state (content hash trusted while size and
+  ``mtime_ns`` are unchanged; the runs of each file);
+* :mod:`~tribopipe.campaign.outputs` — ``runs.csv`` (one row per run) and ``failures.csv``;
+* :mod:`~tribopipe.campaign.worker` — one file in a worker: read once, every run labelled
+  and reduced;
+* :mod:`~tribopipe.campaign.batch` — :func:`run_campaign`, the parallel batch, the same
+  content under two names (duplicate or conflict) and the ledger (:class:`BatchReport`).
 
-A file whose content, labels or config changed is reduced again and its old map row
-replaced; a failed file is retried once it changes. Every public name is importable from
-``tribopipe.campaign`` itself.
+Every friction interval of every test of every export is a run. A file whose content,
+labels or config changed is reduced again and its old map rows replaced; a failed file is
+retried once it changes. Every public name is importable from ``tribopipe.campaign``
+itself.
 """
 
 from __future__ import annotations
@@ -51,12 +60,17 @@ from ..layout import BATCH_LOCK
 from .batch import (
     GC_THRESHOLDS,
     BatchReport,
+    FailedRun,
+    FileDone,
     ProgressCallback,
+    ReducedRun,
     default_jobs,
     run_campaign,
 )
 from .metadata import (
     MANIFEST_COLUMNS,
+    TEST_COLUMN,
+    Manifest,
     ManifestRow,
     labels_from,
     merge_metadata,
@@ -78,6 +92,7 @@ from .spec import (
 )
 from .table import (
     CHANGED,
+    DUPLICATE,
     FAILED,
     NEW,
     REDUCED,
@@ -86,6 +101,7 @@ from .table import (
     CampaignRow,
     campaign_listing,
     campaign_table,
+    describe_glob,
     discover_files,
     load_state,
     recipe_hash,
@@ -104,6 +120,8 @@ __all__ = [
     "load_campaign",
     "folder_campaign",
     "MANIFEST_COLUMNS",
+    "TEST_COLUMN",
+    "Manifest",
     "ManifestRow",
     "read_manifest",
     "merge_metadata",
@@ -114,8 +132,10 @@ __all__ = [
     "CHANGED",
     "FAILED",
     "SKIPPED",
+    "DUPLICATE",
     "CampaignRow",
     "discover_files",
+    "describe_glob",
     "recipe_hash",
     "campaign_table",
     "load_state",
@@ -125,6 +145,9 @@ __all__ = [
     "ProgressCallback",
     "GC_THRESHOLDS",
     "BatchReport",
+    "FileDone",
+    "ReducedRun",
+    "FailedRun",
     "default_jobs",
     "run_campaign",
 ]

@@ -211,7 +211,7 @@ def _run_locked(campaign: Campaign, *, jobs: int | None, plots: bool | None,
     if landing.records or landing.stale_ids:
         map_summary, landed, removed = _update_map(campaign, landing.records, landing.stale_ids)
     groups = _groups_updated(state, landing.records, landed, removed)
-    _save_state_with_map(campaign, entries)
+    _save_state_with_map(campaign, entries, state)
 
     duplicates = {**plan.duplicates, **landing.duplicates}
     this_batch = {n: REDUCED for n in landing.reduced} | {n: SKIPPED for n in plan.skipped} | {
@@ -528,15 +528,18 @@ def _groups_updated(state: Mapping[str, Any], records: Sequence[Mapping[str, Any
     } | old_groups
 
 
-def _save_state_with_map(campaign: Campaign, entries: Mapping[str, Any]) -> None:
+def _save_state_with_map(campaign: Campaign, entries: Mapping[str, Any],
+                         before: Mapping[str, Any]) -> None:
     """Save the state with the map's size and ``mtime_ns`` as this batch leaves it (so the
-    next batch trusts an untouched map without reading it)."""
+    next batch trusts an untouched map without reading it); not rewritten when it equals
+    the state the batch started from (nothing changed)."""
     new_state: dict[str, Any] = {"version": STATE_VERSION, "campaign": campaign.name,
                                  "entries": dict(entries)}
     if campaign.map_path.exists():
         st = campaign.map_path.stat()
         new_state["map"] = {"size": st.st_size, "mtime_ns": st.st_mtime_ns}
-    save_state(campaign, new_state)
+    if new_state != before or not campaign.state_path.exists():
+        save_state(campaign, new_state)
 
 
 def _ids_missing_from_map(campaign: Campaign, state: Mapping[str, Any]) -> tuple[set[str], bool]:

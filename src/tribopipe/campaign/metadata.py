@@ -231,7 +231,7 @@ def merge_metadata(
                         f"contradictory {key}: {origin[key]} says {merged[key]!r}, "
                         f"{source} says {value!r}",
                         path=file,
-                        hint="fix the manifest or rename the file",
+                        hint="fix the manifest, the file name or the Test name",
                     )
                 continue
             merged[key] = value

@@ -303,8 +303,11 @@ def load_state(campaign: Campaign) -> dict[str, Any]:
 
 
 def save_state(campaign: Campaign, state: Mapping[str, Any]) -> None:
-    """Write the incremental state atomically (temporary file + rename)."""
-    write_text_atomic(campaign.state_path, json.dumps(state, indent=1, sort_keys=True))
+    """Write the incremental state atomically (temporary file + rename). Compact JSON:
+    without ``indent`` the json module's C encoder writes it (an indented state of 1,000
+    files took a third of an unchanged re-run)."""
+    write_text_atomic(campaign.state_path,
+                      json.dumps(state, sort_keys=True, separators=(",", ":")))
 
 
 def campaign_listing(campaign: Campaign) -> list[dict[str, Any]]:

@@ -399,3 +399,43 @@ def test_reader_overrides(tmp_path: Path) -> None:
             campaign.read_options.decimal) == ("utf-16", "\t", ",")
     with pytest.raises(ConfigError, match="decimal"):
         make_campaign(tmp_path, extra='decimal = ";"\n')
+
+
+# --------------------------------------------------------------------------- sessions
+
+
+def test_a_manifest_names_tests_of_one_file_and_refuses_a_test_twice(tmp_path: Path) -> None:
+    path = tmp_path / "m.csv"
+    path.write_text("file;test;pin;disc;normal_force_N;temperature_C;repeat\n"
+                    "s.txt;;DS30;steel;;20;\n"
+                    "s.txt;DS30 1 N #1 ;;;1;;1\n"
+                    "s.txt;DS30 3 N #1;;;3,5;;1\n", encoding="utf-8")
+    manifest = read_manifest(path)
+    assert manifest.get("s.txt").fields == {"pin": "DS30", "disc": "steel",
+                                            "temperature_C": 20.0}
+    # the Test name as the export writes it, surrounding blanks aside
+    assert manifest.get("s.txt", "DS30 1 N #1").fields == {"normal_force_N": 1.0, "repeat": 1}
+    assert manifest.get("s.txt", "DS30 3 N #1").line == 4
+    whole, tests = manifest.for_file("raw/s.txt", "s.txt")
+    assert whole.line == 2 and sorted(tests) == ["DS30 1 N #1", "DS30 3 N #1"]
+    path.write_text(path.read_text(encoding="utf-8") + "s.txt;DS30 1 N #1;;;2;;1\n",
+                    encoding="utf-8")
+    with pytest.raises(ConfigError, match=r"m\.csv:5: file 's\.txt' with test 'DS30 1 N #1' "
+                                          r"listed twice \(first on line 3\)"):
+        read_manifest(path)
+
+
+def test_the_test_pattern_key_and_its_older_spelling(tmp_path: Path) -> None:
+    pattern = "{pin} on {disc}, {force} N, {temperature} °C, #{repeat}"
+    assert match_pattern(pattern, "DS30 on steel, 2,5 N, 20 °C, #3") == {
+        "pin": "DS30", "disc": "steel", "normal_force_N": 2.5, "temperature_C": 20.0,
+        "repeat": 3}
+    new = make_campaign(tmp_path, pattern=False, extra=f'test_pattern = "{pattern}"\n')
+    assert new.test_pattern == pattern and new.use_export_names
+    old = make_campaign(tmp_path, extra="use_export_names = true\n")
+    assert old.test_pattern == PATTERN  # export_pattern defaults to the file-name pattern
+    with pytest.raises(ConfigError, match="test_pattern and export_pattern"):
+        make_campaign(tmp_path, extra=f'test_pattern = "{pattern}"\nuse_export_names = true\n'
+                                      f'export_pattern = "{PATTERN}"\n')
+    with pytest.raises(ConfigError, match="test_pattern.*no usable placeholder"):
+        make_campaign(tmp_path, extra='test_pattern = "plain"\n')

@@ -163,3 +163,18 @@ def test_inspect_of_a_plain_csv_names_the_interval_reduce_reads(tmp_path) -> Non
     result = CliRunner().invoke(main, ["inspect", str(path)])
     assert result.exit_code == 0, result.output
     assert "reduce reads: interval 1" in result.output
+
+
+def test_inspect_lists_every_run_of_a_session_export(tmp_path: Path) -> None:
+    from multi_exports import SESSION_TRUTH, write_session
+
+    path = write_session(tmp_path / "session.txt")
+    result = run(str(path))
+    assert result.exit_code == 0, result.output
+    assert "contents:  3 test(s), 3 result(s), 5 interval(s)" in result.output
+    assert "reduce reads 3 runs:" in result.output
+    for name in SESSION_TRUTH:
+        assert f"  {name} / DS30 1 / interval" in result.output
+    summary = json.loads(run(str(path), "--json").output)
+    assert summary["friction_intervals"] == [1, 2, 4]  # set-up, friction, friction, set-up, …
+    assert summary["friction_interval"] == 1

@@ -86,3 +86,15 @@ def test_the_cli_defaults_are_the_layout(tmp_path: Path) -> None:
     assert f"[default: {DEFAULT_OUTPUT_DIR}]" in helps["reduce"]
     assert f"[default: {default.pair_plots_dir}]" in helps["plot pairs"]
     assert f"[default: {default.trace_plots_dir}]" in helps["plot runs"]
+
+
+def test_what_the_folder_writes_is_known_so_a_campaign_never_reads_it(tmp_path: Path) -> None:
+    out = OutputLayout(tmp_path / "processed")
+    ours = [out.map_path, out.runs_csv, out.failures_csv, out.report_html, out.batch_lock,
+            out.state_path("lab"), out.trace_path("a.csv", MID), out.summary_path("a.csv", MID),
+            out.trace_plot_path("a.csv", MID), out.pair_plots_dir / "pair_x__y.png",
+            out.root / "friction_map.parquet.lock"]
+    assert all(out.written_here(p) for p in ours)
+    theirs = [out.root / "DS30_steel_1N_10C_r1.csv", out.root / "raw" / "run.txt",
+              tmp_path / "runs.csv", out.root / "notes" / "runs.csv"]
+    assert not any(out.written_here(p) for p in theirs)

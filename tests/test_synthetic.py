@@ -295,3 +295,31 @@ def test_a_cliff_run_rises_linearly_and_slips_within_0_01_mm() -> None:
     assert mu[2] < 0.6 + 0.3 * np.exp(-1)  # most of the drop within 0.01 mm
     assert mu[3] == pytest.approx(0.6, abs=1e-6)
     assert want.static_distinct and not want.stick_slip
+
+
+def test_a_session_export_is_its_tests_one_after_the_other(tmp_path: Path) -> None:
+    """Several tests in one file, as RheoCompass exports a session and as the real two-test
+    export lays it out: one Project line, each test's Test/Result block with its intervals
+    numbered from 1, a blank line between tests. One test alone is the plain export."""
+    from tribopipe.readers import read_export
+    from tribopipe.synthetic import (
+        SyntheticTest,
+        rheocompass_session_text,
+        write_rheocompass_session,
+    )
+
+    one = replace(RUN, duration_s=20.0)
+    steps = (replace(RUN, duration_s=20.0, seed=6),
+             replace(RUN, duration_s=20.0, seed=7, setup_interval=False))
+    tests = [SyntheticTest("A", "pin", (one,)), SyntheticTest("B", "pin", steps)]
+    assert rheocompass_session_text(tests[:1], project="P") == rheocompass_text(
+        one, project="P", test="A", sample="pin")
+    path = write_rheocompass_session(tmp_path / "s.csv", tests, project="P")
+    lines = _lines(path)
+    b = lines.index("Test:\tB")
+    assert lines[b - 1] == "" and lines[b + 2] == "Result:\tpin 1"
+    assert lines[b + 4] == "Interval and data points:\t1\t200"
+    assert [(m.meta.test, m.meta.interval, len(m.data)) for m in read_export(path)] == [
+        ("A", 1, 200), ("A", 2, 200), ("B", 1, 200), ("B", 2, 200), ("B", 3, 200)]
+    with pytest.raises(ValueError, match="at least one"):
+        SyntheticTest("empty", "pin", ())

@@ -42,8 +42,23 @@ from ..measurement import (  # noqa: F401 - require_columns is importable from h
 )
 from . import plaincsv, rheocompass, rheoplus
 from .aliases import AliasTable, load_aliases, resolve_aliases
-from .common import FileInfo, RawInterval, build_measurement
-from .textio import decode, detect_decimal, detect_delimiter, read_bytes, split_cells
+from .common import build_measurement
+from .interval import FileInfo, RawInterval
+from .textio import (
+    DecodedText,
+    NotSimple,
+    Row,
+    Run,
+    decode,
+    detect_decimal,
+    detect_delimiter,
+    head_lines,
+    plain_line_ends,
+    read_bytes,
+    scan_lines,
+    simple_quotes,
+    split_cells,
+)
 from .xlsx import XLSX_MAGIC, workbook_rows
 
 __all__ = [
@@ -74,6 +89,9 @@ FORMATS: tuple[str, ...] = (
 EXPORT_SUFFIXES: tuple[str, ...] = (".csv", ".txt", ".tsv", ".xlsx", ".xls")
 
 _OLE_MAGIC = b"\xd0\xcf\x11\xe0"  # legacy .xls
+#: lines detection reads: format labels sit in the first 60-80 rows, the decimal mark is
+#: read from the first 300
+_HEAD_LINES = 300
 
 
 def _normalise_delimiter(delimiter: str | None, path: str) -> str | None:
@@ -116,7 +134,33 @@ def _parse(
         return info, rheocompass.parse_intervals(workbook_rows(path), path)
 
     decoded = decode(raw, path, encoding)
-    lines = decoded.text.splitlines()
+    if plain_line_ends(decoded.text):
+        try:
+            return _parse_text(path, decoded, delimiter, decimal, fmt, aliases, plain=True)
+        except (NotSimple, ReadError):
+            pass  # the row-by-row parse decides, and words any error
+    return _parse_text(path, decoded, delimiter, decimal, fmt, aliases, plain=False)
+
+
+def _parse_text(
+    path: str,
+    decoded: DecodedText,
+    delimiter: str | None,
+    decimal: str | None,
+    fmt: str | None,
+    aliases: AliasTable,
+    *,
+    plain: bool,
+) -> tuple[FileInfo, list[RawInterval]]:
+    """Detect delimiter, format and decimal mark of a decoded text; find its intervals.
+
+    ``plain``: the text has plain line ends; detection reads its first lines only, and
+    the format reader gets its labelled lines as rows and its data lines as runs
+    (``textio.scan_lines``). Raises :class:`NotSimple` where that could differ from the
+    row-by-row parse of every line (``plain=False``).
+    """
+    text = decoded.text
+    lines = head_lines(text, _HEAD_LINES) if plain else text.splitlines()
     delim = delimiter or detect_delimiter(lines)
     if delim is None:
         raise ReadError(
@@ -124,6 +168,8 @@ def _parse(
             path=path,
             hint="pass --delimiter if the file uses another one",
         )
+    if plain and not simple_quotes(text, delim):
+        raise NotSimple
     rows = split_cells(lines, delim, path)
     if fmt is None:
         if rheocompass.looks_like(rows):
@@ -132,6 +178,8 @@ def _parse(
             fmt = rheoplus.FORMAT
         elif plaincsv.looks_like(rows, aliases):
             fmt = plaincsv.FORMAT
+        elif plain:
+            raise NotSimple  # the header may lie past the first lines
         else:
             first = next((ln for ln in lines if ln.strip()), "")[:60]
             raise ReadError(
@@ -147,12 +195,16 @@ def _parse(
         sample = [c for _, cells in rows[:300] for c in cells[1:] if c][:2000]
         decimal = detect_decimal(sample, default="." if fmt == rheoplus.FORMAT else ",")
     info = FileInfo(path, fmt, decoded.encoding, delim, decimal)
+    module = {rheocompass.FORMAT: rheocompass, rheoplus.FORMAT: rheoplus}.get(fmt, plaincsv)
+    items: list[Row | Run] = (
+        scan_lines(text, delim, module.data_line(delim)) if plain else list(rows)
+    )
     if fmt == rheocompass.FORMAT:
-        intervals = rheocompass.parse_intervals(rows, path)
+        intervals = rheocompass.parse_intervals(items, path)
     elif fmt == rheoplus.FORMAT:
-        intervals = rheoplus.parse_intervals(rows, path)
+        intervals = rheoplus.parse_intervals(items, path)
     else:
-        intervals = plaincsv.parse_intervals(rows, path, aliases)
+        intervals = plaincsv.parse_intervals(items, path, aliases)
     return info, intervals
 
 

@@ -14,7 +14,8 @@ import re
 from ..errors import ReadError
 from ..units import parse_unit
 from .aliases import AliasTable
-from .common import UNIT_CELL, RawInterval
+from .interval import UNIT_CELL, RawInterval
+from .textio import Row, Run, first_row, peel
 
 FORMAT = "csv"
 
@@ -40,7 +41,14 @@ def split_header(cell: str, aliases: AliasTable) -> tuple[str, str]:
     return cell, ""
 
 
-def looks_like(rows: list[tuple[int, list[str]]], aliases: AliasTable) -> bool:
+def data_line(delimiter: str) -> str:
+    """The start of a plain data line (a regular expression): any line that starts with
+    neither a blank, a quote nor the delimiter (it is not empty)."""
+    d = re.escape(delimiter)
+    return rf'[^\s"{d}]'
+
+
+def looks_like(rows: list[Row], aliases: AliasTable) -> bool:
     """True when the first non-empty row names at least one canonical quantity."""
     header = next((cells for _, cells in rows if any(cells)), None)
     if header is None:
@@ -49,13 +57,15 @@ def looks_like(rows: list[tuple[int, list[str]]], aliases: AliasTable) -> bool:
 
 
 def parse_intervals(
-    rows: list[tuple[int, list[str]]], path: str, aliases: AliasTable
+    rows: list[Row | Run], path: str, aliases: AliasTable
 ) -> list[RawInterval]:
-    """The one table of a plain CSV: header (names with units) and its data rows."""
-    body = [(ln, cells) for ln, cells in rows if any(cells)]
+    """The one table of a plain CSV: header (names with units) and its data rows (rows,
+    and runs of data lines, see ``textio.scan_lines``)."""
+    body = [item for item in rows if isinstance(item, Run) or any(item[1])]
     if not body:
         raise ReadError("empty file", path=path)
-    header_line, header = body[0]
+    header_line, header = first_row(body[0])
+    peel(body, 0)
     names: list[str] = []
     units: list[str] = []
     for cell in header:
@@ -73,10 +83,10 @@ def parse_intervals(
             " or add your names to configs/aliases.toml",
         )
     data = body[1:]
-    if data and all(UNIT_CELL.match(c) or not c for c in data[0][1]):
-        units = [c or u for c, u in zip(data[0][1], units, strict=False)] + units[
-            len(data[0][1]) :
-        ]
+    unit_row = first_row(data[0])[1] if data else None
+    if unit_row is not None and all(UNIT_CELL.match(c) or not c for c in unit_row):
+        units = [c or u for c, u in zip(unit_row, units, strict=False)] + units[len(unit_row) :]
+        peel(data, 0)
         data = data[1:]
     if not data:
         raise ReadError("header without data rows", path=path, line=header_line)

@@ -19,9 +19,13 @@ counted in the metadata, not returned as data.
 
 from __future__ import annotations
 
+import re
+from dataclasses import replace
+
 from ..errors import ReadError
 from .aliases import builtin_aliases, name_key
-from .common import UNIT_CELL, RawInterval, label_value
+from .interval import UNIT_CELL, RawInterval, label_value
+from .textio import Row, Run, peel
 
 FORMAT = "rheocompass"
 FORMAT_XLSX = "rheocompass-xlsx"
@@ -43,7 +47,14 @@ INTERVAL_DATA = frozenset(
 LABELS = PROJECT | TEST | RESULT | INTERVAL_POINTS | INTERVAL_DATA
 
 
-def looks_like(rows: list[tuple[int, list[str]]]) -> bool:
+def data_line(delimiter: str) -> str:
+    """The start of a plain data line (a regular expression): an empty first cell, then a
+    cell that starts with neither a blank nor a quote (the point number)."""
+    d = re.escape(delimiter)
+    return rf'{d}[^\s"{d}]'
+
+
+def looks_like(rows: list[Row]) -> bool:
     """True when the first rows carry RheoCompass labels (``Project:``, ``Interval data:``…)."""
     for _, cells in rows[:60]:
         if cells and cells[0].endswith(":") and name_key(cells[0]) in LABELS:
@@ -63,9 +74,10 @@ def _is_blank(cells: list[str]) -> bool:
     return not any(cells)
 
 
-def parse_intervals(rows: list[tuple[int, list[str]]], path: str) -> list[RawInterval]:
+def parse_intervals(rows: list[Row | Run], path: str) -> list[RawInterval]:
     """Find every interval of a RheoCompass export (rows of stripped cells with their line
-    numbers) and return its header and rows, in file order."""
+    numbers, and runs of data lines, see ``textio.scan_lines``) and return its header and
+    rows, in file order."""
     project = test = result = None
     interval: int | None = None
     declared: int | None = None
@@ -73,7 +85,14 @@ def parse_intervals(rows: list[tuple[int, list[str]]], path: str) -> list[RawInt
     n = len(rows)
     i = 0
     while i < n:
-        line, cells = rows[i]
+        item = rows[i]
+        if isinstance(item, Run):
+            raise ReadError(
+                "data row outside an interval (no 'Interval data:' header above it)",
+                path=path,
+                line=item.first_line,
+            )
+        line, cells = item
         first = cells[0] if cells else ""
         if not first:
             if not _is_blank(cells):
@@ -102,6 +121,7 @@ def parse_intervals(rows: list[tuple[int, list[str]]], path: str) -> list[RawInt
             declared = _int(cells[2], "the number of points", path, line)
         elif key in INTERVAL_DATA:
             raw, i = _read_table(rows, i, path)
+            n = len(rows)  # peeling a run's first line may have added an item
             raw.project, raw.test, raw.result = project, test, result
             raw.interval = interval if interval is not None else len(out) + 1
             raw.n_declared = declared
@@ -118,9 +138,7 @@ def parse_intervals(rows: list[tuple[int, list[str]]], path: str) -> list[RawInt
     return out
 
 
-def _read_table(
-    rows: list[tuple[int, list[str]]], start: int, path: str
-) -> tuple[RawInterval, int]:
+def _read_table(rows: list[Row | Run], start: int, path: str) -> tuple[RawInterval, int]:
     """Read one ``Interval data:`` header (names, meaning row, unit row) and its rows."""
     header_line, header = rows[start]
     names = header[1:]
@@ -134,6 +152,7 @@ def _read_table(
     for _ in range(2):
         if i >= len(rows):
             break
+        peel(rows, i)
         _, cells = rows[i]
         if cells and cells[0]:
             break
@@ -153,9 +172,14 @@ def _read_table(
             line=header_line,
             hint="the file is truncated or not a RheoCompass table export",
         )
-    data: list[tuple[int, list[str]]] = []
+    data: list[Row | Run] = []
     while i < len(rows):
-        line, cells = rows[i]
+        item = rows[i]
+        if isinstance(item, Run):  # data lines: an empty first cell, then the point number
+            data.append(replace(item, skip=1))
+            i += 1
+            continue
+        line, cells = item
         if (cells and cells[0]) or _is_blank(cells):
             break
         data.append((line, cells[1:]))

@@ -18,7 +18,8 @@ import re
 
 from ..errors import ReadError
 from .aliases import name_key
-from .common import RawInterval, label_value
+from .interval import RawInterval, label_value
+from .textio import Row, Run
 
 FORMAT = "rheoplus"
 
@@ -36,7 +37,13 @@ _META_KEYS = {
 _DIGITS = re.compile(r"^\d+$")
 
 
-def looks_like(rows: list[tuple[int, list[str]]]) -> bool:
+def data_line(delimiter: str) -> str:
+    """The start of a plain data line (a regular expression): the point number as ASCII
+    digits, then the delimiter."""
+    return rf"[0-9]+{re.escape(delimiter)}"
+
+
+def looks_like(rows: list[Row]) -> bool:
     """True when the first rows hold a Rheoplus series title or ``Meas. Pts.`` header."""
     for _, cells in rows[:80]:
         if cells and name_key(cells[0]) in POINT_HEADERS | {SERIES}:
@@ -53,8 +60,9 @@ def _whole(cell: str | None, what: str, path: str, line: int) -> int:
         ) from None
 
 
-def parse_intervals(rows: list[tuple[int, list[str]]], path: str) -> list[RawInterval]:
-    """Find every table of a Rheoplus export and return its header and rows in file order."""
+def parse_intervals(rows: list[Row | Run], path: str) -> list[RawInterval]:
+    """Find every table of a Rheoplus export (rows, and runs of data lines, see
+    ``textio.scan_lines``) and return its header and rows in file order."""
     out: list[RawInterval] = []
     meta: dict[str, str] = {}
     sample: str | None = None
@@ -66,7 +74,11 @@ def parse_intervals(rows: list[tuple[int, list[str]]], path: str) -> list[RawInt
     n = len(rows)
     i = 0
     while i < n:
-        line, cells = rows[i]
+        item = rows[i]
+        if isinstance(item, Run):  # data lines outside a table: nothing to read
+            i += 1
+            continue
+        line, cells = item
         first = cells[0] if cells else ""
         key = name_key(first)
         if first == "#NAME?":
@@ -116,26 +128,30 @@ def parse_intervals(rows: list[tuple[int, list[str]]], path: str) -> list[RawInt
     return out
 
 
-def _read_table(
-    rows: list[tuple[int, list[str]]], start: int, path: str
-) -> tuple[RawInterval, int]:
-    header_line, header = rows[start]
+def _read_table(rows: list[Row | Run], start: int, path: str) -> tuple[RawInterval, int]:
+    header_line, header = rows[start]  # type: ignore[misc] - the header is a labelled row
     names = list(header)
     while names and not names[-1]:
         names.pop()
     i = start + 1
-    if i >= len(rows) or (rows[i][1] and rows[i][1][0]):
+    # a run starts with a point number: not a unit row
+    if i >= len(rows) or isinstance(rows[i], Run) or (rows[i][1] and rows[i][1][0]):
         raise ReadError(
             "expected a unit row ([s], [µNm], ...) under the 'Meas. Pts.' header",
             path=path,
             line=header_line,
             hint="the file is truncated or its header was edited",
         )
-    units = list(rows[i][1][: len(names)])
+    units = list(rows[i][1][: len(names)])  # type: ignore[index]
     i += 1
-    data: list[tuple[int, list[str]]] = []
+    data: list[Row | Run] = []
     while i < len(rows):
-        line, cells = rows[i]
+        item = rows[i]
+        if isinstance(item, Run):  # data lines: each starts with its point number
+            data.append(item)
+            i += 1
+            continue
+        line, cells = item
         first = cells[0] if cells else ""
         if not any(cells) or (first and not _DIGITS.match(first) and "(" not in first):
             break

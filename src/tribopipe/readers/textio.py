@@ -9,9 +9,10 @@ from __future__ import annotations
 
 import codecs
 import csv
+import functools
 import re
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -102,41 +103,45 @@ def decode(raw: bytes, path: str, encoding: str | None = None) -> DecodedText:
         text = text.removeprefix("\ufeff")
         _refuse_binary(text, path, forced=encoding)
         return DecodedText(text, encoding)
-    guess = _guess_encoding(raw)
-    if guess is None:
+    detected = _detect(raw)
+    if detected is None:
         raise ReadError(
             "binary file (NUL bytes), expected a text or Excel export", path=path
         )
-    text = _trim_utf16(raw, guess).decode(guess, errors="strict").removeprefix("\ufeff")
+    text = detected.text.removeprefix("\ufeff")
     _refuse_binary(text, path, forced=None)
-    return DecodedText(text, guess)
+    return DecodedText(text, detected.encoding)
 
 
-def _guess_encoding(raw: bytes) -> str | None:
-    """The detected encoding name, or ``None`` for binary data."""
+def _detect(raw: bytes) -> DecodedText | None:
+    """The bytes decoded with the detected encoding (decoded once), or ``None`` for binary
+    data: a BOM decides, then UTF-16 without BOM, NUL bytes, strict UTF-8, cp1252, Latin-1."""
     for bom, name in _BOMS:
         if raw.startswith(bom):
             try:
-                _trim_utf16(raw, name).decode(name)
+                return DecodedText(_trim_utf16(raw, name).decode(name), name)
             except UnicodeDecodeError:
                 return None
-            return name
     utf16 = _utf16_without_bom(raw)
     if utf16 is not None:
         try:
-            _trim_utf16(raw, utf16).decode(utf16)
-            return utf16
+            return DecodedText(_trim_utf16(raw, utf16).decode(utf16), utf16)
         except UnicodeDecodeError:
             return None
     if b"\x00" in raw:
         return None
     for name in ("utf-8", "cp1252"):
         try:
-            raw.decode(name)
-            return name
+            return DecodedText(raw.decode(name), name)
         except UnicodeDecodeError:
             continue
-    return "latin-1"
+    return DecodedText(raw.decode("latin-1"), "latin-1")
+
+
+def _guess_encoding(raw: bytes) -> str | None:
+    """The detected encoding name, or ``None`` for binary data."""
+    detected = _detect(raw)
+    return None if detected is None else detected.encoding
 
 
 def _trim_utf16(raw: bytes, encoding: str) -> bytes:
@@ -194,6 +199,178 @@ def split_cells(
     return rows
 
 
+# ------------------------------------------------------------------ lines and data runs
+#
+# A long export is a few labelled lines and long runs of data lines. Splitting every line
+# into cells with the csv module costs one Python list per row and one str per cell; the
+# scan below splits only the labelled lines and keeps each run of data lines as a slice of
+# the decoded text, which a C parser reads in one call (``readers.cells``). It applies to
+# "plain" texts, where lines end in LF or CRLF only and every double quote encloses one
+# whole cell on one line; there a line is a row, and the csv module and a C parser split a
+# line into the same cells. Other texts take the row-by-row path.
+
+#: characters besides LF and CRLF at which ``str.splitlines`` also ends a line
+_OTHER_LINE_ENDS = ("\x0b", "\x0c", "\x1c", "\x1d", "\x1e", "\x85", "\u2028", "\u2029")
+
+#: one row: its 1-based line number and its stripped cells
+Row = tuple[int, list[str]]
+
+
+class NotSimple(Exception):  # noqa: N818 - a signal between two paths, not an error
+    """The fast path cannot vouch for an exact result here; take the row-by-row path."""
+
+
+def plain_line_ends(text: str) -> bool:
+    """True when ``text`` has no NUL and ends its lines with LF or CRLF only, so that its
+    lines are ``text.split("\\n")`` without the CR (what ``str.splitlines`` gives)."""
+    if "\x00" in text or text.count("\r") != text.count("\r\n"):
+        return False
+    return not any(c in text for c in _OTHER_LINE_ENDS)
+
+
+@functools.lru_cache(maxsize=8)
+def _quoted_cell(delimiter: str) -> tuple[re.Pattern[str], re.Pattern[str]]:
+    d = re.escape(delimiter)
+    cell = rf'[^"\n]*"(?=[{d}\r\n]|$)'
+    # the opening quote first, so that the search jumps from quote to quote
+    return re.compile(rf'"(?<=[\n{d}]"){cell}'), re.compile(rf'"{cell}')
+
+
+def simple_quotes(text: str, delimiter: str) -> bool:
+    """True when every double quote of ``text`` opens or closes a whole cell on one line
+    (``"ME-,taD"``), with no quote inside; then quoting never joins two lines."""
+    n = text.count('"')
+    if not n:
+        return True
+    inner, at_start = _quoted_cell(delimiter)
+    found = len(inner.findall(text)) + (1 if at_start.match(text) else 0)
+    return 2 * found == n
+
+
+def head_lines(text: str, n: int) -> list[str]:
+    """The first ``n`` lines of a text with :func:`plain_line_ends`, as ``str.splitlines``
+    gives them."""
+    parts = text.split("\n", n)
+    if len(parts) > n:
+        del parts[n:]
+    elif parts and not parts[-1]:
+        parts.pop()  # the text ends with a line end
+    return [p[:-1] if p.endswith("\r") else p for p in parts]
+
+
+@dataclass(frozen=True)
+class Run:
+    """Consecutive data lines of a plain text, not yet split: ``n_lines`` lines from the
+    1-based line ``first_line``, the slice ``text[start:end]`` (no line end after the last
+    line). ``skip`` leading cells of every line belong to no column (RheoCompass's empty
+    first cell)."""
+
+    text: str = field(repr=False)
+    start: int
+    end: int
+    first_line: int
+    n_lines: int
+    delimiter: str
+    skip: int = 0
+
+    @property
+    def last_line(self) -> int:
+        return self.first_line + self.n_lines - 1
+
+    def block(self) -> str:
+        """The run's lines as one string (LF or CRLF between them)."""
+        return self.text[self.start : self.end]
+
+    def rows(self) -> list[Row]:
+        """The run's lines split into stripped cells, each with its line number (what
+        :func:`split_cells` gives for these lines), less the ``skip`` leading cells."""
+        lines = [ln[:-1] if ln.endswith("\r") else ln for ln in self.block().split("\n")]
+        offset = self.first_line - 1
+        return [(offset + k, cells[self.skip :]) for k, cells in split_cells(lines, self.delimiter)]
+
+    def split_first(self) -> tuple[Row, Run | None]:
+        """The first line as a row, and the run of the lines after it (``None`` if none)."""
+        newline = self.text.find("\n", self.start, self.end)
+        stop = self.end if newline < 0 else newline
+        line = self.text[self.start : stop].removesuffix("\r")
+        row = (self.first_line, split_cells([line], self.delimiter)[0][1][self.skip :])
+        if newline < 0:
+            return row, None
+        rest = replace(self, start=newline + 1, first_line=self.first_line + 1,
+                       n_lines=self.n_lines - 1)
+        return row, rest
+
+
+@functools.lru_cache(maxsize=16)
+def _line_patterns(data_line: str) -> tuple[re.Pattern[str], re.Pattern[str]]:
+    return re.compile(data_line), re.compile(rf"\n(?!{data_line})")
+
+
+def scan_lines(text: str, delimiter: str, data_line: str) -> list[Row | Run]:
+    """A plain text (see :func:`plain_line_ends`, :func:`simple_quotes`) as rows and runs.
+
+    ``data_line`` is a regular expression matching the start of a format's data lines;
+    every maximal sequence of lines it matches becomes a :class:`Run`, every other line a
+    row of stripped cells. Expanding the runs (:func:`expand_runs`) gives exactly
+    ``split_cells(text.splitlines(), delimiter)``.
+    """
+    first, other = _line_patterns(data_line)
+    starts = [m.end() for m in other.finditer(text)]
+    if not first.match(text):
+        starts.insert(0, 0)
+    items: list[Row | Run | None] = []
+    labelled: list[tuple[int, int, str]] = []  # (index in items, line number, text)
+    cursor, line_no, size = 0, 1, len(text)
+    for s in starts:
+        if s > cursor:  # the data lines before this line
+            end = s - 2 if text[s - 2 : s] == "\r\n" else s - 1
+            n = text.count("\n", cursor, s)
+            items.append(Run(text, cursor, end, line_no, n, delimiter))
+            line_no += n
+        cursor = s
+        if s >= size:
+            break
+        newline = text.find("\n", s)
+        stop = size if newline < 0 else newline
+        labelled.append((len(items), line_no, text[s:stop].removesuffix("\r")))
+        items.append(None)
+        line_no += 1
+        cursor = stop + 1
+    if cursor < size:
+        n = text.count("\n", cursor) + 1
+        items.append(Run(text, cursor, size, line_no, n, delimiter))
+    rows = split_cells([line for _, _, line in labelled], delimiter)
+    if len(rows) != len(labelled):  # pragma: no cover - excluded by simple_quotes
+        raise ValueError("a quoted cell spans lines")
+    for (k, number, _), (_, cells) in zip(labelled, rows, strict=True):
+        items[k] = (number, cells)
+    return items  # type: ignore[return-value]
+
+
+def expand_runs(items: Sequence[Row | Run]) -> list[Row]:
+    """Rows and runs as rows only (every run split into its lines' cells)."""
+    rows: list[Row] = []
+    for item in items:
+        if isinstance(item, Run):
+            rows.extend(item.rows())
+        else:
+            rows.append(item)
+    return rows
+
+
+def first_row(item: Row | Run) -> Row:
+    """A row, or the first line of a run as a row."""
+    return item.split_first()[0] if isinstance(item, Run) else item
+
+
+def peel(items: list[Row | Run], i: int) -> None:
+    """Make ``items[i]`` a row: a run there is split into its first line and the rest."""
+    item = items[i]
+    if isinstance(item, Run):
+        row, rest = item.split_first()
+        items[i : i + 1] = [row] if rest is None else [row, rest]
+
+
 def detect_decimal(cells: Sequence[str], default: str = ".") -> str:
     """The decimal mark of numeric cells: ``","`` or ``"."``.
 
@@ -201,11 +378,19 @@ def detect_decimal(cells: Sequence[str], default: str = ".") -> str:
     other than exactly three digits is a decimal comma (``2,3981``); ``1,460`` alone is
     ambiguous and leaves ``default``.
     """
+    numeric = [c for c in cells if c and c[0] in "+-.0123456789,"]
+    joined = "".join(numeric)
+    # one mark only (the usual case): the first cell that reads as a number decides
+    if "," not in joined:
+        return "." if any(_DOT_DECIMAL.match(c) for c in numeric if "." in c) else default
+    if "." not in joined:
+        decimal_comma = (
+            _COMMA_DECIMAL.match(c) and not _COMMA_THOUSANDS.match(c) for c in numeric
+        )
+        return "," if any(decimal_comma) else default
     dot = comma = 0
     ambiguous_dot = 0  # 2.398: a decimal point, or (rarely) a dotted thousands group
-    for cell in cells:
-        if not cell or cell[0] not in "+-.0123456789,":
-            continue
+    for cell in numeric:
         has_dot, has_comma = "." in cell, "," in cell
         if has_dot and has_comma:
             if _BOTH.match(cell):

@@ -1,0 +1,496 @@
+"""The cells of one interval's data rows, column by column, for ``common.build_measurement``.
+
+Two sources answer the same questions (is a column empty, does it hold an Excel error,
+its numbers, its text):
+
+:class:`RowCells`
+    the general path: every row a list of stripped cells (``textio.split_cells``).
+    Exact for any input; raises :class:`~tribopipe.errors.ReadError` for bad cells,
+    naming line and column.
+:class:`ArrowCells`
+    the fast path for a run of plain data lines (``textio.Run``): one ``pyarrow.csv``
+    parse of the run with delimiter and decimal mark given, row classification,
+    ``******`` cells and thousands separators handled column-wise with Arrow compute
+    kernels, no Python object per cell. It gives the same numbers to the bit (both
+    round decimal strings correctly to the nearest double) and raises :class:`NotSimple`
+    wherever it could differ from the general path (a cell that is not a plain number,
+    padded text, an error to report ...); the caller then takes the general path.
+
+Rows: a point number marks a data row; ``1  (invalid)`` (or a Rheoplus ``invalid point``
+in the next cell) an invalid point, an empty point number a raw-waveform sub-row. Both
+are counted and left out.
+"""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+
+from ..errors import ReadError
+from .aliases import AliasTable
+from .interval import FileInfo, RawInterval
+from .textio import (
+    EXCEL_ERRORS,
+    NotSimple,
+    Row,
+    Run,
+    expand_runs,
+    is_missing,
+    split_cells,
+    to_numbers,
+)
+
+_INVALID_POINT = re.compile(r"\((?:invalid|invalide|ung[üu]ltig|non valide)\)", re.IGNORECASE)
+# Rheoplus writes the point number, then this text in the next cell
+_INVALID_CELL = re.compile(
+    r"^(?:invalid point|point invalide|ung[üu]ltiger (?:mess)?punkt)$", re.IGNORECASE
+)
+
+# the number patterns of ``textio._normalise_number`` in RE2 syntax; RE2's \d is ASCII
+# only, so they match a subset of what Python's do (a cell they miss fails to convert
+# and sends the interval to the general path)
+_COMMA_THOUSANDS = r"^[-+]?[1-9]\d{0,2}(?:,\d{3})+(?:\.\d*)?(?:[eE][-+]?\d+)?$"
+_DOT_THOUSANDS = r"^[-+]?[1-9]\d{0,2}(?:\.\d{3})+(?:,\d*)?(?:[eE][-+]?\d+)?$"
+# a cell that may start with a letter once stripped (Rheoplus's "invalid point")
+_MAYBE_WORD = r"^[^0-9+\-.*]"
+#: what str.strip() removes from a cell (every character whose str.isspace() is true)
+SPACES = (
+    "\t\n\x0b\x0c\r\x1c\x1d\x1e\x1f \x85\xa0\u1680\u2000\u2001\u2002\u2003\u2004\u2005"
+    "\u2006\u2007\u2008\u2009\u200a\u2028\u2029\u202f\u205f\u3000"
+)
+
+
+def classify(point_cell: str, next_cell: str) -> str:
+    """What a row is, from its stripped point-number cell and the cell after it:
+    ``"data"``, ``"invalid"``, ``"waveform"`` or ``"bad"`` (not a point number)."""
+    if point_cell.isascii() and point_cell.isdigit() and len(point_cell) < 16:
+        if next_cell and next_cell[0].isalpha() and _INVALID_CELL.match(next_cell):
+            return "invalid"
+        return "data"
+    if _INVALID_POINT.search(point_cell):
+        return "invalid"
+    return "bad" if point_cell else "waveform"
+
+
+# --------------------------------------------------------------------------- general
+
+
+class RowCells:
+    """The data rows of an interval as lists of stripped cells (the general path)."""
+
+    def __init__(self, raw: RawInterval, info: FileInfo) -> None:
+        rows = expand_runs(raw.rows)
+        data, self.n_invalid, self.n_waveform = _classify_rows(rows, raw, info)
+        if raw.n_declared is not None and len(data) + self.n_invalid < raw.n_declared:
+            last = rows[-1][0] if rows else raw.header_line
+            raise ReadError(
+                f"interval {raw.interval} declares {raw.n_declared} points but holds "
+                f"{len(data) + self.n_invalid}: truncated file?",
+                path=info.path,
+                line=last,
+                hint="export the measurement again",
+            )
+        rows = [rows[i] for i in data]
+        width = len(raw.names)
+        for line, cells in rows:
+            if len(cells) < width:
+                # instrument software always writes every cell (empty ones too)
+                raise ReadError(
+                    f"row has {len(cells)} of the header's {width} cells: truncated file?",
+                    path=info.path,
+                    line=line,
+                )
+            if any(cells[width:]):
+                raise ReadError(
+                    f"row has {len(cells)} cells but the header names {width} columns",
+                    path=info.path,
+                    line=line,
+                )
+        self.path, self.decimal = info.path, info.decimal or "."
+        self.n_rows = len(rows)
+        self.lines = [line for line, _ in rows]
+        # transpose once (C speed); every data row has at least `width` cells
+        self.columns = list(zip(*(cells[:width] for _, cells in rows), strict=True))
+
+    def _cells(self, j: int) -> Sequence[str]:
+        return self.columns[j] if self.columns else ()
+
+    def point_numbers(self, j: int) -> np.ndarray:
+        """The point numbers (int64) of column ``j``."""
+        return np.array([int(c) for c in self._cells(j)], dtype=np.int64)
+
+    def is_empty(self, j: int) -> bool:
+        return not any(self._cells(j))
+
+    def check_damage(self, j: int, name: str) -> None:
+        """Raise for an Excel error (``#NAME?``) in column ``j``."""
+        cells = self._cells(j)
+        damaged = EXCEL_ERRORS.intersection(cells)
+        if damaged:
+            k = next(k for k, c in enumerate(cells) if c in damaged)
+            raise ReadError(
+                f"cell {cells[k]!r} where a value was expected: the table went through "
+                "Excel, which replaced it by an error",
+                path=self.path,
+                line=self.lines[k],
+                column=name,
+                hint="re-export from the instrument software and do not open it in Excel",
+            )
+
+    def numbers(self, j: int, name: str, textual: bool) -> np.ndarray | None:
+        """Column ``j`` as floats (empty and ``******`` cells NaN); ``None`` when a cell is
+        not a number and the column may hold text, else :class:`ReadError`."""
+        cells = self._cells(j)
+        values, bad = to_numbers(cells, self.decimal)
+        if bad is None:
+            return values
+        if not textual:
+            raise ReadError(
+                f"expected a number, got {cells[bad][:40]!r}",
+                path=self.path,
+                line=self.lines[bad],
+                column=name,
+            )
+        return None
+
+    def missing(self, j: int) -> int:
+        """How many cells of column ``j`` are ``******`` (no value)."""
+        cells = self._cells(j)
+        if "*" not in "".join(cells):
+            return 0
+        return sum(1 for c in cells if c and is_missing(c))
+
+    def strings(self, j: int) -> Any:
+        """Column ``j`` as a pandas string array."""
+        import pandas as pd
+
+        return pd.array(list(self._cells(j)), dtype="string")
+
+
+def _classify_rows(rows: list[Row], raw: RawInterval, info: FileInfo) -> tuple[list[int], int, int]:
+    """Indices of the data rows, and the counts of invalid points and waveform sub-rows."""
+    if raw.point_col is None:
+        return list(range(len(rows))), 0, 0
+    data: list[int] = []
+    invalid = waveform = 0
+    pc = raw.point_col
+    for i, (line, cells) in enumerate(rows):
+        cell = cells[pc] if pc < len(cells) else ""
+        after = cells[pc + 1] if pc + 1 < len(cells) else ""
+        kind = classify(cell, after)
+        if kind == "data":
+            data.append(i)
+        elif kind == "invalid":
+            invalid += 1
+        elif kind == "waveform":
+            waveform += 1
+        else:
+            raise ReadError(
+                f"expected a point number, got {cell[:40]!r}",
+                path=info.path,
+                line=line,
+                column=raw.names[pc],
+            )
+    return data, invalid, waveform
+
+
+# --------------------------------------------------------------------------- fast
+
+
+class ArrowCells:
+    """The data rows of an interval held in one :class:`~.textio.Run`, parsed by
+    ``pyarrow.csv``; raises :class:`NotSimple` where the general path is needed."""
+
+    def __init__(self, run: Run, raw: RawInterval, info: FileInfo, aliases: AliasTable) -> None:
+        import pyarrow as pa
+        import pyarrow.compute as pc
+
+        block = run.block()
+        try:
+            data = block.encode("utf-8")
+        except UnicodeEncodeError:  # a lone surrogate from an exotic forced encoding
+            raise NotSimple from None
+        decimal = info.decimal or "."
+        first = block.split("\n", 1)[0].removesuffix("\r")
+        kinds = _kinds(len(split_cells([first], run.delimiter)[0][1]) - run.skip, raw, aliases)
+        if not _lines_within(data, _FIELD_LIMIT):
+            raise NotSimple  # the csv module refuses a cell that long: let it say so
+        # numbers parse as float64 in the C parser, unless a sample line shows a cell it
+        # would refuse (******, 1,460, a decimal point in a decimal-comma file): such a
+        # column is read as text and converted column-wise; when a refused cell shows up
+        # in another column all the same, the whole run is read as text
+        as_text = _text_columns(block, run, kinds, decimal)
+        table = _read(data, run, kinds, decimal, as_text)
+        if table is None and len(as_text) < kinds.count("number"):
+            table = _read(data, run, kinds, decimal, set(range(len(kinds))))
+        if table is None or table.num_rows != run.n_lines:
+            raise NotSimple
+        columns = []
+        for k, kind in enumerate(kinds):
+            column = table.column(k)
+            if pa.types.is_string(column.type):
+                column = _strip(column, empty_is_null=kind == "number")
+                if kind != "number":
+                    column = pc.fill_null(column, "")
+            columns.append(column)
+        mask, self.n_invalid, self.n_waveform = _classify_arrow(columns, raw.point_col)
+        self.n_rows = run.n_lines if mask is None else int(pc.sum(mask).as_py() or 0)
+        if raw.n_declared is not None and self.n_rows + self.n_invalid < raw.n_declared:
+            raise NotSimple  # truncated: the general path reports it
+        if mask is not None:
+            columns = [c.filter(mask) for c in columns]
+        if any(kind == "extra" and not _all_empty(c) for c, kind in zip(columns, kinds,
+                                                                        strict=True)):
+            raise NotSimple  # a cell past the header's columns: the general path reports it
+        self.kinds, self.columns, self.decimal = kinds, columns, decimal
+        self._missing: dict[int, int] = {}
+
+    def point_numbers(self, j: int) -> np.ndarray:
+        import pyarrow as pa
+        import pyarrow.compute as pc
+
+        return np.asarray(pc.cast(self.columns[j], pa.int64()).to_numpy(), dtype=np.int64)
+
+    def is_empty(self, j: int) -> bool:
+        return _all_empty(self.columns[j])
+
+    def check_damage(self, j: int, name: str) -> None:
+        import pyarrow as pa
+
+        # every Excel error starts with "#"; numbers parsed as such hold none
+        column = self.columns[j]
+        if pa.types.is_string(column.type) and any(_holds(c, b"#") for c in column.chunks):
+            raise NotSimple
+
+    def numbers(self, j: int, name: str, textual: bool) -> np.ndarray | None:
+        import pyarrow as pa
+
+        if self.kinds[j] != "number":
+            raise NotSimple  # text in a column other than Status: rare, take the rows
+        values = self.columns[j]
+        if pa.types.is_string(values.type):
+            values, self._missing[j] = _to_float(values, self.decimal)
+        out = values.to_numpy()
+        if np.count_nonzero(np.isnan(out)) != values.null_count:
+            raise NotSimple  # a "nan" cell: its bits are Python's float() to decide
+        return out
+
+    def missing(self, j: int) -> int:
+        return self._missing.get(j, 0)
+
+    def strings(self, j: int) -> Any:
+        import pandas as pd
+
+        return pd.array(self.columns[j], dtype="string")
+
+
+def _kinds(n_cells: int, raw: RawInterval, aliases: AliasTable) -> list[str]:
+    """What each cell of a row holds: ``"point"`` (the point number), ``"number"``,
+    ``"text"`` (a Status column) or ``"extra"`` (past the header's columns: must be
+    empty). :class:`NotSimple` for rows shorter than the header."""
+    width = len(raw.names)
+    if n_cells < width:
+        raise NotSimple  # short rows: the general path names the line
+    kinds = []
+    for j in range(n_cells):
+        if j >= width:
+            kinds.append("extra")
+        elif j == raw.point_col:
+            kinds.append("point")
+        elif aliases.base_name(raw.names[j]) == "status":
+            kinds.append("text")
+        else:
+            kinds.append("number")
+    return kinds
+
+
+#: the longest cell Python's csv module accepts (``csv.field_size_limit()``)
+_FIELD_LIMIT = 131072
+
+
+def _lines_within(data: bytes, limit: int) -> bool:
+    """True when no line of ``data`` is ``limit`` bytes long or longer (a few ``find``
+    calls: a line that long would hold one of the windows of ``limit // 2`` bytes the
+    loop looks into, and none of them is free of a line end)."""
+    step = limit // 2
+    return all(data.find(b"\n", k, k + step) >= 0 for k in range(0, len(data) - step + 1, step))
+
+
+def _text_columns(block: str, run: Run, kinds: list[str], decimal: str) -> set[int]:
+    """The number columns to read as text: those whose cell in the first, middle or last
+    line of the run holds ``*``, or the mark that is not the decimal mark."""
+    lines = block.split("\n")
+    sample = [lines[0], lines[len(lines) // 2], lines[-1]]
+    rows = split_cells([line.removesuffix("\r") for line in sample], run.delimiter)
+    alien = "," if decimal == "." else "."
+    text = set()
+    for _, cells in rows:
+        for k, cell in enumerate(cells[run.skip : run.skip + len(kinds)]):
+            if kinds[k] == "number" and ("*" in cell or alien in cell):
+                text.add(k)
+    return text
+
+
+def _read(data: bytes, run: Run, kinds: list[str], decimal: str, as_text: set[int]) -> Any:
+    """The run's UTF-8 bytes parsed by ``pyarrow.csv`` (the ``skip`` leading cells left
+    out), or ``None`` when it does not parse (a row of another length, a cell that is not
+    a number ...). Number columns not in ``as_text`` are float64 (empty cells null);
+    other columns are text, empty cells null where some number column is text, else
+    empty strings."""
+    import pyarrow as pa
+    import pyarrow.csv as pacsv
+
+    names = [f"c{k}" for k in range(run.skip + len(kinds))]
+    kept = names[run.skip :]
+    types = {n: pa.float64() if kind == "number" and k not in as_text else pa.string()
+             for k, (n, kind) in enumerate(zip(kept, kinds, strict=True))}
+    try:
+        return pacsv.read_csv(
+            pa.py_buffer(data),
+            read_options=pacsv.ReadOptions(column_names=names, use_threads=False,
+                                           block_size=len(data) + 1),
+            parse_options=pacsv.ParseOptions(
+                delimiter=run.delimiter,
+                quote_char='"' if b'"' in data else False,
+                double_quote=True,
+                newlines_in_values=False,
+                ignore_empty_lines=False,
+            ),
+            convert_options=pacsv.ConvertOptions(
+                column_types=types,
+                include_columns=kept,
+                null_values=[""],
+                strings_can_be_null=bool(as_text),
+                quoted_strings_can_be_null=True,
+                decimal_point=decimal,
+            ),
+        )
+    except (pa.ArrowInvalid, pa.ArrowNotImplementedError):
+        return None
+
+
+def _strip(column: Any, *, empty_is_null: bool) -> Any:
+    """A text column with every cell stripped of white space, as the general path strips
+    cells (``str.strip``); a cell stripped to nothing becomes null if ``empty_is_null``.
+    A column with no white-space byte at all is returned as it is."""
+    import pyarrow as pa
+    import pyarrow.compute as pc
+
+    if not any(_has_blank(chunk) for chunk in column.chunks):
+        return column
+    column = pc.utf8_trim(column, characters=SPACES)
+    if empty_is_null:
+        column = pc.if_else(pc.equal(column, ""), pa.scalar(None, pa.string()), column)
+    return column
+
+
+def _has_blank(chunk: Any) -> bool:
+    """True when the text bytes of an Arrow string array hold a white-space character."""
+    raw = _text_bytes(chunk)
+    needles = _ASCII_BLANKS if raw.isascii() else _ASCII_BLANKS + _OTHER_BLANKS
+    return any(n in raw for n in needles)
+
+
+def _holds(chunk: Any, needle: bytes) -> bool:
+    """True when the text bytes of an Arrow string array hold ``needle``."""
+    return needle in _text_bytes(chunk)
+
+
+def _text_bytes(chunk: Any) -> bytes:
+    """The UTF-8 bytes of an Arrow string array's cells, one after the other (possibly
+    with those of cells sliced or filtered away: a superset)."""
+    buffer = chunk.buffers()[2]
+    return b"" if buffer is None else buffer.to_pybytes()
+
+
+#: the UTF-8 bytes of SPACES that a cell can hold (LF, CR and the other characters that
+#: end a line are not in a cell of a plain text); E2 80 starts U+2000-U+200A, U+2028,
+#: U+2029 and U+202F (and a few other characters: a false alarm only costs a strip)
+_ASCII_BLANKS = (b" ", b"\t", b"\x1f")
+_OTHER_BLANKS = (b"\xc2\x85", b"\xc2\xa0", b"\xe1\x9a\x80", b"\xe2\x80", b"\xe2\x81\x9f",
+                 b"\xe3\x80\x80")
+
+
+def _classify_arrow(columns: list[Any], point_col: int | None) -> tuple[Any, int, int]:
+    """The data-row mask (``None``: every row), invalid points, waveform sub-rows.
+
+    Point numbers of ASCII digits are data rows; every other point cell (rare) and a
+    possible Rheoplus ``invalid point`` in the next cell are classified in Python by
+    :func:`classify`, as the general path does."""
+    import pyarrow as pa
+    import pyarrow.compute as pc
+
+    if point_col is None:
+        return None, 0, 0
+    points = columns[point_col]
+    plain = pc.and_(pc.ascii_is_decimal(points), pc.less(pc.binary_length(points), 16))
+    after = columns[point_col + 1] if point_col + 1 < len(columns) else None
+    suspects = None
+    if after is not None and pa.types.is_string(after.type):
+        maybe_word = pc.fill_null(pc.match_substring_regex(after, _MAYBE_WORD), False)
+        suspects = pc.and_(plain, maybe_word)
+    if pc.all(plain).as_py() and (suspects is None or not pc.any(suspects).as_py()):
+        return None, 0, 0
+    keep = plain.to_numpy(zero_copy_only=False).astype(bool)
+    invalid = waveform = 0
+    for i in np.flatnonzero(~keep):
+        kind = classify(points[int(i)].as_py(), "")
+        if kind in ("data", "bad"):  # pragma: no cover - stripped digits are plain
+            raise NotSimple
+        if kind == "invalid":
+            invalid += 1
+        else:
+            waveform += 1
+    if suspects is not None:
+        for i in np.flatnonzero(suspects.to_numpy(zero_copy_only=False).astype(bool)):
+            if classify(points[int(i)].as_py(), after[int(i)].as_py()) == "invalid":
+                keep[i] = False
+                invalid += 1
+    return pa.array(keep), invalid, waveform
+
+
+def _all_empty(column: Any) -> bool:
+    """True when every cell of an Arrow column is null or empty text."""
+    import pyarrow as pa
+    import pyarrow.compute as pc
+
+    if column.null_count == len(column):
+        return True
+    if not pa.types.is_string(column.type):
+        return False
+    return bool(pc.all(pc.equal(pc.fill_null(column, ""), "")).as_py())
+
+
+def _to_float(column: Any, decimal: str) -> tuple[Any, int]:
+    """A text column (empty cells null) as float64 the way ``textio.to_numbers`` reads it:
+    ``******`` cells null (and counted), thousands separators dropped, a decimal comma
+    made a point. :class:`NotSimple` when a cell still is not a plain number."""
+    import pyarrow as pa
+    import pyarrow.compute as pc
+
+    stars = 0
+    starred = pc.match_substring(column, "*")
+    if pc.any(starred).as_py():
+        only_stars = pc.equal(column, "******")  # what Rheoplus writes
+        if pc.sum(only_stars).as_py() != pc.sum(starred).as_py():
+            only_stars = pc.match_substring_regex(column, r"^\*+$")
+        only_stars = pc.fill_null(only_stars, False)
+        stars = int(pc.sum(only_stars).as_py() or 0)
+        if stars:
+            column = pc.if_else(only_stars, pa.scalar(None, pa.string()), column)
+    if decimal == ",":
+        if pc.any(pc.match_substring(column, ".")).as_py():
+            grouped = pc.fill_null(pc.match_substring_regex(column, _DOT_THOUSANDS), False)
+            column = pc.if_else(grouped, pc.replace_substring(column, ".", ""), column)
+        column = pc.replace_substring(column, ",", ".")
+    elif pc.any(pc.match_substring(column, ",")).as_py():
+        grouped = pc.fill_null(pc.match_substring_regex(column, _COMMA_THOUSANDS), False)
+        column = pc.if_else(grouped, pc.replace_substring(column, ",", ""), column)
+    # a cell that is still no number makes the cast fail (slowly, but rarely)
+    try:
+        return pc.cast(column, pa.float64()), stars
+    except pa.ArrowInvalid:
+        raise NotSimple from None

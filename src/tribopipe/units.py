@@ -12,6 +12,7 @@ column converts revolutions to rad/s, while a generic ``[1/s]`` (a shear rate) s
 
 from __future__ import annotations
 
+import functools
 import math
 import re
 import unicodedata
@@ -141,6 +142,7 @@ def normalize_unit(text: str) -> str:
     return "°" if unit == "deg" else unit
 
 
+@functools.lru_cache(maxsize=1024)
 def parse_unit(text: str, quantity: str | None = None) -> UnitSpec | None:
     """Parse a unit string such as ``"[mN·m]"``; ``None`` when the unit is not known.
 

@@ -42,6 +42,7 @@ from ..measurement import (  # noqa: F401 - require_columns is importable from h
 )
 from . import plaincsv, rheocompass, rheoplus
 from .aliases import AliasTable, load_aliases, resolve_aliases
+from .cells import arrow_cells
 from .common import build_measurement
 from .interval import FileInfo, RawInterval
 from .textio import (
@@ -108,15 +109,15 @@ def _normalise_delimiter(delimiter: str | None, path: str) -> str | None:
     return value
 
 
-def _parse(
+def _read(
     path: str,
     encoding: str | None,
     delimiter: str | None,
     decimal: str | None,
     fmt: str | None,
     aliases: AliasTable,
-) -> tuple[FileInfo, list[RawInterval]]:
-    """Detect format, encoding, delimiter and decimal mark; find the intervals."""
+) -> list[Measurement]:
+    """Detect format, encoding, delimiter and decimal mark; read every interval."""
     if decimal not in (None, ".", ","):
         raise ReadError(f"decimal mark must be '.' or ',', got {decimal!r}", path=path)
     if fmt is not None and fmt not in FORMATS:
@@ -131,15 +132,21 @@ def _parse(
         )
     if fmt == rheocompass.FORMAT_XLSX or (fmt is None and raw.startswith(XLSX_MAGIC)):
         info = FileInfo(path, rheocompass.FORMAT_XLSX, None, None, decimal or ".")
-        return info, rheocompass.parse_intervals(workbook_rows(path), path)
+        intervals = rheocompass.parse_intervals(workbook_rows(path), path)
+        return [build_measurement(interval, info, aliases) for interval in intervals]
 
     decoded = decode(raw, path, encoding)
     if plain_line_ends(decoded.text):
         try:
-            return _parse_text(path, decoded, delimiter, decimal, fmt, aliases, plain=True)
+            info, intervals = _parse_text(path, decoded, delimiter, decimal, fmt, aliases,
+                                          plain=True)
+            cells = arrow_cells(intervals, info, aliases)
+            return [build_measurement(interval, info, aliases, c)
+                    for interval, c in zip(intervals, cells, strict=True)]
         except (NotSimple, ReadError):
-            pass  # the row-by-row parse decides, and words any error
-    return _parse_text(path, decoded, delimiter, decimal, fmt, aliases, plain=False)
+            pass  # read it row by row, which also words any error
+    info, intervals = _parse_text(path, decoded, delimiter, decimal, fmt, aliases, plain=False)
+    return [build_measurement(interval, info, aliases) for interval in intervals]
 
 
 def _parse_text(
@@ -247,8 +254,7 @@ def read_export(
     """
     p = str(path)
     table = resolve_aliases(aliases)
-    info, intervals = _parse(p, encoding, delimiter, decimal, fmt, table)
-    measurements = [build_measurement(raw, info, table) for raw in intervals]
+    measurements = _read(p, encoding, delimiter, decimal, fmt, table)
     if not any(len(m.data) for m in measurements):
         raise ReadError(
             f"header without data: {len(measurements)} interval(s), no valid data point",

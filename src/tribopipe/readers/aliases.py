@@ -34,6 +34,7 @@ CANONICAL_COLUMN: dict[str, str] = {
 DEFAULT_USER_FILE = Path("configs") / "aliases.toml"
 
 
+@functools.lru_cache(maxsize=4096)
 def name_key(name: str) -> str:
     """The matching key of a column name: accents stripped, case folded, only letters and
     digits kept (``"Température "`` → ``"temperature"``)."""

@@ -39,6 +39,7 @@ from .textio import (
     Run,
     expand_runs,
     is_missing,
+    plain_lines,
     split_cells,
     to_numbers,
 )
@@ -200,44 +201,55 @@ def _classify_rows(rows: list[Row], raw: RawInterval, info: FileInfo) -> tuple[l
 # --------------------------------------------------------------------------- fast
 
 
+#: the shortest run of data lines read column-wise; below it, row by row is cheaper
+#: (measured crossover ~100-150 lines: a C parse and a DataFrame cost ~0.5 ms per interval)
+MIN_RUN = 150
+
+
+def arrow_cells(
+    intervals: Sequence[RawInterval], info: FileInfo, aliases: AliasTable
+) -> list[ArrowCells | None]:
+    """The cells of every interval whose data rows are one run of at least
+    :data:`MIN_RUN` plain lines, read column-wise; ``None`` for the other intervals and
+    wherever the fast path declines. Runs of one layout (cells per line and what each
+    holds: RheoCompass's set-up and friction intervals) are parsed in one call."""
+    out: list[ArrowCells | None] = [None] * len(intervals)
+    groups: dict[tuple[str, int, tuple[str, ...]], list[int]] = {}
+    for i, raw in enumerate(intervals):
+        run = raw.rows[0] if len(raw.rows) == 1 else None
+        if not isinstance(run, Run) or run.n_lines < MIN_RUN:
+            continue
+        try:
+            kinds = _kinds(run, raw, aliases)
+        except NotSimple:
+            continue
+        groups.setdefault((run.delimiter, run.skip, tuple(kinds)), []).append(i)
+    decimal = info.decimal or "."
+    for (_, _, kinds), members in groups.items():
+        runs = [intervals[i].rows[0] for i in members]
+        for i, columns in zip(members, _parse(runs, list(kinds), decimal), strict=True):
+            if columns is not None:
+                try:
+                    out[i] = ArrowCells(columns, list(kinds), intervals[i], decimal)
+                except NotSimple:
+                    pass
+    return out
+
+
 class ArrowCells:
     """The data rows of an interval held in one :class:`~.textio.Run`, parsed by
-    ``pyarrow.csv``; raises :class:`NotSimple` where the general path is needed."""
+    ``pyarrow.csv`` (:func:`arrow_cells`): ``columns`` holds one Arrow column per cell of
+    a line (text stripped; text of number columns still to convert), ``kinds`` what each
+    holds. Raises :class:`NotSimple` where the general path is needed."""
 
-    def __init__(self, run: Run, raw: RawInterval, info: FileInfo, aliases: AliasTable) -> None:
-        import pyarrow as pa
+    def __init__(
+        self, columns: list[Any], kinds: list[str], raw: RawInterval, decimal: str
+    ) -> None:
         import pyarrow.compute as pc
 
-        block = run.block()
-        try:
-            data = block.encode("utf-8")
-        except UnicodeEncodeError:  # a lone surrogate from an exotic forced encoding
-            raise NotSimple from None
-        decimal = info.decimal or "."
-        first = block.split("\n", 1)[0].removesuffix("\r")
-        kinds = _kinds(len(split_cells([first], run.delimiter)[0][1]) - run.skip, raw, aliases)
-        if not _lines_within(data, _FIELD_LIMIT):
-            raise NotSimple  # the csv module refuses a cell that long: let it say so
-        # numbers parse as float64 in the C parser, unless a sample line shows a cell it
-        # would refuse (******, 1,460, a decimal point in a decimal-comma file): such a
-        # column is read as text and converted column-wise; when a refused cell shows up
-        # in another column all the same, the whole run is read as text
-        as_text = _text_columns(block, run, kinds, decimal)
-        table = _read(data, run, kinds, decimal, as_text)
-        if table is None and len(as_text) < kinds.count("number"):
-            table = _read(data, run, kinds, decimal, set(range(len(kinds))))
-        if table is None or table.num_rows != run.n_lines:
-            raise NotSimple
-        columns = []
-        for k, kind in enumerate(kinds):
-            column = table.column(k)
-            if pa.types.is_string(column.type):
-                column = _strip(column, empty_is_null=kind == "number")
-                if kind != "number":
-                    column = pc.fill_null(column, "")
-            columns.append(column)
+        n_lines = len(columns[0])
         mask, self.n_invalid, self.n_waveform = _classify_arrow(columns, raw.point_col)
-        self.n_rows = run.n_lines if mask is None else int(pc.sum(mask).as_py() or 0)
+        self.n_rows = n_lines if mask is None else int(pc.sum(mask).as_py() or 0)
         if raw.n_declared is not None and self.n_rows + self.n_invalid < raw.n_declared:
             raise NotSimple  # truncated: the general path reports it
         if mask is not None:
@@ -283,14 +295,19 @@ class ArrowCells:
 
     def strings(self, j: int) -> Any:
         import pandas as pd
+        import pyarrow as pa
 
-        return pd.array(self.columns[j], dtype="string")
+        # what pd.array(cells, dtype="string") holds: large_string in a StringDtype array
+        return pd.arrays.ArrowStringArray(self.columns[j].cast(pa.large_string()))
 
 
-def _kinds(n_cells: int, raw: RawInterval, aliases: AliasTable) -> list[str]:
-    """What each cell of a row holds: ``"point"`` (the point number), ``"number"``,
-    ``"text"`` (a Status column) or ``"extra"`` (past the header's columns: must be
-    empty). :class:`NotSimple` for rows shorter than the header."""
+def _kinds(run: Run, raw: RawInterval, aliases: AliasTable) -> list[str]:
+    """What each cell of the run's lines holds (counted on its first line): ``"point"``
+    (the point number), ``"number"``, ``"text"`` (a Status column) or ``"extra"`` (past
+    the header's columns: must be empty). :class:`NotSimple` for rows shorter than the
+    header."""
+    first = _line_at(run.text, run.start, run.end)
+    n_cells = len(split_cells([first], run.delimiter)[0][1]) - run.skip
     width = len(raw.names)
     if n_cells < width:
         raise NotSimple  # short rows: the general path names the line
@@ -305,6 +322,62 @@ def _kinds(n_cells: int, raw: RawInterval, aliases: AliasTable) -> list[str]:
         else:
             kinds.append("number")
     return kinds
+
+
+def _parse(runs: list[Run], kinds: list[str], decimal: str) -> list[list[Any] | None]:
+    """Every run's columns (``None`` for a run the C parser refuses): all runs in one
+    parse, or one by one when that fails."""
+    if len(runs) > 1:
+        try:
+            return _parse_together(runs, kinds, decimal)
+        except NotSimple:
+            pass
+    out: list[list[Any] | None] = []
+    for run in runs:
+        try:
+            out += _parse_together([run], kinds, decimal)
+        except NotSimple:
+            out.append(None)
+    return out
+
+
+def _parse_together(runs: list[Run], kinds: list[str], decimal: str) -> list[list[Any]]:
+    """The runs' lines parsed in one ``pyarrow.csv`` call, cut back into runs."""
+    import pyarrow as pa
+    import pyarrow.compute as pc
+
+    blocks = [run.block() for run in runs]
+    try:
+        data = b"\n".join(block.encode("utf-8") for block in blocks)
+    except UnicodeEncodeError:  # a lone surrogate from an exotic forced encoding
+        raise NotSimple from None
+    if not _lines_within(data, _FIELD_LIMIT):
+        raise NotSimple  # the csv module refuses a cell that long: let it say so
+    # numbers parse as float64 in the C parser, unless a sample line shows a cell it
+    # would refuse (******, 1,460, a decimal point in a decimal-comma file): such a
+    # column is read as text and converted column-wise; when a refused cell shows up in
+    # another column all the same, every column is read as text
+    as_text = set().union(*(_text_columns(block, run, kinds, decimal)
+                            for block, run in zip(blocks, runs, strict=True)))
+    table = _read(data, runs[0], kinds, decimal, as_text)
+    if table is None and len(as_text) < kinds.count("number"):
+        table = _read(data, runs[0], kinds, decimal, set(range(len(kinds))))
+    # a CR that ends no line is a line end to the C parser: one row more than lines
+    if table is None or table.num_rows != sum(run.n_lines for run in runs):
+        raise NotSimple
+    columns = []
+    for k, kind in enumerate(kinds):
+        column = table.column(k)
+        if pa.types.is_string(column.type):
+            column = _strip(column, empty_is_null=kind == "number")
+            if kind != "number":
+                column = pc.fill_null(column, "")
+        columns.append(column)
+    out, offset = [], 0
+    for run in runs:
+        out.append([column.slice(offset, run.n_lines) for column in columns])
+        offset += run.n_lines
+    return out
 
 
 #: the longest cell Python's csv module accepts (``csv.field_size_limit()``)
@@ -322,16 +395,23 @@ def _lines_within(data: bytes, limit: int) -> bool:
 def _text_columns(block: str, run: Run, kinds: list[str], decimal: str) -> set[int]:
     """The number columns to read as text: those whose cell in the first, middle or last
     line of the run holds ``*``, or the mark that is not the decimal mark."""
-    lines = block.split("\n")
-    sample = [lines[0], lines[len(lines) // 2], lines[-1]]
-    rows = split_cells([line.removesuffix("\r") for line in sample], run.delimiter)
+    middle = block.find("\n", len(block) // 2) + 1
+    sample = [_line_at(block, 0), _line_at(block, middle), _line_at(block, block.rfind("\n") + 1)]
     alien = "," if decimal == "." else "."
     text = set()
-    for _, cells in rows:
+    for _, cells in split_cells(sample, run.delimiter):
         for k, cell in enumerate(cells[run.skip : run.skip + len(kinds)]):
             if kinds[k] == "number" and ("*" in cell or alien in cell):
                 text.add(k)
     return text
+
+
+def _line_at(text: str, start: int, end: int | None = None) -> str:
+    """The line of ``text`` that starts at ``start`` (a plain line, see ``plain_lines``),
+    not past ``end``."""
+    end = len(text) if end is None else end
+    stop = text.find("\n", start, end)
+    return plain_lines(text[start : end if stop < 0 else stop])[0]
 
 
 def _read(data: bytes, run: Run, kinds: list[str], decimal: str, as_text: set[int]) -> Any:
@@ -426,14 +506,18 @@ def _classify_arrow(columns: list[Any], point_col: int | None) -> tuple[Any, int
     if point_col is None:
         return None, 0, 0
     points = columns[point_col]
-    plain = pc.and_(pc.ascii_is_decimal(points), pc.less(pc.binary_length(points), 16))
+    digits = pc.ascii_is_decimal(points)
     after = columns[point_col + 1] if point_col + 1 < len(columns) else None
     suspects = None
     if after is not None and pa.types.is_string(after.type):
         maybe_word = pc.fill_null(pc.match_substring_regex(after, _MAYBE_WORD), False)
-        suspects = pc.and_(plain, maybe_word)
-    if pc.all(plain).as_py() and (suspects is None or not pc.any(suspects).as_py()):
+        suspects = pc.and_(digits, maybe_word)
+    if (pc.all(digits).as_py() and pc.max(pc.binary_length(points)).as_py() < 16
+            and (suspects is None or not pc.any(suspects).as_py())):
         return None, 0, 0
+    plain = pc.and_(digits, pc.less(pc.binary_length(points), 16))
+    if suspects is not None:
+        suspects = pc.and_(plain, suspects)
     keep = plain.to_numpy(zero_copy_only=False).astype(bool)
     invalid = waveform = 0
     for i in np.flatnonzero(~keep):
@@ -479,6 +563,8 @@ def _to_float(column: Any, decimal: str) -> tuple[Any, int]:
             only_stars = pc.match_substring_regex(column, r"^\*+$")
         only_stars = pc.fill_null(only_stars, False)
         stars = int(pc.sum(only_stars).as_py() or 0)
+        if stars == len(column) - column.null_count:  # no value at all in the column
+            return pa.chunked_array([pa.nulls(len(column), pa.float64())]), stars
         if stars:
             column = pc.if_else(only_stars, pa.scalar(None, pa.string()), column)
     if decimal == ",":

@@ -16,11 +16,7 @@ from ..units import canonical_unit, parse_unit, sanitize_suffix
 from .aliases import CANONICAL_COLUMN, AliasTable, snake_case
 from .cells import ArrowCells, RowCells
 from .interval import FileInfo, RawInterval
-from .textio import NotSimple, Run
-
-#: the shortest run of data lines read column-wise; below it, row by row is cheaper
-#: (measured crossover ~100-150 lines: a C parse and a DataFrame cost ~0.5 ms per interval)
-MIN_RUN = 150
+from .textio import NotSimple
 
 #: the value RheoCompass writes for a loss factor it could not determine (status ``taD``)
 LOSS_FACTOR_PLACEHOLDER = 20000.0
@@ -39,20 +35,23 @@ def _column_name(base: str, suffix: str) -> str:
     return f"{base}_{suffix}" if suffix else base
 
 
-def build_measurement(raw: RawInterval, info: FileInfo, aliases: AliasTable) -> Measurement:
+def build_measurement(
+    raw: RawInterval, info: FileInfo, aliases: AliasTable, cells: ArrowCells | None = None
+) -> Measurement:
     """Convert one interval to a :class:`Measurement` with SI, unit-suffixed columns.
 
-    An interval whose data rows are one run of plain lines is read column-wise by a C
-    parser (:class:`~.cells.ArrowCells`); any other, or one that parser cannot vouch
-    for, row by row (:class:`~.cells.RowCells`). Both give the same table to the bit.
+    ``cells``: the interval's data rows already read column-wise by a C parser
+    (:func:`~.cells.arrow_cells`); without them, or where that path cannot vouch for a
+    result, the rows are read one by one (:class:`~.cells.RowCells`). Both give the same
+    table to the bit.
 
     Raises :class:`ReadError` for a cell that is not a number where one is expected, a
     canonical quantity in an unknown unit, or an interval holding fewer points than it
     declares (a truncated file).
     """
-    if len(raw.rows) == 1 and isinstance(raw.rows[0], Run) and raw.rows[0].n_lines >= MIN_RUN:
+    if cells is not None:
         try:
-            return _measurement(raw, info, aliases, ArrowCells(raw.rows[0], raw, info, aliases))
+            return _measurement(raw, info, aliases, cells)
         except (NotSimple, ReadError):
             pass  # the general path decides, and names the line of any error
     return _measurement(raw, info, aliases, RowCells(raw, info))

@@ -76,6 +76,7 @@ def parse_intervals(rows: list[Row | Run], path: str) -> list[RawInterval]:
     while i < n:
         item = rows[i]
         if isinstance(item, Run):  # data lines outside a table: nothing to read
+            item.check_line_ends()
             i += 1
             continue
         line, cells = item

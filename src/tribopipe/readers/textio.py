@@ -205,11 +205,13 @@ def split_cells(
 # into cells with the csv module costs one Python list per row and one str per cell; the
 # scan below splits only the labelled lines and keeps each run of data lines as a slice of
 # the decoded text, which a C parser reads in one call (``readers.cells``). It applies to
-# "plain" texts, where lines end in LF or CRLF only and every double quote encloses one
-# whole cell on one line; there a line is a row, and the csv module and a C parser split a
-# line into the same cells. Other texts take the row-by-row path.
+# "plain" texts: lines end in LF or CRLF only, and every double quote encloses one whole
+# cell on one line; there a line is a row, and the csv module and a C parser split a line
+# into the same cells. A CR that ends no line is found where the line holding it is used
+# (:func:`plain_lines`; the C parser sees one row more), and raises :class:`NotSimple`:
+# the file is then read row by row as ``str.splitlines`` and the csv module split it.
 
-#: characters besides LF and CRLF at which ``str.splitlines`` also ends a line
+#: characters besides CR and LF at which ``str.splitlines`` also ends a line
 _OTHER_LINE_ENDS = ("\x0b", "\x0c", "\x1c", "\x1d", "\x1e", "\x85", "\u2028", "\u2029")
 
 #: one row: its 1-based line number and its stripped cells
@@ -221,17 +223,24 @@ class NotSimple(Exception):  # noqa: N818 - a signal between two paths, not an e
 
 
 def plain_line_ends(text: str) -> bool:
-    """True when ``text`` has no NUL and ends its lines with LF or CRLF only, so that its
-    lines are ``text.split("\\n")`` without the CR (what ``str.splitlines`` gives)."""
-    if "\x00" in text or text.count("\r") != text.count("\r\n"):
-        return False
-    return not any(c in text for c in _OTHER_LINE_ENDS)
+    """True when ``text`` has no NUL and no line end other than LF and CR (a lone CR, one
+    not before an LF, is only found line by line, see :func:`plain_lines`)."""
+    return "\x00" not in text and not any(c in text for c in _OTHER_LINE_ENDS)
+
+
+def plain_lines(block: str) -> list[str]:
+    """The lines of a block of a plain text (LF or CRLF line ends), as ``str.splitlines``
+    gives them; :class:`NotSimple` for a CR that ends no line."""
+    lines = [ln[:-1] if ln.endswith("\r") else ln for ln in block.split("\n")]
+    if any("\r" in ln for ln in lines):
+        raise NotSimple
+    return lines
 
 
 @functools.lru_cache(maxsize=8)
 def _quoted_cell(delimiter: str) -> tuple[re.Pattern[str], re.Pattern[str]]:
     d = re.escape(delimiter)
-    cell = rf'[^"\n]*"(?=[{d}\r\n]|$)'
+    cell = rf'[^"\r\n]*"(?=[{d}\r\n]|$)'
     # the opening quote first, so that the search jumps from quote to quote
     return re.compile(rf'"(?<=[\n{d}]"){cell}'), re.compile(rf'"{cell}')
 
@@ -248,14 +257,14 @@ def simple_quotes(text: str, delimiter: str) -> bool:
 
 
 def head_lines(text: str, n: int) -> list[str]:
-    """The first ``n`` lines of a text with :func:`plain_line_ends`, as ``str.splitlines``
-    gives them."""
+    """The first ``n`` lines of a plain text, as ``str.splitlines`` gives them
+    (:class:`NotSimple` for a CR that ends no line)."""
     parts = text.split("\n", n)
     if len(parts) > n:
         del parts[n:]
     elif parts and not parts[-1]:
         parts.pop()  # the text ends with a line end
-    return [p[:-1] if p.endswith("\r") else p for p in parts]
+    return plain_lines("\n".join(parts))
 
 
 @dataclass(frozen=True)
@@ -281,10 +290,17 @@ class Run:
         """The run's lines as one string (LF or CRLF between them)."""
         return self.text[self.start : self.end]
 
+    def check_line_ends(self) -> None:
+        """:class:`NotSimple` when a CR in the run ends no line (for a run that is skipped,
+        not parsed: a parse finds such a CR itself)."""
+        block = self.block()
+        if block.count("\r") != block.count("\r\n"):
+            raise NotSimple
+
     def rows(self) -> list[Row]:
         """The run's lines split into stripped cells, each with its line number (what
         :func:`split_cells` gives for these lines), less the ``skip`` leading cells."""
-        lines = [ln[:-1] if ln.endswith("\r") else ln for ln in self.block().split("\n")]
+        lines = plain_lines(self.block())
         offset = self.first_line - 1
         return [(offset + k, cells[self.skip :]) for k, cells in split_cells(lines, self.delimiter)]
 
@@ -292,7 +308,7 @@ class Run:
         """The first line as a row, and the run of the lines after it (``None`` if none)."""
         newline = self.text.find("\n", self.start, self.end)
         stop = self.end if newline < 0 else newline
-        line = self.text[self.start : stop].removesuffix("\r")
+        (line,) = plain_lines(self.text[self.start : stop])
         row = (self.first_line, split_cells([line], self.delimiter)[0][1][self.skip :])
         if newline < 0:
             return row, None
@@ -332,7 +348,8 @@ def scan_lines(text: str, delimiter: str, data_line: str) -> list[Row | Run]:
             break
         newline = text.find("\n", s)
         stop = size if newline < 0 else newline
-        labelled.append((len(items), line_no, text[s:stop].removesuffix("\r")))
+        (line,) = plain_lines(text[s:stop])
+        labelled.append((len(items), line_no, line))
         items.append(None)
         line_no += 1
         cursor = stop + 1

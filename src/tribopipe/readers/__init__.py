@@ -59,6 +59,7 @@ from .textio import (
     scan_lines,
     simple_quotes,
     split_cells,
+    split_plain,
 )
 from .xlsx import XLSX_MAGIC, workbook_rows
 
@@ -177,7 +178,7 @@ def _parse_text(
         )
     if plain and not simple_quotes(text, delim):
         raise NotSimple
-    rows = split_cells(lines, delim, path)
+    rows = split_plain(lines, delim) if plain else split_cells(lines, delim, path)
     if fmt is None:
         if rheocompass.looks_like(rows):
             fmt = rheocompass.FORMAT

@@ -227,10 +227,10 @@ def arrow_cells(
     decimal = info.decimal or "."
     for (_, _, kinds), members in groups.items():
         runs = [intervals[i].rows[0] for i in members]
-        for i, columns in zip(members, _parse(runs, list(kinds), decimal), strict=True):
-            if columns is not None:
+        for i, parsed in zip(members, _parse(runs, list(kinds), decimal), strict=True):
+            if parsed is not None:
                 try:
-                    out[i] = ArrowCells(columns, list(kinds), intervals[i], decimal)
+                    out[i] = ArrowCells(*parsed, list(kinds), intervals[i], decimal)
                 except NotSimple:
                     pass
     return out
@@ -239,11 +239,17 @@ def arrow_cells(
 class ArrowCells:
     """The data rows of an interval held in one :class:`~.textio.Run`, parsed by
     ``pyarrow.csv`` (:func:`arrow_cells`): ``columns`` holds one Arrow column per cell of
-    a line (text stripped; text of number columns still to convert), ``kinds`` what each
+    a line (text stripped; numbers as float64, or as text still to convert), ``stars``
+    the ``******`` cells of number columns converted from text, ``kinds`` what each cell
     holds. Raises :class:`NotSimple` where the general path is needed."""
 
     def __init__(
-        self, columns: list[Any], kinds: list[str], raw: RawInterval, decimal: str
+        self,
+        columns: list[Any],
+        stars: dict[int, Any],
+        kinds: list[str],
+        raw: RawInterval,
+        decimal: str,
     ) -> None:
         import pyarrow.compute as pc
 
@@ -254,11 +260,12 @@ class ArrowCells:
             raise NotSimple  # truncated: the general path reports it
         if mask is not None:
             columns = [c.filter(mask) for c in columns]
+            stars = {k: c.filter(mask) for k, c in stars.items()}
         if any(kind == "extra" and not _all_empty(c) for c, kind in zip(columns, kinds,
                                                                         strict=True)):
             raise NotSimple  # a cell past the header's columns: the general path reports it
         self.kinds, self.columns, self.decimal = kinds, columns, decimal
-        self._missing: dict[int, int] = {}
+        self._missing = {k: int(pc.sum(c).as_py() or 0) for k, c in stars.items()}
 
     def point_numbers(self, j: int) -> np.ndarray:
         import pyarrow as pa
@@ -267,24 +274,26 @@ class ArrowCells:
         return np.asarray(pc.cast(self.columns[j], pa.int64()).to_numpy(), dtype=np.int64)
 
     def is_empty(self, j: int) -> bool:
-        return _all_empty(self.columns[j])
+        return _all_empty(self.columns[j]) and not self._missing.get(j)
 
     def check_damage(self, j: int, name: str) -> None:
         import pyarrow as pa
 
         # every Excel error starts with "#"; numbers parsed as such hold none
         column = self.columns[j]
-        if pa.types.is_string(column.type) and any(_holds(c, b"#") for c in column.chunks):
+        if pa.types.is_string(column.type) and _column_holds(column, b"#"):
             raise NotSimple
 
     def numbers(self, j: int, name: str, textual: bool) -> np.ndarray | None:
         import pyarrow as pa
+        import pyarrow.compute as pc
 
         if self.kinds[j] != "number":
             raise NotSimple  # text in a column other than Status: rare, take the rows
         values = self.columns[j]
         if pa.types.is_string(values.type):
-            values, self._missing[j] = _to_float(values, self.decimal)
+            values, stars = _to_float(values, self.decimal)
+            self._missing[j] = int(pc.sum(stars).as_py() or 0) if stars is not None else 0
         out = values.to_numpy()
         if np.count_nonzero(np.isnan(out)) != values.null_count:
             raise NotSimple  # a "nan" cell: its bits are Python's float() to decide
@@ -324,15 +333,18 @@ def _kinds(run: Run, raw: RawInterval, aliases: AliasTable) -> list[str]:
     return kinds
 
 
-def _parse(runs: list[Run], kinds: list[str], decimal: str) -> list[list[Any] | None]:
-    """Every run's columns (``None`` for a run the C parser refuses): all runs in one
-    parse, or one by one when that fails."""
+_Parsed = tuple[list[Any], dict[int, Any]]
+
+
+def _parse(runs: list[Run], kinds: list[str], decimal: str) -> list[_Parsed | None]:
+    """Every run's columns and ``******`` cells (``None`` for a run the C parser
+    refuses): all runs in one parse, or one by one when that fails."""
     if len(runs) > 1:
         try:
             return _parse_together(runs, kinds, decimal)
         except NotSimple:
             pass
-    out: list[list[Any] | None] = []
+    out: list[_Parsed | None] = []
     for run in runs:
         try:
             out += _parse_together([run], kinds, decimal)
@@ -341,8 +353,11 @@ def _parse(runs: list[Run], kinds: list[str], decimal: str) -> list[list[Any] | 
     return out
 
 
-def _parse_together(runs: list[Run], kinds: list[str], decimal: str) -> list[list[Any]]:
-    """The runs' lines parsed in one ``pyarrow.csv`` call, cut back into runs."""
+def _parse_together(runs: list[Run], kinds: list[str], decimal: str) -> list[_Parsed]:
+    """The runs' lines parsed in one ``pyarrow.csv`` call, cut back into runs. Number
+    columns read as text are converted here when every cell of them converts (those of
+    invalid points and waveform rows too: the conversion goes cell by cell, so the data
+    rows' values are the same); else each interval converts its data rows."""
     import pyarrow as pa
     import pyarrow.compute as pc
 
@@ -365,17 +380,26 @@ def _parse_together(runs: list[Run], kinds: list[str], decimal: str) -> list[lis
     # a CR that ends no line is a line end to the C parser: one row more than lines
     if table is None or table.num_rows != sum(run.n_lines for run in runs):
         raise NotSimple
-    columns = []
+    columns, stars = [], {}
     for k, kind in enumerate(kinds):
         column = table.column(k)
         if pa.types.is_string(column.type):
             column = _strip(column, empty_is_null=kind == "number")
             if kind != "number":
                 column = pc.fill_null(column, "")
+            else:
+                try:
+                    column, starred = _to_float(column, decimal)
+                except NotSimple:
+                    pass
+                else:
+                    if starred is not None:
+                        stars[k] = starred
         columns.append(column)
     out, offset = [], 0
     for run in runs:
-        out.append([column.slice(offset, run.n_lines) for column in columns])
+        out.append(([column.slice(offset, run.n_lines) for column in columns],
+                    {k: mask.slice(offset, run.n_lines) for k, mask in stars.items()}))
         offset += run.n_lines
     return out
 
@@ -479,6 +503,11 @@ def _holds(chunk: Any, needle: bytes) -> bool:
     return needle in _text_bytes(chunk)
 
 
+def _column_holds(column: Any, needle: bytes) -> bool:
+    """True when some cell of an Arrow string column may hold ``needle`` (its bytes do)."""
+    return any(_holds(chunk, needle) for chunk in column.chunks)
+
+
 def _text_bytes(chunk: Any) -> bytes:
     """The UTF-8 bytes of an Arrow string array's cells, one after the other (possibly
     with those of cells sliced or filtered away: a superset)."""
@@ -548,35 +577,43 @@ def _all_empty(column: Any) -> bool:
     return bool(pc.all(pc.equal(pc.fill_null(column, ""), "")).as_py())
 
 
-def _to_float(column: Any, decimal: str) -> tuple[Any, int]:
-    """A text column (empty cells null) as float64 the way ``textio.to_numbers`` reads it:
-    ``******`` cells null (and counted), thousands separators dropped, a decimal comma
-    made a point. :class:`NotSimple` when a cell still is not a plain number."""
+def _to_float(column: Any, decimal: str) -> tuple[Any, Any]:
+    """A text column (empty cells null) as float64 the way ``textio.to_numbers`` reads it
+    (``******`` cells null, thousands separators dropped, a decimal comma made a point),
+    and the mask of its ``******`` cells (``None``: none). :class:`NotSimple` when a cell
+    still is not a plain number."""
     import pyarrow as pa
     import pyarrow.compute as pc
 
-    stars = 0
-    starred = pc.match_substring(column, "*")
-    if pc.any(starred).as_py():
+    only_stars = None
+    if _column_holds(column, b"*"):
+        starred = pc.match_substring(column, "*")
         only_stars = pc.equal(column, "******")  # what Rheoplus writes
         if pc.sum(only_stars).as_py() != pc.sum(starred).as_py():
             only_stars = pc.match_substring_regex(column, r"^\*+$")
         only_stars = pc.fill_null(only_stars, False)
         stars = int(pc.sum(only_stars).as_py() or 0)
         if stars == len(column) - column.null_count:  # no value at all in the column
-            return pa.chunked_array([pa.nulls(len(column), pa.float64())]), stars
+            return pa.chunked_array([pa.nulls(len(column), pa.float64())]), only_stars
         if stars:
             column = pc.if_else(only_stars, pa.scalar(None, pa.string()), column)
     if decimal == ",":
-        if pc.any(pc.match_substring(column, ".")).as_py():
+        if _column_holds(column, b"."):
             grouped = pc.fill_null(pc.match_substring_regex(column, _DOT_THOUSANDS), False)
             column = pc.if_else(grouped, pc.replace_substring(column, ".", ""), column)
         column = pc.replace_substring(column, ",", ".")
-    elif pc.any(pc.match_substring(column, ",")).as_py():
-        grouped = pc.fill_null(pc.match_substring_regex(column, _COMMA_THOUSANDS), False)
-        column = pc.if_else(grouped, pc.replace_substring(column, ",", ""), column)
+    elif _column_holds(column, b","):
+        # every cell with a comma must be grouped in thousands: else the cell is no
+        # number, and leaving it whole lets the cast below refuse it
+        commas = pc.sum(pc.match_substring(column, ",")).as_py()
+        grouped = pc.match_substring_regex(column, _COMMA_THOUSANDS)
+        if pc.sum(grouped).as_py() == commas:
+            column = pc.replace_substring(column, ",", "")
+        else:
+            grouped = pc.fill_null(grouped, False)
+            column = pc.if_else(grouped, pc.replace_substring(column, ",", ""), column)
     # a cell that is still no number makes the cast fail (slowly, but rarely)
     try:
-        return pc.cast(column, pa.float64()), stars
+        return pc.cast(column, pa.float64()), only_stars
     except pa.ArrowInvalid:
         raise NotSimple from None

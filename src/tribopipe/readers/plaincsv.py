@@ -42,10 +42,9 @@ def split_header(cell: str, aliases: AliasTable) -> tuple[str, str]:
 
 
 def data_line(delimiter: str) -> str:
-    """The start of a plain data line (a regular expression): any line that starts with
-    neither a blank, a quote nor the delimiter (it is not empty)."""
-    d = re.escape(delimiter)
-    return rf'[^\s"{d}]'
+    """The start of a plain data line (a regular expression): a number's first character
+    (any other line is read as a row, and decided there)."""
+    return r"[-+.0-9]"
 
 
 def looks_like(rows: list[Row], aliases: AliasTable) -> bool:

@@ -48,10 +48,9 @@ LABELS = PROJECT | TEST | RESULT | INTERVAL_POINTS | INTERVAL_DATA
 
 
 def data_line(delimiter: str) -> str:
-    """The start of a plain data line (a regular expression): an empty first cell, then a
-    cell that starts with neither a blank nor a quote (the point number)."""
-    d = re.escape(delimiter)
-    return rf'{d}[^\s"{d}]'
+    """The start of a plain data line (a regular expression): an empty first cell, then
+    the point number (any other line is read as a row, and decided there)."""
+    return rf"{re.escape(delimiter)}[0-9]"
 
 
 def looks_like(rows: list[Row]) -> bool:

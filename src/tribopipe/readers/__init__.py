@@ -50,6 +50,7 @@ from .textio import (
     NotSimple,
     Row,
     Run,
+    declines,
     decode,
     detect_decimal,
     detect_delimiter,
@@ -144,7 +145,7 @@ def _read(
             cells = arrow_cells(intervals, info, aliases)
             return [build_measurement(interval, info, aliases, c)
                     for interval, c in zip(intervals, cells, strict=True)]
-        except (NotSimple, ReadError):
+        except (ReadError, *declines()):
             pass  # read it row by row, which also words any error
     info, intervals = _parse_text(path, decoded, delimiter, decimal, fmt, aliases, plain=False)
     return [build_measurement(interval, info, aliases) for interval in intervals]

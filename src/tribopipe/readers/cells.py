@@ -37,6 +37,7 @@ from .textio import (
     NotSimple,
     Row,
     Run,
+    declines,
     expand_runs,
     is_missing,
     plain_lines,
@@ -201,6 +202,9 @@ def _classify_rows(rows: list[Row], raw: RawInterval, info: FileInfo) -> tuple[l
 # --------------------------------------------------------------------------- fast
 
 
+#: one run's columns, and the ``******`` masks of its number columns read as text
+_Parsed = tuple[list[Any], dict[int, Any]]
+
 #: the shortest run of data lines read column-wise; below it, row by row is cheaper
 #: (measured crossover ~100-150 lines: a C parse and a DataFrame cost ~0.5 ms per interval)
 MIN_RUN = 150
@@ -209,31 +213,58 @@ MIN_RUN = 150
 def arrow_cells(
     intervals: Sequence[RawInterval], info: FileInfo, aliases: AliasTable
 ) -> list[ArrowCells | None]:
-    """The cells of every interval whose data rows are one run of at least
-    :data:`MIN_RUN` plain lines, read column-wise; ``None`` for the other intervals and
+    """The cells of every interval whose data rows are runs of plain lines (at least
+    :data:`MIN_RUN` of them), read column-wise; ``None`` for the other intervals and
     wherever the fast path declines. Runs of one layout (cells per line and what each
     holds: RheoCompass's set-up and friction intervals) are parsed in one call."""
     out: list[ArrowCells | None] = [None] * len(intervals)
-    groups: dict[tuple[str, int, tuple[str, ...]], list[int]] = {}
+    groups: dict[tuple[str, int, tuple[str, ...]], list[tuple[int, Run]]] = {}
     for i, raw in enumerate(intervals):
-        run = raw.rows[0] if len(raw.rows) == 1 else None
-        if not isinstance(run, Run) or run.n_lines < MIN_RUN:
+        runs = raw.rows
+        if not runs or not all(isinstance(run, Run) for run in runs):
+            continue
+        if sum(run.n_lines for run in runs) < MIN_RUN:
             continue
         try:
-            kinds = _kinds(run, raw, aliases)
+            layouts = {(run.delimiter, run.skip, tuple(_kinds(run, raw, aliases)))
+                       for run in runs}
         except NotSimple:
             continue
-        groups.setdefault((run.delimiter, run.skip, tuple(kinds)), []).append(i)
+        if len(layouts) == 1:
+            groups.setdefault(layouts.pop(), []).extend((i, run) for run in runs)
     decimal = info.decimal or "."
     for (_, _, kinds), members in groups.items():
-        runs = [intervals[i].rows[0] for i in members]
-        for i, parsed in zip(members, _parse(runs, list(kinds), decimal), strict=True):
-            if parsed is not None:
-                try:
-                    out[i] = ArrowCells(*parsed, list(kinds), intervals[i], decimal)
-                except NotSimple:
-                    pass
+        parsed = _parse([run for _, run in members], list(kinds), decimal)
+        pieces: dict[int, list[_Parsed | None]] = {}
+        for (i, _), part in zip(members, parsed, strict=True):
+            pieces.setdefault(i, []).append(part)
+        for i, parts in pieces.items():
+            if any(part is None for part in parts):
+                continue
+            try:
+                out[i] = ArrowCells(*_joined(parts), list(kinds), intervals[i], decimal)
+            except declines():
+                pass
     return out
+
+
+def _joined(parts: list[_Parsed]) -> _Parsed:
+    """The columns and ``******`` masks of an interval's runs, one after the other."""
+    import pyarrow as pa
+
+    if len(parts) == 1:
+        return parts[0]
+    first_columns, first_stars = parts[0]
+    for columns, stars in parts[1:]:  # runs parsed one by one may differ: no mixing
+        if stars.keys() != first_stars.keys() or any(
+                a.type != b.type for a, b in zip(columns, first_columns, strict=True)):
+            raise NotSimple
+    columns = [pa.chunked_array([chunk for part in parts for chunk in part[0][k].chunks],
+                                type=parts[0][0][k].type)
+               for k in range(len(parts[0][0]))]
+    stars = {k: pa.chunked_array([chunk for part in parts for chunk in part[1][k].chunks])
+             for k in parts[0][1]}
+    return columns, stars
 
 
 class ArrowCells:
@@ -333,22 +364,19 @@ def _kinds(run: Run, raw: RawInterval, aliases: AliasTable) -> list[str]:
     return kinds
 
 
-_Parsed = tuple[list[Any], dict[int, Any]]
-
-
 def _parse(runs: list[Run], kinds: list[str], decimal: str) -> list[_Parsed | None]:
     """Every run's columns and ``******`` cells (``None`` for a run the C parser
     refuses): all runs in one parse, or one by one when that fails."""
     if len(runs) > 1:
         try:
             return _parse_together(runs, kinds, decimal)
-        except NotSimple:
+        except declines():
             pass
     out: list[_Parsed | None] = []
     for run in runs:
         try:
             out += _parse_together([run], kinds, decimal)
-        except NotSimple:
+        except declines():
             out.append(None)
     return out
 
@@ -551,7 +579,7 @@ def _classify_arrow(columns: list[Any], point_col: int | None) -> tuple[Any, int
     invalid = waveform = 0
     for i in np.flatnonzero(~keep):
         kind = classify(points[int(i)].as_py(), "")
-        if kind in ("data", "bad"):  # pragma: no cover - stripped digits are plain
+        if kind == "bad":  # not a point number: the general path names the line
             raise NotSimple
         if kind == "invalid":
             invalid += 1

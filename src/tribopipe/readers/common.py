@@ -16,7 +16,7 @@ from ..units import canonical_unit, parse_unit, sanitize_suffix
 from .aliases import CANONICAL_COLUMN, AliasTable, snake_case
 from .cells import ArrowCells, RowCells
 from .interval import FileInfo, RawInterval
-from .textio import NotSimple
+from .textio import declines
 
 #: the value RheoCompass writes for a loss factor it could not determine (status ``taD``)
 LOSS_FACTOR_PLACEHOLDER = 20000.0
@@ -52,7 +52,7 @@ def build_measurement(
     if cells is not None:
         try:
             return _measurement(raw, info, aliases, cells)
-        except (NotSimple, ReadError):
+        except (ReadError, *declines()):
             pass  # the general path decides, and names the line of any error
     return _measurement(raw, info, aliases, RowCells(raw, info))
 

@@ -130,7 +130,7 @@ def parse_intervals(rows: list[Row | Run], path: str) -> list[RawInterval]:
 
 
 def _read_table(rows: list[Row | Run], start: int, path: str) -> tuple[RawInterval, int]:
-    header_line, header = rows[start]  # type: ignore[misc] - the header is a labelled row
+    header_line, header = rows[start]  # a labelled row: "Meas. Pts." starts no run
     names = list(header)
     while names and not names[-1]:
         names.pop()
@@ -143,7 +143,7 @@ def _read_table(rows: list[Row | Run], start: int, path: str) -> tuple[RawInterv
             line=header_line,
             hint="the file is truncated or its header was edited",
         )
-    units = list(rows[i][1][: len(names)])  # type: ignore[index]
+    units = list(rows[i][1][: len(names)])
     i += 1
     data: list[Row | Run] = []
     while i < len(rows):

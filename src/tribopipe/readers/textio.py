@@ -240,6 +240,14 @@ class NotSimple(Exception):  # noqa: N818 - a signal between two paths, not an e
     """The fast path cannot vouch for an exact result here; take the row-by-row path."""
 
 
+def declines() -> tuple[type[Exception], ...]:
+    """What ends an attempt of the fast path (the caller then reads row by row):
+    :class:`NotSimple`, and any error of pyarrow, which the fast path uses."""
+    import pyarrow as pa
+
+    return (NotSimple, pa.ArrowException)
+
+
 def plain_line_ends(text: str) -> bool:
     """True when ``text`` has no NUL and no line end other than LF and CR (a lone CR, one
     not before an LF, is only found line by line, see :func:`plain_lines`)."""
@@ -305,10 +313,6 @@ class Run:
     delimiter: str
     skip: int = 0
 
-    @property
-    def last_line(self) -> int:
-        return self.first_line + self.n_lines - 1
-
     def block(self) -> str:
         """The run's lines as one string (LF or CRLF between them)."""
         return self.text[self.start : self.end]
@@ -351,7 +355,8 @@ def scan_lines(text: str, delimiter: str, data_line: str) -> list[Row | Run]:
     ``data_line`` is a regular expression matching the start of a format's data lines;
     every maximal sequence of lines it matches becomes a :class:`Run`, every other line a
     row of stripped cells. Expanding the runs (:func:`expand_runs`) gives exactly
-    ``split_cells(text.splitlines(), delimiter)``.
+    ``split_cells(text.splitlines(), delimiter)``, or :class:`NotSimple` where a CR ends
+    no line.
     """
     first, other = _line_patterns(data_line)
     starts = [m.end() for m in other.finditer(text)]

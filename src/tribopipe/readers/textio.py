@@ -186,14 +186,15 @@ def split_plain(lines: Sequence[str], delimiter: str) -> list[Row]:
     """:func:`split_cells` for the lines of a plain text (no NUL, no CR; see
     :func:`plain_line_ends`), faster: a line without quotes is split with ``str.split``,
     and stripped only where it holds white space."""
-    blanks = (" ", "\x1f") if delimiter == "\t" else (" ", "\x1f", "\t")
+    tab = delimiter == "\t"  # else a TAB in a line is white space to strip
     rows: list[Row] = []
     for number, line in enumerate(lines, start=1):
-        if '"' in line:
-            rows.append((number, split_cells([line], delimiter)[0][1]))
-        elif not line:
+        if not line:
             rows.append((number, []))  # what the csv module gives for an empty line
-        elif line.isascii() and not any(b in line for b in blanks):
+        elif '"' in line:
+            rows.append((number, split_cells([line], delimiter)[0][1]))
+        elif (line.isascii() and " " not in line and "\x1f" not in line
+              and (tab or "\t" not in line)):
             rows.append((number, line.split(delimiter)))
         else:
             rows.append((number, list(map(str.strip, line.split(delimiter)))))

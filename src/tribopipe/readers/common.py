@@ -21,6 +21,7 @@ from .textio import declines
 #: the value RheoCompass writes for a loss factor it could not determine (status ``taD``)
 LOSS_FACTOR_PLACEHOLDER = 20000.0
 
+
 def _free(base: str, suffix: str, used: set[str]) -> str:
     """``base_suffix``, or ``base_2_suffix``, ``base_3_suffix``... when already taken."""
     name = _column_name(base, suffix)

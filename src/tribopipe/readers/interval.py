@@ -17,7 +17,6 @@ from .textio import Row, Run
 UNIT_CELL = re.compile(r"^\[.*\]$")
 
 
-
 @dataclass
 class RawInterval:
     """One interval's header and rows as a format reader found them.

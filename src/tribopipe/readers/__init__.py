@@ -28,6 +28,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from itertools import chain, islice
 from os import PathLike
 from pathlib import Path
 from typing import Any
@@ -201,7 +202,8 @@ def _parse_text(
     if decimal is None and delim == ",":
         decimal = "."
     elif decimal is None:
-        sample = [c for _, cells in rows[:300] for c in cells[1:] if c][:2000]
+        cells = chain.from_iterable(row[1:] for _, row in rows[:300])
+        sample = list(islice(filter(None, cells), 2000))  # the first 2000 non-empty cells
         decimal = detect_decimal(sample, default="." if fmt == rheoplus.FORMAT else ",")
     info = FileInfo(path, fmt, decoded.encoding, delim, decimal)
     module = {rheocompass.FORMAT: rheocompass, rheoplus.FORMAT: rheoplus}.get(fmt, plaincsv)

@@ -507,11 +507,11 @@ def _read(data: bytes, run: Run, kinds: list[str], decimal: str, as_text: set[in
 def _strip(column: Any, *, empty_is_null: bool) -> Any:
     """A text column with every cell stripped of white space, as the general path strips
     cells (``str.strip``); a cell stripped to nothing becomes null if ``empty_is_null``.
-    A column with no white-space byte at all is returned as it is."""
+    A column of ASCII cells without a blank is returned as it is."""
     import pyarrow as pa
     import pyarrow.compute as pc
 
-    if not any(_has_blank(chunk) for chunk in column.chunks):
+    if not any(_may_hold_blank(chunk) for chunk in column.chunks):
         return column
     column = pc.utf8_trim(column, characters=SPACES)
     if empty_is_null:
@@ -519,11 +519,12 @@ def _strip(column: Any, *, empty_is_null: bool) -> Any:
     return column
 
 
-def _has_blank(chunk: Any) -> bool:
-    """True when the text bytes of an Arrow string array hold a white-space character."""
+def _may_hold_blank(chunk: Any) -> bool:
+    """False when the cells of an Arrow string array are ASCII without a space, a TAB or a
+    unit separator (the other ASCII white space ends a line, so no cell holds it); for
+    other text, looking costs more than stripping (``utf8_trim``)."""
     raw = _text_bytes(chunk)
-    needles = _ASCII_BLANKS if raw.isascii() else _ASCII_BLANKS + _OTHER_BLANKS
-    return any(n in raw for n in needles)
+    return not raw.isascii() or any(blank in raw for blank in (b" ", b"\t", b"\x1f"))
 
 
 def _holds(chunk: Any, needle: bytes) -> bool:
@@ -541,14 +542,6 @@ def _text_bytes(chunk: Any) -> bytes:
     with those of cells sliced or filtered away: a superset)."""
     buffer = chunk.buffers()[2]
     return b"" if buffer is None else buffer.to_pybytes()
-
-
-#: the UTF-8 bytes of SPACES that a cell can hold (LF, CR and the other characters that
-#: end a line are not in a cell of a plain text); E2 80 starts U+2000-U+200A, U+2028,
-#: U+2029 and U+202F (and a few other characters: a false alarm only costs a strip)
-_ASCII_BLANKS = (b" ", b"\t", b"\x1f")
-_OTHER_BLANKS = (b"\xc2\x85", b"\xc2\xa0", b"\xe1\x9a\x80", b"\xe2\x80", b"\xe2\x81\x9f",
-                 b"\xe3\x80\x80")
 
 
 def _classify_arrow(columns: list[Any], point_col: int | None) -> tuple[Any, int, int]:

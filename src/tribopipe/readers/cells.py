@@ -608,13 +608,14 @@ def _to_float(column: Any, decimal: str) -> tuple[Any, Any]:
 
     only_stars = None
     if _column_holds(column, b"*"):
-        starred = pc.match_substring(column, "*")
-        only_stars = pc.equal(column, "******")  # what Rheoplus writes
-        if pc.sum(only_stars).as_py() != pc.sum(starred).as_py():
-            only_stars = pc.match_substring_regex(column, r"^\*+$")
-        only_stars = pc.fill_null(only_stars, False)
+        only_stars = pc.fill_null(pc.equal(column, "******"), False)  # what Rheoplus writes
         stars = int(pc.sum(only_stars).as_py() or 0)
-        if stars == len(column) - column.null_count:  # no value at all in the column
+        values = len(column) - column.null_count
+        if stars < values and stars != pc.sum(pc.match_substring(column, "*")).as_py():
+            # stars in other numbers: a cell of stars only is still no value
+            only_stars = pc.fill_null(pc.match_substring_regex(column, r"^\*+$"), False)
+            stars = int(pc.sum(only_stars).as_py() or 0)
+        if stars == values:  # no value at all in the column
             return pa.chunked_array([pa.nulls(len(column), pa.float64())]), only_stars
         if stars:
             column = pc.if_else(only_stars, pa.scalar(None, pa.string()), column)

@@ -38,9 +38,10 @@ _DIGITS = re.compile(r"^\d+$")
 
 
 def data_line(delimiter: str) -> str:
-    """The start of a plain data line (a regular expression): the point number as ASCII
-    digits, then the delimiter."""
-    return rf"[0-9]+{re.escape(delimiter)}"
+    """The start of a plain data line (a regular expression): a digit, the start of the
+    point number. (A line whose first cell is not all digits ends a table; in a run it
+    is found where its point number is classified, and the file is read row by row.)"""
+    return r"[0-9]"
 
 
 def looks_like(rows: list[Row]) -> bool:

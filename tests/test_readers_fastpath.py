@@ -21,6 +21,7 @@ import tribopipe.readers as readers
 from test_readers_golden import SYNTHETIC
 from tribopipe.readers import cells, common, read_export
 from tribopipe.readers.textio import (
+    DataLine,
     NotSimple,
     detect_decimal,
     expand_runs,
@@ -209,16 +210,18 @@ def test_fast_and_row_by_row_paths_agree_on_edited_real_exports(
 # --------------------------------------------------------------------------- the pieces
 
 _TEXT_CELLS = st.sampled_from(["", "a", "1,5", " x ", '"q"', '"a\tb"', '""', "\t", ";",
-                               '"', "1.5", "\xa0", "Interval data:", "\r"])
+                               '"', "1.5", "\xa0", "Interval data:", "\r", "™", "😀", "\n"])
 
 
 @SETTINGS
 @given(lines=st.lists(st.lists(_TEXT_CELLS, max_size=5), max_size=20),
        sep=st.sampled_from(["\t", ";", ","]),
        ending=st.sampled_from(["\n", "\r\n"]),
-       data_line=st.sampled_from([r"\t[0-9]", r"[0-9]+\t", r"[-+.0-9]", r"a"]))
+       data_line=st.sampled_from([DataLine("\t", "0123456789"), DataLine("", "0123456789"),
+                                  DataLine("", "-+.0123456789"), DataLine("", "a"),
+                                  DataLine(";", "1a")]))
 def test_scanned_lines_expand_to_the_rows_of_every_line(
-    lines: list[list[str]], sep: str, ending: str, data_line: str
+    lines: list[list[str]], sep: str, ending: str, data_line: DataLine
 ) -> None:
     text = ending.join(sep.join(cells_) for cells_ in lines)
     if not (plain_line_ends(text) and simple_quotes(text, sep)):

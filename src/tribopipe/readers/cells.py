@@ -389,9 +389,8 @@ def _parse_together(runs: list[Run], kinds: list[str], decimal: str) -> list[_Pa
     import pyarrow as pa
     import pyarrow.compute as pc
 
-    blocks = [run.block() for run in runs]
     try:
-        data = b"\n".join(block.encode("utf-8") for block in blocks)
+        data = b"\n".join(run.utf8() for run in runs)
     except UnicodeEncodeError:  # a lone surrogate from an exotic forced encoding
         raise NotSimple from None
     if not _lines_within(data, _FIELD_LIMIT):
@@ -400,8 +399,7 @@ def _parse_together(runs: list[Run], kinds: list[str], decimal: str) -> list[_Pa
     # would refuse (******, 1,460, a decimal point in a decimal-comma file): such a
     # column is read as text and converted column-wise; when a refused cell shows up in
     # another column all the same, every column is read as text
-    as_text = set().union(*(_text_columns(block, run, kinds, decimal)
-                            for block, run in zip(blocks, runs, strict=True)))
+    as_text = set().union(*(_text_columns(run, kinds, decimal) for run in runs))
     table = _read(data, runs[0], kinds, decimal, as_text)
     if table is None and len(as_text) < kinds.count("number"):
         table = _read(data, runs[0], kinds, decimal, set(range(len(kinds))))
@@ -444,18 +442,20 @@ def _lines_within(data: bytes, limit: int) -> bool:
     return all(data.find(b"\n", k, k + step) >= 0 for k in range(0, len(data) - step + 1, step))
 
 
-def _text_columns(block: str, run: Run, kinds: list[str], decimal: str) -> set[int]:
+def _text_columns(run: Run, kinds: list[str], decimal: str) -> set[int]:
     """The number columns to read as text: those whose cell in the first, middle or last
     line of the run holds ``*``, or the mark that is not the decimal mark."""
-    middle = block.find("\n", len(block) // 2) + 1
-    sample = [_line_at(block, 0), _line_at(block, middle), _line_at(block, block.rfind("\n") + 1)]
+    text, start, end = run.text, run.start, run.end
+    middle = text.find("\n", (start + end) // 2, end) + 1 or start
+    last = text.rfind("\n", start, end) + 1 or start
+    sample = [_line_at(text, line, end) for line in (start, middle, last)]
     alien = "," if decimal == "." else "."
-    text = set()
+    text_columns = set()
     for _, cells in split_cells(sample, run.delimiter):
         for k, cell in enumerate(cells[run.skip : run.skip + len(kinds)]):
             if kinds[k] == "number" and ("*" in cell or alien in cell):
-                text.add(k)
-    return text
+                text_columns.add(k)
+    return text_columns
 
 
 def _line_at(text: str, start: int, end: int | None = None) -> str:

@@ -15,7 +15,7 @@ from ..errors import ReadError
 from ..units import parse_unit
 from .aliases import AliasTable
 from .interval import UNIT_CELL, RawInterval
-from .textio import Row, Run, first_row, peel
+from .textio import DataLine, Row, Run, first_row, peel
 
 FORMAT = "csv"
 
@@ -41,10 +41,10 @@ def split_header(cell: str, aliases: AliasTable) -> tuple[str, str]:
     return cell, ""
 
 
-def data_line(delimiter: str) -> str:
-    """The start of a plain data line (a regular expression): a number's first character
-    (any other line is read as a row, and decided there)."""
-    return r"[-+.0-9]"
+def data_line(delimiter: str) -> DataLine:
+    """How a data line starts: with a number's first character (any other line is read
+    as a row, and decided there)."""
+    return DataLine("", "-+.0123456789")
 
 
 def looks_like(rows: list[Row], aliases: AliasTable) -> bool:

@@ -19,13 +19,12 @@ counted in the metadata, not returned as data.
 
 from __future__ import annotations
 
-import re
 from dataclasses import replace
 
 from ..errors import ReadError
 from .aliases import builtin_aliases, name_key
 from .interval import UNIT_CELL, RawInterval, label_value
-from .textio import Row, Run, peel
+from .textio import DataLine, Row, Run, peel
 
 FORMAT = "rheocompass"
 FORMAT_XLSX = "rheocompass-xlsx"
@@ -47,10 +46,10 @@ INTERVAL_DATA = frozenset(
 LABELS = PROJECT | TEST | RESULT | INTERVAL_POINTS | INTERVAL_DATA
 
 
-def data_line(delimiter: str) -> str:
-    """The start of a plain data line (a regular expression): an empty first cell, then
-    the point number (any other line is read as a row, and decided there)."""
-    return rf"{re.escape(delimiter)}[0-9]"
+def data_line(delimiter: str) -> DataLine:
+    """How a data line starts: an empty first cell, then the point number (any other
+    line is read as a row, and decided there)."""
+    return DataLine(delimiter, "0123456789")
 
 
 def looks_like(rows: list[Row]) -> bool:

@@ -19,7 +19,7 @@ import re
 from ..errors import ReadError
 from .aliases import name_key
 from .interval import RawInterval, label_value
-from .textio import Row, Run
+from .textio import DataLine, Row, Run
 
 FORMAT = "rheoplus"
 
@@ -37,11 +37,11 @@ _META_KEYS = {
 _DIGITS = re.compile(r"^\d+$")
 
 
-def data_line(delimiter: str) -> str:
-    """The start of a plain data line (a regular expression): a digit, the start of the
-    point number. (A line whose first cell is not all digits ends a table; in a run it
-    is found where its point number is classified, and the file is read row by row.)"""
-    return r"[0-9]"
+def data_line(delimiter: str) -> DataLine:
+    """How a data line starts: with a digit, the point number's first. (A line whose
+    first cell is not all digits ends a table; in a run it is found where its point
+    number is classified, and the file is read row by row.)"""
+    return DataLine("", "0123456789")
 
 
 def looks_like(rows: list[Row]) -> bool:

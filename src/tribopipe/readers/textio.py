@@ -35,8 +35,6 @@ _COMMA_THOUSANDS = re.compile(r"^[-+]?[1-9]\d{0,2}(?:,\d{3})+(?:\.\d*)?(?:[eE][-
 _DOT_THOUSANDS = re.compile(r"^[-+]?[1-9]\d{0,2}(?:\.\d{3})+(?:,\d*)?(?:[eE][-+]?\d+)?$")
 _BOTH = re.compile(r"^[-+]?[\d.,]*\d(?:[eE][-+]?\d+)?$")
 
-_CONTROL = re.compile("[\x00-\x08\x0b\x0c\x0e-\x1f\ufffd]")
-
 #: cells Excel writes when it could not evaluate a formula
 EXCEL_ERRORS = frozenset({"#NAME?", "#VALUE!", "#DIV/0!", "#REF!", "#N/A", "#NUM!", "#NULL!"})
 
@@ -152,12 +150,20 @@ def _trim_utf16(raw: bytes, encoding: str) -> bytes:
     return raw
 
 
+def _count_control(text: str) -> int:
+    """How many characters of ``text`` are control characters other than TAB, LF and
+    CR (U+0000-U+0008, U+000B, U+000C, U+000E-U+001F) or U+FFFD (what a wrong decoding
+    leaves), counted with numpy."""
+    cp, _ = _code_units(text)
+    control = (cp <= 8) | (cp == 11) | (cp == 12) | ((cp >= 14) & (cp <= 31)) | (cp == 0xFFFD)
+    return int(np.count_nonzero(control))
+
+
 def _refuse_binary(text: str, path: str, *, forced: str | None) -> None:
     sample = text[:20000]
     if not sample:
         raise ReadError("empty file", path=path)
-    control = len(_CONTROL.findall(sample))
-    if "\x00" in sample or control > 0.01 * len(sample):
+    if "\x00" in sample or _count_control(sample) > 0.01 * len(sample):
         if forced:
             raise ReadError(
                 f"decoding as {forced} gives binary garbage",
@@ -280,9 +286,9 @@ def _quoted_cell(delimiter: str) -> tuple[re.Pattern[str], re.Pattern[str]]:
 def simple_quotes(text: str, delimiter: str) -> bool:
     """True when every double quote of ``text`` opens or closes a whole cell on one line
     (``"ME-,taD"``), with no quote inside; then quoting never joins two lines."""
-    n = text.count('"')
-    if not n:
+    if '"' not in text:
         return True
+    n = text.count('"')
     inner, at_start = _quoted_cell(delimiter)
     found = len(inner.findall(text)) + (1 if at_start.match(text) else 0)
     return 2 * found == n
@@ -313,10 +319,20 @@ class Run:
     n_lines: int
     delimiter: str
     skip: int = 0
+    #: the whole text in Latin-1, when every character fits (``None`` otherwise)
+    narrow: bytes | None = field(default=None, repr=False, compare=False)
 
     def block(self) -> str:
         """The run's lines as one string (LF or CRLF between them)."""
         return self.text[self.start : self.end]
+
+    def utf8(self) -> bytes:
+        """:meth:`block` in UTF-8 (an ASCII run is cut from the Latin-1 text as it is)."""
+        if self.narrow is not None:
+            chunk = self.narrow[self.start : self.end]
+            if chunk.isascii():
+                return chunk
+        return self.block().encode("utf-8")
 
     def check_line_ends(self) -> None:
         """:class:`NotSimple` when a CR in the run ends no line (for a run that is skipped,
@@ -345,50 +361,79 @@ class Run:
         return row, rest
 
 
-@functools.lru_cache(maxsize=16)
-def _line_patterns(data_line: str) -> tuple[re.Pattern[str], re.Pattern[str]]:
-    return re.compile(data_line), re.compile(rf"\n(?!{data_line})")
+@dataclass(frozen=True)
+class DataLine:
+    """How a format's data lines start: with ``lead`` (exact text, maybe empty), then one
+    of the characters of ``first`` (RheoCompass: the delimiter, then a digit)."""
+
+    lead: str
+    first: str
 
 
-def scan_lines(text: str, delimiter: str, data_line: str) -> list[Row | Run]:
+def scan_lines(text: str, delimiter: str, data_line: DataLine) -> list[Row | Run]:
     """A plain text (see :func:`plain_line_ends`, :func:`simple_quotes`) as rows and runs.
 
-    ``data_line`` is a regular expression matching the start of a format's data lines;
-    every maximal sequence of lines it matches becomes a :class:`Run`, every other line a
-    row of stripped cells. Expanding the runs (:func:`expand_runs`) gives exactly
-    ``split_cells(text.splitlines(), delimiter)``, or :class:`NotSimple` where a CR ends
-    no line.
+    Every maximal sequence of lines that start as ``data_line`` says becomes a
+    :class:`Run`, every other line a row of stripped cells. Expanding the runs
+    (:func:`expand_runs`) gives exactly ``split_cells(text.splitlines(), delimiter)``, or
+    :class:`NotSimple` where a CR ends no line. The lines are found with numpy on the
+    text's code points: no Python object per line.
     """
-    first, other = _line_patterns(data_line)
-    starts = [m.end() for m in other.finditer(text)]
-    if not first.match(text):
-        starts.insert(0, 0)
+    units, narrow = _code_units(text)
+    size = len(text)
+    ends = np.flatnonzero(units == 10)  # the LF of every line but maybe the last
+    starts = np.concatenate(([0], ends + 1))
+    if starts[-1] == size:  # the text ends with a line end: no line after it
+        starts = starts[:-1]
+    n_lines = len(starts)
+    # the characters at each line's start, with a sentinel past the end of the text
+    lead, first = data_line.lead, data_line.first
+    padded = np.concatenate((units, np.zeros(len(lead) + 1, dtype=units.dtype)))
+    is_data = np.isin(padded[starts + len(lead)], [ord(c) for c in first])
+    for k, c in enumerate(lead):
+        is_data &= padded[starts + k] == ord(c)
+
+    def stop(i: int) -> int:  # where line i stops: at its LF, or at the end of the text
+        return int(ends[i]) if i < len(ends) else size
+
     items: list[Row | Run | None] = []
     labelled: list[tuple[int, int, str]] = []  # (index in items, line number, text)
-    cursor, line_no, size = 0, 1, len(text)
-    for s in starts:
-        if s > cursor:  # the data lines before this line
-            end = s - 2 if text[s - 2 : s] == "\r\n" else s - 1
-            n = text.count("\n", cursor, s)
-            items.append(Run(text, cursor, end, line_no, n, delimiter))
-            line_no += n
-        cursor = s
-        if s >= size:
+    done = 0  # the lines before this one are in items
+    for i in [*np.flatnonzero(~is_data).tolist(), n_lines]:
+        if i > done:  # the data lines before line i, less the last one's CR
+            end = stop(i - 1)
+            end -= units[end - 1] == 13
+            items.append(Run(text, int(starts[done]), end, done + 1, i - done, delimiter,
+                             narrow=narrow))
+        if i == n_lines:
             break
-        newline = text.find("\n", s)
-        stop = size if newline < 0 else newline
-        (line,) = plain_lines(text[s:stop])
-        labelled.append((len(items), line_no, line))
+        (line,) = plain_lines(text[int(starts[i]) : stop(i)])
+        labelled.append((len(items), i + 1, line))
         items.append(None)
-        line_no += 1
-        cursor = stop + 1
-    if cursor < size:
-        n = text.count("\n", cursor) + 1
-        items.append(Run(text, cursor, size, line_no, n, delimiter))
+        done = i + 1
     rows = split_plain([line for _, _, line in labelled], delimiter)
     for (k, number, _), (_, cells) in zip(labelled, rows, strict=True):
         items[k] = (number, cells)
     return items  # type: ignore[return-value]
+
+
+def _code_units(text: str) -> tuple[np.ndarray, bytes | None]:
+    """The code points of ``text`` as a numpy array, one per character, made without a
+    Python object per character: the text encoded as Latin-1, UTF-16 or UTF-32, the
+    narrowest that holds every character as one unit; and the Latin-1 bytes (``None``
+    when a character is beyond U+00FF)."""
+    if text.isascii():
+        narrow = text.encode("ascii")
+        return np.frombuffer(narrow, dtype=np.uint8), narrow
+    try:
+        narrow = text.encode("latin-1")
+        return np.frombuffer(narrow, dtype=np.uint8), narrow
+    except UnicodeEncodeError:
+        pass
+    wide = text.encode("utf-16-le", errors="surrogatepass")
+    if len(wide) == 2 * len(text):  # no character beyond U+FFFF
+        return np.frombuffer(wide, dtype="<u2"), None
+    return np.frombuffer(text.encode("utf-32-le", errors="surrogatepass"), dtype="<u4"), None
 
 
 def expand_runs(items: Sequence[Row | Run]) -> list[Row]:

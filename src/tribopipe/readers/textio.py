@@ -297,7 +297,10 @@ def simple_quotes(text: str, delimiter: str) -> bool:
 def head_lines(text: str, n: int) -> list[str]:
     """The first ``n`` lines of a plain text, as ``str.splitlines`` gives them
     (:class:`NotSimple` for a CR that ends no line)."""
-    parts = text.split("\n", n)
+    prefix = text[: 256 * n]  # mostly enough: splitting it copies no long tail
+    parts = prefix.split("\n", n)
+    if len(parts) <= n and len(prefix) < len(text):
+        parts = text.split("\n", n)  # long lines: split the whole text
     if len(parts) > n:
         del parts[n:]
     elif parts and not parts[-1]:

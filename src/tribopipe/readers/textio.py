@@ -389,12 +389,13 @@ def scan_lines(text: str, delimiter: str, data_line: DataLine) -> list[Row | Run
     if starts[-1] == size:  # the text ends with a line end: no line after it
         starts = starts[:-1]
     n_lines = len(starts)
-    # the characters at each line's start, with a sentinel past the end of the text
+    # the characters at each line's start (a line too short to hold them is no data line)
     lead, first = data_line.lead, data_line.first
-    padded = np.concatenate((units, np.zeros(len(lead) + 1, dtype=units.dtype)))
-    is_data = np.isin(padded[starts + len(lead)], [ord(c) for c in first])
+    is_data = starts + len(lead) < size
+    at = np.minimum(starts + len(lead), size - 1)
+    is_data &= np.isin(units[at], [ord(c) for c in first])
     for k, c in enumerate(lead):
-        is_data &= padded[starts + k] == ord(c)
+        is_data &= units[np.minimum(starts + k, size - 1)] == ord(c)
 
     def stop(i: int) -> int:  # where line i stops: at its LF, or at the end of the text
         return int(ends[i]) if i < len(ends) else size

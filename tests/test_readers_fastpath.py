@@ -19,7 +19,7 @@ from hypothesis import strategies as st
 
 import tribopipe.readers as readers
 from test_readers_golden import SYNTHETIC
-from tribopipe.readers import cells, common, read_export
+from tribopipe.readers import arrowcells, common, read_export
 from tribopipe.readers.textio import (
     DataLine,
     NotSimple,
@@ -71,7 +71,7 @@ def both_paths(path: Path, monkeypatch: pytest.MonkeyPatch, **kwargs: object) ->
     """The outcome of the fast path (every run read column-wise, however short) and of
     the row-by-row path."""
     with monkeypatch.context() as m:
-        m.setattr(cells, "MIN_RUN", 0)
+        m.setattr(arrowcells, "MIN_RUN", 0)
         fast = outcome(path, **kwargs)
     with monkeypatch.context() as m:
         m.setattr(readers, "plain_line_ends", lambda text: False)
@@ -252,7 +252,7 @@ def test_quoted_cells_are_simple_only_when_whole_and_on_one_line() -> None:
 
 def test_white_space_stripped_from_cells_is_what_str_strip_removes() -> None:
     spaces = "".join(chr(c) for c in range(sys.maxunicode + 1) if chr(c).isspace())
-    assert cells.SPACES == spaces
+    assert arrowcells.SPACES == spaces
 
 
 @pytest.mark.parametrize("size", [0, 10, 65535, 65536, 131071, 131072, 200000])
@@ -260,7 +260,7 @@ def test_the_longest_line_check_never_lets_a_too_long_line_through(size: int) ->
     limit = 131072
     for data in (b"x" * size, b"ab\n" + b"x" * size + b"\ncd", (b"y" * 100 + b"\n") * 3000):
         longest = max(len(part) for part in data.split(b"\n"))
-        if cells._lines_within(data, limit):
+        if arrowcells._lines_within(data, limit):
             assert longest < limit
 
 
@@ -330,7 +330,7 @@ def test_long_plain_runs_take_the_fast_path(
 
     def spy(*args: object) -> object:
         result = original(*args)
-        built.append("fast" if isinstance(args[-1], cells.ArrowCells) else "rows")
+        built.append("fast" if isinstance(args[-1], arrowcells.ArrowCells) else "rows")
         return result
 
     monkeypatch.setattr(common, "_measurement", spy)
@@ -339,4 +339,4 @@ def test_long_plain_runs_take_the_fast_path(
 
 
 def test_csv_module_field_limit_is_the_one_the_fast_path_assumes() -> None:
-    assert csv.field_size_limit() == cells._FIELD_LIMIT
+    assert csv.field_size_limit() == arrowcells._FIELD_LIMIT

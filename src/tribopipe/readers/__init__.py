@@ -43,7 +43,7 @@ from ..measurement import (  # noqa: F401 - require_columns is importable from h
 )
 from . import plaincsv, rheocompass, rheoplus
 from .aliases import AliasTable, load_aliases, resolve_aliases
-from .cells import arrow_cells
+from .arrowcells import arrow_cells
 from .common import build_measurement
 from .interval import FileInfo, RawInterval
 from .textio import (

@@ -14,7 +14,8 @@ from ..errors import ReadError
 from ..measurement import Measurement, MeasurementMeta
 from ..units import canonical_unit, parse_unit, sanitize_suffix
 from .aliases import CANONICAL_COLUMN, AliasTable, snake_case
-from .cells import ArrowCells, RowCells
+from .arrowcells import ArrowCells
+from .cells import RowCells
 from .interval import FileInfo, RawInterval
 from .textio import declines
 
@@ -42,7 +43,7 @@ def build_measurement(
     """Convert one interval to a :class:`Measurement` with SI, unit-suffixed columns.
 
     ``cells``: the interval's data rows already read column-wise by a C parser
-    (:func:`~.cells.arrow_cells`); without them, or where that path cannot vouch for a
+    (:func:`~.arrowcells.arrow_cells`); without them, or where that path cannot vouch for a
     result, the rows are read one by one (:class:`~.cells.RowCells`). Both give the same
     table to the bit.
 

@@ -229,7 +229,7 @@ def split_cells(
 # A long export is a few labelled lines and long runs of data lines. Splitting every line
 # into cells with the csv module costs one Python list per row and one str per cell; the
 # scan below splits only the labelled lines and keeps each run of data lines as a slice of
-# the decoded text, which a C parser reads in one call (``readers.cells``). It applies to
+# the decoded text, which a C parser reads in one call (``readers.arrowcells``). It applies to
 # "plain" texts: lines end in LF or CRLF only, and every double quote encloses one whole
 # cell on one line; there a line is a row, and the csv module and a C parser split a line
 # into the same cells. A CR that ends no line is found where the line holding it is used

@@ -338,5 +338,20 @@ def test_long_plain_runs_take_the_fast_path(
     assert built == PATHS[name]
 
 
-def test_csv_module_field_limit_is_the_one_the_fast_path_assumes() -> None:
-    assert csv.field_size_limit() == arrowcells._FIELD_LIMIT
+def test_a_cell_longer_than_the_csv_modules_limit_is_refused_on_both_paths(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The csv module's cell-size limit is process-wide and settable; the fast path reads
+    it each time and leaves a line that long to the csv module, which refuses it."""
+    rows = [[str(k), f"{k / 10:.1f}", "1.5", "3.0", "Dy_auto"] for k in range(1, 300)]
+    rows[200][4] = "x" * 100_000
+    path = tmp_path / "long.csv"
+    path.write_bytes(rheocompass_text(rows, "\t").encode("utf-16"))
+    limit = csv.field_size_limit()
+    try:
+        csv.field_size_limit(70_000)
+        fast, slow = both_paths(path, monkeypatch)
+    finally:
+        csv.field_size_limit(limit)
+    assert fast == slow
+    assert fast[0] == "error" and "field larger than field limit" in fast[2]

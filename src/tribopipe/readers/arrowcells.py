@@ -14,6 +14,7 @@ pyarrow error through, see ``textio.declines``), and the caller takes that path.
 
 from __future__ import annotations
 
+import csv
 from collections.abc import Sequence
 from typing import Any
 
@@ -229,7 +230,8 @@ def _parse_together(runs: list[Run], kinds: list[str], decimal: str) -> list[_Pa
         data = b"\n".join(run.utf8() for run in runs)
     except UnicodeEncodeError:  # a lone surrogate from an exotic forced encoding
         raise NotSimple from None
-    if not _lines_within(data, _FIELD_LIMIT):
+    limit = csv.field_size_limit()  # process-wide, and settable: read it each time
+    if limit < _FIELD_LIMIT_MIN or not _lines_within(data, limit):
         raise NotSimple  # the csv module refuses a cell that long: let it say so
     # numbers parse as float64 in the C parser, unless a sample line shows a cell it
     # would refuse (******, 1,460, a decimal point in a decimal-comma file): such a
@@ -266,8 +268,9 @@ def _parse_together(runs: list[Run], kinds: list[str], decimal: str) -> list[_Pa
     return out
 
 
-#: the longest cell Python's csv module accepts (``csv.field_size_limit()``)
-_FIELD_LIMIT = 131072
+#: below this limit of the csv module's cell size (default 131072), checking the lines
+#: costs more than reading row by row
+_FIELD_LIMIT_MIN = 65536
 
 
 def _lines_within(data: bytes, limit: int) -> bool:

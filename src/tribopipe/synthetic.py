@@ -327,8 +327,16 @@ class SyntheticTest:
 
 def _test_block(test: SyntheticTest, labels: dict, comma: bool) -> list[str]:
     """The lines of one test: ``Test:``, ``Result:`` and its intervals, numbered from 1."""
-    lines = [f"{labels['test']}\t{test.name}", "", f"{labels['result']}\t{test.sample} 1", ""]
     frames = [frame for run in test.runs for frame in make_intervals(run)]
+    return _frames_block(test.name, test.sample, frames, labels, comma)
+
+
+def _frames_block(
+    name: str, sample: str, frames: list[pd.DataFrame], labels: dict, comma: bool
+) -> list[str]:
+    """The lines of one test named ``name`` whose result ``"<sample> 1"`` holds ``frames``
+    as its intervals, numbered from 1."""
+    lines = [f"{labels['test']}\t{name}", "", f"{labels['result']}\t{sample} 1", ""]
     for i, frame in enumerate(frames, start=1):
         if i > 1:
             lines.append("")
@@ -369,6 +377,22 @@ def rheocompass_text(
                                     language=language)
 
 
+def intervals_text(
+    frames: Sequence[pd.DataFrame], *, project: str, test: str, sample: str,
+    language: str = "en",
+) -> str:
+    """The text (CRLF line ends, no BOM) of a RheoCompass export holding ``frames`` as the
+    intervals of one test and result (each frame with the columns of
+    :func:`make_intervals`): how any generator's intervals are written."""
+    if language not in _LABELS:
+        raise ValueError(f"language must be 'en' or 'fr', got {language!r}")
+    labels = _LABELS[language]
+    comma = language == "fr"
+    lines = [f"{labels['project']}\t{project}", ""]
+    lines.extend(_frames_block(test, sample, list(frames), labels, comma))
+    return "\r\n".join(lines) + "\r\n"
+
+
 def _write_utf16(path: str | PathLike[str], text: str) -> Path:
     target = Path(path)
     target.write_bytes(b"\xff\xfe" + text.encode("utf-16-le"))
@@ -401,3 +425,19 @@ def write_rheocompass_session(
     :func:`rheocompass_session_text`) and return its path."""
     return _write_utf16(path, rheocompass_session_text(tests, project=project,
                                                        language=language))
+
+
+def write_intervals_export(
+    path: str | PathLike[str],
+    frames: Sequence[pd.DataFrame],
+    *,
+    project: str,
+    test: str,
+    sample: str,
+    language: str = "en",
+) -> Path:
+    """Write ``frames`` (intervals with the columns of :func:`make_intervals`) as one
+    RheoCompass export (UTF-16 LE with BOM, TAB, CRLF) and return its path. Any
+    generator's intervals go through the same writer as :class:`SyntheticRun`'s."""
+    return _write_utf16(path, intervals_text(frames, project=project, test=test,
+                                             sample=sample, language=language))

@@ -31,12 +31,12 @@ MAX_LINES = 700
 LAYERS: tuple[tuple[str, ...], ...] = (
     # the base: errors, files on disk, numbers from outside, units, the output folder
     ("tribopipe", "tribopipe.errors", "tribopipe.files", "tribopipe.numeric",
-     "tribopipe.units", "tribopipe.layout"),
+     "tribopipe.units", "tribopipe.layout", "tribopipe.signals"),
     ("tribopipe.measurement",),
     ("tribopipe.physics",),
     ("tribopipe.config",),
     # raw exports in (readers) and out (synthetic test exports)
-    ("tribopipe.readers", "tribopipe.synthetic"),
+    ("tribopipe.readers", "tribopipe.synthetic", "tribopipe.synthetic_contact"),
     ("tribopipe.intervals",),
     ("tribopipe.reduce",),
     ("tribopipe.figures",),

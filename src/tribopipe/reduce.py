@@ -117,6 +117,14 @@ from .physics import (  # noqa: F401 - the formulas are importable from here too
     sliding_distance_mm,
     sliding_speed_mm_s,
 )
+from .signals import (
+    end_point_weights,
+    one_sided_fits,
+    running_max,
+    running_mean,
+    running_median,
+    savgol,
+)
 
 if TYPE_CHECKING:
 
@@ -181,25 +189,21 @@ def noise_std(mu: Any) -> float:
 def median_smooth(values: Any, window: int) -> np.ndarray:
     """Running median over ``window`` samples (made odd), edges by nearest value; a new
     array of the same shape (n,). NaN-free input."""
-    from scipy.ndimage import median_filter
-
     v = np.asarray(values, dtype=float)
     w = max(1, int(window) | 1)
     if w <= 1 or v.size < w:
         return v.copy()
-    return median_filter(v, size=w, mode="nearest")
+    return running_median(v, w)
 
 
 def peak_smooth(values: Any, window: int) -> np.ndarray:
     """Quadratic Savitzky–Golay smoothing over ``window`` samples (made odd, ≥ 5); keeps
     rounded peaks while averaging noise. A new array of shape (n,). NaN-free input."""
-    from scipy.signal import savgol_filter
-
     v = np.asarray(values, dtype=float)
     w = max(5, int(window) | 1)
     if v.size < w:
         return v.copy()
-    return savgol_filter(v, w, 2, mode="interp")
+    return savgol(v, w, 2)
 
 
 def static_peak_curve(values: Any, window: int) -> np.ndarray:
@@ -209,39 +213,13 @@ def static_peak_curve(values: Any, window: int) -> np.ndarray:
     smoothing averages the noise without flattening a rounded peak; the cap stops the
     polynomial from overshooting where a peak ends in a sudden slip, so μ_S never exceeds
     what was (lightly averaged) measured."""
-    from scipy.ndimage import maximum_filter1d, uniform_filter1d
-
     v = np.asarray(values, dtype=float)
     w = max(5, int(window) | 1)
     smooth = peak_smooth(v, w)
     if v.size < w:
         return smooth
-    averaged = uniform_filter1d(v, size=max(3, (w // 5) | 1), mode="nearest")
-    return np.minimum(smooth, maximum_filter1d(averaged, size=w, mode="nearest"))
-
-
-def end_point_weights(window: int, degree: int = 2) -> np.ndarray:
-    """Weights (shape (window,)) that give the value at the last sample of the
-    least-squares polynomial of ``degree`` through ``window`` equally spaced samples."""
-    x = np.linspace(0.0, 1.0, int(window))
-    basis = np.vander(x, degree + 1, increasing=True)
-    return np.ones(degree + 1) @ np.linalg.solve(basis.T @ basis, basis.T)
-
-
-def one_sided_fits(values: Any, window: int) -> tuple[np.ndarray, np.ndarray]:
-    """Quadratic least-squares fits over ``window`` samples on one side only (shape (n,)
-    each, -inf where the window does not fit): ``left[k]`` is the fit over samples
-    ``k-window+1 … k`` read at ``k``, ``right[k]`` the fit over ``k … k+window-1`` read at
-    ``k``. Unlike a centred smoothing, neither averages across a sudden slip."""
-    v = np.asarray(values, dtype=float)
-    w = int(window)
-    left = np.full(v.size, -np.inf)
-    right = np.full(v.size, -np.inf)
-    if v.size >= w:
-        weights = end_point_weights(w)
-        left[w - 1 :] = np.correlate(v, weights, mode="valid")
-        right[: v.size - w + 1] = np.correlate(v[::-1], weights, mode="valid")[::-1]
-    return left, right
+    averaged = running_mean(v, max(3, (w // 5) | 1))
+    return np.minimum(smooth, running_max(averaged, w))
 
 
 def cliff_peak_curve(
@@ -257,16 +235,13 @@ def cliff_peak_curve(
     the noise level ``sigma`` [COF]); elsewhere the smooth curve is kept unchanged, so
     rounded peaks read as before. The left fit is capped by the highest sample of its
     window, so a polynomial can never read above what was measured."""
-    from scipy.ndimage import maximum_filter1d
-
     v = np.asarray(values, dtype=float)
     curve = np.array(smooth_curve, dtype=float)
     w = max(5, int(window))
     left, right = one_sided_fits(v, w)
     if v.size < w + 1:
         return curve
-    # trailing maximum: the highest of samples k-w+1 … k
-    left = np.minimum(left, maximum_filter1d(v, size=w, mode="nearest", origin=(w - 1) // 2))
+    left = np.minimum(left, running_max(v, w, trailing=True))
     sd_difference = sigma * math.sqrt(2.0 * float(np.sum(end_point_weights(w) ** 2)))
     drop = left[:-1] - right[1:]
     cliff = np.zeros(v.size, dtype=bool)

@@ -62,6 +62,7 @@ import numpy as np
 
 from .config import FOUNDING_FRICTION_RADIUS_MM
 from .measurement import ANGLE, NORMAL_FORCE, SPEED, TEMPERATURE, TIME, TORQUE
+from .synthetic import write_intervals_export
 
 if TYPE_CHECKING:
     from os import PathLike
@@ -460,8 +461,6 @@ def write_export(
     path: str | PathLike[str], run: ContactRun, *, language: str = "en"
 ) -> Path:
     """Write ``run`` as a RheoCompass export through the project's export writer."""
-    from .synthetic import write_intervals_export
-
     return write_intervals_export(
         path, make_intervals(run), project="validation", test=run.shape,
         sample=run.label or "pin", language=language,

@@ -1,0 +1,93 @@
+"""NumPy signal primitives of the reduction: the same numbers as SciPy's filters (where
+SciPy is installed), and a periodic-line test that finds weak stick-slip in noise without
+raising false alarms on white or coloured noise."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from tribopipe.signals import (
+    line_threshold,
+    periodic_line,
+    running_max,
+    running_mean,
+    running_median,
+    savgol,
+)
+
+RNG = np.random.default_rng(7)
+SERIES = [RNG.standard_normal(n).cumsum() * 0.01 + RNG.standard_normal(n) for n in (5, 21, 400)]
+
+
+@pytest.mark.parametrize("v", SERIES)
+@pytest.mark.parametrize("w", [3, 5, 21])
+def test_running_filters_match_scipy(v: np.ndarray, w: int) -> None:
+    ndimage = pytest.importorskip("scipy.ndimage")
+    assert np.allclose(running_median(v, w), ndimage.median_filter(v, size=w, mode="nearest"),
+                       rtol=0, atol=1e-15)
+    assert np.allclose(running_mean(v, w), ndimage.uniform_filter1d(v, size=w, mode="nearest"),
+                       rtol=0, atol=1e-12)
+    assert np.array_equal(running_max(v, w),
+                          ndimage.maximum_filter1d(v, size=w, mode="nearest"))
+    trailing = ndimage.maximum_filter1d(v, size=w, mode="nearest", origin=(w - 1) // 2)
+    assert np.array_equal(running_max(v, w, trailing=True), trailing)
+
+
+@pytest.mark.parametrize("v", SERIES[1:])
+@pytest.mark.parametrize("w", [5, 7, 21])
+def test_savitzky_golay_matches_scipy(v: np.ndarray, w: int) -> None:
+    signal = pytest.importorskip("scipy.signal")
+    assert np.allclose(savgol(v, w, 2), signal.savgol_filter(v, w, 2, mode="interp"),
+                       rtol=0, atol=1e-12)
+
+
+def test_savitzky_golay_keeps_a_parabola_and_refuses_an_even_window() -> None:
+    x = np.linspace(-1, 1, 101)
+    assert np.allclose(savgol(3 * x**2 - x + 1, 21), 3 * x**2 - x + 1, atol=1e-12)
+    with pytest.raises(ValueError, match="odd"):
+        savgol(x, 20)
+
+
+def test_no_primitive_modifies_its_input() -> None:
+    v = SERIES[2].copy()
+    v.setflags(write=False)
+    for f in (lambda a: running_median(a, 3), lambda a: running_mean(a, 5),
+              lambda a: running_max(a, 7), lambda a: savgol(a, 9),
+              lambda a: periodic_line(a, min_cycles=4, max_period=100)):
+        f(v)
+
+
+def _sawtooth(n: int, period: float, amplitude: float) -> np.ndarray:
+    return amplitude * (np.mod(np.arange(n) / period, 1.0) - 0.5)
+
+
+def test_a_weak_stick_slip_stands_out_of_the_noise() -> None:
+    rng = np.random.default_rng(1)
+    n, sigma = 4000, 0.015
+    mu = 0.5 + _sawtooth(n, 70.0, 0.02) + sigma * rng.standard_normal(n)
+    ratio, period, excess, candidates = periodic_line(mu, min_cycles=4, max_period=n / 4)
+    assert ratio > line_threshold(candidates, 1e-3)
+    assert period == pytest.approx(70.0, rel=0.05)
+    # the fundamental of a saw-tooth of peak-to-peak A has amplitude A/π: variance (A/π)²/2
+    assert math.sqrt(excess) == pytest.approx(0.02 / math.pi / math.sqrt(2), rel=0.3)
+
+
+@pytest.mark.parametrize("rho", [0.0, 0.5, 0.8])
+def test_white_and_coloured_noise_rarely_pass_the_threshold(rho: float) -> None:
+    rng = np.random.default_rng(2)
+    passed = 0
+    for _ in range(200):
+        e = rng.standard_normal(3000)
+        for i in range(1, e.size):
+            e[i] = rho * e[i - 1] + math.sqrt(1 - rho**2) * e[i]
+        ratio, _, _, candidates = periodic_line(0.01 * e, min_cycles=4, max_period=750)
+        passed += ratio > line_threshold(candidates, 1e-3)
+    assert passed <= 2  # 1e-3 per series: 0.2 expected in 200
+
+
+def test_threshold_grows_with_the_number_of_candidates() -> None:
+    assert line_threshold(10, 1e-3) < line_threshold(10_000, 1e-3) < line_threshold(10_000, 1e-6)
+    assert line_threshold(0, 1e-3) == math.inf

@@ -210,7 +210,7 @@ def test_the_result_carries_its_evidence() -> None:
     assert got.sliding_distance_mm == pytest.approx(want.sliding_distance_mm, abs=0.002)
     assert got.plateau_std == pytest.approx(0.005, abs=0.002)
     assert abs(got.plateau_drift_per_mm) < PARAMS.max_drift_per_mm
-    assert got.method.startswith("tribopipe-v1")
+    assert got.method.startswith("tribopipe-v2")
     assert got.parameters["distance_source"] == "angle"
     assert got.parameters["run_in_mm"] == PARAMS.run_in_mm
     json.dumps(got.parameters)  # provenance must be storable as JSON
@@ -374,7 +374,8 @@ def test_no_reduction_function_mutates_its_inputs() -> None:
     r.static_peak_curve(mu, 29)
     r.linear_slope(s[100:], mu)
     r.find_plateau_start(s[100:], mu, 0.25, 0.005, PARAMS)
-    r.stick_slip_std(s[100:], mu, 10)
+    r.stick_slip_test(s[100:], mu, PARAMS)
+    r.cliff_peak_curve(mu, r.static_peak_curve(mu, 29), 63, 0.005, 4.0)
     r.leading_rest(s, 1e-3)
     r.estimate_torque_offset_Nm(torque, r.leading_rest(s, 1e-3), 5)
     intervals.setup_torque_offset_Nm(items[0])

@@ -10,12 +10,15 @@ import numpy as np
 import pytest
 
 from tribopipe.signals import (
+    gamma_q,
     line_threshold,
     periodic_line,
     running_max,
     running_mean,
     running_median,
     savgol,
+    taper_bin_correlation_sq,
+    tukey,
 )
 
 RNG = np.random.default_rng(7)
@@ -64,15 +67,31 @@ def _sawtooth(n: int, period: float, amplitude: float) -> np.ndarray:
     return amplitude * (np.mod(np.arange(n) / period, 1.0) - 0.5)
 
 
+def _ar1(rng: np.random.Generator, n: int, rho: float) -> np.ndarray:
+    e = rng.standard_normal(n)
+    for i in range(1, n):
+        e[i] = rho * e[i - 1] + math.sqrt(1 - rho**2) * e[i]
+    return e
+
+
 def test_a_weak_stick_slip_stands_out_of_the_noise() -> None:
     rng = np.random.default_rng(1)
     n, sigma = 4000, 0.015
     mu = 0.5 + _sawtooth(n, 70.0, 0.02) + sigma * rng.standard_normal(n)
-    ratio, period, excess, candidates = periodic_line(mu, min_cycles=4, max_period=n / 4)
-    assert ratio > line_threshold(candidates, 1e-3)
-    assert period == pytest.approx(70.0, rel=0.05)
+    line = periodic_line(mu, min_cycles=4, max_period=n / 4)
+    assert line.ratio > line.threshold(1e-4)
+    assert line.period == pytest.approx(70.0, rel=0.05)
     # the fundamental of a saw-tooth of peak-to-peak A has amplitude A/π: variance (A/π)²/2
-    assert math.sqrt(excess) == pytest.approx(0.02 / math.pi / math.sqrt(2), rel=0.3)
+    assert math.sqrt(line.variance) == pytest.approx(0.02 / math.pi / math.sqrt(2), rel=0.3)
+
+
+def test_a_transient_at_the_start_is_not_a_line() -> None:
+    # the tail of a decay left at the start of a plateau, in little noise
+    rng = np.random.default_rng(3)
+    n = 2600
+    mu = 0.55 + 0.006 * np.exp(-np.arange(n) / 60.0) + 0.003 * rng.standard_normal(n)
+    line = periodic_line(mu, min_cycles=4, max_period=n / 4)
+    assert line.ratio < line.threshold(1e-4)
 
 
 @pytest.mark.parametrize("rho", [0.0, 0.5, 0.8])
@@ -80,14 +99,28 @@ def test_white_and_coloured_noise_rarely_pass_the_threshold(rho: float) -> None:
     rng = np.random.default_rng(2)
     passed = 0
     for _ in range(200):
-        e = rng.standard_normal(3000)
-        for i in range(1, e.size):
-            e[i] = rho * e[i - 1] + math.sqrt(1 - rho**2) * e[i]
-        ratio, _, _, candidates = periodic_line(0.01 * e, min_cycles=4, max_period=750)
-        passed += ratio > line_threshold(candidates, 1e-3)
+        line = periodic_line(0.01 * _ar1(rng, 3000, rho), min_cycles=4, max_period=750)
+        passed += line.ratio > line.threshold(1e-3)
     assert passed <= 2  # 1e-3 per series: 0.2 expected in 200
 
 
-def test_threshold_grows_with_the_number_of_candidates() -> None:
+def test_threshold_grows_with_the_candidates_and_the_bins_correlation() -> None:
     assert line_threshold(10, 1e-3) < line_threshold(10_000, 1e-3) < line_threshold(10_000, 1e-6)
+    assert line_threshold(1000, 1e-3) < line_threshold(1000, 1e-3, correlation_sq=(0.4, 0.03))
     assert line_threshold(0, 1e-3) == math.inf
+
+
+def test_gamma_survival_function() -> None:
+    # integer shape: Q(k, x) = e^-x Σ_{i<k} x^i / i!
+    for k, x in ((1, 0.5), (3, 10.0), (3, 2.0), (5, 30.0)):
+        want = math.exp(-x) * sum(x**i / math.factorial(i) for i in range(k))
+        assert gamma_q(k, x) == pytest.approx(want, rel=1e-10)
+    assert gamma_q(2.5, 0.0) == 1.0
+
+
+def test_tukey_taper_is_flat_in_the_middle_and_its_bins_are_nearly_independent() -> None:
+    w = tukey(1000, 0.2)
+    assert w[0] == 0 and np.all(w[100:900] == 1) and np.allclose(w, w[::-1])
+    rho1, rho2 = taper_bin_correlation_sq(w)
+    assert rho1 < 0.05 and rho2 < 0.05
+    assert taper_bin_correlation_sq(np.ones(100)) == pytest.approx((0.0, 0.0), abs=1e-20)

@@ -38,12 +38,27 @@ from .physics import (  # noqa: F401 - the founding constants are importable fro
 SECTIONS: tuple[str, ...] = ("instrument", "reduction")
 
 
+#: R_eff from "0.007 mm/s", one significant figure: the speed lies in [0.0065, 0.0075),
+#: so R_eff in [12.41, 14.32) mm; rectangular, u = half-width/√3 = 0.55 mm (4.1 %).
+FOUNDING_FRICTION_RADIUS_U_MM = round(
+    0.0005 / (FOUNDING_SPEED_RPM * 2 * math.pi / 60) / math.sqrt(3), 2
+)
+
+
 @dataclass(frozen=True)
 class InstrumentConfig:
-    """Geometry of a pin-on-disc measuring cell.
+    """Geometry of a pin-on-disc measuring cell and the standard uncertainties (k = 1) of
+    what it measures.
 
     Defaults are the founding setup: Anton Paar MCR 302e with the T-PID/44 cell, three
     silicone pins of radius 3 mm (A = 28.27 mm² each), friction radius 13.37 mm.
+
+    Uncertainties (see ``configs/instruments/t-pid44.toml`` for where each default comes
+    from): ``friction_radius_u_mm`` [mm]; ``torque_u_rel`` (relative, of the torque
+    transducer's calibration); ``torque_resolution_Nm`` [N·m]; ``normal_force_u_rel``
+    (relative) and ``normal_force_u_N`` [N] of the normal-force sensor;
+    ``normal_force_resolution_N`` [N]; ``torque_offset_unknown_Nm`` [N·m], the plausible
+    size (rectangular half-width) of a torque zero offset that could not be estimated.
     """
 
     name: str = "Anton Paar MCR 302e, T-PID/44 pin-on-disc, 3 pins"
@@ -52,8 +67,29 @@ class InstrumentConfig:
     friction_radius_mm: float = FOUNDING_FRICTION_RADIUS_MM
     nominal_speed_rpm: float = FOUNDING_SPEED_RPM
     contact_threshold_N: float = 0.2
+    friction_radius_u_mm: float = FOUNDING_FRICTION_RADIUS_U_MM
+    torque_u_rel: float = 0.005
+    torque_resolution_Nm: float = 5e-11
+    normal_force_u_rel: float = 0.005
+    normal_force_u_N: float = 0.005
+    normal_force_resolution_N: float = 5e-4
+    torque_offset_unknown_Nm: float = 5e-4
 
     def __post_init__(self) -> None:
+        for name in (
+            "friction_radius_u_mm", "torque_u_rel", "torque_resolution_Nm",
+            "normal_force_u_rel", "normal_force_u_N", "normal_force_resolution_N",
+            "torque_offset_unknown_Nm",
+        ):
+            value = getattr(self, name)
+            if not (
+                isinstance(value, int | float) and not isinstance(value, bool)
+                and math.isfinite(value) and value >= 0
+            ):
+                raise ConfigError(
+                    f"[instrument] {name} must be a number >= 0 (a standard uncertainty), "
+                    f"got {value!r}"
+                )
         for name in ("pin_radius_mm", "friction_radius_mm", "nominal_speed_rpm"):
             value = getattr(self, name)
             if not (isinstance(value, int | float) and math.isfinite(value) and value > 0):
@@ -94,27 +130,36 @@ class ReductionParams:
         A sudden slip (cliff) is a drop between the fits left and right of a sample larger
         than this many standard deviations of their difference [-].
     static_search_mm
-        The static peak is searched within this sliding distance from the start [mm].
+        Optional cap [mm]: the static peak is searched no farther than this from the start
+        of sliding. ``None`` (the default): no cap, the search ends where the plateau
+        begins.
     run_in_mm
         The μ_K plateau never starts before this sliding distance (ASTM D2534 run-in) [mm].
     plateau_min_mm
         Shortest acceptable plateau [mm]; shorter → ``no_steady_state``/``short_trace``.
+    plateau_confirm_mm
+        A settled plateau shorter than this ends with the trace before a second minimum
+        plateau could confirm it → ``plateau_at_trace_end`` [mm].
     block_mm
         Block length of the settling test that finds the plateau start [mm].
     settle_tol
         Smallest tolerance of the settling test [COF].
+    settle_alpha
+        Probability that a settled plateau of pure noise fails the settling test [-]: the
+        noise allowance is the two-sided normal quantile at ``settle_alpha / (2·blocks)``
+        times a block mean's standard error (3.4 for 35 blocks, 3.9 for 200).
     max_drift_per_mm
         Largest plateau slope of μ over s still called steady [1/mm].
     static_min_prominence
         μ_S is distinct when it exceeds the plateau's highs by more than this [COF] ...
     static_prominence_sigma
         ... and by more than this many standard deviations of the smoothed noise [-].
-    stick_slip_average_s
-        Averaging time before the stick-slip test [s] (removes white noise, keeps slips).
-    stick_slip_ratio
-        Stick-slip when the averaged plateau scatter exceeds white noise by this factor [-] ...
+    stick_slip_min_cycles
+        A stick-slip oscillation repeats at least this often within the plateau [-].
+    stick_slip_false_alarm
+        Probability that noise alone passes the stick-slip line test on one run [-] ...
     stick_slip_min_std
-        ... and is larger than this [COF].
+        ... and the smallest standard deviation the oscillation must add to μ [COF].
     normal_force_cv_max
         Largest coefficient of variation of F_N over sliding still called stable [-].
     min_contact_samples
@@ -135,17 +180,19 @@ class ReductionParams:
     peak_window_mm: float = 0.015
     cliff_window_mm: float = 0.045
     cliff_sigma: float = 4.0
-    static_search_mm: float = 0.5
+    static_search_mm: float | None = None
     run_in_mm: float = 0.25
     plateau_min_mm: float = 0.3
+    plateau_confirm_mm: float = 0.6
     block_mm: float = 0.05
     settle_tol: float = 0.006
+    settle_alpha: float = 0.01
     max_drift_per_mm: float = 0.02
     static_min_prominence: float = 0.02
     static_prominence_sigma: float = 3.0
-    stick_slip_average_s: float = 1.0
-    stick_slip_ratio: float = 3.0
-    stick_slip_min_std: float = 0.01
+    stick_slip_min_cycles: float = 4.0
+    stick_slip_false_alarm: float = 1e-4
+    stick_slip_min_std: float = 0.001
     normal_force_cv_max: float = 0.05
     min_contact_samples: int = 20
     min_plateau_samples: int = 30
@@ -155,7 +202,28 @@ class ReductionParams:
     max_missing_fraction: float = 0.5
 
     def __post_init__(self) -> None:
+        cap = self.static_search_mm
+        if cap is not None and not (
+            isinstance(cap, int | float) and not isinstance(cap, bool)
+            and math.isfinite(cap) and cap > 0
+        ):
+            raise ConfigError(
+                f"[reduction] static_search_mm must be a distance > 0 (or left out for no "
+                f"cap), got {cap!r}"
+            )
+        if not 0 < self.settle_alpha < 1:
+            raise ConfigError(
+                f"[reduction] settle_alpha must be a probability in (0, 1), got "
+                f"{self.settle_alpha!r}"
+            )
+        if not 0 < self.stick_slip_false_alarm < 1:
+            raise ConfigError(
+                f"[reduction] stick_slip_false_alarm must be a probability in (0, 1), got "
+                f"{self.stick_slip_false_alarm!r}"
+            )
         for f_name, value in asdict(self).items():
+            if f_name == "static_search_mm":
+                continue
             if not (isinstance(value, int | float) and math.isfinite(value) and value >= 0):
                 raise ConfigError(f"[reduction] {f_name} must be a number >= 0, got {value!r}")
         if not (isinstance(self.median_window, int) and self.median_window >= 1):

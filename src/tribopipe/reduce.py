@@ -25,54 +25,89 @@ samples of the friction interval before the disc starts to move (at least
 Contact. Samples with ``F_N`` below ``InstrumentConfig.contact_threshold_N`` are masked
 (``in_contact`` False, ``mu`` NaN in the trace) and take no part in any statistic.
 
-Detection of μ_S and μ_K (method ``"tribopipe-v1"``)
+Detection of μ_S and μ_K (method ``"tribopipe-v2"``)
 ----------------------------------------------------
+The order is fixed and has no circle: the plateau is found from the trace alone (step 3),
+the static peak is the maximum *before* it (step 4), μ_K the mean *over* it (step 5). No
+step uses a distance guessed for the pins: a stiff contact peaks after a few hundredths
+of a millimetre, a soft pin of height h shears by about h·τ/G before it slides (6-mm
+Ecoflex 00-50 at 11.8 kPa: 2–3 mm; Dragon Skin 30 at 106 kPa: ~1 mm), and a pre-sliding
+may creep to the plateau with no peak at all.
+
 1. Light median filter (``median_window`` samples) on μ removes spikes → ``mu_smooth``.
-2. Noise level σ: robust (MAD) standard deviation of the first differences of μ / √2.
-3. μ_S is the static peak at the start of sliding — the maximum transmittable friction
-   force before gross sliding, the reading "at the instant the block slips" of ASTM D1894
-   and ISO 8295. It is the maximum, within the first ``static_search_mm`` of sliding, of
-   a quadratic Savitzky–Golay smoothing of ``mu_smooth`` (``peak_window_mm`` wide: it
-   averages the noise and keeps a rounded peak) capped by the running maximum of a
-   3-sample moving average (so the polynomial cannot overshoot a peak that ends in a
-   sudden slip). The window is short (0.015 mm ≈ 21 samples at 0.007 mm/s and 10 Hz)
-   because a static peak can be sharp: wider smoothing shaves it, narrower lets the
-   noise lift it (bias ≤ ~0.015 at noise 0.015 on rounded peaks). A peak that ends in a
-   sudden slip would still read low (the window reaches past the slip): where the
-   quadratic fit of the ``cliff_window_mm`` before a sample exceeds the fit of the
-   ``cliff_window_mm`` after it by more than ``cliff_sigma`` standard deviations, the
-   sample is the top of a cliff and its value is the left fit's (when higher).
-4. μ_K is the mean of μ over the steady sliding plateau, the "average during uniform
-   sliding" of ASTM D1894; as in ASTM D2534 the plateau starts only after a run-in
-   distance (``run_in_mm``) and after the static peak. Its start is where the transient
-   has settled: the post-run-in trace is cut in blocks of ``block_mm``; the plateau starts
-   at the first block from which every later block mean lies within a tolerance of their
-   median (tolerance = the largest of ``settle_tol``, 3× the standard error of a block
-   mean, and 3× the detrended block-to-block scatter of the second half, which is what
-   stick-slip produces). It ends at the end of the trace. When nothing settles, the
-   last ``plateau_min_mm`` after the peak is used (and flagged).
-5. Drift test: least-squares slope of μ over s in the plateau [1/mm]; a slope larger than
-   ``max_drift_per_mm`` and than 3 standard errors means the plateau is not steady.
+   Noise level σ: robust (MAD) standard deviation of the first differences of μ / √2.
+2. The peak curve: a quadratic Savitzky–Golay smoothing of ``mu_smooth``
+   (``peak_window_mm`` wide: it averages the noise and keeps a rounded peak) capped by the
+   running maximum of a 3-sample moving average (so the polynomial cannot overshoot a
+   peak that ends in a sudden slip). The window is short (0.015 mm ≈ 21 samples at
+   0.007 mm/s and 10 Hz) because a static peak can be sharp: wider smoothing shaves it,
+   narrower lets the noise lift it (bias ≤ ~0.015 at noise 0.015 on rounded peaks). A
+   peak that ends in a sudden slip would still read low (the window reaches past the
+   slip): where the quadratic fit of the ``cliff_window_mm`` before a sample exceeds the
+   fit of the ``cliff_window_mm`` after it by more than ``cliff_sigma`` standard
+   deviations, the sample is the top of a cliff and its value is the left fit's (when
+   higher). A stiff contact's flank can be shorter than that window: near the start of
+   sliding the left fit uses the samples there are (at least 7).
+3. The plateau (the steady sliding of ASTM D1894) is where the trace has settled, searched
+   from the run-in distance ``run_in_mm`` on (ASTM D2534) and nowhere else: the trace
+   from there is cut in blocks of ``block_mm`` (of whole cycles where a stick-slip
+   oscillation with at least 2× ``stick_slip_min_cycles`` cycles is found in the second
+   half of that trace: blocks that cut cycles beat against them); the plateau starts at
+   the first block from which every later block mean lies within a tolerance of their
+   median (tolerance = the largest of ``settle_tol`` and z × the standard error of a
+   block mean from σ and z × the block-to-block scatter: 1.4826·MAD of the second
+   differences of the block means / √6, which stick-slip raises and a smooth transient —
+   a peak, a run-in, a creep — does not; z is the normal quantile that keeps the chance
+   of any of the blocks of a settled plateau falling outside at ``settle_alpha``). It
+   ends at the end of the trace. A peak that stands out of the plateau cannot lie inside
+   it, so the plateau needs no knowledge of the peak. When nothing settles, the last
+   ``plateau_min_mm`` of the trace is used (and flagged).
+4. μ_S is the static peak — the maximum transmittable friction force before gross
+   sliding, the reading "at the instant the block slips" of ASTM D1894 and ISO 8295: the
+   maximum of the peak curve from the start of sliding up to the plateau's start (and,
+   only if ``static_search_mm`` is set, within that distance: a cap, off by default).
+   A maximum on the first or last sample of that range may lie beyond it (flagged).
+5. μ_K is the mean of μ over the plateau. Drift test: least-squares slope of μ over s
+   there [1/mm]; a slope larger than ``max_drift_per_mm`` and than 3 standard errors means
+   the plateau is not steady.
 6. μ_S is *distinct* when the peak stands above the plateau's own highs (its 99th
    percentile after the same smoothing) by more than ``static_min_prominence`` and
    ``static_prominence_sigma`` × the smoothed noise. Otherwise μ_S is reported equal to
    μ_K (the peak is not resolved), placed where the smoothed trace first reaches μ_K,
    and ``static_not_distinct`` is flagged; the raw peak is kept in
    ``parameters["mu_s_peak_raw"]``. So μ_S ≥ μ_K always.
+7. Stick-slip: a periodic oscillation of the plateau. Its periodogram (after removing a
+   quadratic trend) is searched for a line with at least ``stick_slip_min_cycles``
+   cycles in the window that stands above the local level of the neighbouring
+   frequencies (:func:`tribopipe.signals.periodic_line`) by more than white or coloured
+   noise would with probability ``stick_slip_false_alarm`` per run
+   (:func:`tribopipe.signals.line_threshold`), and adds at least ``stick_slip_min_std``
+   to μ's standard deviation. A test over the whole window sees a weak, regular
+   oscillation that averaging over a second cannot separate from the noise (a
+   0.01-peak-to-peak saw-tooth under noise 0.015 in a few millimetres of plateau).
 
 Flags (thresholds in :class:`ReductionParams`)
 ----------------------------------------------
 ``static_not_distinct``  step 6 failed.
-``no_steady_state``      no plateau of at least ``plateau_min_mm`` settles (step 4), or
+``peak_at_search_limit`` a distinct μ_S sits on the first or last sample of its search
+                         range (step 4): the peak may lie beyond it (a trace that starts
+                         while sliding, a ``static_search_mm`` cap, a plateau that never
+                         settled).
+``no_steady_state``      no plateau of at least ``plateau_min_mm`` settles (step 3), or
                          the drift test fails (step 5).
-``stick_slip``           the plateau oscillates: the standard deviation of μ averaged over
-                         ``stick_slip_average_s`` and detrended exceeds both
-                         ``stick_slip_min_std`` and ``stick_slip_ratio`` × what white
-                         noise of level σ would give.
+``plateau_at_trace_end`` the μ_K window is bounded by the end of the trace rather than by
+                         settled sliding: nothing settled (the window is the trace's last
+                         ``plateau_min_mm``), or the settled plateau is shorter than
+                         ``plateau_confirm_mm`` (twice the minimum plateau: the trace ends
+                         before a second stretch could confirm the first).
+``stick_slip``           the settled plateau oscillates (step 7).
 ``normal_force_unstable`` the coefficient of variation of F_N over the sliding contact
                          samples exceeds ``normal_force_cv_max``.
 ``short_trace``          the sliding distance is below ``run_in_mm + plateau_min_mm`` or
                          the plateau holds fewer than ``min_plateau_samples`` samples.
+``torque_offset_unknown`` no set-up interval and no rest before motion: the torque zero
+                         offset could not be estimated; 0 is assumed and the offset's
+                         plausible size enters the uncertainty.
 
 References: ASTM D1894 (static and kinetic COF of plastic film: static = initial peak,
 kinetic = average during uniform sliding); ISO 8295 (same principle for plastics film);
@@ -88,6 +123,21 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from .config import InstrumentConfig, ReductionParams
+from .detection import (  # noqa: F401 - the detection steps are importable from here too
+    MIN_FLANK_SAMPLES,
+    StickSlipTest,
+    _detect,
+    _Detection,
+    cliff_peak_curve,
+    find_plateau_start,
+    linear_slope,
+    median_smooth,
+    noise_std,
+    peak_smooth,
+    settling_block_mm,
+    static_peak_curve,
+    stick_slip_test,
+)
 from .errors import ReductionError
 from .intervals import (  # noqa: F401 - interval choice is importable from here too
     IntervalSamples,
@@ -117,27 +167,26 @@ from .physics import (  # noqa: F401 - the formulas are importable from here too
     sliding_distance_mm,
     sliding_speed_mm_s,
 )
-from .signals import (
-    end_point_weights,
-    one_sided_fits,
-    running_max,
-    running_mean,
-    running_median,
-    savgol,
-)
 
 if TYPE_CHECKING:
 
     import pandas as pd
 
-METHOD = "tribopipe-v1: median filter + Savitzky-Golay static peak; settled-plateau mean"
+
+METHOD = (
+    "tribopipe-v2: settled-plateau mean; static peak = maximum before the plateau "
+    "(median filter + Savitzky-Golay, cliff fits); periodic-line stick-slip test"
+)
 
 FLAGS: tuple[str, ...] = (
     "static_not_distinct",
+    "peak_at_search_limit",
     "no_steady_state",
+    "plateau_at_trace_end",
     "stick_slip",
     "normal_force_unstable",
     "short_trace",
+    "torque_offset_unknown",
 )
 
 
@@ -173,277 +222,41 @@ class ReductionResult:
     trace: pd.DataFrame = field(repr=False)
 
 
-# --------------------------------------------------------------------------- signal helpers
-
-
-def noise_std(mu: Any) -> float:
-    """Robust white-noise level of a signal (shape (n,)): 1.4826·MAD of its first
-    differences / √2. Slow trends and rare jumps (slips) hardly affect it. NaN-free input."""
-    d = np.diff(np.asarray(mu, dtype=float))
-    if d.size < 2:
-        return 0.0
-    mad = np.median(np.abs(d - np.median(d)))
-    return float(1.4826 * mad / math.sqrt(2))
-
-
-def median_smooth(values: Any, window: int) -> np.ndarray:
-    """Running median over ``window`` samples (made odd), edges by nearest value; a new
-    array of the same shape (n,). NaN-free input."""
-    v = np.asarray(values, dtype=float)
-    w = max(1, int(window) | 1)
-    if w <= 1 or v.size < w:
-        return v.copy()
-    return running_median(v, w)
-
-
-def peak_smooth(values: Any, window: int) -> np.ndarray:
-    """Quadratic Savitzky–Golay smoothing over ``window`` samples (made odd, ≥ 5); keeps
-    rounded peaks while averaging noise. A new array of shape (n,). NaN-free input."""
-    v = np.asarray(values, dtype=float)
-    w = max(5, int(window) | 1)
-    if v.size < w:
-        return v.copy()
-    return savgol(v, w, 2)
-
-
-def static_peak_curve(values: Any, window: int) -> np.ndarray:
-    """The curve whose maximum is read as μ_S (shape (n,), NaN-free input): a quadratic
-    Savitzky–Golay smoothing over ``window`` samples, capped by the running maximum (same
-    window) of a short moving average (a fifth of the window, at least 3 samples). The
-    smoothing averages the noise without flattening a rounded peak; the cap stops the
-    polynomial from overshooting where a peak ends in a sudden slip, so μ_S never exceeds
-    what was (lightly averaged) measured."""
-    v = np.asarray(values, dtype=float)
-    w = max(5, int(window) | 1)
-    smooth = peak_smooth(v, w)
-    if v.size < w:
-        return smooth
-    averaged = running_mean(v, max(3, (w // 5) | 1))
-    return np.minimum(smooth, running_max(averaged, w))
-
-
-def cliff_peak_curve(
-    values: Any, smooth_curve: Any, window: int, sigma: float, cliff_sigma: float
-) -> np.ndarray:
-    """``smooth_curve`` (shape (n,)) with the value at each sudden slip replaced by the
-    one-sided fit of the rising flank when that is higher.
-
-    A centred smoothing averages the low values after a slip into the peak and reads it
-    low; the fit of the flank alone up to the last sample before the slip does not. A
-    sample ``k`` is the top of a cliff when the left fit at ``k`` exceeds the right fit
-    at ``k+1`` by more than ``cliff_sigma`` standard deviations of that difference (from
-    the noise level ``sigma`` [COF]); elsewhere the smooth curve is kept unchanged, so
-    rounded peaks read as before. The left fit is capped by the highest sample of its
-    window, so a polynomial can never read above what was measured."""
-    v = np.asarray(values, dtype=float)
-    curve = np.array(smooth_curve, dtype=float)
-    w = max(5, int(window))
-    left, right = one_sided_fits(v, w)
-    if v.size < w + 1:
-        return curve
-    left = np.minimum(left, running_max(v, w, trailing=True))
-    sd_difference = sigma * math.sqrt(2.0 * float(np.sum(end_point_weights(w) ** 2)))
-    drop = left[:-1] - right[1:]
-    cliff = np.zeros(v.size, dtype=bool)
-    cliff[:-1] = np.isfinite(drop) & (drop > cliff_sigma * sd_difference)
-    curve[cliff] = np.maximum(curve[cliff], left[cliff])
-    return curve
-
-
-def linear_slope(x: Any, y: Any) -> tuple[float, float]:
-    """Least-squares slope of y over x and its standard error (white-noise model)."""
-    x = np.asarray(x, dtype=float)
-    y = np.asarray(y, dtype=float)
-    if x.size < 3 or np.ptp(x) == 0:
-        return 0.0, math.inf
-    xc = x - x.mean()
-    sxx = float(np.dot(xc, xc))
-    slope = float(np.dot(xc, y - y.mean()) / sxx)
-    resid = y - y.mean() - slope * xc
-    se = math.sqrt(float(np.dot(resid, resid)) / (x.size - 2) / sxx)
-    return slope, se
-
-
-def find_plateau_start(
-    s_mm: Any, mu: Any, start_mm: float, noise: float, params: ReductionParams
-) -> tuple[float | None, float]:
-    """Start [mm] of the settled plateau in ``mu`` over ``s_mm`` (both shape (n,), valid
-    samples only) searched from ``start_mm`` on, and the tolerance used [COF].
-
-    Returns ``(None, tol)`` when no run of blocks reaching to the end and at least
-    ``plateau_min_mm`` long stays within the tolerance.
-    """
-    s = np.asarray(s_mm, dtype=float)
-    m = np.asarray(mu, dtype=float)
-    end = float(s[-1]) if s.size else start_mm
-    n_blocks = int((end - start_mm) // params.block_mm)
-    if n_blocks < 2:
-        return None, params.settle_tol
-    edges = start_mm + params.block_mm * np.arange(n_blocks + 1)
-    edges[-1] = end + 1e-12
-    idx = np.searchsorted(s, edges)
-    counts = np.diff(idx)
-    sums = np.add.reduceat(m, idx[:-1]) if m.size else np.zeros(n_blocks)
-    means = np.where(counts > 0, sums / np.maximum(counts, 1), np.nan)
-    good = counts >= 3
-    centres = 0.5 * (edges[:-1] + edges[1:])
-    means, centres, counts = means[good], centres[good], counts[good]
-    if means.size < 2:
-        return None, params.settle_tol
-    half = means[means.size // 2 :]
-    scatter = 0.0
-    if half.size >= 4:
-        x = np.arange(half.size, dtype=float)
-        resid = half - np.polyval(np.polyfit(x, half, 1), x)
-        scatter = float(np.std(resid, ddof=2))
-    se_block = noise / math.sqrt(float(np.median(counts)))
-    tol = max(params.settle_tol, 3 * se_block, 3 * scatter)
-    min_blocks = max(2, math.ceil(params.plateau_min_mm / params.block_mm - 1e-9))
-    for k in range(means.size - min_blocks + 1):
-        rest = means[k:]
-        if np.all(np.abs(rest - np.median(rest)) <= tol):
-            return float(centres[k] - 0.5 * params.block_mm), tol
-    return None, tol
-
-
-# --------------------------------------------------------------------------- the reduction
-
-
-@dataclass(frozen=True)
-class _Detection:
-    """μ_S / μ_K detection on the valid samples (arrays of the valid samples)."""
-
-    mu_s: float
-    k_s: int
-    mu_peak: float
-    s_peak: float
-    prominence: float
-    distinct: bool
-    mu_k: float
-    window: np.ndarray
-    settled: bool
-    tol: float
-    plateau_std: float
-    drift: float
-    drift_se: float
-    sigma: float
-    stick_slip_std: float
-    n_average: int
-    mu_med: np.ndarray
-
-
-def _detect(
-    s_v: np.ndarray, t_v: np.ndarray, mu_v: np.ndarray, total_mm: float, params: ReductionParams
-) -> _Detection:
-    """Steps 1–6 of the module docstring on the valid samples: distance [mm], time [s]
-    and μ, all shape (n,), in contact and moving."""
-    mu_med = median_smooth(mu_v, params.median_window)
-    sigma = noise_std(mu_v)
-    step_mm = float(np.median(np.diff(s_v))) if s_v.size > 1 else 0.0
-    if step_mm <= 0:
-        step_mm = max(total_mm / max(s_v.size, 1), 1e-9)
-    peak_n = max(5, int(round(params.peak_window_mm / step_mm)) | 1)
-    cliff_n = max(5, int(round(params.cliff_window_mm / step_mm)))
-    curve = cliff_peak_curve(
-        mu_v, static_peak_curve(mu_med, peak_n), cliff_n, sigma, params.cliff_sigma
-    )
-    # noise left by a quadratic SG of width w at its centre: ~ sqrt(9 / (4 w)) σ
-    sigma_peak = sigma * math.sqrt(min(1.0, 9.0 / (4.0 * peak_n)))
-
-    search = s_v <= params.static_search_mm
-    if not search.any():
-        search = np.arange(s_v.size) < max(1, s_v.size // 4)
-    k_peak = int(np.argmax(np.where(search, curve, -np.inf)))
-    mu_peak, s_peak = float(curve[k_peak]), float(s_v[k_peak])
-
-    start_from = max(params.run_in_mm, s_peak)
-    post = s_v >= start_from
-    tol = params.settle_tol
-    plateau_start: float | None = None
-    if post.sum() >= 3:
-        plateau_start, tol = find_plateau_start(s_v[post], mu_v[post], start_from, sigma, params)
-    settled = plateau_start is not None
-    if plateau_start is None:
-        # not settled: the last plateau_min_mm after the peak (or the second half of the
-        # trace when that is all there is); flagged below
-        end = float(s_v[-1])
-        plateau_start = max(start_from, end - params.plateau_min_mm)
-        if plateau_start >= end:
-            plateau_start = max(s_peak, end / 2) if s_peak < end else end / 2
-    window = s_v >= plateau_start
-    if window.sum() < 3:
-        window = np.arange(s_v.size) >= s_v.size // 2
-    mu_w = mu_v[window]
-    mu_k = float(np.mean(mu_w))
-    drift, drift_se = linear_slope(s_v[window], mu_w)
-
-    plateau_high = float(np.percentile(curve[window], 99))
-    prominence = mu_peak - max(plateau_high, mu_k)
-    distinct = prominence > max(
-        params.static_min_prominence, params.static_prominence_sigma * sigma_peak
-    )
-    if distinct:
-        mu_s, k_s = mu_peak, k_peak
-    else:
-        # μ_S = μ_K; its place is where the smoothed trace first reaches μ_K
-        mu_s = mu_k
-        reached = np.flatnonzero(curve >= mu_k)
-        k_s = int(reached[0]) if reached.size else k_peak
-
-    dt_s = float(np.median(np.diff(t_v))) if t_v.size > 1 else 1.0
-    n_average = max(1, int(round(params.stick_slip_average_s / max(dt_s, 1e-9))))
-    ss_std = stick_slip_std(s_v[window], mu_w, n_average)
-    return _Detection(
-        mu_s=float(mu_s), k_s=k_s, mu_peak=mu_peak, s_peak=s_peak, prominence=prominence,
-        distinct=bool(distinct), mu_k=mu_k, window=window, settled=settled, tol=tol,
-        plateau_std=float(np.std(mu_w, ddof=1)) if mu_w.size > 1 else 0.0,
-        drift=drift, drift_se=drift_se, sigma=sigma, stick_slip_std=ss_std,
-        n_average=n_average, mu_med=mu_med,
-    )
-
-
-def stick_slip_std(s_mm: Any, mu: Any, n_average: int) -> float:
-    """Standard deviation of μ (shape (n,)) after a moving average over ``n_average``
-    samples and removal of a linear trend in s [mm]: the slow oscillation left once white
-    noise is averaged out. 0 when the window is too short to tell."""
-    s = np.asarray(s_mm, dtype=float)
-    m = np.asarray(mu, dtype=float)
-    if m.size < max(10, 3 * n_average):
-        return 0.0
-    averaged = np.convolve(m, np.ones(n_average) / n_average, mode="valid")
-    x = s[n_average // 2 : n_average // 2 + averaged.size]
-    trend = np.polyval(np.polyfit(x, averaged, 1), x)
-    return float(np.std(averaged - trend))
-
-
 def _flags(
     det: _Detection, s_v: np.ndarray, total_mm: float, force_cv: float,
-    params: ReductionParams,
+    offset_known: bool, params: ReductionParams,
 ) -> list[str]:
     """The QC flags of a detection (definitions in the module docstring); ``force_cv`` is
-    the normal force's coefficient of variation over the sliding contact samples."""
+    the normal force's coefficient of variation over the sliding contact samples,
+    ``offset_known`` whether the torque zero offset could be estimated or was given."""
     flags: list[str] = []
     n_window = int(det.window.sum())
     w_s = s_v[det.window]
     short = total_mm < params.run_in_mm + params.plateau_min_mm
     if not det.distinct:
         flags.append("static_not_distinct")
+    elif det.peak_at_limit:
+        flags.append("peak_at_search_limit")
     drifting = abs(det.drift) > params.max_drift_per_mm and abs(det.drift) > 3 * det.drift_se
-    too_short = float(w_s[-1] - w_s[0]) < params.plateau_min_mm * 0.999
+    length = float(w_s[-1] - w_s[0])
+    too_short = length < params.plateau_min_mm * 0.999
     if not det.settled or drifting or too_short:
         flags.append("no_steady_state")
-    white = det.sigma / math.sqrt(det.n_average)
+    if not det.settled or length < params.plateau_confirm_mm * 0.999:
+        flags.append("plateau_at_trace_end")
     # only a settled plateau can tell an oscillation from a transient
     if (
         det.settled
-        and det.stick_slip_std > params.stick_slip_min_std
-        and det.stick_slip_std > params.stick_slip_ratio * white
+        and det.stick_slip.oscillates
+        and det.stick_slip.std > params.stick_slip_min_std
     ):
         flags.append("stick_slip")
     if force_cv > params.normal_force_cv_max:
         flags.append("normal_force_unstable")
     if short or n_window < params.min_plateau_samples:
         flags.append("short_trace")
+    if not offset_known:
+        flags.append("torque_offset_unknown")
     return flags
 
 
@@ -552,7 +365,13 @@ def _parameters(
             "mu_s_peak_raw": det.mu_peak,
             "mu_s_peak_distance_mm": det.s_peak,
             "static_prominence": det.prominence,
-            "stick_slip_std": det.stick_slip_std,
+            "mu_s_search_end_mm": det.search_end_mm,
+            "stick_slip_line_ratio": det.stick_slip.ratio,
+            "stick_slip_line_threshold": det.stick_slip.threshold,
+            "stick_slip_std": det.stick_slip.std,
+            "stick_slip_period_mm": (
+                det.stick_slip.period_mm if math.isfinite(det.stick_slip.period_mm) else None
+            ),
             "normal_force_cv": cv,
             "n_samples": x.n_total,
             "n_dropped_incomplete": x.n_dropped,
@@ -607,7 +426,8 @@ def reduce_measurement(
     f_slide = x.force[sliding]
     f_mean = float(np.mean(f_slide))
     cv = float(np.std(f_slide) / f_mean) if f_mean > 0 else math.inf
-    flags = _flags(det, s_v, total_mm, cv, params)
+    offset_known = not offset_source.startswith("not estimated")
+    flags = _flags(det, s_v, total_mm, cv, offset_known, params)
 
     w_s, w_t = s_v[det.window], t_v[det.window]
     return ReductionResult(

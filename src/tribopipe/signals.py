@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import functools
 import math
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -117,36 +118,85 @@ def one_sided_fits(values: Any, window: int) -> tuple[np.ndarray, np.ndarray]:
     return left, right
 
 
+def tukey(n: int, alpha: float = 0.2) -> np.ndarray:
+    """Tukey (split cosine bell) taper of ``n`` points: flat, with cosine edges over a
+    fraction ``alpha`` of the series (``alpha/2`` at each end)."""
+    w = np.ones(n)
+    edge = int(math.floor(alpha * (n - 1) / 2.0))
+    if edge >= 1:
+        ramp = 0.5 * (1 - np.cos(np.pi * np.arange(edge) / edge))
+        w[:edge] = ramp
+        w[n - edge :] = ramp[::-1]
+    return w
+
+
+def taper_bin_correlation_sq(taper: Any, lags: int = 2) -> tuple[float, ...]:
+    """Squared correlations of periodogram bins ``lags`` apart for white noise tapered
+    by ``taper`` (shape (n,)): |Σ w² e^{-2πikt/n}|² / (Σ w²)² for k = 1 … lags."""
+    w2 = np.asarray(taper, dtype=float) ** 2
+    t = np.arange(w2.size)
+    total = float(w2.sum())
+    return tuple(
+        float(abs(np.sum(w2 * np.exp(-2j * np.pi * k * t / w2.size))) / total) ** 2
+        for k in range(1, lags + 1)
+    )
+
+
+@dataclass(frozen=True)
+class Line:
+    """The strongest periodic line of a series (:func:`periodic_line`).
+
+    ``ratio``: its summed power over the local level, in units of one bin's level;
+    ``period``: the period [samples] at which the series repeats (the strongest line's,
+    or that of its fundamental when the strongest is a harmonic); ``variance``: what the
+    line (and its fundamental) add to the series' variance above the level (a sinusoid
+    of amplitude a adds a²/2); ``candidates``: the number of
+    frequencies searched; ``correlation_sq``: squared correlations of neighbouring bins
+    (from the taper), for :func:`line_threshold`."""
+
+    ratio: float
+    period: float
+    variance: float
+    candidates: int
+    correlation_sq: tuple[float, ...] = (0.0, 0.0)
+
+    def threshold(self, false_alarm: float) -> float:
+        """The ratio noise alone exceeds with probability ``false_alarm`` (over all the
+        candidates)."""
+        return line_threshold(self.candidates, false_alarm, correlation_sq=self.correlation_sq)
+
+
 def periodic_line(
     values: Any, *, min_cycles: float, max_period: float, neighbours: int = 48,
-    smooth_bins: int = 3, detrend_degree: int = 2,
-) -> tuple[float, float, float, int]:
+    smooth_bins: int = 3, detrend_degree: int = 2, taper_fraction: float = 0.2,
+) -> Line:
     """The strongest periodic line in ``values`` (shape (n,), evenly sampled) against the
     local level of the periodogram around it.
 
     The series is detrended (least-squares polynomial of ``detrend_degree``: a slow
-    transient is not a line) and its periodogram ``I_j = |FFT_j|² / n`` taken: for white
-    noise of variance σ², each ``I_j`` is σ² times an exponential variate. A candidate
-    line sums ``smooth_bins`` adjacent bins (a line whose cycle length jitters spreads
-    over a few bins) and is compared with the local level: the running median of
-    ``2·neighbours + smooth_bins`` bins around it divided by ln 2 (the median of an
-    exponential variate), which follows the slow change of a coloured noise's level but
-    not a line. Candidates have at least ``min_cycles`` cycles in the series and a
-    period of at least 2 and at most ``max_period`` samples.
-
-    Returns ``(ratio, period, excess_variance, candidates)``: the largest summed power
-    over its local level (in units of one bin's level), the period of that line
-    [samples], the variance the line adds to the series above the local level (a
-    sinusoid of amplitude a adds a²/2), and the number of candidate frequencies (for a
-    false-alarm threshold). ``(0, nan, 0, 0)`` when no frequency qualifies.
+    transient is not a line) and tapered with a Tukey window whose cosine edges span
+    ``taper_fraction`` of it, so that what is left of a transient at either end does not
+    leak into a broad hump that would pass for a line. Its periodogram is
+    ``I_j = |FFT_j(w·x)|² / Σw²``: for noise of spectral level S(f) each ``I_j`` is
+    S(f_j) times an exponential variate (neighbours slightly correlated through the
+    taper). A candidate line sums ``smooth_bins`` adjacent bins (a line whose cycle
+    length jitters spreads over a few) and is compared with the local level: the median
+    of the ``2·neighbours + smooth_bins`` bins around it (the spectrum mirrored at its
+    ends) over ln 2, the median of an exponential variate; it follows the slow change of a
+    coloured noise's level but not a line. Candidates have at least ``min_cycles``
+    cycles in the series and a period of 2 to ``max_period`` samples. When the strongest
+    line is the 2nd or 3rd harmonic of a line that also stands out (at 1 % for that one
+    frequency), the period reported is the fundamental's.
     """
     v = np.asarray(values, dtype=float)
     n = v.size
-    if n < 16:
-        return 0.0, math.nan, 0.0, 0
+    if n < 32:
+        return Line(0.0, math.nan, 0.0, 0)
     x = np.linspace(-1.0, 1.0, n)
     resid = v - np.polyval(np.polyfit(x, v, detrend_degree), x)
-    power = np.abs(np.fft.rfft(resid)) ** 2 / n
+    taper = tukey(n, taper_fraction)
+    w2 = float(np.sum(taper**2))
+    power = np.abs(np.fft.rfft(resid * taper)) ** 2 / w2
     power[0] = 0.0
     j = np.arange(power.size)
     with np.errstate(divide="ignore"):
@@ -155,9 +205,8 @@ def periodic_line(
     candidate &= (j - smooth_bins // 2 >= 1) & (j + smooth_bins // 2 < power.size)
     count = int(candidate.sum())
     if count == 0:
-        return 0.0, math.nan, 0.0, 0
+        return Line(0.0, math.nan, 0.0, 0)
     line = np.convolve(power, np.ones(smooth_bins), mode="same")
-    # the spectrum is mirrored at its ends, so the level there is still a median of bins
     width = 2 * neighbours + smooth_bins
     mirrored = np.pad(power[1:], width // 2, mode="symmetric")
     level = np.empty_like(power)
@@ -165,38 +214,112 @@ def periodic_line(
     level[1:] = np.median(sliding_window_view(mirrored, width), axis=1) / math.log(2.0)
     ratio = np.where(candidate & (level > 0), line / np.where(level > 0, level, 1.0), 0.0)
     k = int(np.argmax(ratio))
-    excess = max(0.0, float(line[k] - smooth_bins * level[k])) * 2.0 / n
-    return float(ratio[k]), float(period[k]), excess, count
+    # Parseval with the taper: a line's variance is its summed power × 2·Σw²/(Σw)²
+    gain = 2.0 * w2 / float(np.sum(taper)) ** 2
+    excess = max(0.0, float(line[k] - smooth_bins * level[k])) * gain
+    rho = taper_bin_correlation_sq(taper)
+    fundamental = k
+    # a saw-tooth's harmonics are lines too: if the strongest is a harmonic, the series
+    # repeats at the lowest frequency k/h (h = 2, 3) whose own line also stands out
+    single = line_threshold(1, 0.01, correlation_sq=rho, smooth_bins=smooth_bins)
+    for h in (3, 2):
+        sub = int(round(k / h))
+        if sub >= max(1, math.ceil(min_cycles)) and candidate[sub] and ratio[sub] > single:
+            fundamental = sub
+            excess += max(0.0, float(line[sub] - smooth_bins * level[sub])) * gain
+            break
+    return Line(float(ratio[k]), float(period[fundamental]), excess, count, rho)
 
 
-def line_threshold(candidates: int, false_alarm: float, smooth_bins: int = 3,
+def gamma_q(a: float, x: float) -> float:
+    """Regularised upper incomplete gamma function Q(a, x) = Γ(a, x)/Γ(a) (a > 0): the
+    survival function of a Gamma(a, 1) variate at x. Series below a + 1, Lentz's
+    continued fraction above."""
+    if x <= 0:
+        return 1.0
+    log_front = -x + a * math.log(x) - math.lgamma(a)
+    if x < a + 1:
+        term = total = 1.0 / a
+        k = a
+        for _ in range(1000):
+            k += 1
+            term *= x / k
+            total += term
+            if abs(term) < abs(total) * 1e-15:
+                break
+        return max(0.0, 1.0 - total * math.exp(log_front))
+    tiny = 1e-300
+    b = x + 1.0 - a
+    c = 1.0 / tiny
+    d = 1.0 / b
+    h = d
+    for i in range(1, 1000):
+        an = -i * (i - a)
+        b += 2.0
+        d = an * d + b
+        d = tiny if abs(d) < tiny else d
+        c = b + an / c
+        c = tiny if abs(c) < tiny else c
+        d = 1.0 / d
+        delta = d * c
+        h *= delta
+        if abs(delta - 1.0) < 1e-15:
+            break
+    return math.exp(log_front) * h
+
+
+def line_threshold(candidates: int, false_alarm: float, *,
+                   correlation_sq: tuple[float, ...] = (0.0, 0.0), smooth_bins: int = 3,
                    level_bins: int = 99) -> float:
-    """The ratio :func:`periodic_line` must exceed for white noise to pass it with
-    probability ``false_alarm`` over ``candidates`` frequencies.
+    """The ratio :func:`periodic_line` must exceed for noise to pass it with probability
+    ``false_alarm`` over ``candidates`` frequencies.
 
-    A sum of ``smooth_bins`` periodogram bins of noise is a Gamma(smooth_bins, 1) variate
-    in units of the true level, with tail ``T(L) = e^{-L} Σ_{i<k} L^i/i!``. The level is
-    estimated as the median of ``level_bins`` bins over ln 2, which is normally
-    distributed about the true level with relative standard deviation
-    δ = 1/(ln 2·√level_bins) (the sample median of exponential variates). The ratio's
-    tail is ``E[T(L·M)]`` over that M ~ N(1, δ²), solved for
-    ``false_alarm / candidates``.
+    In units of the true level, the sum S of ``smooth_bins`` neighbouring periodogram
+    bins of noise has mean k = ``smooth_bins`` and variance k + 2 Σ_{i<j} ρ²_{|i−j|}
+    (``correlation_sq`` = ρ² at lags 1, 2 …, from the taper); it is taken as the Gamma
+    variate of that mean and variance (Satterthwaite). The level is the median of
+    ``level_bins`` bins over ln 2; its distribution is that of the median of N_eff
+    exponential variates (exact: a binomial tail), N_eff being ``level_bins`` over the
+    correlation's inflation of their variance. The ratio's tail E[Q(shape, L·M/scale)]
+    over that level M is solved for ``false_alarm / candidates``.
     """
     if candidates <= 0:
         return math.inf
-    target = false_alarm / candidates
-    delta = 1.0 / (math.log(2.0) * math.sqrt(level_bins))
-    m = np.linspace(max(0.05, 1.0 - 6 * delta), 1.0 + 6 * delta, 241)
-    weights = np.exp(-0.5 * ((m - 1.0) / delta) ** 2)
-    weights /= weights.sum()
+    rho = tuple(round(r, 3) for r in correlation_sq)
+    return _threshold(round(math.log10(false_alarm / candidates), 2), rho, smooth_bins,
+                      level_bins)
+
+
+@functools.lru_cache(maxsize=1024)
+def _threshold(log10_target: float, correlation_sq: tuple[float, ...], smooth_bins: int,
+               level_bins: int) -> float:
+    target = 10.0**log10_target
+    k = smooth_bins
+    variance = float(k)
+    for lag, rho_sq in enumerate(correlation_sq, start=1):
+        variance += 2.0 * max(0, k - lag) * rho_sq
+    shape, scale = k * k / variance, variance / k
+    # the level's distribution: the median of N_eff exponential bins over ln 2 is below m
+    # when at least half of them are below m·ln 2
+    n_eff = max(3, int(round(level_bins / (1.0 + 2.0 * sum(correlation_sq)))))
+    half = (n_eff + 1) // 2
+    edges = np.linspace(0.0, 4.0, 401)
+    q = 1.0 - 2.0 ** (-edges)
+    cdf = np.array([
+        sum(math.comb(n_eff, i) * qi**i * (1 - qi) ** (n_eff - i) for i in range(half, n_eff + 1))
+        for qi in q
+    ])
+    weights = np.diff(cdf)
+    m = 0.5 * (edges[1:] + edges[:-1])
+    keep = weights > 1e-15
+    weights, m = weights[keep], m[keep]
 
     def tail(L: float) -> float:
-        x = L * m
-        poly = sum(x**i / math.factorial(i) for i in range(smooth_bins))
-        return float(np.sum(weights * np.exp(-x) * poly))
+        return float(sum(w * gamma_q(shape, L * mi / scale)
+                         for w, mi in zip(weights, m, strict=True)))
 
     lo, hi = 0.0, 500.0
-    for _ in range(100):
+    for _ in range(50):
         mid = 0.5 * (lo + hi)
         if tail(mid) > target:
             lo = mid

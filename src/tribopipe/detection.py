@@ -16,6 +16,7 @@ from typing import Any
 
 import numpy as np
 
+from . import uncertainty
 from .config import ReductionParams
 from .signals import (
     end_point_weights,
@@ -229,6 +230,7 @@ class _Detection:
     prominence: float
     distinct: bool
     sigma_peak: float
+    peak_reading_u: float
     mu_k: float
     window: np.ndarray
     settled: bool
@@ -293,9 +295,8 @@ def _detect(
         step_mm = max(total_mm / max(s_v.size, 1), 1e-9)
     peak_n = max(5, int(round(params.peak_window_mm / step_mm)) | 1)
     cliff_n = max(5, int(round(params.cliff_window_mm / step_mm)))
-    curve = cliff_peak_curve(
-        mu_v, static_peak_curve(mu_med, peak_n), cliff_n, sigma, params.cliff_sigma
-    )
+    smooth = static_peak_curve(mu_med, peak_n)
+    curve = cliff_peak_curve(mu_v, smooth, cliff_n, sigma, params.cliff_sigma)
     # noise left by a quadratic SG of width w at its centre: ~ sqrt(9 / (4 w)) σ
     sigma_peak = sigma * math.sqrt(min(1.0, 9.0 / (4.0 * peak_n)))
 
@@ -332,8 +333,20 @@ def _detect(
     searched = np.flatnonzero(search)
     k_peak = int(searched[np.argmax(curve[searched])])
     mu_peak, s_peak = float(curve[k_peak]), float(s_v[k_peak])
-    # a maximum on the first or last searched sample may lie beyond the search
-    peak_at_limit = k_peak in (int(searched[0]), int(searched[-1])) and searched.size > 1
+    # a maximum at the first searched sample (within half a smoothing window, the
+    # reading's resolution) may lie before the trace; at the last, beyond the search when
+    # that ended at a plateau that never settled, or at a cap before the plateau (then
+    # whether or not it stands out). A settled plateau holds no value as high as a
+    # distinct peak, so a peak right before it lies inside the search.
+    reach = peak_n // 2
+    at_start = k_peak - int(searched[0]) <= reach
+    at_end = int(searched[-1]) - k_peak <= reach
+    on_edge = (at_start or (at_end and not settled)) and searched.size > 2 * reach + 1
+    last = int(searched[-1])
+    at_cap = (
+        params.static_search_mm is not None and at_end
+        and last + 1 < s_v.size and not window[last + 1]
+    )
 
     # step 5: μ_K and the drift test
     mu_w = mu_v[window]
@@ -354,10 +367,18 @@ def _detect(
         reached = np.flatnonzero(curve >= mu_k)
         k_s = int(reached[0]) if reached.size else k_peak
 
+    # how far the peak reading moves with this run's noise: the peak curve's scatter on
+    # the plateau, or the flank fit's noise where the peak was read at a sudden slip
+    peak_u = uncertainty.reading_noise(curve[window])
+    if curve[k_peak] > smooth[k_peak]:
+        peak_u = max(peak_u, sigma * _end_point_sd(min(cliff_n, k_peak + 1)))
+
     return _Detection(
         mu_s=float(mu_s), k_s=k_s, mu_peak=mu_peak, s_peak=s_peak,
-        peak_at_limit=bool(peak_at_limit), search_end_mm=float(s_v[searched[-1]]),
+        peak_at_limit=bool((on_edge and distinct) or at_cap),
+        search_end_mm=float(s_v[searched[-1]]),
         prominence=prominence, distinct=bool(distinct), sigma_peak=sigma_peak,
+        peak_reading_u=peak_u,
         mu_k=mu_k, window=window, settled=settled, tol=tol,
         plateau_std=float(np.std(mu_w, ddof=1)) if mu_w.size > 1 else 0.0,
         drift=drift, drift_se=drift_se, sigma=sigma,

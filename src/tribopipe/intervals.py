@@ -39,6 +39,7 @@ from .measurement import (
     TorqueOffset,
     interval_label,
 )
+from .uncertainty import zero_offset_standard_error
 
 if TYPE_CHECKING:
     from collections.abc import Sequence
@@ -221,8 +222,10 @@ def _with_setup_offset(items: list[Measurement], chosen: int) -> Measurement:
         where = f"set-up interval {before.meta.interval}" if before.meta.interval else (
             "set-up interval"
         )
+        u = zero_offset_standard_error(_column(before, TORQUE))
         return Measurement(data=picked.data, meta=replace(
-            picked.meta, torque_offset=TorqueOffset(torque_Nm=offset, source=where)))
+            picked.meta, torque_offset=TorqueOffset(
+                torque_Nm=offset, source=where, u_Nm=u if math.isfinite(u) else 0.0)))
     return picked
 
 
@@ -328,11 +331,11 @@ def interval_samples(m: Measurement, params: ReductionParams) -> IntervalSamples
     )
 
 
-def _offset_from_meta(m: Measurement) -> tuple[float | None, str | None]:
+def _offset_from_meta(m: Measurement) -> tuple[float | None, str | None, float]:
     offset = m.meta.torque_offset
     if offset is None or not math.isfinite(offset.torque_Nm):
-        return None, None
-    return offset.torque_Nm, offset.source
+        return None, None, 0.0
+    return offset.torque_Nm, offset.source, offset.u_Nm
 
 
 def leading_rest(s_mm: Any, motion_tol_mm: float) -> np.ndarray:
@@ -359,19 +362,20 @@ def estimate_torque_offset_Nm(
 
 def choose_torque_offset(
     m: Measurement, x: IntervalSamples, at_rest: np.ndarray, given_Nm: float | None,
-    params: ReductionParams,
-) -> tuple[float, str]:
-    """The torque zero offset [N·m] and where it came from: given > set-up interval >
-    at-rest start of this interval > none (0)."""
-    meta_offset, meta_source = _offset_from_meta(m)
+    params: ReductionParams, *, unknown_u_Nm: float = 0.0,
+) -> tuple[float, str, float]:
+    """The torque zero offset [N·m], where it came from — given > set-up interval >
+    at-rest start of this interval > none (0) — and its standard uncertainty [N·m]: 0 when
+    given, the estimate's standard error (autocorrelation counted) when measured,
+    ``unknown_u_Nm`` when it could not be estimated."""
+    meta_offset, meta_source, meta_u = _offset_from_meta(m)
     rest_offset, n_rest = estimate_torque_offset_Nm(x.torque, at_rest, params.offset_min_samples)
     if given_Nm is not None:
-        offset, offset_source = float(given_Nm), "given"
-    elif meta_offset is not None:
-        offset, offset_source = meta_offset, str(meta_source)
-    elif rest_offset is not None:
-        offset, offset_source = rest_offset, f"at-rest start ({n_rest} samples)"
-    else:
-        offset = 0.0
-        offset_source = "not estimated (no set-up interval, no at-rest samples): 0 assumed"
-    return offset, offset_source
+        return float(given_Nm), "given", 0.0
+    if meta_offset is not None:
+        return meta_offset, str(meta_source), meta_u
+    if rest_offset is not None:
+        u = zero_offset_standard_error(x.torque[at_rest])
+        return rest_offset, f"at-rest start ({n_rest} samples)", u if math.isfinite(u) else 0.0
+    return (0.0, "not estimated (no set-up interval, no at-rest samples): 0 assumed",
+            unknown_u_Nm)

@@ -49,10 +49,12 @@ def interval_label(test: str | None, result: str | None, interval: int | None) -
 @dataclass(frozen=True)
 class TorqueOffset:
     """The instrument's torque zero offset [N·m] measured outside a friction interval, and
-    where (e.g. ``"set-up interval 1"``: the disc at rest under load before sliding)."""
+    where (e.g. ``"set-up interval 1"``: the disc at rest under load before sliding), with
+    the standard error of that estimate ``u_Nm`` [N·m] (0 when not known)."""
 
     torque_Nm: float
     source: str
+    u_Nm: float = 0.0
 
 
 @dataclass(frozen=True)

@@ -66,7 +66,8 @@ may creep to the plateau with no peak at all.
    sliding, the reading "at the instant the block slips" of ASTM D1894 and ISO 8295: the
    maximum of the peak curve from the start of sliding up to the plateau's start (and,
    only if ``static_search_mm`` is set, within that distance: a cap, off by default).
-   A maximum on the first or last sample of that range may lie beyond it (flagged).
+   A maximum at the edge of that range may lie beyond it (flagged; see
+   ``peak_at_search_limit``).
 5. μ_K is the mean of μ over the plateau. Drift test: least-squares slope of μ over s
    there [1/mm]; a slope larger than ``max_drift_per_mm`` and than 3 standard errors means
    the plateau is not steady.
@@ -89,10 +90,13 @@ may creep to the plateau with no peak at all.
 Flags (thresholds in :class:`ReductionParams`)
 ----------------------------------------------
 ``static_not_distinct``  step 6 failed.
-``peak_at_search_limit`` a distinct μ_S sits on the first or last sample of its search
-                         range (step 4): the peak may lie beyond it (a trace that starts
-                         while sliding, a ``static_search_mm`` cap, a plateau that never
-                         settled).
+``peak_at_search_limit`` a distinct μ_S sits at the first sample of its search range
+                         (within half a ``peak_window_mm``, the reading's resolution: the
+                         trace may have started while sliding), or at its last when no
+                         plateau settled (the peak may lie beyond); or the maximum sits at
+                         a ``static_search_mm`` cap that ended the search before the
+                         plateau, distinct or not. (A settled plateau holds no value as
+                         high as a distinct peak: a peak right before it is inside.)
 ``no_steady_state``      no plateau of at least ``plateau_min_mm`` settles (step 3), or
                          the drift test fails (step 5).
 ``plateau_at_trace_end`` the μ_K window is bounded by the end of the trace rather than by
@@ -122,6 +126,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from . import uncertainty
 from .config import InstrumentConfig, ReductionParams
 from .detection import (  # noqa: F401 - the detection steps are importable from here too
     MIN_FLANK_SAMPLES,
@@ -197,10 +202,12 @@ class ReductionResult:
     Distances in mm along the sliding path, times in s of the measurement's ``time_s``,
     forces in N (total on all pins), pressure in kPa per pin. ``plateau_std`` is the
     standard deviation of μ in the μ_K window (not an error of the mean);
-    ``plateau_drift_per_mm`` the slope of μ over s there [1/mm]. ``trace`` has the columns
-    ``time_s, sliding_distance_mm, normal_force_N, pressure_kPa, friction_force_N, mu,
-    mu_smooth, in_contact`` (one row per complete sample, time-ordered; μ is NaN where
-    not in contact).
+    ``plateau_drift_per_mm`` the slope of μ over s there [1/mm]. ``u_mu_k`` and
+    ``u_mu_s`` are the combined standard uncertainties (GUM, k = 1) of μ_K and μ_S, their
+    budgets in ``parameters["uncertainty"]`` (:mod:`tribopipe.uncertainty`). ``trace`` has
+    the columns ``time_s, sliding_distance_mm, normal_force_N, pressure_kPa,
+    friction_force_N, mu, mu_smooth, in_contact`` (one row per complete sample,
+    time-ordered; μ is NaN where not in contact).
     """
 
     mu_s: float
@@ -211,6 +218,8 @@ class ReductionResult:
     mu_k_window_s: tuple[float, float]
     plateau_std: float
     plateau_drift_per_mm: float
+    u_mu_k: float
+    u_mu_s: float
     normal_force_mean_N: float
     pressure_kPa: float
     temperature_C: float | None
@@ -235,7 +244,7 @@ def _flags(
     short = total_mm < params.run_in_mm + params.plateau_min_mm
     if not det.distinct:
         flags.append("static_not_distinct")
-    elif det.peak_at_limit:
+    if det.peak_at_limit:
         flags.append("peak_at_search_limit")
     drifting = abs(det.drift) > params.max_drift_per_mm and abs(det.drift) > 3 * det.drift_se
     length = float(w_s[-1] - w_s[0])
@@ -342,10 +351,10 @@ def _trace_frame(
 def _parameters(
     params: ReductionParams, instrument: InstrumentConfig, x: IntervalSamples, det: _Detection, *,
     distance_source: str, offset: float, offset_source: str, torque_sign: float,
-    cv: float, in_contact: np.ndarray,
+    cv: float, in_contact: np.ndarray, uncertainties: dict[str, Any],
 ) -> dict[str, Any]:
-    """``ReductionResult.parameters``: the method's parameters and the diagnostics of
-    this run."""
+    """``ReductionResult.parameters``: the method's parameters, the diagnostics of this
+    run and its uncertainty budgets (``uncertainties``)."""
     parameters: dict[str, Any] = dict(asdict(params))
     parameters.update(
         {
@@ -377,6 +386,7 @@ def _parameters(
             "n_dropped_incomplete": x.n_dropped,
             "n_in_contact": int(in_contact.sum()),
             "n_plateau": int(det.window.sum()),
+            "uncertainty": uncertainties,
         }
     )
     return parameters
@@ -405,7 +415,10 @@ def reduce_measurement(
     in_contact = _in_contact(x, instrument, label)
     s, distance_source, at_rest = _travel(x, instrument, params, label)
     total_mm = float(s[-1] - s[0])
-    offset, offset_source = choose_torque_offset(m, x, at_rest, torque_offset_Nm, params)
+    offset, offset_source, offset_u = choose_torque_offset(
+        m, x, at_rest, torque_offset_Nm, params,
+        unknown_u_Nm=uncertainty.unknown_offset_u_Nm(instrument),
+    )
 
     corrected = x.torque - offset
     sliding = ~at_rest & in_contact
@@ -428,6 +441,22 @@ def reduce_measurement(
     cv = float(np.std(f_slide) / f_mean) if f_mean > 0 else math.inf
     offset_known = not offset_source.startswith("not estimated")
     flags = _flags(det, s_v, total_mm, cv, offset_known, params)
+    se_k, tau = uncertainty.mean_standard_error(mu_v[det.window])
+    u_k = uncertainty.budget(det.mu_k, se_k, normal_force_N=f_mean, instrument=instrument,
+                             offset_u_Nm=offset_u)
+    u_s = u_k
+    if det.distinct:
+        u_s = uncertainty.budget(det.mu_s, det.peak_reading_u, normal_force_N=f_mean,
+                                 instrument=instrument, offset_u_Nm=offset_u)
+    uncertainties = {
+        "mu_k": u_k,
+        "mu_s": u_s,
+        "k": 1,
+        "coverage_factor_expanded": uncertainty.COVERAGE_FACTOR,
+        "plateau_tau_int_samples": tau,
+        "torque_offset_u_Nm": offset_u,
+        "friction_radius_u_mm": instrument.friction_radius_u_mm,
+    }
 
     w_s, w_t = s_v[det.window], t_v[det.window]
     return ReductionResult(
@@ -439,6 +468,8 @@ def reduce_measurement(
         mu_k_window_s=(float(w_t[0]), float(w_t[-1])),
         plateau_std=det.plateau_std,
         plateau_drift_per_mm=float(det.drift),
+        u_mu_k=float(u_k["combined"]),
+        u_mu_s=float(u_s["combined"]),
         normal_force_mean_N=f_mean,
         pressure_kPa=float(
             contact_pressure_kPa(f_mean, instrument.n_pins, instrument.pin_radius_mm)
@@ -451,7 +482,7 @@ def reduce_measurement(
         parameters=_parameters(
             params, instrument, x, det, distance_source=distance_source, offset=offset,
             offset_source=offset_source, torque_sign=torque_sign, cv=cv,
-            in_contact=in_contact,
+            in_contact=in_contact, uncertainties=uncertainties,
         ),
         trace=_trace_frame(x, s, f_r, mu, in_contact, idx, det, instrument),
     )

@@ -78,6 +78,21 @@ def mean_standard_error(values: Any) -> tuple[float, float]:
     return float(np.std(x, ddof=1)) * math.sqrt(tau / x.size), tau
 
 
+def zero_offset_standard_error(torque_Nm: Any) -> float:
+    """Standard error [N·m] of a torque zero read as the robust mean of at-rest samples
+    (shape (n,)): the mean standard error (with autocorrelation) of the samples within 4
+    robust standard deviations of their median, the ones that mean averages."""
+    v = np.asarray(torque_Nm, dtype=float)
+    v = v[np.isfinite(v)]
+    if v.size < 2:
+        return math.nan
+    centre = float(np.median(v))
+    spread = 1.4826 * float(np.median(np.abs(v - centre)))
+    inliers = v if spread == 0 else v[np.abs(v - centre) <= 4 * spread]
+    se, _ = mean_standard_error(inliers)
+    return se
+
+
 def reading_noise(curve: Any) -> float:
     """Standard deviation [COF] of a smoothed curve (shape (n,)) about its least-squares
     quadratic trend: how far a reading of that curve moves with the noise. 0 for fewer

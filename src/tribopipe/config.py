@@ -129,6 +129,9 @@ class ReductionParams:
     cliff_sigma
         A sudden slip (cliff) is a drop between the fits left and right of a sample larger
         than this many standard deviations of their difference [-].
+    peak_ici_gamma
+        A rounded peak is re-read by quadratics over widening windows while their readings
+        agree within this many standard deviations [-].
     static_search_mm
         Optional cap [mm]: the static peak is searched no farther than this from the start
         of sliding. ``None`` (the default): no cap, the search ends where the plateau
@@ -180,6 +183,7 @@ class ReductionParams:
     peak_window_mm: float = 0.015
     cliff_window_mm: float = 0.045
     cliff_sigma: float = 4.0
+    peak_ici_gamma: float = 2.0
     static_search_mm: float | None = None
     run_in_mm: float = 0.25
     plateau_min_mm: float = 0.3

@@ -22,6 +22,7 @@ from .signals import (
     end_point_weights,
     one_sided_fits,
     periodic_line,
+    quadratic_peak,
     running_max,
     running_mean,
     running_median,
@@ -149,13 +150,45 @@ def settling_block_mm(block_mm: float, period_mm: float | None) -> float:
     return math.ceil(block_mm / period_mm - 1e-9) * period_mm
 
 
+def _block_means(
+    s: np.ndarray, m: np.ndarray, start_mm: float, block: float
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Means, centres [mm] and sample counts of the blocks of ``block`` mm from
+    ``start_mm`` (the last block runs to the end); blocks with fewer than 3 samples are
+    left out."""
+    end = float(s[-1])
+    n_blocks = int((end - start_mm) // block)
+    if n_blocks < 2:
+        return np.empty(0), np.empty(0), np.empty(0, dtype=int)
+    edges = start_mm + block * np.arange(n_blocks + 1)
+    edges[-1] = end + 1e-12
+    idx = np.searchsorted(s, edges)
+    counts = np.diff(idx)
+    sums = np.add.reduceat(m, idx[:-1])
+    means = np.where(counts > 0, sums / np.maximum(counts, 1), np.nan)
+    good = counts >= 3
+    return means[good], (0.5 * (edges[:-1] + edges[1:]))[good], counts[good]
+
+
+def _block_scatter(means: np.ndarray) -> float:
+    """Block-to-block scatter [COF] from second differences of the block means: a
+    stationary scatter (noise, stick-slip) raises them, a smooth transient (a peak, a
+    run-in, a creep) hardly; the median is deaf to a few blocks across a sudden slip."""
+    if means.size < 6:
+        return 0.0
+    d2 = means[2:] - 2 * means[1:-1] + means[:-2]
+    return 1.4826 * float(np.median(np.abs(d2 - np.median(d2)))) / math.sqrt(6.0)
+
+
 def find_plateau_start(
     s_mm: Any, mu: Any, start_mm: float, noise: float, params: ReductionParams,
     *, block_mm: float | None = None,
 ) -> tuple[float | None, float]:
     """Start [mm] of the settled plateau in ``mu`` over ``s_mm`` (both shape (n,), valid
     samples only) searched from ``start_mm`` on, and the tolerance used [COF], with blocks
-    of ``block_mm`` (default ``params.block_mm``).
+    of ``block_mm`` (default ``params.block_mm``), lengthened by a whole factor when the
+    block means scatter so much that the noise allowance would exceed ``settle_tol`` (the
+    scatter of a mean falls with its length), up to half of ``plateau_min_mm``.
 
     Returns ``(None, tol)`` when no run of blocks reaching to the end and at least
     ``plateau_min_mm`` long stays within the tolerance.
@@ -163,33 +196,30 @@ def find_plateau_start(
     block = params.block_mm if block_mm is None else float(block_mm)
     s = np.asarray(s_mm, dtype=float)
     m = np.asarray(mu, dtype=float)
-    end = float(s[-1]) if s.size else start_mm
-    n_blocks = int((end - start_mm) // block)
-    if n_blocks < 2:
+    if s.size < 3:
         return None, params.settle_tol
-    edges = start_mm + block * np.arange(n_blocks + 1)
-    edges[-1] = end + 1e-12
-    idx = np.searchsorted(s, edges)
-    counts = np.diff(idx)
-    sums = np.add.reduceat(m, idx[:-1]) if m.size else np.zeros(n_blocks)
-    means = np.where(counts > 0, sums / np.maximum(counts, 1), np.nan)
-    good = counts >= 3
-    centres = 0.5 * (edges[:-1] + edges[1:])
-    means, centres, counts = means[good], centres[good], counts[good]
+    means, centres, counts = _block_means(s, m, start_mm, block)
     if means.size < 2:
         return None, params.settle_tol
-    # block-to-block scatter from second differences of the block means: a stationary
-    # scatter (noise, stick-slip) raises them, a smooth transient (a peak, a run-in, a
-    # creep) hardly; the median is deaf to a few blocks across a sudden slip
-    scatter = 0.0
-    if means.size >= 6:
-        d2 = means[2:] - 2 * means[1:-1] + means[:-2]
-        scatter = 1.4826 * float(np.median(np.abs(d2 - np.median(d2)))) / math.sqrt(6.0)
-    se_block = noise / math.sqrt(float(np.median(counts)))
-    # every block is compared: the noise allowance grows with their number so that a
-    # settled plateau of pure noise fails the test with probability settle_alpha only
-    z = NormalDist().inv_cdf(1.0 - params.settle_alpha / (2.0 * means.size))
-    tol = max(params.settle_tol, z * se_block, z * scatter)
+
+    def allowance(means: np.ndarray, counts: np.ndarray) -> float:
+        # every block is compared: the noise allowance grows with their number so that a
+        # settled plateau of pure noise fails the test with probability settle_alpha only
+        z = NormalDist().inv_cdf(1.0 - params.settle_alpha / (2.0 * means.size))
+        se_block = noise / math.sqrt(float(np.median(counts)))
+        return z * max(se_block, _block_scatter(means))
+
+    noise_tol = allowance(means, counts)
+    longest = 0.5 * params.plateau_min_mm
+    if noise_tol > params.settle_tol and block < longest:
+        factor = min(math.ceil((noise_tol / params.settle_tol) ** 2), int(longest // block))
+        if factor > 1:
+            longer = _block_means(s, m, start_mm, block * factor)
+            if longer[0].size >= 2:
+                block = block * factor
+                means, centres, counts = longer
+                noise_tol = allowance(means, counts)
+    tol = max(params.settle_tol, noise_tol)
     min_blocks = max(2, math.ceil(params.plateau_min_mm / block - 1e-9))
     for k in range(means.size - min_blocks + 1):
         rest = means[k:]
@@ -265,6 +295,14 @@ def stick_slip_test(s_mm: Any, mu: Any, params: ReductionParams) -> StickSlipTes
     )
 
 
+def _detrended(values: np.ndarray) -> np.ndarray:
+    """``values`` (shape (n,)) minus their least-squares quadratic trend."""
+    if values.size < 4:
+        return values - values.mean()
+    x = np.linspace(-1.0, 1.0, values.size)
+    return values - np.polyval(np.polyfit(x, values, 2), x)
+
+
 def _oscillation_block_mm(s_mm: np.ndarray, mu: np.ndarray, params: ReductionParams) -> float:
     """Block length [mm] of the settling test for the trace after the run-in (shape
     (n,)): whole cycles of a stick-slip oscillation found in its second half with at least
@@ -333,6 +371,30 @@ def _detect(
     searched = np.flatnonzero(search)
     k_peak = int(searched[np.argmax(curve[searched])])
     mu_peak, s_peak = float(curve[k_peak]), float(s_v[k_peak])
+    # the noise per sample, its autocorrelation counted, from the plateau's scatter (from
+    # the sample-to-sample differences where the plateau oscillates: its scatter is then
+    # stick-slip, not noise)
+    stick_slip = stick_slip_test(s_v[window], mu_v[window], params)
+    oscillating = stick_slip.oscillates and stick_slip.std > params.stick_slip_min_std
+    resid = _detrended(mu_v[window])
+    sample_sd = sigma if oscillating else float(np.std(resid))
+    noise_sd = sigma if oscillating else sample_sd * math.sqrt(
+        uncertainty.integrated_autocorrelation_time(resid))
+    cliff_read = curve[k_peak] > smooth[k_peak]
+    peak_u = noise_sd * math.sqrt(9.0 / (4.0 * peak_n))
+    if cliff_read:
+        peak_u = max(peak_u, noise_sd * _end_point_sd(min(cliff_n, k_peak + 1)))
+    else:
+        # a rounded peak: the widest quadratic its shape allows averages the noise
+        value, position, width = quadratic_peak(
+            mu_med, k_peak, int(searched[0]), int(searched[-1]),
+            first_half_width=peak_n // 2, noise_sd=noise_sd, sample_sd=sample_sd,
+            gamma=params.peak_ici_gamma, breaks=curve > smooth,
+        )
+        if width > peak_n and math.isfinite(value):
+            k_peak = int(min(max(round(position), searched[0]), searched[-1]))
+            mu_peak, s_peak = float(value), float(np.interp(position, np.arange(s_v.size), s_v))
+            peak_u = noise_sd * math.sqrt(9.0 / (4.0 * width))
     # a maximum at the first searched sample (within half a smoothing window, the
     # reading's resolution) may lie before the trace; at the last, beyond the search when
     # that ended at a plateau that never settled, or at a cap before the plateau (then
@@ -367,12 +429,6 @@ def _detect(
         reached = np.flatnonzero(curve >= mu_k)
         k_s = int(reached[0]) if reached.size else k_peak
 
-    # how far the peak reading moves with this run's noise: the peak curve's scatter on
-    # the plateau, or the flank fit's noise where the peak was read at a sudden slip
-    peak_u = uncertainty.reading_noise(curve[window])
-    if curve[k_peak] > smooth[k_peak]:
-        peak_u = max(peak_u, sigma * _end_point_sd(min(cliff_n, k_peak + 1)))
-
     return _Detection(
         mu_s=float(mu_s), k_s=k_s, mu_peak=mu_peak, s_peak=s_peak,
         peak_at_limit=bool((on_edge and distinct) or at_cap),
@@ -382,5 +438,5 @@ def _detect(
         mu_k=mu_k, window=window, settled=settled, tol=tol,
         plateau_std=float(np.std(mu_w, ddof=1)) if mu_w.size > 1 else 0.0,
         drift=drift, drift_se=drift_se, sigma=sigma,
-        stick_slip=stick_slip_test(s_v[window], mu_w, params), mu_med=mu_med,
+        stick_slip=stick_slip, mu_med=mu_med,
     )

@@ -58,7 +58,11 @@ may creep to the plateau with no peak at all.
    block mean from σ and z × the block-to-block scatter: 1.4826·MAD of the second
    differences of the block means / √6, which stick-slip raises and a smooth transient —
    a peak, a run-in, a creep — does not; z is the normal quantile that keeps the chance
-   of any of the blocks of a settled plateau falling outside at ``settle_alpha``). It
+   of any of the blocks of a settled plateau falling outside at ``settle_alpha``). Where
+   that noise allowance would exceed ``settle_tol``, the blocks are lengthened by the
+   whole factor that brings it down (the scatter of a mean falls as 1/√length), up to
+   half of ``plateau_min_mm``: a loose tolerance would let the tail of a transient into
+   the plateau. It
    ends at the end of the trace. A peak that stands out of the plateau cannot lie inside
    it, so the plateau needs no knowledge of the peak. When nothing settles, the last
    ``plateau_min_mm`` of the trace is used (and flagged).

@@ -326,3 +326,62 @@ def _threshold(log10_target: float, correlation_sq: tuple[float, ...], smooth_bi
         else:
             hi = mid
     return hi
+
+
+def quadratic_peak(
+    values: Any, k: int, lo: int, hi: int, *, first_half_width: int, noise_sd: float,
+    sample_sd: float, gamma: float = 2.0, breaks: Any = None,
+) -> tuple[float, float, int]:
+    """Read a rounded maximum near sample ``k`` of ``values`` (shape (n,)) by fitting
+    quadratics over windows that double in width, keeping the widest one the data allow
+    (the intersection-of-confidence-intervals rule).
+
+    Window j spans ``k ± first_half_width·2^j`` within ``[lo, hi]`` (inclusive sample
+    indices), re-centred each time on the previous fit's vertex. A fit is used only while
+    it is concave, its vertex lies inside its window, no sample of ``breaks`` (a boolean
+    mask, e.g. sudden slips) lies inside, and its residuals scatter no more than the noise
+    (standard deviation ≤ ``sample_sd``·(1 + 3/√(2(n−3)))): a quadratic laid over a rise
+    and a sudden drop overshoots both. Its reading is the value at the vertex, with
+    standard deviation ``noise_sd·√(9 / (4 n))`` for n samples (``noise_sd`` the per-sample
+    noise with its autocorrelation counted). Windows grow while the intervals reading ±
+    ``gamma``·sd of all windows so far still intersect: a wide fit averages the noise, so
+    the reading is not the noise's maximum, and the first window whose quadratic no
+    longer matches the peak's shape stops the growth.
+
+    Returns ``(value, position, width)``: the reading, its position (fractional sample
+    index) and the number of samples of the window used; ``(nan, nan, 0)`` when not even
+    the first window qualifies.
+    """
+    v = np.asarray(values, dtype=float)
+    barrier = None if breaks is None else np.asarray(breaks, dtype=bool)
+    lower, upper = -math.inf, math.inf
+    best = (math.nan, math.nan, 0)
+    centre = float(k)
+    half = int(first_half_width)
+    while True:
+        a = max(lo, int(round(centre)) - half)
+        b = min(hi, int(round(centre)) + half)
+        n = b - a + 1
+        if n < 7 or (barrier is not None and barrier[a : b + 1].any()):
+            break
+        x = np.arange(a, b + 1, dtype=float) - centre
+        c2, c1, c0 = np.polyfit(x, v[a : b + 1], 2)
+        if c2 >= 0:
+            break
+        vertex = -c1 / (2 * c2)
+        if not (a - centre <= vertex <= b - centre):
+            break
+        resid = v[a : b + 1] - np.polyval((c2, c1, c0), x)
+        if float(np.std(resid, ddof=3)) > sample_sd * (1 + 3 / math.sqrt(2 * (n - 3))):
+            break
+        reading = c0 - c1 * c1 / (4 * c2)
+        sd = noise_sd * math.sqrt(9.0 / (4.0 * n))
+        lower, upper = max(lower, reading - gamma * sd), min(upper, reading + gamma * sd)
+        if lower > upper:
+            break
+        best = (float(reading), float(centre + vertex), n)
+        centre += vertex
+        if a == lo and b == hi:
+            break
+        half *= 2
+    return best

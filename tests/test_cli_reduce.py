@@ -59,6 +59,14 @@ def test_reduce_json_reports_the_known_truth(export: Path, tmp_path: Path) -> No
     summary = json.loads(next((out / "summaries").glob("*.json")).read_text())
     assert summary["mu_k"] == row["mu_k"]
     assert summary["mu_k_window_mm"][0] < summary["mu_k_window_mm"][1]
+    # each coefficient with its standard and expanded uncertainty, and the budget
+    for q in ("mu_k", "mu_s"):
+        assert 0 < row[f"u_{q}"] < 0.1
+        assert row[f"U95_{q}"] == pytest.approx(2 * row[f"u_{q}"])
+        budget = summary["parameters"]["uncertainty"][q]
+        assert budget["combined"] == pytest.approx(row[f"u_{q}"])
+        assert budget["friction_radius"] == pytest.approx(row[q] * 0.55 / 13.37, rel=1e-6)
+    assert summary["method"].startswith("tribopipe-v2")
 
 
 def test_reduce_appends_to_the_map_once(export: Path, tmp_path: Path) -> None:
@@ -131,7 +139,7 @@ def test_reduce_as_a_subprocess(export: Path, tmp_path: Path) -> None:
     )
     assert proc.returncode == 0, proc.stderr
     lines = proc.stdout.strip().splitlines()
-    assert lines[0].split()[:3] == ["file", "mu_s", "mu_k"]
+    assert lines[0].split()[:5] == ["file", "mu_s", "±U95", "mu_k", "±U95"]
     assert export.name in lines[1]
 
 

@@ -36,7 +36,7 @@ PUBLISHED_CSV = fm.published_csv_path()
 def reduced_result() -> ReductionResult:
     """A real reduction of a seeded synthetic run (μ_S 0.8, μ_K 0.55, 3 N, 20 °C)."""
     settings = load_settings()
-    frames = make_intervals(SyntheticRun(seed=7, duration_s=120))
+    frames = make_intervals(SyntheticRun(seed=7, duration_s=180))
     meta = MeasurementMeta(source_file="run.txt", file_format="synthetic", interval=2)
     return reduce_measurement(Measurement(frames[-1], meta), settings.instrument,
                               settings.reduction)

@@ -244,3 +244,37 @@ def test_interpolated_value_lies_within_the_measured_values(ps, ts, p, t, rnd):
     edge_t = min(max(t, min(ts)), max(ts))
     assert res.mu_k.value == pytest.approx(query(groups, "A", "B", edge_p, edge_t).mu_k.value)
     assert res.mu_k.uncertainty == pytest.approx(0.1)
+
+
+# --------------------------------------------------------------------------- uncertainty
+
+
+def test_the_query_carries_the_combined_uncertainty_of_the_groups():
+    from test_frictionmap import run_record
+    from tribopipe import frictionmap as fm
+    from tribopipe.query import format_result
+    from tribopipe.stats import group_statistics
+
+    records = [
+        run_record(1, force_N=3.0, repeat=1, mu_k=0.50, u_mu_k=0.020),
+        run_record(2, force_N=3.0, repeat=2, mu_k=0.52, u_mu_k=0.022),
+        run_record(3, force_N=9.0, repeat=1, mu_k=0.40, u_mu_k=0.016),
+    ]
+    records[2]["pressure_kPa"] = 9.0 / 3 / (math.pi * 9) * 1e3
+    groups = group_statistics(fm.records_frame(records))
+    u3, u9 = (float(g) for g in groups.sort_values("pressure_kPa")["mu_k_u"])
+    assert u3 == pytest.approx(math.hypot(0.01, 0.021)) and u9 == pytest.approx(0.016)
+    p3, p9 = sorted(groups["pressure_kPa"])
+    res = query(groups, "Ecoflex 00-50", "steel", 0.25 * p3 + 0.75 * p9, 20.0)
+    assert res.mu_k.u_combined == pytest.approx(0.25 * u3 + 0.75 * u9)
+    assert sorted(u.u for u in res.mu_k.used) == pytest.approx(sorted([u3, u9]))
+    assert res.to_dict()["mu_k"]["u_combined"] == pytest.approx(res.mu_k.u_combined)
+    assert f"U = {2 * res.mu_k.u_combined:.3f} (k = 2)" in format_result(res)
+    table = friction_table(groups, "Ecoflex 00-50", "steel")
+    assert table["u_combined"].tolist() == pytest.approx([u3, u9])
+
+
+def test_without_run_uncertainties_the_query_states_none(groups):
+    res = query(groups, "Dragonskin 30", "steel", 40.0, 20.0)
+    assert res.mu_k.u_combined is None  # the published map's rows carry none
+    assert res.to_dict()["mu_k"]["u_combined"] is None

@@ -134,6 +134,19 @@ def test_group_table_has_one_row_per_group_and_links_to_every_run(processed, htm
         assert href.startswith("#") and href[1:] in ids, href
 
 
+def test_groups_and_runs_show_their_uncertainty_and_the_range_beside_the_t_interval(
+    processed, html
+):
+    map_path, _ = processed
+    groups = group_statistics(read_map(map_path))
+    assert "<th>U (k = 2)</th>" in html and "<th>μ_K min–max</th>" in html
+    for g in groups.to_dict(orient="records"):
+        assert f"± {2 * g['mu_k_u']:.3f}" in html
+        assert f"{g['mu_k_min']:.3f}–{g['mu_k_max']:.3f}" in html
+    for r in read_map(map_path).to_dict(orient="records"):
+        assert f"μ_K {r['mu_k']:.3f} ± {2 * r['u_mu_k']:.3f}" in html
+
+
 def test_images_decode_pair_plots_and_one_trace_per_run(html):
     page = parse(html)
     pairs = [src for src, alt in page.images if " on " in alt]

@@ -16,6 +16,7 @@ from scipy import stats as sps
 from test_frictionmap import run_record
 from tribopipe import frictionmap as fm
 from tribopipe.stats import (
+    GROUP_FIELDS,
     R_FACTOR,
     STAT_FIELDS,
     describe_values,
@@ -150,7 +151,7 @@ def test_columns_follow_the_design_contract():
     groups = group_statistics(frame([row(1)]))
     expected = ["pin", "disc", "normal_force_N", "pressure_kPa", "temperature_C"]
     for q in ("mu_k", "mu_s"):
-        expected += [f"{q}_{f}" for f in STAT_FIELDS]
+        expected += [f"{q}_{f}" for f in GROUP_FIELDS]
     expected += ["range_exceeds_r", "qc_flagged", "run_ids"]
     assert list(groups.columns) == expected
     empty = group_statistics(fm.empty_map())
@@ -255,3 +256,27 @@ def test_statistics_do_not_depend_on_row_order(spec, rnd):
     assert (finite["mu_k_ci95_low"] <= finite["mu_k_mean"] + 1e-12).all()
     assert np.all(a["mu_k_min"] <= a["mu_k_max"])
 
+
+
+# --------------------------------------------------------------------------- uncertainty
+
+
+def test_the_group_mean_carries_the_runs_uncertainty_beside_the_repeat_scatter():
+    rows = [row(1, mu_k=0.50, u_mu_k=0.020), row(2, mu_k=0.52, u_mu_k=0.022)]
+    g = group_statistics(frame(rows)).iloc[0]
+    assert g["mu_k_u_run"] == pytest.approx(0.021)
+    # sem of (0.50, 0.52) is 0.01; the runs' uncertainty counts in full (correlated)
+    assert g["mu_k_u"] == pytest.approx(math.hypot(0.01, 0.021))
+    assert g["mu_k_min"] == 0.50 and g["mu_k_max"] == 0.52  # n = 2: the range beside the CI
+
+
+def test_one_run_is_its_own_uncertainty():
+    g = group_statistics(frame([row(1, u_mu_k=0.02)])).iloc[0]
+    assert g["mu_k_u"] == pytest.approx(0.02) and math.isnan(g["mu_k_sem"])
+
+
+def test_a_group_with_a_run_of_unknown_uncertainty_states_none():
+    rows = [row(1, u_mu_k=0.02), row(2, u_mu_k=None)]
+    g = group_statistics(frame(rows)).iloc[0]
+    assert math.isnan(g["mu_k_u"]) and math.isnan(g["mu_k_u_run"])
+    assert g["mu_k_n"] == 2  # the repeat statistics are still there

@@ -38,6 +38,10 @@ from .physics import (  # noqa: F401 - the founding constants are importable fro
 SECTIONS: tuple[str, ...] = ("instrument", "reduction")
 
 
+#: The name and version of the reduction method (:mod:`tribopipe.reduce`): part of every
+#: config hash, so a batch re-reduces its runs when the method changes.
+REDUCTION_METHOD = "tribopipe-v2"
+
 #: R_eff from "0.007 mm/s", one significant figure: the speed lies in [0.0065, 0.0075),
 #: so R_eff in [12.41, 14.32) mm; rectangular, u = half-width/√3 = 0.55 mm (4.1 %).
 FOUNDING_FRICTION_RADIUS_U_MM = round(
@@ -243,7 +247,8 @@ class ReductionParams:
 
 @dataclass(frozen=True)
 class Settings:
-    """Everything a reduction depends on: instrument geometry and detection parameters."""
+    """Everything a reduction depends on: instrument geometry and uncertainties, and
+    detection parameters (and, through :attr:`config_hash`, the method's version)."""
 
     instrument: InstrumentConfig
     reduction: ReductionParams
@@ -251,9 +256,11 @@ class Settings:
 
     @functools.cached_property
     def config_hash(self) -> str:
-        """A stable 16-hex-digit hash of the instrument and reduction parameters (computed
-        once per settings object: every run of a batch asks for it)."""
-        payload = {"instrument": asdict(self.instrument), "reduction": asdict(self.reduction)}
+        """A stable 16-hex-digit hash of the reduction method's name, the instrument and
+        the reduction parameters (computed once per settings object: every run of a batch
+        asks for it)."""
+        payload = {"method": REDUCTION_METHOD, "instrument": asdict(self.instrument),
+                   "reduction": asdict(self.reduction)}
         text = json.dumps(payload, sort_keys=True, default=str)
         return hashlib.sha256(text.encode()).hexdigest()[:16]
 

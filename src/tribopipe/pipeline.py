@@ -287,7 +287,9 @@ def run_summary(outcome: RunOutcome) -> dict[str, Any]:
     """A JSON-ready summary of a reduced run: the numbers and the evidence behind them.
 
     Keys: ``file, run`` (the file, with the run's place when the export holds several),
-    ``measurement_id, mu_s, mu_k, pressure_kPa`` (measured mean, per pin),
+    ``measurement_id, mu_s, mu_k``, their standard uncertainties ``u_mu_s, u_mu_k`` (GUM,
+    k = 1; the budget is ``parameters["uncertainty"]``) and expanded uncertainties
+    ``U95_mu_s, U95_mu_k`` (k = 2), ``pressure_kPa`` (measured mean, per pin),
     ``normal_force_N`` (measured mean, total), ``temperature_C`` (measured mean or
     ``None``), ``flags`` (list), the μ_S position (``mu_s_distance_mm``, ``mu_s_time_s``),
     the μ_K window (``mu_k_window_mm``, ``mu_k_window_s``), plateau std and drift, sliding
@@ -302,6 +304,10 @@ def run_summary(outcome: RunOutcome) -> dict[str, Any]:
         "measurement_id": outcome.measurement_id,
         "mu_s": float(r.mu_s),
         "mu_k": float(r.mu_k),
+        "u_mu_s": finite_or_none(r.u_mu_s),
+        "u_mu_k": finite_or_none(r.u_mu_k),
+        "U95_mu_s": finite_or_none(2.0 * r.u_mu_s),
+        "U95_mu_k": finite_or_none(2.0 * r.u_mu_k),
         "pressure_kPa": float(r.pressure_kPa),
         "normal_force_N": float(r.normal_force_mean_N),
         "temperature_C": finite_or_none(r.temperature_C),

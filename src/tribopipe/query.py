@@ -44,7 +44,9 @@ QUANTITIES = ("mu_k", "mu_s")
 
 @dataclass(frozen=True)
 class UsedPoint:
-    """A measured group that contributed to an interpolated value, with its weight (0..1]."""
+    """A measured group that contributed to an interpolated value, with its weight (0..1]
+    and ``u``, the combined standard uncertainty of its mean (GUM, k = 1; ``None`` when
+    unknown, see :mod:`tribopipe.stats`)."""
 
     pressure_kPa: float
     temperature_C: float | None
@@ -52,6 +54,7 @@ class UsedPoint:
     ci95_half_width: float | None
     n: int
     weight: float
+    u: float | None = None
 
 
 @dataclass(frozen=True)
@@ -59,8 +62,13 @@ class Estimate:
     """One interpolated coefficient with its evidence.
 
     ``uncertainty`` is the weighted 95 % CI half-width of the groups used (``None`` when a
-    used group has no CI, e.g. a single run). ``clamped_pressure`` / ``clamped_temperature``
-    say that the request lay outside the measured range and the edge value was held.
+    used group has no CI, e.g. a single run): what the repeats support. ``u_combined`` is
+    the weighted combined standard uncertainty of the groups' means (GUM, k = 1: their
+    runs' budgets beside the repeat scatter; ``None`` when a used group's is unknown); the
+    same weighted sum, which is exact for the correlated part that dominates it (the
+    friction radius) and conservative for the rest. ``clamped_pressure`` /
+    ``clamped_temperature`` say that the request lay outside the measured range and the
+    edge value was held.
     """
 
     value: float
@@ -68,6 +76,7 @@ class Estimate:
     used: tuple[UsedPoint, ...]
     clamped_pressure: bool
     clamped_temperature: bool
+    u_combined: float | None = None
 
 
 @dataclass(frozen=True)
@@ -218,7 +227,8 @@ def _points(pair_groups: pd.DataFrame, quantity: str) -> pd.DataFrame:
     """The pair's measured points for ``quantity``: one row per (pressure, temperature).
 
     Groups that share a condition (e.g. split by sliding speed) are merged by the
-    run-weighted mean of their means and the largest CI half-width, so nothing is dropped.
+    run-weighted mean of their means and the largest CI half-width and combined standard
+    uncertainty, so nothing is dropped.
     """
     import numpy as np
     import pandas as pd
@@ -230,6 +240,7 @@ def _points(pair_groups: pd.DataFrame, quantity: str) -> pd.DataFrame:
         return pd.to_numeric(pair_groups[name], errors="coerce").astype(float)
 
     mean = column(f"{quantity}_mean", math.nan)
+    u = column(f"{quantity}_u", math.nan)
     low = column(f"{quantity}_ci95_low", math.nan)
     high = column(f"{quantity}_ci95_high", math.nan)
     n = column(f"{quantity}_n", 1.0)
@@ -239,6 +250,7 @@ def _points(pair_groups: pd.DataFrame, quantity: str) -> pd.DataFrame:
             "temperature_C": pd.to_numeric(pair_groups["temperature_C"], errors="coerce"),
             "mean": mean,
             "half": (high - low) / 2.0,
+            "u": u,
             # a finite mean stands for at least one run, whatever the count column says
             "n": n.fillna(1).clip(lower=1).astype(float),
         }
@@ -256,6 +268,7 @@ def _points(pair_groups: pd.DataFrame, quantity: str) -> pd.DataFrame:
                 "temperature_C": float(grp["temperature_C"].iloc[0]),
                 "mean": float((grp["mean"] * grp["n"]).sum() / n_tot),
                 "half": float(grp["half"].max()) if grp["half"].notna().all() else math.nan,
+                "u": float(grp["u"].max()) if grp["u"].notna().all() else math.nan,
                 "n": int(n_tot),
             }
         )
@@ -274,7 +287,8 @@ def pair_points(pair_groups: pd.DataFrame, quantity: str = "mu_k") -> pd.DataFra
 
     ``pair_groups`` are the pair's groups (:func:`select_pair`). One row per (pressure
     [kPa], temperature [°C]) with ``pressure_kPa, temperature_C, mean, half`` (95 % CI
-    half-width, NaN when unknown) and ``n``, sorted by pressure then temperature — the
+    half-width, NaN when unknown), ``u`` (combined standard uncertainty of the mean, NaN
+    when unknown) and ``n``, sorted by pressure then temperature — the
     row order the interpolation sums in. Points without a temperature are left out when
     others have one, as :func:`query` does. For pages that redo the interpolation (the
     explorer); :func:`query` itself is the reference.
@@ -296,6 +310,8 @@ def _estimate(points: pd.DataFrame, pressure_kPa: float, temperature_C: float | 
     uncertainty = (
         float(np.dot(weights[used_idx], halves)) if np.isfinite(halves).all() else None
     )
+    us = points["u"].to_numpy()[used_idx] if "u" in points else np.full(used_idx.size, np.nan)
+    u_combined = float(np.dot(weights[used_idx], us)) if np.isfinite(us).all() else None
     used = tuple(
         UsedPoint(
             pressure_kPa=float(points["pressure_kPa"].iloc[i]),
@@ -304,10 +320,11 @@ def _estimate(points: pd.DataFrame, pressure_kPa: float, temperature_C: float | 
             ci95_half_width=finite_or_none(points["half"].iloc[i]),
             n=int(points["n"].iloc[i]),
             weight=float(weights[i]),
+            u=finite_or_none(points["u"].iloc[i]) if "u" in points else None,
         )
         for i in used_idx
     )
-    return Estimate(value, uncertainty, used, clamped_p, clamped_t)
+    return Estimate(value, uncertainty, used, clamped_p, clamped_t, u_combined)
 
 
 # ---------------------------------------------------------------------------- public API
@@ -387,7 +404,9 @@ def friction_table(
 
     Rows cover every measured pressure [kPa] at every measured temperature [°C] (sorted,
     temperature outer, pressure inner — the order ABAQUS wants). Columns:
-    ``pressure_kPa, temperature_C, <quantity>, uncertainty, measured`` (bool). Cells that
+    ``pressure_kPa, temperature_C, <quantity>, uncertainty, u_combined, measured`` (bool;
+    ``uncertainty`` the CI half-width, ``u_combined`` the combined standard uncertainty,
+    see :class:`Estimate`). Cells that
     were not measured are filled by :func:`query`'s interpolation (``measured`` False).
     ``temperature_C`` is NaN throughout when the pair has no temperature.
     """
@@ -416,6 +435,7 @@ def friction_table(
                     "temperature_C": math.nan if t is None else float(t),
                     quantity: est.value,
                     "uncertainty": math.nan if est.uncertainty is None else est.uncertainty,
+                    "u_combined": math.nan if est.u_combined is None else est.u_combined,
                     "measured": (float(p), t) in measured,
                 }
             )
@@ -460,7 +480,9 @@ def format_result(res: QueryResult) -> str:
         if est is None:
             return f"{name} = unknown (no group of this pair holds it)"
         unc = "" if est.uncertainty is None else f" ± {est.uncertainty:.3f} (95 % CI, interpolated)"
-        return f"{name} = {est.value:.3f}{unc}"
+        comb = ("" if est.u_combined is None else
+                f"; combined u = {est.u_combined:.3f}, U = {2 * est.u_combined:.3f} (k = 2)")
+        return f"{name} = {est.value:.3f}{unc}{comb}"
 
     t = "" if res.temperature_C is None else f", {res.temperature_C:g} °C"
     lines = [

@@ -131,7 +131,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from . import uncertainty
-from .config import InstrumentConfig, ReductionParams
+from .config import REDUCTION_METHOD, InstrumentConfig, ReductionParams
 from .detection import (  # noqa: F401 - the detection steps are importable from here too
     MIN_FLANK_SAMPLES,
     StickSlipTest,
@@ -183,8 +183,9 @@ if TYPE_CHECKING:
 
 
 METHOD = (
-    "tribopipe-v2: settled-plateau mean; static peak = maximum before the plateau "
-    "(median filter + Savitzky-Golay, cliff fits); periodic-line stick-slip test"
+    f"{REDUCTION_METHOD}: settled-plateau mean; static peak = maximum before the plateau "
+    "(median filter + Savitzky-Golay, cliff fits, widening quadratics); periodic-line "
+    "stick-slip test"
 )
 
 FLAGS: tuple[str, ...] = (

@@ -149,6 +149,18 @@ def _interval(low: Any, high: Any) -> str:
     return f"[{lo}, {hi}]" if lo and hi else ""
 
 
+def _span(low: Any, high: Any) -> str:
+    """``low–high`` with 3 decimals; '' when either end is missing."""
+    lo, hi = _num(low, ".3f"), _num(high, ".3f")
+    return f"{lo}–{hi}" if lo and hi else ""
+
+
+def _expanded(u: Any) -> str:
+    """``± U`` with U = 2u (k = 2) and 3 decimals; '' when u is missing."""
+    text = _num(2.0 * float(u), ".3f") if _num(u, ".3f") else ""
+    return f"± {text}" if text else ""
+
+
 def run_anchor(measurement_id: str) -> str:
     """The HTML id of a run's section: ``run-<measurement_id>``."""
     return "run-" + "".join(c if c.isalnum() or c in "-_" else "_" for c in measurement_id)
@@ -244,8 +256,9 @@ def _group_table(inp: ReportInputs) -> str:
     overlaid = set(_overlay_groups(inp))
     head = (
         "<tr><th class=t>pin</th><th class=t>disc</th><th>F [N]</th><th>p [kPa]</th>"
-        "<th>T [°C]</th><th>n</th><th>μ_K mean</th><th>μ_K SD</th><th>μ_K 95 % CI</th>"
-        "<th>μ_K CV</th>" + ("<th>μ_S n</th><th>μ_S mean</th>" if with_mu_s else "")
+        "<th>T [°C]</th><th>n</th><th>μ_K mean</th><th>U (k = 2)</th><th>μ_K SD</th>"
+        "<th>μ_K 95 % CI</th><th>μ_K min–max</th><th>μ_K CV</th>"
+        + ("<th>μ_S n</th><th>μ_S mean</th><th>U (k = 2)</th>" if with_mu_s else "")
         + "<th class=t>QC</th><th class=t>runs</th></tr>"
     )
     rows = []
@@ -268,18 +281,24 @@ def _group_table(inp: ReportInputs) -> str:
             f"<tr{cls}><td class=t>{_e(g['pin'])}</td><td class=t>{pair}</td>"
             f"<td>{_num(g['normal_force_N'], 'g')}</td><td>{_num(g['pressure_kPa'], '.4g')}</td>"
             f"<td>{_num(g['temperature_C'], 'g')}</td><td>{g['mu_k_n']}</td>"
-            f"<td>{_num(g['mu_k_mean'], '.3f')}</td><td>{_num(g['mu_k_std'], '.3f')}</td>"
-            f"<td>{ci}</td><td>{_num(g['mu_k_cv'], '.3f')}</td>"
-            + (f"<td>{g['mu_s_n']}</td><td>{_num(g['mu_s_mean'], '.3f')}</td>" if with_mu_s
-               else "")
+            f"<td>{_num(g['mu_k_mean'], '.3f')}</td><td>{_expanded(g.get('mu_k_u'))}</td>"
+            f"<td>{_num(g['mu_k_std'], '.3f')}</td><td>{ci}</td>"
+            f"<td>{_span(g['mu_k_min'], g['mu_k_max'])}</td>"
+            f"<td>{_num(g['mu_k_cv'], '.3f')}</td>"
+            + (f"<td>{g['mu_s_n']}</td><td>{_num(g['mu_s_mean'], '.3f')}</td>"
+               f"<td>{_expanded(g.get('mu_s_u'))}</td>" if with_mu_s else "")
             + f"<td class=t>{', '.join(qc)}</td>"
             f"<td class=t>{links}</td></tr>"
         )
     return (
         '<section id="groups"><h2>Condition groups</h2>'
         "<p class=muted>One row per pair, nominal force and temperature; statistics over "
-        "the repeats (excluded runs left out). QC: the group's range exceeds the "
-        "repeatability limit r, or it holds a run with QC flags. Run ids link to the "
+        "the repeats (excluded runs left out). U (k = 2): the expanded combined uncertainty "
+        "of the group mean, from the runs' own budgets beside the repeat scatter (empty "
+        "where a run has none, e.g. imported rows). With n = 2 the t-interval uses "
+        "t = 12.7 and can reach below zero: the min–max range beside it is the plainer "
+        "picture. QC: the group's range exceeds the repeatability limit r, or it holds a "
+        "run with QC flags. Run ids link to the "
         "runs" + ("" if inp.map_report else " and their trace plots") + "."
         + ("" if with_mu_s else " The map holds no μ_S, so its columns are left out.")
         + "</p>" + _csv_link(inp.groups, "groups.csv", "group-csv")
@@ -355,13 +374,13 @@ def _flagged(inp: ReportInputs) -> str:
                 f'<a href="#{run_anchor(mid)}">{escape(mid[:8])}</a></td>'
                 f"<td class=t>{_e(r.get('source_file'))}</td><td class=t>{_e(r['pin'])}</td>"
                 f"<td class=t>{_e(r['disc'])}</td><td>{_num(r['pressure_kPa'], '.4g')}</td>"
-                f"<td>{_num(r['mu_k'], '.3f')}</td>"
+                f"<td>{_num(r['mu_k'], '.3f')} {_expanded(r.get('u_mu_k'))}</td>"
                 f"<td class=t>{escape(', '.join(_flag_list(r.get('flags'))))}</td>"
                 f"<td class=t>{'excluded: ' + reason if excluded else ''}</td></tr>"
             )
         body = (
             "<table id=flagged-table><thead><tr><th class=t>run</th><th class=t>file</th>"
-            "<th class=t>pin</th><th class=t>disc</th><th>p [kPa]</th><th>μ_K</th>"
+            "<th class=t>pin</th><th class=t>disc</th><th>p [kPa]</th><th>μ_K ± U</th>"
             "<th class=t>flags</th><th class=t>exclusion</th></tr></thead>"
             f"<tbody>{''.join(rows)}</tbody></table>"
         )
@@ -407,8 +426,9 @@ def _runs(inp: ReportInputs) -> str:
                 f"<td class=t>{_e(r['pin'])}</td><td class=t>{_e(r['disc'])}</td>"
                 f"<td>{_num(r['pressure_kPa'], '.4g')}</td>"
                 f"<td>{_num(r['temperature_C'], 'g')}</td><td>{escape(repeat)}</td>"
-                f"<td>{_num(r['mu_k'], '.3f')}</td>"
-                + (f"<td>{_num(r['mu_s'], '.3f')}</td>" if with_mu_s else "")
+                f"<td>{_num(r['mu_k'], '.3f')} {_expanded(r.get('u_mu_k'))}</td>"
+                + (f"<td>{_num(r['mu_s'], '.3f')} {_expanded(r.get('u_mu_s'))}</td>"
+                   if with_mu_s else "")
                 + f"<td class=t>{_e(r.get('source'))}</td><td class=t>{_e(r.get('lab'))}</td>"
                 f"<td class=t>{escape(', '.join(_flag_list(r.get('flags'))))}</td></tr>"
             )
@@ -423,7 +443,9 @@ def _runs(inp: ReportInputs) -> str:
             f"{escape(mid[:8])} · {_e(r['pin'])} on {_e(r['disc'])} · "
             f"{_num(r['pressure_kPa'], '.4g')} kPa · {_num(r['temperature_C'], 'g')} °C"
             f"{escape(', repeat ' + repeat if repeat else '')} · μ_K {_num(r['mu_k'], '.3f')}"
-            + (f" · μ_S {_num(r['mu_s'], '.3f')}" if _num(r["mu_s"], ".3f") else "")
+            f" {_expanded(r.get('u_mu_k'))}"
+            + (f" · μ_S {_num(r['mu_s'], '.3f')} {_expanded(r.get('u_mu_s'))}"
+               if _num(r["mu_s"], ".3f") else "")
         )
         facts = (
             f"<p>file: {_e(r.get('source_file'))}; source: {_e(r.get('source'))}; "
@@ -441,7 +463,9 @@ def _runs(inp: ReportInputs) -> str:
              "plots)</h2>"]
     if blocks:
         parts.append("<p class=muted>μ over sliding distance with the μ_S peak (red) and the "
-                     "μ_K window (blue). Click a run to open it.</p>" + "".join(blocks))
+                     "μ_K window (blue), each ± U (k = 2); a reading at a search limit or a "
+                     "window at the trace's end is marked. Click a run to open it.</p>"
+                     + "".join(blocks))
     if plain:
         table = (
             "<table id=runs-table><thead><tr><th class=t>run</th><th class=t>pin</th>"

@@ -5,6 +5,15 @@ one nominal pressure [kPa]) and one nominal temperature [°C]; optionally also o
 speed [mm/s]. Nominal values are rounded before grouping (force to 1e-6 N, temperature to
 0.01 °C, speed to two significant digits) so 11.79 vs 11.7893 kPa never splits a group.
 
+Beside the repeat statistics each group carries its combined standard uncertainty (GUM,
+k = 1) from the runs' own budgets (:mod:`tribopipe.uncertainty`): ``u_run`` is the mean of
+the runs' combined standard uncertainties, and the group mean's is
+``u = √(sem² + u_run²)``: the repeat scatter (sem, which already holds each run's noise)
+plus the runs' uncertainty counted as fully correlated between the runs (its largest
+part, the friction radius, is the same for every run of a cell; counting the rest so is
+conservative). With one run u = u_run; when a run has no uncertainty (an imported row, a
+run reduced before uncertainties were recorded) the group's is unknown (NaN).
+
 With two or three repeats per group no statistical outlier test is meaningful (ISO 5725,
 ASTM E178). Instead, the within-group standard deviations are pooled over all groups into
 a repeatability standard deviation s_r, and groups whose range exceeds the repeatability
@@ -27,6 +36,10 @@ QUANTITIES: tuple[str, ...] = ("mu_k", "mu_s")
 STAT_FIELDS: tuple[str, ...] = (
     "n", "mean", "std", "sem", "ci95_low", "ci95_high", "cv", "min", "max", "values",
 )
+#: The per-group columns of each quantity: the repeat statistics, then the uncertainty
+#: (``u_run``: mean of the runs' combined standard uncertainties; ``u``: combined standard
+#: uncertainty of the group mean), then the values.
+GROUP_FIELDS: tuple[str, ...] = STAT_FIELDS[:-1] + ("u_run", "u", "values")
 #: Repeatability limit factor: r = 2.8·s_r (≈ 1.96·√2, ISO 5725-6).
 R_FACTOR = 2.8
 #: Two nominal pressures of one force group more than this fraction apart are different
@@ -162,7 +175,8 @@ def group_statistics(runs: pd.DataFrame, *, by_speed: bool = False) -> pd.DataFr
     modified. Excluded runs are left out; groups with no remaining run are dropped.
     Columns: ``pin, disc, normal_force_N, pressure_kPa, temperature_C``
     (+ ``sliding_speed_mm_s`` with ``by_speed``), then for q in ``mu_k``, ``mu_s``:
-    ``q_n, q_mean, q_std, q_sem, q_ci95_low, q_ci95_high, q_cv, q_min, q_max, q_values``,
+    ``q_n, q_mean, q_std, q_sem, q_ci95_low, q_ci95_high, q_cv, q_min, q_max, q_u_run,
+    q_u, q_values``,
     then ``range_exceeds_r, qc_flagged, run_ids``. Within a group, values and ids are in
     (repeat, measurement_id) order, so the result does not depend on the row order.
     Rows are sorted by pin, disc, temperature, pressure, force (and speed).
@@ -173,7 +187,7 @@ def group_statistics(runs: pd.DataFrame, *, by_speed: bool = False) -> pd.DataFr
     condition_cols = ["pin", "disc", "normal_force_N", "pressure_kPa", "temperature_C"]
     if by_speed:
         condition_cols.append("sliding_speed_mm_s")
-    stat_cols = [f"{q}_{f}" for q in QUANTITIES for f in STAT_FIELDS]
+    stat_cols = [f"{q}_{f}" for q in QUANTITIES for f in GROUP_FIELDS]
     columns = condition_cols + stat_cols + ["range_exceeds_r", "qc_flagged", "run_ids"]
 
     included = runs.loc[~runs["excluded"].astype(bool)]
@@ -188,6 +202,8 @@ def group_statistics(runs: pd.DataFrame, *, by_speed: bool = False) -> pd.DataFr
     }
     for q in QUANTITIES:
         data[q] = included[q].to_numpy(dtype=float)
+        data[f"u_{q}"] = (included[f"u_{q}"].to_numpy(dtype=float) if f"u_{q}" in included
+                          else np.full(len(included), np.nan))
     rows: list[dict[str, Any]] = []
     if len(included):
         grouped = keys.groupby(key_cols, dropna=False, sort=False).indices
@@ -243,11 +259,26 @@ def _group_row(
     row["pressure_kPa"] = float(np.median(data["pressure_kPa"][order]))
     for q in QUANTITIES:
         values = data[q][order]
-        stats = describe_values(values[np.isfinite(values)])
+        finite = np.isfinite(values)
+        stats = describe_values(values[finite])
         row.update({f"{q}_{f}": v for f, v in stats.items()})
+        row.update(_group_uncertainty(data[f"u_{q}"][order][finite], stats["sem"], q))
     row["qc_flagged"] = any(str(f).strip() for f in data["flags"][order])
     row["run_ids"] = ";".join(data["measurement_id"][order])
     return row
+
+
+def _group_uncertainty(u_runs: Any, sem: float, q: str) -> dict[str, float]:
+    """``q_u_run`` and ``q_u`` of a group (module docstring) from its runs' standard
+    uncertainties (the runs with a value of q) and the standard error of their mean."""
+    import numpy as np
+
+    u = np.asarray(u_runs, dtype=float)
+    if u.size == 0 or not np.isfinite(u).all():
+        return {f"{q}_u_run": math.nan, f"{q}_u": math.nan}
+    u_run = float(np.mean(u))
+    scatter = sem if math.isfinite(sem) else 0.0
+    return {f"{q}_u_run": u_run, f"{q}_u": math.hypot(scatter, u_run)}
 
 
 def _repeat_key(value: float) -> tuple[int, int]:

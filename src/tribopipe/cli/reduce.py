@@ -73,13 +73,14 @@ def reduce_cmd(
 
     Every friction interval of every test in each file is a run (a session export holds
     several tests; a test with force or speed steps several intervals). Prints one row per
-    run (μ_S, μ_K, contact pressure per pin, mean normal force, flags; which test and
-    interval when a file holds several), writes each run's reduced trace (Parquet) and a
-    JSON summary with the evidence to --out, and appends the runs to the friction map
-    (unless --no-map). A file whose content an earlier FILE or the map already holds under
-    another name is a duplicate (stored once) or, with other labels, a conflict (refused).
-    Exit code 1 when any file or run could not be reduced, or was refused; the others are
-    still reduced and stored.
+    run (μ_S and μ_K, each with its expanded uncertainty ±U95 at k = 2, contact pressure
+    per pin, mean normal force, flags; which test and interval when a file holds several;
+    the standard uncertainties and their budgets are in the JSON summaries), writes each
+    run's reduced trace (Parquet) and a JSON summary with the evidence to --out, and
+    appends the runs to the friction map (unless --no-map). A file whose content an
+    earlier FILE or the map already holds under another name is a duplicate (stored once)
+    or, with other labels, a conflict (refused). Exit code 1 when any file or run could
+    not be reduced, or was refused; the others are still reduced and stored.
     """
     from ..config import load_settings
     from ..pipeline import ReadOptions, RunLabels, reduce_files
@@ -153,14 +154,15 @@ def _print(outcomes: list, as_json: bool) -> None:
     runs = _run_labels(outcomes)
     run_width = max((len(v) for v in runs.values()), default=0)
     run_head = f" {'run':<{run_width}}" if runs else ""
-    header = (f"{'file':<40}{run_head} {'mu_s':>6} {'mu_k':>6} {'p_kPa':>7} {'F_N_N':>6} "
-              f"{'T_C':>6}  flags")
+    header = (f"{'file':<40}{run_head} {'mu_s':>6} {'±U95':>6} {'mu_k':>6} {'±U95':>6} "
+              f"{'p_kPa':>7} {'F_N_N':>6} {'T_C':>6}  flags")
     click.echo(header)
     for k, s in enumerate(summaries):
         name = s["file"] if len(s["file"]) <= 40 else "…" + s["file"][-39:]
         run = f" {runs.get(k, '-'):<{run_width}}" if runs else ""
         click.echo(
-            f"{name:<40}{run} {s['mu_s']:6.3f} {s['mu_k']:6.3f} {s['pressure_kPa']:7.2f} "
+            f"{name:<40}{run} {s['mu_s']:6.3f} {_fmt(s['U95_mu_s'], '6.3f'):>6} "
+            f"{s['mu_k']:6.3f} {_fmt(s['U95_mu_k'], '6.3f'):>6} {s['pressure_kPa']:7.2f} "
             f"{s['normal_force_N']:6.3f} {_fmt(s['temperature_C'], '6.1f'):>6}  "
             f"{','.join(s['flags']) or '-'}"
         )

@@ -319,7 +319,8 @@ def selected_pairs(
 def table_at(
     groups: pd.DataFrame, pin: str, disc: str, temperature_C: float | None
 ) -> pd.DataFrame:
-    """The pair's μ_K table (``pressure_kPa, temperature_C, mu_k, uncertainty, measured``),
+    """The pair's μ_K table (``pressure_kPa, temperature_C, mu_k, uncertainty, u_combined,
+    measured``),
     or its single-temperature slice interpolated at ``temperature_C`` [°C]."""
     import pandas as pd
 
@@ -338,6 +339,7 @@ def table_at(
                 "temperature_C": temperature_C,
                 "mu_k": res.mu_k.value,
                 "uncertainty": math.nan if res.mu_k.uncertainty is None else res.mu_k.uncertainty,
+                "u_combined": math.nan if res.mu_k.u_combined is None else res.mu_k.u_combined,
                 "measured": measured,
             }
         )

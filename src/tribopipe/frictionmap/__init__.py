@@ -107,6 +107,7 @@ from .summary import (
 )
 
 __all__ = [
+    "ADDED_IN_VERSION",
     "META_KEY",
     "SCHEMA_NAME",
     "SCHEMA_VERSION",

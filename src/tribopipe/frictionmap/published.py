@@ -203,6 +203,8 @@ def import_records(
                 "repeat": repeat,
                 "mu_s": None,
                 "mu_k": cof,
+                "u_mu_s": None,
+                "u_mu_k": None,
                 "mu_s_distance_mm": None,
                 "mu_s_time_s": None,
                 "mu_k_window_start_mm": None,

@@ -200,6 +200,8 @@ def make_record(
         "repeat": labels.repeat,
         "mu_s": finite_or_nan(result.mu_s),
         "mu_k": mu_k,
+        "u_mu_s": finite_or_nan(result.u_mu_s),
+        "u_mu_k": finite_or_nan(result.u_mu_k),
         "mu_s_distance_mm": finite_or_nan(result.mu_s_distance_mm),
         "mu_s_time_s": finite_or_nan(result.mu_s_time_s),
         "mu_k_window_start_mm": finite_or_nan(k_start_mm),

@@ -21,7 +21,7 @@ if TYPE_CHECKING:
 #: Parquet key-value metadata key holding the schema and provenance (JSON).
 META_KEY = b"tribopipe.frictionmap"
 SCHEMA_NAME = "tribopipe.frictionmap"
-SCHEMA_VERSION = 2
+SCHEMA_VERSION = 3
 
 #: ``source`` of runs reduced by tribopipe (imported rows name their origin instead).
 SOURCE_REDUCED = "reduced"
@@ -44,6 +44,8 @@ _SCHEMA: tuple[tuple[str, str, str, str], ...] = (
     ("repeat", "int", "", "repeat number within the condition"),
     ("mu_s", "float", "", "static coefficient of friction"),
     ("mu_k", "float", "", "kinetic coefficient of friction"),
+    ("u_mu_s", "float", "", "standard uncertainty of μ_S (GUM, k = 1)"),
+    ("u_mu_k", "float", "", "standard uncertainty of μ_K (GUM, k = 1)"),
     ("mu_s_distance_mm", "float", "mm", "sliding distance at the static peak"),
     ("mu_s_time_s", "float", "s", "time of the static peak"),
     ("mu_k_window_start_mm", "float", "mm", "start of the kinetic plateau window"),
@@ -68,7 +70,7 @@ RUN_COLUMNS: tuple[str, ...] = tuple(name for name, *_ in _SCHEMA)
 #: Columns added after schema version 1, with the version that added them: a map written
 #: before that version lacks them and reads with them missing, and a record built by older
 #: code may leave them out.
-ADDED_IN_VERSION: dict[str, int] = {"lab": 2}
+ADDED_IN_VERSION: dict[str, int] = {"lab": 2, "u_mu_s": 3, "u_mu_k": 3}
 _KIND: dict[str, str] = {name: kind for name, kind, *_ in _SCHEMA}
 #: Columns that say where a row came from, not what was measured: two rows with the same
 #: id that differ only here are the same run (a renamed file, a later import).

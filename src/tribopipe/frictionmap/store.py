@@ -53,9 +53,11 @@ PAUSE_ENV = "TRIBOPIPE_TEST_PAUSE_BEFORE_RENAME"
 def read_map(path: str | os.PathLike[str]) -> pd.DataFrame:
     """Read and validate a friction map; an absent file is an empty map.
 
-    Raises :class:`MapError` naming the path when the file is not Parquet, is a Parquet
-    file without tribopipe's schema metadata (a foreign file), was written by a newer
-    schema, or lacks columns.
+    A map of an older schema version reads with the columns added since
+    (:data:`~tribopipe.frictionmap.schema.ADDED_IN_VERSION`) missing; the next write stores
+    it in the current version. Raises :class:`MapError` naming the path when the file is
+    not Parquet, is a Parquet file without tribopipe's schema metadata (a foreign file),
+    was written by a newer schema, or lacks columns.
     """
     import pyarrow as pa
     import pyarrow.parquet as pq

@@ -124,3 +124,59 @@ def test_tukey_taper_is_flat_in_the_middle_and_its_bins_are_nearly_independent()
     rho1, rho2 = taper_bin_correlation_sq(w)
     assert rho1 < 0.05 and rho2 < 0.05
     assert taper_bin_correlation_sq(np.ones(100)) == pytest.approx((0.0, 0.0), abs=1e-20)
+
+
+# --------------------------------------------------------------------------- peak readings
+
+
+def test_a_broad_peak_is_read_by_a_wide_quadratic_not_by_the_noise_maximum() -> None:
+    from tribopipe.signals import quadratic_peak
+
+    rng = np.random.default_rng(11)
+    x = np.arange(6000.0)
+    clean = 0.8 - 2e-8 * (x - 3000.0) ** 2  # 0.18 lower 3000 samples away
+    values = clean + 0.015 * rng.standard_normal(x.size)
+    k = 3000 + int(np.argmax(savgol(values, 21)[2900:3100])) - 100
+    value, position, width = quadratic_peak(values, k, 0, x.size - 1, first_half_width=10,
+                                            noise_sd=0.015, sample_sd=0.015)
+    assert width > 1000
+    assert value == pytest.approx(0.8, abs=0.004)
+    assert savgol(values, 21).max() > 0.805  # what a 21-sample reading would have given
+    assert position == pytest.approx(3000, abs=200)
+
+
+def test_a_quadratic_is_not_laid_over_a_sudden_slip() -> None:
+    from tribopipe.signals import quadratic_peak
+
+    x = np.arange(2000.0)
+    values = np.where(x < 1000, 0.8 - 1e-6 * (x - 950) ** 2, 0.55)  # a slip at 1000
+    breaks = np.zeros(x.size, dtype=bool)
+    breaks[999] = True
+    value, position, width = quadratic_peak(values, 950, 0, x.size - 1, first_half_width=5,
+                                            noise_sd=0.001, sample_sd=0.001, breaks=breaks)
+    assert 40 < width <= 81  # it grew until the next window would reach the slip
+    assert value == pytest.approx(0.8, abs=1e-6) and position == pytest.approx(950, abs=0.5)
+
+
+def test_a_flank_is_read_at_its_end_from_as_much_of_it_as_fits() -> None:
+    from tribopipe.signals import flank_peak
+
+    rng = np.random.default_rng(12)
+    x = np.arange(3000.0)
+    values = 0.2 + 0.6 * x / 2999 + 0.01 * rng.standard_normal(x.size)  # linear rise to 0.8
+    value, width = flank_peak(values, 2999, 0, first_window=64, noise_sd=0.01,
+                              sample_sd=0.01)
+    assert width >= 1024
+    assert value == pytest.approx(0.8, abs=0.003)
+
+
+def test_effective_noise_of_correlated_noise_counts_its_autocorrelation() -> None:
+    from tribopipe.reduce import effective_noise
+
+    rng = np.random.default_rng(13)
+    white = 0.01 * rng.standard_normal(20000)
+    assert effective_noise(white, 71) == pytest.approx(0.01, rel=0.08)
+    coloured = 0.01 * _ar1(rng, 20000, 0.5)  # τ = 3: √3 × the white estimate, less what
+    # the running mean takes of the correlation (documented: ~18 % low here)
+    assert 0.01 * math.sqrt(3) * 0.75 < effective_noise(coloured, 71) < 0.01 * math.sqrt(3)
+    assert effective_noise(coloured, 71) > 1.3 * effective_noise(white, 71)

@@ -20,6 +20,7 @@ from . import uncertainty
 from .config import ReductionParams
 from .signals import (
     end_point_weights,
+    flank_peak,
     one_sided_fits,
     periodic_line,
     quadratic_peak,
@@ -150,6 +151,23 @@ def settling_block_mm(block_mm: float, period_mm: float | None) -> float:
     return math.ceil(block_mm / period_mm - 1e-9) * period_mm
 
 
+def effective_noise(values: Any, window: int) -> float:
+    """Per-sample noise [COF] of ``values`` (shape (n,)) as it matters for means: the
+    robust standard deviation (1.4826·MAD) of what a running mean over ``window`` samples
+    leaves (slow trends, transients and the plateau's level removed) times √τ_int, its
+    integrated autocorrelation time (correlated noise averages down more slowly). The
+    running mean takes the slowest part of the noise's correlation with it, so τ_int and
+    the result are somewhat low for strongly correlated noise (by ~18 % for AR(1) noise
+    with ρ = 0.5 and 71-sample windows); the settling test backs it with the scatter of
+    the block means themselves."""
+    v = np.asarray(values, dtype=float)
+    if v.size < 8:
+        return noise_std(v)
+    r = v - running_mean(v, max(3, int(window)))
+    spread = 1.4826 * float(np.median(np.abs(r - np.median(r))))
+    return spread * math.sqrt(uncertainty.integrated_autocorrelation_time(r))
+
+
 def _block_means(
     s: np.ndarray, m: np.ndarray, start_mm: float, block: float
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -185,7 +203,9 @@ def find_plateau_start(
     *, block_mm: float | None = None,
 ) -> tuple[float | None, float]:
     """Start [mm] of the settled plateau in ``mu`` over ``s_mm`` (both shape (n,), valid
-    samples only) searched from ``start_mm`` on, and the tolerance used [COF], with blocks
+    samples only) searched from ``start_mm`` on, and the tolerance used [COF]; ``noise``
+    is the per-sample noise with its autocorrelation counted (:func:`effective_noise`:
+    a block mean of n samples scatters by noise/√n). Blocks
     of ``block_mm`` (default ``params.block_mm``), lengthened by a whole factor when the
     block means scatter so much that the noise allowance would exceed ``settle_tol`` (the
     scatter of a mean falls with its length), up to half of ``plateau_min_mm``.
@@ -204,15 +224,17 @@ def find_plateau_start(
 
     def allowance(means: np.ndarray, counts: np.ndarray) -> float:
         # every block is compared: the noise allowance grows with their number so that a
-        # settled plateau of pure noise fails the test with probability settle_alpha only
+        # settled plateau of pure noise fails the test with probability settle_alpha only;
+        # the scatter is read where a plateau would be, the later half of the blocks
         z = NormalDist().inv_cdf(1.0 - params.settle_alpha / (2.0 * means.size))
         se_block = noise / math.sqrt(float(np.median(counts)))
-        return z * max(se_block, _block_scatter(means))
+        return z * max(se_block, _block_scatter(means[means.size // 2 :]))
 
     noise_tol = allowance(means, counts)
     longest = 0.5 * params.plateau_min_mm
     if noise_tol > params.settle_tol and block < longest:
-        factor = min(math.ceil((noise_tol / params.settle_tol) ** 2), int(longest // block))
+        factor = min(math.ceil((noise_tol / params.settle_tol) ** 2),
+                     int(longest / block + 1e-9))
         if factor > 1:
             longer = _block_means(s, m, start_mm, block * factor)
             if longer[0].size >= 2:
@@ -321,6 +343,80 @@ def _oscillation_block_mm(s_mm: np.ndarray, mu: np.ndarray, params: ReductionPar
     return params.block_mm
 
 
+def _find_plateau(
+    s_v: np.ndarray, mu_v: np.ndarray, step_mm: float, params: ReductionParams
+) -> tuple[np.ndarray, bool, float]:
+    """Step 3 on the valid samples (distance [mm], μ; shape (n,)): the μ_K window (a
+    boolean mask), whether it settled, and the settling tolerance [COF]. Not settled: the
+    last ``plateau_min_mm`` of the trace (or its second half when that is all there is)."""
+    post = s_v >= params.run_in_mm
+    tol = params.settle_tol
+    plateau_start: float | None = None
+    if post.sum() >= 3:
+        block_mm = _oscillation_block_mm(s_v[post], mu_v[post], params)
+        block_samples = max(3, int(round(block_mm / step_mm)))
+        plateau_start, tol = find_plateau_start(
+            s_v[post], mu_v[post], params.run_in_mm,
+            effective_noise(mu_v[post], block_samples), params, block_mm=block_mm,
+        )
+    settled = plateau_start is not None
+    if plateau_start is None:
+        end = float(s_v[-1])
+        plateau_start = max(params.run_in_mm, end - params.plateau_min_mm)
+        if plateau_start >= end:
+            plateau_start = end / 2
+    window = s_v >= plateau_start
+    if window.sum() < 3:
+        window = np.arange(s_v.size) >= s_v.size // 2
+    return window, settled, tol
+
+
+def _plateau_noise(mu_w: np.ndarray, sigma: float, oscillating: bool) -> tuple[float, float]:
+    """The per-sample noise of the plateau's μ (shape (n,)) [COF]: its scatter about a
+    quadratic trend, and that times √τ_int (its autocorrelation counted, for averages).
+    Where the plateau oscillates its scatter is stick-slip, not noise: both are then
+    ``sigma``, the noise from sample-to-sample differences."""
+    if oscillating:
+        return sigma, sigma
+    resid = _detrended(mu_w)
+    sample_sd = float(np.std(resid))
+    return sample_sd, sample_sd * math.sqrt(uncertainty.integrated_autocorrelation_time(resid))
+
+
+def _read_peak(
+    mu_v: np.ndarray, mu_med: np.ndarray, curve: np.ndarray, smooth: np.ndarray,
+    searched: np.ndarray, *, peak_n: int, cliff_n: int, noise_sd: float, sample_sd: float,
+    params: ReductionParams,
+) -> tuple[int, float, float]:
+    """Step 4's reading of the static peak among the ``searched`` samples: the sample,
+    the value [COF] and its standard uncertainty from the noise [COF]. The maximum of the
+    peak curve, re-read from as many samples as the peak's shape allows: a flank ending in
+    a sudden slip (where the curve holds a flank fit) by :func:`flank_peak`, a rounded
+    peak by :func:`quadratic_peak`; a fractional vertex position is returned as the
+    nearest sample."""
+    k = int(searched[np.argmax(curve[searched])])
+    value = float(curve[k])
+    u = noise_sd * math.sqrt(9.0 / (4.0 * peak_n))
+    lo, hi = int(searched[0]), int(searched[-1])
+    if curve[k] > smooth[k]:
+        u = max(u, noise_sd * _end_point_sd(min(cliff_n, k + 1)))
+        flank, width = flank_peak(mu_v, k, lo, first_window=cliff_n, noise_sd=noise_sd,
+                                  sample_sd=sample_sd, gamma=params.peak_ici_gamma)
+        if width > cliff_n and math.isfinite(flank):
+            # never above what was measured (the flank fits' own cap, cliff_peak_curve)
+            value = min(flank, float(mu_v[k - width + 1 : k + 1].max()))
+            u = noise_sd * _end_point_sd(width)
+        return k, value, u
+    top, position, width = quadratic_peak(
+        mu_med, k, lo, hi, first_half_width=peak_n // 2, noise_sd=noise_sd,
+        sample_sd=sample_sd, gamma=params.peak_ici_gamma, breaks=curve > smooth,
+    )
+    if width > peak_n and math.isfinite(top):
+        k = int(min(max(round(position), lo), hi))
+        value, u = float(top), noise_sd * math.sqrt(9.0 / (4.0 * width))
+    return k, value, u
+
+
 def _detect(
     s_v: np.ndarray, t_v: np.ndarray, mu_v: np.ndarray, total_mm: float, params: ReductionParams
 ) -> _Detection:
@@ -333,33 +429,20 @@ def _detect(
         step_mm = max(total_mm / max(s_v.size, 1), 1e-9)
     peak_n = max(5, int(round(params.peak_window_mm / step_mm)) | 1)
     cliff_n = max(5, int(round(params.cliff_window_mm / step_mm)))
-    smooth = static_peak_curve(mu_med, peak_n)
-    curve = cliff_peak_curve(mu_v, smooth, cliff_n, sigma, params.cliff_sigma)
     # noise left by a quadratic SG of width w at its centre: ~ sqrt(9 / (4 w)) σ
     sigma_peak = sigma * math.sqrt(min(1.0, 9.0 / (4.0 * peak_n)))
 
-    # step 3: the plateau, from the trace alone (it does not depend on the peak)
-    start_from = params.run_in_mm
-    post = s_v >= start_from
-    tol = params.settle_tol
-    plateau_start: float | None = None
-    block_mm = params.block_mm
-    if post.sum() >= 3:
-        block_mm = _oscillation_block_mm(s_v[post], mu_v[post], params)
-        plateau_start, tol = find_plateau_start(
-            s_v[post], mu_v[post], start_from, sigma, params, block_mm=block_mm
-        )
-    settled = plateau_start is not None
-    if plateau_start is None:
-        # not settled: the last plateau_min_mm of the trace (or its second half when that
-        # is all there is); flagged no_steady_state and plateau_at_trace_end
-        end = float(s_v[-1])
-        plateau_start = max(start_from, end - params.plateau_min_mm)
-        if plateau_start >= end:
-            plateau_start = end / 2
-    window = s_v >= plateau_start
-    if window.sum() < 3:
-        window = np.arange(s_v.size) >= s_v.size // 2
+    # step 3: the plateau, from the trace alone (it does not depend on the peak); step 7's
+    # test on it, and its noise
+    window, settled, tol = _find_plateau(s_v, mu_v, step_mm, params)
+    stick_slip = stick_slip_test(s_v[window], mu_v[window], params)
+    oscillating = stick_slip.oscillates and stick_slip.std > params.stick_slip_min_std
+    sample_sd, noise_sd = _plateau_noise(mu_v[window], sigma, oscillating)
+
+    # step 2, the peak curve: a slip is a drop between two fits that each average many
+    # samples, judged against that noise (correlated noise averages down more slowly)
+    smooth = static_peak_curve(mu_med, peak_n)
+    curve = cliff_peak_curve(mu_v, smooth, cliff_n, max(sigma, noise_sd), params.cliff_sigma)
 
     # step 4: the static peak is the maximum before the plateau (and within the cap)
     search = ~window
@@ -369,32 +452,11 @@ def _detect(
         search = np.zeros(s_v.size, dtype=bool)
         search[0] = True
     searched = np.flatnonzero(search)
-    k_peak = int(searched[np.argmax(curve[searched])])
-    mu_peak, s_peak = float(curve[k_peak]), float(s_v[k_peak])
-    # the noise per sample, its autocorrelation counted, from the plateau's scatter (from
-    # the sample-to-sample differences where the plateau oscillates: its scatter is then
-    # stick-slip, not noise)
-    stick_slip = stick_slip_test(s_v[window], mu_v[window], params)
-    oscillating = stick_slip.oscillates and stick_slip.std > params.stick_slip_min_std
-    resid = _detrended(mu_v[window])
-    sample_sd = sigma if oscillating else float(np.std(resid))
-    noise_sd = sigma if oscillating else sample_sd * math.sqrt(
-        uncertainty.integrated_autocorrelation_time(resid))
-    cliff_read = curve[k_peak] > smooth[k_peak]
-    peak_u = noise_sd * math.sqrt(9.0 / (4.0 * peak_n))
-    if cliff_read:
-        peak_u = max(peak_u, noise_sd * _end_point_sd(min(cliff_n, k_peak + 1)))
-    else:
-        # a rounded peak: the widest quadratic its shape allows averages the noise
-        value, position, width = quadratic_peak(
-            mu_med, k_peak, int(searched[0]), int(searched[-1]),
-            first_half_width=peak_n // 2, noise_sd=noise_sd, sample_sd=sample_sd,
-            gamma=params.peak_ici_gamma, breaks=curve > smooth,
-        )
-        if width > peak_n and math.isfinite(value):
-            k_peak = int(min(max(round(position), searched[0]), searched[-1]))
-            mu_peak, s_peak = float(value), float(np.interp(position, np.arange(s_v.size), s_v))
-            peak_u = noise_sd * math.sqrt(9.0 / (4.0 * width))
+    k_peak, mu_peak, peak_u = _read_peak(
+        mu_v, mu_med, curve, smooth, searched, peak_n=peak_n, cliff_n=cliff_n,
+        noise_sd=noise_sd, sample_sd=sample_sd, params=params,
+    )
+    s_peak = float(s_v[k_peak])
     # a maximum at the first searched sample (within half a smoothing window, the
     # reading's resolution) may lie before the trace; at the last, beyond the search when
     # that ended at a plateau that never settled, or at a cap before the plateau (then

@@ -45,9 +45,17 @@ may creep to the plateau with no peak at all.
    peak that ends in a sudden slip would still read low (the window reaches past the
    slip): where the quadratic fit of the ``cliff_window_mm`` before a sample exceeds the
    fit of the ``cliff_window_mm`` after it by more than ``cliff_sigma`` standard
-   deviations, the sample is the top of a cliff and its value is the left fit's (when
+   deviations (of the noise with its autocorrelation, :func:`effective_noise`: the fits
+   average many samples), the sample is the top of a cliff and its value is the left fit's (when
    higher). A stiff contact's flank can be shorter than that window: near the start of
-   sliding the left fit uses the samples there are (at least 7).
+   sliding the left fit uses the samples there are (at least 7). The static peak is then
+   re-read from as many samples as its shape allows (a short window reads the noise's
+   maximum, not the peak's): a rounded peak by quadratics over windows that double in
+   width around it (:func:`tribopipe.signals.quadratic_peak`), a peak ending in a
+   sudden slip by quadratics over its flank that double in length backwards from the
+   slip (:func:`tribopipe.signals.flank_peak`), each kept while the readings agree
+   within ``peak_ici_gamma`` standard deviations and the fit matches the data within the
+   noise (the intersection-of-confidence-intervals rule).
 3. The plateau (the steady sliding of ASTM D1894) is where the trace has settled, searched
    from the run-in distance ``run_in_mm`` on (ASTM D2534) and nowhere else: the trace
    from there is cut in blocks of ``block_mm`` (of whole cycles where a stick-slip
@@ -55,9 +63,11 @@ may creep to the plateau with no peak at all.
    half of that trace: blocks that cut cycles beat against them); the plateau starts at
    the first block from which every later block mean lies within a tolerance of their
    median (tolerance = the largest of ``settle_tol`` and z × the standard error of a
-   block mean from σ and z × the block-to-block scatter: 1.4826·MAD of the second
-   differences of the block means / √6, which stick-slip raises and a smooth transient —
-   a peak, a run-in, a creep — does not; z is the normal quantile that keeps the chance
+   block mean — from the per-sample noise with its autocorrelation counted
+   (:func:`effective_noise`) — and z × the block-to-block scatter of the later half of
+   the blocks: 1.4826·MAD of the second differences of the block means / √6, which
+   stick-slip raises and a smooth transient — a peak, a run-in, a creep — does not; z
+   is the normal quantile that keeps the chance
    of any of the blocks of a settled plateau falling outside at ``settle_alpha``). Where
    that noise allowance would exceed ``settle_tol``, the blocks are lengthened by the
    whole factor that brings it down (the scatter of a mean falls as 1/√length), up to
@@ -138,6 +148,7 @@ from .detection import (  # noqa: F401 - the detection steps are importable from
     _detect,
     _Detection,
     cliff_peak_curve,
+    effective_noise,
     find_plateau_start,
     linear_slope,
     median_smooth,

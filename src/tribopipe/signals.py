@@ -94,12 +94,15 @@ def savgol(values: Any, window: int, degree: int = 2) -> np.ndarray:
     return out
 
 
+@functools.lru_cache(maxsize=512)
 def end_point_weights(window: int, degree: int = 2) -> np.ndarray:
-    """Weights (shape (window,)) that give the value at the last sample of the
+    """Weights (shape (window,), read-only) that give the value at the last sample of the
     least-squares polynomial of ``degree`` through ``window`` equally spaced samples."""
     x = np.linspace(0.0, 1.0, int(window))
     basis = np.vander(x, degree + 1, increasing=True)
-    return np.ones(degree + 1) @ np.linalg.solve(basis.T @ basis, basis.T)
+    weights = np.ones(degree + 1) @ np.linalg.solve(basis.T @ basis, basis.T)
+    weights.setflags(write=False)
+    return weights
 
 
 def one_sided_fits(values: Any, window: int) -> tuple[np.ndarray, np.ndarray]:
@@ -337,8 +340,10 @@ def quadratic_peak(
     (the intersection-of-confidence-intervals rule).
 
     Window j spans ``k ± first_half_width·2^j`` within ``[lo, hi]`` (inclusive sample
-    indices), re-centred each time on the previous fit's vertex. A fit is used only while
-    it is concave, its vertex lies inside its window, no sample of ``breaks`` (a boolean
+    indices), re-centred each time on the previous fit's vertex. Windows too short to show
+    a concave fit with its vertex inside (a broad peak under noise) are widened until one
+    does; from then on a fit is used only while it is concave, its vertex lies inside its
+    window, no sample of ``breaks`` (a boolean
     mask, e.g. sudden slips) lies inside, and its residuals scatter no more than the noise
     (standard deviation ≤ ``sample_sd``·(1 + 3/√(2(n−3)))): a quadratic laid over a rise
     and a sudden drop overshoots both. Its reading is the value at the vertex, with
@@ -366,11 +371,14 @@ def quadratic_peak(
             break
         x = np.arange(a, b + 1, dtype=float) - centre
         c2, c1, c0 = np.polyfit(x, v[a : b + 1], 2)
-        if c2 >= 0:
-            break
-        vertex = -c1 / (2 * c2)
+        vertex = -c1 / (2 * c2) if c2 < 0 else math.inf
         if not (a - centre <= vertex <= b - centre):
-            break
+            # a window too short to show a broad peak's curvature above the noise says
+            # nothing yet: widen it (a wide one that shows no peak stops below)
+            if (a == lo and b == hi) or best[2]:
+                break
+            half *= 2
+            continue
         resid = v[a : b + 1] - np.polyval((c2, c1, c0), x)
         if float(np.std(resid, ddof=3)) > sample_sd * (1 + 3 / math.sqrt(2 * (n - 3))):
             break
@@ -384,4 +392,49 @@ def quadratic_peak(
         if a == lo and b == hi:
             break
         half *= 2
+    return best
+
+
+def flank_peak(
+    values: Any, k: int, lo: int, *, first_window: int, noise_sd: float, sample_sd: float,
+    gamma: float = 2.0,
+) -> tuple[float, int]:
+    """Read the top of a rising flank that ends in a sudden slip at sample ``k`` of
+    ``values`` (shape (n,)): quadratic fits over windows ending at ``k`` that double in
+    length backwards from ``first_window`` samples, read at ``k``;
+    the widest window is kept while the readings' intervals ± ``gamma``·sd intersect and
+    the residuals scatter no more than the noise (see :func:`quadratic_peak`). A reading
+    over n samples has standard deviation ``noise_sd`` × that of a quadratic's end point.
+
+    Returns ``(value, width)``; ``(nan, 0)`` when not even the first window qualifies.
+    Windows reach back over at most the upper half of the flank (from ``lo``): its lower
+    part is the elastic loading, steeper than the rounded top, and a quadratic over the
+    whole rise would extrapolate past that top.
+    """
+    v = np.asarray(values, dtype=float)
+    lower, upper = -math.inf, math.inf
+    best = (math.nan, 0)
+    n = int(first_window)
+    # only the upper half of the flank: its start is the contact's elastic loading, steeper
+    # than the rounded, elastic-plastic top a quadratic over it all would extrapolate past
+    longest = max(int(first_window), (k - int(lo) + 1) // 2)
+    while n <= longest:
+        a = max(int(lo), k - n + 1)
+        m = k - a + 1
+        if m < 7:
+            break
+        x = np.arange(a, k + 1, dtype=float) - k
+        coeffs = np.polyfit(x, v[a : k + 1], 2)
+        resid = v[a : k + 1] - np.polyval(coeffs, x)
+        if float(np.std(resid, ddof=3)) > sample_sd * (1 + 3 / math.sqrt(2 * (m - 3))):
+            break
+        reading = float(coeffs[-1])
+        sd = noise_sd * math.sqrt(float(np.sum(end_point_weights(m) ** 2)))
+        lower, upper = max(lower, reading - gamma * sd), min(upper, reading + gamma * sd)
+        if lower > upper:
+            break
+        best = (reading, m)
+        if a == lo:
+            break
+        n *= 2
     return best

@@ -37,7 +37,9 @@ def query_cmd(
     Linear interpolation over the group means in temperature and pressure, held constant
     outside the measured range (as ABAQUS treats a friction table). Prints the measured
     groups used with their weights, whether the value was clamped, and the uncertainty:
-    the groups' 95 % CI half-widths interpolated with the same weights.
+    the groups' 95 % CI half-widths interpolated with the same weights (what the repeats
+    support), and their combined standard uncertainties u (the runs' own budgets beside
+    the repeat scatter; U = 2u at k = 2) interpolated likewise.
     """
     from ..query import format_result, query_map
 

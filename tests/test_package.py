@@ -425,3 +425,40 @@ def test_a_version_1_map_publishes_with_its_rows_labelled(tmp_path):
     runs = fm.read_map(done.path / "data" / "runs.parquet")
     assert set(runs["lab"]) == {"Old Lab", fm.PUBLISHED_LAB}
     assert runs["excluded"].sum() == 1
+
+
+def test_a_package_of_schema_version_2_still_checks_and_merges(copy, tmp_path):
+    """A package published before the uncertainty columns (schema version 3) reads with them
+    missing, as an old map does."""
+    import pyarrow.parquet as pq
+
+    gone = ("u_mu_s", "u_mu_k")
+    runs_csv = copy / "data" / "runs.csv"
+    table = pd.read_csv(runs_csv, dtype=str, keep_default_na=False).drop(columns=list(gone))
+    runs_csv.write_text(table.to_csv(index=False, lineterminator="\n"), encoding="utf-8")
+    runs_parquet = copy / "data" / "runs.parquet"
+    arrow = pq.read_table(runs_parquet)
+    meta = dict(arrow.schema.metadata)
+    info = json.loads(meta[fm.META_KEY])
+    info["schema_version"] = 2
+    info["columns"] = [c for c in info["columns"] if c["name"] not in gone]
+    meta[fm.META_KEY] = json.dumps(info).encode()
+    arrow = arrow.drop_columns(list(gone)).replace_schema_metadata(meta)
+    pq.write_table(arrow, runs_parquet)
+    data = descriptor(copy)
+    data["tribopipe"]["schema_version"] = 2
+    for res in data["resources"]:
+        if res["path"] in ("data/runs.csv", "data/runs.parquet") and "schema" in res:
+            res["schema"]["fields"] = [f for f in res["schema"]["fields"]
+                                       if f["name"] not in gone]
+    save_descriptor(copy, data)
+    rehash(copy, "data/runs.csv")
+    rehash(copy, "data/runs.parquet")
+
+    code, lines = validate(copy)
+    assert code == 0, lines
+    merged = tmp_path / "m" / "friction_map.parquet"
+    result = invoke("map", "merge", copy, "--map", merged)
+    assert result.exit_code == 0, result.output
+    runs = fm.read_map(merged)
+    assert len(runs) == 175 and runs["u_mu_k"].isna().all() and runs["u_mu_s"].isna().all()

@@ -17,7 +17,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from conftest import shared_file
+from conftest import DATA
 from tribopipe.config import InstrumentConfig
 from tribopipe.measurement import CANONICAL_COLUMNS
 from tribopipe.reduce import ReductionParams, reduce_measurement, select_friction_interval
@@ -159,7 +159,8 @@ def test_export_layout_line_by_line(tmp_path: Path) -> None:
 def test_export_structure_matches_a_real_rheocompass_file(tmp_path: Path) -> None:
     """Same block structure as a real RheoCompass UTF-16 export: label lines, blank
     separators, the interval header, the meaning row of bare TABs, the unit row."""
-    real = shared_file("real-exports", "rheocompass_en_utf16_small.txt")
+    # the copy in tests/data (MIT, byte-identical to ../shared's: test_readers_real checks)
+    real = DATA / "rheocompass_en_utf16_small.txt"
     real_lines = _lines(real)
     ours = _lines(write_rheocompass_export(tmp_path / "r.txt", replace(RUN, setup_interval=False),
                                            project="P", test="T", sample="S"))

@@ -324,6 +324,8 @@ def test_pyelastica_arrays(groups, groups_with_mu_s):
     text = write_pyelastica(groups, **cond)
     assert "RodPlaneContactWithAnisotropicFriction" in text
     assert "detect_contact_between(rod, plane)" in text
+    # detect_contact_between is a method of the Contact mixin: the usage must say so
+    assert "class Simulator(BaseSystemCollection, Contact)" in text
     assert "AnisotropicFrictionalPlane is gone" in text
 
 

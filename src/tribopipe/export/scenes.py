@@ -180,7 +180,10 @@ def write_pyelastica(
     bodies += [
         "arrays are [forward, backward, sideways]; the pin-on-disc data are isotropic",
         "use (pyelastica >= 1.0; AnisotropicFrictionalPlane is gone):",
-        "  from elastica import Plane, RodPlaneContactWithAnisotropicFriction",
+        "  from elastica import (BaseSystemCollection, Contact, Plane,",
+        "                        RodPlaneContactWithAnisotropicFriction)",
+        "  class Simulator(BaseSystemCollection, Contact): ...  # Contact: detect_contact_between",
+        "  simulator = Simulator()  # ... append the rod",
         "  plane = Plane(plane_origin=..., plane_normal=...)",
         "  simulator.append(plane)",
         "  simulator.detect_contact_between(rod, plane).using(",

@@ -312,6 +312,15 @@ def test_sofa_response_mu_and_the_solvers_that_use_it(groups):
     assert "GenericConstraintSolver" in text and "BlockGaussSeidelConstraintSolver" in text
 
 
+@pytest.mark.parametrize("writer", [write_mujoco, write_sofa])
+def test_the_xml_header_names_the_mu_s_option_readably(groups, writer):
+    # an XML comment cannot hold "--": the header must not print a mangled "- -coefficient"
+    text = writer(groups, pin=PIN, disc=DISC, pressure_kPa=47.16, temperature_C=20.0)
+    holds = next(line for line in text.splitlines() if "holds:" in line)
+    assert "'coefficient mu_s' writes mu_s (breakaway) instead" in holds
+    assert "- -" not in text
+
+
 def test_pyelastica_arrays(groups, groups_with_mu_s):
     cond = {"pin": PIN, "disc": DISC, "pressure_kPa": 11.79, "temperature_C": 20.0}
     default = pyelastica_values(write_pyelastica(groups_with_mu_s, **cond))

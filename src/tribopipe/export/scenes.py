@@ -77,8 +77,9 @@ def _holds(coefficient: str, one: str) -> str:
     """The 'holds' line of a single-coefficient engine (``one`` names its parameter)."""
     if coefficient == "mu_s":
         return f"{one} = mu_s, the static (breakaway) coefficient at the onset of slip"
-    return (f"{one} = mu_k, the kinetic (sliding) coefficient; --coefficient mu_s writes "
-            "mu_s (breakaway) instead")
+    # no "--" here: an XML comment may not hold it (xml_comment would print "- -coefficient")
+    return (f"{one} = mu_k, the kinetic (sliding) coefficient; the export option "
+            "'coefficient mu_s' writes mu_s (breakaway) instead")
 
 
 def write_mujoco(

@@ -29,9 +29,11 @@ MAX_LINES = 700
 #: The import layers, bottom to top: a module may import its own layer and those below,
 #: never one above. A module belongs to the layer of the longest name that prefixes it.
 LAYERS: tuple[tuple[str, ...], ...] = (
-    # the base: errors, files on disk, numbers from outside, units, the output folder
-    ("tribopipe", "tribopipe.errors", "tribopipe.files", "tribopipe.numeric",
-     "tribopipe.units", "tribopipe.layout", "tribopipe.signals"),
+    # the base: errors, escapes of outside text, validation of outside values, files on
+    # disk, numbers from outside, units, the output folder, the signal filters
+    ("tribopipe", "tribopipe.errors", "tribopipe.escape", "tribopipe.validate",
+     "tribopipe.files", "tribopipe.numeric", "tribopipe.units", "tribopipe.layout",
+     "tribopipe.signals"),
     ("tribopipe.measurement",),
     ("tribopipe.physics",),
     ("tribopipe.config",),

@@ -26,12 +26,22 @@ from dataclasses import asdict, dataclass, fields
 from pathlib import Path
 from typing import Any
 
-from .errors import ConfigError
+from .errors import ConfigError, ValidationError
 from .physics import (  # noqa: F401 - the founding constants are importable from here too
     FOUNDING_FRICTION_RADIUS_MM,
     FOUNDING_SLIDING_SPEED_MM_S,
     FOUNDING_SPEED_RPM,
     sliding_speed_mm_s,
+)
+from .validate import (
+    FORCE_N,
+    FRICTION_RADIUS_MM,
+    PIN_RADIUS_MM,
+    SPEED_RPM,
+    Range,
+    check_count,
+    check_name,
+    check_number,
 )
 
 #: the tables of a config that a reduction depends on
@@ -47,6 +57,12 @@ REDUCTION_METHOD = "tribopipe-v2"
 FOUNDING_FRICTION_RADIUS_U_MM = round(
     0.0005 / (FOUNDING_SPEED_RPM * 2 * math.pi / 60) / math.sqrt(3), 2
 )
+
+
+#: most pins a cell may carry
+MAX_PINS = 1000
+#: the contact threshold [N]: from 0 up to the largest force a run may carry
+_CONTACT_THRESHOLD_N = Range(0.0, FORCE_N.high, "N")
 
 
 @dataclass(frozen=True)
@@ -94,18 +110,15 @@ class InstrumentConfig:
                     f"[instrument] {name} must be a number >= 0 (a standard uncertainty), "
                     f"got {value!r}"
                 )
-        for name in ("pin_radius_mm", "friction_radius_mm", "nominal_speed_rpm"):
-            value = getattr(self, name)
-            if not (isinstance(value, int | float) and math.isfinite(value) and value > 0):
-                raise ConfigError(f"[instrument] {name} must be a positive number, got {value!r}")
-        if not (isinstance(self.n_pins, int) and self.n_pins >= 1):
-            raise ConfigError(
-                f"[instrument] n_pins must be a whole number >= 1, got {self.n_pins!r}"
-            )
-        if not (math.isfinite(self.contact_threshold_N) and self.contact_threshold_N >= 0):
-            raise ConfigError(
-                f"[instrument] contact_threshold_N must be >= 0, got {self.contact_threshold_N!r}"
-            )
+        try:
+            check_name(self.name, "name")
+            check_number(self.pin_radius_mm, PIN_RADIUS_MM, "pin_radius_mm")
+            check_number(self.friction_radius_mm, FRICTION_RADIUS_MM, "friction_radius_mm")
+            check_number(self.nominal_speed_rpm, SPEED_RPM, "nominal_speed_rpm")
+            check_count(self.n_pins, "n_pins", low=1, high=MAX_PINS)
+            check_number(self.contact_threshold_N, _CONTACT_THRESHOLD_N, "contact_threshold_N")
+        except ValidationError as exc:
+            raise ConfigError(f"[instrument] {exc.problem}") from None
 
     @property
     def pin_area_mm2(self) -> float:
@@ -210,39 +223,62 @@ class ReductionParams:
     max_missing_fraction: float = 0.5
 
     def __post_init__(self) -> None:
-        cap = self.static_search_mm
-        if cap is not None and not (
-            isinstance(cap, int | float) and not isinstance(cap, bool)
-            and math.isfinite(cap) and cap > 0
-        ):
-            raise ConfigError(
-                f"[reduction] static_search_mm must be a distance > 0 (or left out for no "
-                f"cap), got {cap!r}"
-            )
-        if not 0 < self.settle_alpha < 1:
-            raise ConfigError(
-                f"[reduction] settle_alpha must be a probability in (0, 1), got "
-                f"{self.settle_alpha!r}"
-            )
-        if not 0 < self.stick_slip_false_alarm < 1:
-            raise ConfigError(
-                f"[reduction] stick_slip_false_alarm must be a probability in (0, 1), got "
-                f"{self.stick_slip_false_alarm!r}"
-            )
-        for f_name, value in asdict(self).items():
-            if f_name == "static_search_mm":
+        for f in fields(self):
+            value = getattr(self, f.name)
+            if value is None and f.name in OPTIONAL_REDUCTION_KEYS:
                 continue
-            if not (isinstance(value, int | float) and math.isfinite(value) and value >= 0):
-                raise ConfigError(f"[reduction] {f_name} must be a number >= 0, got {value!r}")
-        if not (isinstance(self.median_window, int) and self.median_window >= 1):
+            bounds = REDUCTION_BOUNDS[f.name]
+            try:
+                if isinstance(bounds, Range):
+                    check_number(value, bounds, f.name)
+                else:
+                    check_count(value, f.name, low=bounds[0], high=bounds[1])
+            except ValidationError as exc:
+                raise ConfigError(f"[reduction] {exc.problem}") from None
+        for name in ("settle_alpha", "stick_slip_false_alarm"):
+            if not getattr(self, name) < 1:
+                raise ConfigError(f"[reduction] {name} must be a probability in (0, 1), got "
+                                  f"{getattr(self, name)!r}")
+        if self.median_window % 2 == 0:
             raise ConfigError(
-                f"[reduction] median_window must be a whole number >= 1, "
-                f"got {self.median_window!r}"
+                f"[reduction] median_window: expected an odd number of samples, "
+                f"got {self.median_window}"
             )
-        if self.block_mm <= 0 or self.peak_window_mm <= 0 or self.cliff_window_mm <= 0:
-            raise ConfigError(
-                "[reduction] block_mm, peak_window_mm and cliff_window_mm must be > 0"
-            )
+
+
+#: the ``[reduction]`` keys that may be left out or set to nothing (``None``)
+OPTIONAL_REDUCTION_KEYS = frozenset({"static_search_mm"})
+#: what each ``[reduction]`` key may hold: a :class:`~tribopipe.validate.Range` of numbers
+#: in its unit, or ``(low, high)`` for a whole number. The bounds are generous, but no
+#: setting may make a reduction allocate without bound (``block_mm`` ≥ 1 µm: a block
+#: needs samples; windows ≤ 100 mm).
+REDUCTION_BOUNDS: dict[str, Range | tuple[int, int]] = {
+    "median_window": (1, 1001),
+    "peak_window_mm": Range(0.0, 100.0, "mm", low_open=True),
+    "cliff_window_mm": Range(0.0, 100.0, "mm", low_open=True),
+    "cliff_sigma": Range(0.0, 1e3),
+    "peak_ici_gamma": Range(0.0, 1e3),
+    "static_search_mm": Range(0.0, 1e4, "mm", low_open=True),
+    "run_in_mm": Range(0.0, 1e4, "mm"),
+    "plateau_min_mm": Range(0.0, 1e4, "mm"),
+    "plateau_confirm_mm": Range(0.0, 1e4, "mm"),
+    "block_mm": Range(1e-3, 100.0, "mm"),
+    "settle_tol": Range(0.0, 100.0),
+    "settle_alpha": Range(0.0, 1.0, low_open=True),
+    "max_drift_per_mm": Range(0.0, 1e6, "1/mm"),
+    "static_min_prominence": Range(0.0, 100.0),
+    "static_prominence_sigma": Range(0.0, 1e3),
+    "stick_slip_min_cycles": Range(0.0, 1e6),
+    "stick_slip_false_alarm": Range(0.0, 1.0, low_open=True),
+    "stick_slip_min_std": Range(0.0, 100.0),
+    "normal_force_cv_max": Range(0.0, 1e3),
+    "min_contact_samples": (1, 10_000_000),
+    "min_plateau_samples": (0, 10_000_000),
+    "min_travel_mm": Range(0.0, 1e4, "mm"),
+    "motion_tol_mm": Range(0.0, 1e4, "mm"),
+    "offset_min_samples": (1, 10_000_000),
+    "max_missing_fraction": Range(0.0, 1.0),
+}
 
 
 @dataclass(frozen=True)

@@ -107,7 +107,8 @@ def cliff_peak_curve(
         width[k] = k + 1
     sd_left = np.array([_end_point_sd(int(n)) for n in range(w + 1)])[width]
     sd_difference = sigma * np.sqrt(sd_left**2 + _end_point_sd(w) ** 2)
-    drop = left[:-1] - right[1:]
+    with np.errstate(invalid="ignore"):  # -inf - -inf where neither window fits: no cliff
+        drop = left[:-1] - right[1:]
     cliff = np.zeros(v.size, dtype=bool)
     cliff[:-1] = np.isfinite(drop) & (drop > cliff_sigma * sd_difference[:-1])
     curve[cliff] = np.maximum(curve[cliff], left[cliff])
@@ -168,6 +169,10 @@ def effective_noise(values: Any, window: int) -> float:
     return spread * math.sqrt(uncertainty.integrated_autocorrelation_time(r))
 
 
+#: most blocks the settling test cuts a trace into (each needs 3 samples to count)
+MAX_PLATEAU_BLOCKS = 1_000_000
+
+
 def _block_means(
     s: np.ndarray, m: np.ndarray, start_mm: float, block: float
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -175,9 +180,12 @@ def _block_means(
     ``start_mm`` (the last block runs to the end); blocks with fewer than 3 samples are
     left out."""
     end = float(s[-1])
-    n_blocks = int((end - start_mm) // block)
-    if n_blocks < 2:
+    span_blocks = (end - start_mm) / block
+    if not 2 <= span_blocks <= MAX_PLATEAU_BLOCKS:
+        # too short to settle; or more blocks than a trace can fill (each needs 3
+        # samples): nothing settles (flagged), never an unbounded allocation
         return np.empty(0), np.empty(0), np.empty(0, dtype=int)
+    n_blocks = int(span_blocks)
     edges = start_mm + block * np.arange(n_blocks + 1)
     edges[-1] = end + 1e-12
     idx = np.searchsorted(s, edges)
@@ -354,7 +362,9 @@ def _find_plateau(
     plateau_start: float | None = None
     if post.sum() >= 3:
         block_mm = _oscillation_block_mm(s_v[post], mu_v[post], params)
-        block_samples = max(3, int(round(block_mm / step_mm)))
+        # a window wider than the trace means the same as the trace: capped, so a hostile
+        # time or distance column cannot make it allocate without bound
+        block_samples = min(max(3, int(round(block_mm / step_mm))), mu_v.size + 1)
         plateau_start, tol = find_plateau_start(
             s_v[post], mu_v[post], params.run_in_mm,
             effective_noise(mu_v[post], block_samples), params, block_mm=block_mm,
@@ -427,8 +437,9 @@ def _detect(
     step_mm = float(np.median(np.diff(s_v))) if s_v.size > 1 else 0.0
     if step_mm <= 0:
         step_mm = max(total_mm / max(s_v.size, 1), 1e-9)
-    peak_n = max(5, int(round(params.peak_window_mm / step_mm)) | 1)
-    cliff_n = max(5, int(round(params.cliff_window_mm / step_mm)))
+    # windows wider than the trace act as the whole trace: capped (see _find_plateau)
+    peak_n = max(5, min(int(round(params.peak_window_mm / step_mm)), s_v.size + 2) | 1)
+    cliff_n = max(5, min(int(round(params.cliff_window_mm / step_mm)), s_v.size + 2))
     # noise left by a quadratic SG of width w at its centre: ~ sqrt(9 / (4 w)) σ
     sigma_peak = sigma * math.sqrt(min(1.0, 9.0 / (4.0 * peak_n)))
 

@@ -8,7 +8,10 @@ shows a traceback for these.
 
 from __future__ import annotations
 
+import os
 from os import PathLike
+
+from .escape import display_path, printable
 
 
 class TribopipeError(Exception):
@@ -24,7 +27,7 @@ class TribopipeError(Exception):
         hint: str | None = None,
     ) -> None:
         self.problem = problem
-        self.path = None if path is None else str(path)
+        self.path = None if path is None else os.fsdecode(path)
         self.line = line
         self.column = column
         self.hint = hint
@@ -33,7 +36,7 @@ class TribopipeError(Exception):
     def _format(self) -> str:
         where = ""
         if self.path is not None:
-            where = self.path
+            where = display_path(self.path)
             if self.line is not None:
                 where += f":{self.line}"
             where += ": "
@@ -44,7 +47,16 @@ class TribopipeError(Exception):
             text += f" (column {self.column!r})"
         if self.hint:
             text += f"; hint: {self.hint}"
-        return text.replace("\n", " ")
+        # names and cells in a message are data: one printable line whatever they hold
+        return printable(text.replace("\n", " "))
+
+
+class ValidationError(TribopipeError, ValueError):
+    """A value (a name, a number, a count) is not what its key or column expects."""
+
+
+class OutputError(TribopipeError):
+    """An output file or folder cannot be written (read-only, full, not a folder...)."""
 
 
 class ReadError(TribopipeError):

@@ -300,6 +300,7 @@ def interval_samples(m: Measurement, params: ReductionParams) -> IntervalSamples
                 f"(more than {params.max_missing_fraction:.0%}); cannot reduce"
             )
     keep = np.isfinite(t) & np.isfinite(torque) & np.isfinite(force)
+    _check_time(m, t, keep)
     order = np.argsort(t[keep], kind="stable")
 
     def pick(values: np.ndarray) -> np.ndarray:
@@ -329,6 +330,31 @@ def interval_samples(m: Measurement, params: ReductionParams) -> IntervalSamples
         n_dropped=int(n_total - t.size),
         force_sign=force_sign,
     )
+
+
+def _check_time(m: Measurement, t: np.ndarray, keep: np.ndarray) -> None:
+    """Refuse (:class:`ReductionError`, naming the point) a time column that goes
+    backwards between complete samples or never advances: the samples of an interval are
+    written in the order they were taken, so either means the column is not the time."""
+    t_kept = t[keep]
+    if t_kept.size < 2:
+        return
+    back = np.flatnonzero(np.diff(t_kept) < 0)
+    if back.size:
+        k = int(back[0]) + 1
+        row = int(np.flatnonzero(keep)[k])
+        point = m.data["point_no"].iloc[row] if "point_no" in m.data.columns else row + 1
+        raise ReductionError(
+            f"{m.meta.label}: time goes backwards at point {point} ({t_kept[k]:g} s after "
+            f"{t_kept[k - 1]:g} s): expected increasing time",
+            hint="check the time column (or its unit)",
+        )
+    if t_kept[-1] == t_kept[0]:
+        raise ReductionError(
+            f"{m.meta.label}: time is constant ({t_kept[0]:g} s) over all {t_kept.size} "
+            "complete samples: expected increasing time",
+            hint="check the time column (or its unit)",
+        )
 
 
 def _offset_from_meta(m: Measurement) -> tuple[float | None, str | None, float]:

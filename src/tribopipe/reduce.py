@@ -126,6 +126,13 @@ Flags (thresholds in :class:`ReductionParams`)
 ``torque_offset_unknown`` no set-up interval and no rest before motion: the torque zero
                          offset could not be estimated; 0 is assumed and the offset's
                          plausible size enters the uncertainty.
+``no_friction_signal``   the torque carries no friction: its samples while sliding are all
+                         equal (a zero or stuck channel), or μ_K is within three standard
+                         errors of zero (the plateau mean's, autocorrelation included).
+
+Refused (one-line :class:`ReductionError`): time going backwards or constant; a sliding
+distance that is not finite; a measured force, temperature, μ_K or μ_S outside its range
+in :mod:`tribopipe.validate` (the column is not what its name and unit say).
 
 References: ASTM D1894 (static and kinetic COF of plastic film: static = initial peak,
 kinetic = average during uniform sliding); ISO 8295 (same principle for plastics film);
@@ -187,6 +194,7 @@ from .physics import (  # noqa: F401 - the formulas are importable from here too
     sliding_distance_mm,
     sliding_speed_mm_s,
 )
+from .validate import FORCE_N, MU, TEMPERATURE_C
 
 if TYPE_CHECKING:
 
@@ -200,6 +208,7 @@ METHOD = (
 )
 
 FLAGS: tuple[str, ...] = (
+    "no_friction_signal",
     "static_not_distinct",
     "peak_at_search_limit",
     "no_steady_state",
@@ -249,12 +258,13 @@ class ReductionResult:
 
 def _flags(
     det: _Detection, s_v: np.ndarray, total_mm: float, force_cv: float,
-    offset_known: bool, params: ReductionParams,
+    offset_known: bool, params: ReductionParams, *, no_signal: bool = False,
 ) -> list[str]:
     """The QC flags of a detection (definitions in the module docstring); ``force_cv`` is
     the normal force's coefficient of variation over the sliding contact samples,
-    ``offset_known`` whether the torque zero offset could be estimated or was given."""
-    flags: list[str] = []
+    ``offset_known`` whether the torque zero offset could be estimated or was given,
+    ``no_signal`` whether the torque carries no friction."""
+    flags: list[str] = ["no_friction_signal"] if no_signal else []
     n_window = int(det.window.sum())
     w_s = s_v[det.window]
     short = total_mm < params.run_in_mm + params.plateau_min_mm
@@ -285,6 +295,21 @@ def _flags(
     return flags
 
 
+def _check_physical(label: str, force_N: float, temperature_C: float | None,
+                    det: _Detection) -> None:
+    """:class:`ReductionError` when the measured mean normal force [N], temperature [°C],
+    μ_K or μ_S lies outside its physical range (:mod:`tribopipe.validate`)."""
+    for what, value, bounds in (("mean normal force", force_N, FORCE_N), ("mu_k", det.mu_k, MU),
+                                ("mean temperature", temperature_C, TEMPERATURE_C),
+                                ("mu_s", det.mu_s, MU)):
+        if value is not None and value not in bounds:
+            raise ReductionError(
+                f"{label}: measured {what} {value:.4g} is outside the physical range "
+                f"({bounds.describe()}): the column is not what its name and unit say",
+                hint="check the export's columns and units",
+            )
+
+
 def _in_contact(x: IntervalSamples, instrument: InstrumentConfig, label: str) -> np.ndarray:
     """Boolean mask (shape (n,)) of the samples with F_N ≥ the contact threshold [N];
     :class:`ReductionError` when there is none."""
@@ -309,6 +334,12 @@ def _travel(
         x.t, instrument.friction_radius_mm, angle_rad=x.angle, speed_rad_s=x.speed,
         nominal_speed_rpm=instrument.nominal_speed_rpm,
     )
+    if not np.isfinite(s).all():
+        raise ReductionError(
+            f"{label}: the sliding distance from the {distance_source} column is not finite "
+            "(values too large for their unit?)",
+            hint="check the angle or speed column and its unit",
+        )
     if distance_source != "nominal" and float(s.max()) < params.min_travel_mm:
         raise ReductionError(
             f"{label}: no rotation: the disc travelled {float(s.max()):.3g} mm "
@@ -455,9 +486,12 @@ def reduce_measurement(
     f_slide = x.force[sliding]
     f_mean = float(np.mean(f_slide))
     cv = float(np.std(f_slide) / f_mean) if f_mean > 0 else math.inf
+    temperature = _mean_temperature(x, in_contact)
+    _check_physical(label, f_mean, temperature, det)
     offset_known = not offset_source.startswith("not estimated")
-    flags = _flags(det, s_v, total_mm, cv, offset_known, params)
     se_k, tau = uncertainty.mean_standard_error(mu_v[det.window])
+    no_signal = bool(np.ptp(x.torque[sliding]) == 0) or det.mu_k <= 3 * se_k
+    flags = _flags(det, s_v, total_mm, cv, offset_known, params, no_signal=no_signal)
     u_k = uncertainty.budget(det.mu_k, se_k, normal_force_N=f_mean, instrument=instrument,
                              offset_u_Nm=offset_u)
     u_s = u_k
@@ -490,7 +524,7 @@ def reduce_measurement(
         pressure_kPa=float(
             contact_pressure_kPa(f_mean, instrument.n_pins, instrument.pin_radius_mm)
         ),
-        temperature_C=_mean_temperature(x, in_contact),
+        temperature_C=temperature,
         sliding_speed_mm_s=_measured_speed(x, s, at_rest, instrument),
         sliding_distance_mm=total_mm,
         flags=tuple(f for f in FLAGS if f in flags),

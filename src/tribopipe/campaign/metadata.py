@@ -27,18 +27,22 @@ its tests apart, and the map would hold them under the same labels.
 
 from __future__ import annotations
 
+import contextlib
 import csv
 import functools
 import io
 import math
+import sys
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from ..errors import CampaignError, ConfigError, ReadError
+from ..errors import CampaignError, ConfigError, ReadError, ValidationError
+from ..files import read_regular
 from ..frictionmap.records import RunLabels
 from ..readers.textio import decode, detect_delimiter
+from ..validate import FORCE_N, MAX_REPEAT, TEMPERATURE_C, check_count, check_name, check_number
 from .patterns import LABEL_FIELDS, REQUIRED_FIELDS, _parse_number
 
 if TYPE_CHECKING:
@@ -111,6 +115,10 @@ class Manifest:
         return {k: tuple(v) for k, v in grouped.items()}
 
 
+#: the largest manifest read [bytes]
+MAX_MANIFEST_BYTES = 256 * 1024 * 1024
+
+
 def _test_key(test: str | None) -> str | None:
     """A Test name as matched: surrounding blanks ignored, an empty cell is ``None``."""
     if test is None:
@@ -129,14 +137,16 @@ def read_manifest(path: str | Path) -> Manifest:
     (:mod:`tribopipe.readers.textio`): UTF-8 with or without BOM, UTF-16, cp1252; the
     header line decides between TAB, semicolon and comma (semicolon files may use a
     decimal comma). An unreadable file, a missing column or a file (and test) listed
-    twice is a :class:`ConfigError` naming the manifest; a bad value is recorded as that
-    row's ``problem`` (an error for what the row describes only).
+    twice is a :class:`ConfigError` naming the manifest; a bad value (a name that is not
+    one line of printable text, a number outside its physical range, a repeat that is not
+    a whole number) is recorded as that row's ``problem``, one line naming the manifest,
+    its line and column: an error for what the row describes only.
     """
     p = Path(path)
     try:
-        raw = p.read_bytes()
-    except OSError as exc:
-        raise ConfigError(f"cannot read manifest: {exc.strerror or exc}", path=p) from None
+        raw = read_regular(p, max_bytes=MAX_MANIFEST_BYTES, what="a manifest (CSV)")
+    except ReadError as exc:
+        raise ConfigError(f"cannot read manifest: {exc.problem}", path=p) from None
     if not raw:
         raise ConfigError("manifest is empty", path=p, line=1)
     try:
@@ -145,6 +155,46 @@ def read_manifest(path: str | Path) -> Manifest:
         raise ConfigError(f"cannot read manifest: {exc.problem}", path=p,
                           hint=exc.hint) from None
     delimiter = detect_delimiter(text.splitlines()[:1]) or ","
+    with _no_cell_size_limit(len(text)):
+        try:
+            return _manifest_rows(p, text, delimiter)
+        except csv.Error as exc:
+            raise ConfigError(f"cannot split the manifest into cells: {exc}", path=p) from None
+
+
+@contextlib.contextmanager
+def _no_cell_size_limit(size: int):  # noqa: ANN202 - a context manager
+    """Let the csv module read cells up to ``size`` characters (its default stops at
+    131,072 with an error for the whole file); a cell that long is then refused as a
+    value, for its row only."""
+    before = csv.field_size_limit()
+    csv.field_size_limit(min(max(before, size + 1), sys.maxsize))
+    try:
+        yield
+    finally:
+        csv.field_size_limit(before)
+
+
+def _cell_value(name: str, raw: str) -> Any:
+    """A manifest cell as the label field ``name`` holds it; :class:`ValidationError`
+    saying what was expected otherwise."""
+    if name in ("pin", "disc"):
+        return check_name(raw, name)
+    try:
+        number = _parse_number(raw)
+    except ValueError:
+        kind = "a whole number" if name == "repeat" else "a number"
+        raise ValidationError(f"{name}: expected {kind}, got {raw[:40]!r}") from None
+    if name == "repeat":
+        if not number.is_integer():
+            raise ValidationError(f"repeat: expected a whole number, got {raw[:40]!r}")
+        return check_count(int(number), "repeat", high=MAX_REPEAT)
+    bounds = FORCE_N if name == "normal_force_N" else TEMPERATURE_C
+    return check_number(number, bounds, name)
+
+
+def _manifest_rows(p: Path, text: str, delimiter: str) -> Manifest:
+    """The rows of a manifest's text (see :func:`read_manifest`)."""
     reader = csv.reader(io.StringIO(text, newline=""), delimiter=delimiter)
     try:
         header = [h.strip() for h in next(reader)]
@@ -167,6 +217,9 @@ def read_manifest(path: str | Path) -> Manifest:
         file = cells[index["file"]].strip()
         if not file:
             raise ConfigError("empty 'file' cell", path=p, line=lineno, column="file")
+        if len(file) > 4096 or not file.isprintable():
+            raise ConfigError("the 'file' cell is not a file name (one printable line)",
+                              path=p, line=lineno, column="file")
         test = None if test_index is None else _test_key(cells[test_index])
         key = (file.replace("\\", "/"), test)
         if key in rows:
@@ -182,21 +235,11 @@ def read_manifest(path: str | Path) -> Manifest:
             if not raw:
                 continue
             try:
-                if name == "repeat":
-                    number = _parse_number(raw)
-                    if not number.is_integer() or number < 0:
-                        raise ValueError
-                    fields[name] = int(number)
-                elif name in ("normal_force_N", "temperature_C"):
-                    value = _parse_number(raw)
-                    if not math.isfinite(value):
-                        raise ValueError
-                    fields[name] = value
-                else:
-                    fields[name] = raw
-            except ValueError:
-                kind = "a whole number" if name == "repeat" else "a number"
-                problem = f"{p}:{lineno}: {raw!r} is not {kind} (column {name!r})"
+                fields[name] = _cell_value(name, raw)
+            except ValidationError as exc:
+                if problem is None:
+                    problem = str(ValidationError(exc.problem, path=p, line=lineno,
+                                                  column=name))
         rows[key] = ManifestRow(line=lineno, fields=fields, problem=problem, file=key[0],
                                 test=test)
     return Manifest(path=p, rows=tuple(rows.values()))
@@ -246,10 +289,13 @@ def labels_from(file: str, merged: Mapping[str, Any], *, hints: Sequence[str] = 
     if missing:
         hint = "; ".join(hints) if hints else "add the file to the manifest"
         raise CampaignError(f"metadata missing: {', '.join(missing)}", path=file, hint=hint)
-    return RunLabels(
-        pin=str(merged["pin"]),
-        disc=str(merged["disc"]),
-        normal_force_N=float(merged["normal_force_N"]),
-        temperature_C=float(merged["temperature_C"]),
-        repeat=None if merged.get("repeat") is None else int(merged["repeat"]),
-    )
+    try:
+        return RunLabels(
+            pin=str(merged["pin"]),
+            disc=str(merged["disc"]),
+            normal_force_N=float(merged["normal_force_N"]),
+            temperature_C=float(merged["temperature_C"]),
+            repeat=None if merged.get("repeat") is None else merged["repeat"],
+        )
+    except ValidationError as exc:
+        raise CampaignError(exc.problem, path=file) from None

@@ -10,7 +10,7 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
-from pathlib import Path
+from pathlib import Path, PurePosixPath, PureWindowsPath
 from typing import Any
 
 from ..config import (
@@ -22,10 +22,12 @@ from ..config import (
     settings_from_dict,
     settings_tables,
 )
-from ..errors import CampaignError, ConfigError
+from ..errors import CampaignError, ConfigError, ValidationError
+from ..escape import display_path
 from ..frictionmap.records import Tolerances
 from ..layout import DEFAULT_OUTPUT_DIR, OutputLayout
 from ..pipeline import ReadOptions
+from ..validate import MAX_NAME_CHARS, check_name
 from .patterns import _compile_pattern
 
 _CAMPAIGN_KEYS = frozenset(
@@ -130,6 +132,31 @@ def _non_negative(value: Any, key: str, path: Path) -> float:
     return float(value)
 
 
+def glob_problem(pattern: Any) -> str | None:
+    """Why ``pattern`` cannot select a campaign's exports below its raw folder, or
+    ``None``: it must be non-empty text, relative, without ``..`` and on one line."""
+    if not isinstance(pattern, str) or not pattern.strip():
+        return f"expected a file pattern such as '*.csv', got {pattern!r}"
+    if not pattern.isprintable():
+        return "expected one line of printable text"
+    if PurePosixPath(pattern).is_absolute() or PureWindowsPath(pattern).is_absolute() or \
+            PureWindowsPath(pattern).drive or pattern.startswith(("/", "\\")):
+        return f"expected a pattern relative to raw_dir, got the absolute {pattern!r}"
+    if ".." in PurePosixPath(pattern.replace("\\", "/")).parts:
+        return f"expected a pattern below raw_dir, got {pattern!r} (with '..')"
+    return None
+
+
+def _output_folder_problem(folder: Path) -> str | None:
+    """Why ``folder`` cannot be an output folder (it exists and is not a folder)."""
+    try:
+        if folder.exists() and not folder.is_dir():
+            return f"{folder} exists and is not a folder"
+    except OSError as exc:
+        return f"{folder}: {exc.strerror or exc}"
+    return None
+
+
 def load_campaign(path: str | Path) -> Campaign:
     """Load and validate a campaign config (TOML); see the module docstring for the keys.
 
@@ -195,8 +222,18 @@ def load_campaign(path: str | Path) -> Campaign:
     ):
         raise ConfigError('[names] must map short names to full names, e.g. DS30 = '
                           '"Dragonskin 30"', path=cfg_path)
+    for short, full in names_table.items():
+        try:
+            check_name(short, f"[names] key {short[:40]!r}")
+            check_name(full, f"[names] {short[:40]}")
+        except ValidationError as exc:
+            raise ConfigError(exc.problem, path=cfg_path) from None
 
     output_dir = rel("output_dir") or (base.parent / DEFAULT_OUTPUT_DIR).resolve()
+    problem = _output_folder_problem(output_dir)
+    if problem is not None:
+        raise ConfigError(f"[campaign] output_dir: {problem}", path=cfg_path,
+                          hint="name a folder (it is created when missing)")
     map_path = rel("map") or OutputLayout(output_dir).map_path
     manifest = rel("manifest")
     if manifest is not None and not manifest.is_file():
@@ -226,7 +263,14 @@ def load_campaign(path: str | Path) -> Campaign:
     glob = table.get("glob")
     if glob is not None:
         _check_type(glob, str, "glob", cfg_path)
+        problem = glob_problem(glob)
+        if problem is not None:
+            raise ConfigError(f"[campaign] glob: {problem}", path=cfg_path)
     name = _check_type(table.get("name", cfg_path.stem), str, "name", cfg_path)
+    try:
+        check_name(name, "[campaign] name")
+    except ValidationError as exc:
+        raise ConfigError(exc.problem, path=cfg_path) from None
     plots = _check_type(table.get("plots", True), bool, "plots", cfg_path)
     decimal = table.get("decimal")
     if decimal not in (None, ".", ","):
@@ -323,9 +367,15 @@ def folder_campaign(
         _compile_pattern(filename_pattern, key="pattern", path=None)
     if test_pattern is not None:
         _compile_pattern(test_pattern, key="test-pattern", path=None)
+    problem = None if glob is None else glob_problem(glob)
+    if problem is not None:
+        raise CampaignError(f"--glob: {problem}", path=folder)
     out = Path(output_dir).resolve()
+    problem = _output_folder_problem(out)
+    if problem is not None:
+        raise CampaignError(f"output folder: {problem}", path=folder)
     return Campaign(
-        name=raw_dir.name,
+        name=display_path(raw_dir.name)[:MAX_NAME_CHARS] or "campaign",
         raw_dir=raw_dir,
         glob=glob,
         settings=load_settings(instrument),

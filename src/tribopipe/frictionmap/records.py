@@ -20,6 +20,7 @@ from .. import __version__
 from ..errors import MapError
 from ..numeric import finite_or_nan
 from ..physics import contact_pressure_kPa
+from ..validate import FORCE_N, MAX_REPEAT, TEMPERATURE_C, check_count, check_name, check_number
 from .schema import SOURCE_REDUCED, _now
 
 if TYPE_CHECKING:
@@ -41,6 +42,11 @@ class RunLabels:
     ``normal_force_N`` is the nominal total normal force on the three pins [N] and
     ``temperature_C`` the nominal chamber temperature [°C]; both define the condition
     group in the friction map. ``None`` means unknown.
+
+    Every given label is checked where it is made (:mod:`tribopipe.validate`): names are
+    one line of printable text, the force is in :data:`~tribopipe.validate.FORCE_N`, the
+    temperature in :data:`~tribopipe.validate.TEMPERATURE_C`, the repeat a whole number;
+    otherwise :class:`~tribopipe.errors.ValidationError` names the label.
     """
 
     pin: str | None = None
@@ -48,6 +54,18 @@ class RunLabels:
     normal_force_N: float | None = None
     temperature_C: float | None = None
     repeat: int | None = None
+
+    def __post_init__(self) -> None:
+        for name in ("pin", "disc"):
+            value = getattr(self, name)
+            if value is not None:
+                check_name(value, name)
+        if self.normal_force_N is not None:
+            check_number(self.normal_force_N, FORCE_N, "nominal normal force")
+        if self.temperature_C is not None:
+            check_number(self.temperature_C, TEMPERATURE_C, "nominal temperature")
+        if self.repeat is not None:
+            check_count(self.repeat, "repeat", high=MAX_REPEAT)
 
     @property
     def complete(self) -> bool:

@@ -290,6 +290,8 @@ class IntervalSummary:
     header_line: int | None
     columns: tuple[ColumnSummary, ...]
     notes: tuple[tuple[str, str], ...]
+    #: numeric cells that hold no finite value (empty, ``******``, NaN, ±inf)
+    n_invalid_values: int = 0
 
     @property
     def friction_ready(self) -> bool:
@@ -371,6 +373,7 @@ class ExportSummary:
                     "n_points_declared": i.n_points_declared,
                     "n_invalid_points": i.n_invalid_points,
                     "n_waveform_rows": i.n_waveform_rows,
+                    "n_invalid_values": i.n_invalid_values,
                     "header_line": i.header_line,
                     "friction_ready": i.friction_ready,
                     "columns": [
@@ -387,6 +390,7 @@ class ExportSummary:
         """A human-readable listing (what ``tribopipe inspect`` prints)."""
         delim = {"\t": "TAB", None: "-"}.get(self.delimiter, repr(self.delimiter))
         invalid = sum(i.n_invalid_points for i in self.intervals)
+        values = sum(i.n_invalid_values for i in self.intervals)
         waveform = sum(i.n_waveform_rows for i in self.intervals)
         lines = [
             f"file:      {self.path}",
@@ -399,7 +403,8 @@ class ExportSummary:
         lines.append(
             f"contents:  {len(self.tests)} test(s), {len(self.results)} result(s), "
             f"{len(self.intervals)} interval(s), {self.n_points} point(s)"
-            f" ({invalid} invalid, {waveform} waveform rows skipped)"
+            f" ({invalid} invalid, {waveform} waveform rows skipped;"
+            f" {values} missing or invalid values)"
         )
         previous: tuple[ColumnSummary, ...] | None = None
         previous_notes: set[tuple[str, str]] = set()
@@ -411,6 +416,8 @@ class ExportSummary:
                 skipped.append(f"{i.n_invalid_points} invalid")
             if i.n_waveform_rows:
                 skipped.append(f"{i.n_waveform_rows} waveform rows")
+            if i.n_invalid_values:
+                skipped.append(f"{i.n_invalid_values} missing or invalid values")
             ready = "  [torque + normal force]" if i.friction_ready else ""
             lines.append("")
             lines.append(
@@ -441,6 +448,18 @@ class ExportSummary:
         elif self.chosen_note:
             lines += ["", f"reduce would stop: {self.chosen_note}"]
         return "\n".join(lines)
+
+
+def _invalid_values(m: Measurement) -> int:
+    """Numeric cells of ``m`` that hold no finite value (empty, ``******``, NaN, ±inf)."""
+    import numpy as np
+
+    total = 0
+    for name in m.data.columns:
+        values = m.data[name]
+        if name != "point_no" and values.dtype.kind == "f":
+            total += int((~np.isfinite(values.to_numpy())).sum())
+    return total
 
 
 def describe_export(
@@ -492,6 +511,7 @@ def describe_export(
                 header_line=meta.header_line,
                 columns=columns,
                 notes=meta.extra,
+                n_invalid_values=_invalid_values(m),
             )
         )
     chosen_all: list[int] = []

@@ -23,7 +23,7 @@ from conftest import shared_file
 from tribopipe import __version__
 from tribopipe import frictionmap as fm
 from tribopipe.config import InstrumentConfig, load_settings, settings_from_dict
-from tribopipe.errors import MapError
+from tribopipe.errors import MapError, ValidationError
 from tribopipe.measurement import Measurement, MeasurementMeta
 from tribopipe.pipeline import RunLabels
 from tribopipe.reduce import ReductionResult, reduce_measurement
@@ -149,11 +149,16 @@ def test_nominal_pressure_follows_the_instrument_geometry():
     assert rec["config_hash"] != run_record(force_N=3.0)["config_hash"]
 
 
-@pytest.mark.parametrize("labels", [{"pin": None}, {"disc": ""}])
+@pytest.mark.parametrize("labels", [{"pin": None}, {"disc": None}])
 def test_a_run_without_pin_or_disc_cannot_be_recorded(labels):
     with pytest.raises(MapError, match="pin and/or disc") as err:
         run_record(**labels)
     assert "run0.txt" in str(err.value) and "--pin" in str(err.value)
+
+
+def test_a_blank_pin_or_disc_is_refused_where_the_labels_are_made():
+    with pytest.raises(ValidationError, match="disc: expected a name"):
+        run_record(disc="")
 
 
 def test_a_run_without_mu_k_is_refused():

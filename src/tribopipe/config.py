@@ -26,7 +26,8 @@ from dataclasses import asdict, dataclass, fields
 from pathlib import Path
 from typing import Any
 
-from .errors import ConfigError, ValidationError
+from .errors import ConfigError, ReadError, ValidationError
+from .files import read_regular
 from .physics import (  # noqa: F401 - the founding constants are importable from here too
     FOUNDING_FRICTION_RADIUS_MM,
     FOUNDING_SLIDING_SPEED_MM_S,
@@ -44,6 +45,8 @@ from .validate import (
     check_number,
 )
 
+#: the largest config file read [bytes]
+MAX_CONFIG_BYTES = 16 * 1024 * 1024
 #: the tables of a config that a reduction depends on
 SECTIONS: tuple[str, ...] = ("instrument", "reduction")
 
@@ -361,14 +364,18 @@ def read_toml(path: str | Path) -> dict[str, Any]:
     """Parse a TOML file, turning any problem into a :class:`ConfigError` naming it."""
     p = Path(path)
     try:
-        with p.open("rb") as fh:
-            return tomllib.load(fh)
-    except FileNotFoundError:
-        raise ConfigError("config file not found", path=p) from None
+        raw = read_regular(p, max_bytes=MAX_CONFIG_BYTES, what="a config file (TOML)")
+    except ReadError as exc:
+        problem = "config file not found" if exc.problem.startswith("file not found") \
+            else f"cannot read config: {exc.problem}"
+        raise ConfigError(problem, path=p) from None
+    try:
+        return tomllib.loads(raw.decode("utf-8"))
     except tomllib.TOMLDecodeError as exc:
         raise ConfigError(f"not valid TOML: {exc}", path=p) from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise ConfigError(f"cannot read config: {exc}", path=p) from None
+    except UnicodeDecodeError as exc:
+        raise ConfigError(f"cannot read config: not UTF-8 text (byte {exc.start})",
+                          path=p) from None
 
 
 def load_settings(path: str | Path | None = None) -> Settings:

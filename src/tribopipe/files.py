@@ -1,35 +1,116 @@
-"""Files on disk: written so a reader never sees half of one, and hashed by content.
+"""Files on disk: looked at before they are opened, written so a reader never sees half of
+one, and hashed by content.
+
+Every input file is ``stat``-ed before it is opened (:func:`regular_file`): a directory, a
+FIFO (which would block the read forever), a device (``/dev/zero`` would fill the memory),
+a socket, a symlink loop or a name too long is refused in one line naming the path, never
+opened. :func:`read_regular` reads such a file up to a size limit.
 
 Every text output (summaries, tables, reports, a campaign's CSVs and state) is written to a
 temporary file beside its target and renamed over it: the rename is atomic, so a crash or
-a concurrent reader sees the old file or the new one, never a mix. (The friction map has its
-own, stricter writer with fsync and a lock: :mod:`tribopipe.frictionmap`.)
+a concurrent reader sees the old file or the new one, never a mix; a folder that is
+read-only or full is one :class:`~tribopipe.errors.OutputError` line. (The friction map has
+its own, stricter writer with fsync and a lock: :mod:`tribopipe.frictionmap`.)
 """
 
 from __future__ import annotations
 
 import hashlib
 import os
+import stat
+from contextlib import suppress
 from pathlib import Path
+
+from .errors import OutputError, ReadError
+
+_KINDS = (
+    (stat.S_ISDIR, "a directory"),
+    (stat.S_ISFIFO, "a FIFO (named pipe)"),
+    (stat.S_ISCHR, "a character device"),
+    (stat.S_ISBLK, "a block device"),
+    (stat.S_ISSOCK, "a socket"),
+)
+
+
+def os_reason(exc: OSError) -> str:
+    """The operating system's one-line reason for an error (``Permission denied``...)."""
+    return exc.strerror or str(exc) or type(exc).__name__
+
+
+def file_kind(mode: int) -> str:
+    """What a ``st_mode`` is: ``"a regular file"``, ``"a directory"``, ``"a FIFO (named
+    pipe)"``, ``"a character device"``..."""
+    for test, kind in _KINDS:
+        if test(mode):
+            return kind
+    return "a regular file" if stat.S_ISREG(mode) else "not a regular file"
+
+
+def regular_file(path: str | os.PathLike[str], *, what: str = "a file") -> os.stat_result:
+    """``os.stat(path)`` of a regular file (symlinks followed); otherwise
+    :class:`ReadError` naming the path and what it is (missing, a directory, a FIFO, a
+    device, a symlink loop, a name too long, no permission). Nothing is opened."""
+    try:
+        st = os.stat(path)
+    except FileNotFoundError:
+        raise ReadError(f"file not found, expected {what}", path=path) from None
+    except OSError as exc:  # ELOOP, ENAMETOOLONG, EACCES, ENOTDIR ...
+        raise ReadError(f"cannot read: {os_reason(exc)}", path=path) from None
+    if not stat.S_ISREG(st.st_mode):
+        raise ReadError(f"is {file_kind(st.st_mode)}, expected {what}; not opened", path=path)
+    return st
+
+
+def read_regular(path: str | os.PathLike[str], *, max_bytes: int,
+                 what: str = "a file") -> bytes:
+    """The bytes of a regular file (:func:`regular_file`) of at most ``max_bytes``;
+    :class:`ReadError` naming the path otherwise (too large, unreadable)."""
+    st = regular_file(path, what=what)
+    if st.st_size > max_bytes:
+        raise ReadError(f"is {st.st_size:,} bytes; at most {max_bytes:,} are read", path=path)
+    try:
+        with open(path, "rb") as fh:
+            if not stat.S_ISREG(os.fstat(fh.fileno()).st_mode):  # swapped since the stat
+                raise ReadError(f"is not {what}; not read", path=path)
+            data = fh.read(max_bytes + 1)
+    except OSError as exc:
+        raise ReadError(f"cannot read: {os_reason(exc)}", path=path) from None
+    if len(data) > max_bytes:
+        raise ReadError(f"is more than {max_bytes:,} bytes", path=path)
+    return data
 
 
 def write_text_atomic(target: str | Path, text: str, *, newline: str | None = None) -> Path:
     """Write ``text`` (UTF-8) to ``target`` via a temporary file and an atomic rename,
-    creating the folder if needed; ``newline`` as for :func:`open`. Returns the path."""
+    creating the folder if needed; ``newline`` as for :func:`open`. Returns the path.
+
+    Raises :class:`OutputError` (one line naming the target) when the folder cannot be
+    made or written (read-only, full, a file in the way, a name too long); the target is
+    then untouched and no temporary file is left behind."""
     path = Path(target)
-    path.parent.mkdir(parents=True, exist_ok=True)
     # the process id keeps two processes writing the same target off each other's temp file
     tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    with open(tmp, "w", encoding="utf-8", newline=newline) as fh:
-        fh.write(text)
-    os.replace(tmp, path)
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        with open(tmp, "w", encoding="utf-8", newline=newline) as fh:
+            fh.write(text)
+        os.replace(tmp, path)
+    except OSError as exc:
+        with suppress(OSError):
+            tmp.unlink()
+        raise OutputError(f"cannot write: {os_reason(exc)}", path=path) from None
     return path
 
 
-def file_sha256(path: str | Path) -> str:
-    """SHA-256 hex digest of a file's bytes."""
+def file_sha256(path: str | os.PathLike[str]) -> str:
+    """SHA-256 hex digest of a regular file's bytes; :class:`ReadError` naming the path
+    when it is not a regular file or cannot be read."""
+    regular_file(path)
     digest = hashlib.sha256()
-    with open(path, "rb") as fh:
-        for chunk in iter(lambda: fh.read(1 << 20), b""):
-            digest.update(chunk)
+    try:
+        with open(path, "rb") as fh:
+            for chunk in iter(lambda: fh.read(1 << 20), b""):
+                digest.update(chunk)
+    except OSError as exc:
+        raise ReadError(f"cannot read: {os_reason(exc)}", path=path) from None
     return digest.hexdigest()

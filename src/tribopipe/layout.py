@@ -31,6 +31,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from .errors import ExportError
+from .escape import csv_cell, csv_uncell, display_path, printable
 from .files import write_text_atomic
 
 #: the output folder when none is given (relative to the working folder)
@@ -53,9 +54,27 @@ OUTPUT_FILES: frozenset[str] = frozenset({MAP_FILE, RUNS_CSV, FAILURES_CSV, REPO
 OUTPUT_DIRS: frozenset[str] = frozenset({TRACES_DIR, SUMMARIES_DIR, PLOTS_DIR})
 
 
+#: longest raw-file stem kept in a run's file names [characters] (a file name may hold
+#: 255 bytes; the id and the suffix need room)
+MAX_STEM_CHARS = 80
+
+
+def safe_stem(source: str | Path) -> str:
+    """A raw file's stem as a file name anyone can handle: characters that are not
+    printable or that were undecodable bytes become ``_``, path separators too, and it is
+    cut to :data:`MAX_STEM_CHARS` (the id that follows keeps run names apart)."""
+    stem = Path(source).stem
+    clean = "".join(
+        ch if ch.isprintable() and ch not in "/\\" and not 0xD800 <= ord(ch) <= 0xDFFF
+        else "_" for ch in stem
+    )
+    return clean[:MAX_STEM_CHARS] or "run"
+
+
 def run_stem(source: str | Path, measurement_id: str) -> str:
-    """The name every file of a run shares: ``<raw file stem>_<first 8 digits of its id>``."""
-    return f"{Path(source).stem}_{measurement_id[:8]}"
+    """The name every file of a run shares: ``<raw file stem>_<first 8 digits of its id>``
+    (the stem made safe by :func:`safe_stem`)."""
+    return f"{safe_stem(source)}_{measurement_id[:8]}"
 
 
 def find_trace(traces_dir: str | Path, measurement_id: str) -> Path | None:
@@ -128,7 +147,7 @@ class OutputLayout:
     def state_path(self, campaign_name: str) -> Path:
         """A campaign's incremental state: ``<root>/.tribopipe-state.<name>.json`` (the
         name reduced to letters, digits, ``-`` and ``_``)."""
-        slug = re.sub(r"[^A-Za-z0-9_-]+", "-", campaign_name).strip("-") or "campaign"
+        slug = re.sub(r"[^A-Za-z0-9_-]+", "-", campaign_name).strip("-")[:100] or "campaign"
         return self.root / STATE_FILE.format(name=slug)
 
     def trace_path(self, source: str | Path, measurement_id: str) -> Path:
@@ -164,12 +183,14 @@ class OutputLayout:
 
 def write_failures(path: str | Path, failures: Mapping[str, str]) -> Path:
     """Write ``failures.csv``: the header ``file,reason``, then one row per failed file,
-    sorted by file (atomically). Returns the path."""
+    sorted by file (atomically). Returns the path. Both cells are one printable line
+    (:func:`~tribopipe.escape.display_path`) written as safe CSV cells
+    (:func:`~tribopipe.escape.csv_cell`: a file named ``=cmd|...`` is no formula)."""
     buf = io.StringIO()
     writer = csv.writer(buf, lineterminator="\n")
     writer.writerow(FAILURES_HEADER)
     for file, reason in sorted(failures.items()):
-        writer.writerow((file, reason))
+        writer.writerow((csv_cell(display_path(file)), csv_cell(printable(reason))))
     return write_text_atomic(path, buf.getvalue())
 
 
@@ -185,4 +206,5 @@ def read_failures(path: str | Path) -> tuple[tuple[str, str], ...] | None:
             return ()
         if [h.strip() for h in header[:2]] != list(FAILURES_HEADER):
             raise ExportError("expected the header 'file,reason'", path=p, line=1)
-        return tuple((row[0], row[1] if len(row) > 1 else "") for row in reader if row)
+        return tuple((csv_uncell(row[0]), csv_uncell(row[1]) if len(row) > 1 else "")
+                     for row in reader if row)

@@ -29,8 +29,9 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from .errors import ReductionError, TribopipeError
+from .escape import display_path
 from .figures import plot_trace
-from .files import file_sha256, write_text_atomic
+from .files import file_sha256, os_reason, write_text_atomic
 from .frictionmap.duplicates import (
     SameContent,
     compare_labels,
@@ -42,7 +43,7 @@ from .frictionmap.store import AppendReport, append_records, read_map
 from .intervals import friction_intervals
 from .layout import OutputLayout
 from .measurement import interval_label
-from .numeric import finite_or_none
+from .numeric import finite_json, finite_or_none
 from .readers import read_export
 from .reduce import reduce_measurement
 
@@ -294,12 +295,13 @@ def run_summary(outcome: RunOutcome) -> dict[str, Any]:
     ``None``), ``flags`` (list), the μ_S position (``mu_s_distance_mm``, ``mu_s_time_s``),
     the μ_K window (``mu_k_window_mm``, ``mu_k_window_s``), plateau std and drift, sliding
     speed, labels, where the run sits (``test, result, interval, occurrence``), method,
-    parameters, file and config hashes.
+    parameters, file and config hashes. Strict JSON: a value that is not finite is
+    ``None``; ``file`` is the path as printable text.
     """
     r = outcome.result
     meta = outcome.measurement.meta
-    return {
-        "file": outcome.path,
+    return finite_json({
+        "file": display_path(outcome.path),
         "run": outcome.name,
         "measurement_id": outcome.measurement_id,
         "mu_s": float(r.mu_s),
@@ -333,13 +335,14 @@ def run_summary(outcome: RunOutcome) -> dict[str, Any]:
         "parameters": dict(r.parameters),
         "file_hash": outcome.file_hash,
         "config_hash": outcome.config_hash,
-    }
+    })
 
 
 def write_summary(out_dir: str | Path | OutputLayout, outcome: RunOutcome) -> Path:
     """Write :func:`run_summary` as JSON: ``<out_dir>/summaries/<stem>_<id8>.json``."""
     target = OutputLayout.of(out_dir).summary_path(outcome.path, outcome.measurement_id)
-    return write_text_atomic(target, json.dumps(run_summary(outcome), indent=2, default=str))
+    text = json.dumps(run_summary(outcome), indent=2, default=str, allow_nan=False)
+    return write_text_atomic(target, text)
 
 
 def plot_run(out_dir: str | Path | OutputLayout, outcome: RunOutcome) -> Path:
@@ -409,10 +412,11 @@ class FileResult:
 def _message(exc: BaseException, path: str | Path) -> str:
     """One line naming the file once: the error's text, prefixed with the path when the
     error does not name it."""
+    shown = display_path(path)
     if isinstance(exc, OSError):
-        return f"{path}: {exc.strerror or exc}"
+        return f"{shown}: {os_reason(exc)}"
     message = str(exc)
-    return message if str(path) in message else f"{path}: {message}"
+    return message if shown in message else f"{shown}: {message}"
 
 
 def reduce_export(
@@ -495,8 +499,8 @@ def reduce_files(
     first_with: dict[str, str] = {}
     for path in paths:
         try:
-            sha: str | None = file_sha256(path)
-        except OSError:
+            sha: str | None = file_sha256(path)  # stat first: a FIFO is never opened
+        except (OSError, TribopipeError):
             sha = None  # the reader says what is wrong with it, in its words
         if sha is not None and sha in first_with:
             result = FileResult(path=str(path), file_hash=sha, duplicate_of=first_with[sha])

@@ -31,8 +31,10 @@ from typing import Any
 from .errors import ValidationError
 from .escape import printable
 
-#: longest name [characters] (pins, discs, campaigns, instruments, map text)
+#: longest name [characters] (pins, discs, campaigns, instruments, a map's ids)
 MAX_NAME_CHARS = 200
+#: longest free text [characters] (a map's reasons, flags, file names, methods)
+MAX_TEXT_CHARS = 4096
 #: Unicode categories a name may not hold: controls, format characters (bidi overrides,
 #: zero-width joiners), surrogates, private use, unassigned, line and paragraph separators
 _FORBIDDEN_CATEGORIES = frozenset({"Cc", "Cf", "Cs", "Co", "Cn", "Zl", "Zp"})
@@ -95,20 +97,26 @@ def _shown(value: Any, limit: int = 60) -> str:
     return text if len(text) <= limit + 10 else text[: limit + 10] + "…"
 
 
-def name_problem(value: Any) -> str | None:
-    """Why ``value`` is not a name (see the module docstring), or ``None`` when it is."""
+def text_problem(value: Any, max_chars: int = MAX_TEXT_CHARS) -> str | None:
+    """Why ``value`` is not one line of printable text of at most ``max_chars``
+    characters (blank allowed), or ``None`` when it is."""
     if not isinstance(value, str):
         return f"expected text, got {type(value).__name__}"
-    if not value.strip():
-        return "expected a name, got blank text"
-    if len(value) > MAX_NAME_CHARS:
-        return f"expected at most {MAX_NAME_CHARS} characters, got {len(value)}"
+    if len(value) > max_chars:
+        return f"expected at most {max_chars} characters, got {len(value)}"
     if not value.isprintable():
         for ch in value:
             if unicodedata.category(ch) in _FORBIDDEN_CATEGORIES:
                 return (f"expected one line of printable text, got the character "
                         f"{printable(repr(ch))} (U+{ord(ch):04X})")
     return None
+
+
+def name_problem(value: Any) -> str | None:
+    """Why ``value`` is not a name (see the module docstring), or ``None`` when it is."""
+    if isinstance(value, str) and not value.strip():
+        return "expected a name, got blank text"
+    return text_problem(value, MAX_NAME_CHARS)
 
 
 def check_name(value: Any, what: str, *, path: str | os.PathLike[str] | None = None,

@@ -19,8 +19,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from ..errors import CampaignError
-from ..files import file_sha256
+from ..errors import CampaignError, OutputError, TribopipeError
+from ..files import file_sha256, os_reason
 from ..frictionmap.duplicates import (
     FilesByHash,
     SameContent,
@@ -163,16 +163,22 @@ def run_campaign(
     """
     from filelock import FileLock, Timeout
 
-    campaign.output_dir.mkdir(parents=True, exist_ok=True)
     lock = FileLock(str(campaign.layout.batch_lock), timeout=0)
     try:
-        with lock:
-            return _run_locked(campaign, jobs=jobs, plots=plots, progress=progress)
+        campaign.output_dir.mkdir(parents=True, exist_ok=True)
+        lock.acquire()
     except Timeout:
         raise CampaignError(
             "another batch of this campaign is running (its output folder is locked)",
             path=campaign.output_dir, hint="wait for it to finish",
         ) from None
+    except OSError as exc:  # read-only, a file in the way, no space
+        raise OutputError(f"cannot use the output folder: {os_reason(exc)}",
+                          path=campaign.output_dir) from None
+    try:
+        return _run_locked(campaign, jobs=jobs, plots=plots, progress=progress)
+    finally:
+        lock.release()
 
 
 def _run_locked(campaign: Campaign, *, jobs: int | None, plots: bool | None,
@@ -211,14 +217,23 @@ def _run_locked(campaign: Campaign, *, jobs: int | None, plots: bool | None,
     if landing.records or landing.stale_ids:
         map_summary, landed, removed = _update_map(campaign, landing.records, landing.stale_ids)
     groups = _groups_updated(state, landing.records, landed, removed)
-    _save_state_with_map(campaign, entries, state)
 
     duplicates = {**plan.duplicates, **landing.duplicates}
     this_batch = {n: REDUCED for n in landing.reduced} | {n: SKIPPED for n in plan.skipped} | {
         n: FAILED for n in failures
     }
-    _write_runs_csv(campaign, rows, entries, this_batch, failures)
-    _write_failures_csv(campaign, failures)
+    # each output is tried even when one fails (a full disk may free up); the first
+    # failure is the batch's one-line error
+    problems: list[OutputError] = []
+    for write in (lambda: _save_state_with_map(campaign, entries, state),
+                  lambda: _write_runs_csv(campaign, rows, entries, this_batch, failures),
+                  lambda: _write_failures_csv(campaign, failures)):
+        try:
+            write()
+        except OutputError as exc:
+            problems.append(exc)
+    if problems:
+        raise problems[0]
     tests, unmatched, undescribed = _ledger(rows, entries, manifest)
     return BatchReport(
         campaign=campaign.name,
@@ -413,7 +428,7 @@ def _apply(campaign: Campaign, results: Sequence[FileDone], by_file: Mapping[str
         base = {
             "size": row.size, "mtime_ns": row.mtime_ns, "config_hash": config_hash,
             "recipe": recipe_hash(campaign, row.merged, row.test_rows),
-            "sha256": done.sha256 or row.sha256 or file_sha256(row.path),
+            "sha256": done.sha256 or row.sha256 or _sha256_or_none(row.path),
             "tests": list(done.tests),
         }
         if done.error is not None:
@@ -474,6 +489,14 @@ def _drop_outputs(campaign: Campaign, done: FileDone, entries: Mapping[str, Any]
                 path.unlink(missing_ok=True)
             except OSError:
                 pass  # a stray picture is not worth failing the batch for
+
+
+def _sha256_or_none(path: Path) -> str | None:
+    """The file's SHA-256, or ``None`` when it cannot be read now (it is tried again)."""
+    try:
+        return file_sha256(path)
+    except TribopipeError:
+        return None
 
 
 def _forget_vanished(campaign: Campaign, entries: dict[str, Any], present: set[str],

@@ -11,6 +11,7 @@ import math
 from collections.abc import Mapping, Sequence
 from typing import Any
 
+from ..escape import csv_cell, display_path
 from ..files import write_text_atomic
 from ..layout import write_failures
 from .patterns import LABEL_FIELDS
@@ -28,11 +29,15 @@ _RUN_KEYS: tuple[str, ...] = tuple(k for k in _SUMMARY_KEYS if k not in ("labels
 
 
 def _cell(value: Any) -> str:
+    """A ``runs.csv`` cell: numbers as written, text as one printable line that no
+    spreadsheet reads as a formula (:func:`~tribopipe.escape.csv_cell`)."""
     if value is None:
         return ""
     if isinstance(value, float):
         return "" if not math.isfinite(value) else repr(round(value, 6))
-    return str(value)
+    if isinstance(value, int):
+        return str(value)
+    return csv_cell(display_path(str(value)))
 
 
 def _write_runs_csv(campaign: Campaign, rows: Sequence[CampaignRow],

@@ -27,13 +27,15 @@ import functools
 import hashlib
 import json
 import os
+import stat
 from collections.abc import Mapping, Sequence
 from dataclasses import asdict, dataclass, fields
 from pathlib import Path
 from typing import Any
 
-from ..errors import CampaignError
-from ..files import file_sha256, write_text_atomic
+from ..errors import CampaignError, ReadError
+from ..escape import display_path
+from ..files import file_sha256, regular_file, write_text_atomic
 from ..frictionmap.records import RunLabels
 from ..layout import FAILURES_CSV, RUNS_CSV
 from ..readers import EXPORT_SUFFIXES
@@ -130,6 +132,8 @@ def _is_tool_table(path: Path) -> bool:
     if path.name not in (RUNS_CSV, FAILURES_CSV):
         return False
     try:
+        if not stat.S_ISREG(os.stat(path).st_mode):  # never open a FIFO
+            return False
         with path.open("rb") as fh:
             return fh.read(5) == b"file,"
     except OSError:
@@ -140,17 +144,17 @@ def discover_files(campaign: Campaign) -> list[Path]:
     """The campaign's raw exports, sorted by relative path: every file of ``raw_dir``
     with a suffix the readers know (any case), or the campaign's ``glob``; never hidden
     files, the manifest, campaign configs, or the tool's own outputs (see the module
-    docstring)."""
+    docstring). What matches but is not a regular file (a folder, a FIFO, a symlink
+    loop) is kept: :func:`campaign_table` lists it as failed, with its reason."""
     root = campaign.raw_dir
     if campaign.glob is None:
         # one scandir: the directory entries carry their type, no stat per file
         with os.scandir(root) as it:
             candidates = [Path(e.path) for e in it
                           if os.path.splitext(e.name)[1].lower() in EXPORT_SUFFIXES
-                          and not e.name.startswith(".") and e.is_file()]
+                          and not e.name.startswith(".")]
     else:
-        candidates = [p for p in root.glob(campaign.glob)
-                      if not p.name.startswith(".") and p.is_file()]
+        candidates = [p for p in root.glob(campaign.glob) if not p.name.startswith(".")]
     not_runs = {p for p in (campaign.manifest, campaign.source, campaign.map_path) if p}
     layout = campaign.layout
     inside = campaign.output_dir != root and campaign.output_dir.is_relative_to(root)
@@ -233,7 +237,13 @@ def campaign_table(campaign: Campaign, *, state: Mapping[str, Any] | None = None
     rows: list[CampaignRow] = []
     for path in discover_files(campaign):
         rel = _relative(path, campaign.raw_dir)
-        st = path.stat()
+        try:
+            st = regular_file(path, what="an export file")
+        except ReadError as exc:
+            problem = f"{display_path(rel)}: {exc.problem}"
+            rows.append(CampaignRow(file=rel, path=path, size=-1, mtime_ns=-1, sources=(),
+                                    merged={}, problem=problem, status=FAILED, reason=problem))
+            continue
         sources: list[tuple[str, dict[str, Any]]] = []
         hints: list[str] = []
         problem: str | None = None
@@ -266,7 +276,10 @@ def campaign_table(campaign: Campaign, *, state: Mapping[str, Any] | None = None
         if previous is not None:
             same_stat = previous.get("size") == st.st_size and \
                 previous.get("mtime_ns") == st.st_mtime_ns
-            sha = previous.get("sha256") if same_stat else file_sha256(path)
+            try:
+                sha = previous.get("sha256") if same_stat else file_sha256(path)
+            except ReadError as exc:
+                problem = problem or f"{display_path(rel)}: {exc.problem}"
             same = sha is not None and sha == previous.get("sha256") and \
                 previous.get("recipe") == recipe_hash(campaign, merged, tuple(test_rows.values()))
             if same and previous.get("status") in (REDUCED, DUPLICATE):

@@ -17,6 +17,8 @@ from dataclasses import asdict, dataclass
 from typing import Any
 
 from ..errors import CampaignError, TribopipeError
+from ..escape import display_path, printable
+from ..files import os_reason
 from ..frictionmap.records import RunLabels
 from ..numeric import finite_or_none
 from ..pipeline import (
@@ -135,9 +137,10 @@ def _reason(exc: TribopipeError, job: _Job, name: str | None = None) -> str:
     (readers name the absolute path, which is long and machine-specific)."""
     text = str(exc)
     if exc.path is None:
-        return f"{name or job.file}: {text}"
-    if exc.path == job.path and text.startswith(exc.path):
-        return job.file + text[len(exc.path):]
+        return f"{display_path(name or job.file)}: {text}"
+    shown = display_path(exc.path)
+    if exc.path == job.path and text.startswith(shown):
+        return display_path(job.file) + text[len(shown):]
     return text
 
 
@@ -240,8 +243,8 @@ def _reduce_one(job: _Job, ctx: _Context) -> FileDone:
         except TribopipeError as exc:
             runs.append(FailedRun(reason=_reason(exc, job, name), **where))
         except OSError as exc:
-            runs.append(FailedRun(reason=f"{name}: cannot write: {exc.strerror or exc}",
-                                  **where))
+            runs.append(FailedRun(reason=f"{display_path(name)}: cannot write: "
+                                         f"{os_reason(exc)}", **where))
     return FileDone(file=job.file, sha256=export.file_hash, tests=export.tests,
                     runs=tuple(runs))
 
@@ -251,7 +254,7 @@ def _plot(campaign: Campaign, outcome: RunOutcome, name: str) -> str | None:
     try:
         plot_run(campaign.layout, outcome)
     except Exception as exc:  # noqa: BLE001 - a picture must not cost the run its map row
-        return f"{name}: trace plot failed ({type(exc).__name__}: {exc})"
+        return printable(f"{name}: trace plot failed ({type(exc).__name__}: {exc})")
     return None
 
 
@@ -289,12 +292,13 @@ def _reduce_chunk(jobs: Sequence[_Job], ctx: _Context) -> list[FileDone]:
         except OSError as exc:
             out.append(FileDone(file=job.file, error=FailedRun(
                 file=job.file, name=job.file,
-                reason=f"{job.file}: cannot read: {exc.strerror or exc}")))
+                reason=f"{display_path(job.file)}: cannot read or write: {os_reason(exc)}")))
         except Exception as exc:  # noqa: BLE001 - one broken file must not stop a campaign
             out.append(FileDone(file=job.file, error=FailedRun(
                 file=job.file, name=job.file, transient=True,
-                reason=f"{job.file}: internal error {type(exc).__name__}: {exc} (please "
-                       "report with the file)")))
+                reason=printable(f"{display_path(job.file)}: internal error "
+                                 f"{type(exc).__name__}: {exc} (please report with the "
+                                 "file)"))))
     return out
 
 

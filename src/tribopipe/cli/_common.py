@@ -36,7 +36,8 @@ def map_option(func: F) -> F:
     return click.option(
         "--map",
         "map_path",
-        type=click.Path(dir_okay=False),
+        # checked by the library (a folder, a FIFO, a device: one line, never opened)
+        type=click.Path(),
         default=DEFAULT_MAP,
         show_default=True,
         help="The friction map (Parquet file).",

@@ -61,6 +61,7 @@ def _shorten(path: Any) -> str:
 
 def _run(campaign: Any, jobs: int | None, plots: bool | None) -> None:
     from ..campaign import run_campaign
+    from ..escape import display_path, printable
     from ..layout import OutputLayout
 
     bar: Any = None
@@ -81,17 +82,18 @@ def _run(campaign: Any, jobs: int | None, plots: bool | None) -> None:
         if bar is not None:
             bar.__exit__(None, None, None)
     for note in report.notes:
-        click.echo(f"note: {note}", err=True)
+        click.echo(f"note: {printable(note)}", err=True)
     for file, reason in report.failures:
         # reasons name their file already (campaign-relative), except rare library ones
-        click.echo(f"failed: {reason if file in reason else f'{file}: {reason}'}", err=True)
+        name, reason = display_path(file), printable(reason)
+        click.echo(f"failed: {reason if name in reason else f'{name}: {reason}'}", err=True)
     for file, flags in report.flagged:
-        click.echo(f"flagged: {file}: {flags.replace(';', ', ')}")
+        click.echo(f"flagged: {display_path(file)}: {flags.replace(';', ', ')}")
     click.echo(f"map {_shorten(report.map_path)}: {report.map_summary}")
     click.echo(f"outputs in {_shorten(report.output_dir)}/: runs.csv, failures.csv, traces/"
                + (", plots/traces/" if OutputLayout(report.output_dir).plots_dir.is_dir() else ""))
     for line in report.ledger():  # the account comes last, where a user looks
-        click.echo(line)
+        click.echo(printable(line))
     if not report.ok:
         parts = []
         if report.failures:

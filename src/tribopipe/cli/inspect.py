@@ -10,7 +10,7 @@ from ._common import friendly_errors, read_options
 
 
 @click.command("inspect")
-@click.argument("file", type=click.Path(dir_okay=False))
+@click.argument("file", type=click.Path())  # checked by the reader, one line
 @read_options
 @click.option(
     "--format",

@@ -17,7 +17,8 @@ def _fmt(value: object, spec: str) -> str:
 
 
 @click.command("reduce")
-@click.argument("files", nargs=-1, required=True, type=click.Path(dir_okay=False))
+# FILES is checked per file by the library (a bad path fails that file only), not by click
+@click.argument("files", nargs=-1, required=True, type=click.Path())
 @click.option("--pin", help="Pin material, e.g. 'Ecoflex 00-50'.")
 @click.option("--disc", help="Disc material, e.g. 'steel'.")
 @click.option(
@@ -143,11 +144,12 @@ def _run_labels(outcomes: list) -> dict[int, str]:
 
 
 def _print(outcomes: list, as_json: bool) -> None:
+    from ..escape import printable
     from ..pipeline import run_summary
 
     summaries = [run_summary(o) for o in outcomes]
     if as_json:
-        click.echo(json.dumps(summaries, indent=2, default=str))
+        click.echo(json.dumps(summaries, indent=2, default=str, allow_nan=False))
         return
     if not summaries:
         return
@@ -160,23 +162,26 @@ def _print(outcomes: list, as_json: bool) -> None:
     for k, s in enumerate(summaries):
         name = s["file"] if len(s["file"]) <= 40 else "…" + s["file"][-39:]
         run = f" {runs.get(k, '-'):<{run_width}}" if runs else ""
-        click.echo(
-            f"{name:<40}{run} {s['mu_s']:6.3f} {_fmt(s['U95_mu_s'], '6.3f'):>6} "
-            f"{s['mu_k']:6.3f} {_fmt(s['U95_mu_k'], '6.3f'):>6} {s['pressure_kPa']:7.2f} "
-            f"{s['normal_force_N']:6.3f} {_fmt(s['temperature_C'], '6.1f'):>6}  "
-            f"{','.join(s['flags']) or '-'}"
-        )
+        click.echo(printable(  # test names come from the file: one printable line
+            f"{name:<40}{run} {_fmt(s['mu_s'], '6.3f'):>6} {_fmt(s['U95_mu_s'], '6.3f'):>6} "
+            f"{_fmt(s['mu_k'], '6.3f'):>6} {_fmt(s['U95_mu_k'], '6.3f'):>6} "
+            f"{_fmt(s['pressure_kPa'], '7.2f'):>7} {_fmt(s['normal_force_N'], '6.3f'):>6} "
+            f"{_fmt(s['temperature_C'], '6.1f'):>6}  {','.join(s['flags']) or '-'}"
+        ))
 
 
 def _note_alike(results: list, labels: object) -> None:
     """Say so when the options label several tests of one file alike."""
+    from ..escape import display_path
+
     given = any(v is not None for v in (labels.pin, labels.disc, labels.normal_force_N,
                                         labels.temperature_C, labels.repeat))
     if not given:
         return
     for r in results:
         if len(r.tests) > 1 and len(r.outcomes) > 1:
-            click.echo(f"note: {r.path} holds {len(r.tests)} tests: --pin/--disc/--force/"
+            click.echo(f"note: {display_path(r.path)} holds {len(r.tests)} tests: "
+                       "--pin/--disc/--force/"
                        "--temperature/--repeat label each of its runs alike "
                        "(a campaign can label them per test: manifest 'test' column, "
                        "--test-pattern)", err=True)
@@ -193,6 +198,7 @@ def _store(outcomes: list, map_path: str, no_map: bool, replace: bool, labels: o
             err=True,
         )
         return 0
+    from ..escape import display_path, printable
     from ..pipeline import store_runs
 
     report = store_runs(map_path, outcomes, replace=replace)
@@ -200,12 +206,14 @@ def _store(outcomes: list, map_path: str, no_map: bool, replace: bool, labels: o
     for same in report.same:
         if same.conflict and not replace:
             refused += 1
-            click.echo(f"conflict: {same.message()} (pass --replace to relabel it)", err=True)
+            click.echo(printable(f"conflict: {same.message()} (pass --replace to relabel it)"),
+                       err=True)
         elif same.conflict:
-            click.echo(f"replaced: {same.file}: same content as {same.other} but other labels "
-                       f"({'; '.join(same.differences)}): its labels replace the map's "
-                       "(--replace)", err=True)
+            click.echo(printable(
+                f"replaced: {same.file}: same content as {same.other} but other labels "
+                f"({'; '.join(same.differences)}): its labels replace the map's "
+                "(--replace)"), err=True)
         else:
-            click.echo(f"duplicate: {same.message()}", err=True)
-    click.echo(f"map {map_path}: {report.appended.summary()}", err=True)
+            click.echo(printable(f"duplicate: {same.message()}"), err=True)
+    click.echo(f"map {display_path(map_path)}: {report.appended.summary()}", err=True)
     return refused

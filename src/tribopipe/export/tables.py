@@ -28,6 +28,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from ..errors import ExportError
+from ..escape import csv_cell, markdown_cell, printable
 from ..files import write_text_atomic
 from ..frictionmap import FRICTIONMAP_COLUMNS, read_map
 from ..stats import _group_keys, group_statistics
@@ -178,12 +179,35 @@ def _numeric(frame: pd.DataFrame, column: str) -> bool:
     return bool(pd.api.types.is_numeric_dtype(dtype)) and not pd.api.types.is_bool_dtype(dtype)
 
 
+def _safe_text_cells(table: pd.DataFrame) -> pd.DataFrame:
+    """``table`` with every text cell one printable line that no spreadsheet reads as a
+    formula (:func:`~tribopipe.escape.csv_cell`, the OWASP rule); numbers untouched."""
+    text_columns = [c for c in table.columns if not _numeric(table, c)
+                    and not _is_bool(table[c])]
+    if not text_columns:
+        return table
+    table = table.copy()
+    for column in text_columns:
+        table[column] = table[column].map(
+            lambda v: csv_cell(printable(v)) if isinstance(v, str) else v)
+    return table
+
+
+def _is_bool(column: Any) -> bool:
+    """True for a boolean column."""
+    import pandas as pd
+
+    return bool(pd.api.types.is_bool_dtype(column.dtype))
+
+
 def to_csv(table: pd.DataFrame, formats: dict[str, str] | None = None) -> str:
-    """CSV text (``\\n`` line ends); floats with ten significant digits, missing as empty.
+    """CSV text (``\\n`` line ends); floats with ten significant digits, missing as empty,
+    text cells safe for spreadsheets (:func:`_safe_text_cells`).
 
     ``formats`` is accepted for a uniform writer signature and ignored: CSV is for machines.
     """
-    return table.to_csv(index=False, lineterminator="\n", float_format="%.10g")
+    return _safe_text_cells(table).to_csv(index=False, lineterminator="\n",
+                                          float_format="%.10g")
 
 
 #: a spreadsheet runs a text cell starting with one of these as a formula
@@ -205,8 +229,10 @@ def spreadsheet_csv(table: pd.DataFrame) -> str:
 
 
 def frictionmap_csv(table: pd.DataFrame) -> str:
-    """CSV text in the published FrictionMap style: floats as shortest round-trip text."""
-    return table.to_csv(index=False, lineterminator="\n")
+    """CSV text in the published FrictionMap style: floats as shortest round-trip text,
+    text cells safe for spreadsheets (read back by
+    :func:`tribopipe.frictionmap.read_frictionmap_table`, which undoes the prefix)."""
+    return _safe_text_cells(table).to_csv(index=False, lineterminator="\n")
 
 
 def _short_values(table: pd.DataFrame) -> pd.DataFrame:
@@ -237,13 +263,13 @@ def _specs(table: pd.DataFrame, formats: dict[str, str] | None) -> list[str]:
 
 def to_markdown(table: pd.DataFrame, formats: dict[str, str] | None = None) -> str:
     """A GitHub-flavoured Markdown table; numeric columns right-aligned. Floats use
-    ``formats[column]`` (a format spec) or four significant digits."""
+    ``formats[column]`` (a format spec) or four significant digits. Every cell is one
+    inert cell (:func:`~tribopipe.escape.markdown_cell`: no raw HTML, no broken row)."""
     table = _short_values(table)
     header = [str(c) for c in table.columns]
     align = ["---:" if _numeric(table, c) else "---" for c in table.columns]
 
-    def esc(text: str) -> str:
-        return text.replace("|", "\\|").replace("\n", " ")
+    esc = markdown_cell
 
     specs = _specs(table, formats)
     lines = ["| " + " | ".join(esc(h) for h in header) + " |", "| " + " | ".join(align) + " |"]

@@ -14,11 +14,13 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from .. import __version__
-from ..errors import MapError
-from ..files import file_sha256
+from ..errors import MapError, ReadError
+from ..escape import csv_uncell
+from ..files import file_sha256, regular_file
 from ..physics import FOUNDING_SLIDING_SPEED_MM_S
+from ..validate import name_problem
 from .records import imported_id
-from .schema import SOURCE_PUBLISHED, _missing, _now
+from .schema import SOURCE_PUBLISHED, _missing, _now, records_frame
 from .store import AppendReport, append_records
 
 if TYPE_CHECKING:
@@ -59,8 +61,10 @@ def read_frictionmap_table(path: str | os.PathLike[str]) -> pd.DataFrame:
     import pandas as pd
 
     p = Path(path)
-    if not p.is_file():
-        raise MapError("file not found, expected a FrictionMap .mat or CSV", path=p)
+    try:
+        regular_file(p, what="a FrictionMap .mat or CSV")
+    except ReadError as exc:
+        raise MapError(exc.problem, path=p) from None
     if p.suffix.lower() == ".mat":
         table = _read_mat_table(p)
         first_line = None
@@ -88,10 +92,14 @@ def read_frictionmap_table(path: str | os.PathLike[str]) -> pd.DataFrame:
     for col in FRICTIONMAP_COLUMNS:
         values = table[col].tolist()
         if col in ("pin", "disc"):
-            texts = ["" if _missing(v) else str(v).strip() for v in values]
+            # a cell we wrote safe for spreadsheets ('=x) reads back as what it was
+            texts = ["" if _missing(v) else csv_uncell(str(v).strip()) for v in values]
             for i, text in enumerate(texts):
                 if not text:
                     raise _where(p, first_line, i, col, "empty, expected a material name")
+                problem = name_problem(text)
+                if problem is not None:
+                    raise _where(p, first_line, i, col, f"expected a material name: {problem}")
             out[col] = texts
             continue
         numbers = []
@@ -225,6 +233,7 @@ def import_records(
                 "exclusion_reason": None,
             }
         )
+    _validate_rows(p, records)
     seen: set[str] = set()
     for row, rec in enumerate(records):
         if rec["measurement_id"] not in seen:
@@ -237,6 +246,28 @@ def import_records(
             column="measurementNo",
         )
     return records
+
+
+def _validate_rows(path: Path, records: list[dict[str, Any]]) -> None:
+    """Check the records of an imported table as every map row is checked
+    (:func:`~tribopipe.frictionmap.schema.validate_runs`: force > 0, temperature above
+    −273.15 °C, 0 ≤ μ ≤ 100 ...); :class:`MapError` naming the file, the line (CSV) or
+    row (``.mat``) and the column of the first bad one."""
+    try:
+        records_frame(records)
+    except MapError:
+        pass
+    else:
+        return
+    for row, rec in enumerate(records):
+        try:
+            records_frame([rec])
+        except MapError as exc:
+            problem = exc.problem.split(": ", 1)[-1]
+            csv_line = row + 2 if path.suffix.lower() != ".mat" else None
+            where = "" if csv_line else f"row {row + 1}: "
+            raise MapError(where + problem, path=path, line=csv_line,
+                           column=exc.column) from None
 
 
 def import_table(

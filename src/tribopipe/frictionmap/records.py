@@ -18,6 +18,7 @@ from typing import TYPE_CHECKING, Any
 
 from .. import __version__
 from ..errors import MapError
+from ..escape import display_path
 from ..numeric import finite_or_nan
 from ..physics import contact_pressure_kPa
 from ..validate import FORCE_N, MAX_REPEAT, TEMPERATURE_C, check_count, check_name, check_number
@@ -230,7 +231,7 @@ def make_record(
         "plateau_drift_per_mm": finite_or_nan(result.plateau_drift_per_mm),
         "flags": _join_flags(flags),
         "method": result.method,
-        "source_file": Path(meta.source_file).name,
+        "source_file": display_path(Path(meta.source_file).name),
         "file_hash": file_hash,
         "interval": meta.interval,
         "config_hash": settings.config_hash,

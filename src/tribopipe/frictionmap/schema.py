@@ -14,6 +14,18 @@ from datetime import UTC, datetime
 from typing import TYPE_CHECKING, Any
 
 from ..errors import MapError
+from ..escape import printable
+from ..validate import (
+    FORCE_N,
+    MAX_REPEAT,
+    MU,
+    PRESSURE_KPA,
+    SLIDING_SPEED_MM_S,
+    TEMPERATURE_C,
+    Range,
+    name_problem,
+    text_problem,
+)
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -105,12 +117,12 @@ def records_frame(records: Sequence[Mapping[str, Any]], *, where: str = "record"
     """Validate run records and return them as a map DataFrame (schema dtypes, in order).
 
     Every record needs every column of :data:`RUN_COLUMNS` (those of
-    :data:`ADDED_IN_VERSION` may be left out: missing); ``measurement_id``, ``source``,
-    ``pin`` and ``disc`` must be non-empty text, ``mu_k`` finite, ``mu_s`` finite unless
-    the row was imported (``source`` other than ``'reduced'``). Raises :class:`MapError`
-    naming the record and column otherwise; nothing is written on error.
+    :data:`ADDED_IN_VERSION` may be left out: missing) with a value of its kind (a
+    ``bool`` is no number, text is no ``bool``) that keeps the rules of
+    :func:`check_runs`. Raises :class:`MapError` naming the record and column otherwise;
+    nothing is written on error.
     """
-    return _validated(unvalidated_frame(records, where=where), where)
+    return check_runs(unvalidated_frame(records, where=where), where)
 
 
 def unvalidated_frame(
@@ -145,23 +157,90 @@ def unvalidated_frame(
     return pd.DataFrame(columns, columns=list(RUN_COLUMNS), index=pd.RangeIndex(len(records)))
 
 
-def _validated(frame: pd.DataFrame, where: str) -> pd.DataFrame:
-    """``frame`` (schema dtypes) after the row rules of :func:`records_frame`."""
+#: the text columns that name something (one printable line, ≤ 200 characters, not blank)
+NAME_COLUMNS: tuple[str, ...] = ("measurement_id", "source", "pin", "disc")
+#: the physical range of each float column; columns not listed need only be finite (or
+#: missing). ``REQUIRED`` columns may not be missing in any row.
+COLUMN_RANGES: dict[str, Range] = {
+    "normal_force_N": FORCE_N,
+    "pressure_kPa": PRESSURE_KPA,
+    "normal_force_measured_N": FORCE_N,
+    "pressure_measured_kPa": PRESSURE_KPA,
+    "temperature_C": TEMPERATURE_C,
+    "temperature_measured_C": TEMPERATURE_C,
+    "sliding_speed_mm_s": SLIDING_SPEED_MM_S,
+    "mu_s": MU,
+    "mu_k": MU,
+    "mu_s_distance_mm": Range(0.0, 1e9, "mm"),
+    "mu_k_window_start_mm": Range(0.0, 1e9, "mm"),
+    "mu_k_window_end_mm": Range(0.0, 1e9, "mm"),
+    "plateau_std": Range(0.0, 1e3),
+}
+REQUIRED: frozenset[str] = frozenset({"normal_force_N", "pressure_kPa", "mu_k"})
+#: the whole-number columns and their bounds
+COUNT_RANGES: dict[str, tuple[int, int]] = {"repeat": (0, MAX_REPEAT),
+                                            "interval": (0, 1_000_000_000)}
+
+
+def _row_error(frame: pd.DataFrame, where: str, i: int, column: str, problem: str) -> MapError:
+    ident = frame["measurement_id"].iloc[i]
+    label = f" ({printable(str(ident))[:40]})" if isinstance(ident, str) else ""
+    return MapError(f"{where} {i + 1}{label}: {problem}", column=column)
+
+
+def check_runs(frame: pd.DataFrame, where: str = "row") -> pd.DataFrame:
+    """Check the rows of a map DataFrame (schema dtypes) and return it unchanged, or raise
+    :class:`MapError` naming the first bad row (``where`` and its number, its id), the
+    column and what was expected.
+
+    The rules every map row keeps, wherever it comes from (a reduction, an import, another
+    lab's map, a file on disk):
+
+    * ``measurement_id``, ``source``, ``pin``, ``disc``: names (one printable line of at
+      most 200 characters, not blank); every other text: one printable line or missing;
+    * floats finite or missing (never ±inf); inside the physical ranges of
+      :data:`COLUMN_RANGES` (force > 0, temperature above −273.15 °C, 0 ≤ μ ≤ 10 ...);
+      :data:`REQUIRED` never missing; ``mu_s`` missing only in imported rows;
+    * ``repeat`` and ``interval`` whole numbers in :data:`COUNT_RANGES` or missing.
+    """
     import numpy as np
 
-    for name in ("measurement_id", "source", "pin", "disc"):
-        empty = frame[name].isna() | (frame[name].str.strip() == "")
-        if empty.any():
-            i = int(np.flatnonzero(empty.to_numpy())[0])
-            raise MapError(f"{where} {i + 1}: empty {name}, expected text", column=name)
-    bad_k = ~np.isfinite(frame["mu_k"].to_numpy())
-    if bad_k.any():
-        i = int(np.flatnonzero(bad_k)[0])
-        raise MapError(
-            f"{where} {i + 1} ({frame['measurement_id'].iloc[i]}): mu_k is "
-            f"{frame['mu_k'].iloc[i]}, expected a finite number",
-            column="mu_k",
-        )
+    for name in RUN_COLUMNS:
+        kind = _KIND[name]
+        if kind == "str":
+            checker = name_problem if name in NAME_COLUMNS else text_problem
+            for i, value in enumerate(frame[name].tolist()):
+                missing = value is None or (isinstance(value, float) and value != value)
+                if missing and name not in NAME_COLUMNS:
+                    continue
+                problem = "missing, expected a name" if missing else checker(value)
+                if problem is not None:
+                    raise _row_error(frame, where, i, name, f"{name}: {problem}")
+        elif kind == "float":
+            values = frame[name].to_numpy(dtype=float)
+            bounds = COLUMN_RANGES.get(name)
+            present = ~np.isnan(values)
+            if bounds is None:
+                bad = present & ~np.isfinite(values)
+                expected = "a finite number or missing"
+            else:
+                low = values > bounds.low if bounds.low_open else values >= bounds.low
+                bad = present & ~(low & (values <= bounds.high))
+                expected = f"a number {bounds.describe()}"
+            if name in REQUIRED:
+                bad |= ~present
+            if bad.any():
+                i = int(np.flatnonzero(bad)[0])
+                raise _row_error(frame, where, i, name,
+                                 f"{name} is {float(values[i])!r}, expected {expected}")
+        elif kind == "int":
+            low_i, high_i = COUNT_RANGES[name]
+            values_i = frame[name]
+            bad_i = values_i.notna() & ((values_i < low_i) | (values_i > high_i))
+            if bad_i.any():
+                i = int(np.flatnonzero(bad_i.to_numpy(dtype=bool))[0])
+                raise _row_error(frame, where, i, name, f"{name} is {values_i.iloc[i]}, "
+                                 f"expected a whole number from {low_i} to {high_i}")
     bad_s = ~np.isfinite(frame["mu_s"].to_numpy()) & (frame["source"] == SOURCE_REDUCED).to_numpy()
     if bad_s.any():
         i = int(np.flatnonzero(bad_s)[0])
@@ -171,6 +250,41 @@ def _validated(frame: pd.DataFrame, where: str) -> pd.DataFrame:
             column="mu_s",
         )
     return frame
+
+
+def content_sha256(frame: pd.DataFrame) -> str:
+    """SHA-256 (hex) of a map's content: the :data:`RUN_COLUMNS` of every row, in order,
+    in a canonical byte form (floats as little-endian IEEE 754 with one NaN, whole numbers
+    as int64 with a missing-mask, booleans as bytes, text as JSON with ``null``), so the
+    same rows give the same digest however they were stored or read back. Stored in the
+    map's Parquet metadata and checked on every read (:mod:`tribopipe.frictionmap.store`).
+    """
+    import hashlib
+    import json
+
+    import numpy as np
+    import pandas as pd
+
+    digest = hashlib.sha256(f"tribopipe.frictionmap rows={len(frame)}".encode())
+    for name in RUN_COLUMNS:
+        kind = _KIND[name]
+        column = frame[name]
+        if kind == "float":
+            values = column.to_numpy(dtype="float64")
+            data = np.where(np.isnan(values), np.nan, values).astype("<f8").tobytes()
+        elif kind == "int":
+            ints = pd.array(column, dtype="Int64")
+            mask = ints.isna()
+            data = (np.asarray(mask, dtype="u1").tobytes()
+                    + ints.fillna(0).to_numpy(dtype="int64").astype("<i8").tobytes())
+        elif kind == "bool":
+            data = np.asarray(column, dtype=bool).astype("u1").tobytes()
+        else:
+            texts = [None if _missing(v) else str(v) for v in column.tolist()]
+            data = json.dumps(texts, ensure_ascii=False).encode("utf-8", "surrogatepass")
+        digest.update(f"|{name}:{kind}:{len(data)}|".encode())
+        digest.update(data)
+    return digest.hexdigest()
 
 
 def _ok(value: Any, kind: str) -> bool:

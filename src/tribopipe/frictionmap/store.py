@@ -9,9 +9,11 @@ path that is not one of our maps is refused, never overwritten.
 
 from __future__ import annotations
 
+import glob
 import json
 import math
 import os
+import stat
 from collections.abc import Iterable, Iterator, Mapping, Sequence
 from contextlib import contextmanager, suppress
 from dataclasses import dataclass, field
@@ -19,7 +21,10 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from .. import __version__
-from ..errors import MapError
+from ..errors import MapError, ReadError
+from ..escape import display_path
+from ..files import file_kind, os_reason, regular_file
+from ..validate import text_problem
 from .schema import (
     _CONTENT_COLUMNS,
     _KIND,
@@ -31,7 +36,8 @@ from .schema import (
     SCHEMA_VERSION,
     _missing,
     _now,
-    _validated,
+    check_runs,
+    content_sha256,
     empty_map,
     frame_records,
     records_frame,
@@ -50,61 +56,109 @@ PAUSE_ENV = "TRIBOPIPE_TEST_PAUSE_BEFORE_RENAME"
 # --------------------------------------------------------------------------- reading
 
 
+def backup_path(path: str | os.PathLike[str]) -> Path:
+    """Where the previous version of the map at ``path`` is kept: ``<map>.bak`` (a hard
+    link made by every rewrite, so it costs no copy)."""
+    p = Path(path)
+    return p.with_name(p.name + ".bak")
+
+
+def _restore_hint(path: Path) -> str:
+    backup = backup_path(path)
+    try:
+        kept = backup.is_file()
+    except OSError:
+        kept = False
+    if kept:
+        return f"restore it from {display_path(backup)} (its previous version) or a backup"
+    return "restore it from a backup"
+
+
+def _damaged(path: Path, problem: str) -> MapError:
+    """A map that cannot be read as ours: one line, with where to restore it from."""
+    return MapError(problem, path=path, hint=_restore_hint(path) +
+                    "; the file is never overwritten, or pass another --map")
+
+
 def read_map(path: str | os.PathLike[str]) -> pd.DataFrame:
     """Read and validate a friction map; an absent file is an empty map.
 
     A map of an older schema version reads with the columns added since
     (:data:`~tribopipe.frictionmap.schema.ADDED_IN_VERSION`) missing; the next write stores
-    it in the current version. Raises :class:`MapError` naming the path when the file is
+    it in the current version. Raises :class:`MapError` (one line naming the path) when
+    the path is not a regular file (a folder, a FIFO, a device: never opened), the file is
     not Parquet, is a Parquet file without tribopipe's schema metadata (a foreign file),
-    was written by a newer schema, or lacks columns.
+    was written by a newer schema, lacks columns, stores a column with another type, holds
+    a row that breaks the rules of :func:`~tribopipe.frictionmap.schema.check_runs`, or
+    fails its checksum (the SHA-256 of its content stored in its metadata when it was
+    written: a map changed outside tribopipe, or damaged on disk, is refused rather than
+    read with other values). A map written before the checksum existed is read, and
+    gains one on its next write.
     """
-    import pyarrow as pa
     import pyarrow.parquet as pq
 
     p = Path(path)
-    if not p.exists():
+    try:
+        st = os.stat(p)
+    except FileNotFoundError:
         return empty_map()
-    if p.is_dir():
-        raise MapError("is a directory, expected a friction-map Parquet file", path=p)
+    except OSError as exc:
+        raise MapError(f"cannot read the friction map: {os_reason(exc)}", path=p) from None
+    if not stat.S_ISREG(st.st_mode):
+        raise MapError(f"is {file_kind(st.st_mode)}, expected a friction-map Parquet file; "
+                       "not opened", path=p, hint="pass another --map")
     try:
         table = pq.read_table(p)
-    except (pa.ArrowException, OSError) as exc:
-        raise MapError(
-            f"not a readable Parquet file ({str(exc).splitlines()[0] if str(exc) else exc!r})",
-            path=p,
-            hint="this path holds something else; pass another --map (it is never overwritten)",
-        ) from None
+        # every buffer checked, text for valid UTF-8 too (Parquet readers do not)
+        table.validate(full=True)
+        table.column_names  # noqa: B018 - names that are not UTF-8 raise here
+    except Exception as exc:  # noqa: BLE001 - pyarrow raises many types for a damaged file
+        raise _damaged(p, f"not a readable Parquet file ({_first_line(exc)})") from None
     info = _check_metadata(table.schema.metadata or {}, p)
     table = _with_added_columns(table, info["schema_version"])
     absent = [c for c in RUN_COLUMNS if c not in table.column_names]
     if absent:
-        raise MapError(
-            f"friction map lacks column(s) {', '.join(absent)}", path=p, column=absent[0]
-        )
+        raise MapError(f"friction map lacks column(s) {', '.join(absent)}", path=p,
+                       column=absent[0], hint=_restore_hint(p))
     try:
         runs = _from_arrow(table.select(list(RUN_COLUMNS)))
     except MapError as exc:
-        raise MapError(exc.problem, path=p, column=exc.column) from None
+        raise MapError(exc.problem, path=p, column=exc.column,
+                       hint=_restore_hint(p)) from None
+    stored = info.get("content_sha256")
+    if stored is not None and stored != content_sha256(runs):
+        raise MapError(
+            f"the map at {display_path(p)} fails its checksum: its rows are not those "
+            "tribopipe wrote (damaged on disk, or changed by another program); refusing to "
+            f"read or overwrite it; {_restore_hint(p)}"
+        )
     if runs["measurement_id"].duplicated().any():
         dup = runs.loc[runs["measurement_id"].duplicated(), "measurement_id"].iloc[0]
         raise MapError(f"duplicate measurement_id {dup}", path=p, column="measurement_id")
     return runs
 
 
+def _first_line(exc: BaseException) -> str:
+    text = str(exc).strip()
+    first = text.splitlines()[0][:160] if text else ""
+    return f"{type(exc).__name__}: {first}" if first else type(exc).__name__
+
+
 def map_metadata(path: str | os.PathLike[str]) -> dict[str, Any]:
     """The schema and provenance a map carries in its Parquet metadata: ``schema``,
     ``schema_version``, ``columns`` (name, kind, unit, meaning), ``tribopipe_version`` and
-    ``written_at`` of the last write, ``n_runs``, ``sources``. Validated like
-    :func:`read_map`."""
-    import pyarrow as pa
+    ``written_at`` of the last write, ``n_runs``, ``sources``, ``content_sha256``.
+    Validated like :func:`read_map` (the rows are not read)."""
     import pyarrow.parquet as pq
 
     p = Path(path)
     try:
+        regular_file(p, what="a friction-map Parquet file")
         schema = pq.read_schema(p)
-    except (pa.ArrowException, OSError) as exc:
-        raise MapError(f"not a readable Parquet file ({exc})", path=p) from None
+    except ReadError as exc:
+        raise MapError(exc.problem, path=p) from None
+    except Exception as exc:  # noqa: BLE001 - pyarrow raises many types for a damaged file
+        raise _damaged(p, f"not a readable Parquet file ({_first_line(exc)})") from None
     return _check_metadata(schema.metadata or {}, p)
 
 
@@ -120,13 +174,40 @@ def _with_added_columns(table: Any, version: int) -> Any:
     return table
 
 
-def _from_arrow(table: Any) -> pd.DataFrame:
-    """The map DataFrame of an Arrow table of the run columns, coerced column by column
-    (vectorised: the read path of every command) and validated."""
-    import pandas as pd
+def _arrow_type_ok(kind: str, arrow_type: Any) -> bool:
+    """True when a column of ``kind`` may be stored as ``arrow_type``."""
     import pyarrow as pa
 
-    frame = table.to_pandas()
+    if pa.types.is_null(arrow_type):
+        return True
+    if kind == "float":
+        return pa.types.is_floating(arrow_type) or pa.types.is_integer(arrow_type)
+    if kind == "int":
+        return pa.types.is_integer(arrow_type)
+    if kind == "bool":
+        return pa.types.is_boolean(arrow_type)
+    return pa.types.is_string(arrow_type) or pa.types.is_large_string(arrow_type)
+
+
+def _from_arrow(table: Any) -> pd.DataFrame:
+    """The map DataFrame of an Arrow table of the run columns, coerced column by column
+    (vectorised: the read path of every command) and validated. Each column must be
+    stored with an Arrow type of its kind (``excluded`` stored as the text ``"false"`` is
+    refused, not read as true)."""
+    import pandas as pd
+
+    for name in RUN_COLUMNS:
+        arrow_type = table.schema.field(name).type
+        if not _arrow_type_ok(_KIND[name], arrow_type):
+            kind = _KIND[name]
+            raise MapError(f"expected {kind} values, stored as {arrow_type}, not "
+                           f"{'text' if kind == 'str' else kind}", column=name)
+    try:
+        # our own columns only, without the pandas metadata (a damaged copy of it must
+        # not decide how the rows are read)
+        frame = table.replace_schema_metadata(None).to_pandas(ignore_metadata=True)
+    except Exception as exc:  # noqa: BLE001 - a damaged column
+        raise MapError(f"cannot read the rows ({_first_line(exc)})") from None
     columns: dict[str, Any] = {}
     for name in RUN_COLUMNS:
         kind = _KIND[name]
@@ -141,18 +222,11 @@ def _from_arrow(table: Any) -> pd.DataFrame:
                     raise ValueError("missing true/false")
                 columns[name] = col.astype(bool).to_numpy()
             else:
-                arrow_type = table.schema.field(name).type
-                if not (
-                    pa.types.is_string(arrow_type)
-                    or pa.types.is_large_string(arrow_type)
-                    or pa.types.is_null(arrow_type)
-                ):
-                    raise ValueError(f"stored as {arrow_type}, not text")
                 columns[name] = pd.array(col.astype(object).where(col.notna(), None), dtype="str")
-        except (TypeError, ValueError) as exc:
+        except (TypeError, ValueError, OverflowError) as exc:
             raise MapError(f"expected {kind} values ({exc})", column=name) from None
     runs = pd.DataFrame(columns, columns=list(RUN_COLUMNS), index=pd.RangeIndex(len(frame)))
-    return _validated(runs, "row")
+    return check_runs(runs, "row")
 
 
 def _check_metadata(metadata: Mapping[bytes, bytes], path: Path) -> dict[str, Any]:
@@ -166,18 +240,23 @@ def _check_metadata(metadata: Mapping[bytes, bytes], path: Path) -> dict[str, An
         )
     try:
         info = json.loads(raw)
-    except (ValueError, UnicodeDecodeError):
-        raise MapError("friction-map metadata is not valid JSON", path=path) from None
+    except (ValueError, UnicodeDecodeError, RecursionError):
+        raise _damaged(path, "friction-map metadata is not valid JSON") from None
     if not isinstance(info, dict) or info.get("schema") != SCHEMA_NAME:
-        raise MapError("friction-map metadata names another schema", path=path)
+        raise _damaged(path, "friction-map metadata names another schema")
     version = info.get("schema_version")
-    if not isinstance(version, int) or version > SCHEMA_VERSION:
+    if not isinstance(version, int) or isinstance(version, bool) or version < 1:
+        raise _damaged(path, f"friction-map schema version {version!r} is not a version")
+    if version > SCHEMA_VERSION:
         raise MapError(
             f"friction-map schema version {version!r}; this tribopipe reads up to "
             f"{SCHEMA_VERSION}",
             path=path,
             hint="upgrade tribopipe",
         )
+    digest = info.get("content_sha256")
+    if digest is not None and not (isinstance(digest, str) and len(digest) == 64):
+        raise _damaged(path, "friction-map metadata holds a damaged checksum")
     return info
 
 
@@ -196,6 +275,7 @@ def _metadata(runs: pd.DataFrame) -> bytes:
         "written_at": _now(),
         "n_runs": len(runs),
         "sources": sorted(set(runs["source"].dropna())),
+        "content_sha256": content_sha256(runs),
     }
     return json.dumps(info, ensure_ascii=False).encode()
 
@@ -225,7 +305,7 @@ def _locked(path: Path) -> Iterator[None]:
 
 def _clean_stale_temps(path: Path) -> None:
     # Under the lock, any temporary map beside ours belongs to a writer that died.
-    for stale in path.parent.glob(f".{path.name}.*.tmp"):
+    for stale in path.parent.glob(f".{glob.escape(path.name)}.*.tmp"):
         with suppress(OSError):
             stale.unlink()
 
@@ -243,12 +323,53 @@ def _fsync_dir(directory: Path) -> None:
         os.close(fd)
 
 
+def _new_temp(path: Path) -> tuple[int, Path]:
+    """A new temporary file beside ``path`` (its name matches :func:`_clean_stale_temps`)
+    with the map's mode: the mode the map has, or for a new map ``0o666`` less the umask
+    (``mkstemp`` would give ``0o600`` and take colleagues' read access away)."""
+    import secrets
+
+    try:
+        mode = stat.S_IMODE(os.stat(path).st_mode)
+    except OSError:
+        mode = None
+    for _ in range(100):
+        tmp = path.with_name(f".{path.name}.{os.getpid()}.{secrets.token_hex(4)}.tmp")
+        try:
+            fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666)
+        except FileExistsError:
+            continue
+        if mode is not None:
+            with suppress(OSError):
+                os.fchmod(fd, mode)
+        return fd, tmp
+    raise FileExistsError(f"no free temporary name beside {path}")  # pragma: no cover
+
+
+def _keep_previous(path: Path) -> None:
+    """Keep the map about to be replaced as ``<map>.bak`` (a hard link: no copy). The
+    caller has just read and validated it; where links are impossible, no backup."""
+    if not path.exists():
+        return
+    backup = backup_path(path)
+    link = backup.with_name(f".{path.name}.{os.getpid()}.bak.tmp")
+    try:
+        with suppress(FileNotFoundError):
+            link.unlink()
+        os.link(path, link)
+        os.replace(link, backup)
+    except OSError:
+        with suppress(OSError):
+            link.unlink()
+
+
 def _write_atomic(path: Path, runs: pd.DataFrame) -> None:
-    """Write ``runs`` to ``path`` via a fsynced temporary file and an atomic rename.
+    """Write ``runs`` to ``path`` via a fsynced temporary file and an atomic rename, with
+    the checksum of its content in the metadata, the previous map kept as ``<map>.bak``
+    and the map's file mode kept.
 
     The caller holds the lock.
     """
-    import tempfile
     import time
 
     import pyarrow as pa
@@ -260,11 +381,10 @@ def _write_atomic(path: Path, runs: pd.DataFrame) -> None:
     table = table.replace_schema_metadata(meta)
     _clean_stale_temps(path)
     try:
-        fd, tmp_name = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+        fd, tmp = _new_temp(path)
     except OSError as exc:
-        raise MapError(f"cannot write the friction map ({exc.strerror or exc})",
+        raise MapError(f"cannot write the friction map ({os_reason(exc)})",
                        path=path) from None
-    tmp = Path(tmp_name)
     try:
         with os.fdopen(fd, "wb") as fh:
             pq.write_table(table, fh)
@@ -274,12 +394,13 @@ def _write_atomic(path: Path, runs: pd.DataFrame) -> None:
         if marker:
             Path(marker).write_text(str(os.getpid()))
             time.sleep(120)
+        _keep_previous(path)
         os.replace(tmp, path)
     except BaseException as exc:
         with suppress(OSError):
             tmp.unlink()
         if isinstance(exc, OSError):  # disk full, permissions: the old map is untouched
-            raise MapError(f"cannot write the friction map ({exc.strerror or exc})",
+            raise MapError(f"cannot write the friction map ({os_reason(exc)})",
                            path=path) from None
         raise
     _fsync_dir(path.parent)
@@ -480,7 +601,7 @@ def _fold(
         extra = records_frame(list(fresh.values()), where="record")
         merged = pd.concat([merged, extra], ignore_index=True) if len(merged) else extra
     merged = merged.reset_index(drop=True)
-    return _validated(merged, "row"), report
+    return check_runs(merged, "row"), report
 
 
 def append_records(
@@ -537,10 +658,12 @@ def merge_map_file(
     Runs with the same id are stored once; rows whose content differs are reported as
     conflicting (and replaced only with ``replace``). The other map is validated first.
     """
-    if Path(other).resolve() == Path(path).resolve():
+    if os.path.realpath(other) == os.path.realpath(path):
         raise MapError("cannot merge a friction map into itself", path=other)
-    if not Path(other).exists():
+    if not os.path.lexists(other):
         raise MapError("file not found, expected a friction map to merge", path=other)
+    # read_map validates every row of the other map (names, types, physical ranges) as
+    # records are validated, and refuses a damaged or foreign file before anything is touched
     return append_records(path, frame_records(read_map(other)), replace=replace)
 
 
@@ -579,6 +702,9 @@ def set_excluded(
     p = Path(path)
     if reason is not None and not reason.strip():
         raise MapError("an exclusion needs a reason", path=p, hint="pass --reason TEXT")
+    problem = None if reason is None else text_problem(reason.strip(), 1000)
+    if problem is not None:
+        raise MapError(f"the reason: {problem}", path=p, hint="pass --reason TEXT")
     if not p.exists():
         raise MapError("friction map not found", path=p, hint="pass --map PATH")
     with _locked(p):

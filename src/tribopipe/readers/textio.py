@@ -17,6 +17,10 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from ..errors import ReadError
+from ..files import read_regular
+
+#: the largest export read [bytes] (hours of a test at 10 Hz are a few tens of MB)
+MAX_EXPORT_BYTES = 512 * 1024 * 1024
 
 #: delimiters we try, in order of preference (Anton Paar writes TAB)
 DELIMITERS: tuple[str, ...] = ("\t", ";", ",")
@@ -48,16 +52,10 @@ class DecodedText:
 
 
 def read_bytes(path: str) -> bytes:
-    """A file's bytes; :class:`ReadError` for a missing, unreadable or empty file."""
-    try:
-        with open(path, "rb") as fh:
-            raw = fh.read()
-    except FileNotFoundError:
-        raise ReadError("file not found", path=path) from None
-    except IsADirectoryError:
-        raise ReadError("is a directory, expected an export file", path=path) from None
-    except OSError as exc:
-        raise ReadError(f"cannot read file: {exc.strerror or exc}", path=path) from None
+    """A file's bytes; :class:`ReadError` for a missing, unreadable or empty file, and for
+    anything that is not a regular file (refused before it is opened:
+    :func:`tribopipe.files.read_regular`) or is larger than :data:`MAX_EXPORT_BYTES`."""
+    raw = read_regular(path, max_bytes=MAX_EXPORT_BYTES, what="an export file")
     if not raw.strip():
         raise ReadError("empty file", path=path, hint="export the measurement again")
     return raw

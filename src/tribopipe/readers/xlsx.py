@@ -46,6 +46,12 @@ def workbook_rows(path: str) -> list[tuple[int, list[str]]]:
             ]
             if looks_like(rows):
                 return rows
+    except Exception as exc:  # noqa: BLE001 - a damaged sheet (bad CRC, bad XML) read lazily
+        raise ReadError(
+            f"not a readable Excel workbook ({type(exc).__name__}: "
+            f"{str(exc).splitlines()[0][:120] if str(exc) else 'damaged'})",
+            path=path,
+        ) from None
     finally:
         workbook.close()
     raise ReadError(

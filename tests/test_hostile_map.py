@@ -1,0 +1,284 @@
+"""A map that cannot be silently corrupted, and rows that cannot come in broken.
+
+* Every map carries the SHA-256 of its content in its Parquet metadata, checked on every
+  read: a flipped bit is refused in one line (or, where it hits bytes that hold no value,
+  read identically), never read with changed values, never rewritten as a valid map.
+* A damaged map's Arrow, JSON, metadata, Unicode and key errors are one ``MapError`` line.
+* ``map merge`` and ``map import`` check every row as a reduced record is checked.
+* A rewrite keeps the map's file mode (or the umask's for a new map) and its previous
+  version as ``<map>.bak``; a map written before the checksum existed still reads.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import random
+import stat
+from pathlib import Path
+
+import pandas as pd
+import pyarrow as pa
+import pyarrow.parquet as pq
+import pytest
+
+from hostile import assert_clean_failure, invoke
+from reduced_runs import make_processed
+from tribopipe import frictionmap as fm
+from tribopipe.errors import MapError
+from tribopipe.frictionmap.schema import content_sha256
+
+#: flips per test run (seeded): a few hundred, a few seconds
+N_FLIPS = 300
+
+
+@pytest.fixture(scope="module")
+def small_map(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """A real map: six reduced runs and ten rows of the published map imported."""
+    root = tmp_path_factory.mktemp("hostile_map")
+    map_path, _ = make_processed(root)
+    lines = fm.published_csv_path().read_text(encoding="utf-8").splitlines()[:11]
+    table = root / "published_part.csv"
+    table.write_text("\n".join(lines) + "\n", encoding="utf-8")
+    fm.import_table(map_path, table)
+    return map_path
+
+
+def _copy(src: Path, dst: Path) -> Path:
+    dst.write_bytes(src.read_bytes())
+    return dst
+
+
+def _rewrite_parquet(src: Path, dst: Path, *, change_table=None, change_info=None) -> Path:
+    """Write ``src``'s table to ``dst`` through pyarrow, changed, keeping our metadata
+    (``change_info`` edits its JSON) — what another program editing the map would do."""
+    table = pq.read_table(src)
+    meta = dict(table.schema.metadata)
+    if change_table is not None:
+        table = change_table(table)
+    info = json.loads(meta[fm.META_KEY])
+    if change_info is not None:
+        change_info(info)
+    meta[fm.META_KEY] = json.dumps(info).encode()
+    pq.write_table(table.replace_schema_metadata(meta), dst)
+    return dst
+
+
+# ------------------------------------------------------------------ the checksum
+
+
+def test_the_map_carries_the_checksum_of_its_content(small_map: Path) -> None:
+    info = fm.map_metadata(small_map)
+    runs = fm.read_map(small_map)
+    assert info["content_sha256"] == content_sha256(runs)
+    assert len(runs) == 16
+
+
+def test_a_value_changed_by_another_program_fails_the_checksum(small_map: Path,
+                                                               tmp_path: Path) -> None:
+    def nudge(table: pa.Table) -> pa.Table:
+        mu = table.column("mu_k").to_pylist()
+        mu[3] = mu[3] + 0.01          # a plausible value: only the checksum can tell
+        return table.set_column(table.schema.get_field_index("mu_k"), "mu_k",
+                                pa.array(mu, pa.float64()))
+    edited = _rewrite_parquet(small_map, tmp_path / "edited.parquet", change_table=nudge)
+    before = edited.read_bytes()
+    with pytest.raises(MapError, match="fails its checksum") as info:
+        fm.read_map(edited)
+    assert str(edited) in str(info.value) and "\n" not in str(info.value)
+    # and nothing rewrites it as a valid map
+    with pytest.raises(MapError, match="fails its checksum"):
+        fm.append_records(edited, [])
+    with pytest.raises(MapError, match="fails its checksum"):
+        fm.exclude_runs(edited, [fm.read_map(small_map)["measurement_id"].iloc[0]], "x")
+    assert edited.read_bytes() == before
+
+
+def test_the_refusal_names_the_previous_version_to_restore(small_map: Path,
+                                                           tmp_path: Path) -> None:
+    map_path = _copy(small_map, tmp_path / "map.parquet")
+    first = fm.read_map(map_path)["measurement_id"].iloc[0]
+    fm.exclude_runs(map_path, [first], "pin debonded")      # a rewrite keeps the old map
+    backup = fm.backup_path(map_path)
+    assert backup.read_bytes() == small_map.read_bytes()
+    _rewrite_parquet(map_path, map_path, change_table=lambda t: t.slice(0, 15))
+    with pytest.raises(MapError) as info:
+        fm.read_map(map_path)
+    message = str(info.value)
+    assert "fails its checksum" in message and f"restore it from {backup}" in message
+    result = invoke("map", "show", "--map", str(map_path))
+    assert "restore it from" in assert_clean_failure(result)
+
+
+def test_a_map_from_before_the_checksum_reads_and_gains_one(small_map: Path,
+                                                            tmp_path: Path) -> None:
+    legacy = _rewrite_parquet(small_map, tmp_path / "legacy.parquet",
+                              change_info=lambda info: info.pop("content_sha256"))
+    assert "content_sha256" not in fm.map_metadata(legacy)
+    pd.testing.assert_frame_equal(fm.read_map(legacy), fm.read_map(small_map))
+    first = fm.read_map(legacy)["measurement_id"].iloc[0]
+    fm.exclude_runs(legacy, [first], "checked by hand")
+    assert fm.map_metadata(legacy)["content_sha256"] == content_sha256(fm.read_map(legacy))
+
+
+def test_damaged_pandas_metadata_does_not_decide_how_the_map_reads(small_map: Path,
+                                                                   tmp_path: Path) -> None:
+    table = pq.read_table(small_map)
+    meta = dict(table.schema.metadata)
+    pandas_meta = json.loads(meta[b"pandas"])
+    for column in pandas_meta["columns"]:
+        column.pop("numpy_type", None)     # was KeyError: 'numpy_type'
+    meta[b"pandas"] = json.dumps(pandas_meta).encode()
+    damaged = tmp_path / "pandas_meta.parquet"
+    pq.write_table(table.replace_schema_metadata(meta), damaged)
+    pd.testing.assert_frame_equal(fm.read_map(damaged), fm.read_map(small_map))
+
+
+def test_every_flipped_bit_is_refused_or_reads_identically(small_map: Path,
+                                                           tmp_path: Path) -> None:
+    raw = small_map.read_bytes()
+    original = fm.read_map(small_map)
+    target = tmp_path / "flipped.parquet"
+    rng = random.Random(9)
+    outcomes = {"refused": 0, "identical": 0}
+    for _ in range(N_FLIPS):
+        position, bit = rng.randrange(len(raw)), rng.randrange(8)
+        flipped = bytearray(raw)
+        flipped[position] ^= 1 << bit
+        target.write_bytes(bytes(flipped))
+        try:
+            runs = fm.read_map(target)
+        except MapError as exc:
+            assert "\n" not in str(exc) and str(target) in str(exc)
+            outcomes["refused"] += 1
+            continue
+        # the flip hit bytes that carry no value (statistics, padding, our write time)
+        try:
+            pd.testing.assert_frame_equal(runs, original)
+        except AssertionError as exc:
+            raise AssertionError(f"bit {bit} of byte {position} changed the map's values "
+                                 f"and was read: {exc}") from None
+        outcomes["identical"] += 1
+    assert outcomes["refused"] > N_FLIPS // 5 and outcomes["identical"] > 0, outcomes
+
+
+def test_map_merge_of_flipped_maps_is_one_line(small_map: Path, tmp_path: Path) -> None:
+    ours = tmp_path / "ours.parquet"
+    fm.import_table(ours)                      # the published map
+    before = ours.read_bytes()
+    raw = small_map.read_bytes()
+    rng = random.Random(4)
+    other = tmp_path / "other.parquet"
+    refused = 0
+    for _ in range(40):
+        flipped = bytearray(raw)
+        flipped[rng.randrange(len(raw))] ^= 1 << rng.randrange(8)
+        other.write_bytes(bytes(flipped))
+        result = invoke("map", "merge", str(other), "--map", str(ours))
+        assert "Traceback" not in result.output, result.output
+        assert result.exception is None or isinstance(result.exception, SystemExit), \
+            f"{type(result.exception).__name__}: {result.exception}"
+        if result.exit_code == 1:
+            assert len(result.stderr.strip().splitlines()) == 1, result.stderr
+            refused += 1
+        else:
+            assert result.exit_code == 0, result.output
+            ours.write_bytes(before)           # a clean merge: start again from ours
+    assert refused > 5
+
+
+# ------------------------------------------------------------------ merge and import
+
+
+def _bad_other(src: Path, dst: Path, column: str, value, arrow_type=None) -> Path:
+    """Another lab's map, written like a legacy map (no checksum), with one bad cell."""
+    def change(table: pa.Table) -> pa.Table:
+        values = table.column(column).to_pylist()
+        values[2] = value
+        kind = arrow_type or table.schema.field(column).type
+        if arrow_type is not None and arrow_type == pa.string():
+            values = [str(v).lower() for v in values]
+        return table.set_column(table.schema.get_field_index(column), column,
+                                pa.array(values, kind))
+    return _rewrite_parquet(src, dst, change_table=change,
+                            change_info=lambda info: info.pop("content_sha256"))
+
+
+@pytest.mark.parametrize(("column", "value", "arrow_type", "expected"), [
+    ("normal_force_N", -3.0, None, "normal_force_N"),
+    ("mu_k", -0.4, None, "mu_k"),
+    ("mu_k", 1e306, None, "mu_k"),
+    ("temperature_C", -300.0, None, "temperature_C"),
+    ("temperature_C", float("inf"), None, "temperature_C"),
+    ("pressure_measured_kPa", float("inf"), None, "pressure_measured_kPa"),
+    ("excluded", False, pa.string(), "excluded"),     # "false" marked every run excluded
+    ("pin", "Dragonskin\n*HEADING", None, "pin"),
+    ("disc", "steel\u202e", None, "disc"),
+    ("repeat", 10**12, None, "repeat"),
+])
+def test_map_merge_checks_every_row(small_map: Path, tmp_path: Path, column: str, value,
+                                    arrow_type, expected: str) -> None:
+    other = _bad_other(small_map, tmp_path / "other.parquet", column, value, arrow_type)
+    ours = tmp_path / "ours.parquet"
+    fm.import_table(ours)
+    before = ours.read_bytes()
+    stderr = assert_clean_failure(invoke("map", "merge", str(other), "--map", str(ours)))
+    assert str(other) in stderr and expected in stderr, stderr
+    assert len(stderr.strip().splitlines()) == 1, stderr
+    assert ours.read_bytes() == before
+
+
+HEADER = "pin,disc,contactForce,contactPressure,temperature,measurementNo,cof\n"
+
+
+@pytest.mark.parametrize(("row", "column"), [
+    ("DS30,steel,-3,-35.37,20,1,0.5\n", "normal_force_N"),
+    ("DS30,steel,3,35.37,20,1,-0.5\n", "mu_k"),
+    ("DS30,steel,3,35.37,-300,1,0.5\n", "temperature_C"),
+    ("DS30,steel,3,35.37,20,1,1e306\n", "mu_k"),
+    ('"DS30\n*HEADING",steel,3,35.37,20,1,0.5\n', "pin"),
+    ("DS30,steel,3,35.37,20,1e30,0.5\n", "repeat"),
+])
+def test_map_import_checks_every_row(tmp_path: Path, row: str, column: str) -> None:
+    table = tmp_path / "theirs.csv"
+    table.write_text(HEADER + "DS30,steel,1,11.79,20,1,0.6\n" + row, encoding="utf-8")
+    ours = tmp_path / "ours.parquet"
+    stderr = assert_clean_failure(invoke("map", "import", str(table), "--map", str(ours)))
+    assert f"{table}:3" in stderr or f"{table}:" in stderr, stderr
+    assert len(stderr.strip().splitlines()) == 1, stderr
+    assert not ours.exists()
+
+
+def test_a_frictionmap_csv_we_wrote_reads_back_with_formula_names(tmp_path: Path) -> None:
+    table = tmp_path / "theirs.csv"
+    table.write_text(HEADER + "=HYPERLINK(x),-steel,3,35.37,20,1,0.5\n", encoding="utf-8")
+    ours = tmp_path / "ours.parquet"
+    assert invoke("map", "import", str(table), "--map", str(ours)).exit_code == 0
+    out = invoke("map", "table", "--format", "frictionmap", "--map", str(ours)).stdout
+    assert "'=HYPERLINK(x),'-steel," in out
+    again = tmp_path / "again.csv"
+    again.write_text(out, encoding="utf-8")
+    runs = fm.read_map(ours)
+    back = fm.read_frictionmap_table(again)
+    assert (back["pin"][0], back["disc"][0]) == (runs["pin"][0], runs["disc"][0])
+
+
+# ------------------------------------------------------------------ file mode
+
+
+def test_a_rewrite_keeps_the_maps_mode(small_map: Path, tmp_path: Path) -> None:
+    map_path = _copy(small_map, tmp_path / "shared.parquet")
+    map_path.chmod(0o664)                      # colleagues on the shared drive read it
+    first = fm.read_map(map_path)["measurement_id"].iloc[0]
+    fm.exclude_runs(map_path, [first], "pin debonded")
+    assert stat.S_IMODE(map_path.stat().st_mode) == 0o664
+
+
+@pytest.mark.parametrize(("umask", "mode"), [(0o022, 0o644), (0o077, 0o600), (0o002, 0o664)])
+def test_a_new_map_gets_the_umasks_mode(tmp_path: Path, umask: int, mode: int) -> None:
+    old = os.umask(umask)
+    try:
+        fm.import_table(tmp_path / "new.parquet")
+    finally:
+        os.umask(old)
+    assert stat.S_IMODE((tmp_path / "new.parquet").stat().st_mode) == mode

@@ -22,7 +22,7 @@ from ..escape import display_path
 from ..numeric import finite_or_nan
 from ..physics import contact_pressure_kPa
 from ..validate import FORCE_N, MAX_REPEAT, TEMPERATURE_C, check_count, check_name, check_number
-from .schema import SOURCE_REDUCED, _now
+from .schema import SOURCE_REDUCED, _now, records_frame
 
 if TYPE_CHECKING:
     from ..config import InstrumentConfig, Settings
@@ -171,7 +171,9 @@ def make_record(
     run's place among runs of the export with the same test/result/interval
     (:func:`measurement_id`).
 
-    Raises :class:`MapError` when pin or disc is unknown or μ_K is not a finite number.
+    Raises :class:`MapError` when pin or disc is unknown, μ_K is not a finite number, or
+    the row would break a rule of :func:`~tribopipe.frictionmap.schema.check_runs`
+    (e.g. a measured sliding speed beyond any instrument).
     """
     if not labels.complete:
         raise MapError(
@@ -203,7 +205,7 @@ def make_record(
     temperature = finite_or_nan(labels.temperature_C)
     k_start_mm, k_end_mm = result.mu_k_window_mm
     k_start_s, k_end_s = result.mu_k_window_s
-    return {
+    record = {
         "measurement_id": measurement_id(file_hash, meta, occurrence),
         "source": SOURCE_REDUCED,
         "lab": None,
@@ -240,3 +242,12 @@ def make_record(
         "excluded": False,
         "exclusion_reason": None,
     }
+    try:
+        # the rules every map row keeps, checked here so a bad run fails alone (in a
+        # batch, before the one map update that holds every run's record)
+        records_frame([record])
+    except MapError as exc:
+        problem = exc.problem.split(": ", 1)[-1]
+        raise MapError(f"the run cannot be recorded: {problem}", path=meta.source_file,
+                       column=exc.column) from None
+    return record

@@ -153,7 +153,7 @@ def test_markdown_writer_aligns_numbers_escapes_pipes_and_leaves_missing_blank()
     assert md[0] == "| pin | pressure_kPa | mu_k_n | mu_k_std | qc_flagged |"
     assert md[1] == "| --- | ---: | ---: | ---: | --- |"
     assert md[2] == "| Ecoflex 00-50 | 11.79 | 2 | 0.01414 | yes |"
-    assert md[3] == "| A\\|B & 50% #1_x | 106.1 | 1 |  | no |"
+    assert md[3] == "| A\\|B &amp; 50% #1_x | 106.1 | 1 |  | no |"
     assert len(md) == 4
 
 

@@ -40,10 +40,17 @@ from .measurement import (
     interval_label,
 )
 from .uncertainty import zero_offset_standard_error
+from .validate import FORCE_N
 
 if TYPE_CHECKING:
     from collections.abc import Sequence
 
+#: the largest magnitude a sample of each quantity may have (in its SI unit): no
+#: instrument measures beyond these, and larger values would overflow the statistics
+SAMPLE_LIMITS: dict[str, float] = {
+    TIME: 1e10, TORQUE: 1e6, NORMAL_FORCE: FORCE_N.high, ANGLE: 1e9, SPEED: 1e6,
+    TEMPERATURE: 1e4,
+}
 #: an interval "rotates" when its deflection angle travels at least this far [rad]
 #: (0.002 rad ≈ 0.027 mm at R = 13.37 mm, ~4 s at 0.005 rpm) ...
 ROTATION_MIN_ANGLE_RAD = 2e-3
@@ -300,6 +307,7 @@ def interval_samples(m: Measurement, params: ReductionParams) -> IntervalSamples
                 f"(more than {params.max_missing_fraction:.0%}); cannot reduce"
             )
     keep = np.isfinite(t) & np.isfinite(torque) & np.isfinite(force)
+    _check_magnitudes(m)
     _check_time(m, t, keep)
     order = np.argsort(t[keep], kind="stable")
 
@@ -330,6 +338,25 @@ def interval_samples(m: Measurement, params: ReductionParams) -> IntervalSamples
         n_dropped=int(n_total - t.size),
         force_sign=force_sign,
     )
+
+
+def _check_magnitudes(m: Measurement) -> None:
+    """Refuse (:class:`ReductionError`) a sample beyond :data:`SAMPLE_LIMITS`: a column
+    holding such values is not what its name and unit say."""
+    for name, limit in SAMPLE_LIMITS.items():
+        if name not in m.data.columns:
+            continue
+        values = np.abs(np.asarray(m.data[name], dtype=float))
+        beyond = np.flatnonzero(values > limit)  # NaN compares False: missing is no error
+        if beyond.size:
+            row = int(beyond[0])
+            point = m.data["point_no"].iloc[row] if "point_no" in m.data.columns else row + 1
+            raise ReductionError(
+                f"{m.meta.label}: {name} is {float(m.data[name].iloc[row]):.4g} at point "
+                f"{point}, beyond any measurement (|value| <= {limit:g}): the column is not "
+                "what its name and unit say",
+                hint="check the export's columns and units",
+            )
 
 
 def _check_time(m: Measurement, t: np.ndarray, keep: np.ndarray) -> None:

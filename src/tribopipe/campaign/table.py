@@ -38,6 +38,7 @@ from ..escape import display_path
 from ..files import file_sha256, regular_file, write_text_atomic
 from ..frictionmap.records import RunLabels
 from ..layout import FAILURES_CSV, RUNS_CSV
+from ..numeric import finite_json
 from ..readers import EXPORT_SUFFIXES
 from .metadata import Manifest, ManifestRow, labels_from, merge_metadata, read_manifest
 from .patterns import LABEL_FIELDS, match_pattern
@@ -316,11 +317,17 @@ def load_state(campaign: Campaign) -> dict[str, Any]:
 
 
 def save_state(campaign: Campaign, state: Mapping[str, Any]) -> None:
-    """Write the incremental state atomically (temporary file + rename). Compact JSON:
-    without ``indent`` the json module's C encoder writes it (an indented state of 1,000
-    files took a third of an unchanged re-run)."""
-    write_text_atomic(campaign.state_path,
-                      json.dumps(state, sort_keys=True, separators=(",", ":")))
+    """Write the incremental state atomically (temporary file + rename). Compact, strict
+    JSON: without ``indent`` the json module's C encoder writes it (an indented state of
+    1,000 files took a third of an unchanged re-run); a value that is not finite is
+    ``null`` (the entries hold none: the slow walk of :func:`finite_json` is the rare
+    fallback)."""
+    try:
+        text = json.dumps(state, sort_keys=True, separators=(",", ":"), allow_nan=False)
+    except ValueError:
+        text = json.dumps(finite_json(dict(state)), sort_keys=True, separators=(",", ":"),
+                          allow_nan=False)
+    write_text_atomic(campaign.state_path, text)
 
 
 def campaign_listing(campaign: Campaign) -> list[dict[str, Any]]:

@@ -191,15 +191,18 @@ def list_cmd(config: str, as_json: bool) -> None:
     status (new, reduced, changed, failed, duplicate). Nothing is reduced: a file not
     read yet shows one row (or one per test its manifest rows name)."""
     from ..campaign import campaign_listing, load_campaign
+    from ..numeric import finite_json
 
     rows = campaign_listing(load_campaign(config))
     if as_json:
-        click.echo(json.dumps(rows, indent=2))
+        click.echo(json.dumps(finite_json(rows), indent=2, allow_nan=False))
         return
     _print_table(rows)
 
 
 def _print_table(rows: list[dict[str, Any]]) -> None:
+    from ..escape import printable
+
     columns = ("file", "test", "interval", "status", "pin", "disc", "normal_force_N",
                "temperature_C", "repeat", "mu_k", "reason")
     heads = {"normal_force_N": "F_N", "temperature_C": "T_C"}
@@ -210,7 +213,7 @@ def _print_table(rows: list[dict[str, Any]]) -> None:
             return "-"
         if isinstance(value, float):
             return f"{value:.3f}" if col == "mu_k" else f"{value:g}"
-        return str(value)
+        return printable(str(value))
 
     body = [[cell(r, c) for c in columns] for r in rows]
     widths = [max([len(heads.get(c, c))] + [len(b[i]) for b in body]) for i, c in

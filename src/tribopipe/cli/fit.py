@@ -41,16 +41,16 @@ def fit_cmd(
     if disc is not None:
         fits = fits[fits["disc"].str.casefold() == disc.casefold()]
     if output:
+        from ..export.tables import to_csv
         from ..files import write_text_atomic
 
-        write_text_atomic(output, fits.to_csv(index=False), newline="")
+        write_text_atomic(output, to_csv(fits), newline="")
         click.echo(f"wrote {output}", err=True)
     if as_json:
-        records = [
-            {k: (None if isinstance(v, float) and math.isnan(v) else v) for k, v in r.items()}
-            for r in fits.to_dict(orient="records")
-        ]
-        click.echo(json.dumps(records, indent=2, default=str))
+        from ..numeric import finite_json
+
+        records = finite_json(fits.to_dict(orient="records"))
+        click.echo(json.dumps(records, indent=2, default=str, allow_nan=False))
         return
     click.echo(
         f"{'pin':<16} {'disc':<22} {'T_C':>5} {'k':>7} {'k 95% CI':>17} "

@@ -39,6 +39,7 @@ def inspect_cmd(
     its tests, results and intervals with their point counts, every column with its
     original unit and the SI column it becomes, and the intervals `reduce` will read (one
     run per friction interval of every test)."""
+    from ..escape import printable
     from ..intervals import all_friction_intervals
     from ..readers import describe_export
 
@@ -52,6 +53,8 @@ def inspect_cmd(
         choose=all_friction_intervals,
     )
     if as_json:
-        click.echo(json.dumps(summary.to_dict(), indent=2, ensure_ascii=False))
+        click.echo(json.dumps(summary.to_dict(), indent=2, ensure_ascii=False,
+                              allow_nan=False))
     else:
-        click.echo(summary.to_text())
+        # names and units come from the file: one printable line each (no terminal escapes)
+        click.echo("\n".join(printable(line) for line in summary.to_text().splitlines()))

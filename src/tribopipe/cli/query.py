@@ -41,10 +41,11 @@ def query_cmd(
     support), and their combined standard uncertainties u (the runs' own budgets beside
     the repeat scatter; U = 2u at k = 2) interpolated likewise.
     """
+    from ..numeric import finite_json
     from ..query import format_result, query_map
 
     result = query_map(map_path, pin, disc, pressure_kPa, temperature_C)
     if as_json:
-        click.echo(json.dumps(result.to_dict(), indent=2))
+        click.echo(json.dumps(finite_json(result.to_dict()), indent=2, allow_nan=False))
     else:
         click.echo(format_result(result))

@@ -34,6 +34,7 @@ from pathlib import Path
 from typing import Any
 
 from ..errors import ReadError, TribopipeError
+from ..escape import display_path
 from ..measurement import (  # noqa: F401 - require_columns is importable from here too
     NORMAL_FORCE,
     TORQUE,
@@ -350,7 +351,7 @@ class ExportSummary:
     def to_dict(self) -> dict[str, Any]:
         """A JSON-ready dict: file facts, counts and every interval with its columns."""
         return {
-            "file": self.path,
+            "file": display_path(self.path),
             "format": self.file_format,
             "encoding": self.encoding,
             "delimiter": self.delimiter,
@@ -393,7 +394,7 @@ class ExportSummary:
         values = sum(i.n_invalid_values for i in self.intervals)
         waveform = sum(i.n_waveform_rows for i in self.intervals)
         lines = [
-            f"file:      {self.path}",
+            f"file:      {display_path(self.path)}",
             f"format:    {self.file_format}",
             f"encoding:  {self.encoding or '-'}   delimiter: {delim}   "
             f"decimal: {self.decimal or '-'}",

@@ -166,7 +166,7 @@ def test_folding_keeps_first_seen_order_and_the_latest_or_first_content(first, s
     taken = {r["measurement_id"] for r in first}
     second = [r for r in second if r["measurement_id"] not in taken]
     # a real change, far beyond the 1e-9 relative tolerance for re-reduction noise
-    second += [{**r, "mu_k": r["mu_k"] + 1.0 if r["mu_k"] < 50 else r["mu_k"] / 2}
+    second += [{**r, "mu_k": r["mu_k"] + 1.0 if r["mu_k"] < 5 else r["mu_k"] / 2}
                for r in reused]
     runs = fm.records_frame(first)
     merged, report = fm.fold_records(runs, second, replace=replace)

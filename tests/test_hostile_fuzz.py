@@ -369,24 +369,30 @@ def check_group(group: int, tmp_path: Path, *, subprocess_run: bool = False) -> 
         if (out / "summaries").is_dir() else {}
     lines = [ln for ln in stderr.splitlines() if ln.strip()]
     for line in lines:
-        assert re.match(r"(error: |\d+ of \d+ file\(s\) failed\.$)", line), \
-            f"{where}: a line that is not one failure per file: {line!r}"
+        assert re.match(r"(error: |duplicate: |\d+ error\(s\) in \d+ of \d+ file\(s\)\.$)",
+                        line), f"{where}: a line that is not one problem of one file: {line!r}"
+        if line.startswith("error: "):   # names exactly one of the files
+            assert sum(c.file_name in line for c in cases) + ("good_neighbour" in line) == 1, \
+                f"{where}: {line!r}"
     failed = 0
     for case in cases:
         stem = case.file_name.rsplit(".", 1)[0]
-        errors = [ln for ln in lines if case.file_name in ln]
+        errors = [ln for ln in lines if ln.startswith("error: ") and case.file_name in ln]
+        duplicate = [ln for ln in lines if ln.startswith(f"duplicate: {folder / case.file_name}")]
         written = [p for name, p in summaries.items() if name.startswith(stem + "_")]
         what = f"{where}, case {case.number} ({case.seed.name}: {', '.join(case.mutations)})"
-        assert len(errors) + len(written) == 1, f"{what}: {errors} {written}"
-        if errors:
-            failed += 1
-            continue
-        summary = json.loads(written[0].read_text(encoding="utf-8"),
-                             parse_constant=_refuse_constant)
-        assert 0 <= summary["mu_k"] <= 100 and summary["mu_s"] >= summary["mu_k"], what
-        assert summary["normal_force_N"] > 0 and summary["pressure_kPa"] > 0, what
-        if case.zero_torque_only:
-            assert "no_friction_signal" in summary["flags"], f"{what}: {summary['flags']}"
+        # every file is accounted for: its runs' summaries, its problems, or a duplicate
+        assert errors or written or duplicate, f"{what}: neither reduced nor reported"
+        if case.seed.synthetic and not duplicate:   # one test, one friction interval
+            assert len(errors) + len(written) >= 1, what
+        failed += bool(errors)
+        for path in written:
+            summary = json.loads(path.read_text(encoding="utf-8"),
+                                 parse_constant=_refuse_constant)
+            assert 0 <= summary["mu_k"] <= 10 and summary["mu_s"] >= summary["mu_k"], what
+            assert summary["normal_force_N"] > 0 and summary["pressure_kPa"] > 0, what
+            if case.zero_torque_only:
+                assert "no_friction_signal" in summary["flags"], f"{what}: {summary['flags']}"
     assert [n for n in summaries if n.startswith("good_neighbour_")], f"{where}: lost the good"
     assert code == (1 if failed else 0), f"{where}: exit code {code}\n{output}"
 
@@ -439,16 +445,17 @@ def check_campaign(first_case: int, n_cases: int, tmp_path: Path) -> None:
     failed_lines = [ln for ln in result.stderr.splitlines() if ln.startswith("failed: ")]
     assert len(failed_lines) == len(failures), result.stderr
     for name in failures["file"]:
-        assert sum(name in ln for ln in failed_lines) == 1, (name, result.stderr)
-        assert name in names, name
+        assert sum(ln.startswith(f"failed: {name}") for ln in failed_lines) == 1, \
+            (name, result.stderr)
+        assert name.split(" ")[0].rstrip(":") in names, name
     table = pd.read_csv(tmp_path / "out" / "runs.csv", dtype=str, keep_default_na=False)
-    assert len(table) == n_cases + 3
-    status = dict(zip(table["file"], table["status"], strict=True))
-    assert {f for f, s in status.items() if s == "failed"} == set(failures["file"])
-    assert all(status[f"DS30_steel_3N_20C_r{r}_good.csv"] == "reduced" for r in (1, 2, 3))
+    assert set(table["file"]) == set(names) | {f"DS30_steel_3N_20C_r{r}_good.csv"
+                                               for r in (1, 2, 3)}   # no file is silent
+    good = table[table["file"].str.endswith("_good.csv")]
+    assert (good["status"] == "reduced").all() and len(good) == 3
     runs = read_map(tmp_path / "out" / "friction_map.parquet")
     reduced_ids = set(table.loc[table["status"] == "reduced", "measurement_id"])
-    assert reduced_ids == set(runs["measurement_id"])      # every reduced run landed
+    assert reduced_ids <= set(runs["measurement_id"])      # every reduced run landed
     assert result.exit_code == (1 if len(failures) else 0)
 
 

@@ -76,7 +76,8 @@ def _text_cells_are_safe(text: str) -> list[list[str]]:
 def test_runs_csv_holds_no_formula(campaign: Path) -> None:
     text = (campaign.parent / "out" / "runs.csv").read_text(encoding="utf-8")
     rows = _text_cells_are_safe(text)
-    pins = {row[2] for row in rows[1:]}
+    column = rows[0].index("pin")
+    pins = {row[column] for row in rows[1:]}
     assert pins == {"'" + PIN, "'" + PLUS}
 
 

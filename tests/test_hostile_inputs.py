@@ -146,9 +146,9 @@ def test_a_bad_manifest_row_fails_that_file_only(tmp_path: Path, cell_row: str,
     manifest = (HEADER + "run0.csv,DS30,steel,3,20,1\n" + cell_row
                 + "run2.csv,DS30,steel,3,20,2\n")
     cfg = _campaign(tmp_path, manifest)
-    rows = read_manifest(tmp_path / "raw" / "manifest.csv")
-    assert rows["run1.csv"].problem is not None and expected in rows["run1.csv"].problem
-    assert "\n" not in rows["run1.csv"].problem and len(rows["run1.csv"].problem) < 500
+    row = read_manifest(tmp_path / "raw" / "manifest.csv").get("run1.csv")
+    assert row is not None and row.problem is not None and expected in row.problem
+    assert "\n" not in row.problem and len(row.problem) < 500
     result = invoke("batch", str(cfg), "--jobs", "1")
     stderr = assert_clean_failure(result)
     assert_one_line_each(stderr, ["run1.csv"])

@@ -70,8 +70,10 @@ FORCE_N = Range(0.0, 1e5, "N", low_open=True)
 PRESSURE_KPA = Range(0.0, 1e12, "kPa", low_open=True)
 #: nominal or measured temperature [°C]: above absolute zero, at most 3000 °C
 TEMPERATURE_C = Range(-273.15, 3000.0, "°C", low_open=True)
-#: a coefficient of friction: 0 to 100 (silicone on steel reaches ~3)
-MU = Range(0.0, 100.0)
+#: a coefficient of friction: 0 to 10 (the highest dry friction of soft elastomers,
+#: adhesion-dominated on smooth glass, is a few units; beyond 10 a force in mN was read
+#: as N, or a torque column is something else)
+MU = Range(0.0, 10.0)
 #: radius of one pin [mm]
 PIN_RADIUS_MM = Range(0.01, 500.0, "mm")
 #: friction radius of the cell [mm]

@@ -111,15 +111,18 @@ def reduce_cmd(
 
 
 def _echo_file(result: object) -> None:
-    """One file done: its plots, or its errors, on stderr as it happens."""
+    """One file done: its plots, or its errors, on stderr as it happens (names from the
+    outside as one printable line each)."""
+    from ..escape import display_path, printable
+
     for error in result.errors:
-        click.echo(f"error: {error}", err=True)
+        click.echo(f"error: {printable(error)}", err=True)
     if result.duplicate_of is not None:
-        click.echo(f"duplicate: {result.path}: same content as {result.duplicate_of}: "
-                   "its runs are reduced once", err=True)
+        click.echo(f"duplicate: {display_path(result.path)}: same content as "
+                   f"{display_path(result.duplicate_of)}: its runs are reduced once", err=True)
     for run in result.runs:
         if run.plot is not None:
-            click.echo(f"plot: {run.plot}", err=True)
+            click.echo(f"plot: {display_path(run.plot)}", err=True)
 
 
 def _run_labels(outcomes: list) -> dict[int, str]:

@@ -210,21 +210,13 @@ def to_csv(table: pd.DataFrame, formats: dict[str, str] | None = None) -> str:
                                           float_format="%.10g")
 
 
-#: a spreadsheet runs a text cell starting with one of these as a formula
-FORMULA_START = ("=", "+", "-", "@", "\t", "\r")
-
-
 def spreadsheet_csv(table: pd.DataFrame) -> str:
-    """CSV text for people who open it in a spreadsheet: like :func:`to_csv`, but a text
-    cell starting with ``=``, ``+``, ``-``, ``@``, a tab or a carriage return gets a leading
-    ``'`` so it stays text (numbers, negative ones included, stay numbers)."""
-    safe = table.copy()
-    for column in safe.columns:
-        if not _numeric(safe, column) and not str(safe[column].dtype).startswith("bool"):
-            safe[column] = safe[column].map(
-                lambda v: "'" + v if isinstance(v, str) and v.startswith(FORMULA_START) else v)
-    safe.columns = ["'" + str(c) if str(c).startswith(FORMULA_START) else str(c)
-                    for c in safe.columns]
+    """CSV text for people who open it in a spreadsheet: :func:`to_csv` (a text cell
+    starting with ``=``, ``+``, ``-``, ``@``, a tab or a carriage return gets a leading
+    ``'`` so it stays text; numbers, negative ones included, stay numbers), with the
+    column names made safe the same way."""
+    safe = table.copy(deep=False)
+    safe.columns = [csv_cell(str(c)) for c in safe.columns]
     return to_csv(safe)
 
 

@@ -7,12 +7,16 @@ tribopipe version, time of reduction). Repeat statistics live in :mod:`tribopipe
 
 The package's rooms, each importing only those above it:
 
-* :mod:`~tribopipe.frictionmap.schema` — the run columns (kind, unit, meaning) and the
-  validated DataFrame form of the rows;
+* :mod:`~tribopipe.frictionmap.schema` — the run columns (kind, unit, meaning), the
+  validated DataFrame form of the rows (:func:`check_runs`, the rules every row keeps)
+  and the checksum of a map's content;
 * :mod:`~tribopipe.frictionmap.records` — :class:`RunLabels`, :class:`Tolerances`,
   :func:`make_record`, the ids and the off-nominal QC flags of a run;
-* :mod:`~tribopipe.frictionmap.store` — Parquet reads and locked atomic writes, the pure
-  :func:`fold_records`, append/update/merge and exclusions;
+* :mod:`~tribopipe.frictionmap.mapfile` — reading a map file without trusting it (kind,
+  structure, metadata, column types, rows, checksum) and the metadata we write;
+* :mod:`~tribopipe.frictionmap.store` — locked atomic writes (the map's mode kept, the
+  previous map kept as ``<map>.bak``), the pure :func:`fold_records`, append/update/merge
+  and exclusions;
 * :mod:`~tribopipe.frictionmap.duplicates` — the same raw content under two file names:
   a duplicate (same labels, stored once) or a conflict (other labels, refused);
 * :mod:`~tribopipe.frictionmap.published` — the founding paper's map (``.mat`` or CSV);
@@ -34,7 +38,10 @@ Guarantees of the store:
 * **safety** — the whole read-modify-write holds a lock (``<map>.lock``); the new map is
   written to a temporary file in the same directory, fsynced and renamed over the old one,
   so a killed writer leaves the previous map intact; a file at the map path that is not one
-  of our maps is refused (:class:`~tribopipe.errors.MapError`), never overwritten.
+  of our maps is refused (:class:`~tribopipe.errors.MapError`), never overwritten;
+* **integrity** — every write stores the SHA-256 of the rows in the metadata and every
+  read checks it: a map changed outside tribopipe or damaged on disk is refused in one
+  line naming ``<map>.bak`` to restore from, never read with other values.
 """
 
 from __future__ import annotations

@@ -15,7 +15,10 @@ are positive; a coefficient of friction is a ratio of magnitudes, so at least 0,
 :data:`MU_MAX` it is a column or unit mix-up rather than any dry friction of an elastomer;
 no temperature lies at or below absolute zero; distances, times, the plateau's SD, repeat
 and interval numbers are not negative; a window does not end before it starts; no stored
-number is infinite.
+number is infinite. Every rule of :func:`~tribopipe.frictionmap.schema.check_runs` (the
+rules every map row keeps, on every read and write: names one printable line of at most
+200 characters, upper bounds from :mod:`tribopipe.validate`) is checked here too, so rows
+that pass here are rows the map accepts.
 """
 
 from __future__ import annotations
@@ -26,7 +29,18 @@ from dataclasses import dataclass
 from datetime import datetime
 from typing import TYPE_CHECKING, Any
 
-from .schema import _KIND, RUN_COLUMNS, SOURCE_REDUCED, _missing
+from ..escape import FORMULA_TRIGGERS
+from ..validate import MU, TEMPERATURE_C, name_problem, text_problem
+from .schema import (
+    _KIND,
+    COLUMN_RANGES,
+    COUNT_RANGES,
+    NAME_COLUMNS,
+    REQUIRED,
+    RUN_COLUMNS,
+    SOURCE_REDUCED,
+    _missing,
+)
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -34,9 +48,9 @@ if TYPE_CHECKING:
 #: A kinetic or static coefficient above this is refused as implausible: the highest dry
 #: friction coefficients reported for soft elastomers (adhesion-dominated, on smooth glass)
 #: are a few units; 10 leaves room for them and still catches a force in mN read as N.
-MU_MAX = 10.0
+MU_MAX = MU.high
 #: Absolute zero [°C]: a temperature at or below it is not a temperature.
-ABSOLUTE_ZERO_C = -273.15
+ABSOLUTE_ZERO_C = TEMPERATURE_C.low
 
 #: field → (lowest allowed, whether the lowest is allowed itself, highest or None, reason)
 RANGES: dict[str, tuple[float, bool, float | None, str]] = {
@@ -68,7 +82,7 @@ WINDOWS: tuple[tuple[str, str], ...] = (
     ("mu_k_window_start_s", "mu_k_window_end_s"),
 )
 #: a spreadsheet runs a cell starting with one of these as a formula
-FORMULA_START = ("=", "+", "-", "@", "\t", "\r")
+FORMULA_START = tuple(sorted(FORMULA_TRIGGERS))
 _CONTROL = re.compile(r"[\x00-\x1f\x7f\u2028\u2029]")
 _SHA256 = re.compile(r"[0-9a-f]{64}")
 _CONFIG_HASH = re.compile(r"[0-9a-f]{16}")
@@ -112,7 +126,7 @@ def validate_runs(runs: pd.DataFrame, *, require_lab: bool = False) -> list[RowP
         def add(field: str, problem: str, i: int = i, mid: str | None = mid) -> None:
             problems.append(RowProblem(i, mid, field, problem))
 
-        for name in ("measurement_id", "source", "pin", "disc", "mu_k"):
+        for name in ("measurement_id", "source", "pin", "disc", *sorted(REQUIRED)):
             if _missing(row[name]) or not str(row[name]).strip():
                 add(name, "missing, expected a value in every row")
         if row["source"] == SOURCE_REDUCED and _missing(row["mu_s"]):
@@ -131,6 +145,7 @@ def validate_runs(runs: pd.DataFrame, *, require_lab: bool = False) -> list[RowP
                 continue
             if name in RANGES:
                 _check_range(name, float(value), add)
+            _check_bound(name, value, add)
             if _KIND[name] == "str":
                 _check_text(name, str(value), add)
         for start, end in WINDOWS:
@@ -150,9 +165,24 @@ def _check_range(name: str, value: float, add: Any) -> None:
         add(name, f"{_number(value)} is out of range, expected at most {high:g} ({reason})")
 
 
+def _check_bound(name: str, value: Any, add: Any) -> None:
+    """The upper bounds every map row keeps (:func:`~tribopipe.frictionmap.schema.check_runs`:
+    no force, pressure, temperature or count beyond any measurement), where
+    :data:`RANGES` sets none."""
+    if name in COLUMN_RANGES and (name not in RANGES or RANGES[name][2] is None):
+        high = COLUMN_RANGES[name].high
+        if math.isfinite(float(value)) and float(value) > high:
+            add(name, f"{_number(value)} is out of range, expected at most {high:g}")
+    elif name in COUNT_RANGES and int(value) > COUNT_RANGES[name][1]:
+        add(name, f"{value} is out of range, expected at most {COUNT_RANGES[name][1]}")
+
+
 def _check_text(name: str, text: str, add: Any) -> None:
+    problem = name_problem(text) if name in NAME_COLUMNS else text_problem(text)
     if _CONTROL.search(text):
         add(name, "contains a control character or line break, expected one line of text")
+    elif problem is not None:
+        add(name, problem)
     elif text.startswith(FORMULA_START):
         add(name, f"starts with {text[0]!r}, which a spreadsheet runs as a formula")
 

@@ -9,10 +9,12 @@ bytes, an empty file.
 
 Cases run in groups: each group's files go through one ``tribopipe reduce`` (in-process
 with ``click.testing``; one group per run as a real subprocess) together with a good
-export. The rule checked for every case: no traceback; a bad file is exactly one
-``error:`` line naming it, a file that still reduces is a strict-JSON summary with
-physical numbers (a zero-torque case is flagged ``no_friction_signal``); the good
-neighbour always lands; no numeric warning reaches the user. A campaign of mutated files
+export. The rule checked for every case: no traceback; every stderr line is one problem
+(``error:``) naming exactly one file, or a duplicate; no file is silent (it has a
+summary per reduced run, or its problems, one line each: a file of several tests has
+one per failing test or run); every summary is strict JSON with physical numbers (a
+zero-torque case is flagged ``no_friction_signal``); the good neighbour always lands; no
+numeric warning reaches the user. A campaign of mutated files
 goes through ``tribopipe batch`` with worker processes: one ``failed:`` line and one
 ``failures.csv`` row per bad file, the good runs in the map.
 

@@ -279,8 +279,12 @@ def write_trace(out_dir: str | Path | OutputLayout, outcome: RunOutcome) -> Path
     trace = outcome.result.trace
     table = pa.table({str(c): trace[c].to_numpy() for c in trace.columns})
     tmp = target.with_suffix(".parquet.tmp")
-    pq.write_table(table, tmp)
-    tmp.replace(target)
+    try:
+        pq.write_table(table, tmp)
+        tmp.replace(target)
+    except OSError:
+        tmp.unlink(missing_ok=True)  # a full disk leaves no half trace behind
+        raise
     return target
 
 

@@ -5,6 +5,7 @@ Everything tribopipe writes for a reduction or a campaign goes below one folder
 
     <output>/
       friction_map.parquet               the friction map (a campaign may keep it elsewhere)
+      friction_map.parquet.bak           the map before its last change (a hard link)
       traces/<stem>_<id8>.parquet        each reduced trace
       summaries/<stem>_<id8>.json        each run's summary (``tribopipe reduce``)
       plots/traces/<stem>_<id8>.png      each run's trace plot
@@ -50,7 +51,10 @@ BATCH_LOCK = ".tribopipe-batch.lock"
 #: the header of ``failures.csv``
 FAILURES_HEADER: tuple[str, str] = ("file", "reason")
 #: what this tool writes at the top of an output folder, and the folders it fills
-OUTPUT_FILES: frozenset[str] = frozenset({MAP_FILE, RUNS_CSV, FAILURES_CSV, REPORT_HTML})
+#: the previous map, kept by every rewrite (:func:`tribopipe.frictionmap.backup_path`)
+MAP_BACKUP = MAP_FILE + ".bak"
+OUTPUT_FILES: frozenset[str] = frozenset({MAP_FILE, MAP_BACKUP, RUNS_CSV, FAILURES_CSV,
+                                          REPORT_HTML})
 OUTPUT_DIRS: frozenset[str] = frozenset({TRACES_DIR, SUMMARIES_DIR, PLOTS_DIR})
 
 

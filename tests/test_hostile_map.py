@@ -121,6 +121,33 @@ def test_a_map_from_before_the_checksum_reads_and_gains_one(small_map: Path,
     assert fm.map_metadata(legacy)["content_sha256"] == content_sha256(fm.read_map(legacy))
 
 
+@pytest.mark.parametrize(("column", "value"), [
+    ("u_mu_s", -1.0), ("u_mu_k", float("inf")), ("u_mu_k", 5e3),
+])
+def test_a_map_row_with_an_impossible_uncertainty_is_refused_on_read(
+        small_map: Path, tmp_path: Path, column: str, value: float) -> None:
+    bad = _bad_other(small_map, tmp_path / "bad.parquet", column, value)
+    with pytest.raises(MapError, match=column) as info:
+        fm.read_map(bad)
+    assert str(bad) in str(info.value) and "\n" not in str(info.value)
+    stderr = assert_clean_failure(invoke("map", "show", "--map", str(bad)))
+    assert column in stderr and len(stderr.strip().splitlines()) == 1, stderr
+
+
+def test_a_missing_uncertainty_reads_the_same_stored_as_nan_or_as_null(
+        small_map: Path, tmp_path: Path) -> None:
+    """u_mu_s/u_mu_k are nullable (imported rows have none): a NaN cell and a null cell
+    both read as missing, and neither is refused."""
+    runs = fm.read_map(small_map)
+    reduced = int(runs.index[runs["source"] == fm.SOURCE_REDUCED][0])
+    as_null = _bad_other(small_map, tmp_path / "null.parquet", "u_mu_k", None)
+    as_nan = _bad_other(small_map, tmp_path / "nan.parquet", "u_mu_k", float("nan"))
+    read_null, read_nan = fm.read_map(as_null), fm.read_map(as_nan)
+    assert pd.isna(read_null["u_mu_k"].iloc[2]) and pd.isna(read_nan["u_mu_k"].iloc[2])
+    pd.testing.assert_frame_equal(read_null, read_nan)
+    assert runs["u_mu_k"].iloc[reduced] > 0        # a reduced run has one
+
+
 def test_damaged_pandas_metadata_does_not_decide_how_the_map_reads(small_map: Path,
                                                                    tmp_path: Path) -> None:
     table = pq.read_table(small_map)
@@ -215,6 +242,9 @@ def _bad_other(src: Path, dst: Path, column: str, value, arrow_type=None) -> Pat
     ("pin", "Dragonskin\n*HEADING", None, "pin"),
     ("disc", "steel\u202e", None, "disc"),
     ("repeat", 10**12, None, "repeat"),
+    ("u_mu_k", -1.0, None, "u_mu_k"),
+    ("u_mu_s", float("inf"), None, "u_mu_s"),
+    ("u_mu_s", 1e306, None, "u_mu_s"),
 ])
 def test_map_merge_checks_every_row(small_map: Path, tmp_path: Path, column: str, value,
                                     arrow_type, expected: str) -> None:

@@ -74,6 +74,8 @@ RANGES: dict[str, tuple[float, bool, float | None, str]] = {
     "mu_k_window_start_s": (0.0, True, None, "time from the start of the interval"),
     "mu_k_window_end_s": (0.0, True, None, "time from the start of the interval"),
     "plateau_std": (0.0, True, None, "a standard deviation is not negative"),
+    "u_mu_s": (0.0, True, None, "a standard uncertainty is not negative"),
+    "u_mu_k": (0.0, True, None, "a standard uncertainty is not negative"),
     "interval": (0.0, True, None, "interval numbers count up from 0 or 1"),
 }
 #: (start, end) columns of a window that must not end before it starts

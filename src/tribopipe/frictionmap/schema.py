@@ -175,6 +175,8 @@ COLUMN_RANGES: dict[str, Range] = {
     "mu_k_window_start_mm": Range(0.0, 1e9, "mm"),
     "mu_k_window_end_mm": Range(0.0, 1e9, "mm"),
     "plateau_std": Range(0.0, 1e3),
+    "u_mu_s": Range(0.0, 1e3),
+    "u_mu_k": Range(0.0, 1e3),
 }
 REQUIRED: frozenset[str] = frozenset({"normal_force_N", "pressure_kPa", "mu_k"})
 #: the whole-number columns and their bounds

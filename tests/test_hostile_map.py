@@ -148,6 +148,35 @@ def test_a_missing_uncertainty_reads_the_same_stored_as_nan_or_as_null(
     assert runs["u_mu_k"].iloc[reduced] > 0        # a reduced run has one
 
 
+def test_a_checksum_written_by_an_older_schema_still_verifies(small_map: Path,
+                                                              tmp_path: Path) -> None:
+    """A map whose schema version predates columns we added since is checked over the
+    columns it had: an upgrade of tribopipe never makes a sound map fail its checksum."""
+    gone = [name for name, added in fm.ADDED_IN_VERSION.items() if added == fm.SCHEMA_VERSION]
+    old_digest = content_sha256(fm.read_map(small_map), fm.SCHEMA_VERSION - 1)
+    assert old_digest != content_sha256(fm.read_map(small_map))
+
+    def downgrade(info: dict) -> None:
+        info["schema_version"] = fm.SCHEMA_VERSION - 1
+        info["content_sha256"] = old_digest
+    older = _rewrite_parquet(small_map, tmp_path / "older.parquet",
+                             change_table=lambda t: t.drop_columns(gone),
+                             change_info=downgrade)
+    runs = fm.read_map(older)
+    assert runs[gone].isna().all().all()
+    pd.testing.assert_frame_equal(runs.drop(columns=gone),
+                                  fm.read_map(small_map).drop(columns=gone))
+
+    def nudge(table: pa.Table) -> pa.Table:
+        mu = table.column("mu_k").to_pylist()
+        mu[3] = mu[3] + 0.01
+        return table.set_column(table.schema.get_field_index("mu_k"), "mu_k",
+                                pa.array(mu, pa.float64()))
+    edited = _rewrite_parquet(older, tmp_path / "edited.parquet", change_table=nudge)
+    with pytest.raises(MapError, match="fails its checksum"):
+        fm.read_map(edited)
+
+
 def test_damaged_pandas_metadata_does_not_decide_how_the_map_reads(small_map: Path,
                                                                    tmp_path: Path) -> None:
     table = pq.read_table(small_map)

@@ -112,7 +112,7 @@ def read_map(path: str | os.PathLike[str]) -> pd.DataFrame:
         raise MapError(exc.problem, path=p, column=exc.column,
                        hint=_restore_hint(p)) from None
     stored = info.get("content_sha256")
-    if stored is not None and stored != content_sha256(runs):
+    if stored is not None and stored != content_sha256(runs, info["schema_version"]):
         raise MapError(
             f"the map at {display_path(p)} fails its checksum: its rows are not those "
             "tribopipe wrote (damaged on disk, or changed by another program); refusing to "

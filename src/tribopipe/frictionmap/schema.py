@@ -254,12 +254,15 @@ def check_runs(frame: pd.DataFrame, where: str = "row") -> pd.DataFrame:
     return frame
 
 
-def content_sha256(frame: pd.DataFrame) -> str:
-    """SHA-256 (hex) of a map's content: the :data:`RUN_COLUMNS` of every row, in order,
-    in a canonical byte form (floats as little-endian IEEE 754 with one NaN, whole numbers
-    as int64 with a missing-mask, booleans as bytes, text as JSON with ``null``), so the
-    same rows give the same digest however they were stored or read back. Stored in the
-    map's Parquet metadata and checked on every read (:mod:`tribopipe.frictionmap.store`).
+def content_sha256(frame: pd.DataFrame, version: int = SCHEMA_VERSION) -> str:
+    """SHA-256 (hex) of a map's content: the :data:`RUN_COLUMNS` of schema ``version``
+    (those :data:`ADDED_IN_VERSION` later are left out) of every row, in order, in a
+    canonical byte form (floats as little-endian IEEE 754 with one NaN, whole numbers as
+    int64 with a missing-mask, booleans as bytes, text as JSON with ``null``), so the same
+    rows give the same digest however they were stored or read back. Stored in the map's
+    Parquet metadata and checked on every read against the version the map was written
+    in (:mod:`tribopipe.frictionmap.mapfile`), so a map still verifies after a schema
+    upgrade adds columns.
     """
     import hashlib
     import json
@@ -269,6 +272,8 @@ def content_sha256(frame: pd.DataFrame) -> str:
 
     digest = hashlib.sha256(f"tribopipe.frictionmap rows={len(frame)}".encode())
     for name in RUN_COLUMNS:
+        if ADDED_IN_VERSION.get(name, 1) > version:
+            continue
         kind = _KIND[name]
         column = frame[name]
         if kind == "float":

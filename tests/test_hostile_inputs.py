@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import json
 import math
+import warnings
 from dataclasses import replace
 from pathlib import Path
 
@@ -25,7 +26,7 @@ from tribopipe.campaign import load_campaign, read_manifest, run_campaign
 from tribopipe.config import load_settings, settings_from_dict
 from tribopipe.errors import ConfigError, ValidationError
 from tribopipe.frictionmap import RunLabels, read_map
-from tribopipe.synthetic import make_intervals
+from tribopipe.synthetic import make_intervals, write_intervals_export
 
 PATTERN = "{pin}_{disc}_{force}N_{temperature}C_r{repeat}"
 
@@ -287,6 +288,27 @@ def test_a_huge_measured_force_fails_the_file_and_json_stays_strict(tmp_path: Pa
     assert [Path(r["file"]).name for r in rows] == ["good.csv"]
     for path in (tmp_path / "o" / "summaries").glob("*.json"):
         json.loads(path.read_text(), parse_constant=_refuse_constant)
+
+
+def test_a_huge_torque_in_the_setup_interval_fails_the_file_in_one_line(
+        tmp_path: Path) -> None:
+    """The set-up interval gives the torque zero: a sample there beyond any measurement
+    fails that file, naming the set-up interval and the point (it overflowed the offset's
+    statistics), and its neighbour reduces."""
+    setup, friction = make_intervals(GOOD_RUN)
+    setup = setup.copy()
+    setup.loc[3, "torque_Nm"] = -1e200    # its square overflows
+    bad = write_intervals_export(tmp_path / "setup_huge.txt", [setup, friction],
+                                 project="p", test="t", sample="DS30")
+    good = _plain_export(tmp_path / "good.csv")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", RuntimeWarning)
+        result = invoke("reduce", str(bad), str(good), "--json", "--no-map",
+                        "--out", str(tmp_path / "o"))
+    stderr = assert_clean_failure(result)
+    assert_one_line_each(stderr, ["setup_huge.txt"])
+    assert "interval 1" in stderr and "point 4" in stderr and "torque_Nm" in stderr, stderr
+    assert [Path(r["file"]).name for r in json.loads(result.stdout)] == ["good.csv"]
 
 
 def _refuse_constant(name: str) -> None:

@@ -212,17 +212,24 @@ def _result_intervals(items: list[Measurement], several: bool) -> ResultInterval
             ))
     else:
         chosen = [max(usable, key=lambda i: (_median_abs_torque(items[i]), -i))]
-    return ResultIntervals(first.test, first.result,
-                           tuple(_with_setup_offset(items, i) for i in chosen))
+    try:
+        friction = tuple(_with_setup_offset(items, i) for i in chosen)
+    except ReductionError as exc:          # a set-up torque beyond any measurement
+        return ResultIntervals(first.test, first.result, (), ReductionError(
+            exc.problem, path=source, hint=exc.hint))
+    return ResultIntervals(first.test, first.result, friction)
 
 
 def _with_setup_offset(items: list[Measurement], chosen: int) -> Measurement:
     """``items[chosen]`` with the torque offset of its set-up interval: the nearest
-    interval before it (same test/result) verified at rest."""
+    interval before it (same test/result) verified at rest. Raises
+    :class:`ReductionError` when that interval holds a sample beyond any measurement
+    (:data:`SAMPLE_LIMITS`): its torque cannot be the instrument's zero."""
     picked = items[chosen]
     for before in reversed(items[:chosen]):
         if not _rotation_known(before) or _rotates(before):
             continue
+        _check_magnitudes(before)
         offset = setup_torque_offset_Nm(before)
         if offset is None:
             continue

@@ -180,3 +180,12 @@ def test_effective_noise_of_correlated_noise_counts_its_autocorrelation() -> Non
     # the running mean takes of the correlation (documented: ~18 % low here)
     assert 0.01 * math.sqrt(3) * 0.75 < effective_noise(coloured, 71) < 0.01 * math.sqrt(3)
     assert effective_noise(coloured, 71) > 1.3 * effective_noise(white, 71)
+
+
+def test_gamma_survival_function_takes_an_array_as_it_takes_numbers() -> None:
+    x = np.array([0.0, 1e-3, 0.5, 2.0, 3.9, 4.1, 12.0, 300.0])
+    for a in (0.7, 2.6, 3.0):
+        together = gamma_q(a, x)
+        assert together.shape == x.shape
+        # one by one each x stops at its own last term; together at the slowest one's
+        assert together == pytest.approx([gamma_q(a, float(v)) for v in x], rel=1e-14)

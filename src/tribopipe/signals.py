@@ -234,41 +234,62 @@ def periodic_line(
     return Line(float(ratio[k]), float(period[fundamental]), excess, count, rho)
 
 
-def gamma_q(a: float, x: float) -> float:
+def gamma_q(a: float, x: Any) -> Any:
     """Regularised upper incomplete gamma function Q(a, x) = Γ(a, x)/Γ(a) (a > 0): the
-    survival function of a Gamma(a, 1) variate at x. Series below a + 1, Lentz's
-    continued fraction above."""
-    if x <= 0:
-        return 1.0
-    log_front = -x + a * math.log(x) - math.lgamma(a)
-    if x < a + 1:
-        term = total = 1.0 / a
-        k = a
-        for _ in range(1000):
-            k += 1
-            term *= x / k
-            total += term
-            if abs(term) < abs(total) * 1e-15:
-                break
-        return max(0.0, 1.0 - total * math.exp(log_front))
+    survival function of a Gamma(a, 1) variate at x, for a number or an array of x (a
+    float, or an array of x's shape). Series below a + 1, Lentz's continued fraction
+    above, both evaluated for all x at once until every term is below 1e-15 of its sum."""
+    xs = np.asarray(x, dtype=float)
+    out = np.ones(xs.shape)
+    positive = xs > 0
+    low = positive & (xs < a + 1)
+    high = positive & ~low
+    if low.any():
+        out[low] = _gamma_q_series(a, xs[low])
+    if high.any():
+        out[high] = _gamma_q_fraction(a, xs[high])
+    return float(out) if out.ndim == 0 else out
+
+
+def _gamma_log_front(a: float, x: np.ndarray) -> np.ndarray:
+    """ln(x^a e^-x / Γ(a)), the factor both expansions of Q(a, x) share (x > 0)."""
+    return -x + a * np.log(x) - math.lgamma(a)
+
+
+def _gamma_q_series(a: float, x: np.ndarray) -> np.ndarray:
+    """Q(a, x) = 1 − P(a, x) from the series of P, for 0 < x < a + 1."""
+    term = np.full(x.shape, 1.0 / a)
+    total = term.copy()
+    k = a
+    for _ in range(1000):
+        k += 1
+        term = term * x / k
+        total += term
+        if np.all(np.abs(term) < np.abs(total) * 1e-15):
+            break
+    return np.maximum(0.0, 1.0 - total * np.exp(_gamma_log_front(a, x)))
+
+
+def _gamma_q_fraction(a: float, x: np.ndarray) -> np.ndarray:
+    """Q(a, x) from its continued fraction (modified Lentz), for x ≥ a + 1."""
     tiny = 1e-300
     b = x + 1.0 - a
-    c = 1.0 / tiny
+    c = np.full(x.shape, 1.0 / tiny)
     d = 1.0 / b
-    h = d
+    h = d.copy()
     for i in range(1, 1000):
         an = -i * (i - a)
-        b += 2.0
+        b = b + 2.0
         d = an * d + b
-        d = tiny if abs(d) < tiny else d
+        d = np.where(np.abs(d) < tiny, tiny, d)
         c = b + an / c
-        c = tiny if abs(c) < tiny else c
+        c = np.where(np.abs(c) < tiny, tiny, c)
         d = 1.0 / d
         delta = d * c
-        h *= delta
-        if abs(delta - 1.0) < 1e-15:
+        h = h * delta
+        if np.all(np.abs(delta - 1.0) < 1e-15):
             break
-    return math.exp(log_front) * h
+    return np.exp(_gamma_log_front(a, x)) * h
 
 
 def line_threshold(candidates: int, false_alarm: float, *,
@@ -308,18 +329,16 @@ def _threshold(log10_target: float, correlation_sq: tuple[float, ...], smooth_bi
     half = (n_eff + 1) // 2
     edges = np.linspace(0.0, 4.0, 401)
     q = 1.0 - 2.0 ** (-edges)
-    cdf = np.array([
-        sum(math.comb(n_eff, i) * qi**i * (1 - qi) ** (n_eff - i) for i in range(half, n_eff + 1))
-        for qi in q
-    ])
+    cdf = np.zeros(q.size)
+    for i in range(half, n_eff + 1):
+        cdf += math.comb(n_eff, i) * q**i * (1 - q) ** (n_eff - i)
     weights = np.diff(cdf)
     m = 0.5 * (edges[1:] + edges[:-1])
     keep = weights > 1e-15
     weights, m = weights[keep], m[keep]
 
     def tail(L: float) -> float:
-        return float(sum(w * gamma_q(shape, L * mi / scale)
-                         for w, mi in zip(weights, m, strict=True)))
+        return float(weights @ gamma_q(shape, L * m / scale))
 
     lo, hi = 0.0, 500.0
     for _ in range(50):

@@ -117,6 +117,21 @@ def test_without_set_up_the_offset_comes_from_the_rest_before_motion() -> None:
     assert got.mu_k == pytest.approx(run.mu_k, abs=0.01)
 
 
+def test_a_set_up_of_one_sample_gives_the_offset_but_not_a_false_precision() -> None:
+    """One at-rest sample is a zero with no scatter to judge it by: the offset is used, and
+    its uncertainty is the unknown offset's (b/√3), not 0."""
+    run = SyntheticRun(torque_offset_Nm=4e-4, noise=0.003, seed=3)
+    items = measurements(run)
+    items[0] = Measurement(items[0].data.iloc[:1].reset_index(drop=True), items[0].meta)
+    one = reduce_measurement(select_friction_interval(items), INSTRUMENT, PARAMS)
+    full = reduce_run(run)
+    assert one.parameters["torque_offset_source"].startswith("set-up interval 1 (too few")
+    u_one = one.parameters["uncertainty"]["torque_offset_u_Nm"]
+    assert u_one == pytest.approx(INSTRUMENT.torque_offset_unknown_Nm / math.sqrt(3))
+    assert full.parameters["uncertainty"]["torque_offset_u_Nm"] < u_one / 10
+    assert one.u_mu_k > full.u_mu_k
+
+
 def test_an_offset_that_cannot_be_estimated_is_said_so() -> None:
     run = SyntheticRun(torque_offset_Nm=4e-4, setup_interval=False, rest_s=0.0,
                        normal_force_N=1.0, seed=5)

@@ -236,10 +236,10 @@ def _with_setup_offset(items: list[Measurement], chosen: int) -> Measurement:
         where = f"set-up interval {before.meta.interval}" if before.meta.interval else (
             "set-up interval"
         )
+        # NaN when the set-up holds too few samples to show its own scatter
         u = zero_offset_standard_error(_column(before, TORQUE))
         return Measurement(data=picked.data, meta=replace(
-            picked.meta, torque_offset=TorqueOffset(
-                torque_Nm=offset, source=where, u_Nm=u if math.isfinite(u) else 0.0)))
+            picked.meta, torque_offset=TorqueOffset(torque_Nm=offset, source=where, u_Nm=u)))
     return picked
 
 
@@ -427,12 +427,16 @@ def choose_torque_offset(
     """The torque zero offset [N·m], where it came from — given > set-up interval >
     at-rest start of this interval > none (0) — and its standard uncertainty [N·m]: 0 when
     given, the estimate's standard error (autocorrelation counted) when measured,
-    ``unknown_u_Nm`` when it could not be estimated."""
+    ``unknown_u_Nm`` when it could not be estimated — or when a set-up interval too short
+    to show its own scatter gave it (a single sample may sit anywhere in the noise)."""
     meta_offset, meta_source, meta_u = _offset_from_meta(m)
     rest_offset, n_rest = estimate_torque_offset_Nm(x.torque, at_rest, params.offset_min_samples)
     if given_Nm is not None:
         return float(given_Nm), "given", 0.0
     if meta_offset is not None:
+        if not math.isfinite(meta_u):
+            return (meta_offset, f"{meta_source} (too few samples for its scatter: "
+                    "the unknown offset's uncertainty applies)", unknown_u_Nm)
         return meta_offset, str(meta_source), meta_u
     if rest_offset is not None:
         u = zero_offset_standard_error(x.torque[at_rest])

@@ -50,7 +50,7 @@ def interval_label(test: str | None, result: str | None, interval: int | None) -
 class TorqueOffset:
     """The instrument's torque zero offset [N·m] measured outside a friction interval, and
     where (e.g. ``"set-up interval 1"``: the disc at rest under load before sliding), with
-    the standard error of that estimate ``u_Nm`` [N·m] (0 when not known)."""
+    the standard error of that estimate ``u_Nm`` [N·m] (NaN when the samples cannot show it)."""
 
     torque_Nm: float
     source: str

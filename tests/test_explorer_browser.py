@@ -623,3 +623,50 @@ def test_a_published_packages_explorer_opens_from_disk(tab, reduced, tmp_path):
     tab.open(page_url(package / "explorer.html", pin="Dragonskin 30", disc="steel",
                       pressure="45", temperature="20"))
     assert_shows(tab, query(groups, "Dragonskin 30", "steel", 45.0, 20.0))
+
+
+def test_a_measured_pressure_shows_rounded_and_counts_exact(tab, reduced):
+    # 3 N on three pins of r = 3 mm is 35.36776... kPa: the input shows it as the chips do,
+    # while μ_K, the address and a link keep the measured value, not the rounded text
+    _, page, groups, _ = reduced
+    tab.open(page_url(page, pin="Dragonskin 30", disc="steel"))
+    pair = groups[(groups["pin"] == "Dragonskin 30") & (groups["disc"] == "steel")]
+    p = float(sorted(pair["pressure_kPa"])[0])
+    assert f"{p:g}" != repr(p)  # the case: six digits are not the value
+    s = shown(tab)
+    assert (s["pressure"], s["temperature"]) == (f"{p:g}", "20")
+    res = query(groups, "Dragonskin 30", "steel", p, 20.0)
+    assert len(res.mu_k.used) == 1 and res.mu_k.used[0].weight == 1.0
+    assert_shows(tab, res)
+    assert f"pressure={repr(p)}" in tab.page.url
+    # the group table and the chips fill in the exact value the same way
+    tab.page.fill("#pressure", "50")
+    tab.page.locator("#tpx-measured button", has_text=f"{p:g} kPa").click()
+    assert shown(tab)["pressure"] == f"{p:g}" and f"pressure={repr(p)}" in tab.page.url
+    assert_shows(tab, res)
+    # a link with the full digits shows them rounded and means the measured point
+    link = tab.page.url
+    tab.open(link)
+    assert shown(tab)["pressure"] == f"{p:g}"
+    assert_shows(tab, res)
+    # typing makes the typed text the value: the rounded number is then what is asked
+    tab.page.fill("#pressure", f"{p:g}")
+    assert_shows(tab, query(groups, "Dragonskin 30", "steel", float(f"{p:g}"), 20.0))
+    assert f"pressure={p:g}&" in tab.page.url or tab.page.url.endswith(f"pressure={p:g}")
+
+
+def test_each_repeat_says_which_file_and_test_it_came_from(tab, reduced):
+    map_path, page, _, _ = reduced
+    runs = read_map(map_path)
+    tab.open(page_url(page, pin="Dragonskin 30", disc="steel", pressure="50",
+                      temperature="20"))
+    cells = tab.page.evaluate("""() => Array.from(
+      document.querySelectorAll('#tpx-used-points tbody tr td:last-child'),
+      td => Array.from(td.querySelectorAll('.tpx-repeat'), d => d.textContent))""")
+    lines = [line for cell in cells for line in cell]
+    used = runs[(runs["pin"] == "Dragonskin 30") & (runs["disc"] == "steel")
+                & runs["normal_force_N"].isin([3.0, 9.0])]
+    assert len(lines) == len(used) == 5
+    expected = {f"{r.mu_k:.3f} — {r.source_file} · {r.test} / {r.result}"
+                for r in used.itertuples()}
+    assert set(lines) == expected

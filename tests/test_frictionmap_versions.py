@@ -5,6 +5,12 @@ reduction method ``tribopipe-v1`` (see ``tests/data/README.md``); its reduced ru
 regenerated here byte for byte from its seed. Issue 14: the uncertainty columns are new
 (schema version 3; ``lab`` came in version 2), a v1 run keeps its method in the map until
 it is re-reduced with ``--replace``.
+
+``tests/data/friction_map_v3.parquet`` and ``tests/data/package_v3/`` were written by the
+code of schema version 3 (``scripts/make_v3_fixtures.py``), before the ``test`` and
+``result`` columns of version 4: a session export of two tests, the published rows, one
+excluded run. They read, validate and merge with those columns missing, and the same
+export reduced by today's code gives the same run ids.
 """
 
 from __future__ import annotations
@@ -23,7 +29,10 @@ from tribopipe.cli import main
 from tribopipe.pipeline import file_sha256
 from tribopipe.synthetic import SyntheticRun, write_rheocompass_export
 
-V1_MAP = Path(__file__).parent / "data" / "frictionmap_v1.parquet"
+DATA = Path(__file__).parent / "data"
+V1_MAP = DATA / "frictionmap_v1.parquet"
+V3_MAP = DATA / "friction_map_v3.parquet"
+V3_PACKAGE = DATA / "package_v3"
 V1_RUN = SyntheticRun(mu_s=0.8, mu_k=0.55, noise=0.005, duration_s=120.0, seed=14)
 LABELS = ["--pin", "Dragonskin 30", "--disc", "steel", "--force", "3", "--temperature", "20",
           "--repeat", "1"]
@@ -74,7 +83,7 @@ def test_writing_to_an_old_map_keeps_its_rows_and_stores_the_current_schema(
                                        "--map", str(v1_map), "--out", str(tmp_path / "out")])
     assert result.exit_code == 0, result.output
     info = json.loads(pq.read_schema(v1_map).metadata[fm.META_KEY])
-    assert info["schema_version"] == fm.SCHEMA_VERSION == 3
+    assert info["schema_version"] == fm.SCHEMA_VERSION == 4
     runs = fm.read_map(v1_map)
     assert len(runs) == 5
     old = runs[runs["method"].str.startswith("tribopipe-v1")]
@@ -102,3 +111,103 @@ def test_a_v1_run_keeps_its_method_until_replaced(v1_map: Path, v1_export: Path,
     assert row["method"].startswith("tribopipe-v2")
     assert row["u_mu_k"] > 0 and row["u_mu_s"] >= row["u_mu_k"]
     assert (runs["method"] == "published").sum() == 3
+
+
+def v3_fixture_script():
+    """``scripts/make_v3_fixtures.py`` as a module (its session's tests and seeds)."""
+    import importlib.util
+
+    path = Path(__file__).parents[1] / "scripts" / "make_v3_fixtures.py"
+    spec = importlib.util.spec_from_file_location("make_v3_fixtures", path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_a_version_3_map_reads_with_test_and_result_missing() -> None:
+    info = json.loads(pq.read_schema(V3_MAP).metadata[fm.META_KEY])
+    assert info["schema_version"] == 3
+    assert {"test", "result"}.isdisjoint(pq.read_schema(V3_MAP).names)
+    runs = fm.read_map(V3_MAP)
+    assert len(runs) == 5 and runs["test"].isna().all() and runs["result"].isna().all()
+    reduced = runs[runs["source"] == fm.SOURCE_REDUCED]
+    assert reduced["interval"].notna().all() and reduced["u_mu_k"].notna().all()
+    assert reduced["excluded"].tolist() == [False, True]
+
+
+def test_the_session_reduced_again_is_the_same_two_runs_and_fills_nothing_in(
+    tmp_path: Path
+) -> None:
+    from tribopipe.config import load_settings
+    from tribopipe.pipeline import RunLabels, reduce_export
+    from tribopipe.synthetic import write_rheocompass_session
+
+    script = v3_fixture_script()
+    target = tmp_path / "friction_map.parquet"
+    shutil.copyfile(V3_MAP, target)
+    raw = write_rheocompass_session(tmp_path / "v3_session.txt", script.session_tests(),
+                                    project="v3")
+    old = fm.read_map(target)
+    assert file_sha256(raw) in set(old["file_hash"])  # the export, byte for byte
+    settings = load_settings()
+    records = []
+    for run in reduce_export(raw, settings).runs:
+        force = script.TESTS[run.place.test][2]
+        records.append(fm.make_record(
+            result=run.outcome.result, labels=RunLabels("Dragonskin 30", "steel", force, 20.0, 1),
+            meta=run.outcome.measurement.meta, file_hash=run.outcome.file_hash,
+            settings=settings))
+    assert {r["test"] for r in records} == set(script.TESTS)
+    report = fm.append_records(target, records)
+    # ids hash the test and result as before: the same runs, nothing added or in conflict
+    assert len(report.unchanged_ids) == 2 and not report.added_ids
+    assert not report.conflicting_ids
+    # nothing changed, so nothing is written: the map stays as the old code left it
+    assert fm.map_metadata(target)["schema_version"] == 3
+    assert fm.read_map(target).equals(old)
+
+
+def test_a_version_3_package_validates_and_merges(tmp_path: Path) -> None:
+    checked = CliRunner().invoke(main, ["map", "validate", str(V3_PACKAGE)])
+    assert checked.exit_code == 0, checked.output
+    merged = tmp_path / "merged.parquet"
+    result = CliRunner().invoke(main, ["map", "merge", str(V3_PACKAGE), "--map", str(merged)])
+    assert result.exit_code == 0, result.output
+    runs = fm.read_map(merged)
+    assert len(runs) == 5 and set(runs["lab"]) >= {"Fixture Lab"}
+    assert runs["test"].isna().all() and runs["result"].isna().all()
+    assert fm.map_metadata(merged)["schema_version"] == 4
+
+
+def test_map_show_runs_names_what_each_map_knows_of_a_run_s_origin(tmp_path: Path) -> None:
+    old = CliRunner().invoke(main, ["map", "show", "--runs", "--map", str(V3_MAP)])
+    assert old.exit_code == 0, old.output
+    lines = [ln.strip() for ln in old.output.splitlines()]
+    session = [ln for ln in lines if "v3_session.txt" in ln]
+    # the excluded run in the summary and both runs in the list; no test a v3 map lacks
+    assert len(session) == 3 and all("[interval 2]" in ln for ln in session)
+    assert sum("(excluded)" in ln for ln in session) == 1
+    assert sum("frictionmap_published.csv" in ln for ln in lines) == 3
+
+    script = v3_fixture_script()
+    from tribopipe.synthetic import write_rheocompass_session
+
+    folder = tmp_path / "raw"
+    folder.mkdir()
+    write_rheocompass_session(folder / "v4_session.txt", script.session_tests(), project="v4")
+    manifest = folder / "manifest.csv"
+    manifest.write_text("file,test,pin,disc,normal_force_N,temperature_C,repeat\n" + "".join(
+        f'v4_session.txt,"{name}",Dragonskin 30,steel,{force},20,1\n'
+        for name, (_, _, force, _) in script.TESTS.items()), encoding="utf-8")
+    new_map = tmp_path / "friction_map.parquet"
+    batch = CliRunner().invoke(main, ["batch", str(folder), "--manifest", str(manifest),
+                                      "--map", str(new_map), "--out", str(tmp_path / "o"),
+                                      "--no-plots", "-j", "1"])
+    assert batch.exit_code == 0, batch.output
+    shown = CliRunner().invoke(main, ["map", "show", "--runs", "--map", str(new_map)])
+    assert shown.exit_code == 0, shown.output
+    for name in script.TESTS:
+        (line,) = [ln for ln in shown.output.splitlines() if name in ln]
+        assert f"v4_session.txt [{name} / " in line and "/ interval 2]" in line
+    plain = CliRunner().invoke(main, ["map", "show", "--map", str(new_map)]).output
+    assert "v4_session.txt" not in plain  # the list only with --runs

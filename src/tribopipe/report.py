@@ -417,6 +417,9 @@ def _runs(inp: ReportInputs) -> str:
     )
     traces = inp.trace_paths or {}
     with_mu_s = bool(inp.runs["mu_s"].notna().any())  # else the μ_S column is left out
+    # the test and result a run came from, where any run without a trace names one
+    plain_runs = inp.runs[~inp.runs["measurement_id"].astype(str).isin(traces)]
+    with_test = bool(plain_runs[["test", "result"]].notna().any(axis=None))
     for r in ordered.to_dict(orient="records"):
         mid = str(r["measurement_id"])
         repeat = "" if pd.isna(r.get("repeat")) else str(r["repeat"])
@@ -430,7 +433,9 @@ def _runs(inp: ReportInputs) -> str:
                 + (f"<td>{_num(r['mu_s'], '.3f')} {_expanded(r.get('u_mu_s'))}</td>"
                    if with_mu_s else "")
                 + f"<td class=t>{_e(r.get('source'))}</td><td class=t>{_e(r.get('lab'))}</td>"
-                f"<td class=t>{escape(', '.join(_flag_list(r.get('flags'))))}</td></tr>"
+                + (f"<td class=t>{_e(r.get('test'))}</td><td class=t>{_e(r.get('result'))}</td>"
+                   if with_test else "")
+                + f"<td class=t>{escape(', '.join(_flag_list(r.get('flags'))))}</td></tr>"
             )
             continue
         trace = pd.read_parquet(traces[mid])
@@ -448,7 +453,9 @@ def _runs(inp: ReportInputs) -> str:
                if _num(r["mu_s"], ".3f") else "")
         )
         facts = (
-            f"<p>file: {_e(r.get('source_file'))}; source: {_e(r.get('source'))}; "
+            f"<p>file: {_e(r.get('source_file'))}; test: {_e(r.get('test'))}; result: "
+            f"{_e(r.get('result'))}; interval: {_e(r.get('interval'))}; source: "
+            f"{_e(r.get('source'))}; "
             f"flags: {escape(flags)}; μ_K window: {_num(r.get('mu_k_window_start_mm'), '.3f')}"
             f"–{_num(r.get('mu_k_window_end_mm'), '.3f')} mm; method: {_e(r.get('method'))}"
             "</p>"
@@ -471,7 +478,9 @@ def _runs(inp: ReportInputs) -> str:
             "<table id=runs-table><thead><tr><th class=t>run</th><th class=t>pin</th>"
             "<th class=t>disc</th><th>p [kPa]</th><th>T [°C]</th><th>repeat</th><th>μ_K</th>"
             + ("<th>μ_S</th>" if with_mu_s else "")
-            + "<th class=t>source</th><th class=t>lab</th><th class=t>flags</th>"
+            + "<th class=t>source</th><th class=t>lab</th>"
+            + ("<th class=t>test</th><th class=t>result</th>" if with_test else "")
+            + "<th class=t>flags</th>"
             f"</tr></thead><tbody>{''.join(plain)}</tbody></table>"
         )
         heading = ("" if not blocks else

@@ -204,14 +204,17 @@ def table_cmd(
 
 
 @map_group.command("show")
+@click.option("--runs", "runs_listed", is_flag=True,
+              help="Then list every run: id, file [test / result / interval], pin / disc, "
+                   "nominal force and temperature, repeat, mu_k, mu_s, flags.")
 @map_option
 @friendly_errors
-def show_cmd(map_path: str) -> None:
-    """Summarise the map: runs, contact pairs, conditions, sources, flags, excluded runs
-    and the pooled repeatability."""
+def show_cmd(runs_listed: bool, map_path: str) -> None:
+    """Summarise the map: runs, contact pairs, conditions, sources, labs, flags, excluded
+    runs (with the file and test each came from) and the pooled repeatability."""
     from ..frictionmap import map_summary
 
-    click.echo(map_summary(map_path))
+    click.echo(map_summary(map_path, runs_listed=runs_listed))
 
 
 @map_group.command("exclude")

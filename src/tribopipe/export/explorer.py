@@ -159,7 +159,8 @@ def _flags(value: Any) -> list[str]:
 
 
 def _runs(pair_runs: pd.DataFrame) -> list[dict[str, Any]]:
-    """The pair's included runs (the repeats) for the page, in a stable order."""
+    """The pair's included runs (the repeats) for the page, in a stable order, each with
+    the file, test and result it came from (``None`` where the map does not say)."""
     ordered = pair_runs.sort_values(
         ["temperature_C", "pressure_kPa", "repeat", "measurement_id"], kind="mergesort"
     )
@@ -172,6 +173,9 @@ def _runs(pair_runs: pd.DataFrame) -> list[dict[str, Any]]:
             "mu_s": _plain(r["mu_s"]),
             "repeat": _plain(r["repeat"]),
             "flags": _flags(r.get("flags")),
+            "file": _plain(r.get("source_file")),
+            "test": _plain(r.get("test")),
+            "result": _plain(r.get("result")),
         }
         for r in ordered.to_dict(orient="records")
     ]

@@ -225,6 +225,8 @@ def import_records(
                 "method": "published" if published else "imported",
                 "source_file": p.name,
                 "file_hash": file_hash,
+                "test": None,
+                "result": None,
                 "interval": None,
                 "config_hash": None,
                 "tribopipe_version": __version__,

@@ -235,6 +235,8 @@ def make_record(
         "method": result.method,
         "source_file": display_path(Path(meta.source_file).name),
         "file_hash": file_hash,
+        "test": meta.test,
+        "result": meta.result,
         "interval": meta.interval,
         "config_hash": settings.config_hash,
         "tribopipe_version": __version__,

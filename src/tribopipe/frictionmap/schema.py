@@ -33,7 +33,7 @@ if TYPE_CHECKING:
 #: Parquet key-value metadata key holding the schema and provenance (JSON).
 META_KEY = b"tribopipe.frictionmap"
 SCHEMA_NAME = "tribopipe.frictionmap"
-SCHEMA_VERSION = 3
+SCHEMA_VERSION = 4
 
 #: ``source`` of runs reduced by tribopipe (imported rows name their origin instead).
 SOURCE_REDUCED = "reduced"
@@ -70,6 +70,8 @@ _SCHEMA: tuple[tuple[str, str, str, str], ...] = (
     ("method", "str", "", "reduction method (or 'published'/'imported')"),
     ("source_file", "str", "", "name of the raw or imported file"),
     ("file_hash", "str", "", "SHA-256 of that file"),
+    ("test", "str", "", "Test name in the export the run came from (as the export writes it)"),
+    ("result", "str", "", "result of that test the run came from"),
     ("interval", "int", "", "interval of the export the run came from"),
     ("config_hash", "str", "", "hash of instrument + reduction settings"),
     ("tribopipe_version", "str", "", "version that wrote the row"),
@@ -82,13 +84,15 @@ RUN_COLUMNS: tuple[str, ...] = tuple(name for name, *_ in _SCHEMA)
 #: Columns added after schema version 1, with the version that added them: a map written
 #: before that version lacks them and reads with them missing, and a record built by older
 #: code may leave them out.
-ADDED_IN_VERSION: dict[str, int] = {"lab": 2, "u_mu_s": 3, "u_mu_k": 3}
+ADDED_IN_VERSION: dict[str, int] = {"lab": 2, "u_mu_s": 3, "u_mu_k": 3, "test": 4, "result": 4}
 _KIND: dict[str, str] = {name: kind for name, kind, *_ in _SCHEMA}
 #: Columns that say where a row came from, not what was measured: two rows with the same
-#: id that differ only here are the same run (a renamed file, a later import).
+#: id that differ only here are the same run (a renamed file, a later import). ``test`` and
+#: ``result`` are part of what the id hashes, so they can differ only where one row lacks
+#: them (a row of a map older than schema version 4).
 PROVENANCE_COLUMNS: frozenset[str] = frozenset(
-    {"lab", "source_file", "file_hash", "tribopipe_version", "reduced_at", "excluded",
-     "exclusion_reason"}
+    {"lab", "source_file", "file_hash", "test", "result", "tribopipe_version", "reduced_at",
+     "excluded", "exclusion_reason"}
 )
 _CONTENT_COLUMNS: tuple[str, ...] = tuple(c for c in RUN_COLUMNS if c not in PROVENANCE_COLUMNS)
 

@@ -3,18 +3,23 @@
 from __future__ import annotations
 
 import os
+import re
 from pathlib import Path
 from typing import Any
 
 from ..errors import MapError
+from ..measurement import interval_label
 from ..stats import group_statistics, repeatability
 from .schema import _missing
 from .store import read_map
 
+_CONTROL = re.compile(r"[\x00-\x1f\x7f-\x9f\u2028\u2029]")
 
-def map_summary(path: str | os.PathLike[str]) -> str:
+
+def map_summary(path: str | os.PathLike[str], *, runs_listed: bool = False) -> str:
     """A readable multi-line summary of the map at ``path``: runs, pairs, conditions,
-    sources, flags, excluded runs (with reasons) and the pooled repeatability."""
+    sources, flags, excluded runs (with reasons and where each came from) and the pooled
+    repeatability; with ``runs_listed``, then one line per run (:func:`run_line`)."""
     p = Path(path)
     if not p.exists():
         raise MapError("friction map not found", path=p, hint="pass --map PATH")
@@ -62,11 +67,50 @@ def map_summary(path: str | os.PathLike[str]) -> str:
     if len(excluded):
         lines.append("")
         lines.append("  excluded runs:")
-        for row in excluded.itertuples(index=False):
-            lines.append(f"    {row.measurement_id}  {row.pin} / {row.disc}, "
-                         f"{row.normal_force_N:g} N, {_fmt_t(row.temperature_C)}, "
-                         f"repeat {_fmt_repeat(row.repeat)}: {row.exclusion_reason}")
+        for row in excluded.to_dict(orient="records"):
+            lines.append(f"    {row['measurement_id']}  {_text(row['pin'])} / "
+                         f"{_text(row['disc'])}, {row['normal_force_N']:g} N, "
+                         f"{_fmt_t(row['temperature_C'])}, repeat {_fmt_repeat(row['repeat'])}"
+                         f", from {run_origin(row)}: {_text(row['exclusion_reason'])}")
+    if runs_listed:
+        lines.append("")
+        lines.append("  runs: id, from (file [test / result / interval]), pin / disc, "
+                     "nominal F and T, repeat, mu_k, mu_s, flags")
+        ordered = runs.sort_values(["source_file", "test", "result", "interval",
+                                    "measurement_id"], kind="mergesort", na_position="first")
+        lines += ["    " + run_line(row) for row in ordered.to_dict(orient="records")]
     return "\n".join(lines)
+
+
+def _text(value: Any) -> str:
+    """A text cell of the map as one printable line (control characters shown as escapes:
+    a merged map's names are data, never terminal commands)."""
+    if _missing(value):
+        return "?"
+    return _CONTROL.sub(lambda m: m.group().encode("unicode_escape").decode("ascii"),
+                        str(value))
+
+
+def run_origin(row: dict[str, Any]) -> str:
+    """Where a map row came from: ``file [test / result / interval i]`` (the parts the row
+    knows; a row of a map older than schema version 4 names no test or result)."""
+    interval = None if _missing(row.get("interval")) else int(row["interval"])
+    place = interval_label(*(None if _missing(row.get(k)) else _text(row[k])
+                             for k in ("test", "result")), interval)
+    file = _text(row.get("source_file"))
+    return f"{file} [{place}]" if place else file
+
+
+def run_line(row: dict[str, Any]) -> str:
+    """One run of the map on one line: the first 16 digits of its id, where it came from,
+    pin / disc, nominal force [N] and temperature [°C], repeat, μ_K, μ_S and flags."""
+    mu_s = "" if _missing(row.get("mu_s")) else f", mu_s {row['mu_s']:.3f}"
+    flags = _text(row["flags"]) if not _missing(row.get("flags")) and row["flags"] else "-"
+    excluded = " (excluded)" if row.get("excluded") else ""
+    return (f"{row['measurement_id']}  {run_origin(row)}  {_text(row['pin'])} / "
+            f"{_text(row['disc'])}, {row['normal_force_N']:g} N, {_fmt_t(row['temperature_C'])}"
+            f", repeat {_fmt_repeat(row['repeat'])}: mu_k {row['mu_k']:.3f}{mu_s}; flags "
+            f"{flags}{excluded}")
 
 
 def _runs(n: int) -> str:

@@ -26,9 +26,39 @@ function tip(node, text) { svg("title", {}, node).textContent = String(text); }
 
 function clear(node) { while (node.firstChild) node.removeChild(node.firstChild); }
 
-/* Text of a number input: the number, null when empty, NaN when not a number. */
+/* Text of a number input: the number, null when empty, NaN when not a number. A value the
+   page filled in (setNumber) counts exact while its rounded text is shown unchanged. */
 function inputNumber(input) {
   if (input.validity && input.validity.badInput) return NaN;
   var s = input.value.trim();
-  return s === "" ? null : Number(s);
+  if (s === "") return null;
+  return input.dataset.shown === s ? Number(input.dataset.exact) : Number(s);
+}
+
+/* Fill a number input with a value (a measured pressure, say 11.78925504 kPa): shown as
+   Python's format(v, "g") (6 significant digits, as the chips show it), the exact value
+   kept for the computation and the address until the user types. */
+function setNumber(input, value) {
+  var shown = pyG(value);
+  input.value = shown;
+  if (Number(shown) === value) {
+    delete input.dataset.shown;
+    delete input.dataset.exact;
+  } else {
+    input.dataset.shown = shown;
+    input.dataset.exact = pyRepr(value);
+  }
+}
+
+/* An input's text as the address carries it: the exact value while its rounded form is
+   shown, else what was typed. */
+function inputText(input) {
+  var s = input.value.trim();
+  return s !== "" && input.dataset.shown === s ? input.dataset.exact : s;
+}
+
+/* Where a run came from, in words: "file · test / result" (the parts the map knows). */
+function runOrigin(run) {
+  var place = [run.test, run.result].filter(function (v) { return v; }).join(" / ");
+  return [run.file, place].filter(function (v) { return v; }).join(" · ");
 }

@@ -41,12 +41,12 @@ function pairPressures(pair, t) {
 function fillDefaults(pair) {
   var temps = pairTemperatures(pair);
   if (tInput.value.trim() === "" && !tInput.validity.badInput && temps.length) {
-    tInput.value = String(temps[0]);
+    setNumber(tInput, temps[0]);
   }
   if (pInput.value.trim() === "" && !pInput.validity.badInput) {
     var t = inputNumber(tInput);
     var at = pairPressures(pair, temps.indexOf(t) >= 0 ? t : undefined);
-    pInput.value = String(at[0]);
+    setNumber(pInput, at[0]);
   }
 }
 
@@ -65,12 +65,12 @@ function renderMeasured(pair) {
   box.appendChild(document.createTextNode("measured temperatures: "));
   if (!temps.length) box.appendChild(document.createTextNode("unknown "));
   temps.forEach(function (v) {
-    box.appendChild(chip(pyG(v) + " °C", v === t, function () { tInput.value = String(v); update(false); }));
+    box.appendChild(chip(pyG(v) + " °C", v === t, function () { setNumber(tInput, v); update(false); }));
   });
   var p = inputNumber(pInput);
   box.appendChild(document.createTextNode(" · pressures: "));
   pairPressures(pair).forEach(function (v) {
-    box.appendChild(chip(pyG(v) + " kPa", v === p, function () { pInput.value = String(v); update(false); }));
+    box.appendChild(chip(pyG(v) + " kPa", v === p, function () { setNumber(pInput, v); update(false); }));
   });
   var tl = $("tpx-temperature-list");
   var pl = $("tpx-pressure-list");
@@ -99,8 +99,8 @@ function writeUrl() {
   var q = new URLSearchParams();
   q.set("pin", PAIRS[state.pair].pin);
   q.set("disc", PAIRS[state.pair].disc);
-  if (pInput.value.trim() !== "") q.set("pressure", pInput.value.trim());
-  if (tInput.value.trim() !== "") q.set("temperature", tInput.value.trim());
+  if (inputText(pInput) !== "") q.set("pressure", inputText(pInput));
+  if (inputText(tInput) !== "") q.set("temperature", inputText(tInput));
   var url = location.pathname + "?" + q.toString() + location.hash;
   try {
     history.replaceState(history.state, "", url);
@@ -127,8 +127,11 @@ function readUrl() {
   [["temperature", tInput], ["pressure", pInput]].forEach(function (f) {
     if (!q.has(f[0])) return;
     var text = q.get(f[0]).trim();
-    if (text !== "" && Number.isFinite(Number(text))) f[1].value = text;
-    else notes.push("the link's " + f[0] + " “" + q.get(f[0]) + "” is not a number");
+    var n = Number(text);
+    // a long number (a measured pressure's full digits) shows rounded and counts exact
+    if (text !== "" && Number.isFinite(n)) {
+      if (Number(pyG(n)) === n) f[1].value = text; else setNumber(f[1], n);
+    } else notes.push("the link's " + f[0] + " “" + q.get(f[0]) + "” is not a number");
   });
   note(notes.join("; "));
 }
@@ -176,12 +179,16 @@ function renderResult(res, error) {
   PAIRS[res.pair].runs.forEach(function (r) { runs[r.id] = r; });
   res.mu_k.used.forEach(function (u) {
     var tr = make("tr");
-    var repeats = u.run_ids.map(function (id) { return runs[id]; }).filter(Boolean)
-      .map(function (r) { return f3(r.mu_k); }).join(", ");
     [g6(u.pressure_kPa), u.temperature_C === null ? "?" : g6(u.temperature_C), f3(u.mean),
       u.ci95_half_width === null ? "–" : f3(u.ci95_half_width), String(u.n), f3(u.weight)]
       .forEach(function (v) { tr.appendChild(make("td", v)); });
-    tr.appendChild(make("td", repeats, "tpx-t"));
+    var cell = make("td", null, "tpx-t");
+    // one line per repeat: its μ_K and the file and test it came from
+    u.run_ids.map(function (id) { return runs[id]; }).filter(Boolean).forEach(function (r) {
+      var from = runOrigin(r);
+      cell.appendChild(make("div", f3(r.mu_k) + (from ? " — " + from : ""), "tpx-repeat"));
+    });
+    tr.appendChild(cell);
     body.appendChild(tr);
   });
 }
@@ -274,7 +281,10 @@ discSelect.addEventListener("change", function () {
   update(true);
 });
 [tInput, pInput].forEach(function (input) {
-  input.addEventListener("input", function () { update(false); });
+  input.addEventListener("input", function () {
+    delete input.dataset.shown;  // typed: the text is the value
+    update(false);
+  });
 });
 $("tpx-form").addEventListener("submit", function (ev) { ev.preventDefault(); });
 $("tpx-export-format").addEventListener("change", renderExport);

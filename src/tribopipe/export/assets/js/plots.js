@@ -91,7 +91,8 @@ function drawPairPlot(res) {
         "fill-opacity": 0.45 }, plot.s);
       tip(c, "run " + r.id.slice(0, 8) + ": " + pyG(r.pressure_kPa) + " kPa, " + tLabel(r.temperature_C) +
         ", repeat " + (r.repeat === null ? "?" : r.repeat) + ": μ_K " + f3(r.mu_k) +
-        (r.flags.length ? " (" + r.flags.join(", ") + ")" : ""));
+        (r.flags.length ? " (" + r.flags.join(", ") + ")" : "") +
+        (runOrigin(r) ? " — from " + runOrigin(r) : ""));
     });
     groups.filter(function (g) { return sameT(g.temperature_C, t) && finite(g.mu_k_mean); })
       .forEach(function (g) {

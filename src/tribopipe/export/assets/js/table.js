@@ -99,8 +99,9 @@ function renderTable() {
       setPin(pinOf(g.pair), key(p.disc));
       state.pair = g.pair;
       discSelect.value = String(g.pair);
-      tInput.value = finite(g.temperature_C) ? String(g.temperature_C) : "";
-      pInput.value = String(g.pressure_kPa);
+      if (finite(g.temperature_C)) setNumber(tInput, g.temperature_C);
+      else { tInput.value = ""; delete tInput.dataset.shown; }
+      setNumber(pInput, g.pressure_kPa);
       update(false);
     };
     tr.addEventListener("click", choose);

@@ -19,6 +19,7 @@ from click.testing import CliRunner
 
 from multi_exports import SESSION_TRUTH, TEST_PATTERN, run, write_session, write_xlsx_twin
 from tribopipe.campaign import campaign_listing, discover_files, load_campaign, run_campaign
+from tribopipe.campaign.batch import Tally
 from tribopipe.cli import main
 from tribopipe.synthetic import write_rheocompass_export
 
@@ -189,6 +190,46 @@ def test_a_contradictory_test_fails_alone(lab: Path) -> None:
     assert len(report.reduced) == 9
 
 
+def test_the_ledger_adds_up_with_duplicates_conflicts_and_failures(lab: Path) -> None:
+    """Every file found is read, a duplicate, a conflict or failed; every test is in one
+    of those files; every run of a file read is reduced, skipped or failed: the ledger's
+    parts add up to its totals, in the first batch and in the next that skips."""
+    raw = lab / "raw"
+    shutil.copy(raw / "SESSION_FR.CSV", raw / "session_fr (copy).txt")  # 3 tests, same labels
+    shutil.copy(raw / "single.csv", raw / "single_r2.csv")               # 1 test, other repeat
+    manifest = raw / "manifest.csv"
+    text = manifest.read_text(encoding="utf-8").replace("steel,5,20", "steel,4,20")
+    manifest.write_text(text + "single_r2.csv,,Dragonskin 30,steel,7,20,2,RB\n",
+                        encoding="utf-8")  # the 5 N test of session.txt now contradicts
+    campaign = load_campaign(lab / "campaign.toml")
+    for batch in (1, 2):
+        report = run_campaign(campaign, jobs=1)
+        # what the folder holds, counted by hand
+        assert report.file_tally == Tally(read=4, duplicate=1, conflict=1, failed=2)
+        assert report.files == report.file_tally.found == 8
+        assert report.test_tally == Tally(read=3 + 3 + 3 + 1, duplicate=3, conflict=1)
+        assert report.tests == report.test_tally.found == 14
+        reduced, skipped = (9, 0) if batch == 1 else (0, 9)
+        assert (len(report.reduced), len(report.skipped), report.runs_failed) == (
+            reduced, skipped, 1)
+        assert report.total == len(report.reduced) + len(report.skipped) + report.runs_failed
+        # every failure listed is a failed file, a conflict or a failed run, once
+        assert len(report.failures) == (report.file_tally.failed + report.file_tally.conflict
+                                        + report.runs_failed) == 4
+        assert [f for f, _ in report.conflicts] == ["single_r2.csv"]
+        assert [f for f, _ in report.duplicates] == ["session_fr (copy).txt"]
+        assert report.summary() == (
+            "sessions: 8 file(s) found (4 read, 1 duplicate, 1 conflict, 2 failed), 14 test(s) "
+            "(10 in files read, 3 in duplicates, 1 in conflicts); 10 run(s) in the files read: "
+            f"{reduced} reduced, {skipped} skipped (unchanged), 1 failed; "
+            f"{4 if batch == 1 else 0} condition group(s) updated")  # 1, 3, 5 N; 7 N
+        ledger = report.ledger()
+        assert sum(ln.startswith("  conflict: single_r2.csv: same content as single.csv")
+                   for ln in ledger) == 1
+        assert sum(ln.startswith("  duplicate: session_fr (copy).txt") for ln in ledger) == 1
+    assert len(pd.read_parquet(campaign.map_path)) == 9
+
+
 def test_file_level_metadata_cannot_tell_the_tests_of_a_session_apart(tmp_path: Path,
                                                                        folder: Path) -> None:
     raw = tmp_path / "raw"
@@ -321,8 +362,8 @@ def test_batch_folder_with_a_test_manifest_and_a_test_pattern(lab: Path) -> None
         TEST_PATTERN, "--out", str(lab / "proc"), "--no-plots", "--jobs", "1"])
     assert result.exit_code == 1, result.output
     out = result.stdout
-    assert "raw: 6 file(s), 10 test(s) found; 12 run(s): 10 reduced, 0 skipped (unchanged), " \
-           "2 failed" in out
+    assert "raw: 6 file(s) found (4 read, 2 failed), 10 test(s); 10 run(s) in the files " \
+           "read: 10 reduced, 0 skipped (unchanged), 0 failed" in out
     assert "  manifest row matching no file: manifest.csv line 7 (ghost.txt)" in out
     assert "  manifest row matching no test: manifest.csv line 5 (session.txt, test " \
            "'DS30 on steel, 9 N, 20 °C, #1')" in out
@@ -366,5 +407,5 @@ def test_batch_a_session_folder_in_a_real_process(lab: Path) -> None:
                             timeout=300)
     assert second.returncode == 0, second.stdout + second.stderr
     # session.txt's manifest rows changed (the 9 N row went): its runs only are redone
-    assert "4 file(s), 10 test(s) found; 10 run(s): 3 reduced, 7 skipped (unchanged), " \
-           "0 failed; 0 duplicate file(s)" in second.stdout
+    assert "4 file(s) found (4 read), 10 test(s); 10 run(s) in the files read: 3 reduced, " \
+           "7 skipped (unchanged), 0 failed" in second.stdout

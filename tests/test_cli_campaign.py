@@ -53,7 +53,9 @@ def invoke(*args: str):
 def test_batch_config_lands_good_runs_and_lists_the_bad_one(config: Path) -> None:
     result = invoke("batch", str(config))
     assert result.exit_code == 1, result.output
-    assert "3 reduced, 0 skipped (unchanged), 1 failed" in result.stdout
+    # the bad file is a file that failed (not read), not a run
+    assert "4 file(s) found (3 read, 1 failed), 3 test(s); 3 run(s) in the files read: " \
+           "3 reduced, 0 skipped (unchanged), 0 failed" in result.stdout
     assert f"failed: {BAD}: " in result.stderr
     assert "Traceback" not in result.output
     out = config.parent / "out"
@@ -64,7 +66,8 @@ def test_batch_config_lands_good_runs_and_lists_the_bad_one(config: Path) -> Non
 
     again = invoke("batch", str(config))
     assert again.exit_code == 1  # the bad file still fails and is still listed
-    assert "0 reduced, 3 skipped (unchanged), 1 failed" in again.stdout
+    assert "(3 read, 1 failed)" in again.stdout
+    assert "0 reduced, 3 skipped (unchanged), 0 failed" in again.stdout
     assert f"failed: {BAD}: " in again.stderr
 
 
@@ -182,7 +185,8 @@ def test_quick_batch_of_a_folder_by_file_names(exports: Path, tmp_path: Path) ->
     result = invoke("batch", str(folder), "--pattern", PATTERN, "--glob", "*_r1.txt",
                     "--out", str(tmp_path / "proc"), "--no-plots", "--jobs", "1")
     # the r2 run is outside the glob; the bad r1 file fails
-    assert "3 run(s): 2 reduced" in result.stdout, result.output
+    assert "3 file(s) found (2 read, 1 failed)" in result.stdout, result.output
+    assert "2 run(s) in the files read: 2 reduced" in result.stdout, result.output
     runs = pd.read_parquet(tmp_path / "proc" / "friction_map.parquet")
     # no [names] table for a folder: the short name stays
     assert set(runs["pin"]) == {"DS30"}

@@ -61,6 +61,48 @@ from .worker import (  # noqa: F401 - GC_THRESHOLDS, _worker_init: importable fr
 
 ProgressCallback = Callable[[int, int], None]
 
+#: what became of a file found, as the ledger counts it: its runs were reduced, skipped or
+#: failed one by one (read); its content came under another name with the same labels
+#: (duplicate) or with other labels (conflict, refused); it was not read at all (failed)
+READ, CONFLICT = "read", "conflict"
+FILE_OUTCOMES: tuple[str, ...] = (READ, DUPLICATE, CONFLICT, FAILED)
+
+
+@dataclass(frozen=True)
+class Tally:
+    """Files (or their tests) found by a batch, by what became of their file
+    (:data:`FILE_OUTCOMES`); the parts add up to :attr:`found`."""
+
+    read: int = 0
+    duplicate: int = 0
+    conflict: int = 0
+    failed: int = 0
+
+    @property
+    def found(self) -> int:
+        """All of them: read + duplicate + conflict + failed."""
+        return self.read + self.duplicate + self.conflict + self.failed
+
+    def parts(self, *, of_files: bool = True) -> str:
+        """``3 read, 1 duplicate, 1 conflict, 1 failed`` (files), or with ``of_files``
+        false ``7 in files read, 3 in duplicates, 1 in conflicts`` (their tests); the
+        parts that are not 0, read always."""
+        words = ("read", "duplicate", "conflict", "failed") if of_files else (
+            "in files read", "in duplicates", "in conflicts", "in failed files")
+        counts = (self.read, self.duplicate, self.conflict, self.failed)
+        return ", ".join(f"{n} {word}" for k, (n, word) in enumerate(zip(counts, words,
+                                                                           strict=True))
+                         if n or k == 0)
+
+
+def tally(outcomes: Mapping[str, str], counts: Mapping[str, int] | None = None) -> Tally:
+    """The :class:`Tally` of files by outcome (``outcomes``: file → outcome), each counting
+    1 or ``counts[file]`` (its tests)."""
+    sums = dict.fromkeys(FILE_OUTCOMES, 0)
+    for file, outcome in outcomes.items():
+        sums[outcome] += 1 if counts is None else counts.get(file, 0)
+    return Tally(**sums)
+
 
 @dataclass(frozen=True)
 class BatchReport:
@@ -76,8 +118,13 @@ class BatchReport:
     map's own account; ``notes``: things worth saying that are not failures (plots
     skipped, files gone from the folder, a renamed file); ``flagged``: ``(name, flags)``
     of the runs reduced now that carry QC flags (";"-joined). The ledger: ``files`` and
-    ``tests`` found, ``unmatched``: manifest rows that matched no file or no test,
+    ``tests`` found, each split by what became of its file (``file_tally``,
+    ``test_tally``: read, duplicate, conflict, failed; the tests of a file never read are
+    unknown and not counted); ``total`` runs of the files read = reduced + skipped +
+    ``runs_failed``; ``unmatched``: manifest rows that matched no file or no test,
     ``undescribed``: the tests (``file [test]``) no metadata source described.
+    ``failures`` lists the files that failed or were refused as a conflict, and the tests
+    and runs that failed in files read; ``conflicts`` (file, reason) the files refused.
     """
 
     campaign: str
@@ -97,6 +144,10 @@ class BatchReport:
     tests: int = 0
     unmatched: list[str] = field(default_factory=list)
     undescribed: list[str] = field(default_factory=list)
+    file_tally: Tally = field(default_factory=Tally)
+    test_tally: Tally = field(default_factory=Tally)
+    runs_failed: int = 0
+    conflicts: list[tuple[str, str]] = field(default_factory=list)
 
     @property
     def ok(self) -> bool:
@@ -105,23 +156,27 @@ class BatchReport:
         return not self.failures and not self.unmatched
 
     def summary(self) -> str:
-        """One line: files and tests found; runs reduced, skipped, failed; duplicate
-        files; groups updated."""
-        text = (f"{self.campaign}: {self.files} file(s), {self.tests} test(s) found; "
-                f"{self.total} run(s): {len(self.reduced)} reduced, "
-                f"{len(self.skipped)} skipped (unchanged), {len(self.failures)} failed; "
-                f"{len(self.duplicates)} duplicate file(s); "
-                f"{self.groups_updated} condition group(s) updated")
+        """One line whose parts add up: files found (read, duplicate, conflict, failed);
+        tests found, split alike; the runs of the files read (reduced, skipped, failed);
+        groups updated."""
+        tests = f"{self.tests} test(s)"
+        if self.test_tally.found != self.test_tally.read:
+            tests += f" ({self.test_tally.parts(of_files=False)})"
+        text = (f"{self.campaign}: {self.files} file(s) found ({self.file_tally.parts()}), "
+                f"{tests}; {self.total} run(s) in the files read: {len(self.reduced)} "
+                f"reduced, {len(self.skipped)} skipped (unchanged), {self.runs_failed} "
+                f"failed; {self.groups_updated} condition group(s) updated")
         if self.removed:
             text += f"; {self.removed} stale map row(s) removed"
         return text
 
     def ledger(self) -> list[str]:
         """The batch's account: :meth:`summary`, then one line per duplicate file, per
-        manifest row that matched no file or no test, and per test no metadata source
-        described."""
+        file refused as a conflict, per manifest row that matched no file or no test, and
+        per test no metadata source described."""
         lines = [self.summary()]
         lines += [f"  duplicate: {reason}" for _, reason in self.duplicates]
+        lines += [f"  conflict: {reason}" for _, reason in self.conflicts]
         lines += [f"  manifest row matching no {what}" for what in self.unmatched]
         lines += [f"  test no metadata source described: {name}" for name in self.undescribed]
         return lines
@@ -219,6 +274,7 @@ def _run_locked(campaign: Campaign, *, jobs: int | None, plots: bool | None,
     groups = _groups_updated(state, landing.records, landed, removed)
 
     duplicates = {**plan.duplicates, **landing.duplicates}
+    outcomes = {**plan.outcomes, **landing.outcomes}
     this_batch = {n: REDUCED for n in landing.reduced} | {n: SKIPPED for n in plan.skipped} | {
         n: FAILED for n in failures
     }
@@ -234,10 +290,12 @@ def _run_locked(campaign: Campaign, *, jobs: int | None, plots: bool | None,
             problems.append(exc)
     if problems:
         raise problems[0]
-    tests, unmatched, undescribed = _ledger(rows, entries, manifest)
+    tests_in, unmatched, undescribed = _ledger(rows, entries, manifest)
+    runs_failed = plan.runs_failed + landing.runs_failed
+    test_tally = tally(outcomes, tests_in)
     return BatchReport(
         campaign=campaign.name,
-        total=len(landing.reduced) + len(plan.skipped) + len(failures),
+        total=len(landing.reduced) + len(plan.skipped) + runs_failed,
         reduced=landing.reduced,
         skipped=plan.skipped,
         failures=sorted(failures.items()),
@@ -250,9 +308,13 @@ def _run_locked(campaign: Campaign, *, jobs: int | None, plots: bool | None,
         flagged=landing.flagged,
         duplicates=sorted(duplicates.items()),
         files=files,
-        tests=tests,
+        tests=test_tally.found,
         unmatched=unmatched,
         undescribed=undescribed,
+        file_tally=tally(outcomes),
+        test_tally=test_tally,
+        runs_failed=runs_failed,
+        conflicts=sorted((f, failures[f]) for f, o in outcomes.items() if o == CONFLICT),
     )
 
 
@@ -260,12 +322,16 @@ def _run_locked(campaign: Campaign, *, jobs: int | None, plots: bool | None,
 class _Plan:
     """What a batch does with each file: reduce it (``todo``), skip its runs (unchanged
     since they were reduced: ``skipped`` run names), list it or its runs as failed without
-    reading it (``failures``: name → reason), or as a duplicate (file → reason)."""
+    reading it (``failures``: name → reason), or as a duplicate (file → reason); the
+    outcome of each file not reduced now (file → one of :data:`FILE_OUTCOMES`) and the
+    runs of unchanged files that failed before (``runs_failed``)."""
 
     todo: list[_Job]
     skipped: list[str]
     failures: dict[str, str]
     duplicates: dict[str, str]
+    outcomes: dict[str, str]
+    runs_failed: int
 
 
 def _run_ids(entry: Mapping[str, Any], statuses: tuple[str, ...] = (REDUCED,)) -> set[str]:
@@ -281,27 +347,35 @@ def _plan(rows: Sequence[CampaignRow], missing_ids: set[str]) -> _Plan:
     skipped: list[str] = []
     failures: dict[str, str] = {}
     duplicates: dict[str, str] = {}
+    outcomes: dict[str, str] = {}
+    runs_failed = 0
     for row in rows:
         previous = row.previous or {}
         stored = _run_ids(previous, (REDUCED, DUPLICATE))
         if row.problem is not None:
             failures[row.file] = row.problem
+            outcomes[row.file] = FAILED
         elif row.status == REDUCED and not stored & missing_ids:
+            outcomes[row.file] = READ
             for run in row.runs:
                 name = run.get("name") or row.file
                 if run.get("status") == REDUCED:
                     skipped.append(name)
                 else:  # unchanged and failed before: not retried, still listed
                     failures[name] = run.get("reason") or "failed in an earlier batch"
+                    runs_failed += 1
         elif row.status == DUPLICATE and not stored & missing_ids:
             duplicates[row.file] = previous.get("reason") or "a duplicate"
+            outcomes[row.file] = DUPLICATE
         elif row.status == FAILED:
             # unchanged and failed before: do not retry, keep it listed
             failures[row.file] = row.reason or "failed in an earlier batch"
+            outcomes[row.file] = CONFLICT if previous.get("duplicate_of") else FAILED
         else:
             todo.append(_Job(file=row.file, path=str(row.path), sources=row.sources,
                              hints=row.hints, test_rows=row.test_rows, sha256=row.sha256))
-    return _Plan(todo=todo, skipped=skipped, failures=failures, duplicates=duplicates)
+    return _Plan(todo=todo, skipped=skipped, failures=failures, duplicates=duplicates,
+                 outcomes=outcomes, runs_failed=runs_failed)
 
 
 def _execute(todo: list[_Job], ctx: _Context, jobs: int, progress: ProgressCallback | None,
@@ -341,14 +415,17 @@ def _execute(todo: list[_Job], ctx: _Context, jobs: int, progress: ProgressCallb
 @dataclass(frozen=True)
 class _Landing:
     """What the workers' results bring to the map: the new records, the ids of rows to
-    drop (their raw file changed or a run now fails), the runs reduced, the flagged ones
-    and the duplicate files (file → reason)."""
+    drop (their raw file changed or a run now fails), the runs reduced, the flagged ones,
+    the duplicate files (file → reason), the outcome of each file reduced now (file → one
+    of :data:`FILE_OUTCOMES`) and the runs that failed in the files read."""
 
     records: list[dict[str, Any]]
     stale_ids: set[str]
     reduced: list[str]
     flagged: list[tuple[str, str]]
     duplicates: dict[str, str]
+    outcomes: dict[str, str]
+    runs_failed: int
 
 
 class _Owners:
@@ -413,6 +490,8 @@ def _apply(campaign: Campaign, results: Sequence[FileDone], by_file: Mapping[str
     reduced: list[str] = []
     flagged: list[tuple[str, str]] = []
     duplicates: dict[str, str] = {}
+    outcomes: dict[str, str] = {}
+    runs_failed = 0
     config_hash = campaign.settings.config_hash  # hashes the settings: once, not per run
     owners = _Owners(campaign, by_file, {r.file for r in results}, vanished)
     for done in sorted(results, key=lambda r: r.file):
@@ -420,6 +499,7 @@ def _apply(campaign: Campaign, results: Sequence[FileDone], by_file: Mapping[str
         old = entries.get(row.file) or {}
         if done.transient:
             # not the file's fault: listed now, retried next time (the state is left as is)
+            outcomes[row.file] = FAILED
             for failed in [done.error, *done.runs]:
                 if isinstance(failed, FailedRun):
                     failures[failed.name or failed.file] = failed.reason
@@ -432,6 +512,7 @@ def _apply(campaign: Campaign, results: Sequence[FileDone], by_file: Mapping[str
             "tests": list(done.tests),
         }
         if done.error is not None:
+            outcomes[row.file] = FAILED
             failures[row.file] = done.error.reason
             entries[row.file] = {**base, "status": FAILED, "reason": done.error.reason,
                                  "runs": []}
@@ -445,15 +526,18 @@ def _apply(campaign: Campaign, results: Sequence[FileDone], by_file: Mapping[str
             runs = [{"status": DUPLICATE, **{**r.entry.as_dict(), "trace": ""}}
                     for r in done.reduced]
             if same.conflict:
+                outcomes[row.file] = CONFLICT
                 failures[row.file] = same.message()
                 entries[row.file] = {**base, "status": FAILED, "reason": same.message(),
                                      "duplicate_of": same.other, "runs": []}
             else:
+                outcomes[row.file] = DUPLICATE
                 duplicates[row.file] = same.message()
                 entries[row.file] = {**base, "status": DUPLICATE, "reason": same.message(),
                                      "duplicate_of": same.other, "runs": runs}
             continue
         owners.landed(done, mine)
+        outcomes[row.file] = READ
         runs_state: list[dict[str, Any]] = []
         for run in done.runs:
             if isinstance(run, ReducedRun):
@@ -466,11 +550,13 @@ def _apply(campaign: Campaign, results: Sequence[FileDone], by_file: Mapping[str
                 runs_state.append({"status": REDUCED, **run.entry.as_dict()})
             else:
                 failures[run.name or run.file] = run.reason
+                runs_failed += 1
                 runs_state.append(run.as_state())
         entries[row.file] = {**base, "status": REDUCED, "runs": runs_state}
     alive = set().union(*(_run_ids(e) for e in entries.values())) if entries else set()
     return _Landing(records=records, stale_ids=old_ids - alive, reduced=reduced,
-                    flagged=flagged, duplicates=duplicates)
+                    flagged=flagged, duplicates=duplicates, outcomes=outcomes,
+                    runs_failed=runs_failed)
 
 
 def _drop_outputs(campaign: Campaign, done: FileDone, entries: Mapping[str, Any]) -> None:
@@ -509,10 +595,10 @@ def _forget_vanished(campaign: Campaign, entries: dict[str, Any], present: set[s
 
 
 def _ledger(rows: Sequence[CampaignRow], entries: Mapping[str, Any],
-            manifest: Manifest | None) -> tuple[int, list[str], list[str]]:
-    """The tests found (over the files whose tests are known), the manifest rows that
+            manifest: Manifest | None) -> tuple[dict[str, int], list[str], list[str]]:
+    """The tests found per file (the files whose tests are known), the manifest rows that
     matched no file or no test, and the runs whose test no metadata source described."""
-    tests = 0
+    tests: dict[str, int] = {}
     undescribed: list[str] = []
     known: dict[str, set[str | None]] = {}
     for row in rows:
@@ -521,7 +607,7 @@ def _ledger(rows: Sequence[CampaignRow], entries: Mapping[str, Any],
         if found is None:
             continue
         known[row.file] = set(found)
-        tests += len(found)
+        tests[row.file] = len(found)
         undescribed += [row.file if r.get("test") is None else f"{row.file} [{r['test']}]"
                         for r in entry.get("runs") or [] if r.get("undescribed")]
     unmatched: list[str] = []

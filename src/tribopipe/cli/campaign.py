@@ -97,7 +97,8 @@ def _run(campaign: Any, jobs: int | None, plots: bool | None) -> None:
     if not report.ok:
         parts = []
         if report.failures:
-            parts.append(f"{len(report.failures)} run(s) failed; see "
+            parts.append(f"{len(report.failures)} file(s), test(s) or run(s) failed or "
+                         "refused; see "
                          f"{_shorten(campaign.failures_csv)}")
         if report.unmatched:
             parts.append(f"{len(report.unmatched)} manifest row(s) matched nothing")

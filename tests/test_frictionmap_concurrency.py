@@ -89,3 +89,62 @@ def test_a_writer_killed_before_the_rename_leaves_the_previous_map_intact(tmp_pa
     report = fm.append_records(map_path, [run_record(3)])
     assert report.added == 1 and len(fm.read_map(map_path)) == 3
     assert not list(tmp_path.glob(f".{map_path.name}.*.tmp"))
+
+
+HOLDER = """
+import sys, time
+from filelock import FileLock
+lock = FileLock(sys.argv[1])
+lock.acquire()
+print("holding", flush=True)
+time.sleep(600)
+"""
+
+
+def _hold_lock(tmp_path: Path, lock_path: Path) -> subprocess.Popen:
+    """Another process holding the map's lock, as a tribopipe command does while it
+    writes; returns once it holds it."""
+    script = tmp_path / "holder.py"
+    script.write_text(HOLDER)
+    holder = subprocess.Popen([sys.executable, str(script), str(lock_path)],
+                              stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    assert holder.stdout.readline().strip() == "holding", holder.stderr.read()
+    return holder
+
+
+def test_a_live_lock_refuses_in_one_line_and_a_killed_holder_s_lock_blocks_nothing(
+    tmp_path, monkeypatch
+):
+    from click.testing import CliRunner
+
+    from tribopipe.cli import main
+    from tribopipe.errors import MapError
+    from tribopipe.frictionmap import store
+
+    map_path = tmp_path / "friction_map.parquet"
+    fm.append_records(map_path, [run_record(1)])
+    before = map_path.read_bytes()
+    lock_path = Path(str(map_path) + ".lock")
+    holder = _hold_lock(tmp_path, lock_path)
+    try:
+        monkeypatch.setattr(store, "LOCK_TIMEOUT_S", 0.5)  # the default waits a minute
+        with pytest.raises(MapError) as refused:
+            fm.append_records(map_path, [run_record(2)])
+        line = str(refused.value)
+        assert "\n" not in line and str(map_path) in line
+        assert "locked by another process for more than 0.5 s" in line
+        assert "a killed process releases it" in line
+        # the command line says the same in one line, exit code 1
+        result = CliRunner().invoke(main, ["map", "exclude", "--map", str(map_path),
+                                           run_record(1)["measurement_id"], "--reason", "x"])
+        assert result.exit_code == 1 and "Traceback" not in result.output
+        assert "locked by another process" in result.output
+        assert map_path.read_bytes() == before
+    finally:
+        holder.send_signal(signal.SIGKILL)
+        holder.communicate(timeout=60)
+    # the holder died with its lock: the file is left behind and blocks nothing
+    assert lock_path.exists()
+    started = time.monotonic()
+    report = fm.append_records(map_path, [run_record(2)])
+    assert report.added == 1 and time.monotonic() - started < 0.5

@@ -55,9 +55,13 @@ PAUSE_ENV = "TRIBOPIPE_TEST_PAUSE_BEFORE_RENAME"
 
 @contextmanager
 def _locked(path: Path) -> Iterator[None]:
+    """Hold ``<map>.lock`` while the body runs. The lock is the kernel's (``flock``), so it
+    dies with the process that holds it: a lock file left by a killed command blocks
+    nothing. A live holder makes this wait up to :data:`LOCK_TIMEOUT_S`, then refuse."""
     from filelock import FileLock, Timeout
 
-    lock = FileLock(str(path) + ".lock", timeout=LOCK_TIMEOUT_S)
+    lock_path = Path(str(path) + ".lock")
+    lock = FileLock(str(lock_path), timeout=LOCK_TIMEOUT_S)
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
         lock.acquire()
@@ -65,8 +69,12 @@ def _locked(path: Path) -> Iterator[None]:
         raise MapError(
             f"friction map is locked by another process for more than {LOCK_TIMEOUT_S:g} s",
             path=path,
-            hint="wait for the other tribopipe command to finish",
+            hint=f"another tribopipe command is writing it; wait for it to finish (a killed "
+                 f"process releases it: never delete {lock_path.name} by hand)",
         ) from None
+    except NotImplementedError:  # an old filelock on a file system without flock
+        raise MapError("cannot lock the friction map: its file system has no file locks",
+                       path=path, hint="keep the map on a local disk") from None
     except OSError as exc:
         raise MapError(f"cannot lock the friction map ({exc.strerror or exc})", path=path,
                        hint="is the directory writable?") from None

@@ -417,7 +417,7 @@ def test_a_manifest_names_tests_of_one_file_and_refuses_a_test_twice(tmp_path: P
     assert manifest.get("s.txt", "DS30 1 N #1").fields == {"normal_force_N": 1.0, "repeat": 1}
     assert manifest.get("s.txt", "DS30 3 N #1").line == 4
     whole, tests = manifest.for_file("raw/s.txt", "s.txt")
-    assert whole.line == 2 and sorted(tests) == ["DS30 1 N #1", "DS30 3 N #1"]
+    assert whole.line == 2 and sorted(r.test for r in tests) == ["DS30 1 N #1", "DS30 3 N #1"]
     path.write_text(path.read_text(encoding="utf-8") + "s.txt;DS30 1 N #1;;;2;;1\n",
                     encoding="utf-8")
     with pytest.raises(ConfigError, match=r"m\.csv:5: file 's\.txt' with test 'DS30 1 N #1' "

@@ -17,9 +17,17 @@ import pandas as pd
 import pytest
 from click.testing import CliRunner
 
-from multi_exports import SESSION_TRUTH, TEST_PATTERN, run, write_session, write_xlsx_twin
+from multi_exports import (
+    SESSION_TRUTH,
+    TEST_PATTERN,
+    run,
+    steps_test,
+    write_session,
+    write_xlsx_twin,
+)
 from tribopipe.campaign import campaign_listing, discover_files, load_campaign, run_campaign
 from tribopipe.campaign.batch import Tally
+from tribopipe.campaign.spec import folder_campaign
 from tribopipe.cli import main
 from tribopipe.synthetic import write_rheocompass_export
 
@@ -91,7 +99,8 @@ def test_the_manifest_reads_with_its_test_column(folder: Path) -> None:
     assert row.fields["normal_force_N"] == 5.0 and row.test == NAMES[2]
     assert manifest.get("single.csv").fields["normal_force_N"] == 7.0
     whole, tests = manifest.for_file("session.txt", "session.txt")
-    assert whole is None and sorted(tests) == sorted([*NAMES, "DS30 on steel, 9 N, 20 °C, #1"])
+    assert whole is None
+    assert sorted(r.test for r in tests) == sorted([*NAMES, "DS30 on steel, 9 N, 20 °C, #1"])
 
 
 def test_every_export_of_the_folder_is_found_and_nothing_else(lab: Path) -> None:
@@ -228,6 +237,87 @@ def test_the_ledger_adds_up_with_duplicates_conflicts_and_failures(lab: Path) ->
                    for ln in ledger) == 1
         assert sum(ln.startswith("  duplicate: session_fr (copy).txt") for ln in ledger) == 1
     assert len(pd.read_parquet(campaign.map_path)) == 9
+
+
+STEPS = "DS30 on steel, steps, 20 °C"
+
+
+def steps_folder(root: Path, interval_rows: str) -> Path:
+    """A folder holding one export of one test with two force steps (set-up, then 3 N as
+    interval 2, then 5 N as interval 3) and a manifest with an ``interval`` column."""
+    from tribopipe.synthetic import write_rheocompass_session
+
+    raw = root / "raw"
+    raw.mkdir(parents=True)
+    write_rheocompass_session(raw / "steps.txt", [steps_test()], project="steps")
+    (raw / "manifest.csv").write_text(
+        "file,test,interval,pin,disc,normal_force_N,temperature_C,repeat\n"
+        "steps.txt,,,Dragonskin 30,steel,,20,1\n" + interval_rows, encoding="utf-8")
+    return raw
+
+
+def test_each_force_step_of_a_test_gets_its_own_manifest_row(tmp_path: Path) -> None:
+    raw = steps_folder(tmp_path, "steps.txt,,2,,,3,,\n"
+                                 f'steps.txt,"{STEPS}",3,,,5,,\n'
+                                 "steps.txt,,7,,,9,,\n")
+    args = ["batch", str(raw), "--manifest", str(raw / "manifest.csv"),
+            "--out", str(tmp_path / "out"), "--no-plots", "--jobs", "1"]
+    result = CliRunner().invoke(main, args)
+    assert result.exit_code == 1, result.output  # the row of interval 7 matched no run
+    assert "  manifest row matching no interval: manifest.csv line 5 (steps.txt, " \
+           "interval 7)" in result.stdout
+    assert "1 file(s) found (1 read), 1 test(s); 2 run(s) in the files read: 2 reduced" \
+        in result.stdout
+    runs = pd.read_parquet(tmp_path / "out" / "friction_map.parquet").sort_values("interval")
+    assert runs["interval"].tolist() == [2, 3]
+    assert runs["normal_force_N"].tolist() == [3.0, 5.0]  # each step its own nominal force
+    assert runs["mu_k"].tolist() == pytest.approx([0.47, 0.36], abs=0.01)
+    assert not runs["flags"].str.contains("normal_force_off_nominal").any()
+    assert set(runs["test"]) == {STEPS} and set(runs["repeat"]) == {1}
+    # run again: nothing to redo; the interval rows are part of the file's recipe
+    again = CliRunner().invoke(main, args)
+    assert "0 reduced, 2 skipped (unchanged)" in again.stdout, again.output
+    manifest = raw / "manifest.csv"
+    manifest.write_text(manifest.read_text(encoding="utf-8").replace(",3,,,5,,", ",3,,,6,,"),
+                        encoding="utf-8")
+    changed = CliRunner().invoke(main, args)
+    assert "2 reduced, 0 skipped (unchanged)" in changed.stdout, changed.output
+    runs = pd.read_parquet(tmp_path / "out" / "friction_map.parquet").sort_values("interval")
+    assert runs["normal_force_N"].tolist() == [3.0, 6.0]
+    assert "normal_force_off_nominal" in runs["flags"].iloc[1]  # 5 N measured, 6 N said
+
+
+def test_an_interval_row_contradicting_its_test_row_fails_that_step_alone(tmp_path: Path
+                                                                          ) -> None:
+    raw = steps_folder(tmp_path, f'steps.txt,"{STEPS}",,,,3,,\nsteps.txt,,3,,,5,,\n')
+    campaign = folder_campaign(raw, manifest=raw / "manifest.csv",
+                               output_dir=tmp_path / "out", plots=False)
+    report = run_campaign(campaign, jobs=1)
+    name = f"steps.txt [{STEPS} / DS30 1 / interval 3]"
+    reason = dict(report.failures)[name]
+    assert "contradictory normal_force_N: manifest line 4 says 5.0, manifest line 3 says " \
+           "3.0" in reason
+    assert report.reduced == [f"steps.txt [{STEPS} / DS30 1 / interval 2]"]
+    assert (report.total, report.runs_failed) == (2, 1)
+
+
+def test_a_bad_interval_cell_is_one_line_naming_the_manifest_line_and_column(tmp_path: Path
+                                                                             ) -> None:
+    from tribopipe.campaign import read_manifest
+    from tribopipe.errors import ConfigError
+
+    raw = steps_folder(tmp_path, "steps.txt,,2.5,,,3,,\n")
+    with pytest.raises(ConfigError) as bad:
+        read_manifest(raw / "manifest.csv")
+    line = str(bad.value)
+    assert "manifest.csv:3" in line and "interval" in line and "'2.5' is not an interval " \
+        "number" in line and "\n" not in line
+    (raw / "manifest.csv").write_text(
+        "file,interval,pin,disc,normal_force_N,temperature_C,repeat\n"
+        "steps.txt,2,DS30,steel,3,20,1\nsteps.txt,2,DS30,steel,5,20,1\n", encoding="utf-8")
+    with pytest.raises(ConfigError, match=r"manifest\.csv:3: file 'steps\.txt' and interval "
+                                          r"2 listed twice \(first on line 2\)"):
+        read_manifest(raw / "manifest.csv")
 
 
 def test_file_level_metadata_cannot_tell_the_tests_of_a_session_apart(tmp_path: Path,

@@ -597,16 +597,19 @@ def _forget_vanished(campaign: Campaign, entries: dict[str, Any], present: set[s
 def _ledger(rows: Sequence[CampaignRow], entries: Mapping[str, Any],
             manifest: Manifest | None) -> tuple[dict[str, int], list[str], list[str]]:
     """The tests found per file (the files whose tests are known), the manifest rows that
-    matched no file or no test, and the runs whose test no metadata source described."""
+    matched no file, no test or no friction interval, and the runs whose test no
+    metadata source described."""
     tests: dict[str, int] = {}
     undescribed: list[str] = []
     known: dict[str, set[str | None]] = {}
+    places: dict[str, set[tuple[str | None, int | None]]] = {}
     for row in rows:
         entry = entries.get(row.file) or {}
         found = entry.get("tests")
         if found is None:
             continue
         known[row.file] = set(found)
+        places[row.file] = {(r.get("test"), r.get("interval")) for r in entry.get("runs") or []}
         tests[row.file] = len(found)
         undescribed += [row.file if r.get("test") is None else f"{row.file} [{r['test']}]"
                         for r in entry.get("runs") or [] if r.get("undescribed")]
@@ -620,8 +623,12 @@ def _ledger(rows: Sequence[CampaignRow], entries: Mapping[str, Any],
             if row.file not in known:
                 continue
             for mrow in row.test_rows:
-                if mrow.test not in known[row.file]:
+                if mrow.test is not None and mrow.test not in known[row.file]:
                     unmatched.append(f"test: {manifest.name} {mrow.describes()}")
+                elif mrow.interval is not None and not any(
+                        i == mrow.interval and mrow.test in (None, t)
+                        for t, i in places[row.file]):
+                    unmatched.append(f"interval: {manifest.name} {mrow.describes()}")
     return tests, unmatched, list(dict.fromkeys(undescribed))
 
 

@@ -7,10 +7,15 @@ Each run needs ``pin``, ``disc``, ``normal_force_N`` (nominal, total) and ``temp
 with its own runs, so metadata is resolved per test. The sources, consulted in this
 order:
 
-1. the manifest row naming the file *and* the test (the manifest's optional ``test``
-   column holds the Test name as the export writes it);
-2. the manifest row naming the file with an empty ``test`` cell (it describes every
-   test of the file);
+1. the manifest rows of the run (:func:`run_rows`): the row naming the file, the test
+   and the friction interval (the optional ``interval`` column: the interval number as
+   the export numbers it within its test, as ``reduce`` and ``runs.csv`` show it), the
+   row naming the file and the interval with an empty ``test`` cell (that interval of
+   every test: a file of one test with force or speed steps), then the row naming the
+   file *and* the test (the manifest's optional ``test`` column holds the Test name as
+   the export writes it) with an empty ``interval`` cell;
+2. the manifest row naming the file with empty ``test`` and ``interval`` cells (it
+   describes every test of the file);
 3. the file-name pattern (:func:`~tribopipe.campaign.patterns.match_pattern` on the file
    stem; it describes every test of the file);
 4. the test-name pattern on the Test name (``test_pattern``; the older
@@ -51,23 +56,30 @@ if TYPE_CHECKING:
 MANIFEST_COLUMNS: tuple[str, ...] = ("file", *LABEL_FIELDS)
 #: the optional manifest column naming a test of a session export
 TEST_COLUMN = "test"
+#: the optional manifest column naming one friction interval (a force or speed step)
+INTERVAL_COLUMN = "interval"
 
 
 @dataclass(frozen=True)
 class ManifestRow:
     """One manifest row: the label fields it gives (``None`` cells left out), its line,
-    the file it names (as written, ``/`` separators) and the test (``None``: the file's
-    every test); ``problem`` is a bad value in it (an error for what it describes only)."""
+    the file it names (as written, ``/`` separators), the test (``None``: the file's
+    every test) and the friction interval (``None``: every interval of the test);
+    ``problem`` is a bad value in it (an error for what it describes only)."""
 
     line: int
     fields: dict[str, Any]
     problem: str | None = None
     file: str = ""
     test: str | None = None
+    interval: int | None = None
 
     def describes(self) -> str:
-        """``line N (file)`` or ``line N (file, test 'T')``, for messages."""
+        """``line N (file)``, ``line N (file, test 'T')``, ``line N (file, interval I)``
+        or ``line N (file, test 'T', interval I)``, for messages."""
         what = self.file if self.test is None else f"{self.file}, test {self.test!r}"
+        if self.interval is not None:
+            what += f", interval {self.interval}"
         return f"line {self.line} ({what})"
 
 
@@ -76,8 +88,9 @@ class Manifest:
     """A manifest's rows, found by file (and test).
 
     ``get(file)`` is the row describing the whole file, ``get(file, test)`` the row of one
-    of its tests; :meth:`for_file` finds both kinds for a file of the campaign, by its
-    path relative to the raw folder or by its name.
+    of its tests, ``get(file, test, interval)`` the row of one friction interval;
+    :meth:`for_file` finds them for a file of the campaign, by its path relative to the
+    raw folder or by its name.
     """
 
     path: Path
@@ -91,21 +104,23 @@ class Manifest:
         """The manifest's file name."""
         return self.path.name
 
-    def get(self, file: str, test: str | None = None) -> ManifestRow | None:
-        """The row for ``file`` (and ``test``; ``None``: the row with an empty test cell)."""
-        return self._index.get((file.replace("\\", "/"), _test_key(test)))
+    def get(self, file: str, test: str | None = None,
+            interval: int | None = None) -> ManifestRow | None:
+        """The row for ``file`` (and ``test``, ``interval``; ``None``: the row with that
+        cell empty)."""
+        return self._index.get((file.replace("\\", "/"), _test_key(test), interval))
 
     def for_file(self, rel: str, name: str) -> tuple[ManifestRow | None,
-                                                     dict[str, ManifestRow]]:
+                                                     tuple[ManifestRow, ...]]:
         """The rows naming a file of the campaign, by its relative path, else its name:
-        the whole-file row (or ``None``) and ``{Test name: row}``."""
+        the whole-file row (or ``None``) and the rows of its tests and intervals."""
         rows = self._by_file.get(rel) or self._by_file.get(name) or ()
-        whole = next((r for r in rows if r.test is None), None)
-        return whole, {r.test: r for r in rows if r.test is not None}
+        whole = next((r for r in rows if r.test is None and r.interval is None), None)
+        return whole, tuple(r for r in rows if r is not whole)
 
     @functools.cached_property
-    def _index(self) -> dict[tuple[str, str | None], ManifestRow]:
-        return {(r.file, r.test): r for r in self.rows}
+    def _index(self) -> dict[tuple[str, str | None, int | None], ManifestRow]:
+        return {(r.file, r.test, r.interval): r for r in self.rows}
 
     @functools.cached_property
     def _by_file(self) -> dict[str, tuple[ManifestRow, ...]]:
@@ -117,6 +132,19 @@ class Manifest:
 
 #: the largest manifest read [bytes]
 MAX_MANIFEST_BYTES = 256 * 1024 * 1024
+
+
+def run_rows(rows: Sequence[ManifestRow], test: str | None,
+             interval: int | None) -> list[ManifestRow]:
+    """The manifest rows (of one file's tests and intervals) that describe the run at
+    ``test`` / ``interval``, most specific first: the row of that test and interval, the
+    row of that interval with an empty test cell, the row of that test with an empty
+    interval cell."""
+    by_key = {(r.test, r.interval): r for r in rows}
+    keys = [(test, interval), (None, interval)] if interval is not None else []
+    keys.append((test, None))
+    found = [by_key.get(key) for key in dict.fromkeys(keys) if key != (None, None)]
+    return [r for r in found if r is not None]
 
 
 def _test_key(test: str | None) -> str | None:
@@ -131,16 +159,19 @@ def read_manifest(path: str | Path) -> Manifest:
     temperature_C, repeat`` (more allowed, ignored; empty cells mean unknown); with an
     optional ``test`` column, one row per test of a session export (the Test name as the
     export writes it; rows with the same file and different tests describe one export's
-    tests, a row with an empty test cell the whole file).
+    tests, a row with an empty test cell the whole file); with an optional ``interval``
+    column, one row per friction interval (a force or speed step within a test: the
+    interval number, as ``reduce`` shows it; an empty cell: every interval).
 
     The encoding and the delimiter are detected as the readers detect them in an export
     (:mod:`tribopipe.readers.textio`): UTF-8 with or without BOM, UTF-16, cp1252; the
     header line decides between TAB, semicolon and comma (semicolon files may use a
-    decimal comma). An unreadable file, a missing column or a file (and test) listed
-    twice is a :class:`ConfigError` naming the manifest; a bad value (a name that is not
-    one line of printable text, a number outside its physical range, a repeat that is not
-    a whole number) is recorded as that row's ``problem``, one line naming the manifest,
-    its line and column: an error for what the row describes only.
+    decimal comma). An unreadable file, a missing column, a bad interval number or a file
+    (and test and interval) listed twice is a :class:`ConfigError` naming the manifest; a
+    bad value (a name that is not one line of printable text, a number outside its
+    physical range, a repeat that is not a whole number) is recorded as that row's
+    ``problem``, one line naming the manifest, its line and column: an error for what the
+    row describes only.
     """
     p = Path(path)
     try:
@@ -209,7 +240,8 @@ def _manifest_rows(p: Path, text: str, delimiter: str) -> Manifest:
         )
     index = {name: header.index(name) for name in MANIFEST_COLUMNS}
     test_index = header.index(TEST_COLUMN) if TEST_COLUMN in header else None
-    rows: dict[tuple[str, str | None], ManifestRow] = {}
+    interval_index = header.index(INTERVAL_COLUMN) if INTERVAL_COLUMN in header else None
+    rows: dict[tuple[str, str | None, int | None], ManifestRow] = {}
     for lineno, cells in enumerate(reader, start=2):
         if not any(c.strip() for c in cells):
             continue
@@ -221,15 +253,31 @@ def _manifest_rows(p: Path, text: str, delimiter: str) -> Manifest:
             raise ConfigError("the 'file' cell is not a file name (one printable line)",
                               path=p, line=lineno, column="file")
         test = None if test_index is None else _test_key(cells[test_index])
-        key = (file.replace("\\", "/"), test)
+        problem = None
+        interval = None
+        interval_text = "" if interval_index is None else cells[interval_index].strip()
+        if interval_text:
+            try:
+                number = _parse_number(interval_text)
+                if not number.is_integer() or number < 1:
+                    raise ValueError
+                interval = int(number)
+            except ValueError:
+                raise ConfigError(
+                    f"{interval_text!r} is not an interval number (a whole number from 1, "
+                    "as reduce and runs.csv show it)",
+                    path=p, line=lineno, column=INTERVAL_COLUMN) from None
+        key = (file.replace("\\", "/"), test, interval)
         if key in rows:
-            what = f"file {file!r}" if test is None else f"file {file!r} with test {test!r}"
+            what = f"file {file!r}" + ("" if test is None else f" with test {test!r}") + (
+                "" if interval is None else f" and interval {interval}")
             raise ConfigError(
                 f"{what} listed twice (first on line {rows[key].line})",
-                path=p, line=lineno, column="file" if test is None else TEST_COLUMN,
+                path=p, line=lineno,
+                column=INTERVAL_COLUMN if interval is not None else
+                "file" if test is None else TEST_COLUMN,
             )
         fields: dict[str, Any] = {}
-        problem = None
         for name in LABEL_FIELDS:
             raw = cells[index[name]].strip()
             if not raw:
@@ -241,7 +289,7 @@ def _manifest_rows(p: Path, text: str, delimiter: str) -> Manifest:
                     problem = str(ValidationError(exc.problem, path=p, line=lineno,
                                                   column=name))
         rows[key] = ManifestRow(line=lineno, fields=fields, problem=problem, file=key[0],
-                                test=test)
+                                test=test, interval=interval)
     return Manifest(path=p, rows=tuple(rows.values()))
 
 

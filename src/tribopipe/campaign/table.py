@@ -186,7 +186,9 @@ def recipe_hash(campaign: Campaign, merged: Mapping[str, Any],
                                "labels": {k: merged.get(k) for k in LABEL_FIELDS}}
     if test_rows:
         payload["tests"] = sorted(
-            [r.test or "", r.line, sorted(r.fields.items()), r.problem] for r in test_rows)
+            # a row without an interval hashes as before the interval column existed
+            [r.test or "", r.line, sorted(r.fields.items()), r.problem]
+            + ([r.interval] if r.interval is not None else []) for r in test_rows)
     text = json.dumps(payload, sort_keys=True, default=str)
     return hashlib.sha256(text.encode()).hexdigest()[:16]
 
@@ -248,7 +250,7 @@ def campaign_table(campaign: Campaign, *, state: Mapping[str, Any] | None = None
         sources: list[tuple[str, dict[str, Any]]] = []
         hints: list[str] = []
         problem: str | None = None
-        test_rows: dict[str, ManifestRow] = {}
+        test_rows: tuple[ManifestRow, ...] = ()
         if manifest is not None:
             whole, test_rows = manifest.for_file(rel, path.name)
             if whole is not None:
@@ -282,7 +284,7 @@ def campaign_table(campaign: Campaign, *, state: Mapping[str, Any] | None = None
             except ReadError as exc:
                 problem = problem or f"{display_path(rel)}: {exc.problem}"
             same = sha is not None and sha == previous.get("sha256") and \
-                previous.get("recipe") == recipe_hash(campaign, merged, tuple(test_rows.values()))
+                previous.get("recipe") == recipe_hash(campaign, merged, test_rows)
             if same and previous.get("status") in (REDUCED, DUPLICATE):
                 status = previous["status"] if _traces_present(campaign, previous) else CHANGED
             elif same and previous.get("status") == FAILED:
@@ -295,7 +297,7 @@ def campaign_table(campaign: Campaign, *, state: Mapping[str, Any] | None = None
             file=rel, path=path, size=st.st_size, mtime_ns=st.st_mtime_ns,
             sources=tuple(sources), merged=merged, problem=problem, status=status,
             reason=reason, sha256=sha, previous=previous, hints=tuple(hints),
-            test_rows=tuple(test_rows.values()),
+            test_rows=test_rows,
         ))
     return rows
 
@@ -354,7 +356,8 @@ def campaign_listing(campaign: Campaign) -> list[dict[str, Any]]:
             for test_row in row.test_rows:
                 labels = {**base, **{k: v for k, v in test_row.fields.items()
                                      if base.get(k) is None}}
-                out.append(_listed(row.file, {"test": test_row.test}, row.status, labels,
+                out.append(_listed(row.file, {"test": test_row.test,
+                                              "interval": test_row.interval}, row.status, labels,
                                    [*sources, f"manifest line {test_row.line}"], row.reason))
         else:
             out.append(_listed(row.file, {}, row.status, base, sources, row.reason))

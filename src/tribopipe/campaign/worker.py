@@ -31,7 +31,7 @@ from ..pipeline import (
     run_name,
     write_trace,
 )
-from .metadata import ManifestRow, labels_from, merge_metadata
+from .metadata import ManifestRow, labels_from, merge_metadata, run_rows
 from .patterns import match_pattern
 from .spec import Campaign
 from .table import RunEntry
@@ -147,22 +147,24 @@ def _reason(exc: TribopipeError, job: _Job, name: str | None = None) -> str:
 def run_labels(job: _Job, place: RunPlace, name: str, campaign: Campaign,
                tests_with_runs: int) -> RunLabels:
     """The labels of one run, from the metadata sources of its test, in order: the
-    manifest row of the test, the file-level sources (manifest row of the file, file
-    name), the test-name pattern on its Test name. Raises :class:`CampaignError` naming
-    the run when they contradict each other or a required field is missing, and when a
-    file of several tests with runs describes this one only at file level (the file's
-    sources cannot tell its tests apart)."""
+    manifest rows of its interval and of its test (:func:`run_rows`), the file-level
+    sources (manifest row of the file, file name), the test-name pattern on its Test name.
+    Raises :class:`CampaignError` naming the run when they contradict each other or a
+    required field is missing, and when a file of several tests with runs describes this
+    one only at file level (the file's sources cannot tell its tests apart)."""
     sources: list[tuple[str, dict[str, Any]]] = []
     hints = list(job.hints)
     per_test = False
-    row = next((r for r in job.test_rows if r.test == place.test), None)
-    if row is not None:
+    for row in run_rows(job.test_rows, place.test, place.interval):
         if row.problem is not None:
             raise CampaignError(row.problem, path=name)
         sources.append((f"manifest line {row.line}", dict(row.fields)))
-        per_test = True
-    elif job.test_rows:
-        hints.append(f"no manifest row for test {place.test!r}")
+        # an interval row without a test names that interval of every test: it tells
+        # the intervals of a test apart, not the tests of a file
+        per_test = per_test or row.test is not None
+    if job.test_rows and not sources:
+        hints.append(f"no manifest row for test {place.test!r}"
+                     + ("" if place.interval is None else f" or its interval {place.interval}"))
     sources.extend(job.sources)
     pattern = campaign.test_pattern
     if pattern is not None:

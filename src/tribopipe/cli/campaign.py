@@ -127,7 +127,7 @@ def _common_run_options(func: Any) -> Any:
 @click.option("--manifest", type=click.Path(exists=True, dir_okay=False),
               help="FOLDER only: manifest CSV (file, pin, disc, normal_force_N, "
                    "temperature_C, repeat; optional test: one row per test of a session "
-                   "export).")
+                   "export; optional interval: one row per force or speed step).")
 @click.option("--pattern", "filename_pattern",
               help="FOLDER only: file-name pattern, e.g. "
                    "'{pin}_{disc}_{force}N_{temperature}C_r{repeat}'.")

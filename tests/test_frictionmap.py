@@ -465,12 +465,12 @@ def test_merge_stores_shared_runs_once_and_reports_conflicts(tmp_path):
     fm.import_table(ours, PUBLISHED_CSV)
     fm.append_records(theirs, [run_record(2), run_record(3), run_record(1, mu_k=0.42)])
     fm.import_table(theirs, PUBLISHED_CSV)
-    report = fm.merge_map(ours, theirs)
+    report = fm.merge_map(ours, theirs).report
     assert report.added == 1 and report.unchanged == 170 and report.kept_conflicting == 1
     assert report.conflicting_ids == (run_record(1)["measurement_id"],)
     runs = fm.read_map(ours)
     assert len(runs) == 3 + 169 and runs["measurement_id"].is_unique
-    assert fm.merge_map(ours, theirs, replace=True).replaced == 1
+    assert fm.merge_map(ours, theirs, replace=True).report.replaced == 1
 
 
 def test_merging_a_map_into_itself_or_a_missing_file_is_refused(tmp_path):

@@ -170,6 +170,9 @@ def test_the_session_reduced_again_is_the_same_two_runs_and_fills_nothing_in(
 def test_a_version_3_package_validates_and_merges(tmp_path: Path) -> None:
     checked = CliRunner().invoke(main, ["map", "validate", str(V3_PACKAGE)])
     assert checked.exit_code == 0, checked.output
+    assert checked.output.strip().endswith(
+        f"valid friction-map package from Fixture Lab, 5 runs: 3 measured by "
+        f"{fm.PUBLISHED_LAB}, 2 measured by Fixture Lab")
     merged = tmp_path / "merged.parquet"
     result = CliRunner().invoke(main, ["map", "merge", str(V3_PACKAGE), "--map", str(merged)])
     assert result.exit_code == 0, result.output

@@ -98,8 +98,10 @@ def test_publish_validate_merge_round_trip_gives_identical_runs(source_map, pack
                      "data/groups.parquet", "data/runs.csv", "data/runs.parquet",
                      "datapackage.json", "explorer.html"]
     code, lines = validate(package)
-    assert code == 0 and lines == [f"{package / 'datapackage.json'}: valid friction-map "
-                                   f"package, 175 runs from {LAB}"]
+    # the package carries the paper's rows too: the line says who measured how many
+    assert code == 0 and lines == [
+        f"{package / 'datapackage.json'}: valid friction-map package from {LAB}, 175 runs: "
+        f"169 measured by {fm.PUBLISHED_LAB}, 6 measured by {LAB}"]
     merged = tmp_path / "empty" / "friction_map.parquet"
     result = invoke("map", "merge", package, "--map", merged)
     assert result.exit_code == 0, result.output
@@ -165,7 +167,7 @@ def test_publish_and_validate_as_real_processes(source_map, tmp_path):
     assert descriptor(out)["licenses"][0]["name"] == "CC0-1.0"
     ok = subprocess.run([sys.executable, "-m", "tribopipe", "map", "validate", str(out)],
                         capture_output=True, text=True, timeout=180, env=env)
-    assert ok.returncode == 0 and "valid friction-map package, 175 runs" in ok.stdout
+    assert ok.returncode == 0 and "valid friction-map package from " in ok.stdout
     (out / "data" / "runs.csv").write_text("measurement_id\n", encoding="utf-8")
     bad = subprocess.run([sys.executable, "-m", "tribopipe", "map", "validate", str(out)],
                          capture_output=True, text=True, timeout=180, env=env)
@@ -465,3 +467,48 @@ def test_a_package_of_schema_version_2_still_checks_and_merges(copy, tmp_path):
     runs = fm.read_map(merged)
     assert len(runs) == 175 and runs["u_mu_k"].isna().all() and runs["u_mu_s"].isna().all()
     assert runs["test"].isna().all() and runs["result"].isna().all()
+
+
+def test_a_package_of_one_lab_s_runs_says_so_in_one_line(tmp_path):
+    map_path, _ = make_processed(tmp_path / "lab")
+    package = publish_map(map_path, tmp_path / "pkg", Publisher("Lab C")).path
+    code, lines = validate(package)
+    assert code == 0 and lines == [
+        f"{package / 'datapackage.json'}: valid friction-map package from Lab C, 6 runs"]
+
+
+def test_merge_lab_names_who_measured_a_parquet_map_s_unnamed_rows(source_map, tmp_path):
+    theirs = tmp_path / "theirs.parquet"
+    shutil.copyfile(source_map, theirs)  # 6 reduced rows without a lab, 169 published
+    ours = tmp_path / "ours.parquet"
+    # without --lab their reduced rows would read as ours: said, not silent
+    plain = CliRunner().invoke(main, ["map", "merge", str(theirs), "--map", str(ours)])
+    assert plain.exit_code == 0, plain.output
+    assert f"note: 6 row(s) of {theirs} name no lab and now read as this map's own; if " \
+           "another lab measured them, merge with --lab NAME" in plain.stderr
+    ours.unlink()
+    named = CliRunner().invoke(main, ["map", "merge", str(theirs), "--map", str(ours),
+                                      "--lab", "  Lab D  "])
+    assert named.exit_code == 0, named.output
+    assert f"6 row(s) of {theirs} named no lab: recorded as measured by 'Lab D'" in named.stdout
+    assert "note:" not in named.stderr
+    labs = fm.read_map(ours).groupby("source")["lab"].unique()
+    assert list(labs["reduced"]) == ["Lab D"]
+    assert list(labs[fm.SOURCE_PUBLISHED]) == [fm.PUBLISHED_LAB]  # rows naming a lab keep it
+    assert "lab Lab D: 6 runs" in CliRunner().invoke(main, ["map", "show", "--map",
+                                                            str(ours)]).output
+
+
+def test_merge_lab_is_refused_for_a_package_and_for_a_bad_name(package, source_map, tmp_path):
+    ours = tmp_path / "ours.parquet"
+    for other, lab, says in (
+        (package, "Lab E", f"a data package names its lab ({LAB!r}); --lab is for a Parquet "
+                           "map whose rows name none"),
+        (source_map, "Lab\nE", "--lab holds a line break or control character"),
+        (source_map, "   ", "--lab is empty"),
+    ):
+        result = CliRunner().invoke(main, ["map", "merge", str(other), "--map", str(ours),
+                                           "--lab", lab])
+        assert result.exit_code == 1 and says in result.output, result.output
+        assert "Traceback" not in result.output and len(result.output.splitlines()) == 1
+        assert not ours.exists()

@@ -65,22 +65,28 @@ def import_cmd(
 @map_group.command("merge")
 @click.argument("other", type=click.Path())
 @click.option("--replace", is_flag=True, help="Overwrite our rows where OTHER's content differs.")
+@click.option("--lab", help="The lab that measured OTHER's rows that name none (a Parquet "
+              "map; a package names its own).")
 @map_option
 @friendly_errors
-def merge_cmd(other: str, replace: bool, map_path: str) -> None:
+def merge_cmd(other: str, replace: bool, lab: str | None, map_path: str) -> None:
     """Fold another friction map (Parquet) or a data package (its folder or
     datapackage.json, as `map publish` writes it) into the map.
 
     A package is checked first (as `map validate` does) and refused whole when anything is
-    wrong; its rows keep their lab. Runs with the same id are stored once; each conflicting
-    run (same id, other values) is listed with both values (exit code 1 when any were
-    kept).
+    wrong; its rows keep their lab. Rows of a Parquet map that name no lab read as this
+    map's own: --lab records who measured them (said when it is missing). Runs with the
+    same id are stored once; each conflicting run (same id, other values) is listed with
+    both values (exit code 1 when any were kept).
     """
     from ..frictionmap import merge_map
 
-    report = merge_map(map_path, other, replace=replace)
+    merged = merge_map(map_path, other, replace=replace, lab=lab)
+    report = merged.report
     for line in report.conflict_lines(theirs=other):
         click.echo(line)
+    for line in merged.notes(other):
+        click.echo(line, err=line.startswith("note:"))
     click.echo(f"map {map_path}: {report.summary()}")
     if report.kept_conflicting:
         raise SystemExit(1)
@@ -144,8 +150,7 @@ def validate_cmd(path: str) -> None:
         click.echo(line)
     if not result.ok:
         raise SystemExit(1)
-    n = 0 if result.runs is None else len(result.runs)
-    click.echo(f"{result.path}: valid friction-map package, {n} runs from {result.lab}")
+    click.echo(result.verdict())
 
 
 @map_group.command("table")

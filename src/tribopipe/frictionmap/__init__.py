@@ -56,7 +56,7 @@ from .duplicates import (
     map_files_by_hash,
     same_label,
 )
-from .merge import is_package, merge_map
+from .merge import MergeReport, is_package, merge_map
 from .package import PackageCheck, PackageInvalid, check_package, package_runs
 from .published import (
     FOUNDING_PAPER,
@@ -152,6 +152,7 @@ __all__ = [
     "append_records",
     "backup_path",
     "update_map",
+    "MergeReport",
     "merge_map",
     "merge_map_file",
     "is_package",

@@ -5,7 +5,10 @@ or a data package (its folder or ``datapackage.json``, as ``tribopipe map publis
 it). A package is checked first (:func:`tribopipe.frictionmap.package.package_runs`) and
 refused whole, the map untouched, when it has any problem. Each row keeps its provenance:
 ``lab`` names the laboratory that measured it (every row of a valid package has one),
-``source`` how it was made. A run already in the map with the same content is left alone;
+``source`` how it was made. A Parquet map may hold rows without a ``lab`` (a lab's own
+runs before it publishes them): merged as they are, they read as this map's own lab's, so
+``lab`` names the laboratory that measured them (``map merge --lab``); rows naming a lab
+keep it. A run already in the map with the same content is left alone;
 one with the same id and other values is a conflict, reported per row with both values
 (:meth:`~tribopipe.frictionmap.store.AppendReport.conflict_lines`) and replaced only with
 ``replace``.
@@ -14,13 +17,41 @@ one with the same id and other values is a conflict, reported per row with both 
 from __future__ import annotations
 
 import os
+import re
+from dataclasses import dataclass
 from pathlib import Path
 
 from ..errors import MapError
 from .datapackage import DESCRIPTOR
 from .package import package_runs
-from .schema import frame_records
-from .store import AppendReport, append_records, merge_map_file
+from .schema import _missing, frame_records
+from .store import AppendReport, append_records, read_map
+
+_CONTROL = re.compile(r"[\x00-\x1f\x7f-\x9f\u2028\u2029]")
+
+
+@dataclass(frozen=True)
+class MergeReport:
+    """What a merge did: the map's :class:`AppendReport`, the rows of the other map that
+    were given the ``lab`` passed (``labelled``) and those left naming no lab
+    (``without_lab``: they now read as this map's own lab's)."""
+
+    report: AppendReport
+    labelled: int = 0
+    without_lab: int = 0
+    lab: str | None = None
+
+    def notes(self, other: str) -> list[str]:
+        """One line per thing to know about the rows' labs (nothing when all named one)."""
+        lines = []
+        if self.labelled:
+            lines.append(f"{self.labelled} row(s) of {other} named no lab: recorded as "
+                         f"measured by {self.lab!r}")
+        if self.without_lab:
+            lines.append(f"note: {self.without_lab} row(s) of {other} name no lab and now "
+                         "read as this map's own; if another lab measured them, merge with "
+                         "--lab NAME")
+        return lines
 
 
 def is_package(path: str | os.PathLike[str]) -> bool:
@@ -30,20 +61,48 @@ def is_package(path: str | os.PathLike[str]) -> bool:
 
 
 def merge_map(
-    path: str | os.PathLike[str], other: str | os.PathLike[str], *, replace: bool = False
-) -> AppendReport:
+    path: str | os.PathLike[str], other: str | os.PathLike[str], *, replace: bool = False,
+    lab: str | None = None,
+) -> MergeReport:
     """Fold ``other`` — a friction map (Parquet) or a data package (folder or
     ``datapackage.json``) — into the map at ``path``.
 
     Runs with the same id are stored once; rows whose content differs are reported as
-    conflicting (and replaced only with ``replace``). A package with any problem is a
+    conflicting (and replaced only with ``replace``). ``lab`` names the laboratory that
+    measured the rows of a Parquet map that name none (a package names its own lab: a
+    ``lab`` given with one is refused). A package with any problem is a
     :class:`~tribopipe.frictionmap.package.PackageInvalid` naming the first and counting
-    the others; a missing ``other`` a :class:`MapError`.
+    the others; a missing ``other``, a map merged into itself or a ``lab`` that is not
+    one line of text a :class:`MapError`.
     """
+    if lab is not None:
+        lab = _lab_name(lab)
     if not Path(other).exists():
         raise MapError("file not found, expected a friction map (Parquet) or a data package "
                        "(folder or datapackage.json) to merge", path=other)
-    if not is_package(other):
-        return merge_map_file(path, other, replace=replace)
-    runs, _lab = package_runs(other)
-    return append_records(path, frame_records(runs), replace=replace)
+    if is_package(other):
+        runs, package_lab = package_runs(other)
+        if lab is not None:
+            raise MapError(f"a data package names its lab ({package_lab!r}); --lab is for a "
+                           "Parquet map whose rows name none", path=other)
+        return MergeReport(append_records(path, frame_records(runs), replace=replace))
+    if Path(other).resolve() == Path(path).resolve():
+        raise MapError("cannot merge a friction map into itself", path=other)
+    runs = read_map(other)
+    unnamed = runs["lab"].map(_missing).astype(bool)
+    if lab is not None:
+        runs.loc[unnamed, "lab"] = lab
+    report = append_records(path, frame_records(runs), replace=replace)
+    n = int(unnamed.sum())
+    return MergeReport(report, labelled=n if lab else 0, without_lab=0 if lab else n, lab=lab)
+
+
+def _lab_name(lab: str) -> str:
+    """``--lab`` as stored: one line of text, stripped (a name from the command line)."""
+    text = lab.strip()
+    if not text:
+        raise MapError("--lab is empty; expected the name of the lab that measured the rows")
+    if _CONTROL.search(text) or len(text) > 300:
+        raise MapError("--lab holds a line break or control character, or is longer than "
+                       "300 characters; expected one line of text")
+    return text

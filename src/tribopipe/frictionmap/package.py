@@ -101,6 +101,20 @@ class PackageCheck:
         """True when the package has no problem."""
         return not self.problems and not self.more
 
+    def verdict(self) -> str:
+        """The line for a package without problems: who published it and how many of its
+        runs each lab measured (a package may carry other labs' runs, e.g. the published
+        map's), most runs first."""
+        n = 0 if self.runs is None else len(self.runs)
+        text = f"{self.path}: valid friction-map package from {self.lab}, {n} runs"
+        if self.runs is None or not n:
+            return text
+        counts = self.runs["lab"].astype(str).value_counts(sort=False)
+        by_lab = sorted(counts.items(), key=lambda kv: (-kv[1], kv[0]))
+        if len(by_lab) == 1 and by_lab[0][0] == self.lab:
+            return text
+        return text + ": " + ", ".join(f"{k} measured by {lab}" for lab, k in by_lab)
+
     def lines(self) -> list[str]:
         """One line per problem (and one counting those beyond the limit)."""
         out = [str(p) for p in self.problems]

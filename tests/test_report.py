@@ -6,6 +6,7 @@ from __future__ import annotations
 import base64
 import io
 import re
+import shutil
 import subprocess
 import sys
 from html.parser import HTMLParser
@@ -208,6 +209,23 @@ def test_published_map_report_without_traces_or_failures(tmp_path):
     assert "no trace (" not in html and "<details" not in html
     assert page.rows["runs-table"] == 169
     assert all(run_anchor(m) in page.ids for m in read_map(map_path)["measurement_id"])
+    assert "<th class=t>test</th>" not in runs_header(html)  # imported rows name none
+
+
+def test_runs_without_a_trace_say_which_test_and_result_they_came_from(tmp_path):
+    # a map of reduced runs read without its traces: each run's row names its test
+    made, _ = make_processed(tmp_path / "lab")
+    map_path = tmp_path / "alone" / "friction_map.parquet"  # no traces beside it
+    map_path.parent.mkdir()
+    shutil.copyfile(made, map_path)
+    html = make_report(map_path=map_path, output=tmp_path / "r.html").read_text(
+        encoding="utf-8")
+    header = runs_header(html)
+    assert "<th class=t>test</th><th class=t>result</th>" in header
+    runs = read_map(map_path)
+    body = html.split("<table id=runs-table>", 1)[1].split("</table>", 1)[0]
+    for r in runs.itertuples():
+        assert f"<td class=t>{r.test}</td><td class=t>{r.result}</td>" in body
 
 
 def _campaign(root: Path) -> Path:

@@ -233,3 +233,21 @@ def test_map_rows_keep_labels_given_per_run(raw: Path) -> None:
     # the 5 N step strays from the 3 N label: flagged, not silently averaged in
     assert "normal_force_off_nominal" not in records[0]["flags"].split(";")
     assert "normal_force_off_nominal" in records[1]["flags"].split(";")
+
+
+def test_reduce_force_steps_without_force_gives_each_step_its_own_nominal(raw: Path,
+                                                                       tmp_path: Path) -> None:
+    labels = ["--pin", "Dragonskin 30", "--disc", "steel", "--temperature", "20"]
+    result = reduce_cli(str(raw / "steps.csv"), *labels, "--json", "--map",
+                        str(tmp_path / "m.parquet"), "--out", str(tmp_path / "o"))
+    assert result.exit_code == 0, result.output
+    runs = pd.read_parquet(tmp_path / "m.parquet").sort_values("interval")
+    # the 3 N and 5 N steps, each estimated from its own measured force, and flagged so
+    assert runs["normal_force_N"].tolist() == [3.0, 5.0]
+    assert all("nominal_force_estimated" in f.split(";") for f in runs["flags"])
+    # with --force every step is labelled alike: said, and the stray step flagged
+    forced = reduce_cli(str(raw / "steps.csv"), *labels, "--force", "3", "--no-map",
+                        "--out", str(tmp_path / "o2"))
+    assert forced.exit_code == 0, forced.output
+    assert "holds 2 friction intervals (force or speed steps): --force labels each alike" \
+        in forced.stderr

@@ -477,7 +477,7 @@ def test_campaign_list_shows_one_row_per_run(lab: Path) -> None:
     fr = [ln for ln in lines if ln.startswith("SESSION_FR.CSV")]
     assert len(fr) == 3 and all("reduced" in ln for ln in fr)
     assert any("DS30 on steel, 5 N, 20 °C, #2" in ln for ln in fr)
-    assert "12 run(s) in 6 file(s): 2 failed, 10 reduced" in result.stdout
+    assert "12 row(s) in 6 file(s): 2 failed, 10 reduced" in result.stdout
 
 
 def test_batch_a_session_folder_in_a_real_process(lab: Path) -> None:

@@ -87,7 +87,7 @@ def test_campaign_list_shows_metadata_and_status(config: Path) -> None:
     row = next(line for line in lines if line.startswith("DS30_steel_5N_20C_r2.csv"))
     # not read yet: its tests are not known
     assert row.split()[1:4] == ["-", "-", "new"] and "Dragonskin 30" in row
-    assert "4 run(s) in 4 file(s): 4 new" in before.stdout
+    assert "4 row(s) in 4 file(s): 4 new" in before.stdout
 
     invoke("batch", str(config))
     after = invoke("campaign", "list", str(config), "--json")

@@ -228,5 +228,6 @@ def _print_table(rows: list[dict[str, Any]]) -> None:
     for r in rows:
         counts[r["status"]] = counts.get(r["status"], 0) + 1
     files = len({r["file"] for r in rows})
-    click.echo(f"{len(rows)} run(s) in {files} file(s): "
+    # a row is a run, or a file (or test) not read as runs yet or that failed as a whole
+    click.echo(f"{len(rows)} row(s) in {files} file(s): "
                + ", ".join(f"{n} {s}" for s, n in sorted(counts.items())))

@@ -86,9 +86,9 @@ def merge_map(
             raise MapError(f"a data package names its lab ({package_lab!r}); --lab is for a "
                            "Parquet map whose rows name none", path=other)
         return MergeReport(append_records(path, frame_records(runs), replace=replace))
-    if Path(other).resolve() == Path(path).resolve():
+    if os.path.realpath(other) == os.path.realpath(path):
         raise MapError("cannot merge a friction map into itself", path=other)
-    runs = read_map(other)
+    runs = read_map(other)  # validated: a damaged or foreign file is refused before any write
     unnamed = runs["lab"].map(_missing).astype(bool)
     if lab is not None:
         runs.loc[unnamed, "lab"] = lab

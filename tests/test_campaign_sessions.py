@@ -262,6 +262,11 @@ def test_each_force_step_of_a_test_gets_its_own_manifest_row(tmp_path: Path) -> 
                                  "steps.txt,,7,,,9,,\n")
     args = ["batch", str(raw), "--manifest", str(raw / "manifest.csv"),
             "--out", str(tmp_path / "out"), "--no-plots", "--jobs", "1"]
+    # before any batch the listing shows the rows the manifest names, with their steps
+    listed = campaign_listing(folder_campaign(raw, manifest=raw / "manifest.csv",
+                                              output_dir=tmp_path / "out"))
+    assert [(r["interval"], r["normal_force_N"], r["status"]) for r in listed] == [
+        (2, 3.0, "new"), (3, 5.0, "new"), (7, 9.0, "new")]
     result = CliRunner().invoke(main, args)
     assert result.exit_code == 1, result.output  # the row of interval 7 matched no run
     assert "  manifest row matching no interval: manifest.csv line 5 (steps.txt, " \

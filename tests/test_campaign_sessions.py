@@ -504,3 +504,28 @@ def test_batch_a_session_folder_in_a_real_process(lab: Path) -> None:
     # session.txt's manifest rows changed (the 9 N row went): its runs only are redone
     assert "4 file(s) found (4 read), 10 test(s); 10 run(s) in the files read: 3 reduced, " \
            "7 skipped (unchanged), 0 failed" in second.stdout
+
+
+def test_a_test_name_with_a_control_character_fails_its_run_alone(tmp_path: Path) -> None:
+    """The Test name now lands in the map's ``test`` column: a name that is not one line of
+    printable text (an escape sequence, a terminal could run it) refuses that run in one
+    line; the other file lands and the map stays readable."""
+    raw = tmp_path / "raw"
+    raw.mkdir()
+    write_rheocompass_export(raw / "a.txt", run(0.6, 0.47, 3.0, 41), project="p",
+                             test="friction\x1b[2J", sample="DS30")
+    write_rheocompass_export(raw / "b.txt", run(0.6, 0.47, 3.0, 42), project="p",
+                             test="friction", sample="DS30")
+    (raw / "manifest.csv").write_text(
+        "file,pin,disc,normal_force_N,temperature_C,repeat\n"
+        "a.txt,Dragonskin 30,steel,3,20,1\nb.txt,Dragonskin 30,steel,3,20,2\n",
+        encoding="utf-8")
+    result = CliRunner().invoke(main, ["batch", str(raw), "--manifest",
+                                       str(raw / "manifest.csv"), "--out", str(tmp_path / "o"),
+                                       "--no-plots", "--jobs", "1"])
+    assert result.exit_code == 1 and "Traceback" not in result.output
+    (line,) = [ln for ln in result.stderr.splitlines() if ln.startswith("failed: a.txt")]
+    assert "test: expected one line of printable text" in line and "\\x1b" in line
+    assert "\x1b" not in result.output
+    runs = pd.read_parquet(tmp_path / "o" / "friction_map.parquet")
+    assert runs["source_file"].tolist() == ["b.txt"] and runs["test"].tolist() == ["friction"]

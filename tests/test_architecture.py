@@ -40,7 +40,8 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     # a run's uncertainty budget from the instrument's uncertainties
     ("tribopipe.uncertainty",),
     # raw exports in (readers) and out (synthetic test exports)
-    ("tribopipe.readers", "tribopipe.synthetic", "tribopipe.synthetic_contact"),
+    ("tribopipe.readers", "tribopipe.synthetic", "tribopipe.synthetic_contact",
+     "tribopipe.synthetic_instrument", "tribopipe.synthetic_ratestate"),
     ("tribopipe.intervals",),
     ("tribopipe.detection",),
     ("tribopipe.reduce",),

@@ -239,6 +239,7 @@ def find_plateau_start(
         return z * max(se_block, _block_scatter(means[means.size // 2 :]))
 
     noise_tol = allowance(means, counts)
+    base = (block, means, centres, max(params.settle_tol, noise_tol))
     longest = 0.5 * params.plateau_min_mm
     if noise_tol > params.settle_tol and block < longest:
         factor = min(math.ceil((noise_tol / params.settle_tol) ** 2),
@@ -253,9 +254,33 @@ def find_plateau_start(
     min_blocks = max(2, math.ceil(params.plateau_min_mm / block - 1e-9))
     for k in range(means.size - min_blocks + 1):
         rest = means[k:]
-        if np.all(np.abs(rest - np.median(rest)) <= tol):
-            return float(centres[k] - 0.5 * block), tol
+        level = float(np.median(rest))
+        if np.all(np.abs(rest - level) <= tol):
+            start = float(centres[k] - 0.5 * block)
+            return _settled_within(start, block, level, base), tol
     return None, tol
+
+
+def _settled_within(
+    start_mm: float, block_mm: float, level: float,
+    base: tuple[float, np.ndarray, np.ndarray, float],
+) -> float:
+    """The plateau's start [mm] refined inside its first block of ``block_mm``: a
+    lengthened block averages what lies inside it, so a loading ramp that rises through
+    the plateau's level up to a peak and drops back (or a peak and its fall) can average
+    to the level itself and pass as settled. ``base`` holds the settling test's own
+    blocks (length [mm], means, centres [mm], tolerance [COF]); the start moves past the
+    last of them in the first block whose mean lies further from ``level`` than that
+    tolerance (a single base block of noise does so with probability ``settle_alpha``
+    over all blocks: the tolerance is the base test's)."""
+    base_mm, means, centres, tol = base
+    if block_mm <= base_mm * (1 + 1e-9):
+        return start_mm
+    inside = (centres > start_mm) & (centres < start_mm + block_mm)
+    off = np.flatnonzero(inside & (np.abs(means - level) > tol))
+    if off.size == 0:
+        return start_mm
+    return float(centres[off[-1]] + 0.5 * base_mm)
 
 
 @dataclass(frozen=True)

@@ -72,10 +72,13 @@ may creep to the plateau with no peak at all.
    that noise allowance would exceed ``settle_tol``, the blocks are lengthened by the
    whole factor that brings it down (the scatter of a mean falls as 1/√length), up to
    half of ``plateau_min_mm``: a loose tolerance would let the tail of a transient into
-   the plateau. It
-   ends at the end of the trace. A peak that stands out of the plateau cannot lie inside
-   it, so the plateau needs no knowledge of the peak. When nothing settles, the last
-   ``plateau_min_mm`` of the trace is used (and flagged).
+   the plateau. A lengthened block averages what lies inside it (a soft pin's loading
+   line rising through the plateau's level to its peak and falling back can average to
+   that level), so the start is then refined inside the first block: it moves past the
+   last of the test's own ``block_mm`` blocks there whose mean lies outside their
+   tolerance. It ends at the end of the trace. A peak that stands out of the plateau
+   cannot lie inside it, so the plateau needs no knowledge of the peak. When nothing
+   settles, the last ``plateau_min_mm`` of the trace is used (and flagged).
 4. μ_S is the static peak — the maximum transmittable friction force before gross
    sliding, the reading "at the instant the block slips" of ASTM D1894 and ISO 8295: the
    maximum of the peak curve from the start of sliding up to the plateau's start (and,

@@ -13,6 +13,7 @@ from tribopipe.signals import (
     gamma_q,
     line_threshold,
     periodic_line,
+    power_law_trend,
     running_max,
     running_mean,
     running_median,
@@ -102,6 +103,57 @@ def test_white_and_coloured_noise_rarely_pass_the_threshold(rho: float) -> None:
         line = periodic_line(0.01 * _ar1(rng, 3000, rho), min_cycles=4, max_period=750)
         passed += line.ratio > line.threshold(1e-3)
     assert passed <= 2  # 1e-3 per series: 0.2 expected in 200
+
+
+def _one_over_f(rng: np.random.Generator, n: int, beta: float = 1.0) -> np.ndarray:
+    """Unit-variance noise of spectrum 1/f^β over a record twice as long as ``n`` (a
+    drifting zero: power below the window's own length too), a random half of it kept."""
+    m = 2 * n
+    spectrum = np.fft.rfft(rng.standard_normal(m))
+    f = np.fft.rfftfreq(m)
+    f[0] = f[1]
+    series = np.fft.irfft(spectrum / f ** (beta / 2), m)
+    start = int(rng.integers(0, n))
+    part = series[start : start + n]
+    return part / np.std(part)
+
+
+@pytest.mark.parametrize("beta", [0.5, 1.0, 1.5])
+def test_a_drifting_zero_is_not_stick_slip(beta: float) -> None:
+    # 1/f^β noise (a sensor's zero wandering) has no line, however much low-frequency
+    # power it has; a level read as the median of ±48 bins lies far below the lowest
+    # bins' own and made it pass for one (before the spectrum was flattened)
+    rng = np.random.default_rng(11)
+    passed = 0
+    for _ in range(100):
+        mu = 0.6 + 0.01 * _one_over_f(rng, 3000, beta)
+        line = periodic_line(mu, min_cycles=4, max_period=750)
+        passed += line.ratio > line.threshold(1e-3)
+    assert passed <= 2  # 1e-3 per series: 0.1 expected in 100
+
+
+def test_a_weak_stick_slip_stands_out_of_a_drifting_zero() -> None:
+    # 0.02 peak-to-peak every 70 samples under pink noise of 0.008 (its power rises
+    # tenfold towards the slowest candidates)
+    rng = np.random.default_rng(12)
+    n = 4000
+    mu = 0.5 + _sawtooth(n, 70.0, 0.02) + 0.008 * _one_over_f(rng, n)
+    line = periodic_line(mu, min_cycles=4, max_period=n / 4)
+    assert line.ratio > line.threshold(1e-4)
+    assert line.period == pytest.approx(70.0, rel=0.05)
+    # its size is read on the true scale, not the flattened one
+    assert math.sqrt(line.variance) == pytest.approx(0.02 / math.pi / math.sqrt(2), rel=0.3)
+
+
+def test_the_power_law_of_white_noise_is_flat_and_of_pink_noise_falls_as_1_over_f() -> None:
+    rng = np.random.default_rng(13)
+    for beta, noise in ((0.0, rng.standard_normal(8192)), (1.0, _one_over_f(rng, 8192))):
+        power = np.abs(np.fft.rfft(noise)) ** 2
+        trend = power_law_trend(power)
+        j = np.array([10, 1000])
+        slope = math.log(trend[j[1]] / trend[j[0]]) / math.log(j[1] / j[0])
+        assert slope == pytest.approx(-beta, abs=0.1)
+    assert np.array_equal(power_law_trend(np.zeros(50)), np.ones(50))
 
 
 def test_threshold_grows_with_the_candidates_and_the_bins_correlation() -> None:

@@ -95,9 +95,11 @@ may creep to the plateau with no peak at all.
    and ``static_not_distinct`` is flagged; the raw peak is kept in
    ``parameters["mu_s_peak_raw"]``. So μ_S ≥ μ_K always.
 7. Stick-slip: a periodic oscillation of the plateau. Its periodogram (after removing a
-   quadratic trend) is searched for a line with at least ``stick_slip_min_cycles``
-   cycles in the window that stands above the local level of the neighbouring
-   frequencies (:func:`tribopipe.signals.periodic_line`) by more than white or coloured
+   quadratic trend, and divided by the power law fitted to it, so that a drifting
+   zero's 1/f noise is locally flat) is searched for a line with at least
+   ``stick_slip_min_cycles`` cycles in the window that stands above the local level of
+   the neighbouring frequencies (:func:`tribopipe.signals.periodic_line`) by more than
+   white or coloured
    noise would with probability ``stick_slip_false_alarm`` per run
    (:func:`tribopipe.signals.line_threshold`), and adds at least ``stick_slip_min_std``
    to μ's standard deviation. A test over the whole window sees a weak, regular

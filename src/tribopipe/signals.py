@@ -169,6 +169,23 @@ class Line:
         return line_threshold(self.candidates, false_alarm, correlation_sq=self.correlation_sq)
 
 
+def power_law_trend(power: Any) -> np.ndarray:
+    """The power law c·j^β fitted to a periodogram (shape (m,), bin 0 the mean's, left
+    out) by least squares of ln I_j over ln j, over the bins with power, as an array of
+    the same shape (1 at bin 0; all ones when fewer than 8 bins have power). The
+    logarithm of an exponential variate is its level's logarithm less Euler's constant,
+    so the slope β is unbiased; the constant does not matter for a ratio."""
+    p = np.asarray(power, dtype=float)
+    out = np.ones(p.size)
+    j = np.arange(1, p.size)
+    good = p[1:] > 0
+    if int(good.sum()) < 8:
+        return out
+    beta, c = np.polyfit(np.log(j[good]), np.log(p[1:][good]), 1)
+    out[1:] = np.exp(c + beta * np.log(j))
+    return out
+
+
 def periodic_line(
     values: Any, *, min_cycles: float, max_period: float, neighbours: int = 48,
     smooth_bins: int = 3, detrend_degree: int = 2, taper_fraction: float = 0.2,
@@ -186,8 +203,16 @@ def periodic_line(
     length jitters spreads over a few) and is compared with the local level: the median
     of the ``2·neighbours + smooth_bins`` bins around it (the spectrum mirrored at its
     ends) over ln 2, the median of an exponential variate; it follows the slow change of a
-    coloured noise's level but not a line. Candidates have at least ``min_cycles``
-    cycles in the series and a period of 2 to ``max_period`` samples. When the strongest
+    coloured noise's level but not a line. The median is a fair level only where the
+    spectrum is about flat over those bins; a sensor's drifting zero is 1/f^β noise
+    (pink: β ≈ 1), whose level falls by a factor of ten or more across the neighbours
+    of the lowest candidates, so the median there lies far below the bin's own level and
+    the noise itself passes for a line. The periodogram is therefore first divided by
+    the power law fitted to it (:func:`power_law_trend`: a line fills a few of thousands
+    of bins and hardly moves the fit; white noise gives β ≈ 0 and changes nothing), the
+    test run on that flattened spectrum, and the line's variance taken back on the true
+    scale. Candidates have at least ``min_cycles`` cycles in the series and a period of 2
+    to ``max_period`` samples. When the strongest
     line is the 2nd or 3rd harmonic of a line that also stands out (at 1 % for that one
     frequency), the period reported is the fundamental's.
     """
@@ -202,6 +227,8 @@ def periodic_line(
     power = np.abs(np.fft.rfft(resid * taper)) ** 2 / w2
     power[0] = 0.0
     j = np.arange(power.size)
+    trend = power_law_trend(power)
+    power = power / trend
     with np.errstate(divide="ignore"):
         period = np.where(j > 0, n / np.maximum(j, 1), np.inf)
     candidate = (j >= max(1, math.ceil(min_cycles))) & (period <= max_period) & (period >= 2)
@@ -219,7 +246,7 @@ def periodic_line(
     k = int(np.argmax(ratio))
     # Parseval with the taper: a line's variance is its summed power × 2·Σw²/(Σw)²
     gain = 2.0 * w2 / float(np.sum(taper)) ** 2
-    excess = max(0.0, float(line[k] - smooth_bins * level[k])) * gain
+    excess = max(0.0, float(line[k] - smooth_bins * level[k])) * gain * float(trend[k])
     rho = taper_bin_correlation_sq(taper)
     fundamental = k
     # a saw-tooth's harmonics are lines too: if the strongest is a harmonic, the series
@@ -229,7 +256,8 @@ def periodic_line(
         sub = int(round(k / h))
         if sub >= max(1, math.ceil(min_cycles)) and candidate[sub] and ratio[sub] > single:
             fundamental = sub
-            excess += max(0.0, float(line[sub] - smooth_bins * level[sub])) * gain
+            excess += (max(0.0, float(line[sub] - smooth_bins * level[sub])) * gain
+                       * float(trend[sub]))
             break
     return Line(float(ratio[k]), float(period[fundamental]), excess, count, rho)
 

@@ -204,6 +204,29 @@ def test_missing_numbers_are_null_never_nan(tmp_path):
     assert len(ds["mu_s_points"]) == 2  # reduced runs hold μ_S
 
 
+def test_each_point_carries_the_combined_uncertainty_query_interpolates(tmp_path):
+    # the page shows query's u beside the repeats' CI: the points must hold pair_points' u
+    from tribopipe.query import pair_points, pairs, select_pair
+    from tribopipe.stats import group_statistics
+
+    map_path, _ = make_processed(tmp_path)
+    runs = read_map(map_path)
+    data = explorer_data(runs)
+    groups = group_statistics(runs)
+    checked = 0
+    for pair in data["pairs"]:
+        want = pair_points(select_pair(groups, pair["pin"], pair["disc"]), "mu_k")
+        for got, (_, row) in zip(pair["mu_k_points"], want.iterrows(), strict=True):
+            if row["u"] == row["u"]:  # not NaN: reduced runs carry their budgets
+                assert got["u"] == pytest.approx(float(row["u"]), rel=1e-12)
+                assert got["u"] > 0
+                checked += 1
+            else:
+                assert got["u"] is None
+    assert checked > 0
+    assert pairs(groups)  # the map has pairs to show
+
+
 def test_excluded_runs_are_left_out(tmp_path):
     map_path, _ = make_processed(tmp_path)
     runs = read_map(map_path)

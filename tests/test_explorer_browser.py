@@ -185,6 +185,8 @@ def assert_same_estimate(page_est: dict | None, est) -> None:
         return
     assert same(page_est["value"], est.value)
     assert same(page_est["uncertainty"], est.uncertainty)
+    # the combined standard uncertainty (the runs' budgets) travels with the same weights
+    assert same(page_est["u_combined"], est.u_combined)
     assert page_est["clamped_pressure"] == est.clamped_pressure
     assert page_est["clamped_temperature"] == est.clamped_temperature
     assert len(page_est["used"]) == len(est.used)
@@ -194,6 +196,7 @@ def assert_same_estimate(page_est: dict | None, est) -> None:
         assert mine["mean"] == theirs.mean and mine["n"] == theirs.n
         assert same(mine["weight"], theirs.weight)
         assert same(mine["ci95_half_width"], theirs.ci95_half_width)
+        assert same(mine["u"], theirs.u)
 
 
 def assert_page_equals_query(tab, groups, conditions) -> int:
@@ -259,6 +262,8 @@ def shown(tab) -> dict:
               clampedTemperature: e.dataset.clampedTemperature,
               clamped: document.getElementById('clamped').textContent,
               muS: document.getElementById('mu-s').textContent,
+              u: document.getElementById('mu-k-u').textContent,
+              uValue: document.getElementById('mu-k-u').dataset.u,
               pin: document.getElementById('pin').selectedOptions[0].textContent,
               disc: document.getElementById('disc').selectedOptions[0].textContent,
               pressure: document.getElementById('pressure').value,
@@ -275,6 +280,13 @@ def assert_shows(tab, res) -> None:
     assert s["clampedPressure"] == str(res.mu_k.clamped_pressure).lower()
     assert s["clampedTemperature"] == str(res.mu_k.clamped_temperature).lower()
     assert s["clamped"].startswith("yes" if res.clamped else "no")
+    # beside the repeats' interval, the combined u of query and its U = 2u
+    if res.mu_k.u_combined is None:
+        assert s["u"].startswith("unknown") and s["uValue"] == ""
+    else:
+        u = res.mu_k.u_combined
+        assert s["u"] == f"{u:.3f} (U = {2 * u:.3f}, k = 2)"
+        assert same(float(s["uValue"]), u)
     if res.mu_s is None:
         assert s["muS"].startswith("unknown")
     else:

@@ -7,9 +7,11 @@ this module fills them with the map's data:
 
 * what :func:`tribopipe.query.query` interpolates over — each pair's measured points
   (:func:`tribopipe.query.pair_points`: pressure [kPa], temperature [°C], group mean, 95 %
-  CI half-width, n), in the order the interpolation sums them. The page redoes
-  ``query``'s interpolation on them (bilinear, held at the ends and said so, the
-  uncertainty carried with the same weights); a browser test holds the two equal.
+  CI half-width, combined standard uncertainty u of the mean, n), in the order the
+  interpolation sums them. The page redoes ``query``'s interpolation on them (bilinear,
+  held at the ends and said so, the CI half-width and u carried with the same weights)
+  and shows u (with U = 2u) beside the repeats' interval; a browser test holds the two
+  equal.
 * each pair's included runs (the repeats), the group table of
   :func:`tribopipe.stats.group_statistics` and the power-law fits of
   :func:`tribopipe.fit.fit_power_law` with their curves sampled here in Python.
@@ -132,6 +134,7 @@ def _points(points: pd.DataFrame, pair_groups: pd.DataFrame) -> list[dict[str, A
                 "temperature_C": _plain(r["temperature_C"]),
                 "mean": _plain(r["mean"]),
                 "half": _plain(r["half"]),
+                "u": _plain(r["u"]) if "u" in r else None,
                 "n": int(r["n"]),
                 "run_ids": run_ids,
             }

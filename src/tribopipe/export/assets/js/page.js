@@ -141,6 +141,7 @@ function readUrl() {
 
 function renderResult(res, error) {
   var muK = $("mu-k");
+  var muKu = $("mu-k-u");
   var muS = $("mu-s");
   var clamped = $("clamped");
   var err = $("tpx-error");
@@ -152,6 +153,8 @@ function renderResult(res, error) {
   err.hidden = !error;
   if (!res) {
     muK.textContent = "–";
+    muKu.textContent = "–";
+    delete muKu.dataset.u;
     muS.textContent = "–";
     clamped.textContent = "–";
     clamped.className = "";
@@ -164,6 +167,10 @@ function renderResult(res, error) {
     (res.mu_k.uncertainty === null ? "" : " ± " + f3(res.mu_k.uncertainty));
   muK.dataset.value = pyRepr(res.mu_k.value);
   muK.dataset.uncertainty = res.mu_k.uncertainty === null ? "" : pyRepr(res.mu_k.uncertainty);
+  // GUM combined standard uncertainty (k = 1) and the expanded U = 2u, beside the CI
+  muKu.textContent = res.mu_k.u_combined === null ? "unknown (a group used has no budget)" :
+    f3(res.mu_k.u_combined) + " (U = " + f3(2 * res.mu_k.u_combined) + ", k = 2)";
+  muKu.dataset.u = res.mu_k.u_combined === null ? "" : pyRepr(res.mu_k.u_combined);
   muK.dataset.clampedPressure = String(res.mu_k.clamped_pressure);
   muK.dataset.clampedTemperature = String(res.mu_k.clamped_temperature);
   muS.textContent = res.mu_s === null ? "unknown (no group of this pair holds it)" :
@@ -180,7 +187,8 @@ function renderResult(res, error) {
   res.mu_k.used.forEach(function (u) {
     var tr = make("tr");
     [g6(u.pressure_kPa), u.temperature_C === null ? "?" : g6(u.temperature_C), f3(u.mean),
-      u.ci95_half_width === null ? "–" : f3(u.ci95_half_width), String(u.n), f3(u.weight)]
+      u.ci95_half_width === null ? "–" : f3(u.ci95_half_width),
+      u.u === null ? "–" : f3(u.u), String(u.n), f3(u.weight)]
       .forEach(function (v) { tr.appendChild(make("td", v)); });
     var cell = make("td", null, "tpx-t");
     // one line per repeat: its μ_K and the file and test it came from

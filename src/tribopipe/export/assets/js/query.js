@@ -60,7 +60,7 @@ function interpolationWeights(ps, ts, p, t) {
   return [weights, clampedP, clampedT];
 }
 
-/* query._estimate over a pair's points (each {pressure_kPa, temperature_C, mean, half, n}). */
+/* query._estimate over a pair's points (each {pressure_kPa, temperature_C, mean, half, u, n}). */
 function estimate(points, p, t) {
   var w = interpolationWeights(
     points.map(function (q) { return q.pressure_kPa; }),
@@ -69,11 +69,14 @@ function estimate(points, p, t) {
   var value = 0;
   var unc = 0;
   var uncKnown = true;
+  var uComb = 0;
+  var uKnown = true;
   var used = [];
   points.forEach(function (q, i) {
     if (!(w[0][i] > 0)) return;
     value += w[0][i] * q.mean;
     if (finite(q.half)) unc += w[0][i] * q.half; else uncKnown = false;
+    if (finite(q.u)) uComb += w[0][i] * q.u; else uKnown = false;
     used.push({
       pressure_kPa: q.pressure_kPa,
       temperature_C: finite(q.temperature_C) ? q.temperature_C : null,
@@ -81,6 +84,7 @@ function estimate(points, p, t) {
       ci95_half_width: finite(q.half) ? q.half : null,
       n: q.n,
       weight: w[0][i],
+      u: finite(q.u) ? q.u : null,
       run_ids: q.run_ids,
     });
   });
@@ -90,6 +94,7 @@ function estimate(points, p, t) {
     used: used,
     clamped_pressure: w[1],
     clamped_temperature: w[2],
+    u_combined: uKnown ? uComb : null,
   };
 }
 

@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 from tribopipe.signals import (
+    decreasing_root,
     gamma_q,
     line_threshold,
     periodic_line,
@@ -20,6 +21,7 @@ from tribopipe.signals import (
     savgol,
     taper_bin_correlation_sq,
     tukey,
+    window_medians,
 )
 
 RNG = np.random.default_rng(7)
@@ -241,3 +243,33 @@ def test_gamma_survival_function_takes_an_array_as_it_takes_numbers() -> None:
         assert together.shape == x.shape
         # one by one each x stops at its own last term; together at the slowest one's
         assert together == pytest.approx([gamma_q(a, float(v)) for v in x], rel=1e-14)
+
+
+@pytest.mark.parametrize("window", [1, 2, 7, 99, 100])
+def test_window_medians_are_numpys_medians_of_every_window(window: int) -> None:
+    rng = np.random.default_rng(window)
+    v = rng.exponential(size=1000)
+    v[500] = np.nan  # a gap spoils exactly the windows that hold it, as np.median does
+    want = np.median(np.lib.stride_tricks.sliding_window_view(v, window), axis=1)
+    got = window_medians(v, window)
+    assert got.shape == want.shape
+    np.testing.assert_array_equal(got, want)
+    assert window_medians(v[: window - 1], window).size == 0
+
+
+def test_decreasing_root_finds_the_crossing_to_the_tolerance_in_few_steps() -> None:
+    calls = []
+
+    def g(x: float) -> float:
+        calls.append(x)
+        return math.log(math.exp(-x) + 1e-9) - math.log(0.01)  # crosses at ~ln 100
+
+    x = decreasing_root(g, 0.0, 500.0)
+    assert x == pytest.approx(math.log(1.0 / (0.01 - 1e-9)), rel=1e-11)
+    assert len(calls) <= 15  # bisection alone would need ~47 steps for this tolerance
+    # no crossing inside: the bound on the side the crossing lies
+    assert decreasing_root(lambda v: -1.0 - v, 0.0, 10.0) == 0.0
+    assert decreasing_root(lambda v: 5.0 - v, 0.0, 1.0) == 1.0
+    # a function that is -inf beyond a point still brackets by bisection
+    assert decreasing_root(lambda v: 3.0 - v if v < 4 else -math.inf, 0.0, 100.0) == (
+        pytest.approx(3.0, rel=1e-11))

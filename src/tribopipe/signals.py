@@ -33,7 +33,21 @@ def running_median(values: Any, window: int) -> np.ndarray:
     if w <= 1 or v.size == 0:
         return v.copy()
     half = w // 2
-    return np.median(sliding_window_view(_padded(v, half, w - 1 - half), w), axis=1)
+    return window_medians(_padded(v, half, w - 1 - half), w)
+
+
+def window_medians(values: Any, window: int) -> np.ndarray:
+    """Median of every run of ``window`` consecutive samples of ``values`` (shape
+    (n - window + 1,)): the same numbers as ``np.median`` over a sliding window view, by
+    pandas' rolling median (a sorted window updated sample by sample, O(n log window)
+    instead of a partition of n × window copied values)."""
+    import pandas as pd
+
+    v = np.asarray(values, dtype=float)
+    w = int(window)
+    if w < 1 or v.size < w:
+        return np.empty(0)
+    return pd.Series(v).rolling(w).median().to_numpy()[w - 1 :]
 
 
 def running_mean(values: Any, window: int) -> np.ndarray:
@@ -241,7 +255,7 @@ def periodic_line(
     mirrored = np.pad(power[1:], width // 2, mode="symmetric")
     level = np.empty_like(power)
     level[0] = np.inf
-    level[1:] = np.median(sliding_window_view(mirrored, width), axis=1) / math.log(2.0)
+    level[1:] = window_medians(mirrored, width) / math.log(2.0)
     ratio = np.where(candidate & (level > 0), line / np.where(level > 0, level, 1.0), 0.0)
     k = int(np.argmax(ratio))
     # Parseval with the taper: a line's variance is its summed power × 2·Σw²/(Σw)²
@@ -368,13 +382,42 @@ def _threshold(log10_target: float, correlation_sq: tuple[float, ...], smooth_bi
     def tail(L: float) -> float:
         return float(weights @ gamma_q(shape, L * m / scale))
 
-    lo, hi = 0.0, 500.0
-    for _ in range(50):
-        mid = 0.5 * (lo + hi)
-        if tail(mid) > target:
-            lo = mid
+    return decreasing_root(lambda L: math.log(max(tail(L), 1e-300)) - math.log(target),
+                           0.0, 500.0)
+
+
+def decreasing_root(g: Any, lo: float, hi: float, *, rel_tol: float = 1e-12) -> float:
+    """The x in [lo, hi] where the decreasing function ``g`` crosses zero (g(lo) > 0 ≥
+    g(hi) assumed; the bound itself when not), to ``rel_tol`` of x: regula falsi with the
+    Illinois halving of a stuck end (a few evaluations for a smooth g), falling back to a
+    bisection step whenever a value is not finite or the step stalls."""
+    g_lo, g_hi = g(lo), g(hi)
+    if not g_lo > 0:
+        return lo
+    if g_hi > 0:
+        return hi
+    side = 0
+    for _ in range(200):
+        if hi - lo <= rel_tol * max(abs(hi), 1e-300):
+            break
+        x = 0.5 * (lo + hi)
+        if math.isfinite(g_lo) and math.isfinite(g_hi) and g_lo != g_hi:
+            guess = hi - g_hi * (hi - lo) / (g_hi - g_lo)
+            if lo < guess < hi:
+                x = guess
+        g_x = g(x)
+        if g_x == 0:
+            return x
+        if g_x > 0:
+            lo, g_lo = x, g_x
+            if side == +1:
+                g_hi *= 0.5
+            side = +1
         else:
-            hi = mid
+            hi, g_hi = x, g_x
+            if side == -1:
+                g_lo *= 0.5
+            side = -1
     return hi
 
 

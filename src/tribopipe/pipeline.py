@@ -30,7 +30,7 @@ from typing import TYPE_CHECKING, Any
 
 from .errors import ReductionError, TribopipeError
 from .escape import display_path
-from .figures import plot_trace
+from .figures import TraceConditions, plot_trace
 from .files import file_sha256, os_reason, write_text_atomic
 from .frictionmap.duplicates import (
     SameContent,
@@ -350,13 +350,28 @@ def write_summary(out_dir: str | Path | OutputLayout, outcome: RunOutcome) -> Pa
 
 
 def plot_run(out_dir: str | Path | OutputLayout, outcome: RunOutcome) -> Path:
-    """Draw a run's trace plot (μ over sliding distance with the μ_S peak and the μ_K
-    window, :func:`tribopipe.figures.plot_trace`) to
-    ``<out_dir>/plots/traces/<stem>_<id8>.png`` and return its path."""
+    """Draw a run's trace plot (μ and normal force over sliding distance with the μ_S peak
+    and the μ_K window, conditions and flags in the title;
+    :func:`tribopipe.figures.plot_trace`) to ``<out_dir>/plots/traces/<stem>_<id8>.png``
+    and return its path."""
     target = OutputLayout.of(out_dir).trace_plot_path(outcome.path, outcome.measurement_id)
-    title = run_name(Path(outcome.path).name, outcome.place, outcome.several)
-    plot_trace(outcome.result, target, title=title)
+    plot_trace(outcome.result, target, conditions=run_conditions(outcome))
     return target
+
+
+def run_conditions(outcome: RunOutcome) -> TraceConditions:
+    """What a run's trace plot names: its file (with the run's test and place when the
+    export holds several, :func:`run_name`) and its nominal conditions (the labels; the
+    nominal pressure from its map record when it has one)."""
+    labels = outcome.labels
+    record = outcome.record or {}
+    return TraceConditions(
+        source=run_name(Path(outcome.path).name, outcome.place, outcome.several),
+        pin=labels.pin, disc=labels.disc,
+        normal_force_N=finite_or_none(labels.normal_force_N),
+        pressure_kPa=finite_or_none(record.get("pressure_kPa")),
+        temperature_C=finite_or_none(labels.temperature_C), repeat=labels.repeat,
+    )
 
 
 @dataclass(frozen=True)

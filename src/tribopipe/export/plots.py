@@ -21,12 +21,14 @@ from ..figures import (  # noqa: F401 - the per-run plot is importable from here
     FORMATS,
     MU_LABEL,
     Target,
-    draw_trace,
+    TraceConditions,
+    TraceMarks,
     image_format,
     new_figure,
     plot_trace,
     plot_trace_row,
     save_figure,
+    trace_figure,
 )
 from ..fit import fit_power_law, power_law
 from ..frictionmap import read_map

@@ -1,0 +1,631 @@
+"""The plot of one reduced run (Fig. 3 style), drawn per run by the pipeline and the batch.
+
+Two panels over one sliding-distance axis — μ (raw and smoothed, the μ_S peak, the μ_K
+window and level) above, the measured normal force (and the nominal force when known)
+below — under a header naming the file, the run's conditions (pin, disc, nominal force and
+pressure, temperature, repeat), what was read (μ_S and where, μ_K and over which window)
+and the run's flags.
+
+A batch draws one per run, so the figure is built for speed without losing anything a
+reader sees:
+
+* **one figure per process and resolution** (:func:`trace_figure`), built once with a
+  fixed layout (no layout engine, no ``tight_layout``); a plot only updates its artists;
+* **min–max decimation per pixel column** (:func:`~tribopipe.figures.decimate.minmax_decimate`):
+  at most two points per pixel column, the same pixels drawn;
+* **one kept background**: what does not change from run to run (spines, axis labels,
+  legend rows) is drawn once per set of legend entries and restored for every PNG; the
+  run's own artists are drawn on it — the data, the μ_S/μ_K marks, and also the grid and
+  the tick marks (one line collection each) at the axes' own tick locations;
+* **text typeset by Pillow** on the PNG (FreeType, well under 1 ms a line; matplotlib's
+  text layout costs several ms a line): the header and the tick labels, at the position,
+  size and colour matplotlib would use. SVG and PDF are drawn whole by matplotlib, with its
+  own tick labels from the same locators and formatters.
+"""
+
+from __future__ import annotations
+
+import threading
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+from ..numeric import finite_or_none, is_finite
+from .canvas import DPI, MU_LABEL, Target, image_format, prepare_target, save_figure, write_png
+from .decimate import minmax_decimate
+
+if TYPE_CHECKING:
+    import numpy as np
+    import pandas as pd
+    from PIL.Image import Image
+
+    from ..reduce import ReductionResult
+
+
+@dataclass(frozen=True)
+class TraceConditions:
+    """What a trace plot's header says of a run: its source and nominal conditions.
+
+    ``normal_force_N`` is the nominal total normal force [N] (also drawn on the force
+    panel), ``pressure_kPa`` the nominal contact pressure per pin [kPa], ``temperature_C``
+    the nominal temperature [°C]; ``None`` means unknown (left out of the header).
+    """
+
+    source: str | None = None
+    pin: str | None = None
+    disc: str | None = None
+    normal_force_N: float | None = None
+    pressure_kPa: float | None = None
+    temperature_C: float | None = None
+    repeat: int | None = None
+
+    @classmethod
+    def from_row(cls, row: Mapping[str, Any]) -> TraceConditions:
+        """The conditions of a friction-map row (``source_file, pin, disc,
+        normal_force_N, pressure_kPa, temperature_C, repeat``; missing keys are unknown)."""
+        repeat = finite_or_none(row.get("repeat"))
+        return cls(source=_text_or_none(row.get("source_file")),
+                   pin=_text_or_none(row.get("pin")), disc=_text_or_none(row.get("disc")),
+                   normal_force_N=finite_or_none(row.get("normal_force_N")),
+                   pressure_kPa=finite_or_none(row.get("pressure_kPa")),
+                   temperature_C=finite_or_none(row.get("temperature_C")),
+                   repeat=None if repeat is None else int(repeat))
+
+    def line(self) -> str:
+        """One line: ``pin on disc · F 3 N (35.37 kPa per pin) · 20 °C · repeat 2``."""
+        parts = []
+        if self.pin or self.disc:
+            parts.append(f"{self.pin or 'pin ?'} on {self.disc or 'disc ?'}")
+        if self.normal_force_N is not None:
+            force = f"F {self.normal_force_N:g} N"
+            if self.pressure_kPa is not None:
+                force += f" ({self.pressure_kPa:.4g} kPa per pin)"
+            parts.append(force)
+        elif self.pressure_kPa is not None:
+            parts.append(f"{self.pressure_kPa:.4g} kPa per pin")
+        if self.temperature_C is not None:
+            parts.append(f"{self.temperature_C:g} °C")
+        if self.repeat is not None:
+            parts.append(f"repeat {self.repeat}")
+        return " · ".join(parts) if parts else "conditions unknown"
+
+
+def _text_or_none(value: Any) -> str | None:
+    """``str(value)`` for a present text; ``None`` for a missing one (None, NaN, '')."""
+    if value is None or (isinstance(value, float) and value != value):
+        return None
+    return str(value) or None
+
+
+@dataclass(frozen=True)
+class TraceMarks:
+    """The readings a trace plot marks: μ_S at its distance [mm], μ_K over its window
+    ``(start, end)`` [mm], and the run's flags; non-finite values are not drawn."""
+
+    mu_s: float | None
+    mu_s_distance_mm: float | None
+    mu_k: float | None
+    mu_k_window_mm: tuple[Any, Any] | None
+    flags: tuple[str, ...] = ()
+
+    @property
+    def window(self) -> tuple[float, float] | None:
+        """The μ_K window ``(start, end)`` [mm] when both ends are finite."""
+        w = self.mu_k_window_mm
+        if w is None or not all(is_finite(v) for v in w):
+            return None
+        return float(w[0]), float(w[1])
+
+    def line(self) -> str:
+        """One line of what was read: ``μ_S = 0.702 at 0.0987 mm · μ_K = 0.480 over
+        0.251–8.39 mm`` (``not found`` for a missing reading)."""
+        if is_finite(self.mu_s):
+            static = f"μ_S = {float(self.mu_s):.3f}"  # type: ignore[arg-type]
+            if is_finite(self.mu_s_distance_mm):
+                static += f" at {float(self.mu_s_distance_mm):.3g} mm"  # type: ignore[arg-type]
+        else:
+            static = "μ_S not found"
+        if is_finite(self.mu_k):
+            kinetic = f"μ_K = {float(self.mu_k):.3f}"  # type: ignore[arg-type]
+            if self.window is not None:
+                kinetic += f" over {self.window[0]:.3g}–{self.window[1]:.3g} mm"
+        else:
+            kinetic = "μ_K not found"
+        return f"{static} · {kinetic}"
+
+
+def flag_tuple(flags: Any) -> tuple[str, ...]:
+    """Flags given as a ``;``-joined text or a sequence, as a tuple without empties."""
+    if flags is None or (isinstance(flags, float) and flags != flags):
+        return ()
+    items = flags.split(";") if isinstance(flags, str) else [str(f) for f in flags]
+    return tuple(f.strip() for f in items if f and f.strip())
+
+
+#: Header lines are cut to this many characters (a file name can be any length).
+HEADER_CHARS = 110
+
+
+def shorten(text: str, limit: int = HEADER_CHARS) -> str:
+    """``text`` cut in the middle with an ellipsis when it is longer than ``limit``."""
+    if len(text) <= limit:
+        return text
+    half = (limit - 1) // 2
+    return text[:half] + "…" + text[len(text) - (limit - 1 - half):]
+
+
+def _fraction(box_in: tuple[float, float, float, float], width_in: float,
+              height_in: float) -> tuple[float, float, float, float]:
+    """An axes box in inches as figure fractions."""
+    left, bottom, width, height = box_in
+    return (left / width_in, bottom / height_in, width / width_in, height / height_in)
+
+
+class TraceFigure:
+    """The reusable figure of a run's trace plot (Agg canvas, fixed layout).
+
+    Built once per process and resolution (:func:`trace_figure`). :meth:`draw` sets every
+    artist from one run (nothing of an earlier run survives), :meth:`save` writes it.
+    7.0 × 5.3 in: header (four lines), μ legend, μ panel, force legend, force panel.
+    """
+
+    WIDTH_IN = 7.0
+    HEIGHT_IN = 5.3
+    #: axes boxes in inches from the figure's left and bottom: (left, bottom, width, height)
+    MU_BOX_IN = (0.75, 1.95, 6.1, 2.3)
+    FORCE_BOX_IN = (0.75, 0.5, 6.1, 1.05)
+    #: where the axis labels sit [in from their axes' left or bottom edge]
+    YLABEL_IN = 0.5
+    XLABEL_IN = 0.3
+    #: tick marks and the gap to their labels [pt] (matplotlib's defaults)
+    TICK_PT = 3.5
+    TICK_PAD_PT = 3.5
+
+    def __init__(self, dpi: int = DPI) -> None:
+        from matplotlib.backends.backend_agg import FigureCanvasAgg
+        from matplotlib.collections import LineCollection
+        from matplotlib.colors import to_rgb
+        from matplotlib.figure import Figure
+        from matplotlib.lines import Line2D
+        from matplotlib.patches import Patch
+        from matplotlib.ticker import MaxNLocator, ScalarFormatter
+        from matplotlib.transforms import IdentityTransform
+
+        self.dpi = dpi
+        w, h = self.WIDTH_IN, self.HEIGHT_IN
+        fig = Figure(figsize=(w, h), dpi=dpi)
+        FigureCanvasAgg(fig)
+        self.figure = fig
+        mu_ax = fig.add_axes(_fraction(self.MU_BOX_IN, w, h))
+        f_ax = fig.add_axes(_fraction(self.FORCE_BOX_IN, w, h), sharex=mu_ax)
+        self.mu_ax, self.force_ax = mu_ax, f_ax
+        #: pixel columns of the panels at this resolution (what decimation aims at)
+        self.columns = int(round(self.MU_BOX_IN[2] * dpi))
+        # matplotlib's automatic ticks, the bin count fixed once (it depends only on the
+        # axis' length), plain numbers (no offset, no power of ten for 1e-5..1e6)
+        for axis in (mu_ax.xaxis, mu_ax.yaxis, f_ax.yaxis):
+            nbins = int(min(max(axis.get_tick_space(), 1), 9))
+            axis.set_major_locator(MaxNLocator(nbins=nbins, steps=[1, 2, 2.5, 5, 10]))
+            formatter = ScalarFormatter(useOffset=False)
+            formatter.set_powerlimits((-5, 6))
+            axis.set_major_formatter(formatter)
+
+        mu_ax.set_ylabel(MU_LABEL)
+        f_ax.set_ylabel("normal force $F_N$ [N]")
+        f_ax.set_xlabel("sliding distance s [mm]")
+        # fixed label places (matplotlib would move them with the tick labels' width)
+        for ax, box in ((mu_ax, self.MU_BOX_IN), (f_ax, self.FORCE_BOX_IN)):
+            ax.yaxis.set_label_coords(-self.YLABEL_IN / box[2], 0.5)
+        f_ax.xaxis.set_label_coords(0.5, -self.XLABEL_IN / self.FORCE_BOX_IN[3])
+
+        blue, red, green = "tab:blue", "tab:red", "tab:green"
+        # the μ_K window: tab:blue at 12 % over white, opaque (five times cheaper to fill
+        # than a transparent span; the grid and the lines are drawn over it), clear of the
+        # spines' inner half
+        tint = tuple(1.0 - 0.12 * (1.0 - c) for c in to_rgb(blue))
+        self.window = mu_ax.axvspan(0.0, 1.0, *_inside(self.MU_BOX_IN[3]), color=tint,
+                                    lw=0, zorder=0.5)
+        self.force_window = f_ax.axvspan(0.0, 1.0, *_inside(self.FORCE_BOX_IN[3]),
+                                         color=tint, lw=0, zorder=0.5)
+        # the grid and the tick marks of a PNG, in pixels (they move with the run's
+        # limits); SVG and PDF use matplotlib's own, at the same places
+        self.grid = fig.add_artist(LineCollection([], colors="#b0b0b0", linewidths=0.8,
+                                                  alpha=0.3, transform=IdentityTransform()))
+        self.ticks = fig.add_artist(LineCollection([], colors="black", linewidths=0.8,
+                                                   transform=IdentityTransform()))
+        (self.raw,) = mu_ax.plot([], [], color="0.75", lw=0.8)
+        (self.smooth,) = mu_ax.plot([], [], color="0.15", lw=1.2)
+        (self.mu_k,) = mu_ax.plot([], [], color=blue, lw=2.0)
+        (self.mu_s,) = mu_ax.plot([], [], "o", color=red, ms=7)
+        # the nominal force under the measured one: where they agree, both show
+        (self.nominal,) = f_ax.plot([], [], color=green, lw=1.3, ls="--")
+        (self.force,) = f_ax.plot([], [], color="0.3", lw=0.8)
+        self.no_force = f_ax.text(0.5, 0.5, "no normal force in the trace",
+                                  transform=f_ax.transAxes, ha="center", va="center",
+                                  color="0.4", fontsize="small")
+        #: legend rows per panel: (the run's artist, a handle like it, label); an entry is
+        #: shown when the run has that artist
+        self._entries = {
+            "mu": (
+                (self.raw, Line2D([], [], color="0.75", lw=0.8), "μ (raw)"),
+                (self.smooth, Line2D([], [], color="0.15", lw=1.2), "μ (smoothed)"),
+                (self.window, Patch(color=tint), "$\\mu_K$ window"),
+                (self.mu_k, Line2D([], [], color=blue, lw=2.0), "$\\mu_K$ (plateau mean)"),
+                (self.mu_s, Line2D([], [], ls="", marker="o", color=red, ms=7),
+                 "$\\mu_S$ (static peak)"),
+            ),
+            "force": (
+                (self.force, Line2D([], [], color="0.3", lw=0.8), "$F_N$ measured"),
+                (self.nominal, Line2D([], [], color=green, lw=1.3, ls="--"),
+                 "$F_N$ nominal"),
+            ),
+        }
+        self._legends: dict[str, Any] = {}
+        self._legend_keys: dict[str, tuple[str, ...]] = {}
+
+        # the header: names from users are never parsed as mathtext
+        top, line = 1.0 - 0.08 / h, 0.18 / h
+        kw: dict[str, Any] = {"ha": "center", "va": "top", "parse_math": False}
+        self.title = fig.text(0.5, top, "", fontsize="medium", **kw)
+        self.conditions = fig.text(0.5, top - 1.1 * line, "", fontsize="small", **kw)
+        self.readings = fig.text(0.5, top - 2.1 * line, "", fontsize="small", **kw)
+        self.flags = fig.text(0.5, top - 3.1 * line, "", fontsize="small", **kw)
+        self.header = (self.title, self.conditions, self.readings, self.flags)
+        self._fonts: dict[tuple[str, float], Any] = {}
+
+        #: the run's own artists, in drawing order (grid above the window's tint)
+        self._artists = (self.window, self.force_window, self.grid, self.ticks, self.raw,
+                         self.smooth, self.mu_k, self.mu_s, self.nominal, self.force)
+        self._shown: dict[Any, bool] = {}
+        self._tick_labels: list[tuple[str, float, float, str]] = []
+        self._backgrounds: dict[tuple[Any, ...], Any] = {}
+        self._background_key: tuple[Any, ...] = ()
+        self._vector_axes(False)
+
+    # ------------------------------------------------------------------ one run
+
+    def draw(
+        self,
+        distance_mm: Any,
+        mu: Any,
+        marks: TraceMarks,
+        *,
+        mu_smooth: Any = None,
+        normal_force_N: Any = None,
+        conditions: TraceConditions | None = None,
+        title: str | None = None,
+    ) -> TraceFigure:
+        """Set every artist from one run; returns ``self`` (ready to :meth:`save`).
+
+        ``distance_mm``, ``mu``, ``mu_smooth`` and ``normal_force_N`` are sample arrays of
+        one length (shape (n,); distance in mm, force in N); ``mu_smooth`` and
+        ``normal_force_N`` may be ``None``. ``title`` (default: the conditions' source)
+        heads the figure; the conditions, the readings and the flags follow.
+        """
+        import numpy as np
+
+        s = np.asarray(distance_mm, dtype=float)
+        mu_v = np.asarray(mu, dtype=float)
+        cond = conditions or TraceConditions()
+        finite_s = s[np.isfinite(s)]
+        data_x = (float(finite_s.min()), float(finite_s.max())) if finite_s.size else (0., 1.)
+        x_range = _padded(*data_x, 0.02)
+        self.mu_ax.set_xlim(*x_range)
+
+        def thin(values: Any) -> tuple[np.ndarray, np.ndarray]:
+            return minmax_decimate(s, np.asarray(values, dtype=float), x_range, self.columns)
+
+        shown = dict.fromkeys(self._artists, False)
+        for artist in (self.raw, self.grid, self.ticks):
+            shown[artist] = True
+        self.raw.set_data(*thin(mu_v))
+        if mu_smooth is not None:
+            self.smooth.set_data(*thin(mu_smooth))
+            shown[self.smooth] = True
+        window = marks.window
+        if window is not None:
+            for span in (self.window, self.force_window):
+                span.set_x(window[0])
+                span.set_width(window[1] - window[0])
+                shown[span] = True
+        if is_finite(marks.mu_k):
+            level = float(marks.mu_k)  # type: ignore[arg-type]
+            # over its window; without one, dashed over the whole run
+            self.mu_k.set_data(list(window or data_x), [level, level])
+            self.mu_k.set_linestyle("-" if window else "--")
+            shown[self.mu_k] = True
+        peak = float(marks.mu_s) if is_finite(marks.mu_s) else None  # type: ignore[arg-type]
+        if peak is not None and is_finite(marks.mu_s_distance_mm):
+            self.mu_s.set_data([float(marks.mu_s_distance_mm)], [peak])  # type: ignore[arg-type]
+            shown[self.mu_s] = True
+        finite = mu_v[np.isfinite(mu_v)]
+        top = max(float(finite.max()) if finite.size else 1.0, peak or 0.0)
+        bottom = min(0.0, float(finite.min())) if finite.size else 0.0
+        self.mu_ax.set_ylim(bottom - 0.02 * (top - bottom), top + 0.08 * (top - bottom))
+        self._draw_force(s, normal_force_N, cond.normal_force_N, data_x, thin, shown)
+        self._set_ticks()
+
+        self.title.set_text(shorten(title if title is not None else (cond.source or "")))
+        self.conditions.set_text(shorten(cond.line()))
+        self.readings.set_text(shorten(marks.line()))
+        self.flags.set_text(shorten("flags: " + (", ".join(marks.flags) or "none")))
+        self.flags.set_color("tab:red" if marks.flags else "0.4")
+        for artist, visible in shown.items():
+            artist.set_visible(visible)
+        self._shown = shown
+        self._background_key = (self._set_legend("mu", shown, self.MU_BOX_IN),
+                                self._set_legend("force", shown, self.FORCE_BOX_IN),
+                                self.no_force.get_visible())
+        return self
+
+    def _draw_force(self, s: np.ndarray, force: Any, nominal_N: float | None,
+                    data_x: tuple[float, float], thin: Any, shown: dict[Any, bool]) -> None:
+        """The normal-force panel: the measured force, the nominal force when known (over
+        the run's distance). Limits: the measured extremes and, when the nominal force is
+        known, ±25 % of it (so a force within the map's 10 % tolerance looks steady and one
+        outside it does not)."""
+        import numpy as np
+
+        f_v = None if force is None else np.asarray(force, dtype=float)
+        finite = f_v[np.isfinite(f_v)] if f_v is not None else np.empty(0)
+        values: list[float] = []
+        if finite.size:
+            self.force.set_data(*thin(f_v))
+            shown[self.force] = True
+            values += [float(finite.min()), float(finite.max())]
+        self.no_force.set_visible(not finite.size)
+        if nominal_N is not None and is_finite(nominal_N):
+            nominal = float(nominal_N)
+            self.nominal.set_data(list(data_x), [nominal, nominal])
+            shown[self.nominal] = True
+            values += [0.75 * nominal, 1.25 * nominal]
+        self.force_ax.set_ylim(*_padded(min(values, default=0.0), max(values, default=1.0),
+                                        0.05))
+
+    def _set_ticks(self) -> None:
+        """The PNG's grid lines, tick marks and tick labels at the axes' locators' ticks
+        within their limits, in pixels, as matplotlib places them: tick marks outside the
+        panels, the force panel's x labels below it, both panels' y labels left of them.
+        Labels are kept as (text, x, y from the top left, Pillow anchor)."""
+        import numpy as np
+
+        tick = self.TICK_PT * self.dpi / 72.0
+        offset = (self.TICK_PT + self.TICK_PAD_PT) * self.dpi / 72.0
+        height = self.HEIGHT_IN * self.dpi
+        grid: list[Any] = []
+        marks: list[Any] = []
+        labels: list[tuple[str, float, float, str]] = []
+        for ax in (self.mu_ax, self.force_ax):
+            (left, bottom), (right, top) = ax.bbox.get_points()
+            to_px = ax.transData.transform
+            for axis, (lo, hi) in ((ax.xaxis, ax.get_xlim()), (ax.yaxis, ax.get_ylim())):
+                locs = np.asarray(axis.get_major_locator().tick_values(lo, hi), dtype=float)
+                slack = 1e-10 * (hi - lo)
+                inside = locs[(locs >= lo - slack) & (locs <= hi + slack)]
+                texts = axis.get_major_formatter().format_ticks(list(inside))
+                if axis is ax.xaxis:
+                    xs = to_px(np.c_[inside, np.full(inside.size, ax.get_ylim()[0])])[:, 0]
+                    grid += [[(x, bottom), (x, top)] for x in xs]
+                    marks += [[(x, bottom), (x, bottom - tick)] for x in xs]
+                    if ax is self.force_ax:
+                        labels += [(text, x, height - bottom + offset, "ma")
+                                   for text, x in zip(texts, xs, strict=True)]
+                else:
+                    ys = to_px(np.c_[np.full(inside.size, ax.get_xlim()[0]), inside])[:, 1]
+                    grid += [[(left, y), (right, y)] for y in ys]
+                    marks += [[(left, y), (left - tick, y)] for y in ys]
+                    labels += [(text, left - offset, height - y, "rm")
+                               for text, y in zip(texts, ys, strict=True)]
+        self.grid.set_segments(grid)
+        self.ticks.set_segments(marks)
+        self._tick_labels = labels
+
+    def _set_legend(self, panel: str, shown: Mapping[Any, bool],
+                    box_in: tuple[float, float, float, float]) -> tuple[str, ...]:
+        """The legend row just above a panel (``"mu"`` or ``"force"``), outside it so the
+        data never hides it: one entry per kind of artist the run has, rebuilt only when
+        that set changes. Returns the labels shown."""
+        entries = [(handle, label) for artist, handle, label in self._entries[panel]
+                   if shown[artist]]
+        key = tuple(label for _, label in entries)
+        if self._legend_keys.get(panel) == key:
+            return key
+        old = self._legends.pop(panel, None)
+        if old is not None:
+            old.remove()
+        if entries:
+            centre = (box_in[0] + box_in[2] / 2) / self.WIDTH_IN
+            self._legends[panel] = self.figure.legend(
+                [h for h, _ in entries], [label for _, label in entries], loc="lower center",
+                bbox_to_anchor=(centre, (box_in[1] + box_in[3]) / self.HEIGHT_IN),
+                ncols=len(entries), fontsize="small", frameon=False, borderaxespad=0.1,
+                borderpad=0.1, columnspacing=1.4, handlelength=1.8)
+        self._legend_keys[panel] = key
+        return key
+
+    # ------------------------------------------------------------------ output
+
+    def save(self, target: Target, fmt: str | None = None) -> Target:
+        """Write the run set by :meth:`draw` to ``target`` and return the target: a PNG
+        from the kept background (:meth:`render`); SVG and PDF drawn whole by matplotlib,
+        with its own tick marks and labels."""
+        fmt = image_format(target, fmt)
+        if fmt != "png":
+            self._vector_axes(True)
+            try:
+                return save_figure(self.figure, target, fmt, self.dpi)
+            finally:
+                self._vector_axes(False)
+        target = prepare_target(target, fmt)
+        write_png(self.render(), target)
+        return target
+
+    def _vector_axes(self, on: bool) -> None:
+        """matplotlib's own grid, tick marks and labels (``on``: for SVG and PDF), or only
+        its axis labels (PNG: the run's grid, tick marks and typeset labels stand in)."""
+        length = self.TICK_PT if on else 0.0
+        self.mu_ax.tick_params(length=length, labelleft=on, labelbottom=False)
+        self.force_ax.tick_params(length=length, labelleft=on, labelbottom=on)
+        for ax in (self.mu_ax, self.force_ax):
+            if on:
+                ax.grid(True, alpha=0.3)
+            else:
+                ax.grid(False)
+        for collection in (self.grid, self.ticks):
+            collection.set_visible(not on and self._shown.get(collection, False))
+
+    def render(self) -> Image:
+        """The run set by :meth:`draw` as an RGB image: the background kept for its legend
+        rows restored (drawn once, without the run's artists, when new), the run's artists
+        drawn on it, the header and tick labels typeset."""
+        from PIL import Image as PILImage
+
+        canvas = self.figure.canvas
+        background = self._backgrounds.get(self._background_key)
+        if background is None:
+            for artist in (*self._artists, *self.header):
+                artist.set_visible(False)
+            canvas.draw()
+            background = canvas.copy_from_bbox(self.figure.bbox)
+            self._backgrounds[self._background_key] = background
+            for artist in self.header:
+                artist.set_visible(True)
+            for artist, visible in self._shown.items():
+                artist.set_visible(visible)
+        else:
+            canvas.restore_region(background)
+        renderer = canvas.get_renderer()
+        for artist in self._artists:
+            if self._shown[artist]:
+                artist.draw(renderer)
+        rgba = canvas.buffer_rgba()
+        image = PILImage.frombuffer("RGBA", (rgba.shape[1], rgba.shape[0]), rgba, "raw",
+                                    "RGBA", 0, 1).convert("RGB")
+        self._typeset(image)
+        return image
+
+    def _typeset(self, image: Image) -> None:
+        """Draw the header texts (centred, at their own position, size and colour) and
+        the tick labels on ``image`` with Pillow. A top-aligned line hangs from the top of
+        an ``l``, as matplotlib aligns it (not from the font's taller ascender)."""
+        from matplotlib.colors import to_rgb
+        from matplotlib.font_manager import findfont
+        from PIL import ImageDraw
+
+        draw = ImageDraw.Draw(image)
+        width, height = image.size
+        for text in self.header:
+            if text.get_text():
+                x, y = text.get_position()
+                colour = tuple(round(255 * c) for c in to_rgb(text.get_color()))
+                font, ascent = self._font(findfont(text.get_fontproperties()),
+                                          text.get_fontsize())
+                draw.text((x * width, (1.0 - y) * height + ascent), text.get_text(),
+                          fill=colour, font=font, anchor="ms")
+        label = self.force_ax.yaxis.get_major_ticks()[0].label1
+        font, ascent = self._font(findfont(label.get_fontproperties()), label.get_fontsize())
+        for content, x, y, anchor in self._tick_labels:
+            if anchor == "ma":  # hangs below the axis
+                draw.text((x, y + ascent), content, fill=(0, 0, 0), font=font, anchor="ms")
+            else:
+                draw.text((x, y), content, fill=(0, 0, 0), font=font, anchor=anchor)
+
+    def _font(self, path: str, size_pt: float) -> tuple[Any, float]:
+        """A Pillow font of the file at ``path`` and ``size_pt`` at this resolution, and
+        the height of an ``l`` above its baseline [px]."""
+        from PIL import ImageFont
+
+        size_px = size_pt * self.dpi / 72.0
+        cached = self._fonts.get((path, size_px))
+        if cached is None:
+            font = ImageFont.truetype(path, size_px)
+            cached = self._fonts[(path, size_px)] = (font, -font.getbbox("l", anchor="ls")[1])
+        return cached
+
+
+def _padded(lo: float, hi: float, fraction: float) -> tuple[float, float]:
+    """``(lo, hi)`` widened by ``fraction`` of its span on each side (by ±0.5 around a
+    single value)."""
+    if not hi > lo:
+        return lo - 0.5, hi + 0.5
+    pad = fraction * (hi - lo)
+    return lo - pad, hi + pad
+
+
+def _inside(axes_height_in: float) -> tuple[float, float]:
+    """The vertical extent (axes fractions) of a span that fills a panel but leaves its
+    top and bottom spines (0.8 pt, centred on the edge) untouched."""
+    half_spine = 0.4 / 72.0 / axes_height_in
+    return half_spine, 1.0 - half_spine
+
+
+_FIGURES = threading.local()
+
+
+def trace_figure(dpi: int = DPI) -> TraceFigure:
+    """This thread's trace figure at ``dpi`` (built on first use, then reused)."""
+    cache: dict[int, TraceFigure] | None = getattr(_FIGURES, "by_dpi", None)
+    if cache is None:
+        cache = _FIGURES.by_dpi = {}
+    if dpi not in cache:
+        cache[dpi] = TraceFigure(dpi)
+    return cache[dpi]
+
+
+def _column(trace: pd.DataFrame, name: str) -> Any:
+    """A trace column as a NumPy array, or ``None`` when the trace has none."""
+    return trace[name].to_numpy() if name in trace.columns else None
+
+
+def plot_trace(
+    result: ReductionResult,
+    target: Target,
+    *,
+    title: str | None = None,
+    conditions: TraceConditions | None = None,
+    fmt: str | None = None,
+    dpi: int = DPI,
+) -> Target:
+    """Plot a reduced run to ``target``: μ over sliding distance with the μ_S peak and the
+    μ_K window, the normal force below, file, conditions, readings and flags above."""
+    trace = result.trace
+    marks = TraceMarks(mu_s=result.mu_s, mu_s_distance_mm=result.mu_s_distance_mm,
+                       mu_k=result.mu_k, mu_k_window_mm=result.mu_k_window_mm,
+                       flags=flag_tuple(result.flags))
+    figure = trace_figure(dpi).draw(
+        trace["sliding_distance_mm"].to_numpy(), trace["mu"].to_numpy(), marks,
+        mu_smooth=_column(trace, "mu_smooth"), normal_force_N=_column(trace, "normal_force_N"),
+        conditions=conditions, title=title,
+    )
+    return figure.save(target, fmt)
+
+
+def plot_trace_row(
+    trace: pd.DataFrame,
+    row: Mapping[str, Any],
+    target: Target,
+    *,
+    title: str | None = None,
+    fmt: str | None = None,
+    dpi: int = DPI,
+) -> Target:
+    """Plot a stored trace (Parquet columns) with its friction-map row's readings.
+
+    ``row`` needs ``mu_s, mu_s_distance_mm, mu_k, mu_k_window_start_mm,
+    mu_k_window_end_mm`` and optionally ``flags`` and the conditions of
+    :meth:`TraceConditions.from_row`; ``trace`` needs ``sliding_distance_mm`` and ``mu``
+    (``mu_smooth`` and ``normal_force_N`` drawn when present).
+    """
+    marks = TraceMarks(
+        mu_s=finite_or_none(row.get("mu_s")),
+        mu_s_distance_mm=finite_or_none(row.get("mu_s_distance_mm")),
+        mu_k=finite_or_none(row.get("mu_k")),
+        mu_k_window_mm=(row.get("mu_k_window_start_mm"), row.get("mu_k_window_end_mm")),
+        flags=flag_tuple(row.get("flags")),
+    )
+    figure = trace_figure(dpi).draw(
+        trace["sliding_distance_mm"].to_numpy(), trace["mu"].to_numpy(), marks,
+        mu_smooth=_column(trace, "mu_smooth"), normal_force_N=_column(trace, "normal_force_N"),
+        conditions=TraceConditions.from_row(row), title=title,
+    )
+    return figure.save(target, fmt)

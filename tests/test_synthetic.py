@@ -20,6 +20,7 @@ from hypothesis import strategies as st
 from conftest import DATA
 from tribopipe.config import InstrumentConfig
 from tribopipe.measurement import CANONICAL_COLUMNS
+from tribopipe.readers import read_export
 from tribopipe.reduce import ReductionParams, reduce_measurement, select_friction_interval
 from tribopipe.synthetic import (
     SHAPES,
@@ -324,3 +325,33 @@ def test_a_session_export_is_its_tests_one_after_the_other(tmp_path: Path) -> No
         ("A", 1, 200), ("A", 2, 200), ("B", 1, 200), ("B", 2, 200), ("B", 3, 200)]
     with pytest.raises(ValueError, match="at least one"):
         SyntheticTest("empty", "pin", ())
+
+
+def test_utf8_comma_export_reads_back_like_the_utf16_one(tmp_path: Path) -> None:
+    """The writer's UTF-8 + BOM, comma-separated variant (as RheoCompass' comma export):
+    same lines with commas, a cell holding a comma quoted; the reader finds the same
+    tables in it as in the UTF-16/TAB save of the same run."""
+    kw = {"project": "Bench, lab 2", "test": "T", "sample": "S"}
+    tab = write_rheocompass_export(tmp_path / "tab.csv", RUN, **kw)
+    comma = write_rheocompass_export(tmp_path / "comma.csv", RUN, encoding="utf-8",
+                                     delimiter=",", **kw)
+    raw = comma.read_bytes()
+    assert raw[:3] == b"\xef\xbb\xbf"
+    lines = raw[3:].decode("utf-8").split("\r\n")
+    assert lines[0] == 'Project:,"Bench, lab 2"'
+    assert lines[10].split(",") == _lines(tab)[10].split("\t")
+    ours, theirs = read_export(comma), read_export(tab)
+    assert len(ours) == len(theirs) == 2
+    for a, b in zip(ours, theirs, strict=True):
+        pd.testing.assert_frame_equal(a.data, b.data)
+    with pytest.raises(ValueError, match="language='en'"):
+        write_rheocompass_export(tmp_path / "x.csv", RUN, language="fr", delimiter=",", **kw)
+    with pytest.raises(ValueError, match="encoding"):
+        write_rheocompass_export(tmp_path / "x.csv", RUN, encoding="latin-1", **kw)
+    # a session export too
+    from tribopipe.synthetic import SyntheticTest, write_rheocompass_session
+
+    tests = [SyntheticTest("A", "S", (RUN,)), SyntheticTest("B", "S", (replace(RUN, seed=9),))]
+    session = write_rheocompass_session(tmp_path / "s.csv", tests, project="P",
+                                        encoding="utf-8", delimiter=",")
+    assert [m.meta.test for m in read_export(session)] == ["A", "A", "B", "B"]

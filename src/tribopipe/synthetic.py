@@ -393,10 +393,34 @@ def intervals_text(
     return "\r\n".join(lines) + "\r\n"
 
 
-def _write_utf16(path: str | PathLike[str], text: str) -> Path:
+def _write(path: str | PathLike[str], text: str, *, language: str, encoding: str,
+           delimiter: str) -> Path:
+    """Write an export's text (TAB-separated, CRLF) as RheoCompass saves it: UTF-16 LE
+    with BOM, or UTF-8 with BOM; TAB- or comma-separated (a cell holding a comma or a
+    quote then quoted, as RheoCompass' comma export does; English decimal points only)."""
+    if encoding not in ("utf-16", "utf-8"):
+        raise ValueError(f"encoding must be 'utf-16' or 'utf-8', got {encoding!r}")
+    if delimiter not in ("\t", ","):
+        raise ValueError(f"delimiter must be TAB or ',', got {delimiter!r}")
+    if delimiter == "," and language != "en":
+        raise ValueError("a comma-separated export needs language='en' (decimal point)")
+    if delimiter == ",":
+        text = "\r\n".join(",".join(_csv_cell(c) for c in line.split("\t"))
+                            for line in text.split("\r\n"))
     target = Path(path)
-    target.write_bytes(b"\xff\xfe" + text.encode("utf-16-le"))
+    if encoding == "utf-16":
+        target.write_bytes(b"\xff\xfe" + text.encode("utf-16-le"))
+    else:
+        target.write_bytes(b"\xef\xbb\xbf" + text.encode("utf-8"))
     return target
+
+
+def _csv_cell(cell: str) -> str:
+    """A cell of a comma-separated line: quoted (quotes doubled) when it holds a comma or
+    a quote."""
+    if "," in cell or '"' in cell:
+        return '"' + cell.replace('"', '""') + '"'
+    return cell
 
 
 def write_rheocompass_export(
@@ -407,11 +431,20 @@ def write_rheocompass_export(
     test: str,
     sample: str,
     language: str = "en",
+    encoding: str = "utf-16",
+    delimiter: str = "\t",
 ) -> Path:
-    """Write ``run`` as a RheoCompass export (UTF-16 LE with BOM, TAB, CRLF) and return
-    its path. ``language="fr"`` writes French labels and decimal commas."""
-    return _write_utf16(path, rheocompass_text(run, project=project, test=test, sample=sample,
-                                               language=language))
+    """Write ``run`` as a RheoCompass export and return its path.
+
+    The default is RheoCompass' own save: UTF-16 LE with BOM, TAB, CRLF. ``language="fr"``
+    writes French labels and decimal commas. ``encoding="utf-8"`` writes UTF-8 with BOM,
+    and ``delimiter=","`` comma-separated cells (a cell holding a comma or a quote is
+    quoted, as RheoCompass' comma export does); a comma delimiter needs the English
+    decimal point.
+    """
+    return _write(path, rheocompass_text(run, project=project, test=test, sample=sample,
+                                         language=language),
+                  language=language, encoding=encoding, delimiter=delimiter)
 
 
 def write_rheocompass_session(
@@ -420,11 +453,13 @@ def write_rheocompass_session(
     *,
     project: str,
     language: str = "en",
+    encoding: str = "utf-16",
+    delimiter: str = "\t",
 ) -> Path:
-    """Write several tests into one RheoCompass export (UTF-16 LE with BOM, TAB, CRLF;
-    :func:`rheocompass_session_text`) and return its path."""
-    return _write_utf16(path, rheocompass_session_text(tests, project=project,
-                                                       language=language))
+    """Write several tests into one RheoCompass export (:func:`rheocompass_session_text`;
+    encoding and delimiter as :func:`write_rheocompass_export`) and return its path."""
+    return _write(path, rheocompass_session_text(tests, project=project, language=language),
+                  language=language, encoding=encoding, delimiter=delimiter)
 
 
 def write_intervals_export(
@@ -435,9 +470,13 @@ def write_intervals_export(
     test: str,
     sample: str,
     language: str = "en",
+    encoding: str = "utf-16",
+    delimiter: str = "\t",
 ) -> Path:
     """Write ``frames`` (intervals with the columns of :func:`make_intervals`) as one
-    RheoCompass export (UTF-16 LE with BOM, TAB, CRLF) and return its path. Any
-    generator's intervals go through the same writer as :class:`SyntheticRun`'s."""
-    return _write_utf16(path, intervals_text(frames, project=project, test=test,
-                                             sample=sample, language=language))
+    RheoCompass export (encoding and delimiter as :func:`write_rheocompass_export`) and
+    return its path. Any generator's intervals go through the same writer as
+    :class:`SyntheticRun`'s."""
+    return _write(path, intervals_text(frames, project=project, test=test, sample=sample,
+                                       language=language),
+                  language=language, encoding=encoding, delimiter=delimiter)

@@ -1,0 +1,231 @@
+"""Scale benchmark: what grows with the number of runs, measured where it can be.
+
+For ``bench/README.md``'s "Scale on paper". Measures, in one process (CPU time,
+``time.process_time``, medians):
+
+* **per file** — the steps a batch worker runs for one export (``read_export``, interval
+  choice + reduction, SHA-256 + record, the trace's Parquet, the trace plot), on exports
+  of 5,000, 10,000 and 15,000 rows in the three layouts of the campaign benchmark;
+* **per map size** N = 10³, 10⁴, 10⁵ rows (a synthetic map: one real record copied with
+  new ids and conditions over the founding grid) — ``read_map``; ``update_map`` with 1,000
+  new runs (the batch's one locked read-modify-write and atomic rewrite of the whole
+  Parquet file); ``group_statistics``; the map's size on disk; the campaign state file
+  (``save_state``/``load_state``) with N entries; the HTML report without traces (N ≤ 10⁴);
+  and ``stat`` of N files (what an unchanged re-run does per file).
+
+    nice .venv/bin/python bench/bench_scale.py [--sizes 1000,10000,100000]
+
+Prints tables and writes ``bench/scale.json``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import platform
+import shutil
+import statistics
+import tempfile
+import time
+import uuid
+from pathlib import Path
+
+HERE = Path(__file__).resolve().parent
+
+
+def cpu(fn, repeat: int = 3) -> float:
+    """Median CPU seconds of ``fn()`` over ``repeat`` calls."""
+    times = []
+    for _ in range(repeat):
+        t0 = time.process_time()
+        fn()
+        times.append(time.process_time() - t0)
+    return statistics.median(times)
+
+
+def wall(fn, repeat: int = 3) -> float:
+    """Median wall seconds of ``fn()`` (for steps that wait on the disk: fsync)."""
+    times = []
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        fn()
+        times.append(time.perf_counter() - t0)
+    return statistics.median(times)
+
+
+# --------------------------------------------------------------------------- per file
+
+
+def per_file(folder: Path, repeat: int) -> dict:
+    """CPU [ms] of each step a batch worker runs per export, median over the files."""
+    import gc
+
+    from tribopipe.campaign import GC_THRESHOLDS
+    from tribopipe.config import load_settings
+    from tribopipe.files import file_sha256
+    from tribopipe.frictionmap import make_record
+    from tribopipe.intervals import select_friction_interval
+    from tribopipe.pipeline import RunLabels, RunOutcome, plot_run, write_trace
+    from tribopipe.readers import read_export
+    from tribopipe.reduce import reduce_measurement
+    from tribopipe.synthetic import SyntheticRun, write_rheocompass_export
+
+    gc.set_threshold(*GC_THRESHOLDS)  # as in the batch's workers
+    settings = load_settings()
+    labels = RunLabels("Dragonskin 30", "steel", 3.0, 20.0, 1)
+    layouts = {"utf16-tab-en": {}, "utf8-comma": {"encoding": "utf-8", "delimiter": ","},
+               "utf16-tab-fr": {"language": "fr"}}
+    steps: dict[str, list[float]] = {k: [] for k in
+                                      ("read", "reduce", "hash_record", "trace", "plot")}
+    out = folder / "out"
+    for rows in (5_000, 10_000, 15_000):
+        for name, kw in layouts.items():
+            path = write_rheocompass_export(
+                folder / f"{name}_{rows}.csv", SyntheticRun(duration_s=rows / 10.0, seed=rows),
+                project="scale", test="t", sample="DS30", **kw)
+            measurements = read_export(path)
+            m = select_friction_interval(measurements)
+            result = reduce_measurement(m, settings.instrument, settings.reduction)
+            file_hash = file_sha256(path)
+            record = make_record(result=result, labels=labels, meta=m.meta,
+                                 file_hash=file_hash, settings=settings)
+            outcome = RunOutcome(path=str(path), measurement=m, result=result, labels=labels,
+                                 file_hash=file_hash, config_hash=settings.config_hash,
+                                 measurement_id=record["measurement_id"], record=record)
+            plot_run(out, outcome)  # the figure is built once per process
+            steps["read"].append(cpu(lambda p=path: read_export(p), repeat))
+            steps["reduce"].append(cpu(lambda ms=measurements: reduce_measurement(
+                select_friction_interval(ms), settings.instrument, settings.reduction), repeat))
+            steps["hash_record"].append(cpu(lambda p=path, r=result, mm=m: make_record(
+                result=r, labels=labels, meta=mm.meta, file_hash=file_sha256(p), settings=settings),
+                repeat))
+            steps["trace"].append(cpu(lambda o=outcome: write_trace(out, o), repeat))
+            steps["plot"].append(cpu(lambda o=outcome: plot_run(out, o), repeat))
+    return {k: statistics.median(v) * 1e3 for k, v in steps.items()}
+
+
+# --------------------------------------------------------------------------- per map size
+
+
+def records(template: dict, n: int, start: int = 0) -> list[dict]:
+    """``n`` copies of a real map record with new ids, files and grid conditions."""
+    pins = ("Dragonskin 30", "Ecoflex 00-50")
+    discs = ("steel", "acrylic", "aluminium sheet", "aluminium lathed", "cardboard",
+             "wood smooth", "wood structured", "DS30", "EF50")
+    out = []
+    for i in range(start, start + n):
+        r = dict(template)
+        r["measurement_id"] = uuid.UUID(int=i + 1).hex[-16:]
+        r["file_hash"] = uuid.UUID(int=(i + 1) << 64).hex * 2
+        r["source_file"] = f"lab{i // 10_000}/run_{i:06d}.csv"
+        r["pin"], r["disc"] = pins[i % 2], discs[(i // 2) % 9]
+        force = (1.0, 3.0, 5.0, 7.0, 9.0)[(i // 18) % 5]
+        r["normal_force_N"], r["pressure_kPa"] = force, 11.789 * force
+        r["temperature_C"] = (10.0, 20.0)[(i // 90) % 2]
+        r["repeat"] = i // 180 + 1
+        r["mu_k"] = 0.3 + 0.5 / force**0.5 + 0.01 * ((i * 7919) % 13 - 6) / 6
+        out.append(r)
+    return out
+
+
+def template_record(folder: Path) -> dict:
+    from tribopipe.config import load_settings
+    from tribopipe.pipeline import RunLabels, reduce_file
+    from tribopipe.synthetic import SyntheticRun, write_rheocompass_export
+
+    path = write_rheocompass_export(folder / "t.csv", SyntheticRun(seed=1), project="p",
+                                    test="t", sample="s")
+    return reduce_file(path, load_settings(), RunLabels("x", "y", 3.0, 20.0, 1)).record
+
+
+def per_size(folder: Path, n: int, template: dict) -> dict:
+    """Costs that grow with the number of runs N, at one N."""
+    from tribopipe.campaign import folder_campaign, load_state, save_state
+    from tribopipe.fit import fit_power_law
+    from tribopipe.frictionmap import read_map, update_map
+    from tribopipe.report import ReportInputs, build_report
+    from tribopipe.stats import group_statistics
+
+    base = folder / f"map_{n}.parquet"
+    for k in range(0, n, 20_000):
+        update_map(base, records(template, min(20_000, n - k), k))
+    runs = read_map(base)
+    assert len(runs) == n
+    row: dict = {"map_MB": base.stat().st_size / 1e6}
+    row["read_map_s"] = cpu(lambda: read_map(base))
+    work = folder / "work.parquet"
+    new = records(template, 1000, n)
+
+    def append() -> None:
+        shutil.copyfile(base, work)
+        update_map(work, new)
+
+    copy_wall = wall(lambda: shutil.copyfile(base, work))
+    copy_cpu = cpu(lambda: shutil.copyfile(base, work))
+    row["update_map_1000_s"] = wall(append) - copy_wall  # wall: it fsyncs
+    row["update_map_1000_cpu_s"] = cpu(append) - copy_cpu
+    row["group_statistics_s"] = cpu(lambda: group_statistics(runs), 1)
+    campaign = folder_campaign(folder, filename_pattern="{pin}", output_dir=folder / "p")
+    entries = {f"lab{i // 10_000}/run_{i:06d}.csv": {
+        "size": 1_200_000, "mtime_ns": 1_700_000_000_000_000_000 + i,
+        "config_hash": "2fc9df08b211fe45", "recipe": "0123456789abcdef",
+        "sha256": uuid.UUID(int=i).hex * 2, "status": "reduced",
+        "labels": {"pin": "Dragonskin 30", "disc": "steel", "normal_force_N": 3.0,
+                   "temperature_C": 20.0, "repeat": 1},
+        "measurement_id": uuid.UUID(int=i + 1).hex[-16:],
+        "trace": f"traces/run_{i:06d}_{uuid.UUID(int=i + 1).hex[-8:]}.parquet",
+        "mu_s": 0.9, "mu_k": 0.6, "pressure_kPa": 35.4, "pressure_measured_kPa": 35.3,
+        "normal_force_measured_N": 2.99, "temperature_measured_C": 20.1, "flags": ""}
+        for i in range(n)}
+    state = {"version": 2, "campaign": "scale", "entries": entries}
+    row["state_save_s"] = wall(lambda: save_state(campaign, state))
+    row["state_load_s"] = cpu(lambda: load_state(campaign))
+    row["state_MB"] = campaign.state_path.stat().st_size / 1e6
+    stat_dir = folder / f"stat_{n}"
+    stat_dir.mkdir()
+    names = [stat_dir / f"{i}.csv" for i in range(n)]
+    for name in names:
+        name.touch()
+    row["stat_files_s"] = cpu(lambda: [os.stat(p) for p in names])
+    shutil.rmtree(stat_dir)
+    if n <= 10_000:
+        inputs = ReportInputs(runs=runs, groups=group_statistics(runs),
+                              fits=fit_power_law(runs))
+        row["report_s"] = cpu(lambda: build_report(inputs), 1)
+        row["report_MB"] = len(build_report(inputs).encode()) / 1e6
+    return row
+
+
+def main(argv: list[str] | None = None) -> dict:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--sizes", default="1000,10000,100000")
+    parser.add_argument("--repeat", type=int, default=5, help="per-file repeats (5)")
+    parser.add_argument("--out", type=Path, default=HERE / "scale.json")
+    args = parser.parse_args(argv)
+    sizes = [int(s) for s in args.sizes.split(",")]
+    load_start = os.getloadavg()
+    with tempfile.TemporaryDirectory(prefix="tribopipe-scale-") as tmp:
+        folder = Path(tmp)
+        print("per-file steps ...", flush=True)
+        steps = per_file(folder, args.repeat)
+        print("   " + ", ".join(f"{k} {v:.1f} ms" for k, v in steps.items()), flush=True)
+        print("per map size ...", flush=True)
+        template = template_record(folder)
+        sized = {}
+        for n in sizes:
+            print(f"  map of {n} rows ...", flush=True)
+            sized[str(n)] = per_size(folder, n, template)
+            print("   " + ", ".join(f"{k} {v:.3g}" for k, v in sized[str(n)].items()),
+                  flush=True)
+    results = {"when_utc": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
+               "load_average_at_start": load_start, "load_average_at_end": os.getloadavg(),
+               "python": platform.python_version(), "cpus": os.cpu_count(),
+               "per_file_cpu_ms": steps, "per_map_size": sized}
+    args.out.write_text(json.dumps(results, indent=1) + "\n", encoding="utf-8")
+    print(f"wrote {args.out}")
+    return results
+
+
+if __name__ == "__main__":
+    main()

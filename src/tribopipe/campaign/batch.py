@@ -54,6 +54,7 @@ from .worker import (  # noqa: F401 - GC_THRESHOLDS, _worker_init: importable fr
     _Context,
     _fewer_gc_passes,
     _Job,
+    _prepare_plots,
     _reduce_chunk,
     _worker_init,
     crashed,
@@ -398,6 +399,8 @@ def _execute(todo: list[_Job], ctx: _Context, jobs: int, progress: ProgressCallb
         return results
     from concurrent.futures import ProcessPoolExecutor, as_completed
 
+    if ctx.plots:
+        _prepare_plots()
     with ProcessPoolExecutor(max_workers=workers, initializer=_worker_init) as pool:
         futures = {pool.submit(_reduce_chunk, chunk, ctx): chunk for chunk in chunks}
         for future in as_completed(futures):

@@ -14,12 +14,14 @@ from .canvas import (
     Target,
     image_format,
     new_figure,
+    png_palette,
     prepare_target,
     save_figure,
     write_png,
 )
 from .decimate import minmax_decimate
 from .trace import (
+    TRACE_DPI,
     TraceConditions,
     TraceFigure,
     TraceMarks,
@@ -30,8 +32,8 @@ from .trace import (
 )
 
 __all__ = [
-    "DPI", "FORMATS", "MU_LABEL", "PNG_COMPRESS_LEVEL", "Target", "TraceConditions",
+    "DPI", "FORMATS", "TRACE_DPI", "MU_LABEL", "PNG_COMPRESS_LEVEL", "Target", "TraceConditions",
     "TraceFigure", "TraceMarks", "flag_tuple", "image_format", "minmax_decimate",
-    "new_figure", "plot_trace", "plot_trace_row", "prepare_target", "save_figure",
+    "new_figure", "plot_trace", "plot_trace_row", "png_palette", "prepare_target", "save_figure",
     "trace_figure", "write_png",
 ]

@@ -31,8 +31,16 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 from ..numeric import finite_or_none, is_finite
-from .canvas import DPI, MU_LABEL, Target, image_format, prepare_target, save_figure, write_png
-from .decimate import minmax_decimate
+from .canvas import (
+    MU_LABEL,
+    Target,
+    image_format,
+    png_palette,
+    prepare_target,
+    save_figure,
+    write_png,
+)
+from .decimate import Columns
 
 if TYPE_CHECKING:
     import numpy as np
@@ -142,6 +150,11 @@ def flag_tuple(flags: Any) -> tuple[str, ...]:
     return tuple(f.strip() for f in items if f and f.strip())
 
 
+#: the per-run plot's resolution: 700 × 530 px, about the pixels of the single-panel plot
+#: it replaced (840 × 432 at 120 dpi); every step of a PNG costs in proportion to them
+TRACE_DPI = 100
+
+
 #: Header lines are cut to this many characters (a file name can be any length).
 HEADER_CHARS = 110
 
@@ -181,9 +194,8 @@ class TraceFigure:
     TICK_PT = 3.5
     TICK_PAD_PT = 3.5
 
-    def __init__(self, dpi: int = DPI) -> None:
+    def __init__(self, dpi: int = TRACE_DPI) -> None:
         from matplotlib.backends.backend_agg import FigureCanvasAgg
-        from matplotlib.collections import LineCollection
         from matplotlib.colors import to_rgb
         from matplotlib.figure import Figure
         from matplotlib.lines import Line2D
@@ -229,10 +241,11 @@ class TraceFigure:
                                          color=tint, lw=0, zorder=0.5)
         # the grid and the tick marks of a PNG, in pixels (they move with the run's
         # limits); SVG and PDF use matplotlib's own, at the same places
-        self.grid = fig.add_artist(LineCollection([], colors="#b0b0b0", linewidths=0.8,
-                                                  alpha=0.3, transform=IdentityTransform()))
-        self.ticks = fig.add_artist(LineCollection([], colors="black", linewidths=0.8,
-                                                   transform=IdentityTransform()))
+        # (each one path of NaN-separated segments: one draw call)
+        self.grid = fig.add_artist(Line2D([], [], color="#b0b0b0", lw=0.8, alpha=0.3,
+                                          transform=IdentityTransform()))
+        self.ticks = fig.add_artist(Line2D([], [], color="black", lw=0.8,
+                                           transform=IdentityTransform()))
         (self.raw,) = mu_ax.plot([], [], color="0.75", lw=0.8)
         (self.smooth,) = mu_ax.plot([], [], color="0.15", lw=1.2)
         (self.mu_k,) = mu_ax.plot([], [], color=blue, lw=2.0)
@@ -272,6 +285,7 @@ class TraceFigure:
         self.flags = fig.text(0.5, top - 3.1 * line, "", fontsize="small", **kw)
         self.header = (self.title, self.conditions, self.readings, self.flags)
         self._fonts: dict[tuple[str, float], Any] = {}
+        self._labels: dict[tuple[str, str], Any] = {}
 
         #: the run's own artists, in drawing order (grid above the window's tint)
         self._artists = (self.window, self.force_window, self.grid, self.ticks, self.raw,
@@ -281,6 +295,8 @@ class TraceFigure:
         self._backgrounds: dict[tuple[Any, ...], Any] = {}
         self._background_key: tuple[Any, ...] = ()
         self._vector_axes(False)
+        self._palette: Image | None = None
+        self._palette = self._calibrate()
 
     # ------------------------------------------------------------------ one run
 
@@ -312,8 +328,7 @@ class TraceFigure:
         x_range = _padded(*data_x, 0.02)
         self.mu_ax.set_xlim(*x_range)
 
-        def thin(values: Any) -> tuple[np.ndarray, np.ndarray]:
-            return minmax_decimate(s, np.asarray(values, dtype=float), x_range, self.columns)
+        thin = Columns(s, x_range, self.columns).thin
 
         shown = dict.fromkeys(self._artists, False)
         for artist in (self.raw, self.grid, self.ticks):
@@ -392,32 +407,35 @@ class TraceFigure:
         tick = self.TICK_PT * self.dpi / 72.0
         offset = (self.TICK_PT + self.TICK_PAD_PT) * self.dpi / 72.0
         height = self.HEIGHT_IN * self.dpi
-        grid: list[Any] = []
+        grid: list[Any] = []  # (x0, y0, x1, y1) per segment, in pixels
         marks: list[Any] = []
         labels: list[tuple[str, float, float, str]] = []
         for ax in (self.mu_ax, self.force_ax):
             (left, bottom), (right, top) = ax.bbox.get_points()
-            to_px = ax.transData.transform
             for axis, (lo, hi) in ((ax.xaxis, ax.get_xlim()), (ax.yaxis, ax.get_ylim())):
                 locs = np.asarray(axis.get_major_locator().tick_values(lo, hi), dtype=float)
                 slack = 1e-10 * (hi - lo)
                 inside = locs[(locs >= lo - slack) & (locs <= hi + slack)]
                 texts = axis.get_major_formatter().format_ticks(list(inside))
-                if axis is ax.xaxis:
-                    xs = to_px(np.c_[inside, np.full(inside.size, ax.get_ylim()[0])])[:, 0]
-                    grid += [[(x, bottom), (x, top)] for x in xs]
-                    marks += [[(x, bottom), (x, bottom - tick)] for x in xs]
+                if axis is ax.xaxis:  # linear axes: data to pixels by proportion
+                    xs = left + (inside - lo) / (hi - lo) * (right - left)
+                    grid += [(x, bottom, x, top) for x in xs]
+                    marks += [(x, bottom, x, bottom - tick) for x in xs]
                     if ax is self.force_ax:
                         labels += [(text, x, height - bottom + offset, "ma")
                                    for text, x in zip(texts, xs, strict=True)]
                 else:
-                    ys = to_px(np.c_[np.full(inside.size, ax.get_xlim()[0]), inside])[:, 1]
-                    grid += [[(left, y), (right, y)] for y in ys]
-                    marks += [[(left, y), (left - tick, y)] for y in ys]
+                    ys = bottom + (inside - lo) / (hi - lo) * (top - bottom)
+                    grid += [(left, y, right, y) for y in ys]
+                    marks += [(left, y, left - tick, y) for y in ys]
                     labels += [(text, left - offset, height - y, "rm")
                                for text, y in zip(texts, ys, strict=True)]
-        self.grid.set_segments(grid)
-        self.ticks.set_segments(marks)
+        for line, segments in ((self.grid, grid), (self.ticks, marks)):
+            # one path: x0 x1 NaN per segment
+            xy = np.full((len(segments), 3, 2), np.nan)
+            if segments:
+                xy[:, :2] = np.asarray(segments, dtype=float).reshape(-1, 2, 2)
+            line.set_data(xy[..., 0].ravel(), xy[..., 1].ravel())
         self._tick_labels = labels
 
     def _set_legend(self, panel: str, shown: Mapping[Any, bool],
@@ -447,8 +465,9 @@ class TraceFigure:
 
     def save(self, target: Target, fmt: str | None = None) -> Target:
         """Write the run set by :meth:`draw` to ``target`` and return the target: a PNG
-        from the kept background (:meth:`render`); SVG and PDF drawn whole by matplotlib,
-        with its own tick marks and labels."""
+        from the kept background (:meth:`render`) in the figure's palette
+        (:meth:`palette`); SVG and PDF drawn whole by matplotlib, with its own tick marks
+        and labels."""
         fmt = image_format(target, fmt)
         if fmt != "png":
             self._vector_axes(True)
@@ -457,8 +476,37 @@ class TraceFigure:
             finally:
                 self._vector_axes(False)
         target = prepare_target(target, fmt)
-        write_png(self.render(), target)
+        write_png(self.render(), target, palette=self._palette)
         return target
+
+    def palette(self) -> Image:
+        """The 256 colours every PNG of this figure is written in (see
+        :meth:`_calibrate`)."""
+        if self._palette is None:
+            self._palette = self._calibrate()
+        return self._palette
+
+    def _calibrate(self) -> Image:
+        """The fast-octree palette of one calibration plot that has every artist, colour
+        and overlap a run can have: raw and smoothed μ with a spike, the μ_K window and
+        level, the μ_S marker, the measured force crossing the nominal one, a red flag
+        line. A run's picture holds the same colours (the same artists on the same
+        background), and mapping it to this palette costs a sixth of finding its own; the
+        tests bound the difference. Leaves the figure set to the calibration plot."""
+        import numpy as np
+
+        rng = np.random.default_rng(0)
+        s = np.linspace(0.0, 6.0, 6000)
+        mu = 0.55 + 0.03 * rng.standard_normal(s.size) + 0.3 * np.exp(-((s - 0.4) / 0.1) ** 2)
+        mu[:300] = np.linspace(0.0, 0.9, 300)
+        mu[3000] = 1.05
+        smooth = np.convolve(mu, np.ones(25) / 25, mode="same")
+        force = 3.0 * (1.0 + 0.15 * np.sin(9.0 * s)) + 0.02 * rng.standard_normal(s.size)
+        self.draw(s, mu, TraceMarks(0.87, 0.4, 0.55, (1.0, 5.8), ("calibration",)),
+                  mu_smooth=smooth, normal_force_N=force,
+                  conditions=TraceConditions("calibration.csv", "pin", "disc", 3.0, 35.4,
+                                             20.0, 1))
+        return png_palette(self.render())
 
     def _vector_axes(self, on: bool) -> None:
         """matplotlib's own grid, tick marks and labels (``on``: for SVG and PDF), or only
@@ -522,13 +570,32 @@ class TraceFigure:
                                           text.get_fontsize())
                 draw.text((x * width, (1.0 - y) * height + ascent), text.get_text(),
                           fill=colour, font=font, anchor="ms")
-        label = self.force_ax.yaxis.get_major_ticks()[0].label1
-        font, ascent = self._font(findfont(label.get_fontproperties()), label.get_fontsize())
         for content, x, y, anchor in self._tick_labels:
-            if anchor == "ma":  # hangs below the axis
-                draw.text((x, y + ascent), content, fill=(0, 0, 0), font=font, anchor="ms")
-            else:
-                draw.text((x, y), content, fill=(0, 0, 0), font=font, anchor=anchor)
+            mask, dx, dy = self._label_mask(content, anchor)
+            image.paste((0, 0, 0), (round(x) + dx, round(y) + dy), mask)
+
+    def _label_mask(self, text: str, anchor: str) -> tuple[Image, int, int]:
+        """A tick label's coverage (an ``L`` image) and its offset from the label's anchor
+        point [px], typeset once per text (tick labels repeat from run to run)."""
+        from matplotlib.font_manager import findfont
+        from PIL import Image as PILImage
+        from PIL import ImageDraw
+
+        cached = self._labels.get((text, anchor))
+        if cached is None:
+            label = self.force_ax.yaxis.get_major_ticks()[0].label1
+            font, ascent = self._font(findfont(label.get_fontproperties()),
+                                      label.get_fontsize())
+            # below the axis a label hangs from the top of an "l" (as matplotlib aligns
+            # it); beside it, it is centred on its tick
+            anchor_pil, shift = ("ms", ascent) if anchor == "ma" else (anchor, 0.0)
+            left, top, right, bottom = font.getbbox(text, anchor=anchor_pil)
+            mask = PILImage.new("L", (int(right - left) + 2, int(bottom - top) + 2), 0)
+            ImageDraw.Draw(mask).text((-left, -top), text, fill=255, font=font,
+                                      anchor=anchor_pil)
+            cached = self._labels[(text, anchor)] = (mask, int(left),
+                                                     int(round(top + shift)))
+        return cached
 
     def _font(self, path: str, size_pt: float) -> tuple[Any, float]:
         """A Pillow font of the file at ``path`` and ``size_pt`` at this resolution, and
@@ -561,8 +628,7 @@ def _inside(axes_height_in: float) -> tuple[float, float]:
 
 _FIGURES = threading.local()
 
-
-def trace_figure(dpi: int = DPI) -> TraceFigure:
+def trace_figure(dpi: int = TRACE_DPI) -> TraceFigure:
     """This thread's trace figure at ``dpi`` (built on first use, then reused)."""
     cache: dict[int, TraceFigure] | None = getattr(_FIGURES, "by_dpi", None)
     if cache is None:
@@ -584,7 +650,7 @@ def plot_trace(
     title: str | None = None,
     conditions: TraceConditions | None = None,
     fmt: str | None = None,
-    dpi: int = DPI,
+    dpi: int = TRACE_DPI,
 ) -> Target:
     """Plot a reduced run to ``target``: μ over sliding distance with the μ_S peak and the
     μ_K window, the normal force below, file, conditions, readings and flags above."""
@@ -607,7 +673,7 @@ def plot_trace_row(
     *,
     title: str | None = None,
     fmt: str | None = None,
-    dpi: int = DPI,
+    dpi: int = TRACE_DPI,
 ) -> Target:
     """Plot a stored trace (Parquet columns) with its friction-map row's readings.
 

@@ -264,6 +264,11 @@ def _plot(campaign: Campaign, outcome: RunOutcome, name: str) -> str | None:
 #: Cyclic-GC thresholds while reducing. Parsing an export allocates ~10⁵ short-lived
 #: containers (cells, rows), which with the default gen-0 threshold (700) triggers hundreds
 #: of collections per file that find nothing; measured: −20 % CPU per run.
+#:
+#: Workers also run one BLAS thread: the batch is already one process per CPU, and
+#: OpenBLAS hands a dot product of ~10⁴ samples to its threads, whose start and spin cost
+#: more than the product (measured: a reduction 4.7 ms with one thread, 16-31 ms with the
+#: default on the 2-CPU benchmark machine while both workers run).
 GC_THRESHOLDS = (100_000, 50, 100)
 
 
@@ -279,17 +284,24 @@ def _prepare_plots() -> None:
 
 
 def _worker_init() -> None:
-    """Start a worker process (ours for its whole life): fewer garbage-collector passes."""
+    """Start a worker process (ours for its whole life): fewer garbage-collector passes
+    and one BLAS thread (see :data:`GC_THRESHOLDS`)."""
+    from threadpoolctl import threadpool_limits
+
     gc.set_threshold(*GC_THRESHOLDS)
+    threadpool_limits(limits=1, user_api="blas")
 
 
 @contextlib.contextmanager
 def _fewer_gc_passes() -> Iterator[None]:
     """:func:`_worker_init`'s tuning for an in-process batch, restored afterwards."""
+    from threadpoolctl import threadpool_limits
+
     before = gc.get_threshold()
     gc.set_threshold(*GC_THRESHOLDS)
     try:
-        yield
+        with threadpool_limits(limits=1, user_api="blas"):
+            yield
     finally:
         gc.set_threshold(*before)
 

@@ -285,7 +285,7 @@ class TraceFigure:
         self.flags = fig.text(0.5, top - 3.1 * line, "", fontsize="small", **kw)
         self.header = (self.title, self.conditions, self.readings, self.flags)
         self._fonts: dict[tuple[str, float], Any] = {}
-        self._labels: dict[tuple[str, str], Any] = {}
+        self._masks: dict[tuple[Any, ...], Any] = {}
 
         #: the run's own artists, in drawing order (grid above the window's tint)
         self._artists = (self.window, self.force_window, self.grid, self.ticks, self.raw,
@@ -554,48 +554,50 @@ class TraceFigure:
 
     def _typeset(self, image: Image) -> None:
         """Draw the header texts (centred, at their own position, size and colour) and
-        the tick labels on ``image`` with Pillow. A top-aligned line hangs from the top of
-        an ``l``, as matplotlib aligns it (not from the font's taller ascender)."""
+        the tick labels on ``image`` with Pillow."""
         from matplotlib.colors import to_rgb
         from matplotlib.font_manager import findfont
-        from PIL import ImageDraw
 
-        draw = ImageDraw.Draw(image)
         width, height = image.size
         for text in self.header:
             if text.get_text():
                 x, y = text.get_position()
                 colour = tuple(round(255 * c) for c in to_rgb(text.get_color()))
-                font, ascent = self._font(findfont(text.get_fontproperties()),
-                                          text.get_fontsize())
-                draw.text((x * width, (1.0 - y) * height + ascent), text.get_text(),
-                          fill=colour, font=font, anchor="ms")
+                self._paste(image, text.get_text(), findfont(text.get_fontproperties()),
+                            text.get_fontsize(), "ma", x * width, (1.0 - y) * height, colour)
+        label = self.force_ax.yaxis.get_major_ticks()[0].label1
+        path, size = findfont(label.get_fontproperties()), label.get_fontsize()
         for content, x, y, anchor in self._tick_labels:
-            mask, dx, dy = self._label_mask(content, anchor)
-            image.paste((0, 0, 0), (round(x) + dx, round(y) + dy), mask)
+            self._paste(image, content, path, size, anchor, x, y, (0, 0, 0))
 
-    def _label_mask(self, text: str, anchor: str) -> tuple[Image, int, int]:
-        """A tick label's coverage (an ``L`` image) and its offset from the label's anchor
-        point [px], typeset once per text (tick labels repeat from run to run)."""
-        from matplotlib.font_manager import findfont
+    #: typeset texts kept (tick labels and most header lines repeat from run to run)
+    MASKS_KEPT = 1024
+
+    def _paste(self, image: Image, text: str, path: str, size_pt: float, anchor: str,
+               x: float, y: float, colour: tuple[int, ...]) -> None:
+        """Put ``text`` on ``image`` at pixel ``(x, y)`` (from the top left) in ``colour``.
+        ``anchor`` ``"ma"`` hangs the text centred below the point from the top of an
+        ``l`` (as matplotlib aligns a top-aligned line, not from the font's taller
+        ascender); ``"rm"`` ends it at the point, centred vertically. Each text is
+        typeset once (an ``L`` coverage image) and pasted after."""
         from PIL import Image as PILImage
         from PIL import ImageDraw
 
-        cached = self._labels.get((text, anchor))
+        key = (text, path, size_pt, anchor)
+        cached = self._masks.get(key)
         if cached is None:
-            label = self.force_ax.yaxis.get_major_ticks()[0].label1
-            font, ascent = self._font(findfont(label.get_fontproperties()),
-                                      label.get_fontsize())
-            # below the axis a label hangs from the top of an "l" (as matplotlib aligns
-            # it); beside it, it is centred on its tick
+            font, ascent = self._font(path, size_pt)
             anchor_pil, shift = ("ms", ascent) if anchor == "ma" else (anchor, 0.0)
             left, top, right, bottom = font.getbbox(text, anchor=anchor_pil)
             mask = PILImage.new("L", (int(right - left) + 2, int(bottom - top) + 2), 0)
             ImageDraw.Draw(mask).text((-left, -top), text, fill=255, font=font,
                                       anchor=anchor_pil)
-            cached = self._labels[(text, anchor)] = (mask, int(left),
-                                                     int(round(top + shift)))
-        return cached
+            cached = (mask, int(left), int(round(top + shift)))
+            if len(self._masks) >= self.MASKS_KEPT:
+                self._masks.pop(next(iter(self._masks)))
+            self._masks[key] = cached
+        mask, dx, dy = cached
+        image.paste(colour, (round(x) + dx, round(y) + dy), mask)
 
     def _font(self, path: str, size_pt: float) -> tuple[Any, float]:
         """A Pillow font of the file at ``path`` and ``size_pt`` at this resolution, and

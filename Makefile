@@ -4,7 +4,7 @@ VENV   := .venv
 PY     := $(VENV)/bin/python
 STAMP  := $(VENV)/.installed
 
-.PHONY: install demo test lint bench example clean
+.PHONY: install demo test lint bench bench-scale example clean
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -37,6 +37,9 @@ lint: install
 
 bench: install
 	$(PY) bench/bench_campaign.py
+
+bench-scale: install
+	$(PY) bench/bench_scale.py
 
 example: install
 	$(PY) scripts/make_example_campaign.py

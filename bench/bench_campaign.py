@@ -189,9 +189,11 @@ def write_configs(out: Path) -> tuple[Path, Path]:
 # --------------------------------------------------------------------------- reader
 
 
-def reader_ratios(files: list[Path], per_layout: int, repeat: int) -> dict:
-    """Per layout: median CPU [ms] of ``read_export`` and of the bare parse over
-    ``per_layout`` files, and the median of the back-to-back pairs' ratios."""
+def reader_ratios(files: list[Path], bundles: list[Path], per_layout: int,
+                  repeat: int) -> dict:
+    """Per layout, single-test exports and bundles: median CPU [ms] of ``read_export`` and
+    of the bare parse over ``per_layout`` files (bundles: a third as many), and the median
+    of the back-to-back pairs' ratios (with the worst file's median ratio)."""
     try:
         from bench_reader import LAYOUTS as BARE_LAYOUTS
         from bench_reader import bare_parse
@@ -207,25 +209,30 @@ def reader_ratios(files: list[Path], per_layout: int, repeat: int) -> dict:
     out: dict = {}
     stems = {stem: layout for stem, layout, _ in plan(len(files))}
     for layout in LAYOUTS:
-        chosen = [f for f in files if stems.get(f.stem) == layout][:per_layout]
+        groups = {layout: [f for f in files if stems.get(f.stem) == layout][:per_layout],
+                  f"{layout}, bundled": [b for b in bundles if b.stem.startswith(
+                      f"bundle_{layout}_")][: max(1, per_layout // 3)]}
         spec = BARE_LAYOUTS[layout]
-        reader, bare, ratios = [], [], []
-        for path in chosen:
-            rows = sum(len(m.data) for m in read_export(path))  # warm-up and sanity check
-            if rows != bare_parse(path, spec):
-                raise SystemExit(f"{path}: read_export and the bare parse disagree on rows")
-            for k in range(repeat):
-                pair = [lambda p=path: read_export(p), lambda p=path, s=spec: bare_parse(p, s)]
-                times = [cpu_ms(f) for f in (pair if k % 2 == 0 else pair[::-1])]
-                r, b = times if k % 2 == 0 else times[::-1]
-                reader.append(r)
-                bare.append(b)
-                ratios.append(r / b)
-        out[layout] = {"files": len(chosen), "read_export_ms": statistics.median(reader),
-                       "bare_ms": statistics.median(bare), "ratio": statistics.median(ratios),
-                       "worst_file_ratio": max(
-                           statistics.median(ratios[i : i + repeat])
-                           for i in range(0, len(ratios), repeat))}
+        for name, chosen in groups.items():
+            reader, bare, ratios = [], [], []
+            for path in chosen:
+                rows = sum(len(m.data) for m in read_export(path))  # warm-up, sanity check
+                if rows != bare_parse(path, spec):
+                    raise SystemExit(f"{path}: read_export and the bare parse disagree")
+                for k in range(repeat):
+                    pair = [lambda p=path: read_export(p),
+                            lambda p=path, s=spec: bare_parse(p, s)]
+                    times = [cpu_ms(f) for f in (pair if k % 2 == 0 else pair[::-1])]
+                    r, b = times if k % 2 == 0 else times[::-1]
+                    reader.append(r)
+                    bare.append(b)
+                    ratios.append(r / b)
+            out[name] = {"files": len(chosen), "read_export_ms": statistics.median(reader),
+                         "bare_ms": statistics.median(bare),
+                         "ratio": statistics.median(ratios),
+                         "worst_file_ratio": max(
+                             statistics.median(ratios[i : i + repeat])
+                             for i in range(0, len(ratios), repeat))}
     return out
 
 
@@ -447,7 +454,7 @@ def main(argv: list[str] | None = None) -> dict:
               f"re-run median {median(walls):.2f} s ({', '.join(f'{w:.2f}' for w in walls)})")
         return {"batch": first, "rerun_s": walls}
     print("reader against the bare parse ...", flush=True)
-    reader = reader_ratios(files, per_layout=8, repeat=7)
+    reader = reader_ratios(files, bundles, per_layout=9, repeat=7)
     rounds: list[dict] = []
     for i in range(args.repeat):
         print(f"round {i + 1}/{args.repeat}: parse-only pool, batch, batch with plots ...",

@@ -1,13 +1,14 @@
-"""Sample trace plots: three synthetic runs drawn by ``pipeline.plot_run`` as the batch
+"""Sample trace plots: seeded synthetic runs drawn by ``pipeline.plot_run`` as the batch
 draws them, to look at before and after a change to the per-run plot.
 
     .venv/bin/python bench/trace_pictures.py --prefix after   # docs/img/trace_after_*.png
 
-The runs (seeded, the benchmark's 10 Hz RheoCompass exports written by the project's
-synthetic writer): a 10,000-row run with a static overshoot; a 12,000-row stick-slip run
-whose normal force wobbles by ±15 % (flagged); a 6,000-row run without a distinct static
-peak (flagged). Labels name the conditions the title shows (pin, disc, nominal force,
-temperature, repeat).
+The runs (seeded, 10 Hz RheoCompass exports written by the project's synthetic writer): a
+10,000-row run with a static overshoot; a 12,000-row stick-slip run whose normal force
+wobbles by ±15 % (flagged); a 6,000-row run without a distinct static peak (flagged); a
+2,380-row run whose plateau the trace cuts short (flagged, and marked on the plot where
+the reduction raises the boundary flags). Labels name the conditions the header shows
+(pin, disc, nominal force, temperature, repeat).
 """
 
 from __future__ import annotations
@@ -27,6 +28,9 @@ RUNS = {
                        noise=0.008, normal_force_N=5.0, normal_force_wobble=0.15, seed=22),
     "no_overshoot": dict(mu_k=0.41, shape="no_overshoot", duration_s=600.0, noise=0.004,
                          normal_force_N=1.0, seed=23),
+    # a peak at 1 mm and the trace ending 0.65 mm after it: the plateau is cut short
+    "short_plateau": dict(mu_s=0.8, mu_k=0.55, peak_distance_mm=1.0, duration_s=238.0,
+                          normal_force_N=3.0, seed=6),
 }
 
 

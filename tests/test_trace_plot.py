@@ -328,6 +328,39 @@ def test_any_flag_list_is_in_the_header_in_red():
     assert figure.mu_k.get_linestyle() == "--"  # no window: dashed over the whole run
 
 
+def test_boundary_flags_and_uncertainties_are_marked():
+    """Issue 14's boundary flags (whatever raises them): μ_S on its search limit is a
+    hollow marker on a dotted line with a note; a μ_K window that ends with the trace is
+    hatched, with a dashed line at its end and a note. U = 2u is a bar on μ_S, a band on
+    μ_K, and ± U in the readings. A run without them after one with them shows none."""
+    figure = TraceFigure()
+    s = np.linspace(0.0, 2.0, 4000)
+    mu = np.where(s < 1.2, 0.7 * s / 1.2, 0.5)
+    flags = ("peak_at_search_limit", "plateau_at_trace_end")
+    figure.draw(s, mu, TraceMarks(0.62, 1.06, 0.5, (1.3, 2.0), flags, 0.01, 0.002))
+    assert figure.limit_line.get_visible() and list(figure.limit_line.get_xdata()) == [1.06] * 2
+    assert figure.mu_s.get_markerfacecolor() == "white"
+    assert figure.limit_note.get_visible() and figure.limit_note.xy == (1.06, 0.62)
+    assert figure.window.get_hatch() == "//" and figure.force_window.get_hatch() is None
+    assert figure.end_line.get_visible() and list(figure.end_line.get_xdata()) == [2.0] * 2
+    assert figure.end_note.get_visible()
+    assert figure.mu_s_bar.get_visible() and list(figure.mu_s_bar.get_ydata()) == \
+        pytest.approx([0.60, 0.64])
+    band = figure.mu_k_band
+    assert band.get_visible() and (band.get_x(), band.get_y()) == pytest.approx((1.3, 0.496))
+    assert band.get_height() == pytest.approx(0.008)
+    assert figure.readings.get_text() == ("μ_S = 0.620 ± 0.020 (k = 2) at 1.06 mm · "
+                                          "μ_K = 0.500 ± 0.004 (k = 2) over 1.3–2 mm")
+    buf = io.BytesIO()
+    figure.save(buf, "png")
+    assert pixels(buf).std() > 0.05
+    figure.draw(s, mu, TraceMarks(0.62, 1.06, 0.5, (1.3, 1.9)))
+    hidden = (figure.limit_line, figure.limit_note, figure.end_line, figure.end_note,
+              figure.mu_s_bar, figure.mu_k_band)
+    assert not any(a.get_visible() for a in hidden)
+    assert figure.window.get_hatch() is None and figure.mu_s.get_markerfacecolor() == "tab:red"
+
+
 def test_conditions_line():
     assert TraceConditions().line() == "conditions unknown"
     assert TraceConditions(pin="DS30", normal_force_N=5.0).line() == "DS30 on disc ? · F 5 N"

@@ -115,6 +115,23 @@ class TraceMarks:
     mu_k: float | None
     mu_k_window_mm: tuple[Any, Any] | None
     flags: tuple[str, ...] = ()
+    #: standard uncertainties (k = 1) of μ_S and μ_K when known; drawn as U = 2u
+    u_mu_s: float | None = None
+    u_mu_k: float | None = None
+
+    @property
+    def peak_at_limit(self) -> bool:
+        """μ_S was read on a limit of its search (flag ``peak_at_search_limit``)."""
+        return "peak_at_search_limit" in self.flags
+
+    @property
+    def window_at_end(self) -> bool:
+        """The μ_K window ends with the trace (flag ``plateau_at_trace_end``)."""
+        return "plateau_at_trace_end" in self.flags
+
+    def expanded(self, u: float | None) -> float | None:
+        """U = 2u (k = 2) of a finite standard uncertainty, else ``None``."""
+        return 2.0 * float(u) if is_finite(u) else None  # type: ignore[arg-type]
 
     @property
     def window(self) -> tuple[float, float] | None:
@@ -125,16 +142,21 @@ class TraceMarks:
         return float(w[0]), float(w[1])
 
     def line(self) -> str:
-        """One line of what was read: ``μ_S = 0.702 at 0.0987 mm · μ_K = 0.480 over
-        0.251–8.39 mm`` (``not found`` for a missing reading)."""
+        """One line of what was read: ``μ_S = 0.702 ± 0.021 (k = 2) at 0.0987 mm · μ_K =
+        0.480 over 0.251–8.39 mm`` (``± U`` where an uncertainty is known, ``not found``
+        for a missing reading)."""
         if is_finite(self.mu_s):
             static = f"μ_S = {float(self.mu_s):.3f}"  # type: ignore[arg-type]
+            if self.expanded(self.u_mu_s) is not None:
+                static += f" ± {self.expanded(self.u_mu_s):.3f} (k = 2)"
             if is_finite(self.mu_s_distance_mm):
                 static += f" at {float(self.mu_s_distance_mm):.3g} mm"  # type: ignore[arg-type]
         else:
             static = "μ_S not found"
         if is_finite(self.mu_k):
             kinetic = f"μ_K = {float(self.mu_k):.3f}"  # type: ignore[arg-type]
+            if self.expanded(self.u_mu_k) is not None:
+                kinetic += f" ± {self.expanded(self.u_mu_k):.3f} (k = 2)"
             if self.window is not None:
                 kinetic += f" over {self.window[0]:.3g}–{self.window[1]:.3g} mm"
         else:
@@ -199,7 +221,7 @@ class TraceFigure:
         from matplotlib.colors import to_rgb
         from matplotlib.figure import Figure
         from matplotlib.lines import Line2D
-        from matplotlib.patches import Patch
+        from matplotlib.patches import Patch, Rectangle
         from matplotlib.ticker import MaxNLocator, ScalarFormatter
         from matplotlib.transforms import IdentityTransform
 
@@ -239,6 +261,7 @@ class TraceFigure:
                                     lw=0, zorder=0.5)
         self.force_window = f_ax.axvspan(0.0, 1.0, *_inside(self.FORCE_BOX_IN[3]),
                                          color=tint, lw=0, zorder=0.5)
+        self.window.set_hatchcolor((*to_rgb(blue), 0.45))
         # the grid and the tick marks of a PNG, in pixels (they move with the run's
         # limits); SVG and PDF use matplotlib's own, at the same places
         # (each one path of NaN-separated segments: one draw call)
@@ -249,7 +272,21 @@ class TraceFigure:
         (self.raw,) = mu_ax.plot([], [], color="0.75", lw=0.8)
         (self.smooth,) = mu_ax.plot([], [], color="0.15", lw=1.2)
         (self.mu_k,) = mu_ax.plot([], [], color=blue, lw=2.0)
+        # U (k = 2): a band on μ_K over its window, a capped bar on μ_S
+        self.mu_k_band = mu_ax.add_patch(Rectangle((0.0, 0.0), 1.0, 1.0, color=blue,
+                                                   alpha=0.18, lw=0))
+        (self.mu_s_bar,) = mu_ax.plot([], [], color=red, lw=1.2, marker="_", ms=7)
         (self.mu_s,) = mu_ax.plot([], [], "o", color=red, ms=7)
+        # boundary flags: μ_S on its search limit (hollow marker, dotted line, note); the
+        # μ_K window at the trace's end (hatched window, dashed line at its end, note)
+        self.limit_line = mu_ax.axvline(0.0, color=red, lw=1.0, ls=":")
+        self.limit_note = mu_ax.annotate("$\\mu_S$ at search limit", (0.0, 0.0),
+                                         xytext=(6, 6), textcoords="offset points",
+                                         fontsize="small", color=red)
+        self.end_line = mu_ax.axvline(0.0, color="tab:orange", lw=1.2, ls="--")
+        self.end_note = mu_ax.annotate("$\\mu_K$ window at trace end", (0.0, 0.0),
+                                       xytext=(-4, 8), textcoords="offset points", ha="right",
+                                       fontsize="small", color="tab:orange")
         # the nominal force under the measured one: where they agree, both show
         (self.nominal,) = f_ax.plot([], [], color=green, lw=1.3, ls="--")
         (self.force,) = f_ax.plot([], [], color="0.3", lw=0.8)
@@ -289,7 +326,9 @@ class TraceFigure:
 
         #: the run's own artists, in drawing order (grid above the window's tint)
         self._artists = (self.window, self.force_window, self.grid, self.ticks, self.raw,
-                         self.smooth, self.mu_k, self.mu_s, self.nominal, self.force)
+                         self.smooth, self.end_line, self.limit_line, self.mu_k_band,
+                         self.mu_k, self.mu_s_bar, self.mu_s, self.nominal, self.force,
+                         self.limit_note, self.end_note)
         self._shown: dict[Any, bool] = {}
         self._tick_labels: list[tuple[str, float, float, str]] = []
         self._backgrounds: dict[tuple[Any, ...], Any] = {}
@@ -337,25 +376,10 @@ class TraceFigure:
         if mu_smooth is not None:
             self.smooth.set_data(*thin(mu_smooth))
             shown[self.smooth] = True
-        window = marks.window
-        if window is not None:
-            for span in (self.window, self.force_window):
-                span.set_x(window[0])
-                span.set_width(window[1] - window[0])
-                shown[span] = True
-        if is_finite(marks.mu_k):
-            level = float(marks.mu_k)  # type: ignore[arg-type]
-            # over its window; without one, dashed over the whole run
-            self.mu_k.set_data(list(window or data_x), [level, level])
-            self.mu_k.set_linestyle("-" if window else "--")
-            shown[self.mu_k] = True
-        peak = float(marks.mu_s) if is_finite(marks.mu_s) else None  # type: ignore[arg-type]
-        if peak is not None and is_finite(marks.mu_s_distance_mm):
-            self.mu_s.set_data([float(marks.mu_s_distance_mm)], [peak])  # type: ignore[arg-type]
-            shown[self.mu_s] = True
+        low, high = self._draw_readings(marks, data_x, shown)
         finite = mu_v[np.isfinite(mu_v)]
-        top = max(float(finite.max()) if finite.size else 1.0, peak or 0.0)
-        bottom = min(0.0, float(finite.min())) if finite.size else 0.0
+        top = max(float(finite.max()) if finite.size else 1.0, high)
+        bottom = min(0.0, float(finite.min()) if finite.size else 0.0, low)
         self.mu_ax.set_ylim(bottom - 0.02 * (top - bottom), top + 0.08 * (top - bottom))
         self._draw_force(s, normal_force_N, cond.normal_force_N, data_x, thin, shown)
         self._set_ticks()
@@ -372,6 +396,56 @@ class TraceFigure:
                                 self._set_legend("force", shown, self.FORCE_BOX_IN),
                                 self.no_force.get_visible())
         return self
+
+    def _draw_readings(self, marks: TraceMarks, data_x: tuple[float, float],
+                       shown: dict[Any, bool]) -> tuple[float, float]:
+        """The μ_K window (shaded on both panels; hatched, with a dashed line at its end,
+        when it ends with the trace), the μ_K level over it (dashed over the whole run
+        without a window) with its U band, the μ_S marker with its U bar (hollow, with a
+        dotted line, when read on a limit of its search). Returns the lowest and highest
+        value drawn [COF]."""
+        values = [0.0]
+        window = marks.window
+        if window is not None:
+            for span in (self.window, self.force_window):
+                span.set_x(window[0])
+                span.set_width(window[1] - window[0])
+                shown[span] = True
+            self.window.set_hatch("//" if marks.window_at_end else None)
+            if marks.window_at_end:
+                self.end_line.set_xdata([window[1], window[1]])
+                shown[self.end_line] = True
+        if is_finite(marks.mu_k):
+            level = float(marks.mu_k)  # type: ignore[arg-type]
+            self.mu_k.set_data(list(window or data_x), [level, level])
+            self.mu_k.set_linestyle("-" if window else "--")
+            shown[self.mu_k] = True
+            values.append(level)
+            band = marks.expanded(marks.u_mu_k)
+            if band is not None and window is not None:
+                self.mu_k_band.set_bounds(window[0], level - band, window[1] - window[0],
+                                          2.0 * band)
+                shown[self.mu_k_band] = True
+                values += [level - band, level + band]
+            if marks.window_at_end:
+                self.end_note.xy = ((window or data_x)[1], level)
+                shown[self.end_note] = True
+        if is_finite(marks.mu_s) and is_finite(marks.mu_s_distance_mm):
+            x, y = float(marks.mu_s_distance_mm), float(marks.mu_s)  # type: ignore[arg-type]
+            self.mu_s.set_data([x], [y])
+            self.mu_s.set_markerfacecolor("white" if marks.peak_at_limit else "tab:red")
+            shown[self.mu_s] = True
+            values.append(y)
+            bar = marks.expanded(marks.u_mu_s)
+            if bar is not None:
+                self.mu_s_bar.set_data([x, x], [y - bar, y + bar])
+                shown[self.mu_s_bar] = True
+                values += [y - bar, y + bar]
+            if marks.peak_at_limit:
+                self.limit_line.set_xdata([x, x])
+                self.limit_note.xy = (x, y)
+                shown[self.limit_line] = shown[self.limit_note] = True
+        return min(values), max(values)
 
     def _draw_force(self, s: np.ndarray, force: Any, nominal_N: float | None,
                     data_x: tuple[float, float], thin: Any, shown: dict[Any, bool]) -> None:
@@ -489,8 +563,9 @@ class TraceFigure:
     def _calibrate(self) -> Image:
         """The fast-octree palette of one calibration plot that has every artist, colour
         and overlap a run can have: raw and smoothed μ with a spike, the μ_K window and
-        level, the μ_S marker, the measured force crossing the nominal one, a red flag
-        line. A run's picture holds the same colours (the same artists on the same
+        level with their U, the μ_S marker hollow on its limit line, the window hatched
+        at the trace's end, the measured force crossing the nominal one, the notes and a
+        red flag line. A run's picture holds the same colours (the same artists on the same
         background), and mapping it to this palette costs a sixth of finding its own; the
         tests bound the difference. Leaves the figure set to the calibration plot."""
         import numpy as np
@@ -502,7 +577,8 @@ class TraceFigure:
         mu[3000] = 1.05
         smooth = np.convolve(mu, np.ones(25) / 25, mode="same")
         force = 3.0 * (1.0 + 0.15 * np.sin(9.0 * s)) + 0.02 * rng.standard_normal(s.size)
-        self.draw(s, mu, TraceMarks(0.87, 0.4, 0.55, (1.0, 5.8), ("calibration",)),
+        flags = ("calibration", "peak_at_search_limit", "plateau_at_trace_end")
+        self.draw(s, mu, TraceMarks(0.87, 0.4, 0.55, (1.0, 5.8), flags, 0.01, 0.004),
                   mu_smooth=smooth, normal_force_N=force,
                   conditions=TraceConditions("calibration.csv", "pin", "disc", 3.0, 35.4,
                                              20.0, 1))
@@ -659,7 +735,9 @@ def plot_trace(
     trace = result.trace
     marks = TraceMarks(mu_s=result.mu_s, mu_s_distance_mm=result.mu_s_distance_mm,
                        mu_k=result.mu_k, mu_k_window_mm=result.mu_k_window_mm,
-                       flags=flag_tuple(result.flags))
+                       flags=flag_tuple(result.flags),
+                       u_mu_s=getattr(result, "u_mu_s", None),
+                       u_mu_k=getattr(result, "u_mu_k", None))
     figure = trace_figure(dpi).draw(
         trace["sliding_distance_mm"].to_numpy(), trace["mu"].to_numpy(), marks,
         mu_smooth=_column(trace, "mu_smooth"), normal_force_N=_column(trace, "normal_force_N"),
@@ -690,6 +768,8 @@ def plot_trace_row(
         mu_k=finite_or_none(row.get("mu_k")),
         mu_k_window_mm=(row.get("mu_k_window_start_mm"), row.get("mu_k_window_end_mm")),
         flags=flag_tuple(row.get("flags")),
+        u_mu_s=finite_or_none(row.get("u_mu_s")),
+        u_mu_k=finite_or_none(row.get("u_mu_k")),
     )
     figure = trace_figure(dpi).draw(
         trace["sliding_distance_mm"].to_numpy(), trace["mu"].to_numpy(), marks,

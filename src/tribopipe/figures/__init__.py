@@ -1,9 +1,11 @@
 """Headless figures: the canvas and file writing every plot shares, and the plot of one run.
 
 ``canvas`` holds the Agg canvas, the formats and the writers; ``decimate`` the min–max
-decimation of long lines; ``trace`` the per-run trace plot (μ and normal force over sliding
-distance, Fig. 3 style) that :mod:`tribopipe.pipeline` draws per run, on one reused figure
-per process. The friction map's plots are in :mod:`tribopipe.export.plots`.
+decimation of long lines; ``runinfo`` what a trace plot says of a run (conditions,
+readings, flags); ``typeset`` text on a PNG with Pillow; ``trace`` the per-run trace plot
+(μ and normal force over sliding distance, Fig. 3 style) that :mod:`tribopipe.pipeline`
+draws per run, on one reused figure per process. The friction map's plots are in
+:mod:`tribopipe.export.plots`.
 """
 
 from .canvas import (
@@ -20,16 +22,8 @@ from .canvas import (
     write_png,
 )
 from .decimate import minmax_decimate
-from .trace import (
-    TRACE_DPI,
-    TraceConditions,
-    TraceFigure,
-    TraceMarks,
-    flag_tuple,
-    plot_trace,
-    plot_trace_row,
-    trace_figure,
-)
+from .runinfo import TraceConditions, TraceMarks, flag_tuple
+from .trace import TRACE_DPI, TraceFigure, plot_trace, plot_trace_row, trace_figure
 
 __all__ = [
     "DPI", "FORMATS", "TRACE_DPI", "MU_LABEL", "PNG_COMPRESS_LEVEL", "Target", "TraceConditions",

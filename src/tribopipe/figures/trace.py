@@ -27,7 +27,6 @@ from __future__ import annotations
 
 import threading
 from collections.abc import Mapping
-from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 from ..numeric import finite_or_none, is_finite
@@ -41,6 +40,8 @@ from .canvas import (
     write_png,
 )
 from .decimate import Columns
+from .runinfo import TraceConditions, TraceMarks, flag_tuple, shorten
+from .typeset import Typesetter
 
 if TYPE_CHECKING:
     import numpy as np
@@ -50,143 +51,9 @@ if TYPE_CHECKING:
     from ..reduce import ReductionResult
 
 
-@dataclass(frozen=True)
-class TraceConditions:
-    """What a trace plot's header says of a run: its source and nominal conditions.
-
-    ``normal_force_N`` is the nominal total normal force [N] (also drawn on the force
-    panel), ``pressure_kPa`` the nominal contact pressure per pin [kPa], ``temperature_C``
-    the nominal temperature [°C]; ``None`` means unknown (left out of the header).
-    """
-
-    source: str | None = None
-    pin: str | None = None
-    disc: str | None = None
-    normal_force_N: float | None = None
-    pressure_kPa: float | None = None
-    temperature_C: float | None = None
-    repeat: int | None = None
-
-    @classmethod
-    def from_row(cls, row: Mapping[str, Any]) -> TraceConditions:
-        """The conditions of a friction-map row (``source_file, pin, disc,
-        normal_force_N, pressure_kPa, temperature_C, repeat``; missing keys are unknown)."""
-        repeat = finite_or_none(row.get("repeat"))
-        return cls(source=_text_or_none(row.get("source_file")),
-                   pin=_text_or_none(row.get("pin")), disc=_text_or_none(row.get("disc")),
-                   normal_force_N=finite_or_none(row.get("normal_force_N")),
-                   pressure_kPa=finite_or_none(row.get("pressure_kPa")),
-                   temperature_C=finite_or_none(row.get("temperature_C")),
-                   repeat=None if repeat is None else int(repeat))
-
-    def line(self) -> str:
-        """One line: ``pin on disc · F 3 N (35.37 kPa per pin) · 20 °C · repeat 2``."""
-        parts = []
-        if self.pin or self.disc:
-            parts.append(f"{self.pin or 'pin ?'} on {self.disc or 'disc ?'}")
-        if self.normal_force_N is not None:
-            force = f"F {self.normal_force_N:g} N"
-            if self.pressure_kPa is not None:
-                force += f" ({self.pressure_kPa:.4g} kPa per pin)"
-            parts.append(force)
-        elif self.pressure_kPa is not None:
-            parts.append(f"{self.pressure_kPa:.4g} kPa per pin")
-        if self.temperature_C is not None:
-            parts.append(f"{self.temperature_C:g} °C")
-        if self.repeat is not None:
-            parts.append(f"repeat {self.repeat}")
-        return " · ".join(parts) if parts else "conditions unknown"
-
-
-def _text_or_none(value: Any) -> str | None:
-    """``str(value)`` for a present text; ``None`` for a missing one (None, NaN, '')."""
-    if value is None or (isinstance(value, float) and value != value):
-        return None
-    return str(value) or None
-
-
-@dataclass(frozen=True)
-class TraceMarks:
-    """The readings a trace plot marks: μ_S at its distance [mm], μ_K over its window
-    ``(start, end)`` [mm], and the run's flags; non-finite values are not drawn."""
-
-    mu_s: float | None
-    mu_s_distance_mm: float | None
-    mu_k: float | None
-    mu_k_window_mm: tuple[Any, Any] | None
-    flags: tuple[str, ...] = ()
-    #: standard uncertainties (k = 1) of μ_S and μ_K when known; drawn as U = 2u
-    u_mu_s: float | None = None
-    u_mu_k: float | None = None
-
-    @property
-    def peak_at_limit(self) -> bool:
-        """μ_S was read on a limit of its search (flag ``peak_at_search_limit``)."""
-        return "peak_at_search_limit" in self.flags
-
-    @property
-    def window_at_end(self) -> bool:
-        """The μ_K window ends with the trace (flag ``plateau_at_trace_end``)."""
-        return "plateau_at_trace_end" in self.flags
-
-    def expanded(self, u: float | None) -> float | None:
-        """U = 2u (k = 2) of a finite standard uncertainty, else ``None``."""
-        return 2.0 * float(u) if is_finite(u) else None  # type: ignore[arg-type]
-
-    @property
-    def window(self) -> tuple[float, float] | None:
-        """The μ_K window ``(start, end)`` [mm] when both ends are finite."""
-        w = self.mu_k_window_mm
-        if w is None or not all(is_finite(v) for v in w):
-            return None
-        return float(w[0]), float(w[1])
-
-    def line(self) -> str:
-        """One line of what was read: ``μ_S = 0.702 ± 0.021 (k = 2) at 0.0987 mm · μ_K =
-        0.480 over 0.251–8.39 mm`` (``± U`` where an uncertainty is known, ``not found``
-        for a missing reading)."""
-        if is_finite(self.mu_s):
-            static = f"μ_S = {float(self.mu_s):.3f}"  # type: ignore[arg-type]
-            if self.expanded(self.u_mu_s) is not None:
-                static += f" ± {self.expanded(self.u_mu_s):.3f} (k = 2)"
-            if is_finite(self.mu_s_distance_mm):
-                static += f" at {float(self.mu_s_distance_mm):.3g} mm"  # type: ignore[arg-type]
-        else:
-            static = "μ_S not found"
-        if is_finite(self.mu_k):
-            kinetic = f"μ_K = {float(self.mu_k):.3f}"  # type: ignore[arg-type]
-            if self.expanded(self.u_mu_k) is not None:
-                kinetic += f" ± {self.expanded(self.u_mu_k):.3f} (k = 2)"
-            if self.window is not None:
-                kinetic += f" over {self.window[0]:.3g}–{self.window[1]:.3g} mm"
-        else:
-            kinetic = "μ_K not found"
-        return f"{static} · {kinetic}"
-
-
-def flag_tuple(flags: Any) -> tuple[str, ...]:
-    """Flags given as a ``;``-joined text or a sequence, as a tuple without empties."""
-    if flags is None or (isinstance(flags, float) and flags != flags):
-        return ()
-    items = flags.split(";") if isinstance(flags, str) else [str(f) for f in flags]
-    return tuple(f.strip() for f in items if f and f.strip())
-
-
 #: the per-run plot's resolution: 700 × 530 px, about the pixels of the single-panel plot
 #: it replaced (840 × 432 at 120 dpi); every step of a PNG costs in proportion to them
 TRACE_DPI = 100
-
-
-#: Header lines are cut to this many characters (a file name can be any length).
-HEADER_CHARS = 110
-
-
-def shorten(text: str, limit: int = HEADER_CHARS) -> str:
-    """``text`` cut in the middle with an ellipsis when it is longer than ``limit``."""
-    if len(text) <= limit:
-        return text
-    half = (limit - 1) // 2
-    return text[:half] + "…" + text[len(text) - (limit - 1 - half):]
 
 
 def _fraction(box_in: tuple[float, float, float, float], width_in: float,
@@ -321,8 +188,7 @@ class TraceFigure:
         self.readings = fig.text(0.5, top - 2.1 * line, "", fontsize="small", **kw)
         self.flags = fig.text(0.5, top - 3.1 * line, "", fontsize="small", **kw)
         self.header = (self.title, self.conditions, self.readings, self.flags)
-        self._fonts: dict[tuple[str, float], Any] = {}
-        self._masks: dict[tuple[Any, ...], Any] = {}
+        self._typesetter = Typesetter(dpi)
 
         #: the run's own artists, in drawing order (grid above the window's tint)
         self._artists = (self.window, self.force_window, self.grid, self.ticks, self.raw,
@@ -639,53 +505,12 @@ class TraceFigure:
             if text.get_text():
                 x, y = text.get_position()
                 colour = tuple(round(255 * c) for c in to_rgb(text.get_color()))
-                self._paste(image, text.get_text(), findfont(text.get_fontproperties()),
+                self._typesetter.paste(image, text.get_text(), findfont(text.get_fontproperties()),
                             text.get_fontsize(), "ma", x * width, (1.0 - y) * height, colour)
         label = self.force_ax.yaxis.get_major_ticks()[0].label1
         path, size = findfont(label.get_fontproperties()), label.get_fontsize()
         for content, x, y, anchor in self._tick_labels:
-            self._paste(image, content, path, size, anchor, x, y, (0, 0, 0))
-
-    #: typeset texts kept (tick labels and most header lines repeat from run to run)
-    MASKS_KEPT = 1024
-
-    def _paste(self, image: Image, text: str, path: str, size_pt: float, anchor: str,
-               x: float, y: float, colour: tuple[int, ...]) -> None:
-        """Put ``text`` on ``image`` at pixel ``(x, y)`` (from the top left) in ``colour``.
-        ``anchor`` ``"ma"`` hangs the text centred below the point from the top of an
-        ``l`` (as matplotlib aligns a top-aligned line, not from the font's taller
-        ascender); ``"rm"`` ends it at the point, centred vertically. Each text is
-        typeset once (an ``L`` coverage image) and pasted after."""
-        from PIL import Image as PILImage
-        from PIL import ImageDraw
-
-        key = (text, path, size_pt, anchor)
-        cached = self._masks.get(key)
-        if cached is None:
-            font, ascent = self._font(path, size_pt)
-            anchor_pil, shift = ("ms", ascent) if anchor == "ma" else (anchor, 0.0)
-            left, top, right, bottom = font.getbbox(text, anchor=anchor_pil)
-            mask = PILImage.new("L", (int(right - left) + 2, int(bottom - top) + 2), 0)
-            ImageDraw.Draw(mask).text((-left, -top), text, fill=255, font=font,
-                                      anchor=anchor_pil)
-            cached = (mask, int(left), int(round(top + shift)))
-            if len(self._masks) >= self.MASKS_KEPT:
-                self._masks.pop(next(iter(self._masks)))
-            self._masks[key] = cached
-        mask, dx, dy = cached
-        image.paste(colour, (round(x) + dx, round(y) + dy), mask)
-
-    def _font(self, path: str, size_pt: float) -> tuple[Any, float]:
-        """A Pillow font of the file at ``path`` and ``size_pt`` at this resolution, and
-        the height of an ``l`` above its baseline [px]."""
-        from PIL import ImageFont
-
-        size_px = size_pt * self.dpi / 72.0
-        cached = self._fonts.get((path, size_px))
-        if cached is None:
-            font = ImageFont.truetype(path, size_px)
-            cached = self._fonts[(path, size_px)] = (font, -font.getbbox("l", anchor="ls")[1])
-        return cached
+            self._typesetter.paste(image, content, path, size, anchor, x, y, (0, 0, 0))
 
 
 def _padded(lo: float, hi: float, fraction: float) -> tuple[float, float]:

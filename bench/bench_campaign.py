@@ -283,18 +283,20 @@ def _pss_kB(pid: int) -> int:
     return 0
 
 
-#: A small launcher: runs the command, then reports its wall time and the largest max RSS
-#: among it and its workers. Linux carries a process's RSS high-water mark over fork and
-#: exec, so launching from this (large) benchmark process would inflate the figure by the
-#: benchmark's own size; from this launcher, by ~10 MB at most.
+#: A small launcher: runs the command, then reports its wall time, the CPU time (user +
+#: system) of it and its workers, and the largest max RSS among them. Linux carries a
+#: process's RSS high-water mark over fork and exec, so launching from this (large)
+#: benchmark process would inflate the figure by the benchmark's own size; from this
+#: launcher, by ~10 MB at most.
 _LAUNCHER = """
 import json, resource, subprocess, sys, time
 t0 = time.perf_counter()
 code = subprocess.call(sys.argv[2:])
 wall = time.perf_counter() - t0
+usage = resource.getrusage(resource.RUSAGE_CHILDREN)
 with open(sys.argv[1], "w") as fh:
-    json.dump({"wall_s": wall, "exit_code": code,
-               "max_rss_kB": resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss}, fh)
+    json.dump({"wall_s": wall, "exit_code": code, "max_rss_kB": usage.ru_maxrss,
+               "cpu_s": usage.ru_utime + usage.ru_stime}, fh)
 """
 
 
@@ -333,7 +335,8 @@ def run_measured(cmd: list[str], cwd: Path) -> dict:
     stdout, stderr = out_fh.read().decode(errors="replace"), err_fh.read().decode(errors="replace")
     if measured["exit_code"] not in (0, 1):
         raise SystemExit(f"{' '.join(cmd)} exited {measured['exit_code']}: {stderr[-2000:]}")
-    return {"wall_s": measured["wall_s"], "exit_code": measured["exit_code"],
+    return {"wall_s": measured["wall_s"], "cpu_s": measured["cpu_s"],
+            "exit_code": measured["exit_code"],
             "max_rss_MB": measured["max_rss_kB"] / 1024,  # Linux reports kB
             "peak_pss_tree_MB": peak / 1024,
             "said": _ledger_line(stdout),
@@ -485,6 +488,7 @@ def main(argv: list[str] | None = None) -> dict:
     start = startup()
 
     walls = {k: [r[k]["wall_s"] for r in rounds] for k in ("batch", "batch_plots")}
+    cpus = {k: [r[k]["cpu_s"] for r in rounds] for k in ("batch", "batch_plots")}
     parse = [r["parse_pool_s"] for r in rounds]
     results = {
         "when_utc": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
@@ -499,8 +503,12 @@ def main(argv: list[str] | None = None) -> dict:
         "parse_pool_s": parse,
         "batch_s": walls["batch"],
         "batch_plots_s": walls["batch_plots"],
+        "batch_cpu_s": cpus["batch"],
+        "batch_plots_cpu_s": cpus["batch_plots"],
         "ratio_plots": median([p / b for p, b in zip(walls["batch_plots"], walls["batch"],
                                                      strict=True)]),
+        "ratio_plots_cpu": median([p / b for p, b in zip(cpus["batch_plots"], cpus["batch"],
+                                                         strict=True)]),
         "ratio_batch_parse": median([b / p for b, p in zip(walls["batch"], parse,
                                                            strict=True)]),
         "peak_pss_MB": {"batch": max(r["batch"]["peak_pss_tree_MB"] for r in rounds),
@@ -555,6 +563,8 @@ def report(r: dict) -> None:
          f"{r['ratio_batch_parse']:.2f}× parse-only (≤ 1.5×)"),
         ("batch with plots", spread(r["batch_plots_s"]),
          f"{r['ratio_plots']:.2f}× without (≤ 1.5×)"),
+        ("CPU, no plots / with plots", f"{median(r['batch_cpu_s']):.1f} s / "
+         f"{median(r['batch_plots_cpu_s']):.1f} s", f"{r['ratio_plots_cpu']:.2f}× in CPU time"),
         ("incremental re-run", spread(r["rerun_s"], fmt=".2f"), "≤ 1 s"),
         ("one file changed", spread(r["one_changed_s"], fmt=".2f"), ""),
         ("peak PSS, process tree", f"{r['peak_pss_MB']['batch']:.0f} MB / "

@@ -268,8 +268,10 @@ def trace_path(out_dir: str | Path | OutputLayout, outcome: RunOutcome) -> Path:
 def write_trace(out_dir: str | Path | OutputLayout, outcome: RunOutcome) -> Path:
     """Write the reduced trace (Parquet, unit-suffixed columns) and return its path.
 
-    The columns go to Arrow as plain arrays (no pandas metadata round trip): a campaign
-    writes one trace per run, so this is on the hot path of a batch.
+    The columns go to Arrow as plain arrays (no pandas metadata round trip), without
+    Parquet's dictionary encoding (measured samples hardly repeat: trying it cost two
+    thirds of the write, 4.4 ms of 10,000 rows against 1.6, for a file 6 % smaller): a
+    campaign writes one trace per run, so this is on the hot path of a batch.
     """
     import pyarrow as pa
     import pyarrow.parquet as pq
@@ -280,7 +282,7 @@ def write_trace(out_dir: str | Path | OutputLayout, outcome: RunOutcome) -> Path
     table = pa.table({str(c): trace[c].to_numpy() for c in trace.columns})
     tmp = target.with_suffix(".parquet.tmp")
     try:
-        pq.write_table(table, tmp)
+        pq.write_table(table, tmp, use_dictionary=False)
         tmp.replace(target)
     except OSError:
         tmp.unlink(missing_ok=True)  # a full disk leaves no half trace behind

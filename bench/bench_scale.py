@@ -61,6 +61,8 @@ def per_file(folder: Path, repeat: int) -> dict:
     """CPU [ms] of each step a batch worker runs per export, median over the files."""
     import gc
 
+    from threadpoolctl import threadpool_limits
+
     from tribopipe.campaign import GC_THRESHOLDS
     from tribopipe.config import load_settings
     from tribopipe.files import file_sha256
@@ -71,7 +73,8 @@ def per_file(folder: Path, repeat: int) -> dict:
     from tribopipe.reduce import reduce_measurement
     from tribopipe.synthetic import SyntheticRun, write_rheocompass_export
 
-    gc.set_threshold(*GC_THRESHOLDS)  # as in the batch's workers
+    gc.set_threshold(*GC_THRESHOLDS)  # as in the batch's workers: their GC setting,
+    threadpool_limits(limits=1, user_api="blas")  # and one BLAS thread
     settings = load_settings()
     labels = RunLabels("Dragonskin 30", "steel", 3.0, 20.0, 1)
     layouts = {"utf16-tab-en": {}, "utf8-comma": {"encoding": "utf-8", "delimiter": ","},

@@ -77,9 +77,7 @@ def test_trace_plot_from_a_reduction_result(tmp_path):
 def test_a_boundary_reading_is_marked_on_the_trace_plot(tmp_path):
     """Issue 14: a μ_S on its search limit and a μ_K window at the trace's end are marked
     (hollow marker, dotted line, hatched window, notes); U = 2u drawn as bar and band."""
-    from matplotlib.figure import Figure
-
-    from tribopipe.export.plots import draw_trace
+    from tribopipe.figures import TraceMarks, flag_tuple, trace_figure
 
     settings = load_settings()
     raw = tmp_path / "run.csv"
@@ -88,25 +86,29 @@ def test_a_boundary_reading_is_marked_on_the_trace_plot(tmp_path):
                              project="p", test="t", sample="s")
     result = reduce_file(raw, settings, RunLabels("Dragonskin 30", "steel", 3.0, 20.0)).result
     assert "plateau_at_trace_end" in result.flags
-    flags = ";".join([*result.flags, "peak_at_search_limit"])
-
-    def texts(flag_text: str) -> tuple[list[str], list[str]]:
-        ax = Figure().add_subplot()
-        draw_trace(ax, result.trace, mu_s=result.mu_s, mu_s_distance_mm=result.mu_s_distance_mm,
-                   mu_k=result.mu_k, mu_k_window_mm=result.mu_k_window_mm, flags=flag_text,
-                   u_mu_s=result.u_mu_s, u_mu_k=result.u_mu_k)
-        notes = [t.get_text() for t in ax.texts]
-        legend = [t.get_text() for t in ax.get_legend().get_texts()]
-        return notes, legend
-
-    notes, legend = texts(flags)
-    assert "$\\mu_S$ at search limit" in notes and "$\\mu_K$ window at trace end" in notes
-    assert any("(at trace end)" in t for t in legend)
-    assert any(f"± {2 * result.u_mu_k:.3f} (k = 2)" in t for t in legend)
-    clean, _ = texts("")
-    assert clean == []  # no flag, no note
     png = plot_trace(result, tmp_path / "boundary.png")
     assert_png(Path(png))
+    figure = trace_figure()  # the figure plot_trace drew on
+    assert figure.end_note.get_visible() and figure.window.get_hatch() == "//"
+    assert f"± {2 * result.u_mu_k:.3f} (k = 2)" in figure.readings.get_text()
+    assert figure.mu_k_band.get_visible()
+    assert "plateau_at_trace_end" in figure.flags.get_text()
+
+    def drawn(flags: tuple[str, ...]):
+        trace = result.trace
+        marks = TraceMarks(result.mu_s, result.mu_s_distance_mm, result.mu_k,
+                           result.mu_k_window_mm, flags, result.u_mu_s, result.u_mu_k)
+        return figure.draw(trace["sliding_distance_mm"].to_numpy(), trace["mu"].to_numpy(),
+                           marks)
+
+    drawn((*flag_tuple(result.flags), "peak_at_search_limit"))
+    assert figure.limit_note.get_visible() and figure.limit_line.get_visible()
+    assert figure.mu_s.get_markerfacecolor() == "white"
+    assert figure.limit_note.get_text() == "$\\mu_S$ at search limit"
+    assert figure.end_note.get_text() == "$\\mu_K$ window at trace end"
+    drawn(())  # no flag, no note
+    assert not figure.limit_note.get_visible() and not figure.end_note.get_visible()
+    assert figure.window.get_hatch() is None
 
 
 def test_trace_plot_from_parquet_and_map_row_in_every_format(processed, tmp_path):

@@ -561,8 +561,8 @@ def plot_trace(
     marks = TraceMarks(mu_s=result.mu_s, mu_s_distance_mm=result.mu_s_distance_mm,
                        mu_k=result.mu_k, mu_k_window_mm=result.mu_k_window_mm,
                        flags=flag_tuple(result.flags),
-                       u_mu_s=getattr(result, "u_mu_s", None),
-                       u_mu_k=getattr(result, "u_mu_k", None))
+                       u_mu_s=finite_or_none(result.u_mu_s),
+                       u_mu_k=finite_or_none(result.u_mu_k))
     figure = trace_figure(dpi).draw(
         trace["sliding_distance_mm"].to_numpy(), trace["mu"].to_numpy(), marks,
         mu_smooth=_column(trace, "mu_smooth"), normal_force_N=_column(trace, "normal_force_N"),

@@ -399,8 +399,7 @@ def _execute(todo: list[_Job], ctx: _Context, jobs: int, progress: ProgressCallb
         return results
     from concurrent.futures import ProcessPoolExecutor, as_completed
 
-    if ctx.plots:
-        _prepare_plots()
+    _prepare_plots(ctx)
     with ProcessPoolExecutor(max_workers=workers, initializer=_worker_init) as pool:
         futures = {pool.submit(_reduce_chunk, chunk, ctx): chunk for chunk in chunks}
         for future in as_completed(futures):

@@ -272,14 +272,15 @@ def _plot(campaign: Campaign, outcome: RunOutcome, name: str) -> str | None:
 GC_THRESHOLDS = (100_000, 50, 100)
 
 
-def _prepare_plots() -> None:
-    """Build this process's trace figure before the workers fork, so that they inherit it
-    (matplotlib imported, fonts loaded, palette and first background drawn: ~0.5 s of CPU
-    each would spend, and memory they now share) instead of building their own. Only where
-    workers are forked; elsewhere each builds its figure on its first plot."""
+def _prepare_plots(ctx: _Context) -> None:
+    """When the batch draws plots, build this process's trace figure before the workers
+    fork, so that they inherit it (matplotlib imported, fonts loaded, palette and first
+    background drawn: ~0.5 s of CPU each would spend, and memory they now share) instead
+    of building their own. Only where workers are forked; elsewhere each builds its figure
+    on its first plot."""
     import multiprocessing
 
-    if multiprocessing.get_start_method() == "fork":
+    if ctx.plots and multiprocessing.get_start_method() == "fork":
         trace_figure()
 
 

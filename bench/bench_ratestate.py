@@ -36,7 +36,6 @@ from __future__ import annotations
 import argparse
 import hashlib
 import json
-import math
 import os
 import sys
 import tempfile
@@ -45,7 +44,7 @@ from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 from typing import Any
 
-from bench_validation import BOUNDARY_FLAGS, _print_table, summarise
+from bench_validation import BOUNDARY_FLAGS, _print_table, json_rows, summarise, targets_met
 
 from tribopipe.synthetic_ratestate import (
     DURATIONS_S,
@@ -207,24 +206,14 @@ def main(argv: list[str] | None = None) -> int:
                          ("by set-up", by_setup)):
         _print_table(title, table)
     print("\nspecial sets:", json.dumps(special, indent=1))
-    a = by_shape["all"]
-    targets = {
-        "mu_k_all_within_0.01": a["mu_k_within_0.01"] == a["runs"],
-        "mu_s_distinct_98pct": a["mu_s_distinct_runs"] == 0
-        or a["mu_s_within_0.02"] >= 0.98 * a["mu_s_distinct_runs"],
-        "no_peak_flagged_95pct": a["no_peak_runs"] == 0
-        or a["no_peak_flagged"] >= 0.95 * a["no_peak_runs"],
-        "stick_slip_flagged_90pct": a["oscillating_runs"] == 0
-        or a["stick_slip_flagged"] >= 0.90 * a["oscillating_runs"],
-    }
+    targets = targets_met(by_shape["all"])
     print("\ntargets:", ", ".join(f"{k} {'met' if v else 'MISSED'}" for k, v in targets.items()))
     out = Path(__file__).with_name("ratestate_quick.json" if args.quick else "ratestate.json")
     out.write_text(json.dumps({
         "elapsed_s": elapsed, "targets": targets, "by_shape": by_shape, "by_peak": by_peak,
         "by_noise": by_noise, "by_duration": by_duration, "by_setup": by_setup,
         "special": special,
-        "runs": [{k: (None if isinstance(v, float) and not math.isfinite(v) else v)
-                  for k, v in r.items()} for r in rows],
+        "runs": json_rows(rows),
     }, indent=1) + "\n")
     return 0 if all(targets.values()) else 1
 

@@ -1,11 +1,12 @@
-"""Signal primitives of the reduction, in NumPy alone: running median, mean and maximum,
-Savitzky–Golay smoothing, one-sided polynomial fits, and a test for a periodic line in
-noise.
+"""Signal primitives of the reduction, in NumPy (and pandas' rolling median): running
+median, mean and maximum, Savitzky–Golay smoothing, one-sided polynomial fits, and a test
+for a periodic line in noise.
 
-NumPy only, so that a batch worker does not pay for importing ``scipy.signal`` and
-``scipy.ndimage`` (~0.9 s per process, issue 10). Edges follow SciPy's conventions
-(``mode="nearest"`` for the running filters, ``mode="interp"`` for Savitzky–Golay), and
-``tests/test_signals.py`` checks every function against SciPy where SciPy is installed.
+No SciPy, so that a batch worker does not pay for importing ``scipy.signal`` and
+``scipy.ndimage`` (~0.9 s per process, issue 10; pandas is loaded by the readers
+anyway). Edges follow SciPy's conventions (``mode="nearest"`` for the running filters,
+``mode="interp"`` for Savitzky–Golay), and ``tests/test_signals.py`` checks every function
+against SciPy where SciPy is installed.
 All functions take NaN-free 1-D arrays and return new arrays; none modifies its input.
 """
 

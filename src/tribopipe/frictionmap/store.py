@@ -316,15 +316,19 @@ def fold_records(
 
     Existing rows keep their position; new runs are added at the end in the given order.
     A replaced row keeps the map's exclusion state (a human decision about the run).
-    Neither input is modified.
+    Neither input is modified. Every row of the result keeps the rules of
+    :func:`~tribopipe.frictionmap.schema.check_runs` (``runs`` may come from anywhere).
     """
-    return _fold(runs, records_frame(records), replace=replace)
+    merged, report = _fold(runs, records_frame(records), replace=replace)
+    return check_runs(merged, "row"), report
 
 
 def _fold(
     runs: pd.DataFrame, new_frame: pd.DataFrame, *, replace: bool
 ) -> tuple[pd.DataFrame, AppendReport]:
-    """:func:`fold_records` of records already validated into ``new_frame``."""
+    """:func:`fold_records` of records already validated into ``new_frame``; the rows
+    of ``runs`` are not checked again (:func:`update_map` has them from :func:`read_map`,
+    which checked every one)."""
     import pandas as pd
 
     base = runs.loc[:, list(RUN_COLUMNS)].reset_index(drop=True)
@@ -381,8 +385,7 @@ def _fold(
     if fresh:
         extra = records_frame(list(fresh.values()), where="record")
         merged = pd.concat([merged, extra], ignore_index=True) if len(merged) else extra
-    merged = merged.reset_index(drop=True)
-    return check_runs(merged, "row"), report
+    return merged.reset_index(drop=True), report
 
 
 def append_records(

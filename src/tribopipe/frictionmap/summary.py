@@ -3,17 +3,15 @@
 from __future__ import annotations
 
 import os
-import re
 from pathlib import Path
 from typing import Any
 
 from ..errors import MapError
+from ..escape import printable
 from ..measurement import interval_label
 from ..stats import group_statistics, repeatability
 from .schema import _missing
 from .store import read_map
-
-_CONTROL = re.compile(r"[\x00-\x1f\x7f-\x9f\u2028\u2029]")
 
 
 def map_summary(path: str | os.PathLike[str], *, runs_listed: bool = False) -> str:
@@ -83,12 +81,11 @@ def map_summary(path: str | os.PathLike[str], *, runs_listed: bool = False) -> s
 
 
 def _text(value: Any) -> str:
-    """A text cell of the map as one printable line (control characters shown as escapes:
+    """A text cell of the map as one printable line (:func:`~tribopipe.escape.printable`:
     a merged map's names are data, never terminal commands)."""
     if _missing(value):
         return "?"
-    return _CONTROL.sub(lambda m: m.group().encode("unicode_escape").decode("ascii"),
-                        str(value))
+    return printable(str(value))
 
 
 def run_origin(row: dict[str, Any]) -> str:

@@ -17,17 +17,15 @@ one with the same id and other values is a conflict, reported per row with both 
 from __future__ import annotations
 
 import os
-import re
 from dataclasses import dataclass
 from pathlib import Path
 
 from ..errors import MapError
+from ..validate import text_problem
 from .datapackage import DESCRIPTOR
 from .package import package_runs
 from .schema import _missing, frame_records
 from .store import AppendReport, append_records, read_map
-
-_CONTROL = re.compile(r"[\x00-\x1f\x7f-\x9f\u2028\u2029]")
 
 
 @dataclass(frozen=True)
@@ -98,11 +96,13 @@ def merge_map(
 
 
 def _lab_name(lab: str) -> str:
-    """``--lab`` as stored: one line of text, stripped (a name from the command line)."""
+    """``--lab`` as stored: one line of text (:func:`~tribopipe.validate.text_problem`,
+    what the map's ``lab`` column keeps) of at most 300 characters, stripped (a name from
+    the command line)."""
     text = lab.strip()
     if not text:
         raise MapError("--lab is empty; expected the name of the lab that measured the rows")
-    if _CONTROL.search(text) or len(text) > 300:
+    if text_problem(text, max_chars=300) is not None:
         raise MapError("--lab holds a line break or control character, or is longer than "
                        "300 characters; expected one line of text")
     return text

@@ -347,6 +347,12 @@ def interval_samples(m: Measurement, params: ReductionParams) -> IntervalSamples
     )
 
 
+def _point(m: Measurement, row: int) -> Any:
+    """The instrument's point number of ``m``'s sample ``row`` (0-based), or ``row + 1``
+    when the export numbers no points."""
+    return m.data["point_no"].iloc[row] if "point_no" in m.data.columns else row + 1
+
+
 def _check_magnitudes(m: Measurement) -> None:
     """Refuse (:class:`ReductionError`) a sample beyond :data:`SAMPLE_LIMITS`: a column
     holding such values is not what its name and unit say."""
@@ -357,7 +363,7 @@ def _check_magnitudes(m: Measurement) -> None:
         beyond = np.flatnonzero(values > limit)  # NaN compares False: missing is no error
         if beyond.size:
             row = int(beyond[0])
-            point = m.data["point_no"].iloc[row] if "point_no" in m.data.columns else row + 1
+            point = _point(m, row)
             raise ReductionError(
                 f"{m.meta.label}: {name} is {float(m.data[name].iloc[row]):.4g} at point "
                 f"{point}, beyond any measurement (|value| <= {limit:g}): the column is not "
@@ -377,7 +383,7 @@ def _check_time(m: Measurement, t: np.ndarray, keep: np.ndarray) -> None:
     if back.size:
         k = int(back[0]) + 1
         row = int(np.flatnonzero(keep)[k])
-        point = m.data["point_no"].iloc[row] if "point_no" in m.data.columns else row + 1
+        point = _point(m, row)
         raise ReductionError(
             f"{m.meta.label}: time goes backwards at point {point} ({t_kept[k]:g} s after "
             f"{t_kept[k - 1]:g} s): expected increasing time",

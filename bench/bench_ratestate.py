@@ -44,7 +44,14 @@ from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 from typing import Any
 
-from bench_validation import BOUNDARY_FLAGS, _print_table, json_rows, summarise, targets_met
+from bench_validation import (
+    _print_table,
+    json_rows,
+    offset_scores,
+    summarise,
+    targets_met,
+    truncated_scores,
+)
 
 from tribopipe.synthetic_ratestate import (
     DURATIONS_S,
@@ -136,26 +143,12 @@ def _one(job: tuple[int, GridPoint, str, bool]) -> dict[str, Any]:
 def special_sets(rows: list[dict[str, Any]]) -> dict[str, Any]:
     """Truncated runs (of the shapes): flagged or refused, else silently right or wrong.
     Runs without a torque zero: flagged, and μ_K within its expanded uncertainty."""
-    out: dict[str, Any] = {}
     trunc = [r for r in rows if r["set"] in SHAPES and r["truncated"]]
-    flagged = [r for r in trunc if r["error"] is not None
-               or any(f in r["flags"] for f in BOUNDARY_FLAGS)]
-    silent_wrong = [r for r in trunc if r not in flagged and (
-        abs(r["mu_k_error"]) > 0.01
-        or (r["static"] == "distinct" and abs(r["mu_s_error"]) > 0.02))]
-    out["truncated"] = {"runs": len(trunc), "flagged_or_refused": len(flagged),
-                        "silent_and_wrong": len(silent_wrong),
-                        "silent_and_wrong_labels": [r["label"] for r in silent_wrong]}
     unknown = [r for r in rows if r["set"] == "offset_unknown"]
-    ok = [r for r in unknown if r["error"] is None]
-    out["offset_unknown"] = {
-        "runs": len(unknown),
-        "refused": len(unknown) - len(ok),
-        "flagged": sum("torque_offset_unknown" in r["flags"] for r in ok),
-        "mu_k_within_0.01": sum(abs(r["mu_k_error"]) <= 0.01 for r in ok),
-        "mu_k_within_2u": sum(abs(r["mu_k_error"]) <= 2 * r["u_mu_k"] for r in ok),
-    }
-    return out
+    refused = sum(r["error"] is not None for r in unknown)
+    offsets = offset_scores(unknown)
+    return {"truncated": truncated_scores(trunc),
+            "offset_unknown": {"runs": offsets.pop("runs"), "refused": refused, **offsets}}
 
 
 def main(argv: list[str] | None = None) -> int:

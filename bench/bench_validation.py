@@ -135,31 +135,43 @@ def summarise(rows: list[dict[str, Any]]) -> dict[str, Any]:
     }
 
 
+def truncated_scores(trunc: list[dict[str, Any]]) -> dict[str, Any]:
+    """Runs the trace cuts short: flagged (a boundary flag) or refused, else silently
+    right or silently wrong (μ_K off by more than 0.01, a distinct μ_S by more than 0.02)."""
+    flagged = [r for r in trunc if r["error"] is not None
+               or any(f in r["flags"] for f in BOUNDARY_FLAGS)]
+    silent_wrong = [
+        r for r in trunc if r not in flagged and (
+            abs(r["mu_k_error"]) > 0.01
+            or (r["static"] == "distinct" and abs(r["mu_s_error"]) > 0.02))
+    ]
+    return {"runs": len(trunc), "flagged_or_refused": len(flagged),
+            "silent_and_wrong": len(silent_wrong),
+            "silent_and_wrong_labels": [r["label"] for r in silent_wrong]}
+
+
+def offset_scores(unknown: list[dict[str, Any]]) -> dict[str, Any]:
+    """Runs without a torque zero, of those reduced: flagged ``torque_offset_unknown``,
+    μ_K within 0.01, μ_K within its expanded uncertainty 2u."""
+    ok = [r for r in unknown if r["error"] is None]
+    return {
+        "runs": len(unknown),
+        "flagged": sum("torque_offset_unknown" in r["flags"] for r in ok),
+        "mu_k_within_0.01": sum(abs(r["mu_k_error"]) <= 0.01 for r in ok),
+        "mu_k_within_2u": sum(r.get("u_mu_k") is not None
+                              and abs(r["mu_k_error"]) <= 2 * r["u_mu_k"] for r in ok),
+    }
+
+
 def _special(rows: list[dict[str, Any]]) -> dict[str, Any]:
     """Truncated runs: flagged, or silently wrong. Unknown offsets: flagged, covered."""
     out: dict[str, Any] = {}
     trunc = [r for r in rows if r["set"] == "truncated"]
     if trunc:
-        flagged = [r for r in trunc if r["error"] is not None
-                   or any(f in r["flags"] for f in BOUNDARY_FLAGS)]
-        silent_wrong = [
-            r for r in trunc if r not in flagged and (
-                abs(r["mu_k_error"]) > 0.01
-                or (r["static"] == "distinct" and abs(r["mu_s_error"]) > 0.02))
-        ]
-        out["truncated"] = {"runs": len(trunc), "flagged_or_refused": len(flagged),
-                            "silent_and_wrong": len(silent_wrong),
-                            "silent_and_wrong_labels": [r["label"] for r in silent_wrong]}
+        out["truncated"] = truncated_scores(trunc)
     unknown = [r for r in rows if r["set"] == "offset_unknown"]
     if unknown:
-        ok = [r for r in unknown if r["error"] is None]
-        out["offset_unknown"] = {
-            "runs": len(unknown),
-            "flagged": sum("torque_offset_unknown" in r["flags"] for r in ok),
-            "mu_k_within_0.01": sum(abs(r["mu_k_error"]) <= 0.01 for r in ok),
-            "mu_k_within_2u": sum(r.get("u_mu_k") is not None
-                                  and abs(r["mu_k_error"]) <= 2 * r["u_mu_k"] for r in ok),
-        }
+        out["offset_unknown"] = offset_scores(unknown)
     return out
 
 

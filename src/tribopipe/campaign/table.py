@@ -27,7 +27,6 @@ import functools
 import hashlib
 import json
 import os
-import stat
 from collections.abc import Mapping, Sequence
 from dataclasses import asdict, dataclass, fields
 from pathlib import Path
@@ -133,11 +132,10 @@ def _is_tool_table(path: Path) -> bool:
     if path.name not in (RUNS_CSV, FAILURES_CSV):
         return False
     try:
-        if not stat.S_ISREG(os.stat(path).st_mode):  # never open a FIFO
-            return False
+        regular_file(path)  # never open a FIFO
         with path.open("rb") as fh:
             return fh.read(5) == b"file,"
-    except OSError:
+    except (OSError, ReadError):
         return False
 
 

@@ -38,7 +38,13 @@ from .frictionmap.duplicates import (
     labels_of,
     map_files_by_hash,
 )
-from .frictionmap.records import RunLabels, Tolerances, make_record, measurement_id
+from .frictionmap.records import (
+    RunLabels,
+    Tolerances,
+    make_record,
+    measurement_id,
+    stored_file_name,
+)
 from .frictionmap.store import AppendReport, append_records, read_map
 from .intervals import friction_intervals
 from .layout import OutputLayout
@@ -565,7 +571,7 @@ def store_runs(map_path: str | Path, outcomes: Sequence[RunOutcome], *,
     keep: list[dict[str, Any]] = []
     checked: dict[str, SameContent | None] = {}
     for o in records:
-        name = Path(o.path).name
+        name = stored_file_name(o.path)  # as the map keeps it: raw
         if o.path not in checked:
             others = {src: ids for src, ids in by_hash.get(o.file_hash, {}).items()
                       if src != name}

@@ -8,6 +8,10 @@ maps. Each edge calls the checks here, so a value means the same everywhere:
 * a **name** is text of at most :data:`MAX_NAME_CHARS` characters, not blank, with no
   control, format, surrogate, private-use or unassigned character and no line or paragraph
   separator (so it is one line wherever it is written; spaces are fine);
+* a **file name** (the map's ``source_file``) is text of at most :data:`MAX_TEXT_CHARS`
+  characters without NUL or a lone surrogate: a file is named by whoever wrote it, so it
+  is kept as it is (U+202E, a newline and all) and every output escapes it where it is
+  written (:mod:`tribopipe.escape`);
 * a **number** is an ``int`` or ``float`` (never a ``bool``), finite and inside the
   physical :class:`Range` of its quantity (:data:`FORCE_N`, :data:`TEMPERATURE_C`,
   :data:`MU`, :data:`PIN_RADIUS_MM`, ...);
@@ -111,6 +115,21 @@ def text_problem(value: Any, max_chars: int = MAX_TEXT_CHARS) -> str | None:
             if unicodedata.category(ch) in _FORBIDDEN_CATEGORIES:
                 return (f"expected one line of printable text, got the character "
                         f"{printable(repr(ch))} (U+{ord(ch):04X})")
+    return None
+
+
+def file_name_problem(value: Any, max_chars: int = MAX_TEXT_CHARS) -> str | None:
+    """Why ``value`` is not a file name as the map keeps it (module docstring), or ``None``
+    when it is. Bytes of a name that were not UTF-8 are kept as ``\\xNN`` text (see
+    :func:`tribopipe.frictionmap.records.stored_file_name`), never as lone surrogates."""
+    if not isinstance(value, str):
+        return f"expected text, got {type(value).__name__}"
+    if len(value) > max_chars:
+        return f"expected at most {max_chars} characters, got {len(value)}"
+    for ch in value:
+        if ch == "\0" or 0xD800 <= ord(ch) <= 0xDFFF:
+            return (f"expected a file name, got the character {printable(repr(ch))} "
+                    f"(U+{ord(ch):04X})")
     return None
 
 

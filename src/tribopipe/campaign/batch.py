@@ -28,6 +28,7 @@ from ..frictionmap.duplicates import (
     labels_of,
     map_files_by_hash,
 )
+from ..frictionmap.records import stored_file_name
 from ..frictionmap.store import read_map, update_map
 from .metadata import Manifest, read_manifest
 from .outputs import _write_failures_csv, _write_runs_csv
@@ -446,7 +447,7 @@ class _Owners:
                     for r in entry.get("runs") or [] if r.get("status") == REDUCED}
             if runs:
                 self.first.setdefault(row.sha256, (file, runs))
-        self.renamed_from = {Path(f).name: f for f, e in vanished.items()
+        self.renamed_from = {stored_file_name(f): f for f, e in vanished.items()
                              if e.get("status") == REDUCED}
         self.vanished_sha = {f: e.get("sha256") for f, e in vanished.items()}
         self._map: FilesByHash | None = None
@@ -465,9 +466,8 @@ class _Owners:
         if sha in self.first and self.first[sha][0] != done.file:
             other, old = self.first[sha]
             return compare_labels(done.file, other, runs, old), None
-        name = Path(done.file).name
         for source, old in sorted(self._in_map().get(sha, {}).items()):
-            if source == name:
+            if source == stored_file_name(done.file):  # as the map keeps it: raw
                 continue
             gone = self.renamed_from.get(source)
             if gone is not None and self.vanished_sha.get(gone) == sha:

@@ -17,8 +17,8 @@ no temperature lies at or below absolute zero; distances, times, the plateau's S
 and interval numbers are not negative; a window does not end before it starts; no stored
 number is infinite. Every rule of :func:`~tribopipe.frictionmap.schema.check_runs` (the
 rules every map row keeps, on every read and write: names one printable line of at most
-200 characters, upper bounds from :mod:`tribopipe.validate`) is checked here too, so rows
-that pass here are rows the map accepts.
+200 characters, a file's name kept raw, upper bounds from :mod:`tribopipe.validate`) is
+checked here too, so rows that pass here are rows the map accepts.
 """
 
 from __future__ import annotations
@@ -30,11 +30,12 @@ from datetime import datetime
 from typing import TYPE_CHECKING, Any
 
 from ..escape import FORMULA_TRIGGERS
-from ..validate import MU, TEMPERATURE_C, name_problem, text_problem
+from ..validate import MU, TEMPERATURE_C, file_name_problem, name_problem, text_problem
 from .schema import (
     _KIND,
     COLUMN_RANGES,
     COUNT_RANGES,
+    FILE_NAME_COLUMNS,
     NAME_COLUMNS,
     REQUIRED,
     RUN_COLUMNS,
@@ -180,8 +181,11 @@ def _check_bound(name: str, value: Any, add: Any) -> None:
 
 
 def _check_text(name: str, text: str, add: Any) -> None:
-    problem = name_problem(text) if name in NAME_COLUMNS else text_problem(text)
-    if _CONTROL.search(text):
+    if name in FILE_NAME_COLUMNS:
+        problem = file_name_problem(text)
+    else:
+        problem = name_problem(text) if name in NAME_COLUMNS else text_problem(text)
+    if name not in FILE_NAME_COLUMNS and _CONTROL.search(text):
         add(name, "contains a control character or line break, expected one line of text")
     elif problem is not None:
         add(name, problem)

@@ -18,7 +18,6 @@ from typing import TYPE_CHECKING, Any
 
 from .. import __version__
 from ..errors import MapError
-from ..escape import display_path
 from ..numeric import finite_or_nan
 from ..physics import contact_pressure_kPa
 from ..validate import FORCE_N, MAX_REPEAT, TEMPERATURE_C, check_count, check_name, check_number
@@ -141,6 +140,19 @@ def imported_id(source: str, pin: str, disc: str, force_N: float, temperature_C:
     return hashlib.sha256(key.encode()).hexdigest()[:16]
 
 
+def stored_file_name(path: str | Path) -> str:
+    """The name a map row keeps of the file at ``path`` (its ``source_file``): the file's
+    own name, raw (a U+202E or a newline stays what it is: outputs escape it where they
+    write it). Only bytes that were not UTF-8 (lone surrogates), which no stored text can
+    hold, are kept as ``\\xNN``. Every comparison with a stored name goes through here."""
+    name = Path(path).name
+    if not any(0xD800 <= ord(ch) <= 0xDFFF for ch in name):
+        return name
+    return "".join(f"\\x{ord(ch) - 0xDC00:02x}" if 0xDC80 <= ord(ch) <= 0xDCFF
+                   else f"\\u{ord(ch):04x}" if 0xD800 <= ord(ch) <= 0xDFFF else ch
+                   for ch in name)
+
+
 def _num_key(value: float) -> str:
     # 1.0 and 1.0000000001 are the same nominal condition; NaN (unknown) keeps its own key.
     return "nan" if value is None or not math.isfinite(value) else format(round(value, 6), ".6f")
@@ -233,7 +245,7 @@ def make_record(
         "plateau_drift_per_mm": finite_or_nan(result.plateau_drift_per_mm),
         "flags": _join_flags(flags),
         "method": result.method,
-        "source_file": display_path(Path(meta.source_file).name),
+        "source_file": stored_file_name(meta.source_file),
         "file_hash": file_hash,
         "test": meta.test,
         "result": meta.result,

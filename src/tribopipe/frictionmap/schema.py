@@ -23,6 +23,7 @@ from ..validate import (
     SLIDING_SPEED_MM_S,
     TEMPERATURE_C,
     Range,
+    file_name_problem,
     name_problem,
     text_problem,
 )
@@ -163,6 +164,9 @@ def unvalidated_frame(
 
 #: the text columns that name something (one printable line, ≤ 200 characters, not blank)
 NAME_COLUMNS: tuple[str, ...] = ("measurement_id", "source", "pin", "disc")
+#: the text columns that hold a file's own name, kept raw
+#: (:func:`~tribopipe.validate.file_name_problem`)
+FILE_NAME_COLUMNS: tuple[str, ...] = ("source_file",)
 #: the physical range of each float column; columns not listed need only be finite (or
 #: missing). ``REQUIRED`` columns may not be missing in any row.
 COLUMN_RANGES: dict[str, Range] = {
@@ -203,7 +207,9 @@ def check_runs(frame: pd.DataFrame, where: str = "row") -> pd.DataFrame:
     lab's map, a file on disk):
 
     * ``measurement_id``, ``source``, ``pin``, ``disc``: names (one printable line of at
-      most 200 characters, not blank); every other text: one printable line or missing;
+      most 200 characters, not blank); ``source_file``: the file's own name (any text
+      without NUL or a lone surrogate) or missing; every other text: one printable line
+      or missing;
     * floats finite or missing (never ±inf); inside the physical ranges of
       :data:`COLUMN_RANGES` (force > 0, temperature above −273.15 °C, 0 ≤ μ ≤ 10 ...);
       :data:`REQUIRED` never missing; ``mu_s`` missing only in imported rows;
@@ -214,7 +220,8 @@ def check_runs(frame: pd.DataFrame, where: str = "row") -> pd.DataFrame:
     for name in RUN_COLUMNS:
         kind = _KIND[name]
         if kind == "str":
-            checker = name_problem if name in NAME_COLUMNS else text_problem
+            checker = (name_problem if name in NAME_COLUMNS else
+                       file_name_problem if name in FILE_NAME_COLUMNS else text_problem)
             for i, value in enumerate(frame[name].tolist()):
                 missing = value is None or (isinstance(value, float) and value != value)
                 if missing and name not in NAME_COLUMNS:

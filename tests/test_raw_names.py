@@ -1,0 +1,73 @@
+"""A file's name is stored raw and compared raw; only outputs escape it.
+
+A file whose name holds U+202E or a newline is reduced like any other: reduced again it
+is the same file (its rows unchanged), relabelled with ``--replace`` its rows are
+replaced, and never "same content as <itself>".
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import pandas as pd
+import pytest
+
+from hostile import good_export, invoke
+from tribopipe.frictionmap.records import stored_file_name
+
+NAMES = ["evil\u202etxt.csv", "two\nlines.csv", "cr\rname.csv"]
+
+
+def _reduce(export: Path, map_path: Path, out: Path, *extra: str):
+    return invoke("reduce", str(export), "--pin", "P", "--disc", "D", "--temperature", "20",
+                  "--map", str(map_path), "--out", str(out), *extra)
+
+
+def _lines_are_printable(stderr: str) -> None:
+    for line in stderr.splitlines():
+        assert line.isprintable(), repr(line)
+
+
+@pytest.mark.parametrize("name", NAMES, ids=["rlo", "newline", "cr"])
+def test_a_hostile_file_name_is_the_same_file_reduced_again(tmp_path: Path, name: str) -> None:
+    export = good_export(tmp_path / name)
+    map_path, out = tmp_path / "m.parquet", tmp_path / "out"
+    first = _reduce(export, map_path, out, "--force", "3")
+    assert first.exit_code == 0, first.output
+    assert "1 added" in first.stderr
+    assert list(pd.read_parquet(map_path)["source_file"]) == [name]   # raw, not escaped
+
+    again = _reduce(export, map_path, out, "--force", "3")
+    assert again.exit_code == 0, again.output
+    assert "duplicate" not in again.stderr and "same content" not in again.stderr
+    assert "0 added, 1 unchanged" in again.stderr
+    _lines_are_printable(again.stderr)
+
+    relabelled = _reduce(export, map_path, out, "--force", "9", "--replace")
+    assert relabelled.exit_code == 0, relabelled.output
+    assert "same content" not in relabelled.stderr, relabelled.stderr
+    assert "1 replaced" in relabelled.stderr
+    _lines_are_printable(relabelled.stderr)
+    runs = pd.read_parquet(map_path)
+    assert list(runs["source_file"]) == [name] and list(runs["normal_force_N"]) == [9.0]
+
+
+def test_a_copy_under_another_name_is_still_a_duplicate(tmp_path: Path) -> None:
+    export = good_export(tmp_path / NAMES[0])
+    copy = tmp_path / "copy\u202e.csv"
+    copy.write_bytes(export.read_bytes())
+    map_path, out = tmp_path / "m.parquet", tmp_path / "out"
+    assert _reduce(export, map_path, out, "--force", "3").exit_code == 0
+    second = _reduce(copy, map_path, out, "--force", "3")
+    assert second.exit_code == 0, second.output
+    assert "duplicate:" in second.stderr and "evil\\u202etxt.csv" in second.stderr
+    _lines_are_printable(second.stderr)
+    assert list(pd.read_parquet(map_path)["source_file"]) == [NAMES[0]]
+
+
+def test_stored_file_name_keeps_the_name_and_only_undecodable_bytes_as_text() -> None:
+    assert stored_file_name("/x/evil\u202e\n.csv") == "evil\u202e\n.csv"
+    odd = os.fsdecode(b"/x/run_\xff\xfe.csv")
+    assert stored_file_name(odd) == "run_\\xff\\xfe.csv"
+    assert stored_file_name(odd).encode("utf-8")                     # storable text

@@ -21,9 +21,9 @@ from click.testing import CliRunner
 
 from reduced_runs import make_processed
 from tribopipe.cli import main
+from tribopipe.escape import script_json
 from tribopipe.export.explorer import (
     DATA_ELEMENT_ID,
-    embed_json,
     explorer_data,
     explorer_page,
     read_embedded_data,
@@ -195,7 +195,7 @@ def test_fits_are_fit_py_fits_with_their_curves(published, published_html):
 def test_missing_numbers_are_null_never_nan(tmp_path):
     map_path, _ = make_processed(tmp_path)
     data = explorer_data(read_map(map_path))
-    text = embed_json(data)
+    text = script_json(data)
     assert "NaN" not in text and "Infinity" not in text
     one_run = next(p for p in data["pairs"] if p["pin"] == "Ecoflex 00-50")
     assert one_run["mu_k_points"][0]["half"] is None  # one run: CI unknown
@@ -238,14 +238,14 @@ def test_excluded_runs_are_left_out(tmp_path):
     assert all(victim not in pt["run_ids"] for p in data["pairs"] for pt in p["mu_k_points"])
 
 
-def test_embed_json_escapes_what_could_close_the_element():
+def test_script_json_escapes_what_could_close_the_element():
     value = {"a": "</script><!-- & \u2028\u2029 >", "b": [1.5, None, True]}
-    text = embed_json(value)
+    text = script_json(value)
     for raw in ("<", ">", "&", "\u2028", "\u2029"):
         assert raw not in text
     assert json.loads(text) == value
     with pytest.raises(ValueError):
-        embed_json({"x": math.nan})
+        script_json({"x": math.nan})
 
 
 def hostile_map(root: Path) -> Path:

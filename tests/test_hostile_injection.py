@@ -28,8 +28,7 @@ from sim_files import (
     pyelastica_values,
     sofa_response,
 )
-from tribopipe.escape import FORMULA_TRIGGERS
-from tribopipe.export.tables import latex_escape
+from tribopipe.escape import FORMULA_TRIGGERS, latex_cell
 
 PIN = ('=HYPERLINK("http://evil","x") <script>alert(1)</script> | `rm -rf` & *HEADING '
        '$ import os; os.system("id") -- </pair>')
@@ -107,7 +106,7 @@ def test_markdown_table_cells_stay_cells(campaign: Path) -> None:
 def test_latex_table_escapes_the_names(campaign: Path) -> None:
     result = invoke("map", "table", "--format", "latex", "--map", _map(campaign))
     assert result.exit_code == 0, result.output
-    assert latex_escape(PIN) in result.stdout
+    assert latex_cell(PIN) in result.stdout
     columns = result.stdout.splitlines()[2].count(" & ")
     body = [ln for ln in result.stdout.splitlines() if ln.endswith("\\\\")]
     assert all(ln.count(" & ") == columns for ln in body)

@@ -21,8 +21,9 @@ from sim_files import (
     sofa_response,
 )
 from tribopipe.errors import ExportError
+from tribopipe.escape import SIM_COMMENTS, sim_comment
 from tribopipe.export.fe_decks import deck_names, field10
-from tribopipe.export.simbase import FOUNDING_SLIP_RATE, SlipRate, safe_text, xml_comment
+from tribopipe.export.simbase import FOUNDING_SLIP_RATE, SlipRate, xml_comment
 from tribopipe.export.simulators import (
     FORMATS,
     UNIT_SYSTEMS,
@@ -454,11 +455,14 @@ def hostile_groups(groups_with_mu_s) -> pd.DataFrame:
     return g
 
 
-def test_safe_text_leaves_no_line_break_or_control_character():
-    for text in (safe_text(HOSTILE), safe_text(HOSTILE, ascii_only=True)):
+def test_sim_comment_leaves_no_line_break_or_control_character():
+    for syntax in SIM_COMMENTS:
+        text = sim_comment(HOSTILE, syntax)
         assert all(ch.isprintable() for ch in text)
         assert "\n" not in text and "\r" not in text and "\u2028" not in text
-    assert safe_text(HOSTILE, ascii_only=True).isascii()
+    for syntax in ("**", "$", "!"):
+        assert sim_comment(HOSTILE, syntax).isascii()
+    assert "$" not in sim_comment(HOSTILE, "!")
     assert "--" not in xml_comment(HOSTILE)[4:-3]
 
 

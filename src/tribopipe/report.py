@@ -12,8 +12,8 @@ leaves out what it cannot fill: the μ_S columns when no group has μ_S, the ove
 the per-run plots. Images are base64 PNG ``data:`` URIs, the CSV downloads ``data:`` URIs
 whose text cells cannot run as spreadsheet formulas
 (:func:`tribopipe.export.tables.spreadsheet_csv`); every piece of text from the map or the
-file system is escaped with :func:`html.escape` (the explorer's data travel as escaped JSON
-and reach the page as text only).
+file system is written with :func:`tribopipe.escape.html_text` (the explorer's data travel
+as :func:`tribopipe.escape.script_json` and reach the page as text only).
 
 :func:`build_report` turns tables into the HTML text (it renders plots but writes no
 file); :func:`write_report` and :func:`make_report` read the map, ``failures.csv`` and
@@ -28,13 +28,13 @@ import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, replace
 from datetime import UTC, datetime
-from html import escape
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from . import __version__
 from .campaign import load_campaign
 from .errors import ExportError, MapError
+from .escape import html_text
 from .export.explorer import explorer_data, explorer_fragment, explorer_style
 from .export.plots import find_trace, plot_group_overlay, plot_pair, plot_trace_row, slug
 from .export.tables import spreadsheet_csv
@@ -131,7 +131,7 @@ def _e(value: Any) -> str:
             return ""
     except (TypeError, ValueError):
         pass
-    return escape(str(value))
+    return html_text(str(value))
 
 
 def _num(value: Any, spec: str) -> str:
@@ -180,13 +180,13 @@ def _png_data_uri(draw: Any) -> str:
 
 def _img(uri: str, alt: str) -> str:
     """An ``<img>`` element for a ``data:`` URI."""
-    return f'<img src="{uri}" alt="{escape(alt)}">'
+    return f'<img src="{uri}" alt="{html_text(alt)}">'
 
 
 def _csv_link(table: pd.DataFrame, name: str, element_id: str) -> str:
     """A link that downloads ``table`` as ``name`` (CSV in a ``data:`` URI, formula-safe)."""
     data = base64.b64encode(spreadsheet_csv(table).encode("utf-8")).decode("ascii")
-    return (f'<p><a id="{element_id}" download="{escape(name)}" '
+    return (f'<p><a id="{element_id}" download="{html_text(name)}" '
             f'href="data:text/csv;charset=utf-8;base64,{data}">Download this table as CSV'
             "</a></p>")
 
@@ -240,7 +240,7 @@ def _summary(inp: ReportInputs) -> str:
         )
     if inp.map_report:
         items.append(("traces", "none in this map (μ_K per run, nothing to plot per run)"))
-    body = "".join(f"<dt>{escape(k)}</dt><dd>{escape(v)}</dd>" for k, v in items)
+    body = "".join(f"<dt>{html_text(k)}</dt><dd>{html_text(v)}</dd>" for k, v in items)
     heading = "Map summary" if inp.map_report else "Campaign summary"
     return (
         f'<section id="summary"><h2>{heading}</h2>'
@@ -265,7 +265,7 @@ def _group_table(inp: ReportInputs) -> str:
     for g in inp.groups.to_dict(orient="records"):
         ids = [i for i in str(g.get("run_ids") or "").split(";") if i]
         links = " ".join(
-            f'<a href="#{run_anchor(i)}">{escape(i[:8])}</a>' for i in ids
+            f'<a href="#{run_anchor(i)}">{html_text(i[:8])}</a>' for i in ids
         )
         qc = []
         if g.get("range_exceeds_r"):
@@ -346,7 +346,7 @@ def _pair_plots(inp: ReportInputs) -> str:
         )
         figures.append(
             f'<figure id="{pair_anchor(pin, disc)}">{_img(uri, f"{pin} on {disc}")}'
-            f"<figcaption>{escape(pin)} on {escape(disc)}: μ_K against contact pressure, "
+            f"<figcaption>{html_text(pin)} on {html_text(disc)}: μ_K against contact pressure, "
             "mean ± SD of repeats per temperature, fitted power law</figcaption></figure>"
         )
     return (
@@ -371,11 +371,11 @@ def _flagged(inp: ReportInputs) -> str:
             reason = _e(r.get("exclusion_reason")) if excluded else ""
             rows.append(
                 f'<tr class="{"excl" if excluded else "flag"}"><td class=t>'
-                f'<a href="#{run_anchor(mid)}">{escape(mid[:8])}</a></td>'
+                f'<a href="#{run_anchor(mid)}">{html_text(mid[:8])}</a></td>'
                 f"<td class=t>{_e(r.get('source_file'))}</td><td class=t>{_e(r['pin'])}</td>"
                 f"<td class=t>{_e(r['disc'])}</td><td>{_num(r['pressure_kPa'], '.4g')}</td>"
                 f"<td>{_num(r['mu_k'], '.3f')} {_expanded(r.get('u_mu_k'))}</td>"
-                f"<td class=t>{escape(', '.join(_flag_list(r.get('flags'))))}</td>"
+                f"<td class=t>{html_text(', '.join(_flag_list(r.get('flags'))))}</td>"
                 f"<td class=t>{'excluded: ' + reason if excluded else ''}</td></tr>"
             )
         body = (
@@ -395,7 +395,7 @@ def _failures(inp: ReportInputs) -> str:
         body = "<p>Every file of the last batch was reduced.</p>"
     else:
         rows = "".join(
-            f"<tr><td class=t>{escape(f)}</td><td class=t>{escape(r)}</td></tr>"
+            f"<tr><td class=t>{html_text(f)}</td><td class=t>{html_text(r)}</td></tr>"
             for f, r in inp.failures
         )
         body = (
@@ -425,17 +425,17 @@ def _runs(inp: ReportInputs) -> str:
         repeat = "" if pd.isna(r.get("repeat")) else str(r["repeat"])
         if mid not in traces:
             plain.append(
-                f'<tr id="{run_anchor(mid)}"><td class=t>{escape(mid[:8])}</td>'
+                f'<tr id="{run_anchor(mid)}"><td class=t>{html_text(mid[:8])}</td>'
                 f"<td class=t>{_e(r['pin'])}</td><td class=t>{_e(r['disc'])}</td>"
                 f"<td>{_num(r['pressure_kPa'], '.4g')}</td>"
-                f"<td>{_num(r['temperature_C'], 'g')}</td><td>{escape(repeat)}</td>"
+                f"<td>{_num(r['temperature_C'], 'g')}</td><td>{html_text(repeat)}</td>"
                 f"<td>{_num(r['mu_k'], '.3f')} {_expanded(r.get('u_mu_k'))}</td>"
                 + (f"<td>{_num(r['mu_s'], '.3f')} {_expanded(r.get('u_mu_s'))}</td>"
                    if with_mu_s else "")
                 + f"<td class=t>{_e(r.get('source'))}</td><td class=t>{_e(r.get('lab'))}</td>"
                 + (f"<td class=t>{_e(r.get('test'))}</td><td class=t>{_e(r.get('result'))}</td>"
                    if with_test else "")
-                + f"<td class=t>{escape(', '.join(_flag_list(r.get('flags'))))}</td></tr>"
+                + f"<td class=t>{html_text(', '.join(_flag_list(r.get('flags'))))}</td></tr>"
             )
             continue
         trace = pd.read_parquet(traces[mid])
@@ -445,9 +445,9 @@ def _runs(inp: ReportInputs) -> str:
         )
         flags = ", ".join(_flag_list(r.get("flags"))) or "none"
         summary = (
-            f"{escape(mid[:8])} · {_e(r['pin'])} on {_e(r['disc'])} · "
+            f"{html_text(mid[:8])} · {_e(r['pin'])} on {_e(r['disc'])} · "
             f"{_num(r['pressure_kPa'], '.4g')} kPa · {_num(r['temperature_C'], 'g')} °C"
-            f"{escape(', repeat ' + repeat if repeat else '')} · μ_K {_num(r['mu_k'], '.3f')}"
+            f"{html_text(', repeat ' + repeat if repeat else '')} · μ_K {_num(r['mu_k'], '.3f')}"
             f" {_expanded(r.get('u_mu_k'))}"
             + (f" · μ_S {_num(r['mu_s'], '.3f')} {_expanded(r.get('u_mu_s'))}"
                if _num(r["mu_s"], ".3f") else "")
@@ -456,7 +456,7 @@ def _runs(inp: ReportInputs) -> str:
             f"<p>file: {_e(r.get('source_file'))}; test: {_e(r.get('test'))}; result: "
             f"{_e(r.get('result'))}; interval: {_e(r.get('interval'))}; source: "
             f"{_e(r.get('source'))}; "
-            f"flags: {escape(flags)}; μ_K window: {_num(r.get('mu_k_window_start_mm'), '.3f')}"
+            f"flags: {html_text(flags)}; μ_K window: {_num(r.get('mu_k_window_start_mm'), '.3f')}"
             f"–{_num(r.get('mu_k_window_end_mm'), '.3f')} mm; method: {_e(r.get('method'))}"
             "</p>"
         )
@@ -524,9 +524,9 @@ def _spread(inp: ReportInputs) -> str:
         pairs_ = [(rows[i], pd.read_parquet(inp.trace_paths[i])) for i in ids]  # type: ignore[index]
         uri = _png_data_uri(lambda buf, t=title, p=pairs_: plot_group_overlay(
             p, buf, title=t, fmt="png", dpi=PAIR_DPI))
-        links = " ".join(f'<a href="#{run_anchor(i)}">{escape(i[:8])}</a>' for i in ids)
+        links = " ".join(f'<a href="#{run_anchor(i)}">{html_text(i[:8])}</a>' for i in ids)
         figures.append(f'<figure id="{anchor}">{_img(uri, f"repeats of {title}")}'
-                       f"<figcaption>{escape(title)}; runs {links}</figcaption></figure>")
+                       f"<figcaption>{html_text(title)}; runs {links}</figcaption></figure>")
     body = ("".join(figures) if figures else
             "<p>No group's repeats spread beyond the repeatability limit r.</p>")
     return (
@@ -579,16 +579,16 @@ def build_report(inp: ReportInputs) -> str:
     with nothing to show in this kind of report are left out, with their links."""
     inp = with_traces(inp)
     stamp = datetime.now(UTC).strftime("%Y-%m-%d %H:%M UTC")
-    source = f" from {escape(inp.source)}" if inp.source else ""
+    source = f" from {html_text(inp.source)}" if inp.source else ""
     built = [(a, t, build(inp)) for a, t, build in _SECTIONS]
     shown = [(a, t, html) for a, t, html in built if html]
     nav = "".join(f'<a href="#{a}">{t}</a>' for a, t, _ in shown)
-    title = escape(inp.page_title)
+    title = html_text(inp.page_title)
     return (
         "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">"
         "<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">"
         f"<title>{title}</title><style>{_CSS}</style></head><body>"
-        f"<header><h1>{title}</h1><p class=muted>tribopipe {escape(__version__)}"
+        f"<header><h1>{title}</h1><p class=muted>tribopipe {html_text(__version__)}"
         f"{source}, {stamp}</p><nav>{nav}</nav></header>"
         + "".join(html for _, _, html in shown)
         + f"<script>{_OPEN_TARGET_JS}</script></body></html>\n"

@@ -10,7 +10,6 @@ become YAML structure — and always cites the founding paper under ``references
 
 from __future__ import annotations
 
-import json
 import re
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -18,6 +17,7 @@ from typing import Any
 
 from .. import __version__
 from ..errors import ExportError
+from ..escape import markdown_cell, yaml_text
 from ..frictionmap import FOUNDING_PAPER
 
 #: SPDX id → (title, URL) of the licences a package may carry; the default first
@@ -109,20 +109,6 @@ def citation_text(publisher: Publisher, year: int) -> str:
 
 # --------------------------------------------------------------------------- CITATION.cff
 
-# what YAML may hold literally in a quoted scalar, less NEL (U+0085, a line break in YAML 1.1)
-_YAML_PRINTABLE = re.compile(
-    "[^\t\n\r\x20-\x7e\xa0-\ud7ff\ue000-\ufffd\U00010000-\U0010ffff]")
-
-
-def yaml_text(text: str) -> str:
-    """``text`` as a YAML double-quoted scalar: JSON's escapes (valid YAML) plus ``\\uXXXX``
-    for what YAML does not allow literally or reads as a line break (C1 controls with NEL,
-    U+2028/9, surrogates, U+FFFE/F)."""
-    quoted = json.dumps(text, ensure_ascii=False)
-    quoted = quoted.replace("\u2028", "\\u2028").replace("\u2029", "\\u2029")
-    return _YAML_PRINTABLE.sub(lambda m: f"\\u{ord(m.group()):04x}", quoted)
-
-
 def _yaml(value: Any, indent: int) -> list[str]:
     """Block-style YAML lines of a value made of dicts, lists, text and integers."""
     pad = " " * indent
@@ -195,13 +181,6 @@ def citation_cff(publisher: Publisher, *, date: str, n_runs: int,
 # --------------------------------------------------------------------------- README.md
 
 
-def _md(text: Any) -> str:
-    """Text for a Markdown table cell or line: no markup, no line breaks, no HTML."""
-    out = re.sub(r"[\x00-\x1f\x7f\u2028\u2029]", " ", str(text))
-    out = re.sub(r"([\\`*_{}\[\]()#+!|<>~])", r"\\\1", out)
-    return out
-
-
 def package_readme(publisher: Publisher, *, date: str, n_runs: int, n_excluded: int,
                    n_published: int, pairs: Sequence[tuple[str, str]],
                    files: Sequence[tuple[str, str]],
@@ -210,11 +189,11 @@ def package_readme(publisher: Publisher, *, date: str, n_runs: int, n_excluded: 
     what)``), the runs table's columns with units, how to check and merge it."""
     year = int(date[:4])
     licence_title, licence_url = LICENCES[publisher.licence]
-    contact = ", ".join(_md(x) for x in (publisher.contact, publisher.email) if x)
+    contact = ", ".join(markdown_cell(x) for x in (publisher.contact, publisher.email) if x)
     lines = [
-        f"# {_md(publisher.package_title)}",
+        f"# {markdown_cell(publisher.package_title)}",
         "",
-        f"Friction data measured by **{_md(publisher.lab)}**"
+        f"Friction data measured by **{markdown_cell(publisher.lab)}**"
         + (f" (contact: {contact})" if contact else "")
         + f", published {date} with tribopipe {__version__} as a Frictionless Data Package "
         "(`datapackage.json` describes every file, its columns, units, licence, size and "
@@ -222,7 +201,7 @@ def package_readme(publisher: Publisher, *, date: str, n_runs: int, n_excluded: 
         "",
         f"{n_runs} runs ({n_excluded} excluded from the statistics, kept with their reason) "
         f"of {len(pairs)} contact pairs: "
-        + "; ".join(f"{_md(pin)} on {_md(disc)}" for pin, disc in pairs) + ".",
+        + "; ".join(f"{markdown_cell(pin)} on {markdown_cell(disc)}" for pin, disc in pairs) + ".",
         "",
         "## Licence",
         "",
@@ -241,11 +220,11 @@ def package_readme(publisher: Publisher, *, date: str, n_runs: int, n_excluded: 
         "",
         "## How to cite",
         "",
-        f"> {_md(citation_text(publisher, year))}",
+        f"> {markdown_cell(citation_text(publisher, year))}",
         "",
         "and the founding paper these measurements build on:",
         "",
-        f"> {_md(founding_paper_text())}",
+        f"> {markdown_cell(founding_paper_text())}",
         "",
         "`CITATION.cff` holds the same in the Citation File Format.",
         "",
@@ -253,7 +232,7 @@ def package_readme(publisher: Publisher, *, date: str, n_runs: int, n_excluded: 
         "",
         "| file | what |",
         "|---|---|",
-        *[f"| `{path}` | {_md(what)} |" for path, what in files],
+        *[f"| `{path}` | {markdown_cell(what)} |" for path, what in files],
         "",
         "## Columns of `data/runs.csv`",
         "",
@@ -261,8 +240,8 @@ def package_readme(publisher: Publisher, *, date: str, n_runs: int, n_excluded: 
         "",
         "| column | type | unit | meaning |",
         "|---|---|---|---|",
-        *[f"| `{f['name']}` | {f['type']} | {_md(f.get('unit', ''))} | "
-          f"{_md(f['description'])} |" for f in fields],
+        *[f"| `{f['name']}` | {f['type']} | {markdown_cell(f.get('unit', ''))} | "
+          f"{markdown_cell(f['description'])} |" for f in fields],
         "",
         "## Using it",
         "",

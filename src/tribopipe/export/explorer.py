@@ -17,11 +17,11 @@ this module fills them with the map's data:
   :func:`tribopipe.fit.fit_power_law` with their curves sampled here in Python.
 
 The data travel as one JSON document in a ``<script type="application/json">`` element.
-Everything in it may come from someone else's map, so :func:`embed_json` escapes ``<``,
-``>``, ``&``, U+2028 and U+2029 (a name cannot close the element), and the page's script
-puts text into the DOM with ``textContent`` only. The standalone page carries a
-Content-Security-Policy that allows its own script and style (by hash) and nothing else:
-no request leaves the page.
+Everything in it may come from someone else's map, so
+:func:`tribopipe.escape.script_json` escapes ``<``, ``>``, ``&``, U+2028 and U+2029 (a name
+cannot close the element), and the page's script puts text into the DOM with
+``textContent`` only. The standalone page carries a Content-Security-Policy that allows
+its own script and style (by hash) and nothing else: no request leaves the page.
 
 :func:`explorer_data` is pure (tables in, a JSON-ready dict out); :func:`explorer_page` and
 :func:`explorer_fragment` turn it into HTML; :func:`write_explorer` reads a map and writes
@@ -36,13 +36,13 @@ import json
 import math
 import re
 from datetime import UTC, datetime
-from html import escape
 from importlib.resources import files
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from .. import __version__
 from ..errors import ExportError
+from ..escape import html_text, printable, script_json
 from ..files import write_text_atomic
 from ..fit import fit_power_law, power_law
 from ..frictionmap import read_map
@@ -65,10 +65,6 @@ SCRIPT_PARTS = (
 #: points per fitted power-law curve (log-spaced over the fitted pressure range)
 FIT_CURVE_POINTS = 48
 
-#: characters that must not appear literally in JSON inside a <script> element
-_JSON_ESCAPES = str.maketrans(
-    {"<": "\\u003c", ">": "\\u003e", "&": "\\u0026", "\u2028": "\\u2028", "\u2029": "\\u2029"}
-)
 _PLACEHOLDER = re.compile(r"\{\{(\w+)\}\}")
 #: group-table columns carried to the page (the others stay in the map's own tables)
 GROUP_FIELDS = (
@@ -176,7 +172,9 @@ def _runs(pair_runs: pd.DataFrame) -> list[dict[str, Any]]:
             "mu_s": _plain(r["mu_s"]),
             "repeat": _plain(r["repeat"]),
             "flags": _flags(r.get("flags")),
-            "file": _plain(r.get("source_file")),
+            # a file's own name, raw in the map: shown as one printable line
+            "file": printable(r["source_file"]) if isinstance(r.get("source_file"), str)
+            else None,
             "test": _plain(r.get("test")),
             "result": _plain(r.get("result")),
         }
@@ -288,19 +286,6 @@ def explorer_data(
 # ---------------------------------------------------------------------------- the page
 
 
-def embed_json(data: Any) -> str:
-    """``data`` as JSON text that is safe inside a ``<script>`` element.
-
-    ``<``, ``>`` and ``&`` (so no ``</script>`` or ``<!--`` can appear) and the line
-    separators U+2028/U+2029 are written as ``\\uXXXX`` escapes, which JSON reads back
-    as the same characters. These characters can only occur inside JSON strings, so the
-    document parses to ``data`` unchanged. NaN and infinities are refused (``None`` is
-    the missing value).
-    """
-    text = json.dumps(data, ensure_ascii=False, allow_nan=False, separators=(",", ":"))
-    return text.translate(_JSON_ESCAPES)
-
-
 def _asset(name: str) -> str:
     """The text of one of the page's package-data files (``assets/<name>``)."""
     return files("tribopipe.export").joinpath("assets", *name.split("/")).read_text(
@@ -348,7 +333,7 @@ def explorer_fragment(data: dict[str, Any]) -> str:
 def _fragment(data: dict[str, Any], js: str) -> str:
     """The fragment template filled with ``data`` (embedded JSON) and the script ``js``."""
     return _fill(_asset("explorer_fragment.html"),
-                 {"data": embed_json(data), "script": js, "data_id": DATA_ELEMENT_ID})
+                 {"data": script_json(data), "script": js, "data_id": DATA_ELEMENT_ID})
 
 
 def explorer_style() -> str:
@@ -375,9 +360,9 @@ def explorer_page(data: dict[str, Any]) -> str:
     return _fill(
         _asset("explorer.html"),
         {
-            "csp": escape(csp),
-            "title": escape(str(data.get("title", ""))),
-            "subtitle": escape(subtitle),
+            "csp": html_text(csp),
+            "title": html_text(str(data.get("title", ""))),
+            "subtitle": html_text(subtitle),
             "style": css,
             "fragment": _fragment(data, js),
         },

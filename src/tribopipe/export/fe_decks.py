@@ -3,7 +3,7 @@
 Each writer returns the text of one input file (nothing here touches the file system);
 every header says which engine and version the format was checked against, which
 coefficient the file holds and how the engine combines two surfaces' values. Names from
-the map reach these decks only as ASCII comments (:func:`simbase.safe_text`) or as
+the map reach these decks only as ASCII comments (:func:`tribopipe.escape.sim_comment`) or as
 sanitised identifiers (:func:`abaqus_name`, :func:`deck_names`).
 """
 
@@ -17,6 +17,7 @@ from functools import partial
 from typing import TYPE_CHECKING
 
 from ..errors import ExportError
+from ..escape import sim_comment
 from ..query import QueryResult, query
 from .simbase import (
     FOUNDING_SLIP_RATE,
@@ -30,7 +31,6 @@ from .simbase import (
     filled_lines,
     header_bodies,
     num,
-    safe_text,
     selected_pairs,
     slip_rate_of,
     table_at,
@@ -40,8 +40,9 @@ from .simbase import (
 if TYPE_CHECKING:
     import pandas as pd
 
-#: ASCII-only inert text for the fixed-format decks
-deck_safe = partial(safe_text, ascii_only=True)
+#: inert text for a comment of the fixed-format decks (ABAQUS ``**``; LS-DYNA's ``$``
+#: comments take the same ASCII escapes)
+deck_safe = partial(sim_comment, syntax="**")
 
 ABAQUS = Engine(
     name="ABAQUS",
@@ -195,7 +196,7 @@ def write_abaqus_decay(
     res = query(groups, pin, disc, pressure_kPa, temperature_C)
     if res.mu_s is None:
         raise ExportError(
-            f"pin {deck_safe(res.pin)!r} on disc {deck_safe(res.disc)!r} has no mu_s in the "
+            f"pin {res.pin!r} on disc {res.disc!r} has no mu_s in the "
             "map: EXPONENTIAL DECAY needs a static coefficient",
             hint="export the mu_k table instead (leave out --exponential-decay)",
         )
@@ -228,7 +229,7 @@ def write_abaqus_decay(
 
 def ansys_safe(value: object) -> str:
     """ASCII inert text for an MAPDL ``!`` comment (``$``, the command separator, escaped)."""
-    return deck_safe(value).replace("$", "\\x24")
+    return sim_comment(value, "!")
 
 
 def write_ansys(

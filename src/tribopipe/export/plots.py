@@ -16,6 +16,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from ..errors import ExportError
+from ..escape import picture_text
 from ..figures import (  # noqa: F401 - the per-run plot is importable from here too
     DPI,
     FORMATS,
@@ -108,7 +109,7 @@ def plot_group_overlay(
                  + ("" if not is_finite(repeat) else f", repeat {int(repeat)}")
                  + ("" if not is_finite(mu_k) else f": μ_K {float(mu_k):.3f}"))
         ax.plot(trace["sliding_distance_mm"], trace[column], "-", color=colour, lw=0.9,
-                alpha=0.85, label=label)
+                alpha=0.85, label=picture_text(label))
         start, end = row.get("mu_k_window_start_mm"), row.get("mu_k_window_end_mm")
         if is_finite(mu_k) and is_finite(start) and is_finite(end):
             ax.plot([float(start), float(end)], [float(mu_k)] * 2, "--", color=colour, lw=1.6)
@@ -117,7 +118,7 @@ def plot_group_overlay(
     ax.set_ylim(bottom=0)
     ax.grid(True, alpha=0.3)
     ax.legend(fontsize="small", loc="lower right")
-    ax.set_title(title, fontsize="medium")
+    ax.set_title(picture_text(title), fontsize="medium")
     return save_figure(fig, target, fmt, dpi)
 
 
@@ -211,7 +212,8 @@ def plot_pair(
     fig = new_figure(6.4, 4.2)
     ax = fig.add_subplot()
     draw_pair(ax, sel, fits)
-    ax.set_title(f"{sel['pin'].iloc[0]} on {sel['disc'].iloc[0]}", fontsize="medium")
+    ax.set_title(picture_text(f"{sel['pin'].iloc[0]} on {sel['disc'].iloc[0]}"),
+                 fontsize="medium")
     return save_figure(fig, target, fmt, dpi)
 
 

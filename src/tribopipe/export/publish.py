@@ -103,9 +103,10 @@ class PublishedPackage:
 # --------------------------------------------------------------------------- CSV
 
 
-def csv_cell(value: Any, kind: str) -> str:
+def package_cell(value: Any, kind: str) -> str:
     """One CSV cell of a value of map column kind ``kind``: missing as empty, floats by
-    their shortest round-trip text, booleans ``true``/``false``."""
+    their shortest round-trip text, booleans ``true``/``false``, text as it is,
+    CSV-quoted (the package's data are read back unchanged: not an escape)."""
     if value is None or (kind != "str" and _isna(value)):
         return ""
     if kind == "bool":
@@ -135,7 +136,7 @@ def table_csv(table: pd.DataFrame, kinds: Sequence[str]) -> str:
     writer = csv.writer(buf, lineterminator="\n")
     writer.writerow([str(c) for c in table.columns])
     for row in table.itertuples(index=False, name=None):
-        writer.writerow([csv_cell(v, k) for v, k in zip(row, kinds, strict=True)])
+        writer.writerow([package_cell(v, k) for v, k in zip(row, kinds, strict=True)])
     return buf.getvalue()
 
 

@@ -6,7 +6,7 @@ pressure and temperature and writes μ_K, or μ_S (breakaway) with ``coefficient
 — refused in one line where the map holds no μ_S for the pair. Every header says which
 engine and version it was checked against, which coefficient it holds and how the engine
 combines two surfaces' values. Names from the map reach these files only as inert
-comment text (:func:`simbase.safe_text`), XML-escaped attribute values or Python
+comment text (:func:`tribopipe.escape.sim_comment`), XML-escaped attribute values or Python
 string literals (:func:`repr`).
 """
 

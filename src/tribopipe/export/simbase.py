@@ -14,16 +14,15 @@ m-N-s       Pa  (kPa × 1e3)      m/s (× 1e-3)    s/m  (× 1e3)
 ==========  ===================  ==============  ======================
 
 Names that come from the map (pin, disc, the map's path) are data, never code: every
-writer passes them through :func:`safe_text` (Python-repr escapes: no newline, no control
-character survives) before they reach a comment, and they appear nowhere else except as
-a quoted literal (:func:`repr` in Python, XML-escaped attributes) or as a sanitised
-identifier (letters, digits, underscores).
+writer passes them through :func:`tribopipe.escape.sim_comment` (Python-repr escapes: no
+newline, no control character survives) before they reach a comment, and they appear
+nowhere else except as a quoted literal (:func:`repr` in Python, XML-escaped attributes)
+or as a sanitised identifier (letters, digits, underscores).
 """
 
 from __future__ import annotations
 
 import math
-import re
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
@@ -31,6 +30,7 @@ from xml.sax.saxutils import quoteattr
 
 from .. import __version__
 from ..errors import ExportError
+from ..escape import sim_comment
 from ..frictionmap import PUBLISHED_SLIDING_SPEED_MM_S
 from ..query import QueryResult, friction_table, pairs, query, select_pair
 
@@ -87,28 +87,12 @@ def num(value: float) -> str:
     return f"{value:.10g}"
 
 
-# ---------------------------------------------------------------------------- safe text
-
-
-def safe_text(value: object, *, ascii_only: bool = False) -> str:
-    """``value`` as one line of inert text for a comment, whatever it holds.
-
-    Python's string escapes (``repr`` without the quotes) turn newlines, carriage
-    returns, tabs, every other control or format character and the Unicode line
-    separators into visible ``\\n``, ``\\x1b``, ``\\u2028`` …; ``ascii_only`` escapes
-    every non-ASCII character too (for the fixed-format decks of ABAQUS, Ansys, LS-DYNA).
-    """
-    text = str(value)
-    escaped = ascii(text) if ascii_only else repr(text)
-    # repr picks its quote character by content; what is inside is the text itself
-    return escaped[1:-1]
+# ---------------------------------------------------------------------------- XML
 
 
 def xml_comment(text: str) -> str:
     """``text`` as one XML comment that no content can close or break."""
-    # "--" may not occur inside a comment: a space after every hyphen that precedes one
-    body = re.sub(r"-(?=-)", "- ", safe_text(text))
-    return "<!-- " + body + " -->"
+    return "<!-- " + sim_comment(text, "<!--") + " -->"
 
 
 def xml_name(name: str, what: str) -> str:
@@ -116,7 +100,7 @@ def xml_name(name: str, what: str) -> str:
     when it holds a control character (which XML cannot carry)."""
     if any(not ch.isprintable() for ch in name):
         raise ExportError(
-            f"{what} {safe_text(name)!r} holds a control character; a name must be printable"
+            f"{what} {name!r} holds a control character; a name must be printable"
         )
     return quoteattr(name)
 
@@ -137,7 +121,7 @@ def header_bodies(
     engine: Engine,
     holds: str,
     source: str | None,
-    safe: Callable[[object], str] = safe_text,
+    safe: Callable[[object], str] = sim_comment,
 ) -> list[str]:
     """The comment bodies every file opens with: engine, version checked against,
     coefficient held, how the engine combines two surfaces' values, and where the
@@ -153,7 +137,7 @@ def header_bodies(
     ]
 
 
-def condition_lines(res: QueryResult, safe: Callable[[object], str] = safe_text) -> list[str]:
+def condition_lines(res: QueryResult, safe: Callable[[object], str] = sim_comment) -> list[str]:
     """Comment bodies naming the pair, the condition, both coefficients and the measured
     groups they were interpolated from."""
     t = "unknown" if res.temperature_C is None else f"{res.temperature_C:g} C"
@@ -198,7 +182,7 @@ def breakaway(res: QueryResult, coefficient: str, engine: str) -> float:
         return res.mu_k.value
     if res.mu_s is None:
         raise ExportError(
-            f"pin {safe_text(res.pin)!r} on disc {safe_text(res.disc)!r} has no mu_s in the "
+            f"pin {res.pin!r} on disc {res.disc!r} has no mu_s in the "
             f"map (e.g. an imported published map holds mu_k only): {engine} cannot get the "
             "breakaway coefficient",
             hint="leave out --coefficient mu_s to write mu_k",

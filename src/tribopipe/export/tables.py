@@ -28,7 +28,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from ..errors import ExportError
-from ..escape import csv_cell, markdown_cell, printable
+from ..escape import csv_cell, latex_cell, markdown_cell
 from ..files import write_text_atomic
 from ..frictionmap import FRICTIONMAP_COLUMNS, read_map
 from ..stats import _group_keys, group_statistics
@@ -189,7 +189,7 @@ def _safe_text_cells(table: pd.DataFrame) -> pd.DataFrame:
     table = table.copy()
     for column in text_columns:
         table[column] = table[column].map(
-            lambda v: csv_cell(printable(v)) if isinstance(v, str) else v)
+            lambda v: csv_cell(v) if isinstance(v, str) else v)
     return table
 
 
@@ -271,25 +271,6 @@ def to_markdown(table: pd.DataFrame, formats: dict[str, str] | None = None) -> s
     return "\n".join(lines) + "\n"
 
 
-_LATEX_SPECIAL = {
-    "\\": r"\textbackslash{}",
-    "&": r"\&",
-    "%": r"\%",
-    "$": r"\$",
-    "#": r"\#",
-    "_": r"\_",
-    "{": r"\{",
-    "}": r"\}",
-    "~": r"\textasciitilde{}",
-    "^": r"\textasciicircum{}",
-}
-
-
-def latex_escape(text: str) -> str:
-    """Escape LaTeX's special characters in plain text."""
-    return "".join(_LATEX_SPECIAL.get(ch, ch) for ch in text)
-
-
 def to_latex(table: pd.DataFrame, formats: dict[str, str] | None = None) -> str:
     """A booktabs ``tabular`` (needs ``\\usepackage{booktabs}``); numbers right-aligned,
     floats formatted as in :func:`to_markdown`."""
@@ -299,11 +280,11 @@ def to_latex(table: pd.DataFrame, formats: dict[str, str] | None = None) -> str:
     lines = [
         f"\\begin{{tabular}}{{{spec}}}",
         "\\toprule",
-        " & ".join(latex_escape(str(c)) for c in table.columns) + " \\\\",
+        " & ".join(latex_cell(str(c)) for c in table.columns) + " \\\\",
         "\\midrule",
     ]
     for row in table.itertuples(index=False, name=None):
-        cells = (latex_escape(_cell(v, f)) for v, f in zip(row, specs, strict=True))
+        cells = (latex_cell(_cell(v, f)) for v, f in zip(row, specs, strict=True))
         lines.append(" & ".join(cells) + " \\\\")
     lines += ["\\bottomrule", "\\end{tabular}"]
     return "\n".join(lines) + "\n"

@@ -29,6 +29,7 @@ import threading
 from collections.abc import Mapping
 from typing import TYPE_CHECKING, Any
 
+from ..escape import picture_text
 from ..numeric import finite_or_none, is_finite
 from .canvas import (
     MU_LABEL,
@@ -250,10 +251,11 @@ class TraceFigure:
         self._draw_force(s, normal_force_N, cond.normal_force_N, data_x, thin, shown)
         self._set_ticks()
 
-        self.title.set_text(shorten(title if title is not None else (cond.source or "")))
-        self.conditions.set_text(shorten(cond.line()))
-        self.readings.set_text(shorten(marks.line()))
-        self.flags.set_text(shorten("flags: " + (", ".join(marks.flags) or "none")))
+        # names from users: one printable line each (a line break fails Pillow's layout)
+        self.title.set_text(_header(title if title is not None else (cond.source or "")))
+        self.conditions.set_text(_header(cond.line()))
+        self.readings.set_text(_header(marks.line()))
+        self.flags.set_text(_header("flags: " + (", ".join(marks.flags) or "none")))
         self.flags.set_color("tab:red" if marks.flags else "0.4")
         for artist, visible in shown.items():
             artist.set_visible(visible)
@@ -511,6 +513,12 @@ class TraceFigure:
         path, size = findfont(label.get_fontproperties()), label.get_fontsize()
         for content, x, y, anchor in self._tick_labels:
             self._typesetter.paste(image, content, path, size, anchor, x, y, (0, 0, 0))
+
+
+def _header(text: str) -> str:
+    """A header line of the figure: :func:`~tribopipe.escape.picture_text` as it is drawn
+    (no mathtext), shortened to :data:`~tribopipe.figures.runinfo.HEADER_CHARS`."""
+    return shorten(picture_text(text, mathtext=False))
 
 
 def _padded(lo: float, hi: float, fraction: float) -> tuple[float, float]:

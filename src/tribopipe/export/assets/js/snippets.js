@@ -1,6 +1,6 @@
 /* The selection as CSV and as the ABAQUS/Ansys text of fe_decks.condition_snippet. */
 
-/* simbase.safe_text(value, ascii_only=True): Python's ascii() without the quotes, so no
+/* escape.sim_comment(value, "**"): Python's ascii() without the quotes, so no
    newline, control or non-ASCII character of a name survives into a deck's comment. */
 function deckSafe(value) {
   var s = String(value);
@@ -21,7 +21,7 @@ function deckSafe(value) {
   return out;
 }
 
-/* fe_decks.ansys_safe: also "$", MAPDL's command separator. */
+/* escape.sim_comment(value, "!"): also "$", MAPDL's command separator. */
 function ansysSafe(value) { return deckSafe(value).replace(/\$/g, "\\x24"); }
 
 /* textwrap.wrap(text, width, subsequent_indent=indent, break_on_hyphens=False), for text

@@ -71,3 +71,41 @@ def test_stored_file_name_keeps_the_name_and_only_undecodable_bytes_as_text() ->
     odd = os.fsdecode(b"/x/run_\xff\xfe.csv")
     assert stored_file_name(odd) == "run_\\xff\\xfe.csv"
     assert stored_file_name(odd).encode("utf-8")                     # storable text
+
+
+# ---------------------------------------------------------------------------- messages
+
+
+def test_a_note_naming_a_file_with_a_newline_stays_one_line(tmp_path: Path) -> None:
+    from multi_exports import steps_test
+    from tribopipe.synthetic import write_rheocompass_session
+
+    raw = write_rheocompass_session(tmp_path / "two\nsteps\u202e.csv", [steps_test()],
+                                    project="steps")
+    result = invoke("reduce", str(raw), "--pin", "P", "--disc", "D", "--force", "3",
+                    "--no-map", "--out", str(tmp_path / "o"))
+    assert result.exit_code == 0, result.output
+    _lines_are_printable(result.stderr)
+    (note,) = [ln for ln in result.stderr.splitlines() if "friction intervals" in ln]
+    assert note.startswith("note: ") and "two\\nsteps\\u202e.csv holds 2" in note
+
+
+def test_written_paths_are_one_line_each(tmp_path: Path) -> None:
+    export = good_export(tmp_path / "run.csv")
+    map_path = tmp_path / "m.parquet"
+    assert _reduce(export, map_path, tmp_path / "o", "--force", "3").exit_code == 0
+    target = tmp_path / "deck\n\u202e.inp"
+    result = invoke("export", "abaqus", "--map", str(map_path), "-o", str(target))
+    assert result.exit_code == 0, result.output
+    assert target.is_file()
+    _lines_are_printable(result.stderr)
+    assert "wrote " in result.stderr and "deck\\n\\u202e.inp" in result.stderr
+
+
+def test_a_crashed_worker_names_its_file_in_one_line() -> None:
+    from tribopipe.campaign.worker import _Job, crashed
+
+    (done,) = crashed([_Job(file="a\nb\u202e.csv", path="/x/a\nb\u202e.csv", sources=(),
+                            hints=())], RuntimeError("killed\nby the OOM killer"))
+    reason = done.error.reason
+    assert reason.isprintable() and reason.startswith("a\\nb\\u202e.csv: worker process")

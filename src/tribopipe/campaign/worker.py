@@ -334,5 +334,6 @@ def crashed(jobs: Sequence[_Job], exc: BaseException) -> list[FileDone]:
     file a transient failure, tried again next time."""
     return [FileDone(file=job.file, error=FailedRun(
         file=job.file, name=job.file, transient=True,
-        reason=f"{job.file}: worker process failed ({type(exc).__name__}: {exc}); run again"))
+        reason=printable(f"{display_path(job.file)}: worker process failed "
+                         f"({type(exc).__name__}: {exc}); run again")))
         for job in jobs]

@@ -31,6 +31,15 @@ def friendly_errors(func: F) -> F:
     return wrapper  # type: ignore[return-value]
 
 
+def say(message: str, *, err: bool = False) -> None:
+    """Print one message line as a terminal line (:func:`tribopipe.escape.printable`): a
+    newline, a carriage return or a bidi override in a name or path can neither split the
+    line nor hide or reorder what follows."""
+    from ..escape import printable
+
+    click.echo(printable(message), err=err)
+
+
 def map_option(func: F) -> F:
     """``--map PATH``: the friction map file every map-touching command takes."""
     return click.option(

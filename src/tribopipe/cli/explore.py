@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import click
 
-from ._common import friendly_errors, map_option
+from ._common import friendly_errors, map_option, say
 
 
 @click.command("explore")
@@ -36,4 +36,4 @@ def explore_cmd(map_path: str, output: str | None, title: str | None) -> None:
     from ..export.explorer import write_explorer
 
     target = output if output is not None else Path(map_path).parent / "explorer.html"
-    click.echo(str(write_explorer(map_path, target, title=title)))
+    say(str(write_explorer(map_path, target, title=title)))

@@ -7,7 +7,7 @@ from typing import Any
 
 import click
 
-from ._common import friendly_errors, map_option
+from ._common import friendly_errors, map_option, say
 
 UNITS = ("mm-N-s", "m-N-s")
 COEFFICIENTS = ("mu_k", "mu_s")
@@ -96,7 +96,7 @@ def _emit(text: str, output: str | None) -> None:
     from ..files import write_text_atomic
 
     write_text_atomic(output, text, newline="\n")
-    click.echo(f"wrote {output}", err=True)
+    say(f"wrote {output}", err=True)
 
 
 def _run(fmt: str, output: str | None, map_path: str, **options: Any) -> None:

@@ -7,7 +7,7 @@ import math
 
 import click
 
-from ._common import friendly_errors, map_option
+from ._common import friendly_errors, map_option, say
 
 
 def _fmt(value: float, spec: str) -> str:
@@ -45,7 +45,7 @@ def fit_cmd(
         from ..files import write_text_atomic
 
         write_text_atomic(output, to_csv(fits), newline="")
-        click.echo(f"wrote {output}", err=True)
+        say(f"wrote {output}", err=True)
     if as_json:
         from ..numeric import finite_json
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import click
 
-from ._common import friendly_errors, map_option
+from ._common import friendly_errors, map_option, say
 from .fit import fit_cmd
 
 
@@ -59,7 +59,7 @@ def import_cmd(
     if published == (file is not None):
         raise click.UsageError("give a FILE or --published (not both)")
     report = import_table(map_path, file, source=source, replace=replace)
-    click.echo(f"map {map_path}: {report.summary()}")
+    say(f"map {map_path}: {report.summary()}")
 
 
 @map_group.command("merge")
@@ -84,10 +84,10 @@ def merge_cmd(other: str, replace: bool, lab: str | None, map_path: str) -> None
     merged = merge_map(map_path, other, replace=replace, lab=lab)
     report = merged.report
     for line in report.conflict_lines(theirs=other):
-        click.echo(line)
+        say(line)
     for line in merged.notes(other):
-        click.echo(line, err=line.startswith("note:"))
-    click.echo(f"map {map_path}: {report.summary()}")
+        say(line, err=line.startswith("note:"))
+    say(f"map {map_path}: {report.summary()}")
     if report.kept_conflicting:
         raise SystemExit(1)
 
@@ -126,8 +126,8 @@ def publish_cmd(folder: str, lab: str, contact: str | None, email: str | None, l
 
     done = publish_map(map_path, folder, Publisher(lab, contact, email, licence, title),
                        overwrite=overwrite)
-    click.echo(f"wrote {done.path}: {done.n_runs} runs in {len(done.files)} files "
-               f"(check it with `tribopipe map validate {done.path}`)")
+    say(f"wrote {done.path}: {done.n_runs} runs in {len(done.files)} files "
+        f"(check it with `tribopipe map validate {done.path}`)")
 
 
 @map_group.command("validate")
@@ -147,10 +147,10 @@ def validate_cmd(path: str) -> None:
 
     result = check_package(path)
     for line in result.lines():
-        click.echo(line)
+        say(line)
     if not result.ok:
         raise SystemExit(1)
-    click.echo(result.verdict())
+    say(result.verdict())
 
 
 @map_group.command("table")
@@ -205,7 +205,7 @@ def table_cmd(
     if output is None:
         click.echo(text, nl=False)
     else:
-        click.echo(f"wrote {output}", err=True)
+        say(f"wrote {output}", err=True)
 
 
 @map_group.command("show")
@@ -233,7 +233,7 @@ def exclude_cmd(ids: tuple[str, ...], reason: str, map_path: str) -> None:
     from ..frictionmap import exclude_runs
 
     changed = exclude_runs(map_path, ids, reason)
-    click.echo(f"excluded {len(changed)} run(s)" + (": " + ", ".join(changed) if changed else ""))
+    say(f"excluded {len(changed)} run(s)" + (": " + ", ".join(changed) if changed else ""))
 
 
 @map_group.command("include")
@@ -245,4 +245,4 @@ def include_cmd(ids: tuple[str, ...], map_path: str) -> None:
     from ..frictionmap import include_runs
 
     changed = include_runs(map_path, ids)
-    click.echo(f"included {len(changed)} run(s)" + (": " + ", ".join(changed) if changed else ""))
+    say(f"included {len(changed)} run(s)" + (": " + ", ".join(changed) if changed else ""))

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import click
 
-from ._common import friendly_errors, map_option
+from ._common import friendly_errors, map_option, say
 
 _FORMAT = click.option(
     "--format",
@@ -42,7 +42,7 @@ def pairs_cmd(map_path: str, pin: str | None, disc: str | None, out_dir: str, fm
     from ..export.plots import plot_map_pairs
 
     for path in plot_map_pairs(map_path, out_dir, fmt=fmt, pin=pin, disc=disc):
-        click.echo(str(path))
+        say(str(path))
 
 
 @plot_group.command("runs")
@@ -74,7 +74,7 @@ def runs_cmd(map_path: str, processed_dir: str, out_dir: str, fmt: str) -> None:
     written, missing = plot_map_runs(map_path, OutputLayout.of(processed_dir).traces_dir, out_dir,
                                      fmt=fmt)
     for path in written:
-        click.echo(str(path))
+        say(str(path))
     if missing:
-        click.echo(f"note: {len(missing)} run(s) have no trace in {processed_dir}/traces "
-                   "(e.g. imported rows)", err=True)
+        say(f"note: {len(missing)} run(s) have no trace in {processed_dir}/traces "
+            "(e.g. imported rows)", err=True)

@@ -189,9 +189,9 @@ def _note_alike(results: list, labels: object) -> None:
                        "(a campaign can label them per test: manifest 'test' column, "
                        "--test-pattern)", err=True)
         elif len(r.outcomes) > 1 and labels.normal_force_N is not None:
-            click.echo(f"note: {r.path} holds {len(r.outcomes)} friction intervals (force or "
-                       "speed steps): --force labels each alike (leave it out to take each "
-                       "step's nominal force from its measured force, flagged "
+            click.echo(f"note: {display_path(r.path)} holds {len(r.outcomes)} friction "
+                       "intervals (force or speed steps): --force labels each alike (leave "
+                       "it out to take each step's nominal force from its measured force, flagged "
                        "nominal_force_estimated; a campaign manifest's 'interval' column "
                        "labels each step)", err=True)
 

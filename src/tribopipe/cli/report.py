@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import click
 
-from ._common import friendly_errors
+from ._common import friendly_errors, say
 
 
 @click.command("report")
@@ -44,4 +44,4 @@ def report_cmd(
 
         map_path = DEFAULT_MAP
     path = make_report(output, config=config, map_path=map_path, processed_dir=processed_dir)
-    click.echo(str(path))
+    say(str(path))

@@ -32,7 +32,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from .errors import ExportError
-from .escape import csv_cell, csv_uncell, display_path, printable
+from .escape import csv_cell, csv_uncell
 from .files import write_text_atomic
 
 #: the output folder when none is given (relative to the working folder)
@@ -187,14 +187,14 @@ class OutputLayout:
 
 def write_failures(path: str | Path, failures: Mapping[str, str]) -> Path:
     """Write ``failures.csv``: the header ``file,reason``, then one row per failed file,
-    sorted by file (atomically). Returns the path. Both cells are one printable line
-    (:func:`~tribopipe.escape.display_path`) written as safe CSV cells
-    (:func:`~tribopipe.escape.csv_cell`: a file named ``=cmd|...`` is no formula)."""
+    sorted by file (atomically). Returns the path. Both cells are written as CSV cells
+    (:func:`~tribopipe.escape.csv_cell`: one printable line, and a file named ``=cmd|...``
+    is no formula)."""
     buf = io.StringIO()
     writer = csv.writer(buf, lineterminator="\n")
     writer.writerow(FAILURES_HEADER)
     for file, reason in sorted(failures.items()):
-        writer.writerow((csv_cell(display_path(file)), csv_cell(printable(reason))))
+        writer.writerow((csv_cell(file), csv_cell(reason)))
     return write_text_atomic(path, buf.getvalue())
 
 

@@ -11,7 +11,7 @@ import math
 from collections.abc import Mapping, Sequence
 from typing import Any
 
-from ..escape import csv_cell, display_path
+from ..escape import csv_cell
 from ..files import write_text_atomic
 from ..layout import write_failures
 from .patterns import LABEL_FIELDS
@@ -37,7 +37,7 @@ def _cell(value: Any) -> str:
         return "" if not math.isfinite(value) else repr(round(value, 6))
     if isinstance(value, int):
         return str(value)
-    return csv_cell(display_path(str(value)))
+    return csv_cell(str(value))
 
 
 def _write_runs_csv(campaign: Campaign, rows: Sequence[CampaignRow],

@@ -109,3 +109,27 @@ def test_a_crashed_worker_names_its_file_in_one_line() -> None:
                             hints=())], RuntimeError("killed\nby the OOM killer"))
     reason = done.error.reason
     assert reason.isprintable() and reason.startswith("a\\nb\\u202e.csv: worker process")
+
+
+def test_batch_after_its_state_is_lost_finds_the_same_file_not_a_duplicate(
+        tmp_path: Path) -> None:
+    """The batch checks a file against the map's files when its state does not know it:
+    the same file (raw name) is the same, not 'same content as <itself>'."""
+    raw = tmp_path / "raw"
+    raw.mkdir()
+    good_export(raw / "P_D_3N_20C_r1_x\u202ey.csv")
+    cfg = tmp_path / "c.toml"
+    cfg.write_text('[campaign]\nname = "c"\nraw_dir = "raw"\noutput_dir = "out"\n'
+                   'filename_pattern = "{pin}_{disc}_{force}N_{temperature}C_r{repeat}_{note}"'
+                   "\nplots = false\n", encoding="utf-8")
+    first = invoke("batch", str(cfg), "--jobs", "1")
+    assert first.exit_code == 0, first.output
+    for state in (tmp_path / "out").glob(".tribopipe-state*"):
+        state.unlink()
+    again = invoke("batch", str(cfg), "--jobs", "1")
+    assert again.exit_code == 0, again.output
+    assert "duplicate" not in again.output and "same content" not in again.output
+    assert "1 reduced" in again.output and "0 added, 1 unchanged" in again.output
+    _lines_are_printable(again.output)
+    runs = pd.read_parquet(tmp_path / "out" / "friction_map.parquet")
+    assert list(runs["source_file"]) == ["P_D_3N_20C_r1_x\u202ey.csv"]

@@ -133,3 +133,25 @@ def test_batch_after_its_state_is_lost_finds_the_same_file_not_a_duplicate(
     _lines_are_printable(again.output)
     runs = pd.read_parquet(tmp_path / "out" / "friction_map.parquet")
     assert list(runs["source_file"]) == ["P_D_3N_20C_r1_x\u202ey.csv"]
+
+
+def test_every_output_of_a_raw_name_shows_it_escaped(tmp_path: Path) -> None:
+    """The map keeps the name raw; map show, the tables, the explorer page and the
+    report write it escaped for their kind (no raw U+202E or line break anywhere)."""
+    name = "rlo\u202e\nx<b>.csv"
+    export = good_export(tmp_path / name)
+    map_path, out = tmp_path / "out" / "friction_map.parquet", tmp_path / "out"
+    assert _reduce(export, map_path, out, "--force", "3", "--plot").exit_code == 0
+    shown = invoke("map", "show", "--runs", "--map", str(map_path))
+    assert shown.exit_code == 0, shown.output
+    assert "rlo\\u202e\\nx<b>.csv" in shown.stdout
+    _lines_are_printable(shown.stdout)
+    table = invoke("map", "table", "--format", "frictionmap", "--map", str(map_path))
+    assert "\u202e" not in table.stdout
+    page, report = tmp_path / "explorer.html", tmp_path / "report.html"
+    assert invoke("explore", "--map", str(map_path), "-o", str(page)).exit_code == 0
+    made = invoke("report", "--map", str(map_path), "--processed", str(out), "-o", str(report))
+    assert made.exit_code == 0, made.output
+    for html in (page.read_text(encoding="utf-8"), report.read_text(encoding="utf-8")):
+        assert "\u202e" not in html and "<b>" not in html
+    assert "rlo\\u202e\\nx&lt;b&gt;.csv" in report.read_text(encoding="utf-8")

@@ -70,7 +70,8 @@ def per_file(folder: Path, repeat: int) -> dict:
     from tribopipe.files import file_sha256
     from tribopipe.frictionmap import make_record
     from tribopipe.intervals import select_friction_interval
-    from tribopipe.pipeline import RunLabels, RunOutcome, plot_run, write_trace
+    from tribopipe.labels import RunLabels
+    from tribopipe.pipeline import RunOutcome, plot_run, write_trace
     from tribopipe.readers import read_export
     from tribopipe.reduce import reduce_measurement
     from tribopipe.synthetic import SyntheticRun, write_rheocompass_export
@@ -148,7 +149,8 @@ def records(template: dict, n: int, start: int = 0) -> list[dict]:
 
 def template_record(folder: Path) -> dict:
     from tribopipe.config import load_settings
-    from tribopipe.pipeline import RunLabels, reduce_file
+    from tribopipe.labels import RunLabels
+    from tribopipe.pipeline import reduce_file
     from tribopipe.synthetic import SyntheticRun, write_rheocompass_export
 
     path = write_rheocompass_export(folder / "t.csv", SyntheticRun(seed=1), project="p",

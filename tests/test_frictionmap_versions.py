@@ -139,7 +139,8 @@ def test_the_session_reduced_again_is_the_same_two_runs_and_fills_nothing_in(
     tmp_path: Path
 ) -> None:
     from tribopipe.config import load_settings
-    from tribopipe.pipeline import RunLabels, reduce_export
+    from tribopipe.labels import RunLabels
+    from tribopipe.pipeline import reduce_export
     from tribopipe.synthetic import write_rheocompass_session
 
     script = v3_fixture_script()

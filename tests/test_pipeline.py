@@ -9,7 +9,8 @@ import pandas as pd
 import pytest
 
 from tribopipe.config import load_settings
-from tribopipe.pipeline import RunLabels, reduce_file, run_summary, write_summary, write_trace
+from tribopipe.labels import RunLabels
+from tribopipe.pipeline import reduce_file, run_summary, write_summary, write_trace
 from tribopipe.synthetic import SyntheticRun, write_rheocompass_export
 
 

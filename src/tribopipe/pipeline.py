@@ -38,12 +38,13 @@ from .frictionmap.duplicates import (
     labels_of,
     map_files_by_hash,
 )
-from .frictionmap.records import RunLabels, Tolerances, make_record, measurement_id
+from .frictionmap.records import make_record, measurement_id
 from .frictionmap.store import AppendReport, append_records, read_map
 from .intervals import friction_intervals
+from .labels import RunLabels, RunVerdict, Tolerances, decide_run
 from .layout import OutputLayout
 from .measurement import interval_label
-from .numeric import finite_json, finite_or_none
+from .numeric import finite_json, finite_or_nan, finite_or_none
 from .readers import read_export
 from .reduce import reduce_measurement
 
@@ -133,6 +134,17 @@ class RunOutcome:
     place: RunPlace = RunPlace()
     #: whether its export holds several runs or tests (then its name says which it is)
     several: bool = False
+    #: its nominal force and flags, decided once (:func:`tribopipe.labels.decide_run`)
+    verdict: RunVerdict | None = None
+
+    @property
+    def flags(self) -> tuple[str, ...]:
+        """The run's QC flags as every output shows them (its verdict's; decided with the
+        default tolerances when it was built without one)."""
+        verdict = self.verdict or decide_run(
+            self.labels, self.result.flags, finite_or_nan(self.result.normal_force_mean_N),
+            finite_or_nan(self.result.temperature_C))
+        return verdict.flags
 
     @property
     def name(self) -> str:
@@ -206,15 +218,16 @@ def reduce_run(
     """
     labels = labels or RunLabels()
     result = reduce_measurement(measurement, settings.instrument, settings.reduction)
+    verdict = decide_run(labels, result.flags, finite_or_nan(result.normal_force_mean_N),
+                         finite_or_nan(result.temperature_C), tolerances)
     record = None
     if labels.complete:
         record = make_record(
             result=result,
-            labels=labels,
+            verdict=verdict,
             meta=measurement.meta,
             file_hash=export.file_hash,
             settings=settings,
-            tolerances=tolerances,
             occurrence=place.occurrence,
         )
     return RunOutcome(
@@ -228,6 +241,7 @@ def reduce_run(
         record=record,
         place=place,
         several=export.several,
+        verdict=verdict,
     )
 
 
@@ -319,7 +333,7 @@ def run_summary(outcome: RunOutcome) -> dict[str, Any]:
         "pressure_kPa": float(r.pressure_kPa),
         "normal_force_N": float(r.normal_force_mean_N),
         "temperature_C": finite_or_none(r.temperature_C),
-        "flags": list(r.flags),
+        "flags": list(outcome.flags),
         "mu_s_distance_mm": float(r.mu_s_distance_mm),
         "mu_s_time_s": float(r.mu_s_time_s),
         "mu_k_window_mm": [float(v) for v in r.mu_k_window_mm],
@@ -357,7 +371,8 @@ def plot_run(out_dir: str | Path | OutputLayout, outcome: RunOutcome) -> Path:
     :func:`tribopipe.figures.plot_trace`) to ``<out_dir>/plots/traces/<stem>_<id8>.png``
     and return its path."""
     target = OutputLayout.of(out_dir).trace_plot_path(outcome.path, outcome.measurement_id)
-    plot_trace(outcome.result, target, conditions=run_conditions(outcome))
+    plot_trace(outcome.result, target, conditions=run_conditions(outcome),
+               flags=outcome.flags)
     return target
 
 

@@ -55,7 +55,6 @@ itself.
 
 from __future__ import annotations
 
-from ..frictionmap.records import Tolerances, qc_flags
 from ..layout import BATCH_LOCK
 from .batch import (
     GC_THRESHOLDS,
@@ -110,8 +109,6 @@ from .table import (
 
 __all__ = [
     "BATCH_LOCK",
-    "Tolerances",
-    "qc_flags",
     "REQUIRED_FIELDS",
     "LABEL_FIELDS",
     "PATTERN_FIELDS",

@@ -45,7 +45,7 @@ from typing import TYPE_CHECKING, Any
 
 from ..errors import CampaignError, ConfigError, ReadError, ValidationError
 from ..files import read_regular
-from ..frictionmap.records import RunLabels
+from ..labels import RunLabels
 from ..readers.textio import decode, detect_delimiter
 from ..validate import FORCE_N, MAX_REPEAT, TEMPERATURE_C, check_count, check_name, check_number
 from .patterns import LABEL_FIELDS, REQUIRED_FIELDS, _parse_number

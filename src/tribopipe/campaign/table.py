@@ -35,7 +35,7 @@ from typing import Any
 from ..errors import CampaignError, ReadError
 from ..escape import display_path
 from ..files import file_sha256, regular_file, write_text_atomic
-from ..frictionmap.records import RunLabels
+from ..labels import RunLabels
 from ..layout import FAILURES_CSV, RUNS_CSV
 from ..numeric import finite_json
 from ..readers import EXPORT_SUFFIXES

@@ -20,7 +20,7 @@ from ..errors import CampaignError, TribopipeError
 from ..escape import display_path, printable
 from ..figures import trace_figure
 from ..files import os_reason
-from ..frictionmap.records import RunLabels
+from ..labels import RunLabels
 from ..numeric import finite_or_none
 from ..pipeline import (
     ExportRuns,

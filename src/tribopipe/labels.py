@@ -16,6 +16,7 @@ import math
 from collections.abc import Iterable
 from dataclasses import dataclass
 
+from .errors import CampaignError
 from .validate import FORCE_N, MAX_REPEAT, TEMPERATURE_C, check_count, check_name, check_number
 
 #: Flag added when the nominal force was not given and the measured mean was used.
@@ -150,3 +151,8 @@ def decide_run(labels: RunLabels, reduction_flags: Iterable[str],
     else:
         force = None
     return RunVerdict(labels=labels, normal_force_N=force, flags=canonical_flags(flags))
+
+
+class Undescribed(CampaignError):
+    """No metadata source describes a run's test: it cannot be labelled (a campaign's
+    ledger names these apart from other failures)."""

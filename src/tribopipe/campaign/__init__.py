@@ -59,10 +59,7 @@ from ..layout import BATCH_LOCK
 from .batch import (
     GC_THRESHOLDS,
     BatchReport,
-    FailedRun,
-    FileDone,
     ProgressCallback,
-    ReducedRun,
     default_jobs,
     run_campaign,
 )
@@ -142,9 +139,6 @@ __all__ = [
     "ProgressCallback",
     "GC_THRESHOLDS",
     "BatchReport",
-    "FileDone",
-    "ReducedRun",
-    "FailedRun",
     "default_jobs",
     "run_campaign",
 ]

@@ -29,6 +29,7 @@ from ..frictionmap.duplicates import (
     map_files_by_hash,
 )
 from ..frictionmap.store import read_map, update_map
+from ..pipeline import FileOutcome, ReducedRun
 from .metadata import Manifest, read_manifest
 from .outputs import _write_failures_csv, _write_runs_csv
 from .spec import Campaign
@@ -39,18 +40,16 @@ from .table import (
     SKIPPED,
     STATE_VERSION,
     CampaignRow,
+    RunEntry,
     campaign_table,
     describe_glob,
+    failed_run_state,
     load_state,
     recipe_hash,
     save_state,
 )
 from .worker import (  # noqa: F401 - GC_THRESHOLDS, _worker_init: importable from here too
     GC_THRESHOLDS,
-    FailedRun,
-    FileDone,
-    ReducedRun,
-    RunResult,
     _Context,
     _fewer_gc_passes,
     _Job,
@@ -380,11 +379,11 @@ def _plan(rows: Sequence[CampaignRow], missing_ids: set[str]) -> _Plan:
 
 
 def _execute(todo: list[_Job], ctx: _Context, jobs: int, progress: ProgressCallback | None,
-             done: int, total: int) -> list[FileDone]:
+             done: int, total: int) -> list[FileOutcome]:
     """Reduce the jobs: in this process for one worker, else in a pool of ``jobs``
     processes; ``progress(done, total)`` after every chunk. A crashed worker's files come
     back as transient failures."""
-    results: list[FileDone] = []
+    results: list[FileOutcome] = []
     if not todo:
         return results
     workers = min(jobs, len(todo))
@@ -457,32 +456,32 @@ class _Owners:
             self._map = map_files_by_hash(read_map(path)) if path.exists() else {}
         return self._map
 
-    def check(self, done: FileDone, runs: Mapping[str, Mapping[str, Any]]
+    def check(self, done: FileOutcome, runs: Mapping[str, Mapping[str, Any]]
               ) -> tuple[SameContent | None, str | None]:
         """The same content seen before under another name (or ``None``), and a note when
         the other name is a file that left the folder with this content (a rename)."""
-        sha = done.sha256 or ""
-        if sha in self.first and self.first[sha][0] != done.file:
+        sha = done.file_hash or ""
+        if sha in self.first and self.first[sha][0] != done.name:
             other, old = self.first[sha]
-            return compare_labels(done.file, other, runs, old), None
-        name = Path(done.file).name
+            return compare_labels(done.name, other, runs, old), None
+        name = Path(done.name).name
         for source, old in sorted(self._in_map().get(sha, {}).items()):
             if source == name:
                 continue
             gone = self.renamed_from.get(source)
             if gone is not None and self.vanished_sha.get(gone) == sha:
-                return None, (f"{done.file}: same content as {gone}, which left the folder: "
+                return None, (f"{done.name}: same content as {gone}, which left the folder: "
                               "taken as renamed")
-            return compare_labels(done.file, source, runs, old), None
+            return compare_labels(done.name, source, runs, old), None
         return None, None
 
-    def landed(self, done: FileDone, runs: dict[str, dict[str, Any]]) -> None:
+    def landed(self, done: FileOutcome, runs: dict[str, dict[str, Any]]) -> None:
         """Record that ``done``'s runs landed: later files with its content are duplicates."""
-        if done.sha256 and runs:
-            self.first.setdefault(done.sha256, (done.file, runs))
+        if done.file_hash and runs:
+            self.first.setdefault(done.file_hash, (done.name, runs))
 
 
-def _apply(campaign: Campaign, results: Sequence[FileDone], by_file: Mapping[str, CampaignRow],
+def _apply(campaign: Campaign, results: Sequence[FileOutcome], by_file: Mapping[str, CampaignRow],
            entries: dict[str, Any], failures: dict[str, str], notes: list[str],
            vanished: Mapping[str, Any]) -> _Landing:
     """Fold the workers' results into the state ``entries`` and ``failures`` (in file
@@ -495,22 +494,21 @@ def _apply(campaign: Campaign, results: Sequence[FileDone], by_file: Mapping[str
     outcomes: dict[str, str] = {}
     runs_failed = 0
     config_hash = campaign.settings.config_hash  # hashes the settings: once, not per run
-    owners = _Owners(campaign, by_file, {r.file for r in results}, vanished)
-    for done in sorted(results, key=lambda r: r.file):
-        row = by_file[done.file]
+    owners = _Owners(campaign, by_file, {r.name for r in results}, vanished)
+    for done in sorted(results, key=lambda r: r.name):
+        row = by_file[done.name]
         old = entries.get(row.file) or {}
         if done.transient:
             # not the file's fault: listed now, retried next time (the state is left as is)
             outcomes[row.file] = FAILED
-            for failed in [done.error, *done.runs]:
-                if isinstance(failed, FailedRun):
-                    failures[failed.name or failed.file] = failed.reason
+            for failed in done.failed:
+                failures[failed.name] = failed.reason
             continue
         old_ids |= _run_ids(old)
         base = {
             "size": row.size, "mtime_ns": row.mtime_ns, "config_hash": config_hash,
             "recipe": recipe_hash(campaign, row.merged, row.test_rows),
-            "sha256": done.sha256 or row.sha256 or _sha256_or_none(row.path),
+            "sha256": done.file_hash or row.sha256 or _sha256_or_none(row.path),
             "tests": list(done.tests),
         }
         if done.error is not None:
@@ -519,13 +517,14 @@ def _apply(campaign: Campaign, results: Sequence[FileDone], by_file: Mapping[str
             entries[row.file] = {**base, "status": FAILED, "reason": done.error.reason,
                                  "runs": []}
             continue
-        mine = {r.entry.measurement_id: labels_of(r.record) for r in done.reduced}
+        entry = {r.measurement_id: RunEntry.of(r, campaign.output_dir) for r in done.reduced}
+        mine = {r.measurement_id: labels_of(r.record) for r in done.reduced}
         same, note = owners.check(done, mine) if mine else (None, None)
         if note:
             notes.append(note)
         if same is not None:
             _drop_outputs(campaign, done, entries)
-            runs = [{"status": DUPLICATE, **{**r.entry.as_dict(), "trace": ""}}
+            runs = [{"status": DUPLICATE, **{**entry[r.measurement_id].as_dict(), "trace": ""}}
                     for r in done.reduced]
             if same.conflict:
                 outcomes[row.file] = CONFLICT
@@ -543,17 +542,17 @@ def _apply(campaign: Campaign, results: Sequence[FileDone], by_file: Mapping[str
         runs_state: list[dict[str, Any]] = []
         for run in done.runs:
             if isinstance(run, ReducedRun):
+                assert run.record is not None  # labels_from always names pin and disc
                 reduced.append(run.name)
                 records.append(run.record)
-                if run.record.get("flags"):
-                    flagged.append((run.name, run.record["flags"]))
-                if run.plot_note and run.plot_note not in notes:
-                    notes.append(run.plot_note)
-                runs_state.append({"status": REDUCED, **run.entry.as_dict()})
+                if run.flags:
+                    flagged.append((run.name, ";".join(run.flags)))
+                notes += [n for n in run.notes if n not in notes]
+                runs_state.append({"status": REDUCED, **entry[run.measurement_id].as_dict()})
             else:
-                failures[run.name or run.file] = run.reason
+                failures[run.name] = run.reason
                 runs_failed += 1
-                runs_state.append(run.as_state())
+                runs_state.append(failed_run_state(run))
         entries[row.file] = {**base, "status": REDUCED, "runs": runs_state}
     alive = set().union(*(_run_ids(e) for e in entries.values())) if entries else set()
     return _Landing(records=records, stale_ids=old_ids - alive, reduced=reduced,
@@ -561,7 +560,7 @@ def _apply(campaign: Campaign, results: Sequence[FileDone], by_file: Mapping[str
                     runs_failed=runs_failed)
 
 
-def _drop_outputs(campaign: Campaign, done: FileDone, entries: Mapping[str, Any]) -> None:
+def _drop_outputs(campaign: Campaign, done: FileOutcome, entries: Mapping[str, Any]) -> None:
     """Remove the traces and plots a worker wrote for runs that do not land (their file
     is a duplicate or a conflict), unless a landed run has the same file (a file of the
     same name and content in another subfolder)."""
@@ -569,10 +568,11 @@ def _drop_outputs(campaign: Campaign, done: FileDone, entries: Mapping[str, Any]
     kept = {r.get("trace") for e in entries.values() for r in e.get("runs") or []
             if r.get("status") == REDUCED}
     for run in done.reduced:
-        if run.entry.trace in kept:
+        mid = run.measurement_id
+        if run.trace is not None and run.trace.relative_to(
+                campaign.output_dir).as_posix() in kept:
             continue
-        mid = run.entry.measurement_id
-        for path in (layout.trace_path(done.file, mid), layout.trace_plot_path(done.file, mid)):
+        for path in (layout.trace_path(done.name, mid), layout.trace_plot_path(done.name, mid)):
             try:
                 path.unlink(missing_ok=True)
             except OSError:

@@ -37,7 +37,8 @@ from ..escape import display_path
 from ..files import file_sha256, regular_file, write_text_atomic
 from ..labels import RunLabels
 from ..layout import FAILURES_CSV, RUNS_CSV
-from ..numeric import finite_json
+from ..numeric import finite_json, finite_or_none
+from ..pipeline import FailedRun, ReducedRun
 from ..readers import EXPORT_SUFFIXES
 from .metadata import Manifest, ManifestRow, labels_from, merge_metadata, read_manifest
 from .patterns import LABEL_FIELDS, match_pattern
@@ -80,6 +81,41 @@ class RunEntry:
     def as_dict(self) -> dict[str, Any]:
         """The entry's fields as the state's JSON keys."""
         return asdict(self)
+
+    @classmethod
+    def of(cls, run: ReducedRun, output_dir: Path) -> RunEntry:
+        """What the state keeps of a run reduced now (its trace relative to
+        ``output_dir``)."""
+        record, summary, place = run.record or {}, run.summary, run.place
+        return cls(
+            labels=asdict(run.labels),
+            measurement_id=run.measurement_id,
+            trace="" if run.trace is None else run.trace.relative_to(output_dir).as_posix(),
+            mu_s=summary["mu_s"],
+            mu_k=summary["mu_k"],
+            pressure_kPa=finite_or_none(record.get("pressure_kPa")),
+            pressure_measured_kPa=summary["pressure_kPa"],
+            normal_force_measured_N=summary["normal_force_N"],
+            temperature_measured_C=summary["temperature_C"],
+            flags=";".join(run.flags),
+            name=run.name,
+            test=place.test,
+            result=place.result,
+            interval=place.interval,
+            occurrence=place.occurrence,
+        )
+
+
+def failed_run_state(run: FailedRun) -> dict[str, Any]:
+    """What the state keeps of a run that failed (``status`` failed, its reason)."""
+    place = run.place
+    out: dict[str, Any] = {
+        "status": FAILED, "name": run.name, "test": place.test if place else None,
+        "result": place.result if place else None,
+        "interval": place.interval if place else None, "reason": run.reason}
+    if run.undescribed:
+        out["undescribed"] = True
+    return out
 
 
 #: the keys of a state run entry that come from a :class:`RunEntry`

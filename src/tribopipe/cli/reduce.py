@@ -4,10 +4,15 @@ from __future__ import annotations
 
 import json
 import sys
+from typing import TYPE_CHECKING
 
 import click
 
 from ._common import config_option, friendly_errors, map_option, read_options
+
+if TYPE_CHECKING:
+    from ..labels import RunLabels
+    from ..pipeline import FileOutcome, ReducedRun
 
 
 def _fmt(value: object, spec: str) -> str:
@@ -95,12 +100,11 @@ def reduce_cmd(
         ReadOptions(encoding=encoding, delimiter=delimiter, decimal=decimal),
         out_dir=out_dir, plots=plot, on_file=_echo_file,
     )
-    outcomes = [o for r in results for o in r.outcomes]
-    _print(outcomes, as_json)
+    _print(results, as_json)
     _note_alike(results, labels)
-    refused = _store(outcomes, map_path, no_map, replace, labels)
+    refused = _store(results, map_path, no_map, replace, labels)
     failed = [r for r in results if not r.ok]
-    errors = sum(len(r.errors) for r in failed)
+    errors = sum(len(r.failed) for r in failed)
     if failed or refused:
         parts = []
         if failed:
@@ -111,34 +115,41 @@ def reduce_cmd(
         sys.exit(1)
 
 
-def _echo_file(result: object) -> None:
+def _echo_file(result: FileOutcome) -> None:
     """One file done: its plots, or its errors, on stderr as it happens (names from the
     outside as one printable line each)."""
     from ..escape import display_path, printable
 
-    for error in result.errors:
-        click.echo(f"error: {printable(error)}", err=True)
+    for failed in result.failed:
+        click.echo(f"error: {printable(failed.reason)}", err=True)
     if result.duplicate_of is not None:
         click.echo(f"duplicate: {display_path(result.path)}: same content as "
                    f"{display_path(result.duplicate_of)}: its runs are reduced once", err=True)
-    for run in result.runs:
+    for run in result.reduced:
         if run.plot is not None:
             click.echo(f"plot: {display_path(run.plot)}", err=True)
+        for note in run.notes:
+            click.echo(f"warning: {printable(note)}", err=True)
 
 
-def _run_labels(outcomes: list) -> dict[int, str]:
+def _reduced(results: list[FileOutcome]) -> list[tuple[FileOutcome, ReducedRun]]:
+    """Every run reduced, with its file, in order."""
+    return [(f, r) for f in results for r in f.reduced]
+
+
+def _run_labels(runs: list[tuple[FileOutcome, ReducedRun]]) -> dict[int, str]:
     """The run column: test and interval (the result too where a test has several) for
     the runs of files that hold several; empty for one-run files."""
-    results_per_test: dict[tuple[str, object], set] = {}
-    for o in outcomes:
-        results_per_test.setdefault((o.path, o.place.test), set()).add(o.place.result)
+    results_per_test: dict[tuple[str, object], set[str | None]] = {}
+    for f, o in runs:
+        results_per_test.setdefault((f.path, o.place.test), set()).add(o.place.result)
     shown: dict[int, str] = {}
-    for k, o in enumerate(outcomes):
-        if not o.several:
+    for k, (f, o) in enumerate(runs):
+        if not f.several:
             continue
         place = o.place
         parts = [p for p in (place.test,) if p]
-        if len(results_per_test[(o.path, place.test)]) > 1 and place.result:
+        if len(results_per_test[(f.path, place.test)]) > 1 and place.result:
             parts.append(place.result)
         if place.interval is not None:
             parts.append(f"interval {place.interval}")
@@ -147,17 +158,17 @@ def _run_labels(outcomes: list) -> dict[int, str]:
     return shown
 
 
-def _print(outcomes: list, as_json: bool) -> None:
+def _print(results: list[FileOutcome], as_json: bool) -> None:
     from ..escape import printable
-    from ..pipeline import run_summary
 
-    summaries = [run_summary(o) for o in outcomes]
+    reduced = _reduced(results)
+    summaries = [r.summary for _, r in reduced]
     if as_json:
         click.echo(json.dumps(summaries, indent=2, default=str, allow_nan=False))
         return
     if not summaries:
         return
-    runs = _run_labels(outcomes)
+    runs = _run_labels(reduced)
     run_width = max((len(v) for v in runs.values()), default=0)
     run_head = f" {'run':<{run_width}}" if runs else ""
     header = (f"{'file':<40}{run_head} {'mu_s':>6} {'±U95':>6} {'mu_k':>6} {'±U95':>6} "
@@ -174,7 +185,7 @@ def _print(outcomes: list, as_json: bool) -> None:
         ))
 
 
-def _note_alike(results: list, labels: object) -> None:
+def _note_alike(results: list[FileOutcome], labels: RunLabels) -> None:
     """Say so when the options label several tests of one file alike."""
     from ..escape import display_path
 
@@ -183,23 +194,25 @@ def _note_alike(results: list, labels: object) -> None:
     if not given:
         return
     for r in results:
-        if len(r.tests) > 1 and len(r.outcomes) > 1:
+        if len(r.tests) > 1 and len(r.reduced) > 1:
             click.echo(f"note: {display_path(r.path)} holds {len(r.tests)} tests: "
                        "--pin/--disc/--force/"
                        "--temperature/--repeat label each of its runs alike "
                        "(a campaign can label them per test: manifest 'test' column, "
                        "--test-pattern)", err=True)
-        elif len(r.outcomes) > 1 and labels.normal_force_N is not None:
-            click.echo(f"note: {r.path} holds {len(r.outcomes)} friction intervals (force or "
+        elif len(r.reduced) > 1 and labels.normal_force_N is not None:
+            click.echo(f"note: {display_path(r.path)} holds {len(r.reduced)} friction "
+                       "intervals (force or "
                        "speed steps): --force labels each alike (leave it out to take each "
                        "step's nominal force from its measured force, flagged "
                        "nominal_force_estimated; a campaign manifest's 'interval' column "
                        "labels each step)", err=True)
 
 
-def _store(outcomes: list, map_path: str, no_map: bool, replace: bool, labels: object) -> int:
+def _store(results: list[FileOutcome], map_path: str, no_map: bool, replace: bool,
+           labels: RunLabels) -> int:
     """Append the runs to the map; returns the number of files refused as a conflict."""
-    if no_map or not outcomes:
+    if no_map or not _reduced(results):
         return 0
     if not labels.complete:
         click.echo(
@@ -211,7 +224,7 @@ def _store(outcomes: list, map_path: str, no_map: bool, replace: bool, labels: o
     from ..escape import display_path, printable
     from ..pipeline import store_runs
 
-    report = store_runs(map_path, outcomes, replace=replace)
+    report = store_runs(map_path, results, replace=replace)
     refused = 0
     for same in report.same:
         if same.conflict and not replace:

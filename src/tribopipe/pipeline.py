@@ -7,17 +7,16 @@ speed steps one run per step. This is the orchestration used by ``tribopipe redu
 by campaigns; readers and writers stay at the edges, :mod:`tribopipe.reduce` does the
 physics.
 
-:func:`read_runs` reads an export and cuts it into its runs (:class:`ExportRuns`: each
-run's :class:`RunPlace` and friction interval, and each test/result that holds no
-friction interval with the reason); :func:`reduce_run` reduces one of them to a
-:class:`RunOutcome` with its map record; :func:`reduce_export` does both for a whole
-file, a failing test or run standing alone. Per run, ``tribopipe reduce`` and the batch
-workers then write what the output folder holds for it at the paths of
-:mod:`tribopipe.layout`: :func:`write_trace`, :func:`write_summary` (``tribopipe reduce``
-only) and :func:`plot_run`. :func:`reduce_files` is the whole ``tribopipe reduce`` over
-several files: each file alone, a failing file or run reported in one line and skipped,
-a file whose content an earlier one already had reported as its duplicate;
-:func:`same_content` tells the batch and :func:`store_runs` the map about such files.
+:func:`reduce_export` is the one route from an export to its runs, for ``tribopipe
+reduce`` (:func:`reduce_files`) and the batch workers alike: it reads the export once
+(:func:`read_runs`: each run's :class:`RunPlace` and friction interval, and each
+test/result that holds none with the reason), labels each run, reduces it
+(:func:`reduce_run`: the in-memory :class:`RunOutcome`, its QC flags decided once by
+:func:`tribopipe.labels.decide_run`), writes its outputs at the paths of
+:mod:`tribopipe.layout` (:func:`write_trace`, :func:`write_summary`, :func:`plot_run`) and
+returns one :class:`FileOutcome`: a :class:`ReducedRun` or :class:`FailedRun` per run,
+each failure with its one-line reason, or the file's error. :func:`store_runs` checks
+the reduced files against the map and appends them, under the map's lock.
 """
 
 from __future__ import annotations
@@ -33,13 +32,13 @@ from .escape import display_path, printable
 from .figures import TraceConditions, plot_trace
 from .files import file_sha256, os_reason, write_text_atomic
 from .frictionmap.duplicates import (
+    ContentOwners,
     SameContent,
-    compare_labels,
     labels_of,
     map_files_by_hash,
 )
 from .frictionmap.records import make_record, measurement_id
-from .frictionmap.store import AppendReport, append_records, read_map
+from .frictionmap.store import AppendReport, update_map_with
 from .intervals import friction_intervals
 from .labels import RunLabels, RunVerdict, Tolerances, Undescribed, decide_run
 from .layout import OutputLayout
@@ -668,28 +667,28 @@ class StoreReport:
 
 def store_runs(map_path: str | Path, files: Sequence[FileOutcome], *,
                replace: bool = False) -> StoreReport:
-    """Append the records of the runs reduced in ``files`` to the map
-    (:func:`append_records`), after checking each file against the map: a file whose runs
-    the map already holds under another file name is a duplicate (its records are left
-    out, the map keeps the first name) or, where the labels differ, a conflict (refused,
-    unless ``replace``)."""
-    by_hash = map_files_by_hash(read_map(map_path)) if Path(map_path).exists() else {}
+    """Append the records of the runs reduced in ``files`` to the map, after checking each
+    file against the map under its lock (:class:`ContentOwners`, the batch's check too):
+    a file whose runs the map already holds under another file name is a duplicate (its
+    records are left out, the map keeps the first name) or, where the labels differ, a
+    conflict (refused, unless ``replace``)."""
     same: list[SameContent] = []
-    keep: list[dict[str, Any]] = []
-    for f in files:
-        records = [r.record for r in f.reduced if r.record is not None]
-        if not records:
-            continue
-        name = Path(f.path).name
-        others = {src: ids for src, ids in by_hash.get(f.file_hash or "", {}).items()
-                  if src != name}
-        found = None
-        if others:
-            other, old = sorted(others.items())[0]
-            new = {str(r["measurement_id"]): labels_of(r) for r in records}
-            found = compare_labels(f.path, other, new, old)
-            same.append(found)
-        if found is None or (found.conflict and replace):
-            keep += records
-    return StoreReport(appended=append_records(map_path, keep, replace=replace),
-                       same=tuple(same))
+
+    def decide(current: Any) -> tuple[list[dict[str, Any]], tuple[str, ...]]:
+        owners = ContentOwners(map_files_by_hash(current))
+        keep: list[dict[str, Any]] = []
+        for f in files:
+            records = [r.record for r in f.reduced if r.record is not None]
+            if not records:
+                continue
+            runs = {str(r["measurement_id"]): labels_of(r) for r in records}
+            found, _ = owners.check(f.path, f.file_hash, runs)
+            if found is not None:
+                same.append(found)
+            if found is None or (found.conflict and replace):
+                keep += records
+                owners.landed(f.path, f.file_hash, runs)
+        return keep, ()
+
+    appended = update_map_with(map_path, decide, replace=replace)
+    return StoreReport(appended=appended, same=tuple(same))

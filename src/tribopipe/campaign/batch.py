@@ -21,14 +21,8 @@ from typing import Any
 
 from ..errors import CampaignError, OutputError, TribopipeError
 from ..files import file_sha256, os_reason
-from ..frictionmap.duplicates import (
-    FilesByHash,
-    SameContent,
-    compare_labels,
-    labels_of,
-    map_files_by_hash,
-)
-from ..frictionmap.store import read_map, update_map
+from ..frictionmap.duplicates import ContentOwners, FilesByHash, labels_of, map_files_by_hash
+from ..frictionmap.store import read_map, update_map_with
 from ..pipeline import FileOutcome, ReducedRun
 from .metadata import Manifest, read_manifest
 from .outputs import _write_failures_csv, _write_runs_csv
@@ -263,14 +257,10 @@ def _run_locked(campaign: Campaign, *, jobs: int | None, plots: bool | None,
     by_file = {row.file: row for row in rows}
     vanished = {f: e for f, e in entries.items() if f not in by_file}
     failures = plan.failures
-    landing = _apply(campaign, results, by_file, entries, failures, notes, vanished)
+    map_summary, landed, removed, landing = _land(
+        campaign, results, lambda in_map: _apply(campaign, results, by_file, entries, failures,
+                                                 notes, vanished, in_map), entries)
     _forget_vanished(campaign, entries, set(by_file), notes)
-
-    map_summary = "unchanged"
-    removed: set[str] = set()
-    landed: set[str] = set()
-    if landing.records or landing.stale_ids:
-        map_summary, landed, removed = _update_map(campaign, landing.records, landing.stale_ids)
     groups = _groups_updated(state, landing.records, landed, removed)
 
     duplicates = {**plan.duplicates, **landing.duplicates}
@@ -429,63 +419,31 @@ class _Landing:
     runs_failed: int
 
 
-class _Owners:
-    """Which file brought each content (SHA-256) to the map, and its runs' labels: the
-    files that landed runs, in the state and in this batch; then the map's own rows."""
-
-    def __init__(self, campaign: Campaign, by_file: Mapping[str, CampaignRow],
-                 redone: set[str], vanished: Mapping[str, Any]) -> None:
-        self.campaign = campaign
-        self.first: dict[str, tuple[str, dict[str, dict[str, Any]]]] = {}
-        for file, row in by_file.items():
-            entry = row.previous or {}
-            if file in redone or entry.get("status") != REDUCED or not row.sha256:
-                continue
-            runs = {str(r["measurement_id"]): labels_of(r.get("labels"))
-                    for r in entry.get("runs") or [] if r.get("status") == REDUCED}
-            if runs:
-                self.first.setdefault(row.sha256, (file, runs))
-        self.renamed_from = {Path(f).name: f for f, e in vanished.items()
-                             if e.get("status") == REDUCED}
-        self.vanished_sha = {f: e.get("sha256") for f, e in vanished.items()}
-        self._map: FilesByHash | None = None
-
-    def _in_map(self) -> FilesByHash:
-        if self._map is None:
-            path = self.campaign.map_path
-            self._map = map_files_by_hash(read_map(path)) if path.exists() else {}
-        return self._map
-
-    def check(self, done: FileOutcome, runs: Mapping[str, Mapping[str, Any]]
-              ) -> tuple[SameContent | None, str | None]:
-        """The same content seen before under another name (or ``None``), and a note when
-        the other name is a file that left the folder with this content (a rename)."""
-        sha = done.file_hash or ""
-        if sha in self.first and self.first[sha][0] != done.name:
-            other, old = self.first[sha]
-            return compare_labels(done.name, other, runs, old), None
-        name = Path(done.name).name
-        for source, old in sorted(self._in_map().get(sha, {}).items()):
-            if source == name:
-                continue
-            gone = self.renamed_from.get(source)
-            if gone is not None and self.vanished_sha.get(gone) == sha:
-                return None, (f"{done.name}: same content as {gone}, which left the folder: "
-                              "taken as renamed")
-            return compare_labels(done.name, source, runs, old), None
-        return None, None
-
-    def landed(self, done: FileOutcome, runs: dict[str, dict[str, Any]]) -> None:
-        """Record that ``done``'s runs landed: later files with its content are duplicates."""
-        if done.file_hash and runs:
-            self.first.setdefault(done.file_hash, (done.name, runs))
+def _owners(by_file: Mapping[str, CampaignRow], redone: set[str],
+            vanished: Mapping[str, Any], in_map: FilesByHash) -> ContentOwners:
+    """The one duplicate check (:class:`ContentOwners`) for a batch: the contents the
+    files of the state brought (those not redone now), then the map's own rows; a file
+    that left the folder with a content the map holds is the one renamed."""
+    known: dict[str, tuple[str, dict[str, dict[str, Any]]]] = {}
+    for file, row in by_file.items():
+        entry = row.previous or {}
+        if file in redone or entry.get("status") != REDUCED or not row.sha256:
+            continue
+        runs = {str(r["measurement_id"]): labels_of(r.get("labels"))
+                for r in entry.get("runs") or [] if r.get("status") == REDUCED}
+        if runs:
+            known.setdefault(row.sha256, (file, runs))
+    renamed = {Path(f).name: (f, e.get("sha256")) for f, e in vanished.items()
+               if e.get("status") == REDUCED}
+    return ContentOwners(in_map, known, renamed)
 
 
 def _apply(campaign: Campaign, results: Sequence[FileOutcome], by_file: Mapping[str, CampaignRow],
            entries: dict[str, Any], failures: dict[str, str], notes: list[str],
-           vanished: Mapping[str, Any]) -> _Landing:
+           vanished: Mapping[str, Any], in_map: FilesByHash) -> _Landing:
     """Fold the workers' results into the state ``entries`` and ``failures`` (in file
-    order, both updated in place; plot and rename notes added to ``notes``)."""
+    order, both updated in place; plot and rename notes added to ``notes``), each file
+    checked against the files before it and the map (``in_map``, read under its lock)."""
     records: list[dict[str, Any]] = []
     old_ids: set[str] = set()
     reduced: list[str] = []
@@ -494,7 +452,7 @@ def _apply(campaign: Campaign, results: Sequence[FileOutcome], by_file: Mapping[
     outcomes: dict[str, str] = {}
     runs_failed = 0
     config_hash = campaign.settings.config_hash  # hashes the settings: once, not per run
-    owners = _Owners(campaign, by_file, {r.name for r in results}, vanished)
+    owners = _owners(by_file, {r.name for r in results}, vanished, in_map)
     for done in sorted(results, key=lambda r: r.name):
         row = by_file[done.name]
         old = entries.get(row.file) or {}
@@ -519,7 +477,7 @@ def _apply(campaign: Campaign, results: Sequence[FileOutcome], by_file: Mapping[
             continue
         entry = {r.measurement_id: RunEntry.of(r, campaign.output_dir) for r in done.reduced}
         mine = {r.measurement_id: labels_of(r.record) for r in done.reduced}
-        same, note = owners.check(done, mine) if mine else (None, None)
+        same, note = owners.check(done.name, done.file_hash, mine) if mine else (None, None)
         if note:
             notes.append(note)
         if same is not None:
@@ -537,7 +495,7 @@ def _apply(campaign: Campaign, results: Sequence[FileOutcome], by_file: Mapping[
                 entries[row.file] = {**base, "status": DUPLICATE, "reason": same.message(),
                                      "duplicate_of": same.other, "runs": runs}
             continue
-        owners.landed(done, mine)
+        owners.landed(done.name, done.file_hash, mine)
         outcomes[row.file] = READ
         runs_state: list[dict[str, Any]] = []
         for run in done.runs:
@@ -684,15 +642,29 @@ def _ids_missing_from_map(campaign: Campaign, state: Mapping[str, Any]) -> tuple
     return ids - present, True
 
 
-def _update_map(campaign: Campaign, records: list[dict[str, Any]],
-                stale_ids: set[str]) -> tuple[str, set[str], set[str]]:
-    """Fold the new records into the map and drop the rows of runs whose raw file changed
-    (their measurement id changed with the content), under the map's lock, in one atomic
-    write. Returns the map's summary line, the ids added or replaced, and the ids removed.
-    """
-    report = update_map(campaign.map_path, records, replace=True, drop_ids=sorted(stale_ids))
+def _land(campaign: Campaign, results: Sequence[FileOutcome],
+          apply: Callable[[FilesByHash], _Landing], entries: Mapping[str, Any]
+          ) -> tuple[str, set[str], set[str], _Landing]:
+    """Check the results against the map and fold them in, under the map's lock, in one
+    atomic write (new records added or replaced, rows of runs whose raw file changed
+    dropped); the map is locked and read only when a result brings or replaces runs.
+    Returns the map's summary line, the ids added or replaced, the ids removed and what
+    ``apply`` made of the results."""
+    touches = any(r.reduced for r in results) or any(
+        _run_ids(entries.get(r.name) or {}) for r in results)
+    if not touches:
+        return "unchanged", set(), set(), apply({})
+    landing: list[_Landing] = []
+
+    def decide(current: Any) -> tuple[list[dict[str, Any]], set[str]]:
+        landing.append(apply(map_files_by_hash(current)))
+        return landing[0].records, landing[0].stale_ids
+
+    report = update_map_with(campaign.map_path, decide, replace=True)
+    if not (landing[0].records or landing[0].stale_ids):
+        return "unchanged", set(), set(), landing[0]
     return (report.summary(), set(report.added_ids) | set(report.replaced_ids),
-            set(report.dropped_ids))
+            set(report.dropped_ids), landing[0])
 
 
 def _group_key(row: Mapping[str, Any]) -> tuple[Any, ...]:

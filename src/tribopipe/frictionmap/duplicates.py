@@ -14,6 +14,7 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass
+from pathlib import PurePath
 from typing import Any
 
 #: the columns that say what a run is (its condition group and repeat)
@@ -112,3 +113,48 @@ def map_files_by_hash(runs: Any) -> FilesByHash:
         labels = {c: _value(c, v) for c, v in zip(LABEL_COLUMNS, values, strict=True)}
         out.setdefault(sha, {}).setdefault(source, {})[str(mid)] = labels
     return out
+
+
+class ContentOwners:
+    """Which file brought each content (SHA-256) to the map, and its runs' labels: the
+    one duplicate and conflict check of ``tribopipe reduce`` and the batch, made from the
+    map as read under its lock (:func:`tribopipe.frictionmap.store.update_map_with`).
+
+    ``in_map``: :func:`map_files_by_hash` of that map; ``known``: contents already owned
+    before the map is asked (a campaign's state: ``{sha: (file, {id: labels})}``);
+    ``renamed``: map source names of files that left the folder, with the file and its
+    content (``{name: (file, sha)}``): the same content under a new name is that file
+    renamed, not a duplicate.
+    """
+
+    def __init__(self, in_map: FilesByHash,
+                 known: Mapping[str, tuple[str, dict[str, dict[str, Any]]]] | None = None,
+                 renamed: Mapping[str, tuple[str, str | None]] | None = None) -> None:
+        self.in_map = in_map
+        self.first: dict[str, tuple[str, dict[str, dict[str, Any]]]] = dict(known or {})
+        self.renamed = dict(renamed or {})
+
+    def check(self, file: str, sha: str | None, runs: Mapping[str, Mapping[str, Any]]
+              ) -> tuple[SameContent | None, str | None]:
+        """The same content (``sha``) seen before under another name than ``file`` (or
+        ``None``), and a note when the other name is a file that left the folder with this
+        content (taken as renamed). ``runs``: the file's runs, measurement id → labels."""
+        sha = sha or ""
+        if sha in self.first and self.first[sha][0] != file:
+            other, old = self.first[sha]
+            return compare_labels(file, other, runs, old), None
+        name = PurePath(file).name
+        for source, old in sorted(self.in_map.get(sha, {}).items()):
+            if source == name:
+                continue
+            gone = self.renamed.get(source)
+            if gone is not None and gone[1] == sha:
+                return None, (f"{file}: same content as {gone[0]}, which left the folder: "
+                              "taken as renamed")
+            return compare_labels(file, source, runs, old), None
+        return None, None
+
+    def landed(self, file: str, sha: str | None, runs: Mapping[str, Mapping[str, Any]]) -> None:
+        """Record that ``file``'s runs land: later files with its content are duplicates."""
+        if sha and runs:
+            self.first.setdefault(sha, (file, {k: dict(v) for k, v in runs.items()}))

@@ -3,9 +3,8 @@
 An export holds one run per friction interval of every test and result
 (:func:`tribopipe.intervals.friction_intervals`): a single test with a set-up and a
 friction interval gives one run, a session export one run per test, a test with force or
-speed steps one run per step. This is the orchestration used by ``tribopipe reduce`` and
-by campaigns; readers and writers stay at the edges, :mod:`tribopipe.reduce` does the
-physics.
+speed steps one run per step. Readers and writers stay at the edges,
+:mod:`tribopipe.reduce` does the physics.
 
 :func:`reduce_export` is the one route from an export to its runs, for ``tribopipe
 reduce`` (:func:`reduce_files`) and the batch workers alike: it reads the export once
@@ -36,6 +35,7 @@ from .frictionmap.duplicates import (
     SameContent,
     labels_of,
     map_files_by_hash,
+    repeat_clashes,
 )
 from .frictionmap.records import make_record, measurement_id
 from .frictionmap.store import AppendReport, update_map_with
@@ -599,8 +599,10 @@ def reduce_export(
                                  tolerances=tolerances)
             runs.append(_reduced(outcome, run, outputs))
         except (TribopipeError, OSError) as exc:
+            # an output that could not be written is not the export's fault: tried again
             runs.append(FailedRun(name=run, place=place,
                                   reason=failure_reason(exc, path, shown, run),
+                                  transient=isinstance(exc, OutputError),
                                   undescribed=isinstance(exc, Undescribed)))
     return FileOutcome(path=str(path), name=shown, file_hash=export.file_hash,
                        tests=export.tests, several=export.several, runs=tuple(runs))
@@ -653,11 +655,13 @@ def reduce_files(
 
 @dataclass(frozen=True)
 class StoreReport:
-    """What :func:`store_runs` did: the map's :class:`AppendReport` and the runs of files
-    the map already held under another name (duplicates left out, conflicts refused)."""
+    """What :func:`store_runs` did: the map's :class:`AppendReport`, the runs of files
+    the map already held under another name (duplicates left out, conflicts refused) and
+    the repeat numbers now used twice in one condition (:func:`repeat_clashes`)."""
 
     appended: AppendReport
     same: tuple[SameContent, ...] = ()
+    repeats: tuple[str, ...] = ()
 
     @property
     def conflicts(self) -> tuple[SameContent, ...]:
@@ -673,6 +677,7 @@ def store_runs(map_path: str | Path, files: Sequence[FileOutcome], *,
     records are left out, the map keeps the first name) or, where the labels differ, a
     conflict (refused, unless ``replace``)."""
     same: list[SameContent] = []
+    repeats: list[str] = []
 
     def decide(current: Any) -> tuple[list[dict[str, Any]], tuple[str, ...]]:
         owners = ContentOwners(map_files_by_hash(current))
@@ -688,7 +693,8 @@ def store_runs(map_path: str | Path, files: Sequence[FileOutcome], *,
             if found is None or (found.conflict and replace):
                 keep += records
                 owners.landed(f.path, f.file_hash, runs)
+        repeats.extend(repeat_clashes(current, keep))
         return keep, ()
 
     appended = update_map_with(map_path, decide, replace=replace)
-    return StoreReport(appended=appended, same=tuple(same))
+    return StoreReport(appended=appended, same=tuple(same), repeats=tuple(repeats))

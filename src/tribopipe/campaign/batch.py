@@ -21,7 +21,13 @@ from typing import Any
 
 from ..errors import CampaignError, OutputError, TribopipeError
 from ..files import file_sha256, os_reason
-from ..frictionmap.duplicates import ContentOwners, FilesByHash, labels_of, map_files_by_hash
+from ..frictionmap.duplicates import (
+    ContentOwners,
+    FilesByHash,
+    labels_of,
+    map_files_by_hash,
+    repeat_clashes,
+)
 from ..frictionmap.store import read_map, update_map_with
 from ..pipeline import FileOutcome, ReducedRun
 from .metadata import Manifest, read_manifest
@@ -142,12 +148,17 @@ class BatchReport:
     test_tally: Tally = field(default_factory=Tally)
     runs_failed: int = 0
     conflicts: list[tuple[str, str]] = field(default_factory=list)
+    #: repeat numbers used by several runs of one condition, with the runs reduced now
+    repeats: list[str] = field(default_factory=list)
+    #: the batch's own outputs (state, runs.csv, failures.csv) that could not be written
+    output_errors: list[str] = field(default_factory=list)
 
     @property
     def ok(self) -> bool:
-        """True when everything the user named was reduced: no file, test or run failed
-        and every manifest row matched a file (and its test)."""
-        return not self.failures and not self.unmatched
+        """True when everything the user named was reduced and written: no file, test or
+        run failed, every manifest row matched a file (and its test) and every output of
+        the batch was written."""
+        return not self.failures and not self.unmatched and not self.output_errors
 
     def summary(self) -> str:
         """One line whose parts add up: files found (read, duplicate, conflict, failed);
@@ -166,11 +177,13 @@ class BatchReport:
 
     def ledger(self) -> list[str]:
         """The batch's account: :meth:`summary`, then one line per duplicate file, per
-        file refused as a conflict, per manifest row that matched no file or no test, and
-        per test no metadata source described."""
+        file refused as a conflict, per repeat number used twice in one condition, per
+        manifest row that matched no file or no test, and per test no metadata source
+        described."""
         lines = [self.summary()]
         lines += [f"  duplicate: {reason}" for _, reason in self.duplicates]
         lines += [f"  conflict: {reason}" for _, reason in self.conflicts]
+        lines += [f"  warning: {line}" for line in self.repeats]
         lines += [f"  manifest row matching no {what}" for what in self.unmatched]
         lines += [f"  test no metadata source described: {name}" for name in self.undescribed]
         return lines
@@ -206,7 +219,8 @@ def run_campaign(
     ``failures.csv`` (``file,reason``: the file, or the run's name) and the state file;
     appends the new records to ``campaign.map_path`` in one atomic update (replacing the
     rows of changed runs). ``progress(done, total)`` is called as files finish. Failures
-    of single files, tests or runs never raise: they are in the report. Raises
+    of single files, tests or runs never raise: they are in the report, and so are the
+    batch's own outputs that could not be written (``output_errors``). Raises
     :class:`CampaignError` when another batch of the same campaign is running,
     :class:`MapError` when the map path holds a foreign file.
     """
@@ -268,18 +282,16 @@ def _run_locked(campaign: Campaign, *, jobs: int | None, plots: bool | None,
     this_batch = {n: REDUCED for n in landing.reduced} | {n: SKIPPED for n in plan.skipped} | {
         n: FAILED for n in failures
     }
-    # each output is tried even when one fails (a full disk may free up); the first
-    # failure is the batch's one-line error
-    problems: list[OutputError] = []
+    # each output is tried even when one fails (a full disk may free up); those that
+    # fail are in the report, beside every run's outcome
+    problems: list[str] = []
     for write in (lambda: _save_state_with_map(campaign, entries, state),
                   lambda: _write_runs_csv(campaign, rows, entries, this_batch, failures),
                   lambda: _write_failures_csv(campaign, failures)):
         try:
             write()
         except OutputError as exc:
-            problems.append(exc)
-    if problems:
-        raise problems[0]
+            problems.append(str(exc))
     tests_in, unmatched, undescribed = _ledger(rows, entries, manifest)
     runs_failed = plan.runs_failed + landing.runs_failed
     test_tally = tally(outcomes, tests_in)
@@ -305,6 +317,8 @@ def _run_locked(campaign: Campaign, *, jobs: int | None, plots: bool | None,
         test_tally=test_tally,
         runs_failed=runs_failed,
         conflicts=sorted((f, failures[f]) for f, o in outcomes.items() if o == CONFLICT),
+        repeats=landing.repeats,
+        output_errors=problems,
     )
 
 
@@ -417,6 +431,8 @@ class _Landing:
     duplicates: dict[str, str]
     outcomes: dict[str, str]
     runs_failed: int
+    #: repeat numbers used twice in one condition once the records land
+    repeats: list[str] = field(default_factory=list)
 
 
 def _owners(by_file: Mapping[str, CampaignRow], redone: set[str],
@@ -658,7 +674,9 @@ def _land(campaign: Campaign, results: Sequence[FileOutcome],
 
     def decide(current: Any) -> tuple[list[dict[str, Any]], set[str]]:
         landing.append(apply(map_files_by_hash(current)))
-        return landing[0].records, landing[0].stale_ids
+        records, stale = landing[0].records, landing[0].stale_ids
+        landing[0].repeats.extend(repeat_clashes(current, records, stale))
+        return records, stale
 
     report = update_map_with(campaign.map_path, decide, replace=True)
     if not (landing[0].records or landing[0].stale_ids):

@@ -86,23 +86,27 @@ def reduce_cmd(
     appends the runs to the friction map (unless --no-map). A file whose content an
     earlier FILE or the map already holds under another name is a duplicate (stored once)
     or, with other labels, a conflict (refused). Exit code 1 when any file or run could
-    not be reduced, or was refused; the others are still reduced and stored.
+    not be reduced or written, or was refused; the others are still reduced and stored.
     """
     from ..config import load_settings
+    from ..frictionmap.mapfile import read_map
     from ..labels import RunLabels
     from ..pipeline import ReadOptions, reduce_files
 
     labels = RunLabels(
         pin=pin, disc=disc, normal_force_N=force_N, temperature_C=temperature_C, repeat=repeat
     )
+    settings = load_settings(config_path)
+    if not no_map and labels.complete:
+        read_map(map_path)  # refuse a damaged or foreign map before any work
     results = reduce_files(
-        files, load_settings(config_path), labels,
+        files, settings, labels,
         ReadOptions(encoding=encoding, delimiter=delimiter, decimal=decimal),
         out_dir=out_dir, plots=plot, on_file=_echo_file,
     )
     _print(results, as_json)
     _note_alike(results, labels)
-    refused = _store(results, map_path, no_map, replace, labels)
+    refused, _ = _store(results, map_path, no_map, replace, labels)
     failed = [r for r in results if not r.ok]
     errors = sum(len(r.failed) for r in failed)
     if failed or refused:
@@ -210,17 +214,18 @@ def _note_alike(results: list[FileOutcome], labels: RunLabels) -> None:
 
 
 def _store(results: list[FileOutcome], map_path: str, no_map: bool, replace: bool,
-           labels: RunLabels) -> int:
-    """Append the runs to the map; returns the number of files refused as a conflict."""
+           labels: RunLabels) -> tuple[int, int]:
+    """Append the runs to the map; returns the number of files refused as a conflict and
+    of runs that kept the map's conflicting row (no --replace)."""
     if no_map or not _reduced(results):
-        return 0
+        return 0, 0
     if not labels.complete:
         click.echo(
             "note: runs not added to the friction map: pin and disc unknown "
             "(pass --pin and --disc, or --no-map)",
             err=True,
         )
-        return 0
+        return 0, 0
     from ..escape import display_path, printable
     from ..pipeline import store_runs
 
@@ -238,5 +243,7 @@ def _store(results: list[FileOutcome], map_path: str, no_map: bool, replace: boo
                 "(--replace)"), err=True)
         else:
             click.echo(printable(f"duplicate: {same.message()}"), err=True)
+    for line in report.repeats:
+        click.echo(printable(f"warning: {line}"), err=True)
     click.echo(f"map {display_path(map_path)}: {report.appended.summary()}", err=True)
-    return refused
+    return refused, report.appended.kept_conflicting

@@ -6,16 +6,24 @@ force and temperature, repeat) it is a *duplicate*: stored once, under the first
 When the labels differ it is a *conflict*: the two names claim different conditions for
 one measurement, and the second is refused rather than overwrite the first.
 :func:`compare_labels` decides between the two; :func:`map_files_by_hash` tells which
-files a map already holds, by content.
+files a map already holds, by content; :class:`ContentOwners` is the one check both
+``tribopipe reduce`` and the batch make, under the map's lock. :func:`repeat_clashes`
+finds one repeat number used by several runs of one condition.
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Collection, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import PurePath
-from typing import Any
+from typing import TYPE_CHECKING, Any
+
+from ..stats import group_statistics
+from .schema import records_frame
+
+if TYPE_CHECKING:
+    import pandas as pd
 
 #: the columns that say what a run is (its condition group and repeat)
 LABEL_COLUMNS: tuple[str, ...] = ("pin", "disc", "normal_force_N", "temperature_C", "repeat")
@@ -158,3 +166,50 @@ class ContentOwners:
         """Record that ``file``'s runs land: later files with its content are duplicates."""
         if sha and runs:
             self.first.setdefault(sha, (file, {k: dict(v) for k, v in runs.items()}))
+
+
+def repeat_clashes(current: pd.DataFrame, records: Sequence[Mapping[str, Any]],
+                   drop_ids: Collection[str] = ()) -> list[str]:
+    """The repeat numbers that more than one run of one condition group would carry once
+    ``records`` are folded into the map ``current`` (rows ``drop_ids`` gone), where one of
+    ``records`` takes part: one line each, naming the condition, the repeat and the files.
+
+    The condition groups are those of the map's statistics
+    (:func:`tribopipe.stats.group_statistics`: pin, disc, nominal force and temperature,
+    nominal pressure; excluded runs left out). A repeat number is a run's place among the
+    repeats of its condition: two runs with one number are a labelling mistake (or one
+    run under two names), reported, never refused.
+    """
+    import pandas as pd
+
+    new = records_frame(records)
+    new_ids = set(new["measurement_id"].astype(str))
+    if not new_ids or not new["repeat"].notna().any():
+        return []
+    pairs = set(zip(new["pin"], new["disc"], strict=True))
+    old = current.loc[~current["measurement_id"].isin(new_ids | set(drop_ids))]
+    old = old.loc[[(p, d) in pairs for p, d in zip(old["pin"], old["disc"], strict=True)]]
+    runs = pd.concat([old, new], ignore_index=True) if len(old) else new
+    by_id = runs.set_index(runs["measurement_id"].astype(str))
+    lines: list[str] = []
+    for group in group_statistics(runs).to_dict(orient="records"):
+        ids = str(group["run_ids"]).split(";")
+        if not new_ids.intersection(ids):
+            continue
+        by_repeat: dict[int, list[str]] = {}
+        for mid in ids:
+            repeat = _value("repeat", by_id.at[mid, "repeat"])
+            if repeat is not None:
+                by_repeat.setdefault(int(repeat), []).append(mid)
+        for repeat, same in sorted(by_repeat.items()):
+            if len(same) < 2 or not new_ids.intersection(same):
+                continue
+            files = ", ".join(sorted({str(by_id.at[mid, "source_file"]) for mid in same}))
+            temperature = _value("temperature_C", group["temperature_C"])
+            where = f"{group['normal_force_N']:g} N, " + (
+                "temperature unknown" if temperature is None else f"{temperature:g} °C")
+            lines.append(
+                f"repeat {repeat} used by {len(same)} runs of {group['pin']} on "
+                f"{group['disc']}, {where} ({files}): give each run of a condition its own "
+                "repeat number")
+    return lines

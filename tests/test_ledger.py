@@ -2,7 +2,8 @@
 
 A run whose output cannot be written is named with that output; a trace plot that cannot
 be drawn costs neither the run nor the other files; a damaged map is refused before any
-work; a repeat number used twice in one condition is reported.
+work; a relabel the map refuses exits 1 with the way out; a repeat number used twice in
+one condition is reported.
 """
 
 from __future__ import annotations
@@ -150,6 +151,29 @@ def test_reduce_refuses_a_damaged_map_before_any_work(tmp_path: Path) -> None:
     assert done.exit_code == 1 and str(mapfile) in done.output
     assert done.stdout == ""  # no results printed
     assert not out.exists()  # no trace, no summary written
+
+
+# ------------------------------------------------------------------ relabel
+
+
+def test_a_relabel_kept_conflicting_exits_1_with_the_way_out(tmp_path: Path) -> None:
+    mapfile, out = tmp_path / "map.parquet", tmp_path / "out"
+    args = [R1, "--pin", "DS30", "--force", "1", "--temperature", "10", "--repeat", "1",
+            "--out", out, "--map", mapfile]
+    assert _reduce(*args, "--disc", "stel").exit_code == 0
+    again = _reduce(*args, "--disc", "steel")
+    assert again.exit_code == 1
+    assert "--replace" in again.stderr.splitlines()[-1]
+    assert "disc 'stel' in the map, 'steel'" in again.stderr
+    assert list(pd.read_parquet(mapfile)["disc"]) == ["stel"]
+    fixed = _reduce(*args, "--disc", "steel", "--replace")
+    assert fixed.exit_code == 0, fixed.output
+    assert list(pd.read_parquet(mapfile)["disc"]) == ["steel"]
+
+
+def test_reduce_help_says_a_kept_conflict_exits_1() -> None:
+    text = " ".join(CliRunner().invoke(main, ["reduce", "--help"]).output.split())
+    assert "a relabelled run kept the map's row (pass --replace to relabel it)" in text
 
 
 # ------------------------------------------------------------------ repeat numbers

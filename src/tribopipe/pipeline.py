@@ -31,6 +31,7 @@ from .escape import display_path, printable
 from .figures import TraceConditions, plot_trace
 from .files import file_sha256, os_reason, write_text_atomic
 from .frictionmap.duplicates import (
+    LABEL_COLUMNS,
     ContentOwners,
     SameContent,
     labels_of,
@@ -137,14 +138,9 @@ class RunOutcome:
     verdict: RunVerdict | None = None
 
     @property
-    def flags(self) -> tuple[str, ...]:
-        """The run's QC flags as every output shows them (its verdict's; decided with the
-        default tolerances when it was built without one)."""
-        return self.verdict_or_default.flags
-
-    @property
-    def verdict_or_default(self) -> RunVerdict:
-        """Its verdict; decided with the default tolerances when it was built without."""
+    def decided(self) -> RunVerdict:
+        """Its verdict (nominal force and the flags every output shows); decided with the
+        default tolerances when it was built without one."""
         return self.verdict or decide_run(
             self.labels, self.result.flags, finite_or_nan(self.result.normal_force_mean_N),
             finite_or_nan(self.result.temperature_C))
@@ -336,7 +332,7 @@ def run_summary(outcome: RunOutcome) -> dict[str, Any]:
         "pressure_kPa": float(r.pressure_kPa),
         "normal_force_N": float(r.normal_force_mean_N),
         "temperature_C": finite_or_none(r.temperature_C),
-        "flags": list(outcome.flags),
+        "flags": list(outcome.decided.flags),
         "mu_s_distance_mm": float(r.mu_s_distance_mm),
         "mu_s_time_s": float(r.mu_s_time_s),
         "mu_k_window_mm": [float(v) for v in r.mu_k_window_mm],
@@ -375,7 +371,7 @@ def plot_run(out_dir: str | Path | OutputLayout, outcome: RunOutcome) -> Path:
     and return its path."""
     target = OutputLayout.of(out_dir).trace_plot_path(outcome.path, outcome.measurement_id)
     plot_trace(outcome.result, target, conditions=run_conditions(outcome),
-               flags=outcome.flags)
+               flags=outcome.decided.flags)
     return target
 
 
@@ -551,7 +547,7 @@ def _reduced(outcome: RunOutcome, name: str, outputs: RunOutputs | None) -> Redu
             except Exception as exc:  # noqa: BLE001 - a picture must not cost the run its map row
                 notes.append(printable(f"{name}: trace plot {display_path(target)} not drawn "
                                        f"({type(exc).__name__}: {exc})"))
-    return ReducedRun(name=name, place=outcome.place, verdict=outcome.verdict_or_default,
+    return ReducedRun(name=name, place=outcome.place, verdict=outcome.decided,
                       measurement_id=outcome.measurement_id, summary=summary,
                       record=outcome.record, notes=tuple(notes), **paths)
 
@@ -664,9 +660,12 @@ class StoreReport:
     repeats: tuple[str, ...] = ()
 
     @property
-    def conflicts(self) -> tuple[SameContent, ...]:
-        """The refused files (labels differ from the map's)."""
-        return tuple(s for s in self.same if s.conflict)
+    def relabelled(self) -> tuple[str, ...]:
+        """The runs the map kept with other labels than this reduction's (a relabel
+        refused without ``replace``): their measurement ids."""
+        appended = self.appended
+        return tuple(i for i in appended.conflicting_ids
+                     if set(appended.differences.get(i, ())) & set(LABEL_COLUMNS))
 
 
 def store_runs(map_path: str | Path, files: Sequence[FileOutcome], *,

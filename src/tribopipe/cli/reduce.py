@@ -85,8 +85,11 @@ def reduce_cmd(
     run's reduced trace (Parquet) and a JSON summary with the evidence to --out, and
     appends the runs to the friction map (unless --no-map). A file whose content an
     earlier FILE or the map already holds under another name is a duplicate (stored once)
-    or, with other labels, a conflict (refused). Exit code 1 when any file or run could
-    not be reduced or written, or was refused; the others are still reduced and stored.
+    or, with other labels, a conflict (refused). A run the map already holds with other
+    labels (or from another config) keeps the map's row unless --replace is given.
+    Exit code 1 when any file or run could not be reduced or written, a file was refused
+    as a conflict, or a relabelled run kept the map's row (pass --replace to relabel
+    it); the others are still reduced and stored.
     """
     from ..config import load_settings
     from ..frictionmap.mapfile import read_map
@@ -106,15 +109,18 @@ def reduce_cmd(
     )
     _print(results, as_json)
     _note_alike(results, labels)
-    refused, _ = _store(results, map_path, no_map, replace, labels)
+    refused, kept = _store(results, map_path, no_map, replace, labels)
     failed = [r for r in results if not r.ok]
     errors = sum(len(r.failed) for r in failed)
-    if failed or refused:
+    if failed or refused or kept:
         parts = []
         if failed:
             parts.append(f"{errors} error(s) in {len(failed)} of {len(files)} file(s)")
         if refused:
             parts.append(f"{refused} file(s) refused as a conflict")
+        if kept:
+            parts.append(f"{kept} run(s) kept the map's row with other labels: pass "
+                         "--replace to relabel")
         click.echo("; ".join(parts) + ".", err=True)
         sys.exit(1)
 
@@ -216,7 +222,7 @@ def _note_alike(results: list[FileOutcome], labels: RunLabels) -> None:
 def _store(results: list[FileOutcome], map_path: str, no_map: bool, replace: bool,
            labels: RunLabels) -> tuple[int, int]:
     """Append the runs to the map; returns the number of files refused as a conflict and
-    of runs that kept the map's conflicting row (no --replace)."""
+    of relabelled runs that kept the map's row (no --replace)."""
     if no_map or not _reduced(results):
         return 0, 0
     if not labels.complete:
@@ -243,7 +249,10 @@ def _store(results: list[FileOutcome], map_path: str, no_map: bool, replace: boo
                 "(--replace)"), err=True)
         else:
             click.echo(printable(f"duplicate: {same.message()}"), err=True)
+    relabelled = report.relabelled
+    for line in report.appended.conflict_lines("this reduction", relabelled):
+        click.echo(printable(f"{line} (pass --replace to relabel it)"), err=True)
     for line in report.repeats:
         click.echo(printable(f"warning: {line}"), err=True)
     click.echo(f"map {display_path(map_path)}: {report.appended.summary()}", err=True)
-    return refused, report.appended.kept_conflicting
+    return refused, len(relabelled)

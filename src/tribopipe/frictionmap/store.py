@@ -274,11 +274,15 @@ class AppendReport:
             text += f" ({details}{more}; pass --replace to overwrite)"
         return text
 
-    def conflict_lines(self, theirs: str = "the new rows") -> list[str]:
-        """One line per conflicting run: its id and, per differing column, the map's value
-        and the value in ``theirs``."""
+    def conflict_lines(self, theirs: str = "the new rows",
+                       ids: Iterable[str] | None = None) -> list[str]:
+        """One line per conflicting run (those of ``ids`` only, when given): its id and,
+        per differing column, the map's value and the value in ``theirs``."""
         lines = []
+        wanted = None if ids is None else set(ids)
         for mid in self.conflicting_ids:
+            if wanted is not None and mid not in wanted:
+                continue
             cells = "; ".join(
                 f"{column} {_show(ours)} in the map, {_show(new)} in {theirs}"
                 for column, ours, new in self.values.get(mid, ())

@@ -18,7 +18,7 @@ import pandas as pd
 import pytest
 from click.testing import CliRunner
 
-import tribopipe.campaign.table as table
+import tribopipe.campaign.state as state
 import tribopipe.pipeline as pipeline
 from tribopipe.cli import main
 from tribopipe.errors import OutputError
@@ -56,10 +56,10 @@ def _no_space(monkeypatch: pytest.MonkeyPatch, *, only: str | None = None) -> No
 
     real = pq.write_table
 
-    def full(table_: Any, where: Any, **kw: Any) -> None:
+    def full(table: Any, where: Any, **kw: Any) -> None:
         if only is None or only in str(where):
             raise OSError(errno.ENOSPC, "No space left on device")
-        real(table_, where, **kw)
+        real(table, where, **kw)
 
     monkeypatch.setattr(pq, "write_table", full)
 
@@ -87,7 +87,7 @@ def test_batch_on_a_full_disk_lists_every_run_it_could_not_write(
     def no_state(*_: Any, **__: Any) -> None:
         raise OutputError("cannot write: No space left on device", path=tmp_path / "state")
 
-    monkeypatch.setattr(table, "write_text_atomic", no_state)
+    monkeypatch.setattr(state, "write_text_atomic", no_state)
     done = _batch(raw, tmp_path, "--no-plots")
     assert done.exit_code == 1 and "Traceback" not in done.output
     errors = _errors(done.stderr)

@@ -15,7 +15,7 @@ from __future__ import annotations
 import math
 import os
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -33,21 +33,20 @@ from ..pipeline import FileOutcome, ReducedRun
 from .metadata import Manifest, read_manifest
 from .outputs import _write_failures_csv, _write_runs_csv
 from .spec import Campaign
-from .table import (
+from .state import (
     DUPLICATE,
     FAILED,
     REDUCED,
     SKIPPED,
-    STATE_VERSION,
-    CampaignRow,
+    CampaignState,
+    FileState,
+    MapStamp,
     RunEntry,
-    campaign_table,
-    describe_glob,
-    failed_run_state,
+    RunState,
     load_state,
-    recipe_hash,
     save_state,
 )
+from .table import CampaignRow, campaign_table, describe_glob, recipe_hash
 from .worker import (  # noqa: F401 - GC_THRESHOLDS, _worker_init: importable from here too
     GC_THRESHOLDS,
     _Context,
@@ -250,7 +249,7 @@ def _run_locked(campaign: Campaign, *, jobs: int | None, plots: bool | None,
     jobs = default_jobs() if jobs is None else max(1, int(jobs))
     plots = campaign.plots if plots is None else plots
     state = load_state(campaign)
-    entries: dict[str, Any] = dict(state.get("entries", {}))
+    entries: dict[str, FileState] = dict(state.entries)
     missing_ids, map_checked = _ids_missing_from_map(campaign, state)
     manifest = read_manifest(campaign.manifest) if campaign.manifest is not None else None
     rows = campaign_table(campaign, state=state, manifest=manifest)
@@ -338,10 +337,9 @@ class _Plan:
     runs_failed: int
 
 
-def _run_ids(entry: Mapping[str, Any], statuses: tuple[str, ...] = (REDUCED,)) -> set[str]:
+def _run_ids(entry: FileState | None, statuses: tuple[str, ...] = (REDUCED,)) -> set[str]:
     """The measurement ids of a state entry's runs with one of ``statuses``."""
-    return {str(r["measurement_id"]) for r in entry.get("runs") or []
-            if r.get("status") in statuses and r.get("measurement_id")}
+    return set() if entry is None else entry.run_ids(statuses)
 
 
 def _plan(rows: Sequence[CampaignRow], missing_ids: set[str]) -> _Plan:
@@ -354,7 +352,7 @@ def _plan(rows: Sequence[CampaignRow], missing_ids: set[str]) -> _Plan:
     outcomes: dict[str, str] = {}
     runs_failed = 0
     for row in rows:
-        previous = row.previous or {}
+        previous = row.previous
         stored = _run_ids(previous, (REDUCED, DUPLICATE))
         if row.problem is not None:
             failures[row.file] = row.problem
@@ -362,19 +360,19 @@ def _plan(rows: Sequence[CampaignRow], missing_ids: set[str]) -> _Plan:
         elif row.status == REDUCED and not stored & missing_ids:
             outcomes[row.file] = READ
             for run in row.runs:
-                name = run.get("name") or row.file
-                if run.get("status") == REDUCED:
+                name = run.name or row.file
+                if run.status == REDUCED:
                     skipped.append(name)
                 else:  # unchanged and failed before: not retried, still listed
-                    failures[name] = run.get("reason") or "failed in an earlier batch"
+                    failures[name] = run.reason or "failed in an earlier batch"
                     runs_failed += 1
         elif row.status == DUPLICATE and not stored & missing_ids:
-            duplicates[row.file] = previous.get("reason") or "a duplicate"
+            duplicates[row.file] = (previous and previous.reason) or "a duplicate"
             outcomes[row.file] = DUPLICATE
         elif row.status == FAILED:
             # unchanged and failed before: do not retry, keep it listed
             failures[row.file] = row.reason or "failed in an earlier batch"
-            outcomes[row.file] = CONFLICT if previous.get("duplicate_of") else FAILED
+            outcomes[row.file] = CONFLICT if previous and previous.duplicate_of else FAILED
         else:
             todo.append(_Job(file=row.file, path=str(row.path), sources=row.sources,
                              hints=row.hints, test_rows=row.test_rows, sha256=row.sha256))
@@ -436,27 +434,27 @@ class _Landing:
 
 
 def _owners(by_file: Mapping[str, CampaignRow], redone: set[str],
-            vanished: Mapping[str, Any], in_map: FilesByHash) -> ContentOwners:
+            vanished: Mapping[str, FileState], in_map: FilesByHash) -> ContentOwners:
     """The one duplicate check (:class:`ContentOwners`) for a batch: the contents the
     files of the state brought (those not redone now), then the map's own rows; a file
     that left the folder with a content the map holds is the one renamed."""
     known: dict[str, tuple[str, dict[str, dict[str, Any]]]] = {}
     for file, row in by_file.items():
-        entry = row.previous or {}
-        if file in redone or entry.get("status") != REDUCED or not row.sha256:
+        entry = row.previous
+        if file in redone or entry is None or entry.status != REDUCED or not row.sha256:
             continue
-        runs = {str(r["measurement_id"]): labels_of(r.get("labels"))
-                for r in entry.get("runs") or [] if r.get("status") == REDUCED}
+        runs = {r.entry.measurement_id: labels_of(r.entry.labels)
+                for r in entry.runs if r.status == REDUCED and r.entry is not None}
         if runs:
             known.setdefault(row.sha256, (file, runs))
-    renamed = {Path(f).name: (f, e.get("sha256")) for f, e in vanished.items()
-               if e.get("status") == REDUCED}
+    renamed = {Path(f).name: (f, e.sha256) for f, e in vanished.items()
+               if e.status == REDUCED}
     return ContentOwners(in_map, known, renamed)
 
 
 def _apply(campaign: Campaign, results: Sequence[FileOutcome], by_file: Mapping[str, CampaignRow],
-           entries: dict[str, Any], failures: dict[str, str], notes: list[str],
-           vanished: Mapping[str, Any], in_map: FilesByHash) -> _Landing:
+           entries: dict[str, FileState], failures: dict[str, str], notes: list[str],
+           vanished: Mapping[str, FileState], in_map: FilesByHash) -> _Landing:
     """Fold the workers' results into the state ``entries`` and ``failures`` (in file
     order, both updated in place; plot and rename notes added to ``notes``), each file
     checked against the files before it and the map (``in_map``, read under its lock)."""
@@ -471,7 +469,7 @@ def _apply(campaign: Campaign, results: Sequence[FileOutcome], by_file: Mapping[
     owners = _owners(by_file, {r.name for r in results}, vanished, in_map)
     for done in sorted(results, key=lambda r: r.name):
         row = by_file[done.name]
-        old = entries.get(row.file) or {}
+        old = entries.get(row.file)
         if done.transient:
             # not the file's fault: listed now, retried next time (the state is left as is)
             outcomes[row.file] = FAILED
@@ -479,17 +477,16 @@ def _apply(campaign: Campaign, results: Sequence[FileOutcome], by_file: Mapping[
                 failures[failed.name] = failed.reason
             continue
         old_ids |= _run_ids(old)
-        base = {
-            "size": row.size, "mtime_ns": row.mtime_ns, "config_hash": config_hash,
-            "recipe": recipe_hash(campaign, row.merged, row.test_rows),
-            "sha256": done.file_hash or row.sha256 or _sha256_or_none(row.path),
-            "tests": list(done.tests),
-        }
+        base = FileState(
+            size=row.size, mtime_ns=row.mtime_ns, config_hash=config_hash,
+            recipe=recipe_hash(campaign, row.merged, row.test_rows),
+            sha256=done.file_hash or row.sha256 or _sha256_or_none(row.path),
+            tests=tuple(done.tests), status=REDUCED,
+        )
         if done.error is not None:
             outcomes[row.file] = FAILED
             failures[row.file] = done.error.reason
-            entries[row.file] = {**base, "status": FAILED, "reason": done.error.reason,
-                                 "runs": []}
+            entries[row.file] = replace(base, status=FAILED, reason=done.error.reason)
             continue
         entry = {r.measurement_id: RunEntry.of(r, campaign.output_dir) for r in done.reduced}
         mine = {r.measurement_id: labels_of(r.record) for r in done.reduced}
@@ -498,22 +495,22 @@ def _apply(campaign: Campaign, results: Sequence[FileOutcome], by_file: Mapping[
             notes.append(note)
         if same is not None:
             _drop_outputs(campaign, done, entries)
-            runs = [{"status": DUPLICATE, **{**entry[r.measurement_id].as_dict(), "trace": ""}}
-                    for r in done.reduced]
+            runs = tuple(RunState.kept(DUPLICATE, replace(entry[r.measurement_id], trace=""))
+                         for r in done.reduced)
             if same.conflict:
                 outcomes[row.file] = CONFLICT
                 failures[row.file] = same.message()
-                entries[row.file] = {**base, "status": FAILED, "reason": same.message(),
-                                     "duplicate_of": same.other, "runs": []}
+                entries[row.file] = replace(base, status=FAILED, reason=same.message(),
+                                            duplicate_of=same.other)
             else:
                 outcomes[row.file] = DUPLICATE
                 duplicates[row.file] = same.message()
-                entries[row.file] = {**base, "status": DUPLICATE, "reason": same.message(),
-                                     "duplicate_of": same.other, "runs": runs}
+                entries[row.file] = replace(base, status=DUPLICATE, reason=same.message(),
+                                            duplicate_of=same.other, runs=runs)
             continue
         owners.landed(done.name, done.file_hash, mine)
         outcomes[row.file] = READ
-        runs_state: list[dict[str, Any]] = []
+        runs_state: list[RunState] = []
         for run in done.runs:
             if isinstance(run, ReducedRun):
                 assert run.record is not None  # labels_from always names pin and disc
@@ -522,25 +519,26 @@ def _apply(campaign: Campaign, results: Sequence[FileOutcome], by_file: Mapping[
                 if run.flags:
                     flagged.append((run.name, ";".join(run.flags)))
                 notes += [n for n in run.notes if n not in notes]
-                runs_state.append({"status": REDUCED, **entry[run.measurement_id].as_dict()})
+                runs_state.append(RunState.kept(REDUCED, entry[run.measurement_id]))
             else:
                 failures[run.name] = run.reason
                 runs_failed += 1
-                runs_state.append(failed_run_state(run))
-        entries[row.file] = {**base, "status": REDUCED, "runs": runs_state}
+                runs_state.append(RunState.failed(run))
+        entries[row.file] = replace(base, runs=tuple(runs_state))
     alive = set().union(*(_run_ids(e) for e in entries.values())) if entries else set()
     return _Landing(records=records, stale_ids=old_ids - alive, reduced=reduced,
                     flagged=flagged, duplicates=duplicates, outcomes=outcomes,
                     runs_failed=runs_failed)
 
 
-def _drop_outputs(campaign: Campaign, done: FileOutcome, entries: Mapping[str, Any]) -> None:
+def _drop_outputs(campaign: Campaign, done: FileOutcome,
+                  entries: Mapping[str, FileState]) -> None:
     """Remove the traces and plots a worker wrote for runs that do not land (their file
     is a duplicate or a conflict), unless a landed run has the same file (a file of the
     same name and content in another subfolder)."""
     layout = campaign.layout
-    kept = {r.get("trace") for e in entries.values() for r in e.get("runs") or []
-            if r.get("status") == REDUCED}
+    kept = {r.entry.trace for e in entries.values() for r in e.runs
+            if r.status == REDUCED and r.entry is not None}
     for run in done.reduced:
         mid = run.measurement_id
         if run.trace is not None and run.trace.relative_to(
@@ -561,16 +559,16 @@ def _sha256_or_none(path: Path) -> str | None:
         return None
 
 
-def _forget_vanished(campaign: Campaign, entries: dict[str, Any], present: set[str],
+def _forget_vanished(campaign: Campaign, entries: dict[str, FileState], present: set[str],
                      notes: list[str]) -> None:
     """Files that vanished from the folder leave the state (their map rows stay)."""
     for gone in sorted(set(entries) - present):
-        if entries[gone].get("status") == REDUCED and _run_ids(entries[gone]):
+        if entries[gone].status == REDUCED and _run_ids(entries[gone]):
             notes.append(f"{gone}: no longer in {campaign.raw_dir}; its map row(s) are kept")
         del entries[gone]
 
 
-def _ledger(rows: Sequence[CampaignRow], entries: Mapping[str, Any],
+def _ledger(rows: Sequence[CampaignRow], entries: Mapping[str, FileState],
             manifest: Manifest | None) -> tuple[dict[str, int], list[str], list[str]]:
     """The tests found per file (the files whose tests are known), the manifest rows that
     matched no file, no test or no friction interval, and the runs whose test no
@@ -580,15 +578,15 @@ def _ledger(rows: Sequence[CampaignRow], entries: Mapping[str, Any],
     known: dict[str, set[str | None]] = {}
     places: dict[str, set[tuple[str | None, int | None]]] = {}
     for row in rows:
-        entry = entries.get(row.file) or {}
-        found = entry.get("tests")
-        if found is None:
+        entry = entries.get(row.file)
+        found = None if entry is None else entry.tests
+        if entry is None or found is None:
             continue
         known[row.file] = set(found)
-        places[row.file] = {(r.get("test"), r.get("interval")) for r in entry.get("runs") or []}
+        places[row.file] = {(r.test, r.interval) for r in entry.runs}
         tests[row.file] = len(found)
-        undescribed += [row.file if r.get("test") is None else f"{row.file} [{r['test']}]"
-                        for r in entry.get("runs") or [] if r.get("undescribed")]
+        undescribed += [row.file if r.test is None else f"{row.file} [{r.test}]"
+                        for r in entry.runs if r.undescribed]
     unmatched: list[str] = []
     if manifest is not None:
         names = {row.file for row in rows} | {row.path.name for row in rows}
@@ -608,33 +606,29 @@ def _ledger(rows: Sequence[CampaignRow], entries: Mapping[str, Any],
     return tests, unmatched, list(dict.fromkeys(undescribed))
 
 
-def _groups_updated(state: Mapping[str, Any], records: Sequence[Mapping[str, Any]],
+def _groups_updated(state: CampaignState, records: Sequence[Mapping[str, Any]],
                     landed: set[str], removed: set[str]) -> set[tuple[Any, ...]]:
     """The condition groups with a map row added, replaced or removed by this batch."""
     old_groups = {
-        _group_key(r.get("labels") or {}) for e in state.get("entries", {}).values()
-        for r in e.get("runs") or [] if r.get("measurement_id") in removed
+        _group_key(r.labels or {}) for e in state.entries.values()
+        for r in e.runs if r.measurement_id in removed
     }
     return {
         _group_key(r) for r in records if r.get("measurement_id") in landed
     } | old_groups
 
 
-def _save_state_with_map(campaign: Campaign, entries: Mapping[str, Any],
-                         before: Mapping[str, Any]) -> None:
+def _save_state_with_map(campaign: Campaign, entries: dict[str, FileState],
+                         before: CampaignState) -> None:
     """Save the state with the map's size and ``mtime_ns`` as this batch leaves it (so the
     next batch trusts an untouched map without reading it); not rewritten when it equals
     the state the batch started from (nothing changed)."""
-    new_state: dict[str, Any] = {"version": STATE_VERSION, "campaign": campaign.name,
-                                 "entries": dict(entries)}
-    if campaign.map_path.exists():
-        st = campaign.map_path.stat()
-        new_state["map"] = {"size": st.st_size, "mtime_ns": st.st_mtime_ns}
+    new_state = before.with_entries(campaign.name, entries, campaign.map_path)
     if new_state != before or not campaign.state_path.exists():
         save_state(campaign, new_state)
 
 
-def _ids_missing_from_map(campaign: Campaign, state: Mapping[str, Any]) -> tuple[set[str], bool]:
+def _ids_missing_from_map(campaign: Campaign, state: CampaignState) -> tuple[set[str], bool]:
     """The measurement ids of runs the state calls reduced (or duplicates of) that are not
     in the map (so they must land again), and whether the map was read (and so validated)
     to tell.
@@ -642,24 +636,21 @@ def _ids_missing_from_map(campaign: Campaign, state: Mapping[str, Any]) -> tuple
     A map whose size and ``mtime_ns`` are those the last batch left is trusted without
     reading it; a missing map misses every run.
     """
-    entries = state.get("entries", {})
     ids: set[str] = set()
-    for e in entries.values():
+    for e in state.entries.values():
         ids |= _run_ids(e, (REDUCED, DUPLICATE))
     if not ids:
         return set(), False
     if not campaign.map_path.exists():
         return ids, False
-    st = campaign.map_path.stat()
-    seen = state.get("map") or {}
-    if seen.get("size") == st.st_size and seen.get("mtime_ns") == st.st_mtime_ns:
+    if state.map is not None and state.map == MapStamp.of(campaign.map_path):
         return set(), False
     present = set(read_map(campaign.map_path)["measurement_id"].astype(str))
     return ids - present, True
 
 
 def _land(campaign: Campaign, results: Sequence[FileOutcome],
-          apply: Callable[[FilesByHash], _Landing], entries: Mapping[str, Any]
+          apply: Callable[[FilesByHash], _Landing], entries: Mapping[str, FileState]
           ) -> tuple[str, set[str], set[str], _Landing]:
     """Check the results against the map and fold them in, under the map's lock, in one
     atomic write (new records added or replaced, rows of runs whose raw file changed
@@ -667,7 +658,7 @@ def _land(campaign: Campaign, results: Sequence[FileOutcome],
     Returns the map's summary line, the ids added or replaced, the ids removed and what
     ``apply`` made of the results."""
     touches = any(r.reduced for r in results) or any(
-        _run_ids(entries.get(r.name) or {}) for r in results)
+        _run_ids(entries.get(r.name)) for r in results)
     if not touches:
         return "unchanged", set(), set(), apply({})
     landing: list[_Landing] = []

@@ -141,7 +141,8 @@ def run_rows(rows: Sequence[ManifestRow], test: str | None,
     row of that interval with an empty test cell, the row of that test with an empty
     interval cell."""
     by_key = {(r.test, r.interval): r for r in rows}
-    keys = [(test, interval), (None, interval)] if interval is not None else []
+    keys: list[tuple[str | None, int | None]] = (
+        [(test, interval), (None, interval)] if interval is not None else [])
     keys.append((test, None))
     found = [by_key.get(key) for key in dict.fromkeys(keys) if key != (None, None)]
     return [r for r in found if r is not None]

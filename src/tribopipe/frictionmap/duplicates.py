@@ -19,7 +19,7 @@ from dataclasses import dataclass
 from pathlib import PurePath
 from typing import TYPE_CHECKING, Any
 
-from ..stats import group_statistics
+from ..stats import FORCE_DECIMALS, TEMPERATURE_DECIMALS, group_statistics
 from .schema import records_frame
 
 if TYPE_CHECKING:
@@ -168,6 +168,21 @@ class ContentOwners:
             self.first.setdefault(sha, (file, {k: dict(v) for k, v in runs.items()}))
 
 
+def _coarse_key(pin: Any, disc: Any, force: Any, temperature: Any, repeat: Any
+                ) -> tuple[Any, ...] | None:
+    """A run's pair, nominal force and temperature rounded as the statistics round them,
+    and repeat: runs of one condition group with one repeat number share it (the groups
+    only split it further, by nominal pressure). ``None`` without a repeat number."""
+    number = _value("repeat", repeat)
+    if number is None:
+        return None
+    force_N, temperature_C = _value("normal_force_N", force), _value("temperature_C",
+                                                                      temperature)
+    return (pin, disc, None if force_N is None else round(force_N, FORCE_DECIMALS),
+            None if temperature_C is None else round(temperature_C, TEMPERATURE_DECIMALS),
+            number)
+
+
 def repeat_clashes(current: pd.DataFrame, records: Sequence[Mapping[str, Any]],
                    drop_ids: Collection[str] = ()) -> list[str]:
     """The repeat numbers that more than one run of one condition group would carry once
@@ -178,16 +193,30 @@ def repeat_clashes(current: pd.DataFrame, records: Sequence[Mapping[str, Any]],
     (:func:`tribopipe.stats.group_statistics`: pin, disc, nominal force and temperature,
     nominal pressure; excluded runs left out). A repeat number is a run's place among the
     repeats of its condition: two runs with one number are a labelling mistake (or one
-    run under two names), reported, never refused.
+    run under two names), reported, never refused. The statistics are asked only when
+    two runs share the pair, rounded conditions and repeat number.
     """
     import pandas as pd
 
-    new = records_frame(records)
-    new_ids = set(new["measurement_id"].astype(str))
-    if not new_ids or not new["repeat"].notna().any():
+    columns = ("pin", "disc", "normal_force_N", "temperature_C", "repeat")
+    new_ids = {str(r["measurement_id"]) for r in records}
+    old = current.loc[~current["measurement_id"].isin(new_ids | set(drop_ids))
+                      & ~current["excluded"].fillna(False).astype(bool)]
+    seen: dict[tuple[Any, ...], int] = {}
+    for values in old.loc[:, list(columns)].itertuples(index=False, name=None):
+        key = _coarse_key(*values)
+        if key is not None:
+            seen[key] = seen.get(key, 0) + 1
+    clash = False
+    for record in records:
+        key = _coarse_key(*(record.get(c) for c in columns))
+        if key is not None:
+            clash = clash or key in seen
+            seen[key] = seen.get(key, 0) + 1
+    if not clash:
         return []
+    new = records_frame(records)
     pairs = set(zip(new["pin"], new["disc"], strict=True))
-    old = current.loc[~current["measurement_id"].isin(new_ids | set(drop_ids))]
     old = old.loc[[(p, d) in pairs for p, d in zip(old["pin"], old["disc"], strict=True)]]
     runs = pd.concat([old, new], ignore_index=True) if len(old) else new
     by_id = runs.set_index(runs["measurement_id"].astype(str))

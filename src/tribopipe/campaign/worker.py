@@ -186,6 +186,7 @@ def _reduce_chunk(jobs: Sequence[_Job], ctx: _Context) -> list[FileOutcome]:
 def crashed(jobs: Sequence[_Job], exc: BaseException) -> list[FileOutcome]:
     """The results of a chunk whose worker process died (e.g. killed for memory): each
     file a transient failure, tried again next time."""
-    return [_failed_file(job, f"{display_path(job.file)}: worker process failed "
-                              f"({type(exc).__name__}: {exc}); run again", transient=True)
+    return [_failed_file(job, printable(f"{display_path(job.file)}: worker process failed "
+                                        f"({type(exc).__name__}: {exc}); run again"),
+                         transient=True)
             for job in jobs]

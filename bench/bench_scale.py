@@ -70,7 +70,8 @@ def per_file(folder: Path, repeat: int) -> dict:
     from tribopipe.files import file_sha256
     from tribopipe.frictionmap import make_record
     from tribopipe.intervals import select_friction_interval
-    from tribopipe.pipeline import RunLabels, RunOutcome, plot_run, write_trace
+    from tribopipe.labels import RunLabels
+    from tribopipe.pipeline import RunOutcome, plot_run, write_trace
     from tribopipe.readers import read_export
     from tribopipe.reduce import reduce_measurement
     from tribopipe.synthetic import SyntheticRun, write_rheocompass_export
@@ -148,7 +149,8 @@ def records(template: dict, n: int, start: int = 0) -> list[dict]:
 
 def template_record(folder: Path) -> dict:
     from tribopipe.config import load_settings
-    from tribopipe.pipeline import RunLabels, reduce_file
+    from tribopipe.labels import RunLabels
+    from tribopipe.pipeline import reduce_file
     from tribopipe.synthetic import SyntheticRun, write_rheocompass_export
 
     path = write_rheocompass_export(folder / "t.csv", SyntheticRun(seed=1), project="p",
@@ -158,7 +160,7 @@ def template_record(folder: Path) -> dict:
 
 def per_size(folder: Path, n: int, template: dict) -> dict:
     """Costs that grow with the number of runs N, at one N."""
-    from tribopipe.campaign import folder_campaign, load_state, save_state
+    from tribopipe.campaign import CampaignState, folder_campaign, load_state, save_state
     from tribopipe.fit import fit_power_law
     from tribopipe.frictionmap import read_map, update_map
     from tribopipe.report import ReportInputs, build_report
@@ -187,15 +189,18 @@ def per_size(folder: Path, n: int, template: dict) -> dict:
     entries = {f"lab{i // 10_000}/run_{i:06d}.csv": {
         "size": 1_200_000, "mtime_ns": 1_700_000_000_000_000_000 + i,
         "config_hash": "2fc9df08b211fe45", "recipe": "0123456789abcdef",
-        "sha256": uuid.UUID(int=i).hex * 2, "status": "reduced",
-        "labels": {"pin": "Dragonskin 30", "disc": "steel", "normal_force_N": 3.0,
-                   "temperature_C": 20.0, "repeat": 1},
-        "measurement_id": uuid.UUID(int=i + 1).hex[-16:],
-        "trace": f"traces/run_{i:06d}_{uuid.UUID(int=i + 1).hex[-8:]}.parquet",
-        "mu_s": 0.9, "mu_k": 0.6, "pressure_kPa": 35.4, "pressure_measured_kPa": 35.3,
-        "normal_force_measured_N": 2.99, "temperature_measured_C": 20.1, "flags": ""}
+        "sha256": uuid.UUID(int=i).hex * 2, "status": "reduced", "tests": [None],
+        "runs": [{
+            "status": "reduced",
+            "labels": {"pin": "Dragonskin 30", "disc": "steel", "normal_force_N": 3.0,
+                       "temperature_C": 20.0, "repeat": 1},
+            "measurement_id": uuid.UUID(int=i + 1).hex[-16:],
+            "trace": f"traces/run_{i:06d}_{uuid.UUID(int=i + 1).hex[-8:]}.parquet",
+            "mu_s": 0.9, "mu_k": 0.6, "pressure_kPa": 35.4, "pressure_measured_kPa": 35.3,
+            "normal_force_measured_N": 2.99, "temperature_measured_C": 20.1, "flags": ""}]}
         for i in range(n)}
-    state = {"version": 2, "campaign": "scale", "entries": entries}
+    state = CampaignState.from_json({"version": 2, "campaign": "scale", "entries": entries})
+    assert len(state.entries) == n
     row["state_save_s"] = wall(lambda: save_state(campaign, state))
     row["state_load_s"] = cpu(lambda: load_state(campaign))
     row["state_MB"] = campaign.state_path.stat().st_size / 1e6

@@ -41,7 +41,8 @@ def main(argv: list[str] | None = None) -> list[Path]:
     args = parser.parse_args(argv)
 
     from tribopipe.config import load_settings
-    from tribopipe.pipeline import RunLabels, plot_run, reduce_file
+    from tribopipe.labels import RunLabels
+    from tribopipe.pipeline import plot_run, reduce_file
     from tribopipe.synthetic import SyntheticRun, write_rheocompass_export
 
     settings = load_settings()

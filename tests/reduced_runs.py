@@ -11,7 +11,8 @@ from pathlib import Path
 
 from tribopipe.config import load_settings
 from tribopipe.frictionmap import append_records
-from tribopipe.pipeline import RunLabels, reduce_file, write_trace
+from tribopipe.labels import RunLabels
+from tribopipe.pipeline import reduce_file, write_trace
 from tribopipe.synthetic import SyntheticRun, write_rheocompass_export
 
 #: (file stem, pin, disc, force N, temperature °C, repeat, synthetic run)

@@ -45,6 +45,9 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("tribopipe.intervals",),
     ("tribopipe.detection",),
     ("tribopipe.reduce",),
+    # what a run is and its QC flags, decided once from its labels and its reduction,
+    # before anything prints, plots or stores it
+    ("tribopipe.labels",),
     ("tribopipe.figures",),
     # pure statistics over map rows: below the map, whose printed summary uses them
     ("tribopipe.stats",),

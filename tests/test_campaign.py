@@ -380,32 +380,28 @@ def test_lost_state_costs_a_re_run_but_changes_no_group(campaign_dir: Path) -> N
 
 
 def test_workers_return_typed_picklable_results(campaign_dir: Path) -> None:
-    """What crosses the process boundary is a frozen dataclass per file: its hash, its
-    tests and a reduced run (record and state entry) or a failure per run; or the file's
-    failure with its one-line reason."""
+    """What crosses the process boundary is the route's frozen outcome per file (the one
+    ``reduce`` gets too): its hash, its tests and a reduced run (record, summary, trace)
+    or a failure per run; or the file's failure with its one-line reason."""
     import pickle
 
-    from tribopipe.campaign.batch import (
-        FailedRun,
-        FileDone,
-        ReducedRun,
-        _Context,
-        _Job,
-        _reduce_chunk,
-    )
+    from tribopipe.campaign.worker import _Context, _Job, _reduce_chunk
+    from tribopipe.pipeline import FailedRun, FileOutcome, ReducedRun
 
     campaign = load_campaign(campaign_dir / "campaign.toml")
     jobs = [_Job(file=row.file, path=str(row.path), sources=row.sources, hints=row.hints)
             for row in campaign_table(campaign)
             if row.file in ("DS30_steel_5N_20C_r1.csv", "DS30_steel_9N_20C_r1.csv")]
     done, failed = pickle.loads(pickle.dumps(_reduce_chunk(jobs, _Context(campaign, False))))
-    assert isinstance(done, FileDone) and done.error is None and done.tests == ("friction",)
+    assert isinstance(done, FileOutcome) and done.error is None
+    assert done.tests == ("friction",)
     (good,) = done.runs
     bad = failed.error
     assert isinstance(good, ReducedRun) and isinstance(bad, FailedRun) and not failed.runs
-    assert good.name == "DS30_steel_5N_20C_r1.csv" and good.entry.test == "friction"
-    assert good.entry.measurement_id == good.record["measurement_id"]
-    assert good.entry.labels["pin"] == "Dragonskin 30"
-    assert good.entry.mu_k == pytest.approx(0.36, abs=0.01)
-    assert (campaign.output_dir / good.entry.trace).is_file()
+    assert good.name == "DS30_steel_5N_20C_r1.csv" and good.place.test == "friction"
+    assert good.measurement_id == good.record["measurement_id"]
+    assert good.labels.pin == "Dragonskin 30"
+    assert good.summary["mu_k"] == pytest.approx(0.36, abs=0.01)
+    assert good.trace is not None and good.trace.is_file()
+    assert good.trace.is_relative_to(campaign.output_dir)
     assert bad.reason.startswith("DS30_steel_9N_20C_r1.csv") and not bad.transient

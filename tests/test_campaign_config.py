@@ -12,17 +12,15 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from tribopipe.campaign import (
-    Tolerances,
     campaign_table,
     labels_from,
     load_campaign,
     match_pattern,
     merge_metadata,
-    qc_flags,
     read_manifest,
 )
 from tribopipe.errors import CampaignError, ConfigError
-from tribopipe.pipeline import RunLabels
+from tribopipe.labels import RunLabels, Tolerances, qc_flags
 
 REPO = Path(__file__).resolve().parents[1]
 PATTERN = "{pin}_{disc}_{force}N_{temperature}C_r{repeat}"

@@ -24,8 +24,8 @@ from tribopipe import __version__
 from tribopipe import frictionmap as fm
 from tribopipe.config import InstrumentConfig, load_settings, settings_from_dict
 from tribopipe.errors import MapError, ValidationError
+from tribopipe.labels import RunLabels, Tolerances
 from tribopipe.measurement import Measurement, MeasurementMeta
-from tribopipe.pipeline import RunLabels
 from tribopipe.reduce import ReductionResult, reduce_measurement
 from tribopipe.synthetic import SyntheticRun, make_intervals
 
@@ -138,8 +138,8 @@ def test_off_nominal_flags_follow_the_tolerances_given():
                               settings=load_settings(), tolerances=tolerances)["flags"]
 
     assert flags(None) == ""
-    assert flags(fm.Tolerances(force_rel=0.05)) == "normal_force_off_nominal"
-    assert flags(fm.Tolerances(temperature_C=1.0)) == "temperature_off_nominal"
+    assert flags(Tolerances(force_rel=0.05)) == "normal_force_off_nominal"
+    assert flags(Tolerances(temperature_C=1.0)) == "temperature_off_nominal"
 
 
 def test_nominal_pressure_follows_the_instrument_geometry():

@@ -139,7 +139,8 @@ def test_the_session_reduced_again_is_the_same_two_runs_and_fills_nothing_in(
     tmp_path: Path
 ) -> None:
     from tribopipe.config import load_settings
-    from tribopipe.pipeline import RunLabels, reduce_export
+    from tribopipe.labels import RunLabels
+    from tribopipe.pipeline import reduce_export
     from tribopipe.synthetic import write_rheocompass_session
 
     script = v3_fixture_script()
@@ -150,13 +151,9 @@ def test_the_session_reduced_again_is_the_same_two_runs_and_fills_nothing_in(
     old = fm.read_map(target)
     assert file_sha256(raw) in set(old["file_hash"])  # the export, byte for byte
     settings = load_settings()
-    records = []
-    for run in reduce_export(raw, settings).runs:
-        force = script.TESTS[run.place.test][2]
-        records.append(fm.make_record(
-            result=run.outcome.result, labels=RunLabels("Dragonskin 30", "steel", force, 20.0, 1),
-            meta=run.outcome.measurement.meta, file_hash=run.outcome.file_hash,
-            settings=settings))
+    done = reduce_export(raw, settings, lambda export, place, name: RunLabels(
+        "Dragonskin 30", "steel", script.TESTS[place.test][2], 20.0, 1))
+    records = [run.record for run in done.reduced]
     assert {r["test"] for r in records} == set(script.TESTS)
     report = fm.append_records(target, records)
     # ids hash the test and result as before: the same runs, nothing added or in conflict

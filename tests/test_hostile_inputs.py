@@ -25,7 +25,8 @@ from hostile import (
 from tribopipe.campaign import load_campaign, read_manifest, run_campaign
 from tribopipe.config import load_settings, settings_from_dict
 from tribopipe.errors import ConfigError, ValidationError
-from tribopipe.frictionmap import RunLabels, read_map
+from tribopipe.frictionmap import read_map
+from tribopipe.labels import RunLabels
 from tribopipe.synthetic import make_intervals, write_intervals_export
 
 PATTERN = "{pin}_{disc}_{force}N_{temperature}C_r{repeat}"

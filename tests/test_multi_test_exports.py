@@ -27,7 +27,8 @@ from tribopipe.cli import main
 from tribopipe.config import load_settings
 from tribopipe.errors import ReductionError
 from tribopipe.frictionmap import measurement_id
-from tribopipe.pipeline import RunLabels, read_runs, reduce_export, reduce_file
+from tribopipe.labels import RunLabels
+from tribopipe.pipeline import FailedRun, ReducedRun, read_runs, reduce_export, reduce_file
 from tribopipe.synthetic import SyntheticTest, write_rheocompass_session
 
 SETTINGS = load_settings()
@@ -46,16 +47,16 @@ def raw(tmp_path_factory: pytest.TempPathFactory) -> Path:
 def test_every_test_of_a_session_is_a_run_with_its_own_set_up_offset(raw: Path,
                                                                     name: str) -> None:
     result = reduce_export(raw / name, SETTINGS)
+    export = read_runs(raw / name)
     assert result.ok and result.error is None
     assert result.tests == tuple(SESSION_TRUTH)
     assert [r.place.test for r in result.runs] == list(SESSION_TRUTH)
-    for r in result.runs:
+    for r in result.reduced:
         mu_s, mu_k, force, offset, setup = SESSION_TRUTH[r.place.test]
-        outcome = r.outcome
-        assert outcome.result.mu_k == pytest.approx(mu_k, abs=0.01)
-        assert outcome.result.mu_s == pytest.approx(mu_s, abs=0.02)
-        assert outcome.result.normal_force_mean_N == pytest.approx(force, rel=0.01)
-        params = outcome.result.parameters
+        assert r.summary["mu_k"] == pytest.approx(mu_k, abs=0.01)
+        assert r.summary["mu_s"] == pytest.approx(mu_s, abs=0.02)
+        assert r.summary["normal_force_N"] == pytest.approx(force, rel=0.01)
+        params = r.summary["parameters"]
         if setup:  # the test's own set-up interval, never another test's
             assert params["torque_offset_source"] == "set-up interval 1"
             assert params["torque_offset_Nm"] == pytest.approx(offset, abs=5e-5)
@@ -64,21 +65,21 @@ def test_every_test_of_a_session_is_a_run_with_its_own_set_up_offset(raw: Path,
             assert params["torque_offset_source"].startswith("at-rest start")
             assert r.place.interval == 1
         assert r.name == f"{raw / name} [{r.place.test} / DS30 1 / interval {r.place.interval}]"
-        assert outcome.measurement_id == measurement_id(outcome.file_hash,
-                                                        outcome.measurement.meta)
-    assert len({r.outcome.measurement_id for r in result.runs}) == 3
+        assert r.measurement_id == measurement_id(export.file_hash,
+                                                  dict(export.runs)[r.place].meta)
+    assert len({r.measurement_id for r in result.reduced}) == 3
 
 
 def test_force_steps_within_one_test_are_one_run_each(raw: Path) -> None:
     result = reduce_export(raw / "steps.csv", SETTINGS)
     assert [r.place.interval for r in result.runs] == [2, 3]
-    three, five = (r.outcome.result for r in result.runs)
-    assert (three.mu_k, five.mu_k) == (pytest.approx(0.47, abs=0.01),
-                                       pytest.approx(0.36, abs=0.01))
-    assert five.normal_force_mean_N == pytest.approx(5.0, rel=0.01)
+    three, five = (r.summary for r in result.reduced)
+    assert (three["mu_k"], five["mu_k"]) == (pytest.approx(0.47, abs=0.01),
+                                             pytest.approx(0.36, abs=0.01))
+    assert five["normal_force_N"] == pytest.approx(5.0, rel=0.01)
     # the second step follows the first without a set-up: the test's set-up zeroes it
-    assert five.parameters["torque_offset_source"] == "set-up interval 1"
-    assert five.parameters["torque_offset_Nm"] == pytest.approx(2.5e-4, abs=5e-5)
+    assert five["parameters"]["torque_offset_source"] == "set-up interval 1"
+    assert five["parameters"]["torque_offset_Nm"] == pytest.approx(2.5e-4, abs=5e-5)
 
 
 def test_the_excel_twin_of_a_session_gives_the_same_runs(raw: Path, tmp_path: Path) -> None:
@@ -86,10 +87,11 @@ def test_the_excel_twin_of_a_session_gives_the_same_runs(raw: Path, tmp_path: Pa
     text = reduce_export(raw / "session.csv", SETTINGS)
     excel = reduce_export(xlsx, SETTINGS)
     assert excel.ok and excel.tests == text.tests
-    for a, b in zip(text.runs, excel.runs, strict=True):
+    assert len(text.reduced) == len(text.runs)
+    for a, b in zip(text.reduced, excel.reduced, strict=True):
         assert (a.place.test, a.place.interval) == (b.place.test, b.place.interval)
-        assert b.outcome.result.mu_k == pytest.approx(a.outcome.result.mu_k, abs=1e-9)
-        assert b.outcome.result.mu_s == pytest.approx(a.outcome.result.mu_s, abs=1e-9)
+        assert b.summary["mu_k"] == pytest.approx(a.summary["mu_k"], abs=1e-9)
+        assert b.summary["mu_s"] == pytest.approx(a.summary["mu_s"], abs=1e-9)
 
 
 def test_a_failing_test_stands_alone(tmp_path: Path) -> None:
@@ -99,8 +101,8 @@ def test_a_failing_test_stands_alone(tmp_path: Path) -> None:
     tests[1] = SyntheticTest(tests[1].name, "DS30", (run(0.6, 0.47, 0.05, 9),))
     path = write_session(tmp_path / "lifted.csv", tests=tests)
     result = reduce_export(path, SETTINGS)
-    assert [r.ok for r in result.runs] == [True, False, True]
-    error = result.runs[1].error
+    assert [isinstance(r, ReducedRun) for r in result.runs] == [True, False, True]
+    error = result.runs[1].reason
     assert error.count(str(path)) == 1 and "\n" not in error
     assert "DS30 on steel, 3 N, 20 °C, #1" in error and "contact threshold" in error
 
@@ -113,7 +115,7 @@ def test_two_tests_of_one_name_get_two_ids_and_the_first_keeps_its_own(tmp_path:
     (p1, m1), (p2, m2) = export.runs
     assert (p1.occurrence, p2.occurrence) == (1, 2)
     result = reduce_export(path, SETTINGS)
-    first, second = (r.outcome.measurement_id for r in result.runs)
+    first, second = (r.measurement_id for r in result.reduced)
     assert first != second
     assert first == measurement_id(export.file_hash, m1.meta)  # as it always was
 
@@ -131,8 +133,8 @@ def test_the_real_two_test_export_says_why_each_test_gives_no_run(data_dir: Path
     assert not result.ok and result.error is None
     assert [r.place.test for r in result.runs] == ["Stress Relaxation 1", "Stress Relaxation"]
     for r in result.runs:
-        assert r.outcome is None
-        assert r.error.startswith(f"{path}: {r.place.test} / Step strain 1: no friction "
+        assert isinstance(r, FailedRun)
+        assert r.reason.startswith(f"{path}: {r.place.test} / Step strain 1: no friction "
                                   "interval: no interval has time, torque and normal force")
 
 
@@ -228,7 +230,7 @@ def test_map_rows_keep_labels_given_per_run(raw: Path) -> None:
     labels = RunLabels(pin="Dragonskin 30", disc="steel", normal_force_N=3.0,
                        temperature_C=20.0, repeat=1)
     result = reduce_export(raw / "steps.csv", SETTINGS, labels)
-    records = [o.record for o in result.outcomes]
+    records = [o.record for o in result.reduced]
     assert [r["interval"] for r in records] == [2, 3]
     # the 5 N step strays from the 3 N label: flagged, not silently averaged in
     assert "normal_force_off_nominal" not in records[0]["flags"].split(";")

@@ -9,7 +9,8 @@ import pandas as pd
 import pytest
 
 from tribopipe.config import load_settings
-from tribopipe.pipeline import RunLabels, reduce_file, run_summary, write_summary, write_trace
+from tribopipe.labels import RunLabels
+from tribopipe.pipeline import reduce_file, run_summary, write_summary, write_trace
 from tribopipe.synthetic import SyntheticRun, write_rheocompass_export
 
 
@@ -69,17 +70,19 @@ def test_reduce_files_writes_each_run_and_reports_a_bad_file_in_one_line(
                            out_dir=tmp_path / "out", plots=True, on_file=seen.append)
     assert seen == results
     assert [r.ok for r in results] == [False, True, False]
-    assert results[0].error.count(str(notes)) == 1 and "\n" not in results[0].error
-    assert results[2].error.startswith(str(tmp_path / "gone.csv"))
+    assert results[0].error.reason.count(str(notes)) == 1
+    assert "\n" not in results[0].error.reason
+    assert results[2].error.reason.startswith(str(tmp_path / "gone.csv"))
     (good,) = results[1].runs  # one test, one friction interval: one run
     assert good.name == str(export)
     layout = OutputLayout(tmp_path / "out")
-    mid = good.outcome.measurement_id
+    mid = good.measurement_id
     assert good.trace == layout.trace_path(export, mid) and good.trace.is_file()
-    assert good.summary == layout.summary_path(export, mid) and good.summary.is_file()
+    assert good.summary_file == layout.summary_path(export, mid)
+    assert good.summary_file.is_file()
     assert good.plot == layout.trace_plot_path(export, mid)
     assert good.plot.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     quiet = reduce_files([export], load_settings(), out_dir=tmp_path / "q", summaries=False)
     (run,) = quiet[0].runs
-    assert quiet[0].ok and run.summary is None and run.plot is None
+    assert quiet[0].ok and run.summary_file is None and run.plot is None
     assert not (tmp_path / "q" / "summaries").exists()

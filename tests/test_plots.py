@@ -28,7 +28,8 @@ from tribopipe.export.plots import (
     plot_trace_row,
 )
 from tribopipe.frictionmap import read_map
-from tribopipe.pipeline import RunLabels, reduce_file
+from tribopipe.labels import RunLabels
+from tribopipe.pipeline import reduce_file
 from tribopipe.synthetic import SyntheticRun, write_rheocompass_export
 
 PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"

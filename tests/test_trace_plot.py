@@ -33,7 +33,8 @@ from tribopipe.figures import (
     save_figure,
     trace_figure,
 )
-from tribopipe.pipeline import RunLabels, plot_run, reduce_file, run_conditions
+from tribopipe.labels import RunLabels
+from tribopipe.pipeline import plot_run, reduce_file, run_conditions
 from tribopipe.synthetic import SyntheticRun, write_rheocompass_export
 
 

@@ -3,53 +3,48 @@
 An export holds one run per friction interval of every test and result
 (:func:`tribopipe.intervals.friction_intervals`): a single test with a set-up and a
 friction interval gives one run, a session export one run per test, a test with force or
-speed steps one run per step. This is the orchestration used by ``tribopipe reduce`` and
-by campaigns; readers and writers stay at the edges, :mod:`tribopipe.reduce` does the
-physics.
+speed steps one run per step. Readers and writers stay at the edges,
+:mod:`tribopipe.reduce` does the physics.
 
-:func:`read_runs` reads an export and cuts it into its runs (:class:`ExportRuns`: each
-run's :class:`RunPlace` and friction interval, and each test/result that holds no
-friction interval with the reason); :func:`reduce_run` reduces one of them to a
-:class:`RunOutcome` with its map record; :func:`reduce_export` does both for a whole
-file, a failing test or run standing alone. Per run, ``tribopipe reduce`` and the batch
-workers then write what the output folder holds for it at the paths of
-:mod:`tribopipe.layout`: :func:`write_trace`, :func:`write_summary` (``tribopipe reduce``
-only) and :func:`plot_run`. :func:`reduce_files` is the whole ``tribopipe reduce`` over
-several files: each file alone, a failing file or run reported in one line and skipped,
-a file whose content an earlier one already had reported as its duplicate;
-:func:`same_content` tells the batch and :func:`store_runs` the map about such files.
+:func:`reduce_export` is the one route from an export to its runs, for ``tribopipe
+reduce`` (:func:`reduce_files`) and the batch workers alike: it reads the export once
+(:func:`read_runs`: each run's :class:`RunPlace` and friction interval, and each
+test/result that holds none with the reason), labels each run, reduces it
+(:func:`reduce_run`: the in-memory :class:`RunOutcome`, its QC flags decided once by
+:func:`tribopipe.labels.decide_run`), writes its outputs at the paths of
+:mod:`tribopipe.layout` (:func:`write_trace`, :func:`write_summary`, :func:`plot_run`) and
+returns one :class:`FileOutcome`: a :class:`ReducedRun` or :class:`FailedRun` per run,
+each failure with its one-line reason, or the file's error. :func:`store_runs` checks
+the reduced files against the map and appends them, under the map's lock.
 """
 
 from __future__ import annotations
 
 import json
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from .errors import ReductionError, TribopipeError
-from .escape import display_path
+from .errors import OutputError, ReductionError, TribopipeError
+from .escape import display_path, printable
 from .figures import TraceConditions, plot_trace
 from .files import file_sha256, os_reason, write_text_atomic
 from .frictionmap.duplicates import (
+    LABEL_COLUMNS,
+    ContentOwners,
     SameContent,
-    compare_labels,
     labels_of,
     map_files_by_hash,
+    repeat_clashes,
 )
-from .frictionmap.records import (
-    RunLabels,
-    Tolerances,
-    make_record,
-    measurement_id,
-    stored_file_name,
-)
-from .frictionmap.store import AppendReport, append_records, read_map
+from .frictionmap.records import make_record, measurement_id
+from .frictionmap.store import AppendReport, update_map_with
 from .intervals import friction_intervals
+from .labels import RunLabels, RunVerdict, Tolerances, Undescribed, decide_run
 from .layout import OutputLayout
 from .measurement import interval_label
-from .numeric import finite_json, finite_or_none
+from .numeric import finite_json, finite_or_nan, finite_or_none
 from .readers import read_export
 from .reduce import reduce_measurement
 
@@ -139,6 +134,16 @@ class RunOutcome:
     place: RunPlace = RunPlace()
     #: whether its export holds several runs or tests (then its name says which it is)
     several: bool = False
+    #: its nominal force and flags, decided once (:func:`tribopipe.labels.decide_run`)
+    verdict: RunVerdict | None = None
+
+    @property
+    def decided(self) -> RunVerdict:
+        """Its verdict (nominal force and the flags every output shows); decided with the
+        default tolerances when it was built without one."""
+        return self.verdict or decide_run(
+            self.labels, self.result.flags, finite_or_nan(self.result.normal_force_mean_N),
+            finite_or_nan(self.result.temperature_C))
 
     @property
     def name(self) -> str:
@@ -212,15 +217,16 @@ def reduce_run(
     """
     labels = labels or RunLabels()
     result = reduce_measurement(measurement, settings.instrument, settings.reduction)
+    verdict = decide_run(labels, result.flags, finite_or_nan(result.normal_force_mean_N),
+                         finite_or_nan(result.temperature_C), tolerances)
     record = None
     if labels.complete:
         record = make_record(
             result=result,
-            labels=labels,
+            verdict=verdict,
             meta=measurement.meta,
             file_hash=export.file_hash,
             settings=settings,
-            tolerances=tolerances,
             occurrence=place.occurrence,
         )
     return RunOutcome(
@@ -234,6 +240,7 @@ def reduce_run(
         record=record,
         place=place,
         several=export.several,
+        verdict=verdict,
     )
 
 
@@ -325,7 +332,7 @@ def run_summary(outcome: RunOutcome) -> dict[str, Any]:
         "pressure_kPa": float(r.pressure_kPa),
         "normal_force_N": float(r.normal_force_mean_N),
         "temperature_C": finite_or_none(r.temperature_C),
-        "flags": list(r.flags),
+        "flags": list(outcome.decided.flags),
         "mu_s_distance_mm": float(r.mu_s_distance_mm),
         "mu_s_time_s": float(r.mu_s_time_s),
         "mu_k_window_mm": [float(v) for v in r.mu_k_window_mm],
@@ -363,7 +370,8 @@ def plot_run(out_dir: str | Path | OutputLayout, outcome: RunOutcome) -> Path:
     :func:`tribopipe.figures.plot_trace`) to ``<out_dir>/plots/traces/<stem>_<id8>.png``
     and return its path."""
     target = OutputLayout.of(out_dir).trace_plot_path(outcome.path, outcome.measurement_id)
-    plot_trace(outcome.result, target, conditions=run_conditions(outcome))
+    plot_trace(outcome.result, target, conditions=run_conditions(outcome),
+               flags=outcome.decided.flags)
     return target
 
 
@@ -382,114 +390,218 @@ def run_conditions(outcome: RunOutcome) -> TraceConditions:
     )
 
 
+# ------------------------------------------------------------------ one route, one outcome
+
+
+#: the labels of each run of an export: ``labels_for(export, place, name)`` (``name`` is
+#: the run's name in messages); raises :class:`~tribopipe.errors.TribopipeError` when the
+#: run cannot be labelled (:class:`~tribopipe.labels.Undescribed` when nothing describes it)
+LabelsFor = Callable[[ExportRuns, RunPlace, str], RunLabels]
+
+
 @dataclass(frozen=True)
-class RunResult:
-    """What became of one run of an export (or of a test that holds none): the reduced
-    run and the files written for it, or ``error``, one line naming the file and which
-    run it is."""
+class RunOutputs:
+    """What :func:`reduce_export` writes for each reduced run below ``layout``: always its
+    trace (Parquet), its JSON summary when ``summary``, its trace plot when ``plot``."""
+
+    layout: OutputLayout
+    summary: bool = False
+    plot: bool = False
+
+
+@dataclass(frozen=True)
+class ReducedRun:
+    """A run reduced (small and picklable: never its trace).
+
+    ``name``: the run's name in messages (the file as the caller names it, with the run's
+    place when the export holds several); ``verdict``: its labels, nominal force and flags
+    (:func:`tribopipe.labels.decide_run`); ``summary``: :func:`run_summary`; ``record``:
+    its friction-map row (``None`` when pin or disc is unknown); the paths of the outputs
+    written; ``notes``: each output that could not be written (the trace plot), naming it
+    and why: the run is still reduced and stored.
+    """
+
+    name: str
+    place: RunPlace
+    verdict: RunVerdict
+    measurement_id: str
+    summary: dict[str, Any] = field(repr=False)
+    record: dict[str, Any] | None = field(repr=False)
+    trace: Path | None = None
+    summary_file: Path | None = None
+    plot: Path | None = None
+    notes: tuple[str, ...] = ()
+
+    @property
+    def labels(self) -> RunLabels:
+        """The labels the run was reduced with."""
+        return self.verdict.labels
+
+    @property
+    def flags(self) -> tuple[str, ...]:
+        """The run's QC flags, as every output shows them."""
+        return self.verdict.flags
+
+
+@dataclass(frozen=True)
+class FailedRun:
+    """A run (or a test without a friction interval; ``place`` ``None``: the whole file)
+    that could not be reduced, labelled or written, with its one-line ``reason`` (naming
+    the file and, for an output, the output). ``transient`` when it was not the file's
+    fault (a crashed worker, an internal error: tried again next time); ``undescribed``
+    when no metadata source described it (:class:`~tribopipe.labels.Undescribed`)."""
+
+    name: str
+    reason: str
+    place: RunPlace | None = None
+    transient: bool = False
+    undescribed: bool = False
+
+
+@dataclass(frozen=True)
+class FileOutcome:
+    """What :func:`reduce_export` made of one file: a :class:`ReducedRun` or
+    :class:`FailedRun` per run (and per test without a friction interval), in file order;
+    or ``error``, the file as a whole (unreadable, not an export). ``name`` is the file as
+    the caller names it in messages; ``duplicate_of`` names an earlier file of the same
+    call with the same content: this one's runs were skipped (reduced once)."""
 
     path: str
     name: str
-    place: RunPlace
-    outcome: RunOutcome | None = None
-    error: str | None = None
-    trace: Path | None = None
-    summary: Path | None = None
-    plot: Path | None = None
-
-    @property
-    def ok(self) -> bool:
-        """True when the run was reduced (and its outputs written)."""
-        return self.error is None
-
-
-@dataclass(frozen=True)
-class FileResult:
-    """What :func:`reduce_export` or :func:`reduce_files` made of one file: a
-    :class:`RunResult` per run (and per test without a friction interval), or ``error``
-    for the file as a whole (unreadable, not an export). ``duplicate_of`` names an
-    earlier file of the same call with the same content: this one was not reduced again.
-    """
-
-    path: str
-    runs: tuple[RunResult, ...] = ()
-    error: str | None = None
     file_hash: str | None = None
     tests: tuple[str | None, ...] = ()
+    several: bool = False
+    runs: tuple[ReducedRun | FailedRun, ...] = ()
+    error: FailedRun | None = None
     duplicate_of: str | None = None
+
+    @property
+    def reduced(self) -> list[ReducedRun]:
+        """The runs reduced, in file order."""
+        return [r for r in self.runs if isinstance(r, ReducedRun)]
+
+    @property
+    def failed(self) -> list[FailedRun]:
+        """The file's failure, or its runs that failed, in file order."""
+        if self.error is not None:
+            return [self.error]
+        return [r for r in self.runs if isinstance(r, FailedRun)]
 
     @property
     def ok(self) -> bool:
         """True when the file was read and every one of its runs reduced."""
-        return self.error is None and all(r.ok for r in self.runs)
+        return not self.failed
 
     @property
-    def outcomes(self) -> list[RunOutcome]:
-        """The reduced runs, in file order."""
-        return [r.outcome for r in self.runs if r.outcome is not None]
-
-    @property
-    def errors(self) -> list[str]:
-        """Every one-line error: the file's, or its failed runs'."""
-        if self.error is not None:
-            return [self.error]
-        return [r.error for r in self.runs if r.error is not None]
+    def transient(self) -> bool:
+        """True when the file or a run failed for a reason that is not the file's."""
+        return any(r.transient for r in self.failed)
 
 
-def _message(exc: BaseException, path: str | Path) -> str:
-    """One line naming the file once: the error's text, prefixed with the path when the
-    error does not name it."""
-    shown = display_path(path)
+def failure_reason(exc: BaseException, path: str | Path, name: str,
+                   run: str | None = None) -> str:
+    """One line naming the file once, as the caller names it (``name``; a reader names
+    the path it was given, which may be long and machine-specific): the error's text, its
+    path swapped for ``name``, or prefixed with the run's name (``run``, default
+    ``name``) when it names no file."""
     if isinstance(exc, OSError):
-        return f"{shown}: {os_reason(exc)}"
-    message = str(exc)
-    return message if shown in message else f"{shown}: {message}"
+        return f"{display_path(run or name)}: {os_reason(exc)}"
+    text = str(exc)
+    where = getattr(exc, "path", None)
+    if where is not None and where != str(path) and display_path(where) in text:
+        return text  # it names another file (a manifest, an output)
+    full = display_path(path)
+    if text.startswith(full):
+        return display_path(name) + text[len(full):]
+    return text if full in text else f"{display_path(run or name)}: {text}"
+
+
+def _written(what: str, target: Path, write: Callable[[], Path]) -> Path:
+    """Run ``write`` (which writes ``target``); an OS error becomes an
+    :class:`OutputError` naming the output (not the export it came from)."""
+    try:
+        return write()
+    except OSError as exc:
+        raise OutputError(f"cannot write its {what} {display_path(target)}: "
+                          f"{os_reason(exc)}") from None
+
+
+def _reduced(outcome: RunOutcome, name: str, outputs: RunOutputs | None) -> ReducedRun:
+    """A reduced run with its outputs written: the trace and summary must be (else
+    :class:`OutputError`), a trace plot that cannot be drawn is a note."""
+    paths: dict[str, Path | None] = {}
+    notes: list[str] = []
+    summary = run_summary(outcome)
+    if outputs is not None:
+        layout, mid = outputs.layout, outcome.measurement_id
+        paths["trace"] = _written("trace", layout.trace_path(outcome.path, mid),
+                                  lambda: write_trace(layout, outcome))
+        if outputs.summary:
+            paths["summary_file"] = _written(
+                "summary", layout.summary_path(outcome.path, mid),
+                lambda: write_summary(layout, outcome))
+        if outputs.plot:
+            target = layout.trace_plot_path(outcome.path, mid)
+            try:
+                paths["plot"] = plot_run(layout, outcome)
+            except Exception as exc:  # noqa: BLE001 - a picture must not cost the run its map row
+                notes.append(printable(f"{name}: trace plot {display_path(target)} not drawn "
+                                       f"({type(exc).__name__}: {exc})"))
+    return ReducedRun(name=name, place=outcome.place, verdict=outcome.decided,
+                      measurement_id=outcome.measurement_id, summary=summary,
+                      record=outcome.record, notes=tuple(notes), **paths)
 
 
 def reduce_export(
     path: str | Path,
     settings: Settings,
-    labels: RunLabels | None = None,
+    labels: RunLabels | LabelsFor | None = None,
     read_options: ReadOptions | None = None,
     *,
     tolerances: Tolerances | None = None,
     file_hash: str | None = None,
-    each_run: Callable[[RunOutcome], Mapping[str, Path | None]] | None = None,
-) -> FileResult:
-    """Reduce every run of an export (:func:`read_runs`, :func:`reduce_run` per run),
-    each labelled ``labels``.
+    outputs: RunOutputs | None = None,
+    name: str | None = None,
+) -> FileOutcome:
+    """The one route from an export to its runs, for ``tribopipe reduce`` and the batch:
+    read it once (:func:`read_runs`), label each run (``labels``, the same for every run,
+    or a :data:`LabelsFor`), reduce it (:func:`reduce_run`: its flags decided once) and
+    write its outputs (``outputs``), and return one :class:`FileOutcome`.
 
-    A test without a friction interval and a run that cannot be reduced each give a
-    :class:`RunResult` with its one-line error and the other runs still go through; a
-    file that cannot be read gives a :class:`FileResult` with ``error``. Nothing raises
-    for a bad file. ``each_run(outcome)`` writes a reduced run's outputs and returns
-    their paths (``trace``, ``summary``, ``plot``); when it fails, the run fails.
+    ``name`` is the file as messages name it (default: ``path``). A test without a
+    friction interval, a run that cannot be labelled, reduced or written each give a
+    :class:`FailedRun` with its one-line reason and the other runs still go through; a
+    file that cannot be read gives ``error``. Nothing raises for a bad file.
     """
+    shown = str(path) if name is None else name
     try:
         export = read_runs(path, read_options, file_hash=file_hash)
     except (TribopipeError, OSError) as exc:
-        return FileResult(path=str(path), error=_message(exc, path), file_hash=file_hash)
-    results: list[tuple[int, RunResult]] = []
-    for place, problem in export.problems:
-        name = export.name(place)
-        error = _message(problem, path)
-        results.append((0, RunResult(path=str(path), name=name, place=place, error=error)))
-    for k, (place, measurement) in enumerate(export.runs, start=1):
-        name = export.name(place)
-        try:
-            outcome = reduce_run(export, place, measurement, settings, labels,
-                                 tolerances=tolerances)
-            written = dict(each_run(outcome)) if each_run is not None else {}
-        except (TribopipeError, OSError) as exc:
-            results.append((k, RunResult(path=str(path), name=name, place=place,
-                                         error=_message(exc, path))))
+        return FileOutcome(path=str(path), name=shown, file_hash=file_hash,
+                           error=FailedRun(name=shown,
+                                           reason=failure_reason(exc, path, shown)))
+    problems = dict(export.problems)
+    measurements = dict(export.runs)
+    runs: list[ReducedRun | FailedRun] = []
+    for place in export.order:
+        run = run_name(shown, place, export.several)
+        if place in problems:
+            runs.append(FailedRun(name=run, place=place,
+                                  reason=failure_reason(problems[place], path, shown, run)))
             continue
-        results.append((k, RunResult(path=str(path), name=name, place=place, outcome=outcome,
-                                     **written)))
-    position = {place: i for i, place in enumerate(export.order)}
-    ordered = tuple(sorted((r for _, r in results), key=lambda r: position[r.place]))
-    return FileResult(path=str(path), runs=ordered, file_hash=export.file_hash,
-                      tests=export.tests)
+        try:
+            given = labels(export, place, run) if callable(labels) else labels
+            outcome = reduce_run(export, place, measurements[place], settings, given,
+                                 tolerances=tolerances)
+            runs.append(_reduced(outcome, run, outputs))
+        except (TribopipeError, OSError) as exc:
+            # an output that could not be written is not the export's fault: tried again
+            runs.append(FailedRun(name=run, place=place,
+                                  reason=failure_reason(exc, path, shown, run),
+                                  transient=isinstance(exc, OutputError),
+                                  undescribed=isinstance(exc, Undescribed)))
+    return FileOutcome(path=str(path), name=shown, file_hash=export.file_hash,
+                       tests=export.tests, several=export.several, runs=tuple(runs))
 
 
 def reduce_files(
@@ -501,28 +613,19 @@ def reduce_files(
     out_dir: str | Path | OutputLayout,
     summaries: bool = True,
     plots: bool = False,
-    on_file: Callable[[FileResult], None] | None = None,
-) -> list[FileResult]:
-    """Reduce every run of each file alone (:func:`reduce_export`) and write each run's
-    trace, its summary (``summaries``) and its trace plot (``plots``) below ``out_dir``.
+    on_file: Callable[[FileOutcome], None] | None = None,
+) -> list[FileOutcome]:
+    """``tribopipe reduce`` over several files: each file alone through
+    :func:`reduce_export`, writing each run's trace, its summary (``summaries``) and its
+    trace plot (``plots``) below ``out_dir``.
 
-    A file that cannot be read, a test without a friction interval and a run that cannot
-    be reduced or written each give their one-line error (naming the file once) and the
-    others still go through; nothing raises for a bad file. A file whose content (SHA-256)
-    an earlier file of ``paths`` already had is not reduced again: its result names that
-    file in ``duplicate_of``. ``on_file`` is called with each result as it is done (in
-    the order of ``paths``), e.g. to print progress.
+    A file whose content (SHA-256) an earlier file of ``paths`` already had is not
+    reduced again: its outcome names that file in ``duplicate_of``. ``on_file`` is
+    called with each outcome as it is done (in the order of ``paths``), e.g. to print
+    progress. Nothing raises for a bad file.
     """
-    layout = OutputLayout.of(out_dir)
-
-    def write(outcome: RunOutcome) -> dict[str, Path | None]:
-        return {
-            "trace": write_trace(layout, outcome),
-            "summary": write_summary(layout, outcome) if summaries else None,
-            "plot": plot_run(layout, outcome) if plots else None,
-        }
-
-    results: list[FileResult] = []
+    outputs = RunOutputs(OutputLayout.of(out_dir), summary=summaries, plot=plots)
+    results: list[FileOutcome] = []
     first_with: dict[str, str] = {}
     for path in paths:
         try:
@@ -530,12 +633,13 @@ def reduce_files(
         except (OSError, TribopipeError):
             sha = None  # the reader says what is wrong with it, in its words
         if sha is not None and sha in first_with:
-            result = FileResult(path=str(path), file_hash=sha, duplicate_of=first_with[sha])
+            result = FileOutcome(path=str(path), name=str(path), file_hash=sha,
+                                 duplicate_of=first_with[sha])
         else:
             if sha is not None:
                 first_with[sha] = str(path)
             result = reduce_export(path, settings, labels, read_options, file_hash=sha,
-                                   each_run=write)
+                                   outputs=outputs)
         if on_file is not None:
             on_file(result)
         results.append(result)
@@ -547,44 +651,49 @@ def reduce_files(
 
 @dataclass(frozen=True)
 class StoreReport:
-    """What :func:`store_runs` did: the map's :class:`AppendReport` and the runs of files
-    the map already held under another name (duplicates left out, conflicts refused)."""
+    """What :func:`store_runs` did: the map's :class:`AppendReport`, the runs of files
+    the map already held under another name (duplicates left out, conflicts refused) and
+    the repeat numbers now used twice in one condition (:func:`repeat_clashes`)."""
 
     appended: AppendReport
     same: tuple[SameContent, ...] = ()
+    repeats: tuple[str, ...] = ()
 
     @property
-    def conflicts(self) -> tuple[SameContent, ...]:
-        """The refused files (labels differ from the map's)."""
-        return tuple(s for s in self.same if s.conflict)
+    def relabelled(self) -> tuple[str, ...]:
+        """The runs the map kept with other labels than this reduction's (a relabel
+        refused without ``replace``): their measurement ids."""
+        appended = self.appended
+        return tuple(i for i in appended.conflicting_ids
+                     if set(appended.differences.get(i, ())) & set(LABEL_COLUMNS))
 
 
-def store_runs(map_path: str | Path, outcomes: Sequence[RunOutcome], *,
+def store_runs(map_path: str | Path, files: Sequence[FileOutcome], *,
                replace: bool = False) -> StoreReport:
-    """Append the records of reduced runs to the map (:func:`append_records`), after
-    checking each file against the map: a file whose runs the map already holds under
-    another file name is a duplicate (its records are left out, the map keeps the first
-    name) or, where the labels differ, a conflict (refused, unless ``replace``)."""
-    records = [o for o in outcomes if o.record is not None]
-    by_hash = map_files_by_hash(read_map(map_path)) if Path(map_path).exists() else {}
+    """Append the records of the runs reduced in ``files`` to the map, after checking each
+    file against the map under its lock (:class:`ContentOwners`, the batch's check too):
+    a file whose runs the map already holds under another file name is a duplicate (its
+    records are left out, the map keeps the first name) or, where the labels differ, a
+    conflict (refused, unless ``replace``)."""
     same: list[SameContent] = []
-    keep: list[dict[str, Any]] = []
-    checked: dict[str, SameContent | None] = {}
-    for o in records:
-        name = stored_file_name(o.path)  # as the map keeps it: raw
-        if o.path not in checked:
-            others = {src: ids for src, ids in by_hash.get(o.file_hash, {}).items()
-                      if src != name}
-            found = None
-            if others:
-                other, old = sorted(others.items())[0]
-                new = {r.measurement_id: labels_of(r.record)
-                       for r in records if r.path == o.path}
-                found = compare_labels(o.path, other, new, old)
+    repeats: list[str] = []
+
+    def decide(current: Any) -> tuple[list[dict[str, Any]], tuple[str, ...]]:
+        owners = ContentOwners(map_files_by_hash(current))
+        keep: list[dict[str, Any]] = []
+        for f in files:
+            records = [r.record for r in f.reduced if r.record is not None]
+            if not records:
+                continue
+            runs = {str(r["measurement_id"]): labels_of(r) for r in records}
+            found, _ = owners.check(f.path, f.file_hash, runs)
+            if found is not None:
                 same.append(found)
-            checked[o.path] = found
-        found = checked[o.path]
-        if found is None or (found.conflict and replace):
-            keep.append(o.record)
-    return StoreReport(appended=append_records(map_path, keep, replace=replace),
-                       same=tuple(same))
+            if found is None or (found.conflict and replace):
+                keep += records
+                owners.landed(f.path, f.file_hash, runs)
+        repeats.extend(repeat_clashes(current, keep))
+        return keep, ()
+
+    appended = update_map_with(map_path, decide, replace=replace)
+    return StoreReport(appended=appended, same=tuple(same), repeats=tuple(repeats))

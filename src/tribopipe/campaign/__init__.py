@@ -37,10 +37,12 @@ The package's rooms, each importing only those above it:
 * :mod:`~tribopipe.campaign.metadata` — the manifest (a row per file, or per test of a
   session export), the merge of metadata sources per test (which must agree; a test whose
   metadata is missing or contradictory fails alone);
-* :mod:`~tribopipe.campaign.table` — which files are exports (:func:`discover_files`), the
-  campaign as a table (:func:`campaign_table`, one row per file; :func:`campaign_listing`,
-  one per run) and its incremental state (content hash trusted while size and
-  ``mtime_ns`` are unchanged; the runs of each file);
+* :mod:`~tribopipe.campaign.state` — the incremental state, typed (:class:`CampaignState`:
+  each file and its runs as the last batch found them), read and written in one place;
+* :mod:`~tribopipe.campaign.table` — which files are exports (:func:`discover_files`) and
+  the campaign as a table (:func:`campaign_table`, one row per file, its content hash
+  trusted while size and ``mtime_ns`` are unchanged; :func:`campaign_listing`, one per
+  run);
 * :mod:`~tribopipe.campaign.outputs` — ``runs.csv`` (one row per run) and ``failures.csv``;
 * :mod:`~tribopipe.campaign.worker` — one file in a worker: read once, every run labelled
   and reduced;
@@ -55,15 +57,11 @@ itself.
 
 from __future__ import annotations
 
-from ..frictionmap.records import Tolerances, qc_flags
 from ..layout import BATCH_LOCK
 from .batch import (
     GC_THRESHOLDS,
     BatchReport,
-    FailedRun,
-    FileDone,
     ProgressCallback,
-    ReducedRun,
     default_jobs,
     run_campaign,
 )
@@ -90,7 +88,7 @@ from .spec import (
     folder_campaign,
     load_campaign,
 )
-from .table import (
+from .state import (
     CHANGED,
     DUPLICATE,
     FAILED,
@@ -98,20 +96,21 @@ from .table import (
     REDUCED,
     SKIPPED,
     STATE_VERSION,
+    CampaignState,
+    load_state,
+    save_state,
+)
+from .table import (
     CampaignRow,
     campaign_listing,
     campaign_table,
     describe_glob,
     discover_files,
-    load_state,
     recipe_hash,
-    save_state,
 )
 
 __all__ = [
     "BATCH_LOCK",
-    "Tolerances",
-    "qc_flags",
     "REQUIRED_FIELDS",
     "LABEL_FIELDS",
     "PATTERN_FIELDS",
@@ -127,6 +126,7 @@ __all__ = [
     "merge_metadata",
     "labels_from",
     "STATE_VERSION",
+    "CampaignState",
     "NEW",
     "REDUCED",
     "CHANGED",
@@ -145,9 +145,6 @@ __all__ = [
     "ProgressCallback",
     "GC_THRESHOLDS",
     "BatchReport",
-    "FileDone",
-    "ReducedRun",
-    "FailedRun",
     "default_jobs",
     "run_campaign",
 ]

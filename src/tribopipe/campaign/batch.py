@@ -15,43 +15,41 @@ from __future__ import annotations
 import math
 import os
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
 from ..errors import CampaignError, OutputError, TribopipeError
 from ..files import file_sha256, os_reason
 from ..frictionmap.duplicates import (
+    ContentOwners,
     FilesByHash,
-    SameContent,
-    compare_labels,
     labels_of,
     map_files_by_hash,
+    repeat_clashes,
 )
 from ..frictionmap.records import stored_file_name
-from ..frictionmap.store import read_map, update_map
+from ..frictionmap.store import read_map, update_map_with
+from ..pipeline import FileOutcome, ReducedRun
 from .metadata import Manifest, read_manifest
 from .outputs import _write_failures_csv, _write_runs_csv
 from .spec import Campaign
-from .table import (
+from .state import (
     DUPLICATE,
     FAILED,
     REDUCED,
     SKIPPED,
-    STATE_VERSION,
-    CampaignRow,
-    campaign_table,
-    describe_glob,
+    CampaignState,
+    FileState,
+    MapStamp,
+    RunEntry,
+    RunState,
     load_state,
-    recipe_hash,
     save_state,
 )
+from .table import CampaignRow, campaign_table, describe_glob, recipe_hash
 from .worker import (  # noqa: F401 - GC_THRESHOLDS, _worker_init: importable from here too
     GC_THRESHOLDS,
-    FailedRun,
-    FileDone,
-    ReducedRun,
-    RunResult,
     _Context,
     _fewer_gc_passes,
     _Job,
@@ -150,12 +148,17 @@ class BatchReport:
     test_tally: Tally = field(default_factory=Tally)
     runs_failed: int = 0
     conflicts: list[tuple[str, str]] = field(default_factory=list)
+    #: repeat numbers used by several runs of one condition, with the runs reduced now
+    repeats: list[str] = field(default_factory=list)
+    #: the batch's own outputs (state, runs.csv, failures.csv) that could not be written
+    output_errors: list[str] = field(default_factory=list)
 
     @property
     def ok(self) -> bool:
-        """True when everything the user named was reduced: no file, test or run failed
-        and every manifest row matched a file (and its test)."""
-        return not self.failures and not self.unmatched
+        """True when everything the user named was reduced and written: no file, test or
+        run failed, every manifest row matched a file (and its test) and every output of
+        the batch was written."""
+        return not self.failures and not self.unmatched and not self.output_errors
 
     def summary(self) -> str:
         """One line whose parts add up: files found (read, duplicate, conflict, failed);
@@ -174,11 +177,13 @@ class BatchReport:
 
     def ledger(self) -> list[str]:
         """The batch's account: :meth:`summary`, then one line per duplicate file, per
-        file refused as a conflict, per manifest row that matched no file or no test, and
-        per test no metadata source described."""
+        file refused as a conflict, per repeat number used twice in one condition, per
+        manifest row that matched no file or no test, and per test no metadata source
+        described."""
         lines = [self.summary()]
         lines += [f"  duplicate: {reason}" for _, reason in self.duplicates]
         lines += [f"  conflict: {reason}" for _, reason in self.conflicts]
+        lines += [f"  warning: {line}" for line in self.repeats]
         lines += [f"  manifest row matching no {what}" for what in self.unmatched]
         lines += [f"  test no metadata source described: {name}" for name in self.undescribed]
         return lines
@@ -214,7 +219,8 @@ def run_campaign(
     ``failures.csv`` (``file,reason``: the file, or the run's name) and the state file;
     appends the new records to ``campaign.map_path`` in one atomic update (replacing the
     rows of changed runs). ``progress(done, total)`` is called as files finish. Failures
-    of single files, tests or runs never raise: they are in the report. Raises
+    of single files, tests or runs never raise: they are in the report, and so are the
+    batch's own outputs that could not be written (``output_errors``). Raises
     :class:`CampaignError` when another batch of the same campaign is running,
     :class:`MapError` when the map path holds a foreign file.
     """
@@ -244,7 +250,7 @@ def _run_locked(campaign: Campaign, *, jobs: int | None, plots: bool | None,
     jobs = default_jobs() if jobs is None else max(1, int(jobs))
     plots = campaign.plots if plots is None else plots
     state = load_state(campaign)
-    entries: dict[str, Any] = dict(state.get("entries", {}))
+    entries: dict[str, FileState] = dict(state.entries)
     missing_ids, map_checked = _ids_missing_from_map(campaign, state)
     manifest = read_manifest(campaign.manifest) if campaign.manifest is not None else None
     rows = campaign_table(campaign, state=state, manifest=manifest)
@@ -265,14 +271,10 @@ def _run_locked(campaign: Campaign, *, jobs: int | None, plots: bool | None,
     by_file = {row.file: row for row in rows}
     vanished = {f: e for f, e in entries.items() if f not in by_file}
     failures = plan.failures
-    landing = _apply(campaign, results, by_file, entries, failures, notes, vanished)
+    map_summary, landed, removed, landing = _land(
+        campaign, results, lambda in_map: _apply(campaign, results, by_file, entries, failures,
+                                                 notes, vanished, in_map), entries)
     _forget_vanished(campaign, entries, set(by_file), notes)
-
-    map_summary = "unchanged"
-    removed: set[str] = set()
-    landed: set[str] = set()
-    if landing.records or landing.stale_ids:
-        map_summary, landed, removed = _update_map(campaign, landing.records, landing.stale_ids)
     groups = _groups_updated(state, landing.records, landed, removed)
 
     duplicates = {**plan.duplicates, **landing.duplicates}
@@ -280,18 +282,16 @@ def _run_locked(campaign: Campaign, *, jobs: int | None, plots: bool | None,
     this_batch = {n: REDUCED for n in landing.reduced} | {n: SKIPPED for n in plan.skipped} | {
         n: FAILED for n in failures
     }
-    # each output is tried even when one fails (a full disk may free up); the first
-    # failure is the batch's one-line error
-    problems: list[OutputError] = []
+    # each output is tried even when one fails (a full disk may free up); those that
+    # fail are in the report, beside every run's outcome
+    problems: list[str] = []
     for write in (lambda: _save_state_with_map(campaign, entries, state),
                   lambda: _write_runs_csv(campaign, rows, entries, this_batch, failures),
                   lambda: _write_failures_csv(campaign, failures)):
         try:
             write()
         except OutputError as exc:
-            problems.append(exc)
-    if problems:
-        raise problems[0]
+            problems.append(str(exc))
     tests_in, unmatched, undescribed = _ledger(rows, entries, manifest)
     runs_failed = plan.runs_failed + landing.runs_failed
     test_tally = tally(outcomes, tests_in)
@@ -317,6 +317,8 @@ def _run_locked(campaign: Campaign, *, jobs: int | None, plots: bool | None,
         test_tally=test_tally,
         runs_failed=runs_failed,
         conflicts=sorted((f, failures[f]) for f, o in outcomes.items() if o == CONFLICT),
+        repeats=landing.repeats,
+        output_errors=problems,
     )
 
 
@@ -336,10 +338,9 @@ class _Plan:
     runs_failed: int
 
 
-def _run_ids(entry: Mapping[str, Any], statuses: tuple[str, ...] = (REDUCED,)) -> set[str]:
+def _run_ids(entry: FileState | None, statuses: tuple[str, ...] = (REDUCED,)) -> set[str]:
     """The measurement ids of a state entry's runs with one of ``statuses``."""
-    return {str(r["measurement_id"]) for r in entry.get("runs") or []
-            if r.get("status") in statuses and r.get("measurement_id")}
+    return set() if entry is None else entry.run_ids(statuses)
 
 
 def _plan(rows: Sequence[CampaignRow], missing_ids: set[str]) -> _Plan:
@@ -352,7 +353,7 @@ def _plan(rows: Sequence[CampaignRow], missing_ids: set[str]) -> _Plan:
     outcomes: dict[str, str] = {}
     runs_failed = 0
     for row in rows:
-        previous = row.previous or {}
+        previous = row.previous
         stored = _run_ids(previous, (REDUCED, DUPLICATE))
         if row.problem is not None:
             failures[row.file] = row.problem
@@ -360,19 +361,19 @@ def _plan(rows: Sequence[CampaignRow], missing_ids: set[str]) -> _Plan:
         elif row.status == REDUCED and not stored & missing_ids:
             outcomes[row.file] = READ
             for run in row.runs:
-                name = run.get("name") or row.file
-                if run.get("status") == REDUCED:
+                name = run.name or row.file
+                if run.status == REDUCED:
                     skipped.append(name)
                 else:  # unchanged and failed before: not retried, still listed
-                    failures[name] = run.get("reason") or "failed in an earlier batch"
+                    failures[name] = run.reason or "failed in an earlier batch"
                     runs_failed += 1
         elif row.status == DUPLICATE and not stored & missing_ids:
-            duplicates[row.file] = previous.get("reason") or "a duplicate"
+            duplicates[row.file] = (previous and previous.reason) or "a duplicate"
             outcomes[row.file] = DUPLICATE
         elif row.status == FAILED:
             # unchanged and failed before: do not retry, keep it listed
             failures[row.file] = row.reason or "failed in an earlier batch"
-            outcomes[row.file] = CONFLICT if previous.get("duplicate_of") else FAILED
+            outcomes[row.file] = CONFLICT if previous and previous.duplicate_of else FAILED
         else:
             todo.append(_Job(file=row.file, path=str(row.path), sources=row.sources,
                              hints=row.hints, test_rows=row.test_rows, sha256=row.sha256))
@@ -381,11 +382,11 @@ def _plan(rows: Sequence[CampaignRow], missing_ids: set[str]) -> _Plan:
 
 
 def _execute(todo: list[_Job], ctx: _Context, jobs: int, progress: ProgressCallback | None,
-             done: int, total: int) -> list[FileDone]:
+             done: int, total: int) -> list[FileOutcome]:
     """Reduce the jobs: in this process for one worker, else in a pool of ``jobs``
     processes; ``progress(done, total)`` after every chunk. A crashed worker's files come
     back as transient failures."""
-    results: list[FileDone] = []
+    results: list[FileOutcome] = []
     if not todo:
         return results
     workers = min(jobs, len(todo))
@@ -429,64 +430,35 @@ class _Landing:
     duplicates: dict[str, str]
     outcomes: dict[str, str]
     runs_failed: int
+    #: repeat numbers used twice in one condition once the records land
+    repeats: list[str] = field(default_factory=list)
 
 
-class _Owners:
-    """Which file brought each content (SHA-256) to the map, and its runs' labels: the
-    files that landed runs, in the state and in this batch; then the map's own rows."""
-
-    def __init__(self, campaign: Campaign, by_file: Mapping[str, CampaignRow],
-                 redone: set[str], vanished: Mapping[str, Any]) -> None:
-        self.campaign = campaign
-        self.first: dict[str, tuple[str, dict[str, dict[str, Any]]]] = {}
-        for file, row in by_file.items():
-            entry = row.previous or {}
-            if file in redone or entry.get("status") != REDUCED or not row.sha256:
-                continue
-            runs = {str(r["measurement_id"]): labels_of(r.get("labels"))
-                    for r in entry.get("runs") or [] if r.get("status") == REDUCED}
-            if runs:
-                self.first.setdefault(row.sha256, (file, runs))
-        self.renamed_from = {stored_file_name(f): f for f, e in vanished.items()
-                             if e.get("status") == REDUCED}
-        self.vanished_sha = {f: e.get("sha256") for f, e in vanished.items()}
-        self._map: FilesByHash | None = None
-
-    def _in_map(self) -> FilesByHash:
-        if self._map is None:
-            path = self.campaign.map_path
-            self._map = map_files_by_hash(read_map(path)) if path.exists() else {}
-        return self._map
-
-    def check(self, done: FileDone, runs: Mapping[str, Mapping[str, Any]]
-              ) -> tuple[SameContent | None, str | None]:
-        """The same content seen before under another name (or ``None``), and a note when
-        the other name is a file that left the folder with this content (a rename)."""
-        sha = done.sha256 or ""
-        if sha in self.first and self.first[sha][0] != done.file:
-            other, old = self.first[sha]
-            return compare_labels(done.file, other, runs, old), None
-        for source, old in sorted(self._in_map().get(sha, {}).items()):
-            if source == stored_file_name(done.file):  # as the map keeps it: raw
-                continue
-            gone = self.renamed_from.get(source)
-            if gone is not None and self.vanished_sha.get(gone) == sha:
-                return None, (f"{done.file}: same content as {gone}, which left the folder: "
-                              "taken as renamed")
-            return compare_labels(done.file, source, runs, old), None
-        return None, None
-
-    def landed(self, done: FileDone, runs: dict[str, dict[str, Any]]) -> None:
-        """Record that ``done``'s runs landed: later files with its content are duplicates."""
-        if done.sha256 and runs:
-            self.first.setdefault(done.sha256, (done.file, runs))
+def _owners(by_file: Mapping[str, CampaignRow], redone: set[str],
+            vanished: Mapping[str, FileState], in_map: FilesByHash) -> ContentOwners:
+    """The one duplicate check (:class:`ContentOwners`) for a batch: the contents the
+    files of the state brought (those not redone now), then the map's own rows; a file
+    that left the folder with a content the map holds is the one renamed."""
+    known: dict[str, tuple[str, dict[str, dict[str, Any]]]] = {}
+    for file, row in by_file.items():
+        entry = row.previous
+        if file in redone or entry is None or entry.status != REDUCED or not row.sha256:
+            continue
+        runs = {r.entry.measurement_id: labels_of(r.entry.labels)
+                for r in entry.runs if r.status == REDUCED and r.entry is not None}
+        if runs:
+            known.setdefault(row.sha256, (file, runs))
+    renamed = {stored_file_name(f): (f, e.sha256) for f, e in vanished.items()
+               if e.status == REDUCED}
+    return ContentOwners(in_map, known, renamed)
 
 
-def _apply(campaign: Campaign, results: Sequence[FileDone], by_file: Mapping[str, CampaignRow],
-           entries: dict[str, Any], failures: dict[str, str], notes: list[str],
-           vanished: Mapping[str, Any]) -> _Landing:
+def _apply(campaign: Campaign, results: Sequence[FileOutcome], by_file: Mapping[str, CampaignRow],
+           entries: dict[str, FileState], failures: dict[str, str], notes: list[str],
+           vanished: Mapping[str, FileState], in_map: FilesByHash) -> _Landing:
     """Fold the workers' results into the state ``entries`` and ``failures`` (in file
-    order, both updated in place; plot and rename notes added to ``notes``)."""
+    order, both updated in place; plot and rename notes added to ``notes``), each file
+    checked against the files before it and the map (``in_map``, read under its lock)."""
     records: list[dict[str, Any]] = []
     old_ids: set[str] = set()
     reduced: list[str] = []
@@ -495,84 +467,85 @@ def _apply(campaign: Campaign, results: Sequence[FileDone], by_file: Mapping[str
     outcomes: dict[str, str] = {}
     runs_failed = 0
     config_hash = campaign.settings.config_hash  # hashes the settings: once, not per run
-    owners = _Owners(campaign, by_file, {r.file for r in results}, vanished)
-    for done in sorted(results, key=lambda r: r.file):
-        row = by_file[done.file]
-        old = entries.get(row.file) or {}
+    owners = _owners(by_file, {r.name for r in results}, vanished, in_map)
+    for done in sorted(results, key=lambda r: r.name):
+        row = by_file[done.name]
+        old = entries.get(row.file)
         if done.transient:
             # not the file's fault: listed now, retried next time (the state is left as is)
             outcomes[row.file] = FAILED
-            for failed in [done.error, *done.runs]:
-                if isinstance(failed, FailedRun):
-                    failures[failed.name or failed.file] = failed.reason
+            for failed in done.failed:
+                failures[failed.name] = failed.reason
             continue
         old_ids |= _run_ids(old)
-        base = {
-            "size": row.size, "mtime_ns": row.mtime_ns, "config_hash": config_hash,
-            "recipe": recipe_hash(campaign, row.merged, row.test_rows),
-            "sha256": done.sha256 or row.sha256 or _sha256_or_none(row.path),
-            "tests": list(done.tests),
-        }
+        base = FileState(
+            size=row.size, mtime_ns=row.mtime_ns, config_hash=config_hash,
+            recipe=recipe_hash(campaign, row.merged, row.test_rows),
+            sha256=done.file_hash or row.sha256 or _sha256_or_none(row.path),
+            tests=tuple(done.tests), status=REDUCED,
+        )
         if done.error is not None:
             outcomes[row.file] = FAILED
             failures[row.file] = done.error.reason
-            entries[row.file] = {**base, "status": FAILED, "reason": done.error.reason,
-                                 "runs": []}
+            entries[row.file] = replace(base, status=FAILED, reason=done.error.reason)
             continue
-        mine = {r.entry.measurement_id: labels_of(r.record) for r in done.reduced}
-        same, note = owners.check(done, mine) if mine else (None, None)
+        entry = {r.measurement_id: RunEntry.of(r, campaign.output_dir) for r in done.reduced}
+        mine = {r.measurement_id: labels_of(r.record) for r in done.reduced}
+        same, note = owners.check(done.name, done.file_hash, mine) if mine else (None, None)
         if note:
             notes.append(note)
         if same is not None:
             _drop_outputs(campaign, done, entries)
-            runs = [{"status": DUPLICATE, **{**r.entry.as_dict(), "trace": ""}}
-                    for r in done.reduced]
+            runs = tuple(RunState.kept(DUPLICATE, replace(entry[r.measurement_id], trace=""))
+                         for r in done.reduced)
             if same.conflict:
                 outcomes[row.file] = CONFLICT
                 failures[row.file] = same.message()
-                entries[row.file] = {**base, "status": FAILED, "reason": same.message(),
-                                     "duplicate_of": same.other, "runs": []}
+                entries[row.file] = replace(base, status=FAILED, reason=same.message(),
+                                            duplicate_of=same.other)
             else:
                 outcomes[row.file] = DUPLICATE
                 duplicates[row.file] = same.message()
-                entries[row.file] = {**base, "status": DUPLICATE, "reason": same.message(),
-                                     "duplicate_of": same.other, "runs": runs}
+                entries[row.file] = replace(base, status=DUPLICATE, reason=same.message(),
+                                            duplicate_of=same.other, runs=runs)
             continue
-        owners.landed(done, mine)
+        owners.landed(done.name, done.file_hash, mine)
         outcomes[row.file] = READ
-        runs_state: list[dict[str, Any]] = []
+        runs_state: list[RunState] = []
         for run in done.runs:
             if isinstance(run, ReducedRun):
+                assert run.record is not None  # labels_from always names pin and disc
                 reduced.append(run.name)
                 records.append(run.record)
-                if run.record.get("flags"):
-                    flagged.append((run.name, run.record["flags"]))
-                if run.plot_note and run.plot_note not in notes:
-                    notes.append(run.plot_note)
-                runs_state.append({"status": REDUCED, **run.entry.as_dict()})
+                if run.flags:
+                    flagged.append((run.name, ";".join(run.flags)))
+                notes += [n for n in run.notes if n not in notes]
+                runs_state.append(RunState.kept(REDUCED, entry[run.measurement_id]))
             else:
-                failures[run.name or run.file] = run.reason
+                failures[run.name] = run.reason
                 runs_failed += 1
-                runs_state.append(run.as_state())
-        entries[row.file] = {**base, "status": REDUCED, "runs": runs_state}
+                runs_state.append(RunState.failed(run))
+        entries[row.file] = replace(base, runs=tuple(runs_state))
     alive = set().union(*(_run_ids(e) for e in entries.values())) if entries else set()
     return _Landing(records=records, stale_ids=old_ids - alive, reduced=reduced,
                     flagged=flagged, duplicates=duplicates, outcomes=outcomes,
                     runs_failed=runs_failed)
 
 
-def _drop_outputs(campaign: Campaign, done: FileDone, entries: Mapping[str, Any]) -> None:
+def _drop_outputs(campaign: Campaign, done: FileOutcome,
+                  entries: Mapping[str, FileState]) -> None:
     """Remove the traces and plots a worker wrote for runs that do not land (their file
     is a duplicate or a conflict), unless a landed run has the same file (a file of the
     same name and content in another subfolder)."""
     layout = campaign.layout
-    kept = {r.get("trace") for e in entries.values() for r in e.get("runs") or []
-            if r.get("status") == REDUCED}
+    kept = {r.entry.trace for e in entries.values() for r in e.runs
+            if r.status == REDUCED and r.entry is not None}
     for run in done.reduced:
-        if run.entry.trace in kept:
+        mid = run.measurement_id
+        if run.trace is not None and run.trace.relative_to(
+                campaign.output_dir).as_posix() in kept:
             continue
-        mid = run.entry.measurement_id
-        for path in (layout.trace_path(done.file, mid), layout.trace_plot_path(done.file, mid)):
+        for path in (layout.trace_path(done.name, mid), layout.trace_plot_path(done.name, mid)):
             try:
                 path.unlink(missing_ok=True)
             except OSError:
@@ -587,16 +560,16 @@ def _sha256_or_none(path: Path) -> str | None:
         return None
 
 
-def _forget_vanished(campaign: Campaign, entries: dict[str, Any], present: set[str],
+def _forget_vanished(campaign: Campaign, entries: dict[str, FileState], present: set[str],
                      notes: list[str]) -> None:
     """Files that vanished from the folder leave the state (their map rows stay)."""
     for gone in sorted(set(entries) - present):
-        if entries[gone].get("status") == REDUCED and _run_ids(entries[gone]):
+        if entries[gone].status == REDUCED and _run_ids(entries[gone]):
             notes.append(f"{gone}: no longer in {campaign.raw_dir}; its map row(s) are kept")
         del entries[gone]
 
 
-def _ledger(rows: Sequence[CampaignRow], entries: Mapping[str, Any],
+def _ledger(rows: Sequence[CampaignRow], entries: Mapping[str, FileState],
             manifest: Manifest | None) -> tuple[dict[str, int], list[str], list[str]]:
     """The tests found per file (the files whose tests are known), the manifest rows that
     matched no file, no test or no friction interval, and the runs whose test no
@@ -606,15 +579,15 @@ def _ledger(rows: Sequence[CampaignRow], entries: Mapping[str, Any],
     known: dict[str, set[str | None]] = {}
     places: dict[str, set[tuple[str | None, int | None]]] = {}
     for row in rows:
-        entry = entries.get(row.file) or {}
-        found = entry.get("tests")
-        if found is None:
+        entry = entries.get(row.file)
+        found = None if entry is None else entry.tests
+        if entry is None or found is None:
             continue
         known[row.file] = set(found)
-        places[row.file] = {(r.get("test"), r.get("interval")) for r in entry.get("runs") or []}
+        places[row.file] = {(r.test, r.interval) for r in entry.runs}
         tests[row.file] = len(found)
-        undescribed += [row.file if r.get("test") is None else f"{row.file} [{r['test']}]"
-                        for r in entry.get("runs") or [] if r.get("undescribed")]
+        undescribed += [row.file if r.test is None else f"{row.file} [{r.test}]"
+                        for r in entry.runs if r.undescribed]
     unmatched: list[str] = []
     if manifest is not None:
         names = {row.file for row in rows} | {row.path.name for row in rows}
@@ -634,33 +607,29 @@ def _ledger(rows: Sequence[CampaignRow], entries: Mapping[str, Any],
     return tests, unmatched, list(dict.fromkeys(undescribed))
 
 
-def _groups_updated(state: Mapping[str, Any], records: Sequence[Mapping[str, Any]],
+def _groups_updated(state: CampaignState, records: Sequence[Mapping[str, Any]],
                     landed: set[str], removed: set[str]) -> set[tuple[Any, ...]]:
     """The condition groups with a map row added, replaced or removed by this batch."""
     old_groups = {
-        _group_key(r.get("labels") or {}) for e in state.get("entries", {}).values()
-        for r in e.get("runs") or [] if r.get("measurement_id") in removed
+        _group_key(r.labels or {}) for e in state.entries.values()
+        for r in e.runs if r.measurement_id in removed
     }
     return {
         _group_key(r) for r in records if r.get("measurement_id") in landed
     } | old_groups
 
 
-def _save_state_with_map(campaign: Campaign, entries: Mapping[str, Any],
-                         before: Mapping[str, Any]) -> None:
+def _save_state_with_map(campaign: Campaign, entries: dict[str, FileState],
+                         before: CampaignState) -> None:
     """Save the state with the map's size and ``mtime_ns`` as this batch leaves it (so the
     next batch trusts an untouched map without reading it); not rewritten when it equals
     the state the batch started from (nothing changed)."""
-    new_state: dict[str, Any] = {"version": STATE_VERSION, "campaign": campaign.name,
-                                 "entries": dict(entries)}
-    if campaign.map_path.exists():
-        st = campaign.map_path.stat()
-        new_state["map"] = {"size": st.st_size, "mtime_ns": st.st_mtime_ns}
+    new_state = before.with_entries(campaign.name, entries, campaign.map_path)
     if new_state != before or not campaign.state_path.exists():
         save_state(campaign, new_state)
 
 
-def _ids_missing_from_map(campaign: Campaign, state: Mapping[str, Any]) -> tuple[set[str], bool]:
+def _ids_missing_from_map(campaign: Campaign, state: CampaignState) -> tuple[set[str], bool]:
     """The measurement ids of runs the state calls reduced (or duplicates of) that are not
     in the map (so they must land again), and whether the map was read (and so validated)
     to tell.
@@ -668,31 +637,44 @@ def _ids_missing_from_map(campaign: Campaign, state: Mapping[str, Any]) -> tuple
     A map whose size and ``mtime_ns`` are those the last batch left is trusted without
     reading it; a missing map misses every run.
     """
-    entries = state.get("entries", {})
     ids: set[str] = set()
-    for e in entries.values():
+    for e in state.entries.values():
         ids |= _run_ids(e, (REDUCED, DUPLICATE))
     if not ids:
         return set(), False
     if not campaign.map_path.exists():
         return ids, False
-    st = campaign.map_path.stat()
-    seen = state.get("map") or {}
-    if seen.get("size") == st.st_size and seen.get("mtime_ns") == st.st_mtime_ns:
+    if state.map is not None and state.map == MapStamp.of(campaign.map_path):
         return set(), False
     present = set(read_map(campaign.map_path)["measurement_id"].astype(str))
     return ids - present, True
 
 
-def _update_map(campaign: Campaign, records: list[dict[str, Any]],
-                stale_ids: set[str]) -> tuple[str, set[str], set[str]]:
-    """Fold the new records into the map and drop the rows of runs whose raw file changed
-    (their measurement id changed with the content), under the map's lock, in one atomic
-    write. Returns the map's summary line, the ids added or replaced, and the ids removed.
-    """
-    report = update_map(campaign.map_path, records, replace=True, drop_ids=sorted(stale_ids))
+def _land(campaign: Campaign, results: Sequence[FileOutcome],
+          apply: Callable[[FilesByHash], _Landing], entries: Mapping[str, FileState]
+          ) -> tuple[str, set[str], set[str], _Landing]:
+    """Check the results against the map and fold them in, under the map's lock, in one
+    atomic write (new records added or replaced, rows of runs whose raw file changed
+    dropped); the map is locked and read only when a result brings or replaces runs.
+    Returns the map's summary line, the ids added or replaced, the ids removed and what
+    ``apply`` made of the results."""
+    touches = any(r.reduced for r in results) or any(
+        _run_ids(entries.get(r.name)) for r in results)
+    if not touches:
+        return "unchanged", set(), set(), apply({})
+    landing: list[_Landing] = []
+
+    def decide(current: Any) -> tuple[list[dict[str, Any]], set[str]]:
+        landing.append(apply(map_files_by_hash(current)))
+        records, stale = landing[0].records, landing[0].stale_ids
+        landing[0].repeats.extend(repeat_clashes(current, records, stale))
+        return records, stale
+
+    report = update_map_with(campaign.map_path, decide, replace=True)
+    if not (landing[0].records or landing[0].stale_ids):
+        return "unchanged", set(), set(), landing[0]
     return (report.summary(), set(report.added_ids) | set(report.replaced_ids),
-            set(report.dropped_ids))
+            set(report.dropped_ids), landing[0])
 
 
 def _group_key(row: Mapping[str, Any]) -> tuple[Any, ...]:

@@ -45,7 +45,7 @@ from typing import TYPE_CHECKING, Any
 
 from ..errors import CampaignError, ConfigError, ReadError, ValidationError
 from ..files import read_regular
-from ..frictionmap.records import RunLabels
+from ..labels import RunLabels
 from ..readers.textio import decode, detect_delimiter
 from ..validate import FORCE_N, MAX_REPEAT, TEMPERATURE_C, check_count, check_name, check_number
 from .patterns import LABEL_FIELDS, REQUIRED_FIELDS, _parse_number
@@ -141,7 +141,8 @@ def run_rows(rows: Sequence[ManifestRow], test: str | None,
     row of that interval with an empty test cell, the row of that test with an empty
     interval cell."""
     by_key = {(r.test, r.interval): r for r in rows}
-    keys = [(test, interval), (None, interval)] if interval is not None else []
+    keys: list[tuple[str | None, int | None]] = (
+        [(test, interval), (None, interval)] if interval is not None else [])
     keys.append((test, None))
     found = [by_key.get(key) for key in dict.fromkeys(keys) if key != (None, None)]
     return [r for r in found if r is not None]

@@ -16,7 +16,8 @@ from ..files import write_text_atomic
 from ..layout import write_failures
 from .patterns import LABEL_FIELDS
 from .spec import Campaign
-from .table import _SUMMARY_KEYS, DUPLICATE, FAILED, REDUCED, CampaignRow
+from .state import DUPLICATE, ENTRY_KEYS, FAILED, REDUCED, FileState
+from .table import CampaignRow
 
 RUNS_COLUMNS: tuple[str, ...] = (
     "file", "test", "result", "interval", "status", "pin", "disc", "normal_force_N",
@@ -25,7 +26,7 @@ RUNS_COLUMNS: tuple[str, ...] = (
     "reason",
 )
 #: the values a run row takes from its state entry (where it sits, what it measured)
-_RUN_KEYS: tuple[str, ...] = tuple(k for k in _SUMMARY_KEYS if k not in ("labels", "name"))
+_RUN_KEYS: tuple[str, ...] = tuple(k for k in ENTRY_KEYS if k not in ("labels", "name"))
 
 
 def _cell(value: Any) -> str:
@@ -41,7 +42,7 @@ def _cell(value: Any) -> str:
 
 
 def _write_runs_csv(campaign: Campaign, rows: Sequence[CampaignRow],
-                    entries: Mapping[str, Any], this_batch: Mapping[str, str],
+                    entries: Mapping[str, FileState], this_batch: Mapping[str, str],
                     failures: Mapping[str, str]) -> None:
     """``runs.csv``: per file of the campaign, a row per run the state knows of it (its
     status in this batch: reduced, skipped, failed or duplicate), else one row for the
@@ -50,10 +51,10 @@ def _write_runs_csv(campaign: Campaign, rows: Sequence[CampaignRow],
     writer = csv.writer(buf, lineterminator="\n")
     writer.writerow(RUNS_COLUMNS)
     for row in rows:
-        entry = entries.get(row.file) or {}
+        entry = entries.get(row.file)
         file_labels = {k: row.merged.get(k) for k in LABEL_FIELDS}
-        runs = entry.get("runs") or []
-        if row.file in failures or not runs:
+        runs = [] if entry is None else [r.flat() for r in entry.runs]
+        if entry is None or row.file in failures or not runs:
             status = this_batch.get(row.file, FAILED)
             writer.writerow([_cell(v) for v in _values(row.file, {}, status, file_labels,
                                                        failures.get(row.file))])
@@ -64,7 +65,7 @@ def _write_runs_csv(campaign: Campaign, rows: Sequence[CampaignRow],
             status = DUPLICATE if kept == DUPLICATE else this_batch.get(name, FAILED)
             ok = kept == REDUCED and status != FAILED
             labels = (run.get("labels") if ok or kept == DUPLICATE else None) or file_labels
-            reason = failures.get(name) or (entry.get("reason") if kept == DUPLICATE else None)
+            reason = failures.get(name) or (entry.reason if kept == DUPLICATE else None)
             writer.writerow([_cell(v) for v in _values(
                 row.file, run, status, labels, reason, measured=ok or kept == DUPLICATE)])
     write_text_atomic(campaign.runs_csv, buf.getvalue())

@@ -24,7 +24,7 @@ from ..config import (
 )
 from ..errors import CampaignError, ConfigError, ValidationError
 from ..escape import display_path
-from ..frictionmap.records import Tolerances
+from ..labels import Tolerances
 from ..layout import DEFAULT_OUTPUT_DIR, OutputLayout
 from ..pipeline import ReadOptions
 from ..validate import MAX_NAME_CHARS, check_name

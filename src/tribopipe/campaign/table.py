@@ -12,13 +12,10 @@ not an export fails with the reader's reason.
 
 Incremental state
 -----------------
-``<output_dir>/.tribopipe-state.<name>.json`` remembers, per file: size, ``mtime_ns``,
-SHA-256, the config hash, a recipe hash (config + the labels known before reading + QC
-tolerances), the file's status, its tests and, per run, what :class:`RunEntry` holds
-(one state per campaign name, so campaigns may share an output folder and a map). Like
-git's index, the cached hash is trusted while size and ``mtime_ns`` are unchanged, so an
-unchanged campaign is checked with one ``stat`` per file and every run of an unchanged
-file is skipped.
+The last batch's :class:`~tribopipe.campaign.state.CampaignState` says, per file, what it
+found. Like git's index, the cached hash is trusted while size and ``mtime_ns`` are
+unchanged, so an unchanged campaign is checked with one ``stat`` per file and every run
+of an unchanged file is skipped.
 """
 
 from __future__ import annotations
@@ -28,62 +25,30 @@ import hashlib
 import json
 import os
 from collections.abc import Mapping, Sequence
-from dataclasses import asdict, dataclass, fields
+from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
 
 from ..errors import CampaignError, ReadError
 from ..escape import display_path
-from ..files import file_sha256, regular_file, write_text_atomic
-from ..frictionmap.records import RunLabels
+from ..files import file_sha256, regular_file
+from ..labels import RunLabels
 from ..layout import FAILURES_CSV, RUNS_CSV
-from ..numeric import finite_json
 from ..readers import EXPORT_SUFFIXES
 from .metadata import Manifest, ManifestRow, labels_from, merge_metadata, read_manifest
 from .patterns import LABEL_FIELDS, match_pattern
 from .spec import Campaign
-
-STATE_VERSION = 2
-
-#: the statuses of a campaign file or run before a batch (``campaign list``)
-NEW, REDUCED, CHANGED, FAILED = "new", "reduced", "changed", "failed"
-#: a file whose content another file of the campaign (or the map) holds: stored once
-DUPLICATE = "duplicate"
-#: what a batch did with a run (``runs.csv``)
-SKIPPED = "skipped"
-
-
-@dataclass(frozen=True)
-class RunEntry:
-    """What the state keeps of a reduced run (and ``runs.csv`` shows), as its worker
-    found it: the labels, the id, the trace (relative to the output folder), μ_S and μ_K,
-    the nominal pressure [kPa], the measured pressure [kPa], normal force [N] and
-    temperature [°C] (``None`` when not finite), the ``;``-joined flags, and where the run
-    sits in its export (its name, test, result, interval and occurrence)."""
-
-    labels: dict[str, Any]
-    measurement_id: str
-    trace: str
-    mu_s: float | None
-    mu_k: float | None
-    pressure_kPa: float | None
-    pressure_measured_kPa: float | None
-    normal_force_measured_N: float | None
-    temperature_measured_C: float | None
-    flags: str
-    name: str = ""
-    test: str | None = None
-    result: str | None = None
-    interval: int | None = None
-    occurrence: int = 1
-
-    def as_dict(self) -> dict[str, Any]:
-        """The entry's fields as the state's JSON keys."""
-        return asdict(self)
-
-
-#: the keys of a state run entry that come from a :class:`RunEntry`
-_SUMMARY_KEYS: tuple[str, ...] = tuple(f.name for f in fields(RunEntry))
+from .state import (
+    CHANGED,
+    DUPLICATE,
+    FAILED,
+    NEW,
+    REDUCED,
+    CampaignState,
+    FileState,
+    RunState,
+    load_state,
+)
 
 
 @dataclass(frozen=True)
@@ -95,7 +60,7 @@ class CampaignRow:
     tests (their Test names are only checked once the file is read); ``problem`` is a
     metadata error known before reading; ``status`` is one of ``new, reduced, changed,
     failed, duplicate``; ``reason`` why the file failed (last batch or now); ``previous``
-    the file's entry in the state; ``hints`` why a source said nothing.
+    what the state keeps of the file; ``hints`` why a source said nothing.
     """
 
     file: str
@@ -108,7 +73,7 @@ class CampaignRow:
     status: str
     reason: str | None = None
     sha256: str | None = None
-    previous: dict[str, Any] | None = None
+    previous: FileState | None = None
     hints: tuple[str, ...] = ()
     test_rows: tuple[ManifestRow, ...] = ()
 
@@ -122,9 +87,9 @@ class CampaignRow:
         )
 
     @property
-    def runs(self) -> list[dict[str, Any]]:
+    def runs(self) -> tuple[RunState, ...]:
         """The runs the state knows of this file (its last batch), in file order."""
-        return list((self.previous or {}).get("runs") or [])
+        return () if self.previous is None else self.previous.runs
 
 
 def _is_tool_table(path: Path) -> bool:
@@ -210,17 +175,17 @@ def _relative(path: Path, root: Path) -> str:
     return path.relative_to(root).as_posix()
 
 
-def _traces_present(campaign: Campaign, entry: Mapping[str, Any]) -> bool:
+def _traces_present(campaign: Campaign, entry: FileState) -> bool:
     """True when every reduced run of a state entry still has its trace on disk."""
-    for run in entry.get("runs") or []:
-        if run.get("status") == REDUCED:
-            trace = run.get("trace")
+    for run in entry.runs:
+        if run.status == REDUCED:
+            trace = run.entry.trace if run.entry is not None else ""
             if not trace or not (campaign.output_dir / trace).is_file():
                 return False
     return True
 
 
-def campaign_table(campaign: Campaign, *, state: Mapping[str, Any] | None = None,
+def campaign_table(campaign: Campaign, *, state: CampaignState | None = None,
                    manifest: Manifest | None = None) -> list[CampaignRow]:
     """The campaign as a table, before anything runs: one row per file with its metadata
     and status (``new, reduced, changed, failed, duplicate``).
@@ -231,7 +196,7 @@ def campaign_table(campaign: Campaign, *, state: Mapping[str, Any] | None = None
     same holds for a file that failed or its metadata is already known to be wrong.
     ``state`` defaults to the campaign's state file, ``manifest`` to its manifest.
     """
-    entries = (state if state is not None else load_state(campaign)).get("entries", {})
+    entries = (state if state is not None else load_state(campaign)).entries
     if manifest is None and campaign.manifest is not None:
         manifest = read_manifest(campaign.manifest)
     per_test_possible = campaign.test_pattern is not None
@@ -241,9 +206,10 @@ def campaign_table(campaign: Campaign, *, state: Mapping[str, Any] | None = None
         try:
             st = regular_file(path, what="an export file")
         except ReadError as exc:
-            problem = f"{display_path(rel)}: {exc.problem}"
+            unreadable = f"{display_path(rel)}: {exc.problem}"
             rows.append(CampaignRow(file=rel, path=path, size=-1, mtime_ns=-1, sources=(),
-                                    merged={}, problem=problem, status=FAILED, reason=problem))
+                                    merged={}, problem=unreadable, status=FAILED,
+                                    reason=unreadable))
             continue
         sources: list[tuple[str, dict[str, Any]]] = []
         hints: list[str] = []
@@ -275,18 +241,17 @@ def campaign_table(campaign: Campaign, *, state: Mapping[str, Any] | None = None
         status = NEW
         reason = None
         if previous is not None:
-            same_stat = previous.get("size") == st.st_size and \
-                previous.get("mtime_ns") == st.st_mtime_ns
+            same_stat = previous.size == st.st_size and previous.mtime_ns == st.st_mtime_ns
             try:
-                sha = previous.get("sha256") if same_stat else file_sha256(path)
+                sha = previous.sha256 if same_stat else file_sha256(path)
             except ReadError as exc:
                 problem = problem or f"{display_path(rel)}: {exc.problem}"
-            same = sha is not None and sha == previous.get("sha256") and \
-                previous.get("recipe") == recipe_hash(campaign, merged, test_rows)
-            if same and previous.get("status") in (REDUCED, DUPLICATE):
-                status = previous["status"] if _traces_present(campaign, previous) else CHANGED
-            elif same and previous.get("status") == FAILED:
-                status, reason = FAILED, previous.get("reason")
+            same = sha is not None and sha == previous.sha256 and \
+                previous.recipe == recipe_hash(campaign, merged, test_rows)
+            if same and previous.status in (REDUCED, DUPLICATE):
+                status = previous.status if _traces_present(campaign, previous) else CHANGED
+            elif same and previous.status == FAILED:
+                status, reason = FAILED, previous.reason
             else:
                 status = CHANGED
         if problem is not None:
@@ -298,36 +263,6 @@ def campaign_table(campaign: Campaign, *, state: Mapping[str, Any] | None = None
             test_rows=test_rows,
         ))
     return rows
-
-
-# --------------------------------------------------------------------------- state
-
-
-def load_state(campaign: Campaign) -> dict[str, Any]:
-    """The incremental state of a campaign (empty when there is none or it is unreadable:
-    a lost state only costs a full re-run)."""
-    try:
-        data = json.loads(campaign.state_path.read_text(encoding="utf-8"))
-    except (OSError, ValueError):
-        return {"version": STATE_VERSION, "entries": {}}
-    if not isinstance(data, dict) or data.get("version") != STATE_VERSION or \
-            not isinstance(data.get("entries"), dict):
-        return {"version": STATE_VERSION, "entries": {}}
-    return data
-
-
-def save_state(campaign: Campaign, state: Mapping[str, Any]) -> None:
-    """Write the incremental state atomically (temporary file + rename). Compact, strict
-    JSON: without ``indent`` the json module's C encoder writes it (an indented state of
-    1,000 files took a third of an unchanged re-run); a value that is not finite is
-    ``null`` (the entries hold none: the slow walk of :func:`finite_json` is the rare
-    fallback)."""
-    try:
-        text = json.dumps(state, sort_keys=True, separators=(",", ":"), allow_nan=False)
-    except ValueError:
-        text = json.dumps(finite_json(dict(state)), sort_keys=True, separators=(",", ":"),
-                          allow_nan=False)
-    write_text_atomic(campaign.state_path, text)
 
 
 def campaign_listing(campaign: Campaign) -> list[dict[str, Any]]:
@@ -346,10 +281,10 @@ def campaign_listing(campaign: Campaign) -> list[dict[str, Any]]:
         sources = [name for name, _ in row.sources]
         if row.status in (REDUCED, DUPLICATE) and row.runs:
             for run in row.runs:
-                reduced = run.get("status") in (REDUCED, DUPLICATE)
-                labels = run.get("labels") or base
-                out.append(_listed(row.file, run, run.get("status", row.status), labels,
-                                   sources, run.get("reason"), values=run if reduced else {}))
+                flat = run.flat()
+                out.append(_listed(row.file, flat, run.status or row.status,
+                                   run.labels or base, sources, run.reason,
+                                   values=flat if run.entry is not None else {}))
         elif row.status in (NEW, CHANGED) and row.test_rows:
             for test_row in row.test_rows:
                 labels = {**base, **{k: v for k, v in test_row.fields.items()

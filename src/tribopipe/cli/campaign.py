@@ -94,6 +94,8 @@ def _run(campaign: Any, jobs: int | None, plots: bool | None) -> None:
                + (", plots/traces/" if OutputLayout(report.output_dir).plots_dir.is_dir() else ""))
     for line in report.ledger():  # the account comes last, where a user looks
         click.echo(printable(line))
+    for problem in report.output_errors:
+        click.echo(f"error: {printable(problem)}", err=True)
     if not report.ok:
         parts = []
         if report.failures:
@@ -102,6 +104,8 @@ def _run(campaign: Any, jobs: int | None, plots: bool | None) -> None:
                          f"{_shorten(campaign.failures_csv)}")
         if report.unmatched:
             parts.append(f"{len(report.unmatched)} manifest row(s) matched nothing")
+        if report.output_errors:
+            parts.append(f"{len(report.output_errors)} output(s) of the batch not written")
         click.echo("; ".join(parts), err=True)
         sys.exit(1)
 

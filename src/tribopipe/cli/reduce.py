@@ -4,10 +4,15 @@ from __future__ import annotations
 
 import json
 import sys
+from typing import TYPE_CHECKING
 
 import click
 
 from ._common import config_option, friendly_errors, map_option, read_options
+
+if TYPE_CHECKING:
+    from ..labels import RunLabels
+    from ..pipeline import FileOutcome, ReducedRun
 
 
 def _fmt(value: object, spec: str) -> str:
@@ -80,64 +85,81 @@ def reduce_cmd(
     run's reduced trace (Parquet) and a JSON summary with the evidence to --out, and
     appends the runs to the friction map (unless --no-map). A file whose content an
     earlier FILE or the map already holds under another name is a duplicate (stored once)
-    or, with other labels, a conflict (refused). Exit code 1 when any file or run could
-    not be reduced, or was refused; the others are still reduced and stored.
+    or, with other labels, a conflict (refused). A run the map already holds with other
+    labels (or from another config) keeps the map's row unless --replace is given.
+    Exit code 1 when any file or run could not be reduced or written, a file was refused
+    as a conflict, or a relabelled run kept the map's row (pass --replace to relabel
+    it); the others are still reduced and stored.
     """
     from ..config import load_settings
-    from ..pipeline import ReadOptions, RunLabels, reduce_files
+    from ..frictionmap.mapfile import read_map
+    from ..labels import RunLabels
+    from ..pipeline import ReadOptions, reduce_files
 
     labels = RunLabels(
         pin=pin, disc=disc, normal_force_N=force_N, temperature_C=temperature_C, repeat=repeat
     )
+    settings = load_settings(config_path)
+    if not no_map and labels.complete:
+        read_map(map_path)  # refuse a damaged or foreign map before any work
     results = reduce_files(
-        files, load_settings(config_path), labels,
+        files, settings, labels,
         ReadOptions(encoding=encoding, delimiter=delimiter, decimal=decimal),
         out_dir=out_dir, plots=plot, on_file=_echo_file,
     )
-    outcomes = [o for r in results for o in r.outcomes]
-    _print(outcomes, as_json)
+    _print(results, as_json)
     _note_alike(results, labels)
-    refused = _store(outcomes, map_path, no_map, replace, labels)
+    refused, kept = _store(results, map_path, no_map, replace, labels)
     failed = [r for r in results if not r.ok]
-    errors = sum(len(r.errors) for r in failed)
-    if failed or refused:
+    errors = sum(len(r.failed) for r in failed)
+    if failed or refused or kept:
         parts = []
         if failed:
             parts.append(f"{errors} error(s) in {len(failed)} of {len(files)} file(s)")
         if refused:
             parts.append(f"{refused} file(s) refused as a conflict")
+        if kept:
+            parts.append(f"{kept} run(s) kept the map's row with other labels: pass "
+                         "--replace to relabel")
         click.echo("; ".join(parts) + ".", err=True)
         sys.exit(1)
 
 
-def _echo_file(result: object) -> None:
+def _echo_file(result: FileOutcome) -> None:
     """One file done: its plots, or its errors, on stderr as it happens (names from the
     outside as one printable line each)."""
     from ..escape import display_path, printable
 
-    for error in result.errors:
-        click.echo(f"error: {printable(error)}", err=True)
+    for failed in result.failed:
+        click.echo(f"error: {printable(failed.reason)}", err=True)
     if result.duplicate_of is not None:
         click.echo(f"duplicate: {display_path(result.path)}: same content as "
                    f"{display_path(result.duplicate_of)}: its runs are reduced once", err=True)
-    for run in result.runs:
+    for run in result.reduced:
         if run.plot is not None:
             click.echo(f"plot: {display_path(run.plot)}", err=True)
+        for note in run.notes:
+            click.echo(f"warning: {printable(note)}", err=True)
 
 
-def _run_labels(outcomes: list) -> dict[int, str]:
+def _reduced(results: list[FileOutcome]) -> list[tuple[FileOutcome, ReducedRun]]:
+    """Every run reduced, with its file, in order."""
+    return [(f, r) for f in results for r in f.reduced]
+
+
+def _run_labels(runs: list[tuple[FileOutcome, ReducedRun]]) -> dict[int, str]:
     """The run column: test and interval (the result too where a test has several) for
     the runs of files that hold several; empty for one-run files."""
-    results_per_test: dict[tuple[str, object], set] = {}
-    for o in outcomes:
-        results_per_test.setdefault((o.path, o.place.test), set()).add(o.place.result)
+    results_per_test: dict[tuple[str, object], set[str | None]] = {}
+    for f, o in runs:
+        results_per_test.setdefault((f.path, o.place.test), set()).add(o.place.result)
     shown: dict[int, str] = {}
-    for k, o in enumerate(outcomes):
-        if not o.several:
+    for k, (f, o) in enumerate(runs):
+        if not f.several:
             continue
         place = o.place
         parts = [p for p in (place.test,) if p]
-        if len(results_per_test[(o.path, place.test)]) > 1 and place.result:
+        if len(results_per_test[(f.path, place.test)]) > 1 and place.result:
             parts.append(place.result)
         if place.interval is not None:
             parts.append(f"interval {place.interval}")
@@ -146,17 +168,17 @@ def _run_labels(outcomes: list) -> dict[int, str]:
     return shown
 
 
-def _print(outcomes: list, as_json: bool) -> None:
+def _print(results: list[FileOutcome], as_json: bool) -> None:
     from ..escape import printable
-    from ..pipeline import run_summary
 
-    summaries = [run_summary(o) for o in outcomes]
+    reduced = _reduced(results)
+    summaries = [r.summary for _, r in reduced]
     if as_json:
         click.echo(json.dumps(summaries, indent=2, default=str, allow_nan=False))
         return
     if not summaries:
         return
-    runs = _run_labels(outcomes)
+    runs = _run_labels(reduced)
     run_width = max((len(v) for v in runs.values()), default=0)
     run_head = f" {'run':<{run_width}}" if runs else ""
     header = (f"{'file':<40}{run_head} {'mu_s':>6} {'±U95':>6} {'mu_k':>6} {'±U95':>6} "
@@ -173,7 +195,7 @@ def _print(outcomes: list, as_json: bool) -> None:
         ))
 
 
-def _note_alike(results: list, labels: object) -> None:
+def _note_alike(results: list[FileOutcome], labels: RunLabels) -> None:
     """Say so when the options label several tests of one file alike."""
     from ..escape import display_path
 
@@ -182,35 +204,38 @@ def _note_alike(results: list, labels: object) -> None:
     if not given:
         return
     for r in results:
-        if len(r.tests) > 1 and len(r.outcomes) > 1:
+        if len(r.tests) > 1 and len(r.reduced) > 1:
             click.echo(f"note: {display_path(r.path)} holds {len(r.tests)} tests: "
                        "--pin/--disc/--force/"
                        "--temperature/--repeat label each of its runs alike "
                        "(a campaign can label them per test: manifest 'test' column, "
                        "--test-pattern)", err=True)
-        elif len(r.outcomes) > 1 and labels.normal_force_N is not None:
-            click.echo(f"note: {display_path(r.path)} holds {len(r.outcomes)} friction "
-                       "intervals (force or speed steps): --force labels each alike (leave "
-                       "it out to take each step's nominal force from its measured force, flagged "
+        elif len(r.reduced) > 1 and labels.normal_force_N is not None:
+            click.echo(f"note: {display_path(r.path)} holds {len(r.reduced)} friction "
+                       "intervals (force or "
+                       "speed steps): --force labels each alike (leave it out to take each "
+                       "step's nominal force from its measured force, flagged "
                        "nominal_force_estimated; a campaign manifest's 'interval' column "
                        "labels each step)", err=True)
 
 
-def _store(outcomes: list, map_path: str, no_map: bool, replace: bool, labels: object) -> int:
-    """Append the runs to the map; returns the number of files refused as a conflict."""
-    if no_map or not outcomes:
-        return 0
+def _store(results: list[FileOutcome], map_path: str, no_map: bool, replace: bool,
+           labels: RunLabels) -> tuple[int, int]:
+    """Append the runs to the map; returns the number of files refused as a conflict and
+    of relabelled runs that kept the map's row (no --replace)."""
+    if no_map or not _reduced(results):
+        return 0, 0
     if not labels.complete:
         click.echo(
             "note: runs not added to the friction map: pin and disc unknown "
             "(pass --pin and --disc, or --no-map)",
             err=True,
         )
-        return 0
+        return 0, 0
     from ..escape import display_path, printable
     from ..pipeline import store_runs
 
-    report = store_runs(map_path, outcomes, replace=replace)
+    report = store_runs(map_path, results, replace=replace)
     refused = 0
     for same in report.same:
         if same.conflict and not replace:
@@ -224,5 +249,10 @@ def _store(outcomes: list, map_path: str, no_map: bool, replace: bool, labels: o
                 "(--replace)"), err=True)
         else:
             click.echo(printable(f"duplicate: {same.message()}"), err=True)
+    relabelled = report.relabelled
+    for line in report.appended.conflict_lines("this reduction", relabelled):
+        click.echo(printable(f"{line} (pass --replace to relabel it)"), err=True)
+    for line in report.repeats:
+        click.echo(printable(f"warning: {line}"), err=True)
     click.echo(f"map {display_path(map_path)}: {report.appended.summary()}", err=True)
-    return refused
+    return refused, len(relabelled)

@@ -26,7 +26,7 @@ reader sees:
 from __future__ import annotations
 
 import threading
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from typing import TYPE_CHECKING, Any
 
 from ..escape import picture_text
@@ -560,15 +560,18 @@ def plot_trace(
     *,
     title: str | None = None,
     conditions: TraceConditions | None = None,
+    flags: Sequence[str] | None = None,
     fmt: str | None = None,
     dpi: int = TRACE_DPI,
 ) -> Target:
     """Plot a reduced run to ``target``: μ over sliding distance with the μ_S peak and the
-    μ_K window, the normal force below, file, conditions, readings and flags above."""
+    μ_K window, the normal force below, file, conditions, readings and flags above.
+    ``flags`` are the run's flags as decided for every output
+    (:func:`tribopipe.labels.decide_run`); default: the reduction's own."""
     trace = result.trace
     marks = TraceMarks(mu_s=result.mu_s, mu_s_distance_mm=result.mu_s_distance_mm,
                        mu_k=result.mu_k, mu_k_window_mm=result.mu_k_window_mm,
-                       flags=flag_tuple(result.flags),
+                       flags=flag_tuple(result.flags if flags is None else flags),
                        u_mu_s=finite_or_none(result.u_mu_s),
                        u_mu_k=finite_or_none(result.u_mu_k))
     figure = trace_figure(dpi).draw(

@@ -10,8 +10,8 @@ The package's rooms, each importing only those above it:
 * :mod:`~tribopipe.frictionmap.schema` — the run columns (kind, unit, meaning), the
   validated DataFrame form of the rows (:func:`check_runs`, the rules every row keeps)
   and the checksum of a map's content;
-* :mod:`~tribopipe.frictionmap.records` — :class:`RunLabels`, :class:`Tolerances`,
-  :func:`make_record`, the ids and the off-nominal QC flags of a run;
+* :mod:`~tribopipe.frictionmap.records` — :func:`make_record` (a run's row, with the labels
+  and flags :mod:`tribopipe.labels` decided) and the ids of a run;
 * :mod:`~tribopipe.frictionmap.mapfile` — reading a map file without trusting it (kind,
   structure, metadata, column types, rows, checksum) and the metadata we write;
 * :mod:`~tribopipe.frictionmap.store` — locked atomic writes (the map's mode kept, the
@@ -69,16 +69,10 @@ from .published import (
     read_frictionmap_table,
 )
 from .records import (
-    FLAG_FORCE_ESTIMATED,
-    FLAG_FORCE_OFF,
-    FLAG_TEMPERATURE_OFF,
-    RunLabels,
-    Tolerances,
     imported_id,
     make_record,
     measurement_id,
     nominal_pressure_kPa,
-    qc_flags,
 )
 from .schema import (
     ADDED_IN_VERSION,
@@ -131,12 +125,6 @@ __all__ = [
     "check_runs",
     "content_sha256",
     "frame_records",
-    "FLAG_FORCE_ESTIMATED",
-    "FLAG_FORCE_OFF",
-    "FLAG_TEMPERATURE_OFF",
-    "RunLabels",
-    "Tolerances",
-    "qc_flags",
     "nominal_pressure_kPa",
     "measurement_id",
     "imported_id",

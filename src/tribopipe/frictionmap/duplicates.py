@@ -6,15 +6,24 @@ force and temperature, repeat) it is a *duplicate*: stored once, under the first
 When the labels differ it is a *conflict*: the two names claim different conditions for
 one measurement, and the second is refused rather than overwrite the first.
 :func:`compare_labels` decides between the two; :func:`map_files_by_hash` tells which
-files a map already holds, by content.
+files a map already holds, by content; :class:`ContentOwners` is the one check both
+``tribopipe reduce`` and the batch make, under the map's lock. :func:`repeat_clashes`
+finds one repeat number used by several runs of one condition.
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Collection, Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
+
+from ..stats import FORCE_DECIMALS, TEMPERATURE_DECIMALS, group_statistics
+from .records import stored_file_name
+from .schema import records_frame
+
+if TYPE_CHECKING:
+    import pandas as pd
 
 #: the columns that say what a run is (its condition group and repeat)
 LABEL_COLUMNS: tuple[str, ...] = ("pin", "disc", "normal_force_N", "temperature_C", "repeat")
@@ -112,3 +121,124 @@ def map_files_by_hash(runs: Any) -> FilesByHash:
         labels = {c: _value(c, v) for c, v in zip(LABEL_COLUMNS, values, strict=True)}
         out.setdefault(sha, {}).setdefault(source, {})[str(mid)] = labels
     return out
+
+
+class ContentOwners:
+    """Which file brought each content (SHA-256) to the map, and its runs' labels: the
+    one duplicate and conflict check of ``tribopipe reduce`` and the batch, made from the
+    map as read under its lock (:func:`tribopipe.frictionmap.store.update_map_with`).
+
+    ``in_map``: :func:`map_files_by_hash` of that map; ``known``: contents already owned
+    before the map is asked (a campaign's state: ``{sha: (file, {id: labels})}``);
+    ``renamed``: map source names of files that left the folder, with the file and its
+    content (``{name: (file, sha)}``): the same content under a new name is that file
+    renamed, not a duplicate.
+    """
+
+    def __init__(self, in_map: FilesByHash,
+                 known: Mapping[str, tuple[str, dict[str, dict[str, Any]]]] | None = None,
+                 renamed: Mapping[str, tuple[str, str | None]] | None = None) -> None:
+        self.in_map = in_map
+        self.first: dict[str, tuple[str, dict[str, dict[str, Any]]]] = dict(known or {})
+        self.renamed = dict(renamed or {})
+
+    def check(self, file: str, sha: str | None, runs: Mapping[str, Mapping[str, Any]]
+              ) -> tuple[SameContent | None, str | None]:
+        """The same content (``sha``) seen before under another name than ``file`` (or
+        ``None``), and a note when the other name is a file that left the folder with this
+        content (taken as renamed). ``runs``: the file's runs, measurement id → labels."""
+        sha = sha or ""
+        if sha in self.first and self.first[sha][0] != file:
+            other, old = self.first[sha]
+            return compare_labels(file, other, runs, old), None
+        name = stored_file_name(file)  # as the map keeps it: raw
+        for source, old in sorted(self.in_map.get(sha, {}).items()):
+            if source == name:
+                continue
+            gone = self.renamed.get(source)
+            if gone is not None and gone[1] == sha:
+                return None, (f"{file}: same content as {gone[0]}, which left the folder: "
+                              "taken as renamed")
+            return compare_labels(file, source, runs, old), None
+        return None, None
+
+    def landed(self, file: str, sha: str | None, runs: Mapping[str, Mapping[str, Any]]) -> None:
+        """Record that ``file``'s runs land: later files with its content are duplicates."""
+        if sha and runs:
+            self.first.setdefault(sha, (file, {k: dict(v) for k, v in runs.items()}))
+
+
+def _coarse_key(pin: Any, disc: Any, force: Any, temperature: Any, repeat: Any
+                ) -> tuple[Any, ...] | None:
+    """A run's pair, nominal force and temperature rounded as the statistics round them,
+    and repeat: runs of one condition group with one repeat number share it (the groups
+    only split it further, by nominal pressure). ``None`` without a repeat number."""
+    number = _value("repeat", repeat)
+    if number is None:
+        return None
+    force_N, temperature_C = _value("normal_force_N", force), _value("temperature_C",
+                                                                      temperature)
+    return (pin, disc, None if force_N is None else round(force_N, FORCE_DECIMALS),
+            None if temperature_C is None else round(temperature_C, TEMPERATURE_DECIMALS),
+            number)
+
+
+def repeat_clashes(current: pd.DataFrame, records: Sequence[Mapping[str, Any]],
+                   drop_ids: Collection[str] = ()) -> list[str]:
+    """The repeat numbers that more than one run of one condition group would carry once
+    ``records`` are folded into the map ``current`` (rows ``drop_ids`` gone), where one of
+    ``records`` takes part: one line each, naming the condition, the repeat and the files.
+
+    The condition groups are those of the map's statistics
+    (:func:`tribopipe.stats.group_statistics`: pin, disc, nominal force and temperature,
+    nominal pressure; excluded runs left out). A repeat number is a run's place among the
+    repeats of its condition: two runs with one number are a labelling mistake (or one
+    run under two names), reported, never refused. The statistics are asked only when
+    two runs share the pair, rounded conditions and repeat number.
+    """
+    import pandas as pd
+
+    columns = ("pin", "disc", "normal_force_N", "temperature_C", "repeat")
+    new_ids = {str(r["measurement_id"]) for r in records}
+    old = current.loc[~current["measurement_id"].isin(new_ids | set(drop_ids))
+                      & ~current["excluded"].fillna(False).astype(bool)]
+    seen: dict[tuple[Any, ...], int] = {}
+    for values in old.loc[:, list(columns)].itertuples(index=False, name=None):
+        key = _coarse_key(*values)
+        if key is not None:
+            seen[key] = seen.get(key, 0) + 1
+    clash = False
+    for record in records:
+        key = _coarse_key(*(record.get(c) for c in columns))
+        if key is not None:
+            clash = clash or key in seen
+            seen[key] = seen.get(key, 0) + 1
+    if not clash:
+        return []
+    new = records_frame(records)
+    pairs = set(zip(new["pin"], new["disc"], strict=True))
+    old = old.loc[[(p, d) in pairs for p, d in zip(old["pin"], old["disc"], strict=True)]]
+    runs = pd.concat([old, new], ignore_index=True) if len(old) else new
+    by_id = runs.set_index(runs["measurement_id"].astype(str))
+    lines: list[str] = []
+    for group in group_statistics(runs).to_dict(orient="records"):
+        ids = str(group["run_ids"]).split(";")
+        if not new_ids.intersection(ids):
+            continue
+        by_repeat: dict[int, list[str]] = {}
+        for mid in ids:
+            repeat = _value("repeat", by_id.at[mid, "repeat"])
+            if repeat is not None:
+                by_repeat.setdefault(int(repeat), []).append(mid)
+        for repeat, same in sorted(by_repeat.items()):
+            if len(same) < 2 or not new_ids.intersection(same):
+                continue
+            files = ", ".join(sorted({str(by_id.at[mid, "source_file"]) for mid in same}))
+            temperature = _value("temperature_C", group["temperature_C"])
+            where = f"{group['normal_force_N']:g} N, " + (
+                "temperature unknown" if temperature is None else f"{temperature:g} °C")
+            lines.append(
+                f"repeat {repeat} used by {len(same)} runs of {group['pin']} on "
+                f"{group['disc']}, {where} ({files}): give each run of a condition its own "
+                "repeat number")
+    return lines

@@ -15,7 +15,7 @@ import glob
 import math
 import os
 import stat
-from collections.abc import Iterable, Iterator, Mapping, Sequence
+from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from contextlib import contextmanager, suppress
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -274,11 +274,15 @@ class AppendReport:
             text += f" ({details}{more}; pass --replace to overwrite)"
         return text
 
-    def conflict_lines(self, theirs: str = "the new rows") -> list[str]:
-        """One line per conflicting run: its id and, per differing column, the map's value
-        and the value in ``theirs``."""
+    def conflict_lines(self, theirs: str = "the new rows",
+                       ids: Iterable[str] | None = None) -> list[str]:
+        """One line per conflicting run (those of ``ids`` only, when given): its id and,
+        per differing column, the map's value and the value in ``theirs``."""
         lines = []
+        wanted = None if ids is None else set(ids)
         for mid in self.conflicting_ids:
+            if wanted is not None and mid not in wanted:
+                continue
             cells = "; ".join(
                 f"{column} {_show(ours)} in the map, {_show(new)} in {theirs}"
                 for column, ours, new in self.values.get(mid, ())
@@ -417,20 +421,47 @@ def update_map(
     Ids in ``drop_ids`` that are also among ``records`` are not dropped; unknown ids are
     ignored. Validation happens before anything is touched.
     """
-    import dataclasses
-
     p = Path(path)
     new_frame = records_frame(records)  # validate before touching anything
     with _locked(p):
+        return _fold_and_write(p, read_map(p), new_frame, replace, drop_ids)
+
+
+#: what to fold into a map, decided from the map as it is: the records and the ids to drop
+MapChange = tuple[Sequence[Mapping[str, Any]], Iterable[str]]
+
+
+def update_map_with(
+    path: str | os.PathLike[str],
+    decide: Callable[[pd.DataFrame], MapChange],
+    *,
+    replace: bool = False,
+) -> AppendReport:
+    """:func:`update_map` with the records and the ids to drop decided by
+    ``decide(current)`` from the map as read under its lock, so that a check against the
+    map (the same content under another name) cannot race another writer. ``decide``
+    runs once; the map is rewritten only when something changed."""
+    p = Path(path)
+    with _locked(p):
         current = read_map(p)
-        drop = set(drop_ids) - set(new_frame["measurement_id"])
-        gone = current["measurement_id"].isin(sorted(drop)).to_numpy()
-        merged, report = _fold(current.loc[~gone], new_frame, replace=replace)
-        report = dataclasses.replace(
-            report, dropped_ids=tuple(current.loc[gone, "measurement_id"].astype(str))
-        )
-        if report.changed:
-            _write_atomic(p, merged)
+        records, drop_ids = decide(current)
+        return _fold_and_write(p, current, records_frame(records), replace, drop_ids)
+
+
+def _fold_and_write(p: Path, current: pd.DataFrame, new_frame: pd.DataFrame, replace: bool,
+                    drop_ids: Iterable[str]) -> AppendReport:
+    """Fold validated records into the map read under the lock, drop ``drop_ids`` and
+    write it atomically when something changed. The caller holds the lock."""
+    import dataclasses
+
+    drop = set(drop_ids) - set(new_frame["measurement_id"])
+    gone = current["measurement_id"].isin(sorted(drop)).to_numpy()
+    merged, report = _fold(current.loc[~gone], new_frame, replace=replace)
+    report = dataclasses.replace(
+        report, dropped_ids=tuple(current.loc[gone, "measurement_id"].astype(str))
+    )
+    if report.changed:
+        _write_atomic(p, merged)
     return report
 
 

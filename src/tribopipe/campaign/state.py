@@ -1,0 +1,286 @@
+"""A campaign's incremental state: typed, and read and written in this one place.
+
+``<output_dir>/.tribopipe-state.<name>.json`` remembers, per file (:class:`FileState`):
+size, ``mtime_ns``, SHA-256, the config hash, a recipe hash (config + the labels known
+before reading + QC tolerances), the file's status, its tests and, per run
+(:class:`RunState`), its status and what :class:`RunEntry` holds of a reduced run; and
+the map's size and ``mtime_ns`` as the last batch left it (:class:`MapStamp`). One state
+per campaign name, so campaigns may share an output folder and a map.
+:meth:`CampaignState.to_json` and :meth:`CampaignState.from_json` are the only
+translation between these types and the JSON file; :func:`load_state` and
+:func:`save_state` the only reads and writes.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import asdict, dataclass, field, fields, replace
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from ..files import write_text_atomic
+from ..numeric import finite_json, finite_or_none
+
+if TYPE_CHECKING:
+    from ..pipeline import FailedRun, ReducedRun
+    from .spec import Campaign
+
+STATE_VERSION = 2
+
+#: the statuses of a campaign file or run before a batch (``campaign list``)
+NEW, REDUCED, CHANGED, FAILED = "new", "reduced", "changed", "failed"
+#: a file whose content another file of the campaign (or the map) holds: stored once
+DUPLICATE = "duplicate"
+#: what a batch did with a run (``runs.csv``)
+SKIPPED = "skipped"
+
+
+@dataclass(frozen=True)
+class RunEntry:
+    """What the state keeps of a reduced run (and ``runs.csv`` shows), as its worker
+    found it: the labels, the id, the trace (relative to the output folder), μ_S and μ_K,
+    the nominal pressure [kPa], the measured pressure [kPa], normal force [N] and
+    temperature [°C] (``None`` when not finite), the ``;``-joined flags, and where the run
+    sits in its export (its name, test, result, interval and occurrence)."""
+
+    labels: dict[str, Any]
+    measurement_id: str
+    trace: str
+    mu_s: float | None
+    mu_k: float | None
+    pressure_kPa: float | None
+    pressure_measured_kPa: float | None
+    normal_force_measured_N: float | None
+    temperature_measured_C: float | None
+    flags: str
+    name: str = ""
+    test: str | None = None
+    result: str | None = None
+    interval: int | None = None
+    occurrence: int = 1
+
+    def as_dict(self) -> dict[str, Any]:
+        """The entry's fields as the state's JSON keys."""
+        return asdict(self)
+
+    @classmethod
+    def of(cls, run: ReducedRun, output_dir: Path) -> RunEntry:
+        """What the state keeps of a run reduced now (its trace relative to
+        ``output_dir``)."""
+        record, summary, place = run.record or {}, run.summary, run.place
+        return cls(
+            labels=asdict(run.labels),
+            measurement_id=run.measurement_id,
+            trace="" if run.trace is None else run.trace.relative_to(output_dir).as_posix(),
+            mu_s=summary["mu_s"],
+            mu_k=summary["mu_k"],
+            pressure_kPa=finite_or_none(record.get("pressure_kPa")),
+            pressure_measured_kPa=summary["pressure_kPa"],
+            normal_force_measured_N=summary["normal_force_N"],
+            temperature_measured_C=summary["temperature_C"],
+            flags=";".join(run.flags),
+            name=run.name,
+            test=place.test,
+            result=place.result,
+            interval=place.interval,
+            occurrence=place.occurrence,
+        )
+
+
+#: the keys of a state run entry that come from a :class:`RunEntry`
+ENTRY_KEYS: tuple[str, ...] = tuple(f.name for f in fields(RunEntry))
+
+
+@dataclass(frozen=True)
+class RunState:
+    """One run of a file as the state keeps it: ``status`` reduced or duplicate (then
+    ``entry`` holds what was measured) or failed (then ``reason`` says why and
+    ``undescribed`` whether no metadata source described its test); its name and where
+    it sits in its export."""
+
+    status: str
+    name: str = ""
+    test: str | None = None
+    result: str | None = None
+    interval: int | None = None
+    reason: str | None = None
+    undescribed: bool = False
+    entry: RunEntry | None = None
+
+    @classmethod
+    def kept(cls, status: str, entry: RunEntry) -> RunState:
+        """A reduced (or duplicate) run with what was measured."""
+        return cls(status=status, name=entry.name, test=entry.test, result=entry.result,
+                   interval=entry.interval, entry=entry)
+
+    @classmethod
+    def failed(cls, run: FailedRun) -> RunState:
+        """A run that failed, with its reason."""
+        place = run.place
+        return cls(status=FAILED, name=run.name, test=place.test if place else None,
+                   result=place.result if place else None,
+                   interval=place.interval if place else None, reason=run.reason,
+                   undescribed=run.undescribed)
+
+    @property
+    def measurement_id(self) -> str | None:
+        """The run's id, when it was reduced."""
+        return None if self.entry is None else self.entry.measurement_id
+
+    @property
+    def labels(self) -> dict[str, Any] | None:
+        """The labels it was reduced with, when it was."""
+        return None if self.entry is None else self.entry.labels
+
+    def flat(self) -> dict[str, Any]:
+        """The run as one flat dict: its JSON form (``status`` and the entry's keys, or
+        where it sits and why it failed)."""
+        if self.entry is not None:
+            return {"status": self.status, **self.entry.as_dict()}
+        out: dict[str, Any] = {"status": self.status, "name": self.name, "test": self.test,
+                               "result": self.result, "interval": self.interval,
+                               "reason": self.reason}
+        if self.undescribed:
+            out["undescribed"] = True
+        return out
+
+    @classmethod
+    def from_json(cls, data: dict[str, Any]) -> RunState:
+        """The run from its JSON form (:meth:`flat`)."""
+        status = str(data["status"])
+        if status in (REDUCED, DUPLICATE):
+            return cls.kept(status, RunEntry(**{k: data[k] for k in ENTRY_KEYS if k in data}))
+        return cls(status=status, name=str(data.get("name") or ""), test=data.get("test"),
+                   result=data.get("result"), interval=data.get("interval"),
+                   reason=data.get("reason"), undescribed=bool(data.get("undescribed")))
+
+
+@dataclass(frozen=True)
+class FileState:
+    """What the state keeps of a file: its size, ``mtime_ns`` and SHA-256, the config and
+    recipe hashes it was reduced with, its status (reduced, duplicate, failed), its Test
+    names (``None``: not known), its runs, and why it failed or which file it duplicates.
+    """
+
+    size: int
+    mtime_ns: int
+    config_hash: str | None
+    recipe: str | None
+    sha256: str | None
+    status: str
+    tests: tuple[str | None, ...] | None = ()
+    runs: tuple[RunState, ...] = ()
+    reason: str | None = None
+    duplicate_of: str | None = None
+
+    def run_ids(self, statuses: tuple[str, ...] = (REDUCED,)) -> set[str]:
+        """The measurement ids of its runs with one of ``statuses``."""
+        return {r.entry.measurement_id for r in self.runs
+                if r.status in statuses and r.entry is not None and r.entry.measurement_id}
+
+    def to_json(self) -> dict[str, Any]:
+        """Its JSON form."""
+        out: dict[str, Any] = {
+            "size": self.size, "mtime_ns": self.mtime_ns, "config_hash": self.config_hash,
+            "recipe": self.recipe, "sha256": self.sha256, "status": self.status,
+            "tests": None if self.tests is None else list(self.tests),
+            "runs": [r.flat() for r in self.runs]}
+        if self.reason is not None:
+            out["reason"] = self.reason
+        if self.duplicate_of is not None:
+            out["duplicate_of"] = self.duplicate_of
+        return out
+
+    @classmethod
+    def from_json(cls, data: dict[str, Any]) -> FileState:
+        """The file from its JSON form."""
+        tests = data.get("tests")
+        return cls(size=int(data["size"]), mtime_ns=int(data["mtime_ns"]),
+                   config_hash=data.get("config_hash"), recipe=data.get("recipe"),
+                   sha256=data.get("sha256"), status=str(data["status"]),
+                   tests=None if tests is None else tuple(tests),
+                   runs=tuple(RunState.from_json(r) for r in data.get("runs") or []),
+                   reason=data.get("reason"), duplicate_of=data.get("duplicate_of"))
+
+
+@dataclass(frozen=True)
+class MapStamp:
+    """The map file's size and ``mtime_ns`` as a batch left it: an untouched map is
+    trusted without reading it."""
+
+    size: int
+    mtime_ns: int
+
+    @classmethod
+    def of(cls, path: Path) -> MapStamp | None:
+        """The stamp of the map at ``path`` (``None`` when there is none)."""
+        if not path.exists():
+            return None
+        st = path.stat()
+        return cls(size=st.st_size, mtime_ns=st.st_mtime_ns)
+
+
+@dataclass(frozen=True)
+class CampaignState:
+    """A campaign's incremental state: its name, each file's :class:`FileState` (by
+    campaign-relative name) and the map's :class:`MapStamp`."""
+
+    campaign: str | None = None
+    entries: dict[str, FileState] = field(default_factory=dict)
+    map: MapStamp | None = None
+
+    def to_json(self) -> dict[str, Any]:
+        """The state file's JSON."""
+        out: dict[str, Any] = {"version": STATE_VERSION, "campaign": self.campaign,
+                               "entries": {f: e.to_json() for f, e in self.entries.items()}}
+        if self.map is not None:
+            out["map"] = asdict(self.map)
+        return out
+
+    @classmethod
+    def from_json(cls, data: Any) -> CampaignState:
+        """The state from its JSON; an empty state when it is not one this version wrote
+        (a lost state only costs a full re-run)."""
+        if not isinstance(data, dict) or data.get("version") != STATE_VERSION or \
+                not isinstance(data.get("entries"), dict):
+            return cls()
+        try:
+            stamp = data.get("map")
+            return cls(campaign=data.get("campaign"),
+                       entries={str(f): FileState.from_json(e)
+                                for f, e in data["entries"].items()},
+                       map=None if not stamp else MapStamp(int(stamp["size"]),
+                                                           int(stamp["mtime_ns"])))
+        except (KeyError, TypeError, ValueError, AttributeError):
+            return cls()
+
+    def with_entries(self, campaign: str, entries: dict[str, FileState],
+                     map_path: Path) -> CampaignState:
+        """This state with new entries and the map's stamp as it is now."""
+        return replace(self, campaign=campaign, entries=dict(entries),
+                       map=MapStamp.of(map_path))
+
+
+def load_state(campaign: Campaign) -> CampaignState:
+    """The incremental state of a campaign (empty when there is none or it is unreadable:
+    a lost state only costs a full re-run)."""
+    try:
+        data = json.loads(campaign.state_path.read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return CampaignState()
+    return CampaignState.from_json(data)
+
+
+def save_state(campaign: Campaign, state: CampaignState) -> None:
+    """Write the incremental state atomically (temporary file + rename). Compact, strict
+    JSON: without ``indent`` the json module's C encoder writes it (an indented state of
+    1,000 files took a third of an unchanged re-run); a value that is not finite is
+    ``null`` (the entries hold none: the slow walk of :func:`finite_json` is the rare
+    fallback)."""
+    data = state.to_json()
+    try:
+        text = json.dumps(data, sort_keys=True, separators=(",", ":"), allow_nan=False)
+    except ValueError:
+        text = json.dumps(finite_json(data), sort_keys=True, separators=(",", ":"),
+                          allow_nan=False)
+    write_text_atomic(campaign.state_path, text)

@@ -1,0 +1,158 @@
+"""What a run is, and its QC flags: decided once, before anything is printed or stored.
+
+:class:`RunLabels` say what a run is (pair and nominal conditions, as the user or a
+campaign's metadata gave them); :class:`Tolerances` how far its measured conditions may
+stray from them. :func:`decide_run` turns the labels and what the reduction measured into
+a :class:`RunVerdict`: the nominal force the run is grouped under (estimated from the
+measured mean when none was given) and the run's one list of flags (the reduction's own
+and the off-nominal ones of :func:`qc_flags`). Every output of a run (the ``reduce``
+table and JSON, the summary, the trace plot, the map row, ``runs.csv``) shows
+``RunVerdict.flags``; nothing decides a flag again downstream.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable
+from dataclasses import dataclass
+
+from .errors import CampaignError
+from .validate import FORCE_N, MAX_REPEAT, TEMPERATURE_C, check_count, check_name, check_number
+
+#: Flag added when the nominal force was not given and the measured mean was used.
+FLAG_FORCE_ESTIMATED = "nominal_force_estimated"
+#: Flags added when a run strays from its nominal conditions (:func:`qc_flags`).
+FLAG_FORCE_OFF = "normal_force_off_nominal"
+FLAG_TEMPERATURE_OFF = "temperature_off_nominal"
+
+
+@dataclass(frozen=True)
+class RunLabels:
+    """What a run is: contact pair and nominal conditions (not measured values).
+
+    ``normal_force_N`` is the nominal total normal force on the three pins [N] and
+    ``temperature_C`` the nominal chamber temperature [°C]; both define the condition
+    group in the friction map. ``None`` means unknown.
+
+    Every given label is checked where it is made (:mod:`tribopipe.validate`): names are
+    one line of printable text, the force is in :data:`~tribopipe.validate.FORCE_N`, the
+    temperature in :data:`~tribopipe.validate.TEMPERATURE_C`, the repeat a whole number;
+    otherwise :class:`~tribopipe.errors.ValidationError` names the label.
+    """
+
+    pin: str | None = None
+    disc: str | None = None
+    normal_force_N: float | None = None
+    temperature_C: float | None = None
+    repeat: int | None = None
+
+    def __post_init__(self) -> None:
+        for name in ("pin", "disc"):
+            value = getattr(self, name)
+            if value is not None:
+                check_name(value, name)
+        if self.normal_force_N is not None:
+            check_number(self.normal_force_N, FORCE_N, "nominal normal force")
+        if self.temperature_C is not None:
+            check_number(self.temperature_C, TEMPERATURE_C, "nominal temperature")
+        if self.repeat is not None:
+            check_count(self.repeat, "repeat", high=MAX_REPEAT)
+
+    @property
+    def complete(self) -> bool:
+        """True when pin and disc are known (the minimum for a friction-map row)."""
+        return bool(self.pin) and bool(self.disc)
+
+
+@dataclass(frozen=True)
+class Tolerances:
+    """How far a run's measured conditions may stray from nominal before it is flagged.
+
+    The normal force limit is ``max(force_N, force_rel · F_nominal)`` [N]; the temperature
+    limit is ``temperature_C`` [K, as a difference in °C]. Defaults: 10 % of the nominal
+    force, 2 K (a campaign config may state its own).
+    """
+
+    force_N: float = 0.0
+    force_rel: float = 0.10
+    temperature_C: float = 2.0
+
+    def force_limit_N(self, nominal_N: float) -> float:
+        """Allowed |F_measured − F_nominal| [N] at a nominal total force [N]."""
+        return max(self.force_N, self.force_rel * abs(nominal_N))
+
+
+def _finite(value: float | None) -> bool:
+    return value is not None and math.isfinite(value)
+
+
+def qc_flags(labels: RunLabels, normal_force_measured_N: float | None,
+             temperature_measured_C: float | None, tolerances: Tolerances) -> list[str]:
+    """The off-nominal QC flags of a run: ``normal_force_off_nominal`` when the measured
+    mean normal force [N] strays more than the tolerance from nominal,
+    ``temperature_off_nominal`` likewise for the temperature [°C]. Unknown nominal or
+    measured values (``None`` or NaN) raise no flag."""
+    flags: list[str] = []
+    if labels.normal_force_N is not None and normal_force_measured_N is not None and \
+            _finite(normal_force_measured_N):
+        if abs(normal_force_measured_N - labels.normal_force_N) > \
+                tolerances.force_limit_N(labels.normal_force_N):
+            flags.append(FLAG_FORCE_OFF)
+    if labels.temperature_C is not None and temperature_measured_C is not None and \
+            _finite(temperature_measured_C):
+        if abs(temperature_measured_C - labels.temperature_C) > tolerances.temperature_C:
+            flags.append(FLAG_TEMPERATURE_OFF)
+    return flags
+
+
+def canonical_flags(flags: Iterable[str]) -> tuple[str, ...]:
+    """Flags as every output shows them: sorted and unique, so the same run always shows
+    the same list (and the map the same ``;``-joined string)."""
+    return tuple(sorted({f for f in flags if f}))
+
+
+@dataclass(frozen=True)
+class RunVerdict:
+    """A run's labels with what they decide: ``normal_force_N``, the nominal total force
+    [N] the run is grouped under (the label, or the measured mean rounded to 0.1 N when
+    none was given; ``None`` when neither is known), and ``flags``, the run's one list of
+    QC flags (:func:`canonical_flags`)."""
+
+    labels: RunLabels
+    normal_force_N: float | None
+    flags: tuple[str, ...]
+
+    @property
+    def force_estimated(self) -> bool:
+        """True when the nominal force is the measured mean (no label gave one)."""
+        return FLAG_FORCE_ESTIMATED in self.flags
+
+
+def decide_run(labels: RunLabels, reduction_flags: Iterable[str],
+               normal_force_measured_N: float | None, temperature_measured_C: float | None,
+               tolerances: Tolerances | None = None) -> RunVerdict:
+    """Decide a reduced run's nominal force and flags, once, from its labels, the flags of
+    its reduction and its measured mean normal force [N] and temperature [°C]
+    (``tolerances`` default: :class:`Tolerances`, 10 %, 2 K).
+
+    The flags are the reduction's, the off-nominal ones (:func:`qc_flags`) and
+    ``nominal_force_estimated`` when no nominal force was given and the measured mean
+    (rounded to 0.1 N) stands in for it.
+    """
+    flags = list(reduction_flags)
+    flags += qc_flags(labels, normal_force_measured_N, temperature_measured_C,
+                      tolerances or Tolerances())
+    force: float | None
+    if labels.normal_force_N is not None:
+        force = float(labels.normal_force_N)
+    elif normal_force_measured_N is not None and _finite(normal_force_measured_N):
+        force = round(float(normal_force_measured_N), 1)
+        flags.append(FLAG_FORCE_ESTIMATED)
+    else:
+        force = None
+    return RunVerdict(labels=labels, normal_force_N=force, flags=canonical_flags(flags))
+
+
+class Undescribed(CampaignError):
+    """No metadata source describes a run's test: it cannot be labelled (a campaign's
+    ledger names these apart from other failures)."""

@@ -1,0 +1,83 @@
+"""A run's QC flags are decided once: every output of `reduce` and of `batch` shows the same.
+
+The real 1 N run of the example campaign, labelled 3 N: the measured force strays from
+nominal by more than the 10 % tolerance, so the run carries ``normal_force_off_nominal``
+in the `reduce` table and JSON, its summary, the trace plot's header, the map and (for a
+batch) ``runs.csv``.
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import shutil
+from pathlib import Path
+
+import pandas as pd
+import pytest
+from click.testing import CliRunner
+
+from tribopipe.cli import main
+from tribopipe.figures import trace_figure
+
+ROOT = Path(__file__).resolve().parents[1]
+ONE_NEWTON = ROOT / "raw" / "example" / "DS30_steel_1N_10C_r1.csv"
+OFF = "normal_force_off_nominal"
+
+
+def _header_flags() -> str:
+    """The flags line of the last trace plot this process drew (its header's last line)."""
+    return str(trace_figure().flags.get_text())
+
+
+def _map_flags(path: Path) -> list[str]:
+    return [str(f) for f in pd.read_parquet(path)["flags"]]
+
+
+@pytest.mark.skipif(not ONE_NEWTON.exists(), reason="the example campaign is not here")
+def test_reduce_shows_the_maps_flags_in_every_output(tmp_path: Path) -> None:
+    out, mapfile = tmp_path / "out", tmp_path / "map.parquet"
+    args = ["reduce", str(ONE_NEWTON), "--pin", "DS30", "--disc", "steel", "--force", "3",
+            "--temperature", "10", "--repeat", "1", "--out", str(out), "--map", str(mapfile)]
+    table = CliRunner().invoke(main, [*args, "--plot"])
+    assert table.exit_code == 0, table.output
+    header_after_reduce = _header_flags()
+    shown = CliRunner().invoke(main, [*args, "--json"])
+    assert shown.exit_code == 0, shown.output
+
+    stored = _map_flags(mapfile)
+    assert stored == [OFF]
+    row = next(line for line in table.stdout.splitlines() if ONE_NEWTON.name in line)
+    assert row.split()[-1] == OFF
+    assert json.loads(shown.stdout)[0]["flags"] == [OFF]
+    summary = json.loads(next((out / "summaries").glob("*.json")).read_text())
+    assert summary["flags"] == [OFF]
+    assert header_after_reduce == f"flags: {OFF}"
+
+
+@pytest.mark.skipif(not ONE_NEWTON.exists(), reason="the example campaign is not here")
+def test_batch_shows_the_same_flags_as_reduce(tmp_path: Path) -> None:
+    raw = tmp_path / "raw"
+    raw.mkdir()
+    # the file name labels it 3 N: the mislabel comes from the campaign's metadata
+    shutil.copyfile(ONE_NEWTON, raw / "DS30_steel_3N_10C_r1.csv")
+    out, mapfile = tmp_path / "out", tmp_path / "map.parquet"
+    done = CliRunner().invoke(main, [
+        "batch", str(raw), "--pattern", "{pin}_{disc}_{force}N_{temperature}C_r{repeat}",
+        "--out", str(out), "--map", str(mapfile), "--jobs", "1", "--plots"])
+    assert done.exit_code == 0, done.output
+    header = _header_flags()
+
+    assert _map_flags(mapfile) == [OFF]
+    with (out / "runs.csv").open(encoding="utf-8", newline="") as fh:
+        rows = list(csv.DictReader(fh))
+    assert [r["flags"] for r in rows] == [OFF]
+    assert header == f"flags: {OFF}"
+
+    # the same run through `reduce` with the same labels: the same flags
+    again = CliRunner().invoke(main, [
+        "reduce", str(raw / "DS30_steel_3N_10C_r1.csv"), "--pin", "DS30", "--disc", "steel",
+        "--force", "3", "--temperature", "10", "--repeat", "1", "--no-map", "--json",
+        "--out", str(tmp_path / "again")])
+    assert again.exit_code == 0, again.output
+    assert json.loads(again.stdout)[0]["flags"] == [OFF]

@@ -18,28 +18,47 @@ from sim_files import (
     parse_ansys,
     parse_lsdyna,
     pyelastica_values,
+    sdf_friction,
     sofa_response,
+    urdf_friction,
+    usd_values,
 )
 from tribopipe.errors import ExportError
-from tribopipe.export.fe_decks import deck_names, field10
-from tribopipe.export.simbase import FOUNDING_SLIP_RATE, SlipRate, safe_text, xml_comment
-from tribopipe.export.simulators import (
-    FORMATS,
+from tribopipe.export import drake, fe_decks, pybullet, scenes, usd
+from tribopipe.export.fe_decks import abaqus_name, deck_names, field10, write_abaqus, write_ansys
+from tribopipe.export.registry import FORMATS
+from tribopipe.export.simbase import (
+    FOUNDING_SLIP_RATE,
     UNIT_SYSTEMS,
-    abaqus_name,
+    SlipRate,
     convert_pressure_kPa,
     default_decay_s_per_mm,
-    export_simulator_input,
     pair_slip_rates,
-    write_abaqus,
-    write_abaqus_decay,
-    write_ansys,
-    write_lsdyna,
-    write_mujoco,
-    write_pyelastica,
-    write_sofa,
+    safe_text,
+    xml_comment,
 )
+from tribopipe.export.simulators import export_simulator_input
 from tribopipe.query import pairs, query
+
+
+def _at_condition(writer):
+    """``writer`` (which takes a query result) called as the tests call it: the group
+    table and the condition, queried here as export_simulator_input does."""
+
+    def call(groups, *, pin, disc, pressure_kPa, temperature_C=None, **options):
+        return writer(query(groups, pin, disc, pressure_kPa, temperature_C), **options)
+
+    return call
+
+
+write_abaqus_decay = _at_condition(fe_decks.write_abaqus_decay)
+write_lsdyna = _at_condition(fe_decks.write_lsdyna)
+write_mujoco = _at_condition(scenes.write_mujoco)
+write_sofa = _at_condition(scenes.write_sofa)
+write_pyelastica = _at_condition(scenes.write_pyelastica)
+write_usd = _at_condition(usd.write_usd)
+write_pybullet = _at_condition(pybullet.write_pybullet)
+write_drake = _at_condition(drake.write_drake)
 
 PIN, DISC = "Dragonskin 30", "steel"
 
@@ -422,6 +441,11 @@ def _all_files(groups, groups_with_mu_s) -> dict[str, str]:
         "mujoco": write_mujoco(groups, **cond),
         "sofa": write_sofa(groups, **cond),
         "pyelastica": write_pyelastica(groups, **cond),
+        "usd": write_usd(groups, **cond),
+        "usd mu_s": write_usd(groups_with_mu_s, **cond),
+        "pybullet": write_pybullet(groups, **cond),
+        "drake": write_drake(groups, **cond),
+        "drake mu_s": write_drake(groups_with_mu_s, **cond),
     }
 
 
@@ -429,7 +453,8 @@ def test_every_header_names_engine_version_coefficient_and_combination(
     groups, groups_with_mu_s
 ):
     versions = {"abaqus": "2017-2024", "ansys": "2025 R1", "lsdyna": "R14",
-                "mujoco": "mujoco 4.0.0", "sofa": "v24.12", "pyelastica": "pyelastica 1.0.0"}
+                "mujoco": "mujoco 4.0.0", "sofa": "v24.12", "pyelastica": "pyelastica 1.0.0",
+                "usd": "usd-core 26.11", "pybullet": "pybullet 3.2.7", "drake": "drake 1.51.1"}
     for kind, text in _all_files(groups, groups_with_mu_s).items():
         head = " ".join(text.splitlines()[:12])
         assert "checked against:" in head, kind
@@ -437,7 +462,8 @@ def test_every_header_names_engine_version_coefficient_and_combination(
         holds = head.split("holds:")[1][:120]
         assert "mu_k" in holds, kind
         assert ("mu_s" in holds) == (kind in ("abaqus decay", "lsdyna mu_s")
-                                     or kind in ("mujoco", "sofa", "pyelastica")), kind
+                                     or kind in ("mujoco", "sofa", "pyelastica", "pybullet")
+                                     or kind.split()[0] in ("usd", "drake")), kind
         assert "two surfaces:" in head, kind
     assert set(FORMATS) == {k.split()[0] for k in versions}
 
@@ -473,6 +499,9 @@ def test_hostile_names_stay_data_in_every_file(hostile_groups):
         "mujoco": write_mujoco(hostile_groups, source=source, **cond),
         "sofa": write_sofa(hostile_groups, source=source, **cond),
         "pyelastica": write_pyelastica(hostile_groups, source=source, **cond),
+        "usd": write_usd(hostile_groups, source=source, **cond),
+        "pybullet": write_pybullet(hostile_groups, source=source, **cond),
+        "drake": write_drake(hostile_groups, source=source, **cond),
     }
     expected_mu_k = query(hostile_groups, HOSTILE, DISC, 35.37, 20.0).mu_k.value
     for kind, text in files.items():
@@ -496,6 +525,13 @@ def test_hostile_names_stay_data_in_every_file(hostile_groups):
     values = pyelastica_values(files["pyelastica"])
     assert values["PAIR"] == (HOSTILE, DISC)  # the exact name, as a Python literal
     assert values["kinetic_mu_array"] == pytest.approx([expected_mu_k] * 3)
+    for kind in ("usd", "pybullet", "drake"):  # names only in ASCII comments
+        assert files[kind].isascii(), kind
+        assert "Evil" not in "".join(line for line in files[kind].splitlines()
+                                     if not line.startswith(("#", "<!--"))), kind
+    assert usd_values(files["usd"])["dynamic"] == pytest.approx(expected_mu_k)
+    assert urdf_friction(files["pybullet"]) == ("pin", pytest.approx(expected_mu_k))
+    assert sdf_friction(files["drake"])["pin"][1] == pytest.approx(expected_mu_k)
 
 
 @pytest.mark.parametrize("fmt", ["abaqus", "ansys"])
@@ -551,3 +587,8 @@ def test_any_name_stays_a_comment_or_a_literal(name):
     assert sofa_response(write_sofa(groups, **cond)).get("responseParams") == "mu=0.5"
     assert pyelastica_values(write_pyelastica(groups, **cond))["PAIR"] == (name, "B")
     assert parse_lsdyna(write_lsdyna(groups, **cond))[0][0] == "*KEYWORD"
+    assert usd_values(write_usd(groups, **cond)) == {"dynamic": 0.5, "static": 0.5,
+                                                     "mode": "average"}
+    assert urdf_friction(write_pybullet(groups, **cond)) == ("pin", 0.5)
+    assert sdf_friction(write_drake(groups, **cond)) == {"pin": (0.5, 0.5),
+                                                         "disc": (0.5, 0.5)}

@@ -340,3 +340,14 @@ def test_abaqus_slip_rate_per_pair_from_a_real_map(tmp_path):
     for name, block in blocks.items():
         expected = 0.021 if name.endswith("_ON_STEEL") else 0.007
         assert {row[1] for row in block["rows"]} == {expected}, name
+
+
+def test_the_simulator_page_holds_the_registry_table():
+    from tribopipe.export.simulators import formats_table
+
+    doc = (Path(__file__).resolve().parents[1] / "docs" / "simulators.md").read_text(
+        encoding="utf-8")
+    start = doc.index("-->\n", doc.index("<!-- formats:")) + 4
+    end = doc.index("<!-- end of formats -->")
+    assert doc[start:end] == formats_table(), (
+        "docs/simulators.md is stale: paste tribopipe.export.simulators.formats_table()")

@@ -156,6 +156,8 @@ def formats_table() -> str:
         engine: Engine = load(w.engine)
         kind = " or ".join(k for k, f in (("a table", w.table), ("one condition", w.condition))
                            if f)
+        # the engines' texts are plain: a keyword's "*" must not start an emphasis
+        cells = [engine.combination.replace("*", "\\*"), engine.checked.replace("*", "\\*")]
         rows.append(f"| `{w.name}` | {engine.name} | {w.holds} | {kind} | "
-                    f"{engine.combination} | {engine.checked} |")
+                    f"{cells[0]} | {cells[1]} |")
     return "\n".join(rows) + "\n"

@@ -592,3 +592,40 @@ def test_any_name_stays_a_comment_or_a_literal(name):
     assert urdf_friction(write_pybullet(groups, **cond)) == ("pin", 0.5)
     assert sdf_friction(write_drake(groups, **cond)) == {"pin": (0.5, 0.5),
                                                          "disc": (0.5, 0.5)}
+
+
+# ---------------------------------------------------------------------------- usd, pybullet, drake
+
+
+def test_static_coefficient_where_mu_s_is_unknown_or_below_mu_k(groups, groups_with_mu_s):
+    cond = {"pin": PIN, "disc": DISC, "pressure_kPa": 35.37, "temperature_C": 20.0}
+    mu_k = query(groups, PIN, DISC, 35.37, 20.0).mu_k.value
+    # unknown: mu_k written as the static coefficient, and said so
+    for text in (write_usd(groups, **cond), write_drake(groups, **cond)):
+        assert "static = mu_k: the map holds no mu_s for this pair" in text
+    assert usd_values(write_usd(groups, **cond))["static"] == pytest.approx(mu_k)
+    # measured and above mu_k: written as it is
+    assert usd_values(write_usd(groups_with_mu_s, **cond))["static"] == pytest.approx(
+        1.4 * mu_k)
+    # below mu_k: raised to mu_k (Drake would refuse the file), and said so
+    low = groups_with_mu_s.copy()
+    low["mu_s_mean"] = low["mu_k_mean"] * 0.8
+    text = write_drake(low, **cond)
+    assert "is below mu_k at this condition" in text
+    assert sdf_friction(text)["pin"] == (pytest.approx(mu_k), pytest.approx(mu_k))
+
+
+def test_new_formats_refuse_what_they_do_not_take(groups):
+    cond = {"pin": PIN, "disc": DISC, "pressure_kPa": 35.37, "temperature_C": 20.0}
+    with pytest.raises(ExportError, match="--coefficient is for .*pybullet; not for usd"):
+        export_simulator_input(groups, "usd", coefficient="mu_s", **cond)
+    with pytest.raises(ExportError, match="--units is for abaqus, ansys, lsdyna; not for drake"):
+        export_simulator_input(groups, "drake", units="m-N-s", **cond)
+    with pytest.raises(ExportError, match="every measured pressure"):
+        export_simulator_input(groups, "ansys", pressure_kPa=20.0)
+    with pytest.raises(ExportError, match="usd takes one condition"):
+        export_simulator_input(groups, "usd", pin=PIN, disc=DISC)
+    high = groups.copy()
+    high["mu_k_mean"] = 12.0
+    with pytest.raises(ExportError, match="exceeds Bullet's clamp"):
+        export_simulator_input(high, "pybullet", **cond)

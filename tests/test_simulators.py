@@ -629,3 +629,32 @@ def test_new_formats_refuse_what_they_do_not_take(groups):
     high["mu_k_mean"] = 12.0
     with pytest.raises(ExportError, match="exceeds Bullet's clamp"):
         export_simulator_input(high, "pybullet", **cond)
+
+
+def test_every_registry_entry_resolves_and_declares_what_its_writer_takes():
+    """The registry names its functions as text: each must exist, and a writer's keyword
+    arguments must be exactly the options its entry declares (plus what
+    export_simulator_input passes), so that no option is dropped or unknown."""
+    import inspect
+
+    from tribopipe.export.registry import UNITS, WRITERS, load
+    from tribopipe.export.simbase import Engine
+
+    assert UNITS.choices == tuple(UNIT_SYSTEMS)
+    for w in WRITERS:
+        assert isinstance(load(w.engine), Engine), w.name
+        for target, options, passed in (
+            (w.table, w.table_options, {"pin", "disc", "temperature_C", "source"}
+             | ({"slip_rates"} if w.slip_rate else set())),
+            (w.condition, w.condition_options,
+             {"source"} | ({"slip_rate"} if w.slip_rate else set())),
+        ):
+            if target is None:
+                continue
+            params = inspect.signature(load(target)).parameters
+            keywords = {n for n, p in params.items() if p.kind is p.KEYWORD_ONLY}
+            assert keywords == passed | {o.name for o in options}, (w.name, target)
+            for option in options:
+                assert option.check is None or callable(load(option.check))
+        if w.snippet is not None:
+            assert callable(load(w.snippet)) and callable(load(w.snippet_header)), w.name

@@ -153,3 +153,70 @@ def pyelastica_values(text: str) -> dict[str, object]:
             found[name] = ast.literal_eval(call.args[0])
     assert sorted(found) == ["PAIR", "kinetic_mu_array", "static_mu_array"]
     return found
+
+
+def usd_values(text: str) -> dict[str, object]:
+    """{"static", "dynamic", "mode"} of a ``.usda`` layer we write, read without pxr.
+
+    Lines are ``#`` comments, blank, or one of the layer's fixed structural lines; the
+    friction and combine-mode lines give the values. Anything else is an error.
+    """
+    lines = text.split("\n")
+    assert lines[0] == "#usda 1.0", lines[0]
+    fixed = {
+        "(", "    metersPerUnit = 1", '    upAxis = "Z"', ")",
+        'def Scope "TribopipeFriction"', "{", "}", '    def Material "PinOnDisc" (',
+        '        prepend apiSchemas = ["PhysicsMaterialAPI", "PhysxMaterialAPI"]', "    )",
+        "    {", "    }", '    def Cube "Pin" (', '    def Cylinder "Disc" (',
+        '        prepend apiSchemas = ["PhysicsCollisionAPI", "MaterialBindingAPI"]',
+        "        rel material:binding:physics = </TribopipeFriction/PinOnDisc>",
+        '        uniform token[] xformOpOrder = ["xformOp:translate"]',
+        "        double size = 0.02", "        double3 xformOp:translate = (0, 0, 0.02)",
+        '        uniform token axis = "Z"', "        double height = 0.02",
+        "        double radius = 0.2", "        double3 xformOp:translate = (0, 0, 0)",
+    }
+    values: dict[str, object] = {}
+    for line in lines[1:]:
+        if not line or line.startswith("#") or line in fixed:
+            continue
+        key, _, value = line.strip().rpartition(" = ")
+        if key == "float physics:staticFriction":
+            values["static"] = float(value)
+        elif key == "float physics:dynamicFriction":
+            values["dynamic"] = float(value)
+        elif key == "uniform token physxMaterial:frictionCombineMode":
+            values["mode"] = ast.literal_eval(value)
+        else:
+            raise AssertionError(f"unexpected USD line {line!r}")
+    return values
+
+
+def urdf_friction(text: str) -> tuple[str, float]:
+    """(link name, lateral friction) of a URDF we write: one robot, one link, and only the
+    elements we write."""
+    root = ET.fromstring(text.encode())
+    assert root.tag == "robot"
+    (link,) = list(root)
+    assert link.tag == "link" and link.get("name") == root.get("name")
+    assert [c.tag for c in link] == ["contact", "inertial", "collision"]
+    (friction,) = list(link.find("contact"))
+    assert friction.tag == "lateral_friction"
+    return link.get("name"), float(friction.get("value"))
+
+
+def sdf_friction(text: str) -> dict[str, tuple[float, float]]:
+    """{link name: (mu_static, mu_dynamic)} of an SDFormat model we write."""
+    drake = "{http://drake.mit.edu}"
+    root = ET.fromstring(text.encode())
+    assert root.tag == "sdf"
+    (model,) = list(root)
+    assert model.tag == "model"
+    found = {}
+    for link in model:
+        assert link.tag == "link"
+        assert [c.tag for c in link] == ["pose", "inertial", "collision"]
+        props = link.find("collision").find(drake + "proximity_properties")
+        assert [c.tag for c in props] == [drake + "mu_dynamic", drake + "mu_static"]
+        found[link.get("name")] = (float(props.find(drake + "mu_static").text),
+                                   float(props.find(drake + "mu_dynamic").text))
+    return found

@@ -20,6 +20,9 @@ from sim_files import (
     parse_abaqus,
     parse_ansys,
     pyelastica_values,
+    sdf_friction,
+    urdf_friction,
+    usd_values,
 )
 from tribopipe.cli import main
 from tribopipe.cli.fit import fit_cmd
@@ -131,6 +134,41 @@ def test_export_single_values(map_path):
                                "--disc-part", "9").output)
     assert (card["fs"], card["fd"], card["dc"]) == (0.26, 0.26, 0.0)
     assert (card["surfa"], card["surfb"]) == (4, 9)
+
+
+def test_export_usd_pybullet_drake(map_path):
+    common = ["--map", str(map_path), "--pin", PIN, "--disc", DISC, "--pressure", "106.1",
+              "--temperature", "20"]
+    # the published map holds mu_k only: the static coefficients are mu_k, and say so
+    usd = _run("export", "usd", *common).output
+    assert usd_values(usd) == {"dynamic": 0.26, "static": 0.26, "mode": "average"}
+    assert "# static = mu_k: the map holds no mu_s for this pair" in usd
+    assert urdf_friction(_run("export", "pybullet", *common).output) == ("pin", 0.26)
+    assert urdf_friction(_run("export", "pybullet", *common, "--body", "disc").output) == (
+        "disc", 1.0)
+    assert sdf_friction(_run("export", "drake", *common).output) == {
+        "pin": (0.26, 0.26), "disc": (0.26, 0.26)}
+    refused = CliRunner().invoke(main, ["export", "pybullet", *common, "--coefficient", "mu_s"])
+    assert refused.exit_code == 1 and "no mu_s in the map" in refused.output
+
+
+def test_every_format_is_a_command_with_the_options_it_declares():
+    import click
+
+    from tribopipe.cli.export import export_group
+    from tribopipe.export.registry import WRITERS
+
+    ctx = click.Context(export_group)
+    assert export_group.list_commands(ctx) == [w.name for w in WRITERS]
+    shared = {"pin", "disc", "temperature_C", "pressure_kPa", "map_path", "output"}
+    for writer in WRITERS:
+        command = export_group.get_command(ctx, writer.name)
+        params = {p.name: p for p in command.params}
+        assert set(params) == shared | {o.name for o in writer.options}, writer.name
+        for option in writer.options:
+            assert option.flag in params[option.name].opts, (writer.name, option.name)
+            if option.choices:
+                assert tuple(params[option.name].type.choices) == option.choices
 
 
 @pytest.mark.parametrize("fmt", ["mujoco", "sofa", "pyelastica", "lsdyna"])
@@ -302,3 +340,14 @@ def test_abaqus_slip_rate_per_pair_from_a_real_map(tmp_path):
     for name, block in blocks.items():
         expected = 0.021 if name.endswith("_ON_STEEL") else 0.007
         assert {row[1] for row in block["rows"]} == {expected}, name
+
+
+def test_the_simulator_page_holds_the_registry_table():
+    from tribopipe.export.simulators import formats_table
+
+    doc = (Path(__file__).resolve().parents[1] / "docs" / "simulators.md").read_text(
+        encoding="utf-8")
+    start = doc.index("-->\n", doc.index("<!-- formats:")) + 4
+    end = doc.index("<!-- end of formats -->")
+    assert doc[start:end] == formats_table(), (
+        "docs/simulators.md is stale: paste tribopipe.export.simulators.formats_table()")

@@ -89,11 +89,11 @@ def test_wrong_encoding_gives_a_hint(data_dir: Path) -> None:
     assert "--encoding utf-16" in result.output
 
 
-def test_format_choices_are_the_readers_formats() -> None:
-    from tribopipe.cli.inspect import inspect_cmd
-
-    option = next(p for p in inspect_cmd.params if p.name == "fmt")
-    assert tuple(option.type.choices) == FORMATS
+def test_an_unknown_format_is_refused_with_the_readers_formats(data_dir: Path) -> None:
+    result = run(str(data_dir / "rheocompass_en_utf16_small.txt"), "--format", "tribo")
+    assert result.exit_code == 1
+    assert "unknown format 'tribo'" in result.output
+    assert f"expected one of {', '.join(FORMATS)}" in result.output
 
 
 @pytest.mark.slow

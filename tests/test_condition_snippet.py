@@ -13,7 +13,6 @@ from tribopipe.export.fe_decks import (
     condition_header,
     condition_snippet,
     deck_safe,
-    write_condition,
 )
 from tribopipe.export.simbase import comment_block, condition_lines
 from tribopipe.frictionmap import published_csv_path
@@ -27,8 +26,7 @@ def groups():
 
 def test_abaqus_constant_friction_at_an_interpolated_condition(groups):
     res = query(groups, "Dragonskin 30", "steel", 50.0, 15.0)
-    text = write_condition(groups, "abaqus", pin="Dragonskin 30", disc="steel",
-                           pressure_kPa=50.0, temperature_C=15.0, source="map.parquet")
+    text = condition_snippet(res, "abaqus", source="map.parquet")
     lines = text.splitlines()
     assert lines[-3:] == [
         f"*SURFACE INTERACTION, NAME={abaqus_name('Dragonskin 30', 'steel')}",
@@ -76,6 +74,6 @@ def test_unknown_format_or_material_is_refused(groups):
     with pytest.raises(ExportError, match="expected one of abaqus, ansys"):
         condition_snippet(res, "mujoco")
     with pytest.raises(ExportError, match="expected one of abaqus, ansys"):
-        write_condition(groups, "lsdyna", pin="Dragonskin 30", disc="steel", pressure_kPa=20.0)
+        condition_snippet(res, "lsdyna")
     with pytest.raises(ExportError, match="material number must be >= 1"):
         condition_snippet(res, "ansys", material_id=0)

@@ -26,6 +26,8 @@ import pytest
 from reduced_runs import make_processed
 from tribopipe.export.explorer import write_explorer
 from tribopipe.export.fe_decks import condition_snippet
+from tribopipe.export.registry import WRITERS
+from tribopipe.export.simulators import snippet
 from tribopipe.frictionmap import import_table, published_csv_path, read_map
 from tribopipe.query import groups_of, pairs, query
 from tribopipe.report import make_report
@@ -227,12 +229,13 @@ PAGE_SNIPPETS = """([conditions, fmts]) => conditions.map(([pin, disc, p, t]) =>
 
 
 def assert_snippets_are_the_writer_s(tab, groups, conditions, source: str) -> None:
-    """The page's ABAQUS and Ansys text equals fe_decks.condition_snippet's."""
-    texts = tab.page.evaluate(PAGE_SNIPPETS, [[list(c) for c in conditions], ["abaqus", "ansys"]])
-    for (pin, disc, p, t), (abaqus, ansys) in zip(conditions, texts, strict=True):
+    """The page's text of every registered snippet format equals the Python writer's."""
+    formats = [w.name for w in WRITERS if w.snippet is not None]
+    texts = tab.page.evaluate(PAGE_SNIPPETS, [[list(c) for c in conditions], formats])
+    for (pin, disc, p, t), row in zip(conditions, texts, strict=True):
         res = query(groups, pin, disc, p, t)
-        assert abaqus == condition_snippet(res, "abaqus", source=source), (pin, disc, p, t)
-        assert ansys == condition_snippet(res, "ansys", source=source), (pin, disc, p, t)
+        for fmt, text in zip(formats, row, strict=True):
+            assert text == snippet(fmt, res, source=source), (fmt, pin, disc, p, t)
 
 
 def test_page_equals_query_on_the_published_map(tab, published):

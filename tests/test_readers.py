@@ -448,3 +448,32 @@ def test_an_absurd_point_number_is_refused_not_overflowed(tmp_path: Path) -> Non
     message = assert_one_line_error(write(tmp_path, "big.csv", text, "utf-8"),
                                     "expected a point number")
     assert "big.csv:2" in message
+
+
+def test_a_new_format_is_one_reader_entry(tmp_path, monkeypatch):
+    """Detection, ``fmt=`` and the refusal hint read :data:`readers.READERS` only: a toy
+    text format registered there is detected and read, and named where nothing matches."""
+    from tribopipe import readers
+    from tribopipe.readers import plaincsv
+    from tribopipe.readers.spec import Reader
+
+    toy = Reader(
+        name="toy",
+        suffixes=(".toy",),
+        expects="a toy export ('TOY')",
+        parse=lambda rows, path, aliases: plaincsv.parse_intervals(rows[1:], path, aliases),
+        looks_like=lambda rows, aliases: bool(rows) and rows[0][1][:1] == ["TOY"],
+        data_line=plaincsv.data_line,
+    )
+    monkeypatch.setattr(readers, "READERS", (toy, *readers.READERS))
+    path = tmp_path / "run.toy"
+    path.write_text("TOY;\ntime [s];torque [mNm];normal force [N]\n0;1,5;2\n1;1,6;2\n",
+                    encoding="utf-8")
+    (m,) = readers.read_export(path)
+    assert m.meta.file_format == "toy"
+    assert m.data["torque_Nm"].tolist() == pytest.approx([1.5e-3, 1.6e-3])
+    bad = tmp_path / "bad.txt"
+    bad.write_text("item;price\napple;1\n", encoding="utf-8")
+    with pytest.raises(ReadError, match="not a recognised export") as err:
+        readers.read_export(bad)
+    assert "a toy export ('TOY')" in str(err.value)

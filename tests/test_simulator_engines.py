@@ -4,12 +4,18 @@ MuJoCo compiles our MJCF (through ``<include>``, as a user would) and reports th
 friction in the model and in a live contact; PyElastica runs our Python file, builds
 ``RodPlaneContactWithAnisotropicFriction`` from it and applies it to a rod lying on a
 plane: the friction force it computes is μ_K × load when sliding and at most μ_S × load
-when stuck. Each test skips with a reason where its engine is not installed
-(``pip install -e '.[test,engines]'``; ``.ci/run`` installs both).
+when stuck. USD (pxr with the PhysX schemas) reads back the material's authored static
+and dynamic friction, its combine mode and both bindings; PyBullet loads both URDFs, reads
+each link's lateral friction and measures the friction of a box sliding on the disc;
+Drake parses the SDFormat file, finalizes the plant and combines the two geometries'
+CoulombFriction by its own rule. Each test skips with a reason where its engine is not
+installed (``pip install -e '.[test,engines]'``; ``.ci/run`` installs them); Drake's sit
+behind the ``drake`` marker (``pytest -m drake``, run by ``.ci/run``).
 """
 
 from __future__ import annotations
 
+import functools
 import runpy
 
 import pandas as pd
@@ -17,10 +23,12 @@ import pytest
 
 from published_map import PUBLISHED_CSV, group_table, published_runs
 from sim_files import pyelastica_values
-from tribopipe.export.simulators import write_mujoco, write_pyelastica
+from tribopipe.export.simulators import export_simulator_input
 from tribopipe.query import query
 
 PIN, DISC = "Dragonskin 30", "steel"
+write_mujoco = functools.partial(export_simulator_input, fmt="mujoco")
+write_pyelastica = functools.partial(export_simulator_input, fmt="pyelastica")
 HOSTILE = "Evil\n*HEADING\r\n'\"</pair><!-- -->--$ import os\x1b\u2028end"
 
 
@@ -152,3 +160,182 @@ def test_pyelastica_runs_the_file_and_applies_its_coefficients(elastica, groups,
     # at rest, pushed with more than mu_s x load: static friction holds mu_s x load
     assert _friction_x(contact, rod, plane, speed=0.0, push_per_node=0.4) == pytest.approx(
         -mu_s * load, rel=1e-9)
+
+
+# ---------------------------------------------------------------------------- OpenUSD
+
+
+@pytest.fixture(scope="module")
+def pxr_usd():
+    """pxr's Usd and UsdShade with the PhysX schemas registered (physx-usd-schemas)."""
+    pxr = pytest.importorskip("pxr", reason="usd-core not installed: pip install -e '.[engines]'")
+    pytest.importorskip("physx_usd_schemas",
+                        reason="physx-usd-schemas not installed: pip install -e '.[engines]'")
+    from pxr import Usd, UsdPhysics, UsdShade
+
+    return pxr, Usd, UsdPhysics, UsdShade
+
+
+@pytest.mark.parametrize("pin,with_mu_s", [(PIN, True), (HOSTILE, True), (PIN, False)])
+def test_usd_opens_and_both_bodies_carry_the_pair_values(
+    pxr_usd, groups, tmp_path, pin, with_mu_s
+):
+    _, Usd, UsdPhysics, UsdShade = pxr_usd
+    table = groups if with_mu_s else groups.drop(
+        columns=[c for c in groups.columns if c.startswith("mu_s")])
+    path = tmp_path / "friction.usda"
+    path.write_text(export_simulator_input(table, "usd", pin=pin, disc=DISC,
+                                           pressure_kPa=47.16, temperature_C=20.0),
+                    encoding="utf-8")
+    res = query(table, pin, DISC, 47.16, 20.0)
+    stage = Usd.Stage.Open(str(path))
+    material = stage.GetPrimAtPath("/TribopipeFriction/PinOnDisc")
+    assert material.HasAPI(UsdPhysics.MaterialAPI)
+    assert "PhysxMaterialAPI" in material.GetAppliedSchemas()
+    physics = UsdPhysics.MaterialAPI(material)
+    # authored, never the schema's fallback (0.0 for staticFriction)
+    assert physics.GetStaticFrictionAttr().HasAuthoredValue()
+    assert physics.GetDynamicFrictionAttr().HasAuthoredValue()
+    static = physics.GetStaticFrictionAttr().Get()
+    dynamic = physics.GetDynamicFrictionAttr().Get()
+    expected_static = res.mu_s.value if with_mu_s else res.mu_k.value
+    assert dynamic == pytest.approx(res.mu_k.value, rel=1e-6)  # USD floats are 32-bit
+    assert static == pytest.approx(expected_static, rel=1e-6)
+    mode = material.GetAttribute("physxMaterial:frictionCombineMode")
+    assert mode.HasAuthoredValue() and mode.Get() == "average"
+    assert "multiply" in mode.GetMetadata("allowedTokens")  # the schema knows the attribute
+    for body in ("Pin", "Disc"):
+        prim = stage.GetPrimAtPath(f"/TribopipeFriction/{body}")
+        bound, _ = UsdShade.MaterialBindingAPI(prim).ComputeBoundMaterial("physics")
+        assert bound.GetPath() == material.GetPath(), body
+    # PhysX's rule on two bodies bound to the same material: the higher-priority mode of the
+    # two (both "average"), static and dynamic separately: the pair's values come back
+    assert (static + static) / 2 == static and (dynamic + dynamic) / 2 == dynamic
+
+
+# ---------------------------------------------------------------------------- PyBullet
+
+
+@pytest.fixture()
+def bullet():
+    """A pybullet client without a window; disconnected after the test."""
+    pb = pytest.importorskip("pybullet",
+                             reason="pybullet not installed: pip install -e '.[engines]'")
+    client = pb.connect(pb.DIRECT)
+    yield pb, client
+    pb.disconnect(client)
+
+
+def _sliding_friction(pb, client, pin_body: int, disc_body: int) -> tuple[float, float]:
+    """(friction/normal force ratio, pin speed [m/s]) of the pin pushed along the disc by
+    a lateral force of twice its weight: the ratio comes from the contact points'
+    lateral friction and normal forces after the pin is sliding."""
+    pb.setGravity(0, 0, -9.81, physicsClientId=client)
+    mass = pb.getDynamicsInfo(pin_body, -1, physicsClientId=client)[0]
+    for _ in range(120):  # settle
+        pb.stepSimulation(physicsClientId=client)
+    ratios = []
+    for _ in range(40):
+        position = pb.getBasePositionAndOrientation(pin_body, physicsClientId=client)[0]
+        pb.applyExternalForce(pin_body, -1, [2.0 * mass * 9.81, 0, 0], position,
+                              pb.WORLD_FRAME, physicsClientId=client)
+        pb.stepSimulation(physicsClientId=client)
+        points = pb.getContactPoints(pin_body, disc_body, physicsClientId=client)
+        normal = sum(p[9] for p in points)
+        lateral = sum(p[10] * p[11][0] + p[12] * p[13][0] for p in points)
+        if normal > 0:
+            ratios.append(abs(lateral) / normal)
+    speed = pb.getBaseVelocity(pin_body, physicsClientId=client)[0][0]
+    return sum(ratios[-10:]) / 10, speed
+
+
+@pytest.mark.parametrize("pin,coefficient", [(PIN, "mu_k"), (PIN, "mu_s"), (HOSTILE, "mu_k")])
+def test_pybullet_loads_both_links_and_a_sliding_contact_has_the_pair_mu(
+    bullet, groups, tmp_path, pin, coefficient
+):
+    pb, client = bullet
+    cond = {"pin": pin, "disc": DISC, "pressure_kPa": 47.16, "temperature_C": 20.0,
+            "coefficient": coefficient}
+    res = query(groups, pin, DISC, 47.16, 20.0)
+    mu = res.mu_k.value if coefficient == "mu_k" else res.mu_s.value
+    for body in ("pin", "disc"):
+        (tmp_path / f"{body}.urdf").write_text(
+            export_simulator_input(groups, "pybullet", body=body, **cond), encoding="utf-8")
+    disc = pb.loadURDF(str(tmp_path / "disc.urdf"), [0, 0, 0], useFixedBase=True,
+                       physicsClientId=client)
+    pin_body = pb.loadURDF(str(tmp_path / "pin.urdf"), [0, 0, 0.0201],
+                           physicsClientId=client)
+    assert pb.getDynamicsInfo(pin_body, -1, physicsClientId=client)[1] == pytest.approx(mu)
+    assert pb.getDynamicsInfo(disc, -1, physicsClientId=client)[1] == 1.0
+    ratio, speed = _sliding_friction(pb, client, pin_body, disc)
+    assert speed > 0.05  # sliding, so the contact is at its friction limit
+    assert ratio == pytest.approx(mu, rel=1e-3)  # Bullet's product: mu x 1.0
+
+
+def test_pybullet_equal_values_on_both_links_would_give_mu_squared(bullet, groups, tmp_path):
+    """Why the disc carries 1.0: the pin's file loaded as both bodies gives mu²."""
+    pb, client = bullet
+    res = query(groups, PIN, DISC, 47.16, 20.0)
+    text = export_simulator_input(groups, "pybullet", pin=PIN, disc=DISC, pressure_kPa=47.16,
+                                  temperature_C=20.0)
+    (tmp_path / "pin.urdf").write_text(text, encoding="utf-8")
+    (tmp_path / "plate.urdf").write_text(
+        text.replace('size="0.02 0.02 0.02"', 'size="0.4 0.4 0.02"'), encoding="utf-8")
+    plate = pb.loadURDF(str(tmp_path / "plate.urdf"), [0, 0, 0], useFixedBase=True,
+                        physicsClientId=client)
+    pin_body = pb.loadURDF(str(tmp_path / "pin.urdf"), [0, 0, 0.0201], physicsClientId=client)
+    ratio, _ = _sliding_friction(pb, client, pin_body, plate)
+    assert ratio == pytest.approx(res.mu_k.value ** 2, rel=1e-3)
+
+
+# ---------------------------------------------------------------------------- Drake
+
+
+@pytest.fixture(scope="module")
+def pydrake():
+    return pytest.importorskip("pydrake", reason="drake not installed: pip install -e '.[engines]'")
+
+
+def _drake_friction(path) -> list:
+    """Each collision geometry's CoulombFriction in a finalized plant of the file."""
+    from pydrake.multibody.parsing import Parser
+    from pydrake.multibody.plant import AddMultibodyPlantSceneGraph
+    from pydrake.systems.framework import DiagramBuilder
+
+    builder = DiagramBuilder()
+    plant, scene_graph = AddMultibodyPlantSceneGraph(builder, 0.0)
+    Parser(plant).AddModels(str(path))
+    plant.Finalize()
+    inspector = scene_graph.model_inspector()
+    found = []
+    for geometry in inspector.GetAllGeometryIds():
+        props = inspector.GetProximityProperties(geometry)
+        if props is not None:
+            found.append(props.GetProperty("material", "coulomb_friction"))
+    return found
+
+
+@pytest.mark.drake
+@pytest.mark.parametrize("pin,mu_s", [(PIN, "measured"), (HOSTILE, "measured"),
+                                       (PIN, "unknown"), (PIN, "below mu_k")])
+def test_drake_parses_the_file_and_combines_to_the_pair_values(
+    pydrake, groups, tmp_path, pin, mu_s
+):
+    from pydrake.multibody.plant import CalcContactFrictionFromSurfaceProperties
+
+    table = groups.copy()
+    if mu_s == "unknown":
+        table = table.drop(columns=[c for c in table.columns if c.startswith("mu_s")])
+    elif mu_s == "below mu_k":
+        table["mu_s_mean"] = table["mu_k_mean"] * 0.9
+    path = tmp_path / "friction.sdf"
+    path.write_text(export_simulator_input(table, "drake", pin=pin, disc=DISC,
+                                           pressure_kPa=47.16, temperature_C=20.0),
+                    encoding="utf-8")
+    res = query(table, pin, DISC, 47.16, 20.0)
+    static = res.mu_s.value if mu_s == "measured" else res.mu_k.value
+    pin_friction, disc_friction = _drake_friction(path)
+    combined = CalcContactFrictionFromSurfaceProperties(pin_friction, disc_friction)
+    assert combined.dynamic_friction() == pytest.approx(res.mu_k.value, rel=1e-12)
+    assert combined.static_friction() == pytest.approx(static, rel=1e-12)
+    assert combined.static_friction() >= combined.dynamic_friction()

@@ -18,29 +18,47 @@ from sim_files import (
     parse_ansys,
     parse_lsdyna,
     pyelastica_values,
+    sdf_friction,
     sofa_response,
+    urdf_friction,
+    usd_values,
 )
 from tribopipe.errors import ExportError
 from tribopipe.escape import SIM_COMMENTS, sim_comment
-from tribopipe.export.fe_decks import deck_names, field10
-from tribopipe.export.simbase import FOUNDING_SLIP_RATE, SlipRate, xml_comment
-from tribopipe.export.simulators import (
-    FORMATS,
+from tribopipe.export import drake, fe_decks, pybullet, scenes, usd
+from tribopipe.export.fe_decks import abaqus_name, deck_names, field10, write_abaqus, write_ansys
+from tribopipe.export.registry import FORMATS
+from tribopipe.export.simbase import (
+    FOUNDING_SLIP_RATE,
     UNIT_SYSTEMS,
-    abaqus_name,
+    SlipRate,
     convert_pressure_kPa,
     default_decay_s_per_mm,
-    export_simulator_input,
     pair_slip_rates,
-    write_abaqus,
-    write_abaqus_decay,
-    write_ansys,
-    write_lsdyna,
-    write_mujoco,
-    write_pyelastica,
-    write_sofa,
+    xml_comment,
 )
+from tribopipe.export.simulators import export_simulator_input
 from tribopipe.query import pairs, query
+
+
+def _at_condition(writer):
+    """``writer`` (which takes a query result) called as the tests call it: the group
+    table and the condition, queried here as export_simulator_input does."""
+
+    def call(groups, *, pin, disc, pressure_kPa, temperature_C=None, **options):
+        return writer(query(groups, pin, disc, pressure_kPa, temperature_C), **options)
+
+    return call
+
+
+write_abaqus_decay = _at_condition(fe_decks.write_abaqus_decay)
+write_lsdyna = _at_condition(fe_decks.write_lsdyna)
+write_mujoco = _at_condition(scenes.write_mujoco)
+write_sofa = _at_condition(scenes.write_sofa)
+write_pyelastica = _at_condition(scenes.write_pyelastica)
+write_usd = _at_condition(usd.write_usd)
+write_pybullet = _at_condition(pybullet.write_pybullet)
+write_drake = _at_condition(drake.write_drake)
 
 PIN, DISC = "Dragonskin 30", "steel"
 
@@ -423,6 +441,11 @@ def _all_files(groups, groups_with_mu_s) -> dict[str, str]:
         "mujoco": write_mujoco(groups, **cond),
         "sofa": write_sofa(groups, **cond),
         "pyelastica": write_pyelastica(groups, **cond),
+        "usd": write_usd(groups, **cond),
+        "usd mu_s": write_usd(groups_with_mu_s, **cond),
+        "pybullet": write_pybullet(groups, **cond),
+        "drake": write_drake(groups, **cond),
+        "drake mu_s": write_drake(groups_with_mu_s, **cond),
     }
 
 
@@ -430,7 +453,8 @@ def test_every_header_names_engine_version_coefficient_and_combination(
     groups, groups_with_mu_s
 ):
     versions = {"abaqus": "2017-2024", "ansys": "2025 R1", "lsdyna": "R14",
-                "mujoco": "mujoco 4.0.0", "sofa": "v24.12", "pyelastica": "pyelastica 1.0.0"}
+                "mujoco": "mujoco 4.0.0", "sofa": "v24.12", "pyelastica": "pyelastica 1.0.0",
+                "usd": "usd-core 26.11", "pybullet": "pybullet 3.2.7", "drake": "drake 1.51.1"}
     for kind, text in _all_files(groups, groups_with_mu_s).items():
         head = " ".join(text.splitlines()[:12])
         assert "checked against:" in head, kind
@@ -438,7 +462,8 @@ def test_every_header_names_engine_version_coefficient_and_combination(
         holds = head.split("holds:")[1][:120]
         assert "mu_k" in holds, kind
         assert ("mu_s" in holds) == (kind in ("abaqus decay", "lsdyna mu_s")
-                                     or kind in ("mujoco", "sofa", "pyelastica")), kind
+                                     or kind in ("mujoco", "sofa", "pyelastica", "pybullet")
+                                     or kind.split()[0] in ("usd", "drake")), kind
         assert "two surfaces:" in head, kind
     assert set(FORMATS) == {k.split()[0] for k in versions}
 
@@ -477,6 +502,9 @@ def test_hostile_names_stay_data_in_every_file(hostile_groups):
         "mujoco": write_mujoco(hostile_groups, source=source, **cond),
         "sofa": write_sofa(hostile_groups, source=source, **cond),
         "pyelastica": write_pyelastica(hostile_groups, source=source, **cond),
+        "usd": write_usd(hostile_groups, source=source, **cond),
+        "pybullet": write_pybullet(hostile_groups, source=source, **cond),
+        "drake": write_drake(hostile_groups, source=source, **cond),
     }
     expected_mu_k = query(hostile_groups, HOSTILE, DISC, 35.37, 20.0).mu_k.value
     for kind, text in files.items():
@@ -500,6 +528,13 @@ def test_hostile_names_stay_data_in_every_file(hostile_groups):
     values = pyelastica_values(files["pyelastica"])
     assert values["PAIR"] == (HOSTILE, DISC)  # the exact name, as a Python literal
     assert values["kinetic_mu_array"] == pytest.approx([expected_mu_k] * 3)
+    for kind in ("usd", "pybullet", "drake"):  # names only in ASCII comments
+        assert files[kind].isascii(), kind
+        assert "Evil" not in "".join(line for line in files[kind].splitlines()
+                                     if not line.startswith(("#", "<!--"))), kind
+    assert usd_values(files["usd"])["dynamic"] == pytest.approx(expected_mu_k)
+    assert urdf_friction(files["pybullet"]) == ("pin", pytest.approx(expected_mu_k))
+    assert sdf_friction(files["drake"])["pin"][1] == pytest.approx(expected_mu_k)
 
 
 @pytest.mark.parametrize("fmt", ["abaqus", "ansys"])
@@ -555,3 +590,74 @@ def test_any_name_stays_a_comment_or_a_literal(name):
     assert sofa_response(write_sofa(groups, **cond)).get("responseParams") == "mu=0.5"
     assert pyelastica_values(write_pyelastica(groups, **cond))["PAIR"] == (name, "B")
     assert parse_lsdyna(write_lsdyna(groups, **cond))[0][0] == "*KEYWORD"
+    assert usd_values(write_usd(groups, **cond)) == {"dynamic": 0.5, "static": 0.5,
+                                                     "mode": "average"}
+    assert urdf_friction(write_pybullet(groups, **cond)) == ("pin", 0.5)
+    assert sdf_friction(write_drake(groups, **cond)) == {"pin": (0.5, 0.5),
+                                                         "disc": (0.5, 0.5)}
+
+
+# ---------------------------------------------------------------------------- usd, pybullet, drake
+
+
+def test_static_coefficient_where_mu_s_is_unknown_or_below_mu_k(groups, groups_with_mu_s):
+    cond = {"pin": PIN, "disc": DISC, "pressure_kPa": 35.37, "temperature_C": 20.0}
+    mu_k = query(groups, PIN, DISC, 35.37, 20.0).mu_k.value
+    # unknown: mu_k written as the static coefficient, and said so
+    for text in (write_usd(groups, **cond), write_drake(groups, **cond)):
+        assert "static = mu_k: the map holds no mu_s for this pair" in text
+    assert usd_values(write_usd(groups, **cond))["static"] == pytest.approx(mu_k)
+    # measured and above mu_k: written as it is
+    assert usd_values(write_usd(groups_with_mu_s, **cond))["static"] == pytest.approx(
+        1.4 * mu_k)
+    # below mu_k: raised to mu_k (Drake would refuse the file), and said so
+    low = groups_with_mu_s.copy()
+    low["mu_s_mean"] = low["mu_k_mean"] * 0.8
+    text = write_drake(low, **cond)
+    assert "is below mu_k at this condition" in text
+    assert sdf_friction(text)["pin"] == (pytest.approx(mu_k), pytest.approx(mu_k))
+
+
+def test_new_formats_refuse_what_they_do_not_take(groups):
+    cond = {"pin": PIN, "disc": DISC, "pressure_kPa": 35.37, "temperature_C": 20.0}
+    with pytest.raises(ExportError, match="--coefficient is for .*pybullet; not for usd"):
+        export_simulator_input(groups, "usd", coefficient="mu_s", **cond)
+    with pytest.raises(ExportError, match="--units is for abaqus, ansys, lsdyna; not for drake"):
+        export_simulator_input(groups, "drake", units="m-N-s", **cond)
+    with pytest.raises(ExportError, match="every measured pressure"):
+        export_simulator_input(groups, "ansys", pressure_kPa=20.0)
+    with pytest.raises(ExportError, match="usd takes one condition"):
+        export_simulator_input(groups, "usd", pin=PIN, disc=DISC)
+    high = groups.copy()
+    high["mu_k_mean"] = 12.0
+    with pytest.raises(ExportError, match="exceeds Bullet's clamp"):
+        export_simulator_input(high, "pybullet", **cond)
+
+
+def test_every_registry_entry_resolves_and_declares_what_its_writer_takes():
+    """The registry names its functions as text: each must exist, and a writer's keyword
+    arguments must be exactly the options its entry declares (plus what
+    export_simulator_input passes), so that no option is dropped or unknown."""
+    import inspect
+
+    from tribopipe.export.registry import UNITS, WRITERS, load
+    from tribopipe.export.simbase import Engine
+
+    assert UNITS.choices == tuple(UNIT_SYSTEMS)
+    for w in WRITERS:
+        assert isinstance(load(w.engine), Engine), w.name
+        for target, options, passed in (
+            (w.table, w.table_options, {"pin", "disc", "temperature_C", "source"}
+             | ({"slip_rates"} if w.slip_rate else set())),
+            (w.condition, w.condition_options,
+             {"source"} | ({"slip_rate"} if w.slip_rate else set())),
+        ):
+            if target is None:
+                continue
+            params = inspect.signature(load(target)).parameters
+            keywords = {n for n, p in params.items() if p.kind is p.KEYWORD_ONLY}
+            assert keywords == passed | {o.name for o in options}, (w.name, target)
+            for option in options:
+                assert option.check is None or callable(load(option.check))
+        if w.snippet is not None:
+            assert callable(load(w.snippet)) and callable(load(w.snippet_header)), w.name

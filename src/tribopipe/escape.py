@@ -183,7 +183,7 @@ def latex_cell(text: str) -> str:
     return "".join(_LATEX.get(ch, ch) for ch in printable(text))
 
 
-def sim_comment(value: object, syntax: str = "#") -> str:
+def sim_comment(value: object, syntax: str = "#", *, ascii_only: bool = False) -> str:
     """``value`` as one line of inert text for a simulator file's comment of ``syntax``.
 
     Python's string escapes (``repr`` without the quotes) turn newlines, carriage
@@ -193,12 +193,13 @@ def sim_comment(value: object, syntax: str = "#") -> str:
     (Ansys MAPDL) are fixed-format ASCII decks, so every non-ASCII character is escaped
     too, and MAPDL's command separator ``$`` becomes ``\\x24`` in a ``!`` comment;
     ``<!--`` (XML) gets a space after every hyphen that precedes one (``--`` may not occur
-    inside an XML comment); ``#`` (Python) keeps other text as it is.
+    inside an XML comment); ``#`` (Python) keeps other text as it is. ``ascii_only``
+    escapes every non-ASCII character in the other syntaxes too (files read as ASCII).
     """
     if syntax not in SIM_COMMENTS:
         raise ValueError(f"unknown comment syntax {syntax!r}; expected one of {SIM_COMMENTS}")
     text = str(value)
-    escaped = (ascii(text) if syntax in ("**", "$", "!") else repr(text))[1:-1]
+    escaped = (ascii(text) if ascii_only or syntax in ("**", "$", "!") else repr(text))[1:-1]
     # repr picks its quote character by content; what is inside is the text itself
     if syntax == "!":
         escaped = escaped.replace("$", "\\x24")

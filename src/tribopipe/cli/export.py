@@ -1,19 +1,41 @@
-"""``tribopipe export abaqus|ansys|lsdyna|mujoco|sofa|pyelastica``: simulator input from the map."""
+"""``tribopipe export FORMAT``: simulator input from the map, one command per format of
+:data:`tribopipe.export.registry.WRITERS`, its options those the format declares.
+
+The registry is imported when a command is listed or run (it imports only the standard
+library), so that ``tribopipe --help`` stays light.
+"""
 
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import click
 
 from ._common import friendly_errors, map_option, say
 
-UNITS = ("mm-N-s", "m-N-s")
-COEFFICIENTS = ("mu_k", "mu_s")
+if TYPE_CHECKING:
+    from ..export.registry import Option, Writer
 
 
-@click.group("export")
+class _FormatGroup(click.Group):
+    """The ``export`` group: one command per registered format, built when needed."""
+
+    def list_commands(self, ctx: click.Context) -> list[str]:
+        from ..export.registry import FORMATS
+
+        return list(FORMATS)
+
+    def get_command(self, ctx: click.Context, cmd_name: str) -> click.Command | None:
+        from ..export.registry import WRITERS
+
+        for writer in WRITERS:
+            if writer.name == cmd_name:
+                return _command(writer)
+        return None
+
+
+@click.group("export", cls=_FormatGroup)
 def export_group() -> None:
     """Simulator input from the friction map (μ_K tables or single values).
 
@@ -24,6 +46,8 @@ def export_group() -> None:
 
 def _selection(func: Callable[..., Any]) -> Callable[..., Any]:
     """--pin/--disc/--temperature/--pressure, --map and -o shared by every format."""
+    from ..export.registry import condition_labels
+
     for option in reversed(
         [
             click.option("--pin", help="Pin material (default: every pin)."),
@@ -38,8 +62,8 @@ def _selection(func: Callable[..., Any]) -> Callable[..., Any]:
                 "--pressure",
                 "pressure_kPa",
                 type=float,
-                help="Contact pressure [kPa] for single-condition input (lsdyna, mujoco, "
-                "sofa, pyelastica, abaqus --exponential-decay).",
+                help="Contact pressure [kPa] for single-condition input ("
+                + ", ".join(condition_labels()) + ").",
             ),
             map_option,
             click.option(
@@ -54,38 +78,13 @@ def _selection(func: Callable[..., Any]) -> Callable[..., Any]:
     return func
 
 
-def _units(func: Callable[..., Any]) -> Callable[..., Any]:
-    """--units: the unit system of table formats."""
-    return click.option(
-        "--units",
-        type=click.Choice(UNITS),
-        default="mm-N-s",
-        show_default=True,
-        help="Unit system: pressure in MPa (mm-N-s) or Pa (m-N-s).",
-    )(func)
-
-
-def _coefficient(func: Callable[..., Any]) -> Callable[..., Any]:
-    """--coefficient: μ_K or μ_S (breakaway) for the onset of slip."""
-    return click.option(
-        "--coefficient",
-        type=click.Choice(COEFFICIENTS),
-        default="mu_k",
-        show_default=True,
-        help="Coefficient for the onset of slip: mu_k (kinetic) or mu_s (static, breakaway; "
-        "refused where the map holds no mu_s for the pair).",
-    )(func)
-
-
-def _decay(func: Callable[..., Any]) -> Callable[..., Any]:
-    """--decay: the exponential decay coefficient d_c [s/mm]."""
-    return click.option(
-        "--decay",
-        "decay_s_per_mm",
-        type=float,
-        help="Decay coefficient d_c [s/mm] (default: 99 % decayed at the pair's measured "
-        "sliding speed); written in the --units' s/mm or s/m.",
-    )(func)
+def _click_option(option: Option) -> Callable[..., Any]:
+    """The click option a writer's :class:`Option` declares."""
+    if option.kind is bool:
+        return click.option(option.flag, option.name, is_flag=True, help=option.help)
+    kind: Any = click.Choice(option.choices) if option.choices else option.kind
+    return click.option(option.flag, option.name, type=kind, default=option.default,
+                        show_default=option.default is not None, help=option.help)
 
 
 def _emit(text: str, output: str | None) -> None:
@@ -99,102 +98,17 @@ def _emit(text: str, output: str | None) -> None:
     say(f"wrote {output}", err=True)
 
 
-def _run(fmt: str, output: str | None, map_path: str, **options: Any) -> None:
-    """Export ``fmt`` from the map and emit it."""
-    from ..export.simulators import export_from_map
+def _command(writer: Writer) -> click.Command:
+    """The ``export`` subcommand of ``writer``: the selection, then its own options."""
 
-    _emit(export_from_map(map_path, fmt, **options), output)
+    def run(output: str | None, map_path: str, **options: Any) -> None:
+        from ..export.simulators import export_from_map
 
+        _emit(export_from_map(map_path, writer.name, **options), output)
 
-@export_group.command("abaqus")
-@_selection
-@_units
-@click.option(
-    "--exponential-decay",
-    is_flag=True,
-    help="One condition as *FRICTION, EXPONENTIAL DECAY (mu_s, mu_k, d_c); needs mu_s.",
-)
-@_decay
-@friendly_errors
-def abaqus_cmd(output: str | None, map_path: str, **options: Any) -> None:
-    """ABAQUS *SURFACE INTERACTION / *FRICTION table: mu, slip rate, pressure, temperature.
+    run.__doc__ = writer.title + (f"\n\n{writer.description}" if writer.description else "")
+    func: Callable[..., Any] = friendly_errors(run)
+    for option in reversed(writer.options):
+        func = _click_option(option)(func)
+    return click.command(writer.name)(_selection(func))
 
-    Abaqus input (CalculiX reads *FRICTION's columns differently). The slip rate is each
-    pair's own measured sliding speed.
-    """
-    _run("abaqus", output, map_path, **options)
-
-
-@export_group.command("ansys")
-@_selection
-@_units
-@click.option("--material-id", type=int, default=1, show_default=True,
-              help="Material number of the first pair's TB,FRIC table.")
-@friendly_errors
-def ansys_cmd(output: str | None, map_path: str, **options: Any) -> None:
-    """Ansys MAPDL TB,FRIC,mat,,,ISO with TBFIELD on temperature and contact pressure."""
-    _run("ansys", output, map_path, **options)
-
-
-@export_group.command("lsdyna")
-@_selection
-@click.option(
-    "--units",
-    type=click.Choice(UNITS),
-    default="mm-N-s",
-    show_default=True,
-    help="Unit system of DC: s/mm (mm-N-s) or s/m (m-N-s).",
-)
-@_coefficient
-@_decay
-@click.option("--contact-id", type=int, default=1, show_default=True,
-              help="CID of the *CONTACT definition.")
-@click.option("--pin-part", type=int, default=1, show_default=True,
-              help="Part ID of the pin (SURFA).")
-@click.option("--disc-part", type=int, default=2, show_default=True,
-              help="Part ID of the disc (SURFB).")
-@friendly_errors
-def lsdyna_cmd(output: str | None, map_path: str, **options: Any) -> None:
-    """LS-DYNA *CONTACT_AUTOMATIC_SURFACE_TO_SURFACE_ID with FS, FD, DC for one condition.
-
-    Default FS = FD = mu_k, DC = 0; with --coefficient mu_s: FS = mu_s, FD = mu_k and the
-    exponential decay coefficient DC.
-    """
-    _run("lsdyna", output, map_path, **options)
-
-
-@export_group.command("mujoco")
-@_selection
-@_coefficient
-@click.option("--geom1", default="pin", show_default=True, help="MJCF name of the pin geom.")
-@click.option("--geom2", default="disc", show_default=True, help="MJCF name of the disc geom.")
-@friendly_errors
-def mujoco_cmd(output: str | None, map_path: str, **options: Any) -> None:
-    """MuJoCo <contact><pair friction=...> for one pair at one condition."""
-    _run("mujoco", output, map_path, **options)
-
-
-@export_group.command("sofa")
-@_selection
-@_coefficient
-@friendly_errors
-def sofa_cmd(output: str | None, map_path: str, **options: Any) -> None:
-    """SOFA CollisionResponse FrictionContactConstraint mu for one pair at one condition.
-
-    LCPConstraintSolver ignores this mu (it applies its own); use a solver that honours
-    per-contact mu (GenericConstraintSolver, BlockGaussSeidelConstraintSolver).
-    """
-    _run("sofa", output, map_path, **options)
-
-
-@export_group.command("pyelastica")
-@_selection
-@_coefficient
-@friendly_errors
-def pyelastica_cmd(output: str | None, map_path: str, **options: Any) -> None:
-    """PyElastica static_mu_array / kinetic_mu_array for one pair at one condition.
-
-    For RodPlaneContactWithAnisotropicFriction (pyelastica >= 1.0); the static array holds
-    mu_k unless --coefficient mu_s.
-    """
-    _run("pyelastica", output, map_path, **options)

@@ -15,8 +15,9 @@ from ._common import friendly_errors, read_options
 @click.option(
     "--format",
     "fmt",
-    type=click.Choice(["rheocompass", "rheocompass-xlsx", "rheoplus", "csv"]),
-    help="Force the export format instead of detecting it.",
+    metavar="NAME",
+    help="Force the export format instead of detecting it (a name `inspect` prints as "
+    "'format:'; an unknown name is refused with the list).",
 )
 @click.option(
     "--aliases",

@@ -48,7 +48,8 @@ from ..fit import fit_power_law, power_law
 from ..frictionmap import read_map
 from ..query import pair_points, pairs, select_pair
 from ..stats import group_statistics
-from .fe_decks import CONDITION_FORMATS, condition_header
+from .registry import WRITERS
+from .simulators import snippet_header
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -217,8 +218,9 @@ def explorer_data(
     plain values (``None`` for missing numbers): ``format, title, source,
     tribopipe_version, generated, pairs`` (per pair: ``pin, disc, mu_k_points,
     mu_s_points, left_out, runs, fits``), ``groups`` (the group table, each row with
-    the index of its ``pair``) and ``snippet_headers`` (the opening comment lines of
-    :func:`tribopipe.export.fe_decks.condition_snippet` per format). Pressures in kPa,
+    the index of its ``pair``), ``snippets`` (the simulator formats the page copies:
+    name, label, file suffix) and ``snippet_headers`` (the opening lines of
+    :func:`tribopipe.export.simulators.snippet` per format). Pressures in kPa,
     temperatures in °C. Raises :class:`ExportError` when no run is left. Inputs are not
     modified.
     """
@@ -277,9 +279,13 @@ def explorer_data(
         "generated": datetime.now(UTC).strftime("%Y-%m-%d %H:%M UTC"),
         "pairs": pair_rows,
         "groups": group_rows,
-        # the opening comments of the copied ABAQUS/Ansys text do not depend on the
-        # condition: rendered here by the writer itself, the page adds the rest
-        "snippet_headers": {fmt: condition_header(fmt, source) for fmt in CONDITION_FORMATS},
+        # the simulator formats the page copies (every registered format with a
+        # snippet); the opening lines of each do not depend on the condition: rendered
+        # here by the writer itself, the page adds the rest (snippets.js)
+        "snippets": [{"name": w.name, "label": w.snippet_label, "suffix": w.snippet_suffix}
+                     for w in WRITERS if w.snippet is not None],
+        "snippet_headers": {w.name: snippet_header(w.name, source)
+                            for w in WRITERS if w.snippet is not None},
     }
 
 
@@ -332,8 +338,12 @@ def explorer_fragment(data: dict[str, Any]) -> str:
 
 def _fragment(data: dict[str, Any], js: str) -> str:
     """The fragment template filled with ``data`` (embedded JSON) and the script ``js``."""
+    options = "".join(
+        f'\n   <option value="{html_text(s["name"])}">{html_text(s["label"])}</option>'
+        for s in data["snippets"])
     return _fill(_asset("explorer_fragment.html"),
-                 {"data": script_json(data), "script": js, "data_id": DATA_ELEMENT_ID})
+                 {"data": script_json(data), "script": js, "data_id": DATA_ELEMENT_ID,
+                  "snippet_options": options})
 
 
 def explorer_style() -> str:

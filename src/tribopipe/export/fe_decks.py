@@ -18,7 +18,7 @@ from typing import TYPE_CHECKING
 
 from ..errors import ExportError
 from ..escape import sim_comment
-from ..query import QueryResult, query
+from ..query import QueryResult
 from .simbase import (
     FOUNDING_SLIP_RATE,
     Engine,
@@ -175,25 +175,21 @@ def write_abaqus(
 
 
 def write_abaqus_decay(
-    groups: pd.DataFrame,
+    res: QueryResult,
     *,
-    pin: str,
-    disc: str,
-    pressure_kPa: float,
-    temperature_C: float | None = None,
     units: str = "mm-N-s",
     decay_s_per_mm: float | None = None,
     slip_rate: SlipRate = FOUNDING_SLIP_RATE,
     source: str | None = None,
 ) -> str:
-    """ABAQUS ``*FRICTION, EXPONENTIAL DECAY`` (μ_s, μ_k, d_c) for one condition.
+    """ABAQUS ``*FRICTION, EXPONENTIAL DECAY`` (μ_s, μ_k, d_c) for one condition, the
+    query result ``res`` (one pair at one contact pressure [kPa] and temperature [°C]).
 
     Needs μ_S in the map (raises :class:`ExportError` otherwise). ``decay_s_per_mm``
     [s/mm] defaults to :func:`default_decay_s_per_mm` at the pair's ``slip_rate``; it is
     written, and said in the comments, in the unit system's 1/slip-rate unit (s/mm or s/m).
     """
     u = unit_system(units)
-    res = query(groups, pin, disc, pressure_kPa, temperature_C)
     if res.mu_s is None:
         raise ExportError(
             f"pin {res.pin!r} on disc {res.disc!r} has no mu_s in the "
@@ -298,12 +294,8 @@ def field10(value: float | int) -> str:
 
 
 def write_lsdyna(
-    groups: pd.DataFrame,
+    res: QueryResult,
     *,
-    pin: str,
-    disc: str,
-    pressure_kPa: float,
-    temperature_C: float | None = None,
     units: str = "mm-N-s",
     coefficient: str = "mu_k",
     decay_s_per_mm: float | None = None,
@@ -313,7 +305,8 @@ def write_lsdyna(
     disc_part: int = 2,
     source: str | None = None,
 ) -> str:
-    """LS-DYNA ``*CONTACT_AUTOMATIC_SURFACE_TO_SURFACE_ID`` with the pair's FS, FD, DC.
+    """LS-DYNA ``*CONTACT_AUTOMATIC_SURFACE_TO_SURFACE_ID`` with the pair's FS, FD, DC at
+    the condition of the query result ``res``.
 
     LS-DYNA's friction is μ_c = FD + (FS − FD)·exp(−DC·|v_rel|), with DC in 1/velocity.
     ``coefficient="mu_k"`` (default) writes FS = FD = μ_K and DC = 0 (kinetic Coulomb
@@ -329,7 +322,6 @@ def write_lsdyna(
         if not 1 <= value < 10**10:
             raise ExportError(f"LS-DYNA {what} must be an integer from 1 to 9999999999, "
                               f"got {value}")
-    res = query(groups, pin, disc, pressure_kPa, temperature_C)
     fs = breakaway(res, coefficient, "LS-DYNA FS")
     fd = res.mu_k.value
     if coefficient == "mu_k":
@@ -437,19 +429,3 @@ def condition_snippet(
     return "\n".join(lines) + "\n"
 
 
-def write_condition(
-    groups: pd.DataFrame,
-    fmt: str,
-    *,
-    pin: str,
-    disc: str,
-    pressure_kPa: float,
-    temperature_C: float | None = None,
-    material_id: int = 1,
-    source: str | None = None,
-) -> str:
-    """:func:`condition_snippet` of :func:`tribopipe.query.query` for one pair at one
-    contact pressure [kPa] and temperature [°C]."""
-    condition_header(fmt)  # an unknown format is refused before the query
-    res = query(groups, pin, disc, pressure_kPa, temperature_C)
-    return condition_snippet(res, fmt, source=source, material_id=material_id)

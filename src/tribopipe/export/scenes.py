@@ -1,8 +1,8 @@
 """Friction for the robotics simulators: MuJoCo (MJCF), SOFA (scene XML), PyElastica (Python).
 
 These engines take one coefficient for the onset of slip (PyElastica a static and a
-kinetic array) at one condition: each writer queries the map at one pair, contact
-pressure and temperature and writes μ_K, or μ_S (breakaway) with ``coefficient="mu_s"``
+kinetic array) at one condition: each writer takes the query result of one pair at one
+contact pressure and temperature and writes μ_K, or μ_S (breakaway) with ``coefficient="mu_s"``
 — refused in one line where the map holds no μ_S for the pair. Every header says which
 engine and version it was checked against, which coefficient it holds and how the engine
 combines two surfaces' values. Names from the map reach these files only as inert
@@ -12,9 +12,7 @@ string literals (:func:`repr`).
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
-
-from ..query import query
+from ..query import QueryResult
 from .simbase import (
     Engine,
     breakaway,
@@ -24,9 +22,6 @@ from .simbase import (
     xml_comment,
     xml_name,
 )
-
-if TYPE_CHECKING:
-    import pandas as pd
 
 MUJOCO = Engine(
     name="MuJoCo",
@@ -83,12 +78,8 @@ def _holds(coefficient: str, one: str) -> str:
 
 
 def write_mujoco(
-    groups: pd.DataFrame,
+    res: QueryResult,
     *,
-    pin: str,
-    disc: str,
-    pressure_kPa: float,
-    temperature_C: float | None = None,
     coefficient: str = "mu_k",
     geom1: str = "pin",
     geom2: str = "disc",
@@ -101,7 +92,6 @@ def write_mujoco(
     coefficients are not measured: MuJoCo's defaults (0.005, 0.0001) are written.
     ``geom1``/``geom2`` are the MJCF names of the pin and disc geoms.
     """
-    res = query(groups, pin, disc, pressure_kPa, temperature_C)
     mu = num(breakaway(res, coefficient, "MuJoCo"))
     attr1, attr2 = xml_name(geom1, "geom1"), xml_name(geom2, "geom2")
     # xml_comment makes every body inert: the bodies go in unescaped, escaped once there
@@ -124,12 +114,8 @@ def write_mujoco(
 
 
 def write_sofa(
-    groups: pd.DataFrame,
+    res: QueryResult,
     *,
-    pin: str,
-    disc: str,
-    pressure_kPa: float,
-    temperature_C: float | None = None,
     coefficient: str = "mu_k",
     source: str | None = None,
 ) -> str:
@@ -140,7 +126,6 @@ def write_sofa(
     ``DefaultContactManager`` and the response ``FrictionContact``; the header says which
     constraint solvers use this μ at all (:data:`SOFA_SOLVER_NOTE`).
     """
-    res = query(groups, pin, disc, pressure_kPa, temperature_C)
     mu = num(breakaway(res, coefficient, "SOFA"))
     bodies = header_bodies(SOFA, _holds(coefficient, "mu"), source, str)
     bodies += [SOFA_SOLVER_NOTE, *condition_lines(res, str)]
@@ -155,12 +140,8 @@ def write_sofa(
 
 
 def write_pyelastica(
-    groups: pd.DataFrame,
+    res: QueryResult,
     *,
-    pin: str,
-    disc: str,
-    pressure_kPa: float,
-    temperature_C: float | None = None,
     coefficient: str = "mu_k",
     source: str | None = None,
 ) -> str:
@@ -172,7 +153,6 @@ def write_pyelastica(
     slip — is μ_K too by default (no breakaway peak) and μ_S with ``coefficient="mu_s"``.
     The pair's names are a Python literal (:func:`repr`), everything else is a comment.
     """
-    res = query(groups, pin, disc, pressure_kPa, temperature_C)
     mu_s = num(breakaway(res, coefficient, "PyElastica's static_mu_array"))
     mu_k = num(res.mu_k.value)
     bodies = header_bodies(PYELASTICA, _holds(coefficient, "static_mu_array")
@@ -200,3 +180,4 @@ def write_pyelastica(
         f"kinetic_mu_array = np.array([{mu_k}, {mu_k}, {mu_k}])",
     ]
     return "\n".join(lines) + "\n"
+

@@ -1,8 +1,8 @@
 """What every simulator writer shares: units, the pair selection, slip rates, safe text.
 
-Nothing here writes a file. The writers live in :mod:`tribopipe.export.fe_decks`
-(ABAQUS, Ansys, LS-DYNA) and :mod:`tribopipe.export.scenes` (MuJoCo, SOFA, PyElastica);
-:mod:`tribopipe.export.simulators` is the entry point.
+Nothing here writes a file. The formats, and which writer function writes each, are
+listed in :data:`tribopipe.export.registry.WRITERS`; :mod:`tribopipe.export.simulators`
+runs them.
 
 Unit systems (``units``): the map stores contact pressure in kPa and sliding speed in mm/s.
 
@@ -33,6 +33,7 @@ from ..errors import ExportError
 from ..escape import sim_comment
 from ..frictionmap import PUBLISHED_SLIDING_SPEED_MM_S
 from ..query import QueryResult, friction_table, pairs, query, select_pair
+from .registry import COEFFICIENT
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -41,7 +42,7 @@ if TYPE_CHECKING:
 FOUNDING_SLIP_RATE_MM_S = PUBLISHED_SLIDING_SPEED_MM_S
 
 #: Which measured coefficient a single-coefficient engine gets for the onset of slip.
-COEFFICIENTS = ("mu_k", "mu_s")
+COEFFICIENTS = COEFFICIENT.choices
 
 
 @dataclass(frozen=True)
@@ -90,9 +91,10 @@ def num(value: float) -> str:
 # ---------------------------------------------------------------------------- XML
 
 
-def xml_comment(text: str) -> str:
-    """``text`` as one XML comment that no content can close or break."""
-    return "<!-- " + sim_comment(text, "<!--") + " -->"
+def xml_comment(text: str, *, ascii_only: bool = False) -> str:
+    """``text`` as one XML comment that no content can close or break (``ascii_only``:
+    every non-ASCII character escaped too)."""
+    return "<!-- " + sim_comment(text, "<!--", ascii_only=ascii_only) + " -->"
 
 
 def xml_name(name: str, what: str) -> str:
@@ -188,6 +190,29 @@ def breakaway(res: QueryResult, coefficient: str, engine: str) -> float:
             hint="leave out --coefficient mu_s to write mu_k",
         )
     return res.mu_s.value
+
+
+def static_and_dynamic(res: QueryResult) -> tuple[float, float, str]:
+    """The static and dynamic coefficients for an engine that takes both, and one line
+    saying where the static one came from.
+
+    Static is μ_S where the map holds it, else μ_K (a published map holds μ_K only): the
+    onset of slip then takes the kinetic coefficient, and the static coefficient is still
+    written, never left to the engine's default. Where the map's μ_S is below μ_K at the
+    condition, static is raised to μ_K (engines want static ≥ dynamic: PhysX raises it
+    itself, Drake refuses the file).
+    """
+    mu_k = res.mu_k.value
+    if res.mu_s is None:
+        return mu_k, mu_k, (
+            "static = mu_k: the map holds no mu_s for this pair (an imported published map "
+            "holds mu_k only), so the onset of slip takes the kinetic coefficient; the static "
+            "coefficient is written all the same, never left to the engine's default")
+    if res.mu_s.value < mu_k:
+        return mu_k, mu_k, (
+            f"static = mu_k: the map's mu_s ({num(res.mu_s.value)}) is below mu_k at this "
+            "condition and the engine needs static >= dynamic, so static is raised to mu_k")
+    return res.mu_s.value, mu_k, "static = mu_s (breakaway), dynamic = mu_k (sliding)"
 
 
 def default_decay_s_per_mm(slip_rate_mm_s: float = FOUNDING_SLIP_RATE_MM_S) -> float:
@@ -364,3 +389,4 @@ def comment_block(comment: str, bodies: list[str], width: int = 100) -> list[str
                                 break_on_hyphens=False) or [""]
         lines += [f"{comment} {w}".rstrip() for w in wrapped]
     return lines
+

@@ -1,86 +1,65 @@
-"""Simulator input from the friction map: ABAQUS, Ansys, LS-DYNA, MuJoCo, SOFA, PyElastica.
+"""Simulator input from the friction map: the one place that queries the map for a
+format of :data:`tribopipe.export.registry.WRITERS`.
 
-:func:`export_from_map` reads a map and writes one format; :func:`export_simulator_input`
-does the same from a group-statistics table (see :mod:`tribopipe.query`). Nothing here
-touches the file system beyond reading the map. Values are the group means of μ_K (and
-μ_S where measured); table cells that were not measured are filled by
-:func:`tribopipe.query.query`'s interpolation and say so in a comment.
-
-========== ==================== ============================================= ==========
-format     engine (checked)     holds                                         condition
-========== ==================== ============================================= ==========
-abaqus     Abaqus Keywords Ref. μ_K table (μ, slip rate, p, T); or μ_S→μ_K     all / one
-                                exponential decay (``exponential_decay``)
-ansys      MAPDL 2025 R1        μ_K table (TB,FRIC + TBFIELD NPRES, TEMP)     all
-lsdyna     LS-DYNA R14 manual   FS = FD = μ_K; or FS = μ_S, FD = μ_K, DC      one
-mujoco     mujoco 4.0.0         μ_K or μ_S (``coefficient``)                  one
-sofa       SOFA v24.12–v25.x    μ_K or μ_S (``coefficient``)                  one
-pyelastica pyelastica 1.0.0     static μ_K or μ_S, kinetic μ_K                one
-========== ==================== ============================================= ==========
-
-The writers live in :mod:`tribopipe.export.fe_decks` and :mod:`tribopipe.export.scenes`;
-units, slip rates and the text safety they share in :mod:`tribopipe.export.simbase`.
+:func:`export_simulator_input` checks the options against what the format declares, runs
+:func:`tribopipe.query.query` once for a single-condition format and hands the writer the
+result (table formats get the group table); :func:`export_from_map` does the same on a map
+file. :func:`snippet` is what the explorer page copies for one condition. Nothing here
+touches the file system beyond reading the map.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping
+from collections.abc import Mapping
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from ..errors import ExportError
+from ..escape import markdown_cell
 from ..frictionmap import read_map
-from ..query import groups_of, pairs, select_pair
-from .fe_decks import abaqus_name, write_abaqus, write_abaqus_decay, write_ansys, write_lsdyna
-from .scenes import write_mujoco, write_pyelastica, write_sofa
-from .simbase import (
-    COEFFICIENTS,
-    FOUNDING_SLIP_RATE_MM_S,
-    UNIT_SYSTEMS,
-    SlipRate,
-    check_coefficient,
-    convert_pressure_kPa,
-    default_decay_s_per_mm,
-    pair_slip_rates,
-    slip_rate_of,
-    unit_system,
+from ..query import QueryResult, groups_of, pairs, query, select_pair
+from .registry import (
+    FORMATS,
+    WRITERS,
+    Option,
+    Writer,
+    condition_labels,
+    function,
+    load,
+    option_named,
+    users,
+    writer_named,
 )
+from .simbase import Engine, SlipRate, pair_slip_rates, slip_rate_of
 
 if TYPE_CHECKING:
     import pandas as pd
 
-__all__ = [
-    "COEFFICIENTS", "FORMATS", "FOUNDING_SLIP_RATE_MM_S", "UNIT_SYSTEMS", "SlipRate",
-    "abaqus_name", "convert_pressure_kPa", "default_decay_s_per_mm", "export_from_map",
-    "export_simulator_input", "pair_slip_rates", "unit_system", "write_abaqus",
-    "write_abaqus_decay", "write_ansys", "write_lsdyna", "write_mujoco", "write_pyelastica",
-    "write_sofa",
-]
-
-FORMATS = ("abaqus", "ansys", "lsdyna", "mujoco", "sofa", "pyelastica")
-
-#: single-condition writers that take ``coefficient`` (need pin, disc and a pressure)
-SINGLE_VALUE_WRITERS: dict[str, Callable[..., str]] = {
-    "mujoco": write_mujoco,
-    "sofa": write_sofa,
-    "pyelastica": write_pyelastica,
-}
+__all__ = ["FORMATS", "export_from_map", "export_simulator_input", "formats_table", "snippet"]
 
 
-def _refuse_unused(fmt: str, exponential_decay: bool, options: Mapping[str, Any]) -> None:
-    """An :class:`ExportError` for an option that ``fmt`` would silently ignore."""
-    decay_fmt = (fmt == "abaqus" and exponential_decay) or fmt == "lsdyna"
-    if options.get("decay_s_per_mm") is not None and not decay_fmt:
-        raise ExportError(
-            "a decay coefficient only applies to abaqus --exponential-decay and lsdyna"
-        )
-    if options.get("coefficient", "mu_k") != "mu_k" and fmt not in (*SINGLE_VALUE_WRITERS,
-                                                                     "lsdyna"):
-        raise ExportError(
-            f"--coefficient is for mujoco, sofa, pyelastica and lsdyna; {fmt} "
-            + ("--exponential-decay holds mu_s and mu_k already" if fmt == "abaqus"
-               else "writes a mu_k table"),
-        )
+def _mode_options(
+    writer: Writer, condition: bool, options: Mapping[str, Any]
+) -> dict[str, Any]:
+    """The options the chosen writer takes, checked; an :class:`ExportError` for one given
+    that it would silently ignore."""
+    declared: tuple[Option, ...] = (writer.condition_options if condition
+                                    else writer.table_options)
+    names = {o.name for o in declared}
+    for name, value in options.items():
+        option = option_named(name)
+        if name in names or value is None or value == option.default:
+            continue
+        raise ExportError(f"{option.flag} is for {', '.join(users(name))}; "
+                          f"not for {writer.label(condition)}")
+    chosen = {}
+    for option in declared:
+        value = options.get(option.name)
+        value = option.default if value is None else value
+        if option.check is not None and value is not None:
+            load(option.check)(value)
+        chosen[option.name] = value
+    return chosen
 
 
 def export_simulator_input(
@@ -91,49 +70,39 @@ def export_simulator_input(
     disc: str | None = None,
     pressure_kPa: float | None = None,
     temperature_C: float | None = None,
-    units: str = "mm-N-s",
-    exponential_decay: bool = False,
-    decay_s_per_mm: float | None = None,
-    coefficient: str = "mu_k",
-    material_id: int = 1,
-    geom1: str = "pin",
-    geom2: str = "disc",
-    contact_id: int = 1,
-    pin_part: int = 1,
-    disc_part: int = 2,
     slip_rates: Mapping[tuple[str, str], SlipRate] | None = None,
     source: str | None = None,
+    **options: Any,
 ) -> str:
     """The input text for simulator ``fmt`` (one of :data:`FORMATS`).
 
-    Tables (``abaqus``, ``ansys``) take any selection of pairs; single-condition formats
-    (``lsdyna``, ``mujoco``, ``sofa``, ``pyelastica``) and ABAQUS's exponential decay need
-    ``pin``, ``disc`` and ``pressure_kPa`` [kPa] (a missing one is an :class:`ExportError`
-    that lists what the map holds). ``coefficient`` (``"mu_k"`` or ``"mu_s"``) is the
-    coefficient a single-condition engine gets for the onset of slip. ``slip_rates``
-    holds each pair's measured sliding speed (:func:`pair_slip_rates`); pairs without one
-    get the founding paper's 0.007 mm/s.
+    Table formats take any selection of pairs (``pin``/``disc`` ``None`` = all) and every
+    measured pressure; single-condition formats need ``pin``, ``disc`` and
+    ``pressure_kPa`` [kPa] (a missing one is an :class:`ExportError` that lists what the
+    map holds), at ``temperature_C`` [°C]. ``options`` are the format's own (its
+    :class:`~tribopipe.export.simbase.Writer` declares them, e.g. ``coefficient``,
+    ``units``); one it does not take is refused. ``slip_rates`` holds each pair's
+    measured sliding speed (:func:`~tribopipe.export.simbase.pair_slip_rates`); pairs
+    without one get the founding paper's 0.007 mm/s. ``source`` (the map's path) is named
+    in the file's header.
     """
-    if fmt not in FORMATS:
-        raise ExportError(f"unknown simulator {fmt!r}; expected one of {', '.join(FORMATS)}")
-    unit_system(units)
-    check_coefficient(coefficient)
-    _refuse_unused(fmt, exponential_decay,
-                   {"decay_s_per_mm": decay_s_per_mm, "coefficient": coefficient})
-    table = fmt == "ansys" or (fmt == "abaqus" and not exponential_decay)
-    if table and pressure_kPa is not None:
-        raise ExportError(
-            f"the {fmt} table covers every measured pressure; a single pressure is for "
-            "lsdyna, mujoco, sofa, pyelastica or abaqus --exponential-decay",
-            hint="leave out --pressure",
-        )
-    if fmt == "abaqus" and not exponential_decay:
-        return write_abaqus(groups, pin=pin, disc=disc, temperature_C=temperature_C,
-                            units=units, slip_rates=slip_rates, source=source)
-    if fmt == "ansys":
-        return write_ansys(groups, pin=pin, disc=disc, temperature_C=temperature_C,
-                           units=units, material_id=material_id, source=source)
-    what = "ABAQUS EXPONENTIAL DECAY" if fmt == "abaqus" else fmt
+    writer = writer_named(fmt)
+    switch = writer.switch
+    switched = bool(switch is not None and options.pop(switch.name, False))
+    condition = writer.table is None or switched
+    chosen = _mode_options(writer, condition, options)
+    if not condition:
+        if pressure_kPa is not None:
+            raise ExportError(
+                f"the {fmt} table covers every measured pressure; a single pressure is for "
+                f"{', '.join(condition_labels())}",
+                hint="leave out --pressure",
+            )
+        if writer.slip_rate:
+            chosen["slip_rates"] = slip_rates
+        return function(writer.table)(groups, pin=pin, disc=disc,
+                                      temperature_C=temperature_C, source=source, **chosen)
+    what = writer.label(True)
     if pin is None or disc is None:
         listing = "; ".join(f"{p} on {d}" for p, d in pairs(groups)) or "nothing"
         raise ExportError(
@@ -148,26 +117,48 @@ def export_simulator_input(
             f"{pin} on {disc} is measured at {measured} kPa",
             hint="pass --pressure KPA",
         )
-    first = pair.iloc[0]
-    rate = slip_rate_of(slip_rates, str(first["pin"]), str(first["disc"]))
-    condition = {"pin": pin, "disc": disc, "pressure_kPa": pressure_kPa,
-                 "temperature_C": temperature_C, "source": source}
-    if fmt == "abaqus":
-        return write_abaqus_decay(groups, units=units, decay_s_per_mm=decay_s_per_mm,
-                                  slip_rate=rate, **condition)
-    if fmt == "lsdyna":
-        return write_lsdyna(groups, units=units, coefficient=coefficient,
-                            decay_s_per_mm=decay_s_per_mm, slip_rate=rate,
-                            contact_id=contact_id, pin_part=pin_part, disc_part=disc_part,
-                            **condition)
-    extra = {"geom1": geom1, "geom2": geom2} if fmt == "mujoco" else {}
-    return SINGLE_VALUE_WRITERS[fmt](groups, coefficient=coefficient, **condition, **extra)
+    res = query(groups, pin, disc, pressure_kPa, temperature_C)
+    if writer.slip_rate:
+        first = pair.iloc[0]
+        chosen["slip_rate"] = slip_rate_of(slip_rates, str(first["pin"]), str(first["disc"]))
+    return function(writer.condition)(res, source=source, **chosen)
 
 
 def export_from_map(map_path: str | Path, fmt: str, **options: Any) -> str:
     """:func:`export_simulator_input` on the friction map (Parquet) at ``map_path``; every
     pair's slip rate is the median sliding speed of its own runs."""
+    writer_named(fmt)  # an unknown format is refused before the map is read
     runs = read_map(map_path)
     groups = groups_of(runs, map_path)
     return export_simulator_input(groups, fmt, source=str(map_path),
                                   slip_rates=pair_slip_rates(runs), **options)
+
+
+def snippet(fmt: str, res: QueryResult, source: str | None = None) -> str:
+    """The text the explorer page copies for format ``fmt`` at one query result ``res``
+    (an :class:`ExportError` for a format the page does not offer)."""
+    writer = writer_named(fmt)
+    return function(writer.snippet)(res, source=source, **dict(writer.snippet_options))
+
+
+def snippet_header(fmt: str, source: str | None = None) -> list[str]:
+    """The lines of :func:`snippet` that do not depend on the condition."""
+    writer = writer_named(fmt)
+    return list(function(writer.snippet_header)(source=source, **dict(writer.snippet_options)))
+
+
+def formats_table() -> str:
+    """The formats as a Markdown table (``docs/simulators.md`` holds it; a test keeps it
+    current): format, engine, what the file holds, one condition or a table, how the
+    engine combines two bodies' values and what the file was checked against."""
+    rows = ["| format | engine | holds | takes | two bodies | checked against |",
+            "|---|---|---|---|---|---|"]
+    for w in WRITERS:
+        engine: Engine = load(w.engine)
+        kind = " or ".join(k for k, f in (("a table", w.table), ("one condition", w.condition))
+                           if f)
+        # the engines' texts are plain: a keyword's "*" must not start an emphasis
+        cells = [markdown_cell(engine.combination), markdown_cell(engine.checked)]
+        rows.append(f"| `{w.name}` | {engine.name} | {w.holds} | {kind} | "
+                    f"{cells[0]} | {cells[1]} |")
+    return "\n".join(rows) + "\n"

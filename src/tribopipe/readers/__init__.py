@@ -1,9 +1,9 @@
 """Readers: raw instrument exports → :class:`tribopipe.measurement.Measurement` objects.
 
-Every vendor quirk lives in this package. :func:`read_export` detects the format
-(RheoCompass text or Excel, Rheoplus, plain CSV), the encoding, the cell delimiter and the
-decimal mark (each can be forced), and returns one Measurement per interval, in file
-order, with canonical SI columns (``time_s``, ``torque_Nm``, ``normal_force_N``,
+Every vendor quirk lives in this package. :func:`read_export` detects the format (one of
+:data:`READERS`: RheoCompass text or Excel, Rheoplus, plain CSV), the encoding, the cell
+delimiter and the decimal mark (each can be forced), and returns one Measurement per
+interval, in file order, with canonical SI columns (``time_s``, ``torque_Nm``, ``normal_force_N``,
 ``angle_rad``, ``speed_rad_s``, ``temperature_C``), ``point_no`` and the other columns
 snake_cased with an SI unit suffix. :func:`describe_export` tells what a file holds
 (``tribopipe inspect``); :func:`require_columns` (from :mod:`tribopipe.measurement`) is
@@ -42,11 +42,12 @@ from ..measurement import (  # noqa: F401 - require_columns is importable from h
     interval_label,
     require_columns,
 )
-from . import plaincsv, rheocompass, rheoplus
+from . import plaincsv, rheocompass, rheoplus, xlsx
 from .aliases import AliasTable, load_aliases, resolve_aliases
 from .arrowcells import arrow_cells
 from .common import build_measurement
 from .interval import FileInfo, RawInterval
+from .spec import Reader
 from .textio import (
     DecodedText,
     NotSimple,
@@ -64,11 +65,11 @@ from .textio import (
     split_cells,
     split_plain,
 )
-from .xlsx import XLSX_MAGIC, workbook_rows
 
 __all__ = [
     "EXPORT_SUFFIXES",
     "FORMATS",
+    "READERS",
     "AliasTable",
     "ColumnSummary",
     "ExportSummary",
@@ -79,19 +80,29 @@ __all__ = [
     "require_columns",
 ]
 
-#: format names accepted by ``fmt=`` / ``--format``
-FORMATS: tuple[str, ...] = (
-    rheocompass.FORMAT,
-    rheocompass.FORMAT_XLSX,
-    rheoplus.FORMAT,
-    plaincsv.FORMAT,
+#: every export format, in the order detection tries them: binary formats by their first
+#: bytes, then text formats by their first rows (a RheoCompass or Rheoplus label before a
+#: plain CSV's header). A new format is one module with a :class:`Reader` and one entry here.
+READERS: tuple[Reader, ...] = (
+    rheocompass.READER,
+    xlsx.READER,
+    rheoplus.READER,
+    plaincsv.READER,
 )
 
-#: file suffixes (lower case) of what the readers take: text tables (RheoCompass,
-#: Rheoplus, plain CSV) as .csv, .txt or .tsv, RheoCompass workbooks as .xlsx; a legacy .xls
-#: is recognised and refused with the reason (save it as .xlsx). Formats are detected from
+#: format names accepted by ``fmt=`` / ``--format``
+FORMATS: tuple[str, ...] = tuple(r.name for r in READERS)
+
+#: file suffixes (lower case) of what the readers take, and a legacy .xls, which is
+#: recognised and refused with the reason (save it as .xlsx). Formats are detected from
 #: the content, so a campaign's folder discovery is all these suffixes stand for.
-EXPORT_SUFFIXES: tuple[str, ...] = (".csv", ".txt", ".tsv", ".xlsx", ".xls")
+EXPORT_SUFFIXES: tuple[str, ...] = (
+    *dict.fromkeys(suffix for r in READERS for suffix in r.suffixes), ".xls")
+
+
+def _text_readers() -> tuple[Reader, ...]:
+    """The text formats of :data:`READERS`, in detection order."""
+    return tuple(r for r in READERS if r.looks_like is not None)
 
 _OLE_MAGIC = b"\xd0\xcf\x11\xe0"  # legacy .xls
 #: lines detection reads: format labels sit in the first 60-80 rows, the decimal mark is
@@ -124,9 +135,10 @@ def _read(
     """Detect format, encoding, delimiter and decimal mark; read every interval."""
     if decimal not in (None, ".", ","):
         raise ReadError(f"decimal mark must be '.' or ',', got {decimal!r}", path=path)
-    if fmt is not None and fmt not in FORMATS:
+    names = [r.name for r in READERS]
+    if fmt is not None and fmt not in names:
         raise ReadError(
-            f"unknown format {fmt!r}", path=path, hint=f"expected one of {', '.join(FORMATS)}"
+            f"unknown format {fmt!r}", path=path, hint=f"expected one of {', '.join(names)}"
         )
     delimiter = _normalise_delimiter(delimiter, path)
     raw = read_bytes(path)
@@ -134,10 +146,14 @@ def _read(
         raise ReadError(
             "legacy Excel .xls workbook", path=path, hint="save it as .xlsx or export text"
         )
-    if fmt == rheocompass.FORMAT_XLSX or (fmt is None and raw.startswith(XLSX_MAGIC)):
-        info = FileInfo(path, rheocompass.FORMAT_XLSX, None, None, decimal or ".")
-        intervals = rheocompass.parse_intervals(workbook_rows(path), path)
-        return [build_measurement(interval, info, aliases) for interval in intervals]
+    for reader in READERS:
+        if reader.magic is None or reader.rows is None:
+            continue
+        if fmt == reader.name or (fmt is None and raw.startswith(reader.magic)):
+            info = FileInfo(path, reader.name, None, None, decimal or reader.decimal)
+            rows: list[Row | Run] = list(reader.rows(path))
+            intervals = reader.parse(rows, path, aliases)
+            return [build_measurement(interval, info, aliases) for interval in intervals]
 
     decoded = decode(raw, path, encoding)
     if plain_line_ends(decoded.text):
@@ -183,41 +199,33 @@ def _parse_text(
         raise NotSimple
     rows = split_plain(lines, delim) if plain else split_cells(lines, delim, path)
     if fmt is None:
-        if rheocompass.looks_like(rows):
-            fmt = rheocompass.FORMAT
-        elif rheoplus.looks_like(rows):
-            fmt = rheoplus.FORMAT
-        elif plaincsv.looks_like(rows, aliases):
-            fmt = plaincsv.FORMAT
+        found = next((r for r in _text_readers() if r.looks_like and r.looks_like(rows, aliases)),
+                     None)
+        if found is not None:
+            fmt = found.name
         elif plain:
             raise NotSimple  # the header may lie past the first lines
         else:
             first = next((ln for ln in lines if ln.strip()), "")[:60]
+            expects = [r.expects for r in _text_readers()]
             raise ReadError(
                 f"not a recognised export (first line {first!r})",
                 path=path,
-                hint="expected a RheoCompass table export ('Project:' ... 'Interval data:'), "
-                "a Rheoplus export ('Meas. Pts.') or a CSV naming time, torque and "
-                "normal-force columns with units",
+                hint=f"expected {', '.join(expects[:-1])} or {expects[-1]}",
             )
+    reader = next(r for r in _text_readers() if r.name == fmt)
     if decimal is None and delim == ",":
         decimal = "."
     elif decimal is None:
         cells = chain.from_iterable(row[1:] for _, row in rows[:300])
         sample = list(islice(filter(None, cells), 2000))  # the first 2000 non-empty cells
-        decimal = detect_decimal(sample, default="." if fmt == rheoplus.FORMAT else ",")
+        decimal = detect_decimal(sample, default=reader.decimal)
     info = FileInfo(path, fmt, decoded.encoding, delim, decimal)
-    module = {rheocompass.FORMAT: rheocompass, rheoplus.FORMAT: rheoplus}.get(fmt, plaincsv)
+    assert reader.data_line is not None  # a text reader's
     items: list[Row | Run] = (
-        scan_lines(text, delim, module.data_line(delim)) if plain else list(rows)
+        scan_lines(text, delim, reader.data_line(delim)) if plain else list(rows)
     )
-    if fmt == rheocompass.FORMAT:
-        intervals = rheocompass.parse_intervals(items, path)
-    elif fmt == rheoplus.FORMAT:
-        intervals = rheoplus.parse_intervals(items, path)
-    else:
-        intervals = plaincsv.parse_intervals(items, path, aliases)
-    return info, intervals
+    return info, reader.parse(items, path, aliases)
 
 
 def read_export(

@@ -15,6 +15,7 @@ from ..errors import ReadError
 from ..units import parse_unit
 from .aliases import AliasTable
 from .interval import UNIT_CELL, RawInterval
+from .spec import Reader
 from .textio import DataLine, Row, Run, first_row, peel
 
 FORMAT = "csv"
@@ -102,3 +103,14 @@ def parse_intervals(
             header_line=header_line,
         )
     ]
+
+
+READER = Reader(
+    name=FORMAT,
+    suffixes=(".csv", ".txt", ".tsv"),
+    expects="a CSV naming time, torque and normal-force columns with units",
+    parse=parse_intervals,
+    looks_like=looks_like,
+    data_line=data_line,
+    decimal=",",
+)

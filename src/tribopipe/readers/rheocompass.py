@@ -24,6 +24,7 @@ from dataclasses import replace
 from ..errors import ReadError
 from .aliases import builtin_aliases, name_key
 from .interval import UNIT_CELL, RawInterval, label_value
+from .spec import Reader
 from .textio import DataLine, Row, Run, peel
 
 FORMAT = "rheocompass"
@@ -195,3 +196,14 @@ def _read_table(rows: list[Row | Run], start: int, path: str) -> tuple[RawInterv
         header_line=header_line,
     )
     return raw, i
+
+
+READER = Reader(
+    name=FORMAT,
+    suffixes=(".csv", ".txt", ".tsv"),
+    expects="a RheoCompass table export ('Project:' ... 'Interval data:')",
+    parse=lambda rows, path, aliases: parse_intervals(rows, path),
+    looks_like=lambda rows, aliases: looks_like(rows),
+    data_line=data_line,
+    decimal=",",
+)

@@ -19,6 +19,7 @@ import re
 from ..errors import ReadError
 from .aliases import name_key
 from .interval import RawInterval, label_value
+from .spec import Reader
 from .textio import DataLine, Row, Run
 
 FORMAT = "rheoplus"
@@ -163,3 +164,14 @@ def _read_table(rows: list[Row | Run], start: int, path: str) -> tuple[RawInterv
         names=names, units=units, rows=data, point_col=0, header_line=header_line
     )
     return raw, i
+
+
+READER = Reader(
+    name=FORMAT,
+    suffixes=(".txt", ".csv"),
+    expects="a Rheoplus export ('Meas. Pts.')",
+    parse=lambda rows, path, aliases: parse_intervals(rows, path),
+    looks_like=lambda rows, aliases: looks_like(rows),
+    data_line=data_line,
+    decimal=".",
+)

@@ -10,7 +10,8 @@ from __future__ import annotations
 import zipfile
 
 from ..errors import ReadError
-from .rheocompass import looks_like
+from .rheocompass import FORMAT_XLSX, looks_like, parse_intervals
+from .spec import Reader
 
 XLSX_MAGIC = b"PK\x03\x04"
 
@@ -59,3 +60,14 @@ def workbook_rows(path: str) -> list[tuple[int, list[str]]]:
         path=path,
         hint="expected 'Project:', 'Test:', 'Interval data:' labels in the first column",
     )
+
+
+READER = Reader(
+    name=FORMAT_XLSX,
+    suffixes=(".xlsx",),
+    expects="a RheoCompass Excel workbook",
+    parse=lambda rows, path, aliases: parse_intervals(rows, path),
+    decimal=".",
+    magic=XLSX_MAGIC,
+    rows=workbook_rows,
+)

@@ -1,4 +1,8 @@
-/* The selection as CSV and as the ABAQUS/Ansys text of fe_decks.condition_snippet. */
+/* The selection as CSV and as the simulator input of every format the registry
+   (tribopipe/export/registry.py) gives a snippet: DATA.snippets lists them, with the
+   opening lines of each rendered by Python (DATA.snippet_headers); SNIPPETS below adds the
+   lines that depend on the condition, each function the copy of its Python writer
+   (tests/test_snippets_js.py holds every one equal to it, and SNIPPETS to the registry). */
 
 /* escape.sim_comment(value, "**"): Python's ascii() without the quotes, so no
    newline, control or non-ASCII character of a name survives into a deck's comment. */
@@ -138,11 +142,104 @@ function csvText(res) {
   return CSV_COLUMNS.join(",") + "\r\n" + row.map(csvCell).join(",") + "\r\n";
 }
 
-var EXPORTS = {
-  csv: { ext: "csv", mime: "text/csv", make: csvText },
-  abaqus: { ext: "inp", mime: "text/plain", make: function (r) { return conditionSnippet(r, "abaqus"); } },
-  ansys: { ext: "mac", mime: "text/plain", make: function (r) { return conditionSnippet(r, "ansys"); } },
+/* simbase.xml_comment(text, ascii_only=True); the opening is split because a page's
+   script may not hold "<" "!--" (explorer._script refuses it) */
+function xmlComment(text) {
+  return "<" + "!-- " + deckSafe(text).replace(/-(?=-)/g, "- ") + " -->";
+}
+
+/* usd._comment */
+function hashComment(text) { return ("# " + deckSafe(text)).replace(/\s+$/, ""); }
+
+/* simbase.static_and_dynamic: [static, dynamic, where the static came from] */
+function staticAndDynamic(res) {
+  var muK = res.mu_k.value;
+  if (res.mu_s === null) {
+    return [muK, muK, "static = mu_k: the map holds no mu_s for this pair (an imported " +
+      "published map holds mu_k only), so the onset of slip takes the kinetic coefficient; " +
+      "the static coefficient is written all the same, never left to the engine's default"];
+  }
+  if (res.mu_s.value < muK) {
+    return [muK, muK, "static = mu_k: the map's mu_s (" + num(res.mu_s.value) + ") is below " +
+      "mu_k at this condition and the engine needs static >= dynamic, so static is raised to mu_k"];
+  }
+  return [res.mu_s.value, muK, "static = mu_s (breakaway), dynamic = mu_k (sliding)"];
+}
+
+/* usd.write_usd(res, source=map) */
+function usdSnippet(res) {
+  var sd = staticAndDynamic(res);
+  var lines = DATA.snippet_headers.usd.concat(
+    conditionLines(res, String).concat([sd[2]]).map(hashComment));
+  lines.push("", 'def Scope "TribopipeFriction"', "{", '    def Material "PinOnDisc" (',
+    '        prepend apiSchemas = ["PhysicsMaterialAPI", "PhysxMaterialAPI"]', "    )", "    {",
+    "        float physics:dynamicFriction = " + num(sd[1]),
+    "        float physics:staticFriction = " + num(sd[0]),
+    '        uniform token physxMaterial:frictionCombineMode = "average"', "    }");
+  [['Cube "Pin"', ["double size = 0.02", "double3 xformOp:translate = (0, 0, 0.02)"]],
+   ['Cylinder "Disc"', ['uniform token axis = "Z"', "double height = 0.02", "double radius = 0.2",
+     "double3 xformOp:translate = (0, 0, 0)"]]].forEach(function (example) {
+    lines.push("", "    def " + example[0] + " (",
+      '        prepend apiSchemas = ["PhysicsCollisionAPI", "MaterialBindingAPI"]', "    )", "    {");
+    example[1].forEach(function (line) { lines.push("        " + line); });
+    lines.push("        rel material:binding:physics = </TribopipeFriction/PinOnDisc>",
+      '        uniform token[] xformOpOrder = ["xformOp:translate"]', "    }");
+  });
+  lines.push("}");
+  return lines.join("\n") + "\n";
+}
+
+/* pybullet.write_pybullet(res, source=map): the pin's link, mu_K */
+function pybulletSnippet(res) {
+  var mu = res.mu_k.value;
+  var lines = DATA.snippet_headers.pybullet.concat(conditionLines(res, String).concat([
+    "contact: pin " + num(mu) + " x disc " + num(1.0) + " = " + num(mu * 1.0)]).map(xmlComment));
+  lines.push('<robot name="pin">', '  <link name="pin">', "    <contact>",
+    '      <lateral_friction value="' + num(mu) + '"/>', "    </contact>", "    <inertial>",
+    '      <mass value="0.1"/>',
+    '      <inertia ixx="6.667e-06" ixy="0" ixz="0" iyy="6.667e-06" iyz="0" izz="6.667e-06"/>',
+    "    </inertial>", "    <collision>", '      <geometry><box size="0.02 0.02 0.02"/></geometry>',
+    "    </collision>", "  </link>", "</robot>");
+  return lines.join("\n") + "\n";
+}
+
+/* drake.write_drake(res, source=map) */
+function drakeSnippet(res) {
+  var sd = staticAndDynamic(res);
+  var lines = DATA.snippet_headers.drake.concat(
+    conditionLines(res, String).concat([sd[2]]).map(xmlComment));
+  lines.push('<sdf version="1.9" xmlns:drake="http://drake.mit.edu">',
+    '  <model name="tribopipe_pin_on_disc">');
+  [["pin", "0 0 0.02 0 0 0", "0.02 0.02 0.02", "0.1", "6.667e-06", "6.667e-06"],
+   ["disc", "0 0 0 0 0 0", "0.4 0.4 0.02", "1.0", "0.01337", "0.02667"]].forEach(function (l) {
+    lines.push('    <link name="' + l[0] + '">', "      <pose>" + l[1] + "</pose>", "      <inertial>",
+      "        <mass>" + l[3] + "</mass>",
+      "        <inertia><ixx>" + l[4] + "</ixx><iyy>" + l[4] + "</iyy><izz>" + l[5] + "</izz>" +
+        "<ixy>0</ixy><ixz>0</ixz><iyz>0</iyz></inertia>",
+      "      </inertial>", '      <collision name="' + l[0] + '_collision">',
+      "        <geometry><box><size>" + l[2] + "</size></box></geometry>",
+      "        <drake:proximity_properties>",
+      "          <drake:mu_dynamic>" + num(sd[1]) + "</drake:mu_dynamic>",
+      "          <drake:mu_static>" + num(sd[0]) + "</drake:mu_static>",
+      "        </drake:proximity_properties>", "      </collision>", "    </link>");
+  });
+  lines.push("  </model>", "</sdf>");
+  return lines.join("\n") + "\n";
+}
+
+/* the condition-dependent part of each registered snippet, by format name */
+var SNIPPETS = {
+  abaqus: function (r) { return conditionSnippet(r, "abaqus"); },
+  ansys: function (r) { return conditionSnippet(r, "ansys"); },
+  usd: usdSnippet,
+  pybullet: pybulletSnippet,
+  drake: drakeSnippet,
 };
+
+var EXPORTS = { csv: { ext: "csv", mime: "text/csv", make: csvText } };
+DATA.snippets.forEach(function (s) {
+  EXPORTS[s.name] = { ext: s.suffix, mime: "text/plain", make: SNIPPETS[s.name] };
+});
 
 function slug(text) {
   return key(text).replace(/[^a-z0-9]+/g, "-").replace(/^-+|-+$/g, "").slice(0, 40) || "x";

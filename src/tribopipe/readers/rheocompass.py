@@ -24,7 +24,7 @@ from dataclasses import replace
 from ..errors import ReadError
 from .aliases import builtin_aliases, name_key
 from .interval import UNIT_CELL, RawInterval, label_value
-from .textio import DataLine, Row, Run, peel
+from .textio import DataLine, Row, Run, first_row, peel
 
 FORMAT = "rheocompass"
 FORMAT_XLSX = "rheocompass-xlsx"
@@ -138,7 +138,7 @@ def parse_intervals(rows: list[Row | Run], path: str) -> list[RawInterval]:
 
 def _read_table(rows: list[Row | Run], start: int, path: str) -> tuple[RawInterval, int]:
     """Read one ``Interval data:`` header (names, meaning row, unit row) and its rows."""
-    header_line, header = rows[start]
+    header_line, header = first_row(rows[start])  # the caller found the label there
     names = header[1:]
     while names and not names[-1]:
         names.pop()
@@ -150,8 +150,7 @@ def _read_table(rows: list[Row | Run], start: int, path: str) -> tuple[RawInterv
     for _ in range(2):
         if i >= len(rows):
             break
-        peel(rows, i)
-        _, cells = rows[i]
+        _, cells = peel(rows, i)
         if cells and cells[0]:
             break
         rest = cells[1:]

@@ -19,7 +19,7 @@ import re
 from ..errors import ReadError
 from .aliases import name_key
 from .interval import RawInterval, label_value
-from .textio import DataLine, Row, Run
+from .textio import DataLine, Row, Run, first_row
 
 FORMAT = "rheoplus"
 
@@ -131,20 +131,21 @@ def parse_intervals(rows: list[Row | Run], path: str) -> list[RawInterval]:
 
 
 def _read_table(rows: list[Row | Run], start: int, path: str) -> tuple[RawInterval, int]:
-    header_line, header = rows[start]  # a labelled row: "Meas. Pts." starts no run
+    header_line, header = first_row(rows[start])  # labelled "Meas. Pts.": starts no run
     names = list(header)
     while names and not names[-1]:
         names.pop()
     i = start + 1
+    unit_row = rows[i] if i < len(rows) else None
     # a run starts with a point number: not a unit row
-    if i >= len(rows) or isinstance(rows[i], Run) or (rows[i][1] and rows[i][1][0]):
+    if unit_row is None or isinstance(unit_row, Run) or (unit_row[1] and unit_row[1][0]):
         raise ReadError(
             "expected a unit row ([s], [µNm], ...) under the 'Meas. Pts.' header",
             path=path,
             line=header_line,
             hint="the file is truncated or its header was edited",
         )
-    units = list(rows[i][1][: len(names)])
+    units = list(unit_row[1][: len(names)])
     i += 1
     data: list[Row | Run] = []
     while i < len(rows):

@@ -454,12 +454,15 @@ def first_row(item: Row | Run) -> Row:
     return item.split_first()[0] if isinstance(item, Run) else item
 
 
-def peel(items: list[Row | Run], i: int) -> None:
-    """Make ``items[i]`` a row: a run there is split into its first line and the rest."""
+def peel(items: list[Row | Run], i: int) -> Row:
+    """Make ``items[i]`` a row: a run there is split into its first line and the rest.
+    Returns that row."""
     item = items[i]
-    if isinstance(item, Run):
-        row, rest = item.split_first()
-        items[i : i + 1] = [row] if rest is None else [row, rest]
+    if not isinstance(item, Run):
+        return item
+    row, rest = item.split_first()
+    items[i : i + 1] = [row] if rest is None else [row, rest]
+    return row
 
 
 def detect_decimal(cells: Sequence[str], default: str = ".") -> str:

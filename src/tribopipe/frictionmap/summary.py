@@ -65,7 +65,7 @@ def map_summary(path: str | os.PathLike[str], *, runs_listed: bool = False) -> s
     if len(excluded):
         lines.append("")
         lines.append("  excluded runs:")
-        for row in excluded.to_dict(orient="records"):
+        for row in excluded.to_dict(orient="records", into=dict):
             lines.append(f"    {row['measurement_id']}  {_text(row['pin'])} / "
                          f"{_text(row['disc'])}, {row['normal_force_N']:g} N, "
                          f"{_fmt_t(row['temperature_C'])}, repeat {_fmt_repeat(row['repeat'])}"
@@ -76,7 +76,7 @@ def map_summary(path: str | os.PathLike[str], *, runs_listed: bool = False) -> s
                      "nominal F and T, repeat, mu_k, mu_s, flags")
         ordered = runs.sort_values(["source_file", "test", "result", "interval",
                                     "measurement_id"], kind="mergesort", na_position="first")
-        lines += ["    " + run_line(row) for row in ordered.to_dict(orient="records")]
+        lines += ["    " + run_line(row) for row in ordered.to_dict(orient="records", into=dict)]
     return "\n".join(lines)
 
 
@@ -92,8 +92,8 @@ def run_origin(row: dict[str, Any]) -> str:
     """Where a map row came from: ``file [test / result / interval i]`` (the parts the row
     knows; a row of a map older than schema version 4 names no test or result)."""
     interval = None if _missing(row.get("interval")) else int(row["interval"])
-    place = interval_label(*(None if _missing(row.get(k)) else _text(row[k])
-                             for k in ("test", "result")), interval)
+    test, result = (None if _missing(row.get(k)) else _text(row[k]) for k in ("test", "result"))
+    place = interval_label(test, result, interval)
     file = _text(row.get("source_file"))
     return f"{file} [{place}]" if place else file
 

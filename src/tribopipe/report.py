@@ -262,7 +262,7 @@ def _group_table(inp: ReportInputs) -> str:
         + "<th class=t>QC</th><th class=t>runs</th></tr>"
     )
     rows = []
-    for g in inp.groups.to_dict(orient="records"):
+    for g in inp.groups.to_dict(orient="records", into=dict):
         ids = [i for i in str(g.get("run_ids") or "").split(";") if i]
         links = " ".join(
             f'<a href="#{run_anchor(i)}">{escape(i[:8])}</a>' for i in ids
@@ -498,7 +498,8 @@ def _overlay_groups(inp: ReportInputs) -> dict[str, tuple[dict[str, Any], list[s
     if inp.map_report or not len(inp.groups):
         return out
     traces = inp.trace_paths or {}
-    for g in inp.groups[inp.groups["range_exceeds_r"].astype(bool)].to_dict(orient="records"):
+    exceeding = inp.groups[inp.groups["range_exceeds_r"].astype(bool)]
+    for g in exceeding.to_dict(orient="records", into=dict):
         ids = [i for i in str(g.get("run_ids") or "").split(";") if i in traces]
         if ids:
             out[group_anchor(g)] = (g, ids)

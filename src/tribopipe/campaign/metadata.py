@@ -38,7 +38,7 @@ import functools
 import io
 import math
 import sys
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -141,7 +141,8 @@ def run_rows(rows: Sequence[ManifestRow], test: str | None,
     row of that interval with an empty test cell, the row of that test with an empty
     interval cell."""
     by_key = {(r.test, r.interval): r for r in rows}
-    keys = [(test, interval), (None, interval)] if interval is not None else []
+    keys: list[tuple[str | None, int | None]] = (
+        [(test, interval), (None, interval)] if interval is not None else [])
     keys.append((test, None))
     found = [by_key.get(key) for key in dict.fromkeys(keys) if key != (None, None)]
     return [r for r in found if r is not None]
@@ -194,7 +195,7 @@ def read_manifest(path: str | Path) -> Manifest:
 
 
 @contextlib.contextmanager
-def _no_cell_size_limit(size: int):  # noqa: ANN202 - a context manager
+def _no_cell_size_limit(size: int) -> Iterator[None]:
     """Let the csv module read cells up to ``size`` characters (its default stops at
     131,072 with an error for the whole file); a cell that long is then refused as a
     value, for its row only."""

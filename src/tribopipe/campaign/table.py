@@ -241,9 +241,10 @@ def campaign_table(campaign: Campaign, *, state: Mapping[str, Any] | None = None
         try:
             st = regular_file(path, what="an export file")
         except ReadError as exc:
-            problem = f"{display_path(rel)}: {exc.problem}"
+            unreadable = f"{display_path(rel)}: {exc.problem}"
             rows.append(CampaignRow(file=rel, path=path, size=-1, mtime_ns=-1, sources=(),
-                                    merged={}, problem=problem, status=FAILED, reason=problem))
+                                    merged={}, problem=unreadable, status=FAILED,
+                                    reason=unreadable))
             continue
         sources: list[tuple[str, dict[str, Any]]] = []
         hints: list[str] = []

@@ -10,6 +10,7 @@ column names, ignoring case, accents, spaces and punctuation, so ``Intervalle Te
 from __future__ import annotations
 
 import functools
+import os
 import re
 import tomllib
 import unicodedata
@@ -121,7 +122,7 @@ def builtin_aliases() -> AliasTable:
     return AliasTable().extended(data, "tribopipe/data/aliases.toml")
 
 
-def load_aliases(path: str | Path | None = None) -> AliasTable:
+def load_aliases(path: str | os.PathLike[str] | None = None) -> AliasTable:
     """The built-in table extended by a user file.
 
     ``path=None`` uses ``configs/aliases.toml`` in the working directory when it exists.
@@ -147,7 +148,7 @@ def _extend_builtin(text: str, source: str) -> AliasTable:
     return builtin_aliases().extended(tomllib.loads(text), source)
 
 
-def resolve_aliases(aliases: AliasTable | str | Path | None) -> AliasTable:
+def resolve_aliases(aliases: AliasTable | str | os.PathLike[str] | None) -> AliasTable:
     """Accept an :class:`AliasTable`, a path to a user alias file, or ``None``."""
     if isinstance(aliases, AliasTable):
         return aliases

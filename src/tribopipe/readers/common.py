@@ -52,10 +52,9 @@ def build_measurement(
     declares (a truncated file).
     """
     if cells is not None:
-        refused: tuple[type[Exception], ...] = (ReadError, *declines())
         try:
             return _measurement(raw, info, aliases, cells)
-        except refused:
+        except declines(ReadError):
             pass  # the general path decides, and names the line of any error
     return _measurement(raw, info, aliases, RowCells(raw, info))
 

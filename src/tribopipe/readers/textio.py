@@ -245,12 +245,13 @@ class NotSimple(Exception):  # noqa: N818 - a signal between two paths, not an e
     """The fast path cannot vouch for an exact result here; take the row-by-row path."""
 
 
-def declines() -> tuple[type[Exception], ...]:
+def declines(*also: type[Exception]) -> tuple[type[Exception], ...]:
     """What ends an attempt of the fast path (the caller then reads row by row):
-    :class:`NotSimple`, and any error of pyarrow, which the fast path uses."""
+    :class:`NotSimple`, and any error of pyarrow, which the fast path uses; ``also``
+    the caller's own exception types (one tuple for an ``except`` clause)."""
     import pyarrow as pa
 
-    return (NotSimple, pa.ArrowException)
+    return (*also, NotSimple, pa.ArrowException)
 
 
 def plain_line_ends(text: str) -> bool:

@@ -11,6 +11,7 @@ import zipfile
 
 from ..errors import ReadError
 from .rheocompass import looks_like
+from .textio import Row, Run
 
 XLSX_MAGIC = b"PK\x03\x04"
 
@@ -23,9 +24,10 @@ def _cell_text(value: object) -> str:
     return str(value).strip()
 
 
-def workbook_rows(path: str) -> list[tuple[int, list[str]]]:
+def workbook_rows(path: str) -> list[Row | Run]:
     """The rows of the first sheet whose first column holds a RheoCompass label, as
-    ``(1-based row number, text cells)``."""
+    ``(1-based row number, text cells)``: the rows of a text export (every line a row,
+    no runs)."""
     import openpyxl
 
     try:
@@ -40,12 +42,12 @@ def workbook_rows(path: str) -> list[tuple[int, list[str]]]:
         names = []
         for sheet in workbook.worksheets:
             names.append(sheet.title)
-            rows = [
+            rows: list[Row] = [
                 (k, [_cell_text(v) for v in values])
                 for k, values in enumerate(sheet.iter_rows(values_only=True), start=1)
             ]
             if looks_like(rows):
-                return rows
+                return [*rows]  # typed as the rows and runs the parser reads
     except Exception as exc:  # noqa: BLE001 - a damaged sheet (bad CRC, bad XML) read lazily
         raise ReadError(
             f"not a readable Excel workbook ({type(exc).__name__}: "

@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import math
 import os
-from collections.abc import Sequence
+from collections.abc import Hashable, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -122,7 +122,7 @@ def frictionmap_table(
     included = _select(included, pin, disc, temperature_C)
     keys = _group_keys(included, by_speed=False)
     numbers: list[float] = []
-    next_free: dict[tuple[Any, ...], int] = {}
+    next_free: dict[Hashable, int] = {}
     for key, idx in keys.groupby(list(keys.columns), dropna=False, sort=False).groups.items():
         repeats = included.loc[idx, "repeat"]
         next_free[key] = int(repeats.max()) if repeats.notna().any() else 0
@@ -333,13 +333,14 @@ def render_table(
                 "the frictionmap format has its own 7-column layout",
                 hint="drop --layout / --by-speed",
             )
-        table = frictionmap_table(runs, **filters)
+        table = frictionmap_table(runs, pin=pin, disc=disc, temperature_C=temperature_C)
     elif layout == "abstract":
         if by_speed:
             raise ExportError("the abstract layout does not split by speed", hint="drop --by-speed")
-        table = abstract_table(runs, **filters)
+        table = abstract_table(runs, pin=pin, disc=disc, temperature_C=temperature_C)
     else:
-        table = group_table(runs, by_speed=by_speed, **filters)
+        table = group_table(runs, pin=pin, disc=disc, temperature_C=temperature_C,
+                            by_speed=by_speed)
     if table.empty:
         given = ", ".join(f"{k}={list(v)}" for k, v in filters.items() if v) or "no filter"
         raise ExportError(

@@ -116,10 +116,10 @@ def plot_group_overlay(
                  + ("" if mu_k is None else f": μ_K {mu_k:.3f}"))
         ax.plot(trace["sliding_distance_mm"], trace[column], "-", color=colour, lw=0.9,
                 alpha=0.85, label=label)
-        start = finite_or_none(row.get("mu_k_window_start_mm"))
-        end = finite_or_none(row.get("mu_k_window_end_mm"))
-        if mu_k is not None and start is not None and end is not None:
-            ax.plot([start, end], [mu_k] * 2, "--", color=colour, lw=1.6)
+        start, end = row.get("mu_k_window_start_mm"), row.get("mu_k_window_end_mm")
+        low, high = finite_or_none(start), finite_or_none(end)  # the μ_K window [mm]
+        if mu_k is not None and low is not None and high is not None:
+            ax.plot([low, high], [mu_k] * 2, "--", color=colour, lw=1.6)
     ax.set_xlabel("sliding distance s [mm]")
     ax.set_ylabel(MU_LABEL)
     ax.set_ylim(bottom=0)

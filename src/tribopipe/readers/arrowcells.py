@@ -19,6 +19,7 @@ from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 
 from .aliases import AliasTable
 from .cells import classify
@@ -136,7 +137,7 @@ class ArrowCells:
         self.kinds, self.columns, self.decimal = kinds, columns, decimal
         self._missing = {k: int(pc.sum(c).as_py() or 0) for k, c in stars.items()}
 
-    def point_numbers(self, j: int) -> np.ndarray:
+    def point_numbers(self, j: int) -> NDArray[np.int64]:
         import pyarrow as pa
         import pyarrow.compute as pc
 
@@ -153,7 +154,7 @@ class ArrowCells:
         if pa.types.is_string(column.type) and _column_holds(column, b"#"):
             raise NotSimple
 
-    def numbers(self, j: int, name: str, textual: bool) -> np.ndarray | None:
+    def numbers(self, j: int, name: str, textual: bool) -> NDArray[np.float64] | None:
         import pyarrow as pa
         import pyarrow.compute as pc
 

@@ -14,9 +14,11 @@ import os
 import re
 import tomllib
 import unicodedata
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from importlib import resources
 from pathlib import Path
+from typing import Any
 
 from ..errors import ConfigError
 from ..measurement import ANGLE, NORMAL_FORCE, SPEED, TEMPERATURE, TIME, TORQUE
@@ -76,7 +78,7 @@ class AliasTable:
             return self.names[key]
         return snake_case(column)
 
-    def extended(self, data: dict, source: str) -> AliasTable:
+    def extended(self, data: Mapping[str, Any], source: str) -> AliasTable:
         """A new table with the aliases of a parsed TOML document added."""
         canonical = dict(self.canonical)
         names = dict(self.names)

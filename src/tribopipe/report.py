@@ -262,7 +262,7 @@ def _group_table(inp: ReportInputs) -> str:
         + "<th class=t>QC</th><th class=t>runs</th></tr>"
     )
     rows = []
-    for g in inp.groups.to_dict(orient="records", into=dict):
+    for g in inp.groups.to_dict(orient="records"):
         ids = [i for i in str(g.get("run_ids") or "").split(";") if i]
         links = " ".join(
             f'<a href="#{run_anchor(i)}">{escape(i[:8])}</a>' for i in ids

@@ -150,8 +150,8 @@ def export_simulator_input(
         )
     first = pair.iloc[0]
     rate = slip_rate_of(slip_rates, str(first["pin"]), str(first["disc"]))
-    condition: dict[str, Any] = {"pin": pin, "disc": disc, "pressure_kPa": pressure_kPa,
-                                 "temperature_C": temperature_C, "source": source}
+    condition = {"pin": pin, "disc": disc, "pressure_kPa": pressure_kPa,
+                 "temperature_C": temperature_C, "source": source}
     if fmt == "abaqus":
         return write_abaqus_decay(groups, units=units, decay_s_per_mm=decay_s_per_mm,
                                   slip_rate=rate, **condition)

@@ -326,21 +326,20 @@ def render_table(
         raise ExportError(f"unknown table format {fmt!r}; expected one of {', '.join(FORMATS)}")
     if layout not in LAYOUTS:
         raise ExportError(f"unknown table layout {layout!r}; expected one of {', '.join(LAYOUTS)}")
-    filters = {"pin": pin, "disc": disc, "temperature_C": temperature_C}
+    filters: dict[str, Any] = {"pin": pin, "disc": disc, "temperature_C": temperature_C}
     if fmt == "frictionmap":
         if layout != "group" or by_speed:
             raise ExportError(
                 "the frictionmap format has its own 7-column layout",
                 hint="drop --layout / --by-speed",
             )
-        table = frictionmap_table(runs, pin=pin, disc=disc, temperature_C=temperature_C)
+        table = frictionmap_table(runs, **filters)
     elif layout == "abstract":
         if by_speed:
             raise ExportError("the abstract layout does not split by speed", hint="drop --by-speed")
-        table = abstract_table(runs, pin=pin, disc=disc, temperature_C=temperature_C)
+        table = abstract_table(runs, **filters)
     else:
-        table = group_table(runs, pin=pin, disc=disc, temperature_C=temperature_C,
-                            by_speed=by_speed)
+        table = group_table(runs, by_speed=by_speed, **filters)
     if table.empty:
         given = ", ".join(f"{k}={list(v)}" for k, v in filters.items() if v) or "no filter"
         raise ExportError(

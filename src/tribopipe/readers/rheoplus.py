@@ -19,7 +19,7 @@ import re
 from ..errors import ReadError
 from .aliases import name_key
 from .interval import RawInterval, label_value
-from .textio import DataLine, Row, Run, first_row
+from .textio import DataLine, Row, Run
 
 FORMAT = "rheoplus"
 
@@ -99,7 +99,7 @@ def parse_intervals(rows: list[Row | Run], path: str) -> list[RawInterval]:
         elif first.endswith(":") and key == "numberofdatapoints":
             declared = _whole(label_value(cells), "the number of data points", path, line)
         elif key in POINT_HEADERS:
-            raw, i = _read_table(rows, i, path)
+            raw, i = _read_table(rows, i, item, path)
             # a Rheoplus series is one test; its name is the sample's
             raw.sample = raw.test = sample
             raw.extra = dict(meta)
@@ -130,8 +130,12 @@ def parse_intervals(rows: list[Row | Run], path: str) -> list[RawInterval]:
     return out
 
 
-def _read_table(rows: list[Row | Run], start: int, path: str) -> tuple[RawInterval, int]:
-    header_line, header = first_row(rows[start])  # labelled "Meas. Pts.": starts no run
+def _read_table(
+    rows: list[Row | Run], start: int, header_row: Row, path: str
+) -> tuple[RawInterval, int]:
+    """Read one ``Meas. Pts.`` header (``header_row``, ``rows[start]``), its unit row and
+    its rows."""
+    header_line, header = header_row
     names = list(header)
     while names and not names[-1]:
         names.pop()

@@ -11,7 +11,6 @@ import zipfile
 
 from ..errors import ReadError
 from .rheocompass import looks_like
-from .textio import Row, Run
 
 XLSX_MAGIC = b"PK\x03\x04"
 
@@ -24,10 +23,9 @@ def _cell_text(value: object) -> str:
     return str(value).strip()
 
 
-def workbook_rows(path: str) -> list[Row | Run]:
+def workbook_rows(path: str) -> list[tuple[int, list[str]]]:
     """The rows of the first sheet whose first column holds a RheoCompass label, as
-    ``(1-based row number, text cells)``: the rows of a text export (every line a row,
-    no runs)."""
+    ``(1-based row number, text cells)``."""
     import openpyxl
 
     try:
@@ -42,12 +40,12 @@ def workbook_rows(path: str) -> list[Row | Run]:
         names = []
         for sheet in workbook.worksheets:
             names.append(sheet.title)
-            rows: list[Row] = [
+            rows = [
                 (k, [_cell_text(v) for v in values])
                 for k, values in enumerate(sheet.iter_rows(values_only=True), start=1)
             ]
             if looks_like(rows):
-                return [*rows]  # typed as the rows and runs the parser reads
+                return rows
     except Exception as exc:  # noqa: BLE001 - a damaged sheet (bad CRC, bad XML) read lazily
         raise ReadError(
             f"not a readable Excel workbook ({type(exc).__name__}: "

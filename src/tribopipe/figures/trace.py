@@ -285,8 +285,8 @@ class TraceFigure:
             if marks.window_at_end:
                 self.end_line.set_xdata([window[1], window[1]])
                 shown[self.end_line] = True
-        if is_finite(marks.mu_k):
-            level = float(marks.mu_k)  # type: ignore[arg-type]
+        level = finite_or_none(marks.mu_k)
+        if level is not None:
             self.mu_k.set_data(list(window or data_x), [level, level])
             self.mu_k.set_linestyle("-" if window else "--")
             shown[self.mu_k] = True
@@ -300,8 +300,8 @@ class TraceFigure:
             if marks.window_at_end:
                 self.end_note.xy = ((window or data_x)[1], level)
                 shown[self.end_note] = True
-        if is_finite(marks.mu_s) and is_finite(marks.mu_s_distance_mm):
-            x, y = float(marks.mu_s_distance_mm), float(marks.mu_s)  # type: ignore[arg-type]
+        x, y = finite_or_none(marks.mu_s_distance_mm), finite_or_none(marks.mu_s)
+        if x is not None and y is not None:
             self.mu_s.set_data([x], [y])
             self.mu_s.set_markerfacecolor("white" if marks.peak_at_limit else "tab:red")
             shown[self.mu_s] = True

@@ -120,7 +120,7 @@ def validate_runs(runs: pd.DataFrame, *, require_lab: bool = False) -> list[RowP
     requires (id, source, pin, disc and a finite μ_K in every row, μ_S in reduced rows).
     An empty list means the rows pass. ``runs`` is not modified."""
     problems: list[RowProblem] = []
-    rows = runs.loc[:, list(RUN_COLUMNS)].to_dict(orient="records", into=dict)
+    rows = runs.loc[:, list(RUN_COLUMNS)].to_dict(orient="records")
     seen: dict[str, int] = {}
     for i, row in enumerate(rows, 1):
         mid = row["measurement_id"] if isinstance(row["measurement_id"], str) else None

@@ -284,8 +284,7 @@ def content_sha256(frame: pd.DataFrame, version: int = SCHEMA_VERSION) -> str:
             values = column.to_numpy(dtype="float64")
             data = np.where(np.isnan(values), np.nan, values).astype("<f8").tobytes()
         elif kind == "int":
-            # pandas-stubs has no Series overload for "Int64"; pandas takes a Series
-            ints = pd.array(column, dtype="Int64")  # type: ignore[call-overload]
+            ints = pd.array(column, dtype="Int64")
             mask = ints.isna()
             data = (np.asarray(mask, dtype="u1").tobytes()
                     + ints.fillna(0).to_numpy(dtype="int64").astype("<i8").tobytes())

@@ -34,6 +34,7 @@ test: install
 
 lint: install
 	$(VENV)/bin/ruff check src tests bench scripts
+	$(VENV)/bin/mypy
 
 bench: install
 	$(PY) bench/bench_campaign.py

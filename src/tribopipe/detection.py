@@ -15,6 +15,7 @@ from statistics import NormalDist
 from typing import Any
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 from . import uncertainty
 from .config import ReductionParams
@@ -43,7 +44,7 @@ def noise_std(mu: Any) -> float:
     return float(1.4826 * mad / math.sqrt(2))
 
 
-def median_smooth(values: Any, window: int) -> np.ndarray:
+def median_smooth(values: ArrayLike, window: int) -> NDArray[np.float64]:
     """Running median over ``window`` samples (made odd), edges by nearest value; a new
     array of the same shape (n,). NaN-free input."""
     v = np.asarray(values, dtype=float)
@@ -53,7 +54,7 @@ def median_smooth(values: Any, window: int) -> np.ndarray:
     return running_median(v, w)
 
 
-def peak_smooth(values: Any, window: int) -> np.ndarray:
+def peak_smooth(values: ArrayLike, window: int) -> NDArray[np.float64]:
     """Quadratic Savitzky–Golay smoothing over ``window`` samples (made odd, ≥ 5); keeps
     rounded peaks while averaging noise. A new array of shape (n,). NaN-free input."""
     v = np.asarray(values, dtype=float)
@@ -63,7 +64,7 @@ def peak_smooth(values: Any, window: int) -> np.ndarray:
     return savgol(v, w, 2)
 
 
-def static_peak_curve(values: Any, window: int) -> np.ndarray:
+def static_peak_curve(values: ArrayLike, window: int) -> NDArray[np.float64]:
     """The curve whose maximum is read as μ_S (shape (n,), NaN-free input): a quadratic
     Savitzky–Golay smoothing over ``window`` samples, capped by the running maximum (same
     window) of a short moving average (a fifth of the window, at least 3 samples). The
@@ -80,8 +81,8 @@ def static_peak_curve(values: Any, window: int) -> np.ndarray:
 
 
 def cliff_peak_curve(
-    values: Any, smooth_curve: Any, window: int, sigma: float, cliff_sigma: float
-) -> np.ndarray:
+    values: ArrayLike, smooth_curve: ArrayLike, window: int, sigma: float, cliff_sigma: float
+) -> NDArray[np.float64]:
     """``smooth_curve`` (shape (n,)) with the value at each sudden slip replaced by the
     one-sided fit of the rising flank when that is higher.
 
@@ -174,8 +175,8 @@ MAX_PLATEAU_BLOCKS = 1_000_000
 
 
 def _block_means(
-    s: np.ndarray, m: np.ndarray, start_mm: float, block: float
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    s: NDArray[np.float64], m: NDArray[np.float64], start_mm: float, block: float
+) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.int_]]:
     """Means, centres [mm] and sample counts of the blocks of ``block`` mm from
     ``start_mm`` (the last block runs to the end); blocks with fewer than 3 samples are
     left out."""
@@ -196,7 +197,7 @@ def _block_means(
     return means[good], (0.5 * (edges[:-1] + edges[1:]))[good], counts[good]
 
 
-def _block_scatter(means: np.ndarray) -> float:
+def _block_scatter(means: NDArray[np.float64]) -> float:
     """Block-to-block scatter [COF] from second differences of the block means: a
     stationary scatter (noise, stick-slip) raises them, a smooth transient (a peak, a
     run-in, a creep) hardly; the median is deaf to a few blocks across a sudden slip."""
@@ -230,7 +231,7 @@ def find_plateau_start(
     if means.size < 2:
         return None, params.settle_tol
 
-    def allowance(means: np.ndarray, counts: np.ndarray) -> float:
+    def allowance(means: NDArray[np.float64], counts: NDArray[np.int_]) -> float:
         # every block is compared: the noise allowance grows with their number so that a
         # settled plateau of pure noise fails the test with probability settle_alpha only;
         # the scatter is read where a plateau would be, the later half of the blocks
@@ -263,7 +264,7 @@ def find_plateau_start(
 
 def _settled_within(
     start_mm: float, block_mm: float, level: float,
-    base: tuple[float, np.ndarray, np.ndarray, float],
+    base: tuple[float, NDArray[np.float64], NDArray[np.float64], float],
 ) -> float:
     """The plateau's start [mm] refined inside its first block of ``block_mm``: a
     lengthened block averages what lies inside it, so a loading ramp that rises through
@@ -317,7 +318,7 @@ class _Detection:
     sigma_peak: float
     peak_reading_u: float
     mu_k: float
-    window: np.ndarray
+    window: NDArray[np.bool_]
     settled: bool
     tol: float
     plateau_std: float
@@ -325,7 +326,7 @@ class _Detection:
     drift_se: float
     sigma: float
     stick_slip: StickSlipTest
-    mu_med: np.ndarray
+    mu_med: NDArray[np.float64]
 
 
 def stick_slip_test(s_mm: Any, mu: Any, params: ReductionParams) -> StickSlipTest:
@@ -350,7 +351,7 @@ def stick_slip_test(s_mm: Any, mu: Any, params: ReductionParams) -> StickSlipTes
     )
 
 
-def _detrended(values: np.ndarray) -> np.ndarray:
+def _detrended(values: NDArray[np.float64]) -> NDArray[np.float64]:
     """``values`` (shape (n,)) minus their least-squares quadratic trend."""
     if values.size < 4:
         return values - values.mean()
@@ -358,7 +359,9 @@ def _detrended(values: np.ndarray) -> np.ndarray:
     return values - np.polyval(np.polyfit(x, values, 2), x)
 
 
-def _oscillation_block_mm(s_mm: np.ndarray, mu: np.ndarray, params: ReductionParams) -> float:
+def _oscillation_block_mm(
+    s_mm: NDArray[np.float64], mu: NDArray[np.float64], params: ReductionParams
+) -> float:
     """Block length [mm] of the settling test for the trace after the run-in (shape
     (n,)): whole cycles of a stick-slip oscillation found in its second half with at least
     twice ``stick_slip_min_cycles`` cycles (so that what is left of a transient, which
@@ -377,8 +380,8 @@ def _oscillation_block_mm(s_mm: np.ndarray, mu: np.ndarray, params: ReductionPar
 
 
 def _find_plateau(
-    s_v: np.ndarray, mu_v: np.ndarray, step_mm: float, params: ReductionParams
-) -> tuple[np.ndarray, bool, float]:
+    s_v: NDArray[np.float64], mu_v: NDArray[np.float64], step_mm: float, params: ReductionParams
+) -> tuple[NDArray[np.bool_], bool, float]:
     """Step 3 on the valid samples (distance [mm], μ; shape (n,)): the μ_K window (a
     boolean mask), whether it settled, and the settling tolerance [COF]. Not settled: the
     last ``plateau_min_mm`` of the trace (or its second half when that is all there is)."""
@@ -406,7 +409,9 @@ def _find_plateau(
     return window, settled, tol
 
 
-def _plateau_noise(mu_w: np.ndarray, sigma: float, oscillating: bool) -> tuple[float, float]:
+def _plateau_noise(
+    mu_w: NDArray[np.float64], sigma: float, oscillating: bool
+) -> tuple[float, float]:
     """The per-sample noise of the plateau's μ (shape (n,)) [COF]: its scatter about a
     quadratic trend, and that times √τ_int (its autocorrelation counted, for averages).
     Where the plateau oscillates its scatter is stick-slip, not noise: both are then
@@ -419,9 +424,9 @@ def _plateau_noise(mu_w: np.ndarray, sigma: float, oscillating: bool) -> tuple[f
 
 
 def _read_peak(
-    mu_v: np.ndarray, mu_med: np.ndarray, curve: np.ndarray, smooth: np.ndarray,
-    searched: np.ndarray, *, peak_n: int, cliff_n: int, noise_sd: float, sample_sd: float,
-    params: ReductionParams,
+    mu_v: NDArray[np.float64], mu_med: NDArray[np.float64], curve: NDArray[np.float64],
+    smooth: NDArray[np.float64], searched: NDArray[np.intp], *, peak_n: int, cliff_n: int,
+    noise_sd: float, sample_sd: float, params: ReductionParams,
 ) -> tuple[int, float, float]:
     """Step 4's reading of the static peak among the ``searched`` samples: the sample,
     the value [COF] and its standard uncertainty from the noise [COF]. The maximum of the

@@ -80,7 +80,9 @@ def read_regular(path: str | os.PathLike[str], *, max_bytes: int,
     return data
 
 
-def write_text_atomic(target: str | Path, text: str, *, newline: str | None = None) -> Path:
+def write_text_atomic(
+    target: str | os.PathLike[str], text: str, *, newline: str | None = None
+) -> Path:
     """Write ``text`` (UTF-8) to ``target`` via a temporary file and an atomic rename,
     creating the folder if needed; ``newline`` as for :func:`open`. Returns the path.
 

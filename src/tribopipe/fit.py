@@ -27,6 +27,7 @@ from .stats import t975
 if TYPE_CHECKING:
     import numpy as np
     import pandas as pd
+    from numpy.typing import ArrayLike, NDArray
 
 FIT_COLUMNS: tuple[str, ...] = (
     "pin",
@@ -49,14 +50,14 @@ FIT_COLUMNS: tuple[str, ...] = (
 MIN_POINTS = 3
 
 
-def power_law(pressure_kPa: np.ndarray | float, k: float, exponent: float) -> Any:
+def power_law(pressure_kPa: ArrayLike, k: float, exponent: float) -> NDArray[np.float64]:
     """μ = k·p^exponent for contact pressure(s) ``pressure_kPa`` [kPa] (same shape out)."""
     import numpy as np
 
     return k * np.power(np.asarray(pressure_kPa, dtype=float), exponent)
 
 
-def fit_one(pressure_kPa: np.ndarray, mu: np.ndarray) -> dict[str, float]:
+def fit_one(pressure_kPa: ArrayLike, mu: ArrayLike) -> dict[str, float]:
     """Fit μ = k·p^exponent to paired arrays (shape ``(N,)``, p in kPa, μ > 0).
 
     Returns ``k, k_ci95_low, k_ci95_high, exponent, exponent_ci95_low,

@@ -23,6 +23,7 @@ import math
 from typing import Any
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 #: The founding paper sets the disc to 0.005 rpm and reports 0.007 mm/s of sliding.
 #: v = ω·R  ⇒  R = 0.007 mm/s / (0.005 · 2π / 60 s⁻¹) = 13.37 mm.
@@ -33,18 +34,18 @@ FOUNDING_FRICTION_RADIUS_MM = round(
 )
 
 
-def contact_pressure_kPa(normal_force_N: Any, n_pins: int, pin_radius_mm: float) -> Any:
+def contact_pressure_kPa(normal_force_N: ArrayLike, n_pins: int, pin_radius_mm: float) -> Any:
     """Contact pressure per pin [kPa] of a total normal force [N] shared by ``n_pins`` pins
     of radius ``pin_radius_mm`` [mm]: ``(F/n) / (π r²)`` N/mm² × 1000. Scalar or array."""
     return np.asarray(normal_force_N, dtype=float) / n_pins / (math.pi * pin_radius_mm**2) * 1e3
 
 
-def friction_force_N(torque_Nm: Any, friction_radius_mm: float) -> Any:
+def friction_force_N(torque_Nm: ArrayLike, friction_radius_mm: float) -> Any:
     """Friction force [N] from a torque [N·m] at the friction radius [mm]: ``M / R``."""
     return np.asarray(torque_Nm, dtype=float) / (friction_radius_mm * 1e-3)
 
 
-def coefficient_of_friction(friction_force_N: Any, normal_force_N: Any) -> Any:
+def coefficient_of_friction(friction_force_N: ArrayLike, normal_force_N: ArrayLike) -> Any:
     """COF μ = F_R / F_N (both in N; arrays of the same shape). NaN where F_N is 0."""
     f_r = np.asarray(friction_force_N, dtype=float)
     f_n = np.asarray(normal_force_N, dtype=float)
@@ -53,7 +54,7 @@ def coefficient_of_friction(friction_force_N: Any, normal_force_N: Any) -> Any:
     return np.where(f_n != 0, mu, np.nan)
 
 
-def rpm_to_rad_s(speed_rpm: Any) -> Any:
+def rpm_to_rad_s(speed_rpm: ArrayLike) -> Any:
     """Rotational speed: revolutions per minute → rad/s (× 2π/60)."""
     return np.asarray(speed_rpm, dtype=float) * (2 * math.pi / 60)
 
@@ -64,7 +65,7 @@ def sliding_speed_mm_s(speed_rpm: float, friction_radius_mm: float) -> float:
     return float(rpm_to_rad_s(speed_rpm)) * friction_radius_mm
 
 
-def distance_from_angle_mm(angle_rad: Any, friction_radius_mm: float) -> np.ndarray:
+def distance_from_angle_mm(angle_rad: ArrayLike, friction_radius_mm: float) -> NDArray[np.float64]:
     """Sliding distance [mm] from a deflection angle [rad] (shape (n,)): ``(φ − φ₀)·R``,
     counted along the direction of travel (so it grows whichever way the disc turns)."""
     phi = np.asarray(angle_rad, dtype=float)
@@ -74,8 +75,8 @@ def distance_from_angle_mm(angle_rad: Any, friction_radius_mm: float) -> np.ndar
 
 
 def distance_from_speed_mm(
-    time_s: Any, speed_rad_s: Any, friction_radius_mm: float
-) -> np.ndarray:
+    time_s: ArrayLike, speed_rad_s: ArrayLike, friction_radius_mm: float
+) -> NDArray[np.float64]:
     """Sliding distance [mm] by integrating the rotational speed [rad/s] over time [s]
     (trapezoids, shape (n,), 0 at the first sample) times the friction radius [mm]."""
     t = np.asarray(time_s, dtype=float)
@@ -87,21 +88,21 @@ def distance_from_speed_mm(
 
 
 def distance_from_nominal_mm(
-    time_s: Any, speed_rpm: float, friction_radius_mm: float
-) -> np.ndarray:
+    time_s: ArrayLike, speed_rpm: float, friction_radius_mm: float
+) -> NDArray[np.float64]:
     """Sliding distance [mm] assuming the nominal speed [rpm] from the first sample on."""
     t = np.asarray(time_s, dtype=float)
     return (t - t[0]) * sliding_speed_mm_s(speed_rpm, friction_radius_mm)
 
 
 def sliding_distance_mm(
-    time_s: Any,
+    time_s: ArrayLike,
     friction_radius_mm: float,
     *,
-    angle_rad: Any = None,
-    speed_rad_s: Any = None,
+    angle_rad: ArrayLike | None = None,
+    speed_rad_s: ArrayLike | None = None,
     nominal_speed_rpm: float | None = None,
-) -> tuple[np.ndarray, str]:
+) -> tuple[NDArray[np.float64], str]:
     """Sliding distance [mm] (shape (n,)) and its source: ``"angle"`` when a finite angle
     [rad] is given, else ``"speed"`` (integrated rad/s), else ``"nominal"`` (rpm × time).
     Missing angle/speed values are interpolated over time."""

@@ -498,7 +498,8 @@ def _overlay_groups(inp: ReportInputs) -> dict[str, tuple[dict[str, Any], list[s
     if inp.map_report or not len(inp.groups):
         return out
     traces = inp.trace_paths or {}
-    for g in inp.groups[inp.groups["range_exceeds_r"].astype(bool)].to_dict(orient="records"):
+    exceeding = inp.groups[inp.groups["range_exceeds_r"].astype(bool)]
+    for g in exceeding.to_dict(orient="records", into=dict):
         ids = [i for i in str(g.get("run_ids") or "").split(";") if i in traces]
         if ids:
             out[group_anchor(g)] = (g, ids)

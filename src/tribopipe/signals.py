@@ -14,19 +14,20 @@ from __future__ import annotations
 
 import functools
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 from numpy.lib.stride_tricks import sliding_window_view
+from numpy.typing import ArrayLike, NDArray
 
 
-def _padded(v: np.ndarray, before: int, after: int) -> np.ndarray:
+def _padded(v: NDArray[np.float64], before: int, after: int) -> NDArray[np.float64]:
     """``v`` extended by its first value ``before`` times and its last ``after`` times."""
     return np.concatenate([np.full(before, v[0]), v, np.full(after, v[-1])])
 
 
-def running_median(values: Any, window: int) -> np.ndarray:
+def running_median(values: ArrayLike, window: int) -> NDArray[np.float64]:
     """Running median over ``window`` samples (odd; centred), edges by the nearest value
     (SciPy ``median_filter(..., mode="nearest")``). Shape (n,)."""
     v = np.asarray(values, dtype=float)
@@ -37,7 +38,7 @@ def running_median(values: Any, window: int) -> np.ndarray:
     return window_medians(_padded(v, half, w - 1 - half), w)
 
 
-def window_medians(values: Any, window: int) -> np.ndarray:
+def window_medians(values: ArrayLike, window: int) -> NDArray[np.float64]:
     """Median of every run of ``window`` consecutive samples of ``values`` (shape
     (n - window + 1,)): the same numbers as ``np.median`` over a sliding window view, by
     pandas' rolling median (a sorted window updated sample by sample, O(n log window)
@@ -51,7 +52,7 @@ def window_medians(values: Any, window: int) -> np.ndarray:
     return pd.Series(v).rolling(w).median().to_numpy()[w - 1 :]
 
 
-def running_mean(values: Any, window: int) -> np.ndarray:
+def running_mean(values: ArrayLike, window: int) -> NDArray[np.float64]:
     """Running mean over ``window`` samples (centred), edges by the nearest value (SciPy
     ``uniform_filter1d(..., mode="nearest")``). Shape (n,)."""
     v = np.asarray(values, dtype=float)
@@ -64,7 +65,7 @@ def running_mean(values: Any, window: int) -> np.ndarray:
     return (sums[w:] - sums[:-w]) / w
 
 
-def running_max(values: Any, window: int, *, trailing: bool = False) -> np.ndarray:
+def running_max(values: ArrayLike, window: int, *, trailing: bool = False) -> NDArray[np.float64]:
     """Running maximum over ``window`` samples, edges by the nearest value. Centred
     (SciPy ``maximum_filter1d(..., mode="nearest")``), or ``trailing``: the highest of
     samples ``k-window+1 … k``. Shape (n,)."""
@@ -77,7 +78,7 @@ def running_max(values: Any, window: int, *, trailing: bool = False) -> np.ndarr
 
 
 @functools.lru_cache(maxsize=64)
-def _savgol_matrix(window: int, degree: int) -> np.ndarray:
+def _savgol_matrix(window: int, degree: int) -> NDArray[np.float64]:
     """(window, window) matrix whose row j gives the value at sample j of the
     least-squares polynomial of ``degree`` through ``window`` equally spaced samples."""
     x = np.arange(window, dtype=float) - (window - 1) / 2
@@ -87,7 +88,7 @@ def _savgol_matrix(window: int, degree: int) -> np.ndarray:
     return matrix
 
 
-def savgol(values: Any, window: int, degree: int = 2) -> np.ndarray:
+def savgol(values: ArrayLike, window: int, degree: int = 2) -> NDArray[np.float64]:
     """Savitzky–Golay smoothing: the value at each sample of the least-squares polynomial
     of ``degree`` through the ``window`` samples (odd) centred on it; the first and last
     ``window // 2`` samples from the polynomial through the first and last ``window``
@@ -110,7 +111,7 @@ def savgol(values: Any, window: int, degree: int = 2) -> np.ndarray:
 
 
 @functools.lru_cache(maxsize=512)
-def end_point_weights(window: int, degree: int = 2) -> np.ndarray:
+def end_point_weights(window: int, degree: int = 2) -> NDArray[np.float64]:
     """Weights (shape (window,), read-only) that give the value at the last sample of the
     least-squares polynomial of ``degree`` through ``window`` equally spaced samples."""
     x = np.linspace(0.0, 1.0, int(window))
@@ -120,7 +121,9 @@ def end_point_weights(window: int, degree: int = 2) -> np.ndarray:
     return weights
 
 
-def one_sided_fits(values: Any, window: int) -> tuple[np.ndarray, np.ndarray]:
+def one_sided_fits(
+    values: ArrayLike, window: int
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """Quadratic least-squares fits over ``window`` samples on one side only (shape (n,)
     each, -inf where the window does not fit): ``left[k]`` is the fit over samples
     ``k-window+1 … k`` read at ``k``, ``right[k]`` the fit over ``k … k+window-1`` read at
@@ -136,7 +139,7 @@ def one_sided_fits(values: Any, window: int) -> tuple[np.ndarray, np.ndarray]:
     return left, right
 
 
-def tukey(n: int, alpha: float = 0.2) -> np.ndarray:
+def tukey(n: int, alpha: float = 0.2) -> NDArray[np.float64]:
     """Tukey (split cosine bell) taper of ``n`` points: flat, with cosine edges over a
     fraction ``alpha`` of the series (``alpha/2`` at each end)."""
     w = np.ones(n)
@@ -148,7 +151,7 @@ def tukey(n: int, alpha: float = 0.2) -> np.ndarray:
     return w
 
 
-def taper_bin_correlation_sq(taper: Any, lags: int = 2) -> tuple[float, ...]:
+def taper_bin_correlation_sq(taper: ArrayLike, lags: int = 2) -> tuple[float, ...]:
     """Squared correlations of periodogram bins ``lags`` apart for white noise tapered
     by ``taper`` (shape (n,)): |Σ w² e^{-2πikt/n}|² / (Σ w²)² for k = 1 … lags."""
     w2 = np.asarray(taper, dtype=float) ** 2
@@ -184,7 +187,7 @@ class Line:
         return line_threshold(self.candidates, false_alarm, correlation_sq=self.correlation_sq)
 
 
-def power_law_trend(power: Any) -> np.ndarray:
+def power_law_trend(power: ArrayLike) -> NDArray[np.float64]:
     """The power law c·j^β fitted to a periodogram (shape (m,), bin 0 the mean's, left
     out) by least squares of ln I_j over ln j, over the bins with power, as an array of
     the same shape (1 at bin 0; all ones when fewer than 8 bins have power). The
@@ -202,7 +205,7 @@ def power_law_trend(power: Any) -> np.ndarray:
 
 
 def periodic_line(
-    values: Any, *, min_cycles: float, max_period: float, neighbours: int = 48,
+    values: ArrayLike, *, min_cycles: float, max_period: float, neighbours: int = 48,
     smooth_bins: int = 3, detrend_degree: int = 2, taper_fraction: float = 0.2,
 ) -> Line:
     """The strongest periodic line in ``values`` (shape (n,), evenly sampled) against the
@@ -277,7 +280,7 @@ def periodic_line(
     return Line(float(ratio[k]), float(period[fundamental]), excess, count, rho)
 
 
-def gamma_q(a: float, x: Any) -> Any:
+def gamma_q(a: float, x: ArrayLike) -> float | NDArray[np.float64]:
     """Regularised upper incomplete gamma function Q(a, x) = Γ(a, x)/Γ(a) (a > 0): the
     survival function of a Gamma(a, 1) variate at x, for a number or an array of x (a
     float, or an array of x's shape). Series below a + 1, Lentz's continued fraction
@@ -294,12 +297,12 @@ def gamma_q(a: float, x: Any) -> Any:
     return float(out) if out.ndim == 0 else out
 
 
-def _gamma_log_front(a: float, x: np.ndarray) -> np.ndarray:
+def _gamma_log_front(a: float, x: NDArray[np.float64]) -> NDArray[np.float64]:
     """ln(x^a e^-x / Γ(a)), the factor both expansions of Q(a, x) share (x > 0)."""
     return -x + a * np.log(x) - math.lgamma(a)
 
 
-def _gamma_q_series(a: float, x: np.ndarray) -> np.ndarray:
+def _gamma_q_series(a: float, x: NDArray[np.float64]) -> NDArray[np.float64]:
     """Q(a, x) = 1 − P(a, x) from the series of P, for 0 < x < a + 1."""
     term = np.full(x.shape, 1.0 / a)
     total = term.copy()
@@ -313,7 +316,7 @@ def _gamma_q_series(a: float, x: np.ndarray) -> np.ndarray:
     return np.maximum(0.0, 1.0 - total * np.exp(_gamma_log_front(a, x)))
 
 
-def _gamma_q_fraction(a: float, x: np.ndarray) -> np.ndarray:
+def _gamma_q_fraction(a: float, x: NDArray[np.float64]) -> NDArray[np.float64]:
     """Q(a, x) from its continued fraction (modified Lentz), for x ≥ a + 1."""
     tiny = 1e-300
     b = x + 1.0 - a
@@ -387,7 +390,9 @@ def _threshold(log10_target: float, correlation_sq: tuple[float, ...], smooth_bi
                            0.0, 500.0)
 
 
-def decreasing_root(g: Any, lo: float, hi: float, *, rel_tol: float = 1e-12) -> float:
+def decreasing_root(
+    g: Callable[[float], float], lo: float, hi: float, *, rel_tol: float = 1e-12
+) -> float:
     """The x in [lo, hi] where the decreasing function ``g`` crosses zero (g(lo) > 0 ≥
     g(hi) assumed; the bound itself when not), to ``rel_tol`` of x: regula falsi with the
     Illinois halving of a stuck end (a few evaluations for a smooth g), falling back to a
@@ -423,8 +428,8 @@ def decreasing_root(g: Any, lo: float, hi: float, *, rel_tol: float = 1e-12) -> 
 
 
 def quadratic_peak(
-    values: Any, k: int, lo: int, hi: int, *, first_half_width: int, noise_sd: float,
-    sample_sd: float, gamma: float = 2.0, breaks: Any = None,
+    values: ArrayLike, k: int, lo: int, hi: int, *, first_half_width: int, noise_sd: float,
+    sample_sd: float, gamma: float = 2.0, breaks: ArrayLike | None = None,
 ) -> tuple[float, float, int]:
     """Read a rounded maximum near sample ``k`` of ``values`` (shape (n,)) by fitting
     quadratics over windows that double in width, keeping the widest one the data allow
@@ -487,7 +492,7 @@ def quadratic_peak(
 
 
 def flank_peak(
-    values: Any, k: int, lo: int, *, first_window: int, noise_sd: float, sample_sd: float,
+    values: ArrayLike, k: int, lo: int, *, first_window: int, noise_sd: float, sample_sd: float,
     gamma: float = 2.0,
 ) -> tuple[float, int]:
     """Read the top of a rising flank that ends in a sudden slip at sample ``k`` of

@@ -211,7 +211,8 @@ def group_statistics(runs: pd.DataFrame, *, by_speed: bool = False) -> pd.DataFr
             key = key if isinstance(key, tuple) else (key,)
             clusters = _pressure_clusters([float(p) for p in data["pressure_kPa"][positions]])
             for c in sorted(set(clusters)):
-                members = positions[[i for i, k in enumerate(clusters) if k == c]]
+                # .indices holds integer arrays (typed as array, Index or list)
+                members = np.asarray(positions)[[i for i, k in enumerate(clusters) if k == c]]
                 rows.append(_group_row(dict(zip(key_cols, key, strict=True)), members, data))
     if not rows:
         return pd.DataFrame({c: pd.Series(dtype=_dtype(c)) for c in columns})

@@ -16,9 +16,11 @@ import functools
 import math
 import re
 import unicodedata
+from collections.abc import Mapping
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 from .errors import ReadError
 
@@ -32,7 +34,7 @@ class UnitSpec:
     suffix: str
     offset: float = 0.0
 
-    def to_si(self, values: np.ndarray) -> np.ndarray:
+    def to_si(self, values: ArrayLike) -> NDArray[np.float64]:
         """Convert an array of values in this unit to SI (a new float array)."""
         out = np.asarray(values, dtype=float) * self.factor
         if self.offset:
@@ -43,7 +45,7 @@ class UnitSpec:
 _REV_PER_MIN = 2 * math.pi / 60  # one revolution per minute in rad/s
 
 #: normalised unit (see :func:`normalize_unit`) → (factor, SI suffix[, offset])
-_GENERIC: dict[str, tuple] = {
+_GENERIC: dict[str, tuple[float, str] | tuple[float, str, float]] = {
     # time
     "s": (1.0, "s"),
     "ms": (1e-3, "s"),
@@ -150,7 +152,8 @@ def parse_unit(text: str, quantity: str | None = None) -> UnitSpec | None:
     ``[1/min]`` and ``[1/s]`` from a rate to revolutions).
     """
     unit = normalize_unit(text)
-    table: dict = _SPEED if quantity == "speed" and unit in _SPEED else _GENERIC
+    table: Mapping[str, tuple[float, str] | tuple[float, str, float]] = (
+        _SPEED if quantity == "speed" and unit in _SPEED else _GENERIC)
     entry = table.get(unit)
     if entry is None:
         return None

@@ -38,7 +38,7 @@ import functools
 import io
 import math
 import sys
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -195,7 +195,7 @@ def read_manifest(path: str | Path) -> Manifest:
 
 
 @contextlib.contextmanager
-def _no_cell_size_limit(size: int):  # noqa: ANN202 - a context manager
+def _no_cell_size_limit(size: int) -> Iterator[None]:
     """Let the csv module read cells up to ``size`` characters (its default stops at
     131,072 with an error for the whole file); a cell that long is then refused as a
     value, for its row only."""

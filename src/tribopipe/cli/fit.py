@@ -10,7 +10,7 @@ import click
 from ._common import friendly_errors, map_option, say
 
 
-def _fmt(value: float, spec: str) -> str:
+def _fmt(value: float | None, spec: str) -> str:
     """A number for the table, '-' when missing."""
     return "-" if value is None or math.isnan(value) else format(value, spec)
 
@@ -56,12 +56,12 @@ def fit_cmd(
         f"{'pin':<16} {'disc':<22} {'T_C':>5} {'k':>7} {'k 95% CI':>17} "
         f"{'n-1':>7} {'n-1 95% CI':>17} {'R2':>6} {'N':>3}"
     )
-    for r in fits.itertuples(index=False):
-        k_ci = f"[{_fmt(r.k_ci95_low, '.3f')}, {_fmt(r.k_ci95_high, '.3f')}]"
-        e_ci = f"[{_fmt(r.exponent_ci95_low, '.3f')}, {_fmt(r.exponent_ci95_high, '.3f')}]"
+    for r in fits.to_dict(orient="records", into=dict):
+        k_ci = f"[{_fmt(r['k_ci95_low'], '.3f')}, {_fmt(r['k_ci95_high'], '.3f')}]"
+        e_ci = f"[{_fmt(r['exponent_ci95_low'], '.3f')}, {_fmt(r['exponent_ci95_high'], '.3f')}]"
         click.echo(
-            f"{r.pin[:16]:<16} {r.disc[:22]:<22} {_fmt(r.temperature_C, '5.1f'):>5} "
-            f"{_fmt(r.k, '7.3f'):>7} {k_ci:>17} {_fmt(r.exponent, '7.3f'):>7} {e_ci:>17} "
-            f"{_fmt(r.r_squared, '6.3f'):>6} {r.n_points:>3}"
-            + (f"  {r.note}" if r.note else "")
+            f"{r['pin'][:16]:<16} {r['disc'][:22]:<22} {_fmt(r['temperature_C'], '5.1f'):>5} "
+            f"{_fmt(r['k'], '7.3f'):>7} {k_ci:>17} {_fmt(r['exponent'], '7.3f'):>7} {e_ci:>17} "
+            f"{_fmt(r['r_squared'], '6.3f'):>6} {r['n_points']:>3}"
+            + (f"  {r['note']}" if r['note'] else "")
         )

@@ -58,7 +58,7 @@ class Publisher:
         """This publisher with names stripped; :class:`ExportError` for an empty lab, a
         line break or control character in any name, a malformed email or an unknown
         licence."""
-        values = {}
+        values: dict[str, str | None] = {}
         for name in ("lab", "contact", "email", "title"):
             value = getattr(self, name)
             if value is None:
@@ -71,17 +71,17 @@ class Publisher:
             if len(text) > 300:
                 raise ExportError(f"--{name} is longer than 300 characters")
             values[name] = text or None
-        if not values["lab"]:
+        lab, email = values["lab"], values["email"]
+        if not lab:
             raise ExportError("a package needs the name of the lab that measured it",
                               hint="pass --lab NAME")
-        if values["email"] and not _EMAIL.fullmatch(values["email"]):
-            raise ExportError(f"--email {values['email']!r} is not an email address")
+        if email and not _EMAIL.fullmatch(email):
+            raise ExportError(f"--email {email!r} is not an email address")
         licence = next((k for k in LICENCES if k.casefold() == self.licence.casefold()), None)
         if licence is None:
             raise ExportError(f"unknown licence {self.licence!r}; expected one of "
                               f"{', '.join(LICENCES)}")
-        return Publisher(values["lab"], values["contact"], values["email"], licence,
-                         values["title"])
+        return Publisher(lab, values["contact"], email, licence, values["title"])
 
     @property
     def package_title(self) -> str:

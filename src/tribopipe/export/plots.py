@@ -34,7 +34,7 @@ from ..figures import (  # noqa: F401 - the per-run plot is importable from here
 from ..fit import fit_power_law, power_law
 from ..frictionmap import read_map
 from ..layout import find_trace
-from ..numeric import is_finite
+from ..numeric import finite_or_none, is_finite
 from ..query import pairs
 
 if TYPE_CHECKING:
@@ -66,7 +66,7 @@ def plot_runs(
     image_format("x", fmt)
     written: list[Path] = []
     missing: list[str] = []
-    for row in runs.to_dict(orient="records"):
+    for row in runs.to_dict(orient="records", into=dict):
         mid = str(row["measurement_id"])
         path = find_trace(traces_dir, mid)
         if path is None:
@@ -75,8 +75,15 @@ def plot_runs(
         trace = pd.read_parquet(path)
         title = f"{row.get('source_file') or path.stem}: {row['pin']} on {row['disc']}"
         target = Path(out_dir) / f"{path.stem}.{fmt}"
-        written.append(Path(plot_trace_row(trace, row, target, title=title, fmt=fmt)))
+        written.append(_path(plot_trace_row(trace, row, target, title=title, fmt=fmt)))
     return written, missing
+
+
+def _path(target: Target) -> Path:
+    """The file a plot given a path was written to (a stream has none: TypeError)."""
+    if isinstance(target, str | Path):
+        return Path(target)
+    raise TypeError(f"a plot written to a stream has no path: {target!r}")
 
 
 # ---------------------------------------------------------------------------- per group
@@ -103,16 +110,17 @@ def plot_group_overlay(
     for i, (row, trace) in enumerate(traces):
         colour = colours[i % len(colours)]
         column = "mu_smooth" if "mu_smooth" in trace.columns else "mu"
-        mu_k = row.get("mu_k")
-        repeat = row.get("repeat")
+        mu_k = finite_or_none(row.get("mu_k"))
+        repeat = finite_or_none(row.get("repeat"))
         label = (f"{str(row['measurement_id'])[:8]}"
-                 + ("" if not is_finite(repeat) else f", repeat {int(repeat)}")
-                 + ("" if not is_finite(mu_k) else f": μ_K {float(mu_k):.3f}"))
+                 + ("" if repeat is None else f", repeat {int(repeat)}")
+                 + ("" if mu_k is None else f": μ_K {mu_k:.3f}"))
         ax.plot(trace["sliding_distance_mm"], trace[column], "-", color=colour, lw=0.9,
                 alpha=0.85, label=picture_text(label))
         start, end = row.get("mu_k_window_start_mm"), row.get("mu_k_window_end_mm")
-        if is_finite(mu_k) and is_finite(start) and is_finite(end):
-            ax.plot([float(start), float(end)], [float(mu_k)] * 2, "--", color=colour, lw=1.6)
+        low, high = finite_or_none(start), finite_or_none(end)  # the μ_K window [mm]
+        if mu_k is not None and low is not None and high is not None:
+            ax.plot([low, high], [mu_k] * 2, "--", color=colour, lw=1.6)
     ax.set_xlabel("sliding distance s [mm]")
     ax.set_ylabel(MU_LABEL)
     ax.set_ylim(bottom=0)
@@ -226,7 +234,7 @@ def plot_pairs(
     written = []
     for pin, disc in pairs(runs):
         target = Path(out_dir) / f"pair_{slug(pin)}__{slug(disc)}.{fmt}"
-        written.append(Path(plot_pair(runs, pin, disc, target, fits=fits, fmt=fmt)))
+        written.append(_path(plot_pair(runs, pin, disc, target, fits=fits, fmt=fmt)))
     return written
 
 

@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import math
 import os
-from collections.abc import Sequence
+from collections.abc import Hashable, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -122,7 +122,7 @@ def frictionmap_table(
     included = _select(included, pin, disc, temperature_C)
     keys = _group_keys(included, by_speed=False)
     numbers: list[float] = []
-    next_free: dict[tuple[Any, ...], int] = {}
+    next_free: dict[Hashable, int] = {}
     for key, idx in keys.groupby(list(keys.columns), dropna=False, sort=False).groups.items():
         repeats = included.loc[idx, "repeat"]
         next_free[key] = int(repeats.max()) if repeats.notna().any() else 0
@@ -307,7 +307,7 @@ def render_table(
         raise ExportError(f"unknown table format {fmt!r}; expected one of {', '.join(FORMATS)}")
     if layout not in LAYOUTS:
         raise ExportError(f"unknown table layout {layout!r}; expected one of {', '.join(LAYOUTS)}")
-    filters = {"pin": pin, "disc": disc, "temperature_C": temperature_C}
+    filters: dict[str, Any] = {"pin": pin, "disc": disc, "temperature_C": temperature_C}
     if fmt == "frictionmap":
         if layout != "group" or by_speed:
             raise ExportError(

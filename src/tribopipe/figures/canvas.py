@@ -69,8 +69,9 @@ def save_figure(fig: Figure, target: Target, fmt: str | None, dpi: int = DPI) ->
     fmt = image_format(target, fmt)
     target = prepare_target(target, fmt)
     # a fixed date keeps PDF/SVG output byte-stable for identical input
-    metadata: dict[str, Any] = {"png": {"Software": "tribopipe"}, "svg": {"Date": None},
-                                "pdf": {"CreationDate": None}}[fmt]
+    metadata_by_format: dict[str, dict[str, Any]] = {
+        "png": {"Software": "tribopipe"}, "svg": {"Date": None}, "pdf": {"CreationDate": None}}
+    metadata = metadata_by_format[fmt]
     fig.savefig(target, format=fmt, dpi=dpi, metadata=metadata)
     return target
 

@@ -9,10 +9,11 @@ included, with at most two points per column.
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
     import numpy as np
+    from numpy.typing import ArrayLike, NDArray
 
 
 class Columns:
@@ -21,7 +22,7 @@ class Columns:
     to the nearest edge column, samples without a finite x in a column of their own.
     Computed once per x, used for every line drawn over it (:meth:`thin`)."""
 
-    def __init__(self, x: Any, x_range: tuple[float, float], columns: int) -> None:
+    def __init__(self, x: ArrayLike, x_range: tuple[float, float], columns: int) -> None:
         import numpy as np
 
         self.x = np.asarray(x, dtype=float)
@@ -44,7 +45,7 @@ class Columns:
         self.lengths = np.diff(np.r_[self.starts, n])
         self.index = np.arange(n)
 
-    def thin(self, y: Any) -> tuple[np.ndarray, np.ndarray]:
+    def thin(self, y: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """The samples of the line ``(x, y)`` worth drawing: for every contiguous run of
         samples in one column, the one with the lowest and the one with the highest finite
         ``y`` (once when they are the same sample), in their original order. A run whose
@@ -77,8 +78,8 @@ class Columns:
 
 
 def minmax_decimate(
-    x: Any, y: Any, x_range: tuple[float, float], columns: int
-) -> tuple[np.ndarray, np.ndarray]:
+    x: ArrayLike, y: ArrayLike, x_range: tuple[float, float], columns: int
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """The samples of the line ``(x, y)`` worth drawing on ``columns`` pixel columns over
     ``x_range`` (:class:`Columns`, :meth:`Columns.thin`).
 

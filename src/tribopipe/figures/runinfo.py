@@ -95,7 +95,8 @@ class TraceMarks:
 
     def expanded(self, u: float | None) -> float | None:
         """U = 2u (k = 2) of a finite standard uncertainty, else ``None``."""
-        return 2.0 * float(u) if is_finite(u) else None  # type: ignore[arg-type]
+        finite = finite_or_none(u)
+        return None if finite is None else 2.0 * finite
 
     @property
     def window(self) -> tuple[float, float] | None:

@@ -96,7 +96,8 @@ class TraceFigure:
         self.dpi = dpi
         w, h = self.WIDTH_IN, self.HEIGHT_IN
         fig = Figure(figsize=(w, h), dpi=dpi)
-        FigureCanvasAgg(fig)
+        #: the figure's canvas (a plot draws on it and reads its pixels)
+        self.canvas = FigureCanvasAgg(fig)
         self.figure = fig
         mu_ax = fig.add_axes(_fraction(self.MU_BOX_IN, w, h))
         f_ax = fig.add_axes(_fraction(self.FORCE_BOX_IN, w, h), sharex=mu_ax)
@@ -124,7 +125,8 @@ class TraceFigure:
         # the μ_K window: tab:blue at 12 % over white, opaque (five times cheaper to fill
         # than a transparent span; the grid and the lines are drawn over it), clear of the
         # spines' inner half
-        tint = tuple(1.0 - 0.12 * (1.0 - c) for c in to_rgb(blue))
+        r, g, b = to_rgb(blue)
+        tint = (1.0 - 0.12 * (1.0 - r), 1.0 - 0.12 * (1.0 - g), 1.0 - 0.12 * (1.0 - b))
         self.window = mu_ax.axvspan(0.0, 1.0, *_inside(self.MU_BOX_IN[3]), color=tint,
                                     lw=0, zorder=0.5)
         self.force_window = f_ax.axvspan(0.0, 1.0, *_inside(self.FORCE_BOX_IN[3]),
@@ -133,16 +135,17 @@ class TraceFigure:
         # the grid and the tick marks of a PNG, in pixels (they move with the run's
         # limits); SVG and PDF use matplotlib's own, at the same places
         # (each one path of NaN-separated segments: one draw call)
-        self.grid = fig.add_artist(Line2D([], [], color="#b0b0b0", lw=0.8, alpha=0.3,
-                                          transform=IdentityTransform()))
-        self.ticks = fig.add_artist(Line2D([], [], color="black", lw=0.8,
-                                           transform=IdentityTransform()))
+        self.grid = Line2D([], [], color="#b0b0b0", lw=0.8, alpha=0.3,
+                           transform=IdentityTransform())
+        self.ticks = Line2D([], [], color="black", lw=0.8, transform=IdentityTransform())
+        fig.add_artist(self.grid)
+        fig.add_artist(self.ticks)
         (self.raw,) = mu_ax.plot([], [], color="0.75", lw=0.8)
         (self.smooth,) = mu_ax.plot([], [], color="0.15", lw=1.2)
         (self.mu_k,) = mu_ax.plot([], [], color=blue, lw=2.0)
         # U (k = 2): a band on μ_K over its window, a capped bar on μ_S
-        self.mu_k_band = mu_ax.add_patch(Rectangle((0.0, 0.0), 1.0, 1.0, color=blue,
-                                                   alpha=0.18, lw=0))
+        self.mu_k_band = Rectangle((0.0, 0.0), 1.0, 1.0, color=blue, alpha=0.18, lw=0)
+        mu_ax.add_patch(self.mu_k_band)
         (self.mu_s_bar,) = mu_ax.plot([], [], color=red, lw=1.2, marker="_", ms=7)
         (self.mu_s,) = mu_ax.plot([], [], "o", color=red, ms=7)
         # boundary flags: μ_S on its search limit (hollow marker, dotted line, note); the
@@ -237,8 +240,8 @@ class TraceFigure:
         thin = Columns(s, x_range, self.columns).thin
 
         shown = dict.fromkeys(self._artists, False)
-        for artist in (self.raw, self.grid, self.ticks):
-            shown[artist] = True
+        for line in (self.raw, self.grid, self.ticks):
+            shown[line] = True
         self.raw.set_data(*thin(mu_v))
         if mu_smooth is not None:
             self.smooth.set_data(*thin(mu_smooth))
@@ -279,12 +282,13 @@ class TraceFigure:
                 span.set_x(window[0])
                 span.set_width(window[1] - window[0])
                 shown[span] = True
-            self.window.set_hatch("//" if marks.window_at_end else None)
+            # matplotlib's stub takes str only; None (no hatch, the default) is valid
+            self.window.set_hatch("//" if marks.window_at_end else None)  # type: ignore[arg-type]
             if marks.window_at_end:
                 self.end_line.set_xdata([window[1], window[1]])
                 shown[self.end_line] = True
-        if is_finite(marks.mu_k):
-            level = float(marks.mu_k)  # type: ignore[arg-type]
+        level = finite_or_none(marks.mu_k)
+        if level is not None:
             self.mu_k.set_data(list(window or data_x), [level, level])
             self.mu_k.set_linestyle("-" if window else "--")
             shown[self.mu_k] = True
@@ -298,8 +302,8 @@ class TraceFigure:
             if marks.window_at_end:
                 self.end_note.xy = ((window or data_x)[1], level)
                 shown[self.end_note] = True
-        if is_finite(marks.mu_s) and is_finite(marks.mu_s_distance_mm):
-            x, y = float(marks.mu_s_distance_mm), float(marks.mu_s)  # type: ignore[arg-type]
+        x, y = finite_or_none(marks.mu_s_distance_mm), finite_or_none(marks.mu_s)
+        if x is not None and y is not None:
             self.mu_s.set_data([x], [y])
             self.mu_s.set_markerfacecolor("white" if marks.peak_at_limit else "tab:red")
             shown[self.mu_s] = True
@@ -472,7 +476,7 @@ class TraceFigure:
         drawn on it, the header and tick labels typeset."""
         from PIL import Image as PILImage
 
-        canvas = self.figure.canvas
+        canvas = self.canvas
         background = self._backgrounds.get(self._background_key)
         if background is None:
             for artist in (*self._artists, *self.header):
@@ -508,9 +512,10 @@ class TraceFigure:
                 x, y = text.get_position()
                 colour = tuple(round(255 * c) for c in to_rgb(text.get_color()))
                 self._typesetter.paste(image, text.get_text(), findfont(text.get_fontproperties()),
-                            text.get_fontsize(), "ma", x * width, (1.0 - y) * height, colour)
+                            float(text.get_fontsize()), "ma", x * width, (1.0 - y) * height,
+                            colour)
         label = self.force_ax.yaxis.get_major_ticks()[0].label1
-        path, size = findfont(label.get_fontproperties()), label.get_fontsize()
+        path, size = findfont(label.get_fontproperties()), float(label.get_fontsize())
         for content, x, y, anchor in self._tick_labels:
             self._typesetter.paste(image, content, path, size, anchor, x, y, (0, 0, 0))
 

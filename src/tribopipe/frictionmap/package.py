@@ -25,7 +25,7 @@ import os
 import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, TypeGuard
 
 from ..errors import MapError
 from ..stats import group_statistics
@@ -163,13 +163,12 @@ def check_package(path: str | os.PathLike[str],
         # the other tables are compared with clean runs only: against faulty ones they
         # would repeat the runs' problems, not add any
         return check.result
-    if RUNS_PARQUET in files and files[RUNS_PARQUET] is not None:
-        _check_parquet_copy(check, resources[RUNS_PARQUET], files[RUNS_PARQUET], runs)
-    if GROUPS in files and files[GROUPS] is not None:
-        _check_groups(check, resources[GROUPS], files[GROUPS], runs)
-    if FRICTIONMAP_APP in files and files[FRICTIONMAP_APP] is not None:
-        _check_frictionmap_table(check, resources[FRICTIONMAP_APP], files[FRICTIONMAP_APP],
-                                 runs)
+    if (parquet := files.get(RUNS_PARQUET)) is not None:
+        _check_parquet_copy(check, resources[RUNS_PARQUET], parquet, runs)
+    if (groups := files.get(GROUPS)) is not None:
+        _check_groups(check, resources[GROUPS], groups, runs)
+    if (app_table := files.get(FRICTIONMAP_APP)) is not None:
+        _check_frictionmap_table(check, resources[FRICTIONMAP_APP], app_table, runs)
     if (runs["source"] == SOURCE_PUBLISHED).any() and not _cites_founding_paper(descriptor):
         check.add(DESCRIPTOR, "holds the founding paper's published rows but does not cite "
                   f"it in 'sources' (expected {FOUNDING_PAPER['title']!r})")
@@ -190,7 +189,7 @@ def package_runs(path: str | os.PathLike[str],
 # --------------------------------------------------------------------------- descriptor
 
 
-def _text(value: Any) -> bool:
+def _text(value: Any) -> TypeGuard[str]:
     return isinstance(value, str) and bool(value.strip())
 
 
@@ -446,7 +445,8 @@ def _check_groups(check: _Checker, res: dict[str, Any], data: bytes,
         check.add(shown, "schema: expected the fields pin, disc, normal_force_N, "
                   "temperature_C, mu_k_n and mu_k_mean")
         return
-    computed = {_key(g, keys): g for g in group_statistics(runs).to_dict(orient="records")}
+    computed = {_key(g, keys): g for g in group_statistics(runs).to_dict(orient="records",
+                                                                           into=dict)}
     if len(rows) != len(computed):
         check.add(shown, f"{len(rows)} groups, the runs make {len(computed)}")
     for n, row in enumerate(rows, 1):

@@ -11,7 +11,7 @@ from __future__ import annotations
 import math
 import os
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, TypedDict
 
 from .. import __version__
 from ..errors import MapError, ReadError
@@ -30,8 +30,19 @@ if TYPE_CHECKING:
 PUBLISHED_SLIDING_SPEED_MM_S = FOUNDING_SLIDING_SPEED_MM_S
 #: ``lab`` of the published rows: the founding paper's authors measured them.
 PUBLISHED_LAB = "Berthold et al. (founding paper)"
+
+
+class Paper(TypedDict):
+    """A paper as cited: authors as (family name, given names), title, year, data URL."""
+
+    authors: tuple[tuple[str, str], ...]
+    title: str
+    year: int
+    data: str
+
+
 #: The founding paper, cited wherever its rows are published again.
-FOUNDING_PAPER = {
+FOUNDING_PAPER: Paper = {
     # (family name, given names as published)
     "authors": (("Berthold", "R."), ("Burgner-Kahrs", "J."), ("Wangenheim", "M."),
                 ("Kahms", "S.")),

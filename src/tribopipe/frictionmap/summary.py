@@ -65,7 +65,7 @@ def map_summary(path: str | os.PathLike[str], *, runs_listed: bool = False) -> s
     if len(excluded):
         lines.append("")
         lines.append("  excluded runs:")
-        for row in excluded.to_dict(orient="records"):
+        for row in excluded.to_dict(orient="records", into=dict):
             lines.append(f"    {row['measurement_id']}  {_text(row['pin'])} / "
                          f"{_text(row['disc'])}, {row['normal_force_N']:g} N, "
                          f"{_fmt_t(row['temperature_C'])}, repeat {_fmt_repeat(row['repeat'])}"
@@ -76,7 +76,7 @@ def map_summary(path: str | os.PathLike[str], *, runs_listed: bool = False) -> s
                      "nominal F and T, repeat, mu_k, mu_s, flags")
         ordered = runs.sort_values(["source_file", "test", "result", "interval",
                                     "measurement_id"], kind="mergesort", na_position="first")
-        lines += ["    " + run_line(row) for row in ordered.to_dict(orient="records")]
+        lines += ["    " + run_line(row) for row in ordered.to_dict(orient="records", into=dict)]
     return "\n".join(lines)
 
 

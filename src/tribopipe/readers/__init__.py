@@ -163,7 +163,7 @@ def _read(
             cells = arrow_cells(intervals, info, aliases)
             return [build_measurement(interval, info, aliases, c)
                     for interval, c in zip(intervals, cells, strict=True)]
-        except (ReadError, *declines()):
+        except declines(ReadError):
             pass  # read it row by row, which also words any error
     info, intervals = _parse_text(path, decoded, delimiter, decimal, fmt, aliases, plain=False)
     return [build_measurement(interval, info, aliases) for interval in intervals]

@@ -10,12 +10,15 @@ column names, ignoring case, accents, spaces and punctuation, so ``Intervalle Te
 from __future__ import annotations
 
 import functools
+import os
 import re
 import tomllib
 import unicodedata
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from importlib import resources
 from pathlib import Path
+from typing import Any
 
 from ..errors import ConfigError
 from ..measurement import ANGLE, NORMAL_FORCE, SPEED, TEMPERATURE, TIME, TORQUE
@@ -75,7 +78,7 @@ class AliasTable:
             return self.names[key]
         return snake_case(column)
 
-    def extended(self, data: dict, source: str) -> AliasTable:
+    def extended(self, data: Mapping[str, Any], source: str) -> AliasTable:
         """A new table with the aliases of a parsed TOML document added."""
         canonical = dict(self.canonical)
         names = dict(self.names)
@@ -121,7 +124,7 @@ def builtin_aliases() -> AliasTable:
     return AliasTable().extended(data, "tribopipe/data/aliases.toml")
 
 
-def load_aliases(path: str | Path | None = None) -> AliasTable:
+def load_aliases(path: str | os.PathLike[str] | None = None) -> AliasTable:
     """The built-in table extended by a user file.
 
     ``path=None`` uses ``configs/aliases.toml`` in the working directory when it exists.
@@ -147,7 +150,7 @@ def _extend_builtin(text: str, source: str) -> AliasTable:
     return builtin_aliases().extended(tomllib.loads(text), source)
 
 
-def resolve_aliases(aliases: AliasTable | str | Path | None) -> AliasTable:
+def resolve_aliases(aliases: AliasTable | str | os.PathLike[str] | None) -> AliasTable:
     """Accept an :class:`AliasTable`, a path to a user alias file, or ``None``."""
     if isinstance(aliases, AliasTable):
         return aliases

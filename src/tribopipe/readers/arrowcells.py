@@ -19,6 +19,7 @@ from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 
 from .aliases import AliasTable
 from .cells import classify
@@ -57,8 +58,8 @@ def arrow_cells(
     out: list[ArrowCells | None] = [None] * len(intervals)
     groups: dict[tuple[str, int, tuple[str, ...]], list[tuple[int, Run]]] = {}
     for i, raw in enumerate(intervals):
-        runs = raw.rows
-        if not runs or not all(isinstance(run, Run) for run in runs):
+        runs = [item for item in raw.rows if isinstance(item, Run)]
+        if not runs or len(runs) != len(raw.rows):
             continue
         if sum(run.n_lines for run in runs) < MIN_RUN:
             continue
@@ -76,10 +77,11 @@ def arrow_cells(
         for (i, _), part in zip(members, parsed, strict=True):
             pieces.setdefault(i, []).append(part)
         for i, parts in pieces.items():
-            if any(part is None for part in parts):
+            complete = [part for part in parts if part is not None]
+            if len(complete) != len(parts):
                 continue
             try:
-                out[i] = ArrowCells(*_joined(parts), list(kinds), intervals[i], decimal)
+                out[i] = ArrowCells(*_joined(complete), list(kinds), intervals[i], decimal)
             except declines():
                 pass
     return out
@@ -135,7 +137,7 @@ class ArrowCells:
         self.kinds, self.columns, self.decimal = kinds, columns, decimal
         self._missing = {k: int(pc.sum(c).as_py() or 0) for k, c in stars.items()}
 
-    def point_numbers(self, j: int) -> np.ndarray:
+    def point_numbers(self, j: int) -> NDArray[np.int64]:
         import pyarrow as pa
         import pyarrow.compute as pc
 
@@ -152,7 +154,7 @@ class ArrowCells:
         if pa.types.is_string(column.type) and _column_holds(column, b"#"):
             raise NotSimple
 
-    def numbers(self, j: int, name: str, textual: bool) -> np.ndarray | None:
+    def numbers(self, j: int, name: str, textual: bool) -> NDArray[np.float64] | None:
         import pyarrow as pa
         import pyarrow.compute as pc
 
@@ -201,7 +203,7 @@ def _kinds(run: Run, raw: RawInterval, aliases: AliasTable) -> list[str]:
     return kinds
 
 
-def _parse(runs: list[Run], kinds: list[str], decimal: str) -> list[_Parsed | None]:
+def _parse(runs: list[Run], kinds: list[str], decimal: str) -> Sequence[_Parsed | None]:
     """Every run's columns and ``******`` cells (``None`` for a run the C parser
     refuses): all runs in one parse, or one by one when that fails."""
     if len(runs) > 1:
@@ -417,7 +419,7 @@ def _classify_arrow(columns: list[Any], point_col: int | None) -> tuple[Any, int
             invalid += 1
         else:
             waveform += 1
-    if suspects is not None:
+    if suspects is not None and after is not None:
         for i in np.flatnonzero(suspects.to_numpy(zero_copy_only=False).astype(bool)):
             if classify(points[int(i)].as_py(), after[int(i)].as_py()) == "invalid":
                 keep[i] = False

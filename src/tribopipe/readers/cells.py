@@ -23,6 +23,7 @@ from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 
 from ..errors import ReadError
 from .interval import FileInfo, RawInterval
@@ -96,7 +97,7 @@ class RowCells:
     def _cells(self, j: int) -> Sequence[str]:
         return self.columns[j] if self.columns else ()
 
-    def point_numbers(self, j: int) -> np.ndarray:
+    def point_numbers(self, j: int) -> NDArray[np.int64]:
         """The point numbers (int64) of column ``j``."""
         return np.array([int(c) for c in self._cells(j)], dtype=np.int64)
 
@@ -118,7 +119,7 @@ class RowCells:
                 hint="re-export from the instrument software and do not open it in Excel",
             )
 
-    def numbers(self, j: int, name: str, textual: bool) -> np.ndarray | None:
+    def numbers(self, j: int, name: str, textual: bool) -> NDArray[np.float64] | None:
         """Column ``j`` as floats (empty and ``******`` cells NaN); ``None`` when a cell is
         not a number and the column may hold text, else :class:`ReadError`."""
         cells = self._cells(j)

@@ -12,7 +12,7 @@ import numpy as np
 
 from ..errors import ReadError
 from ..measurement import Measurement, MeasurementMeta
-from ..units import canonical_unit, parse_unit, sanitize_suffix
+from ..units import UnitSpec, canonical_unit, parse_unit, sanitize_suffix
 from .aliases import CANONICAL_COLUMN, AliasTable, snake_case
 from .arrowcells import ArrowCells
 from .cells import RowCells
@@ -54,7 +54,7 @@ def build_measurement(
     if cells is not None:
         try:
             return _measurement(raw, info, aliases, cells)
-        except (ReadError, *declines()):
+        except declines(ReadError):
             pass  # the general path decides, and names the line of any error
     return _measurement(raw, info, aliases, RowCells(raw, info))
 
@@ -83,6 +83,7 @@ def _measurement(
         cells.check_damage(j, name)
         quantity = aliases.quantity(name)
         base = aliases.base_name(name)
+        spec: UnitSpec | None
         if quantity is not None:
             spec = canonical_unit(quantity, unit, column=name, path=info.path)
             target = CANONICAL_COLUMN[quantity]

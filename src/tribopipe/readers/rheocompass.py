@@ -119,7 +119,7 @@ def parse_intervals(rows: list[Row | Run], path: str) -> list[RawInterval]:
             interval = _int(cells[1], "the interval number", path, line)
             declared = _int(cells[2], "the number of points", path, line)
         elif key in INTERVAL_DATA:
-            raw, i = _read_table(rows, i, path)
+            raw, i = _read_table(rows, i, item, path)
             n = len(rows)  # peeling a run's first line may have added an item
             raw.project, raw.test, raw.result = project, test, result
             raw.interval = interval if interval is not None else len(out) + 1
@@ -137,9 +137,12 @@ def parse_intervals(rows: list[Row | Run], path: str) -> list[RawInterval]:
     return out
 
 
-def _read_table(rows: list[Row | Run], start: int, path: str) -> tuple[RawInterval, int]:
-    """Read one ``Interval data:`` header (names, meaning row, unit row) and its rows."""
-    header_line, header = rows[start]
+def _read_table(
+    rows: list[Row | Run], start: int, header_row: Row, path: str
+) -> tuple[RawInterval, int]:
+    """Read one ``Interval data:`` header (``header_row``, ``rows[start]``), its meaning
+    and unit rows, and its rows."""
+    header_line, header = header_row
     names = header[1:]
     while names and not names[-1]:
         names.pop()
@@ -151,8 +154,7 @@ def _read_table(rows: list[Row | Run], start: int, path: str) -> tuple[RawInterv
     for _ in range(2):
         if i >= len(rows):
             break
-        peel(rows, i)
-        _, cells = rows[i]
+        _, cells = peel(rows, i)
         if cells and cells[0]:
             break
         rest = cells[1:]

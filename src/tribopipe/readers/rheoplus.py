@@ -100,7 +100,7 @@ def parse_intervals(rows: list[Row | Run], path: str) -> list[RawInterval]:
         elif first.endswith(":") and key == "numberofdatapoints":
             declared = _whole(label_value(cells), "the number of data points", path, line)
         elif key in POINT_HEADERS:
-            raw, i = _read_table(rows, i, path)
+            raw, i = _read_table(rows, i, item, path)
             # a Rheoplus series is one test; its name is the sample's
             raw.sample = raw.test = sample
             raw.extra = dict(meta)
@@ -131,21 +131,26 @@ def parse_intervals(rows: list[Row | Run], path: str) -> list[RawInterval]:
     return out
 
 
-def _read_table(rows: list[Row | Run], start: int, path: str) -> tuple[RawInterval, int]:
-    header_line, header = rows[start]  # a labelled row: "Meas. Pts." starts no run
+def _read_table(
+    rows: list[Row | Run], start: int, header_row: Row, path: str
+) -> tuple[RawInterval, int]:
+    """Read one ``Meas. Pts.`` header (``header_row``, ``rows[start]``), its unit row and
+    its rows."""
+    header_line, header = header_row
     names = list(header)
     while names and not names[-1]:
         names.pop()
     i = start + 1
+    unit_row = rows[i] if i < len(rows) else None
     # a run starts with a point number: not a unit row
-    if i >= len(rows) or isinstance(rows[i], Run) or (rows[i][1] and rows[i][1][0]):
+    if unit_row is None or isinstance(unit_row, Run) or (unit_row[1] and unit_row[1][0]):
         raise ReadError(
             "expected a unit row ([s], [µNm], ...) under the 'Meas. Pts.' header",
             path=path,
             line=header_line,
             hint="the file is truncated or its header was edited",
         )
-    units = list(rows[i][1][: len(names)])
+    units = list(unit_row[1][: len(names)])
     i += 1
     data: list[Row | Run] = []
     while i < len(rows):

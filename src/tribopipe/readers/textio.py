@@ -15,6 +15,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
 
 import numpy as np
+from numpy.typing import NDArray
 
 from ..errors import ReadError
 from ..files import read_regular
@@ -245,12 +246,13 @@ class NotSimple(Exception):  # noqa: N818 - a signal between two paths, not an e
     """The fast path cannot vouch for an exact result here; take the row-by-row path."""
 
 
-def declines() -> tuple[type[Exception], ...]:
+def declines(*also: type[Exception]) -> tuple[type[Exception], ...]:
     """What ends an attempt of the fast path (the caller then reads row by row):
-    :class:`NotSimple`, and any error of pyarrow, which the fast path uses."""
+    :class:`NotSimple`, and any error of pyarrow, which the fast path uses; ``also``
+    the caller's own exception types (one tuple for an ``except`` clause)."""
     import pyarrow as pa
 
-    return (NotSimple, pa.ArrowException)
+    return (*also, NotSimple, pa.ArrowException)
 
 
 def plain_line_ends(text: str) -> bool:
@@ -416,10 +418,12 @@ def scan_lines(text: str, delimiter: str, data_line: DataLine) -> list[Row | Run
     rows = split_plain([line for _, _, line in labelled], delimiter)
     for (k, number, _), (_, cells) in zip(labelled, rows, strict=True):
         items[k] = (number, cells)
-    return items  # type: ignore[return-value]
+    return [item for item in items if item is not None]  # every None was filled above
 
 
-def _code_units(text: str) -> tuple[np.ndarray, bytes | None]:
+def _code_units(
+    text: str,
+) -> tuple[NDArray[np.uint8] | NDArray[np.uint16] | NDArray[np.uint32], bytes | None]:
     """The code points of ``text`` as a numpy array, one per character, made without a
     Python object per character: the text encoded as Latin-1, UTF-16 or UTF-32, the
     narrowest that holds every character as one unit; and the Latin-1 bytes (``None``
@@ -454,12 +458,15 @@ def first_row(item: Row | Run) -> Row:
     return item.split_first()[0] if isinstance(item, Run) else item
 
 
-def peel(items: list[Row | Run], i: int) -> None:
-    """Make ``items[i]`` a row: a run there is split into its first line and the rest."""
+def peel(items: list[Row | Run], i: int) -> Row:
+    """Make ``items[i]`` a row: a run there is split into its first line and the rest.
+    Returns that row."""
     item = items[i]
-    if isinstance(item, Run):
-        row, rest = item.split_first()
-        items[i : i + 1] = [row] if rest is None else [row, rest]
+    if not isinstance(item, Run):
+        return item
+    row, rest = item.split_first()
+    items[i : i + 1] = [row] if rest is None else [row, rest]
+    return row
 
 
 def detect_decimal(cells: Sequence[str], default: str = ".") -> str:
@@ -523,7 +530,7 @@ def is_missing(cell: str) -> bool:
     return not cell or (cell[0] == "*" and cell.strip("*") == "")
 
 
-def to_numbers(cells: Sequence[str], decimal: str) -> tuple[np.ndarray, int | None]:
+def to_numbers(cells: Sequence[str], decimal: str) -> tuple[NDArray[np.float64], int | None]:
     """Convert cells to floats in bulk; empty and ``******`` cells become NaN.
 
     Returns ``(values, None)``, or ``(partial, i)`` where ``i`` is the index of the first

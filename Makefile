@@ -9,10 +9,12 @@ TEST_STAMP := $(VENV)/.installed-test
 
 # `make demo` needs only the package and its base dependencies; `make test` adds the test
 # extras (pytest, hypothesis, ruff, mujoco, playwright, frictionless), which the demo never uses.
+# --no-compile: Python compiles only the modules a command imports, when it first imports
+# them, instead of every module of numpy, scipy, pandas and matplotlib at install (half the time).
 $(BASE): pyproject.toml
 	@echo "installing tribopipe and its base dependencies into $(VENV) (once)"
 	@test -x $(PY) || $(PYTHON) -m venv $(VENV)
-	$(PY) -m pip install --quiet --disable-pip-version-check -e .
+	$(PY) -m pip install --quiet --disable-pip-version-check --no-compile -e .
 	touch $(BASE)
 
 $(TEST_STAMP): $(BASE)

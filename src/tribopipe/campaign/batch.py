@@ -545,8 +545,8 @@ def _apply(campaign: Campaign, results: Sequence[FileDone], by_file: Mapping[str
             if isinstance(run, ReducedRun):
                 reduced.append(run.name)
                 records.append(run.record)
-                if run.record.get("flags"):
-                    flagged.append((run.name, run.record["flags"]))
+                if run.qc_flags:
+                    flagged.append((run.name, run.qc_flags))
                 if run.plot_note and run.plot_note not in notes:
                     notes.append(run.plot_note)
                 runs_state.append({"status": REDUCED, **run.entry.as_dict()})

@@ -36,7 +36,7 @@ _CAMPAIGN_KEYS = frozenset(
         "filename_pattern", "test_pattern", "use_export_names", "export_pattern",
         "force_tolerance_N",
         "force_tolerance_rel", "temperature_tolerance_C", "plots", "encoding", "delimiter",
-        "decimal",
+        "decimal", "synthetic",
     }
 )
 _TOP_LEVEL_TABLES = frozenset({"campaign", "reduction", "names"})
@@ -63,6 +63,8 @@ class Campaign:
     names: tuple[tuple[str, str], ...] = ()
     tolerances: Tolerances = field(default_factory=Tolerances)
     plots: bool = True
+    #: the exports are synthetic (a demo): every run is flagged ``synthetic`` in the map
+    synthetic: bool = False
     read_options: ReadOptions = field(default_factory=ReadOptions)
     source: Path | None = None
 
@@ -272,6 +274,7 @@ def load_campaign(path: str | Path) -> Campaign:
     except ValidationError as exc:
         raise ConfigError(exc.problem, path=cfg_path) from None
     plots = _check_type(table.get("plots", True), bool, "plots", cfg_path)
+    synthetic = _check_type(table.get("synthetic", False), bool, "synthetic", cfg_path)
     decimal = table.get("decimal")
     if decimal not in (None, ".", ","):
         raise ConfigError(f"[campaign] decimal must be '.' or ',', got {decimal!r}",
@@ -294,6 +297,7 @@ def load_campaign(path: str | Path) -> Campaign:
         names=tuple(sorted(names_table.items())),
         tolerances=tolerances,
         plots=plots,
+        synthetic=synthetic,
         read_options=options,
         source=cfg_path,
     )

@@ -197,6 +197,8 @@ def _campaign_key(campaign: Campaign) -> str:
     payload = {
         "config": campaign.settings.config_hash,
         "tolerances": asdict(campaign.tolerances),
+        # only when set, so the hashes of every other campaign stay what they were
+        **({"synthetic": True} if campaign.synthetic else {}),
         # the labels in recipe_hash already carry the [names] aliases, except those read
         # from Test names, so the aliases only matter with a test-name pattern
         "export_names": [campaign.test_pattern, list(campaign.names)]

@@ -21,6 +21,7 @@ from ..escape import display_path, printable
 from ..figures import trace_figure
 from ..files import os_reason
 from ..frictionmap.records import RunLabels
+from ..frictionmap.synthetic_rows import FLAG_SYNTHETIC, qc_flags_only
 from ..numeric import finite_or_none
 from ..pipeline import (
     ExportRuns,
@@ -73,6 +74,12 @@ class ReducedRun:
     def name(self) -> str:
         """The run's name: ``file`` or ``file [test / result / interval i]``."""
         return self.entry.name or self.file
+
+    @property
+    def qc_flags(self) -> str:
+        """The run's ``;``-joined QC flags, without the ``synthetic`` flag every run of a
+        synthetic campaign carries (said once for the campaign, not per run)."""
+        return qc_flags_only(self.record.get("flags"))
 
 
 @dataclass(frozen=True)
@@ -202,6 +209,10 @@ def _reduce_run(job: _Job, ctx: _Context, export: ExportRuns, place: RunPlace,
     result = outcome.result
     record = outcome.record
     assert record is not None  # labels_from always names pin and disc
+    if campaign.synthetic:
+        # sorted and unique, as the record's own flags are
+        flags = {*str(record["flags"] or "").split(";"), FLAG_SYNTHETIC} - {""}
+        record = {**record, "flags": ";".join(sorted(flags))}
     trace = write_trace(campaign.layout, outcome)
     plot_note = _plot(campaign, outcome, name) if ctx.plots else None
     entry = RunEntry(

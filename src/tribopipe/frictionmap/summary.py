@@ -12,6 +12,7 @@ from ..measurement import interval_label
 from ..stats import group_statistics, repeatability
 from .schema import _missing
 from .store import read_map
+from .synthetic_rows import synthetic_note
 
 
 def map_summary(path: str | os.PathLike[str], *, runs_listed: bool = False) -> str:
@@ -27,6 +28,9 @@ def map_summary(path: str | os.PathLike[str], *, runs_listed: bool = False) -> s
     lines.append(f"  runs: {len(runs)} ({n_ex} excluded)")
     if runs.empty:
         return "\n".join(lines)
+    note = synthetic_note(runs)
+    if note is not None:
+        lines.append(f"  {note}")
     groups = group_statistics(runs)
     pairs = runs.groupby(["pin", "disc"], sort=True)
     lines.append(f"  contact pairs: {pairs.ngroups}; condition groups: {len(groups)}")

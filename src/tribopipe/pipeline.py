@@ -28,7 +28,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from .errors import ReductionError, TribopipeError
+from .errors import NotFrictionTestError, ReductionError, TribopipeError
 from .escape import display_path
 from .figures import TraceConditions, plot_trace
 from .files import file_sha256, os_reason, write_text_atomic
@@ -178,6 +178,8 @@ def read_runs(
         for m in group.friction:
             runs.append((place_of(m.meta.test, m.meta.result, m.meta.interval), m))
             order.append(runs[-1][0])
+    if not runs and problems and all(isinstance(e, NotFrictionTestError) for _, e in problems):
+        raise _not_friction(path, [e for _, e in problems])  # said once for the file
     return ExportRuns(
         path=str(path),
         file_hash=file_hash or file_sha256(path),
@@ -186,6 +188,16 @@ def read_runs(
         tests=tuple(tests),
         order=tuple(order),
     )
+
+
+def _not_friction(path: str | Path, problems: Sequence[TribopipeError]) -> NotFrictionTestError:
+    """One refusal for an export none of whose tests is pin-on-disc sliding, naming what
+    its tests look like (an oscillation, a flow curve ...)."""
+    kinds = list(dict.fromkeys(p.problem.split("it looks like ", 1)[-1] for p in problems))
+    tests = (f"its {len(problems)} tests (or results) look like" if len(problems) > 1
+             else "it looks like")
+    return NotFrictionTestError(f"not a pin-on-disc friction test: {tests} "
+                                + "; ".join(kinds), path=path, hint=problems[0].hint)
 
 
 def reduce_run(

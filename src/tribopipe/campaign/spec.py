@@ -27,6 +27,7 @@ from ..escape import display_path
 from ..frictionmap.records import Tolerances
 from ..layout import DEFAULT_OUTPUT_DIR, OutputLayout
 from ..pipeline import ReadOptions
+from ..readers import EXPORT_SUFFIXES
 from ..validate import MAX_NAME_CHARS, check_name
 from .patterns import _compile_pattern
 
@@ -171,6 +172,11 @@ def load_campaign(path: str | Path) -> Campaign:
         if exc.hint or cfg_path.suffix.lower() == ".toml":
             raise
         # e.g. `tribopipe batch run.csv`: an export given where a campaign config belongs
+        if cfg_path.suffix.lower() in EXPORT_SUFFIXES:
+            raise ConfigError(
+                "is an instrument export, not a campaign config", path=exc.path,
+                hint="reduce one export with `tribopipe reduce FILE --pin PIN --disc DISC`, "
+                     "or pass the folder of exports to batch") from None
         raise ConfigError(exc.problem, path=exc.path,
                           hint="expected a campaign config (TOML, see configs/example.toml) "
                                "or a folder of exports") from None

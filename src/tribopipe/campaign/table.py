@@ -257,7 +257,10 @@ def campaign_table(campaign: Campaign, *, state: Mapping[str, Any] | None = None
                 sources.append((f"manifest line {whole.line}", dict(whole.fields)))
                 problem = whole.problem
             elif not test_rows:
-                hints.append(f"no row for it in manifest {manifest.name}")
+                near = manifest.near_miss(path.name)
+                hints.append(f"no row for it in manifest {manifest.name}" + (
+                    f" (did you mean its row {near!r}? name the file as it is, "
+                    f"{path.name!r})" if near else ""))
         if campaign.filename_pattern is not None:
             found = match_pattern(campaign.filename_pattern, path.stem)
             if found is None:

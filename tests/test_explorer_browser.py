@@ -726,7 +726,8 @@ OVERFLOWS = """cards => {
       if (r.width === 0 && r.height === 0) continue;
       if (r.left < box.left - 1 || r.right > box.right + 1 || r.top < box.top - 1
           || r.bottom > box.bottom + 1) {
-        out.push(`${card.className} > ${e.tagName.toLowerCase()}.${e.className.baseVal ?? e.className}`
+        const name = e.className.baseVal ?? e.className;
+        out.push(`${card.className} > ${e.tagName.toLowerCase()}.${name}`
                  + ` (${Math.round(r.left)}–${Math.round(r.right)} in ${Math.round(box.left)}–`
                  + `${Math.round(box.right)})`);
       }

@@ -13,7 +13,6 @@ from tribopipe.config import InstrumentConfig, ReductionParams
 from tribopipe.errors import MissingQuantityError, NotFrictionTestError, ReductionError
 from tribopipe.intervals import robust_mean, select_friction_interval
 from tribopipe.measurement import Measurement, MeasurementMeta
-from tribopipe.reduce import reduce_measurement
 from tribopipe.synthetic import SyntheticRun, make_intervals
 
 INSTRUMENT = InstrumentConfig()

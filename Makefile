@@ -26,15 +26,12 @@ install: $(BASE)
 
 # The demo: 48 synthetic exports (raw/example/) reduced into their own folder and map,
 # processed/demo/; every row is flagged `synthetic`, so it is never published as a lab's.
+# scripts/demo.py prints and runs five tribopipe commands (batch, map table, export
+# abaqus, plot pairs, report) in one Python process: the libraries are imported once.
 DEMO := processed/demo
-DEMO_MAP := $(DEMO)/friction_map.parquet
 
 demo: install
-	$(VENV)/bin/tribopipe batch configs/example.toml
-	$(VENV)/bin/tribopipe map table --map $(DEMO_MAP) --format markdown -o $(DEMO)/friction_map_groups.md
-	$(VENV)/bin/tribopipe export abaqus --map $(DEMO_MAP) -o $(DEMO)/friction.inp
-	$(VENV)/bin/tribopipe plot pairs --map $(DEMO_MAP) -o $(DEMO)/plots/pairs
-	$(VENV)/bin/tribopipe report configs/example.toml -o $(DEMO)/report.html
+	$(PY) scripts/demo.py
 	@echo ""
 	@echo "Done. Outputs in $(DEMO)/ (synthetic data, flagged as such in the map):"
 	@echo "  friction_map.parquet     the friction map (one row per run)"

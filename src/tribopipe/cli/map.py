@@ -146,9 +146,22 @@ def validate_cmd(path: str) -> None:
     Prints one line per problem, naming the file, row and field; exit code 1 on any. The
     package is treated as hostile: paths outside it, URLs, huge files and deeply nested
     JSON are refused, never followed.
+
+    PATH may also be a friction map (a .parquet file): its rows are checked as `map
+    publish` checks them before writing a package.
     """
     from ..frictionmap import check_package
 
+    if path.lower().endswith(".parquet"):
+        from ..frictionmap.summary import check_map_file
+
+        problems, verdict = check_map_file(path)
+        for line in problems:
+            click.echo(line)
+        click.echo(verdict)
+        if problems:
+            raise SystemExit(1)
+        return
     result = check_package(path)
     for line in result.lines():
         click.echo(line)

@@ -7,9 +7,10 @@ from pathlib import Path
 from typing import Any
 
 from ..errors import MapError
-from ..escape import printable
+from ..escape import display_path, printable
 from ..measurement import interval_label
 from ..stats import group_statistics, repeatability
+from .checks import validate_runs
 from .schema import _missing
 from .store import read_map
 from .synthetic_rows import synthetic_note
@@ -124,3 +125,18 @@ def _fmt_t(value: float) -> str:
 
 def _fmt_repeat(value: Any) -> str:
     return "?" if _missing(value) else str(value)
+
+
+def check_map_file(path: str | os.PathLike[str]) -> tuple[list[str], str]:
+    """Check the friction map (Parquet) at ``path`` as ``map publish`` would before
+    writing a package: every row against the map's rules
+    (:func:`~tribopipe.frictionmap.checks.validate_runs`). Returns one line per problem
+    and a verdict line. Raises :class:`MapError` for a file that is not a friction map."""
+    p = Path(path)
+    runs = read_map(p)
+    problems = [problem.line(display_path(p)) for problem in validate_runs(runs)]
+    note = synthetic_note(runs)
+    verdict = (f"friction map {display_path(p)}: {_runs(len(runs))}, "
+               + (f"{len(problems)} problem(s)" if problems else "every row passes the checks")
+               + (f"; {note}" if note else ""))
+    return problems, verdict

@@ -251,9 +251,10 @@ def _result_intervals(items: list[Measurement], several: bool) -> ResultInterval
     kinds = [not_sliding(m) for m in items]
     # judged on the intervals that hold samples (an export may list empty ones)
     held = [k for m, k in zip(items, kinds, strict=True) if len(m.data)]
-    if held and all(held):
+    named = [k for k in held if k is not None]
+    if held and len(named) == len(held):
         return ResultIntervals(first.test, first.result, (), NotFrictionTestError(
-            f"{prefix}not a pin-on-disc friction test: it looks like {_most_telling(held)}",
+            f"{prefix}not a pin-on-disc friction test: it looks like {_most_telling(named)}",
             path=source, hint=NOT_FRICTION_HINT))
     usable = [i for i, m in enumerate(items)
               if m.has(TIME, TORQUE, NORMAL_FORCE) and kinds[i] is None]

@@ -744,9 +744,12 @@ OVERFLOWS = """cards => {
 
 @pytest.mark.parametrize("width", [800, 1024, 1400])
 def test_no_element_overflows_its_card(browser, reduced, published, width, tmp_path):
-    """At a narrow, a middling and a wide window every card holds what it shows (a
-    screenshot of each is kept in the test's folder)."""
-    for name, page in (("reduced", reduced[1]), ("published", published[1])):
+    """At a narrow, a middling and a wide window every card holds what it shows, on its
+    own page and inside the report (a screenshot of each is kept in the test's folder)."""
+    report = make_report(tmp_path / "report.html", map_path=reduced[0],
+                         processed_dir=reduced[3])
+    for name, page in (("reduced", reduced[1]), ("published", published[1]),
+                       ("report", report)):
         tab = Tab(browser, viewport={"width": width, "height": 900})
         # a condition between groups: every repeat of four groups is listed
         tab.open(page_url(page, pin="Dragonskin 30", disc="steel", pressure="50",

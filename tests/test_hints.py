@@ -108,6 +108,11 @@ def test_reduce_a_folder_points_to_batch_and_batch_a_file_points_to_reduce(
     assert result.exit_code == 1
     assert "not a campaign config" in result.output and "tribopipe reduce" in result.output
     assert "UTF-8" not in result.output
+    pdf = tmp_path / "notes.pdf"
+    pdf.write_bytes(b"%PDF-1.7\n" + bytes(range(256)))
+    result = invoke("batch", str(pdf))
+    assert result.exit_code == 1
+    assert "is a PDF document, not a campaign config" in result.output
 
 
 def test_a_placeholder_typo_gets_a_did_you_mean(tmp_path: Path) -> None:

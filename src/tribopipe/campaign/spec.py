@@ -28,6 +28,7 @@ from ..frictionmap.records import Tolerances
 from ..layout import DEFAULT_OUTPUT_DIR, OutputLayout
 from ..pipeline import ReadOptions
 from ..readers import EXPORT_SUFFIXES
+from ..readers.textio import foreign_kind
 from ..validate import MAX_NAME_CHARS, check_name
 from .patterns import _compile_pattern
 
@@ -160,6 +161,20 @@ def _output_folder_problem(folder: Path) -> str | None:
     return None
 
 
+def _foreign_kind(path: Path) -> str | None:
+    """What a file given as a config is when its first bytes say it is a document, an
+    image or an archive (:func:`tribopipe.readers.textio.foreign_kind`), else ``None``."""
+    if not path.is_file():  # never open a FIFO or a device
+        return None
+    try:
+        with path.open("rb") as fh:
+            head = fh.read(1024)
+    except OSError:
+        return None
+    found = foreign_kind(head, path.name)
+    return found[0] if found else None
+
+
 def load_campaign(path: str | Path) -> Campaign:
     """Load and validate a campaign config (TOML); see the module docstring for the keys.
 
@@ -172,6 +187,11 @@ def load_campaign(path: str | Path) -> Campaign:
         if exc.hint or cfg_path.suffix.lower() == ".toml":
             raise
         # e.g. `tribopipe batch run.csv`: an export given where a campaign config belongs
+        kind = _foreign_kind(cfg_path)
+        if kind is not None:
+            raise ConfigError(f"is {kind}, not a campaign config", path=exc.path,
+                              hint="pass a campaign config (TOML, see configs/example.toml) "
+                                   "or a folder of exports") from None
         if cfg_path.suffix.lower() in EXPORT_SUFFIXES:
             raise ConfigError(
                 "is an instrument export, not a campaign config", path=exc.path,

@@ -267,8 +267,8 @@ def _result_intervals(items: list[Measurement], several: bool) -> ResultInterval
             "columns found: " + (", ".join(found) or "none"),
             path=source,
             hint="if the export names a quantity otherwise, add that column name to "
-                 "configs/aliases.toml in this folder (`tribopipe inspect FILE` lists the "
-                 "columns read)",
+                 "configs/aliases.toml in the folder you run tribopipe from (`tribopipe "
+                 "inspect FILE` lists the columns read)",
         ))
     known = [i for i in usable if _rotation_known(items[i])]
     if known:

@@ -140,3 +140,24 @@ def test_a_manifest_name_without_its_suffix_gets_a_did_you_mean(tmp_path: Path) 
     result = invoke("batch", str(config))
     assert result.exit_code == 1
     assert "did you mean its row 'DS30_steel_1N_10C_r1'" in result.output
+
+
+def test_the_missing_column_hint_names_a_file_that_works(tmp_path: Path, monkeypatch) -> None:
+    """The hint for an unknown column name points to configs/aliases.toml in the folder
+    tribopipe runs from; following it makes the same file reduce."""
+    t = np.arange(0, 120, 0.1)
+    rows = ["Time [s],Torque [mN·m],Auflast [N],Angle [mrad]"]
+    rows += [f"{a:.2f},{12.0 + 0.01 * np.sin(a):.5f},3.0,{0.5 * a:.4f}" for a in t]
+    export = tmp_path / "run.csv"
+    export.write_text("\n".join(rows) + "\n", encoding="utf-8")
+    monkeypatch.chdir(tmp_path)
+    args = ("reduce", "run.csv", "--pin", "a", "--disc", "b", "--no-map", "--out", "out")
+    result = invoke(*args)
+    assert result.exit_code == 1
+    assert "missing: normal_force_N" in result.output
+    assert "configs/aliases.toml" in result.output and "alias table" not in result.output
+    (tmp_path / "configs").mkdir()
+    (tmp_path / "configs" / "aliases.toml").write_text(
+        '[canonical.normal_force]\nnames = ["Auflast"]\n', encoding="utf-8")
+    result = invoke(*args)
+    assert "missing" not in result.output, result.output

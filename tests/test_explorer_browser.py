@@ -689,11 +689,12 @@ def test_a_measured_pressure_shows_rounded_and_counts_exact(tab, reduced):
     tab.open(link)
     assert shown(tab)["pressure"] == f"{p:g}"
     assert_shows(tab, res)
-    # so does a link with the full digits
+    # so does a link with the full digits; a measured value typed exactly stays as typed
     tab.open(page_url(page, pin="Dragonskin 30", disc="steel", pressure=repr(p),
-                      temperature="20"))
+                      temperature="20.0"))
     assert shown(tab)["pressure"] == f"{p:g}"
     assert_shows(tab, res)
+    assert "temperature=20.0" in tab.address()
     # typing makes the typed text the value: the rounded number is then what is asked
     tab.page.fill("#pressure", f"{p:g}")
     assert_shows(tab, query(groups, "Dragonskin 30", "steel", float(f"{p:g}"), 20.0))

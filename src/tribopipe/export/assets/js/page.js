@@ -140,7 +140,8 @@ function readUrl() {
         // a measured value written to 4 significant digits (or in full) means that value:
         // it shows rounded and counts exact
         var measured = f[2].find(function (v) { return v === n || sig4(v) === text; });
-        if (measured !== undefined) setNumber(f[1], measured);
+        if (Number(pyG(n)) === n && measured === n) f[1].value = text;  // as typed
+        else if (measured !== undefined) setNumber(f[1], measured);
         else if (Number(pyG(n)) === n) f[1].value = text;
         else setNumber(f[1], n);
       } else notes.push("the link's " + f[0] + " “" + q.get(f[0]) + "” is not a number");

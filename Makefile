@@ -2,26 +2,38 @@
 PYTHON ?= python3
 VENV   := .venv
 PY     := $(VENV)/bin/python
-STAMP  := $(VENV)/.installed
+BASE   := $(VENV)/.installed-base
+TEST_STAMP := $(VENV)/.installed-test
 
 .PHONY: install demo test lint bench bench-scale example clean
 
-$(STAMP): pyproject.toml
-	$(PYTHON) -m venv $(VENV)
-	$(PY) -m pip install --quiet --upgrade pip
-	$(PY) -m pip install --quiet -e ".[test]"
-	touch $(STAMP)
+# `make demo` needs only the package and its base dependencies; `make test` adds the test
+# extras (pytest, hypothesis, ruff, mujoco, playwright, frictionless), which the demo never uses.
+# --no-compile: Python compiles only the modules a command imports, when it first imports
+# them, instead of every module of numpy, scipy, pandas and matplotlib at install (half the time).
+$(BASE): pyproject.toml
+	@echo "installing tribopipe and its base dependencies into $(VENV) (once)"
+	@test -x $(PY) || $(PYTHON) -m venv $(VENV)
+	$(PY) -m pip install --quiet --disable-pip-version-check --no-compile -e .
+	touch $(BASE)
 
-install: $(STAMP)
+$(TEST_STAMP): $(BASE)
+	@echo "installing the test extras into $(VENV) (once)"
+	$(PY) -m pip install --quiet --disable-pip-version-check -e ".[test]"
+	touch $(TEST_STAMP)
+
+install: $(BASE)
+
+# The demo: 48 synthetic exports (raw/example/) reduced into their own folder and map,
+# processed/demo/; every row is flagged `synthetic`, so it is never published as a lab's.
+# scripts/demo.py prints and runs five tribopipe commands (batch, map table, export
+# abaqus, plot pairs, report) in one Python process: the libraries are imported once.
+DEMO := processed/demo
 
 demo: install
-	$(VENV)/bin/tribopipe batch configs/example.toml
-	$(VENV)/bin/tribopipe map table --map processed/friction_map.parquet --format markdown -o processed/friction_map_groups.md
-	$(VENV)/bin/tribopipe export abaqus --map processed/friction_map.parquet -o processed/friction.inp
-	$(VENV)/bin/tribopipe plot pairs --map processed/friction_map.parquet -o processed/plots/pairs
-	$(VENV)/bin/tribopipe report configs/example.toml -o processed/report.html
+	$(PY) scripts/demo.py
 	@echo ""
-	@echo "Done. Outputs in processed/:"
+	@echo "Done. Outputs in $(DEMO)/ (synthetic data, flagged as such in the map):"
 	@echo "  friction_map.parquet     the friction map (one row per run)"
 	@echo "  runs.csv, failures.csv   the campaign's runs and failures"
 	@echo "  friction_map_groups.md   group table with repeat statistics"
@@ -29,10 +41,10 @@ demo: install
 	@echo "  plots/traces, plots/pairs  trace and pressure plots (PNG)"
 	@echo "  report.html              the campaign report (open it in a browser)"
 
-test: install
+test: $(TEST_STAMP)
 	$(PY) -m pytest
 
-lint: install
+lint: $(TEST_STAMP)
 	$(VENV)/bin/ruff check src tests bench scripts
 	$(VENV)/bin/mypy
 

@@ -135,8 +135,10 @@ def test_shipped_example_config_loads() -> None:
         pytest.skip("configs/example.toml not written yet")
     campaign = load_campaign(cfg)
     assert campaign.raw_dir == (REPO / "raw" / "example").resolve()
-    assert campaign.output_dir == (REPO / "processed").resolve()
-    assert campaign.map_path == (REPO / "processed" / "friction_map.parquet").resolve()
+    # the demo has its own folder and map, and its runs are flagged synthetic
+    assert campaign.output_dir == (REPO / "processed" / "demo").resolve()
+    assert campaign.map_path == (REPO / "processed" / "demo" / "friction_map.parquet").resolve()
+    assert campaign.synthetic
 
 
 # --------------------------------------------------------------------------- patterns

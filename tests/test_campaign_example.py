@@ -100,6 +100,8 @@ def test_batch_of_the_example_recovers_the_stated_values(tmp_path: Path) -> None
         # the targets: μ_K within ±0.01, a distinct μ_S within ±0.02
         assert row.mu_k == pytest.approx(float(stated["mu_k_true"]), abs=0.01), row.source_file
         assert row.mu_s == pytest.approx(float(stated["mu_s_true"]), abs=0.02), row.source_file
+    # the demo's runs are never a lab's measurements: every one is flagged synthetic
+    assert runs["flags"].str.split(";").map(lambda f: "synthetic" in f).all()
     flagged = runs.loc[runs["flags"].str.contains("normal_force_off_nominal"), "source_file"]
     assert flagged.tolist() == ["EF50_steel_1N_20C_r2.csv"]
     assert report.flagged == [("EF50_steel_1N_20C_r2.csv", "normal_force_off_nominal")]

@@ -205,7 +205,7 @@ def test_an_export_given_as_campaign_gets_a_hint(exports: Path) -> None:
     result = invoke("batch", str(exports / "DS30_steel_5N_20C_r1.csv"))
     assert result.exit_code == 1
     assert "DS30_steel_5N_20C_r1.csv" in result.output
-    assert "expected a campaign config (TOML" in result.output
+    assert "not a campaign config" in result.output and "tribopipe reduce" in result.output
     assert "Traceback" not in result.output
 
 

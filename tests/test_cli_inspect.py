@@ -148,7 +148,8 @@ def test_inspect_names_the_interval_reduce_will_read(tmp_path: Path, language: s
 def test_inspect_says_why_reduce_would_stop(data_dir: Path) -> None:
     result = run(str(data_dir / "rheocompass_en_utf16_small.txt"))
     assert result.exit_code == 0
-    assert "reduce would stop: no interval has time, torque and normal force" in result.output
+    assert "reduce would stop: not a pin-on-disc friction test: it looks like a flow curve" \
+        in result.output
 
 
 def test_inspect_of_a_plain_csv_names_the_interval_reduce_reads(tmp_path) -> None:

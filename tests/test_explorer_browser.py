@@ -109,6 +109,11 @@ class Tab:
                 raise AssertionError(f"page never satisfied: {expression}")
             time.sleep(0.02)
 
+    def address(self) -> str:
+        """The page's address as the page itself has it (``page.url`` follows a
+        ``history.replaceState`` only when the browser's event arrives, late under load)."""
+        return self.page.evaluate("location.href")
+
     def check_clean(self, *, origin: str = "file://") -> None:
         assert self.problems == []
         assert self.dialogs == []
@@ -333,7 +338,7 @@ def test_a_link_restores_the_selection_and_the_url_follows_the_controls(browser,
     assert_shows(first, query(groups, "Dragonskin 30", "lathed aluminium disk", 64.5, 12.5))
     # change the selection with the controls: the address follows
     choose(first, "Dragonskin 30", "cardboard", 99.0, 17.0)
-    link = first.page.url
+    link = first.address()
     assert "disc=cardboard" in link and "pressure=99.0" in link and "temperature=17.0" in link
     first.check_clean()
     first.close()
@@ -354,7 +359,30 @@ def test_a_link_to_something_the_map_lacks_says_so(tab, published):
     note = tab.page.text_content("#tpx-selection-note")
     assert "pin “Unobtainium” is not in this map" in note
     assert "pressure “abc” is not a number" in note
-    assert float(shown(tab)["text"].split()[0]) > 0  # a valid default is shown
+    # no other pair's μ stands in for it: none is shown, and the error says why
+    assert shown(tab)["text"] == "–"
+    assert "no μ is shown" in tab.page.text_content("#tpx-error")
+    assert "Unobtainium" in tab.address()  # the address keeps what the link asked for
+
+
+@pytest.mark.parametrize(("pin", "disc", "said"), [
+    ("Ecoflex 00-50", "acrylic glass", "is not measured with Ecoflex 00-50"),  # both known
+    ("Ecoflex 00-50", "granite", "“granite” is not in this map"),
+])
+def test_a_link_to_a_pair_the_map_lacks_shows_no_mu(tab, published, pin, disc, said):
+    map_path, page, groups = published
+    with pytest.raises(Exception, match="no groups"):  # as query refuses it
+        query(groups, pin, disc, 20.0, 20.0)
+    tab.open(page_url(page, pin=pin, disc=disc, pressure="20", temperature="20"))
+    s = shown(tab)
+    assert s["text"] == "–" and s["muS"] == "–"
+    error = tab.page.text_content("#tpx-error")
+    assert said in error and "choose a pin and a disc" in error
+    assert tab.page.evaluate("window.tribopipeExplorer.result()") is None
+    # choosing a pair shows its μ again
+    tab.page.select_option("#disc", index=0)
+    tab.page.dispatch_event("#disc", "change")
+    assert shown(tab)["text"] != "–"
 
 
 def test_temperature_needed_and_bad_pressure_are_said(tab, published):
@@ -469,7 +497,7 @@ def test_plots_show_the_pair_and_every_disc_of_the_pin(tab, published):
     assert sorted(panels.locator("svg > text").all_text_contents()) == discs
     panels.filter(has_text="cardboard").click()
     assert shown(tab)["disc"] == "cardboard"
-    assert "disc=cardboard" in tab.page.url
+    assert "disc=cardboard" in tab.address()
     tab.page.screenshot(path=str(page.parent / "explorer.png"), full_page=True)
 
 
@@ -516,7 +544,7 @@ def test_the_page_works_from_a_static_web_host(browser, published):
         t.open(f"{origin}/{page.name}?pin=Dragonskin+30&disc=steel&pressure=50&temperature=15")
         assert_shows(t, query(groups, "Dragonskin 30", "steel", 50.0, 15.0))
         choose(t, "Dragonskin 30", "steel", 80.0, 20.0)
-        assert t.page.url.startswith(f"{origin}/{page.name}?") and "pressure=80.0" in t.page.url
+        assert t.address().startswith(f"{origin}/{page.name}?") and "pressure=80.0" in t.address()
         t.check_clean(origin=origin)
         t.close()
     finally:
@@ -532,7 +560,7 @@ def test_the_report_embeds_the_explorer_for_its_campaign(tab, reduced):
     assert_shows(tab, query(groups, "Dragonskin 30", "steel", 45.0, 20.0))
     assert tab.page.locator("#explorer #tpx-overview .tpx-panel").count() == 1
     choose(tab, "Ecoflex 00-50", "wood (smooth)", 10.0, 20.0)
-    assert "pin=Ecoflex+00-50" in tab.page.url
+    assert "pin=Ecoflex+00-50" in tab.address()
     assert_shows(tab, query(groups, "Ecoflex 00-50", "wood (smooth)", 10.0, 20.0))
 
 
@@ -653,21 +681,27 @@ def test_a_measured_pressure_shows_rounded_and_counts_exact(tab, reduced):
     res = query(groups, "Dragonskin 30", "steel", p, 20.0)
     assert len(res.mu_k.used) == 1 and res.mu_k.used[0].weight == 1.0
     assert_shows(tab, res)
-    assert f"pressure={repr(p)}" in tab.page.url
+    # the address carries 4 significant digits, and a link with them means the measured value
+    assert f"pressure={p:.4g}&" in tab.address() and repr(p) not in tab.address()
     # the group table and the chips fill in the exact value the same way
     tab.page.fill("#pressure", "50")
     tab.page.locator("#tpx-measured button", has_text=f"{p:g} kPa").click()
-    assert shown(tab)["pressure"] == f"{p:g}" and f"pressure={repr(p)}" in tab.page.url
+    assert shown(tab)["pressure"] == f"{p:g}" and f"pressure={p:.4g}&" in tab.address()
     assert_shows(tab, res)
-    # a link with the full digits shows them rounded and means the measured point
-    link = tab.page.url
+    link = tab.address()
     tab.open(link)
     assert shown(tab)["pressure"] == f"{p:g}"
     assert_shows(tab, res)
+    # so does a link with the full digits; a measured value typed exactly stays as typed
+    tab.open(page_url(page, pin="Dragonskin 30", disc="steel", pressure=repr(p),
+                      temperature="20.0"))
+    assert shown(tab)["pressure"] == f"{p:g}"
+    assert_shows(tab, res)
+    assert "temperature=20.0" in tab.address()
     # typing makes the typed text the value: the rounded number is then what is asked
     tab.page.fill("#pressure", f"{p:g}")
     assert_shows(tab, query(groups, "Dragonskin 30", "steel", float(f"{p:g}"), 20.0))
-    assert f"pressure={p:g}&" in tab.page.url or tab.page.url.endswith(f"pressure={p:g}")
+    assert f"pressure={p:g}&" in tab.address() or tab.address().endswith(f"pressure={p:g}")
 
 
 def test_each_repeat_says_which_file_and_test_it_came_from(tab, reduced):
@@ -685,3 +719,51 @@ def test_each_repeat_says_which_file_and_test_it_came_from(tab, reduced):
     expected = {f"{r.mu_k:.3f} — {r.source_file} · {r.test} / {r.result}"
                 for r in used.itertuples()}
     assert set(lines) == expected
+
+
+# --------------------------------------------------------------------------- layout
+
+#: the page's cards: every element inside one must stay inside it
+CARDS = ".tpx-select, .tpx-result, .tpx-export, .tpx-figure, .tpx-panel, .tpx-groups"
+OVERFLOWS = """cards => {
+  const out = [];
+  for (const card of document.querySelectorAll(cards)) {
+    const box = card.getBoundingClientRect();
+    for (const e of card.querySelectorAll('*')) {
+      if (e.closest('[hidden], datalist, option, title, script')) continue;
+      const r = e.getBoundingClientRect();
+      if (r.width === 0 && r.height === 0) continue;
+      if (r.left < box.left - 1 || r.right > box.right + 1 || r.top < box.top - 1
+          || r.bottom > box.bottom + 1) {
+        const name = e.className.baseVal ?? e.className;
+        out.push(`${card.className} > ${e.tagName.toLowerCase()}.${name}`
+                 + ` (${Math.round(r.left)}–${Math.round(r.right)} in ${Math.round(box.left)}–`
+                 + `${Math.round(box.right)})`);
+      }
+    }
+  }
+  return out;
+}"""
+
+
+@pytest.mark.parametrize("width", [800, 1024, 1400])
+def test_no_element_overflows_its_card(browser, reduced, published, width, tmp_path):
+    """At a narrow, a middling and a wide window every card holds what it shows, on its
+    own page and inside the report (a screenshot of each is kept in the test's folder)."""
+    report = make_report(tmp_path / "report.html", map_path=reduced[0],
+                         processed_dir=reduced[3])
+    for name, page in (("reduced", reduced[1]), ("published", published[1]),
+                       ("report", report)):
+        tab = Tab(browser, viewport={"width": width, "height": 900})
+        # a condition between groups: every repeat of four groups is listed
+        tab.open(page_url(page, pin="Dragonskin 30", disc="steel", pressure="50",
+                          temperature="15"))
+        tab.page.screenshot(path=str(tmp_path / f"explorer-{name}-{width}.png"), full_page=True)
+        assert tab.page.evaluate(OVERFLOWS, CARDS) == [], f"{name} at {width} px"
+        # each repeat stays on one or two lines
+        heights = tab.page.evaluate("""() => Array.from(
+          document.querySelectorAll('.tpx-repeat'), d => d.getBoundingClientRect().height /
+          parseFloat(getComputedStyle(d).lineHeight || '16'))""")
+        assert heights and max(heights) <= 2.5, f"{name} at {width} px: {max(heights)} lines"
+        tab.check_clean()
+        tab.close()

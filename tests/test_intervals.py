@@ -10,10 +10,9 @@ import pytest
 
 from conftest import shared_file
 from tribopipe.config import InstrumentConfig, ReductionParams
-from tribopipe.errors import MissingQuantityError, ReductionError
+from tribopipe.errors import MissingQuantityError, NotFrictionTestError, ReductionError
 from tribopipe.intervals import robust_mean, select_friction_interval
 from tribopipe.measurement import Measurement, MeasurementMeta
-from tribopipe.reduce import reduce_measurement
 from tribopipe.synthetic import SyntheticRun, make_intervals
 
 INSTRUMENT = InstrumentConfig()
@@ -72,15 +71,16 @@ def test_real_rheometer_files_that_are_not_friction_runs_are_refused_in_one_line
     refused with the file and the reason, not reduced to a number."""
     readers = pytest.importorskip("tribopipe.readers")
     small = shared_file("real-exports", "rheocompass_en_utf16_small.txt")
-    with pytest.raises(MissingQuantityError) as err:
+    with pytest.raises(NotFrictionTestError) as err:
         select_friction_interval(readers.read_export(small))
-    assert str(small) in str(err.value) and "missing: normal_force_N" in str(err.value)
+    assert str(small) in str(err.value) and "flow curve" in str(err.value)
     laos = shared_file("real-exports", "rheocompass_fr_utf16_laos.csv")
-    with pytest.raises(ReductionError) as err:
-        picked = select_friction_interval(readers.read_export(laos))
-        reduce_measurement(picked, INSTRUMENT, PARAMS)
+    # an oscillation is refused before any reduction, whatever the contact threshold
+    with pytest.raises(NotFrictionTestError) as err:
+        select_friction_interval(readers.read_export(laos))
     message = str(err.value)
-    assert message.startswith(str(laos)) and "contact threshold" in message
+    assert message.startswith(str(laos)) and "not a pin-on-disc friction test" in message
+    assert "oscillation" in message
     assert "\n" not in message
 
 
@@ -184,7 +184,7 @@ def test_the_real_two_test_relaxation_export_has_no_friction_interval_in_either_
     assert [r.test for r in found] == ["Stress Relaxation 1", "Stress Relaxation"]
     for r in found:
         assert r.friction == ()
-        assert isinstance(r.problem, MissingQuantityError)
+        assert isinstance(r.problem, NotFrictionTestError)
         assert str(r.problem).startswith(
-            f"{path}: {r.test} / Step strain 1: no friction interval: no interval has time, "
-            "torque and normal force (missing: normal_force_N)")
+            f"{path}: {r.test} / Step strain 1: no friction interval: not a pin-on-disc "
+            "friction test: it looks like a stress relaxation test")

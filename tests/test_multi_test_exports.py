@@ -28,7 +28,7 @@ from tribopipe.config import load_settings
 from tribopipe.errors import ReductionError
 from tribopipe.frictionmap import measurement_id
 from tribopipe.labels import RunLabels
-from tribopipe.pipeline import FailedRun, ReducedRun, read_runs, reduce_export, reduce_file
+from tribopipe.pipeline import ReducedRun, read_runs, reduce_export, reduce_file
 from tribopipe.synthetic import SyntheticTest, write_rheocompass_session
 
 SETTINGS = load_settings()
@@ -125,17 +125,17 @@ def test_reduce_file_refuses_an_export_of_several_runs_instead_of_picking_one(ra
         reduce_file(raw / "session.csv", SETTINGS)
 
 
-def test_the_real_two_test_export_says_why_each_test_gives_no_run(data_dir: Path) -> None:
+def test_the_real_two_test_export_says_once_that_it_is_no_friction_test(
+        data_dir: Path) -> None:
     """A real session export of two stress-relaxation tests (torque, no normal force, no
-    rotation). A user sees one line per test, naming the file and the test."""
+    rotation). A user sees one line for the file, saying what its tests are."""
     path = data_dir / "rheocompass_en_utf16_two_tests.csv"
     result = reduce_export(path, SETTINGS)
-    assert not result.ok and result.error is None
-    assert [r.place.test for r in result.runs] == ["Stress Relaxation 1", "Stress Relaxation"]
-    for r in result.runs:
-        assert isinstance(r, FailedRun)
-        assert r.reason.startswith(f"{path}: {r.place.test} / Step strain 1: no friction "
-                                  "interval: no interval has time, torque and normal force")
+    assert not result.ok and result.runs == ()
+    assert result.error is not None
+    assert result.error.reason.startswith(
+        f"{path}: not a pin-on-disc friction test: its 2 tests")
+    assert "stress relaxation" in result.error.reason
 
 
 # --------------------------------------------------------------------------- the CLI
@@ -173,16 +173,15 @@ def test_reduce_table_shows_which_test_and_interval(raw: Path, tmp_path: Path) -
     assert "DS30 on steel, 5 N, 20 °C, #1 / interval 2" in rows[2]
 
 
-def test_reduce_the_real_two_test_export_is_two_lines_and_exit_1(data_dir: Path,
-                                                                 tmp_path: Path) -> None:
+def test_reduce_the_real_two_test_export_is_one_line_and_exit_1(data_dir: Path,
+                                                                tmp_path: Path) -> None:
     path = data_dir / "rheocompass_en_utf16_two_tests.csv"
     result = reduce_cli(str(path), "--no-map", "--out", str(tmp_path / "o"))
     assert result.exit_code == 1
     errors = [line for line in result.stderr.splitlines() if line.startswith("error:")]
-    assert len(errors) == 2
-    assert "Stress Relaxation 1 / Step strain 1: no friction interval" in errors[0]
-    assert "Stress Relaxation / Step strain 1: no friction interval" in errors[1]
-    assert "2 error(s) in 1 of 1 file(s)" in result.stderr
+    assert len(errors) == 1
+    assert "not a pin-on-disc friction test: its 2 tests" in errors[0]
+    assert "1 error(s) in 1 of 1 file(s)" in result.stderr
     assert "Traceback" not in result.output
 
 

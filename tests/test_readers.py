@@ -310,7 +310,7 @@ def test_empty_file(tmp_path: Path, content: bytes) -> None:
 def test_binary_file(tmp_path: Path) -> None:
     path = tmp_path / "image.csv"
     path.write_bytes(b"\x89PNG\r\n\x1a\n\x00\x00\x00\rIHDR" + bytes(range(256)) * 4)
-    assert_one_line_error(path, "binary file")
+    assert_one_line_error(path, "is a PNG image")
 
 
 def test_truncated_file_names_the_interval(tmp_path: Path) -> None:

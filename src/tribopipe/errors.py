@@ -67,6 +67,11 @@ class MissingQuantityError(ReadError):
     """A required quantity (torque, normal force, ...) has no matching column."""
 
 
+class NotFrictionTestError(ReadError):
+    """The export holds no pin-on-disc friction test: no steady rotation in one direction
+    under normal force (an oscillation, a flow curve, a relaxation test ...)."""
+
+
 class ConfigError(TribopipeError):
     """A config file (instrument, campaign, aliases) is missing a key or has a bad value."""
 

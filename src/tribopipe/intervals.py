@@ -27,7 +27,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from .config import ReductionParams
-from .errors import MissingQuantityError, ReductionError, TribopipeError
+from .errors import MissingQuantityError, NotFrictionTestError, ReductionError, TribopipeError
 from .measurement import (
     ANGLE,
     NORMAL_FORCE,
@@ -92,6 +92,64 @@ def _rotates(m: Measurement) -> bool:
         if finite.size and float(np.median(np.abs(finite))) >= ROTATION_MIN_SPEED_RAD_S:
             return True
     return False
+
+
+#: A sliding interval turns one way: its net angle is at least this share of the angle's
+#: range, and its speed has one sign (an oscillation goes back and forth: a net near 0).
+ONE_WAY_MIN_SHARE = 0.8
+#: What a rheological test that is not pin-on-disc sliding carries: (columns, what it is).
+_NOT_SLIDING: tuple[tuple[tuple[str, ...], str], ...] = (
+    # the most telling first: a relaxation export lists the oscillation moduli too
+    (("relaxation_modulus_Pa",), "a stress relaxation test (relaxation modulus)"),
+    (("storage_modulus_Pa", "loss_modulus_Pa", "frequency_Hz"),
+     "an oscillation test (storage and loss moduli, frequency)"),
+    (("viscosity_Pa_s", "shear_rate_1_s"), "a flow curve (viscosity over shear rate)"),
+)
+#: the hint of every refusal of a test that is not pin-on-disc sliding
+NOT_FRICTION_HINT = ("tribopipe reduces pin-on-disc friction tests: the disc turns one way "
+                     "at constant speed under a normal force (e.g. an Anton Paar T-PID test); "
+                     "export such a test")
+
+
+def _one_way(m: Measurement) -> bool:
+    """True unless the measured angle or speed shows the disc turning back and forth."""
+    angle = _column(m, ANGLE)
+    if angle is not None:
+        finite = angle[np.isfinite(angle)]
+        # the range, not the summed steps: sensor jitter adds path, not range
+        span = float(finite.max() - finite.min()) if finite.size >= 2 else 0.0
+        if span >= ROTATION_MIN_ANGLE_RAD and \
+                abs(float(finite[-1] - finite[0])) < ONE_WAY_MIN_SHARE * span:
+            return False
+    speed = _column(m, SPEED)
+    if speed is not None:
+        moving = speed[np.isfinite(speed) & (np.abs(speed) >= ROTATION_MIN_SPEED_RAD_S)]
+        if moving.size and min((moving > 0).mean(), (moving < 0).mean()) > 1 - ONE_WAY_MIN_SHARE:
+            return False
+    return True
+
+
+def not_sliding(m: Measurement) -> str | None:
+    """What an interval is when it is not pin-on-disc sliding (steady rotation in one
+    direction): a rheological test its columns name (oscillation, relaxation, flow curve)
+    unless a measured angle or speed shows one-way rotation under a normal force, or "an
+    oscillation" when the measured angle or speed goes back and forth; ``None`` for a
+    sliding interval (and for one that names none of these: plain time, torque, force)."""
+    if not _one_way(m):
+        return "an oscillation (the disc turns back and forth)"
+    if _rotation_known(m) and _rotates(m) and m.has(NORMAL_FORCE):
+        return None
+    for columns, what in _NOT_SLIDING:
+        if any(c in m.data.columns for c in columns):
+            return what
+    return None
+
+
+def _most_telling(kinds: Sequence[str]) -> str:
+    """Of the kinds of a result's intervals (:func:`not_sliding`), the one listed first in
+    :data:`_NOT_SLIDING` (an oscillation test's intervals may carry a shear rate too)."""
+    order = [what for _, what in _NOT_SLIDING]
+    return min(kinds, key=lambda k: order.index(k) if k in order else -1)
 
 
 def _angle_travel(m: Measurement) -> float:
@@ -190,7 +248,16 @@ def _result_intervals(items: list[Measurement], several: bool) -> ResultInterval
     prefix = f"{where}: no friction interval: " if several and where else (
         "no friction interval: " if several else "")
     source = first.source_file
-    usable = [i for i, m in enumerate(items) if m.has(TIME, TORQUE, NORMAL_FORCE)]
+    kinds = [not_sliding(m) for m in items]
+    # judged on the intervals that hold samples (an export may list empty ones)
+    held = [k for m, k in zip(items, kinds, strict=True) if len(m.data)]
+    named = [k for k in held if k is not None]
+    if held and len(named) == len(held):
+        return ResultIntervals(first.test, first.result, (), NotFrictionTestError(
+            f"{prefix}not a pin-on-disc friction test: it looks like {_most_telling(named)}",
+            path=source, hint=NOT_FRICTION_HINT))
+    usable = [i for i, m in enumerate(items)
+              if m.has(TIME, TORQUE, NORMAL_FORCE) and kinds[i] is None]
     if not usable:
         found = sorted({c for m in items for c in m.data.columns})
         absent = [c for c in (TIME, TORQUE, NORMAL_FORCE) if not any(m.has(c) for m in items)]
@@ -199,7 +266,9 @@ def _result_intervals(items: list[Measurement], several: bool) -> ResultInterval
             f"{prefix}no interval has time, torque and normal force (missing: {lacking}); "
             "columns found: " + (", ".join(found) or "none"),
             path=source,
-            hint="check the column names or pass an alias table",
+            hint="if the export names a quantity otherwise, add that column name to "
+                 "configs/aliases.toml in the folder you run tribopipe from (`tribopipe "
+                 "inspect FILE` lists the columns read)",
         ))
     known = [i for i in usable if _rotation_known(items[i])]
     if known:

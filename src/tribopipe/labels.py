@@ -24,6 +24,9 @@ FLAG_FORCE_ESTIMATED = "nominal_force_estimated"
 #: Flags added when a run strays from its nominal conditions (:func:`qc_flags`).
 FLAG_FORCE_OFF = "normal_force_off_nominal"
 FLAG_TEMPERATURE_OFF = "temperature_off_nominal"
+#: Flag of a run reduced from a synthetic export (written by a generator, not measured):
+#: a campaign with ``synthetic = true`` (the shipped demo) gives it to every run.
+FLAG_SYNTHETIC = "synthetic"
 
 
 @dataclass(frozen=True)
@@ -130,16 +133,18 @@ class RunVerdict:
 
 def decide_run(labels: RunLabels, reduction_flags: Iterable[str],
                normal_force_measured_N: float | None, temperature_measured_C: float | None,
-               tolerances: Tolerances | None = None) -> RunVerdict:
+               tolerances: Tolerances | None = None,
+               extra_flags: Iterable[str] = ()) -> RunVerdict:
     """Decide a reduced run's nominal force and flags, once, from its labels, the flags of
     its reduction and its measured mean normal force [N] and temperature [°C]
     (``tolerances`` default: :class:`Tolerances`, 10 %, 2 K).
 
-    The flags are the reduction's, the off-nominal ones (:func:`qc_flags`) and
+    The flags are the reduction's, the off-nominal ones (:func:`qc_flags`),
     ``nominal_force_estimated`` when no nominal force was given and the measured mean
-    (rounded to 0.1 N) stands in for it.
+    (rounded to 0.1 N) stands in for it, and ``extra_flags`` of the run's source (e.g.
+    :data:`FLAG_SYNTHETIC` for a synthetic campaign).
     """
-    flags = list(reduction_flags)
+    flags = [*reduction_flags, *extra_flags]
     flags += qc_flags(labels, normal_force_measured_N, temperature_measured_C,
                       tolerances or Tolerances())
     force: float | None

@@ -26,7 +26,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from .errors import OutputError, ReductionError, TribopipeError
+from .errors import NotFrictionTestError, OutputError, ReductionError, TribopipeError
 from .escape import display_path, printable
 from .figures import TraceConditions, plot_trace
 from .files import file_sha256, os_reason, write_text_atomic
@@ -189,6 +189,8 @@ def read_runs(
         for m in group.friction:
             runs.append((place_of(m.meta.test, m.meta.result, m.meta.interval), m))
             order.append(runs[-1][0])
+    if not runs and problems and all(isinstance(e, NotFrictionTestError) for _, e in problems):
+        raise _not_friction(path, [e for _, e in problems])  # said once for the file
     return ExportRuns(
         path=str(path),
         file_hash=file_hash or file_sha256(path),
@@ -199,6 +201,16 @@ def read_runs(
     )
 
 
+def _not_friction(path: str | Path, problems: Sequence[TribopipeError]) -> NotFrictionTestError:
+    """One refusal for an export none of whose tests is pin-on-disc sliding, naming what
+    its tests look like (an oscillation, a flow curve ...)."""
+    kinds = list(dict.fromkeys(p.problem.split("it looks like ", 1)[-1] for p in problems))
+    tests = (f"its {len(problems)} tests (or results) look like" if len(problems) > 1
+             else "it looks like")
+    return NotFrictionTestError(f"not a pin-on-disc friction test: {tests} "
+                                + "; ".join(kinds), path=path, hint=problems[0].hint)
+
+
 def reduce_run(
     export: ExportRuns,
     place: RunPlace,
@@ -207,18 +219,20 @@ def reduce_run(
     labels: RunLabels | None = None,
     *,
     tolerances: Tolerances | None = None,
+    extra_flags: tuple[str, ...] = (),
 ) -> RunOutcome:
     """Reduce one run of an export (``place`` and ``measurement`` from ``export.runs``)
     and build its map record.
 
     The map record is built only when ``labels`` name pin and disc; ``tolerances``
-    (default: the map's 10 %, 2 K) decide its off-nominal QC flags. Raises
+    (default: the map's 10 %, 2 K) decide its off-nominal QC flags; ``extra_flags``
+    (e.g. ``synthetic``) join them (:func:`tribopipe.labels.decide_run`). Raises
     :class:`tribopipe.errors.TribopipeError` subclasses for every bad input.
     """
     labels = labels or RunLabels()
     result = reduce_measurement(measurement, settings.instrument, settings.reduction)
     verdict = decide_run(labels, result.flags, finite_or_nan(result.normal_force_mean_N),
-                         finite_or_nan(result.temperature_C), tolerances)
+                         finite_or_nan(result.temperature_C), tolerances, extra_flags)
     record = None
     if labels.complete:
         record = make_record(
@@ -559,6 +573,7 @@ def reduce_export(
     read_options: ReadOptions | None = None,
     *,
     tolerances: Tolerances | None = None,
+    extra_flags: tuple[str, ...] = (),
     file_hash: str | None = None,
     outputs: RunOutputs | None = None,
     name: str | None = None,
@@ -592,7 +607,7 @@ def reduce_export(
         try:
             given = labels(export, place, run) if callable(labels) else labels
             outcome = reduce_run(export, place, measurements[place], settings, given,
-                                 tolerances=tolerances)
+                                 tolerances=tolerances, extra_flags=extra_flags)
             runs.append(_reduced(outcome, run, outputs))
         except (TribopipeError, OSError) as exc:
             # an output that could not be written is not the export's fault: tried again

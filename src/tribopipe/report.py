@@ -41,6 +41,7 @@ from .export.tables import spreadsheet_csv
 from .files import write_text_atomic
 from .fit import fit_power_law
 from .frictionmap import read_map
+from .frictionmap.synthetic_rows import synthetic_note
 from .layout import OutputLayout, read_failures
 from .query import pairs
 from .stats import group_statistics, repeatability
@@ -230,6 +231,7 @@ def _summary(inp: ReportInputs) -> str:
         ("sources", ", ".join(f"{k}: {v}" for k, v in sorted(sources.items()))),
         ("labs", ", ".join(f"{k}: {v}" for k, v in sorted(labs.items()))),
         ("runs with QC flags", str(int(flagged.sum()))),
+        *([("synthetic runs", note)] if (note := synthetic_note(runs)) else []),
         ("failures", str(len(inp.failures)) if inp.failures_known else "no failures.csv"),
     ]
     if rep is not None and not math.isnan(rep.s_r):
@@ -585,12 +587,14 @@ def build_report(inp: ReportInputs) -> str:
     shown = [(a, t, html) for a, t, html in built if html]
     nav = "".join(f'<a href="#{a}">{t}</a>' for a, t, _ in shown)
     title = html_text(inp.page_title)
+    note = synthetic_note(inp.runs)
+    banner = f'<p class="synthetic"><strong>{html_text(note)}</strong></p>' if note else ""
     return (
         "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">"
         "<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">"
         f"<title>{title}</title><style>{_CSS}</style></head><body>"
         f"<header><h1>{title}</h1><p class=muted>tribopipe {html_text(__version__)}"
-        f"{source}, {stamp}</p><nav>{nav}</nav></header>"
+        f"{source}, {stamp}</p>{banner}<nav>{nav}</nav></header>"
         + "".join(html for _, _, html in shown)
         + f"<script>{_OPEN_TARGET_JS}</script></body></html>\n"
     )

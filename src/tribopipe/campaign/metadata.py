@@ -34,6 +34,7 @@ from __future__ import annotations
 
 import contextlib
 import csv
+import difflib
 import functools
 import io
 import math
@@ -117,6 +118,16 @@ class Manifest:
         rows = self._by_file.get(rel) or self._by_file.get(name) or ()
         whole = next((r for r in rows if r.test is None and r.interval is None), None)
         return whole, tuple(r for r in rows if r is not whole)
+
+    def near_miss(self, name: str) -> str | None:
+        """The file a manifest row names that is closest to ``name`` (a row written
+        without its ``.csv``, a typo), or ``None`` when no row is close."""
+        names = list(self._by_file)
+        stem = name.rsplit(".", 1)[0]
+        if stem in names:
+            return stem
+        near = difflib.get_close_matches(name, names, n=1, cutoff=0.8)
+        return near[0] if near else None
 
     @functools.cached_property
     def _index(self) -> dict[tuple[str, str | None, int | None], ManifestRow]:
@@ -336,7 +347,8 @@ def labels_from(file: str, merged: Mapping[str, Any], *, hints: Sequence[str] = 
     field (pin, disc, normal_force_N, temperature_C) is missing."""
     missing = [f for f in REQUIRED_FIELDS if merged.get(f) is None]
     if missing:
-        hint = "; ".join(hints) if hints else "add the file to the manifest"
+        hint = "; ".join(hints) if hints else (
+            "give it in the manifest, the file-name pattern or the test-name pattern")
         raise CampaignError(f"metadata missing: {', '.join(missing)}", path=file, hint=hint)
     try:
         return RunLabels(

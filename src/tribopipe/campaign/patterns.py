@@ -8,6 +8,7 @@ Test name (:func:`match_pattern`); numbers may use ``.``, ``,`` or ``p`` as deci
 
 from __future__ import annotations
 
+import difflib
 import functools
 import re
 from pathlib import Path
@@ -40,7 +41,8 @@ def _compile_pattern(pattern: str, *, key: str, path: Path | None) -> re.Pattern
     """Turn ``{pin}_{disc}_{force}N_{temperature}C_r{repeat}`` into an anchored regex.
 
     Known placeholders (``pin, disc, force, temperature, repeat`` and the label names) are
-    captured; any other ``{name}`` matches text that is ignored.
+    captured; any other ``{name}`` matches text that is ignored, unless it is a near miss
+    of a known one (``{dsic}``): that is refused with a did-you-mean.
     """
     parts: list[str] = []
     seen: set[str] = set()
@@ -49,6 +51,10 @@ def _compile_pattern(pattern: str, *, key: str, path: Path | None) -> re.Pattern
         parts.append(re.escape(pattern[pos : match.start()]))
         name = match.group(1)
         target = PATTERN_FIELDS.get(name)
+        near = difflib.get_close_matches(name, PATTERN_FIELDS, n=1, cutoff=0.7)
+        if target is None and near:  # `{dsic}`: a typo, not text to ignore
+            raise ConfigError(f"[campaign] {key}: unknown placeholder {{{name}}}",
+                              path=path, hint=f"did you mean {{{near[0]}}}?")
         if target is None:
             parts.append(".+?")
         else:

@@ -27,6 +27,8 @@ from ..escape import display_path
 from ..labels import Tolerances
 from ..layout import DEFAULT_OUTPUT_DIR, OutputLayout
 from ..pipeline import ReadOptions
+from ..readers import EXPORT_SUFFIXES
+from ..readers.textio import foreign_kind
 from ..validate import MAX_NAME_CHARS, check_name
 from .patterns import _compile_pattern
 
@@ -36,7 +38,7 @@ _CAMPAIGN_KEYS = frozenset(
         "filename_pattern", "test_pattern", "use_export_names", "export_pattern",
         "force_tolerance_N",
         "force_tolerance_rel", "temperature_tolerance_C", "plots", "encoding", "delimiter",
-        "decimal",
+        "decimal", "synthetic",
     }
 )
 _TOP_LEVEL_TABLES = frozenset({"campaign", "reduction", "names"})
@@ -63,6 +65,8 @@ class Campaign:
     names: tuple[tuple[str, str], ...] = ()
     tolerances: Tolerances = field(default_factory=Tolerances)
     plots: bool = True
+    #: the exports are synthetic (a demo): every run is flagged ``synthetic`` in the map
+    synthetic: bool = False
     read_options: ReadOptions = field(default_factory=ReadOptions)
     source: Path | None = None
 
@@ -157,6 +161,20 @@ def _output_folder_problem(folder: Path) -> str | None:
     return None
 
 
+def _foreign_kind(path: Path) -> str | None:
+    """What a file given as a config is when its first bytes say it is a document, an
+    image or an archive (:func:`tribopipe.readers.textio.foreign_kind`), else ``None``."""
+    if not path.is_file():  # never open a FIFO or a device
+        return None
+    try:
+        with path.open("rb") as fh:
+            head = fh.read(1024)
+    except OSError:
+        return None
+    found = foreign_kind(head, path.name)
+    return found[0] if found else None
+
+
 def load_campaign(path: str | Path) -> Campaign:
     """Load and validate a campaign config (TOML); see the module docstring for the keys.
 
@@ -169,6 +187,16 @@ def load_campaign(path: str | Path) -> Campaign:
         if exc.hint or cfg_path.suffix.lower() == ".toml":
             raise
         # e.g. `tribopipe batch run.csv`: an export given where a campaign config belongs
+        kind = _foreign_kind(cfg_path)
+        if kind is not None:
+            raise ConfigError(f"is {kind}, not a campaign config", path=exc.path,
+                              hint="pass a campaign config (TOML, see configs/example.toml) "
+                                   "or a folder of exports") from None
+        if cfg_path.suffix.lower() in EXPORT_SUFFIXES:
+            raise ConfigError(
+                "is an instrument export, not a campaign config", path=exc.path,
+                hint="reduce one export with `tribopipe reduce FILE --pin PIN --disc DISC`, "
+                     "or pass the folder of exports to batch") from None
         raise ConfigError(exc.problem, path=exc.path,
                           hint="expected a campaign config (TOML, see configs/example.toml) "
                                "or a folder of exports") from None
@@ -272,6 +300,7 @@ def load_campaign(path: str | Path) -> Campaign:
     except ValidationError as exc:
         raise ConfigError(exc.problem, path=cfg_path) from None
     plots = _check_type(table.get("plots", True), bool, "plots", cfg_path)
+    synthetic = _check_type(table.get("synthetic", False), bool, "synthetic", cfg_path)
     decimal = table.get("decimal")
     if decimal not in (None, ".", ","):
         raise ConfigError(f"[campaign] decimal must be '.' or ',', got {decimal!r}",
@@ -294,6 +323,7 @@ def load_campaign(path: str | Path) -> Campaign:
         names=tuple(sorted(names_table.items())),
         tolerances=tolerances,
         plots=plots,
+        synthetic=synthetic,
         read_options=options,
         source=cfg_path,
     )

@@ -162,6 +162,8 @@ def _campaign_key(campaign: Campaign) -> str:
     payload = {
         "config": campaign.settings.config_hash,
         "tolerances": asdict(campaign.tolerances),
+        # only when set, so the hashes of every other campaign stay what they were
+        **({"synthetic": True} if campaign.synthetic else {}),
         # the labels in recipe_hash already carry the [names] aliases, except those read
         # from Test names, so the aliases only matter with a test-name pattern
         "export_names": [campaign.test_pattern, list(campaign.names)]
@@ -221,7 +223,10 @@ def campaign_table(campaign: Campaign, *, state: CampaignState | None = None,
                 sources.append((f"manifest line {whole.line}", dict(whole.fields)))
                 problem = whole.problem
             elif not test_rows:
-                hints.append(f"no row for it in manifest {manifest.name}")
+                near = manifest.near_miss(path.name)
+                hints.append(f"no row for it in manifest {manifest.name}" + (
+                    f" (did you mean its row {near!r}? name the file as it is, "
+                    f"{path.name!r})" if near else ""))
         if campaign.filename_pattern is not None:
             found = match_pattern(campaign.filename_pattern, path.stem)
             if found is None:

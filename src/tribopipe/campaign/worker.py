@@ -20,7 +20,7 @@ from typing import Any
 from ..errors import CampaignError, TribopipeError
 from ..escape import display_path, printable
 from ..figures import trace_figure
-from ..labels import RunLabels, Undescribed
+from ..labels import FLAG_SYNTHETIC, RunLabels, Undescribed
 from ..pipeline import (
     ExportRuns,
     FailedRun,
@@ -112,7 +112,9 @@ def _reduce_one(job: _Job, ctx: _Context) -> FileOutcome:
         return run_labels(job, place, name, campaign, tests_with_runs)
 
     return reduce_export(job.path, campaign.settings, labels_for, campaign.read_options,
-                         tolerances=campaign.tolerances, file_hash=job.sha256,
+                         tolerances=campaign.tolerances,
+                         extra_flags=(FLAG_SYNTHETIC,) if campaign.synthetic else (),
+                         file_hash=job.sha256,
                          outputs=RunOutputs(campaign.layout, plot=ctx.plots), name=job.file)
 
 

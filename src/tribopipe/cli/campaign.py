@@ -62,6 +62,7 @@ def _shorten(path: Any) -> str:
 def _run(campaign: Any, jobs: int | None, plots: bool | None) -> None:
     from ..campaign import run_campaign
     from ..escape import display_path, printable
+    from ..frictionmap.synthetic_rows import campaign_note
     from ..layout import OutputLayout
 
     bar: Any = None
@@ -83,6 +84,8 @@ def _run(campaign: Any, jobs: int | None, plots: bool | None) -> None:
             bar.__exit__(None, None, None)
     for note in report.notes:
         click.echo(f"note: {printable(note)}", err=True)
+    if campaign.synthetic:
+        click.echo(f"note: {campaign_note()}", err=True)
     for file, reason in report.failures:
         # reasons name their file already (campaign-relative), except rare library ones
         name, reason = display_path(file), printable(reason)

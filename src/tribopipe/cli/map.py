@@ -104,17 +104,21 @@ def merge_cmd(other: str, replace: bool, lab: str | None, map_path: str) -> None
               "CC0-1.0, CC-BY-SA-4.0, ODC-By-1.0, ODbL-1.0 or PDDL-1.0.")
 @click.option("--title", help="Title of the package (default: '<lab> friction map').")
 @click.option("--overwrite", is_flag=True, help="Replace a package already in FOLDER.")
+@click.option("--allow-synthetic", is_flag=True,
+              help="Publish rows flagged synthetic (demo data) too; refused without it.")
 @map_option
 @friendly_errors
 def publish_cmd(folder: str, lab: str, contact: str | None, email: str | None, licence: str,
-                title: str | None, overwrite: bool, map_path: str) -> None:
+                title: str | None, overwrite: bool, allow_synthetic: bool,
+                map_path: str) -> None:
     """Write the map as a Frictionless Data Package in FOLDER: datapackage.json (schema,
     units, licence, sources, size and SHA-256 of every file), the runs and groups as CSV
     and Parquet, the 7-column FrictionMap table, the explorer page, a README and a
     CITATION.cff that cites the founding paper.
 
     The data licence defaults to CC-BY-4.0. The package is checked as `map validate`
-    would before it is moved into place; it is never half-written.
+    would before it is moved into place; it is never half-written. A map with runs
+    flagged synthetic (the demo's) is refused unless --allow-synthetic is given.
 
     \b
     Example:
@@ -125,7 +129,7 @@ def publish_cmd(folder: str, lab: str, contact: str | None, email: str | None, l
     from ..export.publish import publish_map
 
     done = publish_map(map_path, folder, Publisher(lab, contact, email, licence, title),
-                       overwrite=overwrite)
+                       overwrite=overwrite, allow_synthetic=allow_synthetic)
     say(f"wrote {done.path}: {done.n_runs} runs in {len(done.files)} files "
         f"(check it with `tribopipe map validate {done.path}`)")
 
@@ -142,9 +146,22 @@ def validate_cmd(path: str) -> None:
     Prints one line per problem, naming the file, row and field; exit code 1 on any. The
     package is treated as hostile: paths outside it, URLs, huge files and deeply nested
     JSON are refused, never followed.
+
+    PATH may also be a friction map (a .parquet file): its rows are checked as `map
+    publish` checks them before writing a package.
     """
     from ..frictionmap import check_package
 
+    if path.lower().endswith(".parquet"):
+        from ..frictionmap.summary import check_map_file
+
+        problems, verdict = check_map_file(path)
+        for line in problems:
+            say(line)
+        say(verdict)
+        if problems:
+            raise SystemExit(1)
+        return
     result = check_package(path)
     for line in result.lines():
         say(line)

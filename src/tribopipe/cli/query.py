@@ -41,6 +41,7 @@ def query_cmd(
     support), and their combined standard uncertainties u (the runs' own budgets beside
     the repeat scatter; U = 2u at k = 2) interpolated likewise.
     """
+    from ..frictionmap.synthetic_rows import map_synthetic_note
     from ..numeric import finite_json
     from ..query import format_result, query_map
 
@@ -49,3 +50,6 @@ def query_cmd(
         click.echo(json.dumps(finite_json(result.to_dict()), indent=2, allow_nan=False))
     else:
         click.echo(format_result(result))
+    note = map_synthetic_note(map_path)
+    if note is not None:  # on stderr with --json, so the JSON stays one document
+        click.echo(note, err=as_json)

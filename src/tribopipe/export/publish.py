@@ -73,6 +73,8 @@ from ..frictionmap.package import (
     RUNS_PARQUET,
 )
 from ..frictionmap.schema import _KIND
+from ..frictionmap.synthetic_rows import synthetic_count
+from ..labels import FLAG_SYNTHETIC
 from ..query import pairs
 from ..stats import group_statistics
 from .citation import (
@@ -305,13 +307,15 @@ def build_package(runs: pd.DataFrame, publisher: Publisher, folder: Path, *,
 
 def publish_map(map_path: str | os.PathLike[str], out_dir: str | os.PathLike[str],
                 publisher: Publisher, *, overwrite: bool = False,
-                date: str | None = None) -> PublishedPackage:
+                date: str | None = None, allow_synthetic: bool = False) -> PublishedPackage:
     """Write the map at ``map_path`` as a data package in the folder ``out_dir`` (see the
     module docstring). ``date`` (``YYYY-MM-DD``, default today, UTC) is the release date.
 
     Raises :class:`ExportError` for an empty map, rows that fail the checks (the first
     named, the rest counted), a bad publisher, or an ``out_dir`` that exists and is not
-    empty — unless it is a package and ``overwrite`` is given.
+    empty — unless it is a package and ``overwrite`` is given; and for a map with rows
+    flagged synthetic (:mod:`tribopipe.frictionmap.synthetic_rows`) unless
+    ``allow_synthetic`` is given (they are never a lab's measurements).
     """
     publisher = publisher.checked()
     date = date or datetime.now(UTC).strftime("%Y-%m-%d")
@@ -323,6 +327,16 @@ def publish_map(map_path: str | os.PathLike[str], out_dir: str | os.PathLike[str
     if runs.empty:
         raise ExportError("the friction map is empty or absent; nothing to publish",
                           path=map_path)
+    n_synthetic = synthetic_count(runs)
+    if n_synthetic and not allow_synthetic:
+        raise ExportError(
+            f"{n_synthetic} of {len(runs)} runs are synthetic (flagged "
+            f"'{FLAG_SYNTHETIC}': demo data, not measured); they cannot be published as a "
+            "lab's measurements",
+            path=map_path,
+            hint="publish a map of your own runs, or pass --allow-synthetic for a "
+                 "package of demo data",
+        )
     runs = package_runs_table(runs, publisher.lab)
     problems = validate_runs(runs, require_lab=True)
     if problems:

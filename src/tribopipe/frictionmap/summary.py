@@ -7,11 +7,13 @@ from pathlib import Path
 from typing import Any
 
 from ..errors import MapError
-from ..escape import printable
+from ..escape import display_path, printable
 from ..measurement import interval_label
 from ..stats import group_statistics, repeatability
+from .checks import validate_runs
 from .schema import _missing
 from .store import read_map
+from .synthetic_rows import synthetic_note
 
 
 def map_summary(path: str | os.PathLike[str], *, runs_listed: bool = False) -> str:
@@ -27,6 +29,9 @@ def map_summary(path: str | os.PathLike[str], *, runs_listed: bool = False) -> s
     lines.append(f"  runs: {len(runs)} ({n_ex} excluded)")
     if runs.empty:
         return "\n".join(lines)
+    note = synthetic_note(runs)
+    if note is not None:
+        lines.append(f"  {note}")
     groups = group_statistics(runs)
     pairs = runs.groupby(["pin", "disc"], sort=True)
     lines.append(f"  contact pairs: {pairs.ngroups}; condition groups: {len(groups)}")
@@ -120,3 +125,18 @@ def _fmt_t(value: float) -> str:
 
 def _fmt_repeat(value: Any) -> str:
     return "?" if _missing(value) else str(value)
+
+
+def check_map_file(path: str | os.PathLike[str]) -> tuple[list[str], str]:
+    """Check the friction map (Parquet) at ``path`` as ``map publish`` would before
+    writing a package: every row against the map's rules
+    (:func:`~tribopipe.frictionmap.checks.validate_runs`). Returns one line per problem
+    and a verdict line. Raises :class:`MapError` for a file that is not a friction map."""
+    p = Path(path)
+    runs = read_map(p)
+    problems = [problem.line(display_path(p)) for problem in validate_runs(runs)]
+    note = synthetic_note(runs)
+    verdict = (f"friction map {display_path(p)}: {_runs(len(runs))}, "
+               + (f"{len(problems)} problem(s)" if problems else "every row passes the checks")
+               + (f"; {note}" if note else ""))
+    return problems, verdict

@@ -10,6 +10,7 @@ from __future__ import annotations
 import codecs
 import csv
 import functools
+import os
 import re
 from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
@@ -56,10 +57,56 @@ def read_bytes(path: str) -> bytes:
     """A file's bytes; :class:`ReadError` for a missing, unreadable or empty file, and for
     anything that is not a regular file (refused before it is opened:
     :func:`tribopipe.files.read_regular`) or is larger than :data:`MAX_EXPORT_BYTES`."""
-    raw = read_regular(path, max_bytes=MAX_EXPORT_BYTES, what="an export file")
+    try:
+        raw = read_regular(path, max_bytes=MAX_EXPORT_BYTES, what="an export file")
+    except ReadError as exc:
+        if not os.path.isdir(path):
+            raise
+        raise ReadError(exc.problem, path=path,
+                        hint="to reduce every export in a folder, run `tribopipe batch "
+                             "FOLDER`") from None
     if not raw.strip():
         raise ReadError("empty file", path=path, hint="export the measurement again")
+    kind = foreign_kind(raw, path)
+    if kind is not None:
+        what, hint = kind
+        raise ReadError(f"is {what}, not an instrument export", path=path, hint=hint)
     return raw
+
+
+_TABLE_HINT = ("export the test's data from the instrument software as a table "
+               "(.csv, .txt) or an .xlsx workbook")
+_ARCHIVE_HINT = "unpack it and reduce the exports inside (or pass their folder to batch)"
+#: leading bytes of files that are never an export: (magic, what it is, hint)
+_MAGIC: tuple[tuple[bytes, str, str], ...] = (
+    (b"%PDF-", "a PDF document", _TABLE_HINT),
+    (b"\x89PNG\r\n\x1a\n", "a PNG image", _TABLE_HINT),
+    (b"\xff\xd8\xff", "a JPEG image", _TABLE_HINT),
+    (b"GIF87a", "a GIF image", _TABLE_HINT),
+    (b"GIF89a", "a GIF image", _TABLE_HINT),
+    (b"II*\x00", "a TIFF image", _TABLE_HINT),
+    (b"MM\x00*", "a TIFF image", _TABLE_HINT),
+    (b"\x1f\x8b", "a gzip archive", _ARCHIVE_HINT),
+    (b"7z\xbc\xaf\x27\x1c", "a 7-Zip archive", _ARCHIVE_HINT),
+    (b"Rar!\x1a\x07", "a RAR archive", _ARCHIVE_HINT),
+    (b"\xfd7zXZ\x00", "an xz archive", _ARCHIVE_HINT),
+)
+
+
+def foreign_kind(raw: bytes, name: str = "") -> tuple[str, str] | None:
+    """``(what it is, hint)`` for bytes that are a document, an image or an archive by
+    their magic bytes (a PDF, PNG, JPEG, GIF, TIFF; a ZIP that is not an Excel workbook,
+    gzip, 7-Zip, RAR, xz, tar), ``None`` for anything else. A ZIP whose ``name`` ends
+    in ``.xlsx`` is left to the workbook reader (a broken workbook is said as such)."""
+    for magic, what, hint in _MAGIC:
+        if raw.startswith(magic):
+            return what, hint
+    if raw.startswith(b"PK\x03\x04") and b"xl/" not in raw and \
+            not name.lower().endswith((".xlsx", ".xlsm")):
+        return "a ZIP archive (not an Excel workbook)", _ARCHIVE_HINT
+    if raw[257:262] == b"ustar":
+        return "a tar archive", _ARCHIVE_HINT
+    return None
 
 
 def _utf16_without_bom(raw: bytes) -> str | None:

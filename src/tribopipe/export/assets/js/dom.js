@@ -50,11 +50,15 @@ function setNumber(input, value) {
   }
 }
 
-/* An input's text as the address carries it: the exact value while its rounded form is
-   shown, else what was typed. */
-function inputText(input) {
+/* A number to 4 significant digits, as the address writes a value the page filled in
+   (35.36776… kPa -> "35.37"; 0.000123456 -> "0.0001235"; 123456 -> "123500"). */
+function sig4(value) { return String(Number(value.toPrecision(4))); }
+
+/* An input's text as the address carries it: what the user typed, or a value the page
+   filled in to 4 significant digits (a link reading it back means the measured value). */
+function urlText(input) {
   var s = input.value.trim();
-  return s !== "" && input.dataset.shown === s ? input.dataset.exact : s;
+  return s !== "" && input.dataset.shown === s ? sig4(Number(input.dataset.exact)) : s;
 }
 
 /* Where a run came from, in words: "file · test / result" (the parts the map knows). */

@@ -4,7 +4,9 @@ var pinSelect = $("pin");
 var discSelect = $("disc");
 var tInput = $("temperature");
 var pInput = $("pressure");
-var state = { pair: 0, result: null, sortKey: null, sortDir: 1 };
+/* `missing`: what the link asked for that the map does not hold (a pin, a disc, a pair):
+   no μ is shown until the user chooses a pair. */
+var state = { pair: 0, result: null, sortKey: null, sortDir: 1, missing: null };
 
 var PINS = []; // [{key, name, pairs: [index...]}]
 PAIRS.forEach(function (pair, i) {
@@ -96,11 +98,12 @@ function note(text) {
 }
 
 function writeUrl() {
+  if (state.missing) return;  // the address keeps what the link asked for
   var q = new URLSearchParams();
   q.set("pin", PAIRS[state.pair].pin);
   q.set("disc", PAIRS[state.pair].disc);
-  if (inputText(pInput) !== "") q.set("pressure", inputText(pInput));
-  if (inputText(tInput) !== "") q.set("temperature", inputText(tInput));
+  if (urlText(pInput) !== "") q.set("pressure", urlText(pInput));
+  if (urlText(tInput) !== "") q.set("temperature", urlText(tInput));
   var url = location.pathname + "?" + q.toString() + location.hash;
   try {
     history.replaceState(history.state, "", url);
@@ -112,28 +115,40 @@ function writeUrl() {
 function readUrl() {
   var q = new URLSearchParams(location.search);
   var notes = [];
+  var missing = [];
   var pinIndex = 0;
   if (q.has("pin")) {
     var k = key(q.get("pin"));
     var found = PINS.findIndex(function (p) { return p.key === k; });
-    if (found < 0) notes.push("the link's pin “" + q.get("pin") + "” is not in this map");
+    if (found < 0) missing.push("the link's pin “" + q.get("pin") + "” is not in this map");
     else pinIndex = found;
   }
   var discKey = q.has("disc") ? key(q.get("disc")) : null;
   setPin(pinIndex, discKey);
-  if (discKey !== null && key(PAIRS[state.pair].disc) !== discKey) {
-    notes.push("the link's disc “" + q.get("disc") + "” is not measured with " + PINS[pinIndex].name);
+  if (!missing.length && discKey !== null && key(PAIRS[state.pair].disc) !== discKey) {
+    var known = PAIRS.some(function (p) { return key(p.disc) === discKey; });
+    missing.push("the link's disc “" + q.get("disc") + "” " + (known ?
+      "is not measured with " + PINS[pinIndex].name : "is not in this map"));
   }
-  [["temperature", tInput], ["pressure", pInput]].forEach(function (f) {
-    if (!q.has(f[0])) return;
-    var text = q.get(f[0]).trim();
-    var n = Number(text);
-    // a long number (a measured pressure's full digits) shows rounded and counts exact
-    if (text !== "" && Number.isFinite(n)) {
-      if (Number(pyG(n)) === n) f[1].value = text; else setNumber(f[1], n);
-    } else notes.push("the link's " + f[0] + " “" + q.get(f[0]) + "” is not a number");
-  });
-  note(notes.join("; "));
+  var pair = PAIRS[state.pair];
+  [["temperature", tInput, pairTemperatures(pair)], ["pressure", pInput, pairPressures(pair)]]
+    .forEach(function (f) {
+      if (!q.has(f[0])) return;
+      var text = q.get(f[0]).trim();
+      var n = Number(text);
+      if (text !== "" && Number.isFinite(n)) {
+        // a measured value written to 4 significant digits (or in full) means that value:
+        // it shows rounded and counts exact
+        var measured = f[2].find(function (v) { return v === n || sig4(v) === text; });
+        if (Number(pyG(n)) === n && measured === n) f[1].value = text;  // as typed
+        else if (measured !== undefined) setNumber(f[1], measured);
+        else if (Number(pyG(n)) === n) f[1].value = text;
+        else setNumber(f[1], n);
+      } else notes.push("the link's " + f[0] + " “" + q.get(f[0]) + "” is not a number");
+    });
+  state.missing = missing.length ? missing.join("; ") +
+    ": no μ is shown; choose a pin and a disc above" : null;
+  note(notes.concat(missing).join("; "));
 }
 
 
@@ -246,6 +261,7 @@ function download() {
 // ---------------------------------------------------------------- wiring
 
 function compute() {
+  if (state.missing) return [null, state.missing];
   var p = inputNumber(pInput);
   var t = inputNumber(tInput);
   if (p === null) return [null, "enter a contact pressure [kPa]"];
@@ -280,11 +296,13 @@ function update(withDefaults) {
 fillSelect(pinSelect, PINS.map(function (p, i) { return { value: i, text: p.name }; }));
 pinSelect.addEventListener("change", function () {
   setPin(Number(pinSelect.value), key(PAIRS[state.pair].disc));
+  state.missing = null;
   note("");
   update(true);
 });
 discSelect.addEventListener("change", function () {
   state.pair = Number(discSelect.value);
+  state.missing = null;
   note("");
   update(true);
 });

@@ -1,0 +1,65 @@
+"""Rows that are not a lab's measurements: runs reduced from synthetic exports.
+
+A campaign whose config says ``synthetic = true`` (the shipped demo, ``configs/example.toml``)
+flags every run it records with :data:`FLAG_SYNTHETIC`. The flag is the one rule: ``query``,
+``report`` and ``map show`` say when a map holds such rows (:func:`synthetic_note`), and
+``map publish`` refuses them under a lab's name unless told otherwise.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+from ..labels import FLAG_SYNTHETIC
+from .store import read_map
+
+if TYPE_CHECKING:
+    import pandas as pd
+
+def qc_flags_only(flags: object) -> str:
+    """The ``;``-joined flags of a row without :data:`FLAG_SYNTHETIC` (which a synthetic
+    campaign's every run carries, so it is said once, not per run)."""
+    text = flags if isinstance(flags, str) else ""
+    return ";".join(f for f in text.split(";") if f and f != FLAG_SYNTHETIC)
+
+
+def campaign_note() -> str:
+    """What a campaign with ``synthetic = true`` says once after its batch."""
+    return (f"the campaign says synthetic = true: its runs are flagged '{FLAG_SYNTHETIC}' "
+            "(demo data, never published as a lab's measurements)")
+
+
+def synthetic_mask(runs: pd.DataFrame) -> pd.Series:
+    """Boolean Series over ``runs`` (map rows): True where ``flags`` holds
+    :data:`FLAG_SYNTHETIC`."""
+    return runs["flags"].map(
+        lambda text: isinstance(text, str) and FLAG_SYNTHETIC in text.split(";")
+    ).astype(bool)
+
+
+def synthetic_count(runs: pd.DataFrame) -> int:
+    """How many of ``runs`` (map rows) are synthetic."""
+    if runs.empty or "flags" not in runs:
+        return 0
+    return int(synthetic_mask(runs).sum())
+
+
+def synthetic_note(runs: pd.DataFrame) -> str | None:
+    """One line saying how many of ``runs`` are synthetic (``None`` when none are)."""
+    n = synthetic_count(runs)
+    if n == 0:
+        return None
+    whole = f"all {n}" if n == len(runs) else f"{n} of {len(runs)}"
+    return (f"note: {whole} runs are SYNTHETIC (demo data flagged '{FLAG_SYNTHETIC}'), "
+            "not measurements")
+
+
+def map_synthetic_note(path: str | os.PathLike[str]) -> str | None:
+    """:func:`synthetic_note` of the map at ``path`` (``None`` for a map without synthetic
+    rows, or no map)."""
+    if not Path(path).is_file():
+        return None
+    note = synthetic_note(read_map(path))
+    return None if note is None else note.replace(" runs are", " runs of this map are", 1)

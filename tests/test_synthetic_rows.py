@@ -1,0 +1,81 @@
+"""Demo rows are never a lab's measurements: rows flagged ``synthetic`` are refused by
+``map publish`` without --allow-synthetic, and ``map show``, ``query`` and ``report`` say
+when a map holds them."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+from click.testing import CliRunner
+
+from tribopipe import frictionmap as fm
+from tribopipe.cli import main
+from tribopipe.frictionmap.synthetic_rows import FLAG_SYNTHETIC, synthetic_count
+
+NOTE = "SYNTHETIC"
+
+
+def invoke(*args: str):
+    return CliRunner().invoke(main, list(args), catch_exceptions=False)
+
+
+def _map(tmp_path: Path, n_synthetic: int) -> Path:
+    """The published map imported, with its first ``n_synthetic`` rows flagged synthetic."""
+    path = tmp_path / "friction_map.parquet"
+    result = invoke("map", "import", "--published", "--map", str(path))
+    assert result.exit_code == 0, result.output
+    runs = fm.read_map(path)
+    runs.loc[runs.index[:n_synthetic], "flags"] = FLAG_SYNTHETIC
+    fm.write_map(path, runs)
+    assert synthetic_count(fm.read_map(path)) == n_synthetic
+    return path
+
+
+@pytest.mark.parametrize("n_synthetic", [0, 3])
+def test_map_show_says_when_rows_are_synthetic(tmp_path: Path, n_synthetic: int) -> None:
+    path = _map(tmp_path, n_synthetic)
+    result = invoke("map", "show", "--map", str(path))
+    assert result.exit_code == 0, result.output
+    assert (NOTE in result.output) == bool(n_synthetic)
+    if n_synthetic:
+        assert f"{n_synthetic} of " in result.output
+
+
+def test_query_says_when_the_map_holds_synthetic_rows(tmp_path: Path) -> None:
+    path = _map(tmp_path, 2)
+    args = ("query", "--pin", "Dragonskin 30", "--disc", "steel", "--pressure", "30",
+            "--temperature", "20", "--map", str(path))
+    result = invoke(*args)
+    assert result.exit_code == 0, result.output
+    assert NOTE in result.output
+    # with --json the note goes to stderr: stdout stays one JSON document
+    result = CliRunner().invoke(main, [*args, "--json"])
+    assert result.exit_code == 0, result.output
+    json.loads(result.stdout)
+    assert NOTE in result.stderr
+    clean = _map(tmp_path / "clean", 0)
+    assert NOTE not in invoke(*args[:-1], str(clean)).output
+
+
+def test_publish_refuses_synthetic_rows_under_a_lab_without_the_option(tmp_path: Path) -> None:
+    path = _map(tmp_path, 1)
+    refused = invoke("map", "publish", str(tmp_path / "pkg"), "--lab", "Some Lab",
+                     "--map", str(path))
+    assert refused.exit_code == 1
+    assert "synthetic" in refused.output and "--allow-synthetic" in refused.output
+    assert not (tmp_path / "pkg").exists()
+    done = invoke("map", "publish", str(tmp_path / "pkg"), "--lab", "Some Lab",
+                  "--allow-synthetic", "--map", str(path))
+    assert done.exit_code == 0, done.output
+    assert (tmp_path / "pkg" / "datapackage.json").is_file()
+
+
+def test_report_says_when_rows_are_synthetic(tmp_path: Path) -> None:
+    path = _map(tmp_path, 5)
+    out = tmp_path / "report.html"
+    result = invoke("report", "--map", str(path), "-o", str(out))
+    assert result.exit_code == 0, result.output
+    page = out.read_text(encoding="utf-8")
+    assert 'class="synthetic"' in page and f"5 of {len(fm.read_map(path))}" in page

@@ -24,7 +24,7 @@ from pathlib import Path
 
 from tribopipe.config import load_settings
 from tribopipe.readers import read_export
-from tribopipe.reduce import reduce_measurement, select_friction_interval
+from tribopipe.reduction.reduce import reduce_measurement, select_friction_interval
 from tribopipe.synthetic import SyntheticRun, truth, write_rheocompass_export
 
 SHAPES = ("overshoot", "no_overshoot", "stick_slip", "drift", "cliff")

@@ -102,7 +102,7 @@ def _one(job: tuple[int, GridPoint, str, bool]) -> dict[str, Any]:
     from tribopipe.config import load_settings
     from tribopipe.errors import TribopipeError
     from tribopipe.readers import read_export
-    from tribopipe.reduce import reduce_measurement, select_friction_interval
+    from tribopipe.reduction.reduce import reduce_measurement, select_friction_interval
     from tribopipe.synthetic_ratestate import write_export
 
     i, point, folder, keep = job

@@ -69,10 +69,10 @@ def per_file(folder: Path, repeat: int) -> dict:
     from tribopipe.config import load_settings
     from tribopipe.files import file_sha256
     from tribopipe.frictionmap import make_record
-    from tribopipe.intervals import select_friction_interval
     from tribopipe.pipeline import RunLabels, RunOutcome, plot_run, write_trace
     from tribopipe.readers import read_export
-    from tribopipe.reduce import reduce_measurement
+    from tribopipe.reduction.intervals import select_friction_interval
+    from tribopipe.reduction.reduce import reduce_measurement
     from tribopipe.synthetic import SyntheticRun, write_rheocompass_export
 
     gc.set_threshold(*GC_THRESHOLDS)  # as in the batch's workers: their GC setting,
@@ -81,7 +81,7 @@ def per_file(folder: Path, repeat: int) -> dict:
     labels = RunLabels("Dragonskin 30", "steel", 3.0, 20.0, 1)
     layouts = {"utf16-tab-en": {}, "utf8-comma": {"encoding": "utf-8", "delimiter": ","},
                "utf16-tab-fr": {"language": "fr"}}
-    from tribopipe import signals
+    from tribopipe.reduction import signals
 
     steps: dict[str, list[float]] = {k: [] for k in
                                       ("read", "reduce", "reduce_cold", "hash_record", "trace",

@@ -53,7 +53,7 @@ def _one(job: tuple[int, GridPoint, str]) -> dict[str, Any]:
     from tribopipe.config import load_settings
     from tribopipe.errors import TribopipeError
     from tribopipe.readers import read_export
-    from tribopipe.reduce import reduce_measurement, select_friction_interval
+    from tribopipe.reduction.reduce import reduce_measurement, select_friction_interval
 
     i, point, folder = job
     group, run = point.set, point.build()

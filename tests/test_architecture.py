@@ -30,21 +30,22 @@ MAX_LINES = 700
 #: never one above. A module belongs to the layer of the longest name that prefixes it.
 LAYERS: tuple[tuple[str, ...], ...] = (
     # the base: errors, escapes of outside text, validation of outside values, files on
-    # disk, numbers from outside, units, the output folder, the signal filters
+    # disk, numbers from outside, units, the output folder
     ("tribopipe", "tribopipe.errors", "tribopipe.escape", "tribopipe.validate",
-     "tribopipe.files", "tribopipe.numeric", "tribopipe.units", "tribopipe.layout",
-     "tribopipe.signals"),
+     "tribopipe.files", "tribopipe.numeric", "tribopipe.units", "tribopipe.layout"),
     ("tribopipe.measurement",),
     ("tribopipe.physics",),
     ("tribopipe.config",),
-    # a run's uncertainty budget from the instrument's uncertainties
-    ("tribopipe.uncertainty",),
     # raw exports in (readers) and out (synthetic test exports)
     ("tribopipe.readers", "tribopipe.synthetic", "tribopipe.synthetic_contact",
      "tribopipe.synthetic_instrument", "tribopipe.synthetic_ratestate"),
-    ("tribopipe.intervals",),
-    ("tribopipe.detection",),
-    ("tribopipe.reduce",),
+    # the reduction method, one package (its docstring describes the method): the signal
+    # filters and a run's uncertainty budget, the friction interval, the detection steps,
+    # the reduction of one run
+    ("tribopipe.reduction", "tribopipe.reduction.signals", "tribopipe.reduction.uncertainty"),
+    ("tribopipe.reduction.intervals",),
+    ("tribopipe.reduction.detection",),
+    ("tribopipe.reduction.reduce",),
     ("tribopipe.figures",),
     # pure statistics over map rows: below the map, whose printed summary uses them
     ("tribopipe.stats",),
@@ -202,7 +203,7 @@ def test_the_graph_sees_every_kind_of_import() -> None:
     """The checks below are only as good as this walk: it must see imports in functions,
     under TYPE_CHECKING, relative and absolute, of packages and of their modules."""
     pipeline = {(i.target, i.in_function, i.type_only) for i in GRAPH["tribopipe.pipeline"]}
-    assert ("tribopipe.reduce", False, False) in pipeline
+    assert ("tribopipe.reduction.reduce", False, False) in pipeline
     assert ("tribopipe.config", False, True) in pipeline  # under TYPE_CHECKING
     assert ("tribopipe.frictionmap.records", False, False) in pipeline
     assert ("tribopipe.frictionmap", False, False) in pipeline  # its package runs first
@@ -303,19 +304,22 @@ def test_the_checks_catch_what_they_are_for(tmp_path: Path) -> None:
     (pkg / "__init__.py").write_text("")
     (pkg / "errors.py").write_text("")
     (pkg / "config.py").write_text("from typing import TYPE_CHECKING\n"
-                                   "if TYPE_CHECKING:\n    from .reduce import X\n")
-    (pkg / "reduce.py").write_text("import click\nfrom .config import Y\n"
-                                   "def f():\n    from .report import Z\n")
+                                   "if TYPE_CHECKING:\n    from .reduction.reduce import X\n")
+    (pkg / "reduction").mkdir()
+    (pkg / "reduction" / "__init__.py").write_text("")
+    (pkg / "reduction" / "reduce.py").write_text("import click\nfrom ..config import Y\n"
+                                   "def f():\n    from ..report import Z\n")
     (pkg / "report.py").write_text("x = 1\n" * (MAX_LINES + 1))
     (pkg / "cli" / "__init__.py").write_text("import numpy\nfrom ..report import W\n")
     try:
         SRC = tmp_path
         MODULES = {module_name(p): p for p in sorted(pkg.rglob("*.py"))}
         GRAPH = {name: imports_of(name) for name in MODULES}
-        assert cycles() == [["tribopipe.config", "tribopipe.reduce"]]
+        assert cycles() == [["tribopipe.config", "tribopipe.reduction.reduce"]]
         with pytest.raises(AssertionError, match=r"config.py:3: .*\(type-only\)"):
             test_there_is_no_import_cycle()
-        reduce_layer, report_layer = layer_of("tribopipe.reduce"), layer_of("tribopipe.report")
+        reduce_layer = layer_of("tribopipe.reduction.reduce")
+        report_layer = layer_of("tribopipe.report")
         upward = f"layer {reduce_layer} imports layer {report_layer}"
         with pytest.raises(AssertionError, match=upward):
             test_no_module_imports_from_a_higher_layer()

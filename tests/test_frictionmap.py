@@ -26,7 +26,7 @@ from tribopipe.config import InstrumentConfig, load_settings, settings_from_dict
 from tribopipe.errors import MapError, ValidationError
 from tribopipe.measurement import Measurement, MeasurementMeta
 from tribopipe.pipeline import RunLabels
-from tribopipe.reduce import ReductionResult, reduce_measurement
+from tribopipe.reduction.reduce import ReductionResult, reduce_measurement
 from tribopipe.synthetic import SyntheticRun, make_intervals
 
 PUBLISHED_CSV = fm.published_csv_path()

@@ -31,7 +31,7 @@ from tribopipe.physics import (
     sliding_distance_mm,
     sliding_speed_mm_s,
 )
-from tribopipe.reduce import (
+from tribopipe.reduction.reduce import (
     leading_rest,
     linear_slope,
     median_smooth,
@@ -98,12 +98,11 @@ def test_the_founding_speeds_are_defined_once() -> None:
     assert (FOUNDING_SPEED_RPM, FOUNDING_SLIDING_SPEED_MM_S) == (0.005, 0.007)
     assert sliding_speed_mm_s(FOUNDING_SPEED_RPM, FOUNDING_FRICTION_RADIUS_MM) == pytest.approx(
         FOUNDING_SLIDING_SPEED_MM_S, abs=5e-6)
-    from tribopipe import config, frictionmap, reduce, synthetic
+    from tribopipe import config, frictionmap, synthetic
 
     assert config.FOUNDING_FRICTION_RADIUS_MM is FOUNDING_FRICTION_RADIUS_MM
     assert frictionmap.PUBLISHED_SLIDING_SPEED_MM_S is FOUNDING_SLIDING_SPEED_MM_S
     assert synthetic.SyntheticRun().speed_rpm is FOUNDING_SPEED_RPM
-    assert reduce.sliding_speed_mm_s is sliding_speed_mm_s  # the old import still works
 
 
 def test_angle_in_rad_times_radius_in_mm_is_mm() -> None:

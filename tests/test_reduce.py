@@ -22,7 +22,7 @@ from hypothesis import strategies as st
 from tribopipe.config import InstrumentConfig, settings_from_dict
 from tribopipe.errors import ConfigError, MissingQuantityError, ReductionError
 from tribopipe.measurement import Measurement, MeasurementMeta
-from tribopipe.reduce import (
+from tribopipe.reduction.reduce import (
     FLAGS,
     ReductionParams,
     ReductionResult,
@@ -350,8 +350,9 @@ def test_a_missing_torque_column_names_what_was_found() -> None:
 
 def test_no_reduction_function_mutates_its_inputs() -> None:
     """astropy/pybaselines style: every input array is read-only; nothing may write."""
-    from tribopipe import intervals, physics
-    from tribopipe import reduce as r
+    from tribopipe import physics
+    from tribopipe.reduction import intervals
+    from tribopipe.reduction import reduce as r
 
     frames = []
     for frame in make_intervals(SyntheticRun(torque_offset_Nm=2e-4, seed=51)):

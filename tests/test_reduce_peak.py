@@ -16,7 +16,7 @@ import pytest
 from tribopipe.config import InstrumentConfig, settings_from_dict
 from tribopipe.errors import ConfigError
 from tribopipe.measurement import Measurement, MeasurementMeta
-from tribopipe.reduce import (
+from tribopipe.reduction.reduce import (
     ReductionParams,
     ReductionResult,
     reduce_measurement,

@@ -14,9 +14,9 @@ import numpy as np
 import pytest
 
 from tribopipe.config import InstrumentConfig
-from tribopipe.detection import find_plateau_start
 from tribopipe.measurement import Measurement, MeasurementMeta
-from tribopipe.reduce import ReductionParams, reduce_measurement
+from tribopipe.reduction.detection import find_plateau_start
+from tribopipe.reduction.reduce import ReductionParams, reduce_measurement
 
 INSTRUMENT = InstrumentConfig()
 PARAMS = ReductionParams()

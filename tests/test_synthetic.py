@@ -21,7 +21,7 @@ from conftest import DATA
 from tribopipe.config import InstrumentConfig
 from tribopipe.measurement import CANONICAL_COLUMNS
 from tribopipe.readers import read_export
-from tribopipe.reduce import ReductionParams, reduce_measurement, select_friction_interval
+from tribopipe.reduction.reduce import ReductionParams, reduce_measurement, select_friction_interval
 from tribopipe.synthetic import (
     SHAPES,
     SyntheticRun,

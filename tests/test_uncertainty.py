@@ -14,9 +14,8 @@ import pytest
 from tribopipe.config import FOUNDING_FRICTION_RADIUS_MM, InstrumentConfig, settings_from_dict
 from tribopipe.errors import ConfigError
 from tribopipe.measurement import Measurement, MeasurementMeta
-from tribopipe.reduce import reduce_measurement, select_friction_interval
-from tribopipe.synthetic import SyntheticRun, make_intervals
-from tribopipe.uncertainty import (
+from tribopipe.reduction.reduce import reduce_measurement, select_friction_interval
+from tribopipe.reduction.uncertainty import (
     budget,
     integrated_autocorrelation_time,
     mean_standard_error,
@@ -24,6 +23,7 @@ from tribopipe.uncertainty import (
     unknown_offset_u_Nm,
     zero_offset_standard_error,
 )
+from tribopipe.synthetic import SyntheticRun, make_intervals
 
 INSTRUMENT = InstrumentConfig()
 

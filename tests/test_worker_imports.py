@@ -1,6 +1,7 @@
 """Issue 10: a batch worker does not pay for SciPy's start-up (~0.9 s per process for
-``scipy.signal``). The reduction's filters are NumPy (:mod:`tribopipe.signals`); SciPy stays
-where it earns its import (``stats``' Student-t quantiles, which a batch does not need).
+``scipy.signal``). The reduction's filters are NumPy
+(:mod:`tribopipe.reduction.signals`); SciPy stays where it earns its import (``stats``'
+Student-t quantiles, which a batch does not need).
 
 Checked on a real ``tribopipe batch`` in a real process with a pool of two forked workers
 and plots on: an audit hook logs every SciPy module imported and by which process, and a

@@ -6,7 +6,7 @@ An instrument config has two tables:
     the measuring cell's geometry (:class:`InstrumentConfig`);
 ``[reduction]``
     the parameters of the μ_S / μ_K detection (:class:`ReductionParams`, used by
-    :mod:`tribopipe.reduce`).
+    :mod:`tribopipe.reduction.reduce`).
 
 Both are optional: a missing key keeps the founding setup's default. Unknown keys are an
 error (a typo must not silently fall back to a default). A campaign config may override
@@ -51,7 +51,7 @@ MAX_CONFIG_BYTES = 16 * 1024 * 1024
 SECTIONS: tuple[str, ...] = ("instrument", "reduction")
 
 
-#: The name and version of the reduction method (:mod:`tribopipe.reduce`): part of every
+#: The name and version of the reduction method (:mod:`tribopipe.reduction.reduce`): part of every
 #: config hash, so a batch re-reduces its runs when the method changes.
 REDUCTION_METHOD = "tribopipe-v2"
 

@@ -1,10 +1,10 @@
 """One export from raw file to friction-map records: read → its runs → reduce → record.
 
 An export holds one run per friction interval of every test and result
-(:func:`tribopipe.intervals.friction_intervals`): a single test with a set-up and a
+(:func:`tribopipe.reduction.intervals.friction_intervals`): a single test with a set-up and a
 friction interval gives one run, a session export one run per test, a test with force or
 speed steps one run per step. This is the orchestration used by ``tribopipe reduce`` and
-by campaigns; readers and writers stay at the edges, :mod:`tribopipe.reduce` does the
+by campaigns; readers and writers stay at the edges, :mod:`tribopipe.reduction.reduce` does the
 physics.
 
 :func:`read_runs` reads an export and cuts it into its runs (:class:`ExportRuns`: each
@@ -40,17 +40,17 @@ from .frictionmap.duplicates import (
 )
 from .frictionmap.records import RunLabels, Tolerances, make_record, measurement_id
 from .frictionmap.store import AppendReport, append_records, read_map
-from .intervals import friction_intervals
 from .layout import OutputLayout
 from .measurement import interval_label
 from .numeric import finite_json, finite_or_none
 from .readers import read_export
-from .reduce import reduce_measurement
+from .reduction.intervals import friction_intervals
+from .reduction.reduce import reduce_measurement
 
 if TYPE_CHECKING:
     from .config import Settings
     from .measurement import Measurement
-    from .reduce import ReductionResult
+    from .reduction.reduce import ReductionResult
 
 
 @dataclass(frozen=True)
@@ -147,7 +147,7 @@ def read_runs(
     file_hash: str | None = None,
 ) -> ExportRuns:
     """Read an export and cut it into its runs: one per friction interval of every test
-    and result (:func:`tribopipe.intervals.friction_intervals`).
+    and result (:func:`tribopipe.reduction.intervals.friction_intervals`).
 
     ``file_hash`` (SHA-256 of the file's bytes) is computed when not given. Raises
     :class:`tribopipe.errors.ReadError` when the file cannot be read as an export; a test

@@ -6,7 +6,7 @@ speed [mm/s]. Nominal values are rounded before grouping (force to 1e-6 N, tempe
 0.01 °C, speed to two significant digits) so 11.79 vs 11.7893 kPa never splits a group.
 
 Beside the repeat statistics each group carries its combined standard uncertainty (GUM,
-k = 1) from the runs' own budgets (:mod:`tribopipe.uncertainty`): ``u_run`` is the mean of
+k = 1) from the runs' own budgets (:mod:`tribopipe.reduction.uncertainty`): ``u_run`` is the mean of
 the runs' combined standard uncertainties, and the group mean's is
 ``u = √(sem² + u_run²)``: the repeat scatter (sem, which already holds each run's noise)
 plus the runs' uncertainty counted as fully correlated between the runs (its largest

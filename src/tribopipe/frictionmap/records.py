@@ -2,7 +2,7 @@
 
 :class:`RunLabels` say what a run is (pair and nominal conditions); :func:`make_record`
 builds its row (:data:`~tribopipe.frictionmap.schema.RUN_COLUMNS`) from a
-:class:`~tribopipe.reduce.ReductionResult`, with the off-nominal flags of
+:class:`~tribopipe.reduction.reduce.ReductionResult`, with the off-nominal flags of
 :func:`qc_flags` under :class:`Tolerances`; :func:`measurement_id` and
 :func:`imported_id` are the stable ids that make appending idempotent.
 """
@@ -27,7 +27,7 @@ from .schema import SOURCE_REDUCED, _now, records_frame
 if TYPE_CHECKING:
     from ..config import InstrumentConfig, Settings
     from ..measurement import MeasurementMeta
-    from ..reduce import ReductionResult
+    from ..reduction.reduce import ReductionResult
 
 #: Flag added when the nominal force was not given and the measured mean was used.
 FLAG_FORCE_ESTIMATED = "nominal_force_estimated"

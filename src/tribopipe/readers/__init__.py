@@ -478,7 +478,7 @@ def describe_export(
     encoding, delimiter, decimal mark, tests, results, intervals, points and every column
     with its original unit and the column it maps to.
 
-    ``choose`` (e.g. :func:`tribopipe.intervals.all_friction_intervals`) picks the
+    ``choose`` (e.g. :func:`tribopipe.reduction.intervals.all_friction_intervals`) picks the
     interval(s) a reduction reads; its pick(s), or the one-line reason it refuses, go into
     the summary.
     """

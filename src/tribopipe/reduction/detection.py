@@ -1,7 +1,7 @@
 """The detection steps of the reduction: the filters and readings behind μ_S and μ_K.
 
 The method — the order of the steps, their parameters and why — is described in the
-module docstring of :mod:`tribopipe.reduce`, which calls :func:`_detect` on the valid
+module docstring of :mod:`tribopipe.reduction`, which calls :func:`_detect` on the valid
 samples of a run (in contact and moving) and builds the result from its
 :class:`_Detection`. Everything here is pure: arrays in, new values out.
 """
@@ -16,8 +16,8 @@ from typing import Any
 
 import numpy as np
 
+from ..config import ReductionParams
 from . import uncertainty
-from .config import ReductionParams
 from .signals import (
     end_point_weights,
     flank_peak,
@@ -331,8 +331,8 @@ class _Detection:
 def stick_slip_test(s_mm: Any, mu: Any, params: ReductionParams) -> StickSlipTest:
     """Look for a periodic oscillation of μ (shape (n,), evenly sampled in time, over
     distances ``s_mm`` [mm]) with at least ``stick_slip_min_cycles`` cycles in the
-    window: :func:`tribopipe.signals.periodic_line` against
-    :func:`tribopipe.signals.line_threshold` at ``stick_slip_false_alarm``."""
+    window: :func:`tribopipe.reduction.signals.periodic_line` against
+    :func:`tribopipe.reduction.signals.line_threshold` at ``stick_slip_false_alarm``."""
     s = np.asarray(s_mm, dtype=float)
     m = np.asarray(mu, dtype=float)
     if m.size < 32:

@@ -35,7 +35,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 if TYPE_CHECKING:
-    from .config import InstrumentConfig
+    from ..config import InstrumentConfig
 
 COVERAGE_FACTOR = 2.0
 SOURCES: tuple[str, ...] = (

@@ -28,10 +28,13 @@ import os
 import platform
 import shutil
 import statistics
+import sys
 import tempfile
 import time
 import uuid
 from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))  # the generators
 
 HERE = Path(__file__).resolve().parent
 
@@ -65,6 +68,7 @@ def per_file(folder: Path, repeat: int) -> dict:
 
     from threadpoolctl import threadpool_limits
 
+    from generators.synthetic import SyntheticRun, write_rheocompass_export
     from tribopipe.campaign import GC_THRESHOLDS
     from tribopipe.config import load_settings
     from tribopipe.files import file_sha256
@@ -73,7 +77,6 @@ def per_file(folder: Path, repeat: int) -> dict:
     from tribopipe.readers import read_export
     from tribopipe.reduction.intervals import select_friction_interval
     from tribopipe.reduction.reduce import reduce_measurement
-    from tribopipe.synthetic import SyntheticRun, write_rheocompass_export
 
     gc.set_threshold(*GC_THRESHOLDS)  # as in the batch's workers: their GC setting,
     threadpool_limits(limits=1, user_api="blas")  # and one BLAS thread
@@ -147,9 +150,9 @@ def records(template: dict, n: int, start: int = 0) -> list[dict]:
 
 
 def template_record(folder: Path) -> dict:
+    from generators.synthetic import SyntheticRun, write_rheocompass_export
     from tribopipe.config import load_settings
     from tribopipe.pipeline import RunLabels, reduce_file
-    from tribopipe.synthetic import SyntheticRun, write_rheocompass_export
 
     path = write_rheocompass_export(folder / "t.csv", SyntheticRun(seed=1), project="p",
                                     test="t", sample="s")

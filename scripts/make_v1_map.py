@@ -18,10 +18,12 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))  # the generators
+
+from generators.synthetic import SyntheticRun, write_rheocompass_export
 from tribopipe import frictionmap as fm
 from tribopipe.config import load_settings
 from tribopipe.pipeline import RunLabels, reduce_file
-from tribopipe.synthetic import SyntheticRun, write_rheocompass_export
 
 
 def main(out: Path, raw_dir: Path) -> None:

@@ -21,12 +21,14 @@ import sys
 import tempfile
 from pathlib import Path
 
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))  # the generators
+
+from generators.synthetic import SyntheticRun, SyntheticTest, write_rheocompass_session
 from tribopipe import frictionmap as fm
 from tribopipe.config import load_settings
 from tribopipe.export.citation import Publisher
 from tribopipe.export.publish import publish_map
 from tribopipe.pipeline import RunLabels, reduce_export
-from tribopipe.synthetic import SyntheticRun, SyntheticTest, write_rheocompass_session
 
 #: Test name -> (mu_s, mu_k, force [N], seed)
 TESTS = {

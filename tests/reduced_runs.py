@@ -9,10 +9,10 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from generators.synthetic import SyntheticRun, write_rheocompass_export
 from tribopipe.config import load_settings
 from tribopipe.frictionmap import append_records
 from tribopipe.pipeline import RunLabels, reduce_file, write_trace
-from tribopipe.synthetic import SyntheticRun, write_rheocompass_export
 
 #: (file stem, pin, disc, force N, temperature °C, repeat, synthetic run)
 RUNS = [

@@ -36,9 +36,8 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("tribopipe.measurement",),
     ("tribopipe.physics",),
     ("tribopipe.config",),
-    # raw exports in (readers) and out (synthetic test exports)
-    ("tribopipe.readers", "tribopipe.synthetic", "tribopipe.synthetic_contact",
-     "tribopipe.synthetic_instrument", "tribopipe.synthetic_ratestate"),
+    # raw exports in
+    ("tribopipe.readers",),
     # the reduction method, one package (its docstring describes the method): the signal
     # filters and a run's uncertainty budget, the friction interval, the detection steps,
     # the reduction of one run

@@ -11,6 +11,7 @@ from pathlib import Path
 import pandas as pd
 import pytest
 
+from generators.synthetic import SyntheticRun, write_rheocompass_export
 from tribopipe.campaign import (
     CHANGED,
     FAILED,
@@ -21,7 +22,6 @@ from tribopipe.campaign import (
     load_campaign,
     run_campaign,
 )
-from tribopipe.synthetic import SyntheticRun, write_rheocompass_export
 
 PATTERN = "{pin}_{disc}_{force}N_{temperature}C_r{repeat}"
 DURATION_S = 150.0

@@ -13,8 +13,8 @@ import pandas as pd
 import pytest
 from click.testing import CliRunner
 
+from generators.synthetic import SyntheticRun, write_rheocompass_export
 from tribopipe.cli import main
-from tribopipe.synthetic import SyntheticRun, write_rheocompass_export
 
 PATTERN = "{pin}_{disc}_{force}N_{temperature}C_r{repeat}"
 GOOD = {"DS30_steel_1N_20C_r1": 0.62, "DS30_steel_5N_20C_r1": 0.36, "DS30_steel_5N_20C_r2": 0.37}

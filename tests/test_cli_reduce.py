@@ -11,8 +11,8 @@ import pandas as pd
 import pytest
 from click.testing import CliRunner
 
+from generators.synthetic import SyntheticRun, write_rheocompass_export
 from tribopipe.cli import main
-from tribopipe.synthetic import SyntheticRun, write_rheocompass_export
 
 RUN = SyntheticRun(
     mu_s=0.80, mu_k=0.55, shape="overshoot", noise=0.005, torque_offset_Nm=0.0,

@@ -20,6 +20,7 @@ import pyarrow.parquet as pq
 import pytest
 
 from conftest import shared_file
+from generators.synthetic import SyntheticRun, make_intervals
 from tribopipe import __version__
 from tribopipe import frictionmap as fm
 from tribopipe.config import InstrumentConfig, load_settings, settings_from_dict
@@ -27,7 +28,6 @@ from tribopipe.errors import MapError, ValidationError
 from tribopipe.measurement import Measurement, MeasurementMeta
 from tribopipe.pipeline import RunLabels
 from tribopipe.reduction.reduce import ReductionResult, reduce_measurement
-from tribopipe.synthetic import SyntheticRun, make_intervals
 
 PUBLISHED_CSV = fm.published_csv_path()
 
@@ -504,8 +504,8 @@ def test_map_summary_lists_pairs_flags_exclusions_and_repeatability(tmp_path):
 
 
 def test_real_exports_reduced_by_the_pipeline_land_once_in_the_map(tmp_path):
+    from generators.synthetic import write_rheocompass_export
     from tribopipe.pipeline import reduce_file
-    from tribopipe.synthetic import write_rheocompass_export
 
     path = tmp_path / "map.parquet"
     settings = load_settings()

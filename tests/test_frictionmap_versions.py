@@ -24,10 +24,10 @@ import pyarrow.parquet as pq
 import pytest
 from click.testing import CliRunner
 
+from generators.synthetic import SyntheticRun, write_rheocompass_export
 from tribopipe import frictionmap as fm
 from tribopipe.cli import main
 from tribopipe.pipeline import file_sha256
-from tribopipe.synthetic import SyntheticRun, write_rheocompass_export
 
 DATA = Path(__file__).parent / "data"
 V1_MAP = DATA / "frictionmap_v1.parquet"
@@ -138,9 +138,9 @@ def test_a_version_3_map_reads_with_test_and_result_missing() -> None:
 def test_the_session_reduced_again_is_the_same_two_runs_and_fills_nothing_in(
     tmp_path: Path
 ) -> None:
+    from generators.synthetic import write_rheocompass_session
     from tribopipe.config import load_settings
     from tribopipe.pipeline import RunLabels, reduce_export
-    from tribopipe.synthetic import write_rheocompass_session
 
     script = v3_fixture_script()
     target = tmp_path / "friction_map.parquet"
@@ -193,7 +193,7 @@ def test_map_show_runs_names_what_each_map_knows_of_a_run_s_origin(tmp_path: Pat
     assert sum("frictionmap_published.csv" in ln for ln in lines) == 3
 
     script = v3_fixture_script()
-    from tribopipe.synthetic import write_rheocompass_session
+    from generators.synthetic import write_rheocompass_session
 
     folder = tmp_path / "raw"
     folder.mkdir()

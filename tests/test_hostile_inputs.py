@@ -15,6 +15,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
+from generators.synthetic import make_intervals, write_intervals_export
 from hostile import (
     GOOD_RUN,
     assert_clean_failure,
@@ -26,7 +27,6 @@ from tribopipe.campaign import load_campaign, read_manifest, run_campaign
 from tribopipe.config import load_settings, settings_from_dict
 from tribopipe.errors import ConfigError, ValidationError
 from tribopipe.frictionmap import RunLabels, read_map
-from tribopipe.synthetic import make_intervals, write_intervals_export
 
 PATTERN = "{pin}_{disc}_{force}N_{temperature}C_r{repeat}"
 

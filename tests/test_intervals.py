@@ -9,12 +9,12 @@ from __future__ import annotations
 import pytest
 
 from conftest import shared_file
+from generators.synthetic import SyntheticRun, make_intervals
 from tribopipe.config import InstrumentConfig, ReductionParams
 from tribopipe.errors import MissingQuantityError, ReductionError
 from tribopipe.measurement import Measurement, MeasurementMeta
 from tribopipe.reduction.intervals import robust_mean, select_friction_interval
 from tribopipe.reduction.reduce import reduce_measurement
-from tribopipe.synthetic import SyntheticRun, make_intervals
 
 INSTRUMENT = InstrumentConfig()
 PARAMS = ReductionParams()

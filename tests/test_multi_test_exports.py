@@ -15,6 +15,7 @@ import pandas as pd
 import pytest
 from click.testing import CliRunner
 
+from generators.synthetic import SyntheticTest, write_rheocompass_session
 from multi_exports import (
     SESSION_TRUTH,
     run,
@@ -28,7 +29,6 @@ from tribopipe.config import load_settings
 from tribopipe.errors import ReductionError
 from tribopipe.frictionmap import measurement_id
 from tribopipe.pipeline import RunLabels, read_runs, reduce_export, reduce_file
-from tribopipe.synthetic import SyntheticTest, write_rheocompass_session
 
 SETTINGS = load_settings()
 

@@ -98,7 +98,8 @@ def test_the_founding_speeds_are_defined_once() -> None:
     assert (FOUNDING_SPEED_RPM, FOUNDING_SLIDING_SPEED_MM_S) == (0.005, 0.007)
     assert sliding_speed_mm_s(FOUNDING_SPEED_RPM, FOUNDING_FRICTION_RADIUS_MM) == pytest.approx(
         FOUNDING_SLIDING_SPEED_MM_S, abs=5e-6)
-    from tribopipe import config, frictionmap, synthetic
+    from generators import synthetic
+    from tribopipe import config, frictionmap
 
     assert config.FOUNDING_FRICTION_RADIUS_MM is FOUNDING_FRICTION_RADIUS_MM
     assert frictionmap.PUBLISHED_SLIDING_SPEED_MM_S is FOUNDING_SLIDING_SPEED_MM_S

@@ -8,9 +8,9 @@ from pathlib import Path
 import pandas as pd
 import pytest
 
+from generators.synthetic import SyntheticRun, write_rheocompass_export
 from tribopipe.config import load_settings
 from tribopipe.pipeline import RunLabels, reduce_file, run_summary, write_summary, write_trace
-from tribopipe.synthetic import SyntheticRun, write_rheocompass_export
 
 
 @pytest.fixture(scope="module")

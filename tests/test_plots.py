@@ -14,6 +14,7 @@ import pandas as pd
 import pytest
 from click.testing import CliRunner
 
+from generators.synthetic import SyntheticRun, write_rheocompass_export
 from published_map import PUBLISHED_CSV, published_runs, write_published_map
 from reduced_runs import RUNS, make_processed
 from tribopipe.cli import main
@@ -29,7 +30,6 @@ from tribopipe.export.plots import (
 )
 from tribopipe.frictionmap import read_map
 from tribopipe.pipeline import RunLabels, reduce_file
-from tribopipe.synthetic import SyntheticRun, write_rheocompass_export
 
 PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
 

@@ -19,6 +19,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from generators.synthetic import SyntheticRun, make_intervals, truth
 from tribopipe.config import InstrumentConfig, settings_from_dict
 from tribopipe.errors import ConfigError, MissingQuantityError, ReductionError
 from tribopipe.measurement import Measurement, MeasurementMeta
@@ -29,7 +30,6 @@ from tribopipe.reduction.reduce import (
     reduce_measurement,
     select_friction_interval,
 )
-from tribopipe.synthetic import SyntheticRun, make_intervals, truth
 
 INSTRUMENT = InstrumentConfig()
 PARAMS = ReductionParams()

@@ -2,7 +2,7 @@
 
 A centred smoothing averages the low values after a sudden slip into the peak and reads μ_S
 low; these checks hold the reduction to the issue's ±0.02 on peaks that collapse within
-0.002–0.01 mm, a trace family independent of ``tribopipe.synthetic``.
+0.002–0.01 mm, a trace family independent of ``generators.synthetic``.
 """
 
 from __future__ import annotations

@@ -11,6 +11,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
+from generators.synthetic import SyntheticRun, make_intervals
 from tribopipe.config import FOUNDING_FRICTION_RADIUS_MM, InstrumentConfig, settings_from_dict
 from tribopipe.errors import ConfigError
 from tribopipe.measurement import Measurement, MeasurementMeta
@@ -23,7 +24,6 @@ from tribopipe.reduction.uncertainty import (
     unknown_offset_u_Nm,
     zero_offset_standard_error,
 )
-from tribopipe.synthetic import SyntheticRun, make_intervals
 
 INSTRUMENT = InstrumentConfig()
 

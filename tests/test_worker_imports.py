@@ -21,7 +21,7 @@ from pathlib import Path
 
 import pytest
 
-from tribopipe.synthetic import SyntheticRun, write_rheocompass_export
+from generators.synthetic import SyntheticRun, write_rheocompass_export
 
 # Runs tribopipe's CLI after installing the hooks; every line of the log is
 # "<pid> <event> <detail>".

@@ -14,8 +14,7 @@ from hypothesis import strategies as st
 
 from tribopipe import frictionmap as fm
 from tribopipe.errors import MapError
-from tribopipe.frictionmap.schema import _KIND as KIND
-from tribopipe.frictionmap.schema import COLUMN_RANGES, COUNT_RANGES, REQUIRED
+from tribopipe.frictionmap.schema import BOUNDS, KIND, REQUIRED
 
 # A map's text: one printable line (no control, format, surrogate, private-use, unassigned
 # character, no line or paragraph separator: tribopipe.validate's rule for every map text).
@@ -29,7 +28,7 @@ MAYBE_TEXT = st.none() | TEXT
 def float_values(name: str):
     """Valid values of a float column: inside its physical range (NaN where it may be
     missing), else any finite number or NaN."""
-    bounds = COLUMN_RANGES.get(name)
+    bounds = BOUNDS.get(name)
     if bounds is None:
         return FLOAT
     inside = st.floats(min_value=bounds.low, max_value=bounds.high,
@@ -38,8 +37,8 @@ def float_values(name: str):
 
 
 def int_values(name: str):
-    low, high = COUNT_RANGES[name]
-    return st.none() | st.integers(min_value=low, max_value=high)
+    bounds = BOUNDS[name]
+    return st.none() | st.integers(min_value=int(bounds.low), max_value=int(bounds.high))
 
 
 @st.composite

@@ -22,6 +22,7 @@ from tribopipe.cli import main
 from tribopipe.export.citation import Publisher, yaml_text
 from tribopipe.export.publish import package_runs_table, publish_map
 from tribopipe.frictionmap.datapackage import PackageLimits, sha256_hash
+from tribopipe.validate import MU
 
 LAB = "Soft Robotics Lab, Example University"
 
@@ -137,7 +138,7 @@ def test_descriptor_has_schema_units_licence_and_citation_per_resource(package):
     assert fields["pressure_kPa"]["unit"] == "kPa"
     assert fields["temperature_C"]["unit"] == "°C"
     assert fields["mu_k"]["constraints"] == {"required": True, "minimum": 0.0,
-                                             "maximum": fm.MU_MAX}
+                                             "maximum": MU.high}
     titles = " ".join(s["title"] for s in d["sources"])
     assert fm.FOUNDING_PAPER["title"] in titles
     assert "CC-BY-4.0" in (package / "README.md").read_text(encoding="utf-8")

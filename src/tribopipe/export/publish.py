@@ -72,7 +72,7 @@ from ..frictionmap.package import (
     RUNS,
     RUNS_PARQUET,
 )
-from ..frictionmap.schema import _KIND
+from ..frictionmap.schema import KIND
 from ..query import pairs
 from ..stats import group_statistics
 from .citation import (
@@ -169,7 +169,7 @@ def package_runs_table(runs: pd.DataFrame, lab: str) -> pd.DataFrame:
     # none (never missing), every other empty text is written as missing
     out["flags"] = out["flags"].fillna("")
     for name in RUN_COLUMNS:
-        if _KIND[name] == "str" and name != "flags":
+        if KIND[name] == "str" and name != "flags":
             out.loc[out[name].astype(str) == "", name] = None
     return out
 
@@ -219,7 +219,7 @@ def build_package(runs: pd.DataFrame, publisher: Publisher, folder: Path, *,
     fits = fit_power_law(runs)
     data_licence = [publisher.licence_entry()]
     sources = _sources(publisher, year)
-    run_kinds = [_KIND[c] for c in RUN_COLUMNS]
+    run_kinds = [KIND[c] for c in RUN_COLUMNS]
     group_kinds = [column_kind(groups[c]) for c in groups.columns]
     files: dict[str, bytes] = {}
     resources = []

@@ -46,7 +46,7 @@ Guarantees of the store:
 
 from __future__ import annotations
 
-from .checks import MU_MAX, RANGES, RowProblem, validate_runs
+from .checks import RowProblem, validate_runs
 from .datapackage import DESCRIPTOR, PackageLimits, PackageRefused, Problem
 from .duplicates import (
     LABEL_COLUMNS,
@@ -156,8 +156,6 @@ __all__ = [
     "merge_map",
     "merge_map_file",
     "is_package",
-    "MU_MAX",
-    "RANGES",
     "RowProblem",
     "validate_runs",
     "DESCRIPTOR",

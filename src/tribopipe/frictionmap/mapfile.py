@@ -25,9 +25,9 @@ from ..errors import MapError, ReadError
 from ..escape import display_path
 from ..files import file_kind, os_reason, regular_file
 from .schema import (
-    _KIND,
-    _SCHEMA,
     ADDED_IN_VERSION,
+    COLUMNS,
+    KIND,
     META_KEY,
     RUN_COLUMNS,
     SCHEMA_NAME,
@@ -156,7 +156,7 @@ def _with_added_columns(table: Any, version: int) -> Any:
     types = {"str": pa.string(), "float": pa.float64(), "int": pa.int64()}
     for name in RUN_COLUMNS:
         if name not in table.column_names and ADDED_IN_VERSION.get(name, 1) > version:
-            table = table.append_column(name, pa.nulls(table.num_rows, types[_KIND[name]]))
+            table = table.append_column(name, pa.nulls(table.num_rows, types[KIND[name]]))
     return table
 
 
@@ -184,8 +184,8 @@ def _from_arrow(table: Any) -> pd.DataFrame:
 
     for name in RUN_COLUMNS:
         arrow_type = table.schema.field(name).type
-        if not _arrow_type_ok(_KIND[name], arrow_type):
-            kind = _KIND[name]
+        if not _arrow_type_ok(KIND[name], arrow_type):
+            kind = KIND[name]
             raise MapError(f"expected {kind} values, stored as {arrow_type}, not "
                            f"{'text' if kind == 'str' else kind}", column=name)
     try:
@@ -196,7 +196,7 @@ def _from_arrow(table: Any) -> pd.DataFrame:
         raise MapError(f"cannot read the rows ({_first_line(exc)})") from None
     columns: dict[str, Any] = {}
     for name in RUN_COLUMNS:
-        kind = _KIND[name]
+        kind = KIND[name]
         col = frame[name]
         try:
             if kind == "float":
@@ -255,8 +255,8 @@ def map_info(runs: pd.DataFrame) -> bytes:
         "schema": SCHEMA_NAME,
         "schema_version": SCHEMA_VERSION,
         "columns": [
-            {"name": name, "kind": kind, "unit": unit, "meaning": meaning}
-            for name, kind, unit, meaning in _SCHEMA
+            {"name": c.name, "kind": c.kind, "unit": c.unit, "meaning": c.meaning}
+            for c in COLUMNS
         ],
         "tribopipe_version": __version__,
         "written_at": _now(),

@@ -38,6 +38,7 @@ from .schema import (
     check_runs,
     frame_records,
     records_frame,
+    unvalidated_frame,
 )
 
 if TYPE_CHECKING:
@@ -319,8 +320,8 @@ def fold_records(
     Neither input is modified. Every row of the result keeps the rules of
     :func:`~tribopipe.frictionmap.schema.check_runs` (``runs`` may come from anywhere).
     """
-    merged, report = _fold(runs, records_frame(records), replace=replace)
-    return check_runs(merged, "row"), report
+    base = check_runs(runs.loc[:, list(RUN_COLUMNS)].reset_index(drop=True), "row")
+    return _fold(base, records_frame(records), replace=replace)
 
 
 def _fold(
@@ -328,7 +329,7 @@ def _fold(
 ) -> tuple[pd.DataFrame, AppendReport]:
     """:func:`fold_records` of records already validated into ``new_frame``; the rows
     of ``runs`` are not checked again (:func:`update_map` has them from :func:`read_map`,
-    which checked every one)."""
+    which checked every one), nor are the rows of ``new_frame``."""
     import pandas as pd
 
     base = runs.loc[:, list(RUN_COLUMNS)].reset_index(drop=True)
@@ -379,11 +380,11 @@ def _fold(
     merged = base
     if replaced:
         where = [position[mid] for mid in replaced]
-        swapped = records_frame([touched[i] for i in where], where="row")
+        swapped = unvalidated_frame([touched[i] for i in where], where="row")
         swapped.index = pd.Index(where)
         merged = pd.concat([merged.drop(index=where), swapped]).sort_index()
     if fresh:
-        extra = records_frame(list(fresh.values()), where="record")
+        extra = unvalidated_frame(list(fresh.values()), where="record")
         merged = pd.concat([merged, extra], ignore_index=True) if len(merged) else extra
     return merged.reset_index(drop=True), report
 
@@ -502,7 +503,8 @@ def set_excluded(
                 rows[i] = {**rows[i], "excluded": new_state[0], "exclusion_reason": new_state[1]}
                 changed.append(rows[i]["measurement_id"])
         if changed:
-            _write_atomic(p, records_frame(rows, where="row"))
+            # rows read (and checked) with a checked reason: not checked a second time
+            _write_atomic(p, unvalidated_frame(rows, where="row"))
     return changed
 
 

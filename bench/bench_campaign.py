@@ -255,7 +255,8 @@ def parse_only_pool(files: list[Path], jobs: int) -> tuple[float, float]:
     import resource
 
     import tribopipe.readers  # noqa: F401 - imported before the fork, as the batch does
-    from tribopipe.campaign.batch import _chunks, _worker_init
+    from tribopipe.campaign.batch import _chunks
+    from tribopipe.campaign.worker import _worker_init
 
     def children_cpu() -> float:
         usage = resource.getrusage(resource.RUSAGE_CHILDREN)
@@ -435,7 +436,7 @@ def main(argv: list[str] | None = None) -> dict:
                              "(--repeat times); prints the figures, writes no results file")
     args = parser.parse_args(argv)
 
-    from tribopipe.campaign import default_jobs
+    from tribopipe.campaign.batch import default_jobs
 
     jobs = args.jobs or default_jobs()
     out: Path = args.out.resolve()

@@ -69,11 +69,12 @@ def per_file(folder: Path, repeat: int) -> dict:
     from threadpoolctl import threadpool_limits
 
     from generators.synthetic import SyntheticRun, write_rheocompass_export
-    from tribopipe.campaign import GC_THRESHOLDS
+    from tribopipe.campaign.worker import GC_THRESHOLDS
     from tribopipe.config import load_settings
     from tribopipe.files import file_sha256
     from tribopipe.frictionmap import make_record
-    from tribopipe.pipeline import RunLabels, RunOutcome, plot_run, write_trace
+    from tribopipe.frictionmap.records import RunLabels
+    from tribopipe.pipeline import RunOutcome, plot_run, write_trace
     from tribopipe.readers import read_export
     from tribopipe.reduction.intervals import select_friction_interval
     from tribopipe.reduction.reduce import reduce_measurement
@@ -152,7 +153,8 @@ def records(template: dict, n: int, start: int = 0) -> list[dict]:
 def template_record(folder: Path) -> dict:
     from generators.synthetic import SyntheticRun, write_rheocompass_export
     from tribopipe.config import load_settings
-    from tribopipe.pipeline import RunLabels, reduce_file
+    from tribopipe.frictionmap.records import RunLabels
+    from tribopipe.pipeline import reduce_file
 
     path = write_rheocompass_export(folder / "t.csv", SyntheticRun(seed=1), project="p",
                                     test="t", sample="s")
@@ -161,7 +163,8 @@ def template_record(folder: Path) -> dict:
 
 def per_size(folder: Path, n: int, template: dict) -> dict:
     """Costs that grow with the number of runs N, at one N."""
-    from tribopipe.campaign import folder_campaign, load_state, save_state
+    from tribopipe.campaign import folder_campaign
+    from tribopipe.campaign.table import load_state, save_state
     from tribopipe.fit import fit_power_law
     from tribopipe.frictionmap import read_map, update_map
     from tribopipe.report import ReportInputs, build_report

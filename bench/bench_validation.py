@@ -55,7 +55,8 @@ def _one(job: tuple[int, GridPoint, str]) -> dict[str, Any]:
     from tribopipe.config import load_settings
     from tribopipe.errors import TribopipeError
     from tribopipe.readers import read_export
-    from tribopipe.reduction.reduce import reduce_measurement, select_friction_interval
+    from tribopipe.reduction.intervals import select_friction_interval
+    from tribopipe.reduction.reduce import reduce_measurement
 
     i, point, folder = job
     group, run = point.set, point.build()

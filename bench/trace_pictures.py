@@ -45,7 +45,8 @@ def main(argv: list[str] | None = None) -> list[Path]:
 
     from generators.synthetic import SyntheticRun, write_rheocompass_export
     from tribopipe.config import load_settings
-    from tribopipe.pipeline import RunLabels, plot_run, reduce_file
+    from tribopipe.frictionmap.records import RunLabels
+    from tribopipe.pipeline import plot_run, reduce_file
 
     settings = load_settings()
     args.out.mkdir(parents=True, exist_ok=True)

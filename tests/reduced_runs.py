@@ -12,7 +12,8 @@ from pathlib import Path
 from generators.synthetic import SyntheticRun, write_rheocompass_export
 from tribopipe.config import load_settings
 from tribopipe.frictionmap import append_records
-from tribopipe.pipeline import RunLabels, reduce_file, write_trace
+from tribopipe.frictionmap.records import RunLabels
+from tribopipe.pipeline import reduce_file, write_trace
 
 #: (file stem, pin, disc, force N, temperature °C, repeat, synthetic run)
 RUNS = [

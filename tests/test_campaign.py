@@ -12,16 +12,8 @@ import pandas as pd
 import pytest
 
 from generators.synthetic import SyntheticRun, write_rheocompass_export
-from tribopipe.campaign import (
-    CHANGED,
-    FAILED,
-    NEW,
-    REDUCED,
-    campaign_listing,
-    campaign_table,
-    load_campaign,
-    run_campaign,
-)
+from tribopipe.campaign import campaign_listing, campaign_table, load_campaign, run_campaign
+from tribopipe.campaign.table import CHANGED, FAILED, NEW, REDUCED
 
 PATTERN = "{pin}_{disc}_{force}N_{temperature}C_r{repeat}"
 DURATION_S = 150.0
@@ -330,8 +322,8 @@ def test_a_foreign_file_at_the_map_path_stops_the_batch_before_any_work(
 def test_two_batches_of_one_campaign_do_not_interleave(campaign_dir: Path) -> None:
     from filelock import FileLock
 
-    from tribopipe.campaign import BATCH_LOCK
     from tribopipe.errors import CampaignError
+    from tribopipe.layout import BATCH_LOCK
 
     campaign = load_campaign(campaign_dir / "campaign.toml")
     campaign.output_dir.mkdir(parents=True)
@@ -385,7 +377,7 @@ def test_workers_return_typed_picklable_results(campaign_dir: Path) -> None:
     failure with its one-line reason."""
     import pickle
 
-    from tribopipe.campaign.batch import (
+    from tribopipe.campaign.worker import (
         FailedRun,
         FileDone,
         ReducedRun,

@@ -11,18 +11,11 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from tribopipe.campaign import (
-    Tolerances,
-    campaign_table,
-    labels_from,
-    load_campaign,
-    match_pattern,
-    merge_metadata,
-    qc_flags,
-    read_manifest,
-)
+from tribopipe.campaign import campaign_table, load_campaign, read_manifest
+from tribopipe.campaign.metadata import labels_from, merge_metadata
+from tribopipe.campaign.patterns import match_pattern
 from tribopipe.errors import CampaignError, ConfigError
-from tribopipe.pipeline import RunLabels
+from tribopipe.frictionmap.records import RunLabels, Tolerances, qc_flags
 
 REPO = Path(__file__).resolve().parents[1]
 PATTERN = "{pin}_{disc}_{force}N_{temperature}C_r{repeat}"

@@ -26,9 +26,10 @@ from multi_exports import (
     write_session,
     write_xlsx_twin,
 )
-from tribopipe.campaign import campaign_listing, discover_files, load_campaign, run_campaign
+from tribopipe.campaign import campaign_listing, load_campaign, run_campaign
 from tribopipe.campaign.batch import Tally
 from tribopipe.campaign.spec import folder_campaign
+from tribopipe.campaign.table import discover_files
 from tribopipe.cli import main
 
 #: force [N] -> true mu_k of the session's tests

@@ -16,7 +16,7 @@ from tribopipe.export.fe_decks import (
     write_condition,
 )
 from tribopipe.export.simbase import comment_block, condition_lines
-from tribopipe.frictionmap import published_csv_path
+from tribopipe.frictionmap.published import published_csv_path
 from tribopipe.query import query
 
 

@@ -26,7 +26,8 @@ import pytest
 from reduced_runs import make_processed
 from tribopipe.export.explorer import write_explorer
 from tribopipe.export.fe_decks import condition_snippet
-from tribopipe.frictionmap import import_table, published_csv_path, read_map
+from tribopipe.frictionmap import import_table, read_map
+from tribopipe.frictionmap.published import published_csv_path
 from tribopipe.query import groups_of, pairs, query
 from tribopipe.report import make_report
 

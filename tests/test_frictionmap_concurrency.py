@@ -70,7 +70,7 @@ def test_a_writer_killed_before_the_rename_leaves_the_previous_map_intact(tmp_pa
     before = map_path.read_bytes()
     marker = tmp_path / "paused"
     writer = _start_writer(tmp_path, "new", map_path, [run_record(3)],
-                           env={fm.PAUSE_ENV: str(marker)})
+                           env={fm.store.PAUSE_ENV: str(marker)})
     deadline = time.monotonic() + 120
     while not marker.exists():
         assert writer.poll() is None, writer.communicate()[1]

@@ -28,7 +28,8 @@ from tribopipe.cli import main
 from tribopipe.config import load_settings
 from tribopipe.errors import ReductionError
 from tribopipe.frictionmap import measurement_id
-from tribopipe.pipeline import RunLabels, read_runs, reduce_export, reduce_file
+from tribopipe.frictionmap.records import RunLabels
+from tribopipe.pipeline import read_runs, reduce_export, reduce_file
 
 SETTINGS = load_settings()
 

@@ -31,13 +31,13 @@ from tribopipe.physics import (
     sliding_distance_mm,
     sliding_speed_mm_s,
 )
-from tribopipe.reduction.reduce import (
-    leading_rest,
+from tribopipe.reduction.detection import (
     linear_slope,
     median_smooth,
     noise_std,
     static_peak_curve,
 )
+from tribopipe.reduction.intervals import leading_rest
 
 R_EFF = 13.37  # mm, the founding cell's friction radius
 
@@ -99,10 +99,11 @@ def test_the_founding_speeds_are_defined_once() -> None:
     assert sliding_speed_mm_s(FOUNDING_SPEED_RPM, FOUNDING_FRICTION_RADIUS_MM) == pytest.approx(
         FOUNDING_SLIDING_SPEED_MM_S, abs=5e-6)
     from generators import synthetic
-    from tribopipe import config, frictionmap
+    from tribopipe.config import InstrumentConfig
+    from tribopipe.frictionmap.published import PUBLISHED_SLIDING_SPEED_MM_S
 
-    assert config.FOUNDING_FRICTION_RADIUS_MM is FOUNDING_FRICTION_RADIUS_MM
-    assert frictionmap.PUBLISHED_SLIDING_SPEED_MM_S is FOUNDING_SLIDING_SPEED_MM_S
+    assert InstrumentConfig().friction_radius_mm == FOUNDING_FRICTION_RADIUS_MM
+    assert PUBLISHED_SLIDING_SPEED_MM_S is FOUNDING_SLIDING_SPEED_MM_S
     assert synthetic.SyntheticRun().speed_rpm is FOUNDING_SPEED_RPM
 
 

@@ -10,7 +10,8 @@ import pytest
 
 from generators.synthetic import SyntheticRun, write_rheocompass_export
 from tribopipe.config import load_settings
-from tribopipe.pipeline import RunLabels, reduce_file, run_summary, write_summary, write_trace
+from tribopipe.frictionmap.records import RunLabels
+from tribopipe.pipeline import reduce_file, run_summary, write_summary, write_trace
 
 
 @pytest.fixture(scope="module")

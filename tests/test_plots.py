@@ -20,16 +20,12 @@ from reduced_runs import RUNS, make_processed
 from tribopipe.cli import main
 from tribopipe.config import load_settings
 from tribopipe.errors import ExportError
-from tribopipe.export.plots import (
-    find_trace,
-    plot_pair,
-    plot_pairs,
-    plot_runs,
-    plot_trace,
-    plot_trace_row,
-)
+from tribopipe.export.plots import plot_pair, plot_pairs, plot_runs
+from tribopipe.figures.trace import plot_trace, plot_trace_row
 from tribopipe.frictionmap import read_map
-from tribopipe.pipeline import RunLabels, reduce_file
+from tribopipe.frictionmap.records import RunLabels
+from tribopipe.layout import find_trace
+from tribopipe.pipeline import reduce_file
 
 PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
 

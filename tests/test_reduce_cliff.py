@@ -15,7 +15,8 @@ import pytest
 
 from tribopipe.config import load_settings
 from tribopipe.measurement import Measurement, MeasurementMeta
-from tribopipe.reduction.reduce import cliff_peak_curve, reduce_measurement, static_peak_curve
+from tribopipe.reduction.detection import cliff_peak_curve, static_peak_curve
+from tribopipe.reduction.reduce import reduce_measurement
 from tribopipe.reduction.signals import end_point_weights, one_sided_fits
 
 R_MM = 13.37

@@ -14,16 +14,12 @@ from dataclasses import replace
 import pytest
 
 from generators.synthetic import SyntheticRun, make_intervals, truth
-from tribopipe.config import InstrumentConfig, settings_from_dict
+from tribopipe.config import InstrumentConfig, ReductionParams, settings_from_dict
 from tribopipe.errors import ConfigError
 from tribopipe.measurement import Measurement, MeasurementMeta
-from tribopipe.reduction.reduce import (
-    ReductionParams,
-    ReductionResult,
-    reduce_measurement,
-    select_friction_interval,
-    settling_block_mm,
-)
+from tribopipe.reduction.detection import settling_block_mm
+from tribopipe.reduction.intervals import select_friction_interval
+from tribopipe.reduction.reduce import ReductionResult, reduce_measurement
 
 INSTRUMENT = InstrumentConfig()
 PARAMS = ReductionParams()

@@ -22,8 +22,8 @@ from reduced_runs import RUNS, SPREAD_RUNS, make_processed
 from tribopipe.campaign import load_campaign, run_campaign
 from tribopipe.cli import main
 from tribopipe.errors import ExportError
-from tribopipe.export.plots import find_trace
 from tribopipe.frictionmap import read_map
+from tribopipe.layout import find_trace
 from tribopipe.report import (
     MAP_TITLE,
     build_report,

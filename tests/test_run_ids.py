@@ -15,7 +15,8 @@ import pytest
 
 from tribopipe.config import load_settings
 from tribopipe.files import file_sha256
-from tribopipe.pipeline import RunLabels, reduce_file
+from tribopipe.frictionmap.records import RunLabels
+from tribopipe.pipeline import reduce_file
 
 REPO = Path(__file__).resolve().parents[1]
 EXAMPLE = REPO / "raw" / "example"

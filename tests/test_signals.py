@@ -225,7 +225,7 @@ def test_a_flank_is_read_at_its_end_from_as_much_of_it_as_fits() -> None:
 
 
 def test_effective_noise_of_correlated_noise_counts_its_autocorrelation() -> None:
-    from tribopipe.reduction.reduce import effective_noise
+    from tribopipe.reduction.detection import effective_noise
 
     rng = np.random.default_rng(13)
     white = 0.01 * rng.standard_normal(20000)

@@ -17,7 +17,7 @@ import pytest
 
 from published_map import PUBLISHED_CSV, group_table, published_runs
 from sim_files import pyelastica_values
-from tribopipe.export.simulators import write_mujoco, write_pyelastica
+from tribopipe.export.scenes import write_mujoco, write_pyelastica
 from tribopipe.query import query
 
 PIN, DISC = "Dragonskin 30", "steel"

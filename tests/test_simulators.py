@@ -21,24 +21,27 @@ from sim_files import (
     sofa_response,
 )
 from tribopipe.errors import ExportError
-from tribopipe.export.fe_decks import deck_names, field10
-from tribopipe.export.simbase import FOUNDING_SLIP_RATE, SlipRate, safe_text, xml_comment
-from tribopipe.export.simulators import (
-    FORMATS,
-    UNIT_SYSTEMS,
+from tribopipe.export.fe_decks import (
     abaqus_name,
-    convert_pressure_kPa,
-    default_decay_s_per_mm,
-    export_simulator_input,
-    pair_slip_rates,
+    deck_names,
+    field10,
     write_abaqus,
     write_abaqus_decay,
     write_ansys,
     write_lsdyna,
-    write_mujoco,
-    write_pyelastica,
-    write_sofa,
 )
+from tribopipe.export.scenes import write_mujoco, write_pyelastica, write_sofa
+from tribopipe.export.simbase import (
+    FOUNDING_SLIP_RATE,
+    UNIT_SYSTEMS,
+    SlipRate,
+    convert_pressure_kPa,
+    default_decay_s_per_mm,
+    pair_slip_rates,
+    safe_text,
+    xml_comment,
+)
+from tribopipe.export.simulators import FORMATS, export_simulator_input
 from tribopipe.query import pairs, query
 
 PIN, DISC = "Dragonskin 30", "steel"

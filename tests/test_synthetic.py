@@ -27,10 +27,11 @@ from generators.synthetic import (
     truth,
     write_rheocompass_export,
 )
-from tribopipe.config import InstrumentConfig
+from tribopipe.config import InstrumentConfig, ReductionParams
 from tribopipe.measurement import CANONICAL_COLUMNS
 from tribopipe.readers import read_export
-from tribopipe.reduction.reduce import ReductionParams, reduce_measurement, select_friction_interval
+from tribopipe.reduction.intervals import select_friction_interval
+from tribopipe.reduction.reduce import reduce_measurement
 
 RUN = SyntheticRun(mu_s=0.9, mu_k=0.6, noise=0.008, torque_offset_Nm=3e-4, seed=5)
 

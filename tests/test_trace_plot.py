@@ -34,7 +34,8 @@ from tribopipe.figures import (
     save_figure,
     trace_figure,
 )
-from tribopipe.pipeline import RunLabels, plot_run, reduce_file, run_conditions
+from tribopipe.frictionmap.records import RunLabels
+from tribopipe.pipeline import plot_run, reduce_file, run_conditions
 
 
 def column_extremes(x, y, x_range, columns):

@@ -12,10 +12,12 @@ import numpy as np
 import pytest
 
 from generators.synthetic import SyntheticRun, make_intervals
-from tribopipe.config import FOUNDING_FRICTION_RADIUS_MM, InstrumentConfig, settings_from_dict
+from tribopipe.config import InstrumentConfig, settings_from_dict
 from tribopipe.errors import ConfigError
 from tribopipe.measurement import Measurement, MeasurementMeta
-from tribopipe.reduction.reduce import reduce_measurement, select_friction_interval
+from tribopipe.physics import FOUNDING_FRICTION_RADIUS_MM
+from tribopipe.reduction.intervals import select_friction_interval
+from tribopipe.reduction.reduce import reduce_measurement
 from tribopipe.reduction.uncertainty import (
     budget,
     integrated_autocorrelation_time,

@@ -28,9 +28,8 @@ from typing import Any
 
 from .errors import ConfigError, ReadError, ValidationError
 from .files import read_regular
-from .physics import (  # noqa: F401 - the founding constants are importable from here too
+from .physics import (
     FOUNDING_FRICTION_RADIUS_MM,
-    FOUNDING_SLIDING_SPEED_MM_S,
     FOUNDING_SPEED_RPM,
     sliding_speed_mm_s,
 )

@@ -67,8 +67,8 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from tribopipe.config import FOUNDING_FRICTION_RADIUS_MM
 from tribopipe.measurement import ANGLE, NORMAL_FORCE, SPEED, TEMPERATURE, TIME, TORQUE
+from tribopipe.physics import FOUNDING_FRICTION_RADIUS_MM
 
 from .instrument import (
     NOISE_COLOURS,

@@ -28,7 +28,8 @@ from ..frictionmap.duplicates import (
     labels_of,
     map_files_by_hash,
 )
-from ..frictionmap.store import read_map, update_map
+from ..frictionmap.mapfile import read_map
+from ..frictionmap.store import update_map
 from .metadata import Manifest, read_manifest
 from .outputs import _write_failures_csv, _write_runs_csv
 from .spec import Campaign
@@ -45,12 +46,10 @@ from .table import (
     recipe_hash,
     save_state,
 )
-from .worker import (  # noqa: F401 - GC_THRESHOLDS, _worker_init: importable from here too
-    GC_THRESHOLDS,
+from .worker import (
     FailedRun,
     FileDone,
     ReducedRun,
-    RunResult,
     _Context,
     _fewer_gc_passes,
     _Job,

@@ -84,7 +84,8 @@ def reduce_cmd(
     not be reduced, or was refused; the others are still reduced and stored.
     """
     from ..config import load_settings
-    from ..pipeline import ReadOptions, RunLabels, reduce_files
+    from ..frictionmap.records import RunLabels
+    from ..pipeline import ReadOptions, reduce_files
 
     labels = RunLabels(
         pin=pin, disc=disc, normal_force_N=force_N, temperature_C=temperature_C, repeat=repeat

@@ -41,18 +41,8 @@ from typing import TYPE_CHECKING, Any
 from .. import __version__
 from ..errors import ExportError
 from ..fit import fit_power_law
-from ..frictionmap import (
-    FOUNDING_PAPER,
-    PUBLISHED_LAB,
-    RUN_COLUMNS,
-    SCHEMA_NAME,
-    SCHEMA_VERSION,
-    SOURCE_PUBLISHED,
-    check_package,
-    read_map,
-    validate_runs,
-    write_map_copy,
-)
+from ..frictionmap import RUN_COLUMNS, check_package, read_map
+from ..frictionmap.checks import validate_runs
 from ..frictionmap.datapackage import (
     DESCRIPTOR,
     FALSE,
@@ -72,7 +62,9 @@ from ..frictionmap.package import (
     RUNS,
     RUNS_PARQUET,
 )
-from ..frictionmap.schema import KIND
+from ..frictionmap.published import FOUNDING_PAPER, PUBLISHED_LAB
+from ..frictionmap.schema import KIND, SCHEMA_NAME, SCHEMA_VERSION, SOURCE_PUBLISHED
+from ..frictionmap.store import write_map_copy
 from ..query import pairs
 from ..stats import group_statistics
 from .citation import (

@@ -30,7 +30,8 @@ from typing import TYPE_CHECKING, Any
 from ..errors import ExportError
 from ..escape import csv_cell, markdown_cell, printable
 from ..files import write_text_atomic
-from ..frictionmap import FRICTIONMAP_COLUMNS, read_map
+from ..frictionmap import read_map
+from ..frictionmap.published import FRICTIONMAP_COLUMNS
 from ..stats import _group_keys, group_statistics
 
 if TYPE_CHECKING:

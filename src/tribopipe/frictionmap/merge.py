@@ -23,9 +23,10 @@ from pathlib import Path
 from ..errors import MapError
 from ..validate import text_problem
 from .datapackage import DESCRIPTOR
+from .mapfile import read_map
 from .package import package_runs
 from .schema import _missing, frame_records
-from .store import AppendReport, append_records, read_map
+from .store import AppendReport, append_records
 
 
 @dataclass(frozen=True)

@@ -50,6 +50,7 @@ from .datapackage import (
     runs_fields,
     sha256_hash,
 )
+from .mapfile import read_map
 from .published import FOUNDING_PAPER
 from .schema import (
     SCHEMA_NAME,
@@ -58,7 +59,7 @@ from .schema import (
     frame_records,
     unvalidated_frame,
 )
-from .store import _same, read_map
+from .store import _same
 
 if TYPE_CHECKING:
     import pandas as pd

@@ -24,10 +24,9 @@ from typing import TYPE_CHECKING, Any
 from ..errors import MapError
 from ..files import os_reason
 from ..validate import text_problem
-from .mapfile import (  # noqa: F401 - the reader is importable from here too
+from .mapfile import (
     backup_path,
     map_info,
-    map_metadata,
     read_map,
 )
 from .schema import (

@@ -35,7 +35,7 @@ from typing import Any
 
 from ..errors import ReadError, TribopipeError
 from ..escape import display_path
-from ..measurement import (  # noqa: F401 - require_columns is importable from here too
+from ..measurement import (
     NORMAL_FORCE,
     TORQUE,
     Measurement,

@@ -21,44 +21,23 @@ from ..measurement import (
     Measurement,
     require_columns,
 )
-from ..physics import (  # noqa: F401 - the formulas are importable from here too
+from ..physics import (
     coefficient_of_friction,
     contact_pressure_kPa,
-    distance_from_angle_mm,
-    distance_from_nominal_mm,
-    distance_from_speed_mm,
     friction_force_N,
-    rpm_to_rad_s,
     sliding_distance_mm,
-    sliding_speed_mm_s,
 )
 from ..validate import FORCE_N, MU, TEMPERATURE_C
 from . import uncertainty
-from .detection import (  # noqa: F401 - the detection steps are importable from here too
-    MIN_FLANK_SAMPLES,
-    StickSlipTest,
+from .detection import (
     _detect,
     _Detection,
-    cliff_peak_curve,
-    effective_noise,
-    find_plateau_start,
-    linear_slope,
-    median_smooth,
-    noise_std,
-    peak_smooth,
-    settling_block_mm,
-    static_peak_curve,
-    stick_slip_test,
 )
-from .intervals import (  # noqa: F401 - interval choice is importable from here too
+from .intervals import (
     IntervalSamples,
     choose_torque_offset,
-    estimate_torque_offset_Nm,
     interval_samples,
     leading_rest,
-    robust_mean,
-    select_friction_interval,
-    setup_torque_offset_Nm,
 )
 
 if TYPE_CHECKING:

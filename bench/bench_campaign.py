@@ -255,17 +255,17 @@ def parse_only_pool(files: list[Path], jobs: int) -> tuple[float, float]:
     import resource
 
     import tribopipe.readers  # noqa: F401 - imported before the fork, as the batch does
-    from tribopipe.campaign.batch import _chunks
-    from tribopipe.campaign.worker import _worker_init
+    from tribopipe.campaign.batch import chunk_jobs
+    from tribopipe.campaign.worker import worker_init
 
     def children_cpu() -> float:
         usage = resource.getrusage(resource.RUSAGE_CHILDREN)
         return usage.ru_utime + usage.ru_stime
 
-    chunks = _chunks([str(p) for p in files], jobs)
+    chunks = chunk_jobs([str(p) for p in files], jobs)
     c0, p0 = children_cpu(), time.process_time()
     t0 = time.perf_counter()
-    with ProcessPoolExecutor(max_workers=jobs, initializer=_worker_init) as pool:
+    with ProcessPoolExecutor(max_workers=jobs, initializer=worker_init) as pool:
         sum(pool.map(_parse_chunk, chunks))
     wall = time.perf_counter() - t0
     return wall, (children_cpu() - c0) + (time.process_time() - p0)

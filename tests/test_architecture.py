@@ -8,7 +8,9 @@ packages ``a.b`` above it, so that counts as depending on them too.
 The checks: no import cycle; no module imports one from a higher layer of :data:`LAYERS`;
 click only under ``tribopipe.cli``, whose modules import only click and the standard
 library at module level (so ``tribopipe --help`` stays light); no library module imports
-the package's own modules inside a function (that is how cycles hide); no module over
+the package's own modules inside a function (that is how cycles hide); no private name
+(``_x``) imported from another module; every name imported from the module that defines
+it (one import path per name; a package's ``__all__`` is the exception); no module over
 :data:`MAX_LINES` lines.
 """
 
@@ -284,6 +286,72 @@ def test_library_modules_import_their_own_package_at_the_top() -> None:
     assert not lazy, "own-module imports inside library functions:\n" + "\n".join(lazy)
 
 
+def _top_level_names(name: str) -> tuple[set[str], set[str] | None]:
+    """What module ``name`` defines at its top level (functions, classes, assignments, also
+    inside top-level ``if``/``try`` blocks), and its ``__all__`` when it has one."""
+    tree = ast.parse(MODULES[name].read_text(encoding="utf-8"))
+    defined: set[str] = set()
+    listed: set[str] | None = None
+    body = list(tree.body)
+    while body:
+        node = body.pop(0)
+        if isinstance(node, ast.FunctionDef | ast.AsyncFunctionDef | ast.ClassDef):
+            defined.add(node.name)
+        elif isinstance(node, ast.Assign | ast.AnnAssign | ast.AugAssign):
+            targets = node.targets if isinstance(node, ast.Assign) else [node.target]
+            for target in targets:
+                defined |= {n.id for n in ast.walk(target) if isinstance(n, ast.Name)}
+            if isinstance(node, ast.Assign) and any(
+                    isinstance(t, ast.Name) and t.id == "__all__" for t in node.targets):
+                listed = {e.value for e in getattr(node.value, "elts", [])
+                          if isinstance(e, ast.Constant)}
+        elif isinstance(node, ast.If) and not _is_type_checking(node):
+            body += node.body + node.orelse
+        elif isinstance(node, ast.Try):
+            body += node.body + [n for h in node.handlers for n in h.body] + node.orelse
+    return defined, listed
+
+
+def _named_imports(name: str) -> Iterator[tuple[str, str, int]]:
+    """(module, imported name, line) of every ``from <own module> import <name>`` in
+    module ``name`` that imports a name, not a module."""
+    tree = ast.parse(MODULES[name].read_text(encoding="utf-8"))
+    for node, _, _ in _walk(tree):
+        if isinstance(node, ast.ImportFrom):
+            base = _resolve(name, node)
+            if base in MODULES and base != name:
+                for alias in node.names:
+                    if f"{base}.{alias.name}" not in MODULES and alias.name != "*":
+                        yield base, alias.name, node.lineno
+
+
+def test_no_private_name_is_imported_across_modules() -> None:
+    """A ``_name`` is its module's own business: a name another module needs is public in
+    its home module (or the code moves to where it is used)."""
+    offenders = [
+        f"{MODULES[name].relative_to(SRC)}:{line}: {target}.{imported}"
+        for name in MODULES for target, imported, line in _named_imports(name)
+        if imported.startswith("_") and not imported.startswith("__")
+    ]
+    assert not offenders, "private names imported from another module:\n" + "\n".join(offenders)
+
+
+def test_every_name_is_imported_from_the_module_that_defines_it() -> None:
+    """One import path per name: no module passes on a name it imported (a package's
+    ``__all__`` is its deliberate, short exception)."""
+    tops = {name: _top_level_names(name) for name in MODULES}
+    offenders = []
+    for name in MODULES:
+        for target, imported, line in _named_imports(name):
+            defined, listed = tops[target]
+            if imported in defined or (listed is not None and imported in listed):
+                continue
+            offenders.append(f"{MODULES[name].relative_to(SRC)}:{line}: {imported} "
+                             f"imported from {target}, which does not define it")
+    assert not offenders, "names imported from a module that only passes them on:\n" + \
+        "\n".join(offenders)
+
+
 def test_no_module_is_over_700_lines() -> None:
     long = []
     for path in MODULES.values():
@@ -301,7 +369,8 @@ def test_the_checks_catch_what_they_are_for(tmp_path: Path) -> None:
     pkg = tmp_path / "tribopipe"
     (pkg / "cli").mkdir(parents=True)
     (pkg / "__init__.py").write_text("")
-    (pkg / "errors.py").write_text("")
+    (pkg / "errors.py").write_text("_hidden = 1\n")
+    (pkg / "layout.py").write_text("from .errors import _hidden\n")
     (pkg / "config.py").write_text("from typing import TYPE_CHECKING\n"
                                    "if TYPE_CHECKING:\n    from .reduction.reduce import X\n")
     (pkg / "reduction").mkdir()
@@ -328,6 +397,10 @@ def test_the_checks_catch_what_they_are_for(tmp_path: Path) -> None:
             test_cli_modules_import_only_click_and_the_standard_library_at_module_level()
         with pytest.raises(AssertionError, match=r"reduce -> tribopipe\.report \(in a"):
             test_library_modules_import_their_own_package_at_the_top()
+        with pytest.raises(AssertionError, match=r"layout\.py:1: tribopipe\.errors\._hidden"):
+            test_no_private_name_is_imported_across_modules()
+        with pytest.raises(AssertionError, match=r"reduce\.py:2: Y imported from tribopipe\.con"):
+            test_every_name_is_imported_from_the_module_that_defines_it()
         with pytest.raises(AssertionError, match=rf"report\.py: {MAX_LINES + 1} lines"):
             test_no_module_is_over_700_lines()
     finally:

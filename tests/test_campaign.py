@@ -380,17 +380,17 @@ def test_workers_return_typed_picklable_results(campaign_dir: Path) -> None:
     from tribopipe.campaign.worker import (
         FailedRun,
         FileDone,
+        Job,
         ReducedRun,
-        _Context,
-        _Job,
-        _reduce_chunk,
+        WorkerContext,
+        reduce_chunk,
     )
 
     campaign = load_campaign(campaign_dir / "campaign.toml")
-    jobs = [_Job(file=row.file, path=str(row.path), sources=row.sources, hints=row.hints)
+    jobs = [Job(file=row.file, path=str(row.path), sources=row.sources, hints=row.hints)
             for row in campaign_table(campaign)
             if row.file in ("DS30_steel_5N_20C_r1.csv", "DS30_steel_9N_20C_r1.csv")]
-    done, failed = pickle.loads(pickle.dumps(_reduce_chunk(jobs, _Context(campaign, False))))
+    done, failed = pickle.loads(pickle.dumps(reduce_chunk(jobs, WorkerContext(campaign, False))))
     assert isinstance(done, FileDone) and done.error is None and done.tests == ("friction",)
     (good,) = done.runs
     bad = failed.error

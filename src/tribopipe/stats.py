@@ -128,7 +128,7 @@ def _round_significant(value: float, digits: int) -> float:
     return round(value, digits - 1 - math.floor(math.log10(abs(value))))
 
 
-def _group_keys(runs: pd.DataFrame, by_speed: bool) -> pd.DataFrame:
+def group_keys(runs: pd.DataFrame, by_speed: bool) -> pd.DataFrame:
     """The rounded grouping keys of each run (a new frame; ``runs`` is not modified)."""
     import pandas as pd
 
@@ -191,7 +191,7 @@ def group_statistics(runs: pd.DataFrame, *, by_speed: bool = False) -> pd.DataFr
     columns = condition_cols + stat_cols + ["range_exceeds_r", "qc_flagged", "run_ids"]
 
     included = runs.loc[~runs["excluded"].astype(bool)]
-    keys = _group_keys(included, by_speed)
+    keys = group_keys(included, by_speed)
     key_cols = list(keys.columns)
     # plain arrays once; per-group pandas slicing is what makes large maps slow
     data = {

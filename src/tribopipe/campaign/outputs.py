@@ -16,7 +16,7 @@ from ..files import write_text_atomic
 from ..layout import write_failures
 from .patterns import LABEL_FIELDS
 from .spec import Campaign
-from .table import _SUMMARY_KEYS, DUPLICATE, FAILED, REDUCED, CampaignRow
+from .table import DUPLICATE, FAILED, REDUCED, SUMMARY_KEYS, CampaignRow
 
 RUNS_COLUMNS: tuple[str, ...] = (
     "file", "test", "result", "interval", "status", "pin", "disc", "normal_force_N",
@@ -25,7 +25,7 @@ RUNS_COLUMNS: tuple[str, ...] = (
     "reason",
 )
 #: the values a run row takes from its state entry (where it sits, what it measured)
-_RUN_KEYS: tuple[str, ...] = tuple(k for k in _SUMMARY_KEYS if k not in ("labels", "name"))
+_RUN_KEYS: tuple[str, ...] = tuple(k for k in SUMMARY_KEYS if k not in ("labels", "name"))
 
 
 def _cell(value: Any) -> str:
@@ -40,7 +40,7 @@ def _cell(value: Any) -> str:
     return csv_cell(display_path(str(value)))
 
 
-def _write_runs_csv(campaign: Campaign, rows: Sequence[CampaignRow],
+def write_runs_csv(campaign: Campaign, rows: Sequence[CampaignRow],
                     entries: Mapping[str, Any], this_batch: Mapping[str, str],
                     failures: Mapping[str, str]) -> None:
     """``runs.csv``: per file of the campaign, a row per run the state knows of it (its
@@ -83,5 +83,5 @@ def _values(file: str, run: Mapping[str, Any], status: str, labels: Mapping[str,
     return [values.get(c) for c in RUNS_COLUMNS]
 
 
-def _write_failures_csv(campaign: Campaign, failures: Mapping[str, str]) -> None:
+def write_failures_csv(campaign: Campaign, failures: Mapping[str, str]) -> None:
     write_failures(campaign.failures_csv, failures)

@@ -83,7 +83,7 @@ class RunEntry:
 
 
 #: the keys of a state run entry that come from a :class:`RunEntry`
-_SUMMARY_KEYS: tuple[str, ...] = tuple(f.name for f in fields(RunEntry))
+SUMMARY_KEYS: tuple[str, ...] = tuple(f.name for f in fields(RunEntry))
 
 
 @dataclass(frozen=True)

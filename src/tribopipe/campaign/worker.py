@@ -39,7 +39,7 @@ from .table import RunEntry
 
 
 @dataclass(frozen=True)
-class _Job:
+class Job:
     """One file to reduce: its campaign-relative name, its path, the file-level metadata
     sources and hints (:class:`~tribopipe.campaign.table.CampaignRow`), the manifest rows
     of its tests and its SHA-256 when already known."""
@@ -53,7 +53,7 @@ class _Job:
 
 
 @dataclass(frozen=True)
-class _Context:
+class WorkerContext:
     campaign: Campaign
     plots: bool
 
@@ -133,7 +133,7 @@ class _Undescribed(CampaignError):
     """No metadata source describes a test (as a test): named in the batch's ledger."""
 
 
-def _reason(exc: TribopipeError, job: _Job, name: str | None = None) -> str:
+def _reason(exc: TribopipeError, job: Job, name: str | None = None) -> str:
     """The one-line reason of a failure, starting with the file's campaign-relative name
     (readers name the absolute path, which is long and machine-specific)."""
     text = str(exc)
@@ -145,7 +145,7 @@ def _reason(exc: TribopipeError, job: _Job, name: str | None = None) -> str:
     return text
 
 
-def run_labels(job: _Job, place: RunPlace, name: str, campaign: Campaign,
+def run_labels(job: Job, place: RunPlace, name: str, campaign: Campaign,
                tests_with_runs: int) -> RunLabels:
     """The labels of one run, from the metadata sources of its test, in order: the
     manifest rows of its interval and of its test (:func:`run_rows`), the file-level
@@ -192,7 +192,7 @@ def run_labels(job: _Job, place: RunPlace, name: str, campaign: Campaign,
     return labels_from(name, merge_metadata(name, sources, campaign), hints=hints)
 
 
-def _reduce_run(job: _Job, ctx: _Context, export: ExportRuns, place: RunPlace,
+def _reduce_run(job: Job, ctx: WorkerContext, export: ExportRuns, place: RunPlace,
                 measurement: Any, name: str, tests_with_runs: int) -> ReducedRun:
     """Label, reduce and write one run."""
     campaign = ctx.campaign
@@ -224,7 +224,7 @@ def _reduce_run(job: _Job, ctx: _Context, export: ExportRuns, place: RunPlace,
     return ReducedRun(file=job.file, record=record, entry=entry, plot_note=plot_note)
 
 
-def _reduce_one(job: _Job, ctx: _Context) -> FileDone:
+def _reduce_one(job: Job, ctx: WorkerContext) -> FileDone:
     """Read one file in a worker and reduce each of its runs; every run stands alone."""
     export = read_runs(job.path, ctx.campaign.read_options, file_hash=job.sha256)
     tests_with_runs = len({p.test for p, _ in export.runs})
@@ -272,7 +272,7 @@ def _plot(campaign: Campaign, outcome: RunOutcome, name: str) -> str | None:
 GC_THRESHOLDS = (100_000, 50, 100)
 
 
-def _prepare_plots(ctx: _Context) -> None:
+def prepare_plots(ctx: WorkerContext) -> None:
     """When the batch draws plots, build this process's trace figure before the workers
     fork, so that they inherit it (matplotlib imported, fonts loaded, palette and first
     background drawn: ~0.5 s of CPU each would spend, and memory they now share) instead
@@ -284,7 +284,7 @@ def _prepare_plots(ctx: _Context) -> None:
         trace_figure()
 
 
-def _worker_init() -> None:
+def worker_init() -> None:
     """Start a worker process (ours for its whole life): fewer garbage-collector passes
     and one BLAS thread (see :data:`GC_THRESHOLDS`)."""
     from threadpoolctl import threadpool_limits
@@ -294,8 +294,8 @@ def _worker_init() -> None:
 
 
 @contextlib.contextmanager
-def _fewer_gc_passes() -> Iterator[None]:
-    """:func:`_worker_init`'s tuning for an in-process batch, restored afterwards."""
+def fewer_gc_passes() -> Iterator[None]:
+    """:func:`worker_init`'s tuning for an in-process batch, restored afterwards."""
     from threadpoolctl import threadpool_limits
 
     before = gc.get_threshold()
@@ -307,7 +307,7 @@ def _fewer_gc_passes() -> Iterator[None]:
         gc.set_threshold(*before)
 
 
-def _reduce_chunk(jobs: Sequence[_Job], ctx: _Context) -> list[FileDone]:
+def reduce_chunk(jobs: Sequence[Job], ctx: WorkerContext) -> list[FileDone]:
     """Reduce a chunk of files; each failure is caught and returned with its reason."""
     out: list[FileDone] = []
     for job in jobs:
@@ -329,7 +329,7 @@ def _reduce_chunk(jobs: Sequence[_Job], ctx: _Context) -> list[FileDone]:
     return out
 
 
-def crashed(jobs: Sequence[_Job], exc: BaseException) -> list[FileDone]:
+def crashed(jobs: Sequence[Job], exc: BaseException) -> list[FileDone]:
     """The results of a chunk whose worker process died (e.g. killed for memory): each
     file a transient failure, tried again next time."""
     return [FileDone(file=job.file, error=FailedRun(

@@ -36,7 +36,7 @@ from .schema import (
     RUN_COLUMNS,
     SOURCE_REDUCED,
     Column,
-    _missing,
+    is_missing,
 )
 
 if TYPE_CHECKING:
@@ -95,13 +95,13 @@ def validate_runs(runs: pd.DataFrame, *, require_lab: bool = False) -> list[RowP
         for column in COLUMNS:
             name = column.name
             if column.required == ALWAYS and (
-                    _missing(row[name]) or not str(row[name]).strip()):
+                    is_missing(row[name]) or not str(row[name]).strip()):
                 add(name, "missing, expected a value in every row")
             elif (column.required == IN_REDUCED_ROWS and row["source"] == SOURCE_REDUCED
-                  and _missing(row[name])):
+                  and is_missing(row[name])):
                 add(name, f"missing; only imported rows may lack {name}")
             elif column.required == IN_PACKAGES and require_lab and (
-                    _missing(row[name]) or not str(row[name]).strip()):
+                    is_missing(row[name]) or not str(row[name]).strip()):
                 add(name, "missing, expected a value in every row of a data package")
         if mid is not None:
             if mid in seen:
@@ -110,7 +110,7 @@ def validate_runs(runs: pd.DataFrame, *, require_lab: bool = False) -> list[RowP
                 seen[mid] = i
         for column in COLUMNS:
             name, value = column.name, row[column.name]
-            if _missing(value):
+            if is_missing(value):
                 continue
             if column.kind == "float" and math.isinf(float(value)):
                 add(name, f"{_number(value)} is not a finite number")
@@ -121,7 +121,7 @@ def validate_runs(runs: pd.DataFrame, *, require_lab: bool = False) -> list[RowP
                 _check_text(name, str(value), add)
         for start, end in WINDOWS:
             a, b = row[start], row[end]
-            if not (_missing(a) or _missing(b)) and float(b) < float(a):
+            if not (is_missing(a) or is_missing(b)) and float(b) < float(a):
                 add(end, f"{_number(b)} ends before the window's start {_number(a)}")
         _check_provenance(row, add)
     return problems
@@ -153,7 +153,7 @@ def _check_text(name: str, text: str, add: Any) -> None:
 def _check_provenance(row: dict[str, Any], add: Any) -> None:
     def absent(name: str) -> bool:
         value = row[name]
-        return _missing(value) or not str(value).strip()
+        return is_missing(value) or not str(value).strip()
 
     for name in ("source_file", "tribopipe_version"):
         if absent(name):

@@ -32,10 +32,10 @@ from .schema import (
     RUN_COLUMNS,
     SCHEMA_NAME,
     SCHEMA_VERSION,
-    _now,
     check_runs,
     content_sha256,
     empty_map,
+    utc_now,
 )
 
 if TYPE_CHECKING:
@@ -259,7 +259,7 @@ def map_info(runs: pd.DataFrame) -> bytes:
             for c in COLUMNS
         ],
         "tribopipe_version": __version__,
-        "written_at": _now(),
+        "written_at": utc_now(),
         "n_runs": len(runs),
         "sources": sorted(set(runs["source"].dropna())),
         "content_sha256": content_sha256(runs),

@@ -22,7 +22,7 @@ from ..escape import display_path
 from ..numeric import finite_or_nan
 from ..physics import contact_pressure_kPa
 from ..validate import FORCE_N, MAX_REPEAT, TEMPERATURE_C, check_count, check_name, check_number
-from .schema import SOURCE_REDUCED, _now, records_frame
+from .schema import SOURCE_REDUCED, records_frame, utc_now
 
 if TYPE_CHECKING:
     from ..config import InstrumentConfig, Settings
@@ -240,7 +240,7 @@ def make_record(
         "interval": meta.interval,
         "config_hash": settings.config_hash,
         "tribopipe_version": __version__,
-        "reduced_at": _now(),
+        "reduced_at": utc_now(),
         "excluded": False,
         "exclusion_reason": None,
     }

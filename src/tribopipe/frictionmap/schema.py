@@ -171,10 +171,10 @@ PROVENANCE_COLUMNS: frozenset[str] = frozenset(
     {"lab", "source_file", "file_hash", "test", "result", "tribopipe_version", "reduced_at",
      "excluded", "exclusion_reason"}
 )
-_CONTENT_COLUMNS: tuple[str, ...] = tuple(c for c in RUN_COLUMNS if c not in PROVENANCE_COLUMNS)
+CONTENT_COLUMNS: tuple[str, ...] = tuple(c for c in RUN_COLUMNS if c not in PROVENANCE_COLUMNS)
 
 
-def _now() -> str:
+def utc_now() -> str:
     return datetime.now(UTC).strftime("%Y-%m-%dT%H:%M:%SZ")
 
 
@@ -183,7 +183,7 @@ def empty_map() -> pd.DataFrame:
     return records_frame([])
 
 
-def _missing(value: Any) -> bool:
+def is_missing(value: Any) -> bool:
     if value is None:
         return True
     try:
@@ -337,7 +337,7 @@ def content_sha256(frame: pd.DataFrame, version: int = SCHEMA_VERSION) -> str:
         elif kind == "bool":
             data = np.asarray(column, dtype=bool).astype("u1").tobytes()
         else:
-            texts = [None if _missing(v) else str(v) for v in column.tolist()]
+            texts = [None if is_missing(v) else str(v) for v in column.tolist()]
             data = json.dumps(texts, ensure_ascii=False).encode("utf-8", "surrogatepass")
         digest.update(f"|{name}:{kind}:{len(data)}|".encode())
         digest.update(data)
@@ -359,7 +359,7 @@ def _column(values: list[Any], kind: str) -> Any:
     if kind == "float":
         out = []
         for v in values:
-            if _missing(v):
+            if is_missing(v):
                 out.append(np.nan)
             elif isinstance(v, bool | str):
                 raise TypeError(f"not a number: {v!r}")
@@ -369,7 +369,7 @@ def _column(values: list[Any], kind: str) -> Any:
     if kind == "int":
         out_i: list[Any] = []
         for v in values:
-            if _missing(v):
+            if is_missing(v):
                 out_i.append(pd.NA)
             elif isinstance(v, bool | str) or float(v) != int(float(v)):
                 raise TypeError(f"not a whole number: {v!r}")
@@ -386,7 +386,7 @@ def _column(values: list[Any], kind: str) -> Any:
         return np.asarray(out_b, dtype=bool)
     out_s: list[Any] = []
     for v in values:
-        if _missing(v):
+        if is_missing(v):
             out_s.append(None)
         elif isinstance(v, str):
             out_s.append(v)
@@ -399,5 +399,6 @@ def frame_records(runs: pd.DataFrame) -> list[dict[str, Any]]:
     """The rows of a map DataFrame as record dicts (missing values as ``None``)."""
     out = []
     for row in runs.loc[:, list(RUN_COLUMNS)].itertuples(index=False, name=None):
-        out.append({c: (None if _missing(v) else v) for c, v in zip(RUN_COLUMNS, row, strict=True)})
+        pairs = zip(RUN_COLUMNS, row, strict=True)
+        out.append({c: (None if is_missing(v) else v) for c, v in pairs})
     return out

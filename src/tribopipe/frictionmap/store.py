@@ -30,12 +30,12 @@ from .mapfile import (
     read_map,
 )
 from .schema import (
-    _CONTENT_COLUMNS,
+    CONTENT_COLUMNS,
     META_KEY,
     RUN_COLUMNS,
-    _missing,
     check_runs,
     frame_records,
+    is_missing,
     records_frame,
     unvalidated_frame,
 )
@@ -45,9 +45,6 @@ if TYPE_CHECKING:
 
 #: Seconds to wait for another process's lock on the map before giving up.
 LOCK_TIMEOUT_S = 60.0
-#: Test-only hook: when set to a path, the writer creates that file after the temporary map
-#: is written and fsynced, then sleeps, so a test can kill it just before the rename.
-PAUSE_ENV = "TRIBOPIPE_TEST_PAUSE_BEFORE_RENAME"
 
 
 # --------------------------------------------------------------------------- writing
@@ -151,8 +148,6 @@ def _write_atomic(path: Path, runs: pd.DataFrame) -> None:
 
     The caller holds the lock.
     """
-    import time
-
     import pyarrow as pa
     import pyarrow.parquet as pq
 
@@ -171,10 +166,6 @@ def _write_atomic(path: Path, runs: pd.DataFrame) -> None:
             pq.write_table(table, fh)
             fh.flush()
             os.fsync(fh.fileno())
-        marker = os.environ.get(PAUSE_ENV)
-        if marker:
-            Path(marker).write_text(str(os.getpid()))
-            time.sleep(120)
         _keep_previous(path)
         os.replace(tmp, path)
     except BaseException as exc:
@@ -289,15 +280,15 @@ class AppendReport:
 
 def _show(value: Any) -> str:
     """A cell for a message: missing as 'missing', floats by repr, text quoted."""
-    if _missing(value):
+    if is_missing(value):
         return "missing"
     return repr(value) if isinstance(value, str) else str(value)
 
 
-def _same(a: Any, b: Any) -> bool:
-    if _missing(a) and _missing(b):
+def same_value(a: Any, b: Any) -> bool:
+    if is_missing(a) and is_missing(b):
         return True
-    if _missing(a) or _missing(b):
+    if is_missing(a) or is_missing(b):
         return False
     if isinstance(a, float) or isinstance(b, float):
         # Platform noise in a re-reduction is not a different result.
@@ -306,7 +297,7 @@ def _same(a: Any, b: Any) -> bool:
 
 
 def _differences(old: Mapping[str, Any], new: Mapping[str, Any]) -> tuple[str, ...]:
-    return tuple(c for c in _CONTENT_COLUMNS if not _same(old[c], new[c]))
+    return tuple(c for c in CONTENT_COLUMNS if not same_value(old[c], new[c]))
 
 
 def fold_records(

@@ -30,8 +30,8 @@ from ..physics import (
 from ..validate import FORCE_N, MU, TEMPERATURE_C
 from . import uncertainty
 from .detection import (
-    _detect,
-    _Detection,
+    Detection,
+    run_detection,
 )
 from .intervals import (
     IntervalSamples,
@@ -101,7 +101,7 @@ class ReductionResult:
 
 
 def _flags(
-    det: _Detection, s_v: np.ndarray, total_mm: float, force_cv: float,
+    det: Detection, s_v: np.ndarray, total_mm: float, force_cv: float,
     offset_known: bool, params: ReductionParams, *, no_signal: bool = False,
 ) -> list[str]:
     """The QC flags of a detection (definitions in the module docstring); ``force_cv`` is
@@ -140,7 +140,7 @@ def _flags(
 
 
 def _check_physical(label: str, force_N: float, temperature_C: float | None,
-                    det: _Detection) -> None:
+                    det: Detection) -> None:
     """:class:`ReductionError` when the measured mean normal force [N], temperature [°C],
     μ_K or μ_S lies outside its physical range (:mod:`tribopipe.validate`)."""
     for what, value, bounds in (("mean normal force", force_N, FORCE_N), ("mu_k", det.mu_k, MU),
@@ -217,7 +217,7 @@ def _measured_speed(
 
 def _trace_frame(
     x: IntervalSamples, s: np.ndarray, f_r: np.ndarray, mu: np.ndarray, in_contact: np.ndarray,
-    idx: np.ndarray, det: _Detection, instrument: InstrumentConfig,
+    idx: np.ndarray, det: Detection, instrument: InstrumentConfig,
 ) -> pd.DataFrame:
     """The reduced trace (columns of :class:`ReductionResult`), one row per sample."""
     import pandas as pd
@@ -240,7 +240,7 @@ def _trace_frame(
 
 
 def _parameters(
-    params: ReductionParams, instrument: InstrumentConfig, x: IntervalSamples, det: _Detection, *,
+    params: ReductionParams, instrument: InstrumentConfig, x: IntervalSamples, det: Detection, *,
     distance_source: str, offset: float, offset_source: str, torque_sign: float,
     cv: float, in_contact: np.ndarray, uncertainties: dict[str, Any],
 ) -> dict[str, Any]:
@@ -326,7 +326,7 @@ def reduce_measurement(
 
     idx = np.flatnonzero(sliding)
     s_v, t_v, mu_v = s[idx], x.t[idx], mu[idx]
-    det = _detect(s_v, t_v, mu_v, total_mm, params)
+    det = run_detection(s_v, t_v, mu_v, total_mm, params)
     f_slide = x.force[sliding]
     f_mean = float(np.mean(f_slide))
     cv = float(np.std(f_slide) / f_mean) if f_mean > 0 else math.inf

@@ -93,18 +93,6 @@ def zero_offset_standard_error(torque_Nm: Any) -> float:
     return se
 
 
-def reading_noise(curve: Any) -> float:
-    """Standard deviation [COF] of a smoothed curve (shape (n,)) about its least-squares
-    quadratic trend: how far a reading of that curve moves with the noise. 0 for fewer
-    than 4 samples."""
-    y = np.asarray(curve, dtype=float)
-    if y.size < 4:
-        return 0.0
-    x = np.linspace(-1.0, 1.0, y.size)
-    resid = y - np.polyval(np.polyfit(x, y, 2), x)
-    return float(np.std(resid, ddof=3))
-
-
 def budget(
     mu: float,
     reading: float,

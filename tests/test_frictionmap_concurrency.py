@@ -107,6 +107,19 @@ def test_a_writer_killed_before_the_rename_leaves_the_previous_map_intact(tmp_pa
     assert not list(tmp_path.glob(f".{map_path.name}.*.tmp"))
 
 
+def test_a_backup_that_is_already_the_map_leaves_no_temporary_file(tmp_path):
+    """A writer killed after linking the map as <map>.bak and before its rename leaves
+    <map>.bak a link of the map itself; the next write keeps it and leaves nothing else."""
+    map_path = tmp_path / "friction_map.parquet"
+    fm.append_records(map_path, [run_record(1)])
+    backup = fm.mapfile.backup_path(map_path)
+    backup.unlink(missing_ok=True)
+    os.link(map_path, backup)
+    fm.append_records(map_path, [run_record(2)])
+    assert len(fm.read_map(map_path)) == 2 and len(fm.read_map(backup)) == 1
+    assert not list(tmp_path.glob(".*.tmp"))
+
+
 HOLDER = """
 import sys, time
 from filelock import FileLock

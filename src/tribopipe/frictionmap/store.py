@@ -136,6 +136,10 @@ def _keep_previous(path: Path) -> None:
             link.unlink()
         os.link(path, link)
         os.replace(link, backup)
+        # renaming a link over another link of the same file does nothing (POSIX): when
+        # <map>.bak is already the map (a writer killed after linking it), drop ours
+        with suppress(FileNotFoundError):
+            link.unlink()
     except OSError:
         with suppress(OSError):
             link.unlink()

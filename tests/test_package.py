@@ -514,3 +514,14 @@ def test_merge_lab_is_refused_for_a_package_and_for_a_bad_name(package, source_m
         assert result.exit_code == 1 and says in result.output, result.output
         assert "Traceback" not in result.output and len(result.output.splitlines()) == 1
         assert not ours.exists()
+
+
+def test_a_friction_map_given_to_validate_is_named_for_what_it_is(tmp_path):
+    """`map validate` on a Parquet map says what it got and what to run, not "not valid
+    JSON"."""
+    map_path = tmp_path / "friction_map.parquet"
+    shutil.copy(Path(__file__).parent / "data" / "friction_map_v3.parquet", map_path)
+    code, lines = validate(map_path)
+    assert code == 1 and len(lines) == 1
+    assert lines[0].startswith("friction_map.parquet: is a Parquet file (a friction map?)")
+    assert "not valid JSON" not in lines[0] and "tribopipe map show --map" in lines[0]

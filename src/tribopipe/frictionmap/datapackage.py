@@ -50,6 +50,8 @@ PROFILE = "data-package"
 TRIBOPIPE_KEY = "tribopipe"
 #: Table Schema type of each map column kind
 TABLE_TYPES = {"str": "string", "float": "number", "int": "integer", "bool": "boolean"}
+#: the first bytes of a Parquet file (a friction map given where a package was expected)
+PARQUET_MAGIC = b"PAR1"
 #: how booleans are written in the package's CSV
 TRUE, FALSE = "true", "false"
 
@@ -255,10 +257,15 @@ def load_descriptor(path: str | os.PathLike[str],
                     limits: PackageLimits = DEFAULT_LIMITS) -> tuple[dict[str, Any], Path]:
     """The descriptor of the package at ``path`` (folder or ``datapackage.json``) and the
     package folder. Raises :class:`PackageRefused` (one line) when it is absent, not a
-    regular file, larger than the limit, nested deeper than the limit, or not a JSON
-    object."""
+    regular file, larger than the limit, a Parquet file (a map, not a package), nested
+    deeper than the limit, or not a JSON object."""
     desc = descriptor_path(path)
     raw = read_bounded(desc, limits.descriptor_bytes, what="descriptor")
+    if raw.startswith(PARQUET_MAGIC):
+        raise PackageRefused(
+            "is a Parquet file (a friction map?), not a data package; `map validate` checks "
+            "a package folder or its datapackage.json, and a map is checked whole on every "
+            "read: run `tribopipe map show --map` on it", path=desc)
     depth = _json_depth(raw)
     if depth > limits.json_depth:
         raise PackageRefused(f"JSON nested {depth} deep, more than {limits.json_depth}",

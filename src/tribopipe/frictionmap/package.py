@@ -28,6 +28,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from ..errors import MapError
+from ..escape import printable
 from ..stats import group_statistics
 from .checks import validate_runs
 from .datapackage import (
@@ -148,7 +149,7 @@ def check_package(path: str | os.PathLike[str],
     try:
         descriptor, base = load_descriptor(desc, limits)
     except PackageRefused as exc:
-        check.add(DESCRIPTOR, exc.problem)
+        check.add(printable(desc.name), exc.problem)  # the file given, whatever its name
         return check.result
     version = _check_descriptor(check, descriptor)
     resources = _resources(check, descriptor)

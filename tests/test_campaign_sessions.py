@@ -486,6 +486,7 @@ def test_campaign_list_shows_one_row_per_run(lab: Path) -> None:
     assert "12 row(s) in 6 file(s): 2 failed, 10 reduced" in result.stdout
 
 
+@pytest.mark.slow  # a real process or a larger data set: `pytest -m slow`
 def test_batch_a_session_folder_in_a_real_process(lab: Path) -> None:
     env = {**os.environ, "PYTHONIOENCODING": "utf-8"}
     cmd = [sys.executable, "-m", "tribopipe", "batch", str(lab / "campaign.toml"), "--jobs", "2"]

@@ -143,6 +143,7 @@ def test_bad_config_names_the_file_and_key(tmp_path: Path) -> None:
     assert "Traceback" not in result.output
 
 
+@pytest.mark.slow  # a real process or a larger data set: `pytest -m slow`
 def test_batch_in_a_real_process(config: Path) -> None:
     """The installed entry point, as `make demo` calls it: no TTY, so no progress bar."""
     env = {**os.environ, "PYTHONIOENCODING": "utf-8"}

@@ -236,6 +236,7 @@ def assert_snippets_are_the_writer_s(tab, groups, conditions, source: str) -> No
         assert ansys == condition_snippet(res, "ansys", source=source), (pin, disc, p, t)
 
 
+@pytest.mark.slow  # a real process or a larger data set: `pytest -m slow`
 def test_page_equals_query_on_the_published_map(tab, published):
     map_path, page, groups = published
     tab.open(page_url(page))

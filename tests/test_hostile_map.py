@@ -191,6 +191,7 @@ def test_damaged_pandas_metadata_does_not_decide_how_the_map_reads(small_map: Pa
     pd.testing.assert_frame_equal(fm.read_map(damaged), fm.read_map(small_map))
 
 
+@pytest.mark.slow  # a real process or a larger data set: `pytest -m slow`
 def test_every_flipped_bit_is_refused_or_reads_identically(small_map: Path,
                                                            tmp_path: Path) -> None:
     raw = small_map.read_bytes()
@@ -219,6 +220,7 @@ def test_every_flipped_bit_is_refused_or_reads_identically(small_map: Path,
     assert outcomes["refused"] > N_FLIPS // 5 and outcomes["identical"] > 0, outcomes
 
 
+@pytest.mark.slow  # a real process or a larger data set: `pytest -m slow`
 def test_map_merge_of_flipped_maps_is_one_line(small_map: Path, tmp_path: Path) -> None:
     ours = tmp_path / "ours.parquet"
     fm.import_table(ours)                      # the published map

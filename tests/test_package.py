@@ -157,6 +157,7 @@ def test_the_frictionless_library_finds_the_package_valid(package):
     assert not frictionless.validate(str(tampered / "datapackage.json")).valid
 
 
+@pytest.mark.slow  # a real process or a larger data set: `pytest -m slow`
 def test_publish_and_validate_as_real_processes(source_map, tmp_path):
     out = tmp_path / "pkg"
     env = {**os.environ, "PYTHONIOENCODING": "utf-8"}

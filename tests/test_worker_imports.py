@@ -85,6 +85,7 @@ def campaign(tmp_path: Path) -> Path:
     return config
 
 
+@pytest.mark.slow  # a real process or a larger data set: `pytest -m slow`
 def test_batch_workers_reduce_and_plot_without_importing_scipy(campaign: Path,
                                                               tmp_path: Path) -> None:
     log = tmp_path / "imports.log"

@@ -44,7 +44,7 @@ def main(out: Path, raw_dir: Path) -> None:
     fm.import_table(out)
     fm.exclude_runs(out, [records[0]["measurement_id"]], "v1 fixture: excluded to keep the flag")
     Path(str(out) + ".lock").unlink(missing_ok=True)
-    version = fm.mapfile.map_metadata(out)["schema_version"]
+    version = fm.store.map_metadata(out)["schema_version"]
     print(len(fm.read_map(out)), "runs, schema version", version)
 
 

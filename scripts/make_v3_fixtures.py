@@ -75,7 +75,7 @@ def main(out_dir: Path, raw_dir: Path) -> None:
                 date="2026-11-24")
     Path(str(target) + ".lock").unlink(missing_ok=True)
     print(len(fm.read_map(target)), "runs, schema version",
-          fm.mapfile.map_metadata(target)["schema_version"], "; package in", package)
+          fm.store.map_metadata(target)["schema_version"], "; package in", package)
 
 
 if __name__ == "__main__":

@@ -190,7 +190,7 @@ def test_append_then_read_gives_the_same_rows_and_schema_metadata(tmp_path):
     info = pq.read_schema(path).metadata[fm.schema.META_KEY]
     assert f'"schema_version": {fm.schema.SCHEMA_VERSION}'.encode() in info
     assert b'"unit": "kPa"' in info
-    meta = fm.mapfile.map_metadata(path)
+    meta = fm.store.map_metadata(path)
     assert meta["n_runs"] == 3 and meta["sources"] == ["reduced"]
     assert meta["tribopipe_version"] == __version__
     units = {c["name"]: c["unit"] for c in meta["columns"]}
@@ -592,7 +592,7 @@ def test_a_version_1_map_written_by_the_old_code_still_reads_and_upgrades_on_wri
     # tests/data/friction_map_v1.parquet was written by tribopipe at commit 064bf4b
     # (scripts/make_v1_map.py): schema version 1, no `lab` column
     old = Path(__file__).parent / "data" / "friction_map_v1.parquet"
-    assert fm.mapfile.map_metadata(old)["schema_version"] == 1
+    assert fm.store.map_metadata(old)["schema_version"] == 1
     assert "lab" not in pq.read_schema(old).names
     runs = fm.read_map(old)
     assert list(runs.columns) == list(fm.RUN_COLUMNS) and len(runs) == 171
@@ -606,7 +606,7 @@ def test_a_version_1_map_written_by_the_old_code_still_reads_and_upgrades_on_wri
     assert fm.import_table(copy).unchanged == 169
     report = fm.append_records(copy, [run_record(1)])
     assert report.added == 1
-    assert fm.mapfile.map_metadata(copy)["schema_version"] == fm.schema.SCHEMA_VERSION
+    assert fm.store.map_metadata(copy)["schema_version"] == fm.schema.SCHEMA_VERSION
     upgraded = fm.read_map(copy)
     pd.testing.assert_frame_equal(upgraded.iloc[:171], runs)
 

@@ -112,7 +112,7 @@ def test_a_backup_that_is_already_the_map_leaves_no_temporary_file(tmp_path):
     <map>.bak a link of the map itself; the next write keeps it and leaves nothing else."""
     map_path = tmp_path / "friction_map.parquet"
     fm.append_records(map_path, [run_record(1)])
-    backup = fm.mapfile.backup_path(map_path)
+    backup = fm.store.backup_path(map_path)
     backup.unlink(missing_ok=True)
     os.link(map_path, backup)
     fm.append_records(map_path, [run_record(2)])

@@ -164,7 +164,7 @@ def test_the_session_reduced_again_is_the_same_two_runs_and_fills_nothing_in(
     assert len(report.unchanged_ids) == 2 and not report.added_ids
     assert not report.conflicting_ids
     # nothing changed, so nothing is written: the map stays as the old code left it
-    assert fm.mapfile.map_metadata(target)["schema_version"] == 3
+    assert fm.store.map_metadata(target)["schema_version"] == 3
     assert fm.read_map(target).equals(old)
 
 
@@ -180,7 +180,7 @@ def test_a_version_3_package_validates_and_merges(tmp_path: Path) -> None:
     runs = fm.read_map(merged)
     assert len(runs) == 5 and set(runs["lab"]) >= {"Fixture Lab"}
     assert runs["test"].isna().all() and runs["result"].isna().all()
-    assert fm.mapfile.map_metadata(merged)["schema_version"] == 4
+    assert fm.store.map_metadata(merged)["schema_version"] == 4
 
 
 def test_map_show_runs_names_what_each_map_knows_of_a_run_s_origin(tmp_path: Path) -> None:

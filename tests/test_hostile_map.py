@@ -68,7 +68,7 @@ def _rewrite_parquet(src: Path, dst: Path, *, change_table=None, change_info=Non
 
 
 def test_the_map_carries_the_checksum_of_its_content(small_map: Path) -> None:
-    info = fm.mapfile.map_metadata(small_map)
+    info = fm.store.map_metadata(small_map)
     runs = fm.read_map(small_map)
     assert info["content_sha256"] == content_sha256(runs)
     assert len(runs) == 16
@@ -99,7 +99,7 @@ def test_the_refusal_names_the_previous_version_to_restore(small_map: Path,
     map_path = _copy(small_map, tmp_path / "map.parquet")
     first = fm.read_map(map_path)["measurement_id"].iloc[0]
     fm.exclude_runs(map_path, [first], "pin debonded")      # a rewrite keeps the old map
-    backup = fm.mapfile.backup_path(map_path)
+    backup = fm.store.backup_path(map_path)
     assert backup.read_bytes() == small_map.read_bytes()
     _rewrite_parquet(map_path, map_path, change_table=lambda t: t.slice(0, 15))
     with pytest.raises(MapError) as info:
@@ -114,11 +114,11 @@ def test_a_map_from_before_the_checksum_reads_and_gains_one(small_map: Path,
                                                             tmp_path: Path) -> None:
     legacy = _rewrite_parquet(small_map, tmp_path / "legacy.parquet",
                               change_info=lambda info: info.pop("content_sha256"))
-    assert "content_sha256" not in fm.mapfile.map_metadata(legacy)
+    assert "content_sha256" not in fm.store.map_metadata(legacy)
     pd.testing.assert_frame_equal(fm.read_map(legacy), fm.read_map(small_map))
     first = fm.read_map(legacy)["measurement_id"].iloc[0]
     fm.exclude_runs(legacy, [first], "checked by hand")
-    assert fm.mapfile.map_metadata(legacy)["content_sha256"] == content_sha256(fm.read_map(legacy))
+    assert fm.store.map_metadata(legacy)["content_sha256"] == content_sha256(fm.read_map(legacy))
 
 
 @pytest.mark.parametrize(("column", "value"), [

@@ -38,9 +38,8 @@ from .frictionmap.duplicates import (
     labels_of,
     map_files_by_hash,
 )
-from .frictionmap.mapfile import read_map
 from .frictionmap.records import RunLabels, Tolerances, make_record, measurement_id
-from .frictionmap.store import AppendReport, append_records
+from .frictionmap.store import AppendReport, append_records, read_map
 from .layout import OutputLayout
 from .measurement import interval_label
 from .numeric import finite_json, finite_or_none

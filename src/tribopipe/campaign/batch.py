@@ -28,8 +28,7 @@ from ..frictionmap.duplicates import (
     labels_of,
     map_files_by_hash,
 )
-from ..frictionmap.mapfile import read_map
-from ..frictionmap.store import update_map
+from ..frictionmap.store import read_map, update_map
 from .metadata import Manifest, read_manifest
 from .outputs import write_failures_csv, write_runs_csv
 from .spec import Campaign

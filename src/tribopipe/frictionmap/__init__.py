@@ -12,11 +12,10 @@ The package's rooms, each importing only those above it:
   and the checksum of a map's content;
 * :mod:`~tribopipe.frictionmap.records` — :class:`RunLabels`, :class:`Tolerances`,
   :func:`make_record`, the ids and the off-nominal QC flags of a run;
-* :mod:`~tribopipe.frictionmap.mapfile` — reading a map file without trusting it (kind,
-  structure, metadata, column types, rows, checksum) and the metadata we write;
-* :mod:`~tribopipe.frictionmap.store` — locked atomic writes (the map's mode kept, the
-  previous map kept as ``<map>.bak``), the pure :func:`fold_records`, append/update/merge
-  and exclusions;
+* :mod:`~tribopipe.frictionmap.store` — the map file: its one reader, which trusts
+  nothing in it (kind, structure, metadata, column types, rows, checksum), the metadata we
+  write, locked atomic writes (the map's mode kept, the previous map kept as
+  ``<map>.bak``), the pure :func:`fold_records`, append/update/merge and exclusions;
 * :mod:`~tribopipe.frictionmap.duplicates` — the same raw content under two file names:
   a duplicate (same labels, stored once) or a conflict (other labels, refused);
 * :mod:`~tribopipe.frictionmap.published` — the founding paper's map (``.mat`` or CSV);
@@ -47,7 +46,6 @@ Guarantees of the store:
 
 from __future__ import annotations
 
-from .mapfile import read_map
 from .merge import merge_map
 from .package import check_package
 from .published import import_records, import_table
@@ -58,6 +56,7 @@ from .store import (
     append_records,
     exclude_runs,
     include_runs,
+    read_map,
     update_map,
     write_map,
 )

@@ -23,10 +23,9 @@ from pathlib import Path
 from ..errors import MapError
 from ..validate import text_problem
 from .datapackage import DESCRIPTOR
-from .mapfile import read_map
 from .package import package_runs
 from .schema import frame_records, is_missing
-from .store import AppendReport, append_records
+from .store import AppendReport, append_records, read_map
 
 
 @dataclass(frozen=True)

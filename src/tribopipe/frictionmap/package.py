@@ -51,7 +51,6 @@ from .datapackage import (
     runs_fields,
     sha256_hash,
 )
-from .mapfile import read_map
 from .published import FOUNDING_PAPER
 from .schema import (
     SCHEMA_NAME,
@@ -60,7 +59,7 @@ from .schema import (
     frame_records,
     unvalidated_frame,
 )
-from .store import same_value
+from .store import read_map, same_value
 
 if TYPE_CHECKING:
     import pandas as pd

@@ -311,7 +311,7 @@ def content_sha256(frame: pd.DataFrame, version: int = SCHEMA_VERSION) -> str:
     int64 with a missing-mask, booleans as bytes, text as JSON with ``null``), so the same
     rows give the same digest however they were stored or read back. Stored in the map's
     Parquet metadata and checked on every read against the version the map was written
-    in (:mod:`tribopipe.frictionmap.mapfile`), so a map still verifies after a schema
+    in (:mod:`tribopipe.frictionmap.store`), so a map still verifies after a schema
     upgrade adds columns.
     """
     import hashlib

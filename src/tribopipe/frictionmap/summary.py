@@ -10,8 +10,8 @@ from ..errors import MapError
 from ..escape import printable
 from ..measurement import interval_label
 from ..stats import group_statistics, repeatability
-from .mapfile import read_map
 from .schema import is_missing
+from .store import read_map
 
 
 def map_summary(path: str | os.PathLike[str], *, runs_listed: bool = False) -> str:

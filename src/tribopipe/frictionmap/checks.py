@@ -23,7 +23,7 @@ import math
 import re
 from dataclasses import dataclass
 from datetime import datetime
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, cast
 
 from ..escape import FORMULA_TRIGGERS
 from ..validate import name_problem, text_problem
@@ -84,7 +84,7 @@ def validate_runs(runs: pd.DataFrame, *, require_lab: bool = False) -> list[RowP
     ``config_hash``), and text with control characters or starting like a spreadsheet
     formula. An empty list means the rows pass. ``runs`` is not modified."""
     problems: list[RowProblem] = []
-    rows = runs.loc[:, list(RUN_COLUMNS)].to_dict(orient="records")
+    rows = cast("list[dict[str, Any]]", runs.loc[:, list(RUN_COLUMNS)].to_dict(orient="records"))
     seen: dict[str, int] = {}
     for i, row in enumerate(rows, 1):
         mid = row["measurement_id"] if isinstance(row["measurement_id"], str) else None

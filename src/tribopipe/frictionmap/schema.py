@@ -318,7 +318,6 @@ def content_sha256(frame: pd.DataFrame, version: int = SCHEMA_VERSION) -> str:
     import json
 
     import numpy as np
-    import pandas as pd
 
     digest = hashlib.sha256(f"tribopipe.frictionmap rows={len(frame)}".encode())
     for name in RUN_COLUMNS:
@@ -330,7 +329,7 @@ def content_sha256(frame: pd.DataFrame, version: int = SCHEMA_VERSION) -> str:
             values = column.to_numpy(dtype="float64")
             data = np.where(np.isnan(values), np.nan, values).astype("<f8").tobytes()
         elif kind == "int":
-            ints = pd.array(column, dtype="Int64")
+            ints = column.astype("Int64")
             mask = ints.isna()
             data = (np.asarray(mask, dtype="u1").tobytes()
                     + ints.fillna(0).to_numpy(dtype="int64").astype("<i8").tobytes())

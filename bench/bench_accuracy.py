@@ -22,10 +22,13 @@ import tempfile
 import time
 from pathlib import Path
 
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))  # the generators
+
+from generators.synthetic import SyntheticRun, truth, write_rheocompass_export
 from tribopipe.config import load_settings
 from tribopipe.readers import read_export
-from tribopipe.reduce import reduce_measurement, select_friction_interval
-from tribopipe.synthetic import SyntheticRun, truth, write_rheocompass_export
+from tribopipe.reduction.intervals import select_friction_interval
+from tribopipe.reduction.reduce import reduce_measurement
 
 SHAPES = ("overshoot", "no_overshoot", "stick_slip", "drift", "cliff")
 NOISES = (0.003, 0.008, 0.015)

@@ -4,7 +4,7 @@ The files: 1,000 synthetic runs on the founding grid (2 pins × 9 discs × 5 for
 2 temperatures, repeats numbered on), each 5,000–15,000 rows of the friction interval at
 10 Hz (500–1,500 s, 3.5–11 mm of sliding at the founding 0.007 mm/s) after a 200-row
 set-up interval, written by the project's synthetic export writer
-(:func:`tribopipe.synthetic.write_rheocompass_export`) in three layouts: 70 % UTF-16 TAB
+(:func:`generators.synthetic.write_rheocompass_export`) in three layouts: 70 % UTF-16 TAB
 English (RheoCompass' own save), 15 % UTF-8 comma, 15 % UTF-16 French with decimal commas.
 The same runs are also bundled ten to a file as multi-test exports (one Project, ten Tests,
 as RheoCompass writes several tests into one file).
@@ -51,6 +51,8 @@ import threading
 import time
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))  # the generators
 
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))  # bench_reader, the reader benchmark's bare parse
@@ -105,7 +107,7 @@ def plan(n: int) -> list[tuple[str, str, dict]]:
 
 
 def _write_chunk(folder: str, chunk: list[tuple[str, str, dict]]) -> int:
-    from tribopipe.synthetic import SyntheticRun, write_rheocompass_export
+    from generators.synthetic import SyntheticRun, write_rheocompass_export
 
     total = 0
     for stem, layout, kwargs in chunk:
@@ -134,7 +136,7 @@ def generate(raw: Path, n: int, jobs: int) -> int:
 
 
 def _write_bundles(folder: str, groups: list[tuple[str, str, list[tuple[str, dict]]]]) -> int:
-    from tribopipe.synthetic import SyntheticRun, SyntheticTest, write_rheocompass_session
+    from generators.synthetic import SyntheticRun, SyntheticTest, write_rheocompass_session
 
     total = 0
     for name, layout, runs in groups:
@@ -148,7 +150,7 @@ def _write_bundles(folder: str, groups: list[tuple[str, str, list[tuple[str, dic
 
 def bundle(out: Path, n: int, jobs: int) -> list[Path]:
     """The same ``n`` runs bundled :data:`PER_BUNDLE` to a file as multi-test exports
-    (:func:`tribopipe.synthetic.write_rheocompass_session`: one Project, a Test per run,
+    (:func:`generators.synthetic.write_rheocompass_session`: one Project, a Test per run,
     as RheoCompass writes a session), runs of one layout in plan order."""
     info = out / ".bench-info.json"
     want = {"n": n, "per_bundle": PER_BUNDLE, "rows": list(ROWS), "version": FILES_VERSION}
@@ -253,16 +255,17 @@ def parse_only_pool(files: list[Path], jobs: int) -> tuple[float, float]:
     import resource
 
     import tribopipe.readers  # noqa: F401 - imported before the fork, as the batch does
-    from tribopipe.campaign.batch import _chunks, _worker_init
+    from tribopipe.campaign.batch import chunk_jobs
+    from tribopipe.campaign.worker import worker_init
 
     def children_cpu() -> float:
         usage = resource.getrusage(resource.RUSAGE_CHILDREN)
         return usage.ru_utime + usage.ru_stime
 
-    chunks = _chunks([str(p) for p in files], jobs)
+    chunks = chunk_jobs([str(p) for p in files], jobs)
     c0, p0 = children_cpu(), time.process_time()
     t0 = time.perf_counter()
-    with ProcessPoolExecutor(max_workers=jobs, initializer=_worker_init) as pool:
+    with ProcessPoolExecutor(max_workers=jobs, initializer=worker_init) as pool:
         sum(pool.map(_parse_chunk, chunks))
     wall = time.perf_counter() - t0
     return wall, (children_cpu() - c0) + (time.process_time() - p0)
@@ -433,7 +436,7 @@ def main(argv: list[str] | None = None) -> dict:
                              "(--repeat times); prints the figures, writes no results file")
     args = parser.parse_args(argv)
 
-    from tribopipe.campaign import default_jobs
+    from tribopipe.campaign.batch import default_jobs
 
     jobs = args.jobs or default_jobs()
     out: Path = args.out.resolve()

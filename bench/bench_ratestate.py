@@ -1,7 +1,7 @@
 """μ_S / μ_K on the third family — rate-and-state friction on the pins' spring, recorded by
 an imperfect instrument — end to end.
 
-The family (:mod:`tribopipe.synthetic_ratestate`: Dieterich–Ruina friction with the ageing
+The family (:mod:`generators.ratestate`: Dieterich–Ruina friction with the ageing
 law on a spring of the pins' shear stiffness, driven at 0.007 mm/s; peaks 0.02–5 mm after
 a hold, stable velocity-strengthening and -weakening sliding, creep without a peak,
 weak stick-slip of 0.01–0.05; quantised torque, jitter, pink noise, spikes, a normal
@@ -44,6 +44,8 @@ from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 from typing import Any
 
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))  # the generators
+
 from bench_validation import (
     _print_table,
     json_rows,
@@ -53,7 +55,7 @@ from bench_validation import (
     truncated_scores,
 )
 
-from tribopipe.synthetic_ratestate import (
+from generators.ratestate import (
     DURATIONS_S,
     NOISE_COLOURS,
     PEAK_DISTANCES_MM,
@@ -87,11 +89,9 @@ def _truth_row(i: int, point: GridPoint) -> tuple[RateStateRun, dict[str, Any]]:
 
 def generator_stamp() -> str:
     """SHA-256 of the sources the family is built from (a cache is valid while equal)."""
-    import tribopipe
-
-    root = Path(tribopipe.__file__).parent
+    root = Path(__file__).resolve().parents[1] / "tests" / "generators"
     digest = hashlib.sha256()
-    for name in ("synthetic_ratestate.py", "synthetic_instrument.py", "synthetic.py"):
+    for name in ("ratestate.py", "instrument.py", "synthetic.py", "truth.py"):
         digest.update((root / name).read_bytes())
     return digest.hexdigest()
 
@@ -99,11 +99,12 @@ def generator_stamp() -> str:
 def _one(job: tuple[int, GridPoint, str, bool]) -> dict[str, Any]:
     """Build (or, from a cache, reuse), write, read back and reduce one run; compare
     with its truth."""
+    from generators.ratestate import write_export
     from tribopipe.config import load_settings
     from tribopipe.errors import TribopipeError
     from tribopipe.readers import read_export
-    from tribopipe.reduce import reduce_measurement, select_friction_interval
-    from tribopipe.synthetic_ratestate import write_export
+    from tribopipe.reduction.intervals import select_friction_interval
+    from tribopipe.reduction.reduce import reduce_measurement
 
     i, point, folder, keep = job
     started = time.process_time()

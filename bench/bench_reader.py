@@ -1,7 +1,7 @@
 """Reader benchmark: ``read_export`` against a bare decode + ``pyarrow.csv`` parse.
 
 Generates long exports (5,000-15,000 rows of the friction interval, plus a 200-row set-up
-interval) from the project's synthetic runs (:mod:`tribopipe.synthetic`) in every text
+interval) from the project's synthetic runs (:mod:`generators.synthetic`) in every text
 layout the reader knows, plus an Excel twin, and measures per file the CPU time
 (``time.process_time``, all threads of the process) of
 
@@ -37,6 +37,8 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))  # the generators
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
@@ -79,7 +81,7 @@ LAYOUTS: dict[str, Layout] = {
 
 
 def _run(rows: int, seed: int):
-    from tribopipe.synthetic import SyntheticRun
+    from generators.synthetic import SyntheticRun
 
     return SyntheticRun(mu_s=0.8, mu_k=0.55, normal_force_N=3.0, duration_s=rows / 10.0,
                         noise=0.006, seed=seed)
@@ -91,7 +93,7 @@ def _status(k: int) -> str:
 
 
 def _rheocompass_lines(rows: int, seed: int, language: str = "en") -> list[str]:
-    from tribopipe.synthetic import rheocompass_text
+    from generators.synthetic import rheocompass_text
 
     text = rheocompass_text(_run(rows, seed), project="bench | DESKTOP-1, 1/1/2026 | 1",
                             test=f"run {seed}", sample="DS30", language=language)
@@ -99,7 +101,7 @@ def _rheocompass_lines(rows: int, seed: int, language: str = "en") -> list[str]:
 
 
 def write_utf16(path: Path, rows: int, seed: int, language: str) -> None:
-    from tribopipe.synthetic import write_rheocompass_export
+    from generators.synthetic import write_rheocompass_export
 
     write_rheocompass_export(path, _run(rows, seed), project="bench", test=f"run {seed}",
                              sample="DS30", language=language)
@@ -136,7 +138,7 @@ def write_cp1252(path: Path, rows: int, seed: int) -> None:
 def write_rheoplus(path: Path, rows: int, seed: int) -> None:
     """Rheoplus "Data Series Information": thousands separators (torque in µNm), ``******``
     columns, a duplicate column name."""
-    from tribopipe.synthetic import make_intervals
+    from generators.synthetic import make_intervals
 
     head = ["Data Series Information", "Name:\t\t\tDS30 on steel", "Number of Intervals:\t\t\t2",
             "Application:\t\t\tRHEOPLUS/32 V3.62 21006865-33024",
@@ -166,7 +168,7 @@ def write_rheoplus(path: Path, rows: int, seed: int) -> None:
 
 def write_plain_csv(path: Path, rows: int, seed: int) -> None:
     """A plain CSV with units in the header (another instrument's export)."""
-    from tribopipe.synthetic import make_intervals
+    from generators.synthetic import make_intervals
 
     frame = make_intervals(_run(rows, seed))[-1]
     columns = [frame["time_s"].to_numpy(), frame["torque_Nm"].to_numpy() * 1e3,

@@ -28,10 +28,13 @@ import os
 import platform
 import shutil
 import statistics
+import sys
 import tempfile
 import time
 import uuid
 from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))  # the generators
 
 HERE = Path(__file__).resolve().parent
 
@@ -65,16 +68,16 @@ def per_file(folder: Path, repeat: int) -> dict:
 
     from threadpoolctl import threadpool_limits
 
-    from tribopipe.campaign import GC_THRESHOLDS
+    from generators.synthetic import SyntheticRun, write_rheocompass_export
+    from tribopipe.campaign.worker import GC_THRESHOLDS
     from tribopipe.config import load_settings
     from tribopipe.files import file_sha256
     from tribopipe.frictionmap import make_record
-    from tribopipe.intervals import select_friction_interval
     from tribopipe.labels import RunLabels
     from tribopipe.pipeline import RunOutcome, plot_run, write_trace
     from tribopipe.readers import read_export
-    from tribopipe.reduce import reduce_measurement
-    from tribopipe.synthetic import SyntheticRun, write_rheocompass_export
+    from tribopipe.reduction.intervals import select_friction_interval
+    from tribopipe.reduction.reduce import reduce_measurement
 
     gc.set_threshold(*GC_THRESHOLDS)  # as in the batch's workers: their GC setting,
     threadpool_limits(limits=1, user_api="blas")  # and one BLAS thread
@@ -82,7 +85,7 @@ def per_file(folder: Path, repeat: int) -> dict:
     labels = RunLabels("Dragonskin 30", "steel", 3.0, 20.0, 1)
     layouts = {"utf16-tab-en": {}, "utf8-comma": {"encoding": "utf-8", "delimiter": ","},
                "utf16-tab-fr": {"language": "fr"}}
-    from tribopipe import signals
+    from tribopipe.reduction import signals
 
     steps: dict[str, list[float]] = {k: [] for k in
                                       ("read", "reduce", "reduce_cold", "hash_record", "trace",
@@ -148,10 +151,10 @@ def records(template: dict, n: int, start: int = 0) -> list[dict]:
 
 
 def template_record(folder: Path) -> dict:
+    from generators.synthetic import SyntheticRun, write_rheocompass_export
     from tribopipe.config import load_settings
     from tribopipe.labels import RunLabels
     from tribopipe.pipeline import reduce_file
-    from tribopipe.synthetic import SyntheticRun, write_rheocompass_export
 
     path = write_rheocompass_export(folder / "t.csv", SyntheticRun(seed=1), project="p",
                                     test="t", sample="s")
@@ -160,7 +163,8 @@ def template_record(folder: Path) -> dict:
 
 def per_size(folder: Path, n: int, template: dict) -> dict:
     """Costs that grow with the number of runs N, at one N."""
-    from tribopipe.campaign import CampaignState, folder_campaign, load_state, save_state
+    from tribopipe.campaign import folder_campaign
+    from tribopipe.campaign.state import CampaignState, load_state, save_state
     from tribopipe.fit import fit_power_law
     from tribopipe.frictionmap import read_map, update_map
     from tribopipe.report import ReportInputs, build_report

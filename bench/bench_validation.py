@@ -1,6 +1,6 @@
 """Validation of μ_S / μ_K on the independent contact-model family, end to end.
 
-The family (:mod:`tribopipe.synthetic_contact`: soft pins in series with a Dahl-type,
+The family (:mod:`generators.contact`: soft pins in series with a Dahl-type,
 elastic–plastic, slip-weakening contact; peaks from 0.02 to 5 mm of pre-sliding, creep
 without a peak, long run-ins, weak stick-slip, torque offsets, white and AR(1) noise
 0.003–0.015) was written and its grid and seeds fixed before the detection of issue 14
@@ -34,7 +34,9 @@ from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 from typing import Any
 
-from tribopipe.synthetic_contact import (
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))  # the generators
+
+from generators.contact import (
     PEAK_DISTANCES_MM,
     SHAPES,
     SPECIAL_SETS,
@@ -53,7 +55,8 @@ def _one(job: tuple[int, GridPoint, str]) -> dict[str, Any]:
     from tribopipe.config import load_settings
     from tribopipe.errors import TribopipeError
     from tribopipe.readers import read_export
-    from tribopipe.reduce import reduce_measurement, select_friction_interval
+    from tribopipe.reduction.intervals import select_friction_interval
+    from tribopipe.reduction.reduce import reduce_measurement
 
     i, point, folder = job
     group, run = point.set, point.build()

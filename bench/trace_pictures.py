@@ -15,8 +15,11 @@ from __future__ import annotations
 
 import argparse
 import shutil
+import sys
 import tempfile
 from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))  # the generators
 
 HERE = Path(__file__).resolve().parent
 IMG = HERE.parent / "docs" / "img"
@@ -40,10 +43,10 @@ def main(argv: list[str] | None = None) -> list[Path]:
     parser.add_argument("--out", type=Path, default=IMG)
     args = parser.parse_args(argv)
 
+    from generators.synthetic import SyntheticRun, write_rheocompass_export
     from tribopipe.config import load_settings
     from tribopipe.labels import RunLabels
     from tribopipe.pipeline import plot_run, reduce_file
-    from tribopipe.synthetic import SyntheticRun, write_rheocompass_export
 
     settings = load_settings()
     args.out.mkdir(parents=True, exist_ok=True)

@@ -21,10 +21,13 @@ import argparse
 import csv
 import io
 import itertools
+import sys
 from dataclasses import dataclass
 from pathlib import Path
 
-from tribopipe.synthetic import SyntheticRun, write_rheocompass_export
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))  # the generators
+
+from generators.synthetic import SyntheticRun, write_rheocompass_export
 
 REPO = Path(__file__).resolve().parents[1]
 MU_S_FACTOR = 1.3
@@ -145,7 +148,8 @@ def readme_text(runs: list[ExampleRun]) -> str:
         "",
         "**These files are synthetic.** They were written by "
         "`scripts/make_example_campaign.py` (seeded, deterministic) with "
-        "`tribopipe.synthetic`, not measured on a rheometer. They imitate the layout of a",
+        "the test generators (`tests/generators/synthetic.py`), not measured on a rheometer. "
+        "They imitate the layout of a",
         "real Anton Paar RheoCompass export (UTF-16 LE with BOM, TAB-separated, CRLF; a "
         "normal-force set-up interval followed by the friction interval, "
         f"{DURATION_S:g} s at 10 Hz, torque in mN·m) and a realistic friction trace "

@@ -18,15 +18,18 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))  # the generators
+
+from generators.synthetic import SyntheticRun, write_rheocompass_export
 from tribopipe import frictionmap as fm
 from tribopipe.config import load_settings
-from tribopipe.pipeline import RunLabels, reduce_file
-from tribopipe.synthetic import SyntheticRun, write_rheocompass_export
+from tribopipe.frictionmap.records import RunLabels
+from tribopipe.pipeline import reduce_file
 
 
 def main(out: Path, raw_dir: Path) -> None:
     """Write the version-1 map to ``out``, the raw exports it reduces to ``raw_dir``."""
-    if fm.SCHEMA_VERSION != 1:
+    if fm.schema.SCHEMA_VERSION != 1:
         raise SystemExit("run this with the source of commit 064bf4b (schema version 1)")
     settings = load_settings()
     raw_dir.mkdir(parents=True, exist_ok=True)
@@ -41,7 +44,8 @@ def main(out: Path, raw_dir: Path) -> None:
     fm.import_table(out)
     fm.exclude_runs(out, [records[0]["measurement_id"]], "v1 fixture: excluded to keep the flag")
     Path(str(out) + ".lock").unlink(missing_ok=True)
-    print(len(fm.read_map(out)), "runs, schema version", fm.map_metadata(out)["schema_version"])
+    version = fm.store.map_metadata(out)["schema_version"]
+    print(len(fm.read_map(out)), "runs, schema version", version)
 
 
 if __name__ == "__main__":

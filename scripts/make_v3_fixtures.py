@@ -21,12 +21,15 @@ import sys
 import tempfile
 from pathlib import Path
 
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))  # the generators
+
+from generators.synthetic import SyntheticRun, SyntheticTest, write_rheocompass_session
 from tribopipe import frictionmap as fm
 from tribopipe.config import load_settings
 from tribopipe.export.citation import Publisher
 from tribopipe.export.publish import publish_map
-from tribopipe.pipeline import RunLabels, reduce_export
-from tribopipe.synthetic import SyntheticRun, SyntheticTest, write_rheocompass_session
+from tribopipe.frictionmap.records import RunLabels
+from tribopipe.pipeline import reduce_export
 
 #: Test name -> (mu_s, mu_k, force [N], seed)
 TESTS = {
@@ -44,7 +47,7 @@ def session_tests() -> list[SyntheticTest]:
 
 def main(out_dir: Path, raw_dir: Path) -> None:
     """Write the version-3 map and package to ``out_dir``, the raw export to ``raw_dir``."""
-    if fm.SCHEMA_VERSION != 3:
+    if fm.schema.SCHEMA_VERSION != 3:
         raise SystemExit("run this with the source of commit d0b8513 (schema version 3)")
     settings = load_settings()
     raw_dir.mkdir(parents=True, exist_ok=True)
@@ -62,7 +65,7 @@ def main(out_dir: Path, raw_dir: Path) -> None:
     with tempfile.TemporaryDirectory() as tmp:
         published = Path(tmp) / "published.parquet"
         fm.import_table(published)
-        first_three = fm.frame_records(fm.read_map(published).iloc[:3])
+        first_three = fm.schema.frame_records(fm.read_map(published).iloc[:3])
     fm.append_records(target, records + first_three)
     fm.exclude_runs(target, [records[1]["measurement_id"]], "v3 fixture: excluded")
     Path(str(target) + ".lock").unlink(missing_ok=True)
@@ -72,7 +75,7 @@ def main(out_dir: Path, raw_dir: Path) -> None:
                 date="2026-11-24")
     Path(str(target) + ".lock").unlink(missing_ok=True)
     print(len(fm.read_map(target)), "runs, schema version",
-          fm.map_metadata(target)["schema_version"], "; package in", package)
+          fm.store.map_metadata(target)["schema_version"], "; package in", package)
 
 
 if __name__ == "__main__":

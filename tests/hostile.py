@@ -12,8 +12,8 @@ from pathlib import Path
 
 from click.testing import CliRunner, Result
 
+from generators.synthetic import SyntheticRun, rheocompass_text, write_rheocompass_export
 from tribopipe.cli import main
-from tribopipe.synthetic import SyntheticRun, rheocompass_text, write_rheocompass_export
 
 #: a short good run (60 s at 0.005 rpm: 0.4 mm, enough for a plateau) with a set-up interval
 GOOD_RUN = SyntheticRun(mu_s=0.8, mu_k=0.55, noise=0.004, normal_force_N=3.0,

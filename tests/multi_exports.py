@@ -13,7 +13,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from tribopipe.synthetic import SyntheticRun, SyntheticTest, write_rheocompass_session
+from generators.synthetic import SyntheticRun, SyntheticTest, write_rheocompass_session
 
 #: the Test names follow this pattern (the README's example)
 TEST_PATTERN = "{pin} on {disc}, {force} N, {temperature} °C, #{repeat}"

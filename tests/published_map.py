@@ -13,13 +13,8 @@ from pathlib import Path
 
 import pandas as pd
 
-from tribopipe.frictionmap import (
-    import_records,
-    import_table,
-    published_csv_path,
-    read_map,
-    records_frame,
-)
+from tribopipe.frictionmap import import_records, import_table, read_map, records_frame
+from tribopipe.frictionmap.published import published_csv_path
 from tribopipe.stats import group_statistics
 
 #: the published map as tribopipe ships it

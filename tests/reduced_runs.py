@@ -9,11 +9,11 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from generators.synthetic import SyntheticRun, write_rheocompass_export
 from tribopipe.config import load_settings
 from tribopipe.frictionmap import append_records
 from tribopipe.labels import RunLabels
 from tribopipe.pipeline import reduce_file, write_trace
-from tribopipe.synthetic import SyntheticRun, write_rheocompass_export
 
 #: (file stem, pin, disc, force N, temperature °C, repeat, synthetic run)
 RUNS = [

@@ -8,8 +8,10 @@ packages ``a.b`` above it, so that counts as depending on them too.
 The checks: no import cycle; no module imports one from a higher layer of :data:`LAYERS`;
 click only under ``tribopipe.cli``, whose modules import only click and the standard
 library at module level (so ``tribopipe --help`` stays light); no library module imports
-the package's own modules inside a function (that is how cycles hide); no module over
-:data:`MAX_LINES` lines.
+the package's own modules inside a function (that is how cycles hide); no private name
+(``_x``) imported from another module; every name imported from the module that defines
+it (one import path per name; a package's ``__all__`` is the exception). A module's
+length is no rule: a room holds one concept, whatever its length.
 """
 
 from __future__ import annotations
@@ -24,27 +26,26 @@ import pytest
 
 SRC = Path(__file__).resolve().parents[1] / "src"
 PACKAGE = "tribopipe"
-MAX_LINES = 700
 
 #: The import layers, bottom to top: a module may import its own layer and those below,
 #: never one above. A module belongs to the layer of the longest name that prefixes it.
 LAYERS: tuple[tuple[str, ...], ...] = (
     # the base: errors, escapes of outside text, validation of outside values, files on
-    # disk, numbers from outside, units, the output folder, the signal filters
+    # disk, numbers from outside, units, the output folder
     ("tribopipe", "tribopipe.errors", "tribopipe.escape", "tribopipe.validate",
-     "tribopipe.files", "tribopipe.numeric", "tribopipe.units", "tribopipe.layout",
-     "tribopipe.signals"),
+     "tribopipe.files", "tribopipe.numeric", "tribopipe.units", "tribopipe.layout"),
     ("tribopipe.measurement",),
     ("tribopipe.physics",),
     ("tribopipe.config",),
-    # a run's uncertainty budget from the instrument's uncertainties
-    ("tribopipe.uncertainty",),
-    # raw exports in (readers) and out (synthetic test exports)
-    ("tribopipe.readers", "tribopipe.synthetic", "tribopipe.synthetic_contact",
-     "tribopipe.synthetic_instrument", "tribopipe.synthetic_ratestate"),
-    ("tribopipe.intervals",),
-    ("tribopipe.detection",),
-    ("tribopipe.reduce",),
+    # raw exports in
+    ("tribopipe.readers",),
+    # the reduction method, one package (its docstring describes the method): the signal
+    # filters and a run's uncertainty budget, the friction interval, the detection steps,
+    # the reduction of one run
+    ("tribopipe.reduction", "tribopipe.reduction.signals", "tribopipe.reduction.uncertainty"),
+    ("tribopipe.reduction.intervals",),
+    ("tribopipe.reduction.detection",),
+    ("tribopipe.reduction.reduce",),
     # what a run is and its QC flags, decided once from its labels and its reduction,
     # before anything prints, plots or stores it
     ("tribopipe.labels",),
@@ -205,7 +206,7 @@ def test_the_graph_sees_every_kind_of_import() -> None:
     """The checks below are only as good as this walk: it must see imports in functions,
     under TYPE_CHECKING, relative and absolute, of packages and of their modules."""
     pipeline = {(i.target, i.in_function, i.type_only) for i in GRAPH["tribopipe.pipeline"]}
-    assert ("tribopipe.reduce", False, False) in pipeline
+    assert ("tribopipe.reduction.reduce", False, False) in pipeline
     assert ("tribopipe.config", False, True) in pipeline  # under TYPE_CHECKING
     assert ("tribopipe.frictionmap.records", False, False) in pipeline
     assert ("tribopipe.frictionmap", False, False) in pipeline  # its package runs first
@@ -287,14 +288,70 @@ def test_library_modules_import_their_own_package_at_the_top() -> None:
     assert not lazy, "own-module imports inside library functions:\n" + "\n".join(lazy)
 
 
-def test_no_module_is_over_700_lines() -> None:
-    long = []
-    for path in MODULES.values():
-        n_lines = len(path.read_text(encoding="utf-8").splitlines())
-        if n_lines > MAX_LINES:
-            long.append(f"{path.relative_to(SRC)}: {n_lines} lines")
-    assert not long, f"modules over {MAX_LINES} lines (each probably holds two concepts): " \
-        + ", ".join(long)
+def _top_level_names(name: str) -> tuple[set[str], set[str] | None]:
+    """What module ``name`` defines at its top level (functions, classes, assignments, also
+    inside top-level ``if``/``try`` blocks), and its ``__all__`` when it has one."""
+    tree = ast.parse(MODULES[name].read_text(encoding="utf-8"))
+    defined: set[str] = set()
+    listed: set[str] | None = None
+    body = list(tree.body)
+    while body:
+        node = body.pop(0)
+        if isinstance(node, ast.FunctionDef | ast.AsyncFunctionDef | ast.ClassDef):
+            defined.add(node.name)
+        elif isinstance(node, ast.Assign | ast.AnnAssign | ast.AugAssign):
+            targets = node.targets if isinstance(node, ast.Assign) else [node.target]
+            for target in targets:
+                defined |= {n.id for n in ast.walk(target) if isinstance(n, ast.Name)}
+            if isinstance(node, ast.Assign) and any(
+                    isinstance(t, ast.Name) and t.id == "__all__" for t in node.targets):
+                listed = {e.value for e in getattr(node.value, "elts", [])
+                          if isinstance(e, ast.Constant)}
+        elif isinstance(node, ast.If) and not _is_type_checking(node):
+            body += node.body + node.orelse
+        elif isinstance(node, ast.Try):
+            body += node.body + [n for h in node.handlers for n in h.body] + node.orelse
+    return defined, listed
+
+
+def _named_imports(name: str) -> Iterator[tuple[str, str, int]]:
+    """(module, imported name, line) of every ``from <own module> import <name>`` in
+    module ``name`` that imports a name, not a module."""
+    tree = ast.parse(MODULES[name].read_text(encoding="utf-8"))
+    for node, _, _ in _walk(tree):
+        if isinstance(node, ast.ImportFrom):
+            base = _resolve(name, node)
+            if base in MODULES and base != name:
+                for alias in node.names:
+                    if f"{base}.{alias.name}" not in MODULES and alias.name != "*":
+                        yield base, alias.name, node.lineno
+
+
+def test_no_private_name_is_imported_across_modules() -> None:
+    """A ``_name`` is its module's own business: a name another module needs is public in
+    its home module (or the code moves to where it is used)."""
+    offenders = [
+        f"{MODULES[name].relative_to(SRC)}:{line}: {target}.{imported}"
+        for name in MODULES for target, imported, line in _named_imports(name)
+        if imported.startswith("_") and not imported.startswith("__")
+    ]
+    assert not offenders, "private names imported from another module:\n" + "\n".join(offenders)
+
+
+def test_every_name_is_imported_from_the_module_that_defines_it() -> None:
+    """One import path per name: no module passes on a name it imported (a package's
+    ``__all__`` is its deliberate, short exception)."""
+    tops = {name: _top_level_names(name) for name in MODULES}
+    offenders = []
+    for name in MODULES:
+        for target, imported, line in _named_imports(name):
+            defined, listed = tops[target]
+            if imported in defined or (listed is not None and imported in listed):
+                continue
+            offenders.append(f"{MODULES[name].relative_to(SRC)}:{line}: {imported} "
+                             f"imported from {target}, which does not define it")
+    assert not offenders, "names imported from a module that only passes them on:\n" + \
+        "\n".join(offenders)
 
 
 def test_the_checks_catch_what_they_are_for(tmp_path: Path) -> None:
@@ -304,21 +361,25 @@ def test_the_checks_catch_what_they_are_for(tmp_path: Path) -> None:
     pkg = tmp_path / "tribopipe"
     (pkg / "cli").mkdir(parents=True)
     (pkg / "__init__.py").write_text("")
-    (pkg / "errors.py").write_text("")
+    (pkg / "errors.py").write_text("_hidden = 1\n")
+    (pkg / "layout.py").write_text("from .errors import _hidden\n")
     (pkg / "config.py").write_text("from typing import TYPE_CHECKING\n"
-                                   "if TYPE_CHECKING:\n    from .reduce import X\n")
-    (pkg / "reduce.py").write_text("import click\nfrom .config import Y\n"
-                                   "def f():\n    from .report import Z\n")
-    (pkg / "report.py").write_text("x = 1\n" * (MAX_LINES + 1))
+                                   "if TYPE_CHECKING:\n    from .reduction.reduce import X\n")
+    (pkg / "reduction").mkdir()
+    (pkg / "reduction" / "__init__.py").write_text("")
+    (pkg / "reduction" / "reduce.py").write_text("import click\nfrom ..config import Y\n"
+                                   "def f():\n    from ..report import Z\n")
+    (pkg / "report.py").write_text("x = 1\n")
     (pkg / "cli" / "__init__.py").write_text("import numpy\nfrom ..report import W\n")
     try:
         SRC = tmp_path
         MODULES = {module_name(p): p for p in sorted(pkg.rglob("*.py"))}
         GRAPH = {name: imports_of(name) for name in MODULES}
-        assert cycles() == [["tribopipe.config", "tribopipe.reduce"]]
+        assert cycles() == [["tribopipe.config", "tribopipe.reduction.reduce"]]
         with pytest.raises(AssertionError, match=r"config.py:3: .*\(type-only\)"):
             test_there_is_no_import_cycle()
-        reduce_layer, report_layer = layer_of("tribopipe.reduce"), layer_of("tribopipe.report")
+        reduce_layer = layer_of("tribopipe.reduction.reduce")
+        report_layer = layer_of("tribopipe.report")
         upward = f"layer {reduce_layer} imports layer {report_layer}"
         with pytest.raises(AssertionError, match=upward):
             test_no_module_imports_from_a_higher_layer()
@@ -328,7 +389,9 @@ def test_the_checks_catch_what_they_are_for(tmp_path: Path) -> None:
             test_cli_modules_import_only_click_and_the_standard_library_at_module_level()
         with pytest.raises(AssertionError, match=r"reduce -> tribopipe\.report \(in a"):
             test_library_modules_import_their_own_package_at_the_top()
-        with pytest.raises(AssertionError, match=rf"report\.py: {MAX_LINES + 1} lines"):
-            test_no_module_is_over_700_lines()
+        with pytest.raises(AssertionError, match=r"layout\.py:1: tribopipe\.errors\._hidden"):
+            test_no_private_name_is_imported_across_modules()
+        with pytest.raises(AssertionError, match=r"reduce\.py:2: Y imported from tribopipe\.con"):
+            test_every_name_is_imported_from_the_module_that_defines_it()
     finally:
         MODULES, GRAPH, SRC = saved

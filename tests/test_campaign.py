@@ -11,17 +11,9 @@ from pathlib import Path
 import pandas as pd
 import pytest
 
-from tribopipe.campaign import (
-    CHANGED,
-    FAILED,
-    NEW,
-    REDUCED,
-    campaign_listing,
-    campaign_table,
-    load_campaign,
-    run_campaign,
-)
-from tribopipe.synthetic import SyntheticRun, write_rheocompass_export
+from generators.synthetic import SyntheticRun, write_rheocompass_export
+from tribopipe.campaign import campaign_listing, campaign_table, load_campaign, run_campaign
+from tribopipe.campaign.table import CHANGED, FAILED, NEW, REDUCED
 
 PATTERN = "{pin}_{disc}_{force}N_{temperature}C_r{repeat}"
 DURATION_S = 150.0
@@ -330,8 +322,8 @@ def test_a_foreign_file_at_the_map_path_stops_the_batch_before_any_work(
 def test_two_batches_of_one_campaign_do_not_interleave(campaign_dir: Path) -> None:
     from filelock import FileLock
 
-    from tribopipe.campaign import BATCH_LOCK
     from tribopipe.errors import CampaignError
+    from tribopipe.layout import BATCH_LOCK
 
     campaign = load_campaign(campaign_dir / "campaign.toml")
     campaign.output_dir.mkdir(parents=True)
@@ -385,14 +377,14 @@ def test_workers_return_typed_picklable_results(campaign_dir: Path) -> None:
     or a failure per run; or the file's failure with its one-line reason."""
     import pickle
 
-    from tribopipe.campaign.worker import _Context, _Job, _reduce_chunk
+    from tribopipe.campaign.worker import Job, WorkerContext, reduce_chunk
     from tribopipe.pipeline import FailedRun, FileOutcome, ReducedRun
 
     campaign = load_campaign(campaign_dir / "campaign.toml")
-    jobs = [_Job(file=row.file, path=str(row.path), sources=row.sources, hints=row.hints)
+    jobs = [Job(file=row.file, path=str(row.path), sources=row.sources, hints=row.hints)
             for row in campaign_table(campaign)
             if row.file in ("DS30_steel_5N_20C_r1.csv", "DS30_steel_9N_20C_r1.csv")]
-    done, failed = pickle.loads(pickle.dumps(_reduce_chunk(jobs, _Context(campaign, False))))
+    done, failed = pickle.loads(pickle.dumps(reduce_chunk(jobs, WorkerContext(campaign, False))))
     assert isinstance(done, FileOutcome) and done.error is None
     assert done.tests == ("friction",)
     (good,) = done.runs

@@ -11,14 +11,9 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from tribopipe.campaign import (
-    campaign_table,
-    labels_from,
-    load_campaign,
-    match_pattern,
-    merge_metadata,
-    read_manifest,
-)
+from tribopipe.campaign import campaign_table, load_campaign, read_manifest
+from tribopipe.campaign.metadata import labels_from, merge_metadata
+from tribopipe.campaign.patterns import match_pattern
 from tribopipe.errors import CampaignError, ConfigError
 from tribopipe.labels import RunLabels, Tolerances, qc_flags
 

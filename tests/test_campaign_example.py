@@ -66,7 +66,7 @@ def test_example_is_small_labelled_and_complete() -> None:
 
 
 def test_published_values_are_the_published_ones() -> None:
-    from tribopipe.frictionmap import published_csv_path
+    from tribopipe.frictionmap.published import published_csv_path
 
     script = load_script()
     published = pd.read_csv(published_csv_path())

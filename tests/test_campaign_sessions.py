@@ -17,6 +17,7 @@ import pandas as pd
 import pytest
 from click.testing import CliRunner
 
+from generators.synthetic import write_rheocompass_export
 from multi_exports import (
     SESSION_TRUTH,
     TEST_PATTERN,
@@ -25,11 +26,11 @@ from multi_exports import (
     write_session,
     write_xlsx_twin,
 )
-from tribopipe.campaign import campaign_listing, discover_files, load_campaign, run_campaign
+from tribopipe.campaign import campaign_listing, load_campaign, run_campaign
 from tribopipe.campaign.batch import Tally
 from tribopipe.campaign.spec import folder_campaign
+from tribopipe.campaign.table import discover_files
 from tribopipe.cli import main
-from tribopipe.synthetic import write_rheocompass_export
 
 #: force [N] -> true mu_k of the session's tests
 MU_K = {force: mu_k for _, mu_k, force, _, _ in SESSION_TRUTH.values()}
@@ -245,7 +246,7 @@ STEPS = "DS30 on steel, steps, 20 °C"
 def steps_folder(root: Path, interval_rows: str) -> Path:
     """A folder holding one export of one test with two force steps (set-up, then 3 N as
     interval 2, then 5 N as interval 3) and a manifest with an ``interval`` column."""
-    from tribopipe.synthetic import write_rheocompass_session
+    from generators.synthetic import write_rheocompass_session
 
     raw = root / "raw"
     raw.mkdir(parents=True)
@@ -482,6 +483,7 @@ def test_campaign_list_shows_one_row_per_run(lab: Path) -> None:
     assert "12 row(s) in 6 file(s): 2 failed, 10 reduced" in result.stdout
 
 
+@pytest.mark.slow  # a real process or a larger data set: `pytest -m slow`
 def test_batch_a_session_folder_in_a_real_process(lab: Path) -> None:
     env = {**os.environ, "PYTHONIOENCODING": "utf-8"}
     cmd = [sys.executable, "-m", "tribopipe", "batch", str(lab / "campaign.toml"), "--jobs", "2"]

@@ -13,8 +13,8 @@ import pandas as pd
 import pytest
 from click.testing import CliRunner
 
+from generators.synthetic import SyntheticRun, write_rheocompass_export
 from tribopipe.cli import main
-from tribopipe.synthetic import SyntheticRun, write_rheocompass_export
 
 PATTERN = "{pin}_{disc}_{force}N_{temperature}C_r{repeat}"
 GOOD = {"DS30_steel_1N_20C_r1": 0.62, "DS30_steel_5N_20C_r1": 0.36, "DS30_steel_5N_20C_r2": 0.37}
@@ -143,6 +143,7 @@ def test_bad_config_names_the_file_and_key(tmp_path: Path) -> None:
     assert "Traceback" not in result.output
 
 
+@pytest.mark.slow  # a real process or a larger data set: `pytest -m slow`
 def test_batch_in_a_real_process(config: Path) -> None:
     """The installed entry point, as `make demo` calls it: no TTY, so no progress bar."""
     env = {**os.environ, "PYTHONIOENCODING": "utf-8"}

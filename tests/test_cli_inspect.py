@@ -128,7 +128,7 @@ def test_the_command_module_loads_no_heavy_library() -> None:
 
 @pytest.mark.parametrize("language", ["en", "fr"])
 def test_inspect_names_the_interval_reduce_will_read(tmp_path: Path, language: str) -> None:
-    from tribopipe.synthetic import SyntheticRun, write_rheocompass_export
+    from generators.synthetic import SyntheticRun, write_rheocompass_export
 
     run_ = SyntheticRun(normal_force_N=3.0, duration_s=60.0, setup_interval=True, seed=3)
     path = write_rheocompass_export(

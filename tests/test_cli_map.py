@@ -85,7 +85,7 @@ def test_table_abstract_markdown_with_filters_to_a_file(published_map, tmp_path)
 
 def test_table_frictionmap_is_the_published_schema(published_map):
     result = invoke("map", "table", "--map", str(published_map), "--format", "frictionmap")
-    assert result.output == fm.published_csv_path().read_text()
+    assert result.output == fm.published.published_csv_path().read_text()
 
 
 def test_table_latex(published_map):

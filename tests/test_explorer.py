@@ -30,7 +30,8 @@ from tribopipe.export.explorer import (
     write_explorer,
 )
 from tribopipe.fit import fit_power_law, power_law
-from tribopipe.frictionmap import exclude_runs, import_table, published_csv_path, read_map
+from tribopipe.frictionmap import exclude_runs, import_table, read_map
+from tribopipe.frictionmap.published import published_csv_path
 from tribopipe.query import pair_points, select_pair
 from tribopipe.stats import group_statistics
 

@@ -28,7 +28,8 @@ from tribopipe.export.explorer import write_explorer
 from tribopipe.export.fe_decks import condition_snippet
 from tribopipe.export.registry import WRITERS
 from tribopipe.export.simulators import snippet
-from tribopipe.frictionmap import import_table, published_csv_path, read_map
+from tribopipe.frictionmap import import_table, read_map
+from tribopipe.frictionmap.published import published_csv_path
 from tribopipe.query import groups_of, pairs, query
 from tribopipe.report import make_report
 
@@ -243,6 +244,7 @@ def assert_snippets_are_the_writer_s(tab, groups, conditions, source: str) -> No
             assert text == snippet(fmt, res, source=source), (fmt, pin, disc, p, t)
 
 
+@pytest.mark.slow  # a real process or a larger data set: `pytest -m slow`
 def test_page_equals_query_on_the_published_map(tab, published):
     map_path, page, groups = published
     tab.open(page_url(page))

@@ -20,16 +20,17 @@ import pyarrow.parquet as pq
 import pytest
 
 from conftest import shared_file
+from generators.synthetic import SyntheticRun, make_intervals
 from tribopipe import __version__
 from tribopipe import frictionmap as fm
 from tribopipe.config import InstrumentConfig, load_settings, settings_from_dict
 from tribopipe.errors import MapError, ValidationError
+from tribopipe.frictionmap.records import nominal_pressure_kPa
 from tribopipe.labels import RunLabels, Tolerances
 from tribopipe.measurement import Measurement, MeasurementMeta
-from tribopipe.reduce import ReductionResult, reduce_measurement
-from tribopipe.synthetic import SyntheticRun, make_intervals
+from tribopipe.reduction.reduce import ReductionResult, reduce_measurement
 
-PUBLISHED_CSV = fm.published_csv_path()
+PUBLISHED_CSV = fm.published.published_csv_path()
 
 
 @functools.cache
@@ -74,11 +75,11 @@ def run_record(
 def test_nominal_pressure_converts_newtons_on_three_pins_to_kilopascal():
     cell = InstrumentConfig()
     # (1 N / 3) / (π · 9 mm²) = 0.011789 N/mm² = 11.789 kPa: the published 11.79
-    assert fm.nominal_pressure_kPa(1.0, cell) == pytest.approx(1 / 3 / (math.pi * 9e-6) / 1e3)
-    assert round(fm.nominal_pressure_kPa(1.0, cell), 2) == 11.79
-    assert round(fm.nominal_pressure_kPa(9.0, cell), 1) == 106.1
+    assert nominal_pressure_kPa(1.0, cell) == pytest.approx(1 / 3 / (math.pi * 9e-6) / 1e3)
+    assert round(nominal_pressure_kPa(1.0, cell), 2) == 11.79
+    assert round(nominal_pressure_kPa(9.0, cell), 1) == 106.1
     one_pin = InstrumentConfig(n_pins=1, pin_radius_mm=2.0)
-    assert fm.nominal_pressure_kPa(1.0, one_pin) == pytest.approx(1.0 / (math.pi * 4e-6) / 1e3)
+    assert nominal_pressure_kPa(1.0, one_pin) == pytest.approx(1.0 / (math.pi * 4e-6) / 1e3)
 
 
 def test_make_record_carries_the_reduction_and_its_provenance():
@@ -91,7 +92,7 @@ def test_make_record_carries_the_reduction_and_its_provenance():
     assert (rec["mu_k_window_start_mm"], rec["mu_k_window_end_mm"]) == result.mu_k_window_mm
     assert (rec["mu_k_window_start_s"], rec["mu_k_window_end_s"]) == result.mu_k_window_s
     assert rec["normal_force_measured_N"] == result.normal_force_mean_N
-    assert rec["pressure_kPa"] == pytest.approx(fm.nominal_pressure_kPa(3.0, settings.instrument))
+    assert rec["pressure_kPa"] == pytest.approx(nominal_pressure_kPa(3.0, settings.instrument))
     assert rec["sliding_speed_mm_s"] == pytest.approx(0.007, rel=0.02)
     assert rec["source"] == "reduced" and rec["source_file"] == "run5.txt"
     assert rec["file_hash"] == file_hash_of(5) and rec["config_hash"] == settings.config_hash
@@ -117,7 +118,7 @@ def test_missing_nominal_force_uses_the_measured_mean_and_is_flagged():
     rec = run_record(force_N=None, normal_force_mean_N=2.96)
     assert rec["normal_force_N"] == 3.0
     assert "nominal_force_estimated" in rec["flags"].split(";")
-    assert rec["pressure_kPa"] == pytest.approx(fm.nominal_pressure_kPa(3.0, InstrumentConfig()))
+    assert rec["pressure_kPa"] == pytest.approx(nominal_pressure_kPa(3.0, InstrumentConfig()))
 
 
 def test_off_nominal_force_and_temperature_are_flagged():
@@ -187,9 +188,10 @@ def test_append_then_read_gives_the_same_rows_and_schema_metadata(tmp_path):
     assert report.added == 3 and report.added_ids == tuple(r["measurement_id"] for r in records)
     runs = fm.read_map(path)
     pd.testing.assert_frame_equal(runs, fm.records_frame(records))
-    info = pq.read_schema(path).metadata[fm.META_KEY]
-    assert f'"schema_version": {fm.SCHEMA_VERSION}'.encode() in info and b'"unit": "kPa"' in info
-    meta = fm.map_metadata(path)
+    info = pq.read_schema(path).metadata[fm.schema.META_KEY]
+    assert f'"schema_version": {fm.schema.SCHEMA_VERSION}'.encode() in info
+    assert b'"unit": "kPa"' in info
+    meta = fm.store.map_metadata(path)
     assert meta["n_runs"] == 3 and meta["sources"] == ["reduced"]
     assert meta["tribopipe_version"] == __version__
     units = {c["name"]: c["unit"] for c in meta["columns"]}
@@ -246,7 +248,7 @@ def test_fold_records_does_not_modify_its_inputs():
     snapshot = runs.copy()
     new = [run_record(1, mu_k=0.7), run_record(2)]
     copies = [dict(r) for r in new]
-    merged, report = fm.fold_records(runs, new, replace=True)
+    merged, report = fm.store.fold_records(runs, new, replace=True)
     pd.testing.assert_frame_equal(runs, snapshot)
     assert new == copies
     assert len(merged) == 2 and report.replaced == 1 and report.added == 1
@@ -285,7 +287,7 @@ def test_a_map_from_a_newer_schema_or_with_a_missing_column_is_refused(tmp_path)
     fm.append_records(path, [run_record(1)])
     table = pq.read_table(path)
     newer = table.replace_schema_metadata(
-        {fm.META_KEY: b'{"schema": "tribopipe.frictionmap", "schema_version": 99}'}
+        {fm.schema.META_KEY: b'{"schema": "tribopipe.frictionmap", "schema_version": 99}'}
     )
     pq.write_table(newer, tmp_path / "newer.parquet")
     with pytest.raises(MapError, match="schema version 99"):
@@ -350,7 +352,7 @@ def test_importing_the_published_csv_gives_169_published_rows_without_mu_s(tmp_p
     report = fm.import_table(path)  # the shipped copy
     assert report.added == 169
     runs = fm.read_map(path)
-    assert set(runs["source"]) == {fm.SOURCE_PUBLISHED}
+    assert set(runs["source"]) == {fm.schema.SOURCE_PUBLISHED}
     assert runs["mu_s"].isna().all() and np.isfinite(runs["mu_k"]).all()
     assert set(runs["pin"]) == {"Dragonskin 30", "Ecoflex 00-50"}
     assert runs["disc"].nunique() == 9
@@ -359,7 +361,7 @@ def test_importing_the_published_csv_gives_169_published_rows_without_mu_s(tmp_p
     assert set(runs["method"]) == {"published"} and runs["config_hash"].isna().all()
     assert runs["measurement_id"].is_unique
     # imported pressure is the published one; it matches the cell geometry to 4 digits
-    expected = [fm.nominal_pressure_kPa(f, InstrumentConfig()) for f in runs["normal_force_N"]]
+    expected = [nominal_pressure_kPa(f, InstrumentConfig()) for f in runs["normal_force_N"]]
     np.testing.assert_allclose(runs["pressure_kPa"], expected, rtol=5e-4)
 
 
@@ -390,7 +392,7 @@ def test_a_published_subset_under_another_name_is_still_published(tmp_path):
     lines = PUBLISHED_CSV.read_text().splitlines()
     subset.write_text("\n".join(lines[:11]) + "\n")
     recs = fm.import_records(subset)
-    assert {r["source"] for r in recs} == {fm.SOURCE_PUBLISHED}
+    assert {r["source"] for r in recs} == {fm.schema.SOURCE_PUBLISHED}
     published_ids = {r["measurement_id"] for r in fm.import_records(PUBLISHED_CSV)}
     assert {r["measurement_id"] for r in recs} <= published_ids
 
@@ -504,8 +506,8 @@ def test_map_summary_lists_pairs_flags_exclusions_and_repeatability(tmp_path):
 
 
 def test_real_exports_reduced_by_the_pipeline_land_once_in_the_map(tmp_path):
+    from generators.synthetic import write_rheocompass_export
     from tribopipe.pipeline import reduce_file
-    from tribopipe.synthetic import write_rheocompass_export
 
     path = tmp_path / "map.parquet"
     settings = load_settings()
@@ -573,13 +575,13 @@ def test_fold_reports_each_id_once_in_first_seen_order_when_records_repeat():
     a, b = run_record(1), run_record(2)
     a2, b2 = run_record(1, mu_k=0.5), run_record(2, mu_k=0.5)
     runs = fm.records_frame([a])
-    merged, report = fm.fold_records(runs, [b, a, a2, b2, a, a2], replace=True)
+    merged, report = fm.store.fold_records(runs, [b, a, a2, b2, a, a2], replace=True)
     assert report.added_ids == (b["measurement_id"],)
     assert report.unchanged_ids == (a["measurement_id"],)
     assert report.replaced_ids == (a["measurement_id"],)
     assert list(merged["measurement_id"]) == [a["measurement_id"], b["measurement_id"]]
     assert list(merged["mu_k"]) == [0.5, 0.5]
-    _, kept = fm.fold_records(runs, [a2, a, a2], replace=False)
+    _, kept = fm.store.fold_records(runs, [a2, a, a2], replace=False)
     assert kept.conflicting_ids == (a["measurement_id"],) and kept.unchanged_ids == (
         a["measurement_id"],)
 
@@ -591,13 +593,13 @@ def test_a_version_1_map_written_by_the_old_code_still_reads_and_upgrades_on_wri
     # tests/data/friction_map_v1.parquet was written by tribopipe at commit 064bf4b
     # (scripts/make_v1_map.py): schema version 1, no `lab` column
     old = Path(__file__).parent / "data" / "friction_map_v1.parquet"
-    assert fm.map_metadata(old)["schema_version"] == 1
+    assert fm.store.map_metadata(old)["schema_version"] == 1
     assert "lab" not in pq.read_schema(old).names
     runs = fm.read_map(old)
     assert list(runs.columns) == list(fm.RUN_COLUMNS) and len(runs) == 171
     assert runs["lab"].isna().all()
     assert int(runs["excluded"].sum()) == 1
-    assert (runs["source"] == fm.SOURCE_PUBLISHED).sum() == 169
+    assert (runs["source"] == fm.schema.SOURCE_PUBLISHED).sum() == 169
     copy = tmp_path / "friction_map.parquet"
     copy.write_bytes(old.read_bytes())
     # the same published rows imported again by the new code (which names their lab) are
@@ -605,7 +607,7 @@ def test_a_version_1_map_written_by_the_old_code_still_reads_and_upgrades_on_wri
     assert fm.import_table(copy).unchanged == 169
     report = fm.append_records(copy, [run_record(1)])
     assert report.added == 1
-    assert fm.map_metadata(copy)["schema_version"] == fm.SCHEMA_VERSION
+    assert fm.store.map_metadata(copy)["schema_version"] == fm.schema.SCHEMA_VERSION
     upgraded = fm.read_map(copy)
     pd.testing.assert_frame_equal(upgraded.iloc[:171], runs)
 

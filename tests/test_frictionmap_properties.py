@@ -14,8 +14,13 @@ from hypothesis import strategies as st
 
 from tribopipe import frictionmap as fm
 from tribopipe.errors import MapError
-from tribopipe.frictionmap.schema import _KIND as KIND
-from tribopipe.frictionmap.schema import COLUMN_RANGES, COUNT_RANGES, REQUIRED
+from tribopipe.frictionmap.schema import (
+    BOUNDS,
+    KIND,
+    REQUIRED,
+    SOURCE_PUBLISHED,
+    SOURCE_REDUCED,
+)
 
 # A map's text: one printable line (no control, format, surrogate, private-use, unassigned
 # character, no line or paragraph separator: tribopipe.validate's rule for every map text).
@@ -29,7 +34,7 @@ MAYBE_TEXT = st.none() | TEXT
 def float_values(name: str):
     """Valid values of a float column: inside its physical range (NaN where it may be
     missing), else any finite number or NaN."""
-    bounds = COLUMN_RANGES.get(name)
+    bounds = BOUNDS.get(name)
     if bounds is None:
         return FLOAT
     inside = st.floats(min_value=bounds.low, max_value=bounds.high,
@@ -38,8 +43,8 @@ def float_values(name: str):
 
 
 def int_values(name: str):
-    low, high = COUNT_RANGES[name]
-    return st.none() | st.integers(min_value=low, max_value=high)
+    bounds = BOUNDS[name]
+    return st.none() | st.integers(min_value=int(bounds.low), max_value=int(bounds.high))
 
 
 @st.composite
@@ -59,14 +64,14 @@ def records(draw, min_size: int = 0, max_size: int = 6) -> list[dict]:
                 rec[name] = draw(st.booleans())
             else:
                 rec[name] = draw(MAYBE_TEXT)
-        source = draw(st.sampled_from([fm.SOURCE_REDUCED, fm.SOURCE_PUBLISHED]) | NAME)
+        source = draw(st.sampled_from([SOURCE_REDUCED, SOURCE_PUBLISHED]) | NAME)
         rec.update(
             measurement_id=mid,
             source=source,
             pin=draw(NAME),
             disc=draw(NAME),
         )
-        if source == fm.SOURCE_REDUCED and math.isnan(rec["mu_s"]):
+        if source == fm.schema.SOURCE_REDUCED and math.isnan(rec["mu_s"]):
             rec["mu_s"] = draw(float_values("mu_k"))
         out.append(rec)
     return out
@@ -100,7 +105,7 @@ def test_appending_the_same_runs_again_changes_nothing(recs, rnd):
 BREAKERS = {
     "mu_k is NaN": lambda r: r.update(mu_k=float("nan")),
     "no pin": lambda r: r.update(pin=" "),
-    "reduced without mu_s": lambda r: r.update(source=fm.SOURCE_REDUCED, mu_s=None),
+    "reduced without mu_s": lambda r: r.update(source=fm.schema.SOURCE_REDUCED, mu_s=None),
     "text in a number column": lambda r: r.update(normal_force_N="3 N"),
     "half a repeat": lambda r: r.update(repeat=1.5),
     "an infinite repeat": lambda r: r.update(repeat=float("inf")),
@@ -169,7 +174,7 @@ def test_folding_keeps_first_seen_order_and_the_latest_or_first_content(first, s
     second += [{**r, "mu_k": r["mu_k"] + 1.0 if r["mu_k"] < 5 else r["mu_k"] / 2}
                for r in reused]
     runs = fm.records_frame(first)
-    merged, report = fm.fold_records(runs, second, replace=replace)
+    merged, report = fm.store.fold_records(runs, second, replace=replace)
 
     order = [r["measurement_id"] for r in first] + [
         r["measurement_id"] for r in second if r["measurement_id"] not in taken

@@ -24,10 +24,10 @@ import pyarrow.parquet as pq
 import pytest
 from click.testing import CliRunner
 
+from generators.synthetic import SyntheticRun, write_rheocompass_export
 from tribopipe import frictionmap as fm
 from tribopipe.cli import main
-from tribopipe.pipeline import file_sha256
-from tribopipe.synthetic import SyntheticRun, write_rheocompass_export
+from tribopipe.files import file_sha256
 
 DATA = Path(__file__).parent / "data"
 V1_MAP = DATA / "frictionmap_v1.parquet"
@@ -52,11 +52,11 @@ def v1_export(tmp_path: Path) -> Path:
 
 
 def reduced_row(runs):
-    return runs[runs["source"] == fm.SOURCE_REDUCED].iloc[0]
+    return runs[runs["source"] == fm.schema.SOURCE_REDUCED].iloc[0]
 
 
 def test_a_version_1_map_reads_with_the_new_columns_missing() -> None:
-    info = json.loads(pq.read_schema(V1_MAP).metadata[fm.META_KEY])
+    info = json.loads(pq.read_schema(V1_MAP).metadata[fm.schema.META_KEY])
     assert info["schema_version"] == 1
     assert "u_mu_k" not in pq.read_schema(V1_MAP).names
     assert "lab" not in pq.read_schema(V1_MAP).names
@@ -82,8 +82,8 @@ def test_writing_to_an_old_map_keeps_its_rows_and_stores_the_current_schema(
     result = CliRunner().invoke(main, ["reduce", str(other), *LABELS, "--repeat", "2",
                                        "--map", str(v1_map), "--out", str(tmp_path / "out")])
     assert result.exit_code == 0, result.output
-    info = json.loads(pq.read_schema(v1_map).metadata[fm.META_KEY])
-    assert info["schema_version"] == fm.SCHEMA_VERSION == 4
+    info = json.loads(pq.read_schema(v1_map).metadata[fm.schema.META_KEY])
+    assert info["schema_version"] == fm.schema.SCHEMA_VERSION == 4
     runs = fm.read_map(v1_map)
     assert len(runs) == 5
     old = runs[runs["method"].str.startswith("tribopipe-v1")]
@@ -125,12 +125,12 @@ def v3_fixture_script():
 
 
 def test_a_version_3_map_reads_with_test_and_result_missing() -> None:
-    info = json.loads(pq.read_schema(V3_MAP).metadata[fm.META_KEY])
+    info = json.loads(pq.read_schema(V3_MAP).metadata[fm.schema.META_KEY])
     assert info["schema_version"] == 3
     assert {"test", "result"}.isdisjoint(pq.read_schema(V3_MAP).names)
     runs = fm.read_map(V3_MAP)
     assert len(runs) == 5 and runs["test"].isna().all() and runs["result"].isna().all()
-    reduced = runs[runs["source"] == fm.SOURCE_REDUCED]
+    reduced = runs[runs["source"] == fm.schema.SOURCE_REDUCED]
     assert reduced["interval"].notna().all() and reduced["u_mu_k"].notna().all()
     assert reduced["excluded"].tolist() == [False, True]
 
@@ -138,10 +138,10 @@ def test_a_version_3_map_reads_with_test_and_result_missing() -> None:
 def test_the_session_reduced_again_is_the_same_two_runs_and_fills_nothing_in(
     tmp_path: Path
 ) -> None:
+    from generators.synthetic import write_rheocompass_session
     from tribopipe.config import load_settings
     from tribopipe.labels import RunLabels
     from tribopipe.pipeline import reduce_export
-    from tribopipe.synthetic import write_rheocompass_session
 
     script = v3_fixture_script()
     target = tmp_path / "friction_map.parquet"
@@ -160,7 +160,7 @@ def test_the_session_reduced_again_is_the_same_two_runs_and_fills_nothing_in(
     assert len(report.unchanged_ids) == 2 and not report.added_ids
     assert not report.conflicting_ids
     # nothing changed, so nothing is written: the map stays as the old code left it
-    assert fm.map_metadata(target)["schema_version"] == 3
+    assert fm.store.map_metadata(target)["schema_version"] == 3
     assert fm.read_map(target).equals(old)
 
 
@@ -169,14 +169,14 @@ def test_a_version_3_package_validates_and_merges(tmp_path: Path) -> None:
     assert checked.exit_code == 0, checked.output
     assert checked.output.strip().endswith(
         f"valid friction-map package from Fixture Lab, 5 runs: 3 measured by "
-        f"{fm.PUBLISHED_LAB}, 2 measured by Fixture Lab")
+        f"{fm.published.PUBLISHED_LAB}, 2 measured by Fixture Lab")
     merged = tmp_path / "merged.parquet"
     result = CliRunner().invoke(main, ["map", "merge", str(V3_PACKAGE), "--map", str(merged)])
     assert result.exit_code == 0, result.output
     runs = fm.read_map(merged)
     assert len(runs) == 5 and set(runs["lab"]) >= {"Fixture Lab"}
     assert runs["test"].isna().all() and runs["result"].isna().all()
-    assert fm.map_metadata(merged)["schema_version"] == 4
+    assert fm.store.map_metadata(merged)["schema_version"] == 4
 
 
 def test_map_show_runs_names_what_each_map_knows_of_a_run_s_origin(tmp_path: Path) -> None:
@@ -190,7 +190,7 @@ def test_map_show_runs_names_what_each_map_knows_of_a_run_s_origin(tmp_path: Pat
     assert sum("frictionmap_published.csv" in ln for ln in lines) == 3
 
     script = v3_fixture_script()
-    from tribopipe.synthetic import write_rheocompass_session
+    from generators.synthetic import write_rheocompass_session
 
     folder = tmp_path / "raw"
     folder.mkdir()

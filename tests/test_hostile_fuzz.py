@@ -40,9 +40,9 @@ import pandas as pd
 import pytest
 
 from conftest import SHARED
+from generators.synthetic import SyntheticRun, make_intervals, rheocompass_text
 from hostile import GOOD_RUN, good_export, invoke
 from tribopipe.frictionmap import read_map
-from tribopipe.synthetic import SyntheticRun, make_intervals, rheocompass_text
 
 DATA = Path(__file__).resolve().parent / "data"
 SEED = int(os.environ.get("TRIBOPIPE_FUZZ_SEED", "20240521"))

@@ -15,6 +15,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
+from generators.synthetic import make_intervals, write_intervals_export
 from hostile import (
     GOOD_RUN,
     assert_clean_failure,
@@ -27,7 +28,6 @@ from tribopipe.config import load_settings, settings_from_dict
 from tribopipe.errors import ConfigError, ValidationError
 from tribopipe.frictionmap import read_map
 from tribopipe.labels import RunLabels
-from tribopipe.synthetic import make_intervals, write_intervals_export
 
 PATTERN = "{pin}_{disc}_{force}N_{temperature}C_r{repeat}"
 

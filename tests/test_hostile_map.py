@@ -37,7 +37,7 @@ def small_map(tmp_path_factory: pytest.TempPathFactory) -> Path:
     """A real map: six reduced runs and ten rows of the published map imported."""
     root = tmp_path_factory.mktemp("hostile_map")
     map_path, _ = make_processed(root)
-    lines = fm.published_csv_path().read_text(encoding="utf-8").splitlines()[:11]
+    lines = fm.published.published_csv_path().read_text(encoding="utf-8").splitlines()[:11]
     table = root / "published_part.csv"
     table.write_text("\n".join(lines) + "\n", encoding="utf-8")
     fm.import_table(map_path, table)
@@ -56,10 +56,10 @@ def _rewrite_parquet(src: Path, dst: Path, *, change_table=None, change_info=Non
     meta = dict(table.schema.metadata)
     if change_table is not None:
         table = change_table(table)
-    info = json.loads(meta[fm.META_KEY])
+    info = json.loads(meta[fm.schema.META_KEY])
     if change_info is not None:
         change_info(info)
-    meta[fm.META_KEY] = json.dumps(info).encode()
+    meta[fm.schema.META_KEY] = json.dumps(info).encode()
     pq.write_table(table.replace_schema_metadata(meta), dst)
     return dst
 
@@ -68,7 +68,7 @@ def _rewrite_parquet(src: Path, dst: Path, *, change_table=None, change_info=Non
 
 
 def test_the_map_carries_the_checksum_of_its_content(small_map: Path) -> None:
-    info = fm.map_metadata(small_map)
+    info = fm.store.map_metadata(small_map)
     runs = fm.read_map(small_map)
     assert info["content_sha256"] == content_sha256(runs)
     assert len(runs) == 16
@@ -99,7 +99,7 @@ def test_the_refusal_names_the_previous_version_to_restore(small_map: Path,
     map_path = _copy(small_map, tmp_path / "map.parquet")
     first = fm.read_map(map_path)["measurement_id"].iloc[0]
     fm.exclude_runs(map_path, [first], "pin debonded")      # a rewrite keeps the old map
-    backup = fm.backup_path(map_path)
+    backup = fm.store.backup_path(map_path)
     assert backup.read_bytes() == small_map.read_bytes()
     _rewrite_parquet(map_path, map_path, change_table=lambda t: t.slice(0, 15))
     with pytest.raises(MapError) as info:
@@ -114,11 +114,11 @@ def test_a_map_from_before_the_checksum_reads_and_gains_one(small_map: Path,
                                                             tmp_path: Path) -> None:
     legacy = _rewrite_parquet(small_map, tmp_path / "legacy.parquet",
                               change_info=lambda info: info.pop("content_sha256"))
-    assert "content_sha256" not in fm.map_metadata(legacy)
+    assert "content_sha256" not in fm.store.map_metadata(legacy)
     pd.testing.assert_frame_equal(fm.read_map(legacy), fm.read_map(small_map))
     first = fm.read_map(legacy)["measurement_id"].iloc[0]
     fm.exclude_runs(legacy, [first], "checked by hand")
-    assert fm.map_metadata(legacy)["content_sha256"] == content_sha256(fm.read_map(legacy))
+    assert fm.store.map_metadata(legacy)["content_sha256"] == content_sha256(fm.read_map(legacy))
 
 
 @pytest.mark.parametrize(("column", "value"), [
@@ -139,7 +139,7 @@ def test_a_missing_uncertainty_reads_the_same_stored_as_nan_or_as_null(
     """u_mu_s/u_mu_k are nullable (imported rows have none): a NaN cell and a null cell
     both read as missing, and neither is refused."""
     runs = fm.read_map(small_map)
-    reduced = int(runs.index[runs["source"] == fm.SOURCE_REDUCED][0])
+    reduced = int(runs.index[runs["source"] == fm.schema.SOURCE_REDUCED][0])
     as_null = _bad_other(small_map, tmp_path / "null.parquet", "u_mu_k", None)
     as_nan = _bad_other(small_map, tmp_path / "nan.parquet", "u_mu_k", float("nan"))
     read_null, read_nan = fm.read_map(as_null), fm.read_map(as_nan)
@@ -152,12 +152,13 @@ def test_a_checksum_written_by_an_older_schema_still_verifies(small_map: Path,
                                                               tmp_path: Path) -> None:
     """A map whose schema version predates columns we added since is checked over the
     columns it had: an upgrade of tribopipe never makes a sound map fail its checksum."""
-    gone = [name for name, added in fm.ADDED_IN_VERSION.items() if added == fm.SCHEMA_VERSION]
-    old_digest = content_sha256(fm.read_map(small_map), fm.SCHEMA_VERSION - 1)
+    gone = [name for name, added in fm.schema.ADDED_IN_VERSION.items()
+            if added == fm.schema.SCHEMA_VERSION]
+    old_digest = content_sha256(fm.read_map(small_map), fm.schema.SCHEMA_VERSION - 1)
     assert old_digest != content_sha256(fm.read_map(small_map))
 
     def downgrade(info: dict) -> None:
-        info["schema_version"] = fm.SCHEMA_VERSION - 1
+        info["schema_version"] = fm.schema.SCHEMA_VERSION - 1
         info["content_sha256"] = old_digest
     older = _rewrite_parquet(small_map, tmp_path / "older.parquet",
                              change_table=lambda t: t.drop_columns(gone),
@@ -190,6 +191,7 @@ def test_damaged_pandas_metadata_does_not_decide_how_the_map_reads(small_map: Pa
     pd.testing.assert_frame_equal(fm.read_map(damaged), fm.read_map(small_map))
 
 
+@pytest.mark.slow  # a real process or a larger data set: `pytest -m slow`
 def test_every_flipped_bit_is_refused_or_reads_identically(small_map: Path,
                                                            tmp_path: Path) -> None:
     raw = small_map.read_bytes()
@@ -218,6 +220,7 @@ def test_every_flipped_bit_is_refused_or_reads_identically(small_map: Path,
     assert outcomes["refused"] > N_FLIPS // 5 and outcomes["identical"] > 0, outcomes
 
 
+@pytest.mark.slow  # a real process or a larger data set: `pytest -m slow`
 def test_map_merge_of_flipped_maps_is_one_line(small_map: Path, tmp_path: Path) -> None:
     ours = tmp_path / "ours.parquet"
     fm.import_table(ours)                      # the published map
@@ -318,7 +321,7 @@ def test_a_frictionmap_csv_we_wrote_reads_back_with_formula_names(tmp_path: Path
     again = tmp_path / "again.csv"
     again.write_text(out, encoding="utf-8")
     runs = fm.read_map(ours)
-    back = fm.read_frictionmap_table(again)
+    back = fm.published.read_frictionmap_table(again)
     assert (back["pin"][0], back["disc"][0]) == (runs["pin"][0], runs["disc"][0])
 
 

@@ -9,11 +9,11 @@ from __future__ import annotations
 import pytest
 
 from conftest import shared_file
+from generators.synthetic import SyntheticRun, make_intervals
 from tribopipe.config import InstrumentConfig, ReductionParams
 from tribopipe.errors import MissingQuantityError, NotFrictionTestError, ReductionError
-from tribopipe.intervals import robust_mean, select_friction_interval
 from tribopipe.measurement import Measurement, MeasurementMeta
-from tribopipe.synthetic import SyntheticRun, make_intervals
+from tribopipe.reduction.intervals import robust_mean, select_friction_interval
 
 INSTRUMENT = InstrumentConfig()
 PARAMS = ReductionParams()
@@ -96,12 +96,6 @@ def test_the_robust_mean_ignores_spikes_but_not_noise() -> None:
     assert robust_mean([2.0, 2.0, 2.0]) == 2.0
 
 
-def test_the_old_import_place_still_works() -> None:
-    from tribopipe import reduce
-
-    assert reduce.select_friction_interval is select_friction_interval
-
-
 # --------------------------------------------------------------------------- several tests
 
 
@@ -117,7 +111,7 @@ def session(*runs_per_test: tuple[SyntheticRun, ...]) -> list[Measurement]:
 
 
 def test_every_test_gets_its_friction_interval_and_its_own_set_up_offset() -> None:
-    from tribopipe.intervals import friction_intervals
+    from tribopipe.reduction.intervals import friction_intervals
 
     items = session(
         (SyntheticRun(torque_offset_Nm=3e-4, seed=51),),
@@ -140,7 +134,7 @@ def test_every_test_gets_its_friction_interval_and_its_own_set_up_offset() -> No
 def test_force_steps_in_one_test_are_one_friction_interval_each() -> None:
     """A set-up, then 3 N and 5 N steps without a new set-up: both steps are friction
     intervals; the nearest at-rest interval before each (the set-up) zeroes both."""
-    from tribopipe.intervals import friction_intervals
+    from tribopipe.reduction.intervals import friction_intervals
 
     items = session((SyntheticRun(normal_force_N=3.0, torque_offset_Nm=2e-4, seed=54),
                      SyntheticRun(normal_force_N=5.0, torque_offset_Nm=2e-4,
@@ -155,7 +149,7 @@ def test_force_steps_in_one_test_are_one_friction_interval_each() -> None:
 
 
 def test_a_test_without_rotation_is_its_own_problem_naming_it() -> None:
-    from tribopipe.intervals import friction_intervals
+    from tribopipe.reduction.intervals import friction_intervals
 
     still = make_intervals(SyntheticRun(seed=56))[0]  # a set-up alone: the disc never turns
     items = session((SyntheticRun(seed=57),)) + [
@@ -176,8 +170,8 @@ def test_the_real_two_test_relaxation_export_has_no_friction_interval_in_either_
 ) -> None:
     """A real session export of two stress-relaxation tests: torque but no normal force
     and no rotation. Each test is refused on its own, by name."""
-    from tribopipe.intervals import friction_intervals
     from tribopipe.readers import read_export
+    from tribopipe.reduction.intervals import friction_intervals
 
     path = data_dir / "rheocompass_en_utf16_two_tests.csv"
     found = friction_intervals(read_export(path))

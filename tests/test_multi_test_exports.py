@@ -15,6 +15,7 @@ import pandas as pd
 import pytest
 from click.testing import CliRunner
 
+from generators.synthetic import SyntheticTest, write_rheocompass_session
 from multi_exports import (
     SESSION_TRUTH,
     run,
@@ -29,7 +30,6 @@ from tribopipe.errors import ReductionError
 from tribopipe.frictionmap import measurement_id
 from tribopipe.labels import RunLabels
 from tribopipe.pipeline import ReducedRun, read_runs, reduce_export, reduce_file
-from tribopipe.synthetic import SyntheticTest, write_rheocompass_session
 
 SETTINGS = load_settings()
 
@@ -212,6 +212,7 @@ def test_reduce_a_copy_twice_is_one_duplicate_and_the_map_names_both(raw: Path,
     assert set(runs["source_file"]) == {first.name} and set(runs["repeat"]) == {1}
 
 
+@pytest.mark.slow  # a real process or a larger data set: `pytest -m slow`
 def test_reduce_a_session_as_a_subprocess(raw: Path, tmp_path: Path) -> None:
     proc = subprocess.run(
         [sys.executable, "-m", "tribopipe", "reduce", str(raw / "session.csv"), "--no-map",

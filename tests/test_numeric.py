@@ -42,6 +42,6 @@ def test_the_three_helpers_agree_on_what_is_finite(value, expected) -> None:
 
 
 def test_the_old_names_still_import() -> None:
-    from tribopipe.pipeline import finite_or_none as from_pipeline
+    from tribopipe.numeric import finite_or_none as from_pipeline
 
     assert from_pipeline is finite_or_none

@@ -22,6 +22,7 @@ from tribopipe.cli import main
 from tribopipe.export.citation import Publisher, yaml_text
 from tribopipe.export.publish import package_runs_table, publish_map
 from tribopipe.frictionmap.datapackage import PackageLimits, sha256_hash
+from tribopipe.validate import MU
 
 LAB = "Soft Robotics Lab, Example University"
 
@@ -101,7 +102,7 @@ def test_publish_validate_merge_round_trip_gives_identical_runs(source_map, pack
     # the package carries the paper's rows too: the line says who measured how many
     assert code == 0 and lines == [
         f"{package / 'datapackage.json'}: valid friction-map package from {LAB}, 175 runs: "
-        f"169 measured by {fm.PUBLISHED_LAB}, 6 measured by {LAB}"]
+        f"169 measured by {fm.published.PUBLISHED_LAB}, 6 measured by {LAB}"]
     merged = tmp_path / "empty" / "friction_map.parquet"
     result = invoke("map", "merge", package, "--map", merged)
     assert result.exit_code == 0, result.output
@@ -111,9 +112,9 @@ def test_publish_validate_merge_round_trip_gives_identical_runs(source_map, pack
     # each lab's provenance: ours named, the paper's rows keep their authors
     labs = fm.read_map(merged).groupby("source")["lab"].unique()
     assert list(labs["reduced"]) == [LAB]
-    assert list(labs[fm.SOURCE_PUBLISHED]) == [fm.PUBLISHED_LAB]
+    assert list(labs[fm.schema.SOURCE_PUBLISHED]) == [fm.published.PUBLISHED_LAB]
     shown = invoke("map", "show", "--map", merged).output
-    assert f"lab {LAB}: 6 runs" in shown and f"lab {fm.PUBLISHED_LAB}: 169 runs" in shown
+    assert f"lab {LAB}: 6 runs" in shown and f"lab {fm.published.PUBLISHED_LAB}: 169 runs" in shown
     # merging it again, or into the map it came from, changes nothing
     again = invoke("map", "merge", package / "datapackage.json", "--map", source_map)
     assert again.exit_code == 0 and "0 added, 175 unchanged" in again.output
@@ -127,7 +128,7 @@ def test_the_runs_parquet_is_itself_a_friction_map(package):
 def test_descriptor_has_schema_units_licence_and_citation_per_resource(package):
     d = descriptor(package)
     assert d["profile"] == "data-package" and d["tribopipe"]["lab"] == LAB
-    assert d["tribopipe"]["schema_version"] == fm.SCHEMA_VERSION
+    assert d["tribopipe"]["schema_version"] == fm.schema.SCHEMA_VERSION
     assert d["licenses"][0]["name"] == "CC-BY-4.0"
     for res in d["resources"]:
         assert res["licenses"] and res["sources"], res["name"]
@@ -137,9 +138,9 @@ def test_descriptor_has_schema_units_licence_and_citation_per_resource(package):
     assert fields["pressure_kPa"]["unit"] == "kPa"
     assert fields["temperature_C"]["unit"] == "°C"
     assert fields["mu_k"]["constraints"] == {"required": True, "minimum": 0.0,
-                                             "maximum": fm.MU_MAX}
+                                             "maximum": MU.high}
     titles = " ".join(s["title"] for s in d["sources"])
-    assert fm.FOUNDING_PAPER["title"] in titles
+    assert fm.published.FOUNDING_PAPER["title"] in titles
     assert "CC-BY-4.0" in (package / "README.md").read_text(encoding="utf-8")
 
 
@@ -156,6 +157,7 @@ def test_the_frictionless_library_finds_the_package_valid(package):
     assert not frictionless.validate(str(tampered / "datapackage.json")).valid
 
 
+@pytest.mark.slow  # a real process or a larger data set: `pytest -m slow`
 def test_publish_and_validate_as_real_processes(source_map, tmp_path):
     out = tmp_path / "pkg"
     env = {**os.environ, "PYTHONIOENCODING": "utf-8"}
@@ -207,7 +209,7 @@ def test_citation_cff_follows_the_cff_1_2_0_schema(package):
     assert cff["authors"] == [{"name": LAB, "email": "ada@example.org"}]
     assert all(_author_ok(a) for a in cff["authors"] + cff["contact"])
     paper, software = cff["references"]
-    assert paper["title"] == fm.FOUNDING_PAPER["title"] and paper["type"] == "article"
+    assert paper["title"] == fm.published.FOUNDING_PAPER["title"] and paper["type"] == "article"
     assert [a["family-names"] for a in paper["authors"]] == [
         "Berthold", "Burgner-Kahrs", "Wangenheim", "Kahms"]
     assert all(_author_ok(a) for r in cff["references"] for a in r["authors"])
@@ -425,7 +427,7 @@ def test_a_version_1_map_publishes_with_its_rows_labelled(tmp_path):
     done = publish_map(old, tmp_path / "pkg", Publisher("Old Lab"))
     assert fm.check_package(done.path).ok
     runs = fm.read_map(done.path / "data" / "runs.parquet")
-    assert set(runs["lab"]) == {"Old Lab", fm.PUBLISHED_LAB}
+    assert set(runs["lab"]) == {"Old Lab", fm.published.PUBLISHED_LAB}
     assert runs["excluded"].sum() == 1
 
 
@@ -434,7 +436,7 @@ def test_a_package_of_schema_version_2_still_checks_and_merges(copy, tmp_path):
     missing, as an old map does."""
     import pyarrow.parquet as pq
 
-    gone = tuple(c for c, v in fm.ADDED_IN_VERSION.items() if v > 2)
+    gone = tuple(c for c, v in fm.schema.ADDED_IN_VERSION.items() if v > 2)
     assert {"u_mu_s", "u_mu_k", "test", "result"} <= set(gone)
     runs_csv = copy / "data" / "runs.csv"
     table = pd.read_csv(runs_csv, dtype=str, keep_default_na=False).drop(columns=list(gone))
@@ -442,11 +444,11 @@ def test_a_package_of_schema_version_2_still_checks_and_merges(copy, tmp_path):
     runs_parquet = copy / "data" / "runs.parquet"
     arrow = pq.read_table(runs_parquet)
     meta = dict(arrow.schema.metadata)
-    info = json.loads(meta[fm.META_KEY])
+    info = json.loads(meta[fm.schema.META_KEY])
     info["schema_version"] = 2
     info["columns"] = [c for c in info["columns"] if c["name"] not in gone]
     info.pop("content_sha256")     # version 2 was written before the map had a checksum
-    meta[fm.META_KEY] = json.dumps(info).encode()
+    meta[fm.schema.META_KEY] = json.dumps(info).encode()
     arrow = arrow.drop_columns(list(gone)).replace_schema_metadata(meta)
     pq.write_table(arrow, runs_parquet)
     data = descriptor(copy)
@@ -494,7 +496,8 @@ def test_merge_lab_names_who_measured_a_parquet_map_s_unnamed_rows(source_map, t
     assert "note:" not in named.stderr
     labs = fm.read_map(ours).groupby("source")["lab"].unique()
     assert list(labs["reduced"]) == ["Lab D"]
-    assert list(labs[fm.SOURCE_PUBLISHED]) == [fm.PUBLISHED_LAB]  # rows naming a lab keep it
+    # rows naming a lab keep it
+    assert list(labs[fm.schema.SOURCE_PUBLISHED]) == [fm.published.PUBLISHED_LAB]
     assert "lab Lab D: 6 runs" in CliRunner().invoke(main, ["map", "show", "--map",
                                                             str(ours)]).output
 
@@ -512,3 +515,14 @@ def test_merge_lab_is_refused_for_a_package_and_for_a_bad_name(package, source_m
         assert result.exit_code == 1 and says in result.output, result.output
         assert "Traceback" not in result.output and len(result.output.splitlines()) == 1
         assert not ours.exists()
+
+
+def test_a_friction_map_given_to_validate_is_named_for_what_it_is(tmp_path):
+    """`map validate` on a Parquet map says what it got and what to run, not "not valid
+    JSON"."""
+    map_path = tmp_path / "friction_map.parquet"
+    shutil.copy(Path(__file__).parent / "data" / "friction_map_v3.parquet", map_path)
+    code, lines = validate(map_path)
+    assert code == 1 and len(lines) == 1
+    assert lines[0].startswith("friction_map.parquet: is a Parquet file (a friction map?)")
+    assert "not valid JSON" not in lines[0] and "tribopipe map show --map" in lines[0]

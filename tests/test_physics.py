@@ -31,13 +31,13 @@ from tribopipe.physics import (
     sliding_distance_mm,
     sliding_speed_mm_s,
 )
-from tribopipe.reduce import (
-    leading_rest,
+from tribopipe.reduction.detection import (
     linear_slope,
     median_smooth,
     noise_std,
     static_peak_curve,
 )
+from tribopipe.reduction.intervals import leading_rest
 
 R_EFF = 13.37  # mm, the founding cell's friction radius
 
@@ -98,12 +98,13 @@ def test_the_founding_speeds_are_defined_once() -> None:
     assert (FOUNDING_SPEED_RPM, FOUNDING_SLIDING_SPEED_MM_S) == (0.005, 0.007)
     assert sliding_speed_mm_s(FOUNDING_SPEED_RPM, FOUNDING_FRICTION_RADIUS_MM) == pytest.approx(
         FOUNDING_SLIDING_SPEED_MM_S, abs=5e-6)
-    from tribopipe import config, frictionmap, reduce, synthetic
+    from generators import synthetic
+    from tribopipe.config import InstrumentConfig
+    from tribopipe.frictionmap.published import PUBLISHED_SLIDING_SPEED_MM_S
 
-    assert config.FOUNDING_FRICTION_RADIUS_MM is FOUNDING_FRICTION_RADIUS_MM
-    assert frictionmap.PUBLISHED_SLIDING_SPEED_MM_S is FOUNDING_SLIDING_SPEED_MM_S
+    assert InstrumentConfig().friction_radius_mm == FOUNDING_FRICTION_RADIUS_MM
+    assert PUBLISHED_SLIDING_SPEED_MM_S is FOUNDING_SLIDING_SPEED_MM_S
     assert synthetic.SyntheticRun().speed_rpm is FOUNDING_SPEED_RPM
-    assert reduce.sliding_speed_mm_s is sliding_speed_mm_s  # the old import still works
 
 
 def test_angle_in_rad_times_radius_in_mm_is_mm() -> None:

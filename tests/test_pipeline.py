@@ -8,10 +8,10 @@ from pathlib import Path
 import pandas as pd
 import pytest
 
+from generators.synthetic import SyntheticRun, write_rheocompass_export
 from tribopipe.config import load_settings
 from tribopipe.labels import RunLabels
 from tribopipe.pipeline import reduce_file, run_summary, write_summary, write_trace
-from tribopipe.synthetic import SyntheticRun, write_rheocompass_export
 
 
 @pytest.fixture(scope="module")

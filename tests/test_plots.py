@@ -14,23 +14,18 @@ import pandas as pd
 import pytest
 from click.testing import CliRunner
 
+from generators.synthetic import SyntheticRun, write_rheocompass_export
 from published_map import PUBLISHED_CSV, published_runs, write_published_map
 from reduced_runs import RUNS, make_processed
 from tribopipe.cli import main
 from tribopipe.config import load_settings
 from tribopipe.errors import ExportError
-from tribopipe.export.plots import (
-    find_trace,
-    plot_pair,
-    plot_pairs,
-    plot_runs,
-    plot_trace,
-    plot_trace_row,
-)
+from tribopipe.export.plots import plot_pair, plot_pairs, plot_runs
+from tribopipe.figures.trace import plot_trace, plot_trace_row
 from tribopipe.frictionmap import read_map
 from tribopipe.labels import RunLabels
+from tribopipe.layout import find_trace
 from tribopipe.pipeline import reduce_file
-from tribopipe.synthetic import SyntheticRun, write_rheocompass_export
 
 PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
 

@@ -77,8 +77,9 @@ def test_stored_file_name_keeps_the_name_and_only_undecodable_bytes_as_text() ->
 
 
 def test_a_note_naming_a_file_with_a_newline_stays_one_line(tmp_path: Path) -> None:
-    from multi_exports import steps_test
     from tribopipe.synthetic import write_rheocompass_session
+
+    from multi_exports import steps_test
 
     raw = write_rheocompass_session(tmp_path / "two\nsteps\u202e.csv", [steps_test()],
                                     project="steps")
@@ -103,9 +104,9 @@ def test_written_paths_are_one_line_each(tmp_path: Path) -> None:
 
 
 def test_a_crashed_worker_names_its_file_in_one_line() -> None:
-    from tribopipe.campaign.worker import _Job, crashed
+    from tribopipe.campaign.worker import Job, crashed
 
-    (done,) = crashed([_Job(file="a\nb\u202e.csv", path="/x/a\nb\u202e.csv", sources=(),
+    (done,) = crashed([Job(file="a\nb\u202e.csv", path="/x/a\nb\u202e.csv", sources=(),
                             hints=())], RuntimeError("killed\nby the OOM killer"))
     reason = done.error.reason
     assert reason.isprintable() and reason.startswith("a\\nb\\u202e.csv: worker process")

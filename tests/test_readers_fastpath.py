@@ -175,6 +175,7 @@ def test_fast_and_row_by_row_paths_agree_on_every_odd_cell(
                                               "rheocompass_resaved_cp1252.txt",
                                               "rheoplus_mcr302_stress_relaxation.txt",
                                               "rheoplus_after_excel_roundtrip.csv"]))
+@pytest.mark.slow  # a real process or a larger data set: `pytest -m slow`
 def test_fast_and_row_by_row_paths_agree_on_edited_real_exports(
     data_dir: Path, data: st.DataObject, name: str
 ) -> None:

@@ -19,17 +19,12 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from tribopipe.config import InstrumentConfig, settings_from_dict
+from generators.synthetic import SyntheticRun, make_intervals, truth
+from tribopipe.config import InstrumentConfig, ReductionParams, settings_from_dict
 from tribopipe.errors import ConfigError, MissingQuantityError, ReductionError
 from tribopipe.measurement import Measurement, MeasurementMeta
-from tribopipe.reduce import (
-    FLAGS,
-    ReductionParams,
-    ReductionResult,
-    reduce_measurement,
-    select_friction_interval,
-)
-from tribopipe.synthetic import SyntheticRun, make_intervals, truth
+from tribopipe.reduction.intervals import select_friction_interval
+from tribopipe.reduction.reduce import FLAGS, ReductionResult, reduce_measurement
 
 INSTRUMENT = InstrumentConfig()
 PARAMS = ReductionParams()
@@ -350,8 +345,9 @@ def test_a_missing_torque_column_names_what_was_found() -> None:
 
 def test_no_reduction_function_mutates_its_inputs() -> None:
     """astropy/pybaselines style: every input array is read-only; nothing may write."""
-    from tribopipe import intervals, physics
-    from tribopipe import reduce as r
+    from tribopipe import physics
+    from tribopipe.reduction import detection as d
+    from tribopipe.reduction import intervals
 
     frames = []
     for frame in make_intervals(SyntheticRun(torque_offset_Nm=2e-4, seed=51)):
@@ -383,16 +379,16 @@ def test_no_reduction_function_mutates_its_inputs() -> None:
     physics.distance_from_nominal_mm(t, 0.005, 13.37)
     s, _ = physics.sliding_distance_mm(t, 13.37, angle_rad=angle, speed_rad_s=speed)
     s.flags.writeable = False
-    r.noise_std(mu)
-    r.median_smooth(mu, 5)
-    r.peak_smooth(mu, 29)
-    r.static_peak_curve(mu, 29)
-    r.linear_slope(s[100:], mu)
-    r.find_plateau_start(s[100:], mu, 0.25, 0.005, PARAMS)
-    r.stick_slip_test(s[100:], mu, PARAMS)
-    r.cliff_peak_curve(mu, r.static_peak_curve(mu, 29), 63, 0.005, 4.0)
-    r.leading_rest(s, 1e-3)
-    r.estimate_torque_offset_Nm(torque, r.leading_rest(s, 1e-3), 5)
+    d.noise_std(mu)
+    d.median_smooth(mu, 5)
+    d.peak_smooth(mu, 29)
+    d.static_peak_curve(mu, 29)
+    d.linear_slope(s[100:], mu)
+    d.find_plateau_start(s[100:], mu, 0.25, 0.005, PARAMS)
+    d.stick_slip_test(s[100:], mu, PARAMS)
+    d.cliff_peak_curve(mu, d.static_peak_curve(mu, 29), 63, 0.005, 4.0)
+    intervals.leading_rest(s, 1e-3)
+    intervals.estimate_torque_offset_Nm(torque, intervals.leading_rest(s, 1e-3), 5)
     intervals.setup_torque_offset_Nm(items[0])
     intervals.robust_mean(torque)
     for before, after in zip(snapshot, frames, strict=True):

@@ -2,7 +2,7 @@
 
 A centred smoothing averages the low values after a sudden slip into the peak and reads μ_S
 low; these checks hold the reduction to the issue's ±0.02 on peaks that collapse within
-0.002–0.01 mm, a trace family independent of ``tribopipe.synthetic``.
+0.002–0.01 mm, a trace family independent of ``generators.synthetic``.
 """
 
 from __future__ import annotations
@@ -15,8 +15,9 @@ import pytest
 
 from tribopipe.config import load_settings
 from tribopipe.measurement import Measurement, MeasurementMeta
-from tribopipe.reduce import cliff_peak_curve, reduce_measurement, static_peak_curve
-from tribopipe.signals import end_point_weights, one_sided_fits
+from tribopipe.reduction.detection import cliff_peak_curve, static_peak_curve
+from tribopipe.reduction.reduce import reduce_measurement
+from tribopipe.reduction.signals import end_point_weights, one_sided_fits
 
 R_MM = 13.37
 

@@ -2,7 +2,7 @@
 trace settles onto its plateau, from a stiff contact's 0.02 mm to a soft pin's 5 mm of
 pre-sliding; no reading at a boundary passes silently; weak stick-slip is seen.
 
-These runs use the development family (:mod:`tribopipe.synthetic`, with its peak placed
+These runs use the development family (:mod:`generators.synthetic`, with its peak placed
 where a pin would put it); the independent family is the benchmark's
 (``bench/bench_validation.py``).
 """
@@ -13,17 +13,13 @@ from dataclasses import replace
 
 import pytest
 
-from tribopipe.config import InstrumentConfig, settings_from_dict
+from generators.synthetic import SyntheticRun, make_intervals, truth
+from tribopipe.config import InstrumentConfig, ReductionParams, settings_from_dict
 from tribopipe.errors import ConfigError
 from tribopipe.measurement import Measurement, MeasurementMeta
-from tribopipe.reduce import (
-    ReductionParams,
-    ReductionResult,
-    reduce_measurement,
-    select_friction_interval,
-    settling_block_mm,
-)
-from tribopipe.synthetic import SyntheticRun, make_intervals, truth
+from tribopipe.reduction.detection import settling_block_mm
+from tribopipe.reduction.intervals import select_friction_interval
+from tribopipe.reduction.reduce import ReductionResult, reduce_measurement
 
 INSTRUMENT = InstrumentConfig()
 PARAMS = ReductionParams()

@@ -13,10 +13,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from tribopipe.config import InstrumentConfig
-from tribopipe.detection import find_plateau_start
+from tribopipe.config import InstrumentConfig, ReductionParams
 from tribopipe.measurement import Measurement, MeasurementMeta
-from tribopipe.reduce import ReductionParams, reduce_measurement
+from tribopipe.reduction.detection import find_plateau_start
+from tribopipe.reduction.reduce import reduce_measurement
 
 INSTRUMENT = InstrumentConfig()
 PARAMS = ReductionParams()

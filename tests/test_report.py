@@ -16,13 +16,14 @@ import pandas as pd
 import pytest
 from click.testing import CliRunner
 
+from generators.synthetic import SyntheticRun, write_rheocompass_export
 from published_map import PUBLISHED_CSV, write_published_map
 from reduced_runs import RUNS, SPREAD_RUNS, make_processed
 from tribopipe.campaign import load_campaign, run_campaign
 from tribopipe.cli import main
 from tribopipe.errors import ExportError
-from tribopipe.export.plots import find_trace
 from tribopipe.frictionmap import read_map
+from tribopipe.layout import find_trace
 from tribopipe.report import (
     MAP_TITLE,
     build_report,
@@ -33,7 +34,6 @@ from tribopipe.report import (
     run_anchor,
 )
 from tribopipe.stats import group_statistics
-from tribopipe.synthetic import SyntheticRun, write_rheocompass_export
 
 PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
 

@@ -9,7 +9,7 @@ import math
 import numpy as np
 import pytest
 
-from tribopipe.signals import (
+from tribopipe.reduction.signals import (
     decreasing_root,
     gamma_q,
     line_threshold,
@@ -184,7 +184,7 @@ def test_tukey_taper_is_flat_in_the_middle_and_its_bins_are_nearly_independent()
 
 
 def test_a_broad_peak_is_read_by_a_wide_quadratic_not_by_the_noise_maximum() -> None:
-    from tribopipe.signals import quadratic_peak
+    from tribopipe.reduction.signals import quadratic_peak
 
     rng = np.random.default_rng(11)
     x = np.arange(6000.0)
@@ -200,7 +200,7 @@ def test_a_broad_peak_is_read_by_a_wide_quadratic_not_by_the_noise_maximum() -> 
 
 
 def test_a_quadratic_is_not_laid_over_a_sudden_slip() -> None:
-    from tribopipe.signals import quadratic_peak
+    from tribopipe.reduction.signals import quadratic_peak
 
     x = np.arange(2000.0)
     values = np.where(x < 1000, 0.8 - 1e-6 * (x - 950) ** 2, 0.55)  # a slip at 1000
@@ -213,7 +213,7 @@ def test_a_quadratic_is_not_laid_over_a_sudden_slip() -> None:
 
 
 def test_a_flank_is_read_at_its_end_from_as_much_of_it_as_fits() -> None:
-    from tribopipe.signals import flank_peak
+    from tribopipe.reduction.signals import flank_peak
 
     rng = np.random.default_rng(12)
     x = np.arange(3000.0)
@@ -225,7 +225,7 @@ def test_a_flank_is_read_at_its_end_from_as_much_of_it_as_fits() -> None:
 
 
 def test_effective_noise_of_correlated_noise_counts_its_autocorrelation() -> None:
-    from tribopipe.reduce import effective_noise
+    from tribopipe.reduction.detection import effective_noise
 
     rng = np.random.default_rng(13)
     white = 0.01 * rng.standard_normal(20000)

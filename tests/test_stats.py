@@ -154,7 +154,7 @@ def test_columns_follow_the_design_contract():
         expected += [f"{q}_{f}" for f in GROUP_FIELDS]
     expected += ["range_exceeds_r", "qc_flagged", "run_ids"]
     assert list(groups.columns) == expected
-    empty = group_statistics(fm.empty_map())
+    empty = group_statistics(fm.schema.empty_map())
     assert list(empty.columns) == expected and empty.empty
 
 

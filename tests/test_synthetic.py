@@ -18,11 +18,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from conftest import DATA
-from tribopipe.config import InstrumentConfig
-from tribopipe.measurement import CANONICAL_COLUMNS
-from tribopipe.readers import read_export
-from tribopipe.reduce import ReductionParams, reduce_measurement, select_friction_interval
-from tribopipe.synthetic import (
+from generators.synthetic import (
     SHAPES,
     SyntheticRun,
     make_intervals,
@@ -31,6 +27,11 @@ from tribopipe.synthetic import (
     truth,
     write_rheocompass_export,
 )
+from tribopipe.config import InstrumentConfig, ReductionParams
+from tribopipe.measurement import CANONICAL_COLUMNS
+from tribopipe.readers import read_export
+from tribopipe.reduction.intervals import select_friction_interval
+from tribopipe.reduction.reduce import reduce_measurement
 
 RUN = SyntheticRun(mu_s=0.9, mu_k=0.6, noise=0.008, torque_offset_Nm=3e-4, seed=5)
 
@@ -303,12 +304,12 @@ def test_a_session_export_is_its_tests_one_after_the_other(tmp_path: Path) -> No
     """Several tests in one file, as RheoCompass exports a session and as the real two-test
     export lays it out: one Project line, each test's Test/Result block with its intervals
     numbered from 1, a blank line between tests. One test alone is the plain export."""
-    from tribopipe.readers import read_export
-    from tribopipe.synthetic import (
+    from generators.synthetic import (
         SyntheticTest,
         rheocompass_session_text,
         write_rheocompass_session,
     )
+    from tribopipe.readers import read_export
 
     one = replace(RUN, duration_s=20.0)
     steps = (replace(RUN, duration_s=20.0, seed=6),
@@ -349,7 +350,7 @@ def test_utf8_comma_export_reads_back_like_the_utf16_one(tmp_path: Path) -> None
     with pytest.raises(ValueError, match="encoding"):
         write_rheocompass_export(tmp_path / "x.csv", RUN, encoding="latin-1", **kw)
     # a session export too
-    from tribopipe.synthetic import SyntheticTest, write_rheocompass_session
+    from generators.synthetic import SyntheticTest, write_rheocompass_session
 
     tests = [SyntheticTest("A", "S", (RUN,)), SyntheticTest("B", "S", (replace(RUN, seed=9),))]
     session = write_rheocompass_session(tmp_path / "s.csv", tests, project="P",

@@ -14,8 +14,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from tribopipe.readers import read_export
-from tribopipe.synthetic_contact import (
+from generators.contact import (
     PEAK_DISTANCES_MM,
     ContactRun,
     build_run,
@@ -28,6 +27,7 @@ from tribopipe.synthetic_contact import (
     validation_grid,
     write_export,
 )
+from tribopipe.readers import read_export
 
 
 def test_ecoflex_pins_shear_millimetres_before_they_slide() -> None:

@@ -15,15 +15,14 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from tribopipe.readers import read_export
-from tribopipe.synthetic_instrument import (
+from generators.instrument import (
     add_spikes,
     coloured_noise,
     pink_noise,
     sample_times,
     significant_digits,
 )
-from tribopipe.synthetic_ratestate import (
+from generators.ratestate import (
     RateStateRun,
     build_run,
     force_ratio,
@@ -37,6 +36,7 @@ from tribopipe.synthetic_ratestate import (
     truth,
     write_export,
 )
+from tribopipe.readers import read_export
 
 
 def _run(**kw: object) -> RateStateRun:

@@ -101,7 +101,7 @@ def test_the_abstract_layout_has_the_papers_five_columns(published_runs):
 
 def test_frictionmap_export_of_the_published_import_is_the_published_file(published_runs):
     text = tables.render_table(published_runs, fmt="frictionmap")
-    assert text == fm.published_csv_path().read_text(encoding="utf-8")
+    assert text == fm.published.published_csv_path().read_text(encoding="utf-8")
 
 
 def test_frictionmap_export_then_import_gives_the_same_runs(tmp_path):
@@ -130,7 +130,7 @@ def test_frictionmap_numbers_runs_without_repeat_and_leaves_out_excluded_runs():
         {**run_record(4, repeat=1), "excluded": True, "exclusion_reason": "pin tore"},
     ])
     table = tables.frictionmap_table(runs)
-    assert list(table.columns) == list(fm.FRICTIONMAP_COLUMNS)
+    assert list(table.columns) == list(fm.published.FRICTIONMAP_COLUMNS)
     assert table["measurementNo"].tolist() == [2.0, 3.0, 4.0]
     assert table["contactForce"].tolist() == [3.0] * 3
 

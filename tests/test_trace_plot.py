@@ -22,6 +22,7 @@ from hypothesis import strategies as st
 from matplotlib.image import imread
 from PIL import Image
 
+from generators.synthetic import SyntheticRun, write_rheocompass_export
 from tribopipe.config import load_settings
 from tribopipe.figures import (
     TraceConditions,
@@ -35,7 +36,6 @@ from tribopipe.figures import (
 )
 from tribopipe.labels import RunLabels
 from tribopipe.pipeline import plot_run, reduce_file, run_conditions
-from tribopipe.synthetic import SyntheticRun, write_rheocompass_export
 
 
 def column_extremes(x, y, x_range, columns):

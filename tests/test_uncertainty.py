@@ -11,16 +11,17 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from tribopipe.config import FOUNDING_FRICTION_RADIUS_MM, InstrumentConfig, settings_from_dict
+from generators.synthetic import SyntheticRun, make_intervals
+from tribopipe.config import InstrumentConfig, settings_from_dict
 from tribopipe.errors import ConfigError
 from tribopipe.measurement import Measurement, MeasurementMeta
-from tribopipe.reduce import reduce_measurement, select_friction_interval
-from tribopipe.synthetic import SyntheticRun, make_intervals
-from tribopipe.uncertainty import (
+from tribopipe.physics import FOUNDING_FRICTION_RADIUS_MM
+from tribopipe.reduction.intervals import select_friction_interval
+from tribopipe.reduction.reduce import reduce_measurement
+from tribopipe.reduction.uncertainty import (
     budget,
     integrated_autocorrelation_time,
     mean_standard_error,
-    reading_noise,
     unknown_offset_u_Nm,
     zero_offset_standard_error,
 )
@@ -64,13 +65,6 @@ def test_the_standard_error_of_a_correlated_mean_is_what_repeats_show() -> None:
     # σ/√n of correlated samples would be 2× too small here ((1+0.6)/(1-0.6) = 4)
     assert float(np.median(errors)) == pytest.approx(float(np.std(means)), rel=0.15)
     assert float(np.std(means)) > 1.8 / math.sqrt(1500)
-
-
-def test_the_reading_noise_of_a_smooth_curve_is_its_scatter_about_the_trend() -> None:
-    rng = np.random.default_rng(3)
-    x = np.linspace(0, 1, 2000)
-    assert reading_noise(0.5 + 0.2 * x - 0.1 * x**2 + 0.004 * rng.standard_normal(2000)) == (
-        pytest.approx(0.004, rel=0.1))
 
 
 def test_a_zero_from_rest_samples_has_the_standard_error_of_its_inliers() -> None:

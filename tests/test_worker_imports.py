@@ -1,6 +1,7 @@
 """Issue 10: a batch worker does not pay for SciPy's start-up (~0.9 s per process for
-``scipy.signal``). The reduction's filters are NumPy (:mod:`tribopipe.signals`); SciPy stays
-where it earns its import (``stats``' Student-t quantiles, which a batch does not need).
+``scipy.signal``). The reduction's filters are NumPy
+(:mod:`tribopipe.reduction.signals`); SciPy stays where it earns its import (``stats``'
+Student-t quantiles, which a batch does not need).
 
 Checked on a real ``tribopipe batch`` in a real process with a pool of two forked workers
 and plots on: an audit hook logs every SciPy module imported and by which process, and a
@@ -20,7 +21,7 @@ from pathlib import Path
 
 import pytest
 
-from tribopipe.synthetic import SyntheticRun, write_rheocompass_export
+from generators.synthetic import SyntheticRun, write_rheocompass_export
 
 # Runs tribopipe's CLI after installing the hooks; every line of the log is
 # "<pid> <event> <detail>".
@@ -84,6 +85,7 @@ def campaign(tmp_path: Path) -> Path:
     return config
 
 
+@pytest.mark.slow  # a real process or a larger data set: `pytest -m slow`
 def test_batch_workers_reduce_and_plot_without_importing_scipy(campaign: Path,
                                                               tmp_path: Path) -> None:
     log = tmp_path / "imports.log"

@@ -6,7 +6,7 @@ An instrument config has two tables:
     the measuring cell's geometry (:class:`InstrumentConfig`);
 ``[reduction]``
     the parameters of the μ_S / μ_K detection (:class:`ReductionParams`, used by
-    :mod:`tribopipe.reduce`).
+    :mod:`tribopipe.reduction.reduce`).
 
 Both are optional: a missing key keeps the founding setup's default. Unknown keys are an
 error (a typo must not silently fall back to a default). A campaign config may override
@@ -28,9 +28,8 @@ from typing import Any
 
 from .errors import ConfigError, ReadError, ValidationError
 from .files import read_regular
-from .physics import (  # noqa: F401 - the founding constants are importable from here too
+from .physics import (
     FOUNDING_FRICTION_RADIUS_MM,
-    FOUNDING_SLIDING_SPEED_MM_S,
     FOUNDING_SPEED_RPM,
     sliding_speed_mm_s,
 )
@@ -51,7 +50,7 @@ MAX_CONFIG_BYTES = 16 * 1024 * 1024
 SECTIONS: tuple[str, ...] = ("instrument", "reduction")
 
 
-#: The name and version of the reduction method (:mod:`tribopipe.reduce`): part of every
+#: The name and version of the reduction method (:mod:`tribopipe.reduction.reduce`): part of every
 #: config hash, so a batch re-reduces its runs when the method changes.
 REDUCTION_METHOD = "tribopipe-v2"
 

@@ -84,8 +84,8 @@ class MeasurementMeta:
     n_waveform_rows: int = 0
     header_line: int | None = None
     extra: tuple[tuple[str, str], ...] = field(default=())
-    #: set by :func:`tribopipe.intervals.select_friction_interval` from the set-up interval
-    #: before a friction interval; read by the reduction (``None``: not measured)
+    #: set by :func:`tribopipe.reduction.intervals.select_friction_interval` from the
+    #: set-up interval before a friction interval; read by the reduction (``None``: not measured)
     torque_offset: TorqueOffset | None = None
 
     @property

@@ -1,10 +1,11 @@
 """One export from raw file to friction-map records: read → its runs → reduce → record.
 
 An export holds one run per friction interval of every test and result
-(:func:`tribopipe.intervals.friction_intervals`): a single test with a set-up and a
+(:func:`tribopipe.reduction.intervals.friction_intervals`): a single test with a set-up and a
 friction interval gives one run, a session export one run per test, a test with force or
-speed steps one run per step. Readers and writers stay at the edges,
-:mod:`tribopipe.reduce` does the physics.
+speed steps one run per step. This is the orchestration used by ``tribopipe reduce`` and
+by campaigns; readers and writers stay at the edges, :mod:`tribopipe.reduction.reduce` does the
+physics.
 
 :func:`reduce_export` is the one route from an export to its runs, for ``tribopipe
 reduce`` (:func:`reduce_files`) and the batch workers alike: it reads the export once
@@ -40,18 +41,18 @@ from .frictionmap.duplicates import (
 )
 from .frictionmap.records import make_record, measurement_id
 from .frictionmap.store import AppendReport, update_map_with
-from .intervals import friction_intervals
 from .labels import RunLabels, RunVerdict, Tolerances, Undescribed, decide_run
 from .layout import OutputLayout
 from .measurement import interval_label
 from .numeric import finite_json, finite_or_nan, finite_or_none
 from .readers import read_export
-from .reduce import reduce_measurement
+from .reduction.intervals import friction_intervals
+from .reduction.reduce import reduce_measurement
 
 if TYPE_CHECKING:
     from .config import Settings
     from .measurement import Measurement
-    from .reduce import ReductionResult
+    from .reduction.reduce import ReductionResult
 
 
 @dataclass(frozen=True)
@@ -158,7 +159,7 @@ def read_runs(
     file_hash: str | None = None,
 ) -> ExportRuns:
     """Read an export and cut it into its runs: one per friction interval of every test
-    and result (:func:`tribopipe.intervals.friction_intervals`).
+    and result (:func:`tribopipe.reduction.intervals.friction_intervals`).
 
     ``file_hash`` (SHA-256 of the file's bytes) is computed when not given. Raises
     :class:`tribopipe.errors.ReadError` when the file cannot be read as an export; a test

@@ -36,13 +36,14 @@ from .campaign import load_campaign
 from .errors import ExportError, MapError
 from .escape import html_text
 from .export.explorer import explorer_data, explorer_fragment, explorer_style
-from .export.plots import find_trace, plot_group_overlay, plot_pair, plot_trace_row, slug
+from .export.plots import plot_group_overlay, plot_pair, slug
 from .export.tables import spreadsheet_csv
+from .figures.trace import plot_trace_row
 from .files import write_text_atomic
 from .fit import fit_power_law
 from .frictionmap import read_map
 from .frictionmap.synthetic_rows import synthetic_note
-from .layout import OutputLayout, read_failures
+from .layout import OutputLayout, find_trace, read_failures
 from .query import pairs
 from .stats import group_statistics, repeatability
 

@@ -6,7 +6,7 @@ speed [mm/s]. Nominal values are rounded before grouping (force to 1e-6 N, tempe
 0.01 °C, speed to two significant digits) so 11.79 vs 11.7893 kPa never splits a group.
 
 Beside the repeat statistics each group carries its combined standard uncertainty (GUM,
-k = 1) from the runs' own budgets (:mod:`tribopipe.uncertainty`): ``u_run`` is the mean of
+k = 1) from the runs' own budgets (:mod:`tribopipe.reduction.uncertainty`): ``u_run`` is the mean of
 the runs' combined standard uncertainties, and the group mean's is
 ``u = √(sem² + u_run²)``: the repeat scatter (sem, which already holds each run's noise)
 plus the runs' uncertainty counted as fully correlated between the runs (its largest
@@ -130,7 +130,7 @@ def _round_significant(value: float, digits: int) -> float:
     return round(value, digits - 1 - math.floor(math.log10(abs(value))))
 
 
-def _group_keys(runs: pd.DataFrame, by_speed: bool) -> pd.DataFrame:
+def group_keys(runs: pd.DataFrame, by_speed: bool) -> pd.DataFrame:
     """The rounded grouping keys of each run (a new frame; ``runs`` is not modified)."""
     import pandas as pd
 
@@ -193,7 +193,7 @@ def group_statistics(runs: pd.DataFrame, *, by_speed: bool = False) -> pd.DataFr
     columns = condition_cols + stat_cols + ["range_exceeds_r", "qc_flagged", "run_ids"]
 
     included = runs.loc[~runs["excluded"].astype(bool)]
-    keys = _group_keys(included, by_speed)
+    keys = group_keys(included, by_speed)
     key_cols = list(keys.columns)
     # plain arrays once; per-group pandas slicing is what makes large maps slow
     data = {

@@ -84,8 +84,8 @@ PIN_RADIUS_MM = Range(0.01, 500.0, "mm")
 FRICTION_RADIUS_MM = Range(0.1, 1000.0, "mm")
 #: nominal disc speed [rpm]
 SPEED_RPM = Range(1e-6, 1e5, "rpm")
-#: a sliding speed [mm/s]
-SLIDING_SPEED_MM_S = Range(0.0, 1e6, "mm/s")
+#: a sliding speed [mm/s]: positive (a friction run slides)
+SLIDING_SPEED_MM_S = Range(0.0, 1e6, "mm/s", low_open=True)
 #: a repeat number within a condition
 MAX_REPEAT = 1_000_000
 

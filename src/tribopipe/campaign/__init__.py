@@ -51,100 +51,24 @@ The package's rooms, each importing only those above it:
 
 Every friction interval of every test of every export is a run. A file whose content,
 labels or config changed is reduced again and its old map rows replaced; a failed file is
-retried once it changes. Every public name is importable from ``tribopipe.campaign``
-itself.
+retried once it changes. The package exports a campaign's everyday calls
+(:data:`__all__`); every other name is imported from the room that defines it.
 """
 
 from __future__ import annotations
 
-from ..layout import BATCH_LOCK
-from .batch import (
-    GC_THRESHOLDS,
-    BatchReport,
-    ProgressCallback,
-    default_jobs,
-    run_campaign,
-)
-from .metadata import (
-    MANIFEST_COLUMNS,
-    TEST_COLUMN,
-    Manifest,
-    ManifestRow,
-    labels_from,
-    merge_metadata,
-    read_manifest,
-)
-from .outputs import (
-    RUNS_COLUMNS,
-)
-from .patterns import (
-    LABEL_FIELDS,
-    PATTERN_FIELDS,
-    REQUIRED_FIELDS,
-    match_pattern,
-)
-from .spec import (
-    Campaign,
-    folder_campaign,
-    load_campaign,
-)
-from .state import (
-    CHANGED,
-    DUPLICATE,
-    FAILED,
-    NEW,
-    REDUCED,
-    SKIPPED,
-    STATE_VERSION,
-    CampaignState,
-    load_state,
-    save_state,
-)
-from .table import (
-    CampaignRow,
-    campaign_listing,
-    campaign_table,
-    describe_glob,
-    discover_files,
-    recipe_hash,
-)
+from .batch import BatchReport, run_campaign
+from .metadata import read_manifest
+from .spec import Campaign, folder_campaign, load_campaign
+from .table import campaign_listing, campaign_table
 
 __all__ = [
-    "BATCH_LOCK",
-    "REQUIRED_FIELDS",
-    "LABEL_FIELDS",
-    "PATTERN_FIELDS",
-    "match_pattern",
     "Campaign",
     "load_campaign",
     "folder_campaign",
-    "MANIFEST_COLUMNS",
-    "TEST_COLUMN",
-    "Manifest",
-    "ManifestRow",
     "read_manifest",
-    "merge_metadata",
-    "labels_from",
-    "STATE_VERSION",
-    "CampaignState",
-    "NEW",
-    "REDUCED",
-    "CHANGED",
-    "FAILED",
-    "SKIPPED",
-    "DUPLICATE",
-    "CampaignRow",
-    "discover_files",
-    "describe_glob",
-    "recipe_hash",
     "campaign_table",
-    "load_state",
-    "save_state",
     "campaign_listing",
-    "RUNS_COLUMNS",
-    "ProgressCallback",
-    "GC_THRESHOLDS",
-    "BatchReport",
-    "default_jobs",
     "run_campaign",
+    "BatchReport",
 ]

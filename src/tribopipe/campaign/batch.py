@@ -33,7 +33,7 @@ from ..frictionmap.store import read_map, update_map_with
 from ..frictionmap.synthetic_rows import qc_flags_only
 from ..pipeline import FileOutcome, ReducedRun
 from .metadata import Manifest, read_manifest
-from .outputs import _write_failures_csv, _write_runs_csv
+from .outputs import write_failures_csv, write_runs_csv
 from .spec import Campaign
 from .state import (
     DUPLICATE,
@@ -49,15 +49,14 @@ from .state import (
     save_state,
 )
 from .table import CampaignRow, campaign_table, describe_glob, recipe_hash
-from .worker import (  # noqa: F401 - GC_THRESHOLDS, _worker_init: importable from here too
-    GC_THRESHOLDS,
-    _Context,
-    _fewer_gc_passes,
-    _Job,
-    _prepare_plots,
-    _reduce_chunk,
-    _worker_init,
+from .worker import (
+    Job,
+    WorkerContext,
     crashed,
+    fewer_gc_passes,
+    prepare_plots,
+    reduce_chunk,
+    worker_init,
 )
 
 ProgressCallback = Callable[[int, int], None]
@@ -190,7 +189,7 @@ class BatchReport:
         return lines
 
 
-def _chunks(items: Sequence[Any], workers: int) -> list[list[Any]]:
+def chunk_jobs(items: Sequence[Any], workers: int) -> list[list[Any]]:
     """``items`` cut into a few chunks per worker: small enough to balance, large enough to
     amortise pickling (the benchmark's parse-only pool uses the same cut)."""
     size = max(1, min(16, math.ceil(len(items) / (workers * 4))))
@@ -263,7 +262,7 @@ def _run_locked(campaign: Campaign, *, jobs: int | None, plots: bool | None,
 
     if plan.todo and not map_checked and campaign.map_path.exists():
         read_map(campaign.map_path)  # refuse a foreign or corrupt map before any work
-    results = _execute(plan.todo, _Context(campaign=campaign, plots=plots), jobs,
+    results = _execute(plan.todo, WorkerContext(campaign=campaign, plots=plots), jobs,
                        progress, done, files)
 
     notes: list[str] = []
@@ -287,8 +286,8 @@ def _run_locked(campaign: Campaign, *, jobs: int | None, plots: bool | None,
     # fail are in the report, beside every run's outcome
     problems: list[str] = []
     for write in (lambda: _save_state_with_map(campaign, entries, state),
-                  lambda: _write_runs_csv(campaign, rows, entries, this_batch, failures),
-                  lambda: _write_failures_csv(campaign, failures)):
+                  lambda: write_runs_csv(campaign, rows, entries, this_batch, failures),
+                  lambda: write_failures_csv(campaign, failures)):
         try:
             write()
         except OutputError as exc:
@@ -331,7 +330,7 @@ class _Plan:
     outcome of each file not reduced now (file → one of :data:`FILE_OUTCOMES`) and the
     runs of unchanged files that failed before (``runs_failed``)."""
 
-    todo: list[_Job]
+    todo: list[Job]
     skipped: list[str]
     failures: dict[str, str]
     duplicates: dict[str, str]
@@ -347,7 +346,7 @@ def _run_ids(entry: FileState | None, statuses: tuple[str, ...] = (REDUCED,)) ->
 def _plan(rows: Sequence[CampaignRow], missing_ids: set[str]) -> _Plan:
     """Sort the campaign's files into work, skips and known failures; a file with a run
     whose map row went missing (``missing_ids``) is reduced again."""
-    todo: list[_Job] = []
+    todo: list[Job] = []
     skipped: list[str] = []
     failures: dict[str, str] = {}
     duplicates: dict[str, str] = {}
@@ -376,13 +375,13 @@ def _plan(rows: Sequence[CampaignRow], missing_ids: set[str]) -> _Plan:
             failures[row.file] = row.reason or "failed in an earlier batch"
             outcomes[row.file] = CONFLICT if previous and previous.duplicate_of else FAILED
         else:
-            todo.append(_Job(file=row.file, path=str(row.path), sources=row.sources,
+            todo.append(Job(file=row.file, path=str(row.path), sources=row.sources,
                              hints=row.hints, test_rows=row.test_rows, sha256=row.sha256))
     return _Plan(todo=todo, skipped=skipped, failures=failures, duplicates=duplicates,
                  outcomes=outcomes, runs_failed=runs_failed)
 
 
-def _execute(todo: list[_Job], ctx: _Context, jobs: int, progress: ProgressCallback | None,
+def _execute(todo: list[Job], ctx: WorkerContext, jobs: int, progress: ProgressCallback | None,
              done: int, total: int) -> list[FileOutcome]:
     """Reduce the jobs: in this process for one worker, else in a pool of ``jobs``
     processes; ``progress(done, total)`` after every chunk. A crashed worker's files come
@@ -391,20 +390,20 @@ def _execute(todo: list[_Job], ctx: _Context, jobs: int, progress: ProgressCallb
     if not todo:
         return results
     workers = min(jobs, len(todo))
-    chunks = _chunks(todo, workers)
+    chunks = chunk_jobs(todo, workers)
     if workers == 1:
-        with _fewer_gc_passes():
+        with fewer_gc_passes():
             for chunk in chunks:
-                results.extend(_reduce_chunk(chunk, ctx))
+                results.extend(reduce_chunk(chunk, ctx))
                 done += len(chunk)
                 if progress:
                     progress(done, total)
         return results
     from concurrent.futures import ProcessPoolExecutor, as_completed
 
-    _prepare_plots(ctx)
-    with ProcessPoolExecutor(max_workers=workers, initializer=_worker_init) as pool:
-        futures = {pool.submit(_reduce_chunk, chunk, ctx): chunk for chunk in chunks}
+    prepare_plots(ctx)
+    with ProcessPoolExecutor(max_workers=workers, initializer=worker_init) as pool:
+        futures = {pool.submit(reduce_chunk, chunk, ctx): chunk for chunk in chunks}
         for future in as_completed(futures):
             try:
                 part = future.result()

@@ -49,7 +49,7 @@ from ..files import read_regular
 from ..labels import RunLabels
 from ..readers.textio import decode, detect_delimiter
 from ..validate import FORCE_N, MAX_REPEAT, TEMPERATURE_C, check_count, check_name, check_number
-from .patterns import LABEL_FIELDS, REQUIRED_FIELDS, _parse_number
+from .patterns import LABEL_FIELDS, REQUIRED_FIELDS, parse_number
 
 if TYPE_CHECKING:
     from .spec import Campaign
@@ -224,7 +224,7 @@ def _cell_value(name: str, raw: str) -> Any:
     if name in ("pin", "disc"):
         return check_name(raw, name)
     try:
-        number = _parse_number(raw)
+        number = parse_number(raw)
     except ValueError:
         kind = "a whole number" if name == "repeat" else "a number"
         raise ValidationError(f"{name}: expected {kind}, got {raw[:40]!r}") from None
@@ -270,7 +270,7 @@ def _manifest_rows(p: Path, text: str, delimiter: str) -> Manifest:
         interval_text = "" if interval_index is None else cells[interval_index].strip()
         if interval_text:
             try:
-                number = _parse_number(interval_text)
+                number = parse_number(interval_text)
                 if not number.is_integer() or number < 1:
                     raise ValueError
                 interval = int(number)

@@ -41,7 +41,7 @@ def _cell(value: Any) -> str:
     return csv_cell(str(value))
 
 
-def _write_runs_csv(campaign: Campaign, rows: Sequence[CampaignRow],
+def write_runs_csv(campaign: Campaign, rows: Sequence[CampaignRow],
                     entries: Mapping[str, FileState], this_batch: Mapping[str, str],
                     failures: Mapping[str, str]) -> None:
     """``runs.csv``: per file of the campaign, a row per run the state knows of it (its
@@ -84,5 +84,5 @@ def _values(file: str, run: Mapping[str, Any], status: str, labels: Mapping[str,
     return [values.get(c) for c in RUNS_COLUMNS]
 
 
-def _write_failures_csv(campaign: Campaign, failures: Mapping[str, str]) -> None:
+def write_failures_csv(campaign: Campaign, failures: Mapping[str, str]) -> None:
     write_failures(campaign.failures_csv, failures)

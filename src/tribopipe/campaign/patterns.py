@@ -37,7 +37,7 @@ _PATTERN_REGEX: dict[str, str] = {
 }
 
 
-def _compile_pattern(pattern: str, *, key: str, path: Path | None) -> re.Pattern[str]:
+def compile_pattern(pattern: str, *, key: str, path: Path | None) -> re.Pattern[str]:
     """Turn ``{pin}_{disc}_{force}N_{temperature}C_r{repeat}`` into an anchored regex.
 
     Known placeholders (``pin, disc, force, temperature, repeat`` and the label names) are
@@ -77,10 +77,10 @@ def _compile_pattern(pattern: str, *, key: str, path: Path | None) -> re.Pattern
 @functools.lru_cache(maxsize=32)
 def _pattern_regex(pattern: str) -> re.Pattern[str]:
     # a campaign matches one pattern against every file: build its regex once
-    return _compile_pattern(pattern, key="pattern", path=None)
+    return compile_pattern(pattern, key="pattern", path=None)
 
 
-def _parse_number(text: str) -> float:
+def parse_number(text: str) -> float:
     # file names cannot hold '.' comfortably in every lab: accept 0p5 and 0,5 too
     return float(text.strip().replace(",", ".").replace("p", "."))
 
@@ -97,7 +97,7 @@ def match_pattern(pattern: str, text: str) -> dict[str, Any] | None:
         if key == "repeat":
             found[key] = int(value)
         elif key in ("normal_force_N", "temperature_C"):
-            found[key] = _parse_number(value)
+            found[key] = parse_number(value)
         else:
             found[key] = value.strip()
     return found

@@ -30,7 +30,7 @@ from ..pipeline import ReadOptions
 from ..readers import EXPORT_SUFFIXES
 from ..readers.textio import foreign_kind
 from ..validate import MAX_NAME_CHARS, check_name
-from .patterns import _compile_pattern
+from .patterns import compile_pattern
 
 _CAMPAIGN_KEYS = frozenset(
     {
@@ -269,7 +269,7 @@ def load_campaign(path: str | Path) -> Campaign:
     pattern = table.get("filename_pattern")
     if pattern is not None:
         _check_type(pattern, str, "filename_pattern", cfg_path)
-        _compile_pattern(pattern, key="filename_pattern", path=cfg_path)
+        compile_pattern(pattern, key="filename_pattern", path=cfg_path)
     test_pattern = _test_pattern(table, pattern, cfg_path)
     if manifest is None and pattern is None and test_pattern is None:
         raise ConfigError(
@@ -340,7 +340,7 @@ def _test_pattern(table: Mapping[str, Any], filename_pattern: str | None,
     for key, value in (("test_pattern", test_pattern), ("export_pattern", export_pattern)):
         if value is not None:
             _check_type(value, str, key, cfg_path)
-            _compile_pattern(value, key=key, path=cfg_path)
+            compile_pattern(value, key=key, path=cfg_path)
     if test_pattern is not None and export_pattern is not None and \
             test_pattern != export_pattern:
         raise ConfigError("[campaign] test_pattern and export_pattern (its older name) "
@@ -394,9 +394,9 @@ def folder_campaign(
                  "temperature_C, repeat; optional test), --pattern or --test-pattern",
         )
     if filename_pattern is not None:
-        _compile_pattern(filename_pattern, key="pattern", path=None)
+        compile_pattern(filename_pattern, key="pattern", path=None)
     if test_pattern is not None:
-        _compile_pattern(test_pattern, key="test-pattern", path=None)
+        compile_pattern(test_pattern, key="test-pattern", path=None)
     problem = None if glob is None else glob_problem(glob)
     if problem is not None:
         raise CampaignError(f"--glob: {problem}", path=folder)

@@ -36,7 +36,7 @@ from .spec import Campaign
 
 
 @dataclass(frozen=True)
-class _Job:
+class Job:
     """One file to reduce: its campaign-relative name, its path, the file-level metadata
     sources and hints (:class:`~tribopipe.campaign.table.CampaignRow`), the manifest rows
     of its tests and its SHA-256 when already known."""
@@ -50,12 +50,12 @@ class _Job:
 
 
 @dataclass(frozen=True)
-class _Context:
+class WorkerContext:
     campaign: Campaign
     plots: bool
 
 
-def run_labels(job: _Job, place: RunPlace, name: str, campaign: Campaign,
+def run_labels(job: Job, place: RunPlace, name: str, campaign: Campaign,
                tests_with_runs: int) -> RunLabels:
     """The labels of one run, from the metadata sources of its test, in order: the
     manifest rows of its interval and of its test (:func:`run_rows`), the file-level
@@ -102,7 +102,7 @@ def run_labels(job: _Job, place: RunPlace, name: str, campaign: Campaign,
     return labels_from(name, merge_metadata(name, sources, campaign), hints=hints)
 
 
-def _reduce_one(job: _Job, ctx: _Context) -> FileOutcome:
+def _reduce_one(job: Job, ctx: WorkerContext) -> FileOutcome:
     """Reduce one file in a worker through the one route (:func:`reduce_export`), each run
     labelled from the metadata sources of its test (:func:`run_labels`)."""
     campaign = ctx.campaign
@@ -129,7 +129,7 @@ def _reduce_one(job: _Job, ctx: _Context) -> FileOutcome:
 GC_THRESHOLDS = (100_000, 50, 100)
 
 
-def _prepare_plots(ctx: _Context) -> None:
+def prepare_plots(ctx: WorkerContext) -> None:
     """When the batch draws plots, build this process's trace figure before the workers
     fork, so that they inherit it (matplotlib imported, fonts loaded, palette and first
     background drawn: ~0.5 s of CPU each would spend, and memory they now share) instead
@@ -141,7 +141,7 @@ def _prepare_plots(ctx: _Context) -> None:
         trace_figure()
 
 
-def _worker_init() -> None:
+def worker_init() -> None:
     """Start a worker process (ours for its whole life): fewer garbage-collector passes
     and one BLAS thread (see :data:`GC_THRESHOLDS`)."""
     from threadpoolctl import threadpool_limits
@@ -151,8 +151,8 @@ def _worker_init() -> None:
 
 
 @contextlib.contextmanager
-def _fewer_gc_passes() -> Iterator[None]:
-    """:func:`_worker_init`'s tuning for an in-process batch, restored afterwards."""
+def fewer_gc_passes() -> Iterator[None]:
+    """:func:`worker_init`'s tuning for an in-process batch, restored afterwards."""
     from threadpoolctl import threadpool_limits
 
     before = gc.get_threshold()
@@ -164,13 +164,13 @@ def _fewer_gc_passes() -> Iterator[None]:
         gc.set_threshold(*before)
 
 
-def _failed_file(job: _Job, reason: str, *, transient: bool = False) -> FileOutcome:
+def _failed_file(job: Job, reason: str, *, transient: bool = False) -> FileOutcome:
     """A file that failed as a whole, outside the route (its labels, a crash)."""
     return FileOutcome(path=job.path, name=job.file, file_hash=job.sha256,
                        error=FailedRun(name=job.file, reason=reason, transient=transient))
 
 
-def _reduce_chunk(jobs: Sequence[_Job], ctx: _Context) -> list[FileOutcome]:
+def reduce_chunk(jobs: Sequence[Job], ctx: WorkerContext) -> list[FileOutcome]:
     """Reduce a chunk of files; each failure is caught and returned with its reason."""
     out: list[FileOutcome] = []
     for job in jobs:
@@ -185,7 +185,7 @@ def _reduce_chunk(jobs: Sequence[_Job], ctx: _Context) -> list[FileOutcome]:
     return out
 
 
-def crashed(jobs: Sequence[_Job], exc: BaseException) -> list[FileOutcome]:
+def crashed(jobs: Sequence[Job], exc: BaseException) -> list[FileOutcome]:
     """The results of a chunk whose worker process died (e.g. killed for memory): each
     file a transient failure, tried again next time."""
     return [_failed_file(job, printable(f"{display_path(job.file)}: worker process failed "

@@ -41,8 +41,8 @@ def inspect_cmd(
     original unit and the SI column it becomes, and the intervals `reduce` will read (one
     run per friction interval of every test)."""
     from ..escape import printable
-    from ..intervals import all_friction_intervals
     from ..readers import describe_export
+    from ..reduction.intervals import all_friction_intervals
 
     summary = describe_export(
         file,

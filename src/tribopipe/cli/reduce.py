@@ -92,7 +92,7 @@ def reduce_cmd(
     it); the others are still reduced and stored.
     """
     from ..config import load_settings
-    from ..frictionmap.mapfile import read_map
+    from ..frictionmap.store import read_map
     from ..labels import RunLabels
     from ..pipeline import ReadOptions, reduce_files
 

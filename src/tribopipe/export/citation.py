@@ -18,7 +18,7 @@ from typing import Any
 from .. import __version__
 from ..errors import ExportError
 from ..escape import markdown_cell, yaml_text
-from ..frictionmap import FOUNDING_PAPER
+from ..frictionmap.published import FOUNDING_PAPER
 
 #: SPDX id → (title, URL) of the licences a package may carry; the default first
 LICENCES: dict[str, tuple[str, str]] = {

@@ -17,19 +17,14 @@ from typing import TYPE_CHECKING, Any
 
 from ..errors import ExportError
 from ..escape import picture_text
-from ..figures import (  # noqa: F401 - the per-run plot is importable from here too
+from ..figures import (
     DPI,
-    FORMATS,
     MU_LABEL,
     Target,
-    TraceConditions,
-    TraceMarks,
     image_format,
     new_figure,
-    plot_trace,
     plot_trace_row,
     save_figure,
-    trace_figure,
 )
 from ..fit import fit_power_law, power_law
 from ..frictionmap import read_map

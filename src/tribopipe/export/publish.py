@@ -41,18 +41,8 @@ from typing import TYPE_CHECKING, Any
 from .. import __version__
 from ..errors import ExportError
 from ..fit import fit_power_law
-from ..frictionmap import (
-    FOUNDING_PAPER,
-    PUBLISHED_LAB,
-    RUN_COLUMNS,
-    SCHEMA_NAME,
-    SCHEMA_VERSION,
-    SOURCE_PUBLISHED,
-    check_package,
-    read_map,
-    validate_runs,
-    write_map_copy,
-)
+from ..frictionmap import RUN_COLUMNS, check_package, read_map
+from ..frictionmap.checks import validate_runs
 from ..frictionmap.datapackage import (
     DESCRIPTOR,
     FALSE,
@@ -72,7 +62,9 @@ from ..frictionmap.package import (
     RUNS,
     RUNS_PARQUET,
 )
-from ..frictionmap.schema import _KIND
+from ..frictionmap.published import FOUNDING_PAPER, PUBLISHED_LAB
+from ..frictionmap.schema import KIND, SCHEMA_NAME, SCHEMA_VERSION, SOURCE_PUBLISHED
+from ..frictionmap.store import write_map_copy
 from ..frictionmap.synthetic_rows import synthetic_count
 from ..labels import FLAG_SYNTHETIC
 from ..query import pairs
@@ -172,7 +164,7 @@ def package_runs_table(runs: pd.DataFrame, lab: str) -> pd.DataFrame:
     # none (never missing), every other empty text is written as missing
     out["flags"] = out["flags"].fillna("")
     for name in RUN_COLUMNS:
-        if _KIND[name] == "str" and name != "flags":
+        if KIND[name] == "str" and name != "flags":
             out.loc[out[name].astype(str) == "", name] = None
     return out
 
@@ -222,7 +214,7 @@ def build_package(runs: pd.DataFrame, publisher: Publisher, folder: Path, *,
     fits = fit_power_law(runs)
     data_licence = [publisher.licence_entry()]
     sources = _sources(publisher, year)
-    run_kinds = [_KIND[c] for c in RUN_COLUMNS]
+    run_kinds = [KIND[c] for c in RUN_COLUMNS]
     group_kinds = [column_kind(groups[c]) for c in groups.columns]
     files: dict[str, bytes] = {}
     resources = []

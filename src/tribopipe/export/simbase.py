@@ -31,7 +31,7 @@ from xml.sax.saxutils import quoteattr
 from .. import __version__
 from ..errors import ExportError
 from ..escape import sim_comment
-from ..frictionmap import PUBLISHED_SLIDING_SPEED_MM_S
+from ..frictionmap.published import PUBLISHED_SLIDING_SPEED_MM_S
 from ..query import QueryResult, friction_table, pairs, query, select_pair
 from .registry import COEFFICIENT
 

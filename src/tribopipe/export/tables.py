@@ -30,8 +30,9 @@ from typing import TYPE_CHECKING, Any
 from ..errors import ExportError
 from ..escape import csv_cell, latex_cell, markdown_cell
 from ..files import write_text_atomic
-from ..frictionmap import FRICTIONMAP_COLUMNS, read_map
-from ..stats import _group_keys, group_statistics
+from ..frictionmap import read_map
+from ..frictionmap.published import FRICTIONMAP_COLUMNS
+from ..stats import group_keys, group_statistics
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -120,7 +121,7 @@ def frictionmap_table(
 
     included = runs.loc[~runs["excluded"].astype(bool)].reset_index(drop=True)
     included = _select(included, pin, disc, temperature_C)
-    keys = _group_keys(included, by_speed=False)
+    keys = group_keys(included, by_speed=False)
     numbers: list[float] = []
     next_free: dict[Hashable, int] = {}
     for key, idx in keys.groupby(list(keys.columns), dropna=False, sort=False).groups.items():

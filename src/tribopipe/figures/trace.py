@@ -49,7 +49,7 @@ if TYPE_CHECKING:
     import pandas as pd
     from PIL.Image import Image
 
-    from ..reduce import ReductionResult
+    from ..reduction.reduce import ReductionResult
 
 
 #: the per-run plot's resolution: 700 × 530 px, about the pixels of the single-panel plot

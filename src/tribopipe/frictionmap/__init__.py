@@ -12,11 +12,10 @@ The package's rooms, each importing only those above it:
   and the checksum of a map's content;
 * :mod:`~tribopipe.frictionmap.records` — :func:`make_record` (a run's row, with the labels
   and flags :mod:`tribopipe.labels` decided) and the ids of a run;
-* :mod:`~tribopipe.frictionmap.mapfile` — reading a map file without trusting it (kind,
-  structure, metadata, column types, rows, checksum) and the metadata we write;
-* :mod:`~tribopipe.frictionmap.store` — locked atomic writes (the map's mode kept, the
-  previous map kept as ``<map>.bak``), the pure :func:`fold_records`, append/update/merge
-  and exclusions;
+* :mod:`~tribopipe.frictionmap.store` — the map file: its one reader, which trusts
+  nothing in it (kind, structure, metadata, column types, rows, checksum), the metadata we
+  write, locked atomic writes (the map's mode kept, the previous map kept as
+  ``<map>.bak``), the pure :func:`fold_records`, append/update/merge and exclusions;
 * :mod:`~tribopipe.frictionmap.duplicates` — the same raw content under two file names:
   a duplicate (same labels, stored once) or a conflict (other labels, refused);
 * :mod:`~tribopipe.frictionmap.published` — the founding paper's map (``.mat`` or CSV);
@@ -27,7 +26,8 @@ The package's rooms, each importing only those above it:
   :mod:`~tribopipe.frictionmap.merge` — merging a map or a package into the map;
 * :mod:`~tribopipe.frictionmap.summary` — the printed account (``tribopipe map show``).
 
-Every public name is importable from ``tribopipe.frictionmap`` itself.
+The package exports the map's everyday calls (:data:`__all__`); every other name is
+imported from the room that defines it.
 
 Guarantees of the store:
 
@@ -46,132 +46,37 @@ Guarantees of the store:
 
 from __future__ import annotations
 
-from .checks import MU_MAX, RANGES, RowProblem, validate_runs
-from .datapackage import DESCRIPTOR, PackageLimits, PackageRefused, Problem
-from .duplicates import (
-    LABEL_COLUMNS,
-    SameContent,
-    compare_labels,
-    labels_of,
-    map_files_by_hash,
-    same_label,
-)
-from .merge import MergeReport, is_package, merge_map
-from .package import PackageCheck, PackageInvalid, check_package, package_runs
-from .published import (
-    FOUNDING_PAPER,
-    FRICTIONMAP_COLUMNS,
-    PUBLISHED_LAB,
-    PUBLISHED_SLIDING_SPEED_MM_S,
-    import_records,
-    import_table,
-    published_csv_path,
-    read_frictionmap_table,
-)
-from .records import (
-    imported_id,
-    make_record,
-    measurement_id,
-    nominal_pressure_kPa,
-)
-from .schema import (
-    ADDED_IN_VERSION,
-    META_KEY,
-    PROVENANCE_COLUMNS,
-    RUN_COLUMNS,
-    SCHEMA_NAME,
-    SCHEMA_VERSION,
-    SOURCE_PUBLISHED,
-    SOURCE_REDUCED,
-    check_runs,
-    content_sha256,
-    empty_map,
-    frame_records,
-    records_frame,
-)
+from .merge import merge_map
+from .package import check_package
+from .published import import_records, import_table
+from .records import make_record, measurement_id
+from .schema import RUN_COLUMNS, records_frame
 from .store import (
-    LOCK_TIMEOUT_S,
-    PAUSE_ENV,
     AppendReport,
     append_records,
-    backup_path,
     exclude_runs,
-    fold_records,
     include_runs,
-    map_metadata,
-    merge_map_file,
     read_map,
-    set_excluded,
     update_map,
     write_map,
-    write_map_copy,
 )
-from .summary import (
-    map_summary,
-)
+from .summary import map_summary
 
 __all__ = [
-    "ADDED_IN_VERSION",
-    "META_KEY",
-    "SCHEMA_NAME",
-    "SCHEMA_VERSION",
-    "ADDED_IN_VERSION",
-    "SOURCE_REDUCED",
-    "SOURCE_PUBLISHED",
     "RUN_COLUMNS",
-    "PROVENANCE_COLUMNS",
-    "empty_map",
-    "records_frame",
-    "check_runs",
-    "content_sha256",
-    "frame_records",
-    "nominal_pressure_kPa",
-    "measurement_id",
-    "imported_id",
     "make_record",
-    "LOCK_TIMEOUT_S",
-    "PAUSE_ENV",
+    "measurement_id",
+    "records_frame",
     "read_map",
-    "map_metadata",
-    "write_map",
-    "write_map_copy",
-    "AppendReport",
-    "fold_records",
     "append_records",
-    "backup_path",
     "update_map",
-    "MergeReport",
-    "merge_map",
-    "merge_map_file",
-    "is_package",
-    "MU_MAX",
-    "RANGES",
-    "RowProblem",
-    "validate_runs",
-    "DESCRIPTOR",
-    "PackageLimits",
-    "PackageRefused",
-    "Problem",
-    "PackageCheck",
-    "PackageInvalid",
-    "check_package",
-    "package_runs",
-    "set_excluded",
+    "write_map",
     "exclude_runs",
     "include_runs",
-    "PUBLISHED_SLIDING_SPEED_MM_S",
-    "FRICTIONMAP_COLUMNS",
-    "FOUNDING_PAPER",
-    "PUBLISHED_LAB",
-    "read_frictionmap_table",
-    "published_csv_path",
-    "import_records",
+    "AppendReport",
+    "merge_map",
+    "check_package",
     "import_table",
+    "import_records",
     "map_summary",
-    "LABEL_COLUMNS",
-    "SameContent",
-    "compare_labels",
-    "labels_of",
-    "map_files_by_hash",
-    "same_label",
 ]

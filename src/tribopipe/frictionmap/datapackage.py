@@ -38,8 +38,8 @@ from pathlib import Path
 from typing import Any
 
 from ..errors import MapError
-from .checks import MU_MAX, RANGES
-from .schema import _SCHEMA, ADDED_IN_VERSION
+from ..validate import MU
+from .schema import ADDED_IN_VERSION, ALWAYS, COLUMNS, IN_PACKAGES
 
 #: the descriptor's file name in a package folder
 DESCRIPTOR = "datapackage.json"
@@ -50,10 +50,8 @@ PROFILE = "data-package"
 TRIBOPIPE_KEY = "tribopipe"
 #: Table Schema type of each map column kind
 TABLE_TYPES = {"str": "string", "float": "number", "int": "integer", "bool": "boolean"}
-#: run columns that every row must fill (Table Schema ``required``)
-REQUIRED_RUN_FIELDS = frozenset(
-    {"measurement_id", "source", "lab", "pin", "disc", "mu_k", "excluded"}
-)
+#: the first bytes of a Parquet file (a friction map given where a package was expected)
+PARQUET_MAGIC = b"PAR1"
 #: how booleans are written in the package's CSV
 TRUE, FALSE = "true", "false"
 
@@ -115,34 +113,32 @@ def field(name: str, kind: str, unit: str, meaning: str, **constraints: Any) -> 
 
 def run_columns(version: int) -> tuple[str, ...]:
     """The run columns of map schema ``version`` (those added later left out)."""
-    return tuple(name for name, *_ in _SCHEMA if ADDED_IN_VERSION.get(name, 1) <= version)
+    return tuple(c.name for c in COLUMNS if ADDED_IN_VERSION.get(c.name, 1) <= version)
 
 
 def runs_fields(version: int | None = None) -> list[dict[str, Any]]:
     """The Table Schema fields of the runs table (one per map column of schema ``version``,
-    default: the current one) with units, ``required``/``unique`` and the physical ranges
-    of :data:`tribopipe.frictionmap.checks.RANGES` as ``minimum``/``maximum`` (Table Schema
-    v1 has no strict bound: a strict one is written as ``minimum`` and checked strictly by
+    default: the current one), derived from the table of row rules
+    (:data:`tribopipe.frictionmap.schema.COLUMNS`): units, ``required`` (the columns
+    required in every row and those required in a package), ``unique`` for the id, and the
+    physical bounds as ``minimum``/``maximum`` (Table Schema v1 has no strict bound: a
+    strict one is written as ``minimum`` and checked strictly by
     :func:`~tribopipe.frictionmap.checks.validate_runs`)."""
     columns = set(run_columns(version)) if version is not None else None
     fields = []
-    for name, kind, unit, meaning in _SCHEMA:
-        if columns is not None and name not in columns:
+    for column in COLUMNS:
+        if columns is not None and column.name not in columns:
             continue
         constraints: dict[str, Any] = {}
-        if name in REQUIRED_RUN_FIELDS:
+        if column.required in (ALWAYS, IN_PACKAGES):
             constraints["required"] = True
-        if name == "measurement_id":
+        if column.name == "measurement_id":
             constraints["unique"] = True
-        if name in RANGES:
-            low, inclusive, high, _ = RANGES[name]
-            # Table Schema v1 has no exclusive minimum: a strict bound is written as the
-            # inclusive one and enforced strictly by validate_runs
-            constraints["minimum"] = low
-            if high is not None:
-                constraints["maximum"] = high
-        f = field(name, kind, unit, meaning, **constraints)
-        if name == "reduced_at":
+        if column.bounds is not None:
+            constraints["minimum"] = column.bounds.low
+            constraints["maximum"] = column.bounds.high
+        f = field(column.name, column.kind, column.unit, column.meaning, **constraints)
+        if column.name == "reduced_at":
             f["type"] = "datetime"
         fields.append(f)
     return fields
@@ -203,8 +199,8 @@ FRICTIONMAP_FIELDS: tuple[dict[str, Any], ...] = (
     field("contactPressure", "float", "kPa", "contact pressure per pin"),
     field("temperature", "float", "°C", "temperature"),
     field("measurementNo", "float", "", "repeat number within the condition"),
-    field("cof", "float", "", "kinetic coefficient of friction μ_K", minimum=0.0,
-          maximum=MU_MAX),
+    field("cof", "float", "", "kinetic coefficient of friction μ_K", minimum=MU.low,
+          maximum=MU.high),
 )
 
 
@@ -261,10 +257,15 @@ def load_descriptor(path: str | os.PathLike[str],
                     limits: PackageLimits = DEFAULT_LIMITS) -> tuple[dict[str, Any], Path]:
     """The descriptor of the package at ``path`` (folder or ``datapackage.json``) and the
     package folder. Raises :class:`PackageRefused` (one line) when it is absent, not a
-    regular file, larger than the limit, nested deeper than the limit, or not a JSON
-    object."""
+    regular file, larger than the limit, a Parquet file (a map, not a package), nested
+    deeper than the limit, or not a JSON object."""
     desc = descriptor_path(path)
     raw = read_bounded(desc, limits.descriptor_bytes, what="descriptor")
+    if raw.startswith(PARQUET_MAGIC):
+        raise PackageRefused(
+            "is a Parquet file (a friction map?), not a data package; `map validate` checks "
+            "a package folder or its datapackage.json, and a map is checked whole on every "
+            "read: run `tribopipe map show --map` on it", path=desc)
     depth = _json_depth(raw)
     if depth > limits.json_depth:
         raise PackageRefused(f"JSON nested {depth} deep, more than {limits.json_depth}",

@@ -24,7 +24,7 @@ from ..errors import MapError
 from ..validate import text_problem
 from .datapackage import DESCRIPTOR
 from .package import package_runs
-from .schema import _missing, frame_records
+from .schema import frame_records, is_missing
 from .store import AppendReport, append_records, read_map
 
 
@@ -87,7 +87,7 @@ def merge_map(
     if os.path.realpath(other) == os.path.realpath(path):
         raise MapError("cannot merge a friction map into itself", path=other)
     runs = read_map(other)  # validated: a damaged or foreign file is refused before any write
-    unnamed = runs["lab"].map(_missing).astype(bool)
+    unnamed = runs["lab"].map(is_missing).astype(bool)
     if lab is not None:
         runs.loc[unnamed, "lab"] = lab
     report = append_records(path, frame_records(runs), replace=replace)

@@ -28,6 +28,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any, TypeGuard
 
 from ..errors import MapError
+from ..escape import printable
 from ..stats import group_statistics
 from .checks import validate_runs
 from .datapackage import (
@@ -58,7 +59,7 @@ from .schema import (
     frame_records,
     unvalidated_frame,
 )
-from .store import _same, read_map
+from .store import read_map, same_value
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -147,7 +148,7 @@ def check_package(path: str | os.PathLike[str],
     try:
         descriptor, base = load_descriptor(desc, limits)
     except PackageRefused as exc:
-        check.add(DESCRIPTOR, exc.problem)
+        check.add(printable(desc.name), exc.problem)  # the file given, whatever its name
         return check.result
     version = _check_descriptor(check, descriptor)
     resources = _resources(check, descriptor)
@@ -420,7 +421,7 @@ def _check_parquet_copy(check: _Checker, res: dict[str, Any], data: bytes,
     pairs = zip(frame_records(runs), frame_records(parquet), strict=True)
     for n, (ours, theirs) in enumerate(pairs, 1):
         for name, value in ours.items():
-            if not _same(value, theirs[name]):
+            if not same_value(value, theirs[name]):
                 check.add(shown, f"row {n}, field {name}: {theirs[name]!r} differs from "
                           f"the CSV's {value!r}")
 
@@ -455,7 +456,7 @@ def _check_groups(check: _Checker, res: dict[str, Any], data: bytes,
             check.add(shown, f"row {n}: no runs of this group in the runs table")
             continue
         for name in ("mu_k_n", "mu_k_mean"):
-            if not _same(row[name], g[name]):
+            if not same_value(row[name], g[name]):
                 check.add(shown, f"row {n}, field {name}: {row[name]!r} does not follow "
                           f"from the runs ({g[name]!r})")
 
@@ -482,7 +483,7 @@ def _check_frictionmap_table(check: _Checker, res: dict[str, Any], data: bytes,
         check.add(shown, f"{len(rows)} rows, the runs table has {len(included)} included runs")
         return
     for n, (row, mu_k) in enumerate(zip(rows, included, strict=True), 1):
-        if not _same(row["cof"], mu_k):
+        if not same_value(row["cof"], mu_k):
             check.add(shown, f"row {n}, field cof: {row['cof']!r} differs from the run's "
                       f"mu_k {mu_k!r}")
 

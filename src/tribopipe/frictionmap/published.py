@@ -20,7 +20,7 @@ from ..files import file_sha256, regular_file
 from ..physics import FOUNDING_SLIDING_SPEED_MM_S
 from ..validate import name_problem
 from .records import imported_id
-from .schema import SOURCE_PUBLISHED, _missing, _now, records_frame
+from .schema import SOURCE_PUBLISHED, is_missing, records_frame, utc_now
 from .store import AppendReport, append_records
 
 if TYPE_CHECKING:
@@ -104,7 +104,7 @@ def read_frictionmap_table(path: str | os.PathLike[str]) -> pd.DataFrame:
         values = table[col].tolist()
         if col in ("pin", "disc"):
             # a cell we wrote safe for spreadsheets ('=x) reads back as what it was
-            texts = ["" if _missing(v) else csv_uncell(str(v).strip()) for v in values]
+            texts = ["" if is_missing(v) else csv_uncell(str(v).strip()) for v in values]
             for i, text in enumerate(texts):
                 if not text:
                     raise _where(p, first_line, i, col, "empty, expected a material name")
@@ -115,7 +115,7 @@ def read_frictionmap_table(path: str | os.PathLike[str]) -> pd.DataFrame:
             continue
         numbers = []
         for i, v in enumerate(values):
-            text = "" if _missing(v) else str(v).strip()
+            text = "" if is_missing(v) else str(v).strip()
             if text == "" and col == "temperature":
                 numbers.append(math.nan)  # unknown temperature is allowed, unknown μ is not
                 continue
@@ -199,7 +199,7 @@ def import_records(
         source = SOURCE_PUBLISHED if _is_published(table) else f"import:{p.name}"
     published = source == SOURCE_PUBLISHED
     file_hash = file_sha256(p)
-    stamp = _now()
+    stamp = utc_now()
     records = []
     for pin, disc, force, pressure, temperature, number, cof in table.itertuples(
         index=False, name=None

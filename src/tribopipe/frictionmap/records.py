@@ -1,7 +1,7 @@
 """A reduced run as a friction-map row, and its identity.
 
 :func:`make_record` builds a run's row (:data:`~tribopipe.frictionmap.schema.RUN_COLUMNS`)
-from a :class:`~tribopipe.reduce.ReductionResult` and the run's
+from a :class:`~tribopipe.reduction.reduce.ReductionResult` and the run's
 :class:`~tribopipe.labels.RunVerdict` (its labels, nominal force and flags, decided once by
 :func:`tribopipe.labels.decide_run`, never here); :func:`measurement_id` and
 :func:`imported_id` are the stable ids that make appending idempotent.
@@ -19,12 +19,12 @@ from ..errors import MapError
 from ..labels import RunLabels, RunVerdict, Tolerances, decide_run
 from ..numeric import finite_or_nan
 from ..physics import contact_pressure_kPa
-from .schema import SOURCE_REDUCED, _now, records_frame
+from .schema import SOURCE_REDUCED, records_frame, utc_now
 
 if TYPE_CHECKING:
     from ..config import InstrumentConfig, Settings
     from ..measurement import MeasurementMeta
-    from ..reduce import ReductionResult
+    from ..reduction.reduce import ReductionResult
 
 def nominal_pressure_kPa(force_N: float, instrument: InstrumentConfig) -> float:
     """Nominal contact pressure per pin [kPa] for a total normal force [N].
@@ -162,7 +162,7 @@ def make_record(
         "interval": meta.interval,
         "config_hash": settings.config_hash,
         "tribopipe_version": __version__,
-        "reduced_at": _now(),
+        "reduced_at": utc_now(),
         "excluded": False,
         "exclusion_reason": None,
     }

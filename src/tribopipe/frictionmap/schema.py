@@ -1,15 +1,22 @@
-"""The friction map's schema: its run columns with kinds, units and meanings, and the
-validated DataFrame form of its rows.
+"""The friction map's schema: the one table of row rules, and the validated DataFrame
+form of the rows.
 
-:data:`RUN_COLUMNS` (from ``_SCHEMA``: name, kind, unit, meaning) is the contract of a map
-row; :func:`records_frame` turns record dicts into a map DataFrame with the schema's dtypes
-and row rules, :func:`frame_records` turns it back. The schema is written with units into
-every map's Parquet metadata (:mod:`tribopipe.frictionmap.store`).
+:data:`COLUMNS` is the contract of a map row, one :class:`Column` per column: name, kind,
+unit, meaning, physical range (with its reason) and whether it is required. Everything
+else is derived from it: :data:`RUN_COLUMNS`, :data:`KIND`, :data:`BOUNDS`,
+:data:`REQUIRED`, :data:`NAME_COLUMNS`; the store's row check (:func:`check_runs`), the
+package validator (:func:`tribopipe.frictionmap.checks.validate_runs`) and the
+``datapackage.json`` field constraints
+(:func:`tribopipe.frictionmap.datapackage.runs_fields`). :func:`records_frame` turns
+record dicts into a map DataFrame with the schema's dtypes and row rules,
+:func:`frame_records` turns it back. The schema is written with units into every map's
+Parquet metadata (:mod:`tribopipe.frictionmap.store`).
 """
 
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
 from datetime import UTC, datetime
 from typing import TYPE_CHECKING, Any
 
@@ -40,53 +47,123 @@ SCHEMA_VERSION = 4
 SOURCE_REDUCED = "reduced"
 #: ``source`` of the founding paper's published map.
 SOURCE_PUBLISHED = "published:Berthold2023"
-# (name, kind, unit or "", meaning); kinds: str, float, int (nullable), bool.
-_SCHEMA: tuple[tuple[str, str, str, str], ...] = (
-    ("measurement_id", "str", "", "hash of the raw file content + interval (or import origin)"),
-    ("source", "str", "", "'reduced' or the origin of an imported row"),
-    ("lab", "str", "", "laboratory that measured the run (missing: the map's own lab)"),
-    ("pin", "str", "", "pin material"),
-    ("disc", "str", "", "disc material"),
-    ("normal_force_N", "float", "N", "nominal total normal force"),
-    ("pressure_kPa", "float", "kPa", "nominal contact pressure per pin"),
-    ("normal_force_measured_N", "float", "N", "measured mean normal force"),
-    ("pressure_measured_kPa", "float", "kPa", "measured mean contact pressure per pin"),
-    ("temperature_C", "float", "°C", "nominal temperature"),
-    ("temperature_measured_C", "float", "°C", "measured mean temperature"),
-    ("sliding_speed_mm_s", "float", "mm/s", "measured sliding speed"),
-    ("repeat", "int", "", "repeat number within the condition"),
-    ("mu_s", "float", "", "static coefficient of friction"),
-    ("mu_k", "float", "", "kinetic coefficient of friction"),
-    ("u_mu_s", "float", "", "standard uncertainty of μ_S (GUM, k = 1)"),
-    ("u_mu_k", "float", "", "standard uncertainty of μ_K (GUM, k = 1)"),
-    ("mu_s_distance_mm", "float", "mm", "sliding distance at the static peak"),
-    ("mu_s_time_s", "float", "s", "time of the static peak"),
-    ("mu_k_window_start_mm", "float", "mm", "start of the kinetic plateau window"),
-    ("mu_k_window_end_mm", "float", "mm", "end of the kinetic plateau window"),
-    ("mu_k_window_start_s", "float", "s", "start of the kinetic plateau window"),
-    ("mu_k_window_end_s", "float", "s", "end of the kinetic plateau window"),
-    ("plateau_std", "float", "", "standard deviation of μ in the plateau window"),
-    ("plateau_drift_per_mm", "float", "1/mm", "slope of μ over the plateau window"),
-    ("flags", "str", "", "QC flags, ';'-joined"),
-    ("method", "str", "", "reduction method (or 'published'/'imported')"),
-    ("source_file", "str", "", "name of the raw or imported file"),
-    ("file_hash", "str", "", "SHA-256 of that file"),
-    ("test", "str", "", "Test name in the export the run came from (as the export writes it)"),
-    ("result", "str", "", "result of that test the run came from"),
-    ("interval", "int", "", "interval of the export the run came from"),
-    ("config_hash", "str", "", "hash of instrument + reduction settings"),
-    ("tribopipe_version", "str", "", "version that wrote the row"),
-    ("reduced_at", "str", "", "UTC time of reduction or import (ISO 8601)"),
-    ("excluded", "bool", "", "left out of the statistics"),
-    ("exclusion_reason", "str", "", "why it was excluded"),
+#: ``Column.required``: the column is filled in every row
+ALWAYS = "always"
+#: ``Column.required``: filled in every row tribopipe reduced (``source`` is
+#: :data:`SOURCE_REDUCED`); an imported row may lack it
+IN_REDUCED_ROWS = "reduced"
+#: ``Column.required``: filled in every row of a published data package (a map's own rows
+#: may leave it missing)
+IN_PACKAGES = "package"
+
+_DISTANCE = Range(0.0, 1e9, "mm")
+_SPREAD = Range(0.0, 1e3)
+
+
+@dataclass(frozen=True)
+class Column:
+    """One column of a map row and its rules.
+
+    ``kind`` is ``"str"``, ``"float"``, ``"int"`` (nullable) or ``"bool"``; ``unit`` is
+    ``""`` for none. ``bounds`` is the physical range of a number (``None``: a float need
+    only be finite); ``reason`` says why. ``required`` is ``""`` (may be missing),
+    :data:`ALWAYS`, :data:`IN_REDUCED_ROWS` or :data:`IN_PACKAGES`. A text column
+    required :data:`ALWAYS` is a name (one printable line of at most 200 characters, not
+    blank); every other text is one printable line.
+    """
+
+    name: str
+    kind: str
+    unit: str
+    meaning: str
+    bounds: Range | None = None
+    reason: str = ""
+    required: str = ""
+
+
+_CONTACT = "a run in contact presses the pins on the disc"
+_COLD = "nothing is colder than absolute zero"
+_RATIO = "a coefficient of friction is a ratio of magnitudes"
+_ALONG = "sliding distance from the start of sliding"
+
+#: The one table of row rules: every map row keeps them, on its way into the map and on
+#: every read; a published package's ``datapackage.json`` states them as constraints.
+COLUMNS: tuple[Column, ...] = (
+    Column("measurement_id", "str", "", "hash of the raw file content + interval (or import "
+           "origin)", required=ALWAYS),
+    Column("source", "str", "", "'reduced' or the origin of an imported row", required=ALWAYS),
+    Column("lab", "str", "", "laboratory that measured the run (missing: the map's own lab)",
+           required=IN_PACKAGES),
+    Column("pin", "str", "", "pin material", required=ALWAYS),
+    Column("disc", "str", "", "disc material", required=ALWAYS),
+    Column("normal_force_N", "float", "N", "nominal total normal force", FORCE_N, _CONTACT,
+           ALWAYS),
+    Column("pressure_kPa", "float", "kPa", "nominal contact pressure per pin", PRESSURE_KPA,
+           "a run in contact has a positive contact pressure", ALWAYS),
+    Column("normal_force_measured_N", "float", "N", "measured mean normal force", FORCE_N,
+           _CONTACT),
+    Column("pressure_measured_kPa", "float", "kPa", "measured mean contact pressure per pin",
+           PRESSURE_KPA, "a run in contact has a positive contact pressure"),
+    Column("temperature_C", "float", "°C", "nominal temperature", TEMPERATURE_C, _COLD),
+    Column("temperature_measured_C", "float", "°C", "measured mean temperature",
+           TEMPERATURE_C, _COLD),
+    Column("sliding_speed_mm_s", "float", "mm/s", "measured sliding speed",
+           SLIDING_SPEED_MM_S, "a friction run slides"),
+    Column("repeat", "int", "", "repeat number within the condition",
+           Range(0, MAX_REPEAT), "repeat numbers count up from 0 or 1"),
+    Column("mu_s", "float", "", "static coefficient of friction", MU, _RATIO,
+           IN_REDUCED_ROWS),
+    Column("mu_k", "float", "", "kinetic coefficient of friction", MU, _RATIO, ALWAYS),
+    Column("u_mu_s", "float", "", "standard uncertainty of μ_S (GUM, k = 1)", _SPREAD,
+           "a standard uncertainty is not negative"),
+    Column("u_mu_k", "float", "", "standard uncertainty of μ_K (GUM, k = 1)", _SPREAD,
+           "a standard uncertainty is not negative"),
+    Column("mu_s_distance_mm", "float", "mm", "sliding distance at the static peak",
+           _DISTANCE, _ALONG),
+    # times are on the export's own clock, which may start anywhere: finite only
+    Column("mu_s_time_s", "float", "s", "time of the static peak"),
+    Column("mu_k_window_start_mm", "float", "mm", "start of the kinetic plateau window",
+           _DISTANCE, _ALONG),
+    Column("mu_k_window_end_mm", "float", "mm", "end of the kinetic plateau window",
+           _DISTANCE, _ALONG),
+    Column("mu_k_window_start_s", "float", "s", "start of the kinetic plateau window"),
+    Column("mu_k_window_end_s", "float", "s", "end of the kinetic plateau window"),
+    Column("plateau_std", "float", "", "standard deviation of μ in the plateau window",
+           _SPREAD, "a standard deviation is not negative"),
+    Column("plateau_drift_per_mm", "float", "1/mm", "slope of μ over the plateau window"),
+    Column("flags", "str", "", "QC flags, ';'-joined"),
+    Column("method", "str", "", "reduction method (or 'published'/'imported')"),
+    Column("source_file", "str", "", "name of the raw or imported file"),
+    Column("file_hash", "str", "", "SHA-256 of that file"),
+    Column("test", "str", "", "Test name in the export the run came from (as the export "
+           "writes it)"),
+    Column("result", "str", "", "result of that test the run came from"),
+    Column("interval", "int", "", "interval of the export the run came from",
+           Range(0, 1_000_000_000), "interval numbers count up from 0 or 1"),
+    Column("config_hash", "str", "", "hash of instrument + reduction settings"),
+    Column("tribopipe_version", "str", "", "version that wrote the row"),
+    Column("reduced_at", "str", "", "UTC time of reduction or import (ISO 8601)"),
+    Column("excluded", "bool", "", "left out of the statistics", required=ALWAYS),
+    Column("exclusion_reason", "str", "", "why it was excluded"),
 )
 
-RUN_COLUMNS: tuple[str, ...] = tuple(name for name, *_ in _SCHEMA)
+RUN_COLUMNS: tuple[str, ...] = tuple(c.name for c in COLUMNS)
 #: Columns added after schema version 1, with the version that added them: a map written
 #: before that version lacks them and reads with them missing, and a record built by older
 #: code may leave them out.
 ADDED_IN_VERSION: dict[str, int] = {"lab": 2, "u_mu_s": 3, "u_mu_k": 3, "test": 4, "result": 4}
-_KIND: dict[str, str] = {name: kind for name, kind, *_ in _SCHEMA}
+#: the kind of each column: ``"str"``, ``"float"``, ``"int"`` or ``"bool"``
+KIND: dict[str, str] = {c.name: c.kind for c in COLUMNS}
+#: the physical range of each bounded number column; a float column not listed need only
+#: be finite (or missing)
+BOUNDS: dict[str, Range] = {c.name: c.bounds for c in COLUMNS if c.bounds is not None}
+#: number and truth columns that may not be missing in any row
+REQUIRED: frozenset[str] = frozenset(
+    c.name for c in COLUMNS if c.required == ALWAYS and c.kind != "str")
+#: the text columns that name something (required in every row: one printable line,
+#: at most 200 characters, not blank)
+NAME_COLUMNS: tuple[str, ...] = tuple(
+    c.name for c in COLUMNS if c.required == ALWAYS and c.kind == "str")
 #: Columns that say where a row came from, not what was measured: two rows with the same
 #: id that differ only here are the same run (a renamed file, a later import). ``test`` and
 #: ``result`` are part of what the id hashes, so they can differ only where one row lacks
@@ -95,10 +172,10 @@ PROVENANCE_COLUMNS: frozenset[str] = frozenset(
     {"lab", "source_file", "file_hash", "test", "result", "tribopipe_version", "reduced_at",
      "excluded", "exclusion_reason"}
 )
-_CONTENT_COLUMNS: tuple[str, ...] = tuple(c for c in RUN_COLUMNS if c not in PROVENANCE_COLUMNS)
+CONTENT_COLUMNS: tuple[str, ...] = tuple(c for c in RUN_COLUMNS if c not in PROVENANCE_COLUMNS)
 
 
-def _now() -> str:
+def utc_now() -> str:
     return datetime.now(UTC).strftime("%Y-%m-%dT%H:%M:%SZ")
 
 
@@ -107,7 +184,7 @@ def empty_map() -> pd.DataFrame:
     return records_frame([])
 
 
-def _missing(value: Any) -> bool:
+def is_missing(value: Any) -> bool:
     if value is None:
         return True
     try:
@@ -148,7 +225,7 @@ def unvalidated_frame(
                 hint="build records with tribopipe.frictionmap.make_record",
             )
     for name in RUN_COLUMNS:
-        kind = _KIND[name]
+        kind = KIND[name]
         values = [rec.get(name) for rec in records]
         try:
             columns[name] = _column(values, kind)
@@ -162,34 +239,9 @@ def unvalidated_frame(
     return pd.DataFrame(columns, columns=list(RUN_COLUMNS), index=pd.RangeIndex(len(records)))
 
 
-#: the text columns that name something (one printable line, ≤ 200 characters, not blank)
-NAME_COLUMNS: tuple[str, ...] = ("measurement_id", "source", "pin", "disc")
 #: the text columns that hold a file's own name, kept raw
 #: (:func:`~tribopipe.validate.file_name_problem`)
 FILE_NAME_COLUMNS: tuple[str, ...] = ("source_file",)
-#: the physical range of each float column; columns not listed need only be finite (or
-#: missing). ``REQUIRED`` columns may not be missing in any row.
-COLUMN_RANGES: dict[str, Range] = {
-    "normal_force_N": FORCE_N,
-    "pressure_kPa": PRESSURE_KPA,
-    "normal_force_measured_N": FORCE_N,
-    "pressure_measured_kPa": PRESSURE_KPA,
-    "temperature_C": TEMPERATURE_C,
-    "temperature_measured_C": TEMPERATURE_C,
-    "sliding_speed_mm_s": SLIDING_SPEED_MM_S,
-    "mu_s": MU,
-    "mu_k": MU,
-    "mu_s_distance_mm": Range(0.0, 1e9, "mm"),
-    "mu_k_window_start_mm": Range(0.0, 1e9, "mm"),
-    "mu_k_window_end_mm": Range(0.0, 1e9, "mm"),
-    "plateau_std": Range(0.0, 1e3),
-    "u_mu_s": Range(0.0, 1e3),
-    "u_mu_k": Range(0.0, 1e3),
-}
-REQUIRED: frozenset[str] = frozenset({"normal_force_N", "pressure_kPa", "mu_k"})
-#: the whole-number columns and their bounds
-COUNT_RANGES: dict[str, tuple[int, int]] = {"repeat": (0, MAX_REPEAT),
-                                            "interval": (0, 1_000_000_000)}
 
 
 def _row_error(frame: pd.DataFrame, where: str, i: int, column: str, problem: str) -> MapError:
@@ -199,26 +251,26 @@ def _row_error(frame: pd.DataFrame, where: str, i: int, column: str, problem: st
 
 
 def check_runs(frame: pd.DataFrame, where: str = "row") -> pd.DataFrame:
-    """Check the rows of a map DataFrame (schema dtypes) and return it unchanged, or raise
-    :class:`MapError` naming the first bad row (``where`` and its number, its id), the
-    column and what was expected.
+    """Check the rows of a map DataFrame (schema dtypes) against :data:`COLUMNS` and return
+    it unchanged, or raise :class:`MapError` naming the first bad row (``where`` and its
+    number, its id), the column and what was expected.
 
     The rules every map row keeps, wherever it comes from (a reduction, an import, another
     lab's map, a file on disk):
 
-    * ``measurement_id``, ``source``, ``pin``, ``disc``: names (one printable line of at
-      most 200 characters, not blank); ``source_file``: the file's own name (any text
-      without NUL or a lone surrogate) or missing; every other text: one printable line
-      or missing;
-    * floats finite or missing (never ±inf); inside the physical ranges of
-      :data:`COLUMN_RANGES` (force > 0, temperature above −273.15 °C, 0 ≤ μ ≤ 10 ...);
-      :data:`REQUIRED` never missing; ``mu_s`` missing only in imported rows;
-    * ``repeat`` and ``interval`` whole numbers in :data:`COUNT_RANGES` or missing.
+    * :data:`NAME_COLUMNS` are names (one printable line of at most 200 characters, not
+      blank); :data:`FILE_NAME_COLUMNS` hold a file's own name (any text without NUL or a
+      lone surrogate) or are missing; every other text is one printable line or missing;
+    * floats finite or missing (never ±inf); numbers inside their :data:`BOUNDS` (force > 0,
+      temperature above −273.15 °C, 0 ≤ μ ≤ 10 ...; ``repeat`` and ``interval`` whole
+      numbers); :data:`REQUIRED` never missing, and the columns required
+      :data:`IN_REDUCED_ROWS` (``mu_s``) missing only in imported rows.
     """
     import numpy as np
 
-    for name in RUN_COLUMNS:
-        kind = _KIND[name]
+    reduced = (frame["source"] == SOURCE_REDUCED).to_numpy(dtype=bool)
+    for column in COLUMNS:
+        name, kind, bounds = column.name, column.kind, column.bounds
         if kind == "str":
             checker = (name_problem if name in NAME_COLUMNS else
                        file_name_problem if name in FILE_NAME_COLUMNS else text_problem)
@@ -231,7 +283,6 @@ def check_runs(frame: pd.DataFrame, where: str = "row") -> pd.DataFrame:
                     raise _row_error(frame, where, i, name, f"{name}: {problem}")
         elif kind == "float":
             values = frame[name].to_numpy(dtype=float)
-            bounds = COLUMN_RANGES.get(name)
             present = ~np.isnan(values)
             if bounds is None:
                 bad = present & ~np.isfinite(values)
@@ -240,28 +291,24 @@ def check_runs(frame: pd.DataFrame, where: str = "row") -> pd.DataFrame:
                 low = values > bounds.low if bounds.low_open else values >= bounds.low
                 bad = present & ~(low & (values <= bounds.high))
                 expected = f"a number {bounds.describe()}"
-            if name in REQUIRED:
+            if column.required == ALWAYS:
                 bad |= ~present
             if bad.any():
                 i = int(np.flatnonzero(bad)[0])
                 raise _row_error(frame, where, i, name,
                                  f"{name} is {float(values[i])!r}, expected {expected}")
-        elif kind == "int":
-            low_i, high_i = COUNT_RANGES[name]
+            if column.required == IN_REDUCED_ROWS and (reduced & ~present).any():
+                i = int(np.flatnonzero(reduced & ~present)[0])
+                raise _row_error(frame, where, i, name,
+                                 f"{name} is missing; only imported rows may lack {name}")
+        elif kind == "int" and bounds is not None:
             values_i = frame[name]
-            bad_i = values_i.notna() & ((values_i < low_i) | (values_i > high_i))
+            bad_i = values_i.notna() & ((values_i < bounds.low) | (values_i > bounds.high))
             if bad_i.any():
                 i = int(np.flatnonzero(bad_i.to_numpy(dtype=bool))[0])
                 raise _row_error(frame, where, i, name, f"{name} is {values_i.iloc[i]}, "
-                                 f"expected a whole number from {low_i} to {high_i}")
-    bad_s = ~np.isfinite(frame["mu_s"].to_numpy()) & (frame["source"] == SOURCE_REDUCED).to_numpy()
-    if bad_s.any():
-        i = int(np.flatnonzero(bad_s)[0])
-        raise MapError(
-            f"{where} {i + 1} ({frame['measurement_id'].iloc[i]}): mu_s is missing; only "
-            "imported rows may lack mu_s",
-            column="mu_s",
-        )
+                                 f"expected a whole number from {bounds.low:.0f} to "
+                                 f"{bounds.high:.0f}")
     return frame
 
 
@@ -272,33 +319,32 @@ def content_sha256(frame: pd.DataFrame, version: int = SCHEMA_VERSION) -> str:
     int64 with a missing-mask, booleans as bytes, text as JSON with ``null``), so the same
     rows give the same digest however they were stored or read back. Stored in the map's
     Parquet metadata and checked on every read against the version the map was written
-    in (:mod:`tribopipe.frictionmap.mapfile`), so a map still verifies after a schema
+    in (:mod:`tribopipe.frictionmap.store`), so a map still verifies after a schema
     upgrade adds columns.
     """
     import hashlib
     import json
 
     import numpy as np
-    import pandas as pd
 
     digest = hashlib.sha256(f"tribopipe.frictionmap rows={len(frame)}".encode())
     for name in RUN_COLUMNS:
         if ADDED_IN_VERSION.get(name, 1) > version:
             continue
-        kind = _KIND[name]
+        kind = KIND[name]
         column = frame[name]
         if kind == "float":
             values = column.to_numpy(dtype="float64")
             data = np.where(np.isnan(values), np.nan, values).astype("<f8").tobytes()
         elif kind == "int":
-            ints = pd.array(column, dtype="Int64")
+            ints = column.astype("Int64")
             mask = ints.isna()
             data = (np.asarray(mask, dtype="u1").tobytes()
                     + ints.fillna(0).to_numpy(dtype="int64").astype("<i8").tobytes())
         elif kind == "bool":
             data = np.asarray(column, dtype=bool).astype("u1").tobytes()
         else:
-            texts = [None if _missing(v) else str(v) for v in column.tolist()]
+            texts = [None if is_missing(v) else str(v) for v in column.tolist()]
             data = json.dumps(texts, ensure_ascii=False).encode("utf-8", "surrogatepass")
         digest.update(f"|{name}:{kind}:{len(data)}|".encode())
         digest.update(data)
@@ -320,7 +366,7 @@ def _column(values: list[Any], kind: str) -> Any:
     if kind == "float":
         out = []
         for v in values:
-            if _missing(v):
+            if is_missing(v):
                 out.append(np.nan)
             elif isinstance(v, bool | str):
                 raise TypeError(f"not a number: {v!r}")
@@ -330,7 +376,7 @@ def _column(values: list[Any], kind: str) -> Any:
     if kind == "int":
         out_i: list[Any] = []
         for v in values:
-            if _missing(v):
+            if is_missing(v):
                 out_i.append(pd.NA)
             elif isinstance(v, bool | str) or float(v) != int(float(v)):
                 raise TypeError(f"not a whole number: {v!r}")
@@ -347,7 +393,7 @@ def _column(values: list[Any], kind: str) -> Any:
         return np.asarray(out_b, dtype=bool)
     out_s: list[Any] = []
     for v in values:
-        if _missing(v):
+        if is_missing(v):
             out_s.append(None)
         elif isinstance(v, str):
             out_s.append(v)
@@ -360,5 +406,6 @@ def frame_records(runs: pd.DataFrame) -> list[dict[str, Any]]:
     """The rows of a map DataFrame as record dicts (missing values as ``None``)."""
     out = []
     for row in runs.loc[:, list(RUN_COLUMNS)].itertuples(index=False, name=None):
-        out.append({c: (None if _missing(v) else v) for c, v in zip(RUN_COLUMNS, row, strict=True)})
+        pairs = zip(RUN_COLUMNS, row, strict=True)
+        out.append({c: (None if is_missing(v) else v) for c, v in pairs})
     return out

@@ -11,7 +11,7 @@ from ..escape import display_path, printable
 from ..measurement import interval_label
 from ..stats import group_statistics, repeatability
 from .checks import validate_runs
-from .schema import _missing
+from .schema import is_missing
 from .store import read_map
 from .synthetic_rows import synthetic_note
 
@@ -88,7 +88,7 @@ def map_summary(path: str | os.PathLike[str], *, runs_listed: bool = False) -> s
 def _text(value: Any) -> str:
     """A text cell of the map as one printable line (:func:`~tribopipe.escape.printable`:
     a merged map's names are data, never terminal commands)."""
-    if _missing(value):
+    if is_missing(value):
         return "?"
     return printable(str(value))
 
@@ -96,8 +96,8 @@ def _text(value: Any) -> str:
 def run_origin(row: dict[str, Any]) -> str:
     """Where a map row came from: ``file [test / result / interval i]`` (the parts the row
     knows; a row of a map older than schema version 4 names no test or result)."""
-    interval = None if _missing(row.get("interval")) else int(row["interval"])
-    place = interval_label(*(None if _missing(row.get(k)) else _text(row[k])
+    interval = None if is_missing(row.get("interval")) else int(row["interval"])
+    place = interval_label(*(None if is_missing(row.get(k)) else _text(row[k])
                              for k in ("test", "result")), interval)
     file = _text(row.get("source_file"))
     return f"{file} [{place}]" if place else file
@@ -106,8 +106,8 @@ def run_origin(row: dict[str, Any]) -> str:
 def run_line(row: dict[str, Any]) -> str:
     """One run of the map on one line: the first 16 digits of its id, where it came from,
     pin / disc, nominal force [N] and temperature [°C], repeat, μ_K, μ_S and flags."""
-    mu_s = "" if _missing(row.get("mu_s")) else f", mu_s {row['mu_s']:.3f}"
-    flags = _text(row["flags"]) if not _missing(row.get("flags")) and row["flags"] else "-"
+    mu_s = "" if is_missing(row.get("mu_s")) else f", mu_s {row['mu_s']:.3f}"
+    flags = _text(row["flags"]) if not is_missing(row.get("flags")) and row["flags"] else "-"
     excluded = " (excluded)" if row.get("excluded") else ""
     return (f"{row['measurement_id']}  {run_origin(row)}  {_text(row['pin'])} / "
             f"{_text(row['disc'])}, {row['normal_force_N']:g} N, {_fmt_t(row['temperature_C'])}"
@@ -120,11 +120,11 @@ def _runs(n: int) -> str:
 
 
 def _fmt_t(value: float) -> str:
-    return "T ?" if _missing(value) else f"{value:g} °C"
+    return "T ?" if is_missing(value) else f"{value:g} °C"
 
 
 def _fmt_repeat(value: Any) -> str:
-    return "?" if _missing(value) else str(value)
+    return "?" if is_missing(value) else str(value)
 
 
 def check_map_file(path: str | os.PathLike[str]) -> tuple[list[str], str]:

@@ -35,7 +35,7 @@ from typing import Any
 
 from ..errors import ReadError, TribopipeError
 from ..escape import display_path
-from ..measurement import (  # noqa: F401 - require_columns is importable from here too
+from ..measurement import (
     NORMAL_FORCE,
     TORQUE,
     Measurement,
@@ -486,7 +486,7 @@ def describe_export(
     encoding, delimiter, decimal mark, tests, results, intervals, points and every column
     with its original unit and the column it maps to.
 
-    ``choose`` (e.g. :func:`tribopipe.intervals.all_friction_intervals`) picks the
+    ``choose`` (e.g. :func:`tribopipe.reduction.intervals.all_friction_intervals`) picks the
     interval(s) a reduction reads; its pick(s), or the one-line reason it refuses, go into
     the summary.
     """

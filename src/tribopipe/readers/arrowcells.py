@@ -135,7 +135,7 @@ class ArrowCells:
                                                                         strict=True)):
             raise NotSimple  # a cell past the header's columns: the general path reports it
         self.kinds, self.columns, self.decimal = kinds, columns, decimal
-        self._missing = {k: int(pc.sum(c).as_py() or 0) for k, c in stars.items()}
+        self.is_missing = {k: int(pc.sum(c).as_py() or 0) for k, c in stars.items()}
 
     def point_numbers(self, j: int) -> NDArray[np.int64]:
         import pyarrow as pa
@@ -144,7 +144,7 @@ class ArrowCells:
         return np.asarray(pc.cast(self.columns[j], pa.int64()).to_numpy(), dtype=np.int64)
 
     def is_empty(self, j: int) -> bool:
-        return _all_empty(self.columns[j]) and not self._missing.get(j)
+        return _all_empty(self.columns[j]) and not self.is_missing.get(j)
 
     def check_damage(self, j: int, name: str) -> None:
         import pyarrow as pa
@@ -163,14 +163,14 @@ class ArrowCells:
         values = self.columns[j]
         if pa.types.is_string(values.type):
             values, stars = _to_float(values, self.decimal)
-            self._missing[j] = int(pc.sum(stars).as_py() or 0) if stars is not None else 0
+            self.is_missing[j] = int(pc.sum(stars).as_py() or 0) if stars is not None else 0
         out = values.to_numpy()
         if np.count_nonzero(np.isnan(out)) != values.null_count:
             raise NotSimple  # a "nan" cell: its bits are Python's float() to decide
         return out
 
     def missing(self, j: int) -> int:
-        return self._missing.get(j, 0)
+        return self.is_missing.get(j, 0)
 
     def strings(self, j: int) -> Any:
         import pandas as pd

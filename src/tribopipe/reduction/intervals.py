@@ -8,7 +8,7 @@ interval of every test and result (the rule is in its docstring); the nearest in
 before each in the same test and result that is verified at rest is its set-up, whose
 robust mean torque is the instrument's torque zero offset (with the disc at rest the true
 friction torque is zero), attached as ``meta.torque_offset`` for
-:func:`tribopipe.reduce.reduce_measurement`. :func:`select_friction_interval` is the
+:func:`tribopipe.reduction.reduce.reduce_measurement`. :func:`select_friction_interval` is the
 single choice among them (the one travelling farthest).
 
 What the reduction reads of the chosen interval is prepared here too:
@@ -26,9 +26,9 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from .config import ReductionParams
-from .errors import MissingQuantityError, NotFrictionTestError, ReductionError, TribopipeError
-from .measurement import (
+from ..config import ReductionParams
+from ..errors import MissingQuantityError, NotFrictionTestError, ReductionError, TribopipeError
+from ..measurement import (
     ANGLE,
     NORMAL_FORCE,
     SPEED,
@@ -39,8 +39,8 @@ from .measurement import (
     TorqueOffset,
     interval_label,
 )
+from ..validate import FORCE_N
 from .uncertainty import zero_offset_standard_error
-from .validate import FORCE_N
 
 if TYPE_CHECKING:
     from collections.abc import Sequence

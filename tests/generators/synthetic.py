@@ -36,8 +36,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from .measurement import ANGLE, NORMAL_FORCE, SPEED, TEMPERATURE, TIME, TORQUE
-from .physics import FOUNDING_FRICTION_RADIUS_MM, FOUNDING_SPEED_RPM
+from tribopipe.measurement import ANGLE, NORMAL_FORCE, SPEED, TEMPERATURE, TIME, TORQUE
+from tribopipe.physics import FOUNDING_FRICTION_RADIUS_MM, FOUNDING_SPEED_RPM
 
 if TYPE_CHECKING:
     from collections.abc import Sequence

@@ -1,7 +1,7 @@
 """A second, independent family of synthetic runs: a quasi-static pin–interface model.
 
 This family validates the μ_S / μ_K detection on traces whose loading physics differs from
-:mod:`tribopipe.synthetic` (the shapes the detection was developed on). Its model, its
+:mod:`generators.synthetic` (the shapes the detection was developed on). Its model, its
 grid (:func:`validation_runs`) and its seeds were written and fixed before the detection
 of issue 14 was changed, and the detection is not tuned on it (see ``bench/README.md``).
 
@@ -40,9 +40,9 @@ optional normal-force set-up interval (20 s, no rotation) and an optional rest b
 motion; torque ``dir·μ·F_N(t)·R + offset + noise``, where the noise is white or AR(1)
 (ρ = 0.5: a low-passed sensor) with the per-sample standard deviation ``noise`` in COF
 units at the nominal force; F_N wanders ±0.5 % over 60 s with 0.2 % noise; temperature
-±0.05 °C. Written through :func:`tribopipe.synthetic.write_intervals_export`.
+±0.05 °C. Written through :func:`generators.synthetic.write_intervals_export`.
 
-Truth (:class:`ContactTruth`): μ_K is the strength's asymptote, or for an oscillating
+Truth (:class:`generators.truth.Truth`): μ_K is the strength's asymptote, or for an oscillating
 plateau the mean of the noise-free μ over whole cycles of the settled plateau; the
 plateau is settled from the first distance after which the noise-free μ (averaged over
 a cycle where it oscillates) stays within 0.002 of μ_K; μ_S is the largest noise-free μ
@@ -60,9 +60,11 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from .config import FOUNDING_FRICTION_RADIUS_MM
-from .measurement import ANGLE, NORMAL_FORCE, SPEED, TEMPERATURE, TIME, TORQUE
+from tribopipe.measurement import ANGLE, NORMAL_FORCE, SPEED, TEMPERATURE, TIME, TORQUE
+from tribopipe.physics import FOUNDING_FRICTION_RADIUS_MM
+
 from .synthetic import write_intervals_export
+from .truth import OSCILLATION_MIN_PP, Truth, static_kind
 
 if TYPE_CHECKING:
     from os import PathLike
@@ -80,10 +82,7 @@ SHARPNESS: tuple[float, ...] = (1.0, 3.0, 12.0)
 DRAWS_PER_CELL = 10
 
 SETTLE_TOL = 0.002  # noise-free μ within this of μ_K: the plateau has settled [COF]
-DISTINCT_MARGIN = 0.02  # a static peak this far above the plateau's highs is distinct [COF]
-OSCILLATION_MIN_PP = 0.008  # a plateau oscillating less than this (peak-to-peak) is not scored
 MAX_WEAKENING_MM = 0.25  # slip-weakening is an interface property: at most 0.25 mm
-NONE_MARGIN = 0.005  # a "peak" no higher than this above the plateau's highs is none [COF]
 _SAW_RISE = 0.85  # the oscillation's strength rises over this fraction of a cycle
 _CYCLE_JITTER = 0.05  # cycle lengths λ·(1 ± 5 %)
 
@@ -133,31 +132,6 @@ class ContactRun:
     def speed_mm_s(self) -> float:
         """Sliding speed at the friction radius [mm/s]."""
         return self.speed_rpm * 2 * math.pi / 60 * self.friction_radius_mm
-
-
-@dataclass(frozen=True)
-class ContactTruth:
-    """What a correct reduction of a :class:`ContactRun` must find (see module doc).
-
-    ``static`` is ``"distinct"``, ``"none"`` or ``"ambiguous"``; ``oscillating`` says the
-    plateau oscillates (stick-slip) by at least OSCILLATION_MIN_PP peak-to-peak
-    (``oscillation_pp``, noise-free); ``settle_mm`` where the plateau has settled;
-    ``plateau_high`` the largest noise-free μ on it; ``truncated`` that the trace ends
-    before the plateau settled; ``offset_estimable`` that a set-up interval or a rest
-    before motion shows the torque zero.
-    """
-
-    mu_s: float
-    mu_k: float
-    mu_s_distance_mm: float
-    static: str
-    oscillating: bool
-    oscillation_pp: float
-    settle_mm: float
-    plateau_high: float
-    sliding_distance_mm: float
-    truncated: bool
-    offset_estimable: bool
 
 
 def pin_compliance_mm(
@@ -356,7 +330,7 @@ def _analyse(run: ContactRun, x_end: float) -> dict[str, float]:
     }
 
 
-def truth(run: ContactRun) -> ContactTruth:
+def truth(run: ContactRun) -> Truth:
     """The known answer for ``run`` (see module doc)."""
     full = _analyse(run, run.distance_mm)
     truncated = full["settle_mm"] >= run.distance_mm - 1e-9 or (
@@ -368,13 +342,8 @@ def truth(run: ContactRun) -> ContactTruth:
         whole = _analyse(run, run.distance_mm + _settle_estimate(run) + 1.0)
         mu_s, high = whole["mu_s"], whole["plateau_high"]
         full = {**whole, "settle_mm": whole["settle_mm"]}
-    if mu_s >= high + DISTINCT_MARGIN:
-        static = "distinct"
-    elif mu_s <= high + NONE_MARGIN:
-        static = "none"
-    else:
-        static = "ambiguous"
-    return ContactTruth(
+    static = static_kind(mu_s, high)
+    return Truth(
         mu_s=mu_s if static != "none" else full["mu_k"],
         mu_k=full["mu_k"],
         mu_s_distance_mm=full["mu_s_distance_mm"],

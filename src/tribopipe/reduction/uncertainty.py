@@ -35,7 +35,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 if TYPE_CHECKING:
-    from .config import InstrumentConfig
+    from ..config import InstrumentConfig
 
 COVERAGE_FACTOR = 2.0
 SOURCES: tuple[str, ...] = (
@@ -91,18 +91,6 @@ def zero_offset_standard_error(torque_Nm: Any) -> float:
     inliers = v if spread == 0 else v[np.abs(v - centre) <= 4 * spread]
     se, _ = mean_standard_error(inliers)
     return se
-
-
-def reading_noise(curve: Any) -> float:
-    """Standard deviation [COF] of a smoothed curve (shape (n,)) about its least-squares
-    quadratic trend: how far a reading of that curve moves with the noise. 0 for fewer
-    than 4 samples."""
-    y = np.asarray(curve, dtype=float)
-    if y.size < 4:
-        return 0.0
-    x = np.linspace(-1.0, 1.0, y.size)
-    resid = y - np.polyval(np.polyfit(x, y, 2), x)
-    return float(np.std(resid, ddof=3))
 
 
 def budget(

@@ -1,8 +1,8 @@
 """What an imperfect instrument does to a synthetic signal: coloured noise, quantisation,
 sample-time jitter, spikes.
 
-Pure functions on NumPy arrays for the synthetic families (:mod:`tribopipe.
-synthetic_ratestate` first); each draws from the generator it is given, so a seeded run
+Pure functions on NumPy arrays for the synthetic families (:mod:`generators.ratestate`
+first); each draws from the generator it is given, so a seeded run
 stays reproducible. None of them knows about friction.
 """
 

@@ -3,7 +3,7 @@ by an imperfect instrument.
 
 Its grid and seeds were fixed before any change of the detection after issue 14's
 validation (``bench/README.md`` says what was seen when); neither the development family
-(:mod:`tribopipe.synthetic`) nor the validation family (:mod:`tribopipe.synthetic_contact`)
+(:mod:`generators.synthetic`) nor the validation family (:mod:`generators.contact`)
 has this physics or these instrument effects.
 
 Model (lengths in mm along the sliding path at the friction radius, time in s, forces
@@ -46,7 +46,7 @@ the friction force with it: the spring must follow) with 0.2 % noise; friction i
 of 120, 300, 600 or 1,100 s; with a set-up interval of 20–60 s or without, a rest before
 motion of 0–10 s; torque offsets 0, 0.2, −0.3, 0.5 mN·m.
 
-Truth (:class:`RateStateTruth`): μ_K is the mean of the noise-free μ = f_s/n over the
+Truth (:class:`generators.truth.Truth`): μ_K is the mean of the noise-free μ = f_s/n over the
 settled plateau (over whole stick-slip cycles when it oscillates); the plateau settles at
 the first distance after which the noise-free μ of the same run without the normal
 force's wander (cycle means where it oscillates) stays within 0.002 of its level; μ_S the
@@ -67,16 +67,18 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from .config import FOUNDING_FRICTION_RADIUS_MM
-from .measurement import ANGLE, NORMAL_FORCE, SPEED, TEMPERATURE, TIME, TORQUE
-from .synthetic import write_intervals_export
-from .synthetic_instrument import (
+from tribopipe.measurement import ANGLE, NORMAL_FORCE, SPEED, TEMPERATURE, TIME, TORQUE
+from tribopipe.physics import FOUNDING_FRICTION_RADIUS_MM
+
+from .instrument import (
     NOISE_COLOURS,
     add_spikes,
     coloured_noise,
     sample_times,
     significant_digits,
 )
+from .synthetic import write_intervals_export
+from .truth import OSCILLATION_MIN_PP, Truth, static_kind
 
 if TYPE_CHECKING:
     from collections.abc import Callable
@@ -99,9 +101,6 @@ STICK_SLIP_DRAWS = 42
 OFFSET_UNKNOWN_PER_SHAPE = 14
 
 SETTLE_TOL = 0.002  # noise-free μ within this of its level: settled [COF]
-DISTINCT_MARGIN = 0.02  # a peak this far above the plateau's highs is distinct [COF]
-NONE_MARGIN = 0.005  # ... no more than this above them: no peak [COF]
-OSCILLATION_MIN_PP = 0.008  # a plateau oscillating less than this is not "stick-slip"
 SCORED_PLATEAU_MM = 0.5  # at least this much settled plateau in the trace, else truncated
 SLIP_SPEED_FACTOR = 10.0  # a stick-slip cycle starts where v passes 10·V
 SILICONE_DENSITY_KG_M3 = 1100.0
@@ -170,23 +169,6 @@ class RateStateRun:
     def critical_stiffness_per_mm(self) -> float:
         """k_c = (b − a)/D_c [COF/mm]: steady sliding is unstable for k below it."""
         return (self.b - self.a) / self.dc_mm
-
-
-@dataclass(frozen=True)
-class RateStateTruth:
-    """What a correct reduction of a :class:`RateStateRun` must find (module doc)."""
-
-    mu_s: float
-    mu_k: float
-    mu_s_distance_mm: float
-    static: str
-    oscillating: bool
-    oscillation_pp: float
-    settle_mm: float
-    plateau_high: float
-    sliding_distance_mm: float
-    truncated: bool
-    offset_estimable: bool
 
 
 def pin_stiffness_per_mm(normal_force_N: float, shear_modulus_kPa: float,
@@ -404,7 +386,7 @@ def _analyse(run: RateStateRun, t_end: float) -> dict[str, float]:
     }
 
 
-def truth(run: RateStateRun) -> RateStateTruth:
+def truth(run: RateStateRun) -> Truth:
     """The known answer for ``run`` (module doc)."""
     found = _analyse(run, run.duration_s)
     truncated = run.distance_mm - found["settle_mm"] < SCORED_PLATEAU_MM
@@ -412,13 +394,8 @@ def truth(run: RateStateRun) -> RateStateTruth:
         extra = max(run.duration_s, 1.5 * run.mu0 / run.k_per_mm / run.speed_mm_s) + 300.0
         found = _analyse(run, run.duration_s + extra)
     mu_s, high = found["mu_s"], found["plateau_high"]
-    if mu_s >= high + DISTINCT_MARGIN:
-        static = "distinct"
-    elif mu_s <= high + NONE_MARGIN:
-        static = "none"
-    else:
-        static = "ambiguous"
-    return RateStateTruth(
+    static = static_kind(mu_s, high)
+    return Truth(
         mu_s=mu_s if static != "none" else found["mu_k"],
         mu_k=found["mu_k"],
         mu_s_distance_mm=found["mu_s_distance_mm"],

@@ -1,9 +1,9 @@
 """The detection steps of the reduction: the filters and readings behind μ_S and μ_K.
 
 The method — the order of the steps, their parameters and why — is described in the
-module docstring of :mod:`tribopipe.reduce`, which calls :func:`_detect` on the valid
+module docstring of :mod:`tribopipe.reduction`, which calls :func:`run_detection` on the valid
 samples of a run (in contact and moving) and builds the result from its
-:class:`_Detection`. Everything here is pure: arrays in, new values out.
+:class:`Detection`. Everything here is pure: arrays in, new values out.
 """
 
 from __future__ import annotations
@@ -17,8 +17,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ..config import ReductionParams
 from . import uncertainty
-from .config import ReductionParams
 from .signals import (
     end_point_weights,
     flank_peak,
@@ -304,7 +304,7 @@ class StickSlipTest:
 
 
 @dataclass(frozen=True)
-class _Detection:
+class Detection:
     """μ_S / μ_K detection on the valid samples (arrays of the valid samples)."""
 
     mu_s: float
@@ -332,8 +332,8 @@ class _Detection:
 def stick_slip_test(s_mm: Any, mu: Any, params: ReductionParams) -> StickSlipTest:
     """Look for a periodic oscillation of μ (shape (n,), evenly sampled in time, over
     distances ``s_mm`` [mm]) with at least ``stick_slip_min_cycles`` cycles in the
-    window: :func:`tribopipe.signals.periodic_line` against
-    :func:`tribopipe.signals.line_threshold` at ``stick_slip_false_alarm``."""
+    window: :func:`tribopipe.reduction.signals.periodic_line` against
+    :func:`tribopipe.reduction.signals.line_threshold` at ``stick_slip_false_alarm``."""
     s = np.asarray(s_mm, dtype=float)
     m = np.asarray(mu, dtype=float)
     if m.size < 32:
@@ -457,9 +457,9 @@ def _read_peak(
     return k, value, u
 
 
-def _detect(
+def run_detection(
     s_v: np.ndarray, t_v: np.ndarray, mu_v: np.ndarray, total_mm: float, params: ReductionParams
-) -> _Detection:
+) -> Detection:
     """Steps 1–7 of the module docstring on the valid samples: distance [mm], time [s]
     and μ, all shape (n,), in contact and moving."""
     mu_med = median_smooth(mu_v, params.median_window)
@@ -532,7 +532,7 @@ def _detect(
         reached = np.flatnonzero(curve >= mu_k)
         k_s = int(reached[0]) if reached.size else k_peak
 
-    return _Detection(
+    return Detection(
         mu_s=float(mu_s), k_s=k_s, mu_peak=mu_peak, s_peak=s_peak,
         peak_at_limit=bool((on_edge and distinct) or at_cap),
         search_end_mm=float(s_v[searched[-1]]),

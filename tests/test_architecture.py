@@ -33,7 +33,7 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     # disk, numbers from outside, units, the output folder, the signal filters
     ("tribopipe", "tribopipe.errors", "tribopipe.escape", "tribopipe.validate",
      "tribopipe.files", "tribopipe.numeric", "tribopipe.units", "tribopipe.layout",
-     "tribopipe.signals"),
+     "tribopipe.signals", "tribopipe.rounding"),
     ("tribopipe.measurement",),
     ("tribopipe.physics",),
     ("tribopipe.config",),
@@ -51,6 +51,8 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("tribopipe.frictionmap",),
     ("tribopipe.pipeline",),
     ("tribopipe.campaign",),
+    # the one rule for μ between measured conditions, below everything that reads it
+    ("tribopipe.interpolation",),
     ("tribopipe.query", "tribopipe.fit"),
     ("tribopipe.export",),
     ("tribopipe.report",),

@@ -7,11 +7,13 @@ this module fills them with the map's data:
 
 * what :func:`tribopipe.query.query` interpolates over — each pair's measured points
   (:func:`tribopipe.query.pair_points`: pressure [kPa], temperature [°C], group mean, 95 %
-  CI half-width, combined standard uncertainty u of the mean, n), in the order the
-  interpolation sums them. The page redoes ``query``'s interpolation on them (bilinear,
-  held at the ends and said so, the CI half-width and u carried with the same weights)
-  and shows u (with U = 2u) beside the repeats' interval; a browser test holds the two
-  equal.
+  CI half-width, standard uncertainty u of the mean and whether it holds the runs'
+  budgets, n), in the order the interpolation sums them, and the map's curvature κ
+  (:func:`tribopipe.query.map_curvature`). The page redoes ``query``'s interpolation on
+  them (:mod:`tribopipe.interpolation`: linear in temperature, log p – log μ in pressure,
+  held at the ends and said so) and shows value ± U (k = 2) rounded by
+  :mod:`tribopipe.rounding`'s rule, with the repeats' interval apart; a node test and a
+  browser test hold the page equal to ``query``.
 * each pair's included runs (the repeats), the group table of
   :func:`tribopipe.stats.group_statistics` and the power-law fits of
   :func:`tribopipe.fit.fit_power_law` with their curves sampled here in Python.
@@ -46,7 +48,7 @@ from ..errors import ExportError
 from ..files import write_text_atomic
 from ..fit import fit_power_law, power_law
 from ..frictionmap import read_map
-from ..query import pair_points, pairs, select_pair
+from ..query import map_curvature, pair_points, pairs, select_pair
 from ..stats import group_statistics
 from .fe_decks import CONDITION_FORMATS, condition_header
 
@@ -135,6 +137,7 @@ def _points(points: pd.DataFrame, pair_groups: pd.DataFrame) -> list[dict[str, A
                 "mean": _plain(r["mean"]),
                 "half": _plain(r["half"]),
                 "u": _plain(r["u"]) if "u" in r else None,
+                "budget": bool(r.get("budget", False)),
                 "n": int(r["n"]),
                 "run_ids": run_ids,
             }
@@ -279,6 +282,8 @@ def explorer_data(
         "generated": datetime.now(UTC).strftime("%Y-%m-%d %H:%M UTC"),
         "pairs": pair_rows,
         "groups": group_rows,
+        # the map's κ for the interpolation's own uncertainty (tribopipe.interpolation)
+        "curvature": {q: map_curvature(groups, q) for q in ("mu_k", "mu_s")},
         # the opening comments of the copied ABAQUS/Ansys text do not depend on the
         # condition: rendered here by the writer itself, the page adds the rest
         "snippet_headers": {fmt: condition_header(fmt, source) for fmt in CONDITION_FORMATS},

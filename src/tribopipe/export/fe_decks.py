@@ -27,6 +27,7 @@ from .simbase import (
     comment_block,
     condition_lines,
     default_decay_s_per_mm,
+    densify_lines,
     filled_lines,
     header_bodies,
     num,
@@ -154,13 +155,14 @@ def write_abaqus(
     ]
     lines = comment_block("**", bodies)
     for pin_name, disc_name in selected:
-        table = table_at(groups, pin_name, disc_name, temperature_C)
+        table = table_at(groups, pin_name, disc_name, temperature_C, dense=True)
         rate = slip_rate_of(slip_rates, pin_name, disc_name)
         pair_bodies = [
             "",
             f"pair: pin {deck_safe(pin_name)} on disc {deck_safe(disc_name)}",
             rate.describe(),
             *filled_lines(table, u),
+            *densify_lines(table, "ABAQUS"),
         ]
         lines += comment_block("**", pair_bodies)
         lines += [f"*SURFACE INTERACTION, NAME={names[(pin_name, disc_name)]}", "*FRICTION"]
@@ -256,11 +258,12 @@ def write_ansys(
     lines = comment_block("!", bodies)
     for offset, (pin_name, disc_name) in enumerate(selected_pairs(groups, pin, disc)):
         mat = material_id + offset
-        table = table_at(groups, pin_name, disc_name, temperature_C)
+        table = table_at(groups, pin_name, disc_name, temperature_C, dense=True)
         lines += comment_block("!", [
             "",
             f"material {mat}: pin {ansys_safe(pin_name)} on disc {ansys_safe(disc_name)}",
             *filled_lines(table, u),
+            *densify_lines(table, "Ansys"),
         ])
         lines.append(f"TB,FRIC,{mat},,,ISO")
         last_t: float | None = None

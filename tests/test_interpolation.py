@@ -21,16 +21,16 @@ from tribopipe.export.explorer import explorer_data
 from tribopipe.interpolation import (
     DENSIFY_TARGET,
     ENGINE_TOLERANCE,
-    curve,
     LOO_METHODS,
     PUBLISHED_CURVATURE,
+    curve,
     densify,
     evaluate,
     leave_one_out,
     stencil,
 )
 from tribopipe.query import map_curvature, pairs, query
-from tribopipe.rounding import lower_bound, plus_minus, round_gum
+from tribopipe.rounding import known_u, lower_bound, plus_minus, round_gum
 
 JS = Path(__file__).resolve().parents[1] / "src" / "tribopipe" / "export" / "assets" / "js"
 NODE = shutil.which("node")
@@ -174,6 +174,7 @@ def test_plus_minus_is_bounded_at_zero():
     assert lower_bound(0.05, 0.11) == 0.0 and lower_bound(0.5, 0.1) == pytest.approx(0.4)
     with pytest.raises(ValueError):
         round_gum(0.5, 0.0)
+    assert not known_u(7.9e-17) and not known_u(None) and known_u(0.001)
 
 
 # ---------------------------------------------------------------------------- the JS copies

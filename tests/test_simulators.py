@@ -415,9 +415,23 @@ def test_writers_do_not_modify_groups(groups):
     pd.testing.assert_frame_equal(groups, before)
 
 
+@pytest.mark.parametrize("fmt", ["abaqus", "ansys"])
+def test_abaqus_and_ansys_take_a_single_condition(groups, fmt):
+    """As the explorer offers: one pair at one pressure gives its constant mu_K, the text
+    of the single-condition snippet (condition_snippet of the same query)."""
+    from tribopipe.export.fe_decks import condition_snippet
+
+    text = export_simulator_input(groups, fmt, pin=PIN, disc=DISC, pressure_kPa=35.0,
+                                  temperature_C=12.0, source="m.parquet")
+    res = query(groups, PIN, DISC, 35.0, 12.0)
+    assert text == condition_snippet(res, fmt, source="m.parquet")
+    assert f"{res.mu_k.value:.10g}" in text.splitlines()[-1]
+    assert "(U, k = 2)" in text
+    with pytest.raises(ExportError, match="needs the pin and the disc"):
+        export_simulator_input(groups, fmt, pressure_kPa=35.0)
+
+
 def test_options_that_do_not_apply_are_refused(groups):
-    with pytest.raises(ExportError, match="every measured pressure"):
-        export_simulator_input(groups, "abaqus", pin=PIN, disc=DISC, pressure_kPa=20.0)
     with pytest.raises(ExportError, match="exponential-decay"):
         export_simulator_input(groups, "ansys", decay_s_per_mm=10.0)
     with pytest.raises(ExportError, match="exponential-decay"):

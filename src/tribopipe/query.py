@@ -28,12 +28,14 @@ from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from .config import InstrumentConfig
 from .errors import ExportError
 from .frictionmap import read_map
 from .interpolation import curvature, curve, densify, evaluate, interpolation_u, stencil
 from .numeric import finite_or_none
-from .rounding import lower_bound, plus_minus
-from .stats import group_statistics
+from .physics import contact_pressure_kPa
+from .rounding import known_u, lower_bound, plus_minus
+from .stats import group_statistics, group_u
 
 if TYPE_CHECKING:
     import numpy as np
@@ -214,11 +216,9 @@ def _points(pair_groups: pd.DataFrame, quantity: str) -> pd.DataFrame:
         return pd.to_numeric(pair_groups[name], errors="coerce").astype(float)
 
     mean = column(f"{quantity}_mean", math.nan)
-    u_budget = column(f"{quantity}_u", math.nan)
-    sem = column(f"{quantity}_sem", math.nan)
+    u, budget = group_u(pair_groups, quantity)
     high = column(f"{quantity}_ci95_high", math.nan)
     n = column(f"{quantity}_n", 1.0)
-    budget = np.isfinite(u_budget)
     frame = pd.DataFrame(
         {
             "pressure_kPa": pd.to_numeric(pair_groups["pressure_kPa"], errors="coerce"),
@@ -227,7 +227,7 @@ def _points(pair_groups: pd.DataFrame, quantity: str) -> pd.DataFrame:
             # the upper end: the lower one is bounded at 0 (stats.describe_values)
             "half": high - mean,
             # the group's combined u; its repeat scatter alone where its runs have no budget
-            "u": u_budget.where(budget, sem),
+            "u": u,
             "budget": budget,
             # a finite mean stands for at least one run, whatever the count column says
             "n": n.fillna(1).clip(lower=1).astype(float),
@@ -341,7 +341,7 @@ def _estimate(
     u_combined = u_groups if budgets.all() else None
     u_interp = interpolation_u(st, means, kappa)
     expanded = None if u_groups is None else 2.0 * math.hypot(u_groups, u_interp)
-    if expanded == 0.0:
+    if not known_u(expanded):
         expanded = None  # nothing known about the spread: never "± 0"
     used = tuple(
         UsedPoint(
@@ -547,8 +547,20 @@ def query_map(
     return query(load_groups(map_path), pin, disc, pressure_kPa, temperature_C)
 
 
-def format_result(res: QueryResult) -> str:
-    """A short human-readable report of a query (several lines, no trailing newline)."""
+def pressure_of_force(normal_force_N: float, instrument: InstrumentConfig) -> float:
+    """The contact pressure per pin [kPa] of a total normal force [N] on ``instrument``'s
+    pins (:func:`tribopipe.physics.contact_pressure_kPa`); an :class:`ExportError` for a
+    force that is not a finite number > 0."""
+    if not (math.isfinite(normal_force_N) and normal_force_N > 0):
+        raise ExportError(f"normal force must be a finite number > 0 N, got {normal_force_N}")
+    return float(contact_pressure_kPa(normal_force_N, instrument.n_pins,
+                                      instrument.pin_radius_mm))
+
+
+def format_result(res: QueryResult, normal_force_N: float | None = None,
+                  instrument: InstrumentConfig | None = None) -> str:
+    """A short human-readable report of a query (several lines, no trailing newline);
+    ``normal_force_N`` and ``instrument`` say the force the pressure was converted from."""
 
     def est_text(name: str, est: Estimate | None) -> list[str]:
         """The lines of an estimate: value ± U (k = 2), then what U holds and the repeats'
@@ -556,21 +568,23 @@ def format_result(res: QueryResult) -> str:
         if est is None:
             return [f"{name} = unknown (no group of this pair holds it)"]
         head = f"{name} = {est.text()}" + ("" if est.expanded is None else " (U, k = 2)")
-        parts = []
-        if est.u_groups is not None:
-            what = "groups" if est.budgets_known else "groups' repeat scatter"
-            parts.append(f"{what} u = {est.u_groups:.2g}")
-        parts.append(f"interpolation u = {est.u_interpolation:.2g}")
-        lines = [head, "  U = 2·√(" + " ² + ".join(parts) + " ²)"]
-        if est.expanded is not None:
+        groups_u = ("unknown" if est.u_groups is None else f"{est.u_groups:.2g}"
+                    + ("" if est.budgets_known else " (repeat scatter only)"))
+        lines = [head, f"  U = 2·√(u_groups² + u_interp²): u_groups = {groups_u}, "
+                       f"u_interp = {est.u_interpolation:.2g}"]
+        if est.expanded is not None and est.lower is not None:
             lines[-1] += f"; interval [{est.lower:.3g}, {est.value + est.expanded:.3g}]"
         if est.uncertainty is not None:
             lines.append(f"  repeats' 95 % CI half-width (interpolated): {est.uncertainty:.3f}")
         return lines
 
     t = "" if res.temperature_C is None else f", {res.temperature_C:g} °C"
+    force = ""
+    if normal_force_N is not None and instrument is not None:
+        force = (f" ({normal_force_N:g} N on {instrument.n_pins} pin(s) of radius "
+                 f"{instrument.pin_radius_mm:g} mm)")
     lines = [
-        f"{res.pin} on {res.disc} at {res.pressure_kPa:g} kPa{t}",
+        f"{res.pin} on {res.disc} at {res.pressure_kPa:.4g} kPa{force}{t}",
         *("  " + line for line in est_text("mu_k", res.mu_k)),
         *("  " + line for line in est_text("mu_s", res.mu_s)),
         "  from measured groups (pressure, temperature, mean, n, weight):",

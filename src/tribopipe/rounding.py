@@ -20,6 +20,14 @@ from decimal import ROUND_HALF_UP, Decimal
 
 #: significant digits of an expanded uncertainty (GUM 7.2.6)
 U_DIGITS = 2
+#: a U below this is no uncertainty but identical repeats or floating-point noise (μ is
+#: of order 1): it is reported as unknown, never as "± 0"
+U_FLOOR = 1e-6
+
+
+def known_u(expanded: float | None) -> bool:
+    """True when ``expanded`` is a U worth printing: finite and at least :data:`U_FLOOR`."""
+    return expanded is not None and math.isfinite(expanded) and expanded >= U_FLOOR
 
 
 def _decimal(value: float) -> Decimal:

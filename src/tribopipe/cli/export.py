@@ -39,7 +39,8 @@ def _selection(func: Callable[..., Any]) -> Callable[..., Any]:
                 "pressure_kPa",
                 type=float,
                 help="Contact pressure [kPa] for single-condition input (lsdyna, mujoco, "
-                "sofa, pyelastica, abaqus --exponential-decay).",
+                "sofa, pyelastica, abaqus --exponential-decay; abaqus and ansys: the "
+                "constant mu_k at this condition instead of the table).",
             ),
             map_option,
             click.option(

@@ -14,10 +14,10 @@ import math
 import re
 from collections.abc import Mapping
 from functools import partial
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 from ..errors import ExportError
-from ..query import QueryResult, query
+from ..query import QueryResult, pairs, query
 from .simbase import (
     FOUNDING_SLIP_RATE,
     Engine,
@@ -129,8 +129,11 @@ def write_abaqus(
     units: str = "mm-N-s",
     slip_rates: Mapping[tuple[str, str], SlipRate] | None = None,
     source: str | None = None,
+    pressure_kPa: float | None = None,
 ) -> str:
-    """ABAQUS ``*SURFACE INTERACTION`` + ``*FRICTION`` tables of μ_K, one per selected pair.
+    """ABAQUS ``*SURFACE INTERACTION`` + ``*FRICTION`` tables of μ_K, one per selected pair;
+    with ``pressure_kPa`` [kPa] the constant μ_K of one pair at that condition instead
+    (:func:`write_condition`, what the explorer copies).
 
     Data lines follow the *FRICTION keyword's documented order: friction coefficient,
     slip rate, contact pressure, average temperature (then field variables, which we do
@@ -143,6 +146,9 @@ def write_abaqus(
     a pair records none): one value per pair means no slip-rate dependence.
     """
     u = unit_system(units)
+    if pressure_kPa is not None:
+        return write_condition(groups, "abaqus", **_one_condition(
+            groups, pin, disc, pressure_kPa, temperature_C), source=source)
     selected = selected_pairs(groups, pin, disc)
     names = deck_names(selected)
     bodies = header_bodies(ABAQUS, "mu_k, the kinetic (sliding) Coulomb coefficient",
@@ -225,6 +231,22 @@ def write_abaqus_decay(
     return "\n".join(lines) + "\n"
 
 
+def _one_condition(
+    groups: pd.DataFrame, pin: str | None, disc: str | None, pressure_kPa: float,
+    temperature_C: float | None,
+) -> dict[str, Any]:
+    """The condition of a single-condition ABAQUS or Ansys file; an :class:`ExportError`
+    naming the pairs held when the pin or the disc is missing."""
+    if pin is None or disc is None:
+        listing = "; ".join(f"{deck_safe(p)} on {deck_safe(d)}" for p, d in pairs(groups))
+        raise ExportError(
+            f"one condition needs the pin and the disc; the map holds: {listing or 'nothing'}",
+            hint="pass --pin and --disc, or leave out --pressure for the pair's table",
+        )
+    return {"pin": pin, "disc": disc, "pressure_kPa": pressure_kPa,
+            "temperature_C": temperature_C}
+
+
 # ---------------------------------------------------------------------------- Ansys
 
 
@@ -242,8 +264,11 @@ def write_ansys(
     units: str = "mm-N-s",
     material_id: int = 1,
     source: str | None = None,
+    pressure_kPa: float | None = None,
 ) -> str:
-    """Ansys MAPDL ``TB,FRIC,mat,,,ISO`` tables with ``TBFIELD`` on temperature and pressure.
+    """Ansys MAPDL ``TB,FRIC,mat,,,ISO`` tables with ``TBFIELD`` on temperature and pressure;
+    with ``pressure_kPa`` [kPa] the constant μ_K of one pair at that condition instead
+    (:func:`write_condition`, what the explorer copies).
 
     One material per selected pair, numbered from ``material_id``. Per the MAPDL
     reference the field name for contact (normal) pressure is ``NPRES``; fields are given
@@ -252,6 +277,10 @@ def write_ansys(
     u = unit_system(units)
     if material_id < 1:
         raise ExportError(f"material number must be >= 1, got {material_id}")
+    if pressure_kPa is not None:
+        return write_condition(groups, "ansys", **_one_condition(
+            groups, pin, disc, pressure_kPa, temperature_C), material_id=material_id,
+            source=source)
     bodies = header_bodies(ANSYS, "mu_k, the kinetic (sliding) Coulomb coefficient (MU)",
                            source, ansys_safe)
     bodies.append(f"units {u.name}: NPRES in {u.pressure_unit}, TEMP in C")

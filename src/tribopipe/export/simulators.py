@@ -106,7 +106,8 @@ def export_simulator_input(
 ) -> str:
     """The input text for simulator ``fmt`` (one of :data:`FORMATS`).
 
-    Tables (``abaqus``, ``ansys``) take any selection of pairs; single-condition formats
+    Tables (``abaqus``, ``ansys``) take any selection of pairs, or with ``pressure_kPa``
+    one pair's constant μ_K at one condition (as the explorer copies it); single-condition formats
     (``lsdyna``, ``mujoco``, ``sofa``, ``pyelastica``) and ABAQUS's exponential decay need
     ``pin``, ``disc`` and ``pressure_kPa`` [kPa] (a missing one is an :class:`ExportError`
     that lists what the map holds). ``coefficient`` (``"mu_k"`` or ``"mu_s"``) is the
@@ -120,19 +121,15 @@ def export_simulator_input(
     check_coefficient(coefficient)
     _refuse_unused(fmt, exponential_decay,
                    {"decay_s_per_mm": decay_s_per_mm, "coefficient": coefficient})
-    table = fmt == "ansys" or (fmt == "abaqus" and not exponential_decay)
-    if table and pressure_kPa is not None:
-        raise ExportError(
-            f"the {fmt} table covers every measured pressure; a single pressure is for "
-            "lsdyna, mujoco, sofa, pyelastica or abaqus --exponential-decay",
-            hint="leave out --pressure",
-        )
+    # abaqus and ansys: the pair's table, or with a pressure one condition's constant
     if fmt == "abaqus" and not exponential_decay:
         return write_abaqus(groups, pin=pin, disc=disc, temperature_C=temperature_C,
-                            units=units, slip_rates=slip_rates, source=source)
+                            units=units, slip_rates=slip_rates, source=source,
+                            pressure_kPa=pressure_kPa)
     if fmt == "ansys":
         return write_ansys(groups, pin=pin, disc=disc, temperature_C=temperature_C,
-                           units=units, material_id=material_id, source=source)
+                           units=units, material_id=material_id, source=source,
+                           pressure_kPa=pressure_kPa)
     what = "ABAQUS EXPONENTIAL DECAY" if fmt == "abaqus" else fmt
     if pin is None or disc is None:
         listing = "; ".join(f"{p} on {d}" for p, d in pairs(groups)) or "nothing"

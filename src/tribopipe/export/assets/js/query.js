@@ -141,7 +141,7 @@ function estimate(points, p, t, kappa) {
   });
   var uInterp = interpolationU(st, mus, kappa);
   var expanded = uKnown ? 2.0 * Math.hypot(uGroups, uInterp) : null;
-  if (expanded === 0) expanded = null;
+  if (expanded !== null && !(expanded >= U_FLOOR)) expanded = null; // rounding.known_u
   return {
     value: evaluateStencil(st, mus),
     uncertainty: uncKnown ? unc : null,
@@ -156,6 +156,9 @@ function estimate(points, p, t, kappa) {
     n_min: Math.min.apply(null, used.map(function (u) { return u.n; })),
   };
 }
+
+/* rounding.U_FLOOR: a smaller U is identical repeats or floating-point noise */
+var U_FLOOR = 1e-6;
 
 /* rounding.round_gum: [valueText, UText], U to two significant digits, the value to the
    same decimal, half away from zero on the shortest decimal text of each number. */

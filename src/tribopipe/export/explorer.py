@@ -15,7 +15,8 @@ this module fills them with the map's data:
   :mod:`tribopipe.rounding`'s rule, with the repeats' interval apart; a node test and a
   browser test hold the page equal to ``query``.
 * each pair's included runs (the repeats), the group table of
-  :func:`tribopipe.stats.group_statistics` and the power-law fits of
+  :func:`tribopipe.stats.group_statistics` (with each group mean's U, k = 2, from
+  :func:`tribopipe.stats.group_u`) and the power-law fits of
   :func:`tribopipe.fit.fit_power_law` with their curves sampled here in Python.
 
 The data travel as one JSON document in a ``<script type="application/json">`` element.
@@ -49,7 +50,8 @@ from ..files import write_text_atomic
 from ..fit import fit_power_law, power_law
 from ..frictionmap import read_map
 from ..query import map_curvature, pair_points, pairs, select_pair
-from ..stats import group_statistics
+from ..rounding import known_u
+from ..stats import group_statistics, group_u
 from .fe_decks import CONDITION_FORMATS, condition_header
 
 if TYPE_CHECKING:
@@ -267,12 +269,15 @@ def explorer_data(
             }
         )
     group_rows = []
-    for g in groups.to_dict(orient="records"):
+    expanded = {q: 2.0 * group_u(groups, q)[0] for q in ("mu_k", "mu_s")}
+    for i, g in enumerate(groups.to_dict(orient="records")):
         index = pair_index.get((_key(g["pin"]), _key(g["disc"])))
         if index is None:
             continue
         row = {"pin": str(g["pin"]), "disc": str(g["disc"]), "pair": index}
         row.update({name: _plain(g.get(name)) for name in GROUP_FIELDS})
+        for q, values in expanded.items():  # U (k = 2) of the group mean, where known
+            row[f"{q}_U"] = float(values.iloc[i]) if known_u(float(values.iloc[i])) else None
         group_rows.append(row)
     return {
         "format": DATA_FORMAT,

@@ -201,8 +201,14 @@ def paper_text(runs: pd.DataFrame) -> str:
 
 
 def map_paper_text(map_path: str | os.PathLike[str]) -> str:
-    """:func:`paper_text` of the map at ``map_path`` (excluded runs left out)."""
-    return paper_text(read_map(map_path))
+    """:func:`paper_text` of the map at ``map_path`` (excluded runs left out); '' when
+    there is no map or no included run (nothing was reduced)."""
+    if not Path(map_path).is_file():
+        return ""
+    runs = read_map(map_path)
+    if runs.empty or runs["excluded"].astype(bool).all():
+        return ""
+    return paper_text(runs)
 
 
 def round_half_up(value: float, decimals: int) -> float:

@@ -262,6 +262,10 @@ def test_the_js_query_is_the_python_query(runs, budgets):
                 assert (a is None) == (b is None), (name, pin, disc, p, t)
                 if a is not None:
                     assert a == pytest.approx(b, rel=1e-12, abs=1e-15), (name, pin, disc, p, t)
+            assert mine["text"] == est.text()
+            assert (mine["lower"] is None) == (est.lower is None)
+            if est.lower is not None:
+                assert mine["lower"] == pytest.approx(est.lower, rel=1e-12, abs=1e-15)
             assert mine["budgets_known"] == est.budgets_known
             assert mine["n_min"] == est.n_min
             assert [u["weight"] for u in mine["used"]] == pytest.approx(

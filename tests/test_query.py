@@ -239,6 +239,9 @@ def test_result_to_dict_is_json_ready(groups):
     back = json.loads(text)
     assert back["clamped"] is True
     assert back["mu_s"] is None
+    res = query(groups, "Dragonskin 30", "steel", 20.0, 15.0)
+    assert back["mu_k"]["text"] == res.mu_k.text()
+    assert back["mu_k"]["lower"] == pytest.approx(max(0.0, res.mu_k.value - res.mu_k.expanded))
     assert back["mu_k"]["used"][0]["weight"] > 0
 
 

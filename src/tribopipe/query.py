@@ -122,8 +122,12 @@ class QueryResult:
         return self.mu_k.clamped_pressure or self.mu_k.clamped_temperature
 
     def to_dict(self) -> dict[str, Any]:
-        """A JSON-ready dict (plain floats, lists, ``None``)."""
+        """A JSON-ready dict (plain floats, lists, ``None``); each estimate also carries
+        ``text`` (value ± U, GUM-rounded) and ``lower`` (value − U bounded at 0)."""
         data = asdict(self)
+        for name, est in (("mu_k", self.mu_k), ("mu_s", self.mu_s)):
+            if est is not None:
+                data[name].update(text=est.text(), lower=est.lower)
         data["clamped"] = self.clamped
         data["pressure_range_kPa"] = list(self.pressure_range_kPa)
         data["temperatures_C"] = list(self.temperatures_C)

@@ -268,6 +268,11 @@ function query(pin, disc, p, t) {
   var muS = pair.mu_s_points.length ? estimate(pair.mu_s_points, p, t, DATA.curvature.mu_s) : null;
   if (muS === null) notes.push("mu_s unknown: no group of this pair holds a static coefficient");
   notes = notes.concat(uncertaintyNotes(muK));
+  [muK, muS].forEach(function (est) { // QueryResult.to_dict's text and lower
+    if (est === null) return;
+    est.text = estimateText(est);
+    est.lower = est.expanded === null ? null : Math.max(0.0, est.value - est.expanded);
+  });
   if (muK.clamped_pressure) {
     notes.push("pressure outside the range measured (at a temperature used): edge value held");
   }

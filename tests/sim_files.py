@@ -220,3 +220,25 @@ def sdf_friction(text: str) -> dict[str, tuple[float, float]]:
         found[link.get("name")] = (float(props.find(drake + "mu_static").text),
                                    float(props.find(drake + "mu_dynamic").text))
     return found
+def engine_reading(entries: list[tuple[float | None, float, float]], p: float,
+                   t: float | None) -> float:
+    """μ as ABAQUS or Ansys reads a (temperature, pressure, μ) table: linear in pressure
+    between rows at each table temperature, linear between temperatures, the end values
+    held outside (the documented behaviour of both engines)."""
+    import numpy as np
+
+    temps = sorted({e[0] for e in entries if e[0] is not None})
+
+    def at(temp: float | None) -> float:
+        rows = sorted((e[1], e[2]) for e in entries if e[0] == temp)
+        return float(np.interp(p, [r[0] for r in rows], [r[1] for r in rows]))
+
+    if not temps or t is None:
+        return at(temps[0] if temps else None)
+    if t <= temps[0]:
+        return at(temps[0])
+    if t >= temps[-1]:
+        return at(temps[-1])
+    hi = next(i for i, v in enumerate(temps) if v > t)
+    w = (t - temps[hi - 1]) / (temps[hi] - temps[hi - 1])
+    return (1 - w) * at(temps[hi - 1]) + w * at(temps[hi])

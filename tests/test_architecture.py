@@ -33,7 +33,8 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     # the base: errors, escapes of outside text, validation of outside values, files on
     # disk, numbers from outside, units, the output folder
     ("tribopipe", "tribopipe.errors", "tribopipe.escape", "tribopipe.validate",
-     "tribopipe.files", "tribopipe.numeric", "tribopipe.units", "tribopipe.layout"),
+     "tribopipe.files", "tribopipe.numeric", "tribopipe.units", "tribopipe.layout",
+     "tribopipe.rounding"),
     ("tribopipe.measurement",),
     ("tribopipe.physics",),
     ("tribopipe.config",),
@@ -55,6 +56,8 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("tribopipe.frictionmap",),
     ("tribopipe.pipeline",),
     ("tribopipe.campaign",),
+    # the one rule for μ between measured conditions, below everything that reads it
+    ("tribopipe.interpolation",),
     ("tribopipe.query", "tribopipe.fit"),
     ("tribopipe.export",),
     ("tribopipe.report",),

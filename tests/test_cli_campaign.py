@@ -63,6 +63,11 @@ def test_batch_config_lands_good_runs_and_lists_the_bad_one(config: Path) -> Non
     assert sorted(Path(f).stem for f in runs["source_file"]) == sorted(GOOD)
     assert (out / "failures.csv").read_text(encoding="utf-8").splitlines()[1].startswith(BAD)
     assert len(list((out / "traces").glob("*.parquet"))) == len(GOOD)
+    # the groups as the compact paper table, before the account of the run
+    from tribopipe.export.tables import paper_text
+
+    assert paper_text(runs) in result.stdout
+    assert result.stdout.index(paper_text(runs)) < result.stdout.index("file(s) found")
 
     again = invoke("batch", str(config))
     assert again.exit_code == 1  # the bad file still fails and is still listed

@@ -68,6 +68,28 @@ def test_query_text_says_what_it_used_and_that_it_clamped(map_path):
     assert "106.1 kPa, 20 °C, 0.260, n=2, w=1.000" in result.output
 
 
+def test_query_force_converts_through_the_instrument_config(map_path, groups, tmp_path):
+    from tribopipe.physics import contact_pressure_kPa
+
+    result = _run("query", "--map", str(map_path), "--pin", PIN, "--disc", DISC,
+                  "--force", "4", "--temperature", "20", "--json")
+    assert result.exit_code == 0, result.output
+    data = json.loads(result.output)
+    p = float(contact_pressure_kPa(4.0, 3, 3.0))  # the default T-PID/44: 3 pins of r = 3 mm
+    assert data["pressure_kPa"] == pytest.approx(p) and data["normal_force_N"] == 4.0
+    assert data["mu_k"]["value"] == pytest.approx(query(groups, PIN, DISC, p, 20.0).mu_k.value)
+    # another cell: one pin of radius 2 mm
+    config = tmp_path / "one_pin.toml"
+    config.write_text("[instrument]\nn_pins = 1\npin_radius_mm = 2.0\n", encoding="utf-8")
+    text = _run("query", "--map", str(map_path), "--pin", PIN, "--disc", DISC, "--force",
+                "0.5", "--temperature", "20", "--config", str(config)).output
+    p1 = float(contact_pressure_kPa(0.5, 1, 2.0))
+    assert f"at {p1:.4g} kPa (0.5 N on 1 pin(s) of radius 2 mm)" in text
+    both = CliRunner().invoke(main, ["query", "--map", str(map_path), "--pin", PIN, "--disc",
+                                     DISC, "--force", "1", "--pressure", "10"])
+    assert both.exit_code == 2 and "exactly one of --pressure and --force" in both.output
+
+
 def test_query_unknown_pair_is_one_friendly_line(map_path):
     result = CliRunner().invoke(main, ["query", "--map", str(map_path), "--pin", PIN,
                                        "--disc", "glass", "--pressure", "20",
@@ -97,7 +119,7 @@ def test_export_abaqus_to_file(map_path, groups, tmp_path, units, factor):
         for line in out.read_text().splitlines()
         if line and not line.startswith("*")
     ]
-    assert len(rows) == 10
+    assert len(rows) > 10  # 5 x 2 measured cells and the rows added between them
     for mu, _, p, t in rows:
         assert mu == pytest.approx(query(groups, PIN, DISC, p / factor, t).mu_k.value, rel=1e-5)
     assert str(map_path) in out.read_text()
@@ -256,14 +278,17 @@ def test_query_on_reduced_runs_reports_mu_s(reduced_map):
     groups = group_statistics(read_map(reduced_map))
     steel = groups[groups.disc == "steel"].sort_values("pressure_kPa")
     p_lo, p_hi = steel["pressure_kPa"].tolist()
-    mid = (p_lo + p_hi) / 2
+    mid = math.sqrt(p_lo * p_hi)
     result = _run("query", "--map", str(reduced_map), "--pin", PIN, "--disc", DISC,
                   "--pressure", repr(mid), "--json")
     assert result.exit_code == 0, result.output
     data = json.loads(result.output)
-    # one temperature measured: no --temperature needed; halfway between the two groups
-    assert data["mu_s"]["value"] == pytest.approx(steel["mu_s_mean"].mean())
-    assert data["mu_k"]["value"] == pytest.approx(steel["mu_k_mean"].mean())
+    # one temperature measured: no --temperature needed; halfway in ln p between the two
+    # groups, so the geometric mean of their means (log p - log mu)
+    assert data["mu_s"]["value"] == pytest.approx(math.sqrt(steel["mu_s_mean"].prod()))
+    assert data["mu_k"]["value"] == pytest.approx(math.sqrt(steel["mu_k_mean"].prod()))
+    # U (k = 2) travels with the value
+    assert data["mu_k"]["expanded"] > 0
     assert data["temperatures_C"] == [20.0]
 
 

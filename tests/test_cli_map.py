@@ -101,6 +101,16 @@ def test_table_with_no_matching_rows_is_a_clean_error(published_map):
     assert result.exit_code == 1 and "no rows to tabulate" in result.output
 
 
+def test_show_groups_prints_the_paper_table(published_map):
+    from tribopipe.export.tables import paper_text
+
+    show = invoke("map", "show", "--groups", "--map", str(published_map))
+    assert show.exit_code == 0
+    assert show.output.endswith(paper_text(fm.read_map(published_map)))
+    assert "Ecoflex 00-50  steel" in show.output and "0.903 ± 0.027" in show.output
+    assert "0.903 ± 0.027" not in invoke("map", "show", "--map", str(published_map)).output
+
+
 def test_show_exclude_include_cycle(published_map):
     ids = fm.read_map(published_map)["measurement_id"]
     target = ids.iloc[0]

@@ -4,6 +4,8 @@ out of a comment line."""
 
 from __future__ import annotations
 
+import math
+
 import pytest
 
 from published_map import group_table, published_runs
@@ -42,7 +44,9 @@ def test_abaqus_constant_friction_at_an_interpolated_condition(groups):
     assert comment_block("**", condition_lines(res, deck_safe)) == lines[
         len(header):len(header) + len(comment_block("**", condition_lines(res, deck_safe)))]
     assert "map.parquet" in text and "not for CalculiX" in text
-    assert "35.37 kPa/10 C (w=0.19)" in text  # the measured groups used, with weights
+    # the measured groups used, with their weights (log p - log mu: 0.5 * 0.322 here)
+    w = 0.5 * (1 - math.log(50 / 35.37) / math.log(58.95 / 35.37))
+    assert f"35.37 kPa/10 C (w={w:.3g})" in text
     assert "outside the measured range" not in text
 
 

@@ -195,6 +195,10 @@ def assert_same_estimate(page_est: dict | None, est) -> None:
     assert same(page_est["uncertainty"], est.uncertainty)
     # the combined standard uncertainty (the runs' budgets) travels with the same weights
     assert same(page_est["u_combined"], est.u_combined)
+    # and U (k = 2) with the interpolation's own u, the headline
+    assert same(page_est["u_interpolation"], est.u_interpolation)
+    assert same(page_est["expanded"], est.expanded)
+    assert page_est["budgets_known"] == est.budgets_known and page_est["n_min"] == est.n_min
     assert page_est["clamped_pressure"] == est.clamped_pressure
     assert page_est["clamped_temperature"] == est.clamped_temperature
     assert len(page_est["used"]) == len(est.used)
@@ -261,7 +265,7 @@ def test_page_equals_query_on_a_reduced_map(tab, reduced):
                                  ("dragonskin 30", " STEEL ", 40.0, None)]
     assert_page_equals_query(tab, groups, conditions)
     res = tab.page.evaluate(PAGE_QUERY, [["Ecoflex 00-50", "wood (smooth)", 20.0, 20.0]])[0]["ok"]
-    assert "uncertainty unknown: a group used has fewer than 2 runs" in res["notes"]
+    assert "n = 1, no repeat scatter: a group used has a single run" in res["notes"]
 
 
 def shown(tab) -> dict:
@@ -283,24 +287,32 @@ def shown(tab) -> dict:
 
 def assert_shows(tab, res) -> None:
     s = shown(tab)
-    unc = "" if res.mu_k.uncertainty is None else f" ± {res.mu_k.uncertainty:.3f}"
-    assert s["text"] == f"{res.mu_k.value:.3f}{unc}"
-    assert float(s["text"].split()[0]) == pytest.approx(res.mu_k.value, abs=5e-4)
+    # the headline: value ± U (k = 2), rounded the GUM way, as query writes it
+    assert s["text"] == res.mu_k.text()
+    head = s["text"].split()[0]
+    decimals = len(head.split(".")[1]) if "." in head else 0
+    assert float(head) == pytest.approx(res.mu_k.value, abs=0.5 * 10.0 ** -decimals + 1e-12)
     assert same(float(s["value"]), res.mu_k.value)
+    if res.mu_k.expanded is None:
+        assert s["uncertainty"] == ""
+    else:
+        assert same(float(s["uncertainty"]), res.mu_k.expanded)
     assert s["clampedPressure"] == str(res.mu_k.clamped_pressure).lower()
     assert s["clampedTemperature"] == str(res.mu_k.clamped_temperature).lower()
     assert s["clamped"].startswith("yes" if res.clamped else "no")
-    # beside the repeats' interval, the combined u of query and its U = 2u
+    # what U holds, and the repeats' interval apart
+    assert s["u"].startswith("interpolation u = ")
+    ci = res.mu_k.uncertainty
+    assert s["u"].endswith("repeats' 95 % CI half-width "
+                           + ("unknown" if ci is None else f"{ci:.3f}"))
     if res.mu_k.u_combined is None:
-        assert s["u"].startswith("unknown") and s["uValue"] == ""
+        assert s["uValue"] == ""
     else:
-        u = res.mu_k.u_combined
-        assert s["u"] == f"{u:.3f} (U = {2 * u:.3f}, k = 2)"
-        assert same(float(s["uValue"]), u)
+        assert same(float(s["uValue"]), res.mu_k.u_combined)
     if res.mu_s is None:
         assert s["muS"].startswith("unknown")
     else:
-        assert s["muS"].startswith(f"{res.mu_s.value:.3f}")
+        assert s["muS"] == res.mu_s.text()
 
 
 def choose(tab, pin: str, disc: str, pressure: float, temperature: float | None) -> None:
@@ -425,6 +437,7 @@ def test_downloads_and_snippets_are_the_python_writers(tab, reduced):
     assert float(row["pressure_kPa"]) == 60.0 and float(row["temperature_C"]) == 20.0
     assert same(float(row["mu_k"]), res.mu_k.value)
     assert same(float(row["mu_k_ci95_half_width"]), res.mu_k.uncertainty)
+    assert same(float(row["mu_k_U_k2"]), res.mu_k.expanded)
     assert same(float(row["mu_s"]), res.mu_s.value)
     assert row["clamped_pressure"] == "False" and row["clamped_temperature"] == "False"
     assert row["map"] == str(map_path)
@@ -462,12 +475,17 @@ def test_the_group_table_sorts_filters_and_selects(tab, published):
     assert len(rows) == len(expected) == 9
     assert {(r[0], r[1]) for r in rows} == {("Dragonskin 30", "steel")}
     assert tab.page.text_content("#tpx-group-count") == "9 of 76 groups"
-    header = tab.page.locator("#tpx-group-table th", has_text="μ_K mean")
+    header = tab.page.locator("#tpx-group-table th", has_text="μ_K ± U (k = 2)")
     header.click()
-    means = [float(r[6]) for r in group_rows(tab)]
+    means = [float(r[6].split()[0]) for r in group_rows(tab)]
     assert means == sorted(means) and means[0] < means[-1]
     header.click()
-    assert [float(r[6]) for r in group_rows(tab)] == sorted(means, reverse=True)
+    assert [float(r[6].split()[0]) for r in group_rows(tab)] == sorted(means, reverse=True)
+    # each mean with its U as the paper table writes it
+    from tribopipe.export.tables import paper_table
+
+    paper = paper_table(read_map(published[0]), pin=["Dragonskin 30"], disc=["steel"])
+    assert sorted(r[6] for r in group_rows(tab)) == sorted(paper["μ_K ± U"])
     # a row selects its condition: a measured group, weight 1, its own mean
     row = tab.page.locator("#tpx-group-table tbody tr").first
     cells = row.locator("td").all_text_contents()

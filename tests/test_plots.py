@@ -26,6 +26,7 @@ from tribopipe.frictionmap import read_map
 from tribopipe.labels import RunLabels
 from tribopipe.layout import find_trace
 from tribopipe.pipeline import reduce_file
+from tribopipe.rounding import plus_minus
 
 PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
 
@@ -86,7 +87,7 @@ def test_a_boundary_reading_is_marked_on_the_trace_plot(tmp_path):
     assert_png(Path(png))
     figure = trace_figure()  # the figure plot_trace drew on
     assert figure.end_note.get_visible() and figure.window.get_hatch() == "//"
-    assert f"± {2 * result.u_mu_k:.3f} (k = 2)" in figure.readings.get_text()
+    assert f"{plus_minus(result.mu_k, 2 * result.u_mu_k)} (k = 2)" in figure.readings.get_text()
     assert figure.mu_k_band.get_visible()
     assert "plateau_at_trace_end" in figure.flags.get_text()
 

@@ -13,7 +13,13 @@ from hypothesis import strategies as st
 
 from published_map import PUBLISHED_CSV, group_table, published_runs
 from tribopipe.errors import ExportError, TribopipeError
-from tribopipe.query import friction_table, interpolation_weights, query, select_pair
+from tribopipe.query import (
+    format_result,
+    friction_table,
+    interpolation_weights,
+    query,
+    select_pair,
+)
 
 
 @pytest.fixture(scope="module")
@@ -50,28 +56,55 @@ def test_paper_table2_dragonskin_on_steel(groups):
     assert got == pytest.approx(expected, abs=0.005)
 
 
-def test_midpoint_in_pressure_is_the_mean_of_neighbours(groups):
+def test_geometric_midpoint_in_pressure_is_the_geometric_mean_of_neighbours(groups):
+    # log p - log mu: halfway in ln p, the value is halfway in ln mu
     a = _mean(groups, "Dragonskin 30", "steel", 35.37, 20.0)
     b = _mean(groups, "Dragonskin 30", "steel", 58.95, 20.0)
-    res = query(groups, "Dragonskin 30", "steel", (35.37 + 58.95) / 2, 20.0)
-    assert res.mu_k.value == pytest.approx((a + b) / 2)
+    res = query(groups, "Dragonskin 30", "steel", math.sqrt(35.37 * 58.95), 20.0)
+    assert res.mu_k.value == pytest.approx(math.sqrt(a * b))
     assert sorted(u.pressure_kPa for u in res.mu_k.used) == [35.37, 58.95]
     assert [u.weight for u in res.mu_k.used] == pytest.approx([0.5, 0.5])
 
 
-def test_bilinear_in_pressure_and_temperature(groups):
-    # acrylic glass is measured on a full 5 × 2 grid
+def test_ecoflex_on_steel_between_groups_follows_the_power_law(groups):
+    # the case: linear in p gave 0.58 at 30 kPa, 10 degC, the fitted law ~0.54
+    from published_map import published_runs as runs_of
+    from tribopipe.fit import fit_power_law
+
+    fits = fit_power_law(runs_of(PUBLISHED_CSV))
+    fit = fits[(fits.pin == "Ecoflex 00-50") & (fits.disc == "steel")
+               & (fits.temperature_C == 10.0)].iloc[0]
+    law = fit.k * 30.0 ** fit.exponent
+    res = query(groups, "Ecoflex 00-50", "steel", 30.0, 10.0)
+    lo = _mean(groups, "Ecoflex 00-50", "steel", 11.79, 10.0)
+    hi = _mean(groups, "Ecoflex 00-50", "steel", 35.37, 10.0)
+    linear = ((35.37 - 30) * lo + (30 - 11.79) * hi) / (35.37 - 11.79)
+    assert abs(res.mu_k.value - law) < 0.01 < abs(linear - law)
+    # the law lies within the interval of the answer
+    assert res.mu_k.lower <= law <= res.mu_k.value + res.mu_k.expanded
+
+
+def test_a_power_law_comes_back_exactly_between_the_points():
+    rows = [{"pin": "A", "disc": "B", "pressure_kPa": p, "temperature_C": 20.0,
+             "mu_k_mean": 2.5 * p ** -0.35, "mu_k_n": 2} for p in (10.0, 30.0, 90.0)]
+    groups = pd.DataFrame(rows)
+    for p in (12.0, 17.3, 29.9, 45.0, 80.0):
+        assert query(groups, "A", "B", p, 20.0).mu_k.value == pytest.approx(2.5 * p ** -0.35)
+
+
+def test_bilinear_in_temperature_of_the_pressure_rule(groups):
+    # acrylic glass is measured on a full 5 x 2 grid: linear in T of log-log in p
     pin, disc = "Dragonskin 30", "acrylic glass"
     p0, p1 = 35.37, 58.95
     corners = {(p, t): _mean(groups, pin, disc, p, t) for p in (p0, p1) for t in (10.0, 20.0)}
-    p = p0 + 0.25 * (p1 - p0)
+    p = p0 * (p1 / p0) ** 0.25
     res = query(groups, pin, disc, p, 17.5)
     wp, wt = 0.25, 0.75
-    expected = (
-        (1 - wt) * ((1 - wp) * corners[p0, 10.0] + wp * corners[p1, 10.0])
-        + wt * ((1 - wp) * corners[p0, 20.0] + wp * corners[p1, 20.0])
-    )
-    assert res.mu_k.value == pytest.approx(expected)
+
+    def at(t):
+        return corners[p0, t] ** (1 - wp) * corners[p1, t] ** wp
+
+    assert res.mu_k.value == pytest.approx((1 - wt) * at(10.0) + wt * at(20.0))
     assert len(res.mu_k.used) == 4
     assert sum(u.weight for u in res.mu_k.used) == pytest.approx(1.0)
 
@@ -181,9 +214,10 @@ def test_groups_without_a_temperature_are_left_out_when_others_have_one():
         group(10.0, 20.0, 0.5, 0.7), group(20.0, 20.0, 0.4, 0.6),
         group(15.0, math.nan, 9.0, 9.0), group(30.0, math.nan, 9.0, 9.0),
     ])
-    res = query(groups, "A", "B", 15.0, 20.0)
-    assert res.mu_k.value == pytest.approx(0.45)
-    assert res.mu_s is not None and res.mu_s.value == pytest.approx(0.65)
+    mid = math.sqrt(10.0 * 20.0)  # halfway in ln p: the geometric means
+    res = query(groups, "A", "B", mid, 20.0)
+    assert res.mu_k.value == pytest.approx(math.sqrt(0.5 * 0.4))
+    assert res.mu_s is not None and res.mu_s.value == pytest.approx(math.sqrt(0.7 * 0.6))
     assert "2 group(s) without a temperature were left out" in res.notes
     assert res.pressure_range_kPa == (10.0, 20.0)
     table = friction_table(groups, "A", "B")
@@ -205,6 +239,9 @@ def test_result_to_dict_is_json_ready(groups):
     back = json.loads(text)
     assert back["clamped"] is True
     assert back["mu_s"] is None
+    res = query(groups, "Dragonskin 30", "steel", 20.0, 15.0)
+    assert back["mu_k"]["text"] == res.mu_k.text()
+    assert back["mu_k"]["lower"] == pytest.approx(max(0.0, res.mu_k.value - res.mu_k.expanded))
     assert back["mu_k"]["used"][0]["weight"] > 0
 
 
@@ -232,11 +269,12 @@ def test_weights_are_a_convex_combination(ps, ts, p, t, rnd):
 def test_interpolated_value_lies_within_the_measured_values(ps, ts, p, t, rnd):
     rows = [
         {"pin": "A", "disc": "B", "pressure_kPa": pp, "temperature_C": tt,
-         "mu_k_mean": rnd.uniform(0.1, 2.0), "mu_k_ci95_low": 0.0, "mu_k_ci95_high": 0.2,
-         "mu_k_n": 2}
+         "mu_k_mean": rnd.uniform(0.1, 2.0), "mu_k_n": 2}
         for pp in ps for tt in ts
     ]
     groups = pd.DataFrame(rows)
+    groups["mu_k_ci95_low"] = groups["mu_k_mean"] - 0.1
+    groups["mu_k_ci95_high"] = groups["mu_k_mean"] + 0.1
     res = query(groups, "A", "B", p, t)
     assert groups.mu_k_mean.min() - 1e-12 <= res.mu_k.value <= groups.mu_k_mean.max() + 1e-12
     # clamping: beyond the range the value equals the value at the edge
@@ -244,6 +282,7 @@ def test_interpolated_value_lies_within_the_measured_values(ps, ts, p, t, rnd):
     edge_t = min(max(t, min(ts)), max(ts))
     assert res.mu_k.value == pytest.approx(query(groups, "A", "B", edge_p, edge_t).mu_k.value)
     assert res.mu_k.uncertainty == pytest.approx(0.1)
+    assert res.mu_k.expanded is None  # no sem, no budget: U unknown
 
 
 # --------------------------------------------------------------------------- uncertainty
@@ -252,7 +291,6 @@ def test_interpolated_value_lies_within_the_measured_values(ps, ts, p, t, rnd):
 def test_the_query_carries_the_combined_uncertainty_of_the_groups():
     from test_frictionmap import run_record
     from tribopipe import frictionmap as fm
-    from tribopipe.query import format_result
     from tribopipe.stats import group_statistics
 
     records = [
@@ -265,16 +303,43 @@ def test_the_query_carries_the_combined_uncertainty_of_the_groups():
     u3, u9 = (float(g) for g in groups.sort_values("pressure_kPa")["mu_k_u"])
     assert u3 == pytest.approx(math.hypot(0.01, 0.021)) and u9 == pytest.approx(0.016)
     p3, p9 = sorted(groups["pressure_kPa"])
-    res = query(groups, "Ecoflex 00-50", "steel", 0.25 * p3 + 0.75 * p9, 20.0)
+    res = query(groups, "Ecoflex 00-50", "steel", p3 ** 0.25 * p9 ** 0.75, 20.0)
     assert res.mu_k.u_combined == pytest.approx(0.25 * u3 + 0.75 * u9)
     assert sorted(u.u for u in res.mu_k.used) == pytest.approx(sorted([u3, u9]))
     assert res.to_dict()["mu_k"]["u_combined"] == pytest.approx(res.mu_k.u_combined)
-    assert f"U = {2 * res.mu_k.u_combined:.3f} (k = 2)" in format_result(res)
+    # U (k = 2) adds the interpolation's own u in quadrature, and is the headline
+    assert res.mu_k.u_interpolation > 0
+    assert res.mu_k.expanded == pytest.approx(
+        2 * math.hypot(res.mu_k.u_combined, res.mu_k.u_interpolation))
+    assert res.mu_k.budgets_known
+    assert f"mu_k = {res.mu_k.text()} (U, k = 2)" in format_result(res)
     table = friction_table(groups, "Ecoflex 00-50", "steel")
     assert table["u_combined"].tolist() == pytest.approx([u3, u9])
+    # at a measured pressure nothing is interpolated: U = 2 u of the group
+    assert table["expanded"].tolist() == pytest.approx([2 * u3, 2 * u9])
 
 
 def test_without_run_uncertainties_the_query_states_none(groups):
     res = query(groups, "Dragonskin 30", "steel", 40.0, 20.0)
     assert res.mu_k.u_combined is None  # the published map's rows carry none
     assert res.to_dict()["mu_k"]["u_combined"] is None
+    # U then holds the repeat scatter (sem) and the interpolation, and says so
+    assert not res.mu_k.budgets_known
+    sems = [float(g) for g in groups[(groups.pin == "Dragonskin 30") & (groups.disc == "steel")
+                                     & (groups.temperature_C == 20.0)
+                                     & groups.pressure_kPa.isin([35.37, 58.95])]["mu_k_sem"]]
+    u_groups = sum(u.weight * s for u, s in zip(res.mu_k.used, sems, strict=True))
+    assert res.mu_k.u_groups == pytest.approx(u_groups)
+    assert res.mu_k.expanded == pytest.approx(2 * math.hypot(u_groups, res.mu_k.u_interpolation))
+    assert any("U holds the repeat scatter and the interpolation only" in n for n in res.notes)
+
+
+def test_a_single_run_says_so_and_never_plus_minus_zero():
+    rows = [{"pin": "A", "disc": "B", "pressure_kPa": p, "temperature_C": 20.0,
+             "mu_k_mean": m, "mu_k_n": 1, "mu_k_sem": math.nan, "mu_k_u": math.nan}
+            for p, m in ((10.0, 0.6), (30.0, 0.5))]
+    res = query(pd.DataFrame(rows), "A", "B", 10.0, 20.0)
+    assert res.mu_k.expanded is None
+    assert res.mu_k.text() == "0.600 (n = 1, no repeat scatter)"
+    assert "± 0" not in format_result(res)
+    assert "n = 1, no repeat scatter: a group used has a single run" in res.notes

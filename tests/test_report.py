@@ -33,6 +33,7 @@ from tribopipe.report import (
     report_sections,
     run_anchor,
 )
+from tribopipe.rounding import plus_minus
 from tribopipe.stats import group_statistics
 
 PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
@@ -140,12 +141,14 @@ def test_groups_and_runs_show_their_uncertainty_and_the_range_beside_the_t_inter
 ):
     map_path, _ = processed
     groups = group_statistics(read_map(map_path))
-    assert "<th>U (k = 2)</th>" in html and "<th>μ_K min–max</th>" in html
+    assert "<th>μ_K ± U (k = 2)</th>" in html and "<th>μ_K min–max</th>" in html
+    assert "<th>μ_K 95 % CI of the repeats</th>" in html
     for g in groups.to_dict(orient="records"):
-        assert f"± {2 * g['mu_k_u']:.3f}" in html
+        # the headline: mean ± U (k = 2), U to two significant digits (GUM)
+        assert f"<td>{plus_minus(g['mu_k_mean'], 2 * g['mu_k_u'])}</td>" in html
         assert f"{g['mu_k_min']:.3f}–{g['mu_k_max']:.3f}" in html
     for r in read_map(map_path).to_dict(orient="records"):
-        assert f"μ_K {r['mu_k']:.3f} ± {2 * r['u_mu_k']:.3f}" in html
+        assert f"μ_K {plus_minus(r['mu_k'], 2 * r['u_mu_k'])}" in html
 
 
 def test_images_decode_pair_plots_and_one_trace_per_run(html):

@@ -71,7 +71,7 @@ def _with_mu_s(groups: pd.DataFrame, factor: float) -> pd.DataFrame:
 
 
 def _run_js(node: str, data: dict, results: list, formats: list[str]) -> dict:
-    script = HARNESS % (_js("pyformat.js") + "\n" + _js("snippets.js"))
+    script = HARNESS % "\n".join(_js(name) for name in ("pyformat.js", "query.js", "snippets.js"))
     proc = subprocess.run([node, "-e", script], input=json.dumps(
         {"data": data, "results": results, "formats": formats}),
         capture_output=True, text=True, check=True)

@@ -22,6 +22,7 @@ from tribopipe.stats import (
     describe_values,
     group_statistics,
     repeatability,
+    t975,
 )
 
 BASE = run_record(0)
@@ -65,6 +66,13 @@ def test_two_values_use_t_with_one_degree_of_freedom():
     assert out["std"] == pytest.approx(0.06 / math.sqrt(2))
     half = 12.706 * 0.03  # t(0.975, 1) = 12.706; sem = s/√2 = 0.03
     assert out["ci95_high"] - out["mean"] == pytest.approx(half, rel=1e-4)
+
+
+def test_the_interval_of_a_coefficient_never_reaches_below_zero():
+    # n = 2 far apart: mean - t*sem = 0.365 - 12.7*0.335 < 0, bounded at 0
+    out = describe_values([0.03, 0.70])
+    assert out["ci95_low"] == 0.0
+    assert out["ci95_high"] == pytest.approx(0.365 + t975(1) * out["sem"])
 
 
 def test_a_single_value_has_unknown_spread_not_zero():

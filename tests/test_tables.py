@@ -227,3 +227,80 @@ def test_markdown_and_latex_show_individual_values_to_four_digits() -> None:
     assert "0.5706;0.5701" in to_markdown(table)
     assert "0.5706;0.5701" in to_latex(table)
     assert "0.5705877189722872" in to_csv(table)  # machines keep every digit
+
+
+# ---------------------------------------------------------------------------- paper layout
+
+
+def test_the_paper_layout_of_the_published_map(published_runs):
+    from tribopipe.rounding import plus_minus
+    from tribopipe.stats import group_statistics, group_u
+
+    table = tables.paper_table(published_runs)
+    # no mu_s in the published map: its column is left out; one sliding speed: no v column
+    assert list(table.columns) == ["pin", "disc", "p [kPa]", "T [°C]", "n", "μ_K ± U", "flags"]
+    groups = group_statistics(published_runs)
+    u, budget = group_u(groups, "mu_k")
+    assert not budget.any()  # the published runs carry no budget: U is the repeat scatter
+    for cell, mean, uu, flags in zip(table["μ_K ± U"], groups["mu_k_mean"], u, table["flags"],
+                                     strict=True):
+        if 2 * uu >= 1e-6:
+            assert cell == plus_minus(mean, 2 * uu)
+        else:  # identical repeats: no U, never "± 0"
+            assert cell == f"{mean:.3f} (uncertainty unknown)" and "repeats identical" in flags
+        assert "no budget" in flags
+        assert "± 0 " not in cell and not cell.endswith("± 0")
+    # the group whose t-interval went to [-0.083, 0.813] before: mean ± U, bounded at 0
+    markdown = tables.render_table(published_runs, fmt="markdown", layout="paper")
+    # brackets are escaped in every Markdown cell (no link can form); rendered as typed
+    assert markdown.splitlines()[0] == ("| pin | disc | p \\[kPa\\] | T \\[°C\\] | n | μ_K ± U "
+                                        "| flags |")
+    assert "| Ecoflex 00-50 | steel | 11.79 | 10 | 3 | 0.903 ± 0.027 | no budget |" in markdown
+    assert "expanded uncertainty of the group mean (k = 2)" in markdown
+
+
+def test_the_paper_layout_as_latex_and_csv(published_runs):
+    latex = tables.render_table(published_runs, fmt="latex", layout="paper", disc=["steel"])
+    assert r"$\mu_K$ $\pm$ U" in latex and r"0.903 $\pm$ 0.027" in latex
+    assert "±" not in latex and "μ" not in latex
+    csv = tables.render_table(published_runs, fmt="csv", layout="paper", disc=["steel"])
+    frame = pd.read_csv(io.StringIO(csv), dtype=str, keep_default_na=False)
+    assert list(frame.columns) == ["pin", "disc", "pressure_kPa", "temperature_C", "n",
+                                   "mu_k", "mu_k_U", "flags"]
+    row = frame[(frame.pin == "Ecoflex 00-50") & (frame.pressure_kPa == "11.79")].iloc[0]
+    assert (row.mu_k, row.mu_k_U) == ("0.903", "0.027")
+
+
+def test_the_paper_layout_with_budgets_mu_s_speeds_and_a_single_run():
+    from tribopipe.rounding import plus_minus
+    from tribopipe.stats import group_statistics
+
+    records = [
+        run_record(1, force_N=3.0, repeat=1, mu_k=0.50, u_mu_k=0.020, mu_s=0.70,
+                   u_mu_s=0.03),
+        run_record(2, force_N=3.0, repeat=2, mu_k=0.52, u_mu_k=0.022, mu_s=0.72,
+                   u_mu_s=0.03),
+        run_record(3, force_N=9.0, repeat=1, mu_k=0.40, u_mu_k=0.016, mu_s=0.55,
+                   u_mu_s=0.02),
+    ]
+    runs = fm.records_frame(records)
+    table = tables.paper_table(runs)
+    assert list(table.columns) == ["pin", "disc", "p [kPa]", "T [°C]", "n", "μ_S ± U",
+                                   "μ_K ± U", "flags"]
+    groups = group_statistics(runs)
+    assert list(table["μ_K ± U"]) == [plus_minus(m, 2 * u) for m, u in
+                                      zip(groups["mu_k_mean"], groups["mu_k_u"], strict=True)]
+    assert "n = 1" not in table["flags"][0] and table["flags"][1].endswith("n = 1")
+    assert "no budget" not in "".join(table["flags"])
+    # two sliding speeds: the table splits by them and shows them
+    runs.loc[2, "sliding_speed_mm_s"] = 0.07
+    assert "v [mm/s]" in tables.paper_table(runs).columns
+
+
+def test_the_terminal_paper_table_keeps_hostile_names_on_one_line(published_runs):
+    runs = published_runs.copy()
+    runs.loc[runs.index[:3], "pin"] = "evil\x1b[31m\nname"
+    text = tables.paper_text(runs)
+    assert "\x1b" not in text and "evil\\x1b[31m\\nname" in text
+    assert text.splitlines()[0].split() == ["pin", "disc", "p", "[kPa]", "T", "[°C]", "n", "μ_K",
+                                            "±", "U", "flags"]

@@ -351,7 +351,7 @@ def test_boundary_flags_and_uncertainties_are_marked():
     assert band.get_visible() and (band.get_x(), band.get_y()) == pytest.approx((1.3, 0.496))
     assert band.get_height() == pytest.approx(0.008)
     assert figure.readings.get_text() == ("μ_S = 0.620 ± 0.020 (k = 2) at 1.06 mm · "
-                                          "μ_K = 0.500 ± 0.004 (k = 2) over 1.3–2 mm")
+                                          "μ_K = 0.5000 ± 0.0040 (k = 2) over 1.3–2 mm")
     buf = io.BytesIO()
     figure.save(buf, "png")
     assert pixels(buf).std() > 0.05

@@ -1,25 +1,23 @@
-"""μ at any condition: interpolation over a pair's group means, the way ABAQUS reads a table.
+"""μ at any condition: a pair's group means interpolated by the project's one rule.
 
 A contact pair (pin, disc) is measured at a few nominal contact pressures [kPa] and
 temperatures [°C]. :func:`query` returns μ_K (and μ_S where the groups hold it) at any
-(pressure, temperature) by linear interpolation between the measured group means:
+(pressure, temperature) by the rule of :mod:`tribopipe.interpolation`: linear in
+temperature between the two measured temperatures that bracket the request, and at each
+of them linear in log p – log μ between the two measured pressures that bracket it (each
+temperature keeps its own pressure list, so a pair whose grid has holes still
+interpolates); outside the measured range the edge value is held, and the result says so.
 
-* temperature first: the two measured temperatures that bracket the request;
-* then, at each of those temperatures, the two measured pressures that bracket the
-  request (each temperature keeps its own pressure list, so a pair whose grid has holes
-  still interpolates);
-* outside the measured range the value is held constant at the edge (clamped), which is
-  what ABAQUS and Ansys do with a friction table; the result says when that happened.
-
-On a full rectangular grid this is exactly bilinear interpolation. The weights of the
-measured points are returned with the result, and the uncertainty is the same weighted
-sum of the groups' 95 % confidence-interval half-widths (an interpolated half-width, not a
-propagated one: it is what the neighbouring measurements support, no more).
+The uncertainty (:class:`Estimate`): the groups' combined standard uncertainties u (their
+runs' budgets beside the repeat scatter, :mod:`tribopipe.stats`; the repeat scatter alone
+where a map holds no budgets, and said so) carried with the interpolation's weights, and
+the interpolation's own u (:func:`tribopipe.interpolation.interpolation_u`), combined in
+quadrature into u and the expanded U = 2u (k = 2): the headline ± of every output. The
+repeats' 95 % CI half-width is carried beside it, for its own labelled column.
 
 Inputs are the group-statistics table of :func:`tribopipe.stats.group_statistics`
-(columns ``pin, disc, pressure_kPa, temperature_C, mu_k_mean, mu_k_ci95_low,
-mu_k_ci95_high, mu_k_n, mu_s_mean, ...``). Nothing here reads files except
-:func:`load_groups`.
+(columns ``pin, disc, pressure_kPa, temperature_C, mu_k_mean, mu_k_ci95_high, mu_k_sem,
+mu_k_u, mu_k_n, mu_s_mean, ...``). Nothing here reads files except :func:`load_groups`.
 """
 
 from __future__ import annotations
@@ -30,10 +28,14 @@ from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from .config import InstrumentConfig
 from .errors import ExportError
 from .frictionmap import read_map
+from .interpolation import curvature, curve, densify, evaluate, interpolation_u, stencil
 from .numeric import finite_or_none
-from .stats import group_statistics
+from .physics import contact_pressure_kPa
+from .rounding import known_u, lower_bound, plus_minus
+from .stats import group_statistics, group_u
 
 if TYPE_CHECKING:
     import numpy as np
@@ -45,8 +47,10 @@ QUANTITIES = ("mu_k", "mu_s")
 @dataclass(frozen=True)
 class UsedPoint:
     """A measured group that contributed to an interpolated value, with its weight (0..1]
-    and ``u``, the combined standard uncertainty of its mean (GUM, k = 1; ``None`` when
-    unknown, see :mod:`tribopipe.stats`)."""
+    (temperature weight × pressure weight; in a log p – log μ segment the pressure weight
+    is the exponent of the point's μ) and ``u``, the standard uncertainty of its mean
+    (GUM, k = 1: the group's combined u, or its repeat scatter alone where its runs carry
+    no budget; ``None`` when neither is known, e.g. one run without a budget)."""
 
     pressure_kPa: float
     temperature_C: float | None
@@ -61,14 +65,18 @@ class UsedPoint:
 class Estimate:
     """One interpolated coefficient with its evidence.
 
-    ``uncertainty`` is the weighted 95 % CI half-width of the groups used (``None`` when a
-    used group has no CI, e.g. a single run): what the repeats support. ``u_combined`` is
-    the weighted combined standard uncertainty of the groups' means (GUM, k = 1: their
-    runs' budgets beside the repeat scatter; ``None`` when a used group's is unknown); the
-    same weighted sum, which is exact for the correlated part that dominates it (the
-    friction radius) and conservative for the rest. ``clamped_pressure`` /
-    ``clamped_temperature`` say that the request lay outside the measured range and the
-    edge value was held.
+    ``expanded`` is U (k = 2), the headline ±: 2·√(u_groups² + u_interpolation²), with
+    ``u_groups`` the weighted sum of the used groups' u (exact for the correlated part that
+    dominates it, the friction radius, and conservative for the rest) and
+    ``u_interpolation`` the interpolation's own (:func:`tribopipe.interpolation.
+    interpolation_u`); ``None`` when a used group's u is unknown. ``budgets_known`` is
+    False when a used group's runs carry no uncertainty budget (an imported map): U then
+    holds the repeat scatter and the interpolation only. ``n_min`` is the fewest runs of
+    a used group (1: no repeat scatter). ``uncertainty`` is the weighted 95 % CI
+    half-width of the repeats (``None`` when a used group has fewer than 2 runs), for its
+    own labelled column; ``u_combined`` the weighted groups' combined u where every used
+    group has a budget. ``clamped_pressure`` / ``clamped_temperature`` say that the
+    request lay outside the measured range and the edge value was held.
     """
 
     value: float
@@ -77,6 +85,21 @@ class Estimate:
     clamped_pressure: bool
     clamped_temperature: bool
     u_combined: float | None = None
+    u_interpolation: float = 0.0
+    u_groups: float | None = None
+    expanded: float | None = None
+    budgets_known: bool = False
+    n_min: int = 1
+
+    @property
+    def lower(self) -> float | None:
+        """The lower end of value ± U, bounded at 0 (:func:`tribopipe.rounding.lower_bound`)."""
+        return None if self.expanded is None else lower_bound(self.value, self.expanded)
+
+    def text(self, *, ascii_only: bool = False) -> str:
+        """``value ± U`` rounded the GUM way (:func:`tribopipe.rounding.plus_minus`), or
+        the value with three decimals and why U is unknown."""
+        return estimate_text(self.value, self.expanded, self.n_min, ascii_only=ascii_only)
 
 
 @dataclass(frozen=True)
@@ -99,8 +122,12 @@ class QueryResult:
         return self.mu_k.clamped_pressure or self.mu_k.clamped_temperature
 
     def to_dict(self) -> dict[str, Any]:
-        """A JSON-ready dict (plain floats, lists, ``None``)."""
+        """A JSON-ready dict (plain floats, lists, ``None``); each estimate also carries
+        ``text`` (value ± U, GUM-rounded) and ``lower`` (value − U bounded at 0)."""
         data = asdict(self)
+        for name, est in (("mu_k", self.mu_k), ("mu_s", self.mu_s)):
+            if est is not None:
+                data[name].update(text=est.text(), lower=est.lower)
         data["clamped"] = self.clamped
         data["pressure_range_kPa"] = list(self.pressure_range_kPa)
         data["temperatures_C"] = list(self.temperatures_C)
@@ -153,74 +180,27 @@ def select_pair(groups: pd.DataFrame, pin: str, disc: str) -> pd.DataFrame:
 # ---------------------------------------------------------------------------- numerics
 
 
-def _bracket(xs: np.ndarray, x: float) -> tuple[list[tuple[int, float]], bool]:
-    """Indices into sorted unique ``xs`` with linear weights for ``x``, clamped at the ends.
-
-    Returns ``([(i, w), ...], clamped)``; the weights are positive and sum to 1.
-    """
-    import numpy as np
-
-    if len(xs) == 1:
-        return [(0, 1.0)], bool(x != xs[0])
-    if x <= xs[0]:
-        return [(0, 1.0)], bool(x < xs[0])
-    if x >= xs[-1]:
-        return [(len(xs) - 1, 1.0)], bool(x > xs[-1])
-    hi = int(np.searchsorted(xs, x, side="right"))
-    lo = hi - 1
-    if x == xs[lo]:
-        return [(lo, 1.0)], False
-    w_hi = float((x - xs[lo]) / (xs[hi] - xs[lo]))
-    return [(lo, 1.0 - w_hi), (hi, w_hi)], False
-
-
 def interpolation_weights(
     pressures_kPa: np.ndarray,
     temperatures_C: np.ndarray,
     pressure_kPa: float,
     temperature_C: float | None,
+    means: np.ndarray | None = None,
 ) -> tuple[np.ndarray, bool, bool]:
-    """Weights of measured points for a value at (``pressure_kPa``, ``temperature_C``).
+    """Each measured point's share of a value at (``pressure_kPa``, ``temperature_C``).
 
     ``pressures_kPa`` and ``temperatures_C`` (shape ``(n,)``) are the coordinates of ``n``
     measured points with unique (pressure, temperature); NaN temperatures mean "unknown"
-    and are used only when no point has a temperature. Returns ``(weights, clamped_pressure,
+    and are used only when no point has a temperature; ``means`` (shape ``(n,)``, default
+    all 1) decide where a log segment is possible. Returns ``(weights, clamped_pressure,
     clamped_temperature)``: weights of shape ``(n,)``, non-negative, summing to 1, nonzero
-    for at most four points. ``temperature_C=None`` is allowed when at most one temperature
-    is measured.
+    for at most four points (:meth:`tribopipe.interpolation.Stencil.weights`).
     """
     import numpy as np
 
-    p = np.asarray(pressures_kPa, dtype=float)
-    t = np.asarray(temperatures_C, dtype=float)
-    weights = np.zeros(len(p))
-    known_t = np.isfinite(t)
-    # (points at one temperature, weight of that temperature); no temperature known: one set
-    t_sets = [(np.ones(len(p), dtype=bool), 1.0)]
-    clamped_t = False
-    if known_t.any():
-        temps = np.unique(t[known_t])
-        if temperature_C is None:
-            if len(temps) > 1:
-                listed = ", ".join(f"{v:g}" for v in temps)
-                raise ExportError(
-                    f"temperature needed: this pair is measured at {listed} °C",
-                    hint="pass --temperature",
-                )
-            t_brackets = [(0, 1.0)]
-        else:
-            t_brackets, clamped_t = _bracket(temps, float(temperature_C))
-        t_sets = [(t == temps[ti], wt) for ti, wt in t_brackets]
-
-    clamped_p = False
-    for at_t, wt in t_sets:
-        idx = np.flatnonzero(at_t)
-        idx = idx[np.argsort(p[idx])]
-        p_brackets, c = _bracket(p[idx], float(pressure_kPa))
-        clamped_p = clamped_p or c
-        for pi, wp in p_brackets:
-            weights[idx[pi]] += wt * wp
-    return weights, clamped_p, clamped_t
+    mu = np.ones(len(pressures_kPa)) if means is None else means
+    st = stencil(pressures_kPa, temperatures_C, mu, pressure_kPa, temperature_C)
+    return st.weights(len(pressures_kPa)), st.clamped_pressure, st.clamped_temperature
 
 
 def _points(pair_groups: pd.DataFrame, quantity: str) -> pd.DataFrame:
@@ -240,8 +220,7 @@ def _points(pair_groups: pd.DataFrame, quantity: str) -> pd.DataFrame:
         return pd.to_numeric(pair_groups[name], errors="coerce").astype(float)
 
     mean = column(f"{quantity}_mean", math.nan)
-    u = column(f"{quantity}_u", math.nan)
-    low = column(f"{quantity}_ci95_low", math.nan)
+    u, budget = group_u(pair_groups, quantity)
     high = column(f"{quantity}_ci95_high", math.nan)
     n = column(f"{quantity}_n", 1.0)
     frame = pd.DataFrame(
@@ -249,8 +228,11 @@ def _points(pair_groups: pd.DataFrame, quantity: str) -> pd.DataFrame:
             "pressure_kPa": pd.to_numeric(pair_groups["pressure_kPa"], errors="coerce"),
             "temperature_C": pd.to_numeric(pair_groups["temperature_C"], errors="coerce"),
             "mean": mean,
-            "half": (high - low) / 2.0,
+            # the upper end: the lower one is bounded at 0 (stats.describe_values)
+            "half": high - mean,
+            # the group's combined u; its repeat scatter alone where its runs have no budget
             "u": u,
+            "budget": budget,
             # a finite mean stands for at least one run, whatever the count column says
             "n": n.fillna(1).clip(lower=1).astype(float),
         }
@@ -269,6 +251,7 @@ def _points(pair_groups: pd.DataFrame, quantity: str) -> pd.DataFrame:
                 "mean": float((grp["mean"] * grp["n"]).sum() / n_tot),
                 "half": float(grp["half"].max()) if grp["half"].notna().all() else math.nan,
                 "u": float(grp["u"].max()) if grp["u"].notna().all() else math.nan,
+                "budget": bool(grp["budget"].all()),
                 "n": int(n_tot),
             }
         )
@@ -288,7 +271,8 @@ def pair_points(pair_groups: pd.DataFrame, quantity: str = "mu_k") -> pd.DataFra
     ``pair_groups`` are the pair's groups (:func:`select_pair`). One row per (pressure
     [kPa], temperature [°C]) with ``pressure_kPa, temperature_C, mean, half`` (95 % CI
     half-width, NaN when unknown), ``u`` (combined standard uncertainty of the mean, NaN
-    when unknown) and ``n``, sorted by pressure then temperature — the
+    when unknown; the repeat scatter alone where ``budget`` is False) and ``n``, sorted
+    by pressure then temperature — the
     row order the interpolation sums in. Points without a temperature are left out when
     others have one, as :func:`query` does. For pages that redo the interpolation (the
     explorer); :func:`query` itself is the reference.
@@ -296,22 +280,73 @@ def pair_points(pair_groups: pd.DataFrame, quantity: str = "mu_k") -> pd.DataFra
     return _with_temperature(_points(pair_groups, quantity))
 
 
-def _estimate(points: pd.DataFrame, pressure_kPa: float, temperature_C: float | None) -> Estimate:
-    """Interpolate one quantity's points at (pressure [kPa], temperature [°C])."""
+def map_curvature(groups: pd.DataFrame, quantity: str = "mu_k") -> float:
+    """κ of a group table's ``quantity`` (:func:`tribopipe.interpolation.curvature`): over
+    every pair and temperature, the measured points (merged and left out as
+    :func:`pair_points` does) in pressure order; μ_K's where ``quantity`` has no interior
+    point to estimate it from."""
     import numpy as np
 
-    weights, clamped_p, clamped_t = interpolation_weights(
-        points["pressure_kPa"].to_numpy(), points["temperature_C"].to_numpy(),
-        pressure_kPa, temperature_C,
-    )
+    column = f"{quantity}_mean"
+    cells: dict[tuple[str, float, float], list[float]] = {}
+    if not groups.empty and column in groups.columns:
+        pair = (groups["pin"].astype(str).str.strip().str.casefold() + "\0"
+                + groups["disc"].astype(str).str.strip().str.casefold()).to_numpy()
+        p = pd_numeric(groups["pressure_kPa"])
+        t = pd_numeric(groups["temperature_C"])
+        mean = pd_numeric(groups[column])
+        n = (pd_numeric(groups[f"{quantity}_n"]) if f"{quantity}_n" in groups.columns
+             else np.ones(len(groups)))
+        n = np.where(np.isfinite(n), np.maximum(n, 1.0), 1.0)
+        ok = np.isfinite(mean) & np.isfinite(p)
+        with_t = {k for k, tk, o in zip(pair, t, ok, strict=True) if o and np.isfinite(tk)}
+        for k, pk, tk, mk, nk, o in zip(pair, p, t, mean, n, ok, strict=True):
+            if not o or (k in with_t and not np.isfinite(tk)):
+                continue
+            cell = cells.setdefault((k, float(tk) if np.isfinite(tk) else -math.inf, float(pk)),
+                                    [0.0, 0.0])
+            cell[0] += float(mk) * float(nk)
+            cell[1] += float(nk)
+    by_series: dict[tuple[str, float], list[tuple[float, float]]] = {}
+    for (k, tk, pk), (total, count) in sorted(cells.items()):
+        by_series.setdefault((k, tk), []).append((pk, total / count))
+    series = [([pk for pk, _ in pts], [m for _, m in pts]) for pts in by_series.values()]
+    if not any(len(ps) >= 3 for ps, _ in series) and quantity != "mu_k":
+        return map_curvature(groups, "mu_k")
+    return curvature(series)
+
+
+def pd_numeric(column: pd.Series) -> np.ndarray:
+    """A column as floats (text that is not a number as NaN)."""
+    import pandas as pd
+
+    return pd.to_numeric(column, errors="coerce").to_numpy(dtype=float)
+
+
+def _estimate(
+    points: pd.DataFrame, pressure_kPa: float, temperature_C: float | None, kappa: float
+) -> Estimate:
+    """Interpolate one quantity's points at (pressure [kPa], temperature [°C]) with the
+    map's curvature ``kappa`` (:func:`map_curvature`)."""
+    import numpy as np
+
+    means = points["mean"].to_numpy(dtype=float)
+    st = stencil(points["pressure_kPa"].to_numpy(), points["temperature_C"].to_numpy(),
+                 means, pressure_kPa, temperature_C)
+    weights = st.weights(len(points))
     used_idx = np.flatnonzero(weights > 0)
-    value = float(np.dot(weights[used_idx], points["mean"].to_numpy()[used_idx]))
+    w = weights[used_idx]
+    value = evaluate(st, means)
     halves = points["half"].to_numpy()[used_idx]
-    uncertainty = (
-        float(np.dot(weights[used_idx], halves)) if np.isfinite(halves).all() else None
-    )
-    us = points["u"].to_numpy()[used_idx] if "u" in points else np.full(used_idx.size, np.nan)
-    u_combined = float(np.dot(weights[used_idx], us)) if np.isfinite(us).all() else None
+    uncertainty = float(np.dot(w, halves)) if np.isfinite(halves).all() else None
+    us = points["u"].to_numpy(dtype=float)[used_idx]
+    budgets = points["budget"].to_numpy(dtype=bool)[used_idx]
+    u_groups = float(np.dot(w, us)) if np.isfinite(us).all() else None
+    u_combined = u_groups if budgets.all() else None
+    u_interp = interpolation_u(st, means, kappa)
+    expanded = None if u_groups is None else 2.0 * math.hypot(u_groups, u_interp)
+    if not known_u(expanded):
+        expanded = None  # nothing known about the spread: never "± 0"
     used = tuple(
         UsedPoint(
             pressure_kPa=float(points["pressure_kPa"].iloc[i]),
@@ -320,11 +355,27 @@ def _estimate(points: pd.DataFrame, pressure_kPa: float, temperature_C: float | 
             ci95_half_width=finite_or_none(points["half"].iloc[i]),
             n=int(points["n"].iloc[i]),
             weight=float(weights[i]),
-            u=finite_or_none(points["u"].iloc[i]) if "u" in points else None,
+            u=finite_or_none(points["u"].iloc[i]),
         )
         for i in used_idx
     )
-    return Estimate(value, uncertainty, used, clamped_p, clamped_t, u_combined)
+    return Estimate(
+        value, uncertainty, used, st.clamped_pressure, st.clamped_temperature, u_combined,
+        u_interpolation=u_interp, u_groups=u_groups, expanded=expanded,
+        budgets_known=bool(budgets.all()), n_min=min(u.n for u in used),
+    )
+
+
+def estimate_text(
+    value: float, expanded: float | None, n_min: int, *, ascii_only: bool = False
+) -> str:
+    """The headline of a coefficient: ``value ± U`` (:func:`tribopipe.rounding.plus_minus`);
+    without a U the value to three decimals and why ("n = 1, no repeat scatter" where a
+    group used holds a single run), never "± 0"."""
+    if expanded is not None:
+        return plus_minus(value, expanded, ascii_only=ascii_only)
+    why = "n = 1, no repeat scatter" if n_min < 2 else "uncertainty unknown"
+    return f"{value:.3f} ({why})"
 
 
 # ---------------------------------------------------------------------------- public API
@@ -340,8 +391,9 @@ def query(
     """μ_K (and μ_S where measured) of a pair at a contact pressure [kPa] and temperature [°C].
 
     ``groups`` is a group-statistics table (one row per condition group). The value is
-    interpolated linearly in temperature, then in pressure, over the group means and held
-    constant outside the measured range (see the module docstring). ``temperature_C`` may
+    interpolated over the group means by :mod:`tribopipe.interpolation` (linear in
+    temperature, log p – log μ in pressure) and held constant outside the measured range,
+    with U (k = 2) as in the module docstring. ``temperature_C`` may
     be ``None`` only when the pair is measured at a single temperature. Raises
     :class:`ExportError` for an unknown pair (listing the pairs held) or a bad request.
     """
@@ -358,17 +410,17 @@ def query(
     if len(kept) < len(mu_k_points):
         notes.append(f"{len(mu_k_points) - len(kept)} group(s) without a temperature were left out")
         mu_k_points = kept
-    mu_k = _estimate(mu_k_points, pressure_kPa, temperature_C)
+    mu_k = _estimate(mu_k_points, pressure_kPa, temperature_C, map_curvature(groups, "mu_k"))
 
     mu_s = None
     if "mu_s_mean" in pair.columns:
         mu_s_points = _with_temperature(_points(pair, "mu_s"))
         if not mu_s_points.empty:
-            mu_s = _estimate(mu_s_points, pressure_kPa, temperature_C)
+            mu_s = _estimate(mu_s_points, pressure_kPa, temperature_C,
+                             map_curvature(groups, "mu_s"))
     if mu_s is None:
         notes.append("mu_s unknown: no group of this pair holds a static coefficient")
-    if mu_k.uncertainty is None:
-        notes.append("uncertainty unknown: a group used has fewer than 2 runs")
+    notes += uncertainty_notes(mu_k)
     if mu_k.clamped_pressure:
         notes.append(
             "pressure outside the range measured (at a temperature used): edge value held"
@@ -394,20 +446,37 @@ def query(
     )
 
 
+def uncertainty_notes(est: Estimate) -> list[str]:
+    """What a result says about its μ_K uncertainty: a single run, missing budgets."""
+    notes = []
+    if est.n_min < 2:
+        notes.append("n = 1, no repeat scatter: a group used has a single run")
+    if not est.budgets_known:
+        notes.append("no uncertainty budget for the runs of a group used (e.g. an imported "
+                     "map): U holds the repeat scatter and the interpolation only")
+    return notes
+
+
 def friction_table(
     groups: pd.DataFrame,
     pin: str,
     disc: str,
     quantity: str = "mu_k",
+    *,
+    dense: bool = False,
 ) -> pd.DataFrame:
     """The pair's full rectangular (pressure × temperature) table of ``quantity``.
 
     Rows cover every measured pressure [kPa] at every measured temperature [°C] (sorted,
     temperature outer, pressure inner — the order ABAQUS wants). Columns:
-    ``pressure_kPa, temperature_C, <quantity>, uncertainty, u_combined, measured`` (bool;
-    ``uncertainty`` the CI half-width, ``u_combined`` the combined standard uncertainty,
-    see :class:`Estimate`). Cells that
-    were not measured are filled by :func:`query`'s interpolation (``measured`` False).
+    ``pressure_kPa, temperature_C, <quantity>, uncertainty, u_combined, expanded,
+    measured, added`` (``uncertainty`` the repeats' CI half-width, ``u_combined`` the
+    groups' combined u, ``expanded`` U at k = 2, see :class:`Estimate`). Cells that were
+    not measured are filled by :func:`query`'s interpolation (``measured`` False).
+    ``dense`` adds pressure rows (``added`` True) by
+    :func:`tribopipe.interpolation.densify`, so that an engine reading the table linearly
+    in pressure stays within :data:`~tribopipe.interpolation.ENGINE_TOLERANCE` of
+    :func:`query` (the union of every temperature's rows: the grid stays rectangular).
     ``temperature_C`` is NaN throughout when the pair has no temperature.
     """
     import pandas as pd
@@ -425,10 +494,18 @@ def friction_table(
         (float(p), None if math.isnan(t) else float(t))
         for p, t in zip(points["pressure_kPa"], points["temperature_C"], strict=True)
     }
+    kappa = map_curvature(groups, quantity)
+    measured_p = set(pressures)
+    if dense:
+        rows_p: set[float] = set(pressures)
+        for t in temps:
+            rows_p.update(densify(pressures, curve(
+                points["pressure_kPa"], points["temperature_C"], points["mean"], t)))
+        pressures = sorted(rows_p)
     rows = []
     for t in temps:
         for p in pressures:
-            est = _estimate(points, p, t)
+            est = _estimate(points, p, t, kappa)
             rows.append(
                 {
                     "pressure_kPa": float(p),
@@ -436,7 +513,9 @@ def friction_table(
                     quantity: est.value,
                     "uncertainty": math.nan if est.uncertainty is None else est.uncertainty,
                     "u_combined": math.nan if est.u_combined is None else est.u_combined,
+                    "expanded": math.nan if est.expanded is None else est.expanded,
                     "measured": (float(p), t) in measured,
+                    "added": float(p) not in measured_p,
                 }
             )
     return pd.DataFrame(rows)
@@ -472,23 +551,46 @@ def query_map(
     return query(load_groups(map_path), pin, disc, pressure_kPa, temperature_C)
 
 
-def format_result(res: QueryResult) -> str:
-    """A short human-readable report of a query (several lines, no trailing newline)."""
+def pressure_of_force(normal_force_N: float, instrument: InstrumentConfig) -> float:
+    """The contact pressure per pin [kPa] of a total normal force [N] on ``instrument``'s
+    pins (:func:`tribopipe.physics.contact_pressure_kPa`); an :class:`ExportError` for a
+    force that is not a finite number > 0."""
+    if not (math.isfinite(normal_force_N) and normal_force_N > 0):
+        raise ExportError(f"normal force must be a finite number > 0 N, got {normal_force_N}")
+    return float(contact_pressure_kPa(normal_force_N, instrument.n_pins,
+                                      instrument.pin_radius_mm))
 
-    def est_text(name: str, est: Estimate | None) -> str:
-        """One line for an estimate: value ± uncertainty, or 'unknown'."""
+
+def format_result(res: QueryResult, normal_force_N: float | None = None,
+                  instrument: InstrumentConfig | None = None) -> str:
+    """A short human-readable report of a query (several lines, no trailing newline);
+    ``normal_force_N`` and ``instrument`` say the force the pressure was converted from."""
+
+    def est_text(name: str, est: Estimate | None) -> list[str]:
+        """The lines of an estimate: value ± U (k = 2), then what U holds and the repeats'
+        interval in its own line; or 'unknown'."""
         if est is None:
-            return f"{name} = unknown (no group of this pair holds it)"
-        unc = "" if est.uncertainty is None else f" ± {est.uncertainty:.3f} (95 % CI, interpolated)"
-        comb = ("" if est.u_combined is None else
-                f"; combined u = {est.u_combined:.3f}, U = {2 * est.u_combined:.3f} (k = 2)")
-        return f"{name} = {est.value:.3f}{unc}{comb}"
+            return [f"{name} = unknown (no group of this pair holds it)"]
+        head = f"{name} = {est.text()}" + ("" if est.expanded is None else " (U, k = 2)")
+        groups_u = ("unknown" if est.u_groups is None else f"{est.u_groups:.2g}"
+                    + ("" if est.budgets_known else " (repeat scatter only)"))
+        lines = [head, f"  U = 2·√(u_groups² + u_interp²): u_groups = {groups_u}, "
+                       f"u_interp = {est.u_interpolation:.2g}"]
+        if est.expanded is not None and est.lower is not None:
+            lines[-1] += f"; interval [{est.lower:.3g}, {est.value + est.expanded:.3g}]"
+        if est.uncertainty is not None:
+            lines.append(f"  repeats' 95 % CI half-width (interpolated): {est.uncertainty:.3f}")
+        return lines
 
     t = "" if res.temperature_C is None else f", {res.temperature_C:g} °C"
+    force = ""
+    if normal_force_N is not None and instrument is not None:
+        force = (f" ({normal_force_N:g} N on {instrument.n_pins} pin(s) of radius "
+                 f"{instrument.pin_radius_mm:g} mm)")
     lines = [
-        f"{res.pin} on {res.disc} at {res.pressure_kPa:g} kPa{t}",
-        "  " + est_text("mu_k", res.mu_k),
-        "  " + est_text("mu_s", res.mu_s),
+        f"{res.pin} on {res.disc} at {res.pressure_kPa:.4g} kPa{force}{t}",
+        *("  " + line for line in est_text("mu_k", res.mu_k)),
+        *("  " + line for line in est_text("mu_s", res.mu_s)),
         "  from measured groups (pressure, temperature, mean, n, weight):",
     ]
     for u in res.mu_k.used:

@@ -44,8 +44,9 @@ from .fit import fit_power_law
 from .frictionmap import read_map
 from .frictionmap.synthetic_rows import synthetic_note
 from .layout import OutputLayout, find_trace, read_failures
-from .query import pairs
-from .stats import group_statistics, repeatability
+from .query import estimate_text, pairs
+from .rounding import known_u, plus_minus
+from .stats import group_statistics, group_u, repeatability
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -157,10 +158,25 @@ def _span(low: Any, high: Any) -> str:
     return f"{lo}–{hi}" if lo and hi else ""
 
 
-def _expanded(u: Any) -> str:
-    """``± U`` with U = 2u (k = 2) and 3 decimals; '' when u is missing."""
-    text = _num(2.0 * float(u), ".3f") if _num(u, ".3f") else ""
-    return f"± {text}" if text else ""
+def _run_value(value: Any, u: Any) -> str:
+    """A run's ``μ ± U`` (U = 2u, k = 2) rounded the GUM way
+    (:func:`tribopipe.rounding.plus_minus`); the value to 3 decimals where u is unknown;
+    '' when the value is missing."""
+    if not _num(value, ".3f"):
+        return ""
+    expanded = 2.0 * float(u) if _num(u, "g") else None
+    if expanded is None or not known_u(expanded):
+        return _num(value, ".3f")
+    return plus_minus(float(value), expanded)
+
+
+def _group_value(value: Any, u: Any, n: Any) -> str:
+    """A group mean's ``μ ± U`` (:func:`tribopipe.query.estimate_text`: U = 2u, k = 2,
+    GUM-rounded; "n = 1, no repeat scatter" where U is unknown for a single run)."""
+    if not _num(value, ".3f"):
+        return ""
+    expanded = 2.0 * float(u) if _num(u, "g") else None
+    return estimate_text(float(value), expanded if known_u(expanded) else None, int(n))
 
 
 def run_anchor(measurement_id: str) -> str:
@@ -259,13 +275,15 @@ def _group_table(inp: ReportInputs) -> str:
     overlaid = set(_overlay_groups(inp))
     head = (
         "<tr><th class=t>pin</th><th class=t>disc</th><th>F [N]</th><th>p [kPa]</th>"
-        "<th>T [°C]</th><th>n</th><th>μ_K mean</th><th>U (k = 2)</th><th>μ_K SD</th>"
-        "<th>μ_K 95 % CI</th><th>μ_K min–max</th><th>μ_K CV</th>"
-        + ("<th>μ_S n</th><th>μ_S mean</th><th>U (k = 2)</th>" if with_mu_s else "")
+        "<th>T [°C]</th><th>n</th><th>μ_K ± U (k = 2)</th><th>μ_K SD</th>"
+        "<th>μ_K 95 % CI of the repeats</th><th>μ_K min–max</th><th>μ_K CV</th>"
+        + ("<th>μ_S n</th><th>μ_S ± U (k = 2)</th>" if with_mu_s else "")
         + "<th class=t>QC</th><th class=t>runs</th></tr>"
     )
     rows = []
-    for g in inp.groups.to_dict(orient="records"):
+    u_k, _ = group_u(inp.groups, "mu_k")
+    u_s, _ = group_u(inp.groups, "mu_s")
+    for i, g in enumerate(inp.groups.to_dict(orient="records")):
         ids = [i for i in str(g.get("run_ids") or "").split(";") if i]
         links = " ".join(
             f'<a href="#{run_anchor(i)}">{html_text(i[:8])}</a>' for i in ids
@@ -284,23 +302,26 @@ def _group_table(inp: ReportInputs) -> str:
             f"<tr{cls}><td class=t>{_e(g['pin'])}</td><td class=t>{pair}</td>"
             f"<td>{_num(g['normal_force_N'], 'g')}</td><td>{_num(g['pressure_kPa'], '.4g')}</td>"
             f"<td>{_num(g['temperature_C'], 'g')}</td><td>{g['mu_k_n']}</td>"
-            f"<td>{_num(g['mu_k_mean'], '.3f')}</td><td>{_expanded(g.get('mu_k_u'))}</td>"
+            f"<td>{_group_value(g['mu_k_mean'], u_k.iloc[i], g['mu_k_n'])}</td>"
             f"<td>{_num(g['mu_k_std'], '.3f')}</td><td>{ci}</td>"
             f"<td>{_span(g['mu_k_min'], g['mu_k_max'])}</td>"
             f"<td>{_num(g['mu_k_cv'], '.3f')}</td>"
-            + (f"<td>{g['mu_s_n']}</td><td>{_num(g['mu_s_mean'], '.3f')}</td>"
-               f"<td>{_expanded(g.get('mu_s_u'))}</td>" if with_mu_s else "")
+            + (f"<td>{g['mu_s_n']}</td>"
+               f"<td>{_group_value(g['mu_s_mean'], u_s.iloc[i], g['mu_s_n'])}</td>"
+               if with_mu_s else "")
             + f"<td class=t>{', '.join(qc)}</td>"
             f"<td class=t>{links}</td></tr>"
         )
     return (
         '<section id="groups"><h2>Condition groups</h2>'
         "<p class=muted>One row per pair, nominal force and temperature; statistics over "
-        "the repeats (excluded runs left out). U (k = 2): the expanded combined uncertainty "
-        "of the group mean, from the runs' own budgets beside the repeat scatter (empty "
-        "where a run has none, e.g. imported rows). With n = 2 the t-interval uses "
-        "t = 12.7 and can reach below zero: the min–max range beside it is the plainer "
-        "picture. QC: the group's range exceeds the repeatability limit r, or it holds a "
+        "the repeats (excluded runs left out). ± U (k = 2): the expanded combined uncertainty "
+        "of the group mean, from the runs' own budgets beside the repeat scatter (the repeat "
+        "scatter alone where the runs carry no budget, e.g. imported rows), U rounded to two "
+        "significant digits and the mean to the same decimal. The repeats' 95 % t-interval "
+        "is its own column; with n = 2 it uses t = 12.7, and its lower end is bounded at 0 "
+        "(a coefficient of friction is never negative): the min–max range beside it is the "
+        "plainer picture. QC: the group's range exceeds the repeatability limit r, or it holds a "
         "run with QC flags. Run ids link to the "
         "runs" + ("" if inp.map_report else " and their trace plots") + "."
         + ("" if with_mu_s else " The map holds no μ_S, so its columns are left out.")
@@ -377,7 +398,7 @@ def _flagged(inp: ReportInputs) -> str:
                 f'<a href="#{run_anchor(mid)}">{html_text(mid[:8])}</a></td>'
                 f"<td class=t>{_e(r.get('source_file'))}</td><td class=t>{_e(r['pin'])}</td>"
                 f"<td class=t>{_e(r['disc'])}</td><td>{_num(r['pressure_kPa'], '.4g')}</td>"
-                f"<td>{_num(r['mu_k'], '.3f')} {_expanded(r.get('u_mu_k'))}</td>"
+                f"<td>{_run_value(r['mu_k'], r.get('u_mu_k'))}</td>"
                 f"<td class=t>{html_text(', '.join(_flag_list(r.get('flags'))))}</td>"
                 f"<td class=t>{'excluded: ' + reason if excluded else ''}</td></tr>"
             )
@@ -432,8 +453,8 @@ def _runs(inp: ReportInputs) -> str:
                 f"<td class=t>{_e(r['pin'])}</td><td class=t>{_e(r['disc'])}</td>"
                 f"<td>{_num(r['pressure_kPa'], '.4g')}</td>"
                 f"<td>{_num(r['temperature_C'], 'g')}</td><td>{html_text(repeat)}</td>"
-                f"<td>{_num(r['mu_k'], '.3f')} {_expanded(r.get('u_mu_k'))}</td>"
-                + (f"<td>{_num(r['mu_s'], '.3f')} {_expanded(r.get('u_mu_s'))}</td>"
+                f"<td>{_run_value(r['mu_k'], r.get('u_mu_k'))}</td>"
+                + (f"<td>{_run_value(r['mu_s'], r.get('u_mu_s'))}</td>"
                    if with_mu_s else "")
                 + f"<td class=t>{_e(r.get('source'))}</td><td class=t>{_e(r.get('lab'))}</td>"
                 + (f"<td class=t>{_e(r.get('test'))}</td><td class=t>{_e(r.get('result'))}</td>"
@@ -450,9 +471,9 @@ def _runs(inp: ReportInputs) -> str:
         summary = (
             f"{html_text(mid[:8])} · {_e(r['pin'])} on {_e(r['disc'])} · "
             f"{_num(r['pressure_kPa'], '.4g')} kPa · {_num(r['temperature_C'], 'g')} °C"
-            f"{html_text(', repeat ' + repeat if repeat else '')} · μ_K {_num(r['mu_k'], '.3f')}"
-            f" {_expanded(r.get('u_mu_k'))}"
-            + (f" · μ_S {_num(r['mu_s'], '.3f')} {_expanded(r.get('u_mu_s'))}"
+            f"{html_text(', repeat ' + repeat if repeat else '')} · "
+            f"μ_K {_run_value(r['mu_k'], r.get('u_mu_k'))}"
+            + (f" · μ_S {_run_value(r['mu_s'], r.get('u_mu_s'))}"
                if _num(r["mu_s"], ".3f") else "")
         )
         facts = (

@@ -29,6 +29,8 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
+from .rounding import lower_bound
+
 if TYPE_CHECKING:
     import pandas as pd
 
@@ -54,9 +56,11 @@ def describe_values(values: Sequence[float]) -> dict[str, Any]:
     """Statistics of one group's values (finite floats; missing ones already removed).
 
     Returns ``n, mean, std`` (sample, n−1), ``sem`` (std/√n), ``ci95_low, ci95_high``
-    (mean ∓ t₀.₉₇₅,ₙ₋₁·sem, Student t), ``cv`` (std/mean), ``min, max`` and ``values``
-    (``;``-joined shortest round-trip text, in the given order). With n = 1, std, sem, CI
-    and cv are NaN (unknown, not zero); with n = 0 everything but n is NaN.
+    (mean ∓ t₀.₉₇₅,ₙ₋₁·sem, Student t; the lower end bounded at 0, since a coefficient of
+    friction is never negative: with n = 2, t = 12.7 would otherwise reach far below),
+    ``cv`` (std/mean), ``min, max`` and ``values`` (``;``-joined shortest round-trip
+    text, in the given order). With n = 1, std, sem, CI and cv are NaN (unknown, not
+    zero); with n = 0 everything but n is NaN.
     """
     import numpy as np
 
@@ -77,7 +81,7 @@ def describe_values(values: Sequence[float]) -> dict[str, Any]:
     out.update(
         std=std,
         sem=sem,
-        ci95_low=mean - half,
+        ci95_low=lower_bound(mean, half),
         ci95_high=mean + half,
         cv=std / mean if mean != 0 else math.nan,
     )
@@ -286,3 +290,25 @@ def _group_uncertainty(u_runs: Any, sem: float, q: str) -> dict[str, float]:
 
 def _repeat_key(value: float) -> tuple[int, int]:
     return (1, 0) if math.isnan(value) else (0, int(value))
+
+
+def group_u(groups: pd.DataFrame, quantity: str = "mu_k") -> tuple[pd.Series, pd.Series]:
+    """``(u, budget)`` per group of ``quantity``: the standard uncertainty of the group mean
+    (GUM, k = 1) that every output's U = 2u reads, and whether it holds the runs' budgets.
+
+    ``u`` is the group's combined ``q_u`` (runs' budgets beside the repeat scatter) where
+    its runs carry budgets (``budget`` True); else its repeat scatter alone, ``q_sem``
+    (e.g. an imported map); NaN where neither is known (one run without a budget). Columns
+    that are absent count as unknown.
+    """
+    import pandas as pd
+
+    def column(name: str) -> pd.Series:
+        """A numeric column of ``groups`` (all NaN when absent)."""
+        if name not in groups.columns:
+            return pd.Series(math.nan, index=groups.index, dtype=float)
+        return pd.to_numeric(groups[name], errors="coerce").astype(float)
+
+    u_budget = column(f"{quantity}_u")
+    budget = u_budget.notna()
+    return u_budget.where(budget, column(f"{quantity}_sem")), budget

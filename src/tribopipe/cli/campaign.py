@@ -62,6 +62,7 @@ def _shorten(path: Any) -> str:
 def _run(campaign: Any, jobs: int | None, plots: bool | None) -> None:
     from ..campaign import run_campaign
     from ..escape import display_path, printable
+    from ..export.tables import map_paper_text
     from ..frictionmap.synthetic_rows import campaign_note
     from ..layout import OutputLayout
 
@@ -95,6 +96,7 @@ def _run(campaign: Any, jobs: int | None, plots: bool | None) -> None:
     click.echo(f"map {_shorten(report.map_path)}: {report.map_summary}")
     click.echo(f"outputs in {_shorten(report.output_dir)}/: runs.csv, failures.csv, traces/"
                + (", plots/traces/" if OutputLayout(report.output_dir).plots_dir.is_dir() else ""))
+    click.echo(map_paper_text(report.map_path), nl=False)  # the groups, rounded for print
     for line in report.ledger():  # the account comes last, where a user looks
         click.echo(printable(line))
     for problem in report.output_errors:

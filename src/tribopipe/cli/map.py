@@ -181,11 +181,13 @@ def validate_cmd(path: str) -> None:
 )
 @click.option(
     "--layout",
-    type=click.Choice(["group", "abstract"]),
+    type=click.Choice(["group", "abstract", "paper"]),
     default="group",
     show_default=True,
     help="'group': conditions + repeat statistics; 'abstract': pin, disc, pressure, "
-    "temperature, mean μ_K (the paper's Table 2).",
+    "temperature, mean μ_K (the paper's Table 2); 'paper': a compact table to publish, "
+    "n, μ_S ± U and μ_K ± U (expanded uncertainty, k = 2, rounded to two significant "
+    "digits) and flags.",
 )
 @click.option("--pin", multiple=True, help="Only this pin material (repeatable).")
 @click.option("--disc", multiple=True, help="Only this disc material (repeatable).")
@@ -229,14 +231,20 @@ def table_cmd(
 @click.option("--runs", "runs_listed", is_flag=True,
               help="Then list every run: id, file [test / result / interval], pin / disc, "
                    "nominal force and temperature, repeat, mu_k, mu_s, flags.")
+@click.option("--groups", "groups_listed", is_flag=True,
+              help="Then the condition groups as the compact 'paper' table: n, μ_S ± U, "
+                   "μ_K ± U (k = 2) and flags.")
 @map_option
 @friendly_errors
-def show_cmd(runs_listed: bool, map_path: str) -> None:
+def show_cmd(runs_listed: bool, groups_listed: bool, map_path: str) -> None:
     """Summarise the map: runs, contact pairs, conditions, sources, labs, flags, excluded
     runs (with the file and test each came from) and the pooled repeatability."""
+    from ..export.tables import map_paper_text
     from ..frictionmap import map_summary
 
     click.echo(map_summary(map_path, runs_listed=runs_listed))
+    if groups_listed:
+        click.echo(map_paper_text(map_path), nl=False)
 
 
 @map_group.command("exclude")

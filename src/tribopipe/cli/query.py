@@ -6,15 +6,21 @@ import json
 
 import click
 
-from ._common import friendly_errors, map_option
+from ._common import config_option, friendly_errors, map_option
 
 
 @click.command("query")
 @click.option("--pin", required=True, help="Pin material, e.g. 'Dragonskin 30'.")
 @click.option("--disc", required=True, help="Disc material, e.g. 'steel'.")
+@click.option("--pressure", "pressure_kPa", type=float, help="Contact pressure per pin [kPa].")
 @click.option(
-    "--pressure", "pressure_kPa", type=float, required=True, help="Contact pressure per pin [kPa]."
+    "--force",
+    "normal_force_N",
+    type=float,
+    help="Total normal force [N] instead of --pressure: converted to the contact pressure "
+    "per pin through the instrument config's number of pins and pin radius (--config).",
 )
+@config_option
 @click.option(
     "--temperature",
     "temperature_C",
@@ -27,29 +33,44 @@ from ._common import friendly_errors, map_option
 def query_cmd(
     pin: str,
     disc: str,
-    pressure_kPa: float,
+    pressure_kPa: float | None,
+    normal_force_N: float | None,
+    config_path: str | None,
     temperature_C: float | None,
     map_path: str,
     as_json: bool,
 ) -> None:
     """μ_K (and μ_S where known) of PIN on DISC at a contact pressure and temperature.
 
-    Linear interpolation over the group means in temperature and pressure, held constant
-    outside the measured range (as ABAQUS treats a friction table). Prints the measured
-    groups used with their weights, whether the value was clamped, and the uncertainty:
-    the groups' 95 % CI half-widths interpolated with the same weights (what the repeats
-    support), and their combined standard uncertainties u (the runs' own budgets beside
-    the repeat scatter; U = 2u at k = 2) interpolated likewise.
+    Between the measured group means: linear in temperature and, in pressure, linear in
+    log p - log μ (exact for a power law μ = k·p^(n−1)); held constant outside the
+    measured range (as ABAQUS treats a friction table) and said so. Prints value ± U, the
+    expanded uncertainty (k = 2) from the runs' budgets, the repeat scatter and the
+    interpolation's own uncertainty, rounded to two significant digits; then the repeats'
+    95 % CI apart, the measured groups used with their weights and whether the value was
+    clamped. Give the contact pressure per pin (--pressure) or the total normal force
+    (--force, converted with the instrument config's pins).
     """
+    from ..config import load_settings
     from ..frictionmap.synthetic_rows import map_synthetic_note
     from ..numeric import finite_json
-    from ..query import format_result, query_map
+    from ..query import format_result, pressure_of_force, query_map
 
+    if (pressure_kPa is None) == (normal_force_N is None):
+        raise click.UsageError("give exactly one of --pressure and --force")
+    instrument = None
+    if normal_force_N is not None:
+        instrument = load_settings(config_path).instrument
+        pressure_kPa = pressure_of_force(normal_force_N, instrument)
+    assert pressure_kPa is not None
     result = query_map(map_path, pin, disc, pressure_kPa, temperature_C)
     if as_json:
-        click.echo(json.dumps(finite_json(result.to_dict()), indent=2, allow_nan=False))
+        data = result.to_dict()
+        if normal_force_N is not None:
+            data["normal_force_N"] = normal_force_N
+        click.echo(json.dumps(finite_json(data), indent=2, allow_nan=False))
     else:
-        click.echo(format_result(result))
+        click.echo(format_result(result, normal_force_N, instrument))
     note = map_synthetic_note(map_path)
     if note is not None:  # on stderr with --json, so the JSON stays one document
         click.echo(note, err=as_json)

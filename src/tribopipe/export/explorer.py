@@ -7,13 +7,16 @@ this module fills them with the map's data:
 
 * what :func:`tribopipe.query.query` interpolates over — each pair's measured points
   (:func:`tribopipe.query.pair_points`: pressure [kPa], temperature [°C], group mean, 95 %
-  CI half-width, combined standard uncertainty u of the mean, n), in the order the
-  interpolation sums them. The page redoes ``query``'s interpolation on them (bilinear,
-  held at the ends and said so, the CI half-width and u carried with the same weights)
-  and shows u (with U = 2u) beside the repeats' interval; a browser test holds the two
-  equal.
+  CI half-width, standard uncertainty u of the mean and whether it holds the runs'
+  budgets, n), in the order the interpolation sums them, and the map's curvature κ
+  (:func:`tribopipe.query.map_curvature`). The page redoes ``query``'s interpolation on
+  them (:mod:`tribopipe.interpolation`: linear in temperature, log p – log μ in pressure,
+  held at the ends and said so) and shows value ± U (k = 2) rounded by
+  :mod:`tribopipe.rounding`'s rule, with the repeats' interval apart; a node test and a
+  browser test hold the page equal to ``query``.
 * each pair's included runs (the repeats), the group table of
-  :func:`tribopipe.stats.group_statistics` and the power-law fits of
+  :func:`tribopipe.stats.group_statistics` (with each group mean's U, k = 2, from
+  :func:`tribopipe.stats.group_u`) and the power-law fits of
   :func:`tribopipe.fit.fit_power_law` with their curves sampled here in Python.
 
 The data travel as one JSON document in a ``<script type="application/json">`` element.
@@ -46,8 +49,9 @@ from ..escape import html_text, printable, script_json
 from ..files import write_text_atomic
 from ..fit import fit_power_law, power_law
 from ..frictionmap import read_map
-from ..query import pair_points, pairs, select_pair
-from ..stats import group_statistics
+from ..query import map_curvature, pair_points, pairs, select_pair
+from ..rounding import known_u
+from ..stats import group_statistics, group_u
 from .registry import WRITERS
 from .simulators import snippet_header
 
@@ -132,6 +136,7 @@ def _points(points: pd.DataFrame, pair_groups: pd.DataFrame) -> list[dict[str, A
                 "mean": _plain(r["mean"]),
                 "half": _plain(r["half"]),
                 "u": _plain(r["u"]) if "u" in r else None,
+                "budget": bool(r.get("budget", False)),
                 "n": int(r["n"]),
                 "run_ids": run_ids,
             }
@@ -264,12 +269,15 @@ def explorer_data(
             }
         )
     group_rows = []
-    for g in groups.to_dict(orient="records"):
+    expanded = {q: 2.0 * group_u(groups, q)[0] for q in ("mu_k", "mu_s")}
+    for i, g in enumerate(groups.to_dict(orient="records")):
         index = pair_index.get((_key(g["pin"]), _key(g["disc"])))
         if index is None:
             continue
         row = {"pin": str(g["pin"]), "disc": str(g["disc"]), "pair": index}
         row.update({name: _plain(g.get(name)) for name in GROUP_FIELDS})
+        for q, values in expanded.items():  # U (k = 2) of the group mean, where known
+            row[f"{q}_U"] = float(values.iloc[i]) if known_u(float(values.iloc[i])) else None
         group_rows.append(row)
     return {
         "format": DATA_FORMAT,
@@ -279,6 +287,8 @@ def explorer_data(
         "generated": datetime.now(UTC).strftime("%Y-%m-%d %H:%M UTC"),
         "pairs": pair_rows,
         "groups": group_rows,
+        # the map's κ for the interpolation's own uncertainty (tribopipe.interpolation)
+        "curvature": {q: map_curvature(groups, q) for q in ("mu_k", "mu_s")},
         # the simulator formats the page copies (every registered format with a
         # snippet); the opening lines of each do not depend on the condition: rendered
         # here by the writer itself, the page adds the rest (snippets.js)

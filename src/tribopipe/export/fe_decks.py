@@ -28,6 +28,7 @@ from .simbase import (
     comment_block,
     condition_lines,
     default_decay_s_per_mm,
+    densify_lines,
     filled_lines,
     header_bodies,
     num,
@@ -130,7 +131,8 @@ def write_abaqus(
     slip_rates: Mapping[tuple[str, str], SlipRate] | None = None,
     source: str | None = None,
 ) -> str:
-    """ABAQUS ``*SURFACE INTERACTION`` + ``*FRICTION`` tables of μ_K, one per selected pair.
+    """ABAQUS ``*SURFACE INTERACTION`` + ``*FRICTION`` tables of μ_K, one per selected pair
+    (one condition's constant μ_K is :func:`condition_snippet`, what the explorer copies).
 
     Data lines follow the *FRICTION keyword's documented order: friction coefficient,
     slip rate, contact pressure, average temperature (then field variables, which we do
@@ -155,13 +157,14 @@ def write_abaqus(
     ]
     lines = comment_block("**", bodies)
     for pin_name, disc_name in selected:
-        table = table_at(groups, pin_name, disc_name, temperature_C)
+        table = table_at(groups, pin_name, disc_name, temperature_C, dense=True)
         rate = slip_rate_of(slip_rates, pin_name, disc_name)
         pair_bodies = [
             "",
             f"pair: pin {deck_safe(pin_name)} on disc {deck_safe(disc_name)}",
             rate.describe(),
             *filled_lines(table, u),
+            *densify_lines(table, "ABAQUS"),
         ]
         lines += comment_block("**", pair_bodies)
         lines += [f"*SURFACE INTERACTION, NAME={names[(pin_name, disc_name)]}", "*FRICTION"]
@@ -238,7 +241,8 @@ def write_ansys(
     material_id: int = 1,
     source: str | None = None,
 ) -> str:
-    """Ansys MAPDL ``TB,FRIC,mat,,,ISO`` tables with ``TBFIELD`` on temperature and pressure.
+    """Ansys MAPDL ``TB,FRIC,mat,,,ISO`` tables with ``TBFIELD`` on temperature and pressure
+    (one condition's constant μ_K is :func:`condition_snippet`, what the explorer copies).
 
     One material per selected pair, numbered from ``material_id``. Per the MAPDL
     reference the field name for contact (normal) pressure is ``NPRES``; fields are given
@@ -253,11 +257,12 @@ def write_ansys(
     lines = comment_block("!", bodies)
     for offset, (pin_name, disc_name) in enumerate(selected_pairs(groups, pin, disc)):
         mat = material_id + offset
-        table = table_at(groups, pin_name, disc_name, temperature_C)
+        table = table_at(groups, pin_name, disc_name, temperature_C, dense=True)
         lines += comment_block("!", [
             "",
             f"material {mat}: pin {ansys_safe(pin_name)} on disc {ansys_safe(disc_name)}",
             *filled_lines(table, u),
+            *densify_lines(table, "Ansys"),
         ])
         lines.append(f"TB,FRIC,{mat},,,ISO")
         last_t: float | None = None

@@ -297,8 +297,11 @@ def writer_named(fmt: str) -> Writer:
 
 
 def condition_labels() -> list[str]:
-    """Every single-condition format as a user asks for it (``abaqus --exponential-decay``)."""
-    return [w.label(True) for w in WRITERS if w.condition is not None]
+    """Every single-condition format as a user asks for it (``abaqus --exponential-decay``),
+    then the table formats whose one condition is a constant (``abaqus``: its snippet)."""
+    return ([w.label(True) for w in WRITERS if w.condition is not None]
+            + [f"{w.name} (a constant)" for w in WRITERS
+               if w.table is not None and w.snippet is not None])
 
 
 def users(name: str) -> list[str]:

@@ -32,6 +32,7 @@ from .. import __version__
 from ..errors import ExportError
 from ..escape import sim_comment
 from ..frictionmap.published import PUBLISHED_SLIDING_SPEED_MM_S
+from ..interpolation import ENGINE_TOLERANCE
 from ..query import QueryResult, friction_table, pairs, query, select_pair
 from .registry import COEFFICIENT
 
@@ -146,9 +147,11 @@ def condition_lines(res: QueryResult, safe: Callable[[object], str] = sim_commen
     lines = [
         f"pair: pin {safe(res.pin)} on disc {safe(res.disc)}",
         f"condition: contact pressure {res.pressure_kPa:g} kPa, temperature {t}",
-        f"mu_k = {num(res.mu_k.value)}"
-        + ("" if res.mu_k.uncertainty is None else f" +/- {num(res.mu_k.uncertainty)} (95 % CI)"),
-        "mu_s = " + ("unknown (not in the map)" if res.mu_s is None else num(res.mu_s.value)),
+        f"mu_k = {num(res.mu_k.value)}; {res.mu_k.text(ascii_only=True)}"
+        + ("" if res.mu_k.expanded is None else " (U, k = 2)"),
+        "mu_s = " + ("unknown (not in the map)" if res.mu_s is None else
+                     f"{num(res.mu_s.value)}; {res.mu_s.text(ascii_only=True)}"
+                     + ("" if res.mu_s.expanded is None else " (U, k = 2)")),
     ]
     used = ", ".join(
         f"{u.pressure_kPa:g} kPa"
@@ -326,14 +329,16 @@ def selected_pairs(
 
 
 def table_at(
-    groups: pd.DataFrame, pin: str, disc: str, temperature_C: float | None
+    groups: pd.DataFrame, pin: str, disc: str, temperature_C: float | None,
+    *, dense: bool = False,
 ) -> pd.DataFrame:
     """The pair's μ_K table (``pressure_kPa, temperature_C, mu_k, uncertainty, u_combined,
-    measured``),
-    or its single-temperature slice interpolated at ``temperature_C`` [°C]."""
+    expanded, measured, added``), or its single-temperature slice interpolated at
+    ``temperature_C`` [°C]; ``dense`` adds the pressure rows of
+    :func:`tribopipe.interpolation.densify` (for engines that read a table linearly)."""
     import pandas as pd
 
-    table = friction_table(groups, pin, disc, "mu_k")
+    table = friction_table(groups, pin, disc, "mu_k", dense=dense)
     if temperature_C is None:
         return table
     rows = []
@@ -349,20 +354,23 @@ def table_at(
                 "mu_k": res.mu_k.value,
                 "uncertainty": math.nan if res.mu_k.uncertainty is None else res.mu_k.uncertainty,
                 "u_combined": math.nan if res.mu_k.u_combined is None else res.mu_k.u_combined,
+                "expanded": math.nan if res.mu_k.expanded is None else res.mu_k.expanded,
                 "measured": measured,
+                "added": bool(table.loc[table["pressure_kPa"] == p, "added"].iloc[0]),
             }
         )
     return pd.DataFrame(rows)
 
 
 def filled_lines(table: pd.DataFrame, units: UnitSystem) -> list[str]:
-    """Comment bodies listing the table cells filled by interpolation."""
-    filled = table[~table["measured"]]
+    """Comment bodies listing the table cells filled by interpolation (the rows added by
+    :func:`densify_lines` aside)."""
+    filled = table[~table["measured"] & ~table["added"]]
     if filled.empty:
         return ["every cell of this table was measured"]
     lines = [
-        f"{len(filled)} cell(s) not measured, filled by linear interpolation in "
-        "temperature and pressure (held constant outside the measured range):"
+        f"{len(filled)} cell(s) not measured, filled by tribopipe's interpolation (linear in "
+        "temperature, log p - log mu in pressure; held constant outside the measured range):"
     ]
     for _, row in filled.iterrows():
         t = row["temperature_C"]
@@ -373,6 +381,20 @@ def filled_lines(table: pd.DataFrame, units: UnitSystem) -> list[str]:
             f"{t_text}: mu = {num(row['mu_k'])}"
         )
     return lines
+
+
+def densify_lines(table: pd.DataFrame, engine: str) -> list[str]:
+    """Comment bodies saying which pressure rows were added to ``table`` and why."""
+    added = sorted(set(table.loc[table["added"], "pressure_kPa"]))
+    if not added:
+        return []
+    return [
+        f"{len(added)} pressure row(s) added between the measured pressures: {engine} reads "
+        "the table linearly in pressure, tribopipe interpolates in log p - log mu (friction "
+        "falls as a power of pressure); with the added rows the two differ by at most "
+        f"{ENGINE_TOLERANCE:g} in mu over the measured range. Added at (kPa): "
+        + ", ".join(f"{p:g}" for p in added),
+    ]
 
 
 def comment_block(comment: str, bodies: list[str], width: int = 100) -> list[str]:

@@ -10,6 +10,7 @@ touches the file system beyond reading the map.
 
 from __future__ import annotations
 
+import inspect
 from collections.abc import Mapping
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -89,8 +90,12 @@ def export_simulator_input(
     writer = writer_named(fmt)
     switch = writer.switch
     switched = bool(switch is not None and options.pop(switch.name, False))
-    condition = writer.table is None or switched
-    chosen = _mode_options(writer, condition, options)
+    # a table format given one pressure writes that condition's constant, as the
+    # explorer copies it (its snippet writer), where the format has one
+    constant = (writer.table is not None and not switched and pressure_kPa is not None
+                and writer.snippet is not None)
+    condition = writer.table is None or switched or constant
+    chosen = _mode_options(writer, condition and not constant, options)
     if not condition:
         if pressure_kPa is not None:
             raise ExportError(
@@ -102,7 +107,7 @@ def export_simulator_input(
             chosen["slip_rates"] = slip_rates
         return function(writer.table)(groups, pin=pin, disc=disc,
                                       temperature_C=temperature_C, source=source, **chosen)
-    what = writer.label(True)
+    what = f"{fmt} --pressure" if constant else writer.label(True)
     if pin is None or disc is None:
         listing = "; ".join(f"{p} on {d}" for p, d in pairs(groups)) or "nothing"
         raise ExportError(
@@ -118,6 +123,12 @@ def export_simulator_input(
             hint="pass --pressure KPA",
         )
     res = query(groups, pin, disc, pressure_kPa, temperature_C)
+    if constant:
+        write = function(writer.snippet)
+        takes = inspect.signature(write).parameters
+        # a constant has no pressure or temperature dependence: no unit system enters
+        kept = {k: v for k, v in chosen.items() if k in takes}
+        return str(write(res, source=source, **dict(writer.snippet_options), **kept))
     if writer.slip_rate:
         first = pair.iloc[0]
         chosen["slip_rate"] = slip_rate_of(slip_rates, str(first["pin"]), str(first["disc"]))

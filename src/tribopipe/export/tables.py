@@ -9,6 +9,13 @@ Layouts (each a DataFrame; units in the column names):
 ``abstract``
     like Table 2 of the founding paper: ``pin, disc, pressure_kPa, temperature_C, mu_k``
     (group mean of μ_K, rounded to two decimals).
+``paper``
+    a compact table to print: ``pin, disc, p [kPa], T [°C]`` (``v [mm/s]`` where the map
+    holds several sliding speeds), ``n``, ``μ_S ± U``, ``μ_K ± U`` and ``flags``. U is the
+    expanded uncertainty (k = 2) of the group mean (:func:`tribopipe.stats.group_u`),
+    rounded the GUM way (:mod:`tribopipe.rounding`); the μ_S column is left out when no
+    group holds μ_S. Flags: ``range > r``, ``flagged run``, ``no budget`` (U holds the
+    repeat scatter only), ``n = 1``. As CSV the value and U are separate columns.
 ``frictionmap``
     one row per included run in the published schema ``pin, disc, contactForce,
     contactPressure, temperature, measurementNo, cof`` (force [N], pressure [kPa],
@@ -28,16 +35,18 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from ..errors import ExportError
-from ..escape import csv_cell, latex_cell, markdown_cell
+from ..escape import csv_cell, latex_cell, markdown_cell, printable
 from ..files import write_text_atomic
 from ..frictionmap import read_map
 from ..frictionmap.published import FRICTIONMAP_COLUMNS
-from ..stats import group_keys, group_statistics
+from ..query import estimate_text
+from ..rounding import known_u, round_gum
+from ..stats import SPEED_SIGNIFICANT, group_keys, group_statistics, group_u
 
 if TYPE_CHECKING:
     import pandas as pd
 
-LAYOUTS: tuple[str, ...] = ("group", "abstract")
+LAYOUTS: tuple[str, ...] = ("group", "abstract", "paper")
 FORMATS: tuple[str, ...] = ("csv", "markdown", "latex", "frictionmap")
 #: Temperatures closer than this [K] to a --temperature filter value match it.
 TEMPERATURE_MATCH_K = 0.005
@@ -92,6 +101,115 @@ def abstract_table(
     table = groups.loc[:, ["pin", "disc", "pressure_kPa", "temperature_C"]].copy()
     table["mu_k"] = [round_half_up(v, 2) for v in groups["mu_k_mean"]]
     return table
+
+
+def several_speeds(runs: pd.DataFrame) -> bool:
+    """True when the included runs hold more than one sliding speed (two significant
+    digits, as :func:`tribopipe.stats.group_statistics` groups them)."""
+    import numpy as np
+
+    if "sliding_speed_mm_s" not in runs.columns:
+        return False
+    v = runs.loc[~runs["excluded"].astype(bool), "sliding_speed_mm_s"].to_numpy(dtype=float)
+    v = v[np.isfinite(v) & (v > 0)]
+    return len({float(f"{x:.{SPEED_SIGNIFICANT}g}") for x in v}) > 1
+
+
+def _with_u(value: float, u: float, budget: bool, n: int, machine: bool) -> tuple[str, str]:
+    """``(value, U)`` texts of a group mean: GUM-rounded where U = 2u is known; for a
+    person (``machine`` False) joined as ``value ± U`` in the first text."""
+    if not math.isfinite(value):
+        return ("", "") if machine else ("–", "")
+    expanded = 2.0 * u if known_u(2.0 * u) else None
+    if machine:
+        if expanded is None:
+            return repr(round_half_up(value, 3)), ""
+        return round_gum(value, expanded)
+    return estimate_text(value, expanded, n), ""
+
+
+def paper_table(
+    runs: pd.DataFrame,
+    *,
+    pin: Sequence[str] | None = None,
+    disc: Sequence[str] | None = None,
+    temperature_C: Sequence[float] | None = None,
+    machine: bool = False,
+) -> pd.DataFrame:
+    """The ``paper`` layout (module docstring): one row per condition group, every
+    number a text rounded for print. ``machine`` (CSV) keeps value and U in separate
+    columns (``mu_k``, ``mu_k_U``) and the units in snake-case names."""
+    by_speed = several_speeds(runs)
+    groups = group_table(runs, pin=pin, disc=disc, temperature_C=temperature_C,
+                         by_speed=by_speed)
+    with_mu_s = bool((groups["mu_s_n"] > 0).any()) if len(groups) else False
+    names = (("pressure_kPa", "temperature_C", "sliding_speed_mm_s") if machine
+             else ("p [kPa]", "T [°C]", "v [mm/s]"))
+    out: dict[str, list[Any]] = {"pin": list(groups["pin"]), "disc": list(groups["disc"]),
+                                 names[0]: [_cell(v, ".4g") for v in groups["pressure_kPa"]],
+                                 names[1]: [_cell(v, "g") for v in groups["temperature_C"]]}
+    if by_speed:
+        out[names[2]] = [_cell(v, ".2g") for v in groups["sliding_speed_mm_s"]]
+    out["n"] = [int(v) for v in groups["mu_k_n"]]
+    flags: list[list[str]] = [[] for _ in range(len(groups))]
+    for q, label in (("mu_s", "μ_S"), ("mu_k", "μ_K")):
+        if q == "mu_s" and not with_mu_s:
+            continue
+        u, budget = group_u(groups, q)
+        texts = [_with_u(float(m), float(uu), bool(b), int(n), machine) for m, uu, b, n in
+                 zip(groups[f"{q}_mean"], u, budget, groups[f"{q}_n"], strict=True)]
+        if machine:
+            out[q] = [t[0] for t in texts]
+            out[f"{q}_U"] = [t[1] for t in texts]
+        else:
+            out[f"{label} ± U"] = [t[0] for t in texts]
+        if q == "mu_k":
+            for i, (b, n, uu) in enumerate(zip(budget, groups["mu_k_n"], u, strict=True)):
+                flags[i] += (["no budget"] if not b and n > 1 else []) + (
+                    ["n = 1"] if n < 2 else []) + (
+                    ["repeats identical"] if n > 1 and not known_u(2.0 * float(uu)) else [])
+    for i, g in enumerate(groups.itertuples(index=False)):
+        flags[i] = (["range > r"] if g.range_exceeds_r else []) + (
+            ["flagged run"] if g.qc_flagged else []) + flags[i]
+    out["flags"] = [", ".join(f) for f in flags]
+    import pandas as pd
+
+    return pd.DataFrame(out)
+
+
+#: what the paper layout's note says under the table (terminal and Markdown)
+PAPER_NOTE = (
+    "± U: expanded uncertainty of the group mean (k = 2), from the runs' uncertainty "
+    "budgets and the repeat scatter, rounded to two significant digits; an interval that "
+    "would reach below 0 is written +U/−value. no budget: the runs carry no uncertainty "
+    "budget, U holds the repeat scatter only; repeats identical: no scatter to estimate "
+    "U from."
+)
+
+
+def paper_text(runs: pd.DataFrame) -> str:
+    """The paper layout as an aligned plain-text table for a terminal (every cell one
+    printable line), with :data:`PAPER_NOTE` under it."""
+    table = paper_table(runs)
+    if table.empty:
+        return "no condition group to tabulate\n"
+    cells = [[printable(str(c)) for c in table.columns]] + [
+        [printable(str(v)) for v in row] for row in table.itertuples(index=False, name=None)]
+    widths = [max(len(r[i]) for r in cells) for i in range(len(table.columns))]
+    lines = ["  ".join(v.ljust(w) for v, w in zip(r, widths, strict=True)).rstrip()
+             for r in cells]
+    return "\n".join(lines) + "\n" + PAPER_NOTE + "\n"
+
+
+def map_paper_text(map_path: str | os.PathLike[str]) -> str:
+    """:func:`paper_text` of the map at ``map_path`` (excluded runs left out); '' when
+    there is no map or no included run (nothing was reduced)."""
+    if not Path(map_path).is_file():
+        return ""
+    runs = read_map(map_path)
+    if runs.empty or runs["excluded"].astype(bool).all():
+        return ""
+    return paper_text(runs)
 
 
 def round_half_up(value: float, decimals: int) -> float:
@@ -320,6 +438,11 @@ def render_table(
         if by_speed:
             raise ExportError("the abstract layout does not split by speed", hint="drop --by-speed")
         table = abstract_table(runs, **filters)
+    elif layout == "paper":
+        if by_speed:
+            raise ExportError("the paper layout splits by speed where the map holds several",
+                              hint="drop --by-speed")
+        table = paper_table(runs, machine=fmt == "csv", **filters)
     else:
         table = group_table(runs, by_speed=by_speed, **filters)
     if table.empty:
@@ -332,7 +455,20 @@ def render_table(
         return frictionmap_csv(table)
     # The paper prints μ_K with two decimals; keep "0.30", not "0.3".
     formats = {"mu_k": ".2f"} if layout == "abstract" else None
-    return {"csv": to_csv, "markdown": to_markdown, "latex": to_latex}[fmt](table, formats)
+    text = {"csv": to_csv, "markdown": to_markdown, "latex": to_latex}[fmt](table, formats)
+    if layout == "paper" and fmt == "latex":
+        text = _latex_symbols(text)
+    elif layout == "paper" and fmt == "markdown":
+        text += "\n" + markdown_cell(PAPER_NOTE) + "\n"
+    return text
+
+
+def _latex_symbols(text: str) -> str:
+    """The paper layout's symbols in LaTeX math (after escaping: nothing else is touched)."""
+    for plain, latex in (("μ\\_S", r"$\mu_S$"), ("μ\\_K", r"$\mu_K$"), ("±", r"$\pm$"),
+                         ("−", r"$-$"), ("°C", r"$^\circ$C")):
+        text = text.replace(plain, latex)
+    return text
 
 
 def export_table(

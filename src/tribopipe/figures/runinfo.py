@@ -12,6 +12,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from ..numeric import finite_or_none, is_finite
+from ..rounding import known_u, plus_minus
 
 
 @dataclass(frozen=True)
@@ -108,20 +109,23 @@ class TraceMarks:
 
     def line(self) -> str:
         """One line of what was read: ``μ_S = 0.702 ± 0.021 (k = 2) at 0.0987 mm · μ_K =
-        0.480 over 0.251–8.39 mm`` (``± U`` where an uncertainty is known, ``not found``
-        for a missing reading)."""
+        0.480 over 0.251–8.39 mm`` (``± U`` where an uncertainty is known, rounded the GUM
+        way by :func:`tribopipe.rounding.plus_minus`; ``not found`` for a missing
+        reading)."""
         if is_finite(self.mu_s):
             static = f"μ_S = {float(self.mu_s):.3f}"  # type: ignore[arg-type]
-            if self.expanded(self.u_mu_s) is not None:
-                static += f" ± {self.expanded(self.u_mu_s):.3f} (k = 2)"
+            u_s = self.expanded(self.u_mu_s)
+            if u_s is not None and known_u(u_s):
+                static = f"μ_S = {plus_minus(float(self.mu_s), u_s)} (k = 2)"  # type: ignore[arg-type]
             if is_finite(self.mu_s_distance_mm):
                 static += f" at {float(self.mu_s_distance_mm):.3g} mm"  # type: ignore[arg-type]
         else:
             static = "μ_S not found"
         if is_finite(self.mu_k):
             kinetic = f"μ_K = {float(self.mu_k):.3f}"  # type: ignore[arg-type]
-            if self.expanded(self.u_mu_k) is not None:
-                kinetic += f" ± {self.expanded(self.u_mu_k):.3f} (k = 2)"
+            u_k = self.expanded(self.u_mu_k)
+            if u_k is not None and known_u(u_k):
+                kinetic = f"μ_K = {plus_minus(float(self.mu_k), u_k)} (k = 2)"  # type: ignore[arg-type]
             if self.window is not None:
                 kinetic += f" over {self.window[0]:.3g}–{self.window[1]:.3g} mm"
         else:

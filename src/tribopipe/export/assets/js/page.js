@@ -178,18 +178,18 @@ function renderResult(res, error) {
     });
     return;
   }
-  muK.textContent = f3(res.mu_k.value) +
-    (res.mu_k.uncertainty === null ? "" : " ± " + f3(res.mu_k.uncertainty));
+  muK.textContent = estimateText(res.mu_k);
   muK.dataset.value = pyRepr(res.mu_k.value);
-  muK.dataset.uncertainty = res.mu_k.uncertainty === null ? "" : pyRepr(res.mu_k.uncertainty);
+  muK.dataset.uncertainty = res.mu_k.expanded === null ? "" : pyRepr(res.mu_k.expanded);
   // GUM combined standard uncertainty (k = 1) and the expanded U = 2u, beside the CI
-  muKu.textContent = res.mu_k.u_combined === null ? "unknown (a group used has no budget)" :
-    f3(res.mu_k.u_combined) + " (U = " + f3(2 * res.mu_k.u_combined) + ", k = 2)";
+  muKu.textContent = "interpolation u = " + pyG(res.mu_k.u_interpolation, 2) +
+    (res.mu_k.budgets_known ? "" : "; the runs carry no budget: U holds the repeat scatter and the interpolation only") +
+    "; repeats' 95 % CI half-width " + (res.mu_k.uncertainty === null ? "unknown" : f3(res.mu_k.uncertainty));
   muKu.dataset.u = res.mu_k.u_combined === null ? "" : pyRepr(res.mu_k.u_combined);
   muK.dataset.clampedPressure = String(res.mu_k.clamped_pressure);
   muK.dataset.clampedTemperature = String(res.mu_k.clamped_temperature);
   muS.textContent = res.mu_s === null ? "unknown (no group of this pair holds it)" :
-    f3(res.mu_s.value) + (res.mu_s.uncertainty === null ? "" : " ± " + f3(res.mu_s.uncertainty));
+    estimateText(res.mu_s);
   var what = [];
   if (res.mu_k.clamped_pressure) what.push("pressure");
   if (res.mu_k.clamped_temperature) what.push("temperature");

@@ -71,7 +71,7 @@ function drawPairPlot(res) {
   groups.forEach(function (g) { ys.push(g.mu_k_mean + (g.mu_k_std || 0)); });
   if (res) {
     xs.push(res.pressure_kPa);
-    ys.push(res.mu_k.value + (res.mu_k.uncertainty || 0));
+    ys.push(res.mu_k.value + (res.mu_k.expanded || 0));
   }
   var xMax = Math.max.apply(null, xs.filter(finite).concat([1e-9])) * 1.08;
   var yMax = Math.max.apply(null, ys.filter(finite).concat([1e-9])) * 1.12 + 0.05 * temps.length;
@@ -117,9 +117,9 @@ function drawPairPlot(res) {
   if (res) {
     var px = plot.x(res.pressure_kPa);
     var py = plot.y(res.mu_k.value);
-    if (res.mu_k.uncertainty !== null) {
-      svg("path", { d: "M" + px + "," + plot.y(res.mu_k.value - res.mu_k.uncertainty) + "V" +
-        plot.y(res.mu_k.value + res.mu_k.uncertainty), stroke: "#000", "stroke-width": 1.5 }, plot.s);
+    if (res.mu_k.expanded !== null) { // value ± U, bounded at 0 (rounding.lower_bound)
+      svg("path", { d: "M" + px + "," + plot.y(Math.max(0, res.mu_k.value - res.mu_k.expanded)) + "V" +
+        plot.y(res.mu_k.value + res.mu_k.expanded), stroke: "#000", "stroke-width": 1.5 }, plot.s);
     }
     var dmd = svg("path", { d: "M" + px + "," + (py - 7) + "l7,7l-7,7l-7,-7z", fill: "#000",
       stroke: "#fff", "stroke-width": 1 }, plot.s);

@@ -1,4 +1,6 @@
-/* tribopipe query, redone: the interpolation of tribopipe/query.py on its own points. */
+/* tribopipe query, redone: the rule of tribopipe/interpolation.py and tribopipe/query.py on
+   the pair's points, and the GUM rounding of tribopipe/rounding.py (tests/test_interpolation.py
+   runs this file in node and holds it equal to the Python). */
 
 function QueryError(message) { this.name = "QueryError"; this.message = message; }
 QueryError.prototype = Object.create(Error.prototype);
@@ -9,24 +11,36 @@ function sortedUnique(values) {
   return Array.from(new Set(values)).sort(function (a, b) { return a - b; });
 }
 
-/* query._bracket: [[index, weight], ...] into sorted unique xs for x, and clamped. */
+/* interpolation.bracket: [[index, weight], ...] into sorted unique xs for x, and clamped. */
 function bracket(xs, x) {
   var n = xs.length;
   if (n === 1) return [[[0, 1.0]], x !== xs[0]];
   if (x <= xs[0]) return [[[0, 1.0]], x < xs[0]];
   if (x >= xs[n - 1]) return [[[n - 1, 1.0]], x > xs[n - 1]];
   var hi = 0;
-  while (hi < n && xs[hi] <= x) hi += 1; // numpy searchsorted(side="right")
+  while (hi < n && xs[hi] <= x) hi += 1;
   var lo = hi - 1;
   if (x === xs[lo]) return [[[lo, 1.0]], false];
   var wHi = (x - xs[lo]) / (xs[hi] - xs[lo]);
   return [[[lo, 1.0 - wHi], [hi, wHi]], false];
 }
 
-/* query.interpolation_weights: [weights, clampedPressure, clampedTemperature]. */
-function interpolationWeights(ps, ts, p, t) {
+/* interpolation._pressure_segment: {lo, hi, w, log, span, clamped} (positions into ps). */
+function pressureSegment(ps, mus, p) {
+  var b = bracket(ps, p);
+  if (b[0].length === 1) return {lo: b[0][0][0], hi: null, w: 0.0, log: false, span: 0.0, clamped: b[1]};
+  var lo = b[0][0][0];
+  var hi = b[0][1][0];
+  if (ps[lo] > 0 && mus[lo] > 0 && mus[hi] > 0) {
+    var span = Math.log(ps[hi] / ps[lo]);
+    return {lo: lo, hi: hi, w: Math.log(p / ps[lo]) / span, log: true, span: span, clamped: false};
+  }
+  return {lo: lo, hi: hi, w: 1.0 - b[0][0][1], log: false, span: 0.0, clamped: false};
+}
+
+/* interpolation.stencil: {segments: [{tWeight, lo, hi, w, log, span}], clampedP, clampedT}. */
+function stencil(ps, ts, mus, p, t) {
   var n = ps.length;
-  var weights = new Array(n).fill(0);
   var all = [];
   for (var i = 0; i < n; i += 1) all.push(i);
   var sets = [[all, 1.0]];
@@ -51,51 +65,174 @@ function interpolationWeights(ps, ts, p, t) {
     });
   }
   var clampedP = false;
-  sets.forEach(function (set) {
+  var segments = sets.map(function (set) {
     var idx = set[0].slice().sort(function (a, b) { return ps[a] - ps[b]; });
-    var pb = bracket(idx.map(function (k) { return ps[k]; }), p);
-    clampedP = clampedP || pb[1];
-    pb[0].forEach(function (pw) { weights[idx[pw[0]]] += set[1] * pw[1]; });
+    var seg = pressureSegment(idx.map(function (k) { return ps[k]; }),
+      idx.map(function (k) { return mus[k]; }), p);
+    clampedP = clampedP || seg.clamped;
+    return {tWeight: set[1], lo: idx[seg.lo], hi: seg.hi === null ? null : idx[seg.hi],
+      w: seg.w, log: seg.log, span: seg.span};
   });
-  return [weights, clampedP, clampedT];
+  return {segments: segments, clampedP: clampedP, clampedT: clampedT};
 }
 
-/* query._estimate over a pair's points (each {pressure_kPa, temperature_C, mean, half, u, n}). */
-function estimate(points, p, t) {
-  var w = interpolationWeights(
+/* Stencil.weights: each point's share of the value. */
+function stencilWeights(st, n) {
+  var out = new Array(n).fill(0);
+  st.segments.forEach(function (s) {
+    out[s.lo] += s.tWeight * (s.hi !== null ? 1.0 - s.w : 1.0);
+    if (s.hi !== null) out[s.hi] += s.tWeight * s.w;
+  });
+  return out;
+}
+
+/* interpolation.segment_value */
+function segmentValue(s, mus) {
+  if (s.hi === null) return mus[s.lo];
+  if (s.log) return Math.exp((1.0 - s.w) * Math.log(mus[s.lo]) + s.w * Math.log(mus[s.hi]));
+  return (1.0 - s.w) * mus[s.lo] + s.w * mus[s.hi];
+}
+
+/* interpolation.evaluate and interpolation.interpolation_u */
+function evaluateStencil(st, mus) {
+  return st.segments.reduce(function (acc, s) { return acc + s.tWeight * segmentValue(s, mus); }, 0);
+}
+
+function interpolationU(st, mus, kappa) {
+  var total = 0.0;
+  st.segments.forEach(function (s) {
+    if (s.hi === null || !s.log) return;
+    var bend = 0.5 * kappa * s.w * (1.0 - s.w) * s.span * s.span;
+    total += s.tWeight * Math.abs(segmentValue(s, mus)) * bend;
+  });
+  return total;
+}
+
+/* query._estimate over a pair's points (each {pressure_kPa, temperature_C, mean, half, u,
+   budget, n}) with the map's curvature kappa. */
+function estimate(points, p, t, kappa) {
+  var mus = points.map(function (q) { return q.mean; });
+  var st = stencil(
     points.map(function (q) { return q.pressure_kPa; }),
     points.map(function (q) { return q.temperature_C === null ? NaN : q.temperature_C; }),
-    p, t);
-  var value = 0;
+    mus, p, t);
+  var w = stencilWeights(st, points.length);
   var unc = 0;
   var uncKnown = true;
-  var uComb = 0;
+  var uGroups = 0;
   var uKnown = true;
+  var budgets = true;
   var used = [];
   points.forEach(function (q, i) {
-    if (!(w[0][i] > 0)) return;
-    value += w[0][i] * q.mean;
-    if (finite(q.half)) unc += w[0][i] * q.half; else uncKnown = false;
-    if (finite(q.u)) uComb += w[0][i] * q.u; else uKnown = false;
+    if (!(w[i] > 0)) return;
+    if (finite(q.half)) unc += w[i] * q.half; else uncKnown = false;
+    if (finite(q.u)) uGroups += w[i] * q.u; else uKnown = false;
+    if (!q.budget) budgets = false;
     used.push({
       pressure_kPa: q.pressure_kPa,
       temperature_C: finite(q.temperature_C) ? q.temperature_C : null,
       mean: q.mean,
       ci95_half_width: finite(q.half) ? q.half : null,
       n: q.n,
-      weight: w[0][i],
+      weight: w[i],
       u: finite(q.u) ? q.u : null,
       run_ids: q.run_ids,
     });
   });
+  var uInterp = interpolationU(st, mus, kappa);
+  var expanded = uKnown ? 2.0 * Math.hypot(uGroups, uInterp) : null;
+  if (expanded !== null && !(expanded >= U_FLOOR)) expanded = null; // rounding.known_u
   return {
-    value: value,
+    value: evaluateStencil(st, mus),
     uncertainty: uncKnown ? unc : null,
     used: used,
-    clamped_pressure: w[1],
-    clamped_temperature: w[2],
-    u_combined: uKnown ? uComb : null,
+    clamped_pressure: st.clampedP,
+    clamped_temperature: st.clampedT,
+    u_combined: uKnown && budgets ? uGroups : null,
+    u_interpolation: uInterp,
+    u_groups: uKnown ? uGroups : null,
+    expanded: expanded,
+    budgets_known: budgets,
+    n_min: Math.min.apply(null, used.map(function (u) { return u.n; })),
   };
+}
+
+/* rounding.U_FLOOR: a smaller U is identical repeats or floating-point noise */
+var U_FLOOR = 1e-6;
+
+/* rounding.round_gum: [valueText, UText], U to two significant digits, the value to the
+   same decimal, half away from zero on the shortest decimal text of each number. */
+function decimalParts(x) {
+  var m = /^(-?)(\d+)(?:\.(\d+))?(?:e([+-]\d+))?$/.exec(String(x));
+  var digits = (m[2] + (m[3] || "")).replace(/^0+(?=\d)/, "");
+  var exp = (m[4] ? Number(m[4]) : 0) - (m[3] || "").length; // value = digits × 10^exp
+  return {neg: m[1] === "-", digits: digits, exp: exp};
+}
+
+/* the decimal x rounded half away from zero to a multiple of 10^q, as [neg, BigInt units] */
+function quantize(x, q) {
+  var d = decimalParts(x);
+  var units;
+  if (d.exp >= q) {
+    units = BigInt(d.digits) * (10n ** BigInt(d.exp - q));
+  } else {
+    var cut = q - d.exp;
+    var scale = 10n ** BigInt(cut);
+    var whole = BigInt(d.digits);
+    units = whole / scale;
+    if ((whole % scale) * 2n >= scale) units += 1n;
+  }
+  return [d.neg, units];
+}
+
+function fixedText(neg, units, q) {
+  var text = units.toString();
+  if (q >= 0) {
+    text = units === 0n ? "0" : text + "0".repeat(q);
+  } else {
+    var dec = -q;
+    text = text.padStart(dec + 1, "0");
+    text = text.slice(0, text.length - dec) + "." + text.slice(text.length - dec);
+  }
+  return (neg && units !== 0n ? "-" : "") + text;
+}
+
+function adjusted(x) { // Decimal.adjusted(): the power of ten of the leading digit
+  var d = decimalParts(x);
+  return d.exp + d.digits.length - 1;
+}
+
+function roundGum(value, U) {
+  var q = adjusted(U) - 1;
+  var u = quantize(U, q);
+  if (u[1].toString().length > 2) { q += 1; u = quantize(U, q); }
+  var v = quantize(value, q);
+  return [fixedText(v[0], v[1], q), fixedText(u[0], u[1], q)];
+}
+
+/* rounding.plus_minus: "0.53 ± 0.11", bounded at zero as "0.05 +0.11/−0.05" */
+function plusMinus(value, U, asciiOnly) {
+  var r = roundGum(value, U);
+  var minus = asciiOnly ? "-" : "\u2212";
+  if (Number(r[0]) < Number(r[1])) return r[0] + " +" + r[1] + "/" + minus + r[0];
+  return r[0] + (asciiOnly ? " +/- " : " \u00b1 ") + r[1];
+}
+
+/* query.estimate_text */
+function estimateText(est, asciiOnly) {
+  if (est.expanded !== null) return plusMinus(est.value, est.expanded, asciiOnly);
+  return pyFixed(est.value, 3) + " (" + (est.n_min < 2 ? "n = 1, no repeat scatter" : "uncertainty unknown") + ")";
+}
+
+/* query.uncertainty_notes */
+function uncertaintyNotes(est) {
+  var notes = [];
+  if (est.n_min < 2) notes.push("n = 1, no repeat scatter: a group used has a single run");
+  if (!est.budgets_known) {
+    notes.push("no uncertainty budget for the runs of a group used (e.g. an imported " +
+      "map): U holds the repeat scatter and the interpolation only");
+  }
+  return notes;
 }
 
 function key(name) { return String(name).trim().toLowerCase(); }
@@ -127,10 +264,15 @@ function query(pin, disc, p, t) {
   var pair = PAIRS[index];
   var notes = [];
   if (pair.left_out) notes.push(pair.left_out + " group(s) without a temperature were left out");
-  var muK = estimate(pair.mu_k_points, p, t);
-  var muS = pair.mu_s_points.length ? estimate(pair.mu_s_points, p, t) : null;
+  var muK = estimate(pair.mu_k_points, p, t, DATA.curvature.mu_k);
+  var muS = pair.mu_s_points.length ? estimate(pair.mu_s_points, p, t, DATA.curvature.mu_s) : null;
   if (muS === null) notes.push("mu_s unknown: no group of this pair holds a static coefficient");
-  if (muK.uncertainty === null) notes.push("uncertainty unknown: a group used has fewer than 2 runs");
+  notes = notes.concat(uncertaintyNotes(muK));
+  [muK, muS].forEach(function (est) { // QueryResult.to_dict's text and lower
+    if (est === null) return;
+    est.text = estimateText(est);
+    est.lower = est.expanded === null ? null : Math.max(0.0, est.value - est.expanded);
+  });
   if (muK.clamped_pressure) {
     notes.push("pressure outside the range measured (at a temperature used): edge value held");
   }

@@ -92,9 +92,10 @@ function conditionLines(res, safe) {
   var lines = [
     "pair: pin " + safe(res.pin) + " on disc " + safe(res.disc),
     "condition: contact pressure " + pyG(res.pressure_kPa) + " kPa, temperature " + t,
-    "mu_k = " + num(res.mu_k.value) +
-      (res.mu_k.uncertainty === null ? "" : " +/- " + num(res.mu_k.uncertainty) + " (95 % CI)"),
-    "mu_s = " + (res.mu_s === null ? "unknown (not in the map)" : num(res.mu_s.value)),
+    "mu_k = " + num(res.mu_k.value) + "; " + estimateText(res.mu_k, true) +
+      (res.mu_k.expanded === null ? "" : " (U, k = 2)"),
+    "mu_s = " + (res.mu_s === null ? "unknown (not in the map)" : num(res.mu_s.value) + "; " +
+      estimateText(res.mu_s, true) + (res.mu_s.expanded === null ? "" : " (U, k = 2)")),
     "from measured groups: " + usedText(res),
   ];
   if (res.clamped) lines.push("outside the measured range: edge value held constant");
@@ -119,8 +120,8 @@ function conditionSnippet(res, fmt) {
   return lines.join("\n") + "\n";
 }
 
-var CSV_COLUMNS = ["pin", "disc", "pressure_kPa", "temperature_C", "mu_k", "mu_k_ci95_half_width",
-  "mu_s", "mu_s_ci95_half_width", "clamped_pressure", "clamped_temperature", "measured_groups",
+var CSV_COLUMNS = ["pin", "disc", "pressure_kPa", "temperature_C", "mu_k", "mu_k_U_k2",
+  "mu_k_ci95_half_width", "mu_s", "mu_s_U_k2", "mu_s_ci95_half_width", "clamped_pressure", "clamped_temperature", "measured_groups",
   "notes", "map", "tribopipe_version"];
 
 /* One CSV cell: numbers at full precision, text quoted where needed; text that a
@@ -136,7 +137,8 @@ function csvCell(v) {
 
 function csvText(res) {
   var row = [res.pin, res.disc, res.pressure_kPa, res.temperature_C, res.mu_k.value,
-    res.mu_k.uncertainty, res.mu_s ? res.mu_s.value : null, res.mu_s ? res.mu_s.uncertainty : null,
+    res.mu_k.expanded, res.mu_k.uncertainty, res.mu_s ? res.mu_s.value : null,
+    res.mu_s ? res.mu_s.expanded : null, res.mu_s ? res.mu_s.uncertainty : null,
     res.mu_k.clamped_pressure, res.mu_k.clamped_temperature, usedText(res), res.notes.join("; "),
     DATA.source, DATA.tribopipe_version];
   return CSV_COLUMNS.join(",") + "\r\n" + row.map(csvCell).join(",") + "\r\n";

@@ -7,6 +7,13 @@ function qcText(g) {
   return out.join(", ");
 }
 
+/* A group mean with its U (k = 2) as query.estimate_text writes it ('' without a mean). */
+function groupText(g, q) {
+  var mean = g[q + "_mean"];
+  if (!finite(mean)) return "";
+  return estimateText({value: mean, expanded: g[q + "_U"], n_min: g[q + "_n"]});
+}
+
 var COLUMNS = [
   { key: "pin", label: "pin", text: true },
   { key: "disc", label: "disc", text: true },
@@ -14,13 +21,13 @@ var COLUMNS = [
   { key: "pressure_kPa", label: "p [kPa]", fmt: function (v) { return v === null ? "" : pyG(v, 4); } },
   { key: "temperature_C", label: "T [°C]", fmt: g6 },
   { key: "mu_k_n", label: "n", fmt: String },
-  { key: "mu_k_mean", label: "μ_K mean", fmt: f3 },
+  { key: "mu_k_mean", label: "μ_K ± U (k = 2)", show: function (g) { return groupText(g, "mu_k"); } },
   { key: "mu_k_std", label: "μ_K SD", fmt: f3 },
-  { key: "mu_k_ci95_low", label: "μ_K CI low", fmt: f3 },
-  { key: "mu_k_ci95_high", label: "μ_K CI high", fmt: f3 },
+  { key: "mu_k_ci95_low", label: "μ_K 95 % CI low (repeats)", fmt: f3 },
+  { key: "mu_k_ci95_high", label: "μ_K 95 % CI high (repeats)", fmt: f3 },
   { key: "mu_k_cv", label: "μ_K CV", fmt: f3 },
   { key: "mu_s_n", label: "μ_S n", fmt: String },
-  { key: "mu_s_mean", label: "μ_S mean", fmt: f3 },
+  { key: "mu_s_mean", label: "μ_S ± U (k = 2)", show: function (g) { return groupText(g, "mu_s"); } },
   { key: "qc", label: "QC", text: true, get: qcText },
 ];
 
@@ -89,8 +96,8 @@ function renderTable() {
     tr.dataset.group = String(gi[1]);
     COLUMNS.forEach(function (c) {
       var v = cellValue(c, g);
-      var td = make("td", c.fmt ? (v === null || v === undefined ? "" : c.fmt(v)) : v,
-        c.text ? "tpx-t" : "");
+      var shownText = c.show ? c.show(g) : c.fmt ? (v === null || v === undefined ? "" : c.fmt(v)) : v;
+      var td = make("td", shownText, c.text ? "tpx-t" : "");
       if (c.key === "qc") td.className += " tpx-qc";
       tr.appendChild(td);
     });

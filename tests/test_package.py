@@ -518,11 +518,15 @@ def test_merge_lab_is_refused_for_a_package_and_for_a_bad_name(package, source_m
 
 
 def test_a_friction_map_given_to_validate_is_named_for_what_it_is(tmp_path):
-    """`map validate` on a Parquet map says what it got and what to run, not "not valid
-    JSON"."""
+    """`map validate` on a Parquet map checks its rows (a ``.parquet`` name) or, named
+    otherwise, says what it got and what to run, never "not valid JSON"."""
     map_path = tmp_path / "friction_map.parquet"
     shutil.copy(Path(__file__).parent / "data" / "friction_map_v3.parquet", map_path)
     code, lines = validate(map_path)
+    assert code == 0 and lines[-1].startswith("friction map ") and "every row passes" in lines[-1]
+    other = tmp_path / "friction_map.bin"
+    shutil.copy(map_path, other)
+    code, lines = validate(other)
     assert code == 1 and len(lines) == 1
-    assert lines[0].startswith("friction_map.parquet: is a Parquet file (a friction map?)")
+    assert lines[0].startswith("friction_map.bin: is a Parquet file (a friction map?)")
     assert "not valid JSON" not in lines[0] and "tribopipe map show --map" in lines[0]

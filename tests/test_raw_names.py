@@ -77,7 +77,7 @@ def test_stored_file_name_keeps_the_name_and_only_undecodable_bytes_as_text() ->
 
 
 def test_a_note_naming_a_file_with_a_newline_stays_one_line(tmp_path: Path) -> None:
-    from tribopipe.synthetic import write_rheocompass_session
+    from generators.synthetic import write_rheocompass_session
 
     from multi_exports import steps_test
 

@@ -116,10 +116,11 @@ def _one_way(m: Measurement) -> bool:
     angle = _column(m, ANGLE)
     if angle is not None:
         finite = angle[np.isfinite(angle)]
-        # the range, not the summed steps: sensor jitter adds path, not range
-        span = float(finite.max() - finite.min()) if finite.size >= 2 else 0.0
+        # the range, not the summed steps: sensor jitter adds path, not range (Python
+        # floats: a wild sample's overflow is an infinite span, not a numeric warning)
+        span = float(finite.max()) - float(finite.min()) if finite.size >= 2 else 0.0
         if span >= ROTATION_MIN_ANGLE_RAD and \
-                abs(float(finite[-1] - finite[0])) < ONE_WAY_MIN_SHARE * span:
+                abs(float(finite[-1]) - float(finite[0])) < ONE_WAY_MIN_SHARE * span:
             return False
     speed = _column(m, SPEED)
     if speed is not None:

@@ -78,7 +78,6 @@ def test_stored_file_name_keeps_the_name_and_only_undecodable_bytes_as_text() ->
 
 def test_a_note_naming_a_file_with_a_newline_stays_one_line(tmp_path: Path) -> None:
     from generators.synthetic import write_rheocompass_session
-
     from multi_exports import steps_test
 
     raw = write_rheocompass_session(tmp_path / "two\nsteps\u202e.csv", [steps_test()],

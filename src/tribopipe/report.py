@@ -283,7 +283,7 @@ def _group_table(inp: ReportInputs) -> str:
     rows = []
     u_k, _ = group_u(inp.groups, "mu_k")
     u_s, _ = group_u(inp.groups, "mu_s")
-    for i, g in enumerate(inp.groups.to_dict(orient="records")):
+    for i, g in enumerate(inp.groups.to_dict(orient="records", into=dict)):
         ids = [i for i in str(g.get("run_ids") or "").split(";") if i]
         links = " ".join(
             f'<a href="#{run_anchor(i)}">{html_text(i[:8])}</a>' for i in ids

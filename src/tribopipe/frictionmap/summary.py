@@ -97,8 +97,9 @@ def run_origin(row: dict[str, Any]) -> str:
     """Where a map row came from: ``file [test / result / interval i]`` (the parts the row
     knows; a row of a map older than schema version 4 names no test or result)."""
     interval = None if is_missing(row.get("interval")) else int(row["interval"])
-    place = interval_label(*(None if is_missing(row.get(k)) else _text(row[k])
-                             for k in ("test", "result")), interval)
+    test, result = (None if is_missing(row.get(k)) else _text(row[k])
+                    for k in ("test", "result"))
+    place = interval_label(test, result, interval)
     file = _text(row.get("source_file"))
     return f"{file} [{place}]" if place else file
 

@@ -431,6 +431,9 @@ def scan_lines(text: str, delimiter: str, data_line: DataLine) -> list[Row | Run
     """
     units, narrow = _code_units(text)
     size = len(text)
+    crs = np.flatnonzero(units == 13)
+    if crs.size and (crs[-1] == size - 1 or (units[np.minimum(crs + 1, size - 1)] != 10).any()):
+        raise NotSimple  # a CR that ends no line (not before an LF): str.splitlines's line
     ends = np.flatnonzero(units == 10)  # the LF of every line but maybe the last
     starts = np.concatenate(([0], ends + 1))
     if starts[-1] == size:  # the text ends with a line end: no line after it

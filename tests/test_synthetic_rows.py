@@ -12,7 +12,9 @@ from click.testing import CliRunner
 
 from tribopipe import frictionmap as fm
 from tribopipe.cli import main
-from tribopipe.frictionmap.synthetic_rows import FLAG_SYNTHETIC, synthetic_count
+from tribopipe.frictionmap.synthetic_rows import synthetic_count
+from tribopipe.labels import FLAG_SYNTHETIC, quality_flags
+from tribopipe.stats import group_statistics
 
 NOTE = "SYNTHETIC"
 
@@ -79,3 +81,18 @@ def test_report_says_when_rows_are_synthetic(tmp_path: Path) -> None:
     assert result.exit_code == 0, result.output
     page = out.read_text(encoding="utf-8")
     assert 'class="synthetic"' in page and f"5 of {len(fm.read_map(path))}" in page
+
+
+def test_synthetic_is_no_quality_flag_of_a_group(tmp_path: Path) -> None:
+    """A group of synthetic runs is not a 'flagged run' group: the flag says where the runs
+    came from (said once), not how they went; a real QC flag beside it still counts."""
+    assert quality_flags(f"{FLAG_SYNTHETIC};normal_force_off_nominal") == [
+        "normal_force_off_nominal"]
+    assert quality_flags(FLAG_SYNTHETIC) == [] and quality_flags(None) == []
+    runs = fm.read_map(_map(tmp_path, 0))
+    runs["flags"] = FLAG_SYNTHETIC
+    assert not group_statistics(runs)["qc_flagged"].any()
+    first = runs.index[0]
+    runs.loc[first, "flags"] = f"{FLAG_SYNTHETIC};temperature_off_nominal"
+    flagged = group_statistics(runs)["qc_flagged"]
+    assert int(flagged.sum()) == 1

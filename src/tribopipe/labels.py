@@ -27,6 +27,22 @@ FLAG_TEMPERATURE_OFF = "temperature_off_nominal"
 #: Flag of a run reduced from a synthetic export (written by a generator, not measured):
 #: a campaign with ``synthetic = true`` (the shipped demo) gives it to every run.
 FLAG_SYNTHETIC = "synthetic"
+#: Flags that say where a run came from, not how it went: no quality flag (a synthetic
+#: campaign's every run carries one; it is said once, not per run or group).
+PROVENANCE_FLAGS: frozenset[str] = frozenset({FLAG_SYNTHETIC})
+
+
+def quality_flags(flags: object) -> list[str]:
+    """The QC flags among ``flags`` (a ``;``-joined text, as a map row keeps them, or a
+    sequence of flags), in their order, without :data:`PROVENANCE_FLAGS`; none for a
+    missing value."""
+    if isinstance(flags, str):
+        items: list[str] = flags.split(";")
+    elif isinstance(flags, (list, tuple)):
+        items = [str(f) for f in flags]
+    else:
+        items = []
+    return [f for f in (i.strip() for i in items) if f and f not in PROVENANCE_FLAGS]
 
 
 @dataclass(frozen=True)

@@ -29,6 +29,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
+from .labels import quality_flags
 from .rounding import lower_bound
 
 if TYPE_CHECKING:
@@ -270,7 +271,7 @@ def _group_row(
         stats = describe_values(values[finite])
         row.update({f"{q}_{f}": v for f, v in stats.items()})
         row.update(_group_uncertainty(data[f"u_{q}"][order][finite], stats["sem"], q))
-    row["qc_flagged"] = any(str(f).strip() for f in data["flags"][order])
+    row["qc_flagged"] = any(quality_flags(f) for f in data["flags"][order])
     row["run_ids"] = ";".join(data["measurement_id"][order])
     return row
 

@@ -18,13 +18,6 @@ from .store import read_map
 if TYPE_CHECKING:
     import pandas as pd
 
-def qc_flags_only(flags: object) -> str:
-    """The ``;``-joined flags of a row without :data:`FLAG_SYNTHETIC` (which a synthetic
-    campaign's every run carries, so it is said once, not per run)."""
-    text = flags if isinstance(flags, str) else ""
-    return ";".join(f for f in text.split(";") if f and f != FLAG_SYNTHETIC)
-
-
 def campaign_note() -> str:
     """What a campaign with ``synthetic = true`` says once after its batch."""
     return (f"the campaign says synthetic = true: its runs are flagged '{FLAG_SYNTHETIC}' "

@@ -18,7 +18,8 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from tribopipe.frictionmap import import_records, published_csv_path, records_frame
+from tribopipe.frictionmap.published import import_records, published_csv_path
+from tribopipe.frictionmap.schema import records_frame
 from tribopipe.interpolation import LOO_METHODS, HeldOut, leave_one_out
 from tribopipe.query import map_curvature
 from tribopipe.stats import group_statistics

@@ -184,3 +184,22 @@ def test_the_method_pages_flags_are_the_codes_flags() -> None:
     assert sorted(listed) == sorted({*FLAGS, *from_labels})
     reduction = [row for row in table_rows(section(text, "Flags")) if row[1] == "the reduction"]
     assert sorted(TICKS.fullmatch(r[0]).group(1) for r in reduction) == sorted(FLAGS)  # type: ignore[union-attr]
+
+
+def test_no_docstring_points_to_a_name_that_is_gone() -> None:
+    """Every Sphinx-style reference to the package in ``src/`` (``:func:`tribopipe.x.f```,
+    ``:class:`~.cells.RowCells```) names a module, and a name that module defines."""
+    problems = []
+    for module, path in MODULES.items():
+        text = path.read_text(encoding="utf-8")
+        for role, target in re.findall(r":(func|class|mod|data|meth|attr):`~?([^`]+)`", text):
+            if target.startswith("."):
+                package = module if path.name == "__init__.py" else module.rsplit(".", 1)[0]
+                target = f"{package}.{target.lstrip('.')}"
+            elif not target.startswith(PACKAGE + "."):
+                continue
+            why = (None if target in MODULES else f"no module {target}") if role == "mod" \
+                else unresolved(target, short=False)
+            if why is not None:
+                problems.append(f"{path.relative_to(SRC)}: :{role}:`{target}`: {why}")
+    assert problems == []

@@ -30,7 +30,7 @@ def test_no_user_document_speaks_of_issues_branches_or_rebases() -> None:
     found = []
     for doc in USER_DOCS:
         for number, line in enumerate(doc.read_text(encoding="utf-8").splitlines(), 1):
-            # file names of stored results (scale_rebased.json) are names, not words
+            # names in backticks (files, options, commits) are names, not words
             words = re.sub(r"`[^`]*`", "", line)
             if BOOKKEEPING.search(words):
                 found.append(f"{doc.relative_to(REPO)}:{number}: {line.strip()}")

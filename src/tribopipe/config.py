@@ -135,7 +135,8 @@ class InstrumentConfig:
 
 @dataclass(frozen=True)
 class ReductionParams:
-    """Parameters of the μ_S / μ_K detection (the ``[reduction]`` table of a config).
+    """Parameters of the μ_S / μ_K detection (the ``[reduction]`` table of a config); the
+    steps they tune are described in the docstring of :mod:`tribopipe.reduction`.
 
     Attributes
     ----------

@@ -51,7 +51,7 @@ BATCH_LOCK = ".tribopipe-batch.lock"
 #: the header of ``failures.csv``
 FAILURES_HEADER: tuple[str, str] = ("file", "reason")
 #: what this tool writes at the top of an output folder, and the folders it fills
-#: the previous map, kept by every rewrite (:func:`tribopipe.frictionmap.backup_path`)
+#: the previous map, kept by every rewrite (:func:`tribopipe.frictionmap.store.backup_path`)
 MAP_BACKUP = MAP_FILE + ".bak"
 OUTPUT_FILES: frozenset[str] = frozenset({MAP_FILE, MAP_BACKUP, RUNS_CSV, FAILURES_CSV,
                                           REPORT_HTML})

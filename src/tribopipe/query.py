@@ -68,8 +68,9 @@ class Estimate:
     ``expanded`` is U (k = 2), the headline ±: 2·√(u_groups² + u_interpolation²), with
     ``u_groups`` the weighted sum of the used groups' u (exact for the correlated part that
     dominates it, the friction radius, and conservative for the rest) and
-    ``u_interpolation`` the interpolation's own (:func:`tribopipe.interpolation.
-    interpolation_u`); ``None`` when a used group's u is unknown. ``budgets_known`` is
+    ``u_interpolation`` the interpolation's own
+    (:func:`tribopipe.interpolation.interpolation_u`); ``None`` when a used group's u is
+    unknown. ``budgets_known`` is
     False when a used group's runs carry no uncertainty budget (an imported map): U then
     holds the repeat scatter and the interpolation only. ``n_min`` is the fewest runs of
     a used group (1: no repeat scatter). ``uncertainty`` is the weighted 95 % CI

@@ -90,6 +90,9 @@ def reduce_cmd(
     Exit code 1 when any file or run could not be reduced or written, a file was refused
     as a conflict, or a relabelled run kept the map's row (pass --replace to relabel
     it); the others are still reduced and stored.
+
+    How μ_S and μ_K are found: docs/method.md, which points to the method's one
+    description (the docstring of the package tribopipe.reduction).
     """
     from ..config import load_settings
     from ..frictionmap.store import read_map

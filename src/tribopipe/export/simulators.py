@@ -81,7 +81,7 @@ def export_simulator_input(
     measured pressure; single-condition formats need ``pin``, ``disc`` and
     ``pressure_kPa`` [kPa] (a missing one is an :class:`ExportError` that lists what the
     map holds), at ``temperature_C`` [°C]. ``options`` are the format's own (its
-    :class:`~tribopipe.export.simbase.Writer` declares them, e.g. ``coefficient``,
+    :class:`~tribopipe.export.registry.Writer` declares them, e.g. ``coefficient``,
     ``units``); one it does not take is refused. ``slip_rates`` holds each pair's
     measured sliding speed (:func:`~tribopipe.export.simbase.pair_slip_rates`); pairs
     without one get the founding paper's 0.007 mm/s. ``source`` (the map's path) is named

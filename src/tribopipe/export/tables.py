@@ -342,7 +342,8 @@ def spreadsheet_csv(table: pd.DataFrame) -> str:
 def frictionmap_csv(table: pd.DataFrame) -> str:
     """CSV text in the published FrictionMap style: floats as shortest round-trip text,
     text cells safe for spreadsheets (read back by
-    :func:`tribopipe.frictionmap.read_frictionmap_table`, which undoes the prefix)."""
+    :func:`tribopipe.frictionmap.published.read_frictionmap_table`, which undoes the
+    prefix)."""
     return _safe_text_cells(table).to_csv(index=False, lineterminator="\n")
 
 

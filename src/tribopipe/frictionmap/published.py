@@ -263,7 +263,7 @@ def import_records(
 
 def _validate_rows(path: Path, records: list[dict[str, Any]]) -> None:
     """Check the records of an imported table as every map row is checked
-    (:func:`~tribopipe.frictionmap.schema.validate_runs`: force > 0, temperature above
+    (:func:`~tribopipe.frictionmap.checks.validate_runs`: force > 0, temperature above
     −273.15 °C, 0 ≤ μ ≤ 10 ...); :class:`MapError` naming the file, the line (CSV) or
     row (``.mat``) and the column of the first bad one."""
     try:

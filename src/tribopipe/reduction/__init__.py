@@ -28,7 +28,7 @@ A negative median normal force (compression written as negative) is flipped like
 Torque zero offset. A torque offset shows up as torque while the disc does not move. It is
 estimated (:func:`.intervals.robust_mean` of the torque: efficient on noise, deaf to
 spikes) from, in this order: an explicit value; the set-up interval before the friction
-interval (attached by :func:`.intervals.select_friction_interval` as
+interval (attached by :func:`.intervals.friction_intervals` as
 ``meta.torque_offset``); the samples of the friction interval before the disc starts to
 move (at least ``ReductionParams.offset_min_samples``). If neither exists the offset is
 taken as 0 and ``parameters["torque_offset_source"]`` says it could not be estimated.

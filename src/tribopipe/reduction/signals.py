@@ -3,7 +3,7 @@ median, mean and maximum, Savitzky–Golay smoothing, one-sided polynomial fits,
 for a periodic line in noise.
 
 No SciPy, so that a batch worker does not pay for importing ``scipy.signal`` and
-``scipy.ndimage`` (~0.9 s per process, issue 10; pandas is loaded by the readers
+``scipy.ndimage`` (~0.9 s per process; pandas is loaded by the readers
 anyway). Edges follow SciPy's conventions (``mode="nearest"`` for the running filters,
 ``mode="interp"`` for Savitzky–Golay), and ``tests/test_signals.py`` checks every function
 against SciPy where SciPy is installed.

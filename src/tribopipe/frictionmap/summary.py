@@ -8,6 +8,7 @@ from typing import Any
 
 from ..errors import MapError
 from ..escape import display_path, printable
+from ..labels import flag_list
 from ..measurement import interval_label
 from ..stats import group_statistics, repeatability
 from .checks import validate_runs
@@ -48,8 +49,8 @@ def map_summary(path: str | os.PathLike[str], *, runs_listed: bool = False) -> s
         lines.append(f"    {pin} / {disc}: {_runs(len(sub))}, {n_cond} conditions, "
                      f"F {forces or '-'}, T {temps or '-'}")
     flag_counts: dict[str, int] = {}
-    for text in runs["flags"].dropna():
-        for f in filter(None, text.split(";")):
+    for text in runs["flags"]:
+        for f in flag_list(text):
             flag_counts[f] = flag_counts.get(f, 0) + 1
     lines.append("")
     if flag_counts:

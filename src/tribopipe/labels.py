@@ -156,11 +156,6 @@ class RunVerdict:
     normal_force_N: float | None
     flags: tuple[str, ...]
 
-    @property
-    def force_estimated(self) -> bool:
-        """True when the nominal force is the measured mean (no label gave one)."""
-        return FLAG_FORCE_ESTIMATED in self.flags
-
 
 def decide_run(labels: RunLabels, reduction_flags: Iterable[str],
                normal_force_measured_N: float | None, temperature_measured_C: float | None,

@@ -133,8 +133,12 @@ def check_map_file(path: str | os.PathLike[str]) -> tuple[list[str], str]:
     """Check the friction map (Parquet) at ``path`` as ``map publish`` would before
     writing a package: every row against the map's rules
     (:func:`~tribopipe.frictionmap.checks.validate_runs`). Returns one line per problem
-    and a verdict line. Raises :class:`MapError` for a file that is not a friction map."""
+    and a verdict line. Raises :class:`MapError` for a file that is absent or not a
+    friction map."""
     p = Path(path)
+    if not os.path.lexists(p):  # read_map takes an absent map as empty: no file to pass
+        raise MapError("file not found, expected a friction map (Parquet) or a data "
+                       "package", path=p)
     runs = read_map(p)
     problems = [problem.line(display_path(p)) for problem in validate_runs(runs)]
     note = synthetic_note(runs)

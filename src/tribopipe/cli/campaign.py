@@ -64,6 +64,7 @@ def _run(campaign: Any, jobs: int | None, plots: bool | None) -> None:
     from ..escape import display_path, printable
     from ..export.tables import map_paper_text
     from ..frictionmap.synthetic_rows import campaign_note
+    from ..labels import flag_list
     from ..layout import OutputLayout
 
     bar: Any = None
@@ -92,7 +93,7 @@ def _run(campaign: Any, jobs: int | None, plots: bool | None) -> None:
         name, reason = display_path(file), printable(reason)
         click.echo(f"failed: {reason if name in reason else f'{name}: {reason}'}", err=True)
     for file, flags in report.flagged:
-        click.echo(f"flagged: {display_path(file)}: {flags.replace(';', ', ')}")
+        click.echo(f"flagged: {display_path(file)}: {', '.join(flag_list(flags))}")
     click.echo(f"map {_shorten(report.map_path)}: {report.map_summary}")
     click.echo(f"outputs in {_shorten(report.output_dir)}/: runs.csv, failures.csv, traces/"
                + (", plots/traces/" if OutputLayout(report.output_dir).plots_dir.is_dir() else ""))

@@ -502,6 +502,16 @@ def test_map_summary_lists_pairs_flags_exclusions_and_repeatability(tmp_path):
     assert Path(path).exists()
 
 
+def test_map_summary_names_a_hostile_map_path_on_one_line(tmp_path):
+    """The map's path is written as a terminal line (:func:`tribopipe.escape.display_path`):
+    a newline or a bidi override in it neither splits the header nor reorders it."""
+    path = tmp_path / "evil\nname\u202e.parquet"
+    fm.append_records(path, [run_record(1)])
+    first, second = fm.map_summary(path).splitlines()[:2]
+    assert first.startswith("friction map ") and first.endswith("evil\\nname\\u202e.parquet")
+    assert second.startswith("  runs: 1 ")
+
+
 # --------------------------------------------------------------------------- end to end
 
 

@@ -25,7 +25,7 @@ def map_summary(path: str | os.PathLike[str], *, runs_listed: bool = False) -> s
     if not p.exists():
         raise MapError("friction map not found", path=p, hint="pass --map PATH")
     runs = read_map(p)
-    lines = [f"friction map {p}"]
+    lines = [f"friction map {display_path(p)}"]
     n_ex = int(runs["excluded"].sum())
     lines.append(f"  runs: {len(runs)} ({n_ex} excluded)")
     if runs.empty:
@@ -39,14 +39,14 @@ def map_summary(path: str | os.PathLike[str], *, runs_listed: bool = False) -> s
     for source, n in runs["source"].value_counts().sort_index().items():
         lines.append(f"  source {source}: {_runs(n)}")
     for lab, n in runs["lab"].fillna("(this lab)").value_counts().sort_index().items():
-        lines.append(f"  lab {lab}: {_runs(n)}")
+        lines.append(f"  lab {_text(lab)}: {_runs(n)}")
     lines.append("")
     lines.append("  pin / disc: runs, conditions, force [N], temperature [°C]")
     for (pin, disc), sub in pairs:
         forces = ", ".join(f"{f:g}" for f in sorted(sub["normal_force_N"].dropna().unique()))
         temps = ", ".join(f"{t:g}" for t in sorted(sub["temperature_C"].dropna().unique()))
         n_cond = int(((groups["pin"] == pin) & (groups["disc"] == disc)).sum())
-        lines.append(f"    {pin} / {disc}: {_runs(len(sub))}, {n_cond} conditions, "
+        lines.append(f"    {_text(pin)} / {_text(disc)}: {_runs(len(sub))}, {n_cond} conditions, "
                      f"F {forces or '-'}, T {temps or '-'}")
     flag_counts: dict[str, int] = {}
     for text in runs["flags"]:

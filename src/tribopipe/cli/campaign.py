@@ -50,13 +50,16 @@ def _open(target: str, options: dict[str, Any]) -> Any:
 
 
 def _shorten(path: Any) -> str:
-    """A path relative to the current directory when it is below it."""
+    """A path for a terminal line (:func:`tribopipe.escape.display_path`), relative to the
+    current directory when it is below it."""
+    from ..escape import display_path
+
     text = str(path)
     try:
         rel = os.path.relpath(text)
     except ValueError:
-        return text
-    return text if rel.startswith("..") else rel
+        return display_path(text)
+    return display_path(text if rel.startswith("..") else rel)
 
 
 def _run(campaign: Any, jobs: int | None, plots: bool | None) -> None:

@@ -43,7 +43,7 @@ from .files import write_text_atomic
 from .fit import fit_power_law
 from .frictionmap import read_map
 from .frictionmap.synthetic_rows import synthetic_note
-from .labels import flag_list
+from .labels import flag_list, quality_flags
 from .layout import OutputLayout, find_trace, read_failures
 from .query import estimate_text, pairs
 from .rounding import known_u, plus_minus
@@ -224,7 +224,7 @@ def _summary(inp: ReportInputs) -> str:
     """The campaign-summary section."""
     runs = inp.runs
     excluded = runs["excluded"].fillna(False).astype(bool)
-    flagged = runs["flags"].map(lambda f: bool(flag_list(f)))
+    flagged = runs["flags"].map(lambda f: bool(quality_flags(f)))
     pairs = runs[["pin", "disc"]].drop_duplicates()
     temps = sorted({float(t) for t in runs["temperature_C"] if not math.isnan(float(t))})
     p = runs["pressure_kPa"].astype(float)
@@ -376,7 +376,8 @@ def _pair_plots(inp: ReportInputs) -> str:
 def _flagged(inp: ReportInputs) -> str:
     """The flagged and excluded runs section."""
     runs = inp.runs
-    mask = runs["flags"].map(lambda f: bool(flag_list(f))) | runs["excluded"].fillna(
+    # a provenance flag (synthetic) is said once, in the summary: no run is listed for it
+    mask = runs["flags"].map(lambda f: bool(quality_flags(f))) | runs["excluded"].fillna(
         False).astype(bool)
     sel = runs[mask]
     if sel.empty:

@@ -109,7 +109,7 @@ def run_line(row: dict[str, Any]) -> str:
     """One run of the map on one line: the first 16 digits of its id, where it came from,
     pin / disc, nominal force [N] and temperature [°C], repeat, μ_K, μ_S and flags."""
     mu_s = "" if is_missing(row.get("mu_s")) else f", mu_s {row['mu_s']:.3f}"
-    flags = _text(row["flags"]) if not is_missing(row.get("flags")) and row["flags"] else "-"
+    flags = printable(", ".join(flag_list(row.get("flags")))) or "-"
     excluded = " (excluded)" if row.get("excluded") else ""
     return (f"{row['measurement_id']}  {run_origin(row)}  {_text(row['pin'])} / "
             f"{_text(row['disc'])}, {row['normal_force_N']:g} N, {_fmt_t(row['temperature_C'])}"

@@ -73,7 +73,7 @@ def per_file(folder: Path, repeat: int) -> dict:
     from tribopipe.config import load_settings
     from tribopipe.files import file_sha256
     from tribopipe.frictionmap import make_record
-    from tribopipe.labels import RunLabels
+    from tribopipe.labels import RunLabels, decide_run
     from tribopipe.pipeline import RunOutcome, plot_run, write_trace
     from tribopipe.readers import read_export
     from tribopipe.reduction.intervals import select_friction_interval
@@ -100,11 +100,14 @@ def per_file(folder: Path, repeat: int) -> dict:
             m = select_friction_interval(measurements)
             result = reduce_measurement(m, settings.instrument, settings.reduction)
             file_hash = file_sha256(path)
-            record = make_record(result=result, labels=labels, meta=m.meta,
+            verdict = decide_run(labels, result.flags, result.normal_force_mean_N,
+                                 result.temperature_C)
+            record = make_record(result=result, verdict=verdict, meta=m.meta,
                                  file_hash=file_hash, settings=settings)
-            outcome = RunOutcome(path=str(path), measurement=m, result=result, labels=labels,
+            outcome = RunOutcome(path=str(path), measurement=m, result=result,
                                  file_hash=file_hash, config_hash=settings.config_hash,
-                                 measurement_id=record["measurement_id"], record=record)
+                                 measurement_id=record["measurement_id"], verdict=verdict,
+                                 record=record)
             plot_run(out, outcome)  # the figure is built once per process
             steps["read"].append(cpu(lambda p=path: read_export(p), repeat))
             steps["reduce"].append(cpu(lambda ms=measurements: reduce_measurement(

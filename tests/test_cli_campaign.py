@@ -223,3 +223,19 @@ def test_a_glob_that_matches_nothing_says_so(config: Path) -> None:
     assert result.exit_code == 0
     assert "0 run(s)" in result.stdout
     assert "no file matches '*.txt'" in result.stderr
+
+
+def test_batch_names_a_hostile_map_and_output_folder_on_one_line(config: Path) -> None:
+    """The map's path and the output folder come from the config: the closing lines write
+    them as terminal text, so a newline or a bidi override neither splits nor reorders
+    them."""
+    text = config.read_text(encoding="utf-8").replace(
+        'output_dir = "out"', 'output_dir = "out\\u202eput"\nmap = "m\\nap.parquet"')
+    config.write_text(text, encoding="utf-8")
+    result = invoke("batch", str(config))
+    assert "Traceback" not in result.output
+    lines = result.stdout.splitlines()
+    assert any(line.startswith("map ") and line.endswith(
+        "m\\nap.parquet: 3 added, 0 unchanged, 0 replaced, 0 kept conflicting")
+        for line in lines), result.stdout
+    assert "out\\u202eput/: runs.csv" in result.stdout and "\u202e" not in result.stdout

@@ -166,3 +166,26 @@ def test_forced_reader_settings_reach_the_reader(export: Path, tmp_path: Path) -
                                       "--delimiter", ";", "--out", str(tmp_path / "o")])
     assert wrong.exit_code == 1
     assert str(export) in wrong.stderr and "Traceback" not in wrong.output
+
+
+def test_the_table_shows_each_coefficient_with_u_as_every_output_rounds_it(
+        tmp_path: Path) -> None:
+    """The table's μ and ±U95 cells are the JSON's values rounded the GUM way
+    (:func:`tribopipe.rounding.round_gum`), as the trace plot and the map's tables print
+    them, not to a fixed 3 decimals (a high μ_S has U ≥ 0.1: two decimals)."""
+    from dataclasses import replace
+
+    from tribopipe.rounding import round_gum
+
+    export = tmp_path / "high.csv"
+    write_rheocompass_export(export, replace(RUN, mu_s=1.9, mu_k=1.4), project="p",
+                             test="t", sample="s")
+    args = ["reduce", str(export), "--no-map", "--out", str(tmp_path / "o")]
+    shown = CliRunner().invoke(main, args)
+    data = CliRunner().invoke(main, [*args, "--json"])
+    assert shown.exit_code == 0 and data.exit_code == 0, shown.output + data.output
+    run = json.loads(data.stdout)[0]
+    cells = shown.stdout.splitlines()[1].split()[1:5]
+    expected = [*round_gum(run["mu_s"], run["U95_mu_s"]), *round_gum(run["mu_k"], run["U95_mu_k"])]
+    assert cells == expected
+    assert run["U95_mu_s"] >= 0.1 and len(cells[0].split(".")[1]) == 2

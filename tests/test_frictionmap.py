@@ -502,6 +502,30 @@ def test_map_summary_lists_pairs_flags_exclusions_and_repeatability(tmp_path):
     assert Path(path).exists()
 
 
+def test_map_show_lists_a_runs_flags_as_every_output_writes_them(tmp_path):
+    """``map show --runs`` writes a run's flags as a list (``a, b``), as the reduce
+    table, the report and the batch's flagged lines do, not as the map's cell text."""
+    from tribopipe.frictionmap.summary import run_line
+
+    path = tmp_path / "map.parquet"
+    fm.append_records(path, [run_record(1)])
+    row = fm.read_map(path).to_dict(orient="records")[0]
+    row["flags"] = "normal_force_off_nominal;temperature_off_nominal"
+    assert run_line(row).endswith("; flags normal_force_off_nominal, temperature_off_nominal")
+    row["flags"] = ""
+    assert run_line(row).endswith("; flags -")
+
+
+def test_map_summary_names_a_hostile_map_path_on_one_line(tmp_path):
+    """The map's path is written as a terminal line (:func:`tribopipe.escape.display_path`):
+    a newline or a bidi override in it neither splits the header nor reorders it."""
+    path = tmp_path / "evil\nname\u202e.parquet"
+    fm.append_records(path, [run_record(1)])
+    first, second = fm.map_summary(path).splitlines()[:2]
+    assert first.startswith("friction map ") and first.endswith("evil\\nname\\u202e.parquet")
+    assert second.startswith("  runs: 1 ")
+
+
 # --------------------------------------------------------------------------- end to end
 
 

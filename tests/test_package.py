@@ -530,3 +530,12 @@ def test_a_friction_map_given_to_validate_is_named_for_what_it_is(tmp_path):
     assert code == 1 and len(lines) == 1
     assert lines[0].startswith("friction_map.bin: is a Parquet file (a friction map?)")
     assert "not valid JSON" not in lines[0] and "tribopipe map show --map" in lines[0]
+
+
+def test_validate_refuses_a_friction_map_that_is_not_there(tmp_path):
+    """An absent ``.parquet`` path is not a map whose rows all pass: one line naming the
+    file, exit code 1."""
+    code, lines = validate(tmp_path / "nowhere.parquet")
+    assert code == 1 and len(lines) == 1
+    assert "nowhere.parquet" in lines[0] and "file not found" in lines[0]
+    assert "every row passes" not in lines[0]

@@ -74,7 +74,8 @@ def test_trace_plot_from_a_reduction_result(tmp_path):
 def test_a_boundary_reading_is_marked_on_the_trace_plot(tmp_path):
     """Issue 14: a μ_S on its search limit and a μ_K window at the trace's end are marked
     (hollow marker, dotted line, hatched window, notes); U = 2u drawn as bar and band."""
-    from tribopipe.figures import TraceMarks, flag_tuple, trace_figure
+    from tribopipe.figures import TraceMarks, trace_figure
+    from tribopipe.labels import flag_list
 
     settings = load_settings()
     raw = tmp_path / "run.csv"
@@ -98,7 +99,7 @@ def test_a_boundary_reading_is_marked_on_the_trace_plot(tmp_path):
         return figure.draw(trace["sliding_distance_mm"].to_numpy(), trace["mu"].to_numpy(),
                            marks)
 
-    drawn((*flag_tuple(result.flags), "peak_at_search_limit"))
+    drawn((*flag_list(result.flags), "peak_at_search_limit"))
     assert figure.limit_note.get_visible() and figure.limit_line.get_visible()
     assert figure.mu_s.get_markerfacecolor() == "white"
     assert figure.limit_note.get_text() == "$\\mu_S$ at search limit"

@@ -96,3 +96,18 @@ def test_synthetic_is_no_quality_flag_of_a_group(tmp_path: Path) -> None:
     runs.loc[first, "flags"] = f"{FLAG_SYNTHETIC};temperature_off_nominal"
     flagged = group_statistics(runs)["qc_flagged"]
     assert int(flagged.sum()) == 1
+
+
+def test_report_lists_no_run_for_the_synthetic_flag_alone(tmp_path: Path) -> None:
+    """The report counts and lists runs with QC flags as the groups and the batch do
+    (:func:`tribopipe.labels.quality_flags`): a synthetic run is said once, in the
+    summary's note, not listed as a flagged run."""
+    path = _map(tmp_path, 5)
+    runs = fm.read_map(path)
+    assert not any(quality_flags(f) for f in runs["flags"])  # only the synthetic flag
+    out = tmp_path / "report.html"
+    result = invoke("report", "--map", str(path), "-o", str(out))
+    assert result.exit_code == 0, result.output
+    page = out.read_text(encoding="utf-8")
+    assert "<dt>runs with QC flags</dt><dd>0</dd>" in page
+    assert "No run carries a QC flag or is excluded." in page

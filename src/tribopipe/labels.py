@@ -32,17 +32,32 @@ FLAG_SYNTHETIC = "synthetic"
 PROVENANCE_FLAGS: frozenset[str] = frozenset({FLAG_SYNTHETIC})
 
 
-def quality_flags(flags: object) -> list[str]:
-    """The QC flags among ``flags`` (a ``;``-joined text, as a map row keeps them, or a
-    sequence of flags), in their order, without :data:`PROVENANCE_FLAGS`; none for a
-    missing value."""
+#: How a map row, ``runs.csv`` and the campaign state keep a run's flags in one text cell.
+FLAGS_SEPARATOR = ";"
+
+
+def flags_text(flags: Iterable[str]) -> str:
+    """``flags`` as the one text cell a map row keeps (``""`` for none)."""
+    return FLAGS_SEPARATOR.join(flags)
+
+
+def flag_list(flags: object) -> list[str]:
+    """The flags in ``flags`` (a text cell as :func:`flags_text` writes it, or a sequence
+    of flags), in their order, without empties; none for a missing value (``None``,
+    NaN)."""
     if isinstance(flags, str):
-        items: list[str] = flags.split(";")
+        items: list[str] = flags.split(FLAGS_SEPARATOR)
     elif isinstance(flags, (list, tuple)):
         items = [str(f) for f in flags]
     else:
         items = []
-    return [f for f in (i.strip() for i in items) if f and f not in PROVENANCE_FLAGS]
+    return [f for f in (i.strip() for i in items) if f]
+
+
+def quality_flags(flags: object) -> list[str]:
+    """The QC flags among ``flags`` (as :func:`flag_list` takes them), in their order,
+    without :data:`PROVENANCE_FLAGS`; none for a missing value."""
+    return [f for f in flag_list(flags) if f not in PROVENANCE_FLAGS]
 
 
 @dataclass(frozen=True)
@@ -140,11 +155,6 @@ class RunVerdict:
     labels: RunLabels
     normal_force_N: float | None
     flags: tuple[str, ...]
-
-    @property
-    def force_estimated(self) -> bool:
-        """True when the nominal force is the measured mean (no label gave one)."""
-        return FLAG_FORCE_ESTIMATED in self.flags
 
 
 def decide_run(labels: RunLabels, reduction_flags: Iterable[str],

@@ -125,26 +125,23 @@ class RunOutcome:
     path: str
     measurement: Measurement
     result: ReductionResult
-    labels: RunLabels
     file_hash: str
     config_hash: str
     measurement_id: str
+    #: its nominal force and flags, decided once (:func:`tribopipe.labels.decide_run`):
+    #: what every output of the run shows
+    verdict: RunVerdict
     #: the friction-map row; ``None`` when pin or disc is unknown (the run cannot be stored)
     record: dict[str, Any] | None = field(repr=False)
     #: where the run sits in its export
     place: RunPlace = RunPlace()
     #: whether its export holds several runs or tests (then its name says which it is)
     several: bool = False
-    #: its nominal force and flags, decided once (:func:`tribopipe.labels.decide_run`)
-    verdict: RunVerdict | None = None
 
     @property
-    def decided(self) -> RunVerdict:
-        """Its verdict (nominal force and the flags every output shows); decided with the
-        default tolerances when it was built without one."""
-        return self.verdict or decide_run(
-            self.labels, self.result.flags, finite_or_nan(self.result.normal_force_mean_N),
-            finite_or_nan(self.result.temperature_C))
+    def labels(self) -> RunLabels:
+        """The labels the run was reduced with."""
+        return self.verdict.labels
 
     @property
     def name(self) -> str:
@@ -248,7 +245,6 @@ def reduce_run(
         path=export.path,
         measurement=measurement,
         result=result,
-        labels=labels,
         file_hash=export.file_hash,
         config_hash=settings.config_hash,
         measurement_id=measurement_id(export.file_hash, measurement.meta, place.occurrence),
@@ -347,7 +343,7 @@ def run_summary(outcome: RunOutcome) -> dict[str, Any]:
         "pressure_kPa": float(r.pressure_kPa),
         "normal_force_N": float(r.normal_force_mean_N),
         "temperature_C": finite_or_none(r.temperature_C),
-        "flags": list(outcome.decided.flags),
+        "flags": list(outcome.verdict.flags),
         "mu_s_distance_mm": float(r.mu_s_distance_mm),
         "mu_s_time_s": float(r.mu_s_time_s),
         "mu_k_window_mm": [float(v) for v in r.mu_k_window_mm],
@@ -386,7 +382,7 @@ def plot_run(out_dir: str | Path | OutputLayout, outcome: RunOutcome) -> Path:
     and return its path."""
     target = OutputLayout.of(out_dir).trace_plot_path(outcome.path, outcome.measurement_id)
     plot_trace(outcome.result, target, conditions=run_conditions(outcome),
-               flags=outcome.decided.flags)
+               flags=outcome.verdict.flags)
     return target
 
 
@@ -562,7 +558,7 @@ def _reduced(outcome: RunOutcome, name: str, outputs: RunOutputs | None) -> Redu
             except Exception as exc:  # noqa: BLE001 - a picture must not cost the run its map row
                 notes.append(printable(f"{name}: trace plot {display_path(target)} not drawn "
                                        f"({type(exc).__name__}: {exc})"))
-    return ReducedRun(name=name, place=outcome.place, verdict=outcome.decided,
+    return ReducedRun(name=name, place=outcome.place, verdict=outcome.verdict,
                       measurement_id=outcome.measurement_id, summary=summary,
                       record=outcome.record, notes=tuple(notes), **paths)
 

@@ -43,6 +43,7 @@ from .files import write_text_atomic
 from .fit import fit_power_law
 from .frictionmap import read_map
 from .frictionmap.synthetic_rows import synthetic_note
+from .labels import flag_list, quality_flags
 from .layout import OutputLayout, find_trace, read_failures
 from .query import estimate_text, pairs
 from .rounding import known_u, plus_minus
@@ -216,13 +217,6 @@ def group_anchor(group: Mapping[str, Any]) -> str:
             f"{slug(_num(group['temperature_C'], 'g') or 'unknown')}C")
 
 
-def _flag_list(value: Any) -> list[str]:
-    """The QC flags of a ``;``-joined flags cell."""
-    if not isinstance(value, str):
-        return []
-    return [f for f in value.split(";") if f]
-
-
 # ---------------------------------------------------------------------------- sections
 
 
@@ -230,7 +224,7 @@ def _summary(inp: ReportInputs) -> str:
     """The campaign-summary section."""
     runs = inp.runs
     excluded = runs["excluded"].fillna(False).astype(bool)
-    flagged = runs["flags"].map(lambda f: bool(_flag_list(f)))
+    flagged = runs["flags"].map(lambda f: bool(quality_flags(f)))
     pairs = runs[["pin", "disc"]].drop_duplicates()
     temps = sorted({float(t) for t in runs["temperature_C"] if not math.isnan(float(t))})
     p = runs["pressure_kPa"].astype(float)
@@ -382,7 +376,8 @@ def _pair_plots(inp: ReportInputs) -> str:
 def _flagged(inp: ReportInputs) -> str:
     """The flagged and excluded runs section."""
     runs = inp.runs
-    mask = runs["flags"].map(lambda f: bool(_flag_list(f))) | runs["excluded"].fillna(
+    # a provenance flag (synthetic) is said once, in the summary: no run is listed for it
+    mask = runs["flags"].map(lambda f: bool(quality_flags(f))) | runs["excluded"].fillna(
         False).astype(bool)
     sel = runs[mask]
     if sel.empty:
@@ -399,7 +394,7 @@ def _flagged(inp: ReportInputs) -> str:
                 f"<td class=t>{_e(r.get('source_file'))}</td><td class=t>{_e(r['pin'])}</td>"
                 f"<td class=t>{_e(r['disc'])}</td><td>{_num(r['pressure_kPa'], '.4g')}</td>"
                 f"<td>{_run_value(r['mu_k'], r.get('u_mu_k'))}</td>"
-                f"<td class=t>{html_text(', '.join(_flag_list(r.get('flags'))))}</td>"
+                f"<td class=t>{html_text(', '.join(flag_list(r.get('flags'))))}</td>"
                 f"<td class=t>{'excluded: ' + reason if excluded else ''}</td></tr>"
             )
         body = (
@@ -459,7 +454,7 @@ def _runs(inp: ReportInputs) -> str:
                 + f"<td class=t>{_e(r.get('source'))}</td><td class=t>{_e(r.get('lab'))}</td>"
                 + (f"<td class=t>{_e(r.get('test'))}</td><td class=t>{_e(r.get('result'))}</td>"
                    if with_test else "")
-                + f"<td class=t>{html_text(', '.join(_flag_list(r.get('flags'))))}</td></tr>"
+                + f"<td class=t>{html_text(', '.join(flag_list(r.get('flags'))))}</td></tr>"
             )
             continue
         trace = pd.read_parquet(traces[mid])
@@ -467,7 +462,7 @@ def _runs(inp: ReportInputs) -> str:
             lambda buf, trace=trace, r=r: plot_trace_row(trace, r, buf, fmt="png",
                                                          dpi=TRACE_DPI)
         )
-        flags = ", ".join(_flag_list(r.get("flags"))) or "none"
+        flags = ", ".join(flag_list(r.get("flags"))) or "none"
         summary = (
             f"{html_text(mid[:8])} · {_e(r['pin'])} on {_e(r['disc'])} · "
             f"{_num(r['pressure_kPa'], '.4g')} kPa · {_num(r['temperature_C'], 'g')} °C"

@@ -30,7 +30,7 @@ from ..frictionmap.duplicates import (
 )
 from ..frictionmap.records import stored_file_name
 from ..frictionmap.store import read_map, update_map_with
-from ..labels import quality_flags
+from ..labels import flags_text, quality_flags
 from ..pipeline import FileOutcome, ReducedRun
 from .metadata import Manifest, read_manifest
 from .outputs import write_failures_csv, write_runs_csv
@@ -517,7 +517,7 @@ def _apply(campaign: Campaign, results: Sequence[FileOutcome], by_file: Mapping[
                 assert run.record is not None  # labels_from always names pin and disc
                 reduced.append(run.name)
                 records.append(run.record)
-                qc = ";".join(quality_flags(run.flags))  # synthetic: said once, not per run
+                qc = flags_text(quality_flags(run.flags))  # synthetic: said once, not per run
                 if qc:
                     flagged.append((run.name, qc))
                 notes += [n for n in run.notes if n not in notes]

@@ -19,6 +19,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from ..files import write_text_atomic
+from ..labels import flags_text
 from ..numeric import finite_json, finite_or_none
 
 if TYPE_CHECKING:
@@ -78,7 +79,7 @@ class RunEntry:
             pressure_measured_kPa=summary["pressure_kPa"],
             normal_force_measured_N=summary["normal_force_N"],
             temperature_measured_C=summary["temperature_C"],
-            flags=";".join(run.flags),
+            flags=flags_text(run.flags),
             name=run.name,
             test=place.test,
             result=place.result,

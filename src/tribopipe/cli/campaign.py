@@ -50,13 +50,16 @@ def _open(target: str, options: dict[str, Any]) -> Any:
 
 
 def _shorten(path: Any) -> str:
-    """A path relative to the current directory when it is below it."""
+    """A path for a terminal line (:func:`tribopipe.escape.display_path`), relative to the
+    current directory when it is below it."""
+    from ..escape import display_path
+
     text = str(path)
     try:
         rel = os.path.relpath(text)
     except ValueError:
-        return text
-    return text if rel.startswith("..") else rel
+        return display_path(text)
+    return display_path(text if rel.startswith("..") else rel)
 
 
 def _run(campaign: Any, jobs: int | None, plots: bool | None) -> None:
@@ -64,6 +67,7 @@ def _run(campaign: Any, jobs: int | None, plots: bool | None) -> None:
     from ..escape import display_path, printable
     from ..export.tables import map_paper_text
     from ..frictionmap.synthetic_rows import campaign_note
+    from ..labels import flag_list
     from ..layout import OutputLayout
 
     bar: Any = None
@@ -92,7 +96,7 @@ def _run(campaign: Any, jobs: int | None, plots: bool | None) -> None:
         name, reason = display_path(file), printable(reason)
         click.echo(f"failed: {reason if name in reason else f'{name}: {reason}'}", err=True)
     for file, flags in report.flagged:
-        click.echo(f"flagged: {display_path(file)}: {flags.replace(';', ', ')}")
+        click.echo(f"flagged: {display_path(file)}: {', '.join(flag_list(flags))}")
     click.echo(f"map {_shorten(report.map_path)}: {report.map_summary}")
     click.echo(f"outputs in {_shorten(report.output_dir)}/: runs.csv, failures.csv, traces/"
                + (", plots/traces/" if OutputLayout(report.output_dir).plots_dir.is_dir() else ""))

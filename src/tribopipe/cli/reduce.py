@@ -21,6 +21,20 @@ def _fmt(value: object, spec: str) -> str:
     return format(value, spec)
 
 
+def _with_u(value: float | None, expanded: float | None) -> tuple[str, str]:
+    """A coefficient and its U (k = 2) as the table's two cells: rounded the GUM way
+    (:func:`tribopipe.rounding.round_gum`, as the trace plot, ``query`` and the tables
+    print them) where U is known; the value to 3 decimals and ``-`` otherwise."""
+    from ..rounding import known_u, round_gum
+
+    if value is None:
+        return "-", "-"
+    if known_u(expanded):
+        assert expanded is not None
+        return round_gum(float(value), float(expanded))
+    return format(value, ".3f"), "-"
+
+
 @click.command("reduce")
 # FILES is checked per file by the library (a bad path fails that file only), not by click
 @click.argument("files", nargs=-1, required=True, type=click.Path())
@@ -184,15 +198,16 @@ def _print(results: list[FileOutcome], as_json: bool) -> None:
     runs = _run_labels(reduced)
     run_width = max((len(v) for v in runs.values()), default=0)
     run_head = f" {'run':<{run_width}}" if runs else ""
-    header = (f"{'file':<40}{run_head} {'mu_s':>6} {'±U95':>6} {'mu_k':>6} {'±U95':>6} "
+    header = (f"{'file':<40}{run_head} {'mu_s':>7} {'±U95':>6} {'mu_k':>7} {'±U95':>6} "
               f"{'p_kPa':>7} {'F_N_N':>6} {'T_C':>6}  flags")
     click.echo(header)
     for k, s in enumerate(summaries):
         name = s["file"] if len(s["file"]) <= 40 else "…" + s["file"][-39:]
         run = f" {runs.get(k, '-'):<{run_width}}" if runs else ""
+        mu_s, u_s = _with_u(s["mu_s"], s["U95_mu_s"])
+        mu_k, u_k = _with_u(s["mu_k"], s["U95_mu_k"])
         click.echo(printable(  # test names come from the file: one printable line
-            f"{name:<40}{run} {_fmt(s['mu_s'], '6.3f'):>6} {_fmt(s['U95_mu_s'], '6.3f'):>6} "
-            f"{_fmt(s['mu_k'], '6.3f'):>6} {_fmt(s['U95_mu_k'], '6.3f'):>6} "
+            f"{name:<40}{run} {mu_s:>7} {u_s:>6} {mu_k:>7} {u_k:>6} "
             f"{_fmt(s['pressure_kPa'], '7.2f'):>7} {_fmt(s['normal_force_N'], '6.3f'):>6} "
             f"{_fmt(s['temperature_C'], '6.1f'):>6}  {','.join(s['flags']) or '-'}"
         ))

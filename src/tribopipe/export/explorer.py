@@ -49,6 +49,7 @@ from ..escape import html_text, printable, script_json
 from ..files import write_text_atomic
 from ..fit import fit_power_law, power_law
 from ..frictionmap import read_map
+from ..labels import flag_list
 from ..query import map_curvature, pair_points, pairs, select_pair
 from ..rounding import known_u
 from ..stats import group_statistics, group_u
@@ -158,11 +159,6 @@ def _left_out(pair_groups: pd.DataFrame) -> int:
     return int(p[finite & t.isna()].nunique())
 
 
-def _flags(value: Any) -> list[str]:
-    """The QC flags of a ``;``-joined flags cell (``[]`` when missing)."""
-    return [f for f in value.split(";") if f] if isinstance(value, str) else []
-
-
 def _runs(pair_runs: pd.DataFrame) -> list[dict[str, Any]]:
     """The pair's included runs (the repeats) for the page, in a stable order, each with
     the file, test and result it came from (``None`` where the map does not say)."""
@@ -177,7 +173,7 @@ def _runs(pair_runs: pd.DataFrame) -> list[dict[str, Any]]:
             "mu_k": _plain(r["mu_k"]),
             "mu_s": _plain(r["mu_s"]),
             "repeat": _plain(r["repeat"]),
-            "flags": _flags(r.get("flags")),
+            "flags": flag_list(r.get("flags")),
             # a file's own name, raw in the map: shown as one printable line
             "file": printable(r["source_file"]) if isinstance(r.get("source_file"), str)
             else None,

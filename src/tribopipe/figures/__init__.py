@@ -22,12 +22,12 @@ from .canvas import (
     write_png,
 )
 from .decimate import minmax_decimate
-from .runinfo import TraceConditions, TraceMarks, flag_tuple
+from .runinfo import TraceConditions, TraceMarks
 from .trace import TRACE_DPI, TraceFigure, plot_trace, plot_trace_row, trace_figure
 
 __all__ = [
     "DPI", "FORMATS", "TRACE_DPI", "MU_LABEL", "PNG_COMPRESS_LEVEL", "Target", "TraceConditions",
-    "TraceFigure", "TraceMarks", "flag_tuple", "image_format", "minmax_decimate",
+    "TraceFigure", "TraceMarks", "image_format", "minmax_decimate",
     "new_figure", "plot_trace", "plot_trace_row", "png_palette", "prepare_target", "save_figure",
     "trace_figure", "write_png",
 ]

@@ -133,14 +133,6 @@ class TraceMarks:
         return f"{static} · {kinetic}"
 
 
-def flag_tuple(flags: Any) -> tuple[str, ...]:
-    """Flags given as a ``;``-joined text or a sequence, as a tuple without empties."""
-    if flags is None or (isinstance(flags, float) and flags != flags):
-        return ()
-    items = flags.split(";") if isinstance(flags, str) else [str(f) for f in flags]
-    return tuple(f.strip() for f in items if f and f.strip())
-
-
 #: Header lines are cut to this many characters (a file name can be any length).
 HEADER_CHARS = 110
 

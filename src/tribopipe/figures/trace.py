@@ -30,6 +30,7 @@ from collections.abc import Mapping, Sequence
 from typing import TYPE_CHECKING, Any
 
 from ..escape import picture_text
+from ..labels import flag_list
 from ..numeric import finite_or_none, is_finite
 from .canvas import (
     MU_LABEL,
@@ -41,7 +42,7 @@ from .canvas import (
     write_png,
 )
 from .decimate import Columns
-from .runinfo import TraceConditions, TraceMarks, flag_tuple, shorten
+from .runinfo import TraceConditions, TraceMarks, shorten
 from .typeset import Typesetter
 
 if TYPE_CHECKING:
@@ -576,7 +577,7 @@ def plot_trace(
     trace = result.trace
     marks = TraceMarks(mu_s=result.mu_s, mu_s_distance_mm=result.mu_s_distance_mm,
                        mu_k=result.mu_k, mu_k_window_mm=result.mu_k_window_mm,
-                       flags=flag_tuple(result.flags if flags is None else flags),
+                       flags=tuple(flag_list(result.flags if flags is None else flags)),
                        u_mu_s=finite_or_none(result.u_mu_s),
                        u_mu_k=finite_or_none(result.u_mu_k))
     figure = trace_figure(dpi).draw(
@@ -608,7 +609,7 @@ def plot_trace_row(
         mu_s_distance_mm=finite_or_none(row.get("mu_s_distance_mm")),
         mu_k=finite_or_none(row.get("mu_k")),
         mu_k_window_mm=(row.get("mu_k_window_start_mm"), row.get("mu_k_window_end_mm")),
-        flags=flag_tuple(row.get("flags")),
+        flags=tuple(flag_list(row.get("flags"))),
         u_mu_s=finite_or_none(row.get("u_mu_s")),
         u_mu_k=finite_or_none(row.get("u_mu_k")),
     )

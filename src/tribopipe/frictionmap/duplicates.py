@@ -20,7 +20,7 @@ from typing import TYPE_CHECKING, Any
 
 from ..stats import FORCE_DECIMALS, TEMPERATURE_DECIMALS, group_statistics
 from .records import stored_file_name
-from .schema import records_frame
+from .schema import unvalidated_frame
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -215,7 +215,9 @@ def repeat_clashes(current: pd.DataFrame, records: Sequence[Mapping[str, Any]],
             seen[key] = seen.get(key, 0) + 1
     if not clash:
         return []
-    new = records_frame(records)
+    # the records' rules are the store's to check, once, as it folds them in: here only
+    # their columns and dtypes are needed
+    new = unvalidated_frame(records)
     pairs = set(zip(new["pin"], new["disc"], strict=True))
     old = old.loc[[(p, d) in pairs for p, d in zip(old["pin"], old["disc"], strict=True)]]
     runs = pd.concat([old, new], ignore_index=True) if len(old) else new

@@ -16,7 +16,7 @@ from typing import TYPE_CHECKING, Any
 
 from .. import __version__
 from ..errors import MapError
-from ..labels import RunLabels, RunVerdict, Tolerances, decide_run
+from ..labels import RunLabels, RunVerdict, Tolerances, decide_run, flags_text
 from ..numeric import finite_or_nan
 from ..physics import contact_pressure_kPa
 from .schema import SOURCE_REDUCED, records_frame, utc_now
@@ -153,7 +153,7 @@ def make_record(
         "mu_k_window_end_s": finite_or_nan(k_end_s),
         "plateau_std": finite_or_nan(result.plateau_std),
         "plateau_drift_per_mm": finite_or_nan(result.plateau_drift_per_mm),
-        "flags": ";".join(verdict.flags),
+        "flags": flags_text(verdict.flags),
         "method": result.method,
         "source_file": stored_file_name(meta.source_file),
         "file_hash": file_hash,

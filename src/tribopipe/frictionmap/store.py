@@ -475,23 +475,6 @@ def _fold_and_write(p: Path, current: pd.DataFrame, new_frame: pd.DataFrame, rep
     return report
 
 
-def merge_map_file(
-    path: str | os.PathLike[str], other: str | os.PathLike[str], *, replace: bool = False
-) -> AppendReport:
-    """Fold another friction map (another lab's Parquet map) into the map at ``path``.
-
-    Runs with the same id are stored once; rows whose content differs are reported as
-    conflicting (and replaced only with ``replace``). The other map is validated first.
-    """
-    if os.path.realpath(other) == os.path.realpath(path):
-        raise MapError("cannot merge a friction map into itself", path=other)
-    if not os.path.lexists(other):
-        raise MapError("file not found, expected a friction map to merge", path=other)
-    # read_map validates every row of the other map (names, types, physical ranges) as
-    # records are validated, and refuses a damaged or foreign file before anything is touched
-    return append_records(path, frame_records(read_map(other)), replace=replace)
-
-
 # --------------------------------------------------------------------------- exclusions
 
 

@@ -8,6 +8,7 @@ from typing import Any
 
 from ..errors import MapError
 from ..escape import display_path, printable
+from ..labels import flag_list
 from ..measurement import interval_label
 from ..stats import group_statistics, repeatability
 from .checks import validate_runs
@@ -24,7 +25,7 @@ def map_summary(path: str | os.PathLike[str], *, runs_listed: bool = False) -> s
     if not p.exists():
         raise MapError("friction map not found", path=p, hint="pass --map PATH")
     runs = read_map(p)
-    lines = [f"friction map {p}"]
+    lines = [f"friction map {display_path(p)}"]
     n_ex = int(runs["excluded"].sum())
     lines.append(f"  runs: {len(runs)} ({n_ex} excluded)")
     if runs.empty:
@@ -38,18 +39,18 @@ def map_summary(path: str | os.PathLike[str], *, runs_listed: bool = False) -> s
     for source, n in runs["source"].value_counts().sort_index().items():
         lines.append(f"  source {source}: {_runs(n)}")
     for lab, n in runs["lab"].fillna("(this lab)").value_counts().sort_index().items():
-        lines.append(f"  lab {lab}: {_runs(n)}")
+        lines.append(f"  lab {_text(lab)}: {_runs(n)}")
     lines.append("")
     lines.append("  pin / disc: runs, conditions, force [N], temperature [°C]")
     for (pin, disc), sub in pairs:
         forces = ", ".join(f"{f:g}" for f in sorted(sub["normal_force_N"].dropna().unique()))
         temps = ", ".join(f"{t:g}" for t in sorted(sub["temperature_C"].dropna().unique()))
         n_cond = int(((groups["pin"] == pin) & (groups["disc"] == disc)).sum())
-        lines.append(f"    {pin} / {disc}: {_runs(len(sub))}, {n_cond} conditions, "
+        lines.append(f"    {_text(pin)} / {_text(disc)}: {_runs(len(sub))}, {n_cond} conditions, "
                      f"F {forces or '-'}, T {temps or '-'}")
     flag_counts: dict[str, int] = {}
-    for text in runs["flags"].dropna():
-        for f in filter(None, text.split(";")):
+    for text in runs["flags"]:
+        for f in flag_list(text):
             flag_counts[f] = flag_counts.get(f, 0) + 1
     lines.append("")
     if flag_counts:
@@ -108,7 +109,7 @@ def run_line(row: dict[str, Any]) -> str:
     """One run of the map on one line: the first 16 digits of its id, where it came from,
     pin / disc, nominal force [N] and temperature [°C], repeat, μ_K, μ_S and flags."""
     mu_s = "" if is_missing(row.get("mu_s")) else f", mu_s {row['mu_s']:.3f}"
-    flags = _text(row["flags"]) if not is_missing(row.get("flags")) and row["flags"] else "-"
+    flags = printable(", ".join(flag_list(row.get("flags")))) or "-"
     excluded = " (excluded)" if row.get("excluded") else ""
     return (f"{row['measurement_id']}  {run_origin(row)}  {_text(row['pin'])} / "
             f"{_text(row['disc'])}, {row['normal_force_N']:g} N, {_fmt_t(row['temperature_C'])}"
@@ -132,8 +133,12 @@ def check_map_file(path: str | os.PathLike[str]) -> tuple[list[str], str]:
     """Check the friction map (Parquet) at ``path`` as ``map publish`` would before
     writing a package: every row against the map's rules
     (:func:`~tribopipe.frictionmap.checks.validate_runs`). Returns one line per problem
-    and a verdict line. Raises :class:`MapError` for a file that is not a friction map."""
+    and a verdict line. Raises :class:`MapError` for a file that is absent or not a
+    friction map."""
     p = Path(path)
+    if not os.path.lexists(p):  # read_map takes an absent map as empty: no file to pass
+        raise MapError("file not found, expected a friction map (Parquet) or a data "
+                       "package", path=p)
     runs = read_map(p)
     problems = [problem.line(display_path(p)) for problem in validate_runs(runs)]
     note = synthetic_note(runs)

@@ -12,7 +12,7 @@ import os
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from ..labels import FLAG_SYNTHETIC
+from ..labels import FLAG_SYNTHETIC, flag_list
 from .store import read_map
 
 if TYPE_CHECKING:
@@ -27,9 +27,7 @@ def campaign_note() -> str:
 def synthetic_mask(runs: pd.DataFrame) -> pd.Series:
     """Boolean Series over ``runs`` (map rows): True where ``flags`` holds
     :data:`FLAG_SYNTHETIC`."""
-    return runs["flags"].map(
-        lambda text: isinstance(text, str) and FLAG_SYNTHETIC in text.split(";")
-    ).astype(bool)
+    return runs["flags"].map(lambda text: FLAG_SYNTHETIC in flag_list(text)).astype(bool)
 
 
 def synthetic_count(runs: pd.DataFrame) -> int:

@@ -38,10 +38,6 @@ if TYPE_CHECKING:
     from ..config import InstrumentConfig
 
 COVERAGE_FACTOR = 2.0
-SOURCES: tuple[str, ...] = (
-    "reading", "friction_radius", "torque_calibration", "torque_resolution",
-    "torque_offset", "normal_force",
-)
 
 
 def integrated_autocorrelation_time(values: Any, c: float = 5.0) -> float:

@@ -19,7 +19,7 @@ from ..errors import MapError
 from ..labels import RunLabels, RunVerdict, Tolerances, decide_run, flags_text
 from ..numeric import finite_or_nan
 from ..physics import contact_pressure_kPa
-from .schema import SOURCE_REDUCED, records_frame, utc_now
+from .schema import SOURCE_REDUCED, checked_record, utc_now
 
 if TYPE_CHECKING:
     from ..config import InstrumentConfig, Settings
@@ -167,11 +167,11 @@ def make_record(
         "exclusion_reason": None,
     }
     try:
-        # the rules every map row keeps, checked here so a bad run fails alone (in a
-        # batch, before the one map update that holds every run's record)
-        records_frame([record])
+        # the rules every map row keeps, checked here, once, so a bad run fails alone (in
+        # a batch, before the one map update that holds every run's record); the store
+        # takes the checked record without checking it again
+        return checked_record(record)
     except MapError as exc:
         problem = exc.problem.split(": ", 1)[-1]
         raise MapError(f"the run cannot be recorded: {problem}", path=meta.source_file,
                        column=exc.column) from None
-    return record

@@ -195,16 +195,52 @@ def is_missing(value: Any) -> bool:
         return False
 
 
+class CheckedRecord(dict[str, Any]):
+    """A run record that has kept the rules of :func:`check_runs` (built by
+    :func:`checked_record`): :func:`records_frame` does not check it again while it holds
+    what was checked, so a reduced run's row is checked once on its way into the map. It
+    keeps a copy of what was checked; a record changed since is checked again."""
+
+    __slots__ = ("_checked",)
+    _checked: dict[str, Any]
+
+    def unchanged(self) -> bool:
+        """True while the record holds exactly what was checked."""
+        # the same value objects (a NaN is equal to itself by identity here)
+        return dict.__eq__(self, self._checked) is True
+
+    def __reduce__(self) -> tuple[Any, ...]:
+        # pickled as a checked record (a batch worker's record crosses to the parent)
+        return (_rebuild_checked, (dict(self), self.unchanged()))
+
+
+def _rebuild_checked(values: dict[str, Any], unchanged: bool = True) -> CheckedRecord:
+    record = CheckedRecord(values)
+    record._checked = dict(values) if unchanged else {}
+    return record
+
+
+def checked_record(record: Mapping[str, Any], *, where: str = "record") -> CheckedRecord:
+    """``record`` checked against the row rules (:func:`records_frame`, a
+    :class:`MapError` naming the column otherwise), as a :class:`CheckedRecord`."""
+    records_frame([record], where=where)
+    return _rebuild_checked(dict(record))
+
+
 def records_frame(records: Sequence[Mapping[str, Any]], *, where: str = "record") -> pd.DataFrame:
     """Validate run records and return them as a map DataFrame (schema dtypes, in order).
 
     Every record needs every column of :data:`RUN_COLUMNS` (those of
     :data:`ADDED_IN_VERSION` may be left out: missing) with a value of its kind (a
     ``bool`` is no number, text is no ``bool``) that keeps the rules of
-    :func:`check_runs`. Raises :class:`MapError` naming the record and column otherwise;
-    nothing is written on error.
+    :func:`check_runs` (not checked again for records that are all unchanged
+    :class:`CheckedRecord`). Raises :class:`MapError` naming the record and column
+    otherwise; nothing is written on error.
     """
-    return check_runs(unvalidated_frame(records, where=where), where)
+    frame = unvalidated_frame(records, where=where)
+    if records and all(isinstance(r, CheckedRecord) and r.unchanged() for r in records):
+        return frame  # each kept the rules when it was built (checked_record)
+    return check_runs(frame, where)
 
 
 def unvalidated_frame(

@@ -1,0 +1,73 @@
+"""A reduced run's row is checked against the row rules once on its way into the map (when
+its record is built, so a bad run fails alone) and the map's rows once on read: the store
+takes the checked record as it is."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pandas as pd
+import pytest
+from click.testing import CliRunner
+
+from tribopipe.cli import main
+from tribopipe.frictionmap import schema, store
+from tribopipe.frictionmap.schema import CheckedRecord, checked_record
+
+EXAMPLE = Path(__file__).resolve().parents[1] / "raw" / "example" / "DS30_steel_5N_20C_r1.csv"
+
+
+def _count_rows_checked(monkeypatch: pytest.MonkeyPatch) -> list[int]:
+    """The number of rows of every call of the row rules (check_runs), wherever called."""
+    seen: list[int] = []
+    original = schema.check_runs
+
+    def counting(frame: pd.DataFrame, where: str = "row") -> pd.DataFrame:
+        seen.append(len(frame))
+        return original(frame, where)
+
+    monkeypatch.setattr(schema, "check_runs", counting)
+    monkeypatch.setattr(store, "check_runs", counting)
+    return seen
+
+
+def test_a_reduced_run_is_checked_once_on_its_way_in(tmp_path: Path,
+                                                     monkeypatch: pytest.MonkeyPatch) -> None:
+    map_path = tmp_path / "friction_map.parquet"
+    result = CliRunner().invoke(main, ["map", "import", "--published", "--map", str(map_path)])
+    assert result.exit_code == 0, result.output
+    n_map = len(store.read_map(map_path))
+    seen = _count_rows_checked(monkeypatch)
+    result = CliRunner().invoke(main, [
+        "reduce", str(EXAMPLE), "--pin", "Dragonskin 30", "--disc", "steel", "--force", "5",
+        "--temperature", "20", "--repeat", "1", "--map", str(map_path),
+        "--out", str(tmp_path / "out")])
+    assert result.exit_code == 0, result.output
+    assert len(store.read_map(map_path)) == n_map + 1
+    # the new run's row once (its record; the store folds it in unchecked), the map's rows
+    # on each read (reduce checks the map before any work, then reads it under the lock)
+    # and the written map only when read again (here, by the test itself)
+    assert seen.count(1) == 1 and seen.count(n_map + 1) == 1, seen
+    assert set(seen) == {1, n_map, n_map + 1}, seen
+
+
+def test_a_checked_record_changed_since_is_checked_again(monkeypatch: pytest.MonkeyPatch
+                                                        ) -> None:
+    runs = pd.read_parquet(Path(__file__).parent / "data" / "friction_map_v3.parquet")
+    row = {k: (None if pd.isna(v) else v) if not isinstance(v, str) else v
+           for k, v in runs.iloc[0].to_dict().items()}
+    record = checked_record(row)
+    assert isinstance(record, CheckedRecord) and record == row and record.unchanged()
+    seen = _count_rows_checked(monkeypatch)
+    schema.records_frame([record])
+    assert seen == []  # checked when it was built
+    # a batch worker's record crosses to the parent pickled: still checked
+    import pickle
+    assert pickle.loads(pickle.dumps(record)).unchanged()
+    for changed in ({**record, "mu_k": -1.0}, record):
+        if changed is record:
+            record["mu_k"] = -1.0
+            assert not record.unchanged()
+        with pytest.raises(schema.MapError, match="mu_k"):
+            schema.records_frame([changed])
+    assert seen == [1, 1]

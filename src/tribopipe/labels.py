@@ -12,11 +12,11 @@ table and JSON, the summary, the trace plot, the map row, ``runs.csv``) shows
 
 from __future__ import annotations
 
-import math
 from collections.abc import Iterable
 from dataclasses import dataclass
 
 from .errors import CampaignError
+from .numeric import is_finite
 from .validate import FORCE_N, MAX_REPEAT, TEMPERATURE_C, check_count, check_name, check_number
 
 #: Flag added when the nominal force was not given and the measured mean was used.
@@ -116,10 +116,6 @@ class Tolerances:
         return max(self.force_N, self.force_rel * abs(nominal_N))
 
 
-def _finite(value: float | None) -> bool:
-    return value is not None and math.isfinite(value)
-
-
 def qc_flags(labels: RunLabels, normal_force_measured_N: float | None,
              temperature_measured_C: float | None, tolerances: Tolerances) -> list[str]:
     """The off-nominal QC flags of a run: ``normal_force_off_nominal`` when the measured
@@ -128,12 +124,12 @@ def qc_flags(labels: RunLabels, normal_force_measured_N: float | None,
     measured values (``None`` or NaN) raise no flag."""
     flags: list[str] = []
     if labels.normal_force_N is not None and normal_force_measured_N is not None and \
-            _finite(normal_force_measured_N):
+            is_finite(normal_force_measured_N):
         if abs(normal_force_measured_N - labels.normal_force_N) > \
                 tolerances.force_limit_N(labels.normal_force_N):
             flags.append(FLAG_FORCE_OFF)
     if labels.temperature_C is not None and temperature_measured_C is not None and \
-            _finite(temperature_measured_C):
+            is_finite(temperature_measured_C):
         if abs(temperature_measured_C - labels.temperature_C) > tolerances.temperature_C:
             flags.append(FLAG_TEMPERATURE_OFF)
     return flags
@@ -176,7 +172,7 @@ def decide_run(labels: RunLabels, reduction_flags: Iterable[str],
     force: float | None
     if labels.normal_force_N is not None:
         force = float(labels.normal_force_N)
-    elif normal_force_measured_N is not None and _finite(normal_force_measured_N):
+    elif normal_force_measured_N is not None and is_finite(normal_force_measured_N):
         force = round(float(normal_force_measured_N), 1)
         flags.append(FLAG_FORCE_ESTIMATED)
     else:

@@ -144,7 +144,9 @@ class RunOutcome:
         default tolerances when it was built without one."""
         return self.verdict or decide_run(
             self.labels, self.result.flags, finite_or_nan(self.result.normal_force_mean_N),
-            finite_or_nan(self.result.temperature_C))
+            finite_or_nan(self.result.temperature_C),
+            speed_set_point_rpm=self.result.speed_set_point_rpm,
+            sliding_speed_measured_mm_s=self.result.sliding_speed_mm_s)
 
     @property
     def name(self) -> str:
@@ -233,7 +235,10 @@ def reduce_run(
     labels = labels or RunLabels()
     result = reduce_measurement(measurement, settings.instrument, settings.reduction)
     verdict = decide_run(labels, result.flags, finite_or_nan(result.normal_force_mean_N),
-                         finite_or_nan(result.temperature_C), tolerances, extra_flags)
+                         finite_or_nan(result.temperature_C), tolerances, extra_flags,
+                         speed_set_point_rpm=result.speed_set_point_rpm,
+                         sliding_speed_measured_mm_s=result.sliding_speed_mm_s,
+                         instrument=settings.instrument)
     record = None
     if labels.complete:
         record = make_record(

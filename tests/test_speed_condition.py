@@ -1,0 +1,111 @@
+"""The nominal sliding speed is part of a run's condition: decided once from the interval's
+set point (or the instrument config), rounded by one rule, flagged when the measured speed
+strays; groups split by it and show it only where a pair holds several speeds; maps older
+than the column read and group as the founding speed."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from test_frictionmap import reduced_result, run_record
+from tribopipe import frictionmap as fm
+from tribopipe.config import InstrumentConfig
+from tribopipe.labels import (
+    FLAG_SPEED_OFF,
+    FOUNDING_NOMINAL_SPEED_MM_S,
+    RunLabels,
+    Tolerances,
+    decide_run,
+    nominal_speed_mm_s,
+    round_significant,
+)
+from tribopipe.physics import sliding_speed_mm_s
+from tribopipe.stats import group_statistics, nominal_speeds
+
+DATA = Path(__file__).parent / "data"
+
+
+def test_nominal_speed_rounds_the_set_point_then_the_sliding_speed():
+    cell = InstrumentConfig()
+    expected = round_significant(sliding_speed_mm_s(0.005, cell.friction_radius_mm))
+    # a measured set point a little off the dialled 0.005 rpm is still 0.005 rpm
+    assert nominal_speed_mm_s(0.00503, cell) == expected
+    assert nominal_speed_mm_s(0.00497, cell) == expected
+    # no set point: the instrument's nominal speed
+    assert nominal_speed_mm_s(None, cell) == expected == FOUNDING_NOMINAL_SPEED_MM_S
+    assert nominal_speed_mm_s(float("nan"), cell) == expected
+    faster = nominal_speed_mm_s(0.15, cell)
+    assert faster == pytest.approx(30 * expected, rel=0.02)
+    assert faster == round_significant(faster)
+
+
+def test_a_measured_speed_off_its_nominal_is_flagged_once():
+    labels = RunLabels(pin="a", disc="b", normal_force_N=3.0, temperature_C=20.0)
+    nominal = nominal_speed_mm_s(0.05, InstrumentConfig())
+    on = decide_run(labels, (), 3.0, 20.0, speed_set_point_rpm=0.05,
+                    sliding_speed_measured_mm_s=nominal * 1.05)
+    off = decide_run(labels, (), 3.0, 20.0, speed_set_point_rpm=0.05,
+                     sliding_speed_measured_mm_s=nominal * 1.2)
+    assert on.nominal_speed_mm_s == off.nominal_speed_mm_s == nominal
+    assert FLAG_SPEED_OFF not in on.flags and FLAG_SPEED_OFF in off.flags
+    loose = decide_run(labels, (), 3.0, 20.0, Tolerances(speed_rel=0.3),
+                       speed_set_point_rpm=0.05, sliding_speed_measured_mm_s=nominal * 1.2)
+    assert FLAG_SPEED_OFF not in loose.flags
+
+
+def test_the_map_row_carries_the_nominal_speed_of_the_set_point():
+    record = run_record(1)
+    result = reduced_result()
+    assert record["nominal_speed_mm_s"] == nominal_speed_mm_s(
+        result.speed_set_point_rpm, InstrumentConfig())
+    stepped = run_record(2, speed_set_point_rpm=0.15)
+    assert stepped["nominal_speed_mm_s"] == nominal_speed_mm_s(0.15, InstrumentConfig())
+    # the measured speed stayed at 0.005 rpm: off the 0.15 rpm set point
+    assert FLAG_SPEED_OFF in stepped["flags"].split(";")
+
+
+def _pair(i: int, pin: str, speed: float | None, mu_k: float) -> dict:
+    return {**run_record(0), "measurement_id": f"r{i:03d}", "pin": pin,
+            "nominal_speed_mm_s": speed, "mu_k": mu_k, "repeat": i}
+
+
+def test_groups_split_by_nominal_speed_and_show_it_only_where_a_pair_has_several():
+    one = [_pair(1, "A", 0.007, 0.50), _pair(2, "A", 0.007, 0.52)]
+    groups = group_statistics(fm.records_frame(one))
+    assert "nominal_speed_mm_s" not in groups.columns and groups["mu_k_n"].tolist() == [2]
+    several = one + [_pair(3, "A", 0.07, 0.60), _pair(4, "A", 0.07, 0.62),
+                     _pair(5, "B", 0.007, 0.3)]
+    groups = group_statistics(fm.records_frame(several))
+    assert groups["nominal_speed_mm_s"].tolist() == [0.007, 0.07, 0.007]
+    assert groups["mu_k_n"].tolist() == [2, 2, 1]
+    assert groups["mu_k_mean"].tolist() == pytest.approx([0.51, 0.61, 0.3])
+    # the speeds' means do not mix: the pooled repeatability is the repeats' own
+    assert groups["mu_k_std"].iloc[0] == pytest.approx(math.sqrt(2e-4))
+    hidden = group_statistics(fm.records_frame(several), show_speed=False)
+    assert "nominal_speed_mm_s" not in hidden.columns and len(hidden) == 3
+
+
+def test_a_row_without_a_nominal_speed_counts_as_the_founding_speed():
+    rows = [_pair(1, "A", None, 0.50), _pair(2, "A", FOUNDING_NOMINAL_SPEED_MM_S, 0.52)]
+    groups = group_statistics(fm.records_frame(rows))
+    assert groups["mu_k_n"].tolist() == [2] and "nominal_speed_mm_s" not in groups.columns
+
+
+@pytest.mark.parametrize("name", ["friction_map_v1.parquet", "friction_map_v3.parquet"])
+def test_older_maps_read_and_group_as_before(name):
+    runs = fm.read_map(DATA / name)
+    assert runs["nominal_speed_mm_s"].isna().all()
+    assert (nominal_speeds(runs) == FOUNDING_NOMINAL_SPEED_MM_S).all()
+    groups = group_statistics(runs)
+    assert "nominal_speed_mm_s" not in groups.columns
+    # the same groups as without any speed: one per pin, disc, force, temperature
+    included = runs.loc[~runs["excluded"].astype(bool)]
+    keys = {(p, d, round(f, 6), t if t == t else None) for p, d, f, t in zip(
+        included["pin"], included["disc"], included["normal_force_N"],
+        included["temperature_C"], strict=True)}
+    assert len(groups) >= len(keys)
+    assert int(groups["mu_k_n"].sum()) == int(np.isfinite(included["mu_k"]).sum())

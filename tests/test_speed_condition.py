@@ -109,3 +109,51 @@ def test_older_maps_read_and_group_as_before(name):
         included["temperature_C"], strict=True)}
     assert len(groups) >= len(keys)
     assert int(groups["mu_k_n"].sum()) == int(np.isfinite(included["mu_k"]).sum())
+
+
+# ---------------------------------------------------------------------------- query
+
+
+def _two_speed_groups():
+    from tribopipe.query import groups_of
+
+    rows = [_pair(1, "A", 0.007, 0.50), _pair(2, "A", 0.007, 0.52),
+            _pair(3, "A", 0.07, 0.60), _pair(4, "A", 0.07, 0.62), _pair(5, "B", 0.007, 0.3)]
+    return groups_of(fm.records_frame(rows), "map.parquet")
+
+
+def test_query_interpolates_linearly_in_log_speed_between_measured_speeds():
+    from tribopipe.query import query
+
+    groups = _two_speed_groups()
+    p = float(groups["pressure_kPa"].iloc[0])
+    at_low = query(groups, "A", "steel", p, 20.0, 0.007)
+    at_high = query(groups, "A", "steel", p, 20.0, 0.07)
+    assert at_low.mu_k.value == pytest.approx(0.51) and at_high.mu_k.value == pytest.approx(0.61)
+    v = 0.007 * 10 ** 0.3
+    mid = query(groups, "A", "steel", p, 20.0, v)
+    assert mid.mu_k.value == pytest.approx(0.51 + 0.3 * (0.61 - 0.51))
+    assert not mid.clamped and mid.speed_mm_s == v and mid.speeds_mm_s == (0.007, 0.07)
+    assert sorted(u.weight for u in mid.mu_k.used) == pytest.approx([0.3, 0.7])
+    # U carried with the weights: between the two speeds' U
+    assert min(at_low.mu_k.expanded, at_high.mu_k.expanded) <= mid.mu_k.expanded <= max(
+        at_low.mu_k.expanded, at_high.mu_k.expanded) + 1e-12
+    data = mid.to_dict()
+    assert data["speed_mm_s"] == v and set(data["mu_k"]) >= {"value", "expanded", "text"}
+
+
+def test_query_holds_and_flags_outside_the_measured_speeds_and_needs_a_speed_only_where_several():
+    from tribopipe.errors import ExportError
+    from tribopipe.query import query
+
+    groups = _two_speed_groups()
+    p = float(groups["pressure_kPa"].iloc[0])
+    fast = query(groups, "A", "steel", p, 20.0, 1.0)
+    assert fast.mu_k.value == pytest.approx(0.61) and fast.clamped and fast.mu_k.clamped_speed
+    assert any("speed outside" in n for n in fast.notes)
+    with pytest.raises(ExportError, match="sliding speed needed"):
+        query(groups, "A", "steel", p, 20.0)
+    one = query(groups, "B", "steel", p, 20.0)
+    assert one.speed_mm_s == 0.007 and not one.clamped
+    held = query(groups, "B", "steel", p, 20.0, 0.07)
+    assert held.mu_k.value == pytest.approx(0.3) and held.mu_k.clamped_speed

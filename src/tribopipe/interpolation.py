@@ -13,6 +13,11 @@ A pair is measured at a few contact pressures [kPa] and temperatures [°C]. Betw
   Elastomer friction falls as a power of the contact pressure, μ = k·p^(n−1) (the map's
   own fits reach R² ≈ 0.99), and this rule is exact for any power law. Where a μ or p₀ is
   not positive (no logarithm) the segment is linear in p and μ instead;
+* **sliding speed**, where a pair is measured at several nominal speeds: linear in
+  ln v between the two measured speeds that bracket the request (:func:`speed_bracket`;
+  elastomer friction changes by a similar step per decade of speed, the shape of
+  Grosch's master curves on the side of the peak where maps are measured), the value at
+  each speed read by the rules above;
 * **outside the measured range** the edge value is held (as ABAQUS and Ansys hold a
   table's ends), and the result says so.
 
@@ -116,6 +121,15 @@ def bracket(xs: Sequence[float], x: float) -> tuple[list[tuple[int, float]], boo
         return [(lo, 1.0)], False
     w_hi = (x - xs[lo]) / (xs[hi] - xs[lo])
     return [(lo, 1.0 - w_hi), (hi, w_hi)], False
+
+
+def speed_bracket(
+    speeds_mm_s: Sequence[float], speed_mm_s: float
+) -> tuple[list[tuple[int, float]], bool]:
+    """Indices into sorted unique positive ``speeds_mm_s`` [mm/s] with weights linear in
+    ln v for ``speed_mm_s`` [mm/s] (> 0), held at the ends: ``([(i, w), ...], clamped)``
+    as :func:`bracket`."""
+    return bracket([math.log(v) for v in speeds_mm_s], math.log(speed_mm_s))
 
 
 def _pressure_segment(

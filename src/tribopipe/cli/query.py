@@ -27,6 +27,12 @@ from ._common import config_option, friendly_errors, map_option
     type=float,
     help="Temperature [°C]; needed when the pair is measured at several.",
 )
+@click.option(
+    "--speed",
+    "speed_mm_s",
+    type=float,
+    help="Sliding speed [mm/s]; needed when the pair is measured at several.",
+)
 @map_option
 @click.option("--json", "as_json", is_flag=True, help="Print the result as JSON.")
 @friendly_errors
@@ -37,13 +43,16 @@ def query_cmd(
     normal_force_N: float | None,
     config_path: str | None,
     temperature_C: float | None,
+    speed_mm_s: float | None,
     map_path: str,
     as_json: bool,
 ) -> None:
-    """μ_K (and μ_S where known) of PIN on DISC at a contact pressure and temperature.
+    """μ_K (and μ_S where known) of PIN on DISC at a contact pressure, temperature and
+    sliding speed.
 
     Between the measured group means: linear in temperature and, in pressure, linear in
-    log p - log μ (exact for a power law μ = k·p^(n−1)); held constant outside the
+    log p - log μ (exact for a power law μ = k·p^(n−1)); where the pair is measured at
+    several sliding speeds, linear in log v between them (--speed); held constant outside the
     measured range (as ABAQUS treats a friction table) and said so. Prints value ± U, the
     expanded uncertainty (k = 2) from the runs' budgets, the repeat scatter and the
     interpolation's own uncertainty, rounded to two significant digits; then the repeats'
@@ -63,7 +72,7 @@ def query_cmd(
         instrument = load_settings(config_path).instrument
         pressure_kPa = pressure_of_force(normal_force_N, instrument)
     assert pressure_kPa is not None
-    result = query_map(map_path, pin, disc, pressure_kPa, temperature_C)
+    result = query_map(map_path, pin, disc, pressure_kPa, temperature_C, speed_mm_s)
     if as_json:
         data = result.to_dict()
         if normal_force_N is not None:

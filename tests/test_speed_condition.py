@@ -5,6 +5,7 @@ than the column read and group as the founding speed."""
 
 from __future__ import annotations
 
+import json
 import math
 from pathlib import Path
 
@@ -157,3 +158,62 @@ def test_query_holds_and_flags_outside_the_measured_speeds_and_needs_a_speed_onl
     assert one.speed_mm_s == 0.007 and not one.clamped
     held = query(groups, "B", "steel", p, 20.0, 0.07)
     assert held.mu_k.value == pytest.approx(0.3) and held.mu_k.clamped_speed
+
+
+# ---------------------------------------------------------------------------- the JS copy
+
+
+def _multi_speed_runs():
+    """The published runs, budgeted, at two more nominal speeds with faster μ_K (one
+    pair stays at one speed)."""
+    import pandas as pd
+
+    from published_map import PUBLISHED_CSV, published_runs
+    from test_interpolation import budgeted_runs
+
+    base = budgeted_runs(published_runs(PUBLISHED_CSV))
+    base["nominal_speed_mm_s"] = 0.007
+    parts = [base]
+    movers = base[base["disc"] != "steel"]
+    for factor, speed in ((1.15, 0.021), (1.3, 0.07)):
+        faster = movers.copy()
+        faster["nominal_speed_mm_s"] = speed
+        faster["mu_k"] = faster["mu_k"] * factor
+        faster["measurement_id"] = faster["measurement_id"] + f"-{speed}"
+        parts.append(faster)
+    return pd.concat(parts, ignore_index=True)
+
+
+def test_the_js_query_between_speeds_is_the_python_query():
+    from test_interpolation import run_node
+    from tribopipe.export.explorer import explorer_data
+    from tribopipe.query import groups_of, pairs, query
+
+    runs = _multi_speed_runs()
+    groups = groups_of(runs, "map")
+    data = explorer_data(runs, groups=groups)
+    conditions = []
+    for pin, disc in pairs(groups):
+        pair = groups[(groups["pin"] == pin) & (groups["disc"] == disc)]
+        p = float(pair["pressure_kPa"].median())
+        t = float(pair["temperature_C"].min()) + 3.0
+        several = pair["nominal_speed_mm_s"].nunique() > 1
+        for v in ([0.007, 0.01, 0.021, 0.05, 0.07, 0.2, 0.001] if several else [None, 0.05]):
+            conditions.append([pin, disc, p, t, v])
+    got = run_node(data, "return " + json.dumps(conditions) + ".map(function (c) { "
+                   "return query(c[0], c[1], c[2], c[3], c[4]); });")
+    for (pin, disc, p, t, v), page in zip(conditions, got, strict=True):
+        res = query(groups, pin, disc, p, t, v)
+        assert page["notes"] == list(res.notes), (pin, disc, v)
+        assert page["clamped"] == res.clamped and page["speed_mm_s"] == res.speed_mm_s
+        assert page["speeds_mm_s"] == list(res.speeds_mm_s)
+        for mine, est in ((page["mu_k"], res.mu_k), (page["mu_s"], res.mu_s)):
+            for name in ("value", "uncertainty", "u_interpolation", "u_groups", "expanded"):
+                a, b = mine[name], getattr(est, name)
+                assert (a is None) == (b is None), (name, pin, disc, v)
+                if a is not None:
+                    assert a == pytest.approx(b, rel=1e-12, abs=1e-15), (name, pin, disc, v)
+            assert mine["text"] == est.text() and mine["clamped_speed"] == est.clamped_speed
+            assert [u["weight"] for u in mine["used"]] == pytest.approx(
+                [u.weight for u in est.used], rel=1e-12)
+            assert [u["speed_mm_s"] for u in mine["used"]] == [u.speed_mm_s for u in est.used]

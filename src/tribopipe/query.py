@@ -419,7 +419,7 @@ def pair_speeds(pair_groups: pd.DataFrame) -> list[float]:
     return found or [FOUNDING_NOMINAL_SPEED_MM_S]
 
 
-def _at_speed(pair: pd.DataFrame, speed_mm_s: float) -> pd.DataFrame:
+def groups_at_speed(pair: pd.DataFrame, speed_mm_s: float) -> pd.DataFrame:
     """The pair's groups at one nominal speed [mm/s] (all of them without a speed column)."""
     if NOMINAL_SPEED not in pair.columns:
         return pair
@@ -512,7 +512,7 @@ def query(
     temps: set[float] = set()
     p_range = (math.inf, -math.inf)
     for index, weight in brackets:
-        part = _at_speed(pair, speeds[index])
+        part = groups_at_speed(pair, speeds[index])
         mu_k_points = _points(part, "mu_k")
         if mu_k_points.empty:
             raise ExportError(f"pin {pin!r} on disc {disc!r} has no group with a finite mu_k"

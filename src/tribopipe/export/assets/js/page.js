@@ -4,9 +4,10 @@ var pinSelect = $("pin");
 var discSelect = $("disc");
 var tInput = $("temperature");
 var pInput = $("pressure");
+var vSelect = $("speed");
 /* `missing`: what the link asked for that the map does not hold (a pin, a disc, a pair):
    no μ is shown until the user chooses a pair. */
-var state = { pair: 0, result: null, sortKey: null, sortDir: 1, missing: null };
+var state = { pair: 0, result: null, sortKey: null, sortDir: 1, missing: null, speed: 0 };
 
 var PINS = []; // [{key, name, pairs: [index...]}]
 PAIRS.forEach(function (pair, i) {
@@ -50,6 +51,28 @@ function fillDefaults(pair) {
     var at = pairPressures(pair, temps.indexOf(t) >= 0 ? t : undefined);
     setNumber(pInput, at[0]);
   }
+}
+
+/* The speed selector: shown for a pair measured at several sliding speeds; the chosen
+   speed's points become the pair's points (plots, chips) and the query's speed. */
+function pairSpeedList(pair) { return pair.speeds && pair.speeds.length > 1 ? pair.speeds : []; }
+
+function renderSpeeds(pair) {
+  var speeds = pairSpeedList(pair);
+  $("tpx-speed-label").hidden = !speeds.length;
+  if (!speeds.length) { clear(vSelect); return; }
+  if (state.speed >= speeds.length) state.speed = 0;
+  if (vSelect.options.length !== speeds.length) {
+    fillSelect(vSelect, speeds.map(function (x, i) { return { value: i, text: pyG(x.speed_mm_s) }; }));
+  }
+  vSelect.value = String(state.speed);
+  pair.mu_k_points = speeds[state.speed].mu_k_points;
+  pair.mu_s_points = speeds[state.speed].mu_s_points;
+}
+
+function chosenSpeed(pair) {
+  var speeds = pairSpeedList(pair);
+  return speeds.length ? speeds[state.speed].speed_mm_s : null;
 }
 
 function chip(text, active, onClick) {
@@ -269,7 +292,7 @@ function compute() {
   if (Number.isNaN(t)) return [null, "the temperature is not a number"];
   var pair = PAIRS[state.pair];
   try {
-    return [query(pair.pin, pair.disc, p, t), null];
+    return [query(pair.pin, pair.disc, p, t, chosenSpeed(pair)), null];
   } catch (e) {
     if (e instanceof QueryError) return [null, e.message];
     throw e;
@@ -281,6 +304,7 @@ function compute() {
    a cleared field is answered as query answers it). */
 function update(withDefaults) {
   var pair = PAIRS[state.pair];
+  renderSpeeds(pair);
   if (withDefaults === true) fillDefaults(pair);
   var out = compute();
   state.result = out[0];
@@ -296,12 +320,20 @@ function update(withDefaults) {
 fillSelect(pinSelect, PINS.map(function (p, i) { return { value: i, text: p.name }; }));
 pinSelect.addEventListener("change", function () {
   setPin(Number(pinSelect.value), key(PAIRS[state.pair].disc));
+  state.speed = 0;
+  clear(vSelect);
   state.missing = null;
   note("");
   update(true);
 });
+vSelect.addEventListener("change", function () {
+  state.speed = Number(vSelect.value);
+  update(false);
+});
 discSelect.addEventListener("change", function () {
   state.pair = Number(discSelect.value);
+  state.speed = 0;
+  clear(vSelect);
   state.missing = null;
   note("");
   update(true);

@@ -16,13 +16,14 @@ material's clock, not the contact's):
 * ``wlf``: log10 a_T = −C1·(T − T_ref) / (C2 + T − T_ref), for materials measured
   nearer their glass transition; C1 and C2 [K].
 
-The curve: one smooth curve per nominal pressure, a polynomial in x = log10(a_T·v / 1 mm/s)
-(quadratic where the pressure has at least 5 points, else linear). Pressure is *not*
-folded in as a vertical factor: that would assume μ(p, x) = b(p)·g(x), a separability
-the map cannot check with two or three pressures, while a curve per pressure assumes
-nothing across pressures; only the shift is shared. Shift and curves are fitted jointly
-by least squares on the group means (:func:`scipy.optimize.least_squares`); u(Ea) (or
-u(C1), u(C2)) from the fit's covariance, scaled by the residual variance.
+The curve: one smooth curve per nominal pressure, a polynomial in
+x = log10(a_T·v / 1 mm/s) (quadratic where the pressure has at least 5 points at 3 or
+more speeds, else linear). Pressure is *not* folded in as a vertical factor: that would
+assume μ(p, x) = b(p)·g(x), a separability the map cannot check with two or three
+pressures, while a curve per pressure assumes nothing across pressures; only the shift
+is shared. Shift and curves are fitted jointly by least squares on the group means
+(:func:`scipy.optimize.least_squares`); u(Ea) (or u(C1), u(C2)) from the fit's
+covariance, scaled by the residual variance.
 
 :func:`master_curve` refuses (:class:`~tribopipe.errors.ExportError`, one line) with
 fewer than 2 temperatures or 2 speeds at a pressure, or where the shifted speed ranges
@@ -36,10 +37,11 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from .errors import ExportError
-from .query import pair_speeds, select_pair
+from .query import load_groups, pair_speeds, select_pair
 from .stats import NOMINAL_SPEED
 
 if TYPE_CHECKING:
@@ -227,7 +229,8 @@ def master_curve(
                               hint="measure 2-4 speeds per pressure")
     t_ref = (temps[(len(temps) - 1) // 2] if reference_temperature_C is None
              else float(reference_temperature_C))
-    degrees = [2 if len(m) >= QUADRATIC_FROM else 1 for m in by_level]
+    degrees = [2 if len(m) >= QUADRATIC_FROM and len({q.speed_mm_s for q in m}) >= 3 else 1
+               for m in by_level]
     n_shift = 1 if shift == "arrhenius" else 2
     start = [50.0] if shift == "arrhenius" else list(WLF_START)
     if shift == "wlf":
@@ -259,9 +262,9 @@ def master_curve(
 
     theta0 = list(start)
     for members, d in zip(by_level, degrees, strict=True):
-        xs = [q.x for q in members]
-        fit = np.polyfit(xs, [q.mu_k for q in members], d)[::-1]
-        theta0 += [float(c) for c in fit]
+        # the unshifted points start the curve: a line (two speeds fix no more)
+        fit = np.polyfit([q.x for q in members], [q.mu_k for q in members], 1)[::-1]
+        theta0 += [float(c) for c in fit] + [0.0] * (d - 1)
     solution = least_squares(residuals, np.asarray(theta0, dtype=float), bounds=bounds,
                              x_scale="jac")
     theta = solution.x
@@ -391,3 +394,9 @@ def predict(mc: MasterCurve, pressure_kPa: float, temperature_C: float,
     return ModelPrediction(mc.pin, mc.disc, float(pressure_kPa), float(temperature_C),
                            float(speed_mm_s), float(mu), x, (lo, hi_x), mc.residual_sd,
                            mc.shift, a)
+
+
+def map_master_curve(map_path: str | Path, pin: str, disc: str, *,
+                     shift: str = "arrhenius") -> MasterCurve:
+    """:func:`master_curve` of the friction map (Parquet) at ``map_path``."""
+    return master_curve(load_groups(map_path), pin, disc, shift=shift)

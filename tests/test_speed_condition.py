@@ -217,3 +217,67 @@ def test_the_js_query_between_speeds_is_the_python_query():
             assert [u["weight"] for u in mine["used"]] == pytest.approx(
                 [u.weight for u in est.used], rel=1e-12)
             assert [u["speed_mm_s"] for u in mine["used"]] == [u.speed_mm_s for u in est.used]
+
+
+# ---------------------------------------------------------------------------- exports
+
+
+def test_abaqus_and_ansys_tables_carry_the_measured_slip_rates():
+    from tribopipe.export.fe_decks import write_abaqus, write_ansys
+    from tribopipe.query import groups_of, query
+
+    runs = _multi_speed_runs()
+    groups = groups_of(runs, "map")
+    pin, disc = "Dragonskin 30", "acrylic glass"
+    deck = write_abaqus(groups, pin=pin, disc=disc, units="m-N-s")
+    rows = [line.split(", ") for line in deck.splitlines()
+            if line and line[0].isdigit()]
+    slips = sorted({float(r[1]) for r in rows})
+    assert slips == pytest.approx([0.007e-3, 0.021e-3, 0.07e-3])
+    # the slip rate varies fastest, and every cell is query at its speed
+    assert [float(r[1]) for r in rows[:3]] == pytest.approx([0.007e-3, 0.021e-3, 0.07e-3])
+    for r in rows[:6]:
+        p_kPa, t, v = float(r[2]) * 1e-3, float(r[3]), float(r[1]) * 1e3
+        assert float(r[0]) == pytest.approx(query(groups, pin, disc, p_kPa, t, v).mu_k.value,
+                                            rel=1e-6)
+    assert "measured nominal sliding speeds" in deck
+    # a pair of one speed keeps its one slip rate
+    steel = write_abaqus(groups, pin=pin, disc="steel")
+    assert len({line.split(", ")[1] for line in steel.splitlines()
+                if line and line[0].isdigit()}) == 1
+    mapdl = write_ansys(groups, pin=pin, disc=disc)
+    assert mapdl.count("TBFIELD,SLRV,") == len(rows)
+    lines = mapdl.splitlines()
+    first = lines.index(next(x for x in lines if x.startswith("TBFIELD,SLRV")))
+    assert lines[first - 1].startswith("TBFIELD,NPRES") and lines[first + 1].startswith("TBDATA")
+
+
+def test_lsdyna_fits_fs_fd_dc_to_the_measured_speeds():
+    from tribopipe.export.simbase import fit_decay
+    from tribopipe.export.simulators import export_simulator_input
+
+    truth = (0.4, 0.7, 20.0)
+    curve = [(v, truth[1] + (truth[0] - truth[1]) * math.exp(-truth[2] * v))
+             for v in (0.007, 0.021, 0.07, 0.21)]
+    fit = fit_decay(curve)
+    assert (fit.fs, fit.fd, fit.dc_s_per_mm) == pytest.approx(truth, rel=1e-4)
+    assert fit.rising and fit.max_abs < 1e-8
+    assert fit_decay(curve[:2]) is None
+
+    runs = _multi_speed_runs()
+    from tribopipe.query import groups_of
+
+    groups = groups_of(runs, "map")
+    pin, disc = "Dragonskin 30", "acrylic glass"
+    p = float(groups.loc[groups["disc"] == disc, "pressure_kPa"].iloc[0])
+    deck = export_simulator_input(groups, "lsdyna", pin=pin, disc=disc, pressure_kPa=p,
+                                  temperature_C=20.0, speed_mm_s=0.021)
+    assert "fitted to mu_k over the measured sliding speeds" in deck and "residuals rms" in deck
+    one = export_simulator_input(groups, "lsdyna", pin=pin, disc="steel", pressure_kPa=p,
+                                 temperature_C=20.0, coefficient="mu_s")
+    assert "no speed dependence measured" in one
+    from tribopipe.errors import ExportError
+
+    with pytest.raises(ExportError, match="sliding speed needed"):
+        export_simulator_input(groups, "lsdyna", pin=pin, disc=disc, pressure_kPa=p,
+                               temperature_C=20.0)

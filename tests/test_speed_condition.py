@@ -281,3 +281,33 @@ def test_lsdyna_fits_fs_fd_dc_to_the_measured_speeds():
     with pytest.raises(ExportError, match="sliding speed needed"):
         export_simulator_input(groups, "lsdyna", pin=pin, disc=disc, pressure_kPa=p,
                                temperature_C=20.0)
+
+
+# ---------------------------------------------------------------------------- end to end
+
+
+def test_a_stepped_speed_test_gives_one_run_and_one_nominal_speed_per_step(tmp_path):
+    from generators.speed import SPEEDS_RPM, speed_grid, write_test
+    from tribopipe.config import load_settings
+    from tribopipe.pipeline import read_runs, reduce_run
+
+    grid = speed_grid()
+    assert len(grid) == 48 and {len(t.steps) for t in grid} == {4}
+    test = grid[5]
+    export = read_runs(write_test(tmp_path / "stepped.txt", test))
+    assert len(export.runs) == len(SPEEDS_RPM)
+    labels = RunLabels(pin=test.pair.pin, disc=test.pair.disc, normal_force_N=test.force_N,
+                       temperature_C=test.temperature_C, repeat=test.repeat)
+    settings = load_settings()
+    records = []
+    for (place, measurement), step in zip(export.runs, test.steps, strict=True):
+        outcome = reduce_run(export, place, measurement, settings, labels)
+        assert outcome.result.speed_set_point_rpm == pytest.approx(step.speed_rpm, rel=1e-3)
+        assert outcome.result.mu_k == pytest.approx(step.mu_k, abs=0.002)
+        assert FLAG_SPEED_OFF not in outcome.decided.flags
+        records.append(outcome.record)
+    speeds = [r["nominal_speed_mm_s"] for r in records]
+    assert speeds == [nominal_speed_mm_s(v, settings.instrument) for v in SPEEDS_RPM]
+    assert len(set(speeds)) == 4
+    groups = group_statistics(fm.records_frame(records))
+    assert groups["nominal_speed_mm_s"].tolist() == speeds and set(groups["mu_k_n"]) == {1}

@@ -311,3 +311,15 @@ def test_a_stepped_speed_test_gives_one_run_and_one_nominal_speed_per_step(tmp_p
     assert len(set(speeds)) == 4
     groups = group_statistics(fm.records_frame(records))
     assert groups["nominal_speed_mm_s"].tolist() == speeds and set(groups["mu_k_n"]) == {1}
+
+
+def test_the_power_law_fit_never_mixes_speeds():
+    from tribopipe.fit import FIT_COLUMNS, fit_power_law
+
+    runs = _multi_speed_runs()
+    fits = fit_power_law(runs)
+    assert "nominal_speed_mm_s" in fits.columns
+    acrylic = fits[fits["disc"] == "acrylic glass"]
+    assert sorted(set(acrylic["nominal_speed_mm_s"])) == [0.007, 0.021, 0.07]
+    one = fit_power_law(runs[runs["nominal_speed_mm_s"] == 0.007])
+    assert list(one.columns) == list(FIT_COLUMNS)

@@ -127,6 +127,8 @@ function writeUrl() {
   q.set("disc", PAIRS[state.pair].disc);
   if (urlText(pInput) !== "") q.set("pressure", urlText(pInput));
   if (urlText(tInput) !== "") q.set("temperature", urlText(tInput));
+  var speed = chosenSpeed(PAIRS[state.pair]);
+  if (speed !== null) q.set("speed", pyRepr(speed));
   var url = location.pathname + "?" + q.toString() + location.hash;
   try {
     history.replaceState(history.state, "", url);
@@ -154,6 +156,13 @@ function readUrl() {
       "is not measured with " + PINS[pinIndex].name : "is not in this map"));
   }
   var pair = PAIRS[state.pair];
+  if (q.has("speed")) {
+    var wanted = Number(q.get("speed"));
+    var at = pairSpeedList(pair).findIndex(function (x) { return x.speed_mm_s === wanted; });
+    if (at >= 0) state.speed = at;
+    else notes.push("the link's speed “" + q.get("speed") + "” is not measured for this pair");
+  }
+  renderSpeeds(pair);
   [["temperature", tInput, pairTemperatures(pair)], ["pressure", pInput, pairPressures(pair)]]
     .forEach(function (f) {
       if (!q.has(f[0])) return;

@@ -323,3 +323,25 @@ def test_the_power_law_fit_never_mixes_speeds():
     assert sorted(set(acrylic["nominal_speed_mm_s"])) == [0.007, 0.021, 0.07]
     one = fit_power_law(runs[runs["nominal_speed_mm_s"] == 0.007])
     assert list(one.columns) == list(FIT_COLUMNS)
+
+
+def test_a_map_of_several_speeds_publishes_validates_and_merges(tmp_path):
+    from click.testing import CliRunner
+
+    from tribopipe.cli import main
+
+    map_path = tmp_path / "m.parquet"
+    fm.write_map(map_path, _multi_speed_runs())
+    runner = CliRunner()
+    out = runner.invoke(main, ["map", "publish", str(tmp_path / "pkg"), "--lab", "Lab",
+                               "--map", str(map_path)])
+    assert out.exit_code == 0, out.output
+    header = (tmp_path / "pkg" / "data" / "groups.csv").read_text().splitlines()[0]
+    assert "nominal_speed_mm_s" in header.split(",")
+    valid = runner.invoke(main, ["map", "validate", str(tmp_path / "pkg")])
+    assert valid.exit_code == 0 and "valid" in valid.output, valid.output
+    merged = runner.invoke(main, ["map", "merge", str(tmp_path / "pkg"), "--map",
+                                  str(tmp_path / "merged.parquet")])
+    assert merged.exit_code == 0, merged.output
+    runs = fm.read_map(tmp_path / "merged.parquet")
+    assert sorted(set(runs["nominal_speed_mm_s"])) == [0.007, 0.021, 0.07]

@@ -137,7 +137,7 @@ def paper_table(
     groups = group_table(runs, pin=pin, disc=disc, temperature_C=temperature_C)
     by_speed = NOMINAL_SPEED in groups.columns
     with_mu_s = bool((groups["mu_s_n"] > 0).any()) if len(groups) else False
-    names = (("pressure_kPa", "temperature_C", "sliding_speed_mm_s") if machine
+    names = (("pressure_kPa", "temperature_C", NOMINAL_SPEED) if machine
              else ("p [kPa]", "T [°C]", "v [mm/s]"))
     out: dict[str, list[Any]] = {"pin": list(groups["pin"]), "disc": list(groups["disc"]),
                                  names[0]: [_cell(v, ".4g") for v in groups["pressure_kPa"]],

@@ -289,7 +289,7 @@ def test_lsdyna_fits_fs_fd_dc_to_the_measured_speeds():
 def test_a_stepped_speed_test_gives_one_run_and_one_nominal_speed_per_step(tmp_path):
     from generators.speed import SPEEDS_RPM, speed_grid, write_test
     from tribopipe.config import load_settings
-    from tribopipe.pipeline import read_runs, reduce_run
+    from tribopipe.pipeline import read_runs, reduce_run, run_summary
 
     grid = speed_grid()
     assert len(grid) == 48 and {len(t.steps) for t in grid} == {4}
@@ -305,6 +305,9 @@ def test_a_stepped_speed_test_gives_one_run_and_one_nominal_speed_per_step(tmp_p
         assert outcome.result.speed_set_point_rpm == pytest.approx(step.speed_rpm, rel=1e-3)
         assert outcome.result.mu_k == pytest.approx(step.mu_k, abs=0.002)
         assert FLAG_SPEED_OFF not in outcome.decided.flags
+        summary = run_summary(outcome)
+        assert summary["nominal_speed_mm_s"] == outcome.record["nominal_speed_mm_s"]
+        assert summary["speed_set_point_rpm"] == outcome.result.speed_set_point_rpm
         records.append(outcome.record)
     speeds = [r["nominal_speed_mm_s"] for r in records]
     assert speeds == [nominal_speed_mm_s(v, settings.instrument) for v in SPEEDS_RPM]

@@ -812,6 +812,10 @@ def test_a_pair_of_several_speeds_gets_a_speed_selector_and_link(browser, tmp_pa
     first.page.select_option("#speed", label="0.07")
     assert_shows(first, query(groups, pin, disc, p, t, 0.07))
     assert "speed=0.07" in first.address()
+    heads = first.page.evaluate(
+        "[...document.getElementById('tpx-group-table').tHead.rows[0].cells]"
+        ".map(c => c.textContent)")
+    assert heads[5] == "v [mm/s]"
     # a pair of one speed: no selector
     first.page.select_option("#disc", label="steel")
     assert first.page.evaluate("document.getElementById('tpx-speed-label').hidden")

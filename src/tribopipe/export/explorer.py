@@ -58,7 +58,7 @@ from ..query import (
     select_pair,
 )
 from ..rounding import known_u
-from ..stats import group_statistics, group_u
+from ..stats import NOMINAL_SPEED, group_statistics, group_u
 from .registry import WRITERS
 from .simulators import snippet_header
 
@@ -302,6 +302,8 @@ def explorer_data(
             continue
         row = {"pin": str(g["pin"]), "disc": str(g["disc"]), "pair": index}
         row.update({name: _plain(g.get(name)) for name in GROUP_FIELDS})
+        if NOMINAL_SPEED in g:  # a map with a pair of several speeds
+            row[NOMINAL_SPEED] = _plain(g[NOMINAL_SPEED])
         for q, values in expanded.items():  # U (k = 2) of the group mean, where known
             row[f"{q}_U"] = float(values.iloc[i]) if known_u(float(values.iloc[i])) else None
         group_rows.append(row)

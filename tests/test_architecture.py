@@ -58,7 +58,7 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("tribopipe.campaign",),
     # the one rule for μ between measured conditions, below everything that reads it
     ("tribopipe.interpolation",),
-    ("tribopipe.query", "tribopipe.fit"),
+    ("tribopipe.query", "tribopipe.fit", "tribopipe.mastercurve"),
     ("tribopipe.export",),
     ("tribopipe.report",),
     ("tribopipe.cli", "tribopipe.__main__"),

@@ -787,3 +787,37 @@ def test_no_element_overflows_its_card(browser, reduced, published, width, tmp_p
         assert heights and max(heights) <= 2.5, f"{name} at {width} px: {max(heights)} lines"
         tab.check_clean()
         tab.close()
+
+
+def test_a_pair_of_several_speeds_gets_a_speed_selector_and_link(browser, tmp_path):
+    """A map whose acrylic-glass pairs hold three nominal speeds: their selector shows the
+    speeds, the shown μ_K is query's at the chosen one, the link keeps it."""
+    from test_speed_condition import _multi_speed_runs
+    from tribopipe.frictionmap import write_map
+
+    map_path = tmp_path / "speeds.parquet"
+    write_map(map_path, _multi_speed_runs())
+    page = write_explorer(map_path, tmp_path / "explorer.html")
+    groups = groups_of(read_map(map_path), map_path)
+    pin, disc, p, t = "Dragonskin 30", "acrylic glass", 35.37, 20.0
+    first = Tab(browser)
+    first.open(page_url(page, pin=pin, disc=disc, pressure="35.37", temperature="20.0",
+                        speed="0.021"))
+    speeds = first.page.evaluate("""() => ({hidden: document.getElementById(
+        'tpx-speed-label').hidden, options: [...document.getElementById('speed').options]
+        .map(o => o.textContent), chosen: document.getElementById('speed').selectedOptions[0]
+        .textContent})""")
+    assert speeds == {"hidden": False, "options": ["0.007", "0.021", "0.07"], "chosen": "0.021"}
+    assert_shows(first, query(groups, pin, disc, p, t, 0.021))
+    first.page.select_option("#speed", label="0.07")
+    assert_shows(first, query(groups, pin, disc, p, t, 0.07))
+    assert "speed=0.07" in first.address()
+    heads = first.page.evaluate(
+        "[...document.getElementById('tpx-group-table').tHead.rows[0].cells]"
+        ".map(c => c.textContent)")
+    assert heads[5] == "v [mm/s]"
+    # a pair of one speed: no selector
+    first.page.select_option("#disc", label="steel")
+    assert first.page.evaluate("document.getElementById('tpx-speed-label').hidden")
+    first.check_clean()
+    first.close()

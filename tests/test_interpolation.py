@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import pytest
-from hypothesis import given, settings
+from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
 from published_map import PUBLISHED_CSV, group_table, published_runs
@@ -133,6 +133,8 @@ def test_the_benchmark_file_is_what_the_function_gives(groups):
 @settings(max_examples=30, deadline=None)
 @given(st.lists(st.floats(1.0, 300.0), min_size=2, max_size=6, unique=True),
        st.lists(st.floats(0.1, 2.0), min_size=6, max_size=6))
+# two close pressures with a steep fall: rounding added rows to 4 digits merged them
+@example([116.5, 117.0], [2.0, 0.5, 1.0, 1.0, 1.0, 1.0])
 def test_densified_rows_read_linearly_stay_within_the_target(ps, mus):
     ps = sorted(ps)
     mus = mus[: len(ps)]

@@ -702,7 +702,8 @@ def test_every_registry_entry_resolves_and_declares_what_its_writer_takes():
             (w.table, w.table_options, {"pin", "disc", "temperature_C", "source"}
              | ({"slip_rates"} if w.slip_rate else set())),
             (w.condition, w.condition_options,
-             {"source"} | ({"slip_rate"} if w.slip_rate else set())),
+             {"source"} | ({"slip_rate"} if w.slip_rate else set())
+             | ({"speed_curve"} if w.speed_curve else set())),
         ):
             if target is None:
                 continue

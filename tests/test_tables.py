@@ -292,9 +292,14 @@ def test_the_paper_layout_with_budgets_mu_s_speeds_and_a_single_run():
                                       zip(groups["mu_k_mean"], groups["mu_k_u"], strict=True)]
     assert "n = 1" not in table["flags"][0] and table["flags"][1].endswith("n = 1")
     assert "no budget" not in "".join(table["flags"])
-    # two sliding speeds: the table splits by them and shows them
+    # a measured speed off its nominal does not split a group
     runs.loc[2, "sliding_speed_mm_s"] = 0.07
-    assert "v [mm/s]" in tables.paper_table(runs).columns
+    assert "v [mm/s]" not in tables.paper_table(runs).columns
+    # two nominal sliding speeds of one pair: the table splits by them and shows them
+    runs.loc[1, "nominal_speed_mm_s"] = 0.07
+    table = tables.paper_table(runs)
+    assert list(table["v [mm/s]"]) == ["0.007", "0.07", "0.007"]
+    assert list(table["n"]) == [1, 1, 1]
 
 
 def test_the_terminal_paper_table_keeps_hostile_names_on_one_line(published_runs):

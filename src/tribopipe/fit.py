@@ -22,7 +22,7 @@ from typing import TYPE_CHECKING, Any
 
 from .errors import MapError
 from .frictionmap import read_map
-from .stats import t975
+from .stats import NOMINAL_SPEED, nominal_speeds, pairs_with_several_speeds, t975
 
 if TYPE_CHECKING:
     import numpy as np
@@ -95,20 +95,26 @@ def fit_one(pressure_kPa: ArrayLike, mu: ArrayLike) -> dict[str, float]:
 
 
 def fit_power_law(runs: pd.DataFrame, *, quantity: str = "mu_k") -> pd.DataFrame:
-    """Fit μ = k·p^(n−1) per (pin, disc, temperature) on the individual runs.
+    """Fit μ = k·p^(n−1) per (pin, disc, temperature, nominal speed) on the individual runs.
 
     ``runs`` has the friction-map run columns ``pin, disc, pressure_kPa`` (nominal, kPa),
     ``temperature_C`` (nominal, °C; NaN = unknown, fitted as its own set) and ``quantity``
     (default ``mu_k``); runs with ``excluded`` True and rows with a missing or
     non-positive μ or pressure are left out. Returns one row per set with the columns
     :data:`FIT_COLUMNS`; a set with fewer than 3 runs or a single pressure keeps NaN
-    parameters and says why in ``note`` (empty when fitted). ``runs`` is not modified.
+    parameters and says why in ``note`` (empty when fitted). Runs at different nominal
+    sliding speeds are never fitted together; where a pair holds several speeds the
+    table has ``nominal_speed_mm_s`` after ``temperature_C`` (as the group table).
+    ``runs`` is not modified.
     """
     import numpy as np
     import pandas as pd
 
     if runs.empty:
         return pd.DataFrame(columns=list(FIT_COLUMNS))
+    columns = list(FIT_COLUMNS)
+    if "excluded" in runs.columns and pairs_with_several_speeds(runs):
+        columns.insert(columns.index("temperature_C") + 1, NOMINAL_SPEED)
     data = pd.DataFrame(
         {
             "pin": runs["pin"].astype(str),
@@ -116,6 +122,7 @@ def fit_power_law(runs: pd.DataFrame, *, quantity: str = "mu_k") -> pd.DataFrame
             "temperature_C": pd.to_numeric(runs["temperature_C"], errors="coerce"),
             "p": pd.to_numeric(runs["pressure_kPa"], errors="coerce"),
             "mu": pd.to_numeric(runs[quantity], errors="coerce"),
+            "v": nominal_speeds(runs),
         }
     )
     keep = np.isfinite(data["p"]) & np.isfinite(data["mu"]) & (data["p"] > 0) & (data["mu"] > 0)
@@ -124,13 +131,15 @@ def fit_power_law(runs: pd.DataFrame, *, quantity: str = "mu_k") -> pd.DataFrame
     data = data[keep]
     rows = []
     t_key = data["temperature_C"].fillna(-math.inf)
-    for (pin, disc, _), grp in data.groupby([data["pin"], data["disc"], t_key], sort=True):
+    for (pin, disc, _, speed), grp in data.groupby([data["pin"], data["disc"], t_key,
+                                                    data["v"]], sort=True):
         t_val = float(grp["temperature_C"].iloc[0])
         n_pressures = int(grp["p"].nunique())
         row: dict[str, Any] = {
             "pin": pin,
             "disc": disc,
             "temperature_C": t_val,
+            NOMINAL_SPEED: float(speed),
             "n_points": len(grp),
             "n_pressures": n_pressures,
             "pressure_min_kPa": float(grp["p"].min()),
@@ -146,7 +155,7 @@ def fit_power_law(runs: pd.DataFrame, *, quantity: str = "mu_k") -> pd.DataFrame
         else:
             row.update(fit_one(grp["p"].to_numpy(), grp["mu"].to_numpy()))
         rows.append(row)
-    return pd.DataFrame(rows, columns=list(FIT_COLUMNS))
+    return pd.DataFrame(rows, columns=columns)
 
 
 def fit_map(map_path: str | Path) -> pd.DataFrame:

@@ -13,6 +13,11 @@ A pair is measured at a few contact pressures [kPa] and temperatures [°C]. Betw
   Elastomer friction falls as a power of the contact pressure, μ = k·p^(n−1) (the map's
   own fits reach R² ≈ 0.99), and this rule is exact for any power law. Where a μ or p₀ is
   not positive (no logarithm) the segment is linear in p and μ instead;
+* **sliding speed**, where a pair is measured at several nominal speeds: linear in
+  ln v between the two measured speeds that bracket the request (:func:`speed_bracket`;
+  elastomer friction changes by a similar step per decade of speed, the shape of
+  Grosch's master curves on the side of the peak where maps are measured), the value at
+  each speed read by the rules above;
 * **outside the measured range** the edge value is held (as ABAQUS and Ansys hold a
   table's ends), and the result says so.
 
@@ -40,6 +45,7 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 from .errors import ExportError
+from .rounding import round_significant
 
 if TYPE_CHECKING:
     import numpy as np
@@ -116,6 +122,15 @@ def bracket(xs: Sequence[float], x: float) -> tuple[list[tuple[int, float]], boo
         return [(lo, 1.0)], False
     w_hi = (x - xs[lo]) / (xs[hi] - xs[lo])
     return [(lo, 1.0 - w_hi), (hi, w_hi)], False
+
+
+def speed_bracket(
+    speeds_mm_s: Sequence[float], speed_mm_s: float
+) -> tuple[list[tuple[int, float]], bool]:
+    """Indices into sorted unique positive ``speeds_mm_s`` [mm/s] with weights linear in
+    ln v for ``speed_mm_s`` [mm/s] (> 0), held at the ends: ``([(i, w), ...], clamped)``
+    as :func:`bracket`."""
+    return bracket([math.log(v) for v in speeds_mm_s], math.log(speed_mm_s))
 
 
 def _pressure_segment(
@@ -274,17 +289,10 @@ def curvature(series: Iterable[tuple[Sequence[float], Sequence[float]]]) -> floa
     return math.sqrt(sum(k * k for k in terms) / len(terms))
 
 
-def _significant(value: float, digits: int) -> float:
-    """``value`` rounded to ``digits`` significant digits."""
-    if value == 0 or not math.isfinite(value):
-        return value
-    return round(value, digits - 1 - math.floor(math.log10(abs(value))))
-
-
 def _rounded_inside(p: float, a: float, b: float) -> float:
     """``p`` to :data:`DENSIFY_DIGITS` significant digits where that stays strictly
     between ``a`` and ``b``, else ``p`` itself."""
-    rounded = _significant(p, DENSIFY_DIGITS)
+    rounded = round_significant(p, DENSIFY_DIGITS)
     return rounded if a < rounded < b else p
 
 
@@ -311,7 +319,8 @@ def densify(
 
     Each gap between measured pressures is cut into the fewest parts equal in ln p whose
     chords all pass the check; added pressures are rounded to :data:`DENSIFY_DIGITS`
-    significant digits (and the check is made on the rounded rows).
+    significant digits (and the check is made on the rounded rows), unless rounding would
+    merge rows of a narrow gap: then they are kept as they are.
     """
     rows = sorted({float(p) for p in pressures_kPa})
     out = rows[:1]
@@ -322,6 +331,8 @@ def densify(
             else:
                 inner = [a + (b - a) * k / parts for k in range(1, parts)]
             cuts = sorted({_rounded_inside(p, a, b) for p in inner})
+            if len(cuts) < len(inner):  # rounding merged rows of a narrow gap: keep them all
+                cuts = inner
             edges = [a, *cuts, b]
             if all(_chord_error(value_at, lo, hi) <= target
                    for lo, hi in zip(edges, edges[1:], strict=False)):

@@ -15,8 +15,11 @@ from __future__ import annotations
 from collections.abc import Iterable
 from dataclasses import dataclass
 
+from .config import InstrumentConfig
 from .errors import CampaignError
 from .numeric import is_finite
+from .physics import sliding_speed_mm_s
+from .rounding import round_significant
 from .validate import FORCE_N, MAX_REPEAT, TEMPERATURE_C, check_count, check_name, check_number
 
 #: Flag added when the nominal force was not given and the measured mean was used.
@@ -24,6 +27,11 @@ FLAG_FORCE_ESTIMATED = "nominal_force_estimated"
 #: Flags added when a run strays from its nominal conditions (:func:`qc_flags`).
 FLAG_FORCE_OFF = "normal_force_off_nominal"
 FLAG_TEMPERATURE_OFF = "temperature_off_nominal"
+FLAG_SPEED_OFF = "sliding_speed_off_nominal"
+#: Significant digits of a nominal sliding speed: the rotational-speed set point [rpm] is
+#: rounded to them (0.00503 rpm measured is the 0.005 rpm set point), and so is the nominal
+#: sliding speed [mm/s] it gives, as the map groups and prints it (0.0070 mm/s)
+SPEED_SIGNIFICANT = 2
 #: Flag of a run reduced from a synthetic export (written by a generator, not measured):
 #: a campaign with ``synthetic = true`` (the shipped demo) gives it to every run.
 FLAG_SYNTHETIC = "synthetic"
@@ -103,17 +111,40 @@ class Tolerances:
     """How far a run's measured conditions may stray from nominal before it is flagged.
 
     The normal force limit is ``max(force_N, force_rel · F_nominal)`` [N]; the temperature
-    limit is ``temperature_C`` [K, as a difference in °C]. Defaults: 10 % of the nominal
-    force, 2 K (a campaign config may state its own).
+    limit is ``temperature_C`` [K, as a difference in °C]; the sliding speed limit is
+    ``speed_rel · v_nominal`` [mm/s]. Defaults: 10 % of the nominal force, 2 K, 10 % of the
+    nominal speed (a campaign config may state its own).
     """
 
     force_N: float = 0.0
     force_rel: float = 0.10
     temperature_C: float = 2.0
+    speed_rel: float = 0.10
 
     def force_limit_N(self, nominal_N: float) -> float:
         """Allowed |F_measured − F_nominal| [N] at a nominal total force [N]."""
         return max(self.force_N, self.force_rel * abs(nominal_N))
+
+
+def round_speed(value: float) -> float:
+    """A speed (any unit) rounded to :data:`SPEED_SIGNIFICANT` significant digits: the
+    one rounding rule of nominal speeds (0 and non-finite unchanged)."""
+    return round_significant(value, SPEED_SIGNIFICANT)
+
+
+def nominal_speed_mm_s(set_point_rpm: float | None, instrument: InstrumentConfig) -> float:
+    """The nominal sliding speed [mm/s] of a run: its interval's rotational-speed set point
+    [rpm] (else the instrument's ``nominal_speed_rpm``), rounded to
+    :data:`SPEED_SIGNIFICANT` significant digits, times the friction radius, rounded
+    again the same way (the one rounding rule of nominal speeds: the map groups by it)."""
+    rpm = set_point_rpm if set_point_rpm is not None and is_finite(set_point_rpm) and \
+        set_point_rpm > 0 else instrument.nominal_speed_rpm
+    return round_speed(sliding_speed_mm_s(round_speed(rpm), instrument.friction_radius_mm))
+
+
+#: The nominal sliding speed [mm/s] of the founding paper (0.005 rpm at its friction
+#: radius): a map row written before nominal speeds were recorded counts as this speed
+FOUNDING_NOMINAL_SPEED_MM_S = nominal_speed_mm_s(None, InstrumentConfig())
 
 
 def qc_flags(labels: RunLabels, normal_force_measured_N: float | None,
@@ -135,6 +166,18 @@ def qc_flags(labels: RunLabels, normal_force_measured_N: float | None,
     return flags
 
 
+def speed_flags(nominal_mm_s: float | None, measured_mm_s: float | None,
+                tolerances: Tolerances) -> list[str]:
+    """``sliding_speed_off_nominal`` when the measured sliding speed [mm/s] strays more
+    than ``tolerances.speed_rel`` of the nominal from it; unknown values raise nothing."""
+    if nominal_mm_s is None or measured_mm_s is None or not is_finite(measured_mm_s) or \
+            not is_finite(nominal_mm_s) or nominal_mm_s <= 0:
+        return []
+    if abs(measured_mm_s - nominal_mm_s) > tolerances.speed_rel * nominal_mm_s:
+        return [FLAG_SPEED_OFF]
+    return []
+
+
 def canonical_flags(flags: Iterable[str]) -> tuple[str, ...]:
     """Flags as every output shows them: sorted and unique, so the same run always shows
     the same list (and the map the same ``;``-joined string)."""
@@ -145,18 +188,23 @@ def canonical_flags(flags: Iterable[str]) -> tuple[str, ...]:
 class RunVerdict:
     """A run's labels with what they decide: ``normal_force_N``, the nominal total force
     [N] the run is grouped under (the label, or the measured mean rounded to 0.1 N when
-    none was given; ``None`` when neither is known), and ``flags``, the run's one list of
-    QC flags (:func:`canonical_flags`)."""
+    none was given; ``None`` when neither is known), ``flags``, the run's one list of
+    QC flags (:func:`canonical_flags`), and ``nominal_speed_mm_s``, the nominal sliding
+    speed [mm/s] the run is grouped under (:func:`nominal_speed_mm_s`)."""
 
     labels: RunLabels
     normal_force_N: float | None
     flags: tuple[str, ...]
+    nominal_speed_mm_s: float | None = None
 
 
 def decide_run(labels: RunLabels, reduction_flags: Iterable[str],
                normal_force_measured_N: float | None, temperature_measured_C: float | None,
                tolerances: Tolerances | None = None,
-               extra_flags: Iterable[str] = ()) -> RunVerdict:
+               extra_flags: Iterable[str] = (), *,
+               speed_set_point_rpm: float | None = None,
+               sliding_speed_measured_mm_s: float | None = None,
+               instrument: InstrumentConfig | None = None) -> RunVerdict:
     """Decide a reduced run's nominal force and flags, once, from its labels, the flags of
     its reduction and its measured mean normal force [N] and temperature [°C]
     (``tolerances`` default: :class:`Tolerances`, 10 %, 2 K).
@@ -164,11 +212,16 @@ def decide_run(labels: RunLabels, reduction_flags: Iterable[str],
     The flags are the reduction's, the off-nominal ones (:func:`qc_flags`),
     ``nominal_force_estimated`` when no nominal force was given and the measured mean
     (rounded to 0.1 N) stands in for it, and ``extra_flags`` of the run's source (e.g.
-    :data:`FLAG_SYNTHETIC` for a synthetic campaign).
+    :data:`FLAG_SYNTHETIC` for a synthetic campaign). The nominal sliding speed [mm/s]
+    is :func:`nominal_speed_mm_s` of the interval's set point ``speed_set_point_rpm``
+    (else the ``instrument``'s nominal speed; default :class:`InstrumentConfig`), and
+    ``sliding_speed_off_nominal`` flags a measured speed [mm/s] off it (:func:`speed_flags`).
     """
+    tolerances = tolerances or Tolerances()
+    speed = nominal_speed_mm_s(speed_set_point_rpm, instrument or InstrumentConfig())
     flags = [*reduction_flags, *extra_flags]
-    flags += qc_flags(labels, normal_force_measured_N, temperature_measured_C,
-                      tolerances or Tolerances())
+    flags += qc_flags(labels, normal_force_measured_N, temperature_measured_C, tolerances)
+    flags += speed_flags(speed, sliding_speed_measured_mm_s, tolerances)
     force: float | None
     if labels.normal_force_N is not None:
         force = float(labels.normal_force_N)
@@ -177,7 +230,8 @@ def decide_run(labels: RunLabels, reduction_flags: Iterable[str],
         flags.append(FLAG_FORCE_ESTIMATED)
     else:
         force = None
-    return RunVerdict(labels=labels, normal_force_N=force, flags=canonical_flags(flags))
+    return RunVerdict(labels=labels, normal_force_N=force, flags=canonical_flags(flags),
+                      nominal_speed_mm_s=speed)
 
 
 class Undescribed(CampaignError):

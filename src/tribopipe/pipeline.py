@@ -230,7 +230,10 @@ def reduce_run(
     labels = labels or RunLabels()
     result = reduce_measurement(measurement, settings.instrument, settings.reduction)
     verdict = decide_run(labels, result.flags, finite_or_nan(result.normal_force_mean_N),
-                         finite_or_nan(result.temperature_C), tolerances, extra_flags)
+                         finite_or_nan(result.temperature_C), tolerances, extra_flags,
+                         speed_set_point_rpm=result.speed_set_point_rpm,
+                         sliding_speed_measured_mm_s=result.sliding_speed_mm_s,
+                         instrument=settings.instrument)
     record = None
     if labels.complete:
         record = make_record(
@@ -324,9 +327,10 @@ def run_summary(outcome: RunOutcome) -> dict[str, Any]:
     ``normal_force_N`` (measured mean, total), ``temperature_C`` (measured mean or
     ``None``), ``flags`` (list), the μ_S position (``mu_s_distance_mm``, ``mu_s_time_s``),
     the μ_K window (``mu_k_window_mm``, ``mu_k_window_s``), plateau std and drift, sliding
-    speed, labels, where the run sits (``test, result, interval, occurrence``), method,
-    parameters, file and config hashes. Strict JSON: a value that is not finite is
-    ``None``; ``file`` is the path as printable text.
+    speed (measured; the nominal ``nominal_speed_mm_s`` and the interval's
+    ``speed_set_point_rpm``), labels, where the run sits (``test, result, interval,
+    occurrence``), method, parameters, file and config hashes. Strict JSON: a value that
+    is not finite is ``None``; ``file`` is the path as printable text.
     """
     r = outcome.result
     meta = outcome.measurement.meta
@@ -356,6 +360,8 @@ def run_summary(outcome: RunOutcome) -> dict[str, Any]:
         "disc": outcome.labels.disc,
         "nominal_normal_force_N": outcome.labels.normal_force_N,
         "nominal_temperature_C": outcome.labels.temperature_C,
+        "nominal_speed_mm_s": outcome.verdict.nominal_speed_mm_s,
+        "speed_set_point_rpm": finite_or_none(r.speed_set_point_rpm),
         "repeat": outcome.labels.repeat,
         "test": meta.test,
         "result": meta.result,

@@ -15,6 +15,13 @@ the interpolation's own u (:func:`tribopipe.interpolation.interpolation_u`), com
 quadrature into u and the expanded U = 2u (k = 2): the headline ± of every output. The
 repeats' 95 % CI half-width is carried beside it, for its own labelled column.
 
+Sliding speed: where a pair is measured at several nominal speeds the request names one
+(``speed_mm_s``); the value at each of the two measured speeds that bracket it is read as
+above and the two are joined linearly in ln v
+(:func:`tribopipe.interpolation.speed_bracket`), their U carried with the same weights;
+outside the measured speeds the edge value is held, and the result says so. A pair of
+one speed needs none.
+
 Inputs are the group-statistics table of :func:`tribopipe.stats.group_statistics`
 (columns ``pin, disc, pressure_kPa, temperature_C, mu_k_mean, mu_k_ci95_high, mu_k_sem,
 mu_k_u, mu_k_n, mu_s_mean, ...``). Nothing here reads files except :func:`load_groups`.
@@ -24,24 +31,35 @@ from __future__ import annotations
 
 import difflib
 import math
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from .config import InstrumentConfig
 from .errors import ExportError
 from .frictionmap import read_map
-from .interpolation import curvature, curve, densify, evaluate, interpolation_u, stencil
+from .interpolation import (
+    curvature,
+    curve,
+    densify,
+    evaluate,
+    interpolation_u,
+    speed_bracket,
+    stencil,
+)
+from .labels import FOUNDING_NOMINAL_SPEED_MM_S
 from .numeric import finite_or_none
 from .physics import contact_pressure_kPa
 from .rounding import known_u, lower_bound, plus_minus
-from .stats import group_statistics, group_u
+from .stats import NOMINAL_SPEED, group_statistics, group_u
 
 if TYPE_CHECKING:
     import numpy as np
     import pandas as pd
 
 QUANTITIES = ("mu_k", "mu_s")
+#: a requested speed within this fraction of a measured one is that speed
+SPEED_MATCH_REL = 0.01
 
 
 @dataclass(frozen=True)
@@ -59,6 +77,7 @@ class UsedPoint:
     n: int
     weight: float
     u: float | None = None
+    speed_mm_s: float | None = None
 
 
 @dataclass(frozen=True)
@@ -76,8 +95,9 @@ class Estimate:
     a used group (1: no repeat scatter). ``uncertainty`` is the weighted 95 % CI
     half-width of the repeats (``None`` when a used group has fewer than 2 runs), for its
     own labelled column; ``u_combined`` the weighted groups' combined u where every used
-    group has a budget. ``clamped_pressure`` / ``clamped_temperature`` say that the
-    request lay outside the measured range and the edge value was held.
+    group has a budget. ``clamped_pressure`` / ``clamped_temperature`` /
+    ``clamped_speed`` say that the request lay outside the measured range and the edge
+    value was held.
     """
 
     value: float
@@ -91,6 +111,7 @@ class Estimate:
     expanded: float | None = None
     budgets_known: bool = False
     n_min: int = 1
+    clamped_speed: bool = False
 
     @property
     def lower(self) -> float | None:
@@ -116,11 +137,18 @@ class QueryResult:
     pressure_range_kPa: tuple[float, float]
     temperatures_C: tuple[float, ...]
     notes: tuple[str, ...] = field(default=())
+    #: the sliding speed [mm/s] of the value: the request, or the pair's one measured
+    #: nominal speed when none was given
+    speed_mm_s: float | None = None
+    #: the pair's measured nominal speeds [mm/s]
+    speeds_mm_s: tuple[float, ...] = ()
 
     @property
     def clamped(self) -> bool:
-        """True when μ_K was held constant outside the measured pressure or temperature range."""
-        return self.mu_k.clamped_pressure or self.mu_k.clamped_temperature
+        """True when μ_K was held constant outside the measured pressure, temperature or
+        speed range."""
+        return (self.mu_k.clamped_pressure or self.mu_k.clamped_temperature
+                or self.mu_k.clamped_speed)
 
     def to_dict(self) -> dict[str, Any]:
         """A JSON-ready dict (plain floats, lists, ``None``); each estimate also carries
@@ -132,6 +160,7 @@ class QueryResult:
         data["clamped"] = self.clamped
         data["pressure_range_kPa"] = list(self.pressure_range_kPa)
         data["temperatures_C"] = list(self.temperatures_C)
+        data["speeds_mm_s"] = list(self.speeds_mm_s)
         data["notes"] = list(self.notes)
         return data
 
@@ -382,45 +411,140 @@ def estimate_text(
 # ---------------------------------------------------------------------------- public API
 
 
+def pair_speeds(pair_groups: pd.DataFrame) -> list[float]:
+    """The nominal sliding speeds [mm/s] of a pair's groups, sorted (the founding speed
+    where the group table shows none: every group of a one-speed map)."""
+    if NOMINAL_SPEED not in pair_groups.columns:
+        return [FOUNDING_NOMINAL_SPEED_MM_S]
+    values = pd_numeric(pair_groups[NOMINAL_SPEED])
+    found = sorted({float(v) for v in values if math.isfinite(v) and v > 0})
+    return found or [FOUNDING_NOMINAL_SPEED_MM_S]
+
+
+def groups_at_speed(pair: pd.DataFrame, speed_mm_s: float) -> pd.DataFrame:
+    """The pair's groups at one nominal speed [mm/s] (all of them without a speed column)."""
+    if NOMINAL_SPEED not in pair.columns:
+        return pair
+    values = pd_numeric(pair[NOMINAL_SPEED])
+    return pair.loc[values == speed_mm_s]
+
+
+def speed_weights(
+    speeds_mm_s: list[float], speed_mm_s: float | None
+) -> tuple[list[tuple[int, float]], bool]:
+    """Which of a pair's measured speeds [mm/s] a value at ``speed_mm_s`` [mm/s] is read
+    from, with their weights (linear in ln v,
+    :func:`tribopipe.interpolation.speed_bracket`), and whether it was held at an end. A
+    request within :data:`SPEED_MATCH_REL` of a measured speed is that speed. ``None`` is
+    allowed only for a pair of one speed; else an :class:`ExportError` lists the speeds."""
+    if speed_mm_s is None:
+        if len(speeds_mm_s) > 1:
+            listed = ", ".join(f"{v:g}" for v in speeds_mm_s)
+            raise ExportError(f"sliding speed needed: this pair is measured at {listed} mm/s",
+                              hint="pass --speed")
+        return [(0, 1.0)], False
+    if not (math.isfinite(speed_mm_s) and speed_mm_s > 0):
+        raise ExportError(f"sliding speed must be a finite number > 0 mm/s, got {speed_mm_s}")
+    for i, v in enumerate(speeds_mm_s):
+        if abs(math.log(speed_mm_s / v)) <= SPEED_MATCH_REL:
+            return [(i, 1.0)], False
+    return speed_bracket(speeds_mm_s, speed_mm_s)
+
+
+def _blend(parts: list[tuple[float, float, Estimate]]) -> Estimate:
+    """One estimate from estimates at measured speeds: ``(weight, speed [mm/s],
+    estimate)`` with weights summing to 1. Values, CI half-widths, u of the groups and of
+    the interpolation are carried with the weights (the groups' u as fully correlated,
+    as :class:`Estimate` carries them over pressure and temperature)."""
+    def weighted(values: list[float | None]) -> float | None:
+        """The weighted sum, ``None`` when a value is unknown."""
+        if any(v is None for v in values):
+            return None
+        return sum(w * float(v) for (w, _, _), v in zip(parts, values, strict=True)
+                   if v is not None)
+
+    ests = [e for _, _, e in parts]
+    value = sum(w * e.value for w, _, e in parts)
+    u_groups = weighted([e.u_groups for e in ests])
+    u_interp = sum(w * e.u_interpolation for w, _, e in parts)
+    expanded = None if u_groups is None else 2.0 * math.hypot(u_groups, u_interp)
+    if not known_u(expanded):
+        expanded = None
+    used = tuple(replace(u, weight=u.weight * w, speed_mm_s=v)
+                 for w, v, e in parts for u in e.used)
+    return Estimate(
+        value, weighted([e.uncertainty for e in ests]), used,
+        any(e.clamped_pressure for e in ests), any(e.clamped_temperature for e in ests),
+        weighted([e.u_combined for e in ests]), u_interpolation=u_interp, u_groups=u_groups,
+        expanded=expanded, budgets_known=all(e.budgets_known for e in ests),
+        n_min=min(e.n_min for e in ests),
+    )
+
+
 def query(
     groups: pd.DataFrame,
     pin: str,
     disc: str,
     pressure_kPa: float,
     temperature_C: float | None = None,
+    speed_mm_s: float | None = None,
 ) -> QueryResult:
-    """μ_K (and μ_S where measured) of a pair at a contact pressure [kPa] and temperature [°C].
+    """μ_K (and μ_S where measured) of a pair at a contact pressure [kPa], temperature [°C]
+    and sliding speed [mm/s].
 
     ``groups`` is a group-statistics table (one row per condition group). The value is
     interpolated over the group means by :mod:`tribopipe.interpolation` (linear in
-    temperature, log p – log μ in pressure) and held constant outside the measured range,
-    with U (k = 2) as in the module docstring. ``temperature_C`` may
-    be ``None`` only when the pair is measured at a single temperature. Raises
-    :class:`ExportError` for an unknown pair (listing the pairs held) or a bad request.
+    temperature, log p – log μ in pressure, linear in ln v between measured speeds) and
+    held constant outside the measured range, with U (k = 2) as in the module docstring.
+    ``temperature_C`` may be ``None`` only when the pair is measured at a single
+    temperature, ``speed_mm_s`` only when it is measured at a single nominal speed.
+    Raises :class:`ExportError` for an unknown pair (listing the pairs held) or a bad
+    request.
     """
     if not math.isfinite(pressure_kPa) or pressure_kPa < 0:
         raise ExportError(f"contact pressure must be a finite number >= 0 kPa, got {pressure_kPa}")
     if temperature_C is not None and not math.isfinite(temperature_C):
         raise ExportError(f"temperature must be a finite number in °C, got {temperature_C}")
     pair = select_pair(groups, pin, disc)
-    mu_k_points = _points(pair, "mu_k")
-    if mu_k_points.empty:
-        raise ExportError(f"pin {pin!r} on disc {disc!r} has no group with a finite mu_k")
+    speeds = pair_speeds(pair)
+    brackets, clamped_speed = speed_weights(speeds, speed_mm_s)
     notes: list[str] = []
-    kept = _with_temperature(mu_k_points)
-    if len(kept) < len(mu_k_points):
-        notes.append(f"{len(mu_k_points) - len(kept)} group(s) without a temperature were left out")
-        mu_k_points = kept
-    mu_k = _estimate(mu_k_points, pressure_kPa, temperature_C, map_curvature(groups, "mu_k"))
-
+    k_parts: list[tuple[float, float, Estimate]] = []
+    s_parts: list[tuple[float, float, Estimate | None]] = []
+    temps: set[float] = set()
+    p_range = (math.inf, -math.inf)
+    for index, weight in brackets:
+        part = groups_at_speed(pair, speeds[index])
+        mu_k_points = _points(part, "mu_k")
+        if mu_k_points.empty:
+            raise ExportError(f"pin {pin!r} on disc {disc!r} has no group with a finite mu_k"
+                              + (f" at {speeds[index]:g} mm/s" if len(speeds) > 1 else ""))
+        kept = _with_temperature(mu_k_points)
+        if len(kept) < len(mu_k_points):
+            note = (f"{len(mu_k_points) - len(kept)} group(s) without a temperature were "
+                    "left out")
+            notes += [] if note in notes else [note]
+            mu_k_points = kept
+        k_parts.append((weight, speeds[index], _estimate(
+            mu_k_points, pressure_kPa, temperature_C, map_curvature(groups, "mu_k"))))
+        mu_s_part = None
+        if "mu_s_mean" in part.columns:
+            mu_s_points = _with_temperature(_points(part, "mu_s"))
+            if not mu_s_points.empty:
+                mu_s_part = _estimate(mu_s_points, pressure_kPa, temperature_C,
+                                      map_curvature(groups, "mu_s"))
+        s_parts.append((weight, speeds[index], mu_s_part))
+        temps |= {float(t) for t in mu_k_points["temperature_C"] if math.isfinite(t)}
+        p_range = (min(p_range[0], float(mu_k_points["pressure_kPa"].min())),
+                   max(p_range[1], float(mu_k_points["pressure_kPa"].max())))
+    mu_k = replace(_blend(k_parts), clamped_speed=clamped_speed)
     mu_s = None
-    if "mu_s_mean" in pair.columns:
-        mu_s_points = _with_temperature(_points(pair, "mu_s"))
-        if not mu_s_points.empty:
-            mu_s = _estimate(mu_s_points, pressure_kPa, temperature_C,
-                             map_curvature(groups, "mu_s"))
+    if all(e is not None for _, _, e in s_parts):
+        mu_s = replace(_blend([(w, v, e) for w, v, e in s_parts if e is not None]),
+                       clamped_speed=clamped_speed)
     if mu_s is None:
-        notes.append("mu_s unknown: no group of this pair holds a static coefficient")
+        notes.append("mu_s unknown: no group of this pair holds a static coefficient"
+                      + (" at every speed used" if len(speeds) > 1 else ""))
     notes += uncertainty_notes(mu_k)
     if mu_k.clamped_pressure:
         notes.append(
@@ -428,8 +552,9 @@ def query(
         )
     if mu_k.clamped_temperature:
         notes.append("temperature outside the measured range: edge value held")
+    if clamped_speed:
+        notes.append("sliding speed outside the measured speeds: edge value held")
 
-    temps = sorted({float(t) for t in mu_k_points["temperature_C"] if math.isfinite(t)})
     first = pair.iloc[0]
     return QueryResult(
         pin=str(first["pin"]),
@@ -438,12 +563,11 @@ def query(
         temperature_C=None if temperature_C is None else float(temperature_C),
         mu_k=mu_k,
         mu_s=mu_s,
-        pressure_range_kPa=(
-            float(mu_k_points["pressure_kPa"].min()),
-            float(mu_k_points["pressure_kPa"].max()),
-        ),
-        temperatures_C=tuple(temps),
+        pressure_range_kPa=p_range,
+        temperatures_C=tuple(sorted(temps)),
         notes=tuple(notes),
+        speed_mm_s=speeds[0] if speed_mm_s is None else float(speed_mm_s),
+        speeds_mm_s=tuple(speeds),
     )
 
 
@@ -528,8 +652,8 @@ def load_groups(map_path: str | Path) -> pd.DataFrame:
 
 
 def groups_of(runs: pd.DataFrame, map_path: str | Path) -> pd.DataFrame:
-    """Group statistics of friction-map ``runs`` (excluded runs out); an
-    :class:`ExportError` naming ``map_path`` when no run is left."""
+    """Group statistics of friction-map ``runs`` (excluded runs out, the nominal speed
+    always shown); an :class:`ExportError` naming ``map_path`` when no run is left."""
     if "excluded" in runs.columns:
         runs = runs[~runs["excluded"].fillna(False).astype(bool)]
     if runs.empty:
@@ -538,7 +662,7 @@ def groups_of(runs: pd.DataFrame, map_path: str | Path) -> pd.DataFrame:
             path=map_path,
             hint="reduce runs first (tribopipe reduce / batch) or import the published map",
         )
-    return group_statistics(runs)
+    return group_statistics(runs, show_speed=True)
 
 
 def query_map(
@@ -547,9 +671,10 @@ def query_map(
     disc: str,
     pressure_kPa: float,
     temperature_C: float | None = None,
+    speed_mm_s: float | None = None,
 ) -> QueryResult:
     """:func:`query` on the friction map (Parquet) at ``map_path``."""
-    return query(load_groups(map_path), pin, disc, pressure_kPa, temperature_C)
+    return query(load_groups(map_path), pin, disc, pressure_kPa, temperature_C, speed_mm_s)
 
 
 def pressure_of_force(normal_force_N: float, instrument: InstrumentConfig) -> float:
@@ -584,6 +709,8 @@ def format_result(res: QueryResult, normal_force_N: float | None = None,
         return lines
 
     t = "" if res.temperature_C is None else f", {res.temperature_C:g} °C"
+    if len(res.speeds_mm_s) > 1 and res.speed_mm_s is not None:
+        t += f", {res.speed_mm_s:g} mm/s"
     force = ""
     if normal_force_N is not None and instrument is not None:
         force = (f" ({normal_force_N:g} N on {instrument.n_pins} pin(s) of radius "
@@ -601,7 +728,9 @@ def format_result(res: QueryResult, normal_force_N: float | None = None,
         )
     lo, hi = res.pressure_range_kPa
     temps = ", ".join(f"{v:g}" for v in res.temperatures_C) or "unknown"
-    lines.append(f"  measured: {lo:g}–{hi:g} kPa at {temps} °C")
+    lines.append(f"  measured: {lo:g}–{hi:g} kPa at {temps} °C"
+                 + (f", {', '.join(f'{v:g}' for v in res.speeds_mm_s)} mm/s"
+                    if len(res.speeds_mm_s) > 1 else ""))
     lines.append(f"  clamped: {'yes' if res.clamped else 'no'}")
     lines += [f"  note: {n}" for n in res.notes]
     return "\n".join(lines)

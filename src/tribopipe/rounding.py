@@ -73,6 +73,13 @@ def plus_minus(value: float, expanded: float, *, ascii_only: bool = False) -> st
     return f"{v_text} {pm} {u_text}"
 
 
+def round_significant(value: float, digits: int) -> float:
+    """``value`` rounded to ``digits`` significant digits (0 and non-finite unchanged)."""
+    if not math.isfinite(value) or value == 0:
+        return value
+    return round(value, digits - 1 - math.floor(math.log10(abs(value))))
+
+
 def lower_bound(value: float, expanded: float) -> float:
     """The lower end of the interval ``value ± expanded`` for a coefficient of friction:
     ``max(0, value − expanded)``."""

@@ -1,9 +1,14 @@
 """Repeat statistics per condition group of the friction map, and the pooled repeatability.
 
 A condition group is one contact pair (pin, disc) at one nominal normal force [N] (hence
-one nominal pressure [kPa]) and one nominal temperature [°C]; optionally also one sliding
-speed [mm/s]. Nominal values are rounded before grouping (force to 1e-6 N, temperature to
-0.01 °C, speed to two significant digits) so 11.79 vs 11.7893 kPa never splits a group.
+one nominal pressure [kPa]), one nominal temperature [°C] and one nominal sliding speed
+[mm/s] (:func:`nominal_speeds`: a row written before nominal speeds were recorded counts
+as the founding paper's speed); optionally (``by_speed``) also one measured sliding speed.
+Nominal values are rounded before grouping (force to 1e-6 N, temperature to 0.01 °C,
+speeds to two significant digits, :func:`tribopipe.labels.round_speed`) so 11.79 vs
+11.7893 kPa never splits a group. A map whose pairs were each measured at one speed has
+groups without a speed column, as before speeds were recorded; where a pair holds several
+nominal speeds the groups carry ``nominal_speed_mm_s``.
 
 Beside the repeat statistics each group carries its combined standard uncertainty (GUM,
 k = 1) from the runs' own budgets (:mod:`tribopipe.reduction.uncertainty`): ``u_run`` is the mean of
@@ -29,7 +34,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
-from .labels import quality_flags
+from .labels import FOUNDING_NOMINAL_SPEED_MM_S, quality_flags, round_speed
 from .rounding import lower_bound
 
 if TYPE_CHECKING:
@@ -50,7 +55,8 @@ R_FACTOR = 2.8
 PRESSURE_SPLIT = 0.01
 FORCE_DECIMALS = 6
 TEMPERATURE_DECIMALS = 2
-SPEED_SIGNIFICANT = 2
+#: the group column of the nominal sliding speed [mm/s]
+NOMINAL_SPEED = "nominal_speed_mm_s"
 
 
 def describe_values(values: Sequence[float]) -> dict[str, Any]:
@@ -129,14 +135,35 @@ def repeatability(groups: pd.DataFrame, quantity: str = "mu_k") -> Repeatability
     return Repeatability(quantity, s_r, R_FACTOR * s_r, dof, int(use.sum()))
 
 
-def _round_significant(value: float, digits: int) -> float:
-    if not math.isfinite(value) or value == 0:
-        return value
-    return round(value, digits - 1 - math.floor(math.log10(abs(value))))
+def nominal_speeds(runs: pd.DataFrame) -> Any:
+    """The nominal sliding speed [mm/s] each run is grouped under (a float array): its
+    ``nominal_speed_mm_s`` rounded by :func:`~tribopipe.labels.round_speed`, or
+    :data:`~tribopipe.labels.FOUNDING_NOMINAL_SPEED_MM_S` where the row has none (a map
+    written before schema version 5, an imported row: measured at one speed as far as the
+    map can tell, which the published map and tribopipe's default instrument both are)."""
+    import numpy as np
+
+    if NOMINAL_SPEED not in runs.columns:
+        return np.full(len(runs), FOUNDING_NOMINAL_SPEED_MM_S)
+    values = runs[NOMINAL_SPEED].to_numpy(dtype=float)
+    return np.array([round_speed(float(v)) if math.isfinite(v) and v > 0
+                     else FOUNDING_NOMINAL_SPEED_MM_S for v in values], dtype=float)
+
+
+def pairs_with_several_speeds(runs: pd.DataFrame) -> set[tuple[str, str]]:
+    """The (pin, disc) pairs whose included runs hold more than one nominal speed."""
+    included = runs.loc[~runs["excluded"].astype(bool)]
+    speeds: dict[tuple[str, str], set[float]] = {}
+    for pin, disc, v in zip(included["pin"], included["disc"], nominal_speeds(included),
+                            strict=True):
+        speeds.setdefault((str(pin), str(disc)), set()).add(float(v))
+    return {pair for pair, found in speeds.items() if len(found) > 1}
 
 
 def group_keys(runs: pd.DataFrame, by_speed: bool) -> pd.DataFrame:
-    """The rounded grouping keys of each run (a new frame; ``runs`` is not modified)."""
+    """The rounded grouping keys of each run (a new frame; ``runs`` is not modified):
+    pin, disc, force, temperature, nominal speed (and the measured speed with
+    ``by_speed``)."""
     import pandas as pd
 
     keys = pd.DataFrame(
@@ -145,12 +172,13 @@ def group_keys(runs: pd.DataFrame, by_speed: bool) -> pd.DataFrame:
             "disc": runs["disc"].to_numpy(dtype=object),
             "normal_force_N": runs["normal_force_N"].round(FORCE_DECIMALS).to_numpy(),
             "temperature_C": runs["temperature_C"].round(TEMPERATURE_DECIMALS).to_numpy(),
+            NOMINAL_SPEED: nominal_speeds(runs),
         },
         index=runs.index,
     )
     if by_speed:
         keys["sliding_speed_mm_s"] = [
-            _round_significant(float(v), SPEED_SIGNIFICANT) for v in runs["sliding_speed_mm_s"]
+            round_speed(float(v)) for v in runs["sliding_speed_mm_s"]
         ]
     return keys
 
@@ -175,23 +203,32 @@ def _pressure_clusters(pressures: Sequence[float]) -> list[int]:
     return labels
 
 
-def group_statistics(runs: pd.DataFrame, *, by_speed: bool = False) -> pd.DataFrame:
+def group_statistics(runs: pd.DataFrame, *, by_speed: bool = False,
+                     show_speed: bool | None = None) -> pd.DataFrame:
     """Repeat statistics per condition group of a friction map (see module docstring).
 
     ``runs`` is a map DataFrame (:func:`tribopipe.frictionmap.read_map`); it is not
     modified. Excluded runs are left out; groups with no remaining run are dropped.
+    Groups always split by nominal speed; ``show_speed`` says whether the table shows it
+    (default: where some pair holds several nominal speeds).
     Columns: ``pin, disc, normal_force_N, pressure_kPa, temperature_C``
-    (+ ``sliding_speed_mm_s`` with ``by_speed``), then for q in ``mu_k``, ``mu_s``:
+    (+ ``nominal_speed_mm_s`` when shown, + ``sliding_speed_mm_s``, the measured speed,
+    with ``by_speed``), then for q in ``mu_k``, ``mu_s``:
     ``q_n, q_mean, q_std, q_sem, q_ci95_low, q_ci95_high, q_cv, q_min, q_max, q_u_run,
     q_u, q_values``,
     then ``range_exceeds_r, qc_flagged, run_ids``. Within a group, values and ids are in
     (repeat, measurement_id) order, so the result does not depend on the row order.
-    Rows are sorted by pin, disc, temperature, pressure, force (and speed).
+    Rows are sorted by pin, disc, temperature, pressure, force, nominal speed (and
+    measured speed).
     """
     import numpy as np
     import pandas as pd
 
+    if show_speed is None:
+        show_speed = bool(pairs_with_several_speeds(runs))
     condition_cols = ["pin", "disc", "normal_force_N", "pressure_kPa", "temperature_C"]
+    if show_speed:
+        condition_cols.append(NOMINAL_SPEED)
     if by_speed:
         condition_cols.append("sliding_speed_mm_s")
     stat_cols = [f"{q}_{f}" for q in QUANTITIES for f in GROUP_FIELDS]
@@ -225,7 +262,7 @@ def group_statistics(runs: pd.DataFrame, *, by_speed: bool = False) -> pd.DataFr
         return pd.DataFrame({c: pd.Series(dtype=_dtype(c)) for c in columns})
     groups = pd.DataFrame(rows)
     groups = groups.sort_values(
-        ["pin", "disc", "temperature_C", "pressure_kPa", "normal_force_N"]
+        ["pin", "disc", "temperature_C", "pressure_kPa", "normal_force_N", NOMINAL_SPEED]
         + (["sliding_speed_mm_s"] if by_speed else []),
         na_position="last",
         kind="mergesort",

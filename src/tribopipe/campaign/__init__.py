@@ -18,6 +18,7 @@ A campaign is described by a TOML file (``configs/*.toml``)::
     force_tolerance_N = 0.0              # QC: measured F_N may stray max(tol_N, tol_rel·F_nom)
     force_tolerance_rel = 0.10
     temperature_tolerance_C = 2.0        # QC: measured T may stray this far from nominal
+    speed_tolerance_rel = 0.10           # QC: measured sliding speed vs nominal (fraction)
     plots = true                         # per-run trace plots under <output_dir>/plots/traces
     encoding = "utf-16"                  # optional: force the reader's encoding, delimiter
     delimiter = "tab"                    # ("tab", ";", ",") or decimal mark (".", ","),

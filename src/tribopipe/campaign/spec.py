@@ -36,9 +36,8 @@ _CAMPAIGN_KEYS = frozenset(
     {
         "name", "raw_dir", "glob", "instrument", "output_dir", "map", "manifest",
         "filename_pattern", "test_pattern", "use_export_names", "export_pattern",
-        "force_tolerance_N",
-        "force_tolerance_rel", "temperature_tolerance_C", "plots", "encoding", "delimiter",
-        "decimal", "synthetic",
+        "force_tolerance_N", "force_tolerance_rel", "temperature_tolerance_C",
+        "speed_tolerance_rel", "plots", "encoding", "delimiter", "decimal", "synthetic",
     }
 )
 _TOP_LEVEL_TABLES = frozenset({"campaign", "reduction", "names"})
@@ -287,6 +286,8 @@ def load_campaign(path: str | Path) -> Campaign:
             table.get("temperature_tolerance_C", defaults.temperature_C),
             "temperature_tolerance_C", cfg_path,
         ),
+        speed_rel=_non_negative(table.get("speed_tolerance_rel", defaults.speed_rel),
+                                "speed_tolerance_rel", cfg_path),
     )
     glob = table.get("glob")
     if glob is not None:

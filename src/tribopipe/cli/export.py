@@ -65,6 +65,13 @@ def _selection(func: Callable[..., Any]) -> Callable[..., Any]:
                 help="Contact pressure [kPa] for single-condition input ("
                 + ", ".join(condition_labels()) + ").",
             ),
+            click.option(
+                "--speed",
+                "speed_mm_s",
+                type=float,
+                help="Sliding speed [mm/s] for single-condition input where the pair is "
+                "measured at several (interpolated in log v).",
+            ),
             map_option,
             click.option(
                 "-o",

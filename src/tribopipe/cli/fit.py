@@ -52,16 +52,18 @@ def fit_cmd(
         records = finite_json(fits.to_dict(orient="records"))
         click.echo(json.dumps(records, indent=2, default=str, allow_nan=False))
         return
+    speeds = "nominal_speed_mm_s" in fits.columns  # a pair of several speeds
     click.echo(
-        f"{'pin':<16} {'disc':<22} {'T_C':>5} {'k':>7} {'k 95% CI':>17} "
-        f"{'n-1':>7} {'n-1 95% CI':>17} {'R2':>6} {'N':>3}"
+        f"{'pin':<16} {'disc':<22} {'T_C':>5} " + (f"{'v_mm_s':>7} " if speeds else "")
+        + f"{'k':>7} {'k 95% CI':>17} {'n-1':>7} {'n-1 95% CI':>17} {'R2':>6} {'N':>3}"
     )
     for r in fits.to_dict(orient="records", into=dict):
         k_ci = f"[{_fmt(r['k_ci95_low'], '.3f')}, {_fmt(r['k_ci95_high'], '.3f')}]"
         e_ci = f"[{_fmt(r['exponent_ci95_low'], '.3f')}, {_fmt(r['exponent_ci95_high'], '.3f')}]"
         click.echo(
             f"{r['pin'][:16]:<16} {r['disc'][:22]:<22} {_fmt(r['temperature_C'], '5.1f'):>5} "
-            f"{_fmt(r['k'], '7.3f'):>7} {k_ci:>17} {_fmt(r['exponent'], '7.3f'):>7} {e_ci:>17} "
+            + (f"{_fmt(r['nominal_speed_mm_s'], '7.2g'):>7} " if speeds else "")
+            + f"{_fmt(r['k'], '7.3f'):>7} {k_ci:>17} {_fmt(r['exponent'], '7.3f'):>7} {e_ci:>17} "
             f"{_fmt(r['r_squared'], '6.3f'):>6} {r['n_points']:>3}"
             + (f"  {r['note']}" if r['note'] else "")
         )

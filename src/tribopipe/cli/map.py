@@ -6,6 +6,7 @@ import click
 
 from ._common import friendly_errors, map_option, say
 from .fit import fit_cmd
+from .mastercurve import master_curve_cmd
 
 
 @click.group("map")
@@ -24,10 +25,12 @@ def map_group() -> None:
       tribopipe map show
       tribopipe map exclude 3fa2c1d09e --reason "pin slipped in the holder"
       tribopipe map fit --pin "Dragonskin 30"     power law μ_K = k·p^(n−1) per pair
+      tribopipe map master-curve --pin "Dragonskin 30" --disc steel   over speed and T
     """
 
 
 map_group.add_command(fit_cmd)
+map_group.add_command(master_curve_cmd)
 
 
 @map_group.command("import")

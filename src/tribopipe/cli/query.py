@@ -27,6 +27,20 @@ from ._common import config_option, friendly_errors, map_option
     type=float,
     help="Temperature [°C]; needed when the pair is measured at several.",
 )
+@click.option(
+    "--speed",
+    "speed_mm_s",
+    type=float,
+    help="Sliding speed [mm/s]; needed when the pair is measured at several.",
+)
+@click.option(
+    "--master-curve",
+    "use_master_curve",
+    is_flag=True,
+    help="Read μ_K from the pair's master curve (Arrhenius shift over speed and "
+    "temperature; needs --temperature and --speed): a model-based prediction at an "
+    "unmeasured temperature or speed, refused outside the reduced-speed range covered.",
+)
 @map_option
 @click.option("--json", "as_json", is_flag=True, help="Print the result as JSON.")
 @friendly_errors
@@ -37,13 +51,17 @@ def query_cmd(
     normal_force_N: float | None,
     config_path: str | None,
     temperature_C: float | None,
+    speed_mm_s: float | None,
+    use_master_curve: bool,
     map_path: str,
     as_json: bool,
 ) -> None:
-    """μ_K (and μ_S where known) of PIN on DISC at a contact pressure and temperature.
+    """μ_K (and μ_S where known) of PIN on DISC at a contact pressure, temperature and
+    sliding speed.
 
     Between the measured group means: linear in temperature and, in pressure, linear in
-    log p - log μ (exact for a power law μ = k·p^(n−1)); held constant outside the
+    log p - log μ (exact for a power law μ = k·p^(n−1)); where the pair is measured at
+    several sliding speeds, linear in log v between them (--speed); held constant outside the
     measured range (as ABAQUS treats a friction table) and said so. Prints value ± U, the
     expanded uncertainty (k = 2) from the runs' budgets, the repeat scatter and the
     interpolation's own uncertainty, rounded to two significant digits; then the repeats'
@@ -63,7 +81,11 @@ def query_cmd(
         instrument = load_settings(config_path).instrument
         pressure_kPa = pressure_of_force(normal_force_N, instrument)
     assert pressure_kPa is not None
-    result = query_map(map_path, pin, disc, pressure_kPa, temperature_C)
+    if use_master_curve:
+        _master_curve_query(map_path, pin, disc, pressure_kPa, temperature_C, speed_mm_s,
+                            as_json)
+        return
+    result = query_map(map_path, pin, disc, pressure_kPa, temperature_C, speed_mm_s)
     if as_json:
         data = result.to_dict()
         if normal_force_N is not None:
@@ -74,3 +96,27 @@ def query_cmd(
     note = map_synthetic_note(map_path)
     if note is not None:  # on stderr with --json, so the JSON stays one document
         click.echo(note, err=as_json)
+
+
+def _master_curve_query(map_path: str, pin: str, disc: str, pressure_kPa: float,
+                        temperature_C: float | None, speed_mm_s: float | None,
+                        as_json: bool) -> None:
+    """``query --master-curve``: the model-based prediction, as JSON or a few lines."""
+    from ..mastercurve import map_master_curve, predict
+    from ..numeric import finite_json
+    from ._common import say
+
+    if temperature_C is None or speed_mm_s is None:
+        raise click.UsageError("--master-curve needs --temperature and --speed")
+    prediction = predict(map_master_curve(map_path, pin, disc), pressure_kPa, temperature_C,
+                         speed_mm_s)
+    if as_json:
+        click.echo(json.dumps(finite_json(prediction.to_dict()), indent=2, allow_nan=False))
+        return
+    say(f"{prediction.pin} on {prediction.disc} at {pressure_kPa:.4g} kPa, "
+        f"{temperature_C:g} °C, {speed_mm_s:g} mm/s")
+    click.echo(f"  mu_k = {prediction.mu_k:.3f} (model-based: master curve, residual SD "
+               f"{prediction.u:.2g})")
+    click.echo(f"  log10 a_T = {prediction.log10_aT:+.3f}; reduced speed x = "
+               f"{prediction.x:.3f} in [{prediction.x_range[0]:.3f}, "
+               f"{prediction.x_range[1]:.3f}]")

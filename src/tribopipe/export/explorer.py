@@ -50,9 +50,16 @@ from ..files import write_text_atomic
 from ..fit import fit_power_law, power_law
 from ..frictionmap import read_map
 from ..labels import flag_list
-from ..query import map_curvature, pair_points, pairs, select_pair
+from ..query import (
+    groups_at_speed,
+    map_curvature,
+    pair_points,
+    pair_speeds,
+    pairs,
+    select_pair,
+)
 from ..rounding import known_u
-from ..stats import group_statistics, group_u
+from ..stats import NOMINAL_SPEED, group_statistics, group_u
 from .registry import WRITERS
 from .simulators import snippet_header
 
@@ -145,6 +152,16 @@ def _points(points: pd.DataFrame, pair_groups: pd.DataFrame) -> list[dict[str, A
     return out
 
 
+def _speed_points(at_speed: pd.DataFrame, speed_mm_s: float) -> dict[str, Any]:
+    """One measured speed [mm/s] of a pair: its μ_K and μ_S points (:func:`_points`)."""
+    return {
+        "speed_mm_s": float(speed_mm_s),
+        "mu_k_points": _points(pair_points(at_speed, "mu_k"), at_speed),
+        "mu_s_points": _points(pair_points(at_speed, "mu_s"), at_speed)
+        if "mu_s_mean" in at_speed.columns else [],
+    }
+
+
 def _left_out(pair_groups: pd.DataFrame) -> int:
     """How many μ_K points of a pair :func:`tribopipe.query.query` leaves out for lack of
     a temperature (points: distinct pressures of the groups without one)."""
@@ -218,7 +235,9 @@ def explorer_data(
     and ``fits`` to :func:`tribopipe.fit.fit_power_law` of ``runs``. Returns a dict of
     plain values (``None`` for missing numbers): ``format, title, source,
     tribopipe_version, generated, pairs`` (per pair: ``pin, disc, mu_k_points,
-    mu_s_points, left_out, runs, fits``), ``groups`` (the group table, each row with
+    mu_s_points, speed_mm_s, speeds, left_out, runs, fits``; ``speeds`` lists
+    ``speed_mm_s, mu_k_points, mu_s_points`` per measured nominal speed where the pair
+    has several, else it is empty), ``groups`` (the group table, each row with
     the index of its ``pair``), ``snippets`` (the simulator formats the page copies:
     name, label, file suffix) and ``snippet_headers`` (the opening lines of
     :func:`tribopipe.export.simulators.snippet` per format). Pressures in kPa,
@@ -252,13 +271,20 @@ def explorer_data(
             continue
         first = pair_groups.iloc[0]
         pair_index[key] = len(pair_rows)
+        speeds = [_speed_points(groups_at_speed(pair_groups, v), v)
+                  for v in pair_speeds(pair_groups)]
         pair_rows.append(
             {
                 "pin": str(first["pin"]),
                 "disc": str(first["disc"]),
-                "mu_k_points": _points(mu_k_points, pair_groups),
-                "mu_s_points": _points(pair_points(pair_groups, "mu_s"), pair_groups)
-                if "mu_s_mean" in pair_groups.columns else [],
+                # a pair of several speeds shows its first speed's points until one is chosen
+                **({k: speeds[0][k] for k in ("mu_k_points", "mu_s_points")}
+                   if len(speeds) > 1 else {
+                    "mu_k_points": _points(mu_k_points, pair_groups),
+                    "mu_s_points": _points(pair_points(pair_groups, "mu_s"), pair_groups)
+                    if "mu_s_mean" in pair_groups.columns else []}),
+                "speed_mm_s": speeds[0]["speed_mm_s"],
+                "speeds": speeds if len(speeds) > 1 else [],
                 "left_out": _left_out(pair_groups),
                 "runs": _runs(included[(run_pin == key[0]) & (run_disc == key[1])]),
                 "fits": _fits(fits[(fit_pin == key[0]) & (fit_disc == key[1])]),
@@ -272,6 +298,8 @@ def explorer_data(
             continue
         row = {"pin": str(g["pin"]), "disc": str(g["disc"]), "pair": index}
         row.update({name: _plain(g.get(name)) for name in GROUP_FIELDS})
+        if NOMINAL_SPEED in g:  # a map with a pair of several speeds
+            row[NOMINAL_SPEED] = _plain(g[NOMINAL_SPEED])
         for q, values in expanded.items():  # U (k = 2) of the group mean, where known
             row[f"{q}_U"] = float(values.iloc[i]) if known_u(float(values.iloc[i])) else None
         group_rows.append(row)

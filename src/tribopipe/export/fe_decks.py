@@ -21,6 +21,7 @@ from ..escape import sim_comment
 from ..query import QueryResult
 from .simbase import (
     FOUNDING_SLIP_RATE,
+    DecayFit,
     Engine,
     SlipRate,
     breakaway,
@@ -30,10 +31,12 @@ from .simbase import (
     default_decay_s_per_mm,
     densify_lines,
     filled_lines,
+    fit_decay,
     header_bodies,
     num,
     selected_pairs,
     slip_rate_of,
+    speed_rows,
     table_at,
     unit_system,
 )
@@ -166,8 +169,20 @@ def write_abaqus(
             *filled_lines(table, u),
             *densify_lines(table, "ABAQUS"),
         ]
+        by_speed = speed_rows(groups, pin_name, disc_name, temperature_C)
+        if by_speed is not None:
+            pair_bodies[2] = speed_table_note(by_speed, u.speed_per_mm_s, u.speed_unit,
+                                              "ABAQUS")
         lines += comment_block("**", pair_bodies)
         lines += [f"*SURFACE INTERACTION, NAME={names[(pin_name, disc_name)]}", "*FRICTION"]
+        if by_speed is not None:
+            for _, row in by_speed.iterrows():
+                fields = [num(row["mu_k"]), num(row["speed_mm_s"] * u.speed_per_mm_s),
+                          num(row["pressure_kPa"] * u.pressure_per_kPa)]
+                if not math.isnan(row["temperature_C"]):
+                    fields.append(num(row["temperature_C"]))
+                lines.append(", ".join(fields))
+            continue
         slip = rate.value_mm_s * u.speed_per_mm_s
         for _, row in table.iterrows():
             fields = [num(row["mu_k"]), num(slip), num(row["pressure_kPa"] * u.pressure_per_kPa)]
@@ -175,6 +190,16 @@ def write_abaqus(
                 fields.append(num(row["temperature_C"]))
             lines.append(", ".join(fields))
     return "\n".join(lines) + "\n"
+
+
+def speed_table_note(rows: pd.DataFrame, per_mm_s: float, unit: str, engine: str) -> str:
+    """The comment of a table over slip rate: the measured nominal speeds, and how the
+    engine reads between them."""
+    speeds = sorted(set(float(v) for v in rows["speed_mm_s"]))
+    listed = ", ".join(num(v * per_mm_s) for v in speeds)
+    return (f"slip rates {listed} {unit}: this pair's measured nominal sliding speeds; "
+            f"{engine} interpolates linearly in slip rate between them and holds the ends, "
+            "tribopipe query interpolates in log v (the two agree at the measured speeds)")
 
 
 def write_abaqus_decay(
@@ -258,13 +283,20 @@ def write_ansys(
     for offset, (pin_name, disc_name) in enumerate(selected_pairs(groups, pin, disc)):
         mat = material_id + offset
         table = table_at(groups, pin_name, disc_name, temperature_C, dense=True)
+        by_speed = speed_rows(groups, pin_name, disc_name, temperature_C)
         lines += comment_block("!", [
             "",
             f"material {mat}: pin {ansys_safe(pin_name)} on disc {ansys_safe(disc_name)}",
             *filled_lines(table, u),
             *densify_lines(table, "Ansys"),
+            *([] if by_speed is None else [
+                speed_table_note(by_speed, u.speed_per_mm_s, u.speed_unit, "Ansys") +
+                " (TBFIELD,SLRV: sliding velocity, innermost field)"]),
         ])
         lines.append(f"TB,FRIC,{mat},,,ISO")
+        if by_speed is not None:
+            lines += _ansys_speed_rows(by_speed, u.pressure_per_kPa, u.speed_per_mm_s)
+            continue
         last_t: float | None = None
         for _, row in table.iterrows():
             t = row["temperature_C"]
@@ -274,6 +306,25 @@ def write_ansys(
             lines.append(f"TBFIELD,NPRES,{num(row['pressure_kPa'] * u.pressure_per_kPa)}")
             lines.append(f"TBDATA,1,{num(row['mu_k'])}")
     return "\n".join(lines) + "\n"
+
+
+def _ansys_speed_rows(rows: pd.DataFrame, per_kPa: float, per_mm_s: float) -> list[str]:
+    """TBFIELD/TBDATA lines of a table over temperature, pressure and sliding velocity
+    (fields in ascending order, temperature outer, velocity inner)."""
+    out = []
+    last_t: float | None = None
+    last_p: float | None = None
+    for _, row in rows.iterrows():
+        t, p = row["temperature_C"], row["pressure_kPa"]
+        if not math.isnan(t) and t != last_t:
+            out.append(f"TBFIELD,TEMP,{num(t)}")
+            last_t, last_p = t, None
+        if p != last_p:
+            out.append(f"TBFIELD,NPRES,{num(p * per_kPa)}")
+            last_p = p
+        out.append(f"TBFIELD,SLRV,{num(row['speed_mm_s'] * per_mm_s)}")
+        out.append(f"TBDATA,1,{num(row['mu_k'])}")
+    return out
 
 
 # ---------------------------------------------------------------------------- LS-DYNA
@@ -309,9 +360,16 @@ def write_lsdyna(
     pin_part: int = 1,
     disc_part: int = 2,
     source: str | None = None,
+    speed_curve: list[tuple[float, float]] | None = None,
 ) -> str:
     """LS-DYNA ``*CONTACT_AUTOMATIC_SURFACE_TO_SURFACE_ID`` with the pair's FS, FD, DC at
     the condition of the query result ``res``.
+
+    Where the pair is measured at three or more sliding speeds (``speed_curve``: μ_K at
+    each, [mm/s]) and ``coefficient="mu_k"``, FS, FD and DC are fitted to μ_K(v)
+    (:func:`tribopipe.export.simbase.fit_decay`) and the header gives the fit's
+    residuals; otherwise as follows, and the header says no speed dependence was
+    measured.
 
     LS-DYNA's friction is μ_c = FD + (FS − FD)·exp(−DC·|v_rel|), with DC in 1/velocity.
     ``coefficient="mu_k"`` (default) writes FS = FD = μ_K and DC = 0 (kinetic Coulomb
@@ -329,7 +387,20 @@ def write_lsdyna(
                               f"got {value}")
     fs = breakaway(res, coefficient, "LS-DYNA FS")
     fd = res.mu_k.value
-    if coefficient == "mu_k":
+    fit: DecayFit | None = fit_decay(speed_curve or [])
+    if coefficient == "mu_k" and fit is not None:
+        if decay_s_per_mm is not None:
+            raise ExportError("DC is fitted from the measured speeds of this pair",
+                              hint="leave out --decay")
+        fs, fd, dc = fit.fs, fit.fd, fit.dc_s_per_mm * u.decay_per_s_per_mm
+        listed = ", ".join(f"{num(v)} mm/s: {num(m)}" for v, m in speed_curve or [])
+        holds = ("FS, FD, DC fitted to mu_k over the measured sliding speeds (kinetic "
+                 "friction as a function of slip speed)")
+        model = [f"mu_k at the measured speeds: {listed}",
+                 f"fit: FS = {num(fit.fs)}, FD = {num(fit.fd)}, DC = {num(dc)} {u.decay_unit}; "
+                 f"residuals rms {fit.rms:.2g}, max {fit.max_abs:.2g} in mu over {fit.n} "
+                 "speeds" + ("; mu rises with speed (FS < FD)" if fit.rising else "")]
+    elif coefficient == "mu_k":
         if decay_s_per_mm is not None:
             raise ExportError("a decay coefficient needs FS = mu_s",
                               hint="add --coefficient mu_s, or leave out --decay")
@@ -342,7 +413,11 @@ def write_lsdyna(
             else decay_s_per_mm
         )
         dc = d_c * u.decay_per_s_per_mm
-        how = ("default: 99 % of the decay reached at this pair's sliding speed"
+        measured = ("the speed dependence measured for this pair is written by "
+                    "--coefficient mu_k" if fit is not None else
+                    "fewer than 3 speeds measured: no speed dependence to fit"
+                    if speed_curve else "no speed dependence measured")
+        how = (f"default: 99 % of the decay reached at this pair's sliding speed; {measured}"
                if decay_s_per_mm is None else "given")
         holds = "FS = mu_s (static, breakaway), FD = mu_k (kinetic), DC = decay coefficient"
         model = [slip_rate.describe(),

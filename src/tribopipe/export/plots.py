@@ -29,6 +29,7 @@ from ..figures import (
 from ..fit import fit_power_law, power_law
 from ..frictionmap import read_map
 from ..layout import find_trace
+from ..mastercurve import MasterCurve
 from ..numeric import finite_or_none, is_finite
 from ..query import pairs
 
@@ -263,3 +264,42 @@ def _read_runs(map_path: str | Path) -> pd.DataFrame:
         raise ExportError("the friction map is empty or absent", path=map_path,
                           hint="reduce runs first (tribopipe reduce / batch)")
     return runs
+
+
+def plot_master_curve(mc: MasterCurve, target: Target, *, fmt: str | None = None,
+                      dpi: int = DPI) -> Target:
+    """μ_K against log10 v (left, as measured) and against log10(a_T·v) (right, shifted
+    onto the master curve, with the fitted curve per pressure) for one pair, one colour
+    per temperature, one marker per pressure, to ``target``."""
+    import numpy as np
+
+    fig = new_figure(9.6, 4.2)
+    before, after = fig.subplots(1, 2, sharey=True)
+    temps = sorted({p.temperature_C for p in mc.points})
+    pressures = [c.pressure_kPa for c in mc.curves]
+    markers = "osD^v<>"
+    colours = {t: f"C{i % 10}" for i, t in enumerate(temps)}
+    for p in mc.points:
+        level = min(range(len(pressures)), key=lambda i: abs(pressures[i] - p.pressure_kPa))
+        style = {"color": colours[p.temperature_C], "marker": markers[level % len(markers)],
+                 "linestyle": "none", "markersize": 5}
+        before.plot(math.log10(p.speed_mm_s), p.mu_k, **style)
+        after.plot(p.x, p.mu_k, **style)
+    for i, c in enumerate(mc.curves):
+        xs = np.linspace(c.x_range[0], c.x_range[1], 60)
+        after.plot(xs, [c.value(float(x)) for x in xs], color="0.3", linewidth=1,
+                   label=f"{c.pressure_kPa:.4g} kPa ({markers[i % len(markers)]})")
+    for t in temps:
+        before.plot([], [], color=colours[t], marker="o", linestyle="none",
+                    label=f"{t:g} °C (log a_T = {mc.log10_aT[t]:+.2f})")
+    before.set_xlabel("log10 v [mm/s]")
+    before.set_ylabel(MU_LABEL)
+    before.set_title("as measured", fontsize="medium")
+    law = (f"Arrhenius, Ea = {mc.parameters['Ea_kJ_mol']:.1f} kJ/mol" if mc.shift == "arrhenius"
+           else f"WLF, C1 = {mc.parameters['C1']:.3g}, C2 = {mc.parameters['C2_K']:.3g} K")
+    after.set_title(f"shifted to {mc.reference_temperature_C:g} °C: {law}", fontsize="medium")
+    after.set_xlabel("log10 (a_T · v) [mm/s]")
+    before.legend(fontsize="small")
+    after.legend(fontsize="small")
+    fig.suptitle(picture_text(f"{mc.pin} on {mc.disc}: master curve"), fontsize="medium")
+    return save_figure(fig, target, fmt, dpi)

@@ -14,7 +14,9 @@ Writer functions take:
 
 - ``condition(res, *, source, **options)``: one query result
   (:class:`tribopipe.query.QueryResult`), plus ``slip_rate`` (the pair's
-  :class:`~tribopipe.export.simbase.SlipRate`) where ``slip_rate`` is true;
+  :class:`~tribopipe.export.simbase.SlipRate`) where ``slip_rate`` is true, and
+  ``speed_curve`` (μ_K at each measured sliding speed of the pair at the condition,
+  :func:`~tribopipe.export.simbase.speed_curve`) where ``speed_curve`` is true;
 - ``table(groups, *, pin, disc, temperature_C, source, **options)``: the group table,
   plus ``slip_rates`` (every pair's) where ``slip_rate`` is true;
 - ``snippet(res, *, source, **snippet_options)`` and ``snippet_header(*, source,
@@ -99,6 +101,7 @@ class Writer:
     table_options: tuple[Option, ...] = ()
     switch: Option | None = None
     slip_rate: bool = False
+    speed_curve: bool = False
     snippet: str | None = None
     snippet_header: str | None = None
     snippet_options: tuple[tuple[str, Any], ...] = ()
@@ -183,9 +186,12 @@ WRITERS: tuple[Writer, ...] = (
         name="lsdyna",
         title="LS-DYNA *CONTACT_AUTOMATIC_SURFACE_TO_SURFACE_ID with FS, FD, DC for one "
               "condition.",
-        description="Default FS = FD = mu_k, DC = 0; with --coefficient mu_s: FS = mu_s, "
-                    "FD = mu_k and the exponential decay coefficient DC.",
-        holds="FS = FD = μ_K; or FS = μ_S, FD = μ_K, DC (`--coefficient mu_s`)",
+        description="Default FS = FD = mu_k, DC = 0, or FS, FD, DC fitted to mu_k over "
+                    "the pair's measured sliding speeds where it has 3 or more (--speed "
+                    "then names the condition's speed); with --coefficient mu_s: FS = "
+                    "mu_s, FD = mu_k and the exponential decay coefficient DC.",
+        holds="FS = FD = μ_K, or FS, FD, DC fitted to μ_K(v) where ≥ 3 speeds are measured; "
+              "or FS = μ_S, FD = μ_K, DC (`--coefficient mu_s`)",
         engine="tribopipe.export.fe_decks:LSDYNA",
         condition="tribopipe.export.fe_decks:write_lsdyna",
         condition_options=(
@@ -197,6 +203,7 @@ WRITERS: tuple[Writer, ...] = (
             Option("disc_part", "--disc-part", int, 2, "Part ID of the disc (SURFB)."),
         ),
         slip_rate=True,
+        speed_curve=True,
     ),
     Writer(
         name="mujoco",

@@ -33,7 +33,15 @@ from ..errors import ExportError
 from ..escape import sim_comment
 from ..frictionmap.published import PUBLISHED_SLIDING_SPEED_MM_S
 from ..interpolation import ENGINE_TOLERANCE
-from ..query import QueryResult, friction_table, pairs, query, select_pair
+from ..query import (
+    QueryResult,
+    friction_table,
+    groups_at_speed,
+    pair_speeds,
+    pairs,
+    query,
+    select_pair,
+)
 from .registry import COEFFICIENT
 
 if TYPE_CHECKING:
@@ -412,3 +420,108 @@ def comment_block(comment: str, bodies: list[str], width: int = 100) -> list[str
         lines += [f"{comment} {w}".rstrip() for w in wrapped]
     return lines
 
+
+
+# ---------------------------------------------------------------------------- speeds
+
+
+def speed_curve(groups: pd.DataFrame, pin: str, disc: str, pressure_kPa: float,
+                temperature_C: float | None) -> list[tuple[float, float]]:
+    """``[(v [mm/s], μ_K)]`` of a pair at one pressure [kPa] and temperature [°C], one per
+    measured nominal speed (ascending; :func:`tribopipe.query.query` at each)."""
+    pair = select_pair(groups, pin, disc)
+    speeds = pair_speeds(pair)
+    if len(speeds) < 2:
+        return []
+    return [(v, query(groups, pin, disc, pressure_kPa, temperature_C, v).mu_k.value)
+            for v in speeds]
+
+
+@dataclass(frozen=True)
+class DecayFit:
+    """μ(v) = FD + (FS − FD)·exp(−DC·v) fitted to μ_K at the measured speeds: ``fs``,
+    ``fd``, ``dc_s_per_mm`` [s/mm]; ``rms`` and ``max_abs`` the residuals (in μ) at the
+    ``n`` speeds; ``rising`` when μ grows with speed (FS < FD: elastomers below their
+    loss peak)."""
+
+    fs: float
+    fd: float
+    dc_s_per_mm: float
+    rms: float
+    max_abs: float
+    n: int
+
+    @property
+    def rising(self) -> bool:
+        """True when μ rises with speed (FS < FD)."""
+        return self.fs < self.fd
+
+
+def fit_decay(curve: list[tuple[float, float]]) -> DecayFit | None:
+    """:class:`DecayFit` of ``[(v [mm/s], μ)]`` by least squares (DC ≥ 0, started at the
+    inverse middle speed); ``None`` with fewer than 3 speeds (three parameters)."""
+    import numpy as np
+    from scipy.optimize import least_squares
+
+    if len(curve) < 3:
+        return None
+    v = np.array([c[0] for c in curve], dtype=float)
+    mu = np.array([c[1] for c in curve], dtype=float)
+
+    def model(theta: np.ndarray) -> np.ndarray:
+        return theta[1] + (theta[0] - theta[1]) * np.exp(-theta[2] * v)
+
+    start = np.array([mu[0], mu[-1], 1.0 / float(np.exp(np.mean(np.log(v))))])
+    best = None
+    for scale in (0.1, 1.0, 10.0):
+        theta0 = start.copy()
+        theta0[2] *= scale
+        sol = least_squares(lambda t: model(t) - mu, theta0,
+                            bounds=([-np.inf, -np.inf, 0.0], [np.inf, np.inf, np.inf]))
+        if best is None or sol.cost < best.cost:
+            best = sol
+    assert best is not None
+    res = model(best.x) - mu
+    return DecayFit(float(best.x[0]), float(best.x[1]), float(best.x[2]),
+                    float(np.sqrt(np.mean(res**2))), float(np.max(np.abs(res))), len(curve))
+
+
+def speed_rows(groups: pd.DataFrame, pin: str, disc: str,
+               temperature_C: float | None) -> pd.DataFrame | None:
+    """A pair's μ_K table over pressure, temperature and sliding speed where it is
+    measured at several nominal speeds (else ``None``): ``pressure_kPa, temperature_C,
+    speed_mm_s, mu_k, measured, added``, temperature outer, pressure, then speed inner
+    (ABAQUS wants the first variable, the slip rate, to vary fastest). Pressures are
+    every speed's rows of :func:`table_at` (measured and densified), so the grid is
+    rectangular; each cell is :func:`tribopipe.query.query` at its speed."""
+    import pandas as pd
+
+    speeds = pair_speeds(select_pair(groups, pin, disc))
+    if len(speeds) < 2:
+        return None
+    pressures: set[float] = set()
+    temps: set[float] = set()
+    measured: set[tuple[float, float, float]] = set()
+    measured_p: set[float] = set()
+    for v in speeds:
+        part = table_at(groups_at_speed(groups, v), pin, disc, temperature_C, dense=True)
+        pressures |= {float(p) for p in part["pressure_kPa"]}
+        temps |= {float(t) for t in part["temperature_C"]}
+        for p_row, t_row, was_measured, added in zip(
+                part["pressure_kPa"].to_numpy(dtype=float),
+                part["temperature_C"].to_numpy(dtype=float),
+                part["measured"].to_numpy(dtype=bool), part["added"].to_numpy(dtype=bool),
+                strict=True):
+            if was_measured:
+                measured.add((float(p_row), float(t_row), v))
+            if not added:
+                measured_p.add(float(p_row))
+    rows = []
+    for t in sorted(temps, key=lambda x: (math.isnan(x), x)):
+        for p in sorted(pressures):
+            for v in speeds:
+                res = query(groups, pin, disc, p, None if math.isnan(t) else t, v)
+                rows.append({"pressure_kPa": p, "temperature_C": t, "speed_mm_s": v,
+                             "mu_k": res.mu_k.value, "measured": (p, t, v) in measured,
+                             "added": p not in measured_p})
+    return pd.DataFrame(rows)

@@ -31,7 +31,7 @@ from .registry import (
     users,
     writer_named,
 )
-from .simbase import Engine, SlipRate, pair_slip_rates, slip_rate_of
+from .simbase import Engine, SlipRate, pair_slip_rates, slip_rate_of, speed_curve
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -73,6 +73,7 @@ def export_simulator_input(
     temperature_C: float | None = None,
     slip_rates: Mapping[tuple[str, str], SlipRate] | None = None,
     source: str | None = None,
+    speed_mm_s: float | None = None,
     **options: Any,
 ) -> str:
     """The input text for simulator ``fmt`` (one of :data:`FORMATS`).
@@ -85,7 +86,8 @@ def export_simulator_input(
     ``units``); one it does not take is refused. ``slip_rates`` holds each pair's
     measured sliding speed (:func:`~tribopipe.export.simbase.pair_slip_rates`); pairs
     without one get the founding paper's 0.007 mm/s. ``source`` (the map's path) is named
-    in the file's header.
+    in the file's header. ``speed_mm_s`` [mm/s] is the sliding speed of a single
+    condition (needed where the pair is measured at several; tables carry every speed).
     """
     writer = writer_named(fmt)
     switch = writer.switch
@@ -103,6 +105,9 @@ def export_simulator_input(
                 f"{', '.join(condition_labels())}",
                 hint="leave out --pressure",
             )
+        if speed_mm_s is not None:
+            raise ExportError(f"the {fmt} table carries every measured speed; a single speed "
+                              "is for one condition", hint="leave out --speed, or add --pressure")
         if writer.slip_rate:
             chosen["slip_rates"] = slip_rates
         return function(writer.table)(groups, pin=pin, disc=disc,
@@ -122,7 +127,7 @@ def export_simulator_input(
             f"{pin} on {disc} is measured at {measured} kPa",
             hint="pass --pressure KPA",
         )
-    res = query(groups, pin, disc, pressure_kPa, temperature_C)
+    res = query(groups, pin, disc, pressure_kPa, temperature_C, speed_mm_s)
     if constant:
         write = function(writer.snippet)
         takes = inspect.signature(write).parameters
@@ -132,6 +137,8 @@ def export_simulator_input(
     if writer.slip_rate:
         first = pair.iloc[0]
         chosen["slip_rate"] = slip_rate_of(slip_rates, str(first["pin"]), str(first["disc"]))
+    if writer.speed_curve:
+        chosen["speed_curve"] = speed_curve(groups, pin, disc, pressure_kPa, temperature_C)
     return function(writer.condition)(res, source=source, **chosen)
 
 

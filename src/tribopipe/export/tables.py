@@ -41,7 +41,12 @@ from ..frictionmap import read_map
 from ..frictionmap.published import FRICTIONMAP_COLUMNS
 from ..query import estimate_text
 from ..rounding import known_u, round_gum
-from ..stats import SPEED_SIGNIFICANT, group_keys, group_statistics, group_u
+from ..stats import (
+    NOMINAL_SPEED,
+    group_keys,
+    group_statistics,
+    group_u,
+)
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -98,21 +103,11 @@ def abstract_table(
     """The paper's Table 2 layout: ``pin, disc, pressure_kPa, temperature_C, mu_k`` with
     μ_K the group mean rounded half-up to two decimals, as printed in the paper."""
     groups = group_table(runs, pin=pin, disc=disc, temperature_C=temperature_C)
-    table = groups.loc[:, ["pin", "disc", "pressure_kPa", "temperature_C"]].copy()
+    condition = ["pin", "disc", "pressure_kPa", "temperature_C"] + (
+        [NOMINAL_SPEED] if NOMINAL_SPEED in groups.columns else [])
+    table = groups.loc[:, condition].copy()
     table["mu_k"] = [round_half_up(v, 2) for v in groups["mu_k_mean"]]
     return table
-
-
-def several_speeds(runs: pd.DataFrame) -> bool:
-    """True when the included runs hold more than one sliding speed (two significant
-    digits, as :func:`tribopipe.stats.group_statistics` groups them)."""
-    import numpy as np
-
-    if "sliding_speed_mm_s" not in runs.columns:
-        return False
-    v = runs.loc[~runs["excluded"].astype(bool), "sliding_speed_mm_s"].to_numpy(dtype=float)
-    v = v[np.isfinite(v) & (v > 0)]
-    return len({float(f"{x:.{SPEED_SIGNIFICANT}g}") for x in v}) > 1
 
 
 def _with_u(value: float, u: float, budget: bool, n: int, machine: bool) -> tuple[str, str]:
@@ -139,17 +134,16 @@ def paper_table(
     """The ``paper`` layout (module docstring): one row per condition group, every
     number a text rounded for print. ``machine`` (CSV) keeps value and U in separate
     columns (``mu_k``, ``mu_k_U``) and the units in snake-case names."""
-    by_speed = several_speeds(runs)
-    groups = group_table(runs, pin=pin, disc=disc, temperature_C=temperature_C,
-                         by_speed=by_speed)
+    groups = group_table(runs, pin=pin, disc=disc, temperature_C=temperature_C)
+    by_speed = NOMINAL_SPEED in groups.columns
     with_mu_s = bool((groups["mu_s_n"] > 0).any()) if len(groups) else False
-    names = (("pressure_kPa", "temperature_C", "sliding_speed_mm_s") if machine
+    names = (("pressure_kPa", "temperature_C", NOMINAL_SPEED) if machine
              else ("p [kPa]", "T [°C]", "v [mm/s]"))
     out: dict[str, list[Any]] = {"pin": list(groups["pin"]), "disc": list(groups["disc"]),
                                  names[0]: [_cell(v, ".4g") for v in groups["pressure_kPa"]],
                                  names[1]: [_cell(v, "g") for v in groups["temperature_C"]]}
     if by_speed:
-        out[names[2]] = [_cell(v, ".2g") for v in groups["sliding_speed_mm_s"]]
+        out[names[2]] = [_cell(v, ".2g") for v in groups[NOMINAL_SPEED]]
     out["n"] = [int(v) for v in groups["mu_k_n"]]
     flags: list[list[str]] = [[] for _ in range(len(groups))]
     for q, label in (("mu_s", "μ_S"), ("mu_k", "μ_K")):

@@ -441,13 +441,15 @@ def _check_groups(check: _Checker, res: dict[str, Any], data: bytes,
     rows = _table(check, data, fields, shown)
     if rows is None:
         return
-    keys = ("pin", "disc", "normal_force_N", "temperature_C")
+    keys: tuple[str, ...] = ("pin", "disc", "normal_force_N", "temperature_C")
     if not {*keys, "mu_k_n", "mu_k_mean"} <= {f["name"] for f in fields}:
         check.add(shown, "schema: expected the fields pin, disc, normal_force_N, "
                   "temperature_C, mu_k_n and mu_k_mean")
         return
-    computed = {_key(g, keys): g for g in group_statistics(runs).to_dict(orient="records",
-                                                                           into=dict)}
+    if "nominal_speed_mm_s" in {f["name"] for f in fields}:
+        keys += ("nominal_speed_mm_s",)  # a map of several speeds: groups split by speed
+    computed = {_key(g, keys): g for g in group_statistics(runs, show_speed=True).to_dict(
+        orient="records", into=dict)}
     if len(rows) != len(computed):
         check.add(shown, f"{len(rows)} groups, the runs make {len(computed)}")
     for n, row in enumerate(rows, 1):

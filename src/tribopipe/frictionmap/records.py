@@ -103,7 +103,10 @@ def make_record(
     measured_temperature = finite_or_nan(result.temperature_C)
     if verdict is None:
         verdict = decide_run(labels or RunLabels(), result.flags, measured_force,
-                             measured_temperature, tolerances)
+                             measured_temperature, tolerances,
+                             speed_set_point_rpm=result.speed_set_point_rpm,
+                             sliding_speed_measured_mm_s=result.sliding_speed_mm_s,
+                             instrument=settings.instrument)
     labels = verdict.labels
     if not labels.complete:
         raise MapError(
@@ -140,6 +143,7 @@ def make_record(
         "temperature_C": temperature,
         "temperature_measured_C": measured_temperature,
         "sliding_speed_mm_s": finite_or_nan(result.sliding_speed_mm_s),
+        "nominal_speed_mm_s": verdict.nominal_speed_mm_s,
         "repeat": labels.repeat,
         "mu_s": finite_or_nan(result.mu_s),
         "mu_k": mu_k,

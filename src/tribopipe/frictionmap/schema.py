@@ -41,7 +41,7 @@ if TYPE_CHECKING:
 #: Parquet key-value metadata key holding the schema and provenance (JSON).
 META_KEY = b"tribopipe.frictionmap"
 SCHEMA_NAME = "tribopipe.frictionmap"
-SCHEMA_VERSION = 4
+SCHEMA_VERSION = 5
 
 #: ``source`` of runs reduced by tribopipe (imported rows name their origin instead).
 SOURCE_REDUCED = "reduced"
@@ -109,6 +109,9 @@ COLUMNS: tuple[Column, ...] = (
            TEMPERATURE_C, _COLD),
     Column("sliding_speed_mm_s", "float", "mm/s", "measured sliding speed",
            SLIDING_SPEED_MM_S, "a friction run slides"),
+    Column("nominal_speed_mm_s", "float", "mm/s", "nominal sliding speed (the interval's "
+           "set point; missing in rows older than schema version 5: the founding speed)",
+           SLIDING_SPEED_MM_S, "a friction run slides"),
     Column("repeat", "int", "", "repeat number within the condition",
            Range(0, MAX_REPEAT), "repeat numbers count up from 0 or 1"),
     Column("mu_s", "float", "", "static coefficient of friction", MU, _RATIO,
@@ -151,7 +154,8 @@ RUN_COLUMNS: tuple[str, ...] = tuple(c.name for c in COLUMNS)
 #: Columns added after schema version 1, with the version that added them: a map written
 #: before that version lacks them and reads with them missing, and a record built by older
 #: code may leave them out.
-ADDED_IN_VERSION: dict[str, int] = {"lab": 2, "u_mu_s": 3, "u_mu_k": 3, "test": 4, "result": 4}
+ADDED_IN_VERSION: dict[str, int] = {"lab": 2, "u_mu_s": 3, "u_mu_k": 3, "test": 4, "result": 4,
+                                    "nominal_speed_mm_s": 5}
 #: the kind of each column: ``"str"``, ``"float"``, ``"int"`` or ``"bool"``
 KIND: dict[str, str] = {c.name: c.kind for c in COLUMNS}
 #: the physical range of each bounded number column; a float column not listed need only

@@ -98,6 +98,9 @@ class ReductionResult:
     method: str
     parameters: dict[str, Any]
     trace: pd.DataFrame = field(repr=False)
+    #: the interval's rotational-speed set point [rpm]: the median |rotational speed| of
+    #: the moving samples; ``None`` where the export has no speed column
+    speed_set_point_rpm: float | None = None
 
 
 def _flags(
@@ -213,6 +216,20 @@ def _measured_speed(
     if moving_t.size >= 2 and moving_t[-1] > moving_t[0]:
         return float((moving_s[-1] - moving_s[0]) / (moving_t[-1] - moving_t[0]))
     return instrument.nominal_sliding_speed_mm_s
+
+
+def _speed_set_point_rpm(x: IntervalSamples, at_rest: np.ndarray) -> float | None:
+    """The interval's rotational-speed set point [rpm]: the median |rotational speed| of
+    the samples after the leading rest (all samples where none is at rest); ``None``
+    without a speed column or a positive median."""
+    if x.speed is None:
+        return None
+    moving = x.speed[~at_rest] if (~at_rest).any() else x.speed
+    moving = np.abs(moving[np.isfinite(moving)])
+    if not moving.size:
+        return None
+    rpm = float(np.median(moving)) * 60.0 / (2.0 * math.pi)
+    return rpm if rpm > 0 else None
 
 
 def _trace_frame(
@@ -379,4 +396,5 @@ def reduce_measurement(
             in_contact=in_contact, uncertainties=uncertainties,
         ),
         trace=_trace_frame(x, s, f_r, mu, in_contact, idx, det, instrument),
+        speed_set_point_rpm=_speed_set_point_rpm(x, at_rest),
     )

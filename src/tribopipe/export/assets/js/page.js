@@ -4,9 +4,10 @@ var pinSelect = $("pin");
 var discSelect = $("disc");
 var tInput = $("temperature");
 var pInput = $("pressure");
+var vSelect = $("speed");
 /* `missing`: what the link asked for that the map does not hold (a pin, a disc, a pair):
    no μ is shown until the user chooses a pair. */
-var state = { pair: 0, result: null, sortKey: null, sortDir: 1, missing: null };
+var state = { pair: 0, result: null, sortKey: null, sortDir: 1, missing: null, speed: 0 };
 
 var PINS = []; // [{key, name, pairs: [index...]}]
 PAIRS.forEach(function (pair, i) {
@@ -50,6 +51,28 @@ function fillDefaults(pair) {
     var at = pairPressures(pair, temps.indexOf(t) >= 0 ? t : undefined);
     setNumber(pInput, at[0]);
   }
+}
+
+/* The speed selector: shown for a pair measured at several sliding speeds; the chosen
+   speed's points become the pair's points (plots, chips) and the query's speed. */
+function pairSpeedList(pair) { return pair.speeds && pair.speeds.length > 1 ? pair.speeds : []; }
+
+function renderSpeeds(pair) {
+  var speeds = pairSpeedList(pair);
+  $("tpx-speed-label").hidden = !speeds.length;
+  if (!speeds.length) { clear(vSelect); return; }
+  if (state.speed >= speeds.length) state.speed = 0;
+  if (vSelect.options.length !== speeds.length) {
+    fillSelect(vSelect, speeds.map(function (x, i) { return { value: i, text: pyG(x.speed_mm_s) }; }));
+  }
+  vSelect.value = String(state.speed);
+  pair.mu_k_points = speeds[state.speed].mu_k_points;
+  pair.mu_s_points = speeds[state.speed].mu_s_points;
+}
+
+function chosenSpeed(pair) {
+  var speeds = pairSpeedList(pair);
+  return speeds.length ? speeds[state.speed].speed_mm_s : null;
 }
 
 function chip(text, active, onClick) {
@@ -104,6 +127,8 @@ function writeUrl() {
   q.set("disc", PAIRS[state.pair].disc);
   if (urlText(pInput) !== "") q.set("pressure", urlText(pInput));
   if (urlText(tInput) !== "") q.set("temperature", urlText(tInput));
+  var speed = chosenSpeed(PAIRS[state.pair]);
+  if (speed !== null) q.set("speed", pyRepr(speed));
   var url = location.pathname + "?" + q.toString() + location.hash;
   try {
     history.replaceState(history.state, "", url);
@@ -131,6 +156,13 @@ function readUrl() {
       "is not measured with " + PINS[pinIndex].name : "is not in this map"));
   }
   var pair = PAIRS[state.pair];
+  if (q.has("speed")) {
+    var wanted = Number(q.get("speed"));
+    var at = pairSpeedList(pair).findIndex(function (x) { return x.speed_mm_s === wanted; });
+    if (at >= 0) state.speed = at;
+    else notes.push("the link's speed “" + q.get("speed") + "” is not measured for this pair");
+  }
+  renderSpeeds(pair);
   [["temperature", tInput, pairTemperatures(pair)], ["pressure", pInput, pairPressures(pair)]]
     .forEach(function (f) {
       if (!q.has(f[0])) return;
@@ -269,7 +301,7 @@ function compute() {
   if (Number.isNaN(t)) return [null, "the temperature is not a number"];
   var pair = PAIRS[state.pair];
   try {
-    return [query(pair.pin, pair.disc, p, t), null];
+    return [query(pair.pin, pair.disc, p, t, chosenSpeed(pair)), null];
   } catch (e) {
     if (e instanceof QueryError) return [null, e.message];
     throw e;
@@ -281,6 +313,7 @@ function compute() {
    a cleared field is answered as query answers it). */
 function update(withDefaults) {
   var pair = PAIRS[state.pair];
+  renderSpeeds(pair);
   if (withDefaults === true) fillDefaults(pair);
   var out = compute();
   state.result = out[0];
@@ -296,12 +329,20 @@ function update(withDefaults) {
 fillSelect(pinSelect, PINS.map(function (p, i) { return { value: i, text: p.name }; }));
 pinSelect.addEventListener("change", function () {
   setPin(Number(pinSelect.value), key(PAIRS[state.pair].disc));
+  state.speed = 0;
+  clear(vSelect);
   state.missing = null;
   note("");
   update(true);
 });
+vSelect.addEventListener("change", function () {
+  state.speed = Number(vSelect.value);
+  update(false);
+});
 discSelect.addEventListener("change", function () {
   state.pair = Number(discSelect.value);
+  state.speed = 0;
+  clear(vSelect);
   state.missing = null;
   note("");
   update(true);

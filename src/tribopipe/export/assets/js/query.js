@@ -246,10 +246,84 @@ function findPair(pin, disc) {
   return -1;
 }
 
-/* query.query: mu_K (and mu_S) of a pair at a pressure [kPa] and temperature [°C] (or
-   null); the result has the fields of QueryResult.to_dict(). Throws a QueryError. */
-function query(pin, disc, p, t) {
+/* query.SPEED_MATCH_REL: a requested speed this close (in ln v) to a measured one is it */
+var SPEED_MATCH_REL = 0.01;
+
+/* query.speed_weights: [[index, weight], ...] into a pair's sorted speeds [mm/s] for v
+   (linear in ln v, interpolation.speed_bracket), and clamped. */
+function speedWeights(speeds, v) {
+  if (v === null) {
+    if (speeds.length > 1) {
+      throw new QueryError("sliding speed needed: this pair is measured at " +
+        speeds.map(function (x) { return pyG(x); }).join(", ") + " mm/s");
+    }
+    return [[[0, 1.0]], false];
+  }
+  if (typeof v !== "number" || !Number.isFinite(v) || !(v > 0)) {
+    throw new QueryError("sliding speed must be a finite number > 0 mm/s, got " + pyRepr(Number(v)));
+  }
+  for (var i = 0; i < speeds.length; i += 1) {
+    if (Math.abs(Math.log(v / speeds[i])) <= SPEED_MATCH_REL) return [[[i, 1.0]], false];
+  }
+  return bracket(speeds.map(Math.log), Math.log(v));
+}
+
+/* query._blend: one estimate from [[weight, speed, estimate], ...] at measured speeds. */
+function blend(parts) {
+  function weighted(name) {
+    var total = 0;
+    for (var i = 0; i < parts.length; i += 1) {
+      var x = parts[i][2][name];
+      if (x === null) return null;
+      total += parts[i][0] * x;
+    }
+    return total;
+  }
+  var value = 0;
+  var uInterp = 0;
+  parts.forEach(function (q) { value += q[0] * q[2].value; uInterp += q[0] * q[2].u_interpolation; });
+  var uGroups = weighted("u_groups");
+  var expanded = uGroups === null ? null : 2.0 * Math.hypot(uGroups, uInterp);
+  if (expanded !== null && !(expanded >= U_FLOOR)) expanded = null;
+  var used = [];
+  parts.forEach(function (q) {
+    q[2].used.forEach(function (u) {
+      var copy = Object.assign({}, u);
+      copy.weight = u.weight * q[0];
+      copy.speed_mm_s = q[1];
+      used.push(copy);
+    });
+  });
+  return {
+    value: value,
+    uncertainty: weighted("uncertainty"),
+    used: used,
+    clamped_pressure: parts.some(function (q) { return q[2].clamped_pressure; }),
+    clamped_temperature: parts.some(function (q) { return q[2].clamped_temperature; }),
+    u_combined: weighted("u_combined"),
+    u_interpolation: uInterp,
+    u_groups: uGroups,
+    expanded: expanded,
+    budgets_known: parts.every(function (q) { return q[2].budgets_known; }),
+    n_min: Math.min.apply(null, parts.map(function (q) { return q[2].n_min; })),
+    clamped_speed: false,
+  };
+}
+
+/* The pair's measured speeds: [{speed_mm_s, mu_k_points, mu_s_points}], one entry (the
+   pair's own points, speed from the data) for a pair of one speed. */
+function pairSpeeds(pair) {
+  if (pair.speeds && pair.speeds.length) return pair.speeds;
+  return [{speed_mm_s: pair.speed_mm_s === undefined ? null : pair.speed_mm_s,
+           mu_k_points: pair.mu_k_points, mu_s_points: pair.mu_s_points}];
+}
+
+/* query.query: mu_K (and mu_S) of a pair at a pressure [kPa], temperature [°C] (or
+   null) and sliding speed [mm/s] (or null: a pair of one speed); the result has the
+   fields of QueryResult.to_dict(). Throws a QueryError. */
+function query(pin, disc, p, t, v) {
   if (t === undefined) t = null;
+  if (v === undefined) v = null;
   if (typeof p !== "number" || !Number.isFinite(p) || p < 0) {
     throw new QueryError("contact pressure must be a finite number >= 0 kPa, got " + pyRepr(Number(p)));
   }
@@ -262,11 +336,28 @@ function query(pin, disc, p, t) {
       JSON.stringify(String(disc)) + " in this map");
   }
   var pair = PAIRS[index];
+  var speeds = pairSpeeds(pair);
+  var sw = speedWeights(speeds.map(function (x) { return x.speed_mm_s; }), v);
   var notes = [];
   if (pair.left_out) notes.push(pair.left_out + " group(s) without a temperature were left out");
-  var muK = estimate(pair.mu_k_points, p, t, DATA.curvature.mu_k);
-  var muS = pair.mu_s_points.length ? estimate(pair.mu_s_points, p, t, DATA.curvature.mu_s) : null;
-  if (muS === null) notes.push("mu_s unknown: no group of this pair holds a static coefficient");
+  var kParts = [];
+  var sParts = [];
+  var kPoints = [];
+  sw[0].forEach(function (iw) {
+    var at = speeds[iw[0]];
+    kParts.push([iw[1], at.speed_mm_s, estimate(at.mu_k_points, p, t, DATA.curvature.mu_k)]);
+    sParts.push(at.mu_s_points.length ?
+      [iw[1], at.speed_mm_s, estimate(at.mu_s_points, p, t, DATA.curvature.mu_s)] : null);
+    kPoints = kPoints.concat(at.mu_k_points);
+  });
+  var muK = blend(kParts);
+  muK.clamped_speed = sw[1];
+  var muS = sParts.every(function (q) { return q !== null; }) ? blend(sParts) : null;
+  if (muS !== null) muS.clamped_speed = sw[1];
+  if (muS === null) {
+    notes.push("mu_s unknown: no group of this pair holds a static coefficient" +
+      (speeds.length > 1 ? " at every speed used" : ""));
+  }
   notes = notes.concat(uncertaintyNotes(muK));
   [muK, muS].forEach(function (est) { // QueryResult.to_dict's text and lower
     if (est === null) return;
@@ -277,7 +368,8 @@ function query(pin, disc, p, t) {
     notes.push("pressure outside the range measured (at a temperature used): edge value held");
   }
   if (muK.clamped_temperature) notes.push("temperature outside the measured range: edge value held");
-  var pressures = pair.mu_k_points.map(function (q) { return q.pressure_kPa; });
+  if (sw[1]) notes.push("sliding speed outside the measured speeds: edge value held");
+  var pressures = kPoints.map(function (q) { return q.pressure_kPa; });
   return {
     pin: pair.pin,
     disc: pair.disc,
@@ -286,10 +378,12 @@ function query(pin, disc, p, t) {
     mu_k: muK,
     mu_s: muS,
     pressure_range_kPa: [Math.min.apply(null, pressures), Math.max.apply(null, pressures)],
-    temperatures_C: sortedUnique(pair.mu_k_points.map(function (q) { return q.temperature_C; })
+    temperatures_C: sortedUnique(kPoints.map(function (q) { return q.temperature_C; })
       .filter(finite)),
     notes: notes,
-    clamped: muK.clamped_pressure || muK.clamped_temperature,
+    speed_mm_s: v === null ? speeds[0].speed_mm_s : v,
+    speeds_mm_s: speeds.map(function (x) { return x.speed_mm_s; }),
+    clamped: muK.clamped_pressure || muK.clamped_temperature || sw[1],
     pair: index,
   };
 }

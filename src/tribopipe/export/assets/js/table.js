@@ -31,6 +31,11 @@ var COLUMNS = [
   { key: "qc", label: "QC", text: true, get: qcText },
 ];
 
+/* the nominal sliding speed, where a pair of the map holds several (the group table has it) */
+if (GROUPS.some(function (g) { return finite(g.nominal_speed_mm_s); })) {
+  COLUMNS.splice(5, 0, { key: "nominal_speed_mm_s", label: "v [mm/s]", fmt: g6 });
+}
+
 function cellValue(col, g) { return col.get ? col.get(g) : g[col.key]; }
 
 function renderTableHead() {

@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 
 import tribopipe.readers as readers
@@ -221,6 +221,9 @@ _TEXT_CELLS = st.sampled_from(["", "a", "1,5", " x ", '"q"', '"a\tb"', '""', "\t
        data_line=st.sampled_from([DataLine("\t", "0123456789"), DataLine("", "0123456789"),
                                   DataLine("", "-+.0123456789"), DataLine("", "a"),
                                   DataLine(";", "1a")]))
+# a data run holding CR + CRLF: two lines for str.splitlines, so the fast scan declines
+@example(lines=[["1,5", "\r"], []], sep="\t", ending="\r\n",
+         data_line=DataLine("", "0123456789"))
 def test_scanned_lines_expand_to_the_rows_of_every_line(
     lines: list[list[str]], sep: str, ending: str, data_line: DataLine
 ) -> None:

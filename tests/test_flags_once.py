@@ -3,7 +3,7 @@
 The real 1 N run of the example campaign, labelled 3 N: the measured force strays from
 nominal by more than the 10 % tolerance, so the run carries ``normal_force_off_nominal``
 in the `reduce` table and JSON, its summary, the trace plot's header, the map and (for a
-batch) ``runs.csv``.
+batch) ``runs.csv``, the report and the explorer page.
 """
 
 from __future__ import annotations
@@ -32,6 +32,23 @@ def _header_flags() -> str:
 
 def _map_flags(path: Path) -> list[str]:
     return [str(f) for f in pd.read_parquet(path)["flags"]]
+
+
+def _explorer_run_flags(data: object, run_id: str) -> list[str] | None:
+    """The flags the explorer's embedded data holds for the run ``run_id``."""
+    if isinstance(data, dict):
+        if data.get("id") == run_id and "flags" in data:
+            return list(data["flags"])
+        items = list(data.values())
+    elif isinstance(data, list):
+        items = data
+    else:
+        return None
+    for item in items:
+        found = _explorer_run_flags(item, run_id)
+        if found is not None:
+            return found
+    return None
 
 
 @pytest.mark.skipif(not ONE_NEWTON.exists(), reason="the example campaign is not here")
@@ -73,6 +90,23 @@ def test_batch_shows_the_same_flags_as_reduce(tmp_path: Path) -> None:
         rows = list(csv.DictReader(fh))
     assert [r["flags"] for r in rows] == [OFF]
     assert header == f"flags: {OFF}"
+
+    # the report of that map lists the run with its flag, and the explorer page (its own
+    # file, and the copy the report embeds) carries the same flags for the run
+    from tribopipe.export.explorer import read_embedded_data
+
+    report = tmp_path / "report.html"
+    made = CliRunner().invoke(main, ["report", "--map", str(mapfile), "--processed", str(out),
+                                     "-o", str(report)])
+    assert made.exit_code == 0, made.output
+    page = tmp_path / "explorer.html"
+    made = CliRunner().invoke(main, ["explore", "--map", str(mapfile), "-o", str(page)])
+    assert made.exit_code == 0, made.output
+    (run_id,) = pd.read_parquet(mapfile)["measurement_id"]
+    html = report.read_text(encoding="utf-8")
+    assert OFF in html
+    for text in (page.read_text(encoding="utf-8"), html):
+        assert _explorer_run_flags(read_embedded_data(text), run_id) == [OFF]
 
     # the same run through `reduce` with the same labels: the same flags
     again = CliRunner().invoke(main, [

@@ -364,11 +364,10 @@ def unvalidated_frame(
             columns[name] = _column(values, kind)
         except (TypeError, ValueError, OverflowError) as exc:
             bad = next((i for i, v in enumerate(values) if not _ok(v, kind)), None)
-            row = "" if bad is None else f"{where} {bad + 1}: "
-            raise MapError(
-                f"{row}expected {kind} values, got {values[bad] if bad is not None else exc!r}",
-                column=name,
-            ) from None
+            if bad is None:
+                raise MapError(f"expected {kind} values, got {exc!r}", column=name) from None
+            raise RowError(f"expected {kind} values, got {values[bad]!r}", row=f"{where} {bad + 1}",
+                           column=name) from None
     return pd.DataFrame(columns, columns=list(RUN_COLUMNS), index=pd.RangeIndex(len(records)))
 
 

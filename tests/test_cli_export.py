@@ -83,7 +83,7 @@ def test_query_force_converts_through_the_instrument_config(map_path, groups, tm
     config = tmp_path / "one_pin.toml"
     config.write_text("[instrument]\nn_pins = 1\npin_radius_mm = 2.0\n", encoding="utf-8")
     text = _run("query", "--map", str(map_path), "--pin", PIN, "--disc", DISC, "--force",
-                "0.5", "--temperature", "20", "--config", str(config)).output
+                "0.5", "--temperature", "20", "--instrument", str(config)).output
     p1 = float(contact_pressure_kPa(0.5, 1, 2.0))
     assert f"at {p1:.4g} kPa (0.5 N on 1 pin(s) of radius 2 mm)" in text
     both = CliRunner().invoke(main, ["query", "--map", str(map_path), "--pin", PIN, "--disc",

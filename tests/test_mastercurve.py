@@ -111,7 +111,7 @@ def test_cli_master_curve_json_plot_and_model_based_query(tmp_path):
     fm.append_records(map_path, _records({"Ea_kJ_mol": 55.0}, "arrhenius", _quadratic))
     plot = tmp_path / "mc.png"
     out = CliRunner().invoke(main, ["map", "master-curve", "--pin", "Ecoflex 00-50", "--disc",
-                                    "steel", "--json", "--plot", str(plot), "--map",
+                                    "steel", "--json", "--output", str(plot), "--map",
                                     str(map_path)])
     assert out.exit_code == 0, out.output
     data = json.loads(out.stdout)

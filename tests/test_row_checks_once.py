@@ -42,7 +42,7 @@ def test_a_reduced_run_is_checked_once_on_its_way_in(tmp_path: Path,
     result = CliRunner().invoke(main, [
         "reduce", str(EXAMPLE), "--pin", "Dragonskin 30", "--disc", "steel", "--force", "5",
         "--temperature", "20", "--repeat", "1", "--map", str(map_path),
-        "--out", str(tmp_path / "out")])
+        "--output", str(tmp_path / "out")])
     assert result.exit_code == 0, result.output
     assert len(store.read_map(map_path)) == n_map + 1
     # the new run's row once (its record; the store folds it in unchecked), the map's rows

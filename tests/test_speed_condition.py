@@ -336,7 +336,7 @@ def test_a_map_of_several_speeds_publishes_validates_and_merges(tmp_path):
     map_path = tmp_path / "m.parquet"
     fm.write_map(map_path, _multi_speed_runs())
     runner = CliRunner()
-    out = runner.invoke(main, ["map", "publish", str(tmp_path / "pkg"), "--lab", "Lab",
+    out = runner.invoke(main, ["map", "publish", "-o", str(tmp_path / "pkg"), "--lab", "Lab",
                                "--map", str(map_path)])
     assert out.exit_code == 0, out.output
     header = (tmp_path / "pkg" / "data" / "groups.csv").read_text().splitlines()[0]

@@ -628,21 +628,22 @@ def reduce_files(
     labels: RunLabels | None = None,
     read_options: ReadOptions | None = None,
     *,
-    out_dir: str | Path | OutputLayout,
+    out_dir: str | Path | OutputLayout | None,
     summaries: bool = True,
     plots: bool = False,
     on_file: Callable[[FileOutcome], None] | None = None,
 ) -> list[FileOutcome]:
     """``tribopipe reduce`` over several files: each file alone through
     :func:`reduce_export`, writing each run's trace, its summary (``summaries``) and its
-    trace plot (``plots``) below ``out_dir``.
+    trace plot (``plots``) below ``out_dir`` (nothing when it is ``None``).
 
     A file whose content (SHA-256) an earlier file of ``paths`` already had is not
     reduced again: its outcome names that file in ``duplicate_of``. ``on_file`` is
     called with each outcome as it is done (in the order of ``paths``), e.g. to print
     progress. Nothing raises for a bad file.
     """
-    outputs = RunOutputs(OutputLayout.of(out_dir), summary=summaries, plot=plots)
+    outputs = (None if out_dir is None else
+               RunOutputs(OutputLayout.of(out_dir), summary=summaries, plot=plots))
     results: list[FileOutcome] = []
     first_with: dict[str, str] = {}
     for path in paths:

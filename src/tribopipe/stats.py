@@ -34,7 +34,8 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
-from .labels import FOUNDING_NOMINAL_SPEED_MM_S, quality_flags, round_speed
+from .labels import quality_flags, round_speed
+from .physics import FOUNDING_SLIDING_SPEED_MM_S
 from .rounding import lower_bound
 
 if TYPE_CHECKING:
@@ -138,16 +139,16 @@ def repeatability(groups: pd.DataFrame, quantity: str = "mu_k") -> Repeatability
 def nominal_speeds(runs: pd.DataFrame) -> Any:
     """The nominal sliding speed [mm/s] each run is grouped under (a float array): its
     ``nominal_speed_mm_s`` rounded by :func:`~tribopipe.labels.round_speed`, or
-    :data:`~tribopipe.labels.FOUNDING_NOMINAL_SPEED_MM_S` where the row has none (a map
+    :data:`~tribopipe.physics.FOUNDING_SLIDING_SPEED_MM_S` where the row has none (a map
     written before schema version 5, an imported row: measured at one speed as far as the
     map can tell, which the published map and tribopipe's default instrument both are)."""
     import numpy as np
 
     if NOMINAL_SPEED not in runs.columns:
-        return np.full(len(runs), FOUNDING_NOMINAL_SPEED_MM_S)
+        return np.full(len(runs), FOUNDING_SLIDING_SPEED_MM_S)
     values = runs[NOMINAL_SPEED].to_numpy(dtype=float)
     return np.array([round_speed(float(v)) if math.isfinite(v) and v > 0
-                     else FOUNDING_NOMINAL_SPEED_MM_S for v in values], dtype=float)
+                     else FOUNDING_SLIDING_SPEED_MM_S for v in values], dtype=float)
 
 
 def pairs_with_several_speeds(runs: pd.DataFrame) -> set[tuple[str, str]]:

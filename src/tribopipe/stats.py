@@ -184,6 +184,17 @@ def group_keys(runs: pd.DataFrame, by_speed: bool) -> pd.DataFrame:
     return keys
 
 
+def condition_keys(runs: pd.DataFrame) -> dict[str, tuple[Any, ...]]:
+    """The condition group of each run, by ``measurement_id``: the key
+    :func:`group_statistics` groups it under (:func:`group_keys`: pin, disc, nominal force
+    [N] and temperature [°C] rounded, nominal speed [mm/s]), unknown values as ``None``.
+    What a count of the groups a change touches compares."""
+    keys = group_keys(runs, by_speed=False)
+    ids = runs["measurement_id"].astype(str).tolist()
+    return {mid: tuple(None if isinstance(v, float) and v != v else v for v in key)
+            for mid, key in zip(ids, keys.itertuples(index=False, name=None), strict=True)}
+
+
 def _pressure_clusters(pressures: Sequence[float]) -> list[int]:
     """Cluster numbers for the nominal pressures of one force group: sorted, a new cluster
     starts where a pressure is more than :data:`PRESSURE_SPLIT` above the previous one."""

@@ -32,6 +32,7 @@ from ..frictionmap.records import stored_file_name
 from ..frictionmap.schema import MapRow, unvalidated_frame
 from ..frictionmap.store import read_map, update_map_with
 from ..labels import flags_text, quality_flags
+from ..measurement import run_name
 from ..pipeline import FileOutcome, ReducedRun
 from ..stats import condition_keys
 from .metadata import Manifest, read_manifest
@@ -592,8 +593,7 @@ def _ledger(rows: Sequence[CampaignRow], entries: Mapping[str, FileState],
         known[row.file] = set(found)
         places[row.file] = {(r.test, r.interval) for r in entry.runs}
         tests[row.file] = len(found)
-        undescribed += [row.file if r.test is None else f"{row.file} [{r.test}]"
-                        for r in entry.runs if r.undescribed]
+        undescribed += [run_name(row.file, r.test) for r in entry.runs if r.undescribed]
     unmatched: list[str] = []
     if manifest is not None:
         names = {row.file for row in rows} | {row.path.name for row in rows}

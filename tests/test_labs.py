@@ -29,7 +29,7 @@ from tribopipe.stats import (
     stated_u,
 )
 
-BASE = run_record(0)
+BASE = run_record(0).as_dict()
 
 
 def lab_row(i: int, lab: str | None, mu_k: float, u: float | None = 0.01, **changes) -> dict:

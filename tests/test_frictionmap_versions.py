@@ -156,7 +156,7 @@ def test_the_session_reduced_again_is_the_same_two_runs_and_fills_nothing_in(
     done = reduce_export(raw, settings, lambda export, place, name: RunLabels(
         "Dragonskin 30", "steel", script.TESTS[place.test][2], 20.0, 1))
     records = [run.record for run in done.reduced]
-    assert {r["test"] for r in records} == set(script.TESTS)
+    assert {r.test for r in records} == set(script.TESTS)
     report = fm.append_records(target, records)
     # ids hash the test and result as before: the same runs, nothing added or in conflict
     assert len(report.unchanged_ids) == 2 and not report.added_ids

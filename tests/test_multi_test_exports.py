@@ -231,10 +231,10 @@ def test_map_rows_keep_labels_given_per_run(raw: Path) -> None:
                        temperature_C=20.0, repeat=1)
     result = reduce_export(raw / "steps.csv", SETTINGS, labels)
     records = [o.record for o in result.reduced]
-    assert [r["interval"] for r in records] == [2, 3]
+    assert [r.interval for r in records] == [2, 3]
     # the 5 N step strays from the 3 N label: flagged, not silently averaged in
-    assert "normal_force_off_nominal" not in records[0]["flags"].split(";")
-    assert "normal_force_off_nominal" in records[1]["flags"].split(";")
+    assert "normal_force_off_nominal" not in records[0].flags.split(";")
+    assert "normal_force_off_nominal" in records[1].flags.split(";")
 
 
 def test_reduce_force_steps_without_force_gives_each_step_its_own_nominal(raw: Path,

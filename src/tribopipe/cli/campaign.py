@@ -35,7 +35,7 @@ def _open(target: str, options: dict[str, Any]) -> Any:
             instrument=options.get("config_path"),
             test_pattern=options.get("test_pattern"),
         )
-        return campaign
+        return _with_review(campaign, options.get("review"))
     given = [flag for name, flag in _FOLDER_ONLY.items() if options.get(name)]
     if given:
         flags = ", ".join(given)
@@ -46,7 +46,15 @@ def _open(target: str, options: dict[str, Any]) -> Any:
         from dataclasses import replace
 
         campaign = replace(campaign, map_path=Path(options["map_path"]).resolve())
-    return campaign
+    return _with_review(campaign, options.get("review"))
+
+
+def _with_review(campaign: Any, review: str | None) -> Any:
+    """The campaign with the decisions file ``--review`` gave (else its own)."""
+    from dataclasses import replace
+    from pathlib import Path
+
+    return campaign if review is None else replace(campaign, review=Path(review).resolve())
 
 
 def _shorten(path: Any) -> str:
@@ -121,6 +129,12 @@ def _run(campaign: Any, jobs: int | None, plots: bool | None) -> None:
 
 def _common_run_options(func: Any) -> Any:
     func = click.option(
+        "--review", "review", type=click.Path(exists=True, dir_okay=False), default=None,
+        help="A lab's decisions file (review.csv: accept, exclude or re-window runs; "
+             "`tribopipe review` writes it), applied to every run (default: the config's "
+             "`review`).",
+    )(func)
+    func = click.option(
         "--plots/--no-plots", default=None,
         help="Draw a trace plot per reduced run (default: the config's `plots`, else on).",
     )(func)
@@ -158,7 +172,7 @@ def _common_run_options(func: Any) -> Any:
 def batch_cmd(target: str, manifest: str | None, filename_pattern: str | None,
               test_pattern: str | None, glob: str | None, config_path: str | None,
               output_dir: str | None, map_path: str | None, jobs: int | None,
-              plots: bool | None) -> None:
+              plots: bool | None, review: str | None) -> None:
     """Reduce a whole campaign: TARGET is a campaign CONFIG (TOML) or a FOLDER of exports.
 
     Every friction interval of every test of every export is a run. Only new and changed
@@ -177,7 +191,7 @@ def batch_cmd(target: str, manifest: str | None, filename_pattern: str | None,
     campaign = _open(target, {
         "manifest": manifest, "filename_pattern": filename_pattern,
         "test_pattern": test_pattern, "glob": glob, "config_path": config_path,
-        "output_dir": output_dir, "map_path": map_path,
+        "output_dir": output_dir, "map_path": map_path, "review": review,
     })
     _run(campaign, jobs, plots)
 
@@ -191,9 +205,10 @@ def campaign_group() -> None:
 @click.argument("config", type=click.Path(exists=True, dir_okay=False))
 @_common_run_options
 @friendly_errors
-def run_cmd(config: str, map_path: str | None, jobs: int | None, plots: bool | None) -> None:
+def run_cmd(config: str, map_path: str | None, jobs: int | None, plots: bool | None,
+            review: str | None) -> None:
     """Reduce the new and changed runs of a campaign CONFIG (alias of `tribopipe batch`)."""
-    _run(_open(config, {"map_path": map_path}), jobs, plots)
+    _run(_open(config, {"map_path": map_path, "review": review}), jobs, plots)
 
 
 @campaign_group.command("list")

@@ -160,7 +160,7 @@ def test_columns_follow_the_design_contract():
     expected = ["pin", "disc", "normal_force_N", "pressure_kPa", "temperature_C"]
     for q in ("mu_k", "mu_s"):
         expected += [f"{q}_{f}" for f in GROUP_FIELDS]
-    expected += ["range_exceeds_r", "qc_flagged", "run_ids"]
+    expected += ["range_exceeds_r", "qc_flagged", "reviewed", "run_ids"]
     assert list(groups.columns) == expected
     empty = group_statistics(fm.schema.empty_map())
     assert list(empty.columns) == expected and empty.empty

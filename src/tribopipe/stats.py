@@ -216,7 +216,9 @@ def group_statistics(runs: pd.DataFrame, *, by_speed: bool = False,
     with ``by_speed``), then for q in ``mu_k``, ``mu_s``:
     ``q_n, q_mean, q_std, q_sem, q_ci95_low, q_ci95_high, q_cv, q_min, q_max, q_u_run,
     q_u, q_values``,
-    then ``range_exceeds_r, qc_flagged, run_ids``. Within a group, values and ids are in
+    then ``range_exceeds_r, qc_flagged, reviewed, run_ids`` (``reviewed``: how many of the
+    group's runs a reviewer accepted or re-windowed, :mod:`tribopipe.review`; an accepted
+    run's QC flags do not make ``qc_flagged``). Within a group, values and ids are in
     (repeat, measurement_id) order, so the result does not depend on the row order.
     Rows are sorted by pin, disc, temperature, pressure, force, nominal speed (and
     measured speed).
@@ -232,7 +234,8 @@ def group_statistics(runs: pd.DataFrame, *, by_speed: bool = False,
     if by_speed:
         condition_cols.append("sliding_speed_mm_s")
     stat_cols = [f"{q}_{f}" for q in QUANTITIES for f in GROUP_FIELDS]
-    columns = condition_cols + stat_cols + ["range_exceeds_r", "qc_flagged", "run_ids"]
+    columns = condition_cols + stat_cols + ["range_exceeds_r", "qc_flagged", "reviewed",
+                                            "run_ids"]
 
     included = runs.loc[~runs["excluded"].astype(bool)]
     keys = group_keys(included, by_speed)
@@ -243,6 +246,8 @@ def group_statistics(runs: pd.DataFrame, *, by_speed: bool = False,
         "repeat": included["repeat"].astype("Float64").to_numpy(dtype=float, na_value=np.nan),
         "measurement_id": included["measurement_id"].astype(str).to_numpy(dtype=object),
         "flags": included["flags"].fillna("").astype(str).to_numpy(dtype=object),
+        "review": (included["review"].fillna("").astype(str).to_numpy(dtype=object)
+                   if "review" in included else np.full(len(included), "", dtype=object)),
     }
     for q in QUANTITIES:
         data[q] = included[q].to_numpy(dtype=float)
@@ -282,7 +287,7 @@ def group_statistics(runs: pd.DataFrame, *, by_speed: bool = False,
 def _dtype(column: str) -> str:
     if column in ("pin", "disc", "run_ids") or column.endswith("_values"):
         return "str"
-    if column.endswith("_n"):
+    if column.endswith("_n") or column == "reviewed":
         return "int64"
     if column in ("range_exceeds_r", "qc_flagged"):
         return "bool"
@@ -308,7 +313,10 @@ def _group_row(
         stats = describe_values(values[finite])
         row.update({f"{q}_{f}": v for f, v in stats.items()})
         row.update(_group_uncertainty(data[f"u_{q}"][order][finite], stats["sem"], q))
-    row["qc_flagged"] = any(quality_flags(f) for f in data["flags"][order])
+    # a reviewer who accepted a run has judged its flags: they no longer count
+    row["qc_flagged"] = any(quality_flags(f) for f, r in zip(data["flags"][order],
+                            data["review"][order], strict=True) if r != "accept")
+    row["reviewed"] = sum(1 for r in data["review"][order] if r)
     row["run_ids"] = ";".join(data["measurement_id"][order])
     return row
 

@@ -15,7 +15,8 @@ Layouts (each a DataFrame; units in the column names):
     expanded uncertainty (k = 2) of the group mean (:func:`tribopipe.stats.group_u`),
     rounded the GUM way (:mod:`tribopipe.rounding`); the μ_S column is left out when no
     group holds μ_S. Flags: ``range > r``, ``flagged run``, ``no budget`` (U holds the
-    repeat scatter only), ``n = 1``. As CSV the value and U are separate columns.
+    repeat scatter only), ``n = 1``, ``N reviewed`` (runs a reviewer accepted or
+    re-windowed, :mod:`tribopipe.review`). As CSV the value and U are separate columns.
 ``frictionmap``
     one row per included run in the published schema ``pin, disc, contactForce,
     contactPressure, temperature, measurementNo, cof`` (force [N], pressure [kPa],
@@ -164,7 +165,8 @@ def paper_table(
                     ["repeats identical"] if n > 1 and not known_u(2.0 * float(uu)) else [])
     for i, g in enumerate(groups.itertuples(index=False)):
         flags[i] = (["range > r"] if g.range_exceeds_r else []) + (
-            ["flagged run"] if g.qc_flagged else []) + flags[i]
+            ["flagged run"] if g.qc_flagged else []) + flags[i] + (
+            [f"{g.reviewed} reviewed"] if getattr(g, "reviewed", 0) else [])
     out["flags"] = [", ".join(f) for f in flags]
     import pandas as pd
 

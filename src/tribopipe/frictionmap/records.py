@@ -19,7 +19,7 @@ from ..errors import MapError
 from ..labels import RunLabels, RunVerdict, Tolerances, decide_run, flags_text
 from ..numeric import finite_or_nan
 from ..physics import contact_pressure_kPa
-from .schema import SOURCE_REDUCED, checked_record, utc_now
+from .schema import REVIEW_COLUMNS, SOURCE_REDUCED, checked_record, utc_now
 
 if TYPE_CHECKING:
     from ..config import InstrumentConfig, Settings
@@ -169,6 +169,8 @@ def make_record(
         "reduced_at": utc_now(),
         "excluded": False,
         "exclusion_reason": None,
+        # not reviewed: a review (tribopipe.review) fills these in the batch's landing
+        **dict.fromkeys(REVIEW_COLUMNS),
     }
     try:
         # the rules every map row keeps, checked here, once, so a bad run fails alone (in

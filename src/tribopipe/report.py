@@ -439,7 +439,7 @@ def _review_count(runs: pd.DataFrame) -> str:
     return f"{int(counts.sum())} (" + ", ".join(f"{a} {n}" for a, n in counts.items()) + ")"
 
 
-def _review_text(r: Mapping[str, Any]) -> str:
+def _review_text(r: Mapping[Any, Any]) -> str:
     """What a reviewer decided on a run, by whom, when and why, with the automatic
     values beside the reviewed ones (plain text); '' for a run not reviewed."""
     action = r.get("review")

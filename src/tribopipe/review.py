@@ -238,7 +238,7 @@ def decision_of_row(row: Mapping[str, Any], line: int = 0) -> Decision | None:
         return None
 
     def num(c: str) -> float | None:
-        v = row.get(c)
+        v: Any = row.get(c)
         return None if is_missing(v) else float(v)
 
     def text(c: str) -> str:
@@ -275,7 +275,7 @@ def automatic(row: Mapping[str, Any], samples: Callable[[], tuple[SlidingSamples
                          float(out["mu_k_window_end_mm"]), terms)
         out.update(mu_k_window_start_s=k.start_s, mu_k_window_end_s=k.end_s,
                    plateau_std=k.std, plateau_drift_per_mm=k.drift_per_mm)
-        s_peak = out.get("mu_s_distance_mm")
+        s_peak: Any = out.get("mu_s_distance_mm")
         if not is_missing(s_peak) and smp.s_mm.size:
             out["mu_s_time_s"] = float(smp.t_s[int(np.argmin(np.abs(smp.s_mm - float(s_peak))))])
     return out

@@ -676,7 +676,7 @@ def _land(campaign: Campaign, results: Sequence[FileOutcome],
         return "unchanged", set(), set(), apply({})
     landing: list[_Landing] = []
 
-    def decide(current: Any) -> tuple[list[dict[str, Any]], set[str]]:
+    def decide(current: Any) -> tuple[list[Mapping[str, Any]], set[str]]:
         landing.append(apply(map_files_by_hash(current)))
         records, stale = landing[0].records, landing[0].stale_ids
         landing[0].repeats.extend(repeat_clashes(current, records, stale))

@@ -40,7 +40,7 @@ import numpy as np
 from .errors import ReductionError, TribopipeError
 from .escape import csv_cell, csv_uncell, display_path
 from .files import read_regular
-from .frictionmap.schema import checked_record, frame_records, is_missing
+from .frictionmap.schema import MapRow, checked_row, frame_records, is_missing
 from .layout import find_trace
 from .reduction.manual import (
     TRACE_META_KEY,
@@ -282,7 +282,7 @@ def automatic(row: Mapping[str, Any], samples: Callable[[], tuple[SlidingSamples
 
 
 def reviewed(auto: Mapping[str, Any], d: Decision, where: str,
-             samples: Callable[[], tuple[SlidingSamples, TraceTerms]]) -> dict[str, Any]:
+             samples: Callable[[], tuple[SlidingSamples, TraceTerms]]) -> MapRow:
     """The row ``auto`` (as the reduction made it) with decision ``d`` applied; the
     automatic values kept in the ``auto_`` columns. :class:`ReviewError` naming
     ``where`` when the decision cannot be applied."""
@@ -310,7 +310,7 @@ def reviewed(auto: Mapping[str, Any], d: Decision, where: str,
         except ReductionError as exc:
             raise ReviewError(str(exc)) from None
     try:
-        return dict(checked_record(out, where=where))
+        return checked_row(out, where=where)
     except TribopipeError as exc:
         raise ReviewError(f"{where}: the reviewed row breaks a rule: {exc}") from None
 
@@ -370,7 +370,7 @@ class ReviewOutcome:
     rows), and the counts of decisions applied by action and of reviews withdrawn (runs
     reviewed in the map, no longer in the file: back to the reduction's values)."""
 
-    records: list[dict[str, Any]]
+    records: list[MapRow]
     applied: dict[str, int]
     withdrawn: list[str]
 
@@ -408,7 +408,7 @@ def review_records(rows: Sequence[Mapping[str, Any]], review: Review | None,
             if d is not None:
                 decided[mid] = d
         where_of = {mid: f"the review of run {mid} kept in the map" for mid in decided}
-    records: list[dict[str, Any]] = []
+    records: list[MapRow] = []
     applied = dict.fromkeys(ACTIONS, 0)
     withdrawn: list[str] = []
     for mid, row in by_id.items():
@@ -428,7 +428,7 @@ def review_records(rows: Sequence[Mapping[str, Any]], review: Review | None,
                 base[col] = None
         if d is None:
             withdrawn.append(mid)
-            records.append(dict(checked_record(base, where=where)))
+            records.append(checked_row(base, where=where))
             continue
         records.append(reviewed(base, d, where, load))
         applied[d.action] += 1
@@ -445,9 +445,9 @@ def review_counts(runs: pd.DataFrame) -> dict[str, int]:
     return counts
 
 
-def landing_records(current: pd.DataFrame, records: Sequence[Mapping[str, Any]],
+def landing_records(current: pd.DataFrame, records: Sequence[MapRow],
                     stale_ids: Iterable[str], review: Review | None, traces_dir: Path | None
-                    ) -> tuple[list[Mapping[str, Any]], ReviewOutcome | None]:
+                    ) -> tuple[list[MapRow], ReviewOutcome | None]:
     """The records a batch folds into its map (``current``, read under the map's lock)
     with the review applied: ``records`` (the runs reduced now), each reviewed run's
     record taking its review — from ``review`` when given, else the one its old row
@@ -456,7 +456,7 @@ def landing_records(current: pd.DataFrame, records: Sequence[Mapping[str, Any]],
     they are and ``None``. A review withdraws (:func:`review_records`) only reviewed
     rows whose trace lies under ``traces_dir`` (this campaign's runs)."""
     stale = set(stale_ids)
-    fresh = {str(r["measurement_id"]): r for r in records}
+    fresh = {r.measurement_id: r for r in records}
     reviewed_now = set()
     if "review" in current.columns:
         reviewed_now = set(current.loc[current["review"].notna(), "measurement_id"].astype(str))
@@ -468,7 +468,7 @@ def landing_records(current: pd.DataFrame, records: Sequence[Mapping[str, Any]],
         if mid in stale:
             continue
         if mid in fresh:
-            row = dict(fresh[mid])
+            row = fresh[mid].as_dict()
             for col in DECISION_COLUMNS:
                 row[col] = old.get(col)  # the decision the old row held (used without a file)
             if old.get("review") != "exclude":  # a `map exclude` stays
@@ -480,8 +480,8 @@ def landing_records(current: pd.DataFrame, records: Sequence[Mapping[str, Any]],
                     and not any(d.run in (mid, old.get("source_file")) for d in review.decisions)):
                 continue  # another campaign's reviewed run: not this file's to withdraw
             rows.append(dict(old))
-    rows += [dict(r) for mid, r in fresh.items() if mid not in old_rows]
+    rows += [r.as_dict() for mid, r in fresh.items() if mid not in old_rows]
     outcome = review_records(rows, review, traces_dir, fresh=set(fresh) & set(old_rows))
-    changed = {str(r["measurement_id"]): r for r in outcome.records}
-    out: list[Mapping[str, Any]] = [changed.pop(mid, rec) for mid, rec in fresh.items()]
+    changed = {r.measurement_id: r for r in outcome.records}
+    out: list[MapRow] = [changed.pop(mid, rec) for mid, rec in fresh.items()]
     return out + list(changed.values()), outcome

@@ -212,6 +212,11 @@ PROVENANCE_COLUMNS: frozenset[str] = frozenset(
      "excluded", "exclusion_reason"}
 )
 CONTENT_COLUMNS: tuple[str, ...] = tuple(c for c in RUN_COLUMNS if c not in PROVENANCE_COLUMNS)
+#: The content columns :data:`ADDED_IN_VERSION` a later schema: a row written before the
+#: column existed lacks it, so where the older of two rows of one run lacks it, that is no
+#: difference of the run (the store compares rows with this rule).
+ADDED_LATER_CONTENT: frozenset[str] = frozenset(c for c in ADDED_IN_VERSION
+                                                if c in CONTENT_COLUMNS)
 
 
 @dataclass(frozen=True, kw_only=True)

@@ -214,9 +214,12 @@ PROVENANCE_COLUMNS: frozenset[str] = frozenset(
 CONTENT_COLUMNS: tuple[str, ...] = tuple(c for c in RUN_COLUMNS if c not in PROVENANCE_COLUMNS)
 #: The content columns :data:`ADDED_IN_VERSION` a later schema: a row written before the
 #: column existed lacks it, so where the older of two rows of one run lacks it, that is no
-#: difference of the run (the store compares rows with this rule).
+#: difference of the run (the store compares rows with this rule). The review's columns
+#: are not among them: missing there means "not reviewed", and a review that fills them
+#: changes the row.
 ADDED_LATER_CONTENT: frozenset[str] = frozenset(c for c in ADDED_IN_VERSION
-                                                if c in CONTENT_COLUMNS)
+                                                if c in CONTENT_COLUMNS
+                                                and c not in REVIEW_COLUMNS)
 
 
 @dataclass(frozen=True, kw_only=True)

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import click
 
-from ._common import friendly_errors, map_option, say
+from ._common import config_option, friendly_errors, map_option, say
 from .fit import fit_cmd
 from .mastercurve import master_curve_cmd
 
@@ -109,15 +109,30 @@ def merge_cmd(other: str, replace: bool, lab: str | None, map_path: str) -> None
 @click.option("--overwrite", is_flag=True, help="Replace a package already in FOLDER.")
 @click.option("--allow-synthetic", is_flag=True,
               help="Publish rows flagged synthetic (demo data) too; refused without it.")
+@click.option("--traces", "traces_dir", type=click.Path(file_okay=False),
+              help="Folder of the runs' reduced traces (default: traces/ beside the map).")
+@click.option("--with-raw", is_flag=True,
+              help="Include each run's raw export (found in --raw-dir by name and SHA-256).")
+@click.option("--raw-dir", "raw_dirs", multiple=True, type=click.Path(file_okay=False),
+              help="Folder of the raw exports, searched with its sub-folders (repeatable).")
+@click.option("--no-evidence", is_flag=True,
+              help="Leave out the traces and raw exports (summary rows only).")
+@config_option
 @map_option
 @friendly_errors
 def publish_cmd(folder: str, lab: str, contact: str | None, email: str | None, licence: str,
                 title: str | None, overwrite: bool, allow_synthetic: bool,
-                map_path: str) -> None:
+                traces_dir: str | None, with_raw: bool, raw_dirs: tuple[str, ...],
+                no_evidence: bool, config_path: str | None, map_path: str) -> None:
     """Write the map as a Frictionless Data Package in FOLDER: datapackage.json (schema,
     units, licence, sources, size and SHA-256 of every file), the runs and groups as CSV
     and Parquet, the 7-column FrictionMap table, the explorer page, a README and a
     CITATION.cff that cites the founding paper.
+
+    The package carries its evidence: each reduced run's trace (Parquet) and, with
+    --with-raw, its raw export, each with its SHA-256 and the method and settings that
+    reduced it (the defaults, or the instrument config given with --config), so that
+    `map validate --recompute` can re-derive every μ.
 
     The data licence defaults to CC-BY-4.0. The package is checked as `map validate`
     would before it is moved into place; it is never half-written. A map with runs
@@ -128,19 +143,30 @@ def publish_cmd(folder: str, lab: str, contact: str | None, email: str | None, l
       tribopipe map publish contribution --lab "Soft Robotics Lab, Uni X" \\
           --contact "A. Person" --email a.person@uni-x.example
     """
+    from ..config import load_settings
     from ..export.citation import Publisher
     from ..export.publish import publish_map
 
     done = publish_map(map_path, folder, Publisher(lab, contact, email, licence, title),
-                       overwrite=overwrite, allow_synthetic=allow_synthetic)
+                       overwrite=overwrite, allow_synthetic=allow_synthetic,
+                       evidence=not no_evidence, traces_dir=traces_dir, with_raw=with_raw,
+                       raw_dirs=raw_dirs,
+                       settings=[load_settings(config_path)] if config_path else [])
     say(f"wrote {done.path}: {done.n_runs} runs in {len(done.files)} files "
         f"(check it with `tribopipe map validate {done.path}`)")
+    if not no_evidence:
+        say(f"evidence: {done.n_traces} traces, {done.n_raw} raw exports")
+    for note in done.notes:
+        say(f"note: {note}")
 
 
 @map_group.command("validate")
 @click.argument("path", type=click.Path())
+@click.option("--recompute", is_flag=True,
+              help="Also re-derive μ_S and μ_K of every run from the package's traces and "
+              "raw exports, and refuse each row that disagrees beyond its stated U.")
 @friendly_errors
-def validate_cmd(path: str) -> None:
+def validate_cmd(path: str, recompute: bool) -> None:
     """Check a data package someone sent (its folder or datapackage.json): schema and
     units of every field, physical ranges, duplicate ids, provenance (lab, hashes,
     versions, times), licences, the size and SHA-256 of every file, and that the Parquet,
@@ -152,8 +178,27 @@ def validate_cmd(path: str) -> None:
 
     PATH may also be a friction map (a .parquet file): its rows are checked as `map
     publish` checks them before writing a package.
+
+    With --recompute, μ_S and μ_K of every run are re-derived from its raw export where
+    the package holds it (read and reduced again with the package's settings), else
+    from its reduced trace; a row whose stored value differs by more than its stated
+    U = 2u is refused, naming the row and both values. The account says which rows were
+    checked from the trace only and which carry no evidence.
     """
     from ..frictionmap import check_package
+
+    if recompute and not path.lower().endswith(".parquet"):
+        from ..evidence import recompute_package
+
+        again = recompute_package(path)
+        for line in again.lines():
+            say(line)
+        for line in again.account():
+            say(line)
+        if not again.ok:
+            raise SystemExit(1)
+        say(again.check.verdict() + "; every re-derived μ agrees within its U")
+        return
 
     if path.lower().endswith(".parquet"):
         from ..frictionmap.summary import check_map_file

@@ -263,8 +263,10 @@ its rows; the <a href="explorer.html">explorer</a> shows all labs' runs.</p>
 <th>T [°C]</th><th>n</th><th>μ_K ± U (k = 2)</th><th>μ_S ± U (k = 2)</th></tr></thead>
 <tbody>{rows}</tbody></table></section>
 <section><h2>Downloads</h2><ul>
-<li><a id="download-parquet" download href="{DOWNLOADS}/friction_map.parquet">merged map (Parquet)</a></li>
-<li><a id="download-csv" download href="{DOWNLOADS}/friction_map.csv">merged map (CSV)</a></li>
+<li><a id="download-parquet" download href="{DOWNLOADS}/friction_map.parquet">merged map
+(Parquet)</a></li>
+<li><a id="download-csv" download href="{DOWNLOADS}/friction_map.csv">merged map (CSV)</a>
+</li>
 {downloads}</ul></section>
 <script id="hub-labs" type="application/json">{script_json(sorted(colours))}</script>
 <script>
@@ -323,7 +325,8 @@ def lab_page(title: str, releases: list[LabRelease], groups: list[dict[str, Any]
     rel_rows = "".join(
         f'<tr><td>{html_text(r.package.release)}</td><td>{len(r.runs)}</td>'
         f'<td><a href="../{DOWNLOADS}/{_name(r.package)}.zip">package (zip)</a></td>'
-        f'<td><a download href="../{DOWNLOADS}/{_name(r.package)}-CITATION.cff">CITATION.cff</a></td>'
+        f'<td><a download href="../{DOWNLOADS}/{_name(r.package)}-CITATION.cff">'
+        'CITATION.cff</a></td>'
         f'<td><a href="../changelog.html#{_name(r.package)}">changelog</a></td></tr>'
         for r in reversed(releases))
     lab_rows = [g for g in groups if g["lab"] == lab]

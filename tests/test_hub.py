@@ -54,7 +54,7 @@ def invoke(*args):
 def publish(root: Path, runs, lab: str, name: str) -> Path:
     map_path, _ = make_processed(root / name, runs)
     out = root / f"package-{name}"
-    result = invoke("map", "publish", out, "--lab", lab, "--contact", f"{lab} contact",
+    result = invoke("map", "publish", "-o", out, "--lab", lab, "--contact", f"{lab} contact",
                     "--email", "data@lab.example", "--map", map_path, "--with-raw",
                     "--raw-dir", root / name / "raw")
     assert result.exit_code == 0, result.output
@@ -145,14 +145,14 @@ def test_recompute_names_the_edited_row_and_both_values(grown):
 def test_recompute_from_the_trace_only_says_so(grown, tmp_path):
     target = tmp_path / "no-raw"
     publish_root = grown["root"]
-    result = invoke("map", "publish", target, "--lab", "Lab A",
+    result = invoke("map", "publish", "-o", target, "--lab", "Lab A",
                     "--map", publish_root / "a/processed/friction_map.parquet")
     assert result.exit_code == 0, result.output
     again = invoke("map", "validate", "--recompute", target)
     assert again.exit_code == 0, again.output
     assert f"{len(RUNS)} runs could only be checked from their trace" in again.output
     bare = tmp_path / "bare"
-    result = invoke("map", "publish", bare, "--lab", "Lab A", "--no-evidence",
+    result = invoke("map", "publish", "-o", bare, "--lab", "Lab A", "--no-evidence",
                     "--map", publish_root / "a/processed/friction_map.parquet")
     again = invoke("map", "validate", "--recompute", bare)
     assert again.exit_code == 0, again.output

@@ -184,7 +184,7 @@ def gather_evidence(runs: pd.DataFrame, *, traces_dir: Path | None,
                      f"(by name and SHA-256) under {', '.join(map(str, raw_dirs))}")
     if missing_settings:
         notes.append(f"settings of config hash {', '.join(sorted(missing_settings))} not "
-                     "known (pass the instrument config that reduced them with --config)")
+                     "known (pass the instrument file that reduced them with --instrument)")
     return Evidence(tuple(files), used, tuple(notes))
 
 

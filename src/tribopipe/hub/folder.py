@@ -162,7 +162,7 @@ the lab includes them).
 
 1. Reduce your campaign with tribopipe (`tribopipe batch configs/mine.toml`).
 2. Publish it with its evidence:
-   `tribopipe map publish my-package --lab "Your Lab" --contact "Name"
+   `tribopipe map publish -o my-package --lab "Your Lab" --contact "Name"
    --email you@lab.example --with-raw --raw-dir raw/mine`
 3. Check it against this hub: `tribopipe hub check my-package --hub .`
    It prints one line per problem and exits non-zero on any.

@@ -216,6 +216,8 @@ def validate_cmd(path: str | None, map_path: str | None, recompute: bool) -> Non
         from ..evidence import recompute_package
 
         again = recompute_package(path)
+        for note in again.check.notes:
+            say(f"note: {note}")
         for line in again.lines():
             say(line)
         for line in again.account():
@@ -225,9 +227,14 @@ def validate_cmd(path: str | None, map_path: str | None, recompute: bool) -> Non
         say(again.check.verdict() + "; every re-derived μ agrees within its U")
         return
     if path.lower().endswith(".parquet"):
+        from ..frictionmap.profile import map_upgrade_note
+        from ..frictionmap.store import map_metadata
         from ..frictionmap.summary import check_map_file
 
         problems, verdict = check_map_file(path)
+        upgraded = map_upgrade_note(int(map_metadata(path)["schema_version"]))
+        if upgraded is not None:
+            say(f"note: {upgraded}")
         for line in problems:
             say(line)
         say(verdict)
@@ -235,6 +242,8 @@ def validate_cmd(path: str | None, map_path: str | None, recompute: bool) -> Non
             raise SystemExit(1)
         return
     result = check_package(path)
+    for note in result.notes:
+        say(f"note: {note}")
     for line in result.lines():
         say(line)
     if not result.ok:

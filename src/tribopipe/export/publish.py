@@ -73,6 +73,7 @@ from ..frictionmap.package import (
     RUNS,
     RUNS_PARQUET,
 )
+from ..frictionmap.profile import PROFILE_NAME, PROFILE_VERSION, profile_schema, schema_file
 from ..frictionmap.published import FOUNDING_PAPER, PUBLISHED_LAB
 from ..frictionmap.schema import KIND, SCHEMA_NAME, SCHEMA_VERSION, SOURCE_PUBLISHED
 from ..frictionmap.store import write_map_copy
@@ -209,11 +210,12 @@ def _resource(name: str, path: str, data: bytes, *, title: str, fmt: str, mediat
     }
     if fmt == "csv":
         res["encoding"] = "utf-8"
-    if fmt == "parquet":
+    if fmt == "parquet" or mediatype == "application/schema+json":
         # A Parquet file carries its own schema (the runs' with units in the metadata) and
         # the CSV resource beside it describes the same table; as a "file" the frictionless
         # tools check its size and hash rather than reading it through their Parquet plugin
-        # (which takes NaN for a value and cannot count its bytes).
+        # (which takes NaN for a value and cannot count its bytes). A JSON Schema is a
+        # "file" too: the frictionless tools would read it as a Table Schema.
         res["type"] = "file"
     if schema is not None:
         res["schema"] = schema
@@ -273,6 +275,11 @@ def build_package(runs: pd.DataFrame, publisher: Publisher, folder: Path, *,
         add(SETTINGS_RESOURCE, SETTINGS_PATH, settings_json,
             title="The settings that reduced the runs, by config hash (method, instrument, "
                   "reduction parameters)", fmt="json", mediatype="application/json")
+    (folder / "profile").mkdir()
+    add("profile-schema", schema_file(),
+        (json.dumps(profile_schema(), indent=2, ensure_ascii=False) + "\n").encode(),
+        title=f"JSON Schema of this package's descriptor (package profile version "
+              f"{PROFILE_VERSION})", fmt="json", mediatype="application/schema+json")
     page = explorer_page(explorer_data(runs, groups=groups, fits=fits,
                                        title=publisher.package_title, source=publisher.lab))
     add("explorer", "explorer.html", page.encode(), title="Explorer page (open in a browser)",
@@ -312,6 +319,7 @@ def build_package(runs: pd.DataFrame, publisher: Publisher, folder: Path, *,
         "keywords": ["friction", "tribology", "coefficient of friction", "soft robotics"],
         "citation": citation_text(publisher, year),
         TRIBOPIPE_KEY: {
+            "profile": PROFILE_NAME, "profile_version": PROFILE_VERSION,
             "schema": SCHEMA_NAME, "schema_version": SCHEMA_VERSION, "lab": publisher.lab,
             "tribopipe_version": __version__, "n_runs": len(runs),
             "labs": sorted(set(runs["lab"].dropna().astype(str))),

@@ -33,6 +33,7 @@ from tribopipe.cli import main
 from tribopipe.evidence import recompute_package
 from tribopipe.frictionmap.datapackage import sha256_hash
 from tribopipe.hub.folder import CHECK_COMMAND, WORKFLOW, workflow_command
+from tribopipe.stats import group_statistics
 
 REPO = Path(__file__).resolve().parents[1]
 #: Lab B: its own exports (other seeds), two conditions shared with Lab A
@@ -214,6 +215,12 @@ def test_merged_map_and_downloads(grown):
             assert any(n.endswith("/datapackage.json") for n in zf.namelist())
     comparisons = (site / "comparisons.html").read_text(encoding="utf-8")
     assert comparisons.count("<tr><td>Dragonskin 30</td>") == 2  # 3 N and 9 N shared
+    # the page shows the map's own between-lab statistics, not a copy of them
+    pooled = group_statistics(merged)
+    shared = pooled[pooled["mu_k_labs"] >= 2]
+    assert len(shared) == 2
+    for s_R in shared["mu_k_s_R"]:
+        assert f"<td>{s_R:.3g}</td>" in comparisons
 
 
 # --------------------------------------------------------------------------- browser
@@ -310,3 +317,28 @@ def served(grown):
     yield f"http://127.0.0.1:{server.server_address[1]}"
     server.shutdown()
     server.server_close()
+
+
+def test_materials_outside_the_vocabulary_are_refused_until_the_hub_adds_them(grown,
+                                                                               tmp_path):
+    hub = tmp_path / "hub"
+    shutil.copytree(grown["hub"], hub)
+    runs = [("s_new_3N_r1", "Mold Star 15", "steel", 3.0, 20.0, 1,
+             SyntheticRun(mu_s=0.9, mu_k=0.6, normal_force_N=3.0, seed=41)),
+            ("s_typo_3N_r1", "Dragonskn 30", "steel", 3.0, 20.0, 1,
+             SyntheticRun(mu_s=0.9, mu_k=0.6, normal_force_N=3.0, seed=42))]
+    pkg = publish(tmp_path, runs, "Lab D", "d")
+    result = invoke("hub", "check", pkg, "--hub", hub)
+    assert result.exit_code == 1
+    lines = [x for x in result.output.splitlines() if x.startswith("data/runs.csv: ")]
+    assert len(lines) == 2, result.output
+    assert "unknown pin 'Dragonskn 30'; did you mean 'Dragonskin 30'" in lines[0]
+    assert "unknown pin 'Mold Star 15'" in lines[1]
+    # one line in the hub's materials file (a pull request) adds the genuinely new one
+    (hub / "materials.toml").write_text(
+        '[materials]\n"Mold Star 15" = { class = "silicone elastomer", supplier = "Smooth-On" }\n',
+        encoding="utf-8")
+    again = invoke("hub", "check", pkg, "--hub", hub)
+    assert again.exit_code == 1
+    assert [x for x in again.output.splitlines() if x.startswith("data/runs.csv: ")] \
+        == [lines[0]]

@@ -6,7 +6,8 @@
    (:func:`tribopipe.evidence.recompute_package`: schema, row rules, checksums, μ_S and
    μ_K re-derived);
 2. the materials: every pin and disc must be a canonical name of the materials
-   vocabulary (:func:`material_problems`);
+   vocabulary (:mod:`tribopipe.materials`, extended by the hub's own ``materials.toml``;
+   :func:`material_problems`);
 3. the hub: a run whose raw content (its ``file_hash``) the hub holds under another lab
    is refused (one measurement cannot be two labs'), and so is a run the hub holds with
    the same id but other values (a conflict). The same lab's earlier releases may hold the
@@ -24,11 +25,12 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from ..errors import ConfigError
 from ..escape import printable
 from ..evidence import Recompute, recompute_package
 from ..frictionmap.package import PackageInvalid, package_runs
-from ..frictionmap.published import published_csv_path, read_frictionmap_table
 from ..frictionmap.schema import SOURCE_REDUCED
+from ..materials import LAB_FILE, Vocabulary, lab_files, load_vocabulary
 from .folder import HubPackage, hub_packages
 
 if TYPE_CHECKING:
@@ -59,33 +61,27 @@ class HubCheck:
                 "every re-derived μ within its U, no duplicate or conflict")
 
 
-def known_materials(hub_runs: Iterable[pd.DataFrame]) -> set[str]:
-    """The material names the hub knows: the founding map's and those of the hub's rows."""
-    founding = read_frictionmap_table(published_csv_path())
-    names = set(founding["pin"].astype(str)) | set(founding["disc"].astype(str))
-    for runs in hub_runs:
-        names.update(runs["pin"].dropna().astype(str))
-        names.update(runs["disc"].dropna().astype(str))
-    return names
+def hub_vocabulary(hub: Path) -> Vocabulary:
+    """The hub's materials vocabulary: the shipped one, extended by the hub's own
+    ``materials.toml`` (added to by pull request) when it has one."""
+    return load_vocabulary(lab_files(hub))
 
 
-def material_problems(runs: pd.DataFrame, known: set[str]) -> list[str]:
-    """One line per pin or disc name of ``runs`` that ``known`` lacks, with a
-    did-you-mean."""
-    import difflib
-
+def material_problems(runs: pd.DataFrame, vocabulary: Vocabulary) -> list[str]:
+    """One line per pin or disc name of ``runs`` that is not a canonical name of
+    ``vocabulary``: an unknown name with a did-you-mean, an ambiguous one with its
+    choices, an alias with the canonical name to write."""
     out = []
-    folded = {k.casefold(): k for k in known}
     for column in ("pin", "disc"):
         for name in sorted(set(runs[column].dropna().astype(str))):
-            if name in known:
+            if name in vocabulary:
                 continue
-            near = difflib.get_close_matches(name.casefold(), list(folded), n=2, cutoff=0.6)
-            hint = ("; did you mean " + " or ".join(repr(folded[n]) for n in near) + "?"
-                    if near else "; a new material is added to the hub's vocabulary by "
-                    "a pull request")
-            out.append(f"data/runs.csv: {column} {printable(name)!r} is not a material of "
-                       f"the hub's vocabulary{hint}")
+            found = vocabulary.candidates(name)
+            problem = (f"{column} {name!r} is written as an alias; the hub stores the "
+                       f"canonical name {found[0]!r}" if len(found) == 1
+                       else vocabulary.problem(name, column))
+            out.append(f"data/runs.csv: {printable(str(problem))} (the hub's materials "
+                       f"vocabulary; a new material is one line in its {LAB_FILE})")
     return out
 
 
@@ -111,7 +107,12 @@ def check_against_hub(package: str | os.PathLike[str], hub: str | os.PathLike[st
                                    f"({exc.problem})")
             continue
         others.append((other, other_runs))
-    result.problems += material_problems(runs, known_materials(r for _, r in others))
+    try:
+        vocabulary = hub_vocabulary(Path(hub))
+    except ConfigError as exc:
+        result.problems.append(f"{LAB_FILE}: {exc.problem}")
+    else:
+        result.problems += material_problems(runs, vocabulary)
     result.problems += hub_conflicts(runs, others)
     return result
 

@@ -13,10 +13,11 @@ relative links, so it works from ``file://`` and on GitHub Pages::
     downloads/<lab>-<release>.zip                                every package
     downloads/<lab>-<release>-CITATION.cff                       every package's citation
 
-The group statistics are :func:`tribopipe.stats.group_statistics` per lab; a comparison's
-z-score is the difference of two labs' means over the root sum of their standard
-uncertainties (ISO 13528, z' with the labs' own u). Every text from a package is escaped
-where it is written (:mod:`tribopipe.escape`).
+The group statistics are :func:`tribopipe.stats.group_statistics`, each lab's runs apart
+(``by_lab``) and, for the comparisons, pooled over the labs (ISO 5725-2's s_R and the
+labs-disagree flag); a comparison's z' is the difference of two labs' means over the
+root sum of squares of their standard uncertainties (ISO 13528, with the labs' own u).
+Every text from a package is escaped where it is written (:mod:`tribopipe.escape`).
 """
 
 from __future__ import annotations
@@ -39,7 +40,7 @@ from ..frictionmap.package import package_runs
 from ..frictionmap.schema import KIND
 from ..frictionmap.store import write_map_copy
 from ..rounding import plus_minus
-from ..stats import group_statistics, group_u
+from ..stats import LAB, LABS_DISAGREE, group_statistics, group_u
 from .folder import HubPackage, hub_packages, hub_title, lab_slug, latest_releases
 
 if TYPE_CHECKING:
@@ -117,7 +118,8 @@ def build_site(hub: Path, out: Path) -> BuiltSite:
     for slug, lab_releases in by_lab.items():
         write_text_atomic(tmp / "labs" / f"{slug}.html",
                           lab_page(title, lab_releases, groups, colours))
-    write_text_atomic(tmp / "comparisons.html", comparisons_page(title, groups, colours))
+    write_text_atomic(tmp / "comparisons.html",
+                      comparisons_page(title, groups, colours, pooled_precision(merged)))
     write_text_atomic(tmp / "changelog.html", changelog_page(title, releases))
     if out.exists():
         shutil.rmtree(out)
@@ -150,21 +152,36 @@ def _zip_package(package: HubPackage, target: Path) -> None:
 def lab_groups(runs: pd.DataFrame) -> list[dict[str, Any]]:
     """One row per lab and condition group: ``lab, pin, disc, pressure_kPa,
     temperature_C, n`` and μ_K, μ_S with their standard uncertainty ``u`` (k = 1; NaN
-    when unknown), from :func:`tribopipe.stats.group_statistics` of each lab's runs."""
+    when unknown), from :func:`tribopipe.stats.group_statistics` with each lab's runs
+    apart (``by_lab``)."""
+    groups = group_statistics(runs, by_lab=True)
+    u_k, _ = group_u(groups, "mu_k")
+    u_s, _ = group_u(groups, "mu_s")
     out: list[dict[str, Any]] = []
-    for lab in sorted(set(runs["lab"].astype(str))):
-        groups = group_statistics(runs[runs["lab"].astype(str) == lab])
-        u_k, _ = group_u(groups, "mu_k")
-        u_s, _ = group_u(groups, "mu_s")
-        for i, g in enumerate(groups.to_dict("records")):
-            out.append({
-                "lab": lab, "pin": g["pin"], "disc": g["disc"],
-                "pressure_kPa": float(g["pressure_kPa"]),
-                "temperature_C": float(g["temperature_C"]),
-                "n": int(g["mu_k_n"]),
-                "mu_k": float(g["mu_k_mean"]), "u_mu_k": float(u_k.iloc[i]),
-                "mu_s": float(g["mu_s_mean"]), "u_mu_s": float(u_s.iloc[i]),
-            })
+    for i, g in enumerate(groups.to_dict("records")):
+        out.append({
+            "lab": str(g[LAB]), "pin": g["pin"], "disc": g["disc"],
+            "pressure_kPa": float(g["pressure_kPa"]),
+            "temperature_C": float(g["temperature_C"]),
+            "n": int(g["mu_k_n"]),
+            "mu_k": float(g["mu_k_mean"]), "u_mu_k": float(u_k.iloc[i]),
+            "mu_s": float(g["mu_s_mean"]), "u_mu_s": float(u_s.iloc[i]),
+        })
+    return out
+
+
+def pooled_precision(runs: pd.DataFrame) -> dict[tuple[str, str, float, float],
+                                                  dict[str, Any]]:
+    """ISO 5725-2 precision of μ_K at each condition several labs measured, from
+    :func:`tribopipe.stats.group_statistics` (labs pooled): ``s_r``, ``s_R`` and whether
+    the labs disagree beyond the critical difference, by :func:`condition_key`."""
+    groups = group_statistics(runs)
+    out = {}
+    for g in groups.to_dict("records"):
+        if int(g["mu_k_labs"]) >= 2:
+            out[condition_key({str(k): v for k, v in g.items()})] = {
+                "s_r": float(g["mu_k_s_r"]), "s_R": float(g["mu_k_s_R"]),
+                "disagree": bool(g[LABS_DISAGREE])}
     return out
 
 
@@ -354,14 +371,16 @@ def html_text_block(text: str) -> str:
     return "\n".join(html_text(line) for line in text.splitlines())
 
 
-def comparisons_page(title: str, groups: list[dict[str, Any]],
-                     colours: dict[str, str]) -> str:
-    """Where labs share a condition: each lab's μ_K ± U, the difference and z'."""
+def comparisons_page(title: str, groups: list[dict[str, Any]], colours: dict[str, str],
+                     precision: dict[tuple[str, str, float, float], dict[str, Any]]) -> str:
+    """Where labs share a condition: each lab's μ_K ± U, the difference, z', and the
+    condition's ISO 5725-2 reproducibility s_R with the labs-disagree flag."""
     rows = []
     for c in comparisons(groups):
         pin, disc, p, t = c["condition"]
         a, b = c["a"], c["b"]
         z = c["z"]
+        prec = precision.get(c["condition"], {})
         verdict = ("–" if not math.isfinite(z) else "agree" if abs(z) <= 2
                    else "questionable" if abs(z) < 3 else "disagree")
         rows.append(
@@ -371,17 +390,27 @@ def comparisons_page(title: str, groups: list[dict[str, Any]],
             f'<td>{_swatch(colours[b["lab"]])}{html_text(b["lab"])}: '
             f'{html_text(_pm(b["mu_k"], b["u_mu_k"]))}</td>'
             f'<td>{c["difference"]:+.3f}</td>'
-            f'<td>{"–" if not math.isfinite(z) else f"{z:+.2f}"}</td><td>{verdict}</td></tr>')
+            f'<td>{"–" if not math.isfinite(z) else f"{z:+.2f}"}</td><td>{verdict}</td>'
+            f'<td>{_number(prec.get("s_R"))}</td>'
+            f'<td>{"yes" if prec.get("disagree") else "no"}</td></tr>')
     table = ("<p>No condition is shared by two labs yet.</p>" if not rows else
              '<table id="comparisons"><thead><tr><th>pin</th><th>disc</th><th>p [kPa]</th>'
              "<th>T [°C]</th><th>lab 1 μ_K ± U</th><th>lab 2 μ_K ± U</th><th>difference</th>"
-             "<th>z'</th><th></th></tr></thead><tbody>" + "".join(rows) + "</tbody></table>")
+             "<th>z'</th><th></th><th>s_R</th><th>labs disagree (ISO 5725-6)</th></tr>"
+             "</thead><tbody>" + "".join(rows) + "</tbody></table>")
     body = f"""<section><p>Each pair of labs at each condition both measured (the same pin,
 disc, nominal pressure to 0.1 kPa and temperature to 0.1 °C): each lab's mean μ_K with its
 expanded uncertainty U (k = 2), the difference, and z' = difference / √(u₁² + u₂²)
-(ISO 13528): |z'| ≤ 2 agree, 2 &lt; |z'| &lt; 3 questionable, |z'| ≥ 3 disagree.</p>
+(ISO 13528): |z'| ≤ 2 agree, 2 &lt; |z'| &lt; 3 questionable, |z'| ≥ 3 disagree. Beside
+them, the condition's reproducibility standard deviation s_R (ISO 5725-2, all labs that
+measured it) and whether the labs' means differ by more than the critical difference of
+ISO 5725-6, as the map's statistics decide it.</p>
 {table}</section>"""
     return _page(title, "Inter-lab comparisons", body)
+
+
+def _number(value: Any) -> str:
+    return f"{value:.3g}" if isinstance(value, float) and math.isfinite(value) else "–"
 
 
 def changelog_page(title: str, releases: list[LabRelease]) -> str:

@@ -83,7 +83,7 @@ def test_writing_to_an_old_map_keeps_its_rows_and_stores_the_current_schema(
                                        "--map", str(v1_map), "--output", str(tmp_path / "out")])
     assert result.exit_code == 0, result.output
     info = json.loads(pq.read_schema(v1_map).metadata[fm.schema.META_KEY])
-    assert info["schema_version"] == fm.schema.SCHEMA_VERSION == 5
+    assert info["schema_version"] == fm.schema.SCHEMA_VERSION == 6
     runs = fm.read_map(v1_map)
     assert len(runs) == 5
     old = runs[runs["method"].str.startswith("tribopipe-v1")]
@@ -178,7 +178,7 @@ def test_a_version_3_package_validates_and_merges(tmp_path: Path) -> None:
     runs = fm.read_map(merged)
     assert len(runs) == 5 and set(runs["lab"]) >= {"Fixture Lab"}
     assert runs["test"].isna().all() and runs["result"].isna().all()
-    assert fm.store.map_metadata(merged)["schema_version"] == 5
+    assert fm.store.map_metadata(merged)["schema_version"] == 6
 
 
 def test_map_show_runs_names_what_each_map_knows_of_a_run_s_origin(tmp_path: Path) -> None:
@@ -213,3 +213,31 @@ def test_map_show_runs_names_what_each_map_knows_of_a_run_s_origin(tmp_path: Pat
         assert f"v4_session.txt [{name} / " in line and "/ interval 2]" in line
     plain = CliRunner().invoke(main, ["map", "show", "--map", str(new_map)]).output
     assert "v4_session.txt" not in plain  # the list only with --runs
+
+
+def test_a_column_added_later_missing_in_the_older_row_is_no_difference() -> None:
+    """The rule lives beside the schema versions: every content column a later schema
+    added, missing in the map's older row, is no difference of the run; present and
+    different, it is one."""
+    import dataclasses
+
+    from test_frictionmap import run_record
+    from tribopipe.frictionmap.schema import (
+        ADDED_IN_VERSION,
+        ADDED_LATER_CONTENT,
+        CONTENT_COLUMNS,
+        REVIEW_COLUMNS,
+    )
+
+    # a review's columns are the exception: missing there means "not reviewed"
+    assert ADDED_LATER_CONTENT == {c for c in ADDED_IN_VERSION if c in CONTENT_COLUMNS
+                                   and c not in REVIEW_COLUMNS}
+    new = run_record(1)
+    older = dataclasses.replace(new, **dict.fromkeys(ADDED_LATER_CONTENT))
+    runs = fm.records_frame([older])
+    _, report = fm.store.fold_records(runs, [new])
+    assert report.unchanged_ids == (new.measurement_id,) and not report.conflicting_ids
+    changed = dataclasses.replace(new, u_mu_k=(new.u_mu_k or 0.0) + 0.01)
+    _, report = fm.store.fold_records(fm.records_frame([new]), [changed])
+    assert report.conflicting_ids == (new.measurement_id,)
+    assert report.differences[new.measurement_id] == ("u_mu_k",)

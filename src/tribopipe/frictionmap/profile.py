@@ -38,6 +38,8 @@ PROFILE_VERSIONS: dict[int, str] = {
 }
 #: the first map schema version of a package (version 1 maps had no ``lab``)
 FIRST_SCHEMA_VERSION = 2
+#: the last map schema version of a profile version 1 package
+LAST_V1_SCHEMA = 5
 #: the resource names each version requires, and those it may add
 REQUIRED_RESOURCES: dict[int, tuple[str, ...]] = {1: ("runs",), 2: ("runs",)}
 #: the path of a version's JSON Schema inside a package
@@ -105,8 +107,10 @@ def profile_schema(version: int = PROFILE_VERSION) -> dict[str, Any]:
         "required": ["schema", "schema_version", "lab", "tribopipe_version"],
         "properties": {
             "schema": {"const": SCHEMA_NAME},
+            # the map schema may grow within a profile version: the reader refuses a
+            # newer one by name (version 1 packages were written up to schema 5)
             "schema_version": {"type": "integer", "minimum": FIRST_SCHEMA_VERSION,
-                               "maximum": SCHEMA_VERSION if version > 1 else 5},
+                               **({"maximum": LAST_V1_SCHEMA} if version == 1 else {})},
             "lab": {"type": "string", "minLength": 1},
             "tribopipe_version": {"type": "string"},
             "n_runs": {"type": "integer", "minimum": 0},

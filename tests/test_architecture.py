@@ -45,7 +45,7 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     # the reduction of one run
     ("tribopipe.reduction", "tribopipe.reduction.signals", "tribopipe.reduction.uncertainty"),
     ("tribopipe.reduction.intervals",),
-    ("tribopipe.reduction.detection",),
+    ("tribopipe.reduction.detection", "tribopipe.reduction.reciprocating"),
     ("tribopipe.reduction.reduce",),
     # what a run is and its QC flags, decided once from its labels and its reduction,
     # before anything prints, plots or stores it

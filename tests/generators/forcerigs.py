@@ -107,7 +107,8 @@ def simulate_sled(run: SledRun, dt: float = 2e-4) -> dict[str, np.ndarray]:
     xs = -run.preload_fraction * run.mu_s * n_force / k  # the string pre-stretched
     vs = 0.0
     stuck = True
-    stuck_since = -1e9  # the first breakaway meets fully aged static friction
+    stuck_since = 0.0
+    slid = False  # the first breakaway meets the full static friction μ_S
     out_t, out_c, out_s, out_f, out_stuck = [], [], [], [], []
     for i in range(steps + 1):
         t = i * dt
@@ -123,10 +124,10 @@ def simulate_sled(run: SledRun, dt: float = 2e-4) -> dict[str, np.ndarray]:
         tension = k * stretch + c * (vc - vs) if stretch > 0 else 0.0
         tension = max(tension, 0.0)
         if stuck:
-            held = run.mu_k + (run.mu_s - run.mu_k) * (
+            held = run.mu_s if not slid else run.mu_k + (run.mu_s - run.mu_k) * (
                 1.0 - math.exp(-(t - stuck_since) / run.aging_s))
             if tension > held * n_force:
-                stuck = False
+                stuck, slid = False, True
             else:
                 vs = 0.0
         if not stuck:
@@ -155,9 +156,11 @@ def _sled_plateau(run: SledRun, sim: dict[str, np.ndarray]) -> np.ndarray:
 
 
 def sled_truth(run: SledRun) -> ForceTruth:
-    """μ_K: the mean string force over the plateau / F_N; μ_S: the breakaway; stick-slip
-    when the sled sticks again at least 4 times on the plateau."""
+    """μ_K: the mean string force over the plateau / F_N; μ_S: the breakaway, the largest
+    string force before the sled first slides / F_N (as simulated, at the recording
+    rate); stick-slip when the sled sticks again at least 4 times on the plateau."""
     sim = simulate_sled(run)
+    first_slide = int(np.argmin(sim["stuck"][1:])) + 1
     plateau = _sled_plateau(run, sim)
     sticks = np.flatnonzero(np.diff(sim["stuck"][plateau].astype(int)) == 1).size
     force = sim["force_N"][plateau]
@@ -165,8 +168,9 @@ def sled_truth(run: SledRun) -> ForceTruth:
     if stick_slip:  # over whole cycles: from the first re-stick to the last
         starts = np.flatnonzero(np.diff(sim["stuck"][plateau].astype(int)) == 1)
         force = force[starts[0] : starts[-1]]
-    return ForceTruth(mu_k=float(np.mean(force)) / run.normal_force_N, mu_s=run.mu_s,
-                      stick_slip=stick_slip, run_out=False,
+    breakaway = float(np.max(sim["force_N"][: first_slide + 1]))
+    return ForceTruth(mu_k=float(np.mean(force)) / run.normal_force_N,
+                      mu_s=breakaway / run.normal_force_N, stick_slip=stick_slip, run_out=False,
                       preloaded=run.preload_fraction > 0)
 
 

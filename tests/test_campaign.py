@@ -391,7 +391,7 @@ def test_workers_return_typed_picklable_results(campaign_dir: Path) -> None:
     bad = failed.error
     assert isinstance(good, ReducedRun) and isinstance(bad, FailedRun) and not failed.runs
     assert good.name == "DS30_steel_5N_20C_r1.csv" and good.place.test == "friction"
-    assert good.measurement_id == good.record["measurement_id"]
+    assert good.measurement_id == good.record.measurement_id
     assert good.labels.pin == "Dragonskin 30"
     assert good.summary["mu_k"] == pytest.approx(0.36, abs=0.01)
     assert good.trace is not None and good.trace.is_file()

@@ -213,7 +213,7 @@ def hostile_reduced(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Pat
     map_path, out = root / "m.parquet", root / "out"
     result = invoke("reduce", str(export), "--pin", "P", "--disc", "D", "--force", "3",
                     "--temperature", "20", "--plot", "--map", str(map_path),
-                    "--out", str(out))
+                    "--output", str(out))
     assert result.exit_code == 0, result.output
     for line in result.output.splitlines():
         assert line.isprintable(), repr(line)

@@ -80,7 +80,7 @@ def test_writing_to_an_old_map_keeps_its_rows_and_stores_the_current_schema(
     write_rheocompass_export(other, SyntheticRun(seed=15, duration_s=180.0), project="v2",
                              test="Friction", sample="pin")
     result = CliRunner().invoke(main, ["reduce", str(other), *LABELS, "--repeat", "2",
-                                       "--map", str(v1_map), "--out", str(tmp_path / "out")])
+                                       "--map", str(v1_map), "--output", str(tmp_path / "out")])
     assert result.exit_code == 0, result.output
     info = json.loads(pq.read_schema(v1_map).metadata[fm.schema.META_KEY])
     assert info["schema_version"] == fm.schema.SCHEMA_VERSION == 5
@@ -97,7 +97,7 @@ def test_writing_to_an_old_map_keeps_its_rows_and_stores_the_current_schema(
 def test_a_v1_run_keeps_its_method_until_replaced(v1_map: Path, v1_export: Path,
                                                    tmp_path: Path) -> None:
     args = ["reduce", str(v1_export), *LABELS, "--map", str(v1_map),
-            "--out", str(tmp_path / "out")]
+            "--output", str(tmp_path / "out")]
     kept = CliRunner().invoke(main, args)
     assert kept.exit_code == 0, kept.output
     assert "1 kept conflicting" in kept.output
@@ -156,7 +156,7 @@ def test_the_session_reduced_again_is_the_same_two_runs_and_fills_nothing_in(
     done = reduce_export(raw, settings, lambda export, place, name: RunLabels(
         "Dragonskin 30", "steel", script.TESTS[place.test][2], 20.0, 1))
     records = [run.record for run in done.reduced]
-    assert {r["test"] for r in records} == set(script.TESTS)
+    assert {r.test for r in records} == set(script.TESTS)
     report = fm.append_records(target, records)
     # ids hash the test and result as before: the same runs, nothing added or in conflict
     assert len(report.unchanged_ids) == 2 and not report.added_ids
@@ -203,7 +203,7 @@ def test_map_show_runs_names_what_each_map_knows_of_a_run_s_origin(tmp_path: Pat
         for name, (_, _, force, _) in script.TESTS.items()), encoding="utf-8")
     new_map = tmp_path / "friction_map.parquet"
     batch = CliRunner().invoke(main, ["batch", str(folder), "--manifest", str(manifest),
-                                      "--map", str(new_map), "--out", str(tmp_path / "o"),
+                                      "--map", str(new_map), "--output", str(tmp_path / "o"),
                                       "--no-plots", "-j", "1"])
     assert batch.exit_code == 0, batch.output
     shown = CliRunner().invoke(main, ["map", "show", "--runs", "--map", str(new_map)])

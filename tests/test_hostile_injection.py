@@ -153,7 +153,7 @@ def test_reduce_labels_reach_the_map_as_data(tmp_path: Path) -> None:
     export = good_export(tmp_path / "run.csv")
     map_path = tmp_path / "m.parquet"
     result = invoke("reduce", str(export), "--pin", PIN, "--disc", DISC, "--force", "3",
-                    "--temperature", "20", "--map", str(map_path), "--out", str(tmp_path / "o"))
+                    "--temperature", "20", "--map", str(map_path), "--output", str(tmp_path / "o"))
     assert result.exit_code == 0, result.output
     table = invoke("map", "table", "--format", "frictionmap", "--map", str(map_path)).stdout
     assert _text_cells_are_safe(table)[1][:2] == ["'" + PIN, "'" + DISC]

@@ -3,6 +3,7 @@ them lie between them, and outside the range the edge value is held (as ABAQUS d
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -298,7 +299,7 @@ def test_the_query_carries_the_combined_uncertainty_of_the_groups():
         run_record(2, force_N=3.0, repeat=2, mu_k=0.52, u_mu_k=0.022),
         run_record(3, force_N=9.0, repeat=1, mu_k=0.40, u_mu_k=0.016),
     ]
-    records[2]["pressure_kPa"] = 9.0 / 3 / (math.pi * 9) * 1e3
+    records[2] = dataclasses.replace(records[2], pressure_kPa=9.0 / 3 / (math.pi * 9) * 1e3)
     groups = group_statistics(fm.records_frame(records))
     u3, u9 = (float(g) for g in groups.sort_values("pressure_kPa")["mu_k_u"])
     assert u3 == pytest.approx(math.hypot(0.01, 0.021)) and u9 == pytest.approx(0.016)

@@ -61,16 +61,16 @@ def test_a_measured_speed_off_its_nominal_is_flagged_once():
 def test_the_map_row_carries_the_nominal_speed_of_the_set_point():
     record = run_record(1)
     result = reduced_result()
-    assert record["nominal_speed_mm_s"] == nominal_speed_mm_s(
+    assert record.nominal_speed_mm_s == nominal_speed_mm_s(
         result.speed_set_point_rpm, InstrumentConfig())
     stepped = run_record(2, speed_set_point_rpm=0.15)
-    assert stepped["nominal_speed_mm_s"] == nominal_speed_mm_s(0.15, InstrumentConfig())
+    assert stepped.nominal_speed_mm_s == nominal_speed_mm_s(0.15, InstrumentConfig())
     # the measured speed stayed at 0.005 rpm: off the 0.15 rpm set point
-    assert FLAG_SPEED_OFF in stepped["flags"].split(";")
+    assert FLAG_SPEED_OFF in stepped.flags.split(";")
 
 
 def _pair(i: int, pin: str, speed: float | None, mu_k: float) -> dict:
-    return {**run_record(0), "measurement_id": f"r{i:03d}", "pin": pin,
+    return {**run_record(0).as_dict(), "measurement_id": f"r{i:03d}", "pin": pin,
             "nominal_speed_mm_s": speed, "mu_k": mu_k, "repeat": i}
 
 
@@ -306,10 +306,10 @@ def test_a_stepped_speed_test_gives_one_run_and_one_nominal_speed_per_step(tmp_p
         assert outcome.result.mu_k == pytest.approx(step.mu_k, abs=0.002)
         assert FLAG_SPEED_OFF not in outcome.verdict.flags
         summary = run_summary(outcome)
-        assert summary["nominal_speed_mm_s"] == outcome.record["nominal_speed_mm_s"]
+        assert summary["nominal_speed_mm_s"] == outcome.record.nominal_speed_mm_s
         assert summary["speed_set_point_rpm"] == outcome.result.speed_set_point_rpm
         records.append(outcome.record)
-    speeds = [r["nominal_speed_mm_s"] for r in records]
+    speeds = [r.nominal_speed_mm_s for r in records]
     assert speeds == [nominal_speed_mm_s(v, settings.instrument) for v in SPEEDS_RPM]
     assert len(set(speeds)) == 4
     groups = group_statistics(fm.records_frame(records))
@@ -336,7 +336,7 @@ def test_a_map_of_several_speeds_publishes_validates_and_merges(tmp_path):
     map_path = tmp_path / "m.parquet"
     fm.write_map(map_path, _multi_speed_runs())
     runner = CliRunner()
-    out = runner.invoke(main, ["map", "publish", str(tmp_path / "pkg"), "--lab", "Lab",
+    out = runner.invoke(main, ["map", "publish", "-o", str(tmp_path / "pkg"), "--lab", "Lab",
                                "--map", str(map_path)])
     assert out.exit_code == 0, out.output
     header = (tmp_path / "pkg" / "data" / "groups.csv").read_text().splitlines()[0]

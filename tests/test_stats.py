@@ -25,7 +25,7 @@ from tribopipe.stats import (
     t975,
 )
 
-BASE = run_record(0)
+BASE = run_record(0).as_dict()
 
 
 def row(i: int, **changes) -> dict:

@@ -127,7 +127,7 @@ def test_frictionmap_numbers_runs_without_repeat_and_leaves_out_excluded_runs():
         run_record(1, repeat=2),
         run_record(2, repeat=None),
         run_record(3, repeat=None),
-        {**run_record(4, repeat=1), "excluded": True, "exclusion_reason": "pin tore"},
+        {**run_record(4, repeat=1).as_dict(), "excluded": True, "exclusion_reason": "pin tore"},
     ])
     table = tables.frictionmap_table(runs)
     assert list(table.columns) == list(fm.published.FRICTIONMAP_COLUMNS)

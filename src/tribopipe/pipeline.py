@@ -40,6 +40,7 @@ from .frictionmap.duplicates import (
     repeat_clashes,
 )
 from .frictionmap.records import make_record, measurement_id
+from .frictionmap.schema import MapRow
 from .frictionmap.store import AppendReport, update_map_with
 from .labels import RunLabels, RunVerdict, Tolerances, Undescribed, decide_run
 from .layout import OutputLayout
@@ -132,7 +133,7 @@ class RunOutcome:
     #: what every output of the run shows
     verdict: RunVerdict
     #: the friction-map row; ``None`` when pin or disc is unknown (the run cannot be stored)
-    record: dict[str, Any] | None = field(repr=False)
+    record: MapRow | None = field(repr=False)
     #: where the run sits in its export
     place: RunPlace = RunPlace()
     #: whether its export holds several runs or tests (then its name says which it is)
@@ -397,12 +398,11 @@ def run_conditions(outcome: RunOutcome) -> TraceConditions:
     export holds several, :func:`run_name`) and its nominal conditions (the labels; the
     nominal pressure from its map record when it has one)."""
     labels = outcome.labels
-    record = outcome.record or {}
     return TraceConditions(
         source=run_name(Path(outcome.path).name, outcome.place, outcome.several),
         pin=labels.pin, disc=labels.disc,
         normal_force_N=finite_or_none(labels.normal_force_N),
-        pressure_kPa=finite_or_none(record.get("pressure_kPa")),
+        pressure_kPa=None if outcome.record is None else outcome.record.pressure_kPa,
         temperature_C=finite_or_none(labels.temperature_C), repeat=labels.repeat,
     )
 
@@ -443,7 +443,7 @@ class ReducedRun:
     verdict: RunVerdict
     measurement_id: str
     summary: dict[str, Any] = field(repr=False)
-    record: dict[str, Any] | None = field(repr=False)
+    record: MapRow | None = field(repr=False)
     trace: Path | None = None
     summary_file: Path | None = None
     plot: Path | None = None
@@ -628,21 +628,22 @@ def reduce_files(
     labels: RunLabels | None = None,
     read_options: ReadOptions | None = None,
     *,
-    out_dir: str | Path | OutputLayout,
+    out_dir: str | Path | OutputLayout | None,
     summaries: bool = True,
     plots: bool = False,
     on_file: Callable[[FileOutcome], None] | None = None,
 ) -> list[FileOutcome]:
     """``tribopipe reduce`` over several files: each file alone through
     :func:`reduce_export`, writing each run's trace, its summary (``summaries``) and its
-    trace plot (``plots``) below ``out_dir``.
+    trace plot (``plots``) below ``out_dir`` (nothing when it is ``None``).
 
     A file whose content (SHA-256) an earlier file of ``paths`` already had is not
     reduced again: its outcome names that file in ``duplicate_of``. ``on_file`` is
     called with each outcome as it is done (in the order of ``paths``), e.g. to print
     progress. Nothing raises for a bad file.
     """
-    outputs = RunOutputs(OutputLayout.of(out_dir), summary=summaries, plot=plots)
+    outputs = (None if out_dir is None else
+               RunOutputs(OutputLayout.of(out_dir), summary=summaries, plot=plots))
     results: list[FileOutcome] = []
     first_with: dict[str, str] = {}
     for path in paths:
@@ -696,14 +697,14 @@ def store_runs(map_path: str | Path, files: Sequence[FileOutcome], *,
     same: list[SameContent] = []
     repeats: list[str] = []
 
-    def decide(current: Any) -> tuple[list[dict[str, Any]], tuple[str, ...]]:
+    def decide(current: Any) -> tuple[list[MapRow], tuple[str, ...]]:
         owners = ContentOwners(map_files_by_hash(current))
-        keep: list[dict[str, Any]] = []
+        keep: list[MapRow] = []
         for f in files:
             records = [r.record for r in f.reduced if r.record is not None]
             if not records:
                 continue
-            runs = {str(r["measurement_id"]): labels_of(r) for r in records}
+            runs = {r.measurement_id: labels_of(r) for r in records}
             found, _ = owners.check(f.path, f.file_hash, runs)
             if found is not None:
                 same.append(found)

@@ -29,6 +29,7 @@ from ..frictionmap.duplicates import (
     repeat_clashes,
 )
 from ..frictionmap.records import stored_file_name
+from ..frictionmap.schema import MapRow
 from ..frictionmap.store import read_map, update_map_with
 from ..labels import flags_text, quality_flags
 from ..pipeline import FileOutcome, ReducedRun
@@ -423,7 +424,7 @@ class _Landing:
     the duplicate files (file → reason), the outcome of each file reduced now (file → one
     of :data:`FILE_OUTCOMES`) and the runs that failed in the files read."""
 
-    records: list[dict[str, Any]]
+    records: list[MapRow]
     stale_ids: set[str]
     reduced: list[str]
     flagged: list[tuple[str, str]]
@@ -459,7 +460,7 @@ def _apply(campaign: Campaign, results: Sequence[FileOutcome], by_file: Mapping[
     """Fold the workers' results into the state ``entries`` and ``failures`` (in file
     order, both updated in place; plot and rename notes added to ``notes``), each file
     checked against the files before it and the map (``in_map``, read under its lock)."""
-    records: list[dict[str, Any]] = []
+    records: list[MapRow] = []
     old_ids: set[str] = set()
     reduced: list[str] = []
     flagged: list[tuple[str, str]] = []
@@ -608,7 +609,7 @@ def _ledger(rows: Sequence[CampaignRow], entries: Mapping[str, FileState],
     return tests, unmatched, list(dict.fromkeys(undescribed))
 
 
-def _groups_updated(state: CampaignState, records: Sequence[Mapping[str, Any]],
+def _groups_updated(state: CampaignState, records: Sequence[MapRow],
                     landed: set[str], removed: set[str]) -> set[tuple[Any, ...]]:
     """The condition groups with a map row added, replaced or removed by this batch."""
     old_groups = {
@@ -616,7 +617,7 @@ def _groups_updated(state: CampaignState, records: Sequence[Mapping[str, Any]],
         for r in e.runs if r.measurement_id in removed
     }
     return {
-        _group_key(r) for r in records if r.get("measurement_id") in landed
+        _group_key(labels_of(r)) for r in records if r.measurement_id in landed
     } | old_groups
 
 
@@ -665,7 +666,7 @@ def _land(campaign: Campaign, results: Sequence[FileOutcome],
         return "unchanged", set(), set(), apply({})
     landing: list[_Landing] = []
 
-    def decide(current: Any) -> tuple[list[dict[str, Any]], set[str]]:
+    def decide(current: Any) -> tuple[list[MapRow], set[str]]:
         landing.append(apply(map_files_by_hash(current)))
         records, stale = landing[0].records, landing[0].stale_ids
         landing[0].repeats.extend(repeat_clashes(current, records, stale))

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import click
 
-from ._common import friendly_errors, map_option, say
+from ._common import chosen_map, friendly_errors, lazy_map_option, map_option, say
 from .fit import fit_cmd
 from .mastercurve import master_curve_cmd
 
@@ -18,7 +18,7 @@ def map_group() -> None:
       tribopipe map import --published            start from the founding paper's map
       tribopipe map import FrictionMap.mat        the published MATLAB table (or its CSV)
       tribopipe map merge other_lab.parquet       fold in another lab's map
-      tribopipe map publish contribution --lab "Soft Robotics Lab"   a data package
+      tribopipe map publish -o contribution --lab "Soft Robotics Lab"   a data package
       tribopipe map validate their_package/      check a package someone sent
       tribopipe map merge their_package/          fold it in, each lab's rows kept
       tribopipe map table --format markdown --pin "Dragonskin 30" --temperature 20
@@ -96,7 +96,10 @@ def merge_cmd(other: str, replace: bool, lab: str | None, map_path: str) -> None
 
 
 @map_group.command("publish")
-@click.argument("folder", type=click.Path(file_okay=False))
+@click.argument("folder", required=False, type=click.Path(file_okay=False))
+@click.option("-o", "--output", type=click.Path(file_okay=False),
+              help="The folder to write the package in (required; a positional FOLDER, the "
+              "old spelling, works until the next release).")
 @click.option("--lab", required=True,
               help="The laboratory that measured the runs (named in every row and the "
               "citation).")
@@ -111,13 +114,13 @@ def merge_cmd(other: str, replace: bool, lab: str | None, map_path: str) -> None
               help="Publish rows flagged synthetic (demo data) too; refused without it.")
 @map_option
 @friendly_errors
-def publish_cmd(folder: str, lab: str, contact: str | None, email: str | None, licence: str,
-                title: str | None, overwrite: bool, allow_synthetic: bool,
-                map_path: str) -> None:
-    """Write the map as a Frictionless Data Package in FOLDER: datapackage.json (schema,
-    units, licence, sources, size and SHA-256 of every file), the runs and groups as CSV
-    and Parquet, the 7-column FrictionMap table, the explorer page, a README and a
-    CITATION.cff that cites the founding paper.
+def publish_cmd(folder: str | None, output: str | None, lab: str, contact: str | None,
+                email: str | None, licence: str, title: str | None, overwrite: bool,
+                allow_synthetic: bool, map_path: str) -> None:
+    """Write the map as a Frictionless Data Package in the folder -o/--output:
+    datapackage.json (schema, units, licence, sources, size and SHA-256 of every file),
+    the runs and groups as CSV and Parquet, the 7-column FrictionMap table, the explorer
+    page, a README and a CITATION.cff that cites the founding paper.
 
     The data licence defaults to CC-BY-4.0. The package is checked as `map validate`
     would before it is moved into place; it is never half-written. A map with runs
@@ -125,22 +128,31 @@ def publish_cmd(folder: str, lab: str, contact: str | None, email: str | None, l
 
     \b
     Example:
-      tribopipe map publish contribution --lab "Soft Robotics Lab, Uni X" \\
+      tribopipe map publish -o contribution --lab "Soft Robotics Lab, Uni X" \\
           --contact "A. Person" --email a.person@uni-x.example
     """
     from ..export.citation import Publisher
     from ..export.publish import publish_map
 
-    done = publish_map(map_path, folder, Publisher(lab, contact, email, licence, title),
+    if folder is not None and output is not None:
+        raise click.UsageError("give the package folder once: -o/--output FOLDER")
+    if folder is not None:
+        say("note: the positional FOLDER is now -o/--output FOLDER (the old spelling works "
+            "until the next release)", err=True)
+        output = folder
+    if output is None:
+        raise click.UsageError("give the folder to write the package in: -o/--output FOLDER")
+    done = publish_map(map_path, output, Publisher(lab, contact, email, licence, title),
                        overwrite=overwrite, allow_synthetic=allow_synthetic)
     say(f"wrote {done.path}: {done.n_runs} runs in {len(done.files)} files "
         f"(check it with `tribopipe map validate {done.path}`)")
 
 
 @map_group.command("validate")
-@click.argument("path", type=click.Path())
+@click.argument("path", required=False, type=click.Path())
+@lazy_map_option
 @friendly_errors
-def validate_cmd(path: str) -> None:
+def validate_cmd(path: str | None, map_path: str | None) -> None:
     """Check a data package someone sent (its folder or datapackage.json): schema and
     units of every field, physical ranges, duplicate ids, provenance (lab, hashes,
     versions, times), licences, the size and SHA-256 of every file, and that the Parquet,
@@ -151,10 +163,15 @@ def validate_cmd(path: str) -> None:
     JSON are refused, never followed.
 
     PATH may also be a friction map (a .parquet file): its rows are checked as `map
-    publish` checks them before writing a package.
+    publish` checks them before writing a package. With --map, or with no PATH, the map
+    is checked.
     """
     from ..frictionmap import check_package
 
+    if path is not None and map_path is not None:
+        raise click.UsageError("give PATH or --map, not both")
+    if path is None:
+        path = chosen_map(map_path)
     if path.lower().endswith(".parquet"):
         from ..frictionmap.summary import check_map_file
 

@@ -45,6 +45,7 @@ from .schema import (
     RUN_COLUMNS,
     SCHEMA_NAME,
     SCHEMA_VERSION,
+    MapRow,
     check_runs,
     content_sha256,
     empty_map,
@@ -332,7 +333,7 @@ def _differences(old: Mapping[str, Any], new: Mapping[str, Any]) -> tuple[str, .
 
 
 def fold_records(
-    runs: pd.DataFrame, records: Sequence[Mapping[str, Any]], *, replace: bool = False
+    runs: pd.DataFrame, records: Sequence[MapRow], *, replace: bool = False
 ) -> tuple[pd.DataFrame, AppendReport]:
     """Pure core of :func:`append_records`: the map with ``records`` folded in, and the report.
 
@@ -412,7 +413,7 @@ def _fold(
 
 def append_records(
     path: str | os.PathLike[str],
-    records: Sequence[Mapping[str, Any]],
+    records: Sequence[MapRow],
     *,
     replace: bool = False,
 ) -> AppendReport:
@@ -428,7 +429,7 @@ def append_records(
 
 def update_map(
     path: str | os.PathLike[str],
-    records: Sequence[Mapping[str, Any]],
+    records: Sequence[MapRow],
     *,
     replace: bool = False,
     drop_ids: Iterable[str] = (),
@@ -446,7 +447,7 @@ def update_map(
 
 
 #: what to fold into a map, decided from the map as it is: the records and the ids to drop
-MapChange = tuple[Sequence[Mapping[str, Any]], Iterable[str]]
+MapChange = tuple[Sequence[MapRow], Iterable[str]]
 
 
 def update_map_with(

@@ -10,6 +10,12 @@ speeds to two significant digits, :func:`tribopipe.labels.round_speed`) so 11.79
 groups without a speed column, as before speeds were recorded; where a pair holds several
 nominal speeds the groups carry ``nominal_speed_mm_s``.
 
+Test methods are never pooled: the instrument kind and test method (``test_method``, one
+of :data:`tribopipe.config.TEST_METHODS`; a row that names none was measured on the
+founding rheometer cell) is part of every condition group's key, and where a map holds
+several methods the groups carry a ``test_method`` column (a sled's μ on a film and a
+rheometer's μ on the same pair are two groups, side by side).
+
 Beside the repeat statistics each group carries its combined standard uncertainty (GUM,
 k = 1) from the runs' own budgets (:mod:`tribopipe.reduction.uncertainty`): ``u_run`` is the mean of
 the runs' combined standard uncertainties, and the group mean's is
@@ -34,6 +40,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
+from .config import DEFAULT_TEST_METHOD
 from .labels import FOUNDING_NOMINAL_SPEED_MM_S, quality_flags, round_speed
 from .rounding import lower_bound
 
@@ -57,6 +64,26 @@ FORCE_DECIMALS = 6
 TEMPERATURE_DECIMALS = 2
 #: the group column of the nominal sliding speed [mm/s]
 NOMINAL_SPEED = "nominal_speed_mm_s"
+#: the group column of the instrument kind and test method
+TEST_METHOD = "test_method"
+
+
+def test_methods(runs: pd.DataFrame) -> Any:
+    """The test method each run is grouped under (an object array of text): its
+    ``test_method``, or :data:`~tribopipe.config.DEFAULT_TEST_METHOD` where the row names
+    none (a map older than schema version 6, an imported row)."""
+    import numpy as np
+
+    if TEST_METHOD not in runs.columns:
+        return np.full(len(runs), DEFAULT_TEST_METHOD, dtype=object)
+    return np.array([v if isinstance(v, str) and v else DEFAULT_TEST_METHOD
+                     for v in runs[TEST_METHOD].tolist()], dtype=object)
+
+
+def several_methods(runs: pd.DataFrame) -> bool:
+    """Whether the included runs of a map hold more than one test method."""
+    included = runs.loc[~runs["excluded"].astype(bool)]
+    return len(set(test_methods(included).tolist())) > 1
 
 
 def describe_values(values: Sequence[float]) -> dict[str, Any]:
@@ -162,8 +189,8 @@ def pairs_with_several_speeds(runs: pd.DataFrame) -> set[tuple[str, str]]:
 
 def group_keys(runs: pd.DataFrame, by_speed: bool) -> pd.DataFrame:
     """The rounded grouping keys of each run (a new frame; ``runs`` is not modified):
-    pin, disc, force, temperature, nominal speed (and the measured speed with
-    ``by_speed``)."""
+    pin, disc, force, temperature, nominal speed, test method (and the measured speed
+    with ``by_speed``)."""
     import pandas as pd
 
     keys = pd.DataFrame(
@@ -173,6 +200,7 @@ def group_keys(runs: pd.DataFrame, by_speed: bool) -> pd.DataFrame:
             "normal_force_N": runs["normal_force_N"].round(FORCE_DECIMALS).to_numpy(),
             "temperature_C": runs["temperature_C"].round(TEMPERATURE_DECIMALS).to_numpy(),
             NOMINAL_SPEED: nominal_speeds(runs),
+            TEST_METHOD: test_methods(runs),
         },
         index=runs.index,
     )
@@ -204,13 +232,16 @@ def _pressure_clusters(pressures: Sequence[float]) -> list[int]:
 
 
 def group_statistics(runs: pd.DataFrame, *, by_speed: bool = False,
-                     show_speed: bool | None = None) -> pd.DataFrame:
+                     show_speed: bool | None = None,
+                     show_method: bool | None = None) -> pd.DataFrame:
     """Repeat statistics per condition group of a friction map (see module docstring).
 
     ``runs`` is a map DataFrame (:func:`tribopipe.frictionmap.read_map`); it is not
     modified. Excluded runs are left out; groups with no remaining run are dropped.
-    Groups always split by nominal speed; ``show_speed`` says whether the table shows it
-    (default: where some pair holds several nominal speeds).
+    Groups always split by nominal speed and by test method; ``show_speed`` says whether
+    the table shows the speed (default: where some pair holds several nominal speeds),
+    ``show_method`` whether it shows ``test_method`` (default: where the map holds several
+    methods).
     Columns: ``pin, disc, normal_force_N, pressure_kPa, temperature_C``
     (+ ``nominal_speed_mm_s`` when shown, + ``sliding_speed_mm_s``, the measured speed,
     with ``by_speed``), then for q in ``mu_k``, ``mu_s``:
@@ -226,9 +257,13 @@ def group_statistics(runs: pd.DataFrame, *, by_speed: bool = False,
 
     if show_speed is None:
         show_speed = bool(pairs_with_several_speeds(runs))
+    if show_method is None:
+        show_method = several_methods(runs)
     condition_cols = ["pin", "disc", "normal_force_N", "pressure_kPa", "temperature_C"]
     if show_speed:
         condition_cols.append(NOMINAL_SPEED)
+    if show_method:
+        condition_cols.append(TEST_METHOD)
     if by_speed:
         condition_cols.append("sliding_speed_mm_s")
     stat_cols = [f"{q}_{f}" for q in QUANTITIES for f in GROUP_FIELDS]
@@ -262,8 +297,8 @@ def group_statistics(runs: pd.DataFrame, *, by_speed: bool = False,
         return pd.DataFrame({c: pd.Series(dtype=_dtype(c)) for c in columns})
     groups = pd.DataFrame(rows)
     groups = groups.sort_values(
-        ["pin", "disc", "temperature_C", "pressure_kPa", "normal_force_N", NOMINAL_SPEED]
-        + (["sliding_speed_mm_s"] if by_speed else []),
+        ["pin", "disc", "temperature_C", "pressure_kPa", "normal_force_N", NOMINAL_SPEED,
+         TEST_METHOD] + (["sliding_speed_mm_s"] if by_speed else []),
         na_position="last",
         kind="mergesort",
     ).reset_index(drop=True)
@@ -280,7 +315,7 @@ def group_statistics(runs: pd.DataFrame, *, by_speed: bool = False,
 
 
 def _dtype(column: str) -> str:
-    if column in ("pin", "disc", "run_ids") or column.endswith("_values"):
+    if column in ("pin", "disc", "run_ids", TEST_METHOD) or column.endswith("_values"):
         return "str"
     if column.endswith("_n"):
         return "int64"

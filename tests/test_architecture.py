@@ -34,7 +34,7 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     # disk, numbers from outside, units, the output folder
     ("tribopipe", "tribopipe.errors", "tribopipe.escape", "tribopipe.validate",
      "tribopipe.files", "tribopipe.numeric", "tribopipe.units", "tribopipe.layout",
-     "tribopipe.rounding", "tribopipe.project"),
+     "tribopipe.rounding", "tribopipe.project", "tribopipe.materials"),
     ("tribopipe.measurement",),
     ("tribopipe.physics",),
     ("tribopipe.config",),

@@ -241,34 +241,32 @@ def test_the_paper_layout_of_the_published_map(published_runs):
     assert list(table.columns) == ["pin", "disc", "p [kPa]", "T [°C]", "n", "μ_K ± U", "flags"]
     groups = group_statistics(published_runs)
     u, budget = group_u(groups, "mu_k")
-    assert not budget.any()  # the published runs carry no budget: U is the repeat scatter
+    assert not budget.any()  # the published runs carry no budget: U holds the stated u
     for cell, mean, uu, flags in zip(table["μ_K ± U"], groups["mu_k_mean"], u, table["flags"],
                                      strict=True):
-        if 2 * uu >= 1e-6:
-            assert cell == plus_minus(mean, 2 * uu)
-        else:  # identical repeats: no U, never "± 0"
-            assert cell == f"{mean:.3f} (uncertainty unknown)" and "repeats identical" in flags
-        assert "no budget" in flags
+        assert 2 * uu > 0.005  # never the repeat scatter alone: identical repeats too
+        assert cell == plus_minus(mean, 2 * uu)
+        assert "stated u" in flags and "repeats identical" not in flags
         assert "± 0 " not in cell and not cell.endswith("± 0")
     # the group whose t-interval went to [-0.083, 0.813] before: mean ± U, bounded at 0
     markdown = tables.render_table(published_runs, fmt="markdown", layout="paper")
     # brackets are escaped in every Markdown cell (no link can form); rendered as typed
     assert markdown.splitlines()[0] == ("| pin | disc | p \\[kPa\\] | T \\[°C\\] | n | μ_K ± U "
                                         "| flags |")
-    assert "| Ecoflex 00-50 | steel | 11.79 | 10 | 3 | 0.903 ± 0.027 | no budget |" in markdown
+    assert "| Ecoflex 00-50 | steel | 11.79 | 10 | 3 | 0.903 ± 0.092 | stated u |" in markdown
     assert "expanded uncertainty of the group mean (k = 2)" in markdown
 
 
 def test_the_paper_layout_as_latex_and_csv(published_runs):
     latex = tables.render_table(published_runs, fmt="latex", layout="paper", disc=["steel"])
-    assert r"$\mu_K$ $\pm$ U" in latex and r"0.903 $\pm$ 0.027" in latex
+    assert r"$\mu_K$ $\pm$ U" in latex and r"0.903 $\pm$ 0.092" in latex
     assert "±" not in latex and "μ" not in latex
     csv = tables.render_table(published_runs, fmt="csv", layout="paper", disc=["steel"])
     frame = pd.read_csv(io.StringIO(csv), dtype=str, keep_default_na=False)
     assert list(frame.columns) == ["pin", "disc", "pressure_kPa", "temperature_C", "n",
                                    "mu_k", "mu_k_U", "flags"]
     row = frame[(frame.pin == "Ecoflex 00-50") & (frame.pressure_kPa == "11.79")].iloc[0]
-    assert (row.mu_k, row.mu_k_U) == ("0.903", "0.027")
+    assert (row.mu_k, row.mu_k_U) == ("0.903", "0.092")
 
 
 def test_the_paper_layout_with_budgets_mu_s_speeds_and_a_single_run():
@@ -291,7 +289,7 @@ def test_the_paper_layout_with_budgets_mu_s_speeds_and_a_single_run():
     assert list(table["μ_K ± U"]) == [plus_minus(m, 2 * u) for m, u in
                                       zip(groups["mu_k_mean"], groups["mu_k_u"], strict=True)]
     assert "n = 1" not in table["flags"][0] and table["flags"][1].endswith("n = 1")
-    assert "no budget" not in "".join(table["flags"])
+    assert "stated u" not in "".join(table["flags"])
     # a measured speed off its nominal does not split a group
     runs.loc[2, "sliding_speed_mm_s"] = 0.07
     assert "v [mm/s]" not in tables.paper_table(runs).columns

@@ -89,14 +89,14 @@ class Estimate:
     dominates it, the friction radius, and conservative for the rest) and
     ``u_interpolation`` the interpolation's own
     (:func:`tribopipe.interpolation.interpolation_u`); ``None`` when a used group's u is
-    unknown. ``budgets_known`` is
-    False when a used group's runs carry no uncertainty budget (an imported map): U then
-    holds the repeat scatter and the interpolation only. ``n_min`` is the fewest runs of
-    a used group (1: no repeat scatter). ``uncertainty`` is the weighted 95 % CI
-    half-width of the repeats (``None`` when a used group has fewer than 2 runs), for its
-    own labelled column; ``u_combined`` the weighted groups' combined u where every used
-    group has a budget. ``clamped_pressure`` / ``clamped_temperature`` /
-    ``clamped_speed`` say that the request lay outside the measured range and the edge
+    unknown. ``budgets_known`` is False when a used group's runs carry no uncertainty
+    budget of their own (an imported map): their u is then the stated estimate of
+    :func:`tribopipe.stats.stated_u`. ``n_min`` is the fewest runs of a used group (1: no
+    repeat scatter). ``uncertainty`` is the weighted 95 % CI half-width of the repeats
+    (``None`` when a used group has fewer than 2 runs), for its own labelled column;
+    ``u_combined`` the weighted groups' combined u where every used group has a budget.
+    ``clamped_pressure`` / ``clamped_temperature`` / ``clamped_speed`` say that the
+    request lay outside the measured range and the edge
     value was held.
     """
 
@@ -577,8 +577,9 @@ def uncertainty_notes(est: Estimate) -> list[str]:
     if est.n_min < 2:
         notes.append("n = 1, no repeat scatter: a group used has a single run")
     if not est.budgets_known:
-        notes.append("no uncertainty budget for the runs of a group used (e.g. an imported "
-                     "map): U holds the repeat scatter and the interpolation only")
+        notes.append("runs of a group used carry no uncertainty budget of their own (e.g. "
+                     "an imported map): their u is the stated estimate of the founding cell "
+                     "at the run's μ and force")
     return notes
 
 

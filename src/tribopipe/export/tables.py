@@ -14,8 +14,13 @@ Layouts (each a DataFrame; units in the column names):
     holds several sliding speeds), ``n``, ``μ_S ± U``, ``μ_K ± U`` and ``flags``. U is the
     expanded uncertainty (k = 2) of the group mean (:func:`tribopipe.stats.group_u`),
     rounded the GUM way (:mod:`tribopipe.rounding`); the μ_S column is left out when no
-    group holds μ_S. Flags: ``range > r``, ``flagged run``, ``no budget`` (U holds the
-    repeat scatter only), ``n = 1``. As CSV the value and U are separate columns.
+    group holds μ_S. ``n`` counts the runs that have μ_K; ``n (μ_S)`` (CSV ``mu_s_n``),
+    shown where some group holds μ_S for fewer runs, those that have μ_S. ``labs``
+    (where the groups come from more than one lab) names the labs of each value.
+    Flags: ``range > r``, ``labs disagree`` (beyond R, :mod:`tribopipe.stats`),
+    ``flagged run``, ``stated u`` (some run carries no budget of its own: its u is the
+    stated estimate, :func:`tribopipe.stats.stated_u`), ``n = 1``. As CSV the value and
+    U are separate columns.
 ``frictionmap``
     one row per included run in the published schema ``pin, disc, contactForce,
     contactPressure, temperature, measurementNo, cof`` (force [N], pressure [kPa],
@@ -42,6 +47,8 @@ from ..frictionmap.published import FRICTIONMAP_COLUMNS
 from ..query import estimate_text
 from ..rounding import known_u, round_gum
 from ..stats import (
+    LABS,
+    LABS_DISAGREE,
     NOMINAL_SPEED,
     group_keys,
     group_statistics,
@@ -144,11 +151,15 @@ def paper_table(
                                  names[1]: [_cell(v, "g") for v in groups["temperature_C"]]}
     if by_speed:
         out[names[2]] = [_cell(v, ".2g") for v in groups[NOMINAL_SPEED]]
+    if len({lab for v in groups[LABS] for lab in str(v).split(";")}) > 1:
+        out["labs"] = [str(v).replace(";", ", ") for v in groups[LABS]]
     out["n"] = [int(v) for v in groups["mu_k_n"]]
     flags: list[list[str]] = [[] for _ in range(len(groups))]
     for q, label in (("mu_s", "μ_S"), ("mu_k", "μ_K")):
         if q == "mu_s" and not with_mu_s:
             continue
+        if q == "mu_s" and (groups["mu_s_n"] != groups["mu_k_n"]).any():
+            out["mu_s_n" if machine else "n (μ_S)"] = [int(v) for v in groups["mu_s_n"]]
         u, budget = group_u(groups, q)
         texts = [_with_u(float(m), float(uu), bool(b), int(n), machine) for m, uu, b, n in
                  zip(groups[f"{q}_mean"], u, budget, groups[f"{q}_n"], strict=True)]
@@ -159,11 +170,12 @@ def paper_table(
             out[f"{label} ± U"] = [t[0] for t in texts]
         if q == "mu_k":
             for i, (b, n, uu) in enumerate(zip(budget, groups["mu_k_n"], u, strict=True)):
-                flags[i] += (["no budget"] if not b and n > 1 else []) + (
+                flags[i] += (["stated u"] if not b else []) + (
                     ["n = 1"] if n < 2 else []) + (
                     ["repeats identical"] if n > 1 and not known_u(2.0 * float(uu)) else [])
     for i, g in enumerate(groups.itertuples(index=False)):
         flags[i] = (["range > r"] if g.range_exceeds_r else []) + (
+            ["labs disagree"] if getattr(g, LABS_DISAGREE) else []) + (
             ["flagged run"] if g.qc_flagged else []) + flags[i]
     out["flags"] = [", ".join(f) for f in flags]
     import pandas as pd
@@ -175,9 +187,11 @@ def paper_table(
 PAPER_NOTE = (
     "± U: expanded uncertainty of the group mean (k = 2), from the runs' uncertainty "
     "budgets and the repeat scatter, rounded to two significant digits; an interval that "
-    "would reach below 0 is written +U/−value. no budget: the runs carry no uncertainty "
-    "budget, U holds the repeat scatter only; repeats identical: no scatter to estimate "
-    "U from."
+    "would reach below 0 is written +U/−value; where several labs measured a condition, U "
+    "holds the between-lab component. stated u: some runs carry no uncertainty budget of "
+    "their own (imported rows): theirs is the stated estimate of the founding cell at the "
+    "run's μ and force; labs disagree: two labs' means differ beyond the critical "
+    "difference of R; repeats identical: no scatter to estimate U from."
 )
 
 

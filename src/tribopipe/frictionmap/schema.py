@@ -67,7 +67,8 @@ class Column:
 
     ``kind`` is ``"str"``, ``"float"``, ``"int"`` (nullable) or ``"bool"``; ``unit`` is
     ``""`` for none. ``bounds`` is the physical range of a number (``None``: a float need
-    only be finite); ``reason`` says why; ``choices`` the values a text column may hold. ``required`` is ``""`` (may be missing),
+    only be finite); ``reason`` says why; ``choices`` the values a text column may hold.
+    ``required`` is ``""`` (may be missing),
     :data:`ALWAYS`, :data:`IN_REDUCED_ROWS` or :data:`IN_PACKAGES`. A text column
     required :data:`ALWAYS` is a name (one printable line of at most 200 characters, not
     blank); every other text is one printable line.

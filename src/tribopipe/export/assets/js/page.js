@@ -215,7 +215,7 @@ function renderResult(res, error) {
   muK.dataset.uncertainty = res.mu_k.expanded === null ? "" : pyRepr(res.mu_k.expanded);
   // GUM combined standard uncertainty (k = 1) and the expanded U = 2u, beside the CI
   muKu.textContent = "interpolation u = " + pyG(res.mu_k.u_interpolation, 2) +
-    (res.mu_k.budgets_known ? "" : "; the runs carry no budget: U holds the repeat scatter and the interpolation only") +
+    (res.mu_k.budgets_known ? "" : "; some runs carry no budget of their own: their u is the stated estimate of the founding cell") +
     "; repeats' 95 % CI half-width " + (res.mu_k.uncertainty === null ? "unknown" : f3(res.mu_k.uncertainty));
   muKu.dataset.u = res.mu_k.u_combined === null ? "" : pyRepr(res.mu_k.u_combined);
   muK.dataset.clampedPressure = String(res.mu_k.clamped_pressure);

@@ -229,8 +229,9 @@ function uncertaintyNotes(est) {
   var notes = [];
   if (est.n_min < 2) notes.push("n = 1, no repeat scatter: a group used has a single run");
   if (!est.budgets_known) {
-    notes.push("no uncertainty budget for the runs of a group used (e.g. an imported " +
-      "map): U holds the repeat scatter and the interpolation only");
+    notes.push("runs of a group used carry no uncertainty budget of their own (e.g. " +
+      "an imported map): their u is the stated estimate of the founding cell " +
+      "at the run's μ and force");
   }
   return notes;
 }

@@ -22,7 +22,7 @@ import json
 import math
 import tomllib
 from collections.abc import Mapping
-from dataclasses import asdict, dataclass, fields
+from dataclasses import asdict, dataclass, fields, replace
 from pathlib import Path
 from typing import Any
 
@@ -496,6 +496,25 @@ def settings_from_dict(data: Mapping[str, Any], *, source: str | None = None) ->
     instrument = _build(InstrumentConfig, tables["instrument"], "instrument", source)
     reduction = _build(ReductionParams, tables["reduction"], "reduction", source)
     return Settings(instrument=instrument, reduction=reduction, source=source)
+
+
+def with_zero(settings: Settings, text: str) -> Settings:
+    """``settings`` with the instrument's ``zero_offset`` from a command-line word:
+    ``auto``, ``off`` or a number (N·m for torque, N for a friction force);
+    :class:`ConfigError` in one line otherwise."""
+    value: str | float = text.strip().lower()
+    if value not in ZERO_MODES:
+        try:
+            value = float(text)
+        except ValueError:
+            raise ConfigError(f"--zero: expected auto, off or a number (N·m for torque, N "
+                              f"for a friction force), got {text[:40]!r}") from None
+    try:
+        instrument = replace(settings.instrument, zero_offset=value)
+    except ConfigError as exc:
+        raise ConfigError(f"--zero: {exc.problem.removeprefix('[instrument] ')}") from None
+    return Settings(instrument=instrument, reduction=settings.reduction,
+                    source=settings.source)
 
 
 def read_toml(path: str | Path) -> dict[str, Any]:

@@ -215,6 +215,9 @@ def validate_cmd(path: str | None, map_path: str | None) -> None:
     "--temperature", "temperature_C", type=float, multiple=True, help="Only this nominal °C."
 )
 @click.option("--by-speed", is_flag=True, help="Also split condition groups by sliding speed.")
+@click.option("--method", multiple=True,
+              help="Only runs of this test method (repeatable): 'rheometer pin-on-disc', "
+              "'sled D1894', 'linear reciprocating' or 'rotary pin-on-disc'.")
 @click.option("-o", "--output", type=click.Path(dir_okay=False), help="Write to FILE.")
 @map_option
 @friendly_errors
@@ -225,6 +228,7 @@ def table_cmd(
     disc: tuple[str, ...],
     temperature_C: tuple[float, ...],
     by_speed: bool,
+    method: tuple[str, ...],
     output: str | None,
     map_path: str,
 ) -> None:
@@ -240,6 +244,7 @@ def table_cmd(
         disc=disc,
         temperature_C=temperature_C,
         by_speed=by_speed,
+        method=method,
     )
     if output is None:
         click.echo(text, nl=False)

@@ -163,6 +163,8 @@ RUN_COLUMNS: tuple[str, ...] = tuple(c.name for c in COLUMNS)
 #: code may leave them out.
 ADDED_IN_VERSION: dict[str, int] = {"lab": 2, "u_mu_s": 3, "u_mu_k": 3, "test": 4, "result": 4,
                                     "nominal_speed_mm_s": 5, "test_method": 6}
+#: the values each text column with a closed vocabulary may hold
+CHOICES: dict[str, tuple[str, ...]] = {c.name: c.choices for c in COLUMNS if c.choices}
 #: the kind of each column: ``"str"``, ``"float"``, ``"int"`` or ``"bool"``
 KIND: dict[str, str] = {c.name: c.kind for c in COLUMNS}
 #: the physical range of each bounded number column; a float column not listed need only

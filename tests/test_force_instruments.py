@@ -358,3 +358,139 @@ def test_hash_of_a_config_without_the_new_keys_is_unchanged() -> None:
     plain = load_settings(CONFIGS / "t-pid44.toml")
     assert plain.config_hash == load_settings(None).config_hash == "bd32ca6cbce867a1"
     assert SLED.config_hash != plain.config_hash
+
+
+# ------------------------------------------------------------- the map and its method
+
+
+def _two_method_map(tmp_path: Path) -> Path:
+    """The published map with the Dragonskin 30 on steel runs relabelled as sled runs."""
+    from tribopipe.frictionmap import import_table, read_map, write_map
+    from tribopipe.frictionmap.published import published_csv_path
+
+    path = tmp_path / "friction_map.parquet"
+    import_table(path, published_csv_path())
+    runs = read_map(path)
+    sled = (runs["pin"] == "Dragonskin 30") & (runs["disc"] == "steel")
+    runs.loc[sled, "test_method"] = "sled D1894"
+    write_map(path, runs)
+    return path
+
+
+def test_groups_never_pool_two_methods(tmp_path: Path) -> None:
+    from tribopipe.frictionmap import read_map
+    from tribopipe.stats import group_statistics
+
+    runs = read_map(_two_method_map(tmp_path))
+    groups = group_statistics(runs)
+    assert "test_method" in groups.columns
+    assert set(groups["test_method"]) == {"rheometer pin-on-disc", "sled D1894"}
+    # a copy of a sled group's runs labelled as the rheometer's: two groups, not one
+    sled = runs[runs["test_method"] == "sled D1894"].copy()
+    sled["test_method"] = None
+    sled["measurement_id"] = sled["measurement_id"] + "r"
+    both = group_statistics(pd.concat([runs, sled], ignore_index=True))
+    ds = both[(both["pin"] == "Dragonskin 30") & (both["disc"] == "steel")]
+    assert len(ds) == 2 * len(groups[(groups["pin"] == "Dragonskin 30")
+                                     & (groups["disc"] == "steel")])
+    # a map of one method shows no method column, as before
+    one = group_statistics(runs[runs["test_method"].isna()])
+    assert "test_method" not in one.columns
+
+
+def test_a_row_names_a_known_method(tmp_path: Path) -> None:
+    from tribopipe.frictionmap import read_map, records_frame
+    from tribopipe.frictionmap.checks import validate_runs
+    from tribopipe.frictionmap.schema import frame_records
+
+    runs = read_map(_two_method_map(tmp_path))
+    record = dict(frame_records(runs.iloc[:1])[0])
+    record["test_method"] = "tilting plane"
+    with pytest.raises(Exception, match="test_method"):
+        records_frame([record])
+    runs.loc[runs.index[0], "test_method"] = "tilting plane"
+    problems = [p for p in validate_runs(runs) if p.field == "test_method"]
+    assert problems and "is not one of" in problems[0].problem
+
+
+def test_map_table_filters_by_method(tmp_path: Path) -> None:
+    from click.testing import CliRunner
+
+    from tribopipe.cli import main
+
+    path = _two_method_map(tmp_path)
+    runner = CliRunner()
+    out = runner.invoke(main, ["map", "table", "--map", str(path), "--method", "sled D1894"])
+    assert out.exit_code == 0, out.output
+    lines = out.output.strip().splitlines()
+    assert all("Dragonskin 30,steel" in line for line in lines[1:])
+    paper = runner.invoke(main, ["map", "table", "--map", str(path), "--layout", "paper",
+                                 "--format", "markdown"])
+    assert paper.exit_code == 0 and "| method |" in paper.output
+    bad = runner.invoke(main, ["map", "table", "--map", str(path), "--method", "tilt"])
+    assert bad.exit_code != 0 and "unknown test method 'tilt'" in bad.output
+    assert "Traceback" not in bad.output
+
+
+def test_explorer_data_carries_the_methods(tmp_path: Path) -> None:
+    from tribopipe.export.explorer import explorer_data
+    from tribopipe.frictionmap import read_map
+
+    data = explorer_data(read_map(_two_method_map(tmp_path)))
+    assert data["methods"] == ["rheometer pin-on-disc", "sled D1894"]
+    assert {g["test_method"] for g in data["groups"]} == set(data["methods"])
+    ds = next(p for p in data["pairs"] if (p["pin"], p["disc"]) == ("Dragonskin 30", "steel"))
+    assert {r["test_method"] for r in ds["runs"]} == {"sled D1894"}
+
+
+# ------------------------------------------------------------------- end to end
+
+
+def _sled_csv(path: Path, **kwargs: float) -> Path:
+    m = sled_trace(**kwargs)
+    lines = ['"Sample","PE film"', '"Test speed","150 mm/min"', "",
+             '"Time (s)","Extension (mm)","Load (N)"']
+    lines += [f"{t:.3f},{x * 1e3:.4f},{f:.6f}" for t, x, f in zip(
+        m.data[TIME], m.data[POSITION], m.data[FRICTION_FORCE], strict=True)]
+    path.write_text("\n".join(lines) + "\n", encoding="utf-8")
+    return path
+
+
+def test_reduce_a_sled_export_into_the_map(tmp_path: Path) -> None:
+    """The real CLI: a D1894 sled export with its instrument file; the row records the
+    method, the statement of the normal force is in the summary."""
+    import json
+    import subprocess
+    import sys
+
+    from tribopipe.frictionmap import read_map
+
+    export = _sled_csv(tmp_path / "pe_steel.csv", rest_load_N=0.45)
+    map_path = tmp_path / "map.parquet"
+    done = subprocess.run(
+        [sys.executable, "-m", "tribopipe", "reduce", str(export), "--pin", "PE film",
+         "--disc", "steel", "--temperature", "23", "--repeat", "1", "--instrument",
+         str(CONFIGS / "sled-d1894.toml"), "--map", str(map_path), "-o", str(tmp_path / "o"),
+         "--json"], capture_output=True, text=True, check=False)
+    assert done.returncode == 0, done.stderr
+    (row,) = read_map(map_path).to_dict(orient="records")
+    assert row["test_method"] == "sled D1894"
+    assert "zero_under_load" in row["flags"]
+    assert row["mu_k"] == pytest.approx(0.25, abs=0.004)
+    assert row["normal_force_measured_N"] == pytest.approx(0.2 * G)
+    summary = json.loads(next((tmp_path / "o").rglob("*.json")).read_text())
+    assert "sled mass 200 g" in json.dumps(summary)
+    # --zero off: the pull at rest is not a zero either way
+    off = subprocess.run(
+        [sys.executable, "-m", "tribopipe", "reduce", str(export), "--instrument",
+         str(CONFIGS / "sled-d1894.toml"), "--zero", "0.45", "--no-map", "--json"],
+        capture_output=True, text=True, check=False)
+    assert off.returncode == 0, off.stderr
+    assert json.loads(off.stdout)[0]["mu_k"] == pytest.approx(0.25 - 0.45 / (0.2 * G),
+                                                              abs=0.004)
+    bad = subprocess.run(
+        [sys.executable, "-m", "tribopipe", "reduce", str(export), "--zero", "maybe",
+         "--no-map"], capture_output=True, text=True, check=False)
+    assert bad.returncode != 0
+    assert "--zero: expected auto, off or a number" in bad.stderr
+    assert "Traceback" not in bad.stderr

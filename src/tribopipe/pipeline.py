@@ -44,7 +44,7 @@ from .frictionmap.schema import MapRow
 from .frictionmap.store import AppendReport, update_map_with
 from .labels import RunLabels, RunVerdict, Tolerances, Undescribed, decide_run
 from .layout import OutputLayout
-from .measurement import interval_label
+from .measurement import interval_label, run_name
 from .numeric import finite_json, finite_or_nan, finite_or_none
 from .readers import read_export
 from .reduction.intervals import friction_intervals
@@ -80,15 +80,14 @@ class RunPlace:
     @property
     def label(self) -> str:
         """``test / result / interval i`` (``#n`` added for a repeated place)."""
-        text = interval_label(self.test, self.result, self.interval)
-        return f"{text} #{self.occurrence}" if self.occurrence > 1 else text
+        return interval_label(self.test, self.result, self.interval, self.occurrence)
 
-
-def run_name(file: str, place: RunPlace, several: bool) -> str:
-    """How a run is named in messages and tables: the file alone for an export with one
-    run, ``file [test / result / interval i]`` for one with several."""
-    label = place.label
-    return f"{file} [{label}]" if several and label else file
+    def run_name(self, file: str, several: bool) -> str:
+        """The run's name (:func:`tribopipe.measurement.run_name`): the file alone for an
+        export with one run, ``file [test / result / interval i]`` for one with several."""
+        if not several:
+            return file
+        return run_name(file, self.test, self.result, self.interval, self.occurrence)
 
 
 @dataclass(frozen=True)
@@ -115,8 +114,8 @@ class ExportRuns:
         return len(self.runs) + len(self.problems) > 1
 
     def name(self, place: RunPlace, file: str | None = None) -> str:
-        """:func:`run_name` of a run of this export (``file`` defaults to the path)."""
-        return run_name(self.path if file is None else file, place, self.several)
+        """The name of a run of this export (``file`` defaults to the path)."""
+        return place.run_name(self.path if file is None else file, self.several)
 
 
 @dataclass(frozen=True)
@@ -146,8 +145,8 @@ class RunOutcome:
 
     @property
     def name(self) -> str:
-        """:func:`run_name`: the file, with the run's place when its export holds several."""
-        return run_name(self.path, self.place, self.several)
+        """The run's name: the file, with its place when its export holds several."""
+        return self.place.run_name(self.path, self.several)
 
 
 def read_runs(
@@ -395,11 +394,11 @@ def plot_run(out_dir: str | Path | OutputLayout, outcome: RunOutcome) -> Path:
 
 def run_conditions(outcome: RunOutcome) -> TraceConditions:
     """What a run's trace plot names: its file (with the run's test and place when the
-    export holds several, :func:`run_name`) and its nominal conditions (the labels; the
+    export holds several, :meth:`RunPlace.run_name`) and its nominal conditions (the labels; the
     nominal pressure from its map record when it has one)."""
     labels = outcome.labels
     return TraceConditions(
-        source=run_name(Path(outcome.path).name, outcome.place, outcome.several),
+        source=outcome.place.run_name(Path(outcome.path).name, outcome.several),
         pin=labels.pin, disc=labels.disc,
         normal_force_N=finite_or_none(labels.normal_force_N),
         pressure_kPa=None if outcome.record is None else outcome.record.pressure_kPa,
@@ -602,7 +601,7 @@ def reduce_export(
     measurements = dict(export.runs)
     runs: list[ReducedRun | FailedRun] = []
     for place in export.order:
-        run = run_name(shown, place, export.several)
+        run = place.run_name(shown, export.several)
         if place in problems:
             runs.append(FailedRun(name=run, place=place,
                                   reason=failure_reason(problems[place], path, shown, run)))

@@ -47,9 +47,8 @@ from .interpolation import (
     speed_bracket,
     stencil,
 )
-from .labels import FOUNDING_NOMINAL_SPEED_MM_S
 from .numeric import finite_or_none
-from .physics import contact_pressure_kPa
+from .physics import FOUNDING_SLIDING_SPEED_MM_S, contact_pressure_kPa
 from .rounding import known_u, lower_bound, plus_minus
 from .stats import NOMINAL_SPEED, group_statistics, group_u
 
@@ -415,10 +414,10 @@ def pair_speeds(pair_groups: pd.DataFrame) -> list[float]:
     """The nominal sliding speeds [mm/s] of a pair's groups, sorted (the founding speed
     where the group table shows none: every group of a one-speed map)."""
     if NOMINAL_SPEED not in pair_groups.columns:
-        return [FOUNDING_NOMINAL_SPEED_MM_S]
+        return [FOUNDING_SLIDING_SPEED_MM_S]
     values = pd_numeric(pair_groups[NOMINAL_SPEED])
     found = sorted({float(v) for v in values if math.isfinite(v) and v > 0})
-    return found or [FOUNDING_NOMINAL_SPEED_MM_S]
+    return found or [FOUNDING_SLIDING_SPEED_MM_S]
 
 
 def groups_at_speed(pair: pd.DataFrame, speed_mm_s: float) -> pd.DataFrame:

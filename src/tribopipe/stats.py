@@ -63,7 +63,8 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 from .config import DEFAULT_TEST_METHOD, InstrumentConfig
-from .labels import FOUNDING_NOMINAL_SPEED_MM_S, quality_flags, round_speed
+from .labels import quality_flags, round_speed
+from .physics import FOUNDING_SLIDING_SPEED_MM_S
 from .reduction.uncertainty import budget, unknown_offset_u_Nm
 from .rounding import lower_bound
 
@@ -292,16 +293,16 @@ def select_labs(runs: pd.DataFrame, labs: Sequence[str] | None) -> pd.DataFrame:
 def nominal_speeds(runs: pd.DataFrame) -> Any:
     """The nominal sliding speed [mm/s] each run is grouped under (a float array): its
     ``nominal_speed_mm_s`` rounded by :func:`~tribopipe.labels.round_speed`, or
-    :data:`~tribopipe.labels.FOUNDING_NOMINAL_SPEED_MM_S` where the row has none (a map
+    :data:`~tribopipe.physics.FOUNDING_SLIDING_SPEED_MM_S` where the row has none (a map
     written before schema version 5, an imported row: measured at one speed as far as the
     map can tell, which the published map and tribopipe's default instrument both are)."""
     import numpy as np
 
     if NOMINAL_SPEED not in runs.columns:
-        return np.full(len(runs), FOUNDING_NOMINAL_SPEED_MM_S)
+        return np.full(len(runs), FOUNDING_SLIDING_SPEED_MM_S)
     values = runs[NOMINAL_SPEED].to_numpy(dtype=float)
     return np.array([round_speed(float(v)) if math.isfinite(v) and v > 0
-                     else FOUNDING_NOMINAL_SPEED_MM_S for v in values], dtype=float)
+                     else FOUNDING_SLIDING_SPEED_MM_S for v in values], dtype=float)
 
 
 def pairs_with_several_speeds(runs: pd.DataFrame) -> set[tuple[str, str]]:
@@ -338,6 +339,17 @@ def group_keys(runs: pd.DataFrame, by_speed: bool, by_lab: bool = False) -> pd.D
     if by_lab:
         keys[LAB] = lab_names(runs)
     return keys
+
+
+def condition_keys(runs: pd.DataFrame) -> dict[str, tuple[Any, ...]]:
+    """The condition group of each run, by ``measurement_id``: the key
+    :func:`group_statistics` groups it under (:func:`group_keys`: pin, disc, nominal force
+    [N] and temperature [°C] rounded, nominal speed [mm/s]), unknown values as ``None``.
+    What a count of the groups a change touches compares."""
+    keys = group_keys(runs, by_speed=False)
+    ids = runs["measurement_id"].astype(str).tolist()
+    return {mid: tuple(None if isinstance(v, float) and v != v else v for v in key)
+            for mid, key in zip(ids, keys.itertuples(index=False, name=None), strict=True)}
 
 
 def _pressure_clusters(pressures: Sequence[float]) -> list[int]:

@@ -29,10 +29,12 @@ from ..frictionmap.duplicates import (
     repeat_clashes,
 )
 from ..frictionmap.records import stored_file_name
-from ..frictionmap.schema import MapRow
+from ..frictionmap.schema import MapRow, unvalidated_frame
 from ..frictionmap.store import read_map, update_map_with
 from ..labels import flags_text, quality_flags
+from ..measurement import run_name
 from ..pipeline import FileOutcome, ReducedRun
+from ..stats import condition_keys
 from .metadata import Manifest, read_manifest
 from .outputs import write_failures_csv, write_runs_csv
 from .spec import Campaign
@@ -276,7 +278,7 @@ def _run_locked(campaign: Campaign, *, jobs: int | None, plots: bool | None,
         campaign, results, lambda in_map: _apply(campaign, results, by_file, entries, failures,
                                                  notes, vanished, in_map), entries)
     _forget_vanished(campaign, entries, set(by_file), notes)
-    groups = _groups_updated(state, landing.records, landed, removed)
+    groups = _groups_updated(landing, landed, removed)
 
     duplicates = {**plan.duplicates, **landing.duplicates}
     outcomes = {**plan.outcomes, **landing.outcomes}
@@ -433,6 +435,9 @@ class _Landing:
     runs_failed: int
     #: repeat numbers used twice in one condition once the records land
     repeats: list[str] = field(default_factory=list)
+    #: the condition group (:func:`tribopipe.stats.condition_keys`) of each map row the
+    #: records replace or the stale ids drop, as the map held them before this batch
+    old_groups: dict[str, tuple[Any, ...]] = field(default_factory=dict)
 
 
 def _owners(by_file: Mapping[str, CampaignRow], redone: set[str],
@@ -588,8 +593,7 @@ def _ledger(rows: Sequence[CampaignRow], entries: Mapping[str, FileState],
         known[row.file] = set(found)
         places[row.file] = {(r.test, r.interval) for r in entry.runs}
         tests[row.file] = len(found)
-        undescribed += [row.file if r.test is None else f"{row.file} [{r.test}]"
-                        for r in entry.runs if r.undescribed]
+        undescribed += [run_name(row.file, r.test) for r in entry.runs if r.undescribed]
     unmatched: list[str] = []
     if manifest is not None:
         names = {row.file for row in rows} | {row.path.name for row in rows}
@@ -609,16 +613,14 @@ def _ledger(rows: Sequence[CampaignRow], entries: Mapping[str, FileState],
     return tests, unmatched, list(dict.fromkeys(undescribed))
 
 
-def _groups_updated(state: CampaignState, records: Sequence[MapRow],
-                    landed: set[str], removed: set[str]) -> set[tuple[Any, ...]]:
-    """The condition groups with a map row added, replaced or removed by this batch."""
-    old_groups = {
-        _group_key(r.labels or {}) for e in state.entries.values()
-        for r in e.runs if r.measurement_id in removed
-    }
-    return {
-        _group_key(labels_of(r)) for r in records if r.measurement_id in landed
-    } | old_groups
+def _groups_updated(landing: _Landing, landed: set[str],
+                    removed: set[str]) -> set[tuple[Any, ...]]:
+    """The condition groups (those of the statistics, :func:`condition_keys`) with a map
+    row added, replaced (its group before and after) or removed by this batch."""
+    touched = [r for r in landing.records if r.measurement_id in landed]
+    new = condition_keys(unvalidated_frame(touched)) if touched else {}
+    old = {k for mid, k in landing.old_groups.items() if mid in landed | removed}
+    return set(new.values()) | old
 
 
 def _save_state_with_map(campaign: Campaign, entries: dict[str, FileState],
@@ -670,6 +672,9 @@ def _land(campaign: Campaign, results: Sequence[FileOutcome],
         landing.append(apply(map_files_by_hash(current)))
         records, stale = landing[0].records, landing[0].stale_ids
         landing[0].repeats.extend(repeat_clashes(current, records, stale))
+        ids = stale | {r.measurement_id for r in records}
+        landing[0].old_groups.update(
+            condition_keys(current.loc[current["measurement_id"].isin(ids)]))
         return records, stale
 
     report = update_map_with(campaign.map_path, decide, replace=True)
@@ -678,7 +683,3 @@ def _land(campaign: Campaign, results: Sequence[FileOutcome],
     return (report.summary(), set(report.added_ids) | set(report.replaced_ids),
             set(report.dropped_ids), landing[0])
 
-
-def _group_key(row: Mapping[str, Any]) -> tuple[Any, ...]:
-    """The condition group of a record or label dict: pin, disc, nominal F [N], T [°C]."""
-    return (row.get("pin"), row.get("disc"), row.get("normal_force_N"), row.get("temperature_C"))

@@ -197,6 +197,8 @@ def _reduced(results: list[FileOutcome]) -> list[tuple[FileOutcome, ReducedRun]]
 def _run_labels(runs: list[tuple[FileOutcome, ReducedRun]]) -> dict[int, str]:
     """The run column: test and interval (the result too where a test has several) for
     the runs of files that hold several; empty for one-run files."""
+    from ..measurement import interval_label
+
     results_per_test: dict[tuple[str, object], set[str | None]] = {}
     for f, o in runs:
         results_per_test.setdefault((f.path, o.place.test), set()).add(o.place.result)
@@ -205,13 +207,9 @@ def _run_labels(runs: list[tuple[FileOutcome, ReducedRun]]) -> dict[int, str]:
         if not f.several:
             continue
         place = o.place
-        parts = [p for p in (place.test,) if p]
-        if len(results_per_test[(f.path, place.test)]) > 1 and place.result:
-            parts.append(place.result)
-        if place.interval is not None:
-            parts.append(f"interval {place.interval}")
-        text = " / ".join(parts)
-        shown[k] = f"{text} #{place.occurrence}" if place.occurrence > 1 else text
+        several_results = len(results_per_test[(f.path, place.test)]) > 1
+        shown[k] = interval_label(place.test, place.result if several_results else None,
+                                  place.interval, place.occurrence)
     return shown
 
 

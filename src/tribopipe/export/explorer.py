@@ -242,9 +242,9 @@ def explorer_data(
     has several, else it is empty; each run with its ``test_method``), ``groups`` (the
     group table, each row with the index of its ``pair`` and its ``test_method``),
     ``methods`` (the test methods of the included runs, in the map's order: the page
-    filters the group table by them where there are several), ``snippets`` (the simulator formats the page copies:
-    name, label, file suffix) and ``snippet_headers`` (the opening lines of
-    :func:`tribopipe.export.simulators.snippet` per format). Pressures in kPa,
+    filters the group table by them where there are several), ``snippets`` (the
+    simulator formats the page copies: name, label, file suffix) and ``snippet_headers``
+    (the opening lines of :func:`tribopipe.export.simulators.snippet` per format). Pressures in kPa,
     temperatures in °C. Raises :class:`ExportError` when no run is left. Inputs are not
     modified.
     """

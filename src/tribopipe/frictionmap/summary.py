@@ -9,7 +9,7 @@ from typing import Any
 from ..errors import MapError
 from ..escape import display_path, printable
 from ..labels import flag_list
-from ..measurement import interval_label
+from ..measurement import run_name
 from ..stats import group_statistics, repeatability
 from .checks import validate_runs
 from .schema import is_missing
@@ -100,9 +100,7 @@ def run_origin(row: dict[str, Any]) -> str:
     interval = None if is_missing(row.get("interval")) else int(row["interval"])
     test, result = (None if is_missing(row.get(k)) else _text(row[k])
                     for k in ("test", "result"))
-    place = interval_label(test, result, interval)
-    file = _text(row.get("source_file"))
-    return f"{file} [{place}]" if place else file
+    return run_name(_text(row.get("source_file")), test, result, interval)
 
 
 def run_line(row: dict[str, Any]) -> str:

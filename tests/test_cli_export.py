@@ -89,6 +89,11 @@ def test_query_force_converts_through_the_instrument_config(map_path, groups, tm
     both = CliRunner().invoke(main, ["query", "--map", str(map_path), "--pin", PIN, "--disc",
                                      DISC, "--force", "1", "--pressure", "10"])
     assert both.exit_code == 2 and "exactly one of --pressure and --force" in both.output
+    for bad in ("0", "-3", "nan", "inf"):
+        refused = CliRunner().invoke(main, ["query", "--map", str(map_path), "--pin", PIN,
+                                            "--disc", DISC, "--force", bad])
+        assert refused.exit_code == 2 and "Traceback" not in refused.output, refused.output
+        assert "--force" in refused.output and "finite number > 0 N" in refused.output
 
 
 def test_query_unknown_pair_is_one_friendly_line(map_path):

@@ -48,7 +48,7 @@ from .interpolation import (
     stencil,
 )
 from .numeric import finite_or_none
-from .physics import FOUNDING_SLIDING_SPEED_MM_S, contact_pressure_kPa
+from .physics import FOUNDING_SLIDING_SPEED_MM_S
 from .rounding import known_u, lower_bound, plus_minus
 from .stats import NOMINAL_SPEED, group_statistics, group_u
 
@@ -675,16 +675,6 @@ def query_map(
 ) -> QueryResult:
     """:func:`query` on the friction map (Parquet) at ``map_path``."""
     return query(load_groups(map_path), pin, disc, pressure_kPa, temperature_C, speed_mm_s)
-
-
-def pressure_of_force(normal_force_N: float, instrument: InstrumentConfig) -> float:
-    """The contact pressure per pin [kPa] of a total normal force [N] on ``instrument``'s
-    pins (:func:`tribopipe.physics.contact_pressure_kPa`); an :class:`ExportError` for a
-    force that is not a finite number > 0."""
-    if not (math.isfinite(normal_force_N) and normal_force_N > 0):
-        raise ExportError(f"normal force must be a finite number > 0 N, got {normal_force_N}")
-    return float(contact_pressure_kPa(normal_force_N, instrument.n_pins,
-                                      instrument.pin_radius_mm))
 
 
 def format_result(res: QueryResult, normal_force_N: float | None = None,

@@ -197,6 +197,8 @@ def _runs(pair_runs: pd.DataFrame) -> list[dict[str, Any]]:
             "test": _plain(r.get("test")),
             "result": _plain(r.get("result")),
             "test_method": method,
+            # a reviewer's decision (tribopipe.review): accept or window; None when none
+            "review": _plain(r.get("review")),
         }
         for r, method in zip(ordered.to_dict(orient="records"), test_methods(ordered),
                              strict=True)

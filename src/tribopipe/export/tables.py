@@ -19,8 +19,9 @@ Layouts (each a DataFrame; units in the column names):
     (where the groups come from more than one lab) names the labs of each value.
     Flags: ``range > r``, ``labs disagree`` (beyond R, :mod:`tribopipe.stats`),
     ``flagged run``, ``stated u`` (some run carries no budget of its own: its u is the
-    stated estimate, :func:`tribopipe.stats.stated_u`), ``n = 1``. As CSV the value and
-    U are separate columns.
+    stated estimate, :func:`tribopipe.stats.stated_u`), ``n = 1``, ``N reviewed`` (runs a
+    reviewer accepted or re-windowed, :mod:`tribopipe.review`). As CSV the value and U
+    are separate columns.
 ``frictionmap``
     one row per included run in the published schema ``pin, disc, contactForce,
     contactPressure, temperature, measurementNo, cof`` (force [N], pressure [kPa],
@@ -182,7 +183,8 @@ def paper_table(
     for i, g in enumerate(groups.itertuples(index=False)):
         flags[i] = (["range > r"] if g.range_exceeds_r else []) + (
             ["labs disagree"] if getattr(g, LABS_DISAGREE) else []) + (
-            ["flagged run"] if g.qc_flagged else []) + flags[i]
+            ["flagged run"] if g.qc_flagged else []) + flags[i] + (
+            [f"{g.reviewed} reviewed"] if getattr(g, "reviewed", 0) else [])
     out["flags"] = [", ".join(f) for f in flags]
     import pandas as pd
 

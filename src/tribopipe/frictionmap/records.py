@@ -18,22 +18,12 @@ from .. import __version__
 from ..errors import MapError, RowError
 from ..labels import RunLabels, RunVerdict, Tolerances, decide_run, flags_text
 from ..numeric import finite_or_nan, finite_or_none
-from ..physics import contact_pressure_kPa
 from .schema import SOURCE_REDUCED, MapRow, checked_row, utc_now
 
 if TYPE_CHECKING:
-    from ..config import InstrumentConfig, Settings
+    from ..config import Settings
     from ..measurement import MeasurementMeta
     from ..reduction.reduce import ReductionResult
-
-def nominal_pressure_kPa(force_N: float, instrument: InstrumentConfig) -> float:
-    """Nominal contact pressure per pin [kPa] for a total normal force [N].
-
-    p = (F / n_pins) / (π r²); with F in N and r in mm, N/mm² = MPa, hence × 1000 → kPa.
-    The founding cell (3 pins, r = 3 mm) gives 1 N → 11.79 kPa.
-    """
-    return float(contact_pressure_kPa(force_N, instrument.n_pins, instrument.pin_radius_mm))
-
 
 def measurement_id(file_hash: str, meta: MeasurementMeta, occurrence: int = 1) -> str:
     """Stable id of a run: 16 hex digits of SHA-256 over the raw file's content hash and
@@ -139,7 +129,7 @@ def make_record(
         pin=pin,
         disc=disc,
         normal_force_N=force,
-        pressure_kPa=nominal_pressure_kPa(force, settings.instrument),
+        pressure_kPa=settings.instrument.pressure_kPa(force),
         normal_force_measured_N=finite_or_none(measured_force),
         pressure_measured_kPa=finite_or_none(result.pressure_kPa),
         temperature_C=temperature,

@@ -467,6 +467,8 @@ def reduce_measurement(
         "plateau_tau_int_samples": tau,
         "torque_offset_u_Nm": offset_u,
         "friction_radius_u_mm": lever.friction_radius_u_mm,
+        "terms": dict(zip(("relative", "absolute"), uncertainty.budget_terms(
+            normal_force_N=f_mean, instrument=lever, offset_u_Nm=offset_u), strict=True)),
     }
     parameters = _parameters(
         params, instrument, x, det, distance_source=distance_source, offset=offset,

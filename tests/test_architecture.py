@@ -56,12 +56,13 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("tribopipe.stats",),
     ("tribopipe.frictionmap",),
     ("tribopipe.pipeline", "tribopipe.review"),
-    ("tribopipe.campaign",),
+    # many exports, incrementally; a package's evidence re-derived through the one route
+    ("tribopipe.campaign", "tribopipe.evidence"),
     # the one rule for μ between measured conditions, below everything that reads it
     ("tribopipe.interpolation",),
     ("tribopipe.query", "tribopipe.fit", "tribopipe.mastercurve"),
     ("tribopipe.export",),
-    ("tribopipe.report",),
+    ("tribopipe.report", "tribopipe.hub"),
     ("tribopipe.cli", "tribopipe.__main__"),
 )
 

@@ -281,6 +281,9 @@ def validate_cmd(path: str | None, map_path: str | None, recompute: bool) -> Non
 @click.option("--decimal", type=click.Choice([".", ","]), default=".", show_default=True,
               help="Decimal mark of a CSV: ',' writes it for a decimal-comma locale (cells "
               "separated by ';'), as Excel there opens a CSV.")
+@click.option("--method", multiple=True,
+              help="Only runs of this test method (repeatable): 'rheometer pin-on-disc', "
+              "'sled D1894', 'linear reciprocating' or 'rotary pin-on-disc'.")
 @click.option("-o", "--output", type=click.Path(dir_okay=False),
               help="Write to FILE. Default: standard output (not for xlsx).")
 @map_option
@@ -293,6 +296,7 @@ def table_cmd(
     temperature_C: tuple[float, ...],
     by_speed: bool,
     decimal: str,
+    method: tuple[str, ...],
     output: str | None,
     map_path: str,
 ) -> None:
@@ -315,7 +319,8 @@ def table_cmd(
         if decimal != ".":
             raise click.UsageError("--decimal is for --format csv (an xlsx stores numbers)")
         written = export_workbook(map_path, output, pin=pin, disc=disc,
-                                  temperature_C=temperature_C, by_speed=by_speed)
+                                  temperature_C=temperature_C, by_speed=by_speed,
+                                  method=method)
         say(f"wrote {written}", err=True)
         return
     from ..export.tables import export_table
@@ -330,6 +335,7 @@ def table_cmd(
         temperature_C=temperature_C,
         by_speed=by_speed,
         decimal=decimal,
+        method=method,
     )
     if output is None:
         click.echo(text, nl=False)

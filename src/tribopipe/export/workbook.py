@@ -26,7 +26,7 @@ from ..escape import display_path, printable
 from ..files import write_bytes_atomic
 from ..frictionmap import read_map
 from ..frictionmap.synthetic_rows import synthetic_note
-from .tables import PAPER_NOTE, abstract_table, group_table, paper_table
+from .tables import PAPER_NOTE, abstract_table, group_table, paper_table, runs_of_methods
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -130,12 +130,15 @@ def workbook_bytes(
     disc: Sequence[str] | None = None,
     temperature_C: Sequence[float] | None = None,
     by_speed: bool = False,
+    method: Sequence[str] | None = None,
 ) -> bytes:
     """The ``.xlsx`` file of the map's ``runs`` (filtered like ``map table``): sheets
     ``paper``, ``group``, ``abstract`` and ``notes``. :class:`ExportError` when no group
     matches the filters."""
     from openpyxl import Workbook
 
+    if method:
+        runs = runs_of_methods(runs, method)
     filters: dict[str, Any] = {"pin": pin, "disc": disc, "temperature_C": temperature_C}
     paper = paper_table(runs, machine=True, **filters)
     if paper.empty:

@@ -68,3 +68,10 @@ def test_dpi_sets_the_png_resolution(reduced: Path, tmp_path: Path) -> None:
     assert sizes[120][0] == pytest.approx(6.4 * 120, abs=2)
     refused = CliRunner().invoke(main, ["plot", "pairs", "--map", str(reduced), "--dpi", "5"])
     assert refused.exit_code == 2
+
+
+def test_the_dpi_default_in_help_is_the_figures_default() -> None:
+    from tribopipe.figures import DPI
+
+    text = " ".join(CliRunner().invoke(main, ["plot", "pairs", "--help"]).output.split())
+    assert f"Default: {DPI}." in text

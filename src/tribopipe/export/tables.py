@@ -57,6 +57,17 @@ FORMATS: tuple[str, ...] = ("csv", "markdown", "latex", "frictionmap")
 TEMPERATURE_MATCH_K = 0.005
 
 
+#: how the tables print a condition: pressure [kPa] to 4 significant digits (11.79, the
+#: paper's), temperature [°C] as measured (format "g"), nominal speed [mm/s] to 2
+CONDITION_SPECS = {"pressure_kPa": ".4g", "temperature_C": "g", NOMINAL_SPEED: ".2g"}
+
+
+def condition_text(column: str, value: Any) -> str:
+    """A condition value of ``column`` (a key of :data:`CONDITION_SPECS`) as every table
+    prints it ('' where missing); the explorer's chips and inputs read the same."""
+    return _cell(value, CONDITION_SPECS[column])
+
+
 def _select(
     frame: pd.DataFrame,
     pin: Sequence[str] | None,
@@ -140,10 +151,12 @@ def paper_table(
     names = (("pressure_kPa", "temperature_C", NOMINAL_SPEED) if machine
              else ("p [kPa]", "T [°C]", "v [mm/s]"))
     out: dict[str, list[Any]] = {"pin": list(groups["pin"]), "disc": list(groups["disc"]),
-                                 names[0]: [_cell(v, ".4g") for v in groups["pressure_kPa"]],
-                                 names[1]: [_cell(v, "g") for v in groups["temperature_C"]]}
+                                 names[0]: [condition_text("pressure_kPa", v)
+                                            for v in groups["pressure_kPa"]],
+                                 names[1]: [condition_text("temperature_C", v)
+                                            for v in groups["temperature_C"]]}
     if by_speed:
-        out[names[2]] = [_cell(v, ".2g") for v in groups[NOMINAL_SPEED]]
+        out[names[2]] = [condition_text(NOMINAL_SPEED, v) for v in groups[NOMINAL_SPEED]]
     out["n"] = [int(v) for v in groups["mu_k_n"]]
     flags: list[list[str]] = [[] for _ in range(len(groups))]
     for q, label in (("mu_s", "μ_S"), ("mu_k", "μ_K")):

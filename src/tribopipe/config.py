@@ -31,6 +31,7 @@ from .files import read_regular
 from .physics import (
     FOUNDING_FRICTION_RADIUS_MM,
     FOUNDING_SPEED_RPM,
+    contact_pressure_kPa,
     sliding_speed_mm_s,
 )
 from .validate import (
@@ -131,6 +132,12 @@ class InstrumentConfig:
     def nominal_sliding_speed_mm_s(self) -> float:
         """Nominal sliding speed at the friction radius, ω·R_eff [mm/s]."""
         return sliding_speed_mm_s(self.nominal_speed_rpm, self.friction_radius_mm)
+
+    def pressure_kPa(self, normal_force_N: float) -> float:
+        """The contact pressure per pin [kPa] of a total normal force [N] on these pins:
+        the one force → pressure conversion (:func:`tribopipe.physics.contact_pressure_kPa`,
+        F / n / (π r²)); the founding cell (3 pins, r = 3 mm) gives 1 N → 11.79 kPa."""
+        return float(contact_pressure_kPa(normal_force_N, self.n_pins, self.pin_radius_mm))
 
 
 @dataclass(frozen=True)

@@ -84,6 +84,18 @@ class MapError(TribopipeError):
     """The friction map at a path is corrupt, foreign, or an operation on it was refused."""
 
 
+class RowError(MapError):
+    """A map row breaks a rule of the row table: ``row`` names the row (``"row 3
+    (ab12…)"``), ``row_problem`` says what is wrong with it, as fields; the message joins
+    them once."""
+
+    def __init__(self, row_problem: str, *, row: str, column: str | None = None,
+                 path: str | PathLike[str] | None = None, hint: str | None = None) -> None:
+        self.row = row
+        self.row_problem = row_problem
+        super().__init__(f"{row}: {row_problem}", path=path, column=column, hint=hint)
+
+
 class CampaignError(TribopipeError):
     """A campaign's files or metadata are missing or contradictory."""
 

@@ -38,12 +38,27 @@ TEMPERATURE = "temperature_C"
 CANONICAL_COLUMNS: tuple[str, ...] = (TIME, TORQUE, NORMAL_FORCE, ANGLE, SPEED, TEMPERATURE)
 
 
-def interval_label(test: str | None, result: str | None, interval: int | None) -> str:
-    """``test / result / interval i``, leaving out what is unknown (``""`` when all are)."""
+def interval_label(test: str | None, result: str | None, interval: int | None,
+                   occurrence: int = 1) -> str:
+    """``test / result / interval i``, leaving out what is unknown (``""`` when all are);
+    `` #n`` added for the n-th run of an export at the same place (``occurrence`` > 1)."""
     parts = [p for p in (test, result) if p]
     if interval is not None:
         parts.append(f"interval {interval}")
-    return " / ".join(parts)
+    text = " / ".join(parts)
+    if occurrence > 1:
+        return f"{text} #{occurrence}" if text else f"#{occurrence}"
+    return text
+
+
+def run_name(file: str, test: str | None = None, result: str | None = None,
+             interval: int | None = None, occurrence: int = 1) -> str:
+    """The one way a run is named in messages, tables, plots and the map's account:
+    ``file [test / result / interval i]`` (:func:`interval_label` of the parts known), the
+    file alone where none is (or where the caller leaves them out: an export with one
+    run)."""
+    label = interval_label(test, result, interval, occurrence)
+    return f"{file} [{label}]" if label else file
 
 
 @dataclass(frozen=True)

@@ -40,13 +40,15 @@ from .frictionmap.duplicates import (
     repeat_clashes,
 )
 from .frictionmap.records import make_record, measurement_id
+from .frictionmap.schema import MapRow
 from .frictionmap.store import AppendReport, update_map_with
 from .labels import RunLabels, RunVerdict, Tolerances, Undescribed, decide_run
 from .layout import OutputLayout
-from .measurement import interval_label
+from .measurement import interval_label, run_name
 from .numeric import finite_json, finite_or_nan, finite_or_none
 from .readers import read_export
 from .reduction.intervals import friction_intervals
+from .reduction.manual import TRACE_META_KEY, terms_from_parameters
 from .reduction.reduce import reduce_measurement
 
 if TYPE_CHECKING:
@@ -79,15 +81,14 @@ class RunPlace:
     @property
     def label(self) -> str:
         """``test / result / interval i`` (``#n`` added for a repeated place)."""
-        text = interval_label(self.test, self.result, self.interval)
-        return f"{text} #{self.occurrence}" if self.occurrence > 1 else text
+        return interval_label(self.test, self.result, self.interval, self.occurrence)
 
-
-def run_name(file: str, place: RunPlace, several: bool) -> str:
-    """How a run is named in messages and tables: the file alone for an export with one
-    run, ``file [test / result / interval i]`` for one with several."""
-    label = place.label
-    return f"{file} [{label}]" if several and label else file
+    def run_name(self, file: str, several: bool) -> str:
+        """The run's name (:func:`tribopipe.measurement.run_name`): the file alone for an
+        export with one run, ``file [test / result / interval i]`` for one with several."""
+        if not several:
+            return file
+        return run_name(file, self.test, self.result, self.interval, self.occurrence)
 
 
 @dataclass(frozen=True)
@@ -114,8 +115,8 @@ class ExportRuns:
         return len(self.runs) + len(self.problems) > 1
 
     def name(self, place: RunPlace, file: str | None = None) -> str:
-        """:func:`run_name` of a run of this export (``file`` defaults to the path)."""
-        return run_name(self.path if file is None else file, place, self.several)
+        """The name of a run of this export (``file`` defaults to the path)."""
+        return place.run_name(self.path if file is None else file, self.several)
 
 
 @dataclass(frozen=True)
@@ -132,7 +133,7 @@ class RunOutcome:
     #: what every output of the run shows
     verdict: RunVerdict
     #: the friction-map row; ``None`` when pin or disc is unknown (the run cannot be stored)
-    record: dict[str, Any] | None = field(repr=False)
+    record: MapRow | None = field(repr=False)
     #: where the run sits in its export
     place: RunPlace = RunPlace()
     #: whether its export holds several runs or tests (then its name says which it is)
@@ -145,8 +146,8 @@ class RunOutcome:
 
     @property
     def name(self) -> str:
-        """:func:`run_name`: the file, with the run's place when its export holds several."""
-        return run_name(self.path, self.place, self.several)
+        """The run's name: the file, with its place when its export holds several."""
+        return self.place.run_name(self.path, self.several)
 
 
 def read_runs(
@@ -307,6 +308,9 @@ def write_trace(out_dir: str | Path | OutputLayout, outcome: RunOutcome) -> Path
     target.parent.mkdir(parents=True, exist_ok=True)
     trace = outcome.result.trace
     table = pa.table({str(c): trace[c].to_numpy() for c in trace.columns})
+    # what a reviewer's window is read with (tribopipe.reduction.manual)
+    table = table.replace_schema_metadata(
+        {TRACE_META_KEY: terms_from_parameters(outcome.result.parameters).to_json()})
     tmp = target.with_suffix(".parquet.tmp")
     try:
         pq.write_table(table, tmp, use_dictionary=False)
@@ -394,15 +398,14 @@ def plot_run(out_dir: str | Path | OutputLayout, outcome: RunOutcome) -> Path:
 
 def run_conditions(outcome: RunOutcome) -> TraceConditions:
     """What a run's trace plot names: its file (with the run's test and place when the
-    export holds several, :func:`run_name`) and its nominal conditions (the labels; the
+    export holds several, :meth:`RunPlace.run_name`) and its nominal conditions (the labels; the
     nominal pressure from its map record when it has one)."""
     labels = outcome.labels
-    record = outcome.record or {}
     return TraceConditions(
-        source=run_name(Path(outcome.path).name, outcome.place, outcome.several),
+        source=outcome.place.run_name(Path(outcome.path).name, outcome.several),
         pin=labels.pin, disc=labels.disc,
         normal_force_N=finite_or_none(labels.normal_force_N),
-        pressure_kPa=finite_or_none(record.get("pressure_kPa")),
+        pressure_kPa=None if outcome.record is None else outcome.record.pressure_kPa,
         temperature_C=finite_or_none(labels.temperature_C), repeat=labels.repeat,
     )
 
@@ -443,7 +446,7 @@ class ReducedRun:
     verdict: RunVerdict
     measurement_id: str
     summary: dict[str, Any] = field(repr=False)
-    record: dict[str, Any] | None = field(repr=False)
+    record: MapRow | None = field(repr=False)
     trace: Path | None = None
     summary_file: Path | None = None
     plot: Path | None = None
@@ -602,7 +605,7 @@ def reduce_export(
     measurements = dict(export.runs)
     runs: list[ReducedRun | FailedRun] = []
     for place in export.order:
-        run = run_name(shown, place, export.several)
+        run = place.run_name(shown, export.several)
         if place in problems:
             runs.append(FailedRun(name=run, place=place,
                                   reason=failure_reason(problems[place], path, shown, run)))
@@ -628,21 +631,22 @@ def reduce_files(
     labels: RunLabels | None = None,
     read_options: ReadOptions | None = None,
     *,
-    out_dir: str | Path | OutputLayout,
+    out_dir: str | Path | OutputLayout | None,
     summaries: bool = True,
     plots: bool = False,
     on_file: Callable[[FileOutcome], None] | None = None,
 ) -> list[FileOutcome]:
     """``tribopipe reduce`` over several files: each file alone through
     :func:`reduce_export`, writing each run's trace, its summary (``summaries``) and its
-    trace plot (``plots``) below ``out_dir``.
+    trace plot (``plots``) below ``out_dir`` (nothing when it is ``None``).
 
     A file whose content (SHA-256) an earlier file of ``paths`` already had is not
     reduced again: its outcome names that file in ``duplicate_of``. ``on_file`` is
     called with each outcome as it is done (in the order of ``paths``), e.g. to print
     progress. Nothing raises for a bad file.
     """
-    outputs = RunOutputs(OutputLayout.of(out_dir), summary=summaries, plot=plots)
+    outputs = (None if out_dir is None else
+               RunOutputs(OutputLayout.of(out_dir), summary=summaries, plot=plots))
     results: list[FileOutcome] = []
     first_with: dict[str, str] = {}
     for path in paths:
@@ -696,14 +700,14 @@ def store_runs(map_path: str | Path, files: Sequence[FileOutcome], *,
     same: list[SameContent] = []
     repeats: list[str] = []
 
-    def decide(current: Any) -> tuple[list[dict[str, Any]], tuple[str, ...]]:
+    def decide(current: Any) -> tuple[list[MapRow], tuple[str, ...]]:
         owners = ContentOwners(map_files_by_hash(current))
-        keep: list[dict[str, Any]] = []
+        keep: list[MapRow] = []
         for f in files:
             records = [r.record for r in f.reduced if r.record is not None]
             if not records:
                 continue
-            runs = {str(r["measurement_id"]): labels_of(r) for r in records}
+            runs = {r.measurement_id: labels_of(r) for r in records}
             found, _ = owners.check(f.path, f.file_hash, runs)
             if found is not None:
                 same.append(found)

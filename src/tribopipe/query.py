@@ -49,9 +49,8 @@ from .interpolation import (
     speed_bracket,
     stencil,
 )
-from .labels import FOUNDING_NOMINAL_SPEED_MM_S
 from .numeric import finite_or_none
-from .physics import contact_pressure_kPa
+from .physics import FOUNDING_SLIDING_SPEED_MM_S
 from .rounding import known_u, lower_bound, plus_minus
 from .stats import NOMINAL_SPEED, group_statistics, group_u
 
@@ -90,8 +89,9 @@ NOTES = {
     "mu_s_unknown_speeds": "mu_s unknown: no group of this pair holds a static coefficient"
                            " at every speed used",
     "single_run": "n = 1, no repeat scatter: a group used has a single run",
-    "no_budget": "no uncertainty budget for the runs of a group used (e.g. an imported "
-                 "map): U holds the repeat scatter and the interpolation only",
+    "no_budget": "runs of a group used carry no uncertainty budget of their own (e.g. an "
+                 "imported map): their u is the stated estimate of the founding cell at the "
+                 "run's μ and force",
     "clamped_pressure": "pressure outside the range measured (at a temperature used): edge "
                         "value held",
     "clamped_temperature": "temperature outside the measured range: edge value held",
@@ -120,14 +120,14 @@ class Estimate:
     dominates it, the friction radius, and conservative for the rest) and
     ``u_interpolation`` the interpolation's own
     (:func:`tribopipe.interpolation.interpolation_u`); ``None`` when a used group's u is
-    unknown. ``budgets_known`` is
-    False when a used group's runs carry no uncertainty budget (an imported map): U then
-    holds the repeat scatter and the interpolation only. ``n_min`` is the fewest runs of
-    a used group (1: no repeat scatter). ``uncertainty`` is the weighted 95 % CI
-    half-width of the repeats (``None`` when a used group has fewer than 2 runs), for its
-    own labelled column; ``u_combined`` the weighted groups' combined u where every used
-    group has a budget. ``clamped_pressure`` / ``clamped_temperature`` /
-    ``clamped_speed`` say that the request lay outside the measured range and the edge
+    unknown. ``budgets_known`` is False when a used group's runs carry no uncertainty
+    budget of their own (an imported map): their u is then the stated estimate of
+    :func:`tribopipe.stats.stated_u`. ``n_min`` is the fewest runs of a used group (1: no
+    repeat scatter). ``uncertainty`` is the weighted 95 % CI half-width of the repeats
+    (``None`` when a used group has fewer than 2 runs), for its own labelled column;
+    ``u_combined`` the weighted groups' combined u where every used group has a budget.
+    ``clamped_pressure`` / ``clamped_temperature`` / ``clamped_speed`` say that the
+    request lay outside the measured range and the edge
     value was held.
     """
 
@@ -457,10 +457,10 @@ def pair_speeds(pair_groups: pd.DataFrame) -> list[float]:
     """The nominal sliding speeds [mm/s] of a pair's groups, sorted (the founding speed
     where the group table shows none: every group of a one-speed map)."""
     if NOMINAL_SPEED not in pair_groups.columns:
-        return [FOUNDING_NOMINAL_SPEED_MM_S]
+        return [FOUNDING_SLIDING_SPEED_MM_S]
     values = pd_numeric(pair_groups[NOMINAL_SPEED])
     found = sorted({float(v) for v in values if math.isfinite(v) and v > 0})
-    return found or [FOUNDING_NOMINAL_SPEED_MM_S]
+    return found or [FOUNDING_SLIDING_SPEED_MM_S]
 
 
 def groups_at_speed(pair: pd.DataFrame, speed_mm_s: float) -> pd.DataFrame:
@@ -725,16 +725,6 @@ def query_map(
 ) -> QueryResult:
     """:func:`query` on the friction map (Parquet) at ``map_path``."""
     return query(load_groups(map_path), pin, disc, pressure_kPa, temperature_C, speed_mm_s)
-
-
-def pressure_of_force(normal_force_N: float, instrument: InstrumentConfig) -> float:
-    """The contact pressure per pin [kPa] of a total normal force [N] on ``instrument``'s
-    pins (:func:`tribopipe.physics.contact_pressure_kPa`); an :class:`ExportError` for a
-    force that is not a finite number > 0."""
-    if not (math.isfinite(normal_force_N) and normal_force_N > 0):
-        raise ExportError(f"normal force must be a finite number > 0 N, got {normal_force_N}")
-    return float(contact_pressure_kPa(normal_force_N, instrument.n_pins,
-                                      instrument.pin_radius_mm))
 
 
 def format_result(res: QueryResult, normal_force_N: float | None = None,

@@ -51,7 +51,8 @@ from ..files import write_text_atomic
 from ..fit import fit_power_law, power_law
 from ..frictionmap import read_map
 from ..interpolation import EXTRAPOLATED, temperature_needed
-from ..labels import FOUNDING_NOMINAL_SPEED_MM_S, flag_list
+from ..labels import flag_list
+from ..physics import FOUNDING_SLIDING_SPEED_MM_S
 from ..query import (
     NOTES,
     REQUEST_ERRORS,
@@ -66,7 +67,14 @@ from ..query import (
     speed_needed,
 )
 from ..rounding import known_u
-from ..stats import NOMINAL_SPEED, group_statistics, group_u, nominal_speeds
+from ..stats import (
+    LABS,
+    LABS_DISAGREE,
+    NOMINAL_SPEED,
+    group_statistics,
+    group_u,
+    nominal_speeds,
+)
 from .fe_decks import CONSTANT_NOTE, MATERIAL_LINE, abaqus_name, ansys_safe, deck_safe
 from .registry import WRITERS
 from .simbase import (
@@ -78,7 +86,7 @@ from .simbase import (
     xml_comment,
 )
 from .simulators import snippet_header
-from .tables import condition_text
+from .tables import condition_text, group_flags
 from .usd import comment as usd_comment
 
 if TYPE_CHECKING:
@@ -263,6 +271,7 @@ def _runs(pair_runs: pd.DataFrame, labs: dict[str, int]) -> list[dict[str, Any]]
     for r, speed in zip(ordered.to_dict(orient="records"), speeds, strict=True):
         origin = _origin(r)
         lab = r.get("lab")
+        review = _plain(r.get("review"))
         out.append({
             "id": str(r["measurement_id"]),
             "pressure_kPa": _plain(r["pressure_kPa"]),
@@ -273,7 +282,9 @@ def _runs(pair_runs: pd.DataFrame, labs: dict[str, int]) -> list[dict[str, Any]]
             "repeat": _plain(r["repeat"]),
             "lab": labs.get(_lab_name(lab), 0),
             "flags": flag_list(r.get("flags")),
-            "line": _text3(r["mu_k"]) + (f" — {origin}" if origin else ""),
+            # a reviewer's decision (tribopipe.review): accept or window; None when none
+            "line": _text3(r["mu_k"]) + (f" (reviewed: {printable(str(review))})" if review
+                                         else "") + (f" — {origin}" if origin else ""),
         })
     return out
 
@@ -292,7 +303,7 @@ def _fits(pair_fits: pd.DataFrame) -> list[dict[str, Any]]:
 
     out = []
     speeds = (pair_fits[NOMINAL_SPEED].to_numpy(dtype=float) if NOMINAL_SPEED in pair_fits
-              else [FOUNDING_NOMINAL_SPEED_MM_S] * len(pair_fits))
+              else [FOUNDING_SLIDING_SPEED_MM_S] * len(pair_fits))
     for f, speed in zip(pair_fits.to_dict(orient="records"), speeds, strict=True):
         row = {name: _plain(f[name]) for name in FIT_FIELDS}
         row["speed_mm_s"] = float(speed)
@@ -330,8 +341,7 @@ def _group_texts(g: Mapping[Any, Any], expanded: dict[str, float | None]) -> dic
         v = _plain(g.get(name))
         return "" if v is None else f"{v:.3f}"
 
-    qc = ", ".join(t for t, on in (("range > r", g.get("range_exceeds_r")),
-                                   ("flagged run", g.get("qc_flagged"))) if on is True)
+    qc = ", ".join(group_flags({k: _plain(v) for k, v in g.items()}))
     return {
         "normal_force_N": _cell_g(g.get("normal_force_N")),
         "pressure_kPa": condition_text("pressure_kPa", _plain(g.get("pressure_kPa"))),
@@ -484,8 +494,10 @@ def explorer_data(
         for q, values in expanded.items():  # U (k = 2) of the group mean, where known
             u = float(values.iloc[i])
             row[f"{q}_U"] = u_known[q] = u if known_u(u) else None
-        ids = str(g.get("run_ids") or "").split(";")
-        row["labs"] = sorted({lab_of_run[r] for r in ids if r in lab_of_run})
+        named = str(g.get(LABS) or "").split(";") if LABS in g else []
+        row["labs"] = sorted({labs[n] for n in map(printable, named) if n in labs}) or sorted(
+            {lab_of_run[r] for r in str(g.get("run_ids") or "").split(";") if r in lab_of_run})
+        row[LABS_DISAGREE] = bool(g.get(LABS_DISAGREE) is True)
         row["text"] = _group_texts(g, u_known)
         group_rows.append(row)
     return {

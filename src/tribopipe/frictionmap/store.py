@@ -38,6 +38,7 @@ from ..files import file_kind, os_reason, regular_file
 from ..validate import text_problem
 from .schema import (
     ADDED_IN_VERSION,
+    ADDED_LATER_CONTENT,
     COLUMNS,
     CONTENT_COLUMNS,
     KIND,
@@ -45,6 +46,7 @@ from .schema import (
     RUN_COLUMNS,
     SCHEMA_NAME,
     SCHEMA_VERSION,
+    MapRow,
     check_runs,
     content_sha256,
     empty_map,
@@ -319,25 +321,22 @@ def same_value(a: Any, b: Any) -> bool:
     return a == b
 
 
-#: content columns a re-reduction fills where a map's older row lacks them (the row was
-#: written before the column existed): no difference of the run
-_FILLED_LATER: frozenset[str] = frozenset({"nominal_speed_mm_s"})
-
-
 def _differences(old: Mapping[str, Any], new: Mapping[str, Any]) -> tuple[str, ...]:
-    """The content columns where ``new`` differs from ``old`` (:data:`_FILLED_LATER`
-    missing in ``old`` is none)."""
+    """The content columns where ``new`` differs from ``old`` (a column
+    :data:`~tribopipe.frictionmap.schema.ADDED_LATER_CONTENT` missing in ``old`` is none)."""
     return tuple(c for c in CONTENT_COLUMNS if not same_value(old[c], new[c])
-                 and not (c in _FILLED_LATER and is_missing(old[c])))
+                 and not (c in ADDED_LATER_CONTENT and is_missing(old[c])))
 
 
 def fold_records(
-    runs: pd.DataFrame, records: Sequence[Mapping[str, Any]], *, replace: bool = False
+    runs: pd.DataFrame, records: Sequence[MapRow], *, replace: bool = False
 ) -> tuple[pd.DataFrame, AppendReport]:
     """Pure core of :func:`append_records`: the map with ``records`` folded in, and the report.
 
     Existing rows keep their position; new runs are added at the end in the given order.
-    A replaced row keeps the map's exclusion state (a human decision about the run).
+    A replaced row keeps the map's exclusion state (a human decision about the run),
+    unless the record or the row holds a review (:mod:`tribopipe.review`), which decides
+    the exclusion itself.
     Neither input is modified. Every row of the result keeps the rules of
     :func:`~tribopipe.frictionmap.schema.check_runs` (``runs`` may come from anywhere).
     """
@@ -382,7 +381,9 @@ def _fold(
         differences[mid] = diff
         values[mid] = tuple((c, old[c], rec[c]) for c in diff)
         if replace:
-            rec = {**rec, "excluded": old["excluded"], "exclusion_reason": old["exclusion_reason"]}
+            if is_missing(rec.get("review")) and is_missing(old.get("review")):
+                rec = {**rec, "excluded": old["excluded"],
+                       "exclusion_reason": old["exclusion_reason"]}
             if mid in fresh:
                 fresh[mid] = rec
             else:
@@ -412,7 +413,7 @@ def _fold(
 
 def append_records(
     path: str | os.PathLike[str],
-    records: Sequence[Mapping[str, Any]],
+    records: Sequence[MapRow],
     *,
     replace: bool = False,
 ) -> AppendReport:
@@ -428,7 +429,7 @@ def append_records(
 
 def update_map(
     path: str | os.PathLike[str],
-    records: Sequence[Mapping[str, Any]],
+    records: Sequence[MapRow],
     *,
     replace: bool = False,
     drop_ids: Iterable[str] = (),
@@ -446,7 +447,7 @@ def update_map(
 
 
 #: what to fold into a map, decided from the map as it is: the records and the ids to drop
-MapChange = tuple[Sequence[Mapping[str, Any]], Iterable[str]]
+MapChange = tuple[Sequence[MapRow], Iterable[str]]
 
 
 def update_map_with(

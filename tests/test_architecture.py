@@ -43,7 +43,8 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     # the reduction method, one package (its docstring describes the method): the signal
     # filters and a run's uncertainty budget, the friction interval, the detection steps,
     # the reduction of one run
-    ("tribopipe.reduction", "tribopipe.reduction.signals", "tribopipe.reduction.uncertainty"),
+    ("tribopipe.reduction", "tribopipe.reduction.signals", "tribopipe.reduction.uncertainty",
+     "tribopipe.reduction.manual"),
     ("tribopipe.reduction.intervals",),
     ("tribopipe.reduction.detection",),
     ("tribopipe.reduction.reduce",),
@@ -54,7 +55,7 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     # pure statistics over map rows: below the map, whose printed summary uses them
     ("tribopipe.stats",),
     ("tribopipe.frictionmap",),
-    ("tribopipe.pipeline",),
+    ("tribopipe.pipeline", "tribopipe.review"),
     ("tribopipe.campaign",),
     # the one rule for μ between measured conditions, below everything that reads it
     ("tribopipe.interpolation",),

@@ -55,6 +55,7 @@ from .measurement import interval_label, run_name
 from .numeric import finite_json, finite_or_nan, finite_or_none
 from .readers import read_export
 from .reduction.intervals import friction_intervals
+from .reduction.manual import TRACE_META_KEY, terms_from_parameters
 from .reduction.reduce import reduce_measurement
 
 if TYPE_CHECKING:
@@ -317,6 +318,9 @@ def write_trace(out_dir: str | Path | OutputLayout, outcome: RunOutcome) -> Path
     target.parent.mkdir(parents=True, exist_ok=True)
     trace = outcome.result.trace
     table = pa.table({str(c): trace[c].to_numpy() for c in trace.columns})
+    # what a reviewer's window is read with (tribopipe.reduction.manual)
+    table = table.replace_schema_metadata(
+        {TRACE_META_KEY: terms_from_parameters(outcome.result.parameters).to_json()})
     tmp = target.with_suffix(".parquet.tmp")
     try:
         pq.write_table(table, tmp, use_dictionary=False)

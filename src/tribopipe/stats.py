@@ -361,7 +361,9 @@ def group_statistics(runs: pd.DataFrame, *, by_speed: bool = False,
     with ``by_speed``, + ``lab`` with ``by_lab``), then for q in ``mu_k``, ``mu_s``:
     ``q_n, q_mean, q_std, q_sem, q_ci95_low, q_ci95_high, q_cv, q_min, q_max, q_u_run,
     q_u, q_u_estimated, q_labs, q_s_r, q_s_L, q_s_R, q_values``,
-    then ``labs, range_exceeds_r, labs_disagree, qc_flagged, run_ids``. Within a group,
+    then ``labs, range_exceeds_r, labs_disagree, qc_flagged, reviewed, run_ids``
+    (``reviewed``: how many of the group's runs a reviewer accepted or re-windowed,
+    :mod:`tribopipe.review`; an accepted run's QC flags do not make ``qc_flagged``). Within a group,
     values and ids are in (repeat, measurement_id) order, so the result does not depend
     on the row order. Rows are sorted by pin, disc, temperature, pressure, force, nominal
     speed (measured speed, lab).
@@ -381,7 +383,7 @@ def group_statistics(runs: pd.DataFrame, *, by_speed: bool = False,
         condition_cols.append(LAB)
     stat_cols = [f"{q}_{f}" for q in QUANTITIES for f in GROUP_FIELDS]
     columns = condition_cols + stat_cols + [LABS, "range_exceeds_r", LABS_DISAGREE,
-                                            "qc_flagged", "run_ids"]
+                                            "qc_flagged", "reviewed", "run_ids"]
 
     included = runs.loc[~runs["excluded"].astype(bool)]
     keys = group_keys(included, by_speed, by_lab)
@@ -393,6 +395,8 @@ def group_statistics(runs: pd.DataFrame, *, by_speed: bool = False,
         "repeat": included["repeat"].astype("Float64").to_numpy(dtype=float, na_value=np.nan),
         "measurement_id": included["measurement_id"].astype(str).to_numpy(dtype=object),
         "flags": included["flags"].fillna("").astype(str).to_numpy(dtype=object),
+        "review": (included["review"].fillna("").astype(str).to_numpy(dtype=object)
+                   if "review" in included else np.full(len(included), "", dtype=object)),
         "lab": lab_names(included),
     }
     for q in QUANTITIES:
@@ -455,7 +459,7 @@ def _labs_disagree(groups: pd.DataFrame, q: str, rep: Reproducibility) -> Any:
 def _dtype(column: str) -> str:
     if column in ("pin", "disc", "run_ids", LABS, LAB) or column.endswith("_values"):
         return "str"
-    if column.endswith("_n") or column.endswith("_labs"):
+    if column.endswith("_n") or column.endswith("_labs") or column == "reviewed":
         return "int64"
     if column in ("range_exceeds_r", "qc_flagged", LABS_DISAGREE) or \
             column.endswith("_u_estimated"):
@@ -491,7 +495,10 @@ def _group_row(
         row.update(_lab_precision(values[finite], u_runs, labs_of[finite], q))
         row[f"{q}_u_estimated"] = bool(estimated.any())
     row[LABS] = ";".join(sorted(set(labs_of.tolist())))
-    row["qc_flagged"] = any(quality_flags(f) for f in data["flags"][order])
+    # a reviewer who accepted a run has judged its flags: they no longer count
+    row["qc_flagged"] = any(quality_flags(f) for f, r in zip(data["flags"][order],
+                            data["review"][order], strict=True) if r != "accept")
+    row["reviewed"] = sum(1 for r in data["review"][order] if r)
     row["run_ids"] = ";".join(data["measurement_id"][order])
     return row
 

@@ -34,6 +34,7 @@ from ..frictionmap.store import read_map, update_map_with
 from ..labels import flags_text, quality_flags
 from ..measurement import run_name
 from ..pipeline import FileOutcome, ReducedRun
+from ..review import Review, ReviewOutcome, landing_records, read_review
 from ..stats import condition_keys
 from .metadata import Manifest, read_manifest
 from .outputs import write_failures_csv, write_runs_csv
@@ -253,6 +254,9 @@ def _run_locked(campaign: Campaign, *, jobs: int | None, plots: bool | None,
     jobs = default_jobs() if jobs is None else max(1, int(jobs))
     plots = campaign.plots if plots is None else plots
     state = load_state(campaign)
+    # a decisions file is checked before any work (its runs only under the map's lock)
+    review = read_review(campaign.review) if campaign.review is not None and (
+        campaign.review.exists() or campaign.review.is_symlink()) else None
     entries: dict[str, FileState] = dict(state.entries)
     missing_ids, map_checked = _ids_missing_from_map(campaign, state)
     manifest = read_manifest(campaign.manifest) if campaign.manifest is not None else None
@@ -276,7 +280,10 @@ def _run_locked(campaign: Campaign, *, jobs: int | None, plots: bool | None,
     failures = plan.failures
     map_summary, landed, removed, landing = _land(
         campaign, results, lambda in_map: _apply(campaign, results, by_file, entries, failures,
-                                                 notes, vanished, in_map), entries)
+                                                 notes, vanished, in_map), entries,
+        review)
+    if landing.review is not None:
+        notes.append(landing.review.line(campaign.review))
     _forget_vanished(campaign, entries, set(by_file), notes)
     groups = _groups_updated(landing, landed, removed)
 
@@ -435,6 +442,8 @@ class _Landing:
     runs_failed: int
     #: repeat numbers used twice in one condition once the records land
     repeats: list[str] = field(default_factory=list)
+    #: what the review did (:func:`tribopipe.review.landing_records`), when one applied
+    review: ReviewOutcome | None = None
     #: the condition group (:func:`tribopipe.stats.condition_keys`) of each map row the
     #: records replace or the stale ids drop, as the map held them before this batch
     old_groups: dict[str, tuple[Any, ...]] = field(default_factory=dict)
@@ -655,14 +664,16 @@ def _ids_missing_from_map(campaign: Campaign, state: CampaignState) -> tuple[set
 
 
 def _land(campaign: Campaign, results: Sequence[FileOutcome],
-          apply: Callable[[FilesByHash], _Landing], entries: Mapping[str, FileState]
-          ) -> tuple[str, set[str], set[str], _Landing]:
+          apply: Callable[[FilesByHash], _Landing], entries: Mapping[str, FileState],
+          review: Review | None = None) -> tuple[str, set[str], set[str], _Landing]:
     """Check the results against the map and fold them in, under the map's lock, in one
     atomic write (new records added or replaced, rows of runs whose raw file changed
     dropped); the map is locked and read only when a result brings or replaces runs.
-    Returns the map's summary line, the ids added or replaced, the ids removed and what
-    ``apply`` made of the results."""
-    touches = any(r.reduced for r in results) or any(
+    The review (``review``, else the one each row holds) is applied in the same write
+    (:func:`tribopipe.review.landing_records`); a decision that fails raises before
+    anything is written. Returns the map's summary line, the ids added or replaced, the
+    ids removed and what ``apply`` made of the results."""
+    touches = review is not None or any(r.reduced for r in results) or any(
         _run_ids(entries.get(r.name)) for r in results)
     if not touches:
         return "unchanged", set(), set(), apply({})
@@ -672,13 +683,16 @@ def _land(campaign: Campaign, results: Sequence[FileOutcome],
         landing.append(apply(map_files_by_hash(current)))
         records, stale = landing[0].records, landing[0].stale_ids
         landing[0].repeats.extend(repeat_clashes(current, records, stale))
-        ids = stale | {r.measurement_id for r in records}
+        folded, outcome = landing_records(current, records, stale, review,
+                                          campaign.layout.traces_dir)
+        landing[0] = replace(landing[0], review=outcome)
+        ids = stale | {r.measurement_id for r in folded}
         landing[0].old_groups.update(
             condition_keys(current.loc[current["measurement_id"].isin(ids)]))
-        return records, stale
+        return folded, stale
 
     report = update_map_with(campaign.map_path, decide, replace=True)
-    if not (landing[0].records or landing[0].stale_ids):
+    if not (landing[0].records or landing[0].stale_ids or report.changed):
         return "unchanged", set(), set(), landing[0]
     return (report.summary(), set(report.added_ids) | set(report.replaced_ids),
             set(report.dropped_ids), landing[0])

@@ -196,6 +196,8 @@ def _runs(pair_runs: pd.DataFrame) -> list[dict[str, Any]]:
             else None,
             "test": _plain(r.get("test")),
             "result": _plain(r.get("result")),
+            # a reviewer's decision (tribopipe.review): accept or window; None when none
+            "review": _plain(r.get("review")),
         }
         for r in ordered.to_dict(orient="records")
     ]

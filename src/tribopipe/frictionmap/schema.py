@@ -41,7 +41,7 @@ if TYPE_CHECKING:
 #: Parquet key-value metadata key holding the schema and provenance (JSON).
 META_KEY = b"tribopipe.frictionmap"
 SCHEMA_NAME = "tribopipe.frictionmap"
-SCHEMA_VERSION = 5
+SCHEMA_VERSION = 6
 
 #: ``source`` of runs reduced by tribopipe (imported rows name their origin instead).
 SOURCE_REDUCED = "reduced"
@@ -148,14 +148,49 @@ COLUMNS: tuple[Column, ...] = (
     Column("reduced_at", "str", "", "UTC time of reduction or import (ISO 8601)"),
     Column("excluded", "bool", "", "left out of the statistics", required=ALWAYS),
     Column("exclusion_reason", "str", "", "why it was excluded"),
+    Column("review", "str", "", "a reviewer's decision on the run: 'accept' (its QC flags "
+           "do not count against its group), 'exclude' or 'window' (μ_K, and μ_S where a "
+           "peak was given, re-read where the reviewer chose); missing: not reviewed"),
+    Column("review_by", "str", "", "who reviewed the run"),
+    Column("review_date", "str", "", "when the run was reviewed (as the decisions file says)"),
+    Column("review_reason", "str", "", "why the reviewer decided so"),
+    Column("review_kinetic_from_mm", "float", "mm", "start of the μ_K window the reviewer "
+           "gave", _DISTANCE, _ALONG),
+    Column("review_kinetic_to_mm", "float", "mm", "end of the μ_K window the reviewer gave",
+           _DISTANCE, _ALONG),
+    Column("review_static_peak_mm", "float", "mm", "the static peak position the reviewer "
+           "gave", _DISTANCE, _ALONG),
+    Column("auto_mu_s", "float", "", "μ_S as the reduction found it (reviewed rows)", MU,
+           _RATIO),
+    Column("auto_mu_k", "float", "", "μ_K as the reduction found it (reviewed rows)", MU,
+           _RATIO),
+    Column("auto_u_mu_s", "float", "", "u(μ_S) as the reduction found it (reviewed rows)",
+           _SPREAD, "a standard uncertainty is not negative"),
+    Column("auto_u_mu_k", "float", "", "u(μ_K) as the reduction found it (reviewed rows)",
+           _SPREAD, "a standard uncertainty is not negative"),
+    Column("auto_mu_s_distance_mm", "float", "mm", "the reduction's static peak position "
+           "(reviewed rows)", _DISTANCE, _ALONG),
+    Column("auto_mu_k_window_start_mm", "float", "mm", "start of the reduction's μ_K window "
+           "(reviewed rows)", _DISTANCE, _ALONG),
+    Column("auto_mu_k_window_end_mm", "float", "mm", "end of the reduction's μ_K window "
+           "(reviewed rows)", _DISTANCE, _ALONG),
 )
+
+#: the columns a review sets (:mod:`tribopipe.review`); the ``auto_`` ones keep the
+#: reduction's own values beside the reviewed ones
+REVIEW_COLUMNS: tuple[str, ...] = (
+    "review", "review_by", "review_date", "review_reason", "review_kinetic_from_mm",
+    "review_kinetic_to_mm", "review_static_peak_mm", "auto_mu_s", "auto_mu_k",
+    "auto_u_mu_s", "auto_u_mu_k", "auto_mu_s_distance_mm", "auto_mu_k_window_start_mm",
+    "auto_mu_k_window_end_mm")
 
 RUN_COLUMNS: tuple[str, ...] = tuple(c.name for c in COLUMNS)
 #: Columns added after schema version 1, with the version that added them: a map written
 #: before that version lacks them and reads with them missing, and a record built by older
 #: code may leave them out.
 ADDED_IN_VERSION: dict[str, int] = {"lab": 2, "u_mu_s": 3, "u_mu_k": 3, "test": 4, "result": 4,
-                                    "nominal_speed_mm_s": 5}
+                                    "nominal_speed_mm_s": 5,
+                                    **{c: 6 for c in REVIEW_COLUMNS}}
 #: the kind of each column: ``"str"``, ``"float"``, ``"int"`` or ``"bool"``
 KIND: dict[str, str] = {c.name: c.kind for c in COLUMNS}
 #: the physical range of each bounded number column; a float column not listed need only
@@ -179,9 +214,12 @@ PROVENANCE_COLUMNS: frozenset[str] = frozenset(
 CONTENT_COLUMNS: tuple[str, ...] = tuple(c for c in RUN_COLUMNS if c not in PROVENANCE_COLUMNS)
 #: The content columns :data:`ADDED_IN_VERSION` a later schema: a row written before the
 #: column existed lacks it, so where the older of two rows of one run lacks it, that is no
-#: difference of the run (the store compares rows with this rule).
+#: difference of the run (the store compares rows with this rule). The review's columns
+#: are not among them: missing there means "not reviewed", and a review that fills them
+#: changes the row.
 ADDED_LATER_CONTENT: frozenset[str] = frozenset(c for c in ADDED_IN_VERSION
-                                                if c in CONTENT_COLUMNS)
+                                                if c in CONTENT_COLUMNS
+                                                and c not in REVIEW_COLUMNS)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -236,6 +274,20 @@ class MapRow:
     reduced_at: str | None = None
     excluded: bool = False
     exclusion_reason: str | None = None
+    review: str | None = None
+    review_by: str | None = None
+    review_date: str | None = None
+    review_reason: str | None = None
+    review_kinetic_from_mm: float | None = None
+    review_kinetic_to_mm: float | None = None
+    review_static_peak_mm: float | None = None
+    auto_mu_s: float | None = None
+    auto_mu_k: float | None = None
+    auto_u_mu_s: float | None = None
+    auto_u_mu_k: float | None = None
+    auto_mu_s_distance_mm: float | None = None
+    auto_mu_k_window_start_mm: float | None = None
+    auto_mu_k_window_end_mm: float | None = None
     #: set by :func:`checked_row` only: the row kept the row rules when it was built
     checked: bool = field(default=False, init=False, compare=False, repr=False)
 

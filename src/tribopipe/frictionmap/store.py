@@ -334,7 +334,9 @@ def fold_records(
     """Pure core of :func:`append_records`: the map with ``records`` folded in, and the report.
 
     Existing rows keep their position; new runs are added at the end in the given order.
-    A replaced row keeps the map's exclusion state (a human decision about the run).
+    A replaced row keeps the map's exclusion state (a human decision about the run),
+    unless the record or the row holds a review (:mod:`tribopipe.review`), which decides
+    the exclusion itself.
     Neither input is modified. Every row of the result keeps the rules of
     :func:`~tribopipe.frictionmap.schema.check_runs` (``runs`` may come from anywhere).
     """
@@ -379,7 +381,9 @@ def _fold(
         differences[mid] = diff
         values[mid] = tuple((c, old[c], rec[c]) for c in diff)
         if replace:
-            rec = {**rec, "excluded": old["excluded"], "exclusion_reason": old["exclusion_reason"]}
+            if is_missing(rec.get("review")) and is_missing(old.get("review")):
+                rec = {**rec, "excluded": old["excluded"],
+                       "exclusion_reason": old["exclusion_reason"]}
             if mid in fresh:
                 fresh[mid] = rec
             else:

@@ -376,6 +376,8 @@ def reduce_measurement(
         "plateau_tau_int_samples": tau,
         "torque_offset_u_Nm": offset_u,
         "friction_radius_u_mm": instrument.friction_radius_u_mm,
+        "terms": dict(zip(("relative", "absolute"), uncertainty.budget_terms(
+            normal_force_N=f_mean, instrument=instrument, offset_u_Nm=offset_u), strict=True)),
     }
 
     w_s, w_t = s_v[det.window], t_v[det.window]

@@ -241,7 +241,8 @@ function renderResult(res, error) {
     // one line per repeat: its μ_K and the file and test it came from
     u.run_ids.map(function (id) { return runs[id]; }).filter(Boolean).forEach(function (r) {
       var from = runOrigin(r);
-      cell.appendChild(make("div", f3(r.mu_k) + (from ? " — " + from : ""), "tpx-repeat"));
+      cell.appendChild(make("div", f3(r.mu_k) + (r.review ? " (reviewed: " + r.review + ")" : "") +
+        (from ? " — " + from : ""), "tpx-repeat"));
     });
     tr.appendChild(cell);
     body.appendChild(tr);

@@ -4,6 +4,7 @@ function qcText(g) {
   var out = [];
   if (g.range_exceeds_r) out.push("range > r");
   if (g.qc_flagged) out.push("flagged run");
+  if (g.reviewed) out.push(g.reviewed + " reviewed");
   return out.join(", ");
 }
 

@@ -79,8 +79,9 @@ def make_record(
     ``verdict`` is the run's labels, nominal force and flags as
     :func:`tribopipe.labels.decide_run` decided them (the pipeline passes the one every
     other output of the run shows: nothing is decided here). The nominal pressure [kPa]
-    follows from the nominal force and ``settings.instrument``. ``occurrence`` is the run's place among
-    runs of the export with the same test/result/interval (:func:`measurement_id`).
+    follows from the nominal force and ``settings.instrument``. ``occurrence`` is the
+    run's place among runs of the export with the same test/result/interval
+    (:func:`measurement_id`).
 
     Raises :class:`MapError` when pin or disc is unknown, μ_K is not a finite number, the
     run has neither a nominal nor a measured normal force, or the row would break a rule

@@ -306,6 +306,7 @@ function draw(run) {
   line(fb.ctx, fm, sh.s_f, sh.f, "#6b4f1d");
   axes(fb.ctx, fb, xr, fr, "F_N");
   run._drawn = true;
+  card.root.setAttribute("data-drawn", "1");
 }
 
 // ------------------------------------------------------------------ one run's card

@@ -16,10 +16,10 @@ What travels in the page: per run, the full sliding samples (distance and μ as 
 little-endian float64, decoded only when the run is scrolled into view: the computation
 uses every sample, and the plot draws μ from them, decimated min–max to the canvas's
 pixel columns), and the normal force decimated min–max to :data:`DISPLAY_COLUMNS` pixel
-columns (:mod:`tribopipe.figures.decimate`). Plots are drawn when scrolled into view. Everything that came from outside (names, reasons) is
-embedded through :func:`tribopipe.escape.script_json` and put into the page with
-``textContent`` only; the page's Content-Security-Policy allows its own script and style
-and nothing else.
+columns (:mod:`tribopipe.figures.decimate`). Plots are drawn when scrolled into view.
+Everything that came from outside (names, reasons) is embedded through
+:func:`tribopipe.escape.script_json` and put into the page with ``textContent`` only; the
+page's Content-Security-Policy allows its own script and style and nothing else.
 """
 
 from __future__ import annotations
@@ -45,7 +45,7 @@ from ..frictionmap import read_map
 from ..frictionmap.schema import is_missing
 from ..labels import flag_list, quality_flags
 from ..layout import find_trace
-from ..review import AUTO_OF, Review, decision_of_row, read_review, trace_samples
+from ..review import AUTO_OF, Review, decision_of_row, read_review, trace_table
 from ..stats import group_statistics, repeatability
 
 if TYPE_CHECKING:
@@ -77,13 +77,10 @@ def _rounded(values: np.ndarray, digits: int = 5) -> list[float | None]:
     return [None if not math.isfinite(v) else float(f"{v:.{digits}g}") for v in values.tolist()]
 
 
-def _trace_payload(path: Path, where: str, traces_dir: Path, mid: str) -> dict[str, Any]:
+def _trace_payload(where: str, traces_dir: Path, mid: str) -> dict[str, Any]:
     """The sliding samples (for the estimator, and drawn by the page min–max per pixel
     column) and the normal force decimated for drawing (:data:`DISPLAY_COLUMNS`)."""
-    import pyarrow.parquet as pq
-
-    samples, terms = trace_samples(traces_dir, mid, where)
-    trace = pq.read_table(path, columns=["sliding_distance_mm", "normal_force_N"]).to_pandas()
+    samples, terms, trace = trace_table(traces_dir, mid, where)
     s_all = trace["sliding_distance_mm"].to_numpy(dtype=float)
     finite = np.isfinite(s_all)
     x0 = float(np.min(s_all[finite])) if finite.any() else 0.0
@@ -178,7 +175,7 @@ def review_data(runs: pd.DataFrame, traces_dir: Path | None, *, review: Review |
         entry["trace"] = None
         if path is not None:
             try:
-                entry["trace"] = _trace_payload(path, f"run {mid}", traces_dir, mid)  # type: ignore[arg-type]
+                entry["trace"] = _trace_payload(f"run {mid}", path.parent, mid)
             except ExportError:
                 raise
             except Exception as exc:  # a trace we cannot use is said on its card

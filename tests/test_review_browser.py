@@ -185,3 +185,36 @@ def test_review_in_the_browser_then_batch(browser, reviewed_campaign: Path, tmp_
     assert after.loc[dragged, "review_by"] == "A. Reviewer"
     assert not pd.isna(after.loc[dragged, "auto_mu_k"])
     assert len(after) == len(FILES)
+
+
+def test_hostile_names_and_reasons_stay_text(browser, tmp_path: Path):  # noqa: F811
+    """A pin named like markup and a reason that would be markup are shown as text: no
+    script runs, no element is made from them, nothing leaves the page."""
+    from test_explorer_browser import HOSTILE_DISC, HOSTILE_PIN
+
+    cfg = make_campaign(tmp_path)
+    text = cfg.read_text(encoding="utf-8").replace('"Dragonskin 30"', repr(HOSTILE_PIN)).replace(
+        '"acrylic glass"', repr(HOSTILE_DISC).replace("'", '"'))
+    cfg.write_text(text, encoding="utf-8")
+    assert run_campaign(load_campaign(cfg), jobs=1, plots=False).ok
+    mid = str(the_map(tmp_path)["measurement_id"].iloc[0])
+    review = tmp_path / "review.csv"
+    review.write_text("run,action,kinetic_from_mm,kinetic_to_mm,static_peak_mm,reason,who,date\n"
+                      f'{mid},exclude,,,,"<img src=x onerror=alert(3)>, ""quoted""",'
+                      "=HYPERLINK(1),2026-11-27\n", encoding="utf-8")
+    result = CliRunner().invoke(main, ["review", str(cfg), "--review", str(review), "-o",
+                                       str(tmp_path / "page.html")], catch_exceptions=False)
+    assert result.exit_code == 0, result.output
+    tab = open_page(browser, tmp_path / "page.html", 1024)
+    try:
+        page = tab.page
+        body = page.text_content("body")
+        assert HOSTILE_PIN in body and HOSTILE_DISC in body
+        assert page.locator("img").count() == 0
+        decisions = page.input_value("#decisions")
+        again = parse_review(decisions, tmp_path / "review.csv").decisions
+        assert again[0].reason == '<img src=x onerror=alert(3)>, "quoted"'
+        assert again[0].who == "=HYPERLINK(1)" and "'=HYPERLINK(1)" in decisions
+        tab.check_clean()
+    finally:
+        tab.close()

@@ -46,7 +46,7 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("tribopipe.reduction", "tribopipe.reduction.signals", "tribopipe.reduction.uncertainty",
      "tribopipe.reduction.manual"),
     ("tribopipe.reduction.intervals",),
-    ("tribopipe.reduction.detection",),
+    ("tribopipe.reduction.detection", "tribopipe.reduction.reciprocating"),
     ("tribopipe.reduction.reduce",),
     # what a run is and its QC flags, decided once from its labels and its reduction,
     # before anything prints, plots or stores it
@@ -56,12 +56,13 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("tribopipe.stats",),
     ("tribopipe.frictionmap",),
     ("tribopipe.pipeline", "tribopipe.review"),
-    ("tribopipe.campaign",),
+    # many exports, incrementally; a package's evidence re-derived through the one route
+    ("tribopipe.campaign", "tribopipe.evidence"),
     # the one rule for μ between measured conditions, below everything that reads it
     ("tribopipe.interpolation",),
     ("tribopipe.query", "tribopipe.fit", "tribopipe.mastercurve"),
     ("tribopipe.export",),
-    ("tribopipe.report",),
+    ("tribopipe.report", "tribopipe.hub"),
     ("tribopipe.cli", "tribopipe.__main__"),
 )
 

@@ -327,7 +327,7 @@ def test_export_mu_s_from_reduced_runs(reduced_map, tmp_path):
     g = groups[(groups.disc == "steel")].sort_values("pressure_kPa").iloc[0]
     common = ["--map", str(reduced_map), "--pin", PIN, "--disc", DISC, "--pressure",
               repr(float(g.pressure_kPa)), "--coefficient", "mu_s"]
-    pair = mujoco_pair(_run("export", "mujoco", *common).output)
+    pair = mujoco_pair(_run("export", "mujoco", *common).stdout)
     assert float(pair.get("friction").split()[0]) == pytest.approx(g.mu_s_mean, rel=1e-8)
     out = tmp_path / "contact.k"
     result = _run("export", "lsdyna", *common, "--units", "m-N-s", "-o", str(out))

@@ -26,6 +26,7 @@ COMMANDS: dict[str, str] = {
     "plot": "tribopipe.cli.plot:plot_group",
     "report": "tribopipe.cli.report:report_cmd",
     "review": "tribopipe.cli.review:review_cmd",
+    "hub": "tribopipe.cli.hub:hub_group",
 }
 
 

@@ -151,6 +151,7 @@ def make_record(
         plateau_drift_per_mm=finite_or_none(result.plateau_drift_per_mm),
         flags=flags_text(verdict.flags),
         method=result.method,
+        test_method=settings.instrument.test_method,
         source_file=stored_file_name(meta.source_file),
         file_hash=file_hash,
         test=meta.test,

@@ -360,6 +360,9 @@ $("tpx-copy").addEventListener("click", copyText);
 $("tpx-download").addEventListener("click", download);
 $("tpx-group-filter").addEventListener("input", renderTable);
 $("tpx-group-scope").addEventListener("change", renderTable);
+METHODS.forEach(function (m) { $("tpx-group-method").appendChild(make("option", m)); });
+$("tpx-group-method-label").hidden = METHODS.length < 2;
+$("tpx-group-method").addEventListener("change", renderTable);
 
 if (!PAIRS.length) {
   renderResult(null, "the map holds no pair with a finite μ_K");

@@ -10,6 +10,12 @@ speeds to two significant digits, :func:`tribopipe.labels.round_speed`) so 11.79
 groups without a speed column, as before speeds were recorded; where a pair holds several
 nominal speeds the groups carry ``nominal_speed_mm_s``.
 
+Test methods are never pooled: the instrument kind and test method (``test_method``, one
+of :data:`tribopipe.config.TEST_METHODS`; a row that names none was measured on the
+founding rheometer cell) is part of every condition group's key, and where a map holds
+several methods the groups carry a ``test_method`` column (a sled's μ on a film and a
+rheometer's μ on the same pair are two groups, side by side).
+
 Beside the repeat statistics each group carries its combined standard uncertainty (GUM,
 k = 1) from the runs' own budgets (:mod:`tribopipe.reduction.uncertainty`): ``u_run`` is the mean of
 the runs' combined standard uncertainties, and the group mean's is
@@ -56,7 +62,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
-from .config import InstrumentConfig
+from .config import DEFAULT_TEST_METHOD, InstrumentConfig
 from .labels import quality_flags, round_speed
 from .physics import FOUNDING_SLIDING_SPEED_MM_S
 from .reduction.uncertainty import budget, unknown_offset_u_Nm
@@ -95,6 +101,26 @@ LABS = "labs"
 LABS_DISAGREE = "labs_disagree"
 #: the group column of a per-lab table (``by_lab``): the one lab of the row
 LAB = "lab"
+#: the group column of the instrument kind and test method
+TEST_METHOD = "test_method"
+
+
+def test_methods(runs: pd.DataFrame) -> Any:
+    """The test method each run is grouped under (an object array of text): its
+    ``test_method``, or :data:`~tribopipe.config.DEFAULT_TEST_METHOD` where the row names
+    none (a map older than schema version 6, an imported row)."""
+    import numpy as np
+
+    if TEST_METHOD not in runs.columns:
+        return np.full(len(runs), DEFAULT_TEST_METHOD, dtype=object)
+    return np.array([v if isinstance(v, str) and v else DEFAULT_TEST_METHOD
+                     for v in runs[TEST_METHOD].tolist()], dtype=object)
+
+
+def several_methods(runs: pd.DataFrame) -> bool:
+    """Whether the included runs of a map hold more than one test method."""
+    included = runs.loc[~runs["excluded"].astype(bool)]
+    return len(set(test_methods(included).tolist())) > 1
 
 
 def describe_values(values: Sequence[float]) -> dict[str, Any]:
@@ -291,8 +317,8 @@ def pairs_with_several_speeds(runs: pd.DataFrame) -> set[tuple[str, str]]:
 
 def group_keys(runs: pd.DataFrame, by_speed: bool, by_lab: bool = False) -> pd.DataFrame:
     """The rounded grouping keys of each run (a new frame; ``runs`` is not modified):
-    pin, disc, force, temperature, nominal speed (and the measured speed with
-    ``by_speed``, the lab with ``by_lab``)."""
+    pin, disc, force, temperature, nominal speed, test method (and the measured speed
+    with ``by_speed``, the lab with ``by_lab``)."""
     import pandas as pd
 
     keys = pd.DataFrame(
@@ -302,6 +328,7 @@ def group_keys(runs: pd.DataFrame, by_speed: bool, by_lab: bool = False) -> pd.D
             "normal_force_N": runs["normal_force_N"].round(FORCE_DECIMALS).to_numpy(),
             "temperature_C": runs["temperature_C"].round(TEMPERATURE_DECIMALS).to_numpy(),
             NOMINAL_SPEED: nominal_speeds(runs),
+            TEST_METHOD: test_methods(runs),
         },
         index=runs.index,
     )
@@ -347,15 +374,18 @@ def _pressure_clusters(pressures: Sequence[float]) -> list[int]:
 
 def group_statistics(runs: pd.DataFrame, *, by_speed: bool = False,
                      show_speed: bool | None = None, by_lab: bool = False,
-                     labs: Sequence[str] | None = None) -> pd.DataFrame:
+                     labs: Sequence[str] | None = None,
+                     show_method: bool | None = None) -> pd.DataFrame:
     """Repeat statistics per condition group of a friction map (see module docstring).
 
     ``runs`` is a map DataFrame (:func:`tribopipe.frictionmap.read_map`); it is not
     modified. Excluded runs are left out, and with ``labs`` the runs of other labs
     (:func:`select_labs`); groups with no remaining run are dropped.
-    Groups always split by nominal speed; ``show_speed`` says whether the table shows it
-    (default: where some pair holds several nominal speeds). With ``by_lab`` each lab's
-    runs of a condition are a group of their own (column ``lab``).
+    Groups always split by nominal speed and by test method; ``show_speed`` says whether
+    the table shows the speed (default: where some pair holds several nominal speeds),
+    ``show_method`` whether it shows ``test_method`` (default: where the map holds several
+    methods). With ``by_lab`` each lab's runs of a condition are a group of their own
+    (column ``lab``).
     Columns: ``pin, disc, normal_force_N, pressure_kPa, temperature_C``
     (+ ``nominal_speed_mm_s`` when shown, + ``sliding_speed_mm_s``, the measured speed,
     with ``by_speed``, + ``lab`` with ``by_lab``), then for q in ``mu_k``, ``mu_s``:
@@ -374,9 +404,13 @@ def group_statistics(runs: pd.DataFrame, *, by_speed: bool = False,
     runs = select_labs(runs, labs)
     if show_speed is None:
         show_speed = bool(pairs_with_several_speeds(runs))
+    if show_method is None:
+        show_method = several_methods(runs)
     condition_cols = ["pin", "disc", "normal_force_N", "pressure_kPa", "temperature_C"]
     if show_speed:
         condition_cols.append(NOMINAL_SPEED)
+    if show_method:
+        condition_cols.append(TEST_METHOD)
     if by_speed:
         condition_cols.append("sliding_speed_mm_s")
     if by_lab:
@@ -417,8 +451,8 @@ def group_statistics(runs: pd.DataFrame, *, by_speed: bool = False,
         return pd.DataFrame({c: pd.Series(dtype=_dtype(c)) for c in columns})
     groups = pd.DataFrame(rows)
     groups = groups.sort_values(
-        ["pin", "disc", "temperature_C", "pressure_kPa", "normal_force_N", NOMINAL_SPEED]
-        + (["sliding_speed_mm_s"] if by_speed else []) + ([LAB] if by_lab else []),
+        ["pin", "disc", "temperature_C", "pressure_kPa", "normal_force_N", NOMINAL_SPEED,
+         TEST_METHOD] + (["sliding_speed_mm_s"] if by_speed else []) + ([LAB] if by_lab else []),
         na_position="last",
         kind="mergesort",
     ).reset_index(drop=True)
@@ -457,7 +491,8 @@ def _labs_disagree(groups: pd.DataFrame, q: str, rep: Reproducibility) -> Any:
 
 
 def _dtype(column: str) -> str:
-    if column in ("pin", "disc", "run_ids", LABS, LAB) or column.endswith("_values"):
+    if column in ("pin", "disc", "run_ids", LABS, LAB, TEST_METHOD) or \
+            column.endswith("_values"):
         return "str"
     if column.endswith("_n") or column.endswith("_labs") or column == "reviewed":
         return "int64"

@@ -60,6 +60,11 @@ def _with_u(value: float | None, expanded: float | None) -> tuple[str, str]:
 )
 @click.option("--repeat", type=int, help="Repeat number of this run within its condition.")
 @instrument_option
+@click.option("--zero", "zero",
+              help="The zero of the torque or friction force: 'auto' (estimated where the "
+              "instrument is at rest and unloaded; refused and flagged zero_under_load when "
+              "already loaded), 'off' (0), or a value in N·m (torque) or N (friction "
+              "force). Default: the instrument file's zero_offset.")
 @lazy_map_option
 @click.option("--no-map", is_flag=True,
               help="Do not append the runs to the friction map, and write nothing unless "
@@ -92,6 +97,7 @@ def reduce_cmd(
     temperature_C: float | None,
     repeat: int | None,
     instrument_path: str | None,
+    zero: str | None,
     map_path: str | None,
     no_map: bool,
     replace: bool,
@@ -122,7 +128,7 @@ def reduce_cmd(
     How μ_S and μ_K are found: docs/method.md, which points to the method's one
     description (the docstring of the package tribopipe.reduction).
     """
-    from ..config import load_settings
+    from ..config import load_settings, with_zero
     from ..frictionmap.store import read_map
     from ..labels import RunLabels
     from ..pipeline import ReadOptions, reduce_files
@@ -134,6 +140,8 @@ def reduce_cmd(
         raise click.UsageError("--plots with --no-map: give -o/--output, the folder for the "
                                "plots (--no-map alone writes nothing)")
     settings = load_settings(instrument_path)
+    if zero is not None:
+        settings = with_zero(settings, zero)
     if not no_map:
         map_path = chosen_map(map_path)
         if labels.complete:

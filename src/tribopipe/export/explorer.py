@@ -71,9 +71,11 @@ from ..stats import (
     LABS,
     LABS_DISAGREE,
     NOMINAL_SPEED,
+    TEST_METHOD,
     group_statistics,
     group_u,
     nominal_speeds,
+    test_methods,
 )
 from .fe_decks import CONSTANT_NOTE, MATERIAL_LINE, abaqus_name, ansys_safe, deck_safe
 from .registry import WRITERS
@@ -268,7 +270,8 @@ def _runs(pair_runs: pd.DataFrame, labs: dict[str, int]) -> list[dict[str, Any]]
     )
     speeds = nominal_speeds(ordered)
     out = []
-    for r, speed in zip(ordered.to_dict(orient="records"), speeds, strict=True):
+    for r, speed, method in zip(ordered.to_dict(orient="records"), speeds,
+                                test_methods(ordered), strict=True):
         origin = _origin(r)
         lab = r.get("lab")
         review = _plain(r.get("review"))
@@ -282,6 +285,7 @@ def _runs(pair_runs: pd.DataFrame, labs: dict[str, int]) -> list[dict[str, Any]]
             "repeat": _plain(r["repeat"]),
             "lab": labs.get(_lab_name(lab), 0),
             "flags": flag_list(r.get("flags")),
+            "test_method": method,
             # a reviewer's decision (tribopipe.review): accept or window; None when none
             "line": _text3(r["mu_k"]) + (f" (reviewed: {printable(str(review))})" if review
                                          else "") + (f" — {origin}" if origin else ""),
@@ -419,14 +423,17 @@ def explorer_data(
     per measured nominal speed: ``speed_mm_s, text, mu_k_points, mu_s_points,
     temperatures, pressures, temperature_needed``), ``speed_needed``, ``left_out``,
     ``fits``, ``labs`` and ``snippet`` (the lines of each snippet that name the pair));
-    ``runs`` (per pair, the included runs: the page reads them when the pair is shown);
-    ``groups`` (the group table, each row with the index of its ``pair`` and its cells'
-    ``text``); ``labs``; ``texts`` (the notes, errors and snippet words the page shows);
-    ``csv`` (the CSV header and the cells that are text); ``snippets`` and
-    ``snippet_headers`` (the simulator formats the page copies and their opening lines).
-    Every text is made here, by the library's own rules; the page's script only computes
-    numbers and puts these texts around them. Pressures in kPa, temperatures in °C, speeds
-    in mm/s. Raises :class:`ExportError` when no run is left. Inputs are not modified.
+    ``runs`` (per pair, the included runs, each with its ``test_method``: the page reads
+    them when the pair is shown); ``groups`` (the group table, each row with the index of
+    its ``pair``, its ``test_method`` and its cells' ``text``); ``labs``; ``methods`` (the
+    test methods of the included runs, in the map's order: the page filters the group
+    table by them where there are several); ``texts`` (the notes, errors and snippet words
+    the page shows); ``csv`` (the CSV header and the cells that are text); ``snippets``
+    and ``snippet_headers`` (the simulator formats the page copies and their opening
+    lines). Every text is made here, by the library's own rules; the page's script only
+    computes numbers and puts these texts around them. Pressures in kPa, temperatures in
+    °C, speeds in mm/s. Raises :class:`ExportError` when no run is left. Inputs are not
+    modified.
     """
     included = runs
     if "excluded" in runs.columns:
@@ -437,7 +444,9 @@ def explorer_data(
             hint="reduce runs first (tribopipe reduce / batch) or import the published map",
         )
     if groups is None:
-        groups = group_statistics(included)
+        groups = group_statistics(included, show_method=True)
+    run_methods = test_methods(included)
+    methods = list(dict.fromkeys(str(m) for m in run_methods))
     if fits is None:
         fits = fit_power_law(runs)
     run_pin, run_disc = included["pin"].map(_key), included["disc"].map(_key)
@@ -490,6 +499,10 @@ def explorer_data(
         row.update({name: _plain(g.get(name)) for name in GROUP_FIELDS})
         if NOMINAL_SPEED in g:  # a map with a pair of several speeds
             row[NOMINAL_SPEED] = _plain(g[NOMINAL_SPEED])
+        # the group's one test method (groups never pool two; a table that does not
+        # show it comes from a map of one method)
+        row[TEST_METHOD] = str(g[TEST_METHOD]) if isinstance(g.get(TEST_METHOD), str) \
+            else methods[0]
         u_known: dict[str, float | None] = {}
         for q, values in expanded.items():  # U (k = 2) of the group mean, where known
             u = float(values.iloc[i])
@@ -510,6 +523,9 @@ def explorer_data(
         "runs": run_chunks,
         "groups": group_rows,
         "labs": list(labs),
+        # the test methods of the included runs, in the map's order (the page filters
+        # the group table by them where there are several)
+        "methods": methods,
         "texts": _texts(),
         "csv": {"header": ",".join(CSV_COLUMNS),
                 "cells": [_csv_field(source or ""), _csv_field(__version__)]},

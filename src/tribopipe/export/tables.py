@@ -41,6 +41,7 @@ from collections.abc import Hashable, Mapping, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from ..config import TEST_METHODS
 from ..errors import ExportError
 from ..escape import csv_cell, latex_cell, markdown_cell, printable
 from ..files import write_text_atomic
@@ -52,9 +53,11 @@ from ..stats import (
     LABS,
     LABS_DISAGREE,
     NOMINAL_SPEED,
+    TEST_METHOD,
     group_keys,
     group_statistics,
     group_u,
+    test_methods,
 )
 
 if TYPE_CHECKING:
@@ -135,7 +138,8 @@ def abstract_table(
     μ_K the group mean rounded half-up to two decimals, as printed in the paper."""
     groups = group_table(runs, pin=pin, disc=disc, temperature_C=temperature_C)
     condition = ["pin", "disc", "pressure_kPa", "temperature_C"] + (
-        [NOMINAL_SPEED] if NOMINAL_SPEED in groups.columns else [])
+        [NOMINAL_SPEED] if NOMINAL_SPEED in groups.columns else []) + (
+        [TEST_METHOD] if TEST_METHOD in groups.columns else [])
     table = groups.loc[:, condition].copy()
     table["mu_k"] = [round_half_up(v, 2) for v in groups["mu_k_mean"]]
     return table
@@ -177,6 +181,8 @@ def paper_table(
                                             for v in groups["temperature_C"]]}
     if by_speed:
         out[names[2]] = [condition_text(NOMINAL_SPEED, v) for v in groups[NOMINAL_SPEED]]
+    if TEST_METHOD in groups.columns:  # the map holds several methods: never pooled
+        out[TEST_METHOD if machine else "method"] = list(groups[TEST_METHOD])
     if len({lab for v in groups[LABS] for lab in str(v).split(";")}) > 1:
         out["labs"] = [str(v).replace(";", ", ") for v in groups[LABS]]
     out["n"] = [int(v) for v in groups["mu_k_n"]]
@@ -351,14 +357,28 @@ def _is_bool(column: Any) -> bool:
     return bool(pd.api.types.is_bool_dtype(column.dtype))
 
 
-def to_csv(table: pd.DataFrame, formats: dict[str, str] | None = None) -> str:
+def to_csv(table: pd.DataFrame, formats: dict[str, str] | None = None, *,
+           decimal: str = ".") -> str:
     """CSV text (``\\n`` line ends); floats with ten significant digits, missing as empty,
-    text cells safe for spreadsheets (:func:`_safe_text_cells`).
+    text cells safe for spreadsheets (:func:`_safe_text_cells`). ``decimal=","`` writes
+    it for a decimal-comma locale: cells separated by ``;``, numbers with a decimal comma
+    (a rounded number kept as text, ``0.740``, too), as Excel there reads a CSV.
 
     ``formats`` is accepted for a uniform writer signature and ignored: CSV is for machines.
     """
-    return _safe_text_cells(table).to_csv(index=False, lineterminator="\n",
-                                          float_format="%.10g")
+    if decimal not in (".", ","):
+        raise ExportError(f"unknown decimal mark {decimal!r}; expected '.' or ','")
+    safe = _safe_text_cells(table)
+    if decimal == ".":
+        return safe.to_csv(index=False, lineterminator="\n", float_format="%.10g")
+    safe = safe.copy()
+    for column in safe.columns:
+        if not _numeric(safe, column) and not _is_bool(safe[column]):
+            safe[column] = safe[column].map(
+                lambda v: v.replace(".", ",") if isinstance(v, str) and _PLAIN_NUMBER.match(v)
+                else v)
+    return safe.to_csv(index=False, lineterminator="\n", float_format="%.10g", sep=";",
+                       decimal=",")
 
 
 def spreadsheet_csv(table: pd.DataFrame) -> str:
@@ -491,10 +511,22 @@ def to_latex(table: pd.DataFrame, formats: dict[str, str] | None = None, *,
     return "\n".join(lines) + "\n"
 
 
+def runs_of_methods(runs: pd.DataFrame, methods: Sequence[str]) -> pd.DataFrame:
+    """The runs measured with one of ``methods`` (a row naming none was measured on the
+    rheometer cell, :func:`tribopipe.stats.test_methods`); :class:`ExportError` naming the
+    known methods for an unknown one."""
+    unknown = [m for m in methods if m not in TEST_METHODS]
+    if unknown:
+        raise ExportError(f"unknown test method {printable(unknown[0])[:60]!r}; expected one "
+                          "of " + ", ".join(repr(m) for m in TEST_METHODS))
+    return runs.loc[[m in set(methods) for m in test_methods(runs)]]
+
+
 #: the paper layout's column heads in LaTeX (the units upright, siunitx's °C)
 _PAPER_LATEX_HEADS = {"pin": "pin", "disc": "disc", "pressure_kPa": "{$p$ [kPa]}",
                       "temperature_C": "{$T$ [\\si{\\degreeCelsius}]}",
-                      NOMINAL_SPEED: "{$v$ [mm/s]}", "n": "{$n$}", "flags": "flags"}
+                      NOMINAL_SPEED: "{$v$ [mm/s]}", "n": "{$n$}", "flags": "flags",
+                      TEST_METHOD: "method"}
 
 
 def _pm_cells(value: str, expanded: str) -> tuple[str, str, str]:
@@ -562,10 +594,20 @@ def render_table(
     disc: Sequence[str] | None = None,
     temperature_C: Sequence[float] | None = None,
     by_speed: bool = False,
+    decimal: str = ".",
+    method: Sequence[str] | None = None,
 ) -> str:
     """A table of the map as text: ``fmt`` one of :data:`FORMATS`, ``layout`` one of
-    :data:`LAYOUTS` (``frictionmap`` has its own layout). Raises :class:`ExportError` for an
-    unknown format/layout or when no row matches the filters."""
+    :data:`LAYOUTS` (``frictionmap`` has its own layout); ``decimal`` the decimal mark of a
+    CSV (``","``: for a decimal-comma locale, :func:`to_csv`); ``method`` keeps the runs of
+    these test methods only (:data:`tribopipe.config.TEST_METHODS`). Raises
+    :class:`ExportError` for an unknown format/layout/method or when no row matches the
+    filters."""
+    if decimal != "." and fmt != "csv":
+        raise ExportError(f"a decimal comma is for --format csv, not {fmt}",
+                          hint="drop --decimal")
+    if method:
+        runs = runs_of_methods(runs, method)
     if fmt not in FORMATS:
         raise ExportError(f"unknown table format {fmt!r}; expected one of {', '.join(FORMATS)}")
     if layout not in LAYOUTS:
@@ -595,7 +637,8 @@ def render_table(
     else:
         table = group_table(runs, by_speed=by_speed, **filters)
     if table.empty:
-        given = ", ".join(f"{k}={list(v)}" for k, v in filters.items() if v) or "no filter"
+        given = ", ".join(f"{k}={list(v)}" for k, v in {**filters, "method": method}.items()
+                          if v) or "no filter"
         raise ExportError(
             f"no rows to tabulate ({given}; the map holds {len(runs)} runs)",
             hint="check `tribopipe map show` for the pins, discs and temperatures",
@@ -604,7 +647,9 @@ def render_table(
         return frictionmap_csv(table)
     # The paper prints μ_K with two decimals; keep "0.30", not "0.3".
     formats = {"mu_k": ".2f"} if layout == "abstract" else None
-    text = {"csv": to_csv, "markdown": to_markdown, "latex": to_latex}[fmt](table, formats)
+    if fmt == "csv":
+        return to_csv(table, formats, decimal=decimal)
+    text = {"markdown": to_markdown, "latex": to_latex}[fmt](table, formats)
     if layout == "paper" and fmt == "markdown":
         text += "\n" + markdown_cell(PAPER_NOTE) + "\n"
     return text

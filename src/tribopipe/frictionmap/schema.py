@@ -20,6 +20,7 @@ from dataclasses import dataclass, field, fields, replace
 from datetime import UTC, datetime
 from typing import TYPE_CHECKING, Any
 
+from ..config import DEFAULT_TEST_METHOD, TEST_METHODS
 from ..errors import MapError, RowError
 from ..escape import printable
 from ..validate import (
@@ -66,7 +67,8 @@ class Column:
 
     ``kind`` is ``"str"``, ``"float"``, ``"int"`` (nullable) or ``"bool"``; ``unit`` is
     ``""`` for none. ``bounds`` is the physical range of a number (``None``: a float need
-    only be finite); ``reason`` says why. ``required`` is ``""`` (may be missing),
+    only be finite); ``reason`` says why; ``choices`` the values a text column may hold.
+    ``required`` is ``""`` (may be missing),
     :data:`ALWAYS`, :data:`IN_REDUCED_ROWS` or :data:`IN_PACKAGES`. A text column
     required :data:`ALWAYS` is a name (one printable line of at most 200 characters, not
     blank); every other text is one printable line.
@@ -79,6 +81,8 @@ class Column:
     bounds: Range | None = None
     reason: str = ""
     required: str = ""
+    #: the values a text column may hold (``()``: any one printable line)
+    choices: tuple[str, ...] = ()
 
 
 _CONTACT = "a run in contact presses the pins on the disc"
@@ -136,6 +140,9 @@ COLUMNS: tuple[Column, ...] = (
     Column("plateau_drift_per_mm", "float", "1/mm", "slope of μ over the plateau window"),
     Column("flags", "str", "", "QC flags, ';'-joined"),
     Column("method", "str", "", "reduction method (or 'published'/'imported')"),
+    Column("test_method", "str", "", "instrument kind and test method: "
+           + ", ".join(f"'{m}'" for m in TEST_METHODS) + " (missing in rows older than "
+           f"schema version 6: '{DEFAULT_TEST_METHOD}')", choices=TEST_METHODS),
     Column("source_file", "str", "", "name of the raw or imported file"),
     Column("file_hash", "str", "", "SHA-256 of that file"),
     Column("test", "str", "", "Test name in the export the run came from (as the export "
@@ -189,8 +196,10 @@ RUN_COLUMNS: tuple[str, ...] = tuple(c.name for c in COLUMNS)
 #: before that version lacks them and reads with them missing, and a record built by older
 #: code may leave them out.
 ADDED_IN_VERSION: dict[str, int] = {"lab": 2, "u_mu_s": 3, "u_mu_k": 3, "test": 4, "result": 4,
-                                    "nominal_speed_mm_s": 5,
+                                    "nominal_speed_mm_s": 5, "test_method": 6,
                                     **{c: 6 for c in REVIEW_COLUMNS}}
+#: the values each text column with a closed vocabulary may hold
+CHOICES: dict[str, tuple[str, ...]] = {c.name: c.choices for c in COLUMNS if c.choices}
 #: the kind of each column: ``"str"``, ``"float"``, ``"int"`` or ``"bool"``
 KIND: dict[str, str] = {c.name: c.kind for c in COLUMNS}
 #: the physical range of each bounded number column; a float column not listed need only
@@ -264,6 +273,7 @@ class MapRow:
     plateau_drift_per_mm: float | None = None
     flags: str | None = None
     method: str | None = None
+    test_method: str | None = None
     source_file: str | None = None
     file_hash: str | None = None
     test: str | None = None
@@ -468,6 +478,9 @@ def check_runs(frame: pd.DataFrame, where: str = "row") -> pd.DataFrame:
                 if missing and name not in NAME_COLUMNS:
                     continue
                 problem = "missing, expected a name" if missing else checker(value)
+                if problem is None and column.choices and value not in column.choices:
+                    problem = (f"{printable(str(value))[:60]!r} is not one of "
+                               + ", ".join(repr(c) for c in column.choices))
                 if problem is not None:
                     raise _row_error(frame, where, i, name, f"{name}: {problem}")
         elif kind == "float":

@@ -32,6 +32,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from .. import __version__
+from ..config import DEFAULT_TEST_METHOD
 from ..errors import MapError, ReadError
 from ..escape import display_path
 from ..files import file_kind, os_reason, regular_file
@@ -321,11 +322,21 @@ def same_value(a: Any, b: Any) -> bool:
     return a == b
 
 
+#: content columns whose missing value in an older row means one value: a row written
+#: before schema version 6 was measured on the founding rheometer cell
+_MISSING_MEANS: dict[str, str] = {"test_method": DEFAULT_TEST_METHOD}
+
+
 def _differences(old: Mapping[str, Any], new: Mapping[str, Any]) -> tuple[str, ...]:
     """The content columns where ``new`` differs from ``old`` (a column
-    :data:`~tribopipe.frictionmap.schema.ADDED_LATER_CONTENT` missing in ``old`` is none)."""
-    return tuple(c for c in CONTENT_COLUMNS if not same_value(old[c], new[c])
-                 and not (c in ADDED_LATER_CONTENT and is_missing(old[c])))
+    :data:`~tribopipe.frictionmap.schema.ADDED_LATER_CONTENT` missing in ``old`` is none,
+    but a missing :data:`_MISSING_MEANS` column is that value)."""
+    def value(row: Mapping[str, Any], c: str) -> Any:
+        return _MISSING_MEANS[c] if c in _MISSING_MEANS and is_missing(row[c]) else row[c]
+
+    return tuple(c for c in CONTENT_COLUMNS if not same_value(value(old, c), value(new, c))
+                 and not (c in ADDED_LATER_CONTENT and c not in _MISSING_MEANS
+                          and is_missing(old[c])))
 
 
 def fold_records(

@@ -393,6 +393,9 @@ window.addEventListener("resize", function () {
   drawPairPlot(state.result);
   drawOverview();
 });
+METHODS.forEach(function (m) { $("tpx-group-method").appendChild(make("option", m)); });
+$("tpx-group-method-label").hidden = METHODS.length < 2;
+$("tpx-group-method").addEventListener("change", renderTable);
 
 if (!PAIRS.length) {
   renderResult(null, "the map holds no pair with a finite μ_K");

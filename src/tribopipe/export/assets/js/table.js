@@ -26,12 +26,19 @@ if (GROUPS.some(function (g) { return finite(g.nominal_speed_mm_s); })) {
 if (DATA.labs.length > 1) COLUMNS.push({ key: "labs", label: "labs", text: true });
 
 function cellText(col, g) {
-  if (col.key === "pin" || col.key === "disc") return g[col.key];
+  if (col.key === "pin" || col.key === "disc" || col.key === "test_method") return g[col.key];
   if (col.key === "labs") return g.labs.map(function (i) { return DATA.labs[i]; }).join(", ");
   return g.text[col.key] || "";
 }
 
 function sortValue(col, g) { return col.text ? cellText(col, g) : g[col.key]; }
+
+/* the test methods of the groups (the map's, in its own order): a column and a filter
+   where there are several; methods are never pooled, each group has one */
+var METHODS = DATA.methods || [];
+if (METHODS.length > 1) {
+  COLUMNS.splice(2, 0, { key: "test_method", label: "method", text: true });
+}
 
 function renderTableHead() {
   var head = $("tpx-group-table").tHead;
@@ -75,6 +82,7 @@ function renderTable() {
   var body = $("tpx-group-table").tBodies[0];
   clear(body);
   var scope = $("tpx-group-scope").value;
+  var method = $("tpx-group-method").value;
   var patterns = $("tpx-group-filter").value.split(/\s+/).filter(Boolean).map(wordPattern);
   var pinKey = PAIRS[state.pair].keys[0];
   var used = {};
@@ -86,6 +94,7 @@ function renderTable() {
     if (scope === "pin" && PAIRS[g.pair].keys[0] !== pinKey) return false;
     if (scope === "pair" && g.pair !== state.pair) return false;
     if (state.lab >= 0 && g.labs.indexOf(state.lab) < 0) return false;
+    if (method && g.test_method !== method) return false;
     var hay = [g.pin, g.disc, g.text.qc, g.text.pressure_kPa, g.text.temperature_C + " °C"]
       .concat(g.labs.map(function (i) { return DATA.labs[i]; })).join(" ");
     return patterns.every(function (w) { return w.test(hay); });

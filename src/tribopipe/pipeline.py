@@ -56,8 +56,8 @@ from .numeric import finite_json, finite_or_nan, finite_or_none
 from .readers import read_export
 from .reduction.intervals import friction_intervals
 from .reduction.manual import TRACE_META_KEY, terms_from_parameters
-from .review import landing_records
 from .reduction.reduce import reduce_measurement
+from .review import landing_records
 
 if TYPE_CHECKING:
     from .config import Settings

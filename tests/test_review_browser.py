@@ -155,7 +155,8 @@ def test_review_in_the_browser_then_batch(browser, reviewed_campaign: Path, tmp_
         pair = f"{runs.iloc[0]['pin']} / {runs.iloc[0]['disc']}"
         page.select_option("#filter-pair", pair)
         shown = page.locator(".run:visible").count()
-        assert 0 < shown < total and shown == int((runs["pin"] + " / " + runs["disc"] == pair).sum())
+        in_pair = int((runs["pin"] + " / " + runs["disc"] == pair).sum())
+        assert 0 < shown < total and shown == in_pair
         page.select_option("#filter-pair", "")
         page.select_option("#filter-flag", "*")
         assert page.locator(".run:visible").count() == int(

@@ -117,3 +117,9 @@ def test_an_index_row_that_is_not_a_run_id_is_named(copy):
     edit_index(copy, bad)
     again = recompute_package(copy)
     assert any("is not a run id" in line for line in again.lines())
+
+
+def test_recompute_of_a_map_file_says_what_it_takes(package):
+    result = invoke("map", "validate", "--recompute", package / "data/runs.parquet")
+    assert result.exit_code == 2
+    assert "--recompute checks a package against its evidence" in result.output

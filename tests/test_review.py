@@ -349,9 +349,9 @@ def test_every_output_marks_and_counts_reviewed_runs(campaign: Path, tmp_path: P
     html = (tmp_path / "r.html").read_text(encoding="utf-8")
     assert "reviewed runs" in html and "reviewed: window" in html and "1 reviewed" in html
     assert "reviewed: exclude" in html
-    from tribopipe.export.explorer import explorer_data
-
     import json
+
+    from tribopipe.export.explorer import explorer_data
 
     data = json.dumps(explorer_data(the_map(campaign), title="t"), ensure_ascii=False)
     assert data.count("(reviewed: window)") == 1

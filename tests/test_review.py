@@ -435,3 +435,12 @@ def test_a_decisions_file_that_is_no_text_is_one_line(tmp_path: Path):
     with pytest.raises(ReviewError, match="empty"):
         (tmp_path / "empty.csv").write_text("", encoding="utf-8")
         read_review(tmp_path / "empty.csv")
+
+
+def test_the_trace_plot_says_a_run_was_reviewed():
+    from tribopipe.figures.runinfo import TraceMarks
+
+    marks = TraceMarks(mu_s=0.7, mu_s_distance_mm=0.1, mu_k=0.5, mu_k_window_mm=(0.6, 1.1),
+                       review="window")
+    assert marks.line().endswith(" · reviewed: window")
+    assert "reviewed" not in TraceMarks(0.7, 0.1, 0.5, (0.6, 1.1)).line()

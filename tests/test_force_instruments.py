@@ -494,3 +494,32 @@ def test_reduce_a_sled_export_into_the_map(tmp_path: Path) -> None:
     assert bad.returncode != 0
     assert "--zero: expected auto, off or a number" in bad.stderr
     assert "Traceback" not in bad.stderr
+
+
+def test_a_rheometer_run_whose_pins_start_pre_sheared() -> None:
+    """The torque channel keeps the same rule: a rest that already carries the sliding
+    torque is no zero (flagged); a small true offset still is one (subtracted)."""
+    from tribopipe.config import load_settings as settings_of
+
+    rng = np.random.default_rng(5)
+    t = np.arange(0.0, 1200.0, 0.1)
+    angle = np.clip(t - 100.0, 0.0, None) * 0.005 * 2 * math.pi / 60  # 0.005 rpm
+    r_m = 13.37e-3
+    sliding_torque = 0.4 * 3.0 * r_m
+    at_rest = angle == 0
+    base = settings_of(None)
+
+    def run(rest_torque: float, offset: float) -> Measurement:
+        torque = np.where(at_rest, rest_torque, sliding_torque) + offset
+        torque = torque + rng.normal(0, 2e-6, t.size)
+        return _measurement({TIME: t, "angle_rad": angle, "torque_Nm": torque,
+                             NORMAL_FORCE: 3.0 + rng.normal(0, 0.003, t.size)})
+
+    sheared = reduce_measurement(run(0.9 * sliding_torque, 0.0), base.instrument,
+                                 base.reduction)
+    assert "zero_under_load" in sheared.flags
+    assert sheared.mu_k == pytest.approx(0.4, abs=0.003)
+    honest = reduce_measurement(run(0.0, 2e-4), base.instrument, base.reduction)
+    assert "zero_under_load" not in honest.flags
+    assert honest.parameters["torque_offset_Nm"] == pytest.approx(2e-4, rel=0.02)
+    assert honest.mu_k == pytest.approx(0.4, abs=0.003)

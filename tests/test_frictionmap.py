@@ -25,7 +25,7 @@ from tribopipe import __version__
 from tribopipe import frictionmap as fm
 from tribopipe.config import InstrumentConfig, load_settings, settings_from_dict
 from tribopipe.errors import MapError, ValidationError
-from tribopipe.labels import RunLabels, Tolerances
+from tribopipe.labels import RunLabels, Tolerances, decide_run
 from tribopipe.measurement import Measurement, MeasurementMeta
 from tribopipe.reduction.reduce import ReductionResult, reduce_measurement
 
@@ -64,8 +64,19 @@ def run_record(
     meta = MeasurementMeta(source_file=f"data/run{i}.txt", file_format="synthetic", interval=2)
     labels = RunLabels(pin=pin, disc=disc, normal_force_N=force_N,
                        temperature_C=temperature_C, repeat=repeat)
-    return fm.make_record(result=result, labels=labels, meta=meta, file_hash=file_hash_of(i),
-                          settings=settings or load_settings())
+    return record_of(result, labels, meta, file_hash_of(i), settings or load_settings())
+
+
+def record_of(result, labels, meta, file_hash, settings, tolerances=None):
+    """``make_record`` of a run whose flags are decided by ``decide_run`` from ``labels``
+    and ``tolerances``, as the pipeline decides them."""
+    verdict = decide_run(labels, result.flags, result.normal_force_mean_N,
+                         result.temperature_C, tolerances,
+                         speed_set_point_rpm=result.speed_set_point_rpm,
+                         sliding_speed_measured_mm_s=result.sliding_speed_mm_s,
+                         instrument=settings.instrument)
+    return fm.make_record(result=result, verdict=verdict, meta=meta, file_hash=file_hash,
+                          settings=settings)
 
 
 # --------------------------------------------------------------------------- records
@@ -134,8 +145,8 @@ def test_off_nominal_flags_follow_the_tolerances_given():
                        temperature_C=21.5, repeat=1)
 
     def flags(tolerances):
-        return fm.make_record(result=result, labels=labels, meta=meta, file_hash=file_hash_of(0),
-                              settings=load_settings(), tolerances=tolerances).flags
+        return record_of(result, labels, meta, file_hash_of(0), load_settings(),
+                         tolerances).flags
 
     assert flags(None) == ""
     assert flags(Tolerances(force_rel=0.05)) == "normal_force_off_nominal"

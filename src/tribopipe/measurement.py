@@ -114,9 +114,14 @@ class MeasurementMeta:
 
     @property
     def label(self) -> str:
-        """A short human label: ``file [test / result / interval i]``."""
-        where = interval_label(self.test, self.result, self.interval)
-        return f"{self.source_file} [{where}]" if where else self.source_file
+        """A short human label: ``file [test / result / interval i]`` (:func:`run_name`)."""
+        return run_name(self.source_file, self.test, self.result, self.interval)
+
+    @property
+    def place(self) -> str | None:
+        """Where the interval sits in its export, ``test / result / interval i``
+        (:func:`interval_label`; ``None`` when the export names none of them)."""
+        return interval_label(self.test, self.result, self.interval) or None
 
 
 @dataclass(frozen=True)

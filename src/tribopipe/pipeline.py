@@ -22,12 +22,19 @@ the reduced files against the map and appends them, under the map's lock.
 from __future__ import annotations
 
 import json
+import os
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from .errors import NotFrictionTestError, OutputError, ReductionError, TribopipeError
+from .errors import (
+    Failure,
+    NotFrictionTestError,
+    OutputError,
+    ReductionError,
+    TribopipeError,
+)
 from .escape import display_path, printable
 from .figures import TraceConditions, plot_trace
 from .files import file_sha256, os_reason, write_text_atomic
@@ -189,7 +196,8 @@ def read_runs(
             runs.append((place_of(m.meta.test, m.meta.result, m.meta.interval), m))
             order.append(runs[-1][0])
     if not runs and problems and all(isinstance(e, NotFrictionTestError) for _, e in problems):
-        raise _not_friction(path, [e for _, e in problems])  # said once for the file
+        # said once for the file
+        raise _not_friction(path, [e for _, e in problems if isinstance(e, NotFrictionTestError)])
     return ExportRuns(
         path=str(path),
         file_hash=file_hash or file_sha256(path),
@@ -200,14 +208,16 @@ def read_runs(
     )
 
 
-def _not_friction(path: str | Path, problems: Sequence[TribopipeError]) -> NotFrictionTestError:
+def _not_friction(path: str | Path,
+                  problems: Sequence[NotFrictionTestError]) -> NotFrictionTestError:
     """One refusal for an export none of whose tests is pin-on-disc sliding, naming what
     its tests look like (an oscillation, a flow curve ...)."""
-    kinds = list(dict.fromkeys(p.problem.split("it looks like ", 1)[-1] for p in problems))
+    kinds = list(dict.fromkeys(p.looks_like or p.problem for p in problems))
     tests = (f"its {len(problems)} tests (or results) look like" if len(problems) > 1
              else "it looks like")
     return NotFrictionTestError(f"not a pin-on-disc friction test: {tests} "
-                                + "; ".join(kinds), path=path, hint=problems[0].hint)
+                                + "; ".join(kinds), looks_like="; ".join(kinds), path=path,
+                                hint=problems[0].hint)
 
 
 def reduce_run(
@@ -466,16 +476,22 @@ class ReducedRun:
 @dataclass(frozen=True)
 class FailedRun:
     """A run (or a test without a friction interval; ``place`` ``None``: the whole file)
-    that could not be reduced, labelled or written, with its one-line ``reason`` (naming
-    the file and, for an output, the output). ``transient`` when it was not the file's
-    fault (a crashed worker, an internal error: tried again next time); ``undescribed``
-    when no metadata source described it (:class:`~tribopipe.labels.Undescribed`)."""
+    that could not be reduced, labelled or written: its ``failure`` as fields (the file
+    named as the caller names it, or the output, the problem, the hint), its one-line
+    :attr:`reason` formatted from them. ``transient`` when it was not the file's fault (a
+    crashed worker, an internal error: tried again next time); ``undescribed`` when no
+    metadata source described it (:class:`~tribopipe.labels.Undescribed`)."""
 
     name: str
-    reason: str
+    failure: Failure
     place: RunPlace | None = None
     transient: bool = False
     undescribed: bool = False
+
+    @property
+    def reason(self) -> str:
+        """The failure in one line (:meth:`~tribopipe.errors.Failure.text`)."""
+        return self.failure.text()
 
 
 @dataclass(frozen=True)
@@ -518,22 +534,23 @@ class FileOutcome:
         return any(r.transient for r in self.failed)
 
 
-def failure_reason(exc: BaseException, path: str | Path, name: str,
-                   run: str | None = None) -> str:
-    """One line naming the file once, as the caller names it (``name``; a reader names
-    the path it was given, which may be long and machine-specific): the error's text, its
-    path swapped for ``name``, or prefixed with the run's name (``run``, default
-    ``name``) when it names no file."""
+def failure_of(exc: BaseException, path: str | Path, name: str,
+               run: str | None = None) -> Failure:
+    """The :class:`~tribopipe.errors.Failure` of an error met reading or reducing the
+    export at ``path``, naming the file as the caller names it (``name``; a reader names
+    the path it was given, which may be long and machine-specific): an error naming the
+    export names ``name`` instead, one naming no file names the run (``run``, default
+    ``name``), one naming another file (a manifest, an output) keeps it."""
     if isinstance(exc, OSError):
-        return f"{display_path(run or name)}: {os_reason(exc)}"
-    text = str(exc)
-    where = getattr(exc, "path", None)
-    if where is not None and where != str(path) and display_path(where) in text:
-        return text  # it names another file (a manifest, an output)
-    full = display_path(path)
-    if text.startswith(full):
-        return display_path(name) + text[len(full):]
-    return text if full in text else f"{display_path(run or name)}: {text}"
+        return Failure(os_reason(exc), path=run or name)
+    if not isinstance(exc, TribopipeError):
+        return Failure(str(exc), path=run or name)
+    failure = exc.failure
+    if failure.path is None:
+        return replace(failure, path=run or name)
+    if failure.path == os.fsdecode(path):
+        return replace(failure, path=name)
+    return failure
 
 
 def _written(what: str, target: Path, write: Callable[[], Path]) -> Path:
@@ -599,8 +616,7 @@ def reduce_export(
         export = read_runs(path, read_options, file_hash=file_hash)
     except (TribopipeError, OSError) as exc:
         return FileOutcome(path=str(path), name=shown, file_hash=file_hash,
-                           error=FailedRun(name=shown,
-                                           reason=failure_reason(exc, path, shown)))
+                           error=FailedRun(name=shown, failure=failure_of(exc, path, shown)))
     problems = dict(export.problems)
     measurements = dict(export.runs)
     runs: list[ReducedRun | FailedRun] = []
@@ -608,7 +624,7 @@ def reduce_export(
         run = place.run_name(shown, export.several)
         if place in problems:
             runs.append(FailedRun(name=run, place=place,
-                                  reason=failure_reason(problems[place], path, shown, run)))
+                                  failure=failure_of(problems[place], path, shown, run)))
             continue
         try:
             given = labels(export, place, run) if callable(labels) else labels
@@ -618,7 +634,7 @@ def reduce_export(
         except (TribopipeError, OSError) as exc:
             # an output that could not be written is not the export's fault: tried again
             runs.append(FailedRun(name=run, place=place,
-                                  reason=failure_reason(exc, path, shown, run),
+                                  failure=failure_of(exc, path, shown, run),
                                   transient=isinstance(exc, OutputError),
                                   undescribed=isinstance(exc, Undescribed)))
     return FileOutcome(path=str(path), name=shown, file_hash=export.file_hash,

@@ -255,10 +255,12 @@ def validate_cmd(path: str | None, map_path: str | None, recompute: bool) -> Non
 @click.option(
     "--format",
     "fmt",
-    type=click.Choice(["csv", "markdown", "latex", "frictionmap"]),
+    type=click.Choice(["csv", "markdown", "latex", "xlsx", "frictionmap"]),
     default="csv",
     show_default=True,
-    help="Output format; 'frictionmap' is the published 7-column CSV, one row per run.",
+    help="Output format. 'latex' compiles as written with booktabs and siunitx; 'xlsx' is "
+    "a spreadsheet with one sheet per layout and a notes sheet (needs -o); 'frictionmap' "
+    "is the published 7-column CSV, one row per run.",
 )
 @click.option(
     "--layout",
@@ -276,10 +278,14 @@ def validate_cmd(path: str | None, map_path: str | None, recompute: bool) -> Non
     "--temperature", "temperature_C", type=float, multiple=True, help="Only this nominal °C."
 )
 @click.option("--by-speed", is_flag=True, help="Also split condition groups by sliding speed.")
+@click.option("--decimal", type=click.Choice([".", ","]), default=".", show_default=True,
+              help="Decimal mark of a CSV: ',' writes it for a decimal-comma locale (cells "
+              "separated by ';'), as Excel there opens a CSV.")
 @click.option("--method", multiple=True,
               help="Only runs of this test method (repeatable): 'rheometer pin-on-disc', "
               "'sled D1894', 'linear reciprocating' or 'rotary pin-on-disc'.")
-@click.option("-o", "--output", type=click.Path(dir_okay=False), help="Write to FILE.")
+@click.option("-o", "--output", type=click.Path(dir_okay=False),
+              help="Write to FILE. Default: standard output (not for xlsx).")
 @map_option
 @friendly_errors
 def table_cmd(
@@ -289,11 +295,34 @@ def table_cmd(
     disc: tuple[str, ...],
     temperature_C: tuple[float, ...],
     by_speed: bool,
+    decimal: str,
     method: tuple[str, ...],
     output: str | None,
     map_path: str,
 ) -> None:
-    """Regenerate a table from the friction map (to stdout, or -o FILE)."""
+    """Regenerate a table from the friction map (to stdout, or -o FILE).
+
+    \b
+      tribopipe map table --layout paper --format latex -o table.tex
+      tribopipe map table --format xlsx -o friction_map.xlsx
+      tribopipe map table --layout paper --decimal , -o table.csv
+    """
+    if fmt == "xlsx":
+        from ..export.workbook import export_workbook
+
+        if output is None:
+            raise click.UsageError("--format xlsx writes a binary file: give -o FILE.xlsx")
+        source = click.get_current_context().get_parameter_source("layout")
+        if source is not None and source.name == "COMMANDLINE":
+            say("note: an xlsx holds every layout, one sheet each: --layout is not needed",
+                err=True)
+        if decimal != ".":
+            raise click.UsageError("--decimal is for --format csv (an xlsx stores numbers)")
+        written = export_workbook(map_path, output, pin=pin, disc=disc,
+                                  temperature_C=temperature_C, by_speed=by_speed,
+                                  method=method)
+        say(f"wrote {written}", err=True)
+        return
     from ..export.tables import export_table
 
     text = export_table(
@@ -305,6 +334,7 @@ def table_cmd(
         disc=disc,
         temperature_C=temperature_C,
         by_speed=by_speed,
+        decimal=decimal,
         method=method,
     )
     if output is None:

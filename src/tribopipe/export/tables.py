@@ -336,14 +336,28 @@ def _is_bool(column: Any) -> bool:
     return bool(pd.api.types.is_bool_dtype(column.dtype))
 
 
-def to_csv(table: pd.DataFrame, formats: dict[str, str] | None = None) -> str:
+def to_csv(table: pd.DataFrame, formats: dict[str, str] | None = None, *,
+           decimal: str = ".") -> str:
     """CSV text (``\\n`` line ends); floats with ten significant digits, missing as empty,
-    text cells safe for spreadsheets (:func:`_safe_text_cells`).
+    text cells safe for spreadsheets (:func:`_safe_text_cells`). ``decimal=","`` writes
+    it for a decimal-comma locale: cells separated by ``;``, numbers with a decimal comma
+    (a rounded number kept as text, ``0.740``, too), as Excel there reads a CSV.
 
     ``formats`` is accepted for a uniform writer signature and ignored: CSV is for machines.
     """
-    return _safe_text_cells(table).to_csv(index=False, lineterminator="\n",
-                                          float_format="%.10g")
+    if decimal not in (".", ","):
+        raise ExportError(f"unknown decimal mark {decimal!r}; expected '.' or ','")
+    safe = _safe_text_cells(table)
+    if decimal == ".":
+        return safe.to_csv(index=False, lineterminator="\n", float_format="%.10g")
+    safe = safe.copy()
+    for column in safe.columns:
+        if not _numeric(safe, column) and not _is_bool(safe[column]):
+            safe[column] = safe[column].map(
+                lambda v: v.replace(".", ",") if isinstance(v, str) and _PLAIN_NUMBER.match(v)
+                else v)
+    return safe.to_csv(index=False, lineterminator="\n", float_format="%.10g", sep=";",
+                       decimal=",")
 
 
 def spreadsheet_csv(table: pd.DataFrame) -> str:
@@ -559,13 +573,18 @@ def render_table(
     disc: Sequence[str] | None = None,
     temperature_C: Sequence[float] | None = None,
     by_speed: bool = False,
+    decimal: str = ".",
     method: Sequence[str] | None = None,
 ) -> str:
     """A table of the map as text: ``fmt`` one of :data:`FORMATS`, ``layout`` one of
-    :data:`LAYOUTS` (``frictionmap`` has its own layout); ``method`` keeps the runs of
+    :data:`LAYOUTS` (``frictionmap`` has its own layout); ``decimal`` the decimal mark of a
+    CSV (``","``: for a decimal-comma locale, :func:`to_csv`); ``method`` keeps the runs of
     these test methods only (:data:`tribopipe.config.TEST_METHODS`). Raises
     :class:`ExportError` for an unknown format/layout/method or when no row matches the
     filters."""
+    if decimal != "." and fmt != "csv":
+        raise ExportError(f"a decimal comma is for --format csv, not {fmt}",
+                          hint="drop --decimal")
     if method:
         runs = runs_of_methods(runs, method)
     if fmt not in FORMATS:
@@ -607,7 +626,9 @@ def render_table(
         return frictionmap_csv(table)
     # The paper prints μ_K with two decimals; keep "0.30", not "0.3".
     formats = {"mu_k": ".2f"} if layout == "abstract" else None
-    text = {"csv": to_csv, "markdown": to_markdown, "latex": to_latex}[fmt](table, formats)
+    if fmt == "csv":
+        return to_csv(table, formats, decimal=decimal)
+    text = {"markdown": to_markdown, "latex": to_latex}[fmt](table, formats)
     if layout == "paper" and fmt == "markdown":
         text += "\n" + markdown_cell(PAPER_NOTE) + "\n"
     return text

@@ -272,7 +272,7 @@ def _result_intervals(items: list[Measurement], several: bool) -> ResultInterval
     if held and len(named) == len(held):
         return ResultIntervals(first.test, first.result, (), NotFrictionTestError(
             f"{prefix}not a pin-on-disc friction test: it looks like {_most_telling(named)}",
-            path=source, hint=NOT_FRICTION_HINT))
+            looks_like=_most_telling(named), path=source, hint=NOT_FRICTION_HINT))
     usable = [i for i, m in enumerate(items) if _usable(m) and kinds[i] is None]
     if not usable:
         found = sorted({c for m in items for c in m.data.columns})
@@ -300,8 +300,7 @@ def _result_intervals(items: list[Measurement], several: bool) -> ResultInterval
     try:
         friction = tuple(_with_setup_offset(items, i) for i in chosen)
     except ReductionError as exc:          # a set-up torque beyond any measurement
-        return ResultIntervals(first.test, first.result, (), ReductionError(
-            exc.problem, path=source, hint=exc.hint))
+        return ResultIntervals(first.test, first.result, (), exc)
     return ResultIntervals(first.test, first.result, friction)
 
 
@@ -391,7 +390,7 @@ def interval_samples(
 ) -> IntervalSamples:
     """Validate and copy the quantities of ``m`` (raises ReductionError for bad input);
     ``tangential`` names the column of the tangential reading (torque or friction force)."""
-    label = m.meta.label
+    meta = m.meta
     data = m.data
     t = np.array(data[TIME], dtype=float)
     torque = np.array(data[tangential], dtype=float)
@@ -401,8 +400,9 @@ def interval_samples(
         missing = int((~np.isfinite(values)).sum())
         if missing > params.max_missing_fraction * n_total:
             raise ReductionError(
-                f"{label}: {missing} of {n_total} {name} values are missing "
-                f"(more than {params.max_missing_fraction:.0%}); cannot reduce"
+                f"{missing} of {n_total} {name} values are missing "
+                f"(more than {params.max_missing_fraction:.0%}); cannot reduce",
+                path=meta.source_file, place=meta.place,
             )
     keep = np.isfinite(t) & np.isfinite(torque) & np.isfinite(force)
     _check_magnitudes(m)
@@ -421,8 +421,9 @@ def interval_samples(
     t, torque, force = pick(t), pick(torque), pick(force)
     if t.size < params.min_contact_samples:
         raise ReductionError(
-            f"{label}: only {t.size} complete samples (time, {tangential} and normal force); "
-            f"need at least {params.min_contact_samples}"
+            f"only {t.size} complete samples (time, {tangential} and normal force); "
+            f"need at least {params.min_contact_samples}",
+            path=meta.source_file, place=meta.place,
         )
     force_sign = -1.0 if np.median(force) < 0 else 1.0
     return IntervalSamples(
@@ -448,6 +449,7 @@ def _point(m: Measurement, row: int) -> Any:
 def _check_magnitudes(m: Measurement) -> None:
     """Refuse (:class:`ReductionError`) a sample beyond :data:`SAMPLE_LIMITS`: a column
     holding such values is not what its name and unit say."""
+    meta = m.meta
     for name, limit in SAMPLE_LIMITS.items():
         if name not in m.data.columns:
             continue
@@ -457,10 +459,11 @@ def _check_magnitudes(m: Measurement) -> None:
             row = int(beyond[0])
             point = _point(m, row)
             raise ReductionError(
-                f"{m.meta.label}: {name} is {float(m.data[name].iloc[row]):.4g} at point "
+                f"{name} is {float(m.data[name].iloc[row]):.4g} at point "
                 f"{point}, beyond any measurement (|value| <= {limit:g}): the column is not "
                 "what its name and unit say",
                 hint="check the export's columns and units",
+                path=meta.source_file, place=meta.place,
             )
 
 
@@ -468,6 +471,7 @@ def _check_time(m: Measurement, t: np.ndarray, keep: np.ndarray) -> None:
     """Refuse (:class:`ReductionError`, naming the point) a time column that goes
     backwards between complete samples or never advances: the samples of an interval are
     written in the order they were taken, so either means the column is not the time."""
+    meta = m.meta
     t_kept = t[keep]
     if t_kept.size < 2:
         return
@@ -477,15 +481,17 @@ def _check_time(m: Measurement, t: np.ndarray, keep: np.ndarray) -> None:
         row = int(np.flatnonzero(keep)[k])
         point = _point(m, row)
         raise ReductionError(
-            f"{m.meta.label}: time goes backwards at point {point} ({t_kept[k]:g} s after "
+            f"time goes backwards at point {point} ({t_kept[k]:g} s after "
             f"{t_kept[k - 1]:g} s): expected increasing time",
             hint="check the time column (or its unit)",
+            path=meta.source_file, place=meta.place,
         )
     if t_kept[-1] == t_kept[0]:
         raise ReductionError(
-            f"{m.meta.label}: time is constant ({t_kept[0]:g} s) over all {t_kept.size} "
+            f"time is constant ({t_kept[0]:g} s) over all {t_kept.size} "
             "complete samples: expected increasing time",
             hint="check the time column (or its unit)",
+            path=meta.source_file, place=meta.place,
         )
 
 

@@ -19,6 +19,7 @@ from ..measurement import (
     TIME,
     TORQUE,
     Measurement,
+    MeasurementMeta,
     require_columns,
 )
 from ..physics import (
@@ -206,7 +207,7 @@ def revolution_locked(period_mm: float, window_mm: float, revolution_mm: float |
     return any(abs(period_mm / (revolution_mm / h) - 1.0) <= slack for h in (1, 2, 3))
 
 
-def _check_physical(label: str, force_N: float, temperature_C: float | None,
+def _check_physical(meta: MeasurementMeta, force_N: float, temperature_C: float | None,
                     det: Detection) -> None:
     """:class:`ReductionError` when the measured mean normal force [N], temperature [°C],
     μ_K or μ_S lies outside its physical range (:mod:`tribopipe.validate`)."""
@@ -215,28 +216,32 @@ def _check_physical(label: str, force_N: float, temperature_C: float | None,
                                 ("mu_s", det.mu_s, MU)):
         if value is not None and value not in bounds:
             raise ReductionError(
-                f"{label}: measured {what} {value:.4g} is outside the physical range "
+                f"measured {what} {value:.4g} is outside the physical range "
                 f"({bounds.describe()}): the column is not what its name and unit say",
                 hint="check the export's columns and units",
+                path=meta.source_file, place=meta.place,
             )
 
 
-def _in_contact(x: IntervalSamples, instrument: InstrumentConfig, label: str) -> np.ndarray:
+def _in_contact(x: IntervalSamples, instrument: InstrumentConfig,
+                meta: MeasurementMeta) -> np.ndarray:
     """Boolean mask (shape (n,)) of the samples with F_N ≥ the contact threshold [N];
     :class:`ReductionError` when there is none."""
     threshold = instrument.contact_threshold_N
     in_contact = x.force >= threshold
     if not in_contact.any() or x.force.max() <= 0:
         raise ReductionError(
-            f"{label}: the normal force never reaches the contact threshold "
+            f"the normal force never reaches the contact threshold "
             f"{threshold:g} N (largest {x.force.max():.3g} N): no contact, no friction",
             hint="check the normal-force column or lower contact_threshold_N",
+            path=meta.source_file, place=meta.place,
         )
     return in_contact
 
 
 def _travel(
-    x: IntervalSamples, instrument: InstrumentConfig, params: ReductionParams, label: str
+    x: IntervalSamples, instrument: InstrumentConfig, params: ReductionParams,
+    meta: MeasurementMeta,
 ) -> tuple[np.ndarray, str, np.ndarray]:
     """Sliding distance [mm] (shape (n,)), its source (``position``, ``angle``,
     ``speed``, ``nominal``) and the mask of the samples at rest before the disc moves;
@@ -260,16 +265,18 @@ def _travel(
         )
     if not np.isfinite(s).all():
         raise ReductionError(
-            f"{label}: the sliding distance from the {distance_source} column is not finite "
+            f"the sliding distance from the {distance_source} column is not finite "
             "(values too large for their unit?)",
             hint="check the angle or speed column and its unit",
+            path=meta.source_file, place=meta.place,
         )
     if distance_source != "nominal" and float(s.max()) < params.min_travel_mm:
         what = ("no sliding: the position moved" if distance_source == "position" else
                 "no rotation: the disc travelled")
         raise ReductionError(
-            f"{label}: {what} {float(s.max()):.3g} mm "
-            f"(< {params.min_travel_mm:g} mm); this is not a friction interval"
+            f"{what} {float(s.max()):.3g} mm "
+            f"(< {params.min_travel_mm:g} mm); this is not a friction interval",
+            path=meta.source_file, place=meta.place,
         )
     if distance_source == "nominal":
         at_rest = np.zeros(s.size, dtype=bool)
@@ -397,20 +404,21 @@ def reduce_measurement(
     reduced stroke by stroke (:mod:`tribopipe.reduction.reciprocating`). ``m`` is not
     modified.
 
-    Raises :class:`ReductionError` (naming ``m.meta.label``) for zero normal force, more
-    than half of torque or normal force missing, no rotation, or too few contact samples.
+    Raises :class:`ReductionError` (naming the file and the interval's place) for zero
+    normal force, more than half of torque or normal force missing, no rotation, or too
+    few contact samples.
     """
     tangential = tangential_column(m)
     m, normal_force_source = with_sled_force(m, instrument)
     require_columns(m, TIME, tangential, NORMAL_FORCE)
     lever = instrument if tangential == TORQUE else force_lever(instrument)
-    label = m.meta.label
+    meta = m.meta
     x = interval_samples(m, params, tangential)
-    in_contact = _in_contact(x, instrument, label)
+    in_contact = _in_contact(x, instrument, meta)
     if instrument.test_method == "linear reciprocating":
         return _reduce_reciprocating(m, x, in_contact, instrument, lever, params,
                                      torque_offset_Nm, normal_force_source)
-    s, distance_source, at_rest = _travel(x, instrument, params, label)
+    s, distance_source, at_rest = _travel(x, instrument, params, m.meta)
     total_mm = float(s[-1] - s[0])
     stop = end_stop(x.t, s, ~at_rest, params.stop_speed_fraction) & ~at_rest
     sliding = ~at_rest & ~stop & in_contact
@@ -429,9 +437,10 @@ def reduce_measurement(
     n_sliding = int(sliding.sum())
     if n_sliding < params.min_contact_samples:
         raise ReductionError(
-            f"{label}: only {n_sliding} samples in contact "
+            f"only {n_sliding} samples in contact "
             f"(F_N ≥ {instrument.contact_threshold_N:g} N) while "
-            f"sliding; need at least {params.min_contact_samples}"
+            f"sliding; need at least {params.min_contact_samples}",
+            path=meta.source_file, place=meta.place,
         )
     torque_sign = -1.0 if np.median(corrected[sliding]) < 0 else 1.0
     f_r = torque_sign * friction_force_N(corrected, lever.friction_radius_mm)
@@ -444,7 +453,7 @@ def reduce_measurement(
     f_mean = float(np.mean(f_slide))
     cv = float(np.std(f_slide) / f_mean) if f_mean > 0 else math.inf
     temperature = _mean_temperature(x, in_contact)
-    _check_physical(label, f_mean, temperature, det)
+    _check_physical(m.meta, f_mean, temperature, det)
     se_k, tau = uncertainty.mean_standard_error(mu_v[det.window])
     no_signal = bool(np.ptp(x.torque[sliding]) == 0) or det.mu_k <= 3 * se_k
     w_s, w_t = s_v[det.window], t_v[det.window]
@@ -577,7 +586,7 @@ def _reduce_reciprocating(
     cv = float(np.std(f_slide) / np.mean(f_slide))
     temperature = _mean_temperature(x, in_contact)
     flag_det = replace(det, mu_k=mu_k, mu_s=mu_s, distinct=distinct, peak_at_limit=False)
-    _check_physical(label, f_mean, temperature, flag_det)
+    _check_physical(m.meta, f_mean, temperature, flag_det)
     no_signal = bool(np.ptp(x.torque[sliding]) == 0) or mu_k <= 3 * se_k
     flags = _flags(flag_det, c.s_cycle_mm, total_mm, cv, True, params, no_signal=no_signal,
                    zero=replace(zero, under_load=False))

@@ -523,3 +523,17 @@ def test_a_rheometer_run_whose_pins_start_pre_sheared() -> None:
     assert "zero_under_load" not in honest.flags
     assert honest.parameters["torque_offset_Nm"] == pytest.approx(2e-4, rel=0.02)
     assert honest.mu_k == pytest.approx(0.4, abs=0.003)
+
+
+def test_inspect_names_the_force_channel(tmp_path: Path) -> None:
+    from click.testing import CliRunner
+
+    from tribopipe.cli import main
+
+    export = _sled_csv(tmp_path / "sled.csv")
+    out = CliRunner().invoke(main, ["inspect", str(export)])
+    assert out.exit_code == 0, out.output
+    assert "[friction force]" in out.output
+    assert "Load [N]       → friction_force_N" in out.output
+    assert "header block lines: 3" in out.output
+    assert "reduce reads: interval 1" in out.output

@@ -535,5 +535,5 @@ def test_inspect_names_the_force_channel(tmp_path: Path) -> None:
     assert out.exit_code == 0, out.output
     assert "[friction force]" in out.output
     assert "Load [N]       → friction_force_N" in out.output
-    assert "header block lines: 3" in out.output
+    assert "header block lines: 2" in out.output
     assert "reduce reads: interval 1" in out.output

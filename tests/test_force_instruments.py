@@ -537,3 +537,29 @@ def test_inspect_names_the_force_channel(tmp_path: Path) -> None:
     assert "Load [N]       → friction_force_N" in out.output
     assert "header block lines: 2" in out.output
     assert "reduce reads: interval 1" in out.output
+
+
+def test_a_batch_of_sled_runs(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """A folder of sled exports through `batch`: the nominal speed is the instrument
+    file's 150 mm/min (no rotational set point), so the runs are not off nominal."""
+    from click.testing import CliRunner
+
+    from tribopipe.cli import main
+    from tribopipe.frictionmap import read_map
+
+    folder = tmp_path / "raw"
+    folder.mkdir()
+    _sled_csv(folder / "PE_steel_2N_23C_r1.csv", seed=1)
+    _sled_csv(folder / "PE_steel_2N_23C_r2.csv", seed=2, rest_load_N=0.4)
+    monkeypatch.chdir(tmp_path)
+    out = CliRunner().invoke(main, [
+        "batch", str(folder), "--pattern", "{pin}_{disc}_{force}N_{temperature}C_r{repeat}",
+        "--instrument", str(CONFIGS / "sled-d1894.toml"), "-o", str(tmp_path / "out"),
+        "--jobs", "1", "--no-plots"])
+    assert out.exit_code == 0, out.output
+    runs = read_map(tmp_path / "out" / "friction_map.parquet").sort_values("repeat")
+    assert list(runs["test_method"]) == ["sled D1894"] * 2
+    assert list(runs["nominal_speed_mm_s"]) == [2.5, 2.5]
+    assert "sliding_speed_off_nominal" not in ";".join(runs["flags"].fillna(""))
+    assert runs["flags"].fillna("").tolist()[1] == "zero_under_load"
+    assert runs["mu_k"].tolist() == pytest.approx([0.25, 0.25], abs=0.004)

@@ -319,6 +319,13 @@ def trace_samples(traces_dir: Path | None, measurement_id: str,
                   where: str) -> tuple[SlidingSamples, TraceTerms]:
     """A run's sliding samples and terms from its trace Parquet under ``traces_dir``;
     :class:`ReviewError` naming ``where`` when there is none or it predates the terms."""
+    samples, terms, _ = trace_table(traces_dir, measurement_id, where)
+    return samples, terms
+
+
+def trace_table(traces_dir: Path | None, measurement_id: str,
+                where: str) -> tuple[SlidingSamples, TraceTerms, pd.DataFrame]:
+    """:func:`trace_samples` and the whole trace (read once)."""
     import pyarrow.parquet as pq
 
     path = None if traces_dir is None else find_trace(traces_dir, measurement_id)
@@ -334,7 +341,8 @@ def trace_samples(traces_dir: Path | None, measurement_id: str,
     if terms is None:
         raise ReviewError(f"{where}: the trace {display_path(path)} was written before traces "
                           "kept their uncertainty terms; reduce the run again")
-    return SlidingSamples.of_trace(table.to_pandas()), terms
+    frame = table.to_pandas()
+    return SlidingSamples.of_trace(frame), terms, frame
 
 
 def _resolve(review: Review, rows: Mapping[str, Mapping[str, Any]]) -> dict[str, Decision]:

@@ -42,6 +42,7 @@ def review_cmd(config: str | None, map_path: str | None, traces_dir: str | None,
     from pathlib import Path
 
     from ..export.review_page import write_review_page
+    from ..layout import OutputLayout
 
     if config is None and map_path is None:
         raise click.UsageError("give a campaign CONFIG or --map PATH")
@@ -60,5 +61,5 @@ def review_cmd(config: str | None, map_path: str | None, traces_dir: str | None,
         the_map = Path(map_path)
         folder = the_map.parent
         traces = Path(traces_dir) if traces_dir is not None else folder / "traces"
-    target = Path(output) if output is not None else Path(folder) / "review.html"
+    target = Path(output) if output is not None else OutputLayout(folder).review_html
     say(str(write_review_page(the_map, traces, target, review_path=review_path, title=title)))

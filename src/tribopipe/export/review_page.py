@@ -14,12 +14,12 @@ download or copy; ``tribopipe batch --review`` applies it.
 
 What travels in the page: per run, the full sliding samples (distance and μ as base64
 little-endian float64, decoded only when the run is scrolled into view: the computation
-uses every sample), and, for drawing, μ and F_N decimated min–max to
-:data:`DISPLAY_COLUMNS` pixel columns (:mod:`tribopipe.figures.decimate`). Plots are
-drawn when scrolled into view. Everything that came from outside (names, reasons) is
-embedded through :func:`tribopipe.escape.script_json` and put into the page with
-``textContent`` only; the page's Content-Security-Policy allows its own script and style
-and nothing else.
+uses every sample, and the plot draws μ from them, decimated min–max to the canvas's
+pixel columns), and the normal force decimated min–max to :data:`DISPLAY_COLUMNS` pixel
+columns (:mod:`tribopipe.figures.decimate`). Plots are drawn when scrolled into view.
+Everything that came from outside (names, reasons) is embedded through
+:func:`tribopipe.escape.script_json` and put into the page with ``textContent`` only; the
+page's Content-Security-Policy allows its own script and style and nothing else.
 """
 
 from __future__ import annotations
@@ -45,7 +45,7 @@ from ..frictionmap import read_map
 from ..frictionmap.schema import is_missing
 from ..labels import flag_list, quality_flags
 from ..layout import find_trace
-from ..review import AUTO_OF, Review, decision_of_row, read_review, trace_samples
+from ..review import AUTO_OF, Review, decision_of_row, read_review, trace_table
 from ..stats import group_statistics, repeatability
 
 if TYPE_CHECKING:
@@ -53,8 +53,9 @@ if TYPE_CHECKING:
 
 #: the id of the page's data element
 DATA_ELEMENT_ID = "tribopipe-review-data"
-#: pixel columns the display traces are decimated to (the computation keeps every sample)
-DISPLAY_COLUMNS = 600
+#: pixel columns the normal force is decimated to for drawing (μ is drawn from every
+#: sliding sample, which the computation needs anyway, min–max per pixel column)
+DISPLAY_COLUMNS = 300
 _PLACEHOLDER = re.compile(r"\{\{(\w+)\}\}")
 
 
@@ -76,17 +77,14 @@ def _rounded(values: np.ndarray, digits: int = 5) -> list[float | None]:
     return [None if not math.isfinite(v) else float(f"{v:.{digits}g}") for v in values.tolist()]
 
 
-def _trace_payload(path: Path, where: str, traces_dir: Path, mid: str) -> dict[str, Any]:
-    """The samples (for the estimator) and the decimated lines (for drawing) of a trace."""
-    import pyarrow.parquet as pq
-
-    samples, terms = trace_samples(traces_dir, mid, where)
-    trace = pq.read_table(path, columns=["sliding_distance_mm", "normal_force_N", "mu"]).to_pandas()
+def _trace_payload(where: str, traces_dir: Path, mid: str) -> dict[str, Any]:
+    """The sliding samples (for the estimator, and drawn by the page min–max per pixel
+    column) and the normal force decimated for drawing (:data:`DISPLAY_COLUMNS`)."""
+    samples, terms, trace = trace_table(traces_dir, mid, where)
     s_all = trace["sliding_distance_mm"].to_numpy(dtype=float)
     finite = np.isfinite(s_all)
     x0 = float(np.min(s_all[finite])) if finite.any() else 0.0
     x1 = float(np.max(s_all[finite])) if finite.any() else 1.0
-    s_mu, mu = minmax_decimate(s_all, trace["mu"].to_numpy(dtype=float), (x0, x1), DISPLAY_COLUMNS)
     s_f, force = minmax_decimate(s_all, trace["normal_force_N"].to_numpy(dtype=float), (x0, x1),
                                  DISPLAY_COLUMNS)
     return {
@@ -96,8 +94,7 @@ def _trace_payload(path: Path, where: str, traces_dir: Path, mid: str) -> dict[s
         "terms": {"u_relative": terms.u_relative, "u_absolute": terms.u_absolute,
                   "min_plateau_samples": terms.min_plateau_samples,
                   "peak_window_mm": terms.peak_window_mm},
-        "show": {"s_mu": _rounded(s_mu, 6), "mu": _rounded(mu), "s_f": _rounded(s_f, 6),
-                 "f": _rounded(force)},
+        "show": {"x0": x0, "x1": x1, "s_f": _rounded(s_f, 5), "f": _rounded(force, 4)},
     }
 
 
@@ -178,7 +175,7 @@ def review_data(runs: pd.DataFrame, traces_dir: Path | None, *, review: Review |
         entry["trace"] = None
         if path is not None:
             try:
-                entry["trace"] = _trace_payload(path, f"run {mid}", traces_dir, mid)  # type: ignore[arg-type]
+                entry["trace"] = _trace_payload(f"run {mid}", path.parent, mid)
             except ExportError:
                 raise
             except Exception as exc:  # a trace we cannot use is said on its card

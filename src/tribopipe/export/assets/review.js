@@ -205,9 +205,28 @@ function setupCanvas(canvas) {
 var PAD = { l: 46, r: 10, t: 8, b: 20 };
 
 function xRange(run) {
-  var sh = run.trace.show, lo = Infinity, hi = -Infinity;
-  sh.s_mu.forEach(function (v) { if (v !== null) { lo = Math.min(lo, v); hi = Math.max(hi, v); } });
-  return hi > lo ? [lo, hi] : [lo, lo + 1];
+  var sh = run.trace.show;
+  return sh.x1 > sh.x0 ? [sh.x0, sh.x1] : [sh.x0, sh.x0 + 1];
+}
+
+// min-max per pixel column of the samples (x never decreasing): the points that decide
+// the drawn line (tribopipe.figures.decimate's rule)
+function thin(xs, ys, xr, columns) {
+  var outX = [], outY = [], i = 0, n = xs.length;
+  var scale = columns / (xr[1] - xr[0]);
+  while (i < n) {
+    var col = Math.floor((xs[i] - xr[0]) * scale), lo = i, hi = i, j = i;
+    while (j < n && Math.floor((xs[j] - xr[0]) * scale) === col) {
+      if (ys[j] < ys[lo]) { lo = j; }
+      if (ys[j] > ys[hi]) { hi = j; }
+      j++;
+    }
+    var a = Math.min(lo, hi), b = Math.max(lo, hi);
+    outX.push(xs[a]); outY.push(ys[a]);
+    if (b !== a) { outX.push(xs[b]); outY.push(ys[b]); }
+    i = j;
+  }
+  return [outX, outY];
 }
 
 function yRange(values, extra) {
@@ -273,7 +292,9 @@ function draw(run) {
   var box = setupCanvas(card.mu);
   var ctx = box.ctx;
   ctx.clearRect(0, 0, box.w, box.h);
-  var yr = yRange(sh.mu, [cur.mu_s]);
+  var x = samples(run);
+  var muLine = thin(x.s, x.mu, xr, Math.max(50, Math.round(box.w - PAD.l - PAD.r)));
+  var yr = yRange(muLine[1], [cur.mu_s]);
   var m = mapper(box, xr, yr);
   run._map = m;
   // the automatic window, outlined; the current one shaded
@@ -287,7 +308,7 @@ function draw(run) {
     ctx.fillStyle = "rgba(43,108,176,0.18)";
     ctx.fillRect(m.x(Math.min(lo, hi)), PAD.t, Math.abs(m.x(hi) - m.x(lo)), box.h - PAD.t - PAD.b);
   }
-  line(ctx, m, sh.s_mu, sh.mu, "#333");
+  line(ctx, m, muLine[0], muLine[1], "#333");
   if (cur.mu_k !== null && cur.from_mm !== null) {
     ctx.strokeStyle = "#2b6cb0"; ctx.lineWidth = 2; ctx.beginPath();
     ctx.moveTo(m.x(cur.from_mm), m.y(cur.mu_k)); ctx.lineTo(m.x(cur.to_mm), m.y(cur.mu_k)); ctx.stroke();
@@ -306,6 +327,7 @@ function draw(run) {
   line(fb.ctx, fm, sh.s_f, sh.f, "#6b4f1d");
   axes(fb.ctx, fb, xr, fr, "F_N");
   run._drawn = true;
+  card.root.setAttribute("data-drawn", "1");
 }
 
 // ------------------------------------------------------------------ one run's card

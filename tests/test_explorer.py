@@ -153,7 +153,10 @@ def test_embedded_json_round_trips(published_html):
         f"tpx-runs-{i}" for i in range(len(data["pairs"]))]
     head = {k: v for k, v in data.items() if k != "runs"}
     assert json.loads(blocks[0][1]) == head
-    assert [json.loads(text) for _, text in blocks[1:]] == data["runs"]
+    # packed: each key once per pair, each run a row
+    packed = [json.loads(text) for _, text in blocks[1:]]
+    assert [[dict(zip(c["columns"], row, strict=True)) for row in c["rows"]]
+            for c in packed] == data["runs"]
     assert read_embedded_data(html) == data
 
 

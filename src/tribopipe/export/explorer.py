@@ -114,8 +114,9 @@ CSV_COLUMNS = (
     "mu_s", "mu_s_U_k2", "mu_s_ci95_half_width", "clamped_pressure", "clamped_temperature",
     "measured_groups", "notes", "map", "tribopipe_version",
 )
-#: points per fitted power-law curve (log-spaced over the fitted pressure range)
-FIT_CURVE_POINTS = 48
+#: points per fitted power-law curve (log-spaced over the fitted pressure range), each
+#: coordinate to 4 significant digits (they are drawn, never computed with)
+FIT_CURVE_POINTS = 24
 
 _PLACEHOLDER = re.compile(r"\{\{(\w+)\}\}")
 #: group-table columns carried to the page (the others stay in the map's own tables)
@@ -320,7 +321,7 @@ def _fits(pair_fits: pd.DataFrame) -> list[dict[str, Any]]:
         if None not in (k, exponent, lo, hi) and 0 < lo < hi:
             p = np.geomspace(lo, hi, FIT_CURVE_POINTS)
             mu = power_law(p, k, exponent)
-            curve = [[float(a), float(b)] for a, b in zip(p, mu, strict=True)]
+            curve = [[float(f"{a:.4g}"), float(f"{b:.4g}")] for a, b in zip(p, mu, strict=True)]
         row["curve"] = curve
         row["legend"] = ("not fitted" if k is None else
                          f"μ_K = {k:.3f}·(p/kPa)^{exponent:.3f}, R² {row['r_squared']:.3f}"
@@ -612,15 +613,33 @@ def explorer_fragment(data: dict[str, Any], *, runs_beside: str | None = None) -
     return _fragment(data, _script(), runs_beside)
 
 
-def _packed(chunk: list[dict[str, Any]]) -> dict[str, Any]:
-    """A pair's runs as columns and rows (each key written once, not once per run)."""
-    columns = list(chunk[0]) if chunk else []
-    return {"columns": columns, "rows": [[r[c] for c in columns] for r in chunk]}
+def _packed(rows: list[dict[str, Any]]) -> dict[str, Any]:
+    """Rows (a pair's runs, the groups) as columns and rows: each key written once, not
+    once per row; a dict value's keys become columns ``name/key``."""
+    columns: list[str] = []
+    for name, value in (rows[0].items() if rows else ()):
+        columns += [f"{name}/{k}" for k in value] if isinstance(value, dict) else [name]
+
+    def cell(row: dict[str, Any], column: str) -> Any:
+        name, _, key = column.partition("/")
+        return row[name][key] if key else row[name]
+
+    return {"columns": columns, "rows": [[cell(r, c) for c in columns] for r in rows]}
 
 
 def _unpacked(packed: dict[str, Any]) -> list[dict[str, Any]]:
     """:func:`_packed` undone."""
-    return [dict(zip(packed["columns"], row, strict=True)) for row in packed["rows"]]
+    out = []
+    for row in packed["rows"]:
+        item: dict[str, Any] = {}
+        for column, value in zip(packed["columns"], row, strict=True):
+            name, _, key = column.partition("/")
+            if key:
+                item.setdefault(name, {})[key] = value
+            else:
+                item[name] = value
+        out.append(item)
+    return out
 
 
 def runs_files(data: dict[str, Any]) -> dict[str, str]:
@@ -643,6 +662,9 @@ def _fragment(data: dict[str, Any], js: str, runs_beside: str | None = None) -> 
         f'\n   <option value="{html_text(s["name"])}">{html_text(s["label"])}</option>'
         for s in data["snippets"])
     head = {k: v for k, v in data.items() if k != "runs"}
+    # the groups packed, their names left to their pair's (the page restores both)
+    head["groups"] = _packed([{k: v for k, v in g.items() if k not in ("pin", "disc")}
+                              for g in data["groups"]])
     chunks = ""
     if runs_beside is None:
         chunks = "".join(
@@ -706,6 +728,9 @@ def read_embedded_data(html: str) -> dict[str, Any]:
     if match is None:
         raise ExportError(f"no explorer data (script element #{DATA_ELEMENT_ID}) in the page")
     data: dict[str, Any] = json.loads(match.group(1))
+    data["groups"] = [{"pin": data["pairs"][g["pair"]]["pin"],
+                       "disc": data["pairs"][g["pair"]]["disc"], **g}
+                      for g in _unpacked(data["groups"])]
     chunks = re.findall(
         r'<script type="application/json" id="' + re.escape(RUNS_ELEMENT_PREFIX)
         + r'(\d+)">(.*?)</script>', html, re.DOTALL)

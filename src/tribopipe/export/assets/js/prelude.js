@@ -13,7 +13,7 @@ var dataElement = document.getElementById("explorer-data");
 if (!root || !dataElement) return;
 var DATA = JSON.parse(dataElement.textContent);
 var PAIRS = DATA.pairs;
-var GROUPS = DATA.groups;
+var GROUPS;
 var SVG_NS = "http://www.w3.org/2000/svg";
 var COLOURS = ["#0072B2", "#D55E00", "#009E73", "#CC79A7", "#E69F00", "#56B4E9", "#7f7f7f"];
 
@@ -24,13 +24,21 @@ var COLOURS = ["#0072B2", "#D55E00", "#009E73", "#CC79A7", "#E69F00", "#56B4E9",
    where the file is missing, the pair has no runs to show and says so. */
 var RUNS = {};
 var RUNS_MISSING = {};
+/* Rows packed as columns and rows (explorer.py's _packed; "name/key" a nested key). */
 function unpack(packed) {
+  var cols = packed.columns.map(function (c) { return c.split("/"); });
   return packed.rows.map(function (row) {
     var r = {};
-    packed.columns.forEach(function (c, k) { r[c] = row[k]; });
+    cols.forEach(function (c, k) {
+      if (c.length > 1) (r[c[0]] = r[c[0]] || {})[c[1]] = row[k];
+      else r[c[0]] = row[k];
+    });
     return r;
   });
 }
+GROUPS = unpack(DATA.groups);
+GROUPS.forEach(function (g) { g.pin = PAIRS[g.pair].pin; g.disc = PAIRS[g.pair].disc; });
+
 window.tribopipeRuns = function (index, packed) {
   RUNS[index] = unpack(packed);
   if (typeof runsArrived === "function") runsArrived(index);

@@ -41,15 +41,15 @@ def say(message: str, *, err: bool = False) -> None:
 
 
 def map_option(func: F) -> F:
-    """``--map PATH``: the friction map file every map-touching command takes."""
+    """``--map PATH``: the friction map every map-touching command takes."""
     return click.option(
         "--map",
         "map_path",
-        # checked by the library (a folder, a FIFO, a device: one line, never opened)
+        # checked by the library (a folder that is not a map, a FIFO, a device: one line)
         type=click.Path(),
         default=DEFAULT_MAP,
         show_default=True,
-        help="The friction map (Parquet file).",
+        help="The friction map (a Parquet folder of parts; a single file still reads).",
     )(func)
 
 

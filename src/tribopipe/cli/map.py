@@ -274,3 +274,35 @@ def include_cmd(ids: tuple[str, ...], map_path: str) -> None:
 
     changed = include_runs(map_path, ids)
     say(f"included {len(changed)} run(s)" + (": " + ", ".join(changed) if changed else ""))
+
+
+@map_group.command("upgrade")
+@map_option
+@friendly_errors
+def upgrade_cmd(map_path: str) -> None:
+    """Convert a map kept as one Parquet file (the format before map folders) into a map
+    folder of parts at the same path, so that every later write adds a part instead of
+    rewriting the whole map. Every row is checked on the way; the old file is kept as
+    <map>.bak. A map folder already is left as it is."""
+    from ..frictionmap.store import upgrade_map
+
+    n_runs, kept = upgrade_map(map_path)
+    if kept is None:
+        say(f"{map_path}: a map folder of parts already ({n_runs} runs); nothing to do")
+    else:
+        say(f"{map_path}: converted to a map folder of parts ({n_runs} runs); the single "
+            f"file is kept as {kept}")
+
+
+@map_group.command("compact")
+@map_option
+@friendly_errors
+def compact_cmd(map_path: str) -> None:
+    """Rewrite a map folder's parts as one part (with the safety of every write: the new
+    part fsynced, the manifest swapped atomically, the previous commit kept as
+    _manifest.json.bak). Writes keep the number of parts small on their own; compact
+    before copying a map, or after many exclusions."""
+    from ..frictionmap.store import compact_map
+
+    before, after = compact_map(map_path)
+    say(f"{map_path}: {before} part(s) → {after}")

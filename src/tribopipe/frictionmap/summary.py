@@ -13,7 +13,7 @@ from ..measurement import interval_label
 from ..stats import group_statistics, repeatability
 from .checks import validate_runs
 from .schema import is_missing
-from .store import read_map
+from .store import read_map, verify_map
 from .synthetic_rows import synthetic_note
 
 
@@ -139,7 +139,7 @@ def check_map_file(path: str | os.PathLike[str]) -> tuple[list[str], str]:
     if not os.path.lexists(p):  # read_map takes an absent map as empty: no file to pass
         raise MapError("file not found, expected a friction map (Parquet) or a data "
                        "package", path=p)
-    runs = read_map(p)
+    runs, _ = verify_map(p)  # every check there is: parts, checksums, every row
     problems = [problem.line(display_path(p)) for problem in validate_runs(runs)]
     note = synthetic_note(runs)
     verdict = (f"friction map {display_path(p)}: {_runs(len(runs))}, "

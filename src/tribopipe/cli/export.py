@@ -110,8 +110,9 @@ def _command(writer: Writer) -> click.Command:
 
     def run(output: str | None, map_path: str, **options: Any) -> None:
         from ..export.simulators import export_from_map
+        from ..frictionmap.snapshot import open_map
 
-        _emit(export_from_map(map_path, writer.name, **options), output)
+        _emit(export_from_map(open_map(map_path), writer.name, **options), output)
 
     run.__doc__ = writer.title + (f"\n\n{writer.description}" if writer.description else "")
     func: Callable[..., Any] = friendly_errors(run)

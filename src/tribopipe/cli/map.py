@@ -130,8 +130,9 @@ def publish_cmd(folder: str, lab: str, contact: str | None, email: str | None, l
     """
     from ..export.citation import Publisher
     from ..export.publish import publish_map
+    from ..frictionmap.snapshot import open_map
 
-    done = publish_map(map_path, folder, Publisher(lab, contact, email, licence, title),
+    done = publish_map(open_map(map_path), folder, Publisher(lab, contact, email, licence, title),
                        overwrite=overwrite, allow_synthetic=allow_synthetic)
     say(f"wrote {done.path}: {done.n_runs} runs in {len(done.files)} files "
         f"(check it with `tribopipe map validate {done.path}`)")
@@ -213,9 +214,10 @@ def table_cmd(
 ) -> None:
     """Regenerate a table from the friction map (to stdout, or -o FILE)."""
     from ..export.tables import export_table
+    from ..frictionmap.snapshot import open_map
 
     text = export_table(
-        map_path,
+        open_map(map_path),
         output,
         fmt=fmt,
         layout=layout,
@@ -244,10 +246,12 @@ def show_cmd(runs_listed: bool, groups_listed: bool, map_path: str) -> None:
     runs (with the file and test each came from) and the pooled repeatability."""
     from ..export.tables import map_paper_text
     from ..frictionmap import map_summary
+    from ..frictionmap.snapshot import open_map
 
-    click.echo(map_summary(map_path, runs_listed=runs_listed))
+    snap = open_map(map_path)  # the one read and check of the map
+    click.echo(map_summary(snap, runs_listed=runs_listed))
     if groups_listed:
-        click.echo(map_paper_text(map_path), nl=False)
+        click.echo(map_paper_text(snap), nl=False)
 
 
 @map_group.command("exclude")

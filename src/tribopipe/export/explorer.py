@@ -48,7 +48,7 @@ from ..errors import ExportError
 from ..escape import html_text, printable, script_json
 from ..files import write_text_atomic
 from ..fit import fit_power_law, power_law
-from ..frictionmap import read_map
+from ..frictionmap.snapshot import MapSource, as_snapshot
 from ..labels import flag_list
 from ..query import (
     groups_at_speed,
@@ -431,9 +431,9 @@ def read_embedded_data(html: str) -> dict[str, Any]:
 # ---------------------------------------------------------------------------- I/O edge
 
 
-def build_explorer(map_path: str | Path, *, title: str | None = None) -> str:
+def build_explorer(map_path: MapSource, *, title: str | None = None) -> str:
     """The explorer page (HTML text) of the friction map (Parquet) at ``map_path``."""
-    runs = read_map(map_path)
+    runs = as_snapshot(map_path).runs
     if runs.empty:
         raise ExportError(
             "the friction map is empty or absent",
@@ -446,6 +446,6 @@ def build_explorer(map_path: str | Path, *, title: str | None = None) -> str:
     return explorer_page(data)
 
 
-def write_explorer(map_path: str | Path, output: str | Path, *, title: str | None = None) -> Path:
+def write_explorer(map_path: MapSource, output: str | Path, *, title: str | None = None) -> Path:
     """Write the explorer page of the map at ``map_path`` to ``output`` (atomically)."""
     return write_text_atomic(output, build_explorer(map_path, title=title))

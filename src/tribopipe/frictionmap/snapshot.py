@@ -48,6 +48,14 @@ class MapSnapshot:
     columns: tuple[str, ...] = RUN_COLUMNS
     _derived: dict[Any, Any] = field(default_factory=dict, repr=False, compare=False)
 
+    def __fspath__(self) -> str:
+        """The map's path: a snapshot names its map where a message or a default folder
+        needs the path."""
+        return os.fspath(self.path)
+
+    def __str__(self) -> str:
+        return str(self.path)
+
     @property
     def runs(self) -> pd.DataFrame:
         """The rows of the map (a copy-on-write view: changing it leaves the snapshot)."""
@@ -122,8 +130,12 @@ def snapshot_of(runs: pd.DataFrame, path: str | os.PathLike[str] = "<rows>",
                        tuple(runs.columns))
 
 
-def as_snapshot(source: MapSnapshot | str | os.PathLike[str],
-                columns: Sequence[str] | None = None) -> MapSnapshot:
+#: what a library function takes for a map: a snapshot (a command opened it once), or a
+#: path that it opens once itself (callers not moved to snapshots yet)
+MapSource = MapSnapshot | str | os.PathLike[str]
+
+
+def as_snapshot(source: MapSource, columns: Sequence[str] | None = None) -> MapSnapshot:
     """``source`` itself when it is a snapshot, else the map at that path opened once.
     Library functions call this at their top so that a command that passes the snapshot
     reads the map once, and older callers that pass a path still work."""

@@ -462,9 +462,9 @@ def update_map(
     new_frame = records_frame(records)  # validate before touching anything
     with _locked(p):
         if _writes_parts(p):
-            return _update_parts(p, lambda _: (new_frame, drop_ids), replace)
+            return _update_parts(p, lambda _: (new_frame, drop_ids), replace)[0]
         # the locked read-modify-write: the map read again under the lock
-        return _fold_and_write(p, read_map(p), new_frame, replace, drop_ids)
+        return _fold_and_write(p, read_map(p), new_frame, replace, drop_ids)[0]
 
 
 #: what to fold into a map, decided from the map as it is: the records and the ids to drop
@@ -483,6 +483,18 @@ def update_map_with(
     ``decide(current)`` from the map as read under its lock, so that a check against the
     map (the same content under another name) cannot race another writer. ``decide``
     runs once; the map is rewritten only when something changed."""
+    return change_map_with(path, decide, replace=replace)[0]
+
+
+def change_map_with(
+    path: str | os.PathLike[str],
+    decide: Callable[[pd.DataFrame], MapChange],
+    *,
+    replace: bool = False,
+) -> tuple[AppendReport, pd.DataFrame]:
+    """:func:`update_map_with`, returning also the rows of the map as this change left it
+    (all columns, in the map's order), so that a command that shows the map after its
+    write need not read it again."""
     p = Path(path)
 
     def checked(current: pd.DataFrame) -> FrameChange:
@@ -507,7 +519,7 @@ def _writes_parts(p: Path) -> bool:
 
 
 def _fold_and_write(p: Path, current: pd.DataFrame, new_frame: pd.DataFrame, replace: bool,
-                    drop_ids: Iterable[str]) -> AppendReport:
+                    drop_ids: Iterable[str]) -> tuple[AppendReport, pd.DataFrame]:
     """Fold validated records into the map read under the lock, drop ``drop_ids`` and
     write it atomically when something changed. The caller holds the lock."""
     import dataclasses
@@ -520,7 +532,8 @@ def _fold_and_write(p: Path, current: pd.DataFrame, new_frame: pd.DataFrame, rep
     )
     if report.changed:
         _write_atomic(p, merged)
-    return report
+        return report, merged
+    return report, current
 
 
 # --------------------------------------------------------------------------- exclusions
@@ -1134,7 +1147,7 @@ def _owner(manifest: Manifest | None) -> Any:
 
 
 def _update_parts(p: Path, decide: Callable[[pd.DataFrame], FrameChange], replace: bool
-                  ) -> AppendReport:
+                  ) -> tuple[AppendReport, pd.DataFrame]:
     """The locked read-modify-write of a map folder: the map read (under the lock: the
     second read of a command that appends, so that no other writer slips in between the
     duplicate check and the write), ``decide`` asked once, the change committed as new
@@ -1150,14 +1163,14 @@ def _update_parts(p: Path, decide: Callable[[pd.DataFrame], FrameChange], replac
     report = dataclasses.replace(
         report, dropped_ids=tuple(current.loc[gone, "measurement_id"].astype(str)))
     if not report.changed:
-        return report
+        return report, current
     owner = _owner(manifest)
     by_id = dict(zip(current["measurement_id"], owner, strict=True))
     dirty = {int(by_id[m]) for m in report.replaced_ids} | {
         int(k) for k in owner[gone]}
     _change_parts(p, manifest, current, owner, gone, merged.iloc[:len(kept)], dirty,
                   merged.iloc[len(kept):])
-    return report
+    return report, merged
 
 
 def upgrade_map(path: str | os.PathLike[str]) -> tuple[int, Path | None]:

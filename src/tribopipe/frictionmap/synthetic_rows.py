@@ -8,12 +8,11 @@ flags every run it records with :data:`FLAG_SYNTHETIC`. The flag is the one rule
 
 from __future__ import annotations
 
-import os
 from pathlib import Path
 from typing import TYPE_CHECKING
 
 from ..labels import FLAG_SYNTHETIC, flag_list
-from .store import read_map
+from .snapshot import MapSource, as_snapshot
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -47,10 +46,10 @@ def synthetic_note(runs: pd.DataFrame) -> str | None:
             "not measurements")
 
 
-def map_synthetic_note(path: str | os.PathLike[str]) -> str | None:
+def map_synthetic_note(path: MapSource) -> str | None:
     """:func:`synthetic_note` of the map at ``path`` (``None`` for a map without synthetic
     rows, or no map)."""
     if not Path(path).is_file():
         return None
-    note = synthetic_note(read_map(path))
+    note = synthetic_note(as_snapshot(path).runs)
     return None if note is None else note.replace(" runs are", " runs of this map are", 1)

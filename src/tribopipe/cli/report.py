@@ -12,7 +12,7 @@ from ._common import friendly_errors, say
 @click.option(
     "--map",
     "map_path",
-    type=click.Path(dir_okay=False),
+    type=click.Path(),
     help="Friction map (Parquet). Default: the CONFIG's, else processed/friction_map.parquet.",
 )
 @click.option(

@@ -40,6 +40,11 @@ demo: install
 	@echo "  friction.inp             ABAQUS *FRICTION tables"
 	@echo "  plots/traces, plots/pairs  trace and pressure plots (PNG)"
 	@echo "  report.html              the campaign report (open it in a browser)"
+	@echo ""
+	@echo "Next: put tribopipe on your PATH (in this shell) with"
+	@echo "  source $(VENV)/bin/activate"
+	@echo "then try, from this folder:  tribopipe map show"
+	@echo "Commands run here without --map read $(DEMO)/friction_map.parquet: batch named it in ./.tribopipe-map."
 
 test: $(TEST_STAMP)
 	$(PY) -m pytest

@@ -106,7 +106,7 @@ def per_file(folder: Path, repeat: int) -> dict:
                                  file_hash=file_hash, settings=settings)
             outcome = RunOutcome(path=str(path), measurement=m, result=result,
                                  file_hash=file_hash, config_hash=settings.config_hash,
-                                 measurement_id=record["measurement_id"], verdict=verdict,
+                                 measurement_id=record.measurement_id, verdict=verdict,
                                  record=record)
             plot_run(out, outcome)  # the figure is built once per process
             steps["read"].append(cpu(lambda p=path: read_export(p), repeat))
@@ -161,7 +161,9 @@ def template_record(folder: Path) -> dict:
 
     path = write_rheocompass_export(folder / "t.csv", SyntheticRun(seed=1), project="p",
                                     test="t", sample="s")
-    return reduce_file(path, load_settings(), RunLabels("x", "y", 3.0, 20.0, 1)).record
+    record = reduce_file(path, load_settings(), RunLabels("x", "y", 3.0, 20.0, 1)).record
+    assert record is not None
+    return record.as_dict()
 
 
 def per_size(folder: Path, n: int, template: dict) -> dict:

@@ -123,7 +123,7 @@ def main() -> int:
         for s in d["steps"]:
             by_speed.setdefault(s["speed_rpm"], []).append(s["mu_k"] - s["true_mu_k"])
             speed_err.append(s["sliding_speed_mm_s"] / sliding_speed_mm_s(s["speed_rpm"]) - 1)
-            nominal.setdefault(s["speed_rpm"], set()).add(s["record"]["nominal_speed_mm_s"])
+            nominal.setdefault(s["speed_rpm"], set()).add(s["record"].nominal_speed_mm_s)
             flagged_speed += "sliding_speed_off_nominal" in s["flags"]
             records.append(s["record"])
     report["per_step"] = {

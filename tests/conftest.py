@@ -11,6 +11,7 @@ read from there (``published_map.PUBLISHED_CSV``).
 from __future__ import annotations
 
 import os
+from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
@@ -40,3 +41,20 @@ def shared_file(*parts: str) -> Path:
     if not path.exists():
         pytest.skip(f"{path} not found (../shared exists only in CI and on developer machines)")
     return path
+
+
+@pytest.fixture(autouse=True)
+def _no_project_file() -> Iterator[None]:
+    """Each test starts without ``./.tribopipe-map`` (the map commands read without
+    ``--map``, written by ``batch``) and leaves the one it found, if any, as it was: a
+    ``make demo`` before ``make test`` or a batch run by a test never steers another
+    test's map."""
+    project = Path.cwd() / ".tribopipe-map"
+    kept = project.read_bytes() if project.is_file() else None
+    project.unlink(missing_ok=True)
+    try:
+        yield
+    finally:
+        project.unlink(missing_ok=True)
+        if kept is not None:
+            project.write_bytes(kept)

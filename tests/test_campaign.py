@@ -395,7 +395,7 @@ def test_workers_return_typed_picklable_results(campaign_dir: Path) -> None:
     bad = failed.error
     assert isinstance(good, ReducedRun) and isinstance(bad, FailedRun) and not failed.runs
     assert good.name == "DS30_steel_5N_20C_r1.csv" and good.place.test == "friction"
-    assert good.measurement_id == good.record["measurement_id"]
+    assert good.measurement_id == good.record.measurement_id
     assert good.labels.pin == "Dragonskin 30"
     assert good.summary["mu_k"] == pytest.approx(0.36, abs=0.01)
     assert good.trace is not None and good.trace.is_file()
@@ -423,3 +423,33 @@ def test_the_state_is_sqlite_updated_row_by_row_and_an_old_json_state_converts(
     assert campaign.state_path.is_file()                 # converted
     again = run_campaign(campaign, jobs=1)
     assert again.reduced == [] and len(again.skipped) == len(GOOD)
+
+
+def test_the_groups_updated_are_the_statistics_groups(tmp_path: Path) -> None:
+    """The batch counts condition groups as the statistics group runs: two runs of one
+    pair, force and temperature at two nominal speeds are two groups, and a replaced run
+    counts its group."""
+    from tribopipe.frictionmap import read_map
+    from tribopipe.stats import group_statistics
+
+    raw = tmp_path / "raw"
+    raw.mkdir()
+    for repeat, rpm in ((1, 0.005), (2, 0.005), (3, 0.05)):
+        run = SyntheticRun(mu_s=0.8, mu_k=0.6, normal_force_N=1.0, temperature_C=20.0,
+                           duration_s=DURATION_S, noise=0.004, seed=repeat, speed_rpm=rpm)
+        write_rheocompass_export(raw / f"DS30_steel_1N_20C_r{repeat}.csv", run,
+                                 project="speeds", test="friction", sample="pin")
+    campaign = load_campaign(write_config(tmp_path))
+    report = run_campaign(campaign, jobs=1)
+    assert sorted(report.reduced) == [f"DS30_steel_1N_20C_r{r}.csv" for r in (1, 2, 3)]
+    groups = group_statistics(read_map(campaign.map_path))
+    assert len(groups) == 2  # one pair, force and temperature; two nominal speeds
+    assert report.groups_updated == len(groups)
+    # the fast run reduced again from a changed file: its one group, nothing else
+    run = SyntheticRun(mu_s=0.8, mu_k=0.5, normal_force_N=1.0, temperature_C=20.0,
+                       duration_s=DURATION_S, noise=0.004, seed=9, speed_rpm=0.05)
+    write_rheocompass_export(raw / "DS30_steel_1N_20C_r3.csv", run, project="speeds",
+                             test="friction", sample="pin")
+    again = run_campaign(campaign, jobs=1)
+    assert again.reduced == ["DS30_steel_1N_20C_r3.csv"]
+    assert again.groups_updated == 1

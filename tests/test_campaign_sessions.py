@@ -263,7 +263,7 @@ def test_each_force_step_of_a_test_gets_its_own_manifest_row(tmp_path: Path) -> 
                                  f'steps.txt,"{STEPS}",3,,,5,,\n'
                                  "steps.txt,,7,,,9,,\n")
     args = ["batch", str(raw), "--manifest", str(raw / "manifest.csv"),
-            "--out", str(tmp_path / "out"), "--no-plots", "--jobs", "1"]
+            "--output", str(tmp_path / "out"), "--no-plots", "--jobs", "1"]
     # before any batch the listing shows the rows the manifest names, with their steps
     listed = campaign_listing(folder_campaign(raw, manifest=raw / "manifest.csv",
                                               output_dir=tmp_path / "out"))
@@ -411,7 +411,7 @@ def test_a_copy_of_a_file_the_map_holds_from_elsewhere_is_named(lab: Path) -> No
     result = CliRunner().invoke(main, [
         "reduce", str(elsewhere), "--pin", "Dragonskin 30", "--disc", "steel", "--force", "7",
         "--temperature", "20", "--repeat", "5", "--map", str(campaign.map_path),
-        "--out", str(lab / "o")])
+        "--output", str(lab / "o")])
     assert result.exit_code == 0, result.output
     report = run_campaign(campaign, jobs=1)
     reason = dict(report.failures)["single.csv"]
@@ -453,7 +453,7 @@ def test_batch_folder_with_a_test_manifest_and_a_test_pattern(lab: Path) -> None
                         encoding="utf-8")
     result = CliRunner().invoke(main, [
         "batch", str(raw), "--manifest", str(manifest), "--test-pattern",
-        TEST_PATTERN, "--out", str(lab / "proc"), "--no-plots", "--jobs", "1"])
+        TEST_PATTERN, "--output", str(lab / "proc"), "--no-plots", "--jobs", "1"])
     assert result.exit_code == 1, result.output
     out = result.stdout
     assert "raw: 6 file(s) found (4 read, 2 failed), 10 test(s); 10 run(s) in the files " \
@@ -521,7 +521,7 @@ def test_a_test_name_with_a_control_character_fails_its_run_alone(tmp_path: Path
         "a.txt,Dragonskin 30,steel,3,20,1\nb.txt,Dragonskin 30,steel,3,20,2\n",
         encoding="utf-8")
     result = CliRunner().invoke(main, ["batch", str(raw), "--manifest",
-                                       str(raw / "manifest.csv"), "--out", str(tmp_path / "o"),
+                                       str(raw / "manifest.csv"), "--output", str(tmp_path / "o"),
                                        "--no-plots", "--jobs", "1"])
     assert result.exit_code == 1 and "Traceback" not in result.output
     (line,) = [ln for ln in result.stderr.splitlines() if ln.startswith("failed: a.txt")]

@@ -115,7 +115,7 @@ def test_quick_batch_of_a_folder_with_a_manifest(exports: Path, tmp_path: Path) 
     )
     map_path = tmp_path / "lab" / "map.parquet"
     result = invoke("batch", str(folder), "--manifest", str(manifest), "--map", str(map_path),
-                    "--out", str(tmp_path / "proc"), "--no-plots")
+                    "--output", str(tmp_path / "proc"), "--no-plots")
     assert result.exit_code == 1  # two files have no manifest row
     assert "2 reduced" in result.stdout and "2 failed" in result.stdout
     assert "no row for it in manifest manifest.csv" in result.stderr
@@ -189,7 +189,7 @@ def test_quick_batch_of_a_folder_by_file_names(exports: Path, tmp_path: Path) ->
     for p in folder.glob("*.csv"):
         p.rename(p.with_suffix(".txt"))
     result = invoke("batch", str(folder), "--pattern", PATTERN, "--glob", "*_r1.txt",
-                    "--out", str(tmp_path / "proc"), "--no-plots", "--jobs", "1")
+                    "--output", str(tmp_path / "proc"), "--no-plots", "--jobs", "1")
     # the r2 run is outside the glob; the bad r1 file fails
     assert "3 file(s) found (2 read, 1 failed)" in result.stdout, result.output
     assert "2 run(s) in the files read: 2 reduced" in result.stdout, result.output

@@ -3,6 +3,7 @@ Parquet map imported from the published friction map."""
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
 import subprocess
@@ -82,12 +83,17 @@ def test_query_force_converts_through_the_instrument_config(map_path, groups, tm
     config = tmp_path / "one_pin.toml"
     config.write_text("[instrument]\nn_pins = 1\npin_radius_mm = 2.0\n", encoding="utf-8")
     text = _run("query", "--map", str(map_path), "--pin", PIN, "--disc", DISC, "--force",
-                "0.5", "--temperature", "20", "--config", str(config)).output
+                "0.5", "--temperature", "20", "--instrument", str(config)).output
     p1 = float(contact_pressure_kPa(0.5, 1, 2.0))
     assert f"at {p1:.4g} kPa (0.5 N on 1 pin(s) of radius 2 mm)" in text
     both = CliRunner().invoke(main, ["query", "--map", str(map_path), "--pin", PIN, "--disc",
                                      DISC, "--force", "1", "--pressure", "10"])
     assert both.exit_code == 2 and "exactly one of --pressure and --force" in both.output
+    for bad in ("0", "-3", "nan", "inf"):
+        refused = CliRunner().invoke(main, ["query", "--map", str(map_path), "--pin", PIN,
+                                            "--disc", DISC, "--force", bad])
+        assert refused.exit_code == 2 and "Traceback" not in refused.output, refused.output
+        assert "--force" in refused.output and "finite number > 0 N" in refused.output
 
 
 def test_query_unknown_pair_is_one_friendly_line(map_path):
@@ -321,7 +327,7 @@ def test_export_mu_s_from_reduced_runs(reduced_map, tmp_path):
     g = groups[(groups.disc == "steel")].sort_values("pressure_kPa").iloc[0]
     common = ["--map", str(reduced_map), "--pin", PIN, "--disc", DISC, "--pressure",
               repr(float(g.pressure_kPa)), "--coefficient", "mu_s"]
-    pair = mujoco_pair(_run("export", "mujoco", *common).output)
+    pair = mujoco_pair(_run("export", "mujoco", *common).stdout)
     assert float(pair.get("friction").split()[0]) == pytest.approx(g.mu_s_mean, rel=1e-8)
     out = tmp_path / "contact.k"
     result = _run("export", "lsdyna", *common, "--units", "m-N-s", "-o", str(out))
@@ -353,10 +359,8 @@ def test_abaqus_slip_rate_per_pair_from_a_real_map(tmp_path):
     """Steel runs recorded at three times the speed: only the steel table says so."""
     from tribopipe.frictionmap import append_records, import_records
 
-    records = import_records(PUBLISHED_CSV)
-    for record in records:
-        if record["disc"] == DISC:
-            record["sliding_speed_mm_s"] = 0.021
+    records = [dataclasses.replace(r, sliding_speed_mm_s=0.021) if r.disc == DISC else r
+               for r in import_records(PUBLISHED_CSV)]
     map_path = tmp_path / "friction_map.parquet"
     append_records(map_path, records)
     result = _run("export", "abaqus", "--map", str(map_path), "--pin", PIN)

@@ -38,7 +38,7 @@ def _invoke(args: list[str], cwd: Path):
 def test_reduce_json_reports_the_known_truth(export: Path, tmp_path: Path) -> None:
     out = tmp_path / "out"
     result = CliRunner().invoke(
-        main, ["reduce", str(export), "--json", "--no-map", "--out", str(out)]
+        main, ["reduce", str(export), "--json", "--no-map", "--output", str(out)]
     )
     assert result.exit_code == 0, result.output
     rows = json.loads(result.stdout)
@@ -73,7 +73,7 @@ def test_reduce_appends_to_the_map_once(export: Path, tmp_path: Path) -> None:
     map_path = tmp_path / "map.parquet"
     args = ["reduce", str(export), "--pin", "Dragonskin 30", "--disc", "steel", "--force", "3",
             "--temperature", "20", "--repeat", "1", "--map", str(map_path),
-            "--out", str(tmp_path / "out")]
+            "--output", str(tmp_path / "out")]
     first = CliRunner().invoke(main, args)
     assert first.exit_code == 0, first.output
     second = CliRunner().invoke(main, args)
@@ -87,7 +87,7 @@ def test_reduce_appends_to_the_map_once(export: Path, tmp_path: Path) -> None:
 def test_reduce_without_pin_and_disc_does_not_touch_the_map(export: Path, tmp_path: Path) -> None:
     map_path = tmp_path / "map.parquet"
     result = CliRunner().invoke(
-        main, ["reduce", str(export), "--map", str(map_path), "--out", str(tmp_path / "o")]
+        main, ["reduce", str(export), "--map", str(map_path), "--output", str(tmp_path / "o")]
     )
     assert result.exit_code == 0, result.output
     assert "pin and disc unknown" in result.stderr
@@ -103,7 +103,7 @@ def test_bad_file_gives_one_line_and_exit_1_but_good_files_still_reduce(
     empty.write_bytes(b"")
     result = CliRunner().invoke(
         main, ["reduce", str(bad), str(export), str(empty), "--no-map", "--json",
-               "--out", str(tmp_path / "o")]
+               "--output", str(tmp_path / "o")]
     )
     assert result.exit_code == 1
     errors = [line for line in result.stderr.splitlines() if line.startswith("error:")]
@@ -123,7 +123,7 @@ def test_missing_file_is_one_line(tmp_path: Path) -> None:
 def test_plot_writes_a_png(export: Path, tmp_path: Path) -> None:
     out = tmp_path / "out"
     result = CliRunner().invoke(
-        main, ["reduce", str(export), "--no-map", "--plot", "--out", str(out)]
+        main, ["reduce", str(export), "--no-map", "--plots", "--output", str(out)]
     )
     assert result.exit_code == 0, result.output
     pngs = list((out / "plots" / "traces").glob("*.png"))
@@ -135,7 +135,7 @@ def test_plot_writes_a_png(export: Path, tmp_path: Path) -> None:
 def test_reduce_as_a_subprocess(export: Path, tmp_path: Path) -> None:
     proc = subprocess.run(
         [sys.executable, "-m", "tribopipe", "reduce", str(export), "--no-map",
-         "--out", str(tmp_path / "o")],
+         "--output", str(tmp_path / "o")],
         capture_output=True, text=True,
     )
     assert proc.returncode == 0, proc.stderr
@@ -149,7 +149,7 @@ def test_an_export_without_contact_is_refused_naming_the_file_once(tmp_path: Pat
     path = tmp_path / "lifted.csv"
     write_rheocompass_export(path, run, project="p", test="t", sample="s")
     result = CliRunner().invoke(main, ["reduce", str(path), "--no-map",
-                                       "--out", str(tmp_path / "o")])
+                                       "--output", str(tmp_path / "o")])
     assert result.exit_code == 1
     line = result.stderr.splitlines()[0]
     assert line.count(str(path)) == 1
@@ -159,11 +159,11 @@ def test_an_export_without_contact_is_refused_naming_the_file_once(tmp_path: Pat
 def test_forced_reader_settings_reach_the_reader(export: Path, tmp_path: Path) -> None:
     ok = CliRunner().invoke(main, ["reduce", str(export), "--no-map", "--json",
                                    "--encoding", "utf-16", "--delimiter", "tab",
-                                   "--decimal", ".", "--out", str(tmp_path / "o")])
+                                   "--decimal", ".", "--output", str(tmp_path / "o")])
     assert ok.exit_code == 0, ok.output
     assert json.loads(ok.stdout)[0]["mu_k"] == pytest.approx(RUN.mu_k, abs=0.01)
     wrong = CliRunner().invoke(main, ["reduce", str(export), "--no-map",
-                                      "--delimiter", ";", "--out", str(tmp_path / "o")])
+                                      "--delimiter", ";", "--output", str(tmp_path / "o")])
     assert wrong.exit_code == 1
     assert str(export) in wrong.stderr and "Traceback" not in wrong.output
 
@@ -180,7 +180,7 @@ def test_the_table_shows_each_coefficient_with_u_as_every_output_rounds_it(
     export = tmp_path / "high.csv"
     write_rheocompass_export(export, replace(RUN, mu_s=1.9, mu_k=1.4), project="p",
                              test="t", sample="s")
-    args = ["reduce", str(export), "--no-map", "--out", str(tmp_path / "o")]
+    args = ["reduce", str(export), "--no-map", "--output", str(tmp_path / "o")]
     shown = CliRunner().invoke(main, args)
     data = CliRunner().invoke(main, [*args, "--json"])
     assert shown.exit_code == 0 and data.exit_code == 0, shown.output + data.output

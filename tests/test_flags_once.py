@@ -55,7 +55,7 @@ def _explorer_run_flags(data: object, run_id: str) -> list[str] | None:
 def test_reduce_shows_the_maps_flags_in_every_output(tmp_path: Path) -> None:
     out, mapfile = tmp_path / "out", tmp_path / "map.parquet"
     args = ["reduce", str(ONE_NEWTON), "--pin", "DS30", "--disc", "steel", "--force", "3",
-            "--temperature", "10", "--repeat", "1", "--out", str(out), "--map", str(mapfile)]
+            "--temperature", "10", "--repeat", "1", "--output", str(out), "--map", str(mapfile)]
     table = CliRunner().invoke(main, [*args, "--plot"])
     assert table.exit_code == 0, table.output
     header_after_reduce = _header_flags()
@@ -81,7 +81,7 @@ def test_batch_shows_the_same_flags_as_reduce(tmp_path: Path) -> None:
     out, mapfile = tmp_path / "out", tmp_path / "map.parquet"
     done = CliRunner().invoke(main, [
         "batch", str(raw), "--pattern", "{pin}_{disc}_{force}N_{temperature}C_r{repeat}",
-        "--out", str(out), "--map", str(mapfile), "--jobs", "1", "--plots"])
+        "--output", str(out), "--map", str(mapfile), "--jobs", "1", "--plots"])
     assert done.exit_code == 0, done.output
     header = _header_flags()
 
@@ -112,6 +112,6 @@ def test_batch_shows_the_same_flags_as_reduce(tmp_path: Path) -> None:
     again = CliRunner().invoke(main, [
         "reduce", str(raw / "DS30_steel_3N_10C_r1.csv"), "--pin", "DS30", "--disc", "steel",
         "--force", "3", "--temperature", "10", "--repeat", "1", "--no-map", "--json",
-        "--out", str(tmp_path / "again")])
+        "--output", str(tmp_path / "again")])
     assert again.exit_code == 0, again.output
     assert json.loads(again.stdout)[0]["flags"] == [OFF]

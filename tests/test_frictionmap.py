@@ -26,8 +26,7 @@ from tribopipe import __version__
 from tribopipe import frictionmap as fm
 from tribopipe.config import InstrumentConfig, load_settings, settings_from_dict
 from tribopipe.errors import MapError, ValidationError
-from tribopipe.frictionmap.records import nominal_pressure_kPa
-from tribopipe.labels import RunLabels, Tolerances
+from tribopipe.labels import RunLabels, Tolerances, decide_run
 from tribopipe.measurement import Measurement, MeasurementMeta
 from tribopipe.reduction.reduce import ReductionResult, reduce_measurement
 
@@ -66,8 +65,19 @@ def run_record(
     meta = MeasurementMeta(source_file=f"data/run{i}.txt", file_format="synthetic", interval=2)
     labels = RunLabels(pin=pin, disc=disc, normal_force_N=force_N,
                        temperature_C=temperature_C, repeat=repeat)
-    return fm.make_record(result=result, labels=labels, meta=meta, file_hash=file_hash_of(i),
-                          settings=settings or load_settings())
+    return record_of(result, labels, meta, file_hash_of(i), settings or load_settings())
+
+
+def record_of(result, labels, meta, file_hash, settings, tolerances=None):
+    """``make_record`` of a run whose flags are decided by ``decide_run`` from ``labels``
+    and ``tolerances``, as the pipeline decides them."""
+    verdict = decide_run(labels, result.flags, result.normal_force_mean_N,
+                         result.temperature_C, tolerances,
+                         speed_set_point_rpm=result.speed_set_point_rpm,
+                         sliding_speed_measured_mm_s=result.sliding_speed_mm_s,
+                         instrument=settings.instrument)
+    return fm.make_record(result=result, verdict=verdict, meta=meta, file_hash=file_hash,
+                          settings=settings)
 
 
 # --------------------------------------------------------------------------- records
@@ -76,32 +86,32 @@ def run_record(
 def test_nominal_pressure_converts_newtons_on_three_pins_to_kilopascal():
     cell = InstrumentConfig()
     # (1 N / 3) / (π · 9 mm²) = 0.011789 N/mm² = 11.789 kPa: the published 11.79
-    assert nominal_pressure_kPa(1.0, cell) == pytest.approx(1 / 3 / (math.pi * 9e-6) / 1e3)
-    assert round(nominal_pressure_kPa(1.0, cell), 2) == 11.79
-    assert round(nominal_pressure_kPa(9.0, cell), 1) == 106.1
+    assert cell.pressure_kPa(1.0) == pytest.approx(1 / 3 / (math.pi * 9e-6) / 1e3)
+    assert round(cell.pressure_kPa(1.0), 2) == 11.79
+    assert round(cell.pressure_kPa(9.0), 1) == 106.1
     one_pin = InstrumentConfig(n_pins=1, pin_radius_mm=2.0)
-    assert nominal_pressure_kPa(1.0, one_pin) == pytest.approx(1.0 / (math.pi * 4e-6) / 1e3)
+    assert one_pin.pressure_kPa(1.0) == pytest.approx(1.0 / (math.pi * 4e-6) / 1e3)
 
 
 def test_make_record_carries_the_reduction_and_its_provenance():
     result = reduced_result()
     settings = load_settings()
     rec = run_record(5, force_N=3.0, temperature_C=20.0, repeat=2)
-    assert set(rec) == set(fm.RUN_COLUMNS)
-    assert rec["mu_s"] == result.mu_s and rec["mu_k"] == result.mu_k
-    assert 0.75 < rec["mu_s"] < 0.85 and 0.5 < rec["mu_k"] < 0.6  # the synthetic truth
-    assert (rec["mu_k_window_start_mm"], rec["mu_k_window_end_mm"]) == result.mu_k_window_mm
-    assert (rec["mu_k_window_start_s"], rec["mu_k_window_end_s"]) == result.mu_k_window_s
-    assert rec["normal_force_measured_N"] == result.normal_force_mean_N
-    assert rec["pressure_kPa"] == pytest.approx(nominal_pressure_kPa(3.0, settings.instrument))
-    assert rec["sliding_speed_mm_s"] == pytest.approx(0.007, rel=0.02)
-    assert rec["source"] == "reduced" and rec["source_file"] == "run5.txt"
-    assert rec["file_hash"] == file_hash_of(5) and rec["config_hash"] == settings.config_hash
-    assert rec["tribopipe_version"] == __version__ and rec["interval"] == 2
-    assert rec["reduced_at"].endswith("Z") and rec["excluded"] is False
-    assert rec["flags"] == ";".join(sorted(result.flags))
+    assert set(rec.as_dict()) == set(fm.RUN_COLUMNS)
+    assert rec.mu_s == result.mu_s and rec.mu_k == result.mu_k
+    assert 0.75 < rec.mu_s < 0.85 and 0.5 < rec.mu_k < 0.6  # the synthetic truth
+    assert (rec.mu_k_window_start_mm, rec.mu_k_window_end_mm) == result.mu_k_window_mm
+    assert (rec.mu_k_window_start_s, rec.mu_k_window_end_s) == result.mu_k_window_s
+    assert rec.normal_force_measured_N == result.normal_force_mean_N
+    assert rec.pressure_kPa == pytest.approx(settings.instrument.pressure_kPa(3.0))
+    assert rec.sliding_speed_mm_s == pytest.approx(0.007, rel=0.02)
+    assert rec.source == "reduced" and rec.source_file == "run5.txt"
+    assert rec.file_hash == file_hash_of(5) and rec.config_hash == settings.config_hash
+    assert rec.tribopipe_version == __version__ and rec.interval == 2
+    assert rec.reduced_at.endswith("Z") and rec.excluded is False
+    assert rec.flags == ";".join(sorted(result.flags))
     meta = MeasurementMeta(source_file="x", file_format="synthetic", interval=2)
-    assert rec["measurement_id"] == fm.measurement_id(file_hash_of(5), meta)
+    assert rec.measurement_id == fm.measurement_id(file_hash_of(5), meta)
 
 
 def test_measurement_id_depends_on_content_and_interval_not_on_the_file_name():
@@ -117,15 +127,15 @@ def test_measurement_id_depends_on_content_and_interval_not_on_the_file_name():
 
 def test_missing_nominal_force_uses_the_measured_mean_and_is_flagged():
     rec = run_record(force_N=None, normal_force_mean_N=2.96)
-    assert rec["normal_force_N"] == 3.0
-    assert "nominal_force_estimated" in rec["flags"].split(";")
-    assert rec["pressure_kPa"] == pytest.approx(nominal_pressure_kPa(3.0, InstrumentConfig()))
+    assert rec.normal_force_N == 3.0
+    assert "nominal_force_estimated" in rec.flags.split(";")
+    assert rec.pressure_kPa == pytest.approx(InstrumentConfig().pressure_kPa(3.0))
 
 
 def test_off_nominal_force_and_temperature_are_flagged():
     rec = run_record(force_N=5.0, temperature_C=10.0)  # the run measured 3 N at 20 °C
-    assert {"normal_force_off_nominal", "temperature_off_nominal"} <= set(rec["flags"].split(";"))
-    assert run_record(force_N=3.0, temperature_C=20.0)["flags"] == ""
+    assert {"normal_force_off_nominal", "temperature_off_nominal"} <= set(rec.flags.split(";"))
+    assert run_record(force_N=3.0, temperature_C=20.0).flags == ""
 
 
 def test_off_nominal_flags_follow_the_tolerances_given():
@@ -136,8 +146,8 @@ def test_off_nominal_flags_follow_the_tolerances_given():
                        temperature_C=21.5, repeat=1)
 
     def flags(tolerances):
-        return fm.make_record(result=result, labels=labels, meta=meta, file_hash=file_hash_of(0),
-                              settings=load_settings(), tolerances=tolerances)["flags"]
+        return record_of(result, labels, meta, file_hash_of(0), load_settings(),
+                         tolerances).flags
 
     assert flags(None) == ""
     assert flags(Tolerances(force_rel=0.05)) == "normal_force_off_nominal"
@@ -147,8 +157,8 @@ def test_off_nominal_flags_follow_the_tolerances_given():
 def test_nominal_pressure_follows_the_instrument_geometry():
     two_mm = settings_from_dict({"instrument": {"pin_radius_mm": 2.0}})
     rec = run_record(force_N=3.0, settings=two_mm)
-    assert rec["pressure_kPa"] == pytest.approx(1.0 / (math.pi * 4.0) * 1e3)
-    assert rec["config_hash"] != run_record(force_N=3.0)["config_hash"]
+    assert rec.pressure_kPa == pytest.approx(1.0 / (math.pi * 4.0) * 1e3)
+    assert rec.config_hash != run_record(force_N=3.0).config_hash
 
 
 @pytest.mark.parametrize("labels", [{"pin": None}, {"disc": None}])
@@ -169,7 +179,7 @@ def test_a_run_without_mu_k_is_refused():
 
 
 def test_records_frame_refuses_a_reduced_row_without_mu_s_and_names_the_column():
-    rec = dict(run_record())  # a changed copy of a checked record is checked again
+    rec = run_record().as_dict()  # a changed copy of a checked record is checked again
     rec["mu_s"] = None
     with pytest.raises(MapError, match="only imported rows may lack mu_s") as err:
         fm.records_frame([rec])
@@ -186,7 +196,7 @@ def test_append_then_read_gives_the_same_rows_and_schema_metadata(tmp_path):
     path = tmp_path / "processed" / "friction_map.parquet"
     records = [run_record(i, repeat=i + 1, mu_k=0.5 + 0.01 * i) for i in range(3)]
     report = fm.append_records(path, records)
-    assert report.added == 3 and report.added_ids == tuple(r["measurement_id"] for r in records)
+    assert report.added == 3 and report.added_ids == tuple(r.measurement_id for r in records)
     runs = fm.read_map(path)
     pd.testing.assert_frame_equal(runs, fm.records_frame(records))
     info = pq.read_schema(the_part(path)).metadata[fm.schema.META_KEY]
@@ -223,12 +233,12 @@ def test_a_rereduction_with_another_config_replaces_only_when_asked(tmp_path):
     other_config = settings_from_dict({"reduction": {"median_window": 9}})
     new = run_record(1, settings=other_config, mu_k=0.57)
     kept = fm.append_records(path, [new])
-    assert kept.kept_conflicting == 1 and kept.conflicting_ids == (old["measurement_id"],)
-    assert set(kept.differences[old["measurement_id"]]) == {"mu_k", "config_hash"}
+    assert kept.kept_conflicting == 1 and kept.conflicting_ids == (old.measurement_id,)
+    assert set(kept.differences[old.measurement_id]) == {"mu_k", "config_hash"}
     assert "pass --replace" in kept.summary()
-    assert fm.read_map(path)["mu_k"].iloc[0] == old["mu_k"]
+    assert fm.read_map(path)["mu_k"].iloc[0] == old.mu_k
     replaced = fm.append_records(path, [new], replace=True)
-    assert replaced.replaced_ids == (old["measurement_id"],)
+    assert replaced.replaced_ids == (old.measurement_id,)
     runs = fm.read_map(path)
     assert len(runs) == 2 and runs["mu_k"].iloc[0] == 0.57
     assert runs["config_hash"].iloc[0] == other_config.config_hash
@@ -238,7 +248,7 @@ def test_a_replaced_run_keeps_its_exclusion(tmp_path):
     path = tmp_path / "map.parquet"
     rec = run_record(1)
     fm.append_records(path, [rec])
-    fm.exclude_runs(path, [rec["measurement_id"]], "pin slipped")
+    fm.exclude_runs(path, [rec.measurement_id], "pin slipped")
     fm.append_records(path, [run_record(1, mu_k=0.6)], replace=True)
     row = fm.read_map(path).iloc[0]
     assert row["mu_k"] == 0.6 and row["excluded"] and row["exclusion_reason"] == "pin slipped"
@@ -248,10 +258,10 @@ def test_fold_records_does_not_modify_its_inputs():
     runs = fm.records_frame([run_record(1)])
     snapshot = runs.copy()
     new = [run_record(1, mu_k=0.7), run_record(2)]
-    copies = [dict(r) for r in new]
+    copies = [r.as_dict() for r in new]
     merged, report = fm.store.fold_records(runs, new, replace=True)
     pd.testing.assert_frame_equal(runs, snapshot)
-    assert new == copies
+    assert [r.as_dict() for r in new] == copies
     assert len(merged) == 2 and report.replaced == 1 and report.added == 1
 
 
@@ -317,7 +327,7 @@ def test_exclude_needs_a_reason_keeps_the_run_and_include_restores_it(tmp_path):
     path = tmp_path / "map.parquet"
     recs = [run_record(i, repeat=i) for i in range(1, 4)]
     fm.append_records(path, recs)
-    target = recs[1]["measurement_id"]
+    target = recs[1].measurement_id
     with pytest.raises(MapError, match="needs a reason"):
         fm.exclude_runs(path, [target], "  ")
     assert fm.exclude_runs(path, [target[:8]], "air bubble under the pin") == [target]
@@ -362,7 +372,7 @@ def test_importing_the_published_csv_gives_169_published_rows_without_mu_s(tmp_p
     assert set(runs["method"]) == {"published"} and runs["config_hash"].isna().all()
     assert runs["measurement_id"].is_unique
     # imported pressure is the published one; it matches the cell geometry to 4 digits
-    expected = [nominal_pressure_kPa(f, InstrumentConfig()) for f in runs["normal_force_N"]]
+    expected = [InstrumentConfig().pressure_kPa(f) for f in runs["normal_force_N"]]
     np.testing.assert_allclose(runs["pressure_kPa"], expected, rtol=5e-4)
 
 
@@ -393,9 +403,9 @@ def test_a_published_subset_under_another_name_is_still_published(tmp_path):
     lines = PUBLISHED_CSV.read_text().splitlines()
     subset.write_text("\n".join(lines[:11]) + "\n")
     recs = fm.import_records(subset)
-    assert {r["source"] for r in recs} == {fm.schema.SOURCE_PUBLISHED}
-    published_ids = {r["measurement_id"] for r in fm.import_records(PUBLISHED_CSV)}
-    assert {r["measurement_id"] for r in recs} <= published_ids
+    assert {r.source for r in recs} == {fm.schema.SOURCE_PUBLISHED}
+    published_ids = {r.measurement_id for r in fm.import_records(PUBLISHED_CSV)}
+    assert {r.measurement_id for r in recs} <= published_ids
 
 
 def test_another_labs_csv_is_labelled_with_its_file_and_has_no_speed(tmp_path):
@@ -406,11 +416,11 @@ def test_another_labs_csv_is_labelled_with_its_file_and_has_no_speed(tmp_path):
         "Ecoflex 00-50,PTFE,3.0,35.37,23.0,2.0,0.23\n"
     )
     recs = fm.import_records(other)
-    assert {r["source"] for r in recs} == {"import:lab_b.csv"}
-    assert all(r["sliding_speed_mm_s"] is None for r in recs)
+    assert {r.source for r in recs} == {"import:lab_b.csv"}
+    assert all(r.sliding_speed_mm_s is None for r in recs)
     labelled = fm.import_records(other, source="lab B 2025")
-    assert {r["source"] for r in labelled} == {"lab B 2025"}
-    assert labelled[0]["measurement_id"] != recs[0]["measurement_id"]
+    assert {r.source for r in labelled} == {"lab B 2025"}
+    assert labelled[0].measurement_id != recs[0].measurement_id
 
 
 @pytest.mark.parametrize(
@@ -470,7 +480,7 @@ def test_merge_stores_shared_runs_once_and_reports_conflicts(tmp_path):
     fm.import_table(theirs, PUBLISHED_CSV)
     report = fm.merge_map(ours, theirs).report
     assert report.added == 1 and report.unchanged == 170 and report.kept_conflicting == 1
-    assert report.conflicting_ids == (run_record(1)["measurement_id"],)
+    assert report.conflicting_ids == (run_record(1).measurement_id,)
     runs = fm.read_map(ours)
     assert len(runs) == 3 + 169 and runs["measurement_id"].is_unique
     assert fm.merge_map(ours, theirs, replace=True).report.replaced == 1
@@ -493,12 +503,12 @@ def test_map_summary_lists_pairs_flags_exclusions_and_repeatability(tmp_path):
     fm.import_table(path, PUBLISHED_CSV)
     flagged = run_record(1, force_N=None, normal_force_mean_N=3.0)
     fm.append_records(path, [flagged, run_record(2, repeat=2)])
-    fm.exclude_runs(path, [run_record(2)["measurement_id"]], "disc not cleaned")
+    fm.exclude_runs(path, [run_record(2).measurement_id], "disc not cleaned")
     text = fm.map_summary(path)
     assert "runs: 171 (1 excluded)" in text
     assert "Ecoflex 00-50 / steel: 16 runs" in text
     assert "nominal_force_estimated 1" in text
-    assert "disc not cleaned" in text and run_record(2)["measurement_id"] in text
+    assert "disc not cleaned" in text and run_record(2).measurement_id in text
     assert "repeatability mu_k: s_r =" in text
     assert Path(path).exists()
 
@@ -574,14 +584,14 @@ def test_update_map_drops_stale_runs_and_adds_new_ones_in_one_write(tmp_path):
     path = tmp_path / "map.parquet"
     old = [run_record(1), run_record(2), run_record(3)]
     fm.append_records(path, old)
-    stale = [old[0]["measurement_id"], old[1]["measurement_id"], "not-in-the-map"]
+    stale = [old[0].measurement_id, old[1].measurement_id, "not-in-the-map"]
     report = fm.update_map(path, [run_record(4), old[1]], drop_ids=stale)
-    assert report.dropped_ids == (old[0]["measurement_id"],)  # old[1] is re-supplied: kept
+    assert report.dropped_ids == (old[0].measurement_id,)  # old[1] is re-supplied: kept
     assert report.added == 1 and report.unchanged == 1
     assert "1 dropped" in report.summary()
     ids = fm.read_map(path)["measurement_id"].tolist()
-    assert ids == [old[1]["measurement_id"], old[2]["measurement_id"],
-                   run_record(4)["measurement_id"]]
+    assert ids == [old[1].measurement_id, old[2].measurement_id,
+                   run_record(4).measurement_id]
     before = map_bytes(path)
     assert not fm.update_map(path, [], drop_ids=["not-in-the-map"]).changed
     assert map_bytes(path) == before
@@ -601,14 +611,14 @@ def test_fold_reports_each_id_once_in_first_seen_order_when_records_repeat():
     a2, b2 = run_record(1, mu_k=0.5), run_record(2, mu_k=0.5)
     runs = fm.records_frame([a])
     merged, report = fm.store.fold_records(runs, [b, a, a2, b2, a, a2], replace=True)
-    assert report.added_ids == (b["measurement_id"],)
-    assert report.unchanged_ids == (a["measurement_id"],)
-    assert report.replaced_ids == (a["measurement_id"],)
-    assert list(merged["measurement_id"]) == [a["measurement_id"], b["measurement_id"]]
+    assert report.added_ids == (b.measurement_id,)
+    assert report.unchanged_ids == (a.measurement_id,)
+    assert report.replaced_ids == (a.measurement_id,)
+    assert list(merged["measurement_id"]) == [a.measurement_id, b.measurement_id]
     assert list(merged["mu_k"]) == [0.5, 0.5]
     _, kept = fm.store.fold_records(runs, [a2, a, a2], replace=False)
-    assert kept.conflicting_ids == (a["measurement_id"],) and kept.unchanged_ids == (
-        a["measurement_id"],)
+    assert kept.conflicting_ids == (a.measurement_id,) and kept.unchanged_ids == (
+        a.measurement_id,)
 
 
 # --------------------------------------------------------------------------- schema versions
@@ -638,7 +648,7 @@ def test_a_version_1_map_written_by_the_old_code_still_reads_and_upgrades_on_wri
 
 
 def test_a_record_built_without_the_columns_added_later_reads_them_as_missing():
-    rec = dict(run_record(1))  # a changed copy: checked again
+    rec = run_record(1).as_dict()  # a changed copy: checked again
     rec.pop("lab")
     frame = fm.records_frame([rec])
     assert frame["lab"].isna().all()

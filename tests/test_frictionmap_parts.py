@@ -67,8 +67,8 @@ def test_small_parts_are_merged_so_parts_stay_few(tmp_path: Path) -> None:
     # each part holds more than MERGE_FACTOR times the rows of the next
     assert all(a > fm.store.MERGE_FACTOR * b for a, b in zip(sizes, sizes[1:], strict=False)), sizes
     ids = fm.read_map(path)["measurement_id"].tolist()
-    assert ids == [run_record(i, repeat=i + 1)["measurement_id"] for i in range(64)] + [
-        run_record(1000 + i, repeat=1, disc=f"d{i}")["measurement_id"] for i in range(60)]
+    assert ids == [run_record(i, repeat=i + 1).measurement_id for i in range(64)] + [
+        run_record(1000 + i, repeat=1, disc=f"d{i}").measurement_id for i in range(60)]
     assert not list(fm.parts.leftovers(path))
 
 
@@ -81,7 +81,7 @@ def test_a_changed_part_fails_its_checksum_and_nothing_overwrites_it(tmp_path: P
     before = map_bytes(path)
     for action in (lambda: fm.read_map(path),
                    lambda: fm.append_records(path, [run_record(9)]),
-                   lambda: fm.exclude_runs(path, [run_record(0, repeat=1)["measurement_id"]],
+                   lambda: fm.exclude_runs(path, [run_record(0, repeat=1).measurement_id],
                                            "x")):
         with pytest.raises(MapError, match="fails its checksum") as info:
             action()
@@ -138,7 +138,7 @@ def test_the_previous_commit_is_kept_and_restores_by_a_rename(tmp_path: Path) ->
 def test_other_tools_read_the_folder_as_the_committed_rows(tmp_path: Path) -> None:
     path = _map(tmp_path)
     fm.append_records(path, [run_record(1, repeat=2, mu_k=0.61)], replace=True)
-    fm.exclude_runs(path, [run_record(2, repeat=3)["measurement_id"]], "pin slipped")
+    fm.exclude_runs(path, [run_record(2, repeat=3).measurement_id], "pin slipped")
     theirs = pd.read_parquet(path)                   # pyarrow reads the folder as a dataset
     ours = fm.read_map(path)
     assert sorted(theirs["measurement_id"]) == sorted(ours["measurement_id"])

@@ -156,7 +156,7 @@ def test_a_raw_file_that_fails_to_reduce_changes_no_byte_of_the_map(map_with_run
         result = CliRunner().invoke(
             main,
             ["reduce", str(raw), "--pin", "Ecoflex 00-50", "--disc", "steel", "--force", "3",
-             "--map", str(map_with_runs), "--out", str(Path(tmp) / "out")],
+             "--map", str(map_with_runs), "--output", str(Path(tmp) / "out")],
         )
     assert result.exit_code == 1, result.output
     assert "Traceback" not in result.output

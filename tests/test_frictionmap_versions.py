@@ -80,10 +80,10 @@ def test_writing_to_an_old_map_keeps_its_rows_and_stores_the_current_schema(
     write_rheocompass_export(other, SyntheticRun(seed=15, duration_s=180.0), project="v2",
                              test="Friction", sample="pin")
     result = CliRunner().invoke(main, ["reduce", str(other), *LABELS, "--repeat", "2",
-                                       "--map", str(v1_map), "--out", str(tmp_path / "out")])
+                                       "--map", str(v1_map), "--output", str(tmp_path / "out")])
     assert result.exit_code == 0, result.output
     info = json.loads(pq.read_schema(v1_map).metadata[fm.schema.META_KEY])
-    assert info["schema_version"] == fm.schema.SCHEMA_VERSION == 5
+    assert info["schema_version"] == fm.schema.SCHEMA_VERSION == 6
     runs = fm.read_map(v1_map)
     assert len(runs) == 5
     old = runs[runs["method"].str.startswith("tribopipe-v1")]
@@ -97,7 +97,7 @@ def test_writing_to_an_old_map_keeps_its_rows_and_stores_the_current_schema(
 def test_a_v1_run_keeps_its_method_until_replaced(v1_map: Path, v1_export: Path,
                                                    tmp_path: Path) -> None:
     args = ["reduce", str(v1_export), *LABELS, "--map", str(v1_map),
-            "--out", str(tmp_path / "out")]
+            "--output", str(tmp_path / "out")]
     kept = CliRunner().invoke(main, args)
     assert kept.exit_code == 0, kept.output
     assert "1 kept conflicting" in kept.output
@@ -156,7 +156,7 @@ def test_the_session_reduced_again_is_the_same_two_runs_and_fills_nothing_in(
     done = reduce_export(raw, settings, lambda export, place, name: RunLabels(
         "Dragonskin 30", "steel", script.TESTS[place.test][2], 20.0, 1))
     records = [run.record for run in done.reduced]
-    assert {r["test"] for r in records} == set(script.TESTS)
+    assert {r.test for r in records} == set(script.TESTS)
     report = fm.append_records(target, records)
     # ids hash the test and result as before: the same runs, nothing added or in conflict
     assert len(report.unchanged_ids) == 2 and not report.added_ids
@@ -178,7 +178,7 @@ def test_a_version_3_package_validates_and_merges(tmp_path: Path) -> None:
     runs = fm.read_map(merged)
     assert len(runs) == 5 and set(runs["lab"]) >= {"Fixture Lab"}
     assert runs["test"].isna().all() and runs["result"].isna().all()
-    assert fm.store.map_metadata(merged)["schema_version"] == 5
+    assert fm.store.map_metadata(merged)["schema_version"] == 6
 
 
 def test_map_show_runs_names_what_each_map_knows_of_a_run_s_origin(tmp_path: Path) -> None:
@@ -203,7 +203,7 @@ def test_map_show_runs_names_what_each_map_knows_of_a_run_s_origin(tmp_path: Pat
         for name, (_, _, force, _) in script.TESTS.items()), encoding="utf-8")
     new_map = tmp_path / "friction_map.parquet"
     batch = CliRunner().invoke(main, ["batch", str(folder), "--manifest", str(manifest),
-                                      "--map", str(new_map), "--out", str(tmp_path / "o"),
+                                      "--map", str(new_map), "--output", str(tmp_path / "o"),
                                       "--no-plots", "-j", "1"])
     assert batch.exit_code == 0, batch.output
     shown = CliRunner().invoke(main, ["map", "show", "--runs", "--map", str(new_map)])
@@ -213,3 +213,31 @@ def test_map_show_runs_names_what_each_map_knows_of_a_run_s_origin(tmp_path: Pat
         assert f"v4_session.txt [{name} / " in line and "/ interval 2]" in line
     plain = CliRunner().invoke(main, ["map", "show", "--map", str(new_map)]).output
     assert "v4_session.txt" not in plain  # the list only with --runs
+
+
+def test_a_column_added_later_missing_in_the_older_row_is_no_difference() -> None:
+    """The rule lives beside the schema versions: every content column a later schema
+    added, missing in the map's older row, is no difference of the run; present and
+    different, it is one."""
+    import dataclasses
+
+    from test_frictionmap import run_record
+    from tribopipe.frictionmap.schema import (
+        ADDED_IN_VERSION,
+        ADDED_LATER_CONTENT,
+        CONTENT_COLUMNS,
+        REVIEW_COLUMNS,
+    )
+
+    # a review's columns are the exception: missing there means "not reviewed"
+    assert ADDED_LATER_CONTENT == {c for c in ADDED_IN_VERSION if c in CONTENT_COLUMNS
+                                   and c not in REVIEW_COLUMNS}
+    new = run_record(1)
+    older = dataclasses.replace(new, **dict.fromkeys(ADDED_LATER_CONTENT))
+    runs = fm.records_frame([older])
+    _, report = fm.store.fold_records(runs, [new])
+    assert report.unchanged_ids == (new.measurement_id,) and not report.conflicting_ids
+    changed = dataclasses.replace(new, u_mu_k=(new.u_mu_k or 0.0) + 0.01)
+    _, report = fm.store.fold_records(fm.records_frame([new]), [changed])
+    assert report.conflicting_ids == (new.measurement_id,)
+    assert report.differences[new.measurement_id] == ("u_mu_k",)

@@ -32,7 +32,7 @@ def error_lines(output: str) -> list[str]:
 def test_an_export_that_is_no_friction_test_is_named_once_per_file(
         tmp_path: Path, name: str, what: str) -> None:
     result = invoke("reduce", str(DATA / name), "--pin", "a", "--disc", "b", "--no-map",
-                    "--out", str(tmp_path))
+                    "--output", str(tmp_path))
     assert result.exit_code == 1
     lines = error_lines(result.output)
     assert len(lines) == 1, result.output
@@ -59,7 +59,7 @@ def test_an_oscillation_under_normal_force_is_refused_even_with_a_low_threshold(
     config = tmp_path / "low.toml"
     config.write_text("[instrument]\ncontact_threshold_N = 0.001\n", encoding="utf-8")
     result = invoke("reduce", str(export), "--pin", "a", "--disc", "b", "--no-map",
-                    "--config", str(config), "--out", str(tmp_path / "out"))
+                    "--instrument", str(config), "--output", str(tmp_path / "out"))
     assert result.exit_code == 1
     lines = error_lines(result.output)
     assert len(lines) == 1 and "not a pin-on-disc friction test" in lines[0], result.output
@@ -75,7 +75,7 @@ def test_a_one_way_slide_is_still_reduced(tmp_path: Path) -> None:
     export = tmp_path / "slide.csv"
     export.write_text("\n".join(rows) + "\n", encoding="utf-8")
     result = invoke("reduce", str(export), "--pin", "a", "--disc", "b", "--no-map",
-                    "--out", str(tmp_path / "out"))
+                    "--output", str(tmp_path / "out"))
     assert "not a pin-on-disc friction test" not in result.output
 
 
@@ -91,7 +91,7 @@ def test_a_document_image_or_archive_is_named_as_such(tmp_path: Path, head: byte
     path = tmp_path / "run.csv"  # the suffix lies: the bytes decide
     path.write_bytes(head + b"\x00" * 64)
     result = invoke("reduce", str(path), "--pin", "a", "--disc", "b", "--no-map",
-                    "--out", str(tmp_path / "out"))
+                    "--output", str(tmp_path / "out"))
     assert result.exit_code == 1
     (line,) = error_lines(result.output)
     assert f"is {what}" in line and "delimiter" not in line
@@ -99,7 +99,7 @@ def test_a_document_image_or_archive_is_named_as_such(tmp_path: Path, head: byte
 
 def test_reduce_a_folder_points_to_batch_and_batch_a_file_points_to_reduce(
         tmp_path: Path) -> None:
-    result = invoke("reduce", str(tmp_path), "--no-map", "--out", str(tmp_path / "out"))
+    result = invoke("reduce", str(tmp_path), "--no-map", "--output", str(tmp_path / "out"))
     assert result.exit_code == 1
     assert "tribopipe batch" in result.output
     export = tmp_path / "run.csv"
@@ -151,7 +151,7 @@ def test_the_missing_column_hint_names_a_file_that_works(tmp_path: Path, monkeyp
     export = tmp_path / "run.csv"
     export.write_text("\n".join(rows) + "\n", encoding="utf-8")
     monkeypatch.chdir(tmp_path)
-    args = ("reduce", "run.csv", "--pin", "a", "--disc", "b", "--no-map", "--out", "out")
+    args = ("reduce", "run.csv", "--pin", "a", "--disc", "b", "--no-map", "--output", "out")
     result = invoke(*args)
     assert result.exit_code == 1
     assert "missing: normal_force_N" in result.output

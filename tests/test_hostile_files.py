@@ -98,7 +98,7 @@ def test_reduce_fails_a_bad_path_alone(tmp_path: Path, kind: str) -> None:
     bad = _bad_object(tmp_path, kind)
     good = good_export(tmp_path / "good.csv")
     out = tmp_path / "out"
-    done = run_subprocess("reduce", bad, good, "--no-map", "--out", out, timeout=90,
+    done = run_subprocess("reduce", bad, good, "--no-map", "--output", out, timeout=90,
                           preexec_fn=_limited)
     stderr = done.stderr.decode("utf-8", "replace")
     assert b"Traceback" not in done.stderr and "Usage:" not in stderr, stderr
@@ -162,12 +162,12 @@ def test_reduce_keeps_a_name_that_is_not_utf8(tmp_path: Path) -> None:
     raw = os.fsencode(str(tmp_path)) + b"/caf\xe9_run.csv"
     good_export(Path(os.fsdecode(raw)))
     out = tmp_path / "out"
-    result = invoke("reduce", os.fsdecode(raw), "--json", "--no-map", "--out", str(out))
+    result = invoke("reduce", os.fsdecode(raw), "--json", "--no-map", "--output", str(out))
     assert result.exit_code == 0, result.output
     rows = json.loads(result.stdout)
     assert rows[0]["file"].endswith("caf\\xe9_run.csv")
     assert [p.name.startswith("caf__run_") for p in (out / "traces").iterdir()] == [True]
-    done = run_subprocess("reduce", raw, "--no-map", "--out", out)
+    done = run_subprocess("reduce", raw, "--no-map", "--output", out)
     assert done.returncode == 0 and b"caf\\xe9_run.csv" in done.stdout, done.stderr
 
 
@@ -221,7 +221,7 @@ def test_reduce_to_an_unwritable_out_is_one_line_per_file(tmp_path: Path,
                                                           read_only: bool) -> None:
     a = good_export(tmp_path / "a.csv", replace(GOOD_RUN, seed=31))
     b = good_export(tmp_path / "b.csv", replace(GOOD_RUN, seed=32))
-    done = _run_on_small_disk(tmp_path / "out", ["reduce", a, b, "--no-map", "--out",
+    done = _run_on_small_disk(tmp_path / "out", ["reduce", a, b, "--no-map", "--output",
                                                  tmp_path / "out"], size_kb=8,
                               read_only=read_only)
     stderr = done.stderr.decode()
@@ -294,7 +294,7 @@ def test_a_damaged_workbook_is_one_line_and_its_neighbour_reduces(tmp_path: Path
                                                                   how: str) -> None:
     bad = _damaged_xlsx(tmp_path, how)
     good = good_export(tmp_path / "good.csv")
-    result = invoke("reduce", str(bad), str(good), "--no-map", "--out", str(tmp_path / "o"))
+    result = invoke("reduce", str(bad), str(good), "--no-map", "--output", str(tmp_path / "o"))
     stderr = assert_clean_failure(result)
     assert_one_line_each(stderr, [bad.name])
     assert len(list((tmp_path / "o" / "summaries").glob("good_*.json"))) == 1

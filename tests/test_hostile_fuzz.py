@@ -349,7 +349,7 @@ def check_group(group: int, tmp_path: Path, *, subprocess_run: bool = False) -> 
         paths.append(path)
     good = good_export(folder / "good_neighbour.csv")
     out = tmp_path / f"out{group}"
-    args = ["reduce", *map(str, paths), str(good), "--no-map", "--out", str(out)]
+    args = ["reduce", *map(str, paths), str(good), "--no-map", "--output", str(out)]
     if subprocess_run:
         done = subprocess.run([sys.executable, "-m", "tribopipe", *args], capture_output=True,
                               timeout=600, check=False)

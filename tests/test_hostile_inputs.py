@@ -58,8 +58,8 @@ def test_instrument_config_refuses_in_one_line(tmp_path: Path, table: str, key: 
         load_settings(cfg)
     message = str(info.value)
     assert str(cfg) in message and key in message and "\n" not in message
-    result = invoke("reduce", str(good_export(tmp_path / "run.csv")), "--config", str(cfg),
-                    "--no-map", "--out", str(tmp_path / "out"))
+    result = invoke("reduce", str(good_export(tmp_path / "run.csv")), "--instrument", str(cfg),
+                    "--no-map", "--output", str(tmp_path / "out"))
     assert key in assert_clean_failure(result)
 
 
@@ -99,7 +99,7 @@ def test_reduce_refuses_a_bad_label_in_one_line(tmp_path: Path, option: str, val
     export = good_export(tmp_path / "run.csv")
     args = ["reduce", str(export), "--pin", "p", "--disc", "d", "--force", "3",
             "--temperature", "20", option, value, "--map", str(tmp_path / "map.parquet"),
-            "--out", str(tmp_path / "out")]
+            "--output", str(tmp_path / "out")]
     stderr = assert_clean_failure(invoke(*args))
     assert expected in stderr and len(stderr.strip().splitlines()) == 1, stderr
     assert not (tmp_path / "map.parquet").exists()
@@ -200,7 +200,7 @@ def test_a_folder_campaign_refuses_an_absolute_glob(tmp_path: Path) -> None:
     raw.mkdir()
     good_export(raw / "run0.csv")
     stderr = assert_clean_failure(invoke("batch", str(raw), "--glob", "/etc/*", "--pattern",
-                                         PATTERN, "--out", str(tmp_path / "out")))
+                                         PATTERN, "--output", str(tmp_path / "out")))
     assert "glob" in stderr
 
 
@@ -217,7 +217,7 @@ def _plain_export(path: Path, change=None) -> Path:
 
 
 def _reduce_json(tmp_path: Path, export: Path):
-    return invoke("reduce", str(export), "--json", "--no-map", "--out", str(tmp_path / "o"))
+    return invoke("reduce", str(export), "--json", "--no-map", "--output", str(tmp_path / "o"))
 
 
 def test_zero_torque_is_flagged_no_friction_signal(tmp_path: Path) -> None:
@@ -282,7 +282,7 @@ def test_a_huge_measured_force_fails_the_file_and_json_stays_strict(tmp_path: Pa
     bad = _plain_export(tmp_path / "huge.csv", huge)
     good = _plain_export(tmp_path / "good.csv")
     result = invoke("reduce", str(bad), str(good), "--json", "--no-map",
-                    "--out", str(tmp_path / "o"))
+                    "--output", str(tmp_path / "o"))
     stderr = assert_clean_failure(result)
     assert_one_line_each(stderr, ["huge.csv"])
     rows = json.loads(result.stdout, parse_constant=_refuse_constant)
@@ -305,7 +305,7 @@ def test_a_huge_torque_in_the_setup_interval_fails_the_file_in_one_line(
     with warnings.catch_warnings():
         warnings.simplefilter("error", RuntimeWarning)
         result = invoke("reduce", str(bad), str(good), "--json", "--no-map",
-                        "--out", str(tmp_path / "o"))
+                        "--output", str(tmp_path / "o"))
     stderr = assert_clean_failure(result)
     assert_one_line_each(stderr, ["setup_huge.txt"])
     assert "interval 1" in stderr and "point 4" in stderr and "torque_Nm" in stderr, stderr

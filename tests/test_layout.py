@@ -79,15 +79,19 @@ def test_the_cli_defaults_are_the_layout(tmp_path: Path) -> None:
     from click.testing import CliRunner
 
     from tribopipe.cli import main
-    from tribopipe.cli._common import DEFAULT_MAP
+    from tribopipe.project import DEFAULT_MAP
 
     default = OutputLayout(Path(DEFAULT_OUTPUT_DIR))
     assert Path(DEFAULT_MAP) == default.map_path
-    helps = {cmd: CliRunner().invoke(main, [*cmd.split(), "--help"], terminal_width=200).output
-             for cmd in ("reduce", "plot pairs", "plot runs")}
-    assert f"[default: {DEFAULT_OUTPUT_DIR}]" in helps["reduce"]
-    assert f"[default: {default.pair_plots_dir}]" in helps["plot pairs"]
-    assert f"[default: {default.trace_plots_dir}]" in helps["plot runs"]
+    helps = {cmd: " ".join(CliRunner().invoke(main, [*cmd.split(), "--help"]).output.split())
+             for cmd in ("reduce", "plot pairs", "plot runs", "map show", "query")}
+    for text in helps.values():
+        assert f"else {DEFAULT_MAP}." in text
+    assert "Default: the map's folder" in helps["reduce"]
+    pairs = default.pair_plots_dir.relative_to(default.root).as_posix()
+    traces = default.trace_plots_dir.relative_to(default.root).as_posix()
+    assert f"Default: {pairs} beside the map." in helps["plot pairs"]
+    assert f"Default: {traces} in the campaign output folder." in helps["plot runs"]
 
 
 def test_what_the_folder_writes_is_known_so_a_campaign_never_reads_it(tmp_path: Path) -> None:

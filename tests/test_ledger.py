@@ -38,7 +38,7 @@ def _reduce(*args: Any) -> Any:
 
 def _batch(raw: Path, tmp_path: Path, *more: str) -> Any:
     return CliRunner().invoke(main, [
-        "batch", str(raw), "--pattern", PATTERN, "--out", str(tmp_path / "out"),
+        "batch", str(raw), "--pattern", PATTERN, "--output", str(tmp_path / "out"),
         "--map", str(tmp_path / "map.parquet"), "--jobs", "1", *more])
 
 
@@ -67,7 +67,7 @@ def test_reduce_on_a_full_disk_names_the_output_not_the_input(
         tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     _no_space(monkeypatch)
     out, mapfile = tmp_path / "out", tmp_path / "map.parquet"
-    done = _reduce(R1, *LABELS, "--force", "1", "--out", out, "--map", mapfile)
+    done = _reduce(R1, *LABELS, "--force", "1", "--output", out, "--map", mapfile)
     assert done.exit_code == 1 and "Traceback" not in done.output
     (line,) = _errors(done.stderr)
     assert str(out / "traces") in line and "No space left on device" in line
@@ -114,7 +114,7 @@ def test_a_plot_that_fails_costs_neither_its_run_nor_the_other_files(
 
     monkeypatch.setattr(pipeline, "plot_run", fragile)
     out, mapfile = tmp_path / "out", tmp_path / "map.parquet"
-    done = _reduce(R1, R2, OTHER, *LABELS, "--out", out, "--map", mapfile, "--plot")
+    done = _reduce(R1, R2, OTHER, *LABELS, "--output", out, "--map", mapfile, "--plots")
     assert done.exit_code == 0, done.output
     (warning,) = [ln for ln in done.stderr.splitlines() if ln.startswith("warning:")]
     assert R2.name in warning and str(out / "plots") in warning and "raqm_layout" in warning
@@ -128,7 +128,7 @@ def test_reduce_plot_of_a_file_named_with_a_newline(tmp_path: Path) -> None:
     odd = raw / "DS30_steel\n1N\r_r2.csv"
     shutil.copyfile(R2, odd)
     out, mapfile = tmp_path / "out", tmp_path / "map.parquet"
-    done = _reduce(R1, odd, OTHER, *LABELS, "--out", out, "--map", mapfile, "--plot")
+    done = _reduce(R1, odd, OTHER, *LABELS, "--output", out, "--map", mapfile, "--plots")
     assert "Traceback" not in done.output and done.exception is None or \
         isinstance(done.exception, SystemExit)
     assert done.exit_code == 0, done.output
@@ -148,7 +148,7 @@ def test_reduce_plot_of_a_file_named_with_a_newline(tmp_path: Path) -> None:
 def test_reduce_refuses_a_damaged_map_before_any_work(tmp_path: Path) -> None:
     mapfile, out = tmp_path / "map.parquet", tmp_path / "out"
     mapfile.write_bytes(b"PAR1 not a map at all")
-    done = _reduce(R1, *LABELS, "--force", "1", "--out", out, "--map", mapfile)
+    done = _reduce(R1, *LABELS, "--force", "1", "--output", out, "--map", mapfile)
     assert done.exit_code == 1 and str(mapfile) in done.output
     assert done.stdout == ""  # no results printed
     assert not out.exists()  # no trace, no summary written
@@ -160,7 +160,7 @@ def test_reduce_refuses_a_damaged_map_before_any_work(tmp_path: Path) -> None:
 def test_a_relabel_kept_conflicting_exits_1_with_the_way_out(tmp_path: Path) -> None:
     mapfile, out = tmp_path / "map.parquet", tmp_path / "out"
     args = [R1, "--pin", "DS30", "--force", "1", "--temperature", "10", "--repeat", "1",
-            "--out", out, "--map", mapfile]
+            "--output", out, "--map", mapfile]
     assert _reduce(*args, "--disc", "stel").exit_code == 0
     again = _reduce(*args, "--disc", "steel")
     assert again.exit_code == 1
@@ -182,14 +182,14 @@ def test_reduce_help_says_a_kept_conflict_exits_1() -> None:
 
 def test_reduce_reports_one_repeat_number_used_twice(tmp_path: Path) -> None:
     mapfile, out = tmp_path / "map.parquet", tmp_path / "out"
-    done = _reduce(R1, R2, *LABELS, "--force", "1", "--repeat", "1", "--out", out,
+    done = _reduce(R1, R2, *LABELS, "--force", "1", "--repeat", "1", "--output", out,
                    "--map", mapfile, "--json")
     assert done.exit_code == 0, done.output
     (warning,) = [ln for ln in done.stderr.splitlines() if ln.startswith("warning:")]
     assert "repeat 1 used by 2 runs of DS30 on steel, 1 N, 10 °C" in warning
     assert R1.name in warning and R2.name in warning
     assert len(json.loads(done.stdout)) == 2  # reported, not refused
-    again = _reduce(R1, *LABELS, "--force", "1", "--repeat", "2", "--out", out,
+    again = _reduce(R1, *LABELS, "--force", "1", "--repeat", "2", "--output", out,
                     "--map", tmp_path / "other.parquet")
     assert "warning:" not in again.stderr
 

@@ -3,6 +3,7 @@ them, the refusals, the model-based prediction inside the covered range only, th
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
 
@@ -32,9 +33,10 @@ def _records(law: dict, shift: str, curve, *, temps=TEMPS, speeds=SPEEDS, forces
                 x = math.log10(v) + shift_law(shift, law, 25.0, t)
                 for repeat, delta in ((1, -0.001), (2, 0.001)):
                     i += 1
-                    rec = run_record(0, force_N=force, temperature_C=t, repeat=repeat)
-                    rec.update(measurement_id=f"m{i:04d}", nominal_speed_mm_s=v,
-                               mu_k=curve(x, force) + delta, flags="")
+                    rec = dataclasses.replace(
+                        run_record(0, force_N=force, temperature_C=t, repeat=repeat),
+                        measurement_id=f"m{i:04d}", nominal_speed_mm_s=v,
+                        mu_k=curve(x, force) + delta, flags="")
                     out.append(rec)
     return out
 
@@ -109,7 +111,7 @@ def test_cli_master_curve_json_plot_and_model_based_query(tmp_path):
     fm.append_records(map_path, _records({"Ea_kJ_mol": 55.0}, "arrhenius", _quadratic))
     plot = tmp_path / "mc.png"
     out = CliRunner().invoke(main, ["map", "master-curve", "--pin", "Ecoflex 00-50", "--disc",
-                                    "steel", "--json", "--plot", str(plot), "--map",
+                                    "steel", "--json", "--output", str(plot), "--map",
                                     str(map_path)])
     assert out.exit_code == 0, out.output
     data = json.loads(out.stdout)

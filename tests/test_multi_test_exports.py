@@ -105,6 +105,16 @@ def test_a_failing_test_stands_alone(tmp_path: Path) -> None:
     error = result.runs[1].reason
     assert error.count(str(path)) == 1 and "\n" not in error
     assert "DS30 on steel, 3 N, 20 °C, #1" in error and "contact threshold" in error
+    # the failure is fields, formatted once: the file as named, where in it, what, the fix
+    failure = result.runs[1].failure
+    assert failure.path == str(path) and failure.place is not None
+    assert "DS30 on steel, 3 N, 20 °C, #1" in failure.place
+    assert failure.problem.startswith("the normal force never reaches the contact threshold")
+    assert failure.hint and "contact_threshold_N" in failure.hint
+    assert str(path) not in failure.problem and error == failure.text()
+    shown = reduce_export(path, SETTINGS, name="lifted.csv").runs[1]
+    assert shown.failure.path == "lifted.csv" and str(path) not in shown.reason
+    assert shown.reason.startswith("lifted.csv [") and shown.failure.problem == failure.problem
 
 
 def test_two_tests_of_one_name_get_two_ids_and_the_first_keeps_its_own(tmp_path: Path) -> None:
@@ -147,7 +157,7 @@ def reduce_cli(*args: str):
 
 def test_reduce_json_gives_one_object_per_run(raw: Path, tmp_path: Path) -> None:
     result = reduce_cli(str(raw / "session.csv"), str(raw / "steps.csv"), "--json", "--no-map",
-                        "--out", str(tmp_path / "o"))
+                        "--output", str(tmp_path / "o"))
     assert result.exit_code == 0, result.output
     rows = json.loads(result.stdout)
     assert len(rows) == 5
@@ -165,7 +175,7 @@ def test_reduce_json_gives_one_object_per_run(raw: Path, tmp_path: Path) -> None
 
 
 def test_reduce_table_shows_which_test_and_interval(raw: Path, tmp_path: Path) -> None:
-    result = reduce_cli(str(raw / "session_fr.txt"), "--no-map", "--out", str(tmp_path / "o"))
+    result = reduce_cli(str(raw / "session_fr.txt"), "--no-map", "--output", str(tmp_path / "o"))
     assert result.exit_code == 0, result.output
     header, *rows = result.stdout.splitlines()
     assert header.split()[:3] == ["file", "run", "mu_s"]
@@ -176,7 +186,7 @@ def test_reduce_table_shows_which_test_and_interval(raw: Path, tmp_path: Path) -
 def test_reduce_the_real_two_test_export_is_one_line_and_exit_1(data_dir: Path,
                                                                 tmp_path: Path) -> None:
     path = data_dir / "rheocompass_en_utf16_two_tests.csv"
-    result = reduce_cli(str(path), "--no-map", "--out", str(tmp_path / "o"))
+    result = reduce_cli(str(path), "--no-map", "--output", str(tmp_path / "o"))
     assert result.exit_code == 1
     errors = [line for line in result.stderr.splitlines() if line.startswith("error:")]
     assert len(errors) == 1
@@ -193,7 +203,7 @@ def test_reduce_a_copy_twice_is_one_duplicate_and_the_map_names_both(raw: Path,
     shutil.copy(first, copy)
     map_path = tmp_path / "map.parquet"
     labels = ["--pin", "DS30", "--disc", "steel", "--force", "3", "--temperature", "20",
-              "--repeat", "1", "--map", str(map_path), "--out", str(tmp_path / "o")]
+              "--repeat", "1", "--map", str(map_path), "--output", str(tmp_path / "o")]
     both = reduce_cli(str(first), str(copy), *labels)
     assert both.exit_code == 0, both.output
     assert f"duplicate: {copy}: same content as {first}" in both.stderr
@@ -216,7 +226,7 @@ def test_reduce_a_copy_twice_is_one_duplicate_and_the_map_names_both(raw: Path,
 def test_reduce_a_session_as_a_subprocess(raw: Path, tmp_path: Path) -> None:
     proc = subprocess.run(
         [sys.executable, "-m", "tribopipe", "reduce", str(raw / "session.csv"), "--no-map",
-         "--out", str(tmp_path / "o")],
+         "--output", str(tmp_path / "o")],
         capture_output=True, text=True, encoding="utf-8", timeout=300,
     )
     assert proc.returncode == 0, proc.stderr
@@ -231,17 +241,17 @@ def test_map_rows_keep_labels_given_per_run(raw: Path) -> None:
                        temperature_C=20.0, repeat=1)
     result = reduce_export(raw / "steps.csv", SETTINGS, labels)
     records = [o.record for o in result.reduced]
-    assert [r["interval"] for r in records] == [2, 3]
+    assert [r.interval for r in records] == [2, 3]
     # the 5 N step strays from the 3 N label: flagged, not silently averaged in
-    assert "normal_force_off_nominal" not in records[0]["flags"].split(";")
-    assert "normal_force_off_nominal" in records[1]["flags"].split(";")
+    assert "normal_force_off_nominal" not in records[0].flags.split(";")
+    assert "normal_force_off_nominal" in records[1].flags.split(";")
 
 
 def test_reduce_force_steps_without_force_gives_each_step_its_own_nominal(raw: Path,
                                                                        tmp_path: Path) -> None:
     labels = ["--pin", "Dragonskin 30", "--disc", "steel", "--temperature", "20"]
     result = reduce_cli(str(raw / "steps.csv"), *labels, "--json", "--map",
-                        str(tmp_path / "m.parquet"), "--out", str(tmp_path / "o"))
+                        str(tmp_path / "m.parquet"), "--output", str(tmp_path / "o"))
     assert result.exit_code == 0, result.output
     runs = pd.read_parquet(tmp_path / "m.parquet").sort_values("interval")
     # the 3 N and 5 N steps, each estimated from its own measured force, and flagged so
@@ -249,7 +259,7 @@ def test_reduce_force_steps_without_force_gives_each_step_its_own_nominal(raw: P
     assert all("nominal_force_estimated" in f.split(";") for f in runs["flags"])
     # with --force every step is labelled alike: said, and the stray step flagged
     forced = reduce_cli(str(raw / "steps.csv"), *labels, "--force", "3", "--no-map",
-                        "--out", str(tmp_path / "o2"))
+                        "--output", str(tmp_path / "o2"))
     assert forced.exit_code == 0, forced.output
     assert "holds 2 friction intervals (force or speed steps): --force labels each alike" \
         in forced.stderr

@@ -64,7 +64,7 @@ def test_update_map_with_decides_under_the_lock(tmp_path: Path) -> None:
 def _reduce(path: Path, mapfile: Path, out: Path, disc: str = "steel") -> Any:
     return CliRunner().invoke(main, [
         "reduce", str(path), "--pin", "DS30", "--disc", disc, "--force", "1",
-        "--temperature", "10", "--repeat", "1", "--map", str(mapfile), "--out", str(out)])
+        "--temperature", "10", "--repeat", "1", "--map", str(mapfile), "--output", str(out)])
 
 
 def test_reduce_checks_the_same_content_under_the_map_lock(
@@ -93,7 +93,7 @@ def test_batch_checks_the_same_content_under_the_map_lock(
     mapfile = tmp_path / "map.parquet"
     held = _watching(batch, monkeypatch, mapfile)
     done = CliRunner().invoke(main, ["batch", str(raw), "--pattern", PATTERN, "--glob",
-                                     "*/*.csv", "--out", str(tmp_path / "out"), "--map",
+                                     "*/*.csv", "--output", str(tmp_path / "out"), "--map",
                                      str(mapfile), "--jobs", "1", "--no-plots"])
     assert held == [True]
     assert done.exit_code == 1, done.output

@@ -43,10 +43,11 @@ def source_map(tmp_path_factory) -> Path:
 @pytest.fixture(scope="module")
 def package(source_map, tmp_path_factory) -> Path:
     out = tmp_path_factory.mktemp("publish") / "contribution"
-    result = invoke("map", "publish", out, "--lab", LAB, "--contact", "Ada Lovelace",
+    result = invoke("map", "publish", "-o", out, "--lab", LAB, "--contact", "Ada Lovelace",
                     "--email", "ada@example.org", "--map", source_map)
     assert result.exit_code == 0, result.output
-    assert "175 runs in 9 files" in result.output
+    assert "175 runs in 12 files" in result.output
+    assert "evidence: 6 traces, 0 raw exports" in result.output
     return out
 
 
@@ -96,6 +97,11 @@ def validate(pkg: Path) -> tuple[int, list[str]]:
 
 def test_publish_validate_merge_round_trip_gives_identical_runs(source_map, package, tmp_path):
     files = sorted(str(p.relative_to(package)) for p in package.rglob("*") if p.is_file())
+    evidence = [f for f in files if f.startswith("evidence/")]
+    assert "profile/package-v2.schema.json" in files
+    files = [f for f in files if not f.startswith(("evidence/", "profile/"))]
+    assert len([f for f in evidence if f.startswith("evidence/traces/")]) == 6
+    assert "evidence/index.csv" in evidence and "evidence/settings.json" in evidence
     assert files == ["CITATION.cff", "README.md", "data/frictionmap.csv", "data/groups.csv",
                      "data/groups.parquet", "data/runs.csv", "data/runs.parquet",
                      "datapackage.json", "explorer.html"]
@@ -163,7 +169,7 @@ def test_publish_and_validate_as_real_processes(source_map, tmp_path):
     out = tmp_path / "pkg"
     env = {**os.environ, "PYTHONIOENCODING": "utf-8"}
     pub = subprocess.run(
-        [sys.executable, "-m", "tribopipe", "map", "publish", str(out), "--lab", "Lab B",
+        [sys.executable, "-m", "tribopipe", "map", "publish", "-o", str(out), "--lab", "Lab B",
          "--licence", "CC0-1.0", "--map", str(source_map)],
         capture_output=True, text=True, timeout=180, env=env)
     assert pub.returncode == 0, pub.stderr
@@ -379,7 +385,7 @@ def test_merge_reports_each_conflicting_row_with_both_values(source_map, tmp_pat
 
 
 def test_publish_needs_a_lab_and_refuses_bad_input(source_map, package, tmp_path):
-    no_lab = CliRunner().invoke(main, ["map", "publish", str(tmp_path / "x"),
+    no_lab = CliRunner().invoke(main, ["map", "publish", "-o", str(tmp_path / "x"),
                                        "--map", str(source_map)])
     assert no_lab.exit_code == 2 and "--lab" in no_lab.output
     for args, says in [
@@ -387,24 +393,25 @@ def test_publish_needs_a_lab_and_refuses_bad_input(source_map, package, tmp_path
         (["--lab", "Lab", "--licence", "WTFPL"], "unknown licence 'WTFPL'"),
         (["--lab", "Lab", "--email", "not-an-email"], "not an email address"),
     ]:
-        result = CliRunner().invoke(main, ["map", "publish", str(tmp_path / "y"), *args,
+        result = CliRunner().invoke(main, ["map", "publish", "-o", str(tmp_path / "y"), *args,
                                            "--map", str(source_map)])
         assert result.exit_code == 1 and says in result.output, result.output
         assert not (tmp_path / "y").exists()
-    again = CliRunner().invoke(main, ["map", "publish", str(package), "--lab", "Lab",
+    again = CliRunner().invoke(main, ["map", "publish", "-o", str(package), "--lab", "Lab",
                                       "--map", str(source_map)])
     assert again.exit_code == 1 and "holds a package already" in again.output
     other = tmp_path / "notes"
     other.mkdir()
     (other / "mine.txt").write_text("keep me", encoding="utf-8")
-    refused = CliRunner().invoke(main, ["map", "publish", str(other), "--lab", "Lab",
+    refused = CliRunner().invoke(main, ["map", "publish", "-o", str(other), "--lab", "Lab",
                                         "--map", str(source_map)])
     assert refused.exit_code == 1 and "not empty" in refused.output
     assert [p.name for p in other.iterdir()] == ["mine.txt"]
 
 
 def test_publish_overwrites_only_a_package_and_leaves_no_temporary_folder(source_map, copy):
-    result = invoke("map", "publish", copy, "--lab", "Lab C", "--overwrite", "--map", source_map)
+    result = invoke("map", "publish", "-o", copy, "--lab", "Lab C", "--overwrite", "--map",
+                    source_map)
     assert result.exit_code == 0, result.output
     assert descriptor(copy)["tribopipe"]["lab"] == "Lab C"
     assert sorted(p.name for p in copy.parent.iterdir()) == ["pkg"]
@@ -415,7 +422,7 @@ def test_publish_refuses_a_map_whose_rows_fail_the_checks(source_map, tmp_path):
     runs = fm.read_map(source_map)
     runs.loc[0, "pin"] = "=HYPERLINK(\"http://x\")"
     fm.write_map(bad, runs)
-    result = CliRunner().invoke(main, ["map", "publish", str(tmp_path / "p"), "--lab", "L",
+    result = CliRunner().invoke(main, ["map", "publish", "-o", str(tmp_path / "p"), "--lab", "L",
                                        "--map", str(bad)])
     assert result.exit_code == 1
     assert "map: row 1, field pin: starts with '=', which a spreadsheet runs as a formula" \

@@ -40,9 +40,9 @@ def test_labels_decide_whether_a_map_record_exists(export: Path) -> None:
                                                      normal_force_N=5.0, temperature_C=10.0,
                                                      repeat=2))
     assert labelled.record is not None
-    assert labelled.record["measurement_id"] == unlabelled.measurement_id
+    assert labelled.record.measurement_id == unlabelled.measurement_id
     # 5 N nominal on three pins of r = 3 mm -> 58.95 kPa
-    assert labelled.record["pressure_kPa"] == pytest.approx(58.95, abs=0.01)
+    assert labelled.record.pressure_kPa == pytest.approx(58.95, abs=0.01)
 
 
 def test_summary_is_json_and_carries_the_evidence(export: Path, tmp_path: Path) -> None:

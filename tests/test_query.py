@@ -3,6 +3,7 @@ them lie between them, and outside the range the edge value is held (as ABAQUS d
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -241,8 +242,14 @@ def test_result_to_dict_is_json_ready(groups):
     assert back["mu_s"] is None
     res = query(groups, "Dragonskin 30", "steel", 20.0, 15.0)
     assert back["mu_k"]["text"] == res.mu_k.text()
-    assert back["mu_k"]["lower"] == pytest.approx(max(0.0, res.mu_k.value - res.mu_k.expanded))
+    # held below the lowest measured pressure: the value says so, and carries no U
+    assert back["mu_k"]["text"] == f"{res.mu_k.value:.3f} (extrapolated: U not valid)"
+    assert back["mu_k"]["expanded"] is None and back["mu_k"]["lower"] is None
     assert back["mu_k"]["used"][0]["weight"] > 0
+    inside = query(groups, "Dragonskin 30", "steel", 50.0, 15.0).to_dict()
+    assert inside["clamped"] is False and inside["mu_k"]["expanded"] > 0
+    assert inside["mu_k"]["lower"] == pytest.approx(
+        max(0.0, inside["mu_k"]["value"] - inside["mu_k"]["expanded"]))
 
 
 # ---------------------------------------------------------------------------- properties
@@ -298,7 +305,7 @@ def test_the_query_carries_the_combined_uncertainty_of_the_groups():
         run_record(2, force_N=3.0, repeat=2, mu_k=0.52, u_mu_k=0.022),
         run_record(3, force_N=9.0, repeat=1, mu_k=0.40, u_mu_k=0.016),
     ]
-    records[2]["pressure_kPa"] = 9.0 / 3 / (math.pi * 9) * 1e3
+    records[2] = dataclasses.replace(records[2], pressure_kPa=9.0 / 3 / (math.pi * 9) * 1e3)
     groups = group_statistics(fm.records_frame(records))
     u3, u9 = (float(g) for g in groups.sort_values("pressure_kPa")["mu_k_u"])
     assert u3 == pytest.approx(math.hypot(0.01, 0.021)) and u9 == pytest.approx(0.016)
@@ -319,19 +326,20 @@ def test_the_query_carries_the_combined_uncertainty_of_the_groups():
     assert table["expanded"].tolist() == pytest.approx([2 * u3, 2 * u9])
 
 
-def test_without_run_uncertainties_the_query_states_none(groups):
+def test_without_run_uncertainties_the_query_carries_the_stated_estimate(groups):
     res = query(groups, "Dragonskin 30", "steel", 40.0, 20.0)
-    assert res.mu_k.u_combined is None  # the published map's rows carry none
+    assert res.mu_k.u_combined is None  # the published map's rows carry no budget
     assert res.to_dict()["mu_k"]["u_combined"] is None
-    # U then holds the repeat scatter (sem) and the interpolation, and says so
+    # U then holds their stated estimate (the founding cell's budget), never the scatter alone
     assert not res.mu_k.budgets_known
-    sems = [float(g) for g in groups[(groups.pin == "Dragonskin 30") & (groups.disc == "steel")
-                                     & (groups.temperature_C == 20.0)
-                                     & groups.pressure_kPa.isin([35.37, 58.95])]["mu_k_sem"]]
-    u_groups = sum(u.weight * s for u, s in zip(res.mu_k.used, sems, strict=True))
+    used = groups[(groups.pin == "Dragonskin 30") & (groups.disc == "steel")
+                  & (groups.temperature_C == 20.0) & groups.pressure_kPa.isin([35.37, 58.95])]
+    us = [float(g) for g in used["mu_k_u"]]
+    assert all(u > float(s) for u, s in zip(us, used["mu_k_sem"], strict=True))
+    u_groups = sum(u.weight * s for u, s in zip(res.mu_k.used, us, strict=True))
     assert res.mu_k.u_groups == pytest.approx(u_groups)
     assert res.mu_k.expanded == pytest.approx(2 * math.hypot(u_groups, res.mu_k.u_interpolation))
-    assert any("U holds the repeat scatter and the interpolation only" in n for n in res.notes)
+    assert any("their u is the stated estimate of the founding cell" in n for n in res.notes)
 
 
 def test_a_single_run_says_so_and_never_plus_minus_zero():

@@ -5,6 +5,7 @@ vouches for it); a single-file map is checked on read."""
 
 from __future__ import annotations
 
+import dataclasses
 from pathlib import Path
 
 import pandas as pd
@@ -13,7 +14,7 @@ from click.testing import CliRunner
 
 from tribopipe.cli import main
 from tribopipe.frictionmap import schema, store
-from tribopipe.frictionmap.schema import CheckedRecord, checked_record
+from tribopipe.frictionmap.schema import MapRow, checked_row
 
 EXAMPLE = Path(__file__).resolve().parents[1] / "raw" / "example" / "DS30_steel_5N_20C_r1.csv"
 
@@ -42,7 +43,7 @@ def test_a_reduced_run_is_checked_once_on_its_way_in(tmp_path: Path,
     result = CliRunner().invoke(main, [
         "reduce", str(EXAMPLE), "--pin", "Dragonskin 30", "--disc", "steel", "--force", "5",
         "--temperature", "20", "--repeat", "1", "--map", str(map_path),
-        "--out", str(tmp_path / "out")])
+        "--output", str(tmp_path / "out")])
     assert result.exit_code == 0, result.output
     assert len(store.read_map(map_path)) == n_map + 1
     # the new run's row once (its record; the store folds it in unchecked) and nothing
@@ -63,23 +64,26 @@ def test_a_single_file_map_s_rows_are_checked_on_every_read(
     assert seen == [169], seen
 
 
-def test_a_checked_record_changed_since_is_checked_again(monkeypatch: pytest.MonkeyPatch
-                                                        ) -> None:
+def test_a_checked_row_changed_since_is_checked_again(monkeypatch: pytest.MonkeyPatch
+                                                     ) -> None:
     runs = pd.read_parquet(Path(__file__).parent / "data" / "friction_map_v3.parquet")
-    row = {k: (None if pd.isna(v) else v) if not isinstance(v, str) else v
-           for k, v in runs.iloc[0].to_dict().items()}
-    record = checked_record(row)
-    assert isinstance(record, CheckedRecord) and record == row and record.unchanged()
+    values = {k: (None if pd.isna(v) else v) if not isinstance(v, str) else v
+              for k, v in runs.iloc[0].to_dict().items()}
+    row = MapRow.from_mapping(values)
+    assert not row.checked
+    record = checked_row(row)
+    assert isinstance(record, MapRow) and record == row and record.checked
     seen = _count_rows_checked(monkeypatch)
     schema.records_frame([record])
     assert seen == []  # checked when it was built
     # a batch worker's record crosses to the parent pickled: still checked
     import pickle
-    assert pickle.loads(pickle.dumps(record)).unchanged()
-    for changed in ({**record, "mu_k": -1.0}, record):
-        if changed is record:
-            record["mu_k"] = -1.0
-            assert not record.unchanged()
-        with pytest.raises(schema.MapError, match="mu_k"):
-            schema.records_frame([changed])
-    assert seen == [1, 1]
+    assert pickle.loads(pickle.dumps(record)).checked
+    # a row cannot change in place; a changed copy is a new row, checked again
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        record.mu_k = -1.0  # type: ignore[misc]
+    changed = dataclasses.replace(record, mu_k=-1.0)
+    assert not changed.checked
+    with pytest.raises(schema.MapError, match="mu_k"):
+        schema.records_frame([changed])
+    assert seen == [1]

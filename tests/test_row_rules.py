@@ -25,6 +25,8 @@ from tribopipe.frictionmap.schema import (
     IN_REDUCED_ROWS,
     SOURCE_REDUCED,
     Column,
+    MapRow,
+    frame_rows,
     records_frame,
 )
 
@@ -34,7 +36,7 @@ def valid_record() -> dict[str, Any]:
     record: dict[str, Any] = {}
     for c in COLUMNS:
         if c.kind == "str":
-            record[c.name] = "x"
+            record[c.name] = c.choices[0] if c.choices else "x"
         elif c.kind == "bool":
             record[c.name] = False
         elif c.kind == "int":
@@ -126,3 +128,36 @@ def test_the_datapackage_constraints_equal_the_table() -> None:
         else:
             assert (constraints["minimum"], constraints["maximum"]) == (
                 c.bounds.low, c.bounds.high), c.name
+
+
+def test_the_row_type_is_the_table_of_row_rules() -> None:
+    """``MapRow`` has one field per column, in the table's order, of its kind, optional
+    exactly where the table lets the column be missing; a drift fails at import."""
+    import dataclasses
+
+    from tribopipe.frictionmap import schema
+
+    row_fields = [f for f in dataclasses.fields(MapRow) if f.init]
+    assert [f.name for f in row_fields] == [c.name for c in COLUMNS]
+    for f, c in zip(row_fields, COLUMNS, strict=True):
+        optional = c.required != ALWAYS and c.kind != "bool"
+        assert f.type == {"str": "str", "float": "float", "int": "int",
+                          "bool": "bool"}[c.kind] + (" | None" if optional else "")
+    drifted = (*COLUMNS, Column("spare_N", "float", "N", "a column the row type lacks"))
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(schema, "COLUMNS", drifted)
+        mp.setattr(schema, "RUN_COLUMNS", tuple(c.name for c in drifted))
+        with pytest.raises(AssertionError, match="differ from COLUMNS"):
+            schema._check_row_type()
+
+
+def test_a_misspelt_or_mistyped_column_is_refused_by_name() -> None:
+    record = valid_record()
+    row = MapRow.from_mapping(record)
+    assert row.as_dict() == record
+    assert frame_rows(records_frame([row])) == [row]
+    with pytest.raises(MapError, match="unknown column.*mu_kk"):
+        MapRow.from_mapping({**record, "mu_kk": 0.5})
+    with pytest.raises(MapError, match="expected float") as err:
+        MapRow.from_mapping({**record, "mu_k": "0.5"})
+    assert err.value.column == "mu_k"

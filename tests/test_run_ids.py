@@ -44,5 +44,5 @@ def test_a_shipped_single_test_export_keeps_its_measurement_id(name: str) -> Non
                        temperature_C=10.0, repeat=1)
     outcome = reduce_file(path, load_settings(), labels)
     assert outcome.measurement_id == pinned_id
-    assert outcome.record is not None and outcome.record["measurement_id"] == pinned_id
-    assert outcome.record["interval"] == interval
+    assert outcome.record is not None and outcome.record.measurement_id == pinned_id
+    assert outcome.record.interval == interval

@@ -17,14 +17,13 @@ from tribopipe import frictionmap as fm
 from tribopipe.config import InstrumentConfig
 from tribopipe.labels import (
     FLAG_SPEED_OFF,
-    FOUNDING_NOMINAL_SPEED_MM_S,
     RunLabels,
     Tolerances,
     decide_run,
     nominal_speed_mm_s,
     round_speed,
 )
-from tribopipe.physics import sliding_speed_mm_s
+from tribopipe.physics import FOUNDING_SLIDING_SPEED_MM_S, sliding_speed_mm_s
 from tribopipe.stats import group_statistics, nominal_speeds
 
 DATA = Path(__file__).parent / "data"
@@ -37,7 +36,7 @@ def test_nominal_speed_rounds_the_set_point_then_the_sliding_speed():
     assert nominal_speed_mm_s(0.00503, cell) == expected
     assert nominal_speed_mm_s(0.00497, cell) == expected
     # no set point: the instrument's nominal speed
-    assert nominal_speed_mm_s(None, cell) == expected == FOUNDING_NOMINAL_SPEED_MM_S
+    assert nominal_speed_mm_s(None, cell) == expected == FOUNDING_SLIDING_SPEED_MM_S
     assert nominal_speed_mm_s(float("nan"), cell) == expected
     faster = nominal_speed_mm_s(0.15, cell)
     assert faster == pytest.approx(30 * expected, rel=0.02)
@@ -61,16 +60,16 @@ def test_a_measured_speed_off_its_nominal_is_flagged_once():
 def test_the_map_row_carries_the_nominal_speed_of_the_set_point():
     record = run_record(1)
     result = reduced_result()
-    assert record["nominal_speed_mm_s"] == nominal_speed_mm_s(
+    assert record.nominal_speed_mm_s == nominal_speed_mm_s(
         result.speed_set_point_rpm, InstrumentConfig())
     stepped = run_record(2, speed_set_point_rpm=0.15)
-    assert stepped["nominal_speed_mm_s"] == nominal_speed_mm_s(0.15, InstrumentConfig())
+    assert stepped.nominal_speed_mm_s == nominal_speed_mm_s(0.15, InstrumentConfig())
     # the measured speed stayed at 0.005 rpm: off the 0.15 rpm set point
-    assert FLAG_SPEED_OFF in stepped["flags"].split(";")
+    assert FLAG_SPEED_OFF in stepped.flags.split(";")
 
 
 def _pair(i: int, pin: str, speed: float | None, mu_k: float) -> dict:
-    return {**run_record(0), "measurement_id": f"r{i:03d}", "pin": pin,
+    return {**run_record(0).as_dict(), "measurement_id": f"r{i:03d}", "pin": pin,
             "nominal_speed_mm_s": speed, "mu_k": mu_k, "repeat": i}
 
 
@@ -91,7 +90,7 @@ def test_groups_split_by_nominal_speed_and_show_it_only_where_a_pair_has_several
 
 
 def test_a_row_without_a_nominal_speed_counts_as_the_founding_speed():
-    rows = [_pair(1, "A", None, 0.50), _pair(2, "A", FOUNDING_NOMINAL_SPEED_MM_S, 0.52)]
+    rows = [_pair(1, "A", None, 0.50), _pair(2, "A", FOUNDING_SLIDING_SPEED_MM_S, 0.52)]
     groups = group_statistics(fm.records_frame(rows))
     assert groups["mu_k_n"].tolist() == [2] and "nominal_speed_mm_s" not in groups.columns
 
@@ -100,7 +99,7 @@ def test_a_row_without_a_nominal_speed_counts_as_the_founding_speed():
 def test_older_maps_read_and_group_as_before(name):
     runs = fm.read_map(DATA / name)
     assert runs["nominal_speed_mm_s"].isna().all()
-    assert (nominal_speeds(runs) == FOUNDING_NOMINAL_SPEED_MM_S).all()
+    assert (nominal_speeds(runs) == FOUNDING_SLIDING_SPEED_MM_S).all()
     groups = group_statistics(runs)
     assert "nominal_speed_mm_s" not in groups.columns
     # the same groups as without any speed: one per pin, disc, force, temperature
@@ -306,10 +305,10 @@ def test_a_stepped_speed_test_gives_one_run_and_one_nominal_speed_per_step(tmp_p
         assert outcome.result.mu_k == pytest.approx(step.mu_k, abs=0.002)
         assert FLAG_SPEED_OFF not in outcome.verdict.flags
         summary = run_summary(outcome)
-        assert summary["nominal_speed_mm_s"] == outcome.record["nominal_speed_mm_s"]
+        assert summary["nominal_speed_mm_s"] == outcome.record.nominal_speed_mm_s
         assert summary["speed_set_point_rpm"] == outcome.result.speed_set_point_rpm
         records.append(outcome.record)
-    speeds = [r["nominal_speed_mm_s"] for r in records]
+    speeds = [r.nominal_speed_mm_s for r in records]
     assert speeds == [nominal_speed_mm_s(v, settings.instrument) for v in SPEEDS_RPM]
     assert len(set(speeds)) == 4
     groups = group_statistics(fm.records_frame(records))
@@ -336,7 +335,7 @@ def test_a_map_of_several_speeds_publishes_validates_and_merges(tmp_path):
     map_path = tmp_path / "m.parquet"
     fm.write_map(map_path, _multi_speed_runs())
     runner = CliRunner()
-    out = runner.invoke(main, ["map", "publish", str(tmp_path / "pkg"), "--lab", "Lab",
+    out = runner.invoke(main, ["map", "publish", "-o", str(tmp_path / "pkg"), "--lab", "Lab",
                                "--map", str(map_path)])
     assert out.exit_code == 0, out.output
     header = (tmp_path / "pkg" / "data" / "groups.csv").read_text().splitlines()[0]

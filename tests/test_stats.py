@@ -21,11 +21,13 @@ from tribopipe.stats import (
     STAT_FIELDS,
     describe_values,
     group_statistics,
+    group_u,
     repeatability,
+    stated_u,
     t975,
 )
 
-BASE = run_record(0)
+BASE = run_record(0).as_dict()
 
 
 def row(i: int, **changes) -> dict:
@@ -160,7 +162,7 @@ def test_columns_follow_the_design_contract():
     expected = ["pin", "disc", "normal_force_N", "pressure_kPa", "temperature_C"]
     for q in ("mu_k", "mu_s"):
         expected += [f"{q}_{f}" for f in GROUP_FIELDS]
-    expected += ["range_exceeds_r", "qc_flagged", "run_ids"]
+    expected += ["labs", "range_exceeds_r", "labs_disagree", "qc_flagged", "reviewed", "run_ids"]
     assert list(groups.columns) == expected
     empty = group_statistics(fm.schema.empty_map())
     assert list(empty.columns) == expected and empty.empty
@@ -283,8 +285,13 @@ def test_one_run_is_its_own_uncertainty():
     assert g["mu_k_u"] == pytest.approx(0.02) and math.isnan(g["mu_k_sem"])
 
 
-def test_a_group_with_a_run_of_unknown_uncertainty_states_none():
+def test_a_run_without_a_budget_carries_the_stated_estimate_never_zero():
     rows = [row(1, u_mu_k=0.02), row(2, u_mu_k=None)]
     g = group_statistics(frame(rows)).iloc[0]
-    assert math.isnan(g["mu_k_u"]) and math.isnan(g["mu_k_u_run"])
+    stated = stated_u(float(rows[1]["mu_k"]), float(rows[1]["normal_force_N"]))
+    assert stated > 0.01  # the founding cell's budget: its friction radius alone is 4 %
+    assert g["mu_k_u_run"] == pytest.approx((0.02 + stated) / 2)
+    assert g["mu_k_u"] >= g["mu_k_u_run"] and bool(g["mu_k_u_estimated"])
     assert g["mu_k_n"] == 2  # the repeat statistics are still there
+    u, budget = group_u(group_statistics(frame(rows)), "mu_k")
+    assert u.iloc[0] == g["mu_k_u"] and not budget.iloc[0]

@@ -63,12 +63,12 @@ def test_query_says_when_the_map_holds_synthetic_rows(tmp_path: Path) -> None:
 
 def test_publish_refuses_synthetic_rows_under_a_lab_without_the_option(tmp_path: Path) -> None:
     path = _map(tmp_path, 1)
-    refused = invoke("map", "publish", str(tmp_path / "pkg"), "--lab", "Some Lab",
+    refused = invoke("map", "publish", "-o", str(tmp_path / "pkg"), "--lab", "Some Lab",
                      "--map", str(path))
     assert refused.exit_code == 1
     assert "synthetic" in refused.output and "--allow-synthetic" in refused.output
     assert not (tmp_path / "pkg").exists()
-    done = invoke("map", "publish", str(tmp_path / "pkg"), "--lab", "Some Lab",
+    done = invoke("map", "publish", "-o", str(tmp_path / "pkg"), "--lab", "Some Lab",
                   "--allow-synthetic", "--map", str(path))
     assert done.exit_code == 0, done.output
     assert (tmp_path / "pkg" / "datapackage.json").is_file()

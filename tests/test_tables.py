@@ -127,7 +127,7 @@ def test_frictionmap_numbers_runs_without_repeat_and_leaves_out_excluded_runs():
         run_record(1, repeat=2),
         run_record(2, repeat=None),
         run_record(3, repeat=None),
-        {**run_record(4, repeat=1), "excluded": True, "exclusion_reason": "pin tore"},
+        {**run_record(4, repeat=1).as_dict(), "excluded": True, "exclusion_reason": "pin tore"},
     ])
     table = tables.frictionmap_table(runs)
     assert list(table.columns) == list(fm.published.FRICTIONMAP_COLUMNS)
@@ -153,15 +153,20 @@ def test_markdown_writer_aligns_numbers_escapes_pipes_and_leaves_missing_blank()
     assert md[0] == "| pin | pressure_kPa | mu_k_n | mu_k_std | qc_flagged |"
     assert md[1] == "| --- | ---: | ---: | ---: | --- |"
     assert md[2] == "| Ecoflex 00-50 | 11.79 | 2 | 0.01414 | yes |"
-    assert md[3] == "| A\\|B &amp; 50% #1_x | 106.1 | 1 |  | no |"
+    assert md[3] == "| A\\|B \\& 50% #1_x | 106.1 | 1 |  | no |"
     assert len(md) == 4
 
 
 def test_latex_writer_escapes_specials_and_uses_booktabs():
     tex = tables.to_latex(_small_groups()).splitlines()
-    assert tex[0] == "\\begin{tabular}{lrrrl}"
+    assert tex[1] == "% Needs in the preamble: \\usepackage{booktabs} \\usepackage{siunitx}"
+    tex = tex[3:]
+    # numbers aligned on the decimal point (siunitx S), text left
+    assert tex[0] == ("\\begin{tabular}{lS[table-format=3.2]S[table-format=1]"
+                      "S[table-format=1.5]l}")
     assert tex[1] == "\\toprule" and tex[-2] == "\\bottomrule" and tex[-1] == "\\end{tabular}"
-    assert tex[2] == "pin & pressure\\_kPa & mu\\_k\\_n & mu\\_k\\_std & qc\\_flagged \\\\"
+    assert tex[2] == ("pin & {pressure\\_kPa} & {mu\\_k\\_n} & {mu\\_k\\_std} & qc\\_flagged "
+                      "\\\\")
     assert tex[5] == "A|B \\& 50\\% \\#1\\_x & 106.1 & 1 &  & no \\\\"
 
 
@@ -241,34 +246,34 @@ def test_the_paper_layout_of_the_published_map(published_runs):
     assert list(table.columns) == ["pin", "disc", "p [kPa]", "T [°C]", "n", "μ_K ± U", "flags"]
     groups = group_statistics(published_runs)
     u, budget = group_u(groups, "mu_k")
-    assert not budget.any()  # the published runs carry no budget: U is the repeat scatter
+    assert not budget.any()  # the published runs carry no budget: U holds the stated u
     for cell, mean, uu, flags in zip(table["μ_K ± U"], groups["mu_k_mean"], u, table["flags"],
                                      strict=True):
-        if 2 * uu >= 1e-6:
-            assert cell == plus_minus(mean, 2 * uu)
-        else:  # identical repeats: no U, never "± 0"
-            assert cell == f"{mean:.3f} (uncertainty unknown)" and "repeats identical" in flags
-        assert "no budget" in flags
+        assert 2 * uu > 0.005  # never the repeat scatter alone: identical repeats too
+        assert cell == plus_minus(mean, 2 * uu)
+        assert "stated u" in flags and "repeats identical" not in flags
         assert "± 0 " not in cell and not cell.endswith("± 0")
     # the group whose t-interval went to [-0.083, 0.813] before: mean ± U, bounded at 0
     markdown = tables.render_table(published_runs, fmt="markdown", layout="paper")
     # brackets are escaped in every Markdown cell (no link can form); rendered as typed
     assert markdown.splitlines()[0] == ("| pin | disc | p \\[kPa\\] | T \\[°C\\] | n | μ_K ± U "
                                         "| flags |")
-    assert "| Ecoflex 00-50 | steel | 11.79 | 10 | 3 | 0.903 ± 0.027 | no budget |" in markdown
+    assert "| Ecoflex 00-50 | steel | 11.79 | 10 | 3 | 0.903 ± 0.092 | stated u |" in markdown
     assert "expanded uncertainty of the group mean (k = 2)" in markdown
 
 
 def test_the_paper_layout_as_latex_and_csv(published_runs):
     latex = tables.render_table(published_runs, fmt="latex", layout="paper", disc=["steel"])
-    assert r"$\mu_K$ $\pm$ U" in latex and r"0.903 $\pm$ 0.027" in latex
+    assert r"\multicolumn{3}{c}{$\mu_K \pm U$}" in latex
+    assert r"0.903 & $\pm$ & 0.092" in latex
     assert "±" not in latex and "μ" not in latex
+    assert "expanded uncertainty of the group mean (k = 2)" in latex
     csv = tables.render_table(published_runs, fmt="csv", layout="paper", disc=["steel"])
     frame = pd.read_csv(io.StringIO(csv), dtype=str, keep_default_na=False)
     assert list(frame.columns) == ["pin", "disc", "pressure_kPa", "temperature_C", "n",
                                    "mu_k", "mu_k_U", "flags"]
     row = frame[(frame.pin == "Ecoflex 00-50") & (frame.pressure_kPa == "11.79")].iloc[0]
-    assert (row.mu_k, row.mu_k_U) == ("0.903", "0.027")
+    assert (row.mu_k, row.mu_k_U) == ("0.903", "0.092")
 
 
 def test_the_paper_layout_with_budgets_mu_s_speeds_and_a_single_run():
@@ -291,7 +296,7 @@ def test_the_paper_layout_with_budgets_mu_s_speeds_and_a_single_run():
     assert list(table["μ_K ± U"]) == [plus_minus(m, 2 * u) for m, u in
                                       zip(groups["mu_k_mean"], groups["mu_k_u"], strict=True)]
     assert "n = 1" not in table["flags"][0] and table["flags"][1].endswith("n = 1")
-    assert "no budget" not in "".join(table["flags"])
+    assert "stated u" not in "".join(table["flags"])
     # a measured speed off its nominal does not split a group
     runs.loc[2, "sliding_speed_mm_s"] = 0.07
     assert "v [mm/s]" not in tables.paper_table(runs).columns

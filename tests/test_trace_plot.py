@@ -304,7 +304,7 @@ def test_header_names_file_conditions_readings_and_flags(outcomes):
     figure = draw(TraceFigure(), outcome)
     r = outcome.result
     assert figure.title.get_text() == "EF50_acrylic_9N_10C_r2.csv"
-    pressure = outcome.record["pressure_kPa"]
+    pressure = outcome.record.pressure_kPa
     assert figure.conditions.get_text() == (
         f"Ecoflex 00-50 on acrylic · F 9 N ({pressure:.4g} kPa per pin) · 10 °C · repeat 2")
     assert figure.readings.get_text() == (
@@ -446,7 +446,7 @@ def test_plot_trace_row_draws_a_stored_trace(outcomes, tmp_path):
     outcome = outcomes[1]
     stored = tmp_path / "t.parquet"
     outcome.result.trace.to_parquet(stored)
-    row = dict(outcome.record)
+    row = outcome.record.as_dict()
     png = plot_trace_row(pd.read_parquet(stored), row, io.BytesIO(), fmt="png", dpi=80)
     with Image.open(io.BytesIO(png.getvalue())) as image:
         assert image.size == (560, 424)

@@ -44,6 +44,8 @@ PLOTS_DIR = "plots"
 RUNS_CSV = "runs.csv"
 FAILURES_CSV = "failures.csv"
 REPORT_HTML = "report.html"
+#: the review page (``tribopipe review``)
+REVIEW_HTML = "review.html"
 #: the incremental state, one SQLite file per campaign name (campaigns may share an output
 #: folder); :data:`LEGACY_STATE_FILE` is the JSON state older versions wrote, read once
 STATE_FILE = ".tribopipe-state.{name}.sqlite"
@@ -56,7 +58,7 @@ FAILURES_HEADER: tuple[str, str] = ("file", "reason")
 #: the previous map, kept by every rewrite (:func:`tribopipe.frictionmap.store.backup_path`)
 MAP_BACKUP = MAP_FILE + ".bak"
 OUTPUT_FILES: frozenset[str] = frozenset({MAP_FILE, MAP_BACKUP, RUNS_CSV, FAILURES_CSV,
-                                          REPORT_HTML})
+                                          REPORT_HTML, REVIEW_HTML})
 OUTPUT_DIRS: frozenset[str] = frozenset({TRACES_DIR, SUMMARIES_DIR, PLOTS_DIR})
 
 
@@ -149,6 +151,11 @@ class OutputLayout:
     def report_html(self) -> Path:
         """The campaign report: ``<root>/report.html``."""
         return self.root / REPORT_HTML
+
+    @property
+    def review_html(self) -> Path:
+        """The review page: ``<root>/review.html``."""
+        return self.root / REVIEW_HTML
 
     @property
     def batch_lock(self) -> Path:

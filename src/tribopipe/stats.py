@@ -10,6 +10,12 @@ speeds to two significant digits, :func:`tribopipe.labels.round_speed`) so 11.79
 groups without a speed column, as before speeds were recorded; where a pair holds several
 nominal speeds the groups carry ``nominal_speed_mm_s``.
 
+Test methods are never pooled: the instrument kind and test method (``test_method``, one
+of :data:`tribopipe.config.TEST_METHODS`; a row that names none was measured on the
+founding rheometer cell) is part of every condition group's key, and where a map holds
+several methods the groups carry a ``test_method`` column (a sled's μ on a film and a
+rheometer's μ on the same pair are two groups, side by side).
+
 Beside the repeat statistics each group carries its combined standard uncertainty (GUM,
 k = 1) from the runs' own budgets (:mod:`tribopipe.reduction.uncertainty`): ``u_run`` is the mean of
 the runs' combined standard uncertainties, and the group mean's is
@@ -19,11 +25,33 @@ part, the friction radius, is the same for every run of a cell; counting the res
 conservative). With one run u = u_run; when a run has no uncertainty (an imported row, a
 run reduced before uncertainties were recorded) the group's is unknown (NaN).
 
+Rows without a budget of their own (an imported row, a run reduced before uncertainties were
+recorded) carry a stated estimate instead of none (:func:`stated_u`): the GUM budget of the
+founding cell (:class:`tribopipe.config.InstrumentConfig` defaults, the T-PID/44 the
+founding map was measured with) at the row's μ and nominal force, with its reading term the
+resolution of the value as written (0.45: ±0.005, rectangular) and its torque zero unknown;
+the group says so (``q_u_estimated``).
+
+Labs: a group's runs are split by the lab that measured them (``lab``; a row naming none is
+the map's own lab, :data:`OWN_LAB`). A lab's repeats are never pooled with another's:
+within a condition measured by p ≥ 2 labs the statistics are ISO 5725-2's (unbalanced, §7.4):
+the repeatability variance s_r² = Σ(nᵢ−1)sᵢ² / Σ(nᵢ−1), the variance of the lab means
+s_d² = Σnᵢ(ȳᵢ−ȳ)² / (p−1), n̄ = (Σnᵢ − Σnᵢ²/Σnᵢ)/(p−1), the between-lab variance
+s_L² = max(0, (s_d² − s_r²)/n̄), s_R² = s_L² + s_r², r = 2.8·s_r and R = 2.8·s_R. The
+pooled value's u holds the between-lab component whole: u² = maxᵢ uᵢ² + s_L², with uᵢ
+the lab's own group-mean u; so a second lab's data never make a value look more certain
+than either lab alone (the pooled value stands for what a lab measures, not for a mean
+over labs that grows more certain the more labs are counted). A condition whose labs'
+means differ by more than ISO 5725-6's critical difference
+CD = √(R² − r²(1 − 1/2nᵢ − 1/2nⱼ)), with s_r and s_R pooled over the map's conditions, is
+flagged ``labs_disagree`` (with one shared condition it never is: its own spread is R).
+
 With two or three repeats per group no statistical outlier test is meaningful (ISO 5725,
 ASTM E178). Instead, the within-group standard deviations are pooled over all groups into
-a repeatability standard deviation s_r, and groups whose range exceeds the repeatability
-limit r = 2.8·s_r are flagged, as are groups holding runs with QC flags. Runs excluded by
-id (with a recorded reason) are left out of everything here.
+a repeatability standard deviation s_r (each lab's repeats apart), and groups in which a
+lab's range exceeds the repeatability limit r = 2.8·s_r are flagged, as are groups holding
+runs with QC flags. Runs excluded by id (with a recorded reason) are left out of
+everything here.
 """
 
 from __future__ import annotations
@@ -34,7 +62,10 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
-from .labels import FOUNDING_NOMINAL_SPEED_MM_S, quality_flags, round_speed
+from .config import DEFAULT_TEST_METHOD, InstrumentConfig
+from .labels import quality_flags, round_speed
+from .physics import FOUNDING_SLIDING_SPEED_MM_S
+from .reduction.uncertainty import budget, unknown_offset_u_Nm
 from .rounding import lower_bound
 
 if TYPE_CHECKING:
@@ -44,11 +75,16 @@ QUANTITIES: tuple[str, ...] = ("mu_k", "mu_s")
 STAT_FIELDS: tuple[str, ...] = (
     "n", "mean", "std", "sem", "ci95_low", "ci95_high", "cv", "min", "max", "values",
 )
-#: The per-group columns of each quantity: the repeat statistics, then the uncertainty
-#: (``u_run``: mean of the runs' combined standard uncertainties; ``u``: combined standard
-#: uncertainty of the group mean), then the values.
-GROUP_FIELDS: tuple[str, ...] = STAT_FIELDS[:-1] + ("u_run", "u", "values")
-#: Repeatability limit factor: r = 2.8·s_r (≈ 1.96·√2, ISO 5725-6).
+#: The per-group columns of each quantity: the repeat statistics (``n``: the runs that
+#: have a value of it), then the uncertainty (``u_run``: mean of the runs' combined
+#: standard uncertainties; ``u``: combined standard uncertainty of the group mean, with
+#: the between-lab component; ``u_estimated``: some run's u is the stated estimate of
+#: :func:`stated_u`), then the labs (``labs``: how many labs measured it; ISO 5725-2's
+#: ``s_r``, ``s_L``, ``s_R`` of the condition, ``s_L`` and ``s_R`` NaN with one lab),
+#: then the values.
+GROUP_FIELDS: tuple[str, ...] = STAT_FIELDS[:-1] + (
+    "u_run", "u", "u_estimated", "labs", "s_r", "s_L", "s_R", "values")
+#: Repeatability limit factor: r = 2.8·s_r (≈ 1.96·√2, ISO 5725-6); likewise R = 2.8·s_R.
 R_FACTOR = 2.8
 #: Two nominal pressures of one force group more than this fraction apart are different
 #: conditions (e.g. two cells with different pin radii in one map).
@@ -57,6 +93,34 @@ FORCE_DECIMALS = 6
 TEMPERATURE_DECIMALS = 2
 #: the group column of the nominal sliding speed [mm/s]
 NOMINAL_SPEED = "nominal_speed_mm_s"
+#: how a row that names no lab is shown: the map's own lab
+OWN_LAB = "(own lab)"
+#: the group column of the labs that measured a group (``;``-joined, sorted)
+LABS = "labs"
+#: the group column that flags a condition whose labs disagree beyond R
+LABS_DISAGREE = "labs_disagree"
+#: the group column of a per-lab table (``by_lab``): the one lab of the row
+LAB = "lab"
+#: the group column of the instrument kind and test method
+TEST_METHOD = "test_method"
+
+
+def test_methods(runs: pd.DataFrame) -> Any:
+    """The test method each run is grouped under (an object array of text): its
+    ``test_method``, or :data:`~tribopipe.config.DEFAULT_TEST_METHOD` where the row names
+    none (a map older than schema version 6, an imported row)."""
+    import numpy as np
+
+    if TEST_METHOD not in runs.columns:
+        return np.full(len(runs), DEFAULT_TEST_METHOD, dtype=object)
+    return np.array([v if isinstance(v, str) and v else DEFAULT_TEST_METHOD
+                     for v in runs[TEST_METHOD].tolist()], dtype=object)
+
+
+def several_methods(runs: pd.DataFrame) -> bool:
+    """Whether the included runs of a map hold more than one test method."""
+    included = runs.loc[~runs["excluded"].astype(bool)]
+    return len(set(test_methods(included).tolist())) > 1
 
 
 def describe_values(values: Sequence[float]) -> dict[str, Any]:
@@ -105,12 +169,33 @@ def t975(dof: int) -> float:
     return float(stdtrit(dof, 0.975))
 
 
+@functools.lru_cache(maxsize=4096)
+def stated_u(mu: float, normal_force_N: float) -> float:
+    """The stated standard uncertainty (k = 1) of a μ that carries no budget of its own
+    (an imported row): the GUM budget of the founding cell
+    (:class:`~tribopipe.config.InstrumentConfig` defaults) at ``mu`` and the nominal
+    total force ``normal_force_N`` [N], its reading term the resolution of ``mu`` as
+    written (the last decimal of its shortest text, rectangular: 0.45 → 0.01/√12) and its
+    torque zero unknown (:func:`~tribopipe.reduction.uncertainty.unknown_offset_u_Nm`).
+    NaN for a μ or force that is not finite."""
+    if not (math.isfinite(mu) and math.isfinite(normal_force_N) and normal_force_N > 0):
+        return math.nan
+    instrument = InstrumentConfig()
+    text = repr(float(mu))
+    decimals = len(text.split(".", 1)[1]) if "." in text and "e" not in text else 0
+    resolution = 10.0 ** -decimals if decimals else 1.0
+    parts = budget(mu, resolution / math.sqrt(12), normal_force_N=normal_force_N,
+                   instrument=instrument, offset_u_Nm=unknown_offset_u_Nm(instrument))
+    return parts["combined"]
+
+
 @dataclass(frozen=True)
 class Repeatability:
-    """Pooled within-group standard deviation of one quantity over the groups with n ≥ 2.
+    """Pooled within-lab standard deviation of one quantity over the groups with repeats.
 
-    ``s_r = sqrt(Σ (nᵢ−1)·sᵢ² / Σ (nᵢ−1))`` with ``dof = Σ (nᵢ−1)``; ``r = 2.8·s_r``.
-    NaN when no group has two values.
+    ``s_r = sqrt(Σ dofᵢ·s_rᵢ² / Σ dofᵢ)`` with ``dofᵢ = nᵢ − labsᵢ`` (each lab's repeats
+    apart; ``nᵢ − 1`` for a one-lab group) and ``dof = Σ dofᵢ``; ``r = 2.8·s_r``.
+    NaN when no group has two values from one lab.
     """
 
     quantity: str
@@ -122,32 +207,102 @@ class Repeatability:
 
 def repeatability(groups: pd.DataFrame, quantity: str = "mu_k") -> Repeatability:
     """The pooled repeatability of ``quantity`` ('mu_k' or 'mu_s') from a
-    :func:`group_statistics` table."""
+    :func:`group_statistics` table (an older table without ``q_labs`` and ``q_s_r``:
+    from ``q_n`` and ``q_std``, as one lab)."""
     import numpy as np
 
     n = groups[f"{quantity}_n"].to_numpy(dtype=float)
-    s = groups[f"{quantity}_std"].to_numpy(dtype=float)
-    use = (n >= 2) & np.isfinite(s)
-    dof = int(np.sum(n[use] - 1))
+    if f"{quantity}_s_r" in groups.columns and f"{quantity}_labs" in groups.columns:
+        s = groups[f"{quantity}_s_r"].to_numpy(dtype=float)
+        dofs = n - groups[f"{quantity}_labs"].to_numpy(dtype=float)
+    else:
+        s = groups[f"{quantity}_std"].to_numpy(dtype=float)
+        dofs = n - 1
+    use = (dofs >= 1) & np.isfinite(s)
+    dof = int(np.sum(dofs[use]))
     if dof == 0:
         return Repeatability(quantity, math.nan, math.nan, 0, 0)
-    s_r = math.sqrt(float(np.sum((n[use] - 1) * s[use] ** 2)) / dof)
+    s_r = math.sqrt(float(np.sum(dofs[use] * s[use] ** 2)) / dof)
     return Repeatability(quantity, s_r, R_FACTOR * s_r, dof, int(use.sum()))
+
+
+@dataclass(frozen=True)
+class Reproducibility:
+    """ISO 5725-2 precision of one quantity pooled over the conditions several labs
+    measured: ``s_r`` (the map's pooled repeatability, :func:`repeatability`), ``s_R``
+    (``sqrt(Σ (pᵢ−1)·s_Rᵢ² / Σ (pᵢ−1))`` over those conditions), ``r = 2.8·s_r``,
+    ``R = 2.8·s_R``, ``n_conditions``; NaN where unknown."""
+
+    quantity: str
+    s_r: float
+    s_R: float
+    r: float
+    R: float
+    n_conditions: int
+
+
+def reproducibility(groups: pd.DataFrame, quantity: str = "mu_k") -> Reproducibility:
+    """The pooled reproducibility of ``quantity`` from a :func:`group_statistics` table."""
+    import numpy as np
+
+    rep = repeatability(groups, quantity)
+    if f"{quantity}_s_R" not in groups.columns:
+        return Reproducibility(quantity, rep.s_r, math.nan, rep.r, math.nan, 0)
+    p = groups[f"{quantity}_labs"].to_numpy(dtype=float)
+    s_R = groups[f"{quantity}_s_R"].to_numpy(dtype=float)
+    use = (p >= 2) & np.isfinite(s_R)
+    if not use.any():
+        return Reproducibility(quantity, rep.s_r, math.nan, rep.r, math.nan, 0)
+    pooled = math.sqrt(float(np.sum((p[use] - 1) * s_R[use] ** 2) / np.sum(p[use] - 1)))
+    return Reproducibility(quantity, rep.s_r, pooled, rep.r, R_FACTOR * pooled,
+                           int(use.sum()))
+
+
+def critical_difference(s_r: float, s_R: float, n_a: int, n_b: int) -> float:
+    """ISO 5725-6 §4.2.3: the critical difference of two labs' means of ``n_a`` and
+    ``n_b`` results, CD = √(R² − r²(1 − 1/2n_a − 1/2n_b)) with r = 2.8·s_r, R = 2.8·s_R
+    (s_r unknown: 0, the two means then compared with R alone). NaN when s_R is."""
+    if not math.isfinite(s_R):
+        return math.nan
+    r = R_FACTOR * (s_r if math.isfinite(s_r) else 0.0)
+    R = R_FACTOR * s_R
+    return math.sqrt(max(R * R - r * r * (1 - 1 / (2 * n_a) - 1 / (2 * n_b)), 0.0))
+
+
+def lab_names(runs: pd.DataFrame) -> Any:
+    """The lab of each run as the statistics name it (an object array): its ``lab``, or
+    :data:`OWN_LAB` where the row names none."""
+    import numpy as np
+
+    if "lab" not in runs.columns:
+        return np.full(len(runs), OWN_LAB, dtype=object)
+    return np.array([OWN_LAB if not isinstance(v, str) or not v.strip() else v
+                     for v in runs["lab"].tolist()], dtype=object)
+
+
+def select_labs(runs: pd.DataFrame, labs: Sequence[str] | None) -> pd.DataFrame:
+    """The runs measured by one of ``labs`` (as :func:`lab_names` names them, compared
+    without case; ``None``: all runs)."""
+    if not labs:
+        return runs
+    wanted = {lab.strip().casefold() for lab in labs}
+    keep = [str(v).casefold() in wanted for v in lab_names(runs)]
+    return runs.loc[keep]
 
 
 def nominal_speeds(runs: pd.DataFrame) -> Any:
     """The nominal sliding speed [mm/s] each run is grouped under (a float array): its
     ``nominal_speed_mm_s`` rounded by :func:`~tribopipe.labels.round_speed`, or
-    :data:`~tribopipe.labels.FOUNDING_NOMINAL_SPEED_MM_S` where the row has none (a map
+    :data:`~tribopipe.physics.FOUNDING_SLIDING_SPEED_MM_S` where the row has none (a map
     written before schema version 5, an imported row: measured at one speed as far as the
     map can tell, which the published map and tribopipe's default instrument both are)."""
     import numpy as np
 
     if NOMINAL_SPEED not in runs.columns:
-        return np.full(len(runs), FOUNDING_NOMINAL_SPEED_MM_S)
+        return np.full(len(runs), FOUNDING_SLIDING_SPEED_MM_S)
     values = runs[NOMINAL_SPEED].to_numpy(dtype=float)
     return np.array([round_speed(float(v)) if math.isfinite(v) and v > 0
-                     else FOUNDING_NOMINAL_SPEED_MM_S for v in values], dtype=float)
+                     else FOUNDING_SLIDING_SPEED_MM_S for v in values], dtype=float)
 
 
 def pairs_with_several_speeds(runs: pd.DataFrame) -> set[tuple[str, str]]:
@@ -160,10 +315,10 @@ def pairs_with_several_speeds(runs: pd.DataFrame) -> set[tuple[str, str]]:
     return {pair for pair, found in speeds.items() if len(found) > 1}
 
 
-def group_keys(runs: pd.DataFrame, by_speed: bool) -> pd.DataFrame:
+def group_keys(runs: pd.DataFrame, by_speed: bool, by_lab: bool = False) -> pd.DataFrame:
     """The rounded grouping keys of each run (a new frame; ``runs`` is not modified):
-    pin, disc, force, temperature, nominal speed (and the measured speed with
-    ``by_speed``)."""
+    pin, disc, force, temperature, nominal speed, test method (and the measured speed
+    with ``by_speed``, the lab with ``by_lab``)."""
     import pandas as pd
 
     keys = pd.DataFrame(
@@ -173,6 +328,7 @@ def group_keys(runs: pd.DataFrame, by_speed: bool) -> pd.DataFrame:
             "normal_force_N": runs["normal_force_N"].round(FORCE_DECIMALS).to_numpy(),
             "temperature_C": runs["temperature_C"].round(TEMPERATURE_DECIMALS).to_numpy(),
             NOMINAL_SPEED: nominal_speeds(runs),
+            TEST_METHOD: test_methods(runs),
         },
         index=runs.index,
     )
@@ -180,7 +336,20 @@ def group_keys(runs: pd.DataFrame, by_speed: bool) -> pd.DataFrame:
         keys["sliding_speed_mm_s"] = [
             round_speed(float(v)) for v in runs["sliding_speed_mm_s"]
         ]
+    if by_lab:
+        keys[LAB] = lab_names(runs)
     return keys
+
+
+def condition_keys(runs: pd.DataFrame) -> dict[str, tuple[Any, ...]]:
+    """The condition group of each run, by ``measurement_id``: the key
+    :func:`group_statistics` groups it under (:func:`group_keys`: pin, disc, nominal force
+    [N] and temperature [°C] rounded, nominal speed [mm/s]), unknown values as ``None``.
+    What a count of the groups a change touches compares."""
+    keys = group_keys(runs, by_speed=False)
+    ids = runs["measurement_id"].astype(str).tolist()
+    return {mid: tuple(None if isinstance(v, float) and v != v else v for v in key)
+            for mid, key in zip(ids, keys.itertuples(index=False, name=None), strict=True)}
 
 
 def _pressure_clusters(pressures: Sequence[float]) -> list[int]:
@@ -204,45 +373,65 @@ def _pressure_clusters(pressures: Sequence[float]) -> list[int]:
 
 
 def group_statistics(runs: pd.DataFrame, *, by_speed: bool = False,
-                     show_speed: bool | None = None) -> pd.DataFrame:
+                     show_speed: bool | None = None, by_lab: bool = False,
+                     labs: Sequence[str] | None = None,
+                     show_method: bool | None = None) -> pd.DataFrame:
     """Repeat statistics per condition group of a friction map (see module docstring).
 
     ``runs`` is a map DataFrame (:func:`tribopipe.frictionmap.read_map`); it is not
-    modified. Excluded runs are left out; groups with no remaining run are dropped.
-    Groups always split by nominal speed; ``show_speed`` says whether the table shows it
-    (default: where some pair holds several nominal speeds).
+    modified. Excluded runs are left out, and with ``labs`` the runs of other labs
+    (:func:`select_labs`); groups with no remaining run are dropped.
+    Groups always split by nominal speed and by test method; ``show_speed`` says whether
+    the table shows the speed (default: where some pair holds several nominal speeds),
+    ``show_method`` whether it shows ``test_method`` (default: where the map holds several
+    methods). With ``by_lab`` each lab's runs of a condition are a group of their own
+    (column ``lab``).
     Columns: ``pin, disc, normal_force_N, pressure_kPa, temperature_C``
     (+ ``nominal_speed_mm_s`` when shown, + ``sliding_speed_mm_s``, the measured speed,
-    with ``by_speed``), then for q in ``mu_k``, ``mu_s``:
+    with ``by_speed``, + ``lab`` with ``by_lab``), then for q in ``mu_k``, ``mu_s``:
     ``q_n, q_mean, q_std, q_sem, q_ci95_low, q_ci95_high, q_cv, q_min, q_max, q_u_run,
-    q_u, q_values``,
-    then ``range_exceeds_r, qc_flagged, run_ids``. Within a group, values and ids are in
-    (repeat, measurement_id) order, so the result does not depend on the row order.
-    Rows are sorted by pin, disc, temperature, pressure, force, nominal speed (and
-    measured speed).
+    q_u, q_u_estimated, q_labs, q_s_r, q_s_L, q_s_R, q_values``,
+    then ``labs, range_exceeds_r, labs_disagree, qc_flagged, reviewed, run_ids``
+    (``reviewed``: how many of the group's runs a reviewer accepted or re-windowed,
+    :mod:`tribopipe.review`; an accepted run's QC flags do not make ``qc_flagged``). Within a group,
+    values and ids are in (repeat, measurement_id) order, so the result does not depend
+    on the row order. Rows are sorted by pin, disc, temperature, pressure, force, nominal
+    speed (measured speed, lab).
     """
     import numpy as np
     import pandas as pd
 
+    runs = select_labs(runs, labs)
     if show_speed is None:
         show_speed = bool(pairs_with_several_speeds(runs))
+    if show_method is None:
+        show_method = several_methods(runs)
     condition_cols = ["pin", "disc", "normal_force_N", "pressure_kPa", "temperature_C"]
     if show_speed:
         condition_cols.append(NOMINAL_SPEED)
+    if show_method:
+        condition_cols.append(TEST_METHOD)
     if by_speed:
         condition_cols.append("sliding_speed_mm_s")
+    if by_lab:
+        condition_cols.append(LAB)
     stat_cols = [f"{q}_{f}" for q in QUANTITIES for f in GROUP_FIELDS]
-    columns = condition_cols + stat_cols + ["range_exceeds_r", "qc_flagged", "run_ids"]
+    columns = condition_cols + stat_cols + [LABS, "range_exceeds_r", LABS_DISAGREE,
+                                            "qc_flagged", "reviewed", "run_ids"]
 
     included = runs.loc[~runs["excluded"].astype(bool)]
-    keys = group_keys(included, by_speed)
+    keys = group_keys(included, by_speed, by_lab)
     key_cols = list(keys.columns)
     # plain arrays once; per-group pandas slicing is what makes large maps slow
     data = {
         "pressure_kPa": included["pressure_kPa"].to_numpy(dtype=float),
+        "normal_force_N": included["normal_force_N"].to_numpy(dtype=float),
         "repeat": included["repeat"].astype("Float64").to_numpy(dtype=float, na_value=np.nan),
         "measurement_id": included["measurement_id"].astype(str).to_numpy(dtype=object),
         "flags": included["flags"].fillna("").astype(str).to_numpy(dtype=object),
+        "review": (included["review"].fillna("").astype(str).to_numpy(dtype=object)
+                   if "review" in included else np.full(len(included), "", dtype=object)),
+        "lab": lab_names(included),
     }
     for q in QUANTITIES:
         data[q] = included[q].to_numpy(dtype=float)
@@ -262,29 +451,53 @@ def group_statistics(runs: pd.DataFrame, *, by_speed: bool = False,
         return pd.DataFrame({c: pd.Series(dtype=_dtype(c)) for c in columns})
     groups = pd.DataFrame(rows)
     groups = groups.sort_values(
-        ["pin", "disc", "temperature_C", "pressure_kPa", "normal_force_N", NOMINAL_SPEED]
-        + (["sliding_speed_mm_s"] if by_speed else []),
+        ["pin", "disc", "temperature_C", "pressure_kPa", "normal_force_N", NOMINAL_SPEED,
+         TEST_METHOD] + (["sliding_speed_mm_s"] if by_speed else []) + ([LAB] if by_lab else []),
         na_position="last",
         kind="mergesort",
     ).reset_index(drop=True)
     flagged = np.zeros(len(groups), dtype=bool)
+    disagree = np.zeros(len(groups), dtype=bool)
     for q in QUANTITIES:
         rep = repeatability(groups, q)
         if math.isfinite(rep.r):
-            spread = (groups[f"{q}_max"] - groups[f"{q}_min"]).to_numpy(dtype=float)
+            spread = groups[f"_{q}_lab_range"].to_numpy(dtype=float)
             flagged |= np.nan_to_num(spread, nan=0.0) > rep.r
+        disagree |= _labs_disagree(groups, q, reproducibility(groups, q))
     groups["range_exceeds_r"] = flagged
+    groups[LABS_DISAGREE] = disagree
     # the types of _dtype, as for an empty table; numeric columns are left as computed
     non_float = {c: _dtype(c) for c in columns if _dtype(c) != "float64"}
     return groups.astype(non_float).loc[:, columns]
 
 
+def _labs_disagree(groups: pd.DataFrame, q: str, rep: Reproducibility) -> Any:
+    """Per group: two of its labs' means of ``q`` differ by more than their critical
+    difference (:func:`critical_difference`, with the map's pooled s_r and s_R)."""
+    import numpy as np
+
+    out = np.zeros(len(groups), dtype=bool)
+    if not math.isfinite(rep.s_R):
+        return out
+    for i, lab_means in enumerate(groups[f"_{q}_lab_means"]):
+        means = list(lab_means)
+        for a in range(len(means)):
+            for b in range(a + 1, len(means)):
+                (m_a, n_a), (m_b, n_b) = means[a], means[b]
+                cd = critical_difference(rep.s_r, rep.s_R, n_a, n_b)
+                if math.isfinite(cd) and abs(m_a - m_b) > cd:
+                    out[i] = True
+    return out
+
+
 def _dtype(column: str) -> str:
-    if column in ("pin", "disc", "run_ids") or column.endswith("_values"):
+    if column in ("pin", "disc", "run_ids", LABS, LAB, TEST_METHOD) or \
+            column.endswith("_values"):
         return "str"
-    if column.endswith("_n"):
+    if column.endswith("_n") or column.endswith("_labs") or column == "reviewed":
         return "int64"
-    if column in ("range_exceeds_r", "qc_flagged"):
+    if column in ("range_exceeds_r", "qc_flagged", LABS_DISAGREE) or \
+            column.endswith("_u_estimated"):
         return "bool"
     return "float64"
 
@@ -292,7 +505,8 @@ def _dtype(column: str) -> str:
 def _group_row(
     key: dict[str, Any], members: Any, data: dict[str, Any]
 ) -> dict[str, Any]:
-    """One output row (``range_exceeds_r`` comes later, from all groups): ``members`` are
+    """One output row (``range_exceeds_r`` and ``labs_disagree`` come later, from all
+    groups, through the private ``_q_lab_range`` and ``_q_lab_means``): ``members`` are
     positions into the per-run arrays of ``data``."""
     import numpy as np
 
@@ -302,28 +516,82 @@ def _group_row(
     )
     row: dict[str, Any] = dict(key)
     row["pressure_kPa"] = float(np.median(data["pressure_kPa"][order]))
+    labs_of = data["lab"][order]
     for q in QUANTITIES:
         values = data[q][order]
         finite = np.isfinite(values)
         stats = describe_values(values[finite])
         row.update({f"{q}_{f}": v for f, v in stats.items()})
-        row.update(_group_uncertainty(data[f"u_{q}"][order][finite], stats["sem"], q))
-    row["qc_flagged"] = any(quality_flags(f) for f in data["flags"][order])
+        u_runs = data[f"u_{q}"][order][finite]
+        forces = data["normal_force_N"][order][finite]
+        estimated = ~np.isfinite(u_runs)
+        u_runs = np.where(estimated, [stated_u(float(m), float(f)) for m, f in
+                                      zip(values[finite], forces, strict=True)], u_runs)
+        row.update(_lab_precision(values[finite], u_runs, labs_of[finite], q))
+        row[f"{q}_u_estimated"] = bool(estimated.any())
+    row[LABS] = ";".join(sorted(set(labs_of.tolist())))
+    # a reviewer who accepted a run has judged its flags: they no longer count
+    row["qc_flagged"] = any(quality_flags(f) for f, r in zip(data["flags"][order],
+                            data["review"][order], strict=True) if r != "accept")
+    row["reviewed"] = sum(1 for r in data["review"][order] if r)
     row["run_ids"] = ";".join(data["measurement_id"][order])
     return row
 
 
-def _group_uncertainty(u_runs: Any, sem: float, q: str) -> dict[str, float]:
-    """``q_u_run`` and ``q_u`` of a group (module docstring) from its runs' standard
-    uncertainties (the runs with a value of q) and the standard error of their mean."""
+def _lab_precision(values: Any, u_runs: Any, labs: Any, q: str) -> dict[str, Any]:
+    """The uncertainty and ISO 5725-2 columns of ``q`` for one condition group: its runs'
+    ``values``, standard uncertainties ``u_runs`` (a budget or the stated estimate) and
+    ``labs``, all in the group's order (module docstring)."""
     import numpy as np
 
-    u = np.asarray(u_runs, dtype=float)
-    if u.size == 0 or not np.isfinite(u).all():
-        return {f"{q}_u_run": math.nan, f"{q}_u": math.nan}
-    u_run = float(np.mean(u))
-    scatter = sem if math.isfinite(sem) else 0.0
-    return {f"{q}_u_run": u_run, f"{q}_u": math.hypot(scatter, u_run)}
+    out: dict[str, Any] = {f"{q}_u_run": math.nan, f"{q}_u": math.nan, f"{q}_labs": 0,
+                           f"{q}_s_r": math.nan, f"{q}_s_L": math.nan, f"{q}_s_R": math.nan,
+                           f"_{q}_lab_range": math.nan, f"_{q}_lab_means": ()}
+    if values.size == 0:
+        return out
+    names = sorted(set(labs.tolist()))
+    per_lab = []
+    for lab in names:
+        sel = labs == lab
+        x, u = values[sel], u_runs[sel]
+        n = int(x.size)
+        mean = float(np.mean(x))
+        s = float(np.std(x, ddof=1)) if n > 1 else math.nan
+        u_run = float(np.mean(u)) if np.isfinite(u).all() else math.nan
+        sem = s / math.sqrt(n) if n > 1 else 0.0
+        per_lab.append((n, mean, s, u_run, math.hypot(sem, u_run),
+                        float(np.ptp(x)) if n > 1 else math.nan))
+    n_i = np.array([p[0] for p in per_lab], dtype=float)
+    means = np.array([p[1] for p in per_lab])
+    s_i = np.array([p[2] for p in per_lab])
+    u_i = np.array([p[4] for p in per_lab])
+    dof = n_i - 1
+    with_dof = dof > 0
+    s_r = (math.sqrt(float(np.sum(dof[with_dof] * s_i[with_dof] ** 2) / np.sum(dof[with_dof])))
+           if with_dof.any() else math.nan)
+    out.update({
+        f"{q}_u_run": float(np.mean(u_runs)) if np.isfinite(u_runs).all() else math.nan,
+        f"{q}_labs": len(names),
+        f"{q}_s_r": s_r,
+        f"_{q}_lab_range": float(np.nanmax([p[5] for p in per_lab]))
+        if any(math.isfinite(p[5]) for p in per_lab) else math.nan,
+        f"_{q}_lab_means": tuple((float(m), int(n)) for m, n in zip(means, n_i, strict=True)),
+    })
+    p = len(names)
+    if p == 1:
+        out[f"{q}_u"] = float(u_i[0])
+        return out
+    total = float(np.sum(n_i))
+    grand = float(np.sum(n_i * means) / total)
+    s_d2 = float(np.sum(n_i * (means - grand) ** 2) / (p - 1))
+    n_bar = (total - float(np.sum(n_i ** 2)) / total) / (p - 1)
+    # no repeats in any lab: the spread of the means is all the map can tell
+    s_r2 = s_r ** 2 if math.isfinite(s_r) else 0.0
+    s_L2 = max(0.0, (s_d2 - s_r2) / n_bar)
+    out[f"{q}_s_L"] = math.sqrt(s_L2)
+    out[f"{q}_s_R"] = math.sqrt(s_L2 + s_r2)
+    out[f"{q}_u"] = math.sqrt(float(np.max(u_i ** 2)) + s_L2)
+    return out
 
 
 def _repeat_key(value: float) -> tuple[int, int]:
@@ -332,11 +600,12 @@ def _repeat_key(value: float) -> tuple[int, int]:
 
 def group_u(groups: pd.DataFrame, quantity: str = "mu_k") -> tuple[pd.Series, pd.Series]:
     """``(u, budget)`` per group of ``quantity``: the standard uncertainty of the group mean
-    (GUM, k = 1) that every output's U = 2u reads, and whether it holds the runs' budgets.
+    (GUM, k = 1) that every output's U = 2u reads, and whether it holds only the runs' own
+    budgets (False where some run's u is the stated estimate of :func:`stated_u`).
 
-    ``u`` is the group's combined ``q_u`` (runs' budgets beside the repeat scatter) where
-    its runs carry budgets (``budget`` True); else its repeat scatter alone, ``q_sem``
-    (e.g. an imported map); NaN where neither is known (one run without a budget). Columns
+    ``u`` is the group's combined ``q_u`` (runs' budgets or stated estimates beside the
+    repeat scatter and the between-lab component); a table without it (written before
+    it existed) gives its repeat scatter, ``q_sem``; NaN where neither is known. Columns
     that are absent count as unknown.
     """
     import pandas as pd
@@ -347,6 +616,12 @@ def group_u(groups: pd.DataFrame, quantity: str = "mu_k") -> tuple[pd.Series, pd
             return pd.Series(math.nan, index=groups.index, dtype=float)
         return pd.to_numeric(groups[name], errors="coerce").astype(float)
 
-    u_budget = column(f"{quantity}_u")
-    budget = u_budget.notna()
-    return u_budget.where(budget, column(f"{quantity}_sem")), budget
+    u_group = column(f"{quantity}_u")
+    known = u_group.notna()
+    if f"{quantity}_u_estimated" in groups.columns:
+        estimated = groups[f"{quantity}_u_estimated"].astype(str).str.lower().isin(
+            ["true", "1"])
+        budget = known & ~estimated
+    else:
+        budget = known
+    return u_group.where(known, column(f"{quantity}_sem")), budget

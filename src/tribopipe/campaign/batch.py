@@ -31,10 +31,14 @@ from ..frictionmap.duplicates import (
     repeat_clashes,
 )
 from ..frictionmap.records import stored_file_name
+from ..frictionmap.schema import MapRow, unvalidated_frame
 from ..frictionmap.snapshot import open_map
 from ..frictionmap.store import AppendReport, change_map_with
 from ..labels import flags_text, quality_flags
+from ..measurement import run_name
 from ..pipeline import FileOutcome, ReducedRun
+from ..review import Review, ReviewOutcome, landing_records, read_review
+from ..stats import condition_keys
 from .metadata import Manifest, read_manifest
 from .outputs import write_failures_csv, write_runs_csv
 from .spec import Campaign
@@ -270,6 +274,9 @@ def _run_locked(campaign: Campaign, *, jobs: int | None, plots: bool | None,
     jobs = default_jobs() if jobs is None else max(1, int(jobs))
     plots = campaign.plots if plots is None else plots
     state = load_state(campaign)
+    # a decisions file is checked before any work (its runs only under the map's lock)
+    review = read_review(campaign.review) if campaign.review is not None and (
+        campaign.review.exists() or campaign.review.is_symlink()) else None
     entries: dict[str, FileState] = dict(state.entries)
     missing_ids, map_checked = _ids_missing_from_map(campaign, state)
     manifest = read_manifest(campaign.manifest) if campaign.manifest is not None else None
@@ -311,10 +318,10 @@ def _run_locked(campaign: Campaign, *, jobs: int | None, plots: bool | None,
         report, landed, removed, part, after = _land(
             campaign, results, lambda in_map: _apply(
                 campaign, results, by_file, entries, failures, notes, vanished, in_map,
-                redone), entries)
+                redone), entries, review)
         if report is not None:
             appended = report if appended is None else _combined(appended, report)
-        groups.update(_groups_updated(state, part.records, landed, removed))
+        groups.update(_groups_updated(part, landed, removed))
         landing = _plus(landing, part)
         with suppress(OutputError):  # said by the batch's last save, which meets it again
             saved[0] = _save_state_with_map(campaign, entries, state, saved[0])
@@ -344,6 +351,8 @@ def _run_locked(campaign: Campaign, *, jobs: int | None, plots: bool | None,
             landed_files += len(ready)
             if progress:
                 progress(done + landed_files, files)
+    if landing.review is not None:
+        notes.append(landing.review.line(campaign.review))
     _forget_vanished(campaign, entries, set(by_file), notes)
     map_summary = "unchanged" if appended is None else appended.summary()
 
@@ -501,7 +510,7 @@ class _Landing:
     the duplicate files (file → reason), the outcome of each file reduced now (file → one
     of :data:`FILE_OUTCOMES`) and the runs that failed in the files read."""
 
-    records: list[dict[str, Any]]
+    records: list[MapRow]
     stale_ids: set[str]
     reduced: list[str]
     flagged: list[tuple[str, str]]
@@ -510,6 +519,11 @@ class _Landing:
     runs_failed: int
     #: repeat numbers used twice in one condition once the records land
     repeats: list[str] = field(default_factory=list)
+    #: what the review did (:func:`tribopipe.review.landing_records`), when one applied
+    review: ReviewOutcome | None = None
+    #: the condition group (:func:`tribopipe.stats.condition_keys`) of each map row the
+    #: records replace or the stale ids drop, as the map held them before this batch
+    old_groups: dict[str, tuple[Any, ...]] = field(default_factory=dict)
 
 
 def _owners(by_file: Mapping[str, CampaignRow], redone: set[str],
@@ -540,7 +554,7 @@ def _apply(campaign: Campaign, results: Sequence[FileOutcome], by_file: Mapping[
     checked against the files before it and the map (``in_map``, read under its lock).
     ``redone``: every file the batch reduces again (default: those of ``results``); the
     state's account of them no longer holds."""
-    records: list[dict[str, Any]] = []
+    records: list[MapRow] = []
     old_ids: set[str] = set()
     reduced: list[str] = []
     flagged: list[tuple[str, str]] = []
@@ -669,8 +683,7 @@ def _ledger(rows: Sequence[CampaignRow], entries: Mapping[str, FileState],
         known[row.file] = set(found)
         places[row.file] = {(r.test, r.interval) for r in entry.runs}
         tests[row.file] = len(found)
-        undescribed += [row.file if r.test is None else f"{row.file} [{r.test}]"
-                        for r in entry.runs if r.undescribed]
+        undescribed += [run_name(row.file, r.test) for r in entry.runs if r.undescribed]
     unmatched: list[str] = []
     if manifest is not None:
         names = {row.file for row in rows} | {row.path.name for row in rows}
@@ -690,16 +703,14 @@ def _ledger(rows: Sequence[CampaignRow], entries: Mapping[str, FileState],
     return tests, unmatched, list(dict.fromkeys(undescribed))
 
 
-def _groups_updated(state: CampaignState, records: Sequence[Mapping[str, Any]],
-                    landed: set[str], removed: set[str]) -> set[tuple[Any, ...]]:
-    """The condition groups with a map row added, replaced or removed by this batch."""
-    old_groups = {
-        _group_key(r.labels or {}) for e in state.entries.values()
-        for r in e.runs if r.measurement_id in removed
-    }
-    return {
-        _group_key(r) for r in records if r.get("measurement_id") in landed
-    } | old_groups
+def _groups_updated(landing: _Landing, landed: set[str],
+                    removed: set[str]) -> set[tuple[Any, ...]]:
+    """The condition groups (those of the statistics, :func:`condition_keys`) with a map
+    row added, replaced (its group before and after) or removed by this batch."""
+    touched = [r for r in landing.records if r.measurement_id in landed]
+    new = condition_keys(unvalidated_frame(touched)) if touched else {}
+    old = {k for mid, k in landing.old_groups.items() if mid in landed | removed}
+    return set(new.values()) | old
 
 
 def _save_state_with_map(campaign: Campaign, entries: dict[str, FileState],
@@ -737,29 +748,38 @@ def _ids_missing_from_map(campaign: Campaign, state: CampaignState) -> tuple[set
 
 
 def _land(campaign: Campaign, results: Sequence[FileOutcome],
-          apply: Callable[[FilesByHash], _Landing], entries: Mapping[str, FileState]
+          apply: Callable[[FilesByHash], _Landing], entries: Mapping[str, FileState],
+          review: Review | None = None
           ) -> tuple[AppendReport | None, set[str], set[str], _Landing, pd.DataFrame | None]:
     """Check the results against the map and fold them in, under the map's lock, in one
     atomic write (new records added or replaced, rows of runs whose raw file changed
     dropped); the map is locked and read only when a result brings or replaces runs.
-    Returns the map's report (``None``: nothing to land), the ids added or replaced, the
-    ids removed, what ``apply`` made of the results, and the map's rows as the write
-    left them (``None`` when the map was not read)."""
-    touches = any(r.reduced for r in results) or any(
+    The review (``review``, else the one each row holds) is applied in the same write
+    (:func:`tribopipe.review.landing_records`); a decision that fails raises before
+    anything is written. Returns the map's report (``None``: nothing changed), the ids
+    added or replaced, the ids removed, what ``apply`` made of the results, and the map's
+    rows as the write left them (``None`` when the map was not read)."""
+    touches = review is not None or any(r.reduced for r in results) or any(
         _run_ids(entries.get(r.name)) for r in results)
     if not touches:
         return None, set(), set(), apply({}), None
     landing: list[_Landing] = []
 
-    def decide(current: Any) -> tuple[list[dict[str, Any]], set[str]]:
+    def decide(current: Any) -> tuple[list[MapRow], set[str]]:
         landing.append(apply(map_files_by_hash(current)))
         records, stale = landing[0].records, landing[0].stale_ids
         landing[0].repeats.extend(repeat_clashes(current, records, stale))
-        return records, stale
+        folded, outcome = landing_records(current, records, stale, review,
+                                          campaign.layout.traces_dir)
+        landing[0] = replace(landing[0], review=outcome)
+        ids = stale | {r.measurement_id for r in folded}
+        landing[0].old_groups.update(
+            condition_keys(current.loc[current["measurement_id"].isin(ids)]))
+        return folded, stale
 
     # the one landing of the batch and of `reduce`: the map read again under its lock
     report, after = change_map_with(campaign.map_path, decide, replace=True)
-    if not (landing[0].records or landing[0].stale_ids):
+    if not (landing[0].records or landing[0].stale_ids or report.changed):
         return None, set(), set(), landing[0], after
     return (report, set(report.added_ids) | set(report.replaced_ids),
             set(report.dropped_ids), landing[0], after)
@@ -777,10 +797,15 @@ def _combined(a: AppendReport, b: AppendReport) -> AppendReport:
 
 def _plus(a: _Landing, b: _Landing) -> _Landing:
     """What two landings brought, without their records (landed and let go)."""
+    review = a.review if b.review is None else b.review if a.review is None else ReviewOutcome(
+        records=[], applied={k: a.review.applied.get(k, 0) + b.review.applied.get(k, 0)
+                             for k in {*a.review.applied, *b.review.applied}},
+        withdrawn=a.review.withdrawn + b.review.withdrawn)
     return _Landing(records=[], stale_ids=set(), reduced=a.reduced + b.reduced,
                     flagged=a.flagged + b.flagged, duplicates={**a.duplicates, **b.duplicates},
                     outcomes={**a.outcomes, **b.outcomes},
-                    runs_failed=a.runs_failed + b.runs_failed, repeats=a.repeats + b.repeats)
+                    runs_failed=a.runs_failed + b.runs_failed, repeats=a.repeats + b.repeats,
+                    review=review)
 
 
 class StopFlag:
@@ -817,7 +842,3 @@ def _stop_on_signals(stop: StopFlag) -> Iterator[None]:
         for s, h in old.items():
             signal.signal(s, h)
 
-
-def _group_key(row: Mapping[str, Any]) -> tuple[Any, ...]:
-    """The condition group of a record or label dict: pin, disc, nominal F [N], T [°C]."""
-    return (row.get("pin"), row.get("disc"), row.get("normal_force_N"), row.get("temperature_C"))

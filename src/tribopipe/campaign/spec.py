@@ -38,6 +38,7 @@ _CAMPAIGN_KEYS = frozenset(
         "filename_pattern", "test_pattern", "use_export_names", "export_pattern",
         "force_tolerance_N", "force_tolerance_rel", "temperature_tolerance_C",
         "speed_tolerance_rel", "plots", "encoding", "delimiter", "decimal", "synthetic",
+        "review",
     }
 )
 _TOP_LEVEL_TABLES = frozenset({"campaign", "reduction", "names"})
@@ -68,6 +69,9 @@ class Campaign:
     synthetic: bool = False
     read_options: ReadOptions = field(default_factory=ReadOptions)
     source: Path | None = None
+    #: the lab's decisions file (``review.csv``, :mod:`tribopipe.review`), applied on every
+    #: batch; ``None``: the map's rows keep the reviews they hold
+    review: Path | None = None
 
     @property
     def use_export_names(self) -> bool:
@@ -267,6 +271,7 @@ def load_campaign(path: str | Path) -> Campaign:
         raise ConfigError(f"[campaign] output_dir: {problem}", path=cfg_path,
                           hint="name a folder (it is created when missing)")
     map_path = rel("map") or OutputLayout(output_dir).map_path
+    review = rel("review")
     manifest = rel("manifest")
     if manifest is not None and not manifest.is_file():
         raise ConfigError(f"[campaign] manifest: file {manifest} not found", path=cfg_path)
@@ -332,6 +337,7 @@ def load_campaign(path: str | Path) -> Campaign:
         synthetic=synthetic,
         read_options=options,
         source=cfg_path,
+        review=review,
     )
 
 

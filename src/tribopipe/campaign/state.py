@@ -24,7 +24,7 @@ from typing import TYPE_CHECKING, Any
 from ..errors import OutputError
 from ..frictionmap.parts import MANIFEST
 from ..labels import flags_text
-from ..numeric import finite_json, finite_or_none
+from ..numeric import finite_json
 
 if TYPE_CHECKING:
     from ..pipeline import FailedRun, ReducedRun
@@ -72,14 +72,14 @@ class RunEntry:
     def of(cls, run: ReducedRun, output_dir: Path) -> RunEntry:
         """What the state keeps of a run reduced now (its trace relative to
         ``output_dir``)."""
-        record, summary, place = run.record or {}, run.summary, run.place
+        record, summary, place = run.record, run.summary, run.place
         return cls(
             labels=asdict(run.labels),
             measurement_id=run.measurement_id,
             trace="" if run.trace is None else run.trace.relative_to(output_dir).as_posix(),
             mu_s=summary["mu_s"],
             mu_k=summary["mu_k"],
-            pressure_kPa=finite_or_none(record.get("pressure_kPa")),
+            pressure_kPa=None if record is None else record.pressure_kPa,
             pressure_measured_kPa=summary["pressure_kPa"],
             normal_force_measured_N=summary["normal_force_N"],
             temperature_measured_C=summary["temperature_C"],

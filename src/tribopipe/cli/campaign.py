@@ -9,12 +9,12 @@ from typing import Any
 
 import click
 
-from ._common import friendly_errors
+from ._common import friendly_errors, renamed, say
 
 #: options that describe a campaign, so they only make sense with a FOLDER
 _FOLDER_ONLY = {"manifest": "--manifest", "filename_pattern": "--pattern",
                 "test_pattern": "--test-pattern", "glob": "--glob",
-                "config_path": "--config", "output_dir": "--out"}
+                "instrument_path": "--instrument", "output": "--output"}
 
 
 def _open(target: str, options: dict[str, Any]) -> Any:
@@ -30,23 +30,31 @@ def _open(target: str, options: dict[str, Any]) -> Any:
             manifest=options.get("manifest"),
             filename_pattern=options.get("filename_pattern"),
             map_path=options.get("map_path"),
-            output_dir=options.get("output_dir") or DEFAULT_OUTPUT_DIR,
+            output_dir=options.get("output") or DEFAULT_OUTPUT_DIR,
             glob=options.get("glob"),
-            instrument=options.get("config_path"),
+            instrument=options.get("instrument_path"),
             test_pattern=options.get("test_pattern"),
         )
-        return campaign
+        return _with_review(campaign, options.get("review"))
     given = [flag for name, flag in _FOLDER_ONLY.items() if options.get(name)]
     if given:
         flags = ", ".join(given)
-        raise click.UsageError(f"{flags}: only with a FOLDER; a campaign config sets these "
+        raise click.UsageError(f"{flags}: only with a FOLDER; a campaign file sets these "
                                "in its [campaign] table")
     campaign = load_campaign(target)
     if options.get("map_path"):
         from dataclasses import replace
 
         campaign = replace(campaign, map_path=Path(options["map_path"]).resolve())
-    return campaign
+    return _with_review(campaign, options.get("review"))
+
+
+def _with_review(campaign: Any, review: str | None) -> Any:
+    """The campaign with the decisions file ``--review`` gave (else its own)."""
+    from dataclasses import replace
+    from pathlib import Path
+
+    return campaign if review is None else replace(campaign, review=Path(review).resolve())
 
 
 def _shorten(path: Any) -> str:
@@ -107,6 +115,7 @@ def _run(campaign: Any, jobs: int | None, plots: bool | None) -> None:
     click.echo(map_paper_text(shown), nl=False)
     for line in report.ledger():  # the account comes last, where a user looks
         click.echo(printable(line))
+    _remember(report.map_path)
     for problem in report.output_errors:
         click.echo(f"error: {printable(problem)}", err=True)
     if report.interrupted is not None:
@@ -128,10 +137,36 @@ def _run(campaign: Any, jobs: int | None, plots: bool | None) -> None:
         sys.exit(1)
 
 
+def _remember(map_path: Any) -> None:
+    """Record the map the batch updated in ./.tribopipe-map: the commands run here without
+    --map read it (:mod:`tribopipe.project`)."""
+    from pathlib import Path
+
+    from ..errors import TribopipeError
+    from ..project import PROJECT_FILE, remember_map
+
+    if not Path(map_path).is_file():
+        return
+    try:
+        remember_map(map_path)
+    except TribopipeError as exc:
+        say(f"note: {exc} (commands here need --map)", err=True)
+        return
+    say(f"note: commands run here without --map now read {_shorten(map_path)} "
+        f"(./{PROJECT_FILE})", err=True)
+
+
 def _common_run_options(func: Any) -> Any:
     func = click.option(
+        "--review", "review", type=click.Path(exists=True, dir_okay=False), default=None,
+        help="A lab's decisions file (review.csv: accept, exclude or re-window runs; "
+             "`tribopipe review` writes it), applied to every run (default: the config's "
+             "`review`).",
+    )(func)
+    func = click.option(
         "--plots/--no-plots", default=None,
-        help="Draw a trace plot per reduced run (default: the config's `plots`, else on).",
+        help="Draw a trace plot per reduced run. Default: the campaign file's `plots`, "
+        "else on.",
     )(func)
     func = click.option(
         "--jobs", "-j", type=click.IntRange(min=1), default=None,
@@ -139,36 +174,53 @@ def _common_run_options(func: Any) -> Any:
     )(func)
     func = click.option(
         "--map", "map_path", type=click.Path(), default=None,
-        help="Friction map to update (default: the config's, else processed/friction_map.parquet).",
+        help="Friction map to update. Default: the campaign file's `map`, else "
+        "friction_map.parquet in the output folder.",
     )(func)
     return func
 
 
+def _folder_options(func: Any) -> Any:
+    """The options that describe a campaign held in a FOLDER (a campaign file sets them in
+    its [campaign] table), with the old spellings of --instrument and -o/--output."""
+    func = renamed("--out", "-o/--output", "output", type=click.Path(file_okay=False))(func)
+    func = renamed("--config", "--instrument", "instrument_path",
+                   type=click.Path(exists=True, dir_okay=False))(func)
+    for option in reversed(_FOLDER_OPTIONS):
+        func = option(func)
+    return func
+
+
+_FOLDER_OPTIONS = [
+    click.option("--manifest", type=click.Path(exists=True, dir_okay=False),
+                 help="FOLDER only: manifest CSV (file, pin, disc, normal_force_N, "
+                      "temperature_C, repeat; optional test: one row per test of a session "
+                      "export; optional interval: one row per force or speed step)."),
+    click.option("--pattern", "filename_pattern",
+                 help="FOLDER only: file-name pattern, e.g. "
+                      "'{pin}_{disc}_{force}N_{temperature}C_r{repeat}'."),
+    click.option("--test-pattern", "test_pattern",
+                 help="FOLDER only: pattern for each test's Test name, e.g. "
+                      "'{pin} on {disc}, {force} N, {temperature} °C, #{repeat}'."),
+    click.option("--glob", help="FOLDER only: which files are exports (default: every export "
+                                "the readers know: .csv, .txt, .tsv, .xlsx, .xls, any case)."),
+    click.option("--instrument", "instrument_path", type=click.Path(exists=True, dir_okay=False),
+                 help="FOLDER only: instrument file (TOML). Default: the T-PID/44 cell, 3 pins."),
+    click.option("-o", "--output", "output", type=click.Path(file_okay=False),
+                 help="FOLDER only: output folder. Default: processed/."),
+]
+
+
 @click.command("batch")
-@click.argument("target", type=click.Path(exists=True))
-@click.option("--manifest", type=click.Path(exists=True, dir_okay=False),
-              help="FOLDER only: manifest CSV (file, pin, disc, normal_force_N, "
-                   "temperature_C, repeat; optional test: one row per test of a session "
-                   "export; optional interval: one row per force or speed step).")
-@click.option("--pattern", "filename_pattern",
-              help="FOLDER only: file-name pattern, e.g. "
-                   "'{pin}_{disc}_{force}N_{temperature}C_r{repeat}'.")
-@click.option("--test-pattern", "test_pattern",
-              help="FOLDER only: pattern for each test's Test name, e.g. "
-                   "'{pin} on {disc}, {force} N, {temperature} °C, #{repeat}'.")
-@click.option("--glob", help="FOLDER only: which files are exports (default: every export "
-                             "the readers know: .csv, .txt, .tsv, .xlsx, .xls, any case).")
-@click.option("--config", "config_path", type=click.Path(exists=True, dir_okay=False),
-              help="FOLDER only: instrument config (TOML). Default: T-PID/44, 3 pins.")
-@click.option("--out", "output_dir", type=click.Path(file_okay=False),
-              help="FOLDER only: output folder (default processed/).")
+@click.argument("target", metavar="CAMPAIGN|FOLDER", type=click.Path(exists=True))
+@_folder_options
 @_common_run_options
 @friendly_errors
 def batch_cmd(target: str, manifest: str | None, filename_pattern: str | None,
-              test_pattern: str | None, glob: str | None, config_path: str | None,
-              output_dir: str | None, map_path: str | None, jobs: int | None,
-              plots: bool | None) -> None:
-    """Reduce a whole campaign: TARGET is a campaign CONFIG (TOML) or a FOLDER of exports.
+              test_pattern: str | None, glob: str | None, instrument_path: str | None,
+              output: str | None, map_path: str | None, jobs: int | None,
+              plots: bool | None, review: str | None) -> None:
+    """Reduce a whole campaign: a CAMPAIGN file (TOML) or a FOLDER of exports.
 
     Every friction interval of every test of every export is a run. Only new and changed
     files are reduced (content + config hash); the others are skipped. A bad file, test
@@ -177,16 +229,17 @@ def batch_cmd(target: str, manifest: str | None, filename_pattern: str | None,
     conflict (refused); the map is updated once. Writes traces/, runs.csv and
     failures.csv to the output folder and ends with a ledger: files and tests found,
     runs reduced, skipped and failed, and every manifest row and test left out. Exit code
-    1 when anything named was not reduced.
+    1 when anything named was not reduced. The map it updated is recorded in
+    ./.tribopipe-map: commands run in this folder without --map read that map.
 
     \b
       tribopipe batch configs/example.toml
-      tribopipe batch raw/mine --manifest raw/mine/manifest.csv --map processed/map.parquet
+      tribopipe batch raw/mine --manifest raw/mine/manifest.csv -o processed/mine
     """
     campaign = _open(target, {
         "manifest": manifest, "filename_pattern": filename_pattern,
-        "test_pattern": test_pattern, "glob": glob, "config_path": config_path,
-        "output_dir": output_dir, "map_path": map_path,
+        "test_pattern": test_pattern, "glob": glob, "instrument_path": instrument_path,
+        "output": output, "map_path": map_path, "review": review,
     })
     _run(campaign, jobs, plots)
 
@@ -197,26 +250,41 @@ def campaign_group() -> None:
 
 
 @campaign_group.command("run")
-@click.argument("config", type=click.Path(exists=True, dir_okay=False))
+@click.argument("campaign", type=click.Path(exists=True, dir_okay=False))
 @_common_run_options
 @friendly_errors
-def run_cmd(config: str, map_path: str | None, jobs: int | None, plots: bool | None) -> None:
-    """Reduce the new and changed runs of a campaign CONFIG (alias of `tribopipe batch`)."""
-    _run(_open(config, {"map_path": map_path}), jobs, plots)
+def run_cmd(campaign: str, map_path: str | None, jobs: int | None, plots: bool | None,
+            review: str | None) -> None:
+    """Reduce the new and changed runs of a CAMPAIGN file (as `tribopipe batch` does)."""
+    _run(_open(campaign, {"map_path": map_path, "review": review}), jobs, plots)
 
 
 @campaign_group.command("list")
-@click.argument("config", type=click.Path(exists=True, dir_okay=False))
+@click.argument("target", metavar="CAMPAIGN|FOLDER", type=click.Path(exists=True))
+@_folder_options
 @click.option("--json", "as_json", is_flag=True, help="Print a JSON list instead of a table.")
 @friendly_errors
-def list_cmd(config: str, as_json: bool) -> None:
-    """Show a campaign CONFIG as a table: one row per run (file + test), its metadata and
-    status (new, reduced, changed, failed, duplicate). Nothing is reduced: a file not
-    read yet shows one row (or one per test its manifest rows name)."""
-    from ..campaign import campaign_listing, load_campaign
+def list_cmd(target: str, manifest: str | None, filename_pattern: str | None,
+             test_pattern: str | None, glob: str | None, instrument_path: str | None,
+             output: str | None, as_json: bool) -> None:
+    """Show a campaign as a table, before running it: a CAMPAIGN file (TOML), or a FOLDER
+    of exports with the options `batch` would take (a dry run). One row per run (file +
+    test), its labels and status (new, reduced, changed, failed, duplicate). Nothing is
+    reduced and nothing is written: a file not read yet shows one row (or one per test its
+    manifest rows name).
+
+    \b
+      tribopipe campaign list raw/mine --pattern '{pin}_{disc}_{force}N_{temperature}C_r{repeat}'
+      tribopipe campaign list raw/mine --manifest raw/mine/manifest.csv
+    """
+    from ..campaign import campaign_listing
     from ..numeric import finite_json
 
-    rows = campaign_listing(load_campaign(config))
+    rows = campaign_listing(_open(target, {
+        "manifest": manifest, "filename_pattern": filename_pattern,
+        "test_pattern": test_pattern, "glob": glob, "instrument_path": instrument_path,
+        "output": output,
+    }))
     if as_json:
         click.echo(json.dumps(finite_json(rows), indent=2, allow_nan=False))
         return

@@ -4,7 +4,14 @@ from __future__ import annotations
 
 import click
 
-from ._common import friendly_errors, map_option, say
+from ._common import (
+    chosen_map,
+    friendly_errors,
+    instrument_option,
+    lazy_map_option,
+    map_option,
+    say,
+)
 from .fit import fit_cmd
 from .mastercurve import master_curve_cmd
 
@@ -18,7 +25,7 @@ def map_group() -> None:
       tribopipe map import --published            start from the founding paper's map
       tribopipe map import FrictionMap.mat        the published MATLAB table (or its CSV)
       tribopipe map merge other_lab.parquet       fold in another lab's map
-      tribopipe map publish contribution --lab "Soft Robotics Lab"   a data package
+      tribopipe map publish -o contribution --lab "Soft Robotics Lab"   a data package
       tribopipe map validate their_package/      check a package someone sent
       tribopipe map merge their_package/          fold it in, each lab's rows kept
       tribopipe map table --format markdown --pin "Dragonskin 30" --temperature 20
@@ -96,7 +103,10 @@ def merge_cmd(other: str, replace: bool, lab: str | None, map_path: str) -> None
 
 
 @map_group.command("publish")
-@click.argument("folder", type=click.Path(file_okay=False))
+@click.argument("folder", required=False, type=click.Path(file_okay=False))
+@click.option("-o", "--output", type=click.Path(file_okay=False),
+              help="The folder to write the package in (required; a positional FOLDER, the "
+              "old spelling, works until the next release).")
 @click.option("--lab", required=True,
               help="The laboratory that measured the runs (named in every row and the "
               "citation).")
@@ -109,15 +119,31 @@ def merge_cmd(other: str, replace: bool, lab: str | None, map_path: str) -> None
 @click.option("--overwrite", is_flag=True, help="Replace a package already in FOLDER.")
 @click.option("--allow-synthetic", is_flag=True,
               help="Publish rows flagged synthetic (demo data) too; refused without it.")
+@click.option("--traces", "traces_dir", type=click.Path(file_okay=False),
+              help="Folder of the runs' reduced traces (default: traces/ beside the map).")
+@click.option("--with-raw", is_flag=True,
+              help="Include each run's raw export (found in --raw-dir by name and SHA-256).")
+@click.option("--raw-dir", "raw_dirs", multiple=True, type=click.Path(file_okay=False),
+              help="Folder of the raw exports, searched with its sub-folders (repeatable).")
+@click.option("--no-evidence", is_flag=True,
+              help="Leave out the traces and raw exports (summary rows only).")
+@instrument_option
 @map_option
 @friendly_errors
-def publish_cmd(folder: str, lab: str, contact: str | None, email: str | None, licence: str,
-                title: str | None, overwrite: bool, allow_synthetic: bool,
+def publish_cmd(folder: str | None, output: str | None, lab: str, contact: str | None,
+                email: str | None, licence: str, title: str | None, overwrite: bool,
+                allow_synthetic: bool, traces_dir: str | None, with_raw: bool,
+                raw_dirs: tuple[str, ...], no_evidence: bool, instrument_path: str | None,
                 map_path: str) -> None:
-    """Write the map as a Frictionless Data Package in FOLDER: datapackage.json (schema,
-    units, licence, sources, size and SHA-256 of every file), the runs and groups as CSV
-    and Parquet, the 7-column FrictionMap table, the explorer page, a README and a
-    CITATION.cff that cites the founding paper.
+    """Write the map as a Frictionless Data Package in the folder -o/--output:
+    datapackage.json (schema, units, licence, sources, size and SHA-256 of every file),
+    the runs and groups as CSV and Parquet, the 7-column FrictionMap table, the explorer
+    page, a README and a CITATION.cff that cites the founding paper.
+
+    The package carries its evidence: each reduced run's trace (Parquet) and, with
+    --with-raw, its raw export, each with its SHA-256 and the method and settings that
+    reduced it (the defaults, or the instrument file given with --instrument), so that
+    `map validate --recompute` can re-derive every μ.
 
     The data licence defaults to CC-BY-4.0. The package is checked as `map validate`
     would before it is moved into place; it is never half-written. A map with runs
@@ -125,23 +151,44 @@ def publish_cmd(folder: str, lab: str, contact: str | None, email: str | None, l
 
     \b
     Example:
-      tribopipe map publish contribution --lab "Soft Robotics Lab, Uni X" \\
+      tribopipe map publish -o contribution --lab "Soft Robotics Lab, Uni X" \\
           --contact "A. Person" --email a.person@uni-x.example
     """
+    from ..config import load_settings
     from ..export.citation import Publisher
     from ..export.publish import publish_map
     from ..frictionmap.snapshot import open_map
 
-    done = publish_map(open_map(map_path), folder, Publisher(lab, contact, email, licence, title),
-                       overwrite=overwrite, allow_synthetic=allow_synthetic)
+    if folder is not None and output is not None:
+        raise click.UsageError("give the package folder once: -o/--output FOLDER")
+    if folder is not None:
+        say("note: the positional FOLDER is now -o/--output FOLDER (the old spelling works "
+            "until the next release)", err=True)
+        output = folder
+    if output is None:
+        raise click.UsageError("give the folder to write the package in: -o/--output FOLDER")
+    done = publish_map(open_map(map_path), output,
+                       Publisher(lab, contact, email, licence, title),
+                       overwrite=overwrite, allow_synthetic=allow_synthetic,
+                       evidence=not no_evidence, traces_dir=traces_dir, with_raw=with_raw,
+                       raw_dirs=raw_dirs,
+                       settings=[load_settings(instrument_path)] if instrument_path else [])
     say(f"wrote {done.path}: {done.n_runs} runs in {len(done.files)} files "
         f"(check it with `tribopipe map validate {done.path}`)")
+    if not no_evidence:
+        say(f"evidence: {done.n_traces} traces, {done.n_raw} raw exports")
+    for note in done.notes:
+        say(f"note: {note}")
 
 
 @map_group.command("validate")
-@click.argument("path", type=click.Path())
+@click.argument("path", required=False, type=click.Path())
+@click.option("--recompute", is_flag=True,
+              help="Also re-derive μ_S and μ_K of every run from the package's traces and "
+              "raw exports, and refuse each row that disagrees beyond its stated U.")
+@lazy_map_option
 @friendly_errors
-def validate_cmd(path: str) -> None:
+def validate_cmd(path: str | None, map_path: str | None, recompute: bool) -> None:
     """Check a data package someone sent (its folder or datapackage.json): schema and
     units of every field, physical ranges, duplicate ids, provenance (lab, hashes,
     versions, times), licences, the size and SHA-256 of every file, and that the Parquet,
@@ -152,14 +199,44 @@ def validate_cmd(path: str) -> None:
     JSON are refused, never followed.
 
     PATH may also be a friction map (a .parquet file): its rows are checked as `map
-    publish` checks them before writing a package.
+    publish` checks them before writing a package. With --map, or with no PATH, the map
+    is checked.
+
+    With --recompute, μ_S and μ_K of every run are re-derived from its raw export where
+    the package holds it (read and reduced again with the package's settings), else
+    from its reduced trace; a row whose stored value differs by more than its stated
+    U = 2u is refused, naming the row and both values. The account says which rows were
+    checked from the trace only and which carry no evidence.
     """
     from ..frictionmap import check_package
 
+    if path is not None and map_path is not None:
+        raise click.UsageError("give PATH or --map, not both")
+    if path is None:
+        path = chosen_map(map_path)
+    if recompute and not path.lower().endswith(".parquet"):
+        from ..evidence import recompute_package
+
+        again = recompute_package(path)
+        for note in again.check.notes:
+            say(f"note: {note}")
+        for line in again.lines():
+            say(line)
+        for line in again.account():
+            say(line)
+        if not again.ok:
+            raise SystemExit(1)
+        say(again.check.verdict() + "; every re-derived μ agrees within its U")
+        return
     if path.lower().endswith(".parquet"):
+        from ..frictionmap.profile import map_upgrade_note
+        from ..frictionmap.store import map_metadata
         from ..frictionmap.summary import check_map_file
 
         problems, verdict = check_map_file(path)
+        upgraded = map_upgrade_note(int(map_metadata(path)["schema_version"]))
+        if upgraded is not None:
+            say(f"note: {upgraded}")
         for line in problems:
             say(line)
         say(verdict)
@@ -167,6 +244,8 @@ def validate_cmd(path: str) -> None:
             raise SystemExit(1)
         return
     result = check_package(path)
+    for note in result.notes:
+        say(f"note: {note}")
     for line in result.lines():
         say(line)
     if not result.ok:
@@ -178,10 +257,12 @@ def validate_cmd(path: str) -> None:
 @click.option(
     "--format",
     "fmt",
-    type=click.Choice(["csv", "markdown", "latex", "frictionmap"]),
+    type=click.Choice(["csv", "markdown", "latex", "xlsx", "frictionmap"]),
     default="csv",
     show_default=True,
-    help="Output format; 'frictionmap' is the published 7-column CSV, one row per run.",
+    help="Output format. 'latex' compiles as written with booktabs and siunitx; 'xlsx' is "
+    "a spreadsheet with one sheet per layout and a notes sheet (needs -o); 'frictionmap' "
+    "is the published 7-column CSV, one row per run.",
 )
 @click.option(
     "--layout",
@@ -199,7 +280,14 @@ def validate_cmd(path: str) -> None:
     "--temperature", "temperature_C", type=float, multiple=True, help="Only this nominal °C."
 )
 @click.option("--by-speed", is_flag=True, help="Also split condition groups by sliding speed.")
-@click.option("-o", "--output", type=click.Path(dir_okay=False), help="Write to FILE.")
+@click.option("--decimal", type=click.Choice([".", ","]), default=".", show_default=True,
+              help="Decimal mark of a CSV: ',' writes it for a decimal-comma locale (cells "
+              "separated by ';'), as Excel there opens a CSV.")
+@click.option("--method", multiple=True,
+              help="Only runs of this test method (repeatable): 'rheometer pin-on-disc', "
+              "'sled D1894', 'linear reciprocating' or 'rotary pin-on-disc'.")
+@click.option("-o", "--output", type=click.Path(dir_okay=False),
+              help="Write to FILE. Default: standard output (not for xlsx).")
 @map_option
 @friendly_errors
 def table_cmd(
@@ -209,10 +297,34 @@ def table_cmd(
     disc: tuple[str, ...],
     temperature_C: tuple[float, ...],
     by_speed: bool,
+    decimal: str,
+    method: tuple[str, ...],
     output: str | None,
     map_path: str,
 ) -> None:
-    """Regenerate a table from the friction map (to stdout, or -o FILE)."""
+    """Regenerate a table from the friction map (to stdout, or -o FILE).
+
+    \b
+      tribopipe map table --layout paper --format latex -o table.tex
+      tribopipe map table --format xlsx -o friction_map.xlsx
+      tribopipe map table --layout paper --decimal , -o table.csv
+    """
+    if fmt == "xlsx":
+        from ..export.workbook import export_workbook
+
+        if output is None:
+            raise click.UsageError("--format xlsx writes a binary file: give -o FILE.xlsx")
+        source = click.get_current_context().get_parameter_source("layout")
+        if source is not None and source.name == "COMMANDLINE":
+            say("note: an xlsx holds every layout, one sheet each: --layout is not needed",
+                err=True)
+        if decimal != ".":
+            raise click.UsageError("--decimal is for --format csv (an xlsx stores numbers)")
+        written = export_workbook(map_path, output, pin=pin, disc=disc,
+                                  temperature_C=temperature_C, by_speed=by_speed,
+                                  method=method)
+        say(f"wrote {written}", err=True)
+        return
     from ..export.tables import export_table
     from ..frictionmap.snapshot import open_map
 
@@ -225,6 +337,8 @@ def table_cmd(
         disc=disc,
         temperature_C=temperature_C,
         by_speed=by_speed,
+        decimal=decimal,
+        method=method,
     )
     if output is None:
         click.echo(text, nl=False)

@@ -7,7 +7,7 @@ import json
 
 import click
 
-from ._common import friendly_errors, map_option, say
+from ._common import friendly_errors, map_option, renamed, say
 
 
 @click.command("master-curve")
@@ -17,13 +17,14 @@ from ._common import friendly_errors, map_option, say
               show_default=True,
               help="Shift law: Arrhenius (Ea; silicones far above their glass transition) "
               "or WLF (C1, C2).")
-@click.option("--plot", "plot_path", type=click.Path(dir_okay=False),
-              help="Write a plot (PNG, or .svg/.pdf) of μ_K against log v and against "
-              "log a_T·v, one colour per temperature.")
+@click.option("-o", "--output", type=click.Path(dir_okay=False),
+              help="Write a plot (PNG, or .svg/.pdf by the suffix) of μ_K against log v and "
+              "against log a_T·v, one colour per temperature. Default: no plot.")
 @click.option("--json", "as_json", is_flag=True, help="Print the result as JSON.")
 @map_option
+@renamed("--plot", "-o/--output", "output", type=click.Path(dir_okay=False))
 @friendly_errors
-def master_curve_cmd(pin: str, disc: str, shift: str, plot_path: str | None, as_json: bool,
+def master_curve_cmd(pin: str, disc: str, shift: str, output: str | None, as_json: bool,
                      map_path: str) -> None:
     """Shift each temperature's μ_K(log v) of PIN on DISC onto one master curve.
 
@@ -54,8 +55,8 @@ def master_curve_cmd(pin: str, disc: str, shift: str, plot_path: str | None, as_
             click.echo(f"  {c.pressure_kPa:.4g} kPa: mu_k = {terms}, x = log10(a_T·v/(1 mm/s))"
                        f" in [{c.x_range[0]:.3g}, {c.x_range[1]:.3g}], {c.n_points} groups")
         click.echo(f"  residual SD: {mc.residual_sd:.2g}")
-    if plot_path is not None:
+    if output is not None:
         from ..export.plots import plot_master_curve
 
-        written = plot_master_curve(mc, plot_path)
+        written = plot_master_curve(mc, output)
         say(f"wrote {written}", err=True)

@@ -3,11 +3,12 @@
 from __future__ import annotations
 
 import json
+import math
 from typing import Any
 
 import click
 
-from ._common import config_option, friendly_errors, map_option
+from ._common import friendly_errors, instrument_option, map_option
 
 
 @click.command("query")
@@ -19,9 +20,9 @@ from ._common import config_option, friendly_errors, map_option
     "normal_force_N",
     type=float,
     help="Total normal force [N] instead of --pressure: converted to the contact pressure "
-    "per pin through the instrument config's number of pins and pin radius (--config).",
+    "per pin through the instrument file's number of pins and pin radius (--instrument).",
 )
-@config_option
+@instrument_option
 @click.option(
     "--temperature",
     "temperature_C",
@@ -50,7 +51,7 @@ def query_cmd(
     disc: str,
     pressure_kPa: float | None,
     normal_force_N: float | None,
-    config_path: str | None,
+    instrument_path: str | None,
     temperature_C: float | None,
     speed_mm_s: float | None,
     use_master_curve: bool,
@@ -68,20 +69,23 @@ def query_cmd(
     interpolation's own uncertainty, rounded to two significant digits; then the repeats'
     95 % CI apart, the measured groups used with their weights and whether the value was
     clamped. Give the contact pressure per pin (--pressure) or the total normal force
-    (--force, converted with the instrument config's pins).
+    (--force, converted with the instrument file's pins).
     """
     from ..config import load_settings
     from ..frictionmap.snapshot import open_map
     from ..frictionmap.synthetic_rows import map_synthetic_note
     from ..numeric import finite_json
-    from ..query import format_result, pressure_of_force, query_map
+    from ..query import format_result, query_map
 
     if (pressure_kPa is None) == (normal_force_N is None):
         raise click.UsageError("give exactly one of --pressure and --force")
     instrument = None
     if normal_force_N is not None:
-        instrument = load_settings(config_path).instrument
-        pressure_kPa = pressure_of_force(normal_force_N, instrument)
+        if not (math.isfinite(normal_force_N) and normal_force_N > 0):
+            raise click.BadParameter(f"expected a finite number > 0 N, got {normal_force_N}",
+                                     param_hint="--force")
+        instrument = load_settings(instrument_path).instrument
+        pressure_kPa = instrument.pressure_kPa(normal_force_N)
     assert pressure_kPa is not None
     snap = open_map(map_path)  # the one read and check of the map
     if use_master_curve:

@@ -4,11 +4,19 @@ from __future__ import annotations
 
 import json
 import sys
+from pathlib import Path
 from typing import TYPE_CHECKING
 
 import click
 
-from ._common import config_option, friendly_errors, map_option, read_options
+from ._common import (
+    chosen_map,
+    friendly_errors,
+    instrument_option,
+    lazy_map_option,
+    read_options,
+    renamed,
+)
 
 if TYPE_CHECKING:
     from ..labels import RunLabels
@@ -51,25 +59,35 @@ def _with_u(value: float | None, expanded: float | None) -> tuple[str, str]:
     "--temperature", "temperature_C", type=float, help="Nominal chamber temperature [°C]."
 )
 @click.option("--repeat", type=int, help="Repeat number of this run within its condition.")
-@config_option
-@map_option
-@click.option("--no-map", is_flag=True, help="Do not append the runs to the friction map.")
+@instrument_option
+@click.option("--zero", "zero",
+              help="The zero of the torque or friction force: 'auto' (estimated where the "
+              "instrument is at rest and unloaded; refused and flagged zero_under_load when "
+              "already loaded), 'off' (0), or a value in N·m (torque) or N (friction "
+              "force). Default: the instrument file's zero_offset.")
+@lazy_map_option
+@click.option("--no-map", is_flag=True,
+              help="Do not append the runs to the friction map, and write nothing unless "
+              "-o/--output is given.")
 @click.option(
     "--replace",
     is_flag=True,
     help="Replace a run already in the map when it was reduced with another config.",
 )
 @click.option(
-    "--out",
-    "out_dir",
+    "-o",
+    "--output",
     type=click.Path(file_okay=False),
-    default="processed",
-    show_default=True,
-    help="Where reduced traces (Parquet), summaries (JSON) and plots are written.",
+    default=None,
+    help="Folder for each run's reduced trace (Parquet), summary (JSON) and plot. "
+    "Default: the map's folder; with --no-map, nothing is written unless given.",
 )
 @click.option("--json", "as_json", is_flag=True, help="Print a JSON list instead of a table.")
-@click.option("--plot", is_flag=True, help="Also draw μ over sliding distance (PNG) per run.")
+@click.option("--plots/--no-plots", default=False,
+              help="Draw μ over sliding distance (PNG) per run. Default: off.")
 @read_options
+@renamed("--out", "-o/--output", "output", type=click.Path(file_okay=False))
+@renamed("--plot", "--plots", "plots", is_flag=True)
 @friendly_errors
 def reduce_cmd(
     files: tuple[str, ...],
@@ -78,13 +96,14 @@ def reduce_cmd(
     force_N: float | None,
     temperature_C: float | None,
     repeat: int | None,
-    config_path: str | None,
-    map_path: str,
+    instrument_path: str | None,
+    zero: str | None,
+    map_path: str | None,
     no_map: bool,
     replace: bool,
-    out_dir: str,
+    output: str | None,
     as_json: bool,
-    plot: bool,
+    plots: bool,
     encoding: str | None,
     delimiter: str | None,
     decimal: str | None,
@@ -96,8 +115,9 @@ def reduce_cmd(
     run (μ_S and μ_K, each with its expanded uncertainty ±U95 at k = 2, contact pressure
     per pin, mean normal force, flags; which test and interval when a file holds several;
     the standard uncertainties and their budgets are in the JSON summaries), writes each
-    run's reduced trace (Parquet) and a JSON summary with the evidence to --out, and
-    appends the runs to the friction map (unless --no-map). A file whose content an
+    run's reduced trace (Parquet) and a JSON summary with the evidence to -o/--output, and
+    appends the runs to the friction map (unless --no-map, which writes nothing at all
+    unless -o/--output is given). A file whose content an
     earlier FILE or the map already holds under another name is a duplicate (stored once)
     or, with other labels, a conflict (refused). A run the map already holds with other
     labels (or from another config) keeps the map's row unless --replace is given.
@@ -108,7 +128,7 @@ def reduce_cmd(
     How μ_S and μ_K are found: docs/method.md, which points to the method's one
     description (the docstring of the package tribopipe.reduction).
     """
-    from ..config import load_settings
+    from ..config import load_settings, with_zero
     from ..frictionmap.store import read_map
     from ..labels import RunLabels
     from ..pipeline import ReadOptions, reduce_files
@@ -116,17 +136,27 @@ def reduce_cmd(
     labels = RunLabels(
         pin=pin, disc=disc, normal_force_N=force_N, temperature_C=temperature_C, repeat=repeat
     )
-    settings = load_settings(config_path)
-    if not no_map and labels.complete:
-        read_map(map_path)  # refuse a damaged or foreign map before any work
+    if no_map and plots and output is None:
+        raise click.UsageError("--plots with --no-map: give -o/--output, the folder for the "
+                               "plots (--no-map alone writes nothing)")
+    settings = load_settings(instrument_path)
+    if zero is not None:
+        settings = with_zero(settings, zero)
+    if not no_map:
+        map_path = chosen_map(map_path)
+        if labels.complete:
+            read_map(map_path)  # refuse a damaged or foreign map before any work
+        if output is None:
+            output = str(Path(map_path).parent)
     results = reduce_files(
         files, settings, labels,
         ReadOptions(encoding=encoding, delimiter=delimiter, decimal=decimal),
-        out_dir=out_dir, plots=plot, on_file=_echo_file,
+        out_dir=output, plots=plots, on_file=_echo_file,
     )
     _print(results, as_json)
     _note_alike(results, labels)
-    refused, kept = _store(results, map_path, no_map, replace, labels)
+    refused, kept = (0, 0) if map_path is None else _store(results, map_path, no_map,
+                                                          replace, labels)
     failed = [r for r in results if not r.ok]
     errors = sum(len(r.failed) for r in failed)
     if failed or refused or kept:
@@ -167,6 +197,8 @@ def _reduced(results: list[FileOutcome]) -> list[tuple[FileOutcome, ReducedRun]]
 def _run_labels(runs: list[tuple[FileOutcome, ReducedRun]]) -> dict[int, str]:
     """The run column: test and interval (the result too where a test has several) for
     the runs of files that hold several; empty for one-run files."""
+    from ..measurement import interval_label
+
     results_per_test: dict[tuple[str, object], set[str | None]] = {}
     for f, o in runs:
         results_per_test.setdefault((f.path, o.place.test), set()).add(o.place.result)
@@ -175,13 +207,9 @@ def _run_labels(runs: list[tuple[FileOutcome, ReducedRun]]) -> dict[int, str]:
         if not f.several:
             continue
         place = o.place
-        parts = [p for p in (place.test,) if p]
-        if len(results_per_test[(f.path, place.test)]) > 1 and place.result:
-            parts.append(place.result)
-        if place.interval is not None:
-            parts.append(f"interval {place.interval}")
-        text = " / ".join(parts)
-        shown[k] = f"{text} #{place.occurrence}" if place.occurrence > 1 else text
+        several_results = len(results_per_test[(f.path, place.test)]) > 1
+        shown[k] = interval_label(place.test, place.result if several_results else None,
+                                  place.interval, place.occurrence)
     return shown
 
 

@@ -4,23 +4,25 @@ from __future__ import annotations
 
 import click
 
-from ._common import friendly_errors, say
+from ._common import chosen_map, friendly_errors, say
 
 
 @click.command("report")
-@click.argument("config", required=False, type=click.Path(exists=True, dir_okay=False))
+@click.argument("campaign", required=False, type=click.Path(exists=True, dir_okay=False))
 @click.option(
     "--map",
     "map_path",
     type=click.Path(),
-    help="Friction map (Parquet). Default: the CONFIG's, else processed/friction_map.parquet.",
+    help="Friction map (Parquet). Default: the CAMPAIGN file's; without one, the map the "
+    "last `tribopipe batch` run in this folder updated (named in ./.tribopipe-map), else "
+    "processed/friction_map.parquet.",
 )
 @click.option(
     "--processed",
     "processed_dir",
     type=click.Path(file_okay=False),
-    help="Campaign output folder (traces/, failures.csv). Default: the CONFIG's, else the "
-    "map's folder.",
+    help="Campaign output folder (traces/, failures.csv). Default: the CAMPAIGN file's, "
+    "else the map's folder.",
 )
 @click.option(
     "-o",
@@ -30,18 +32,17 @@ from ._common import friendly_errors, say
 )
 @friendly_errors
 def report_cmd(
-    config: str | None, map_path: str | None, processed_dir: str | None, output: str | None
+    campaign: str | None, map_path: str | None, processed_dir: str | None, output: str | None
 ) -> None:
-    """Write one self-contained HTML report of a campaign (plots embedded).
+    """Write one self-contained HTML report of a campaign (plots embedded): a CAMPAIGN
+    file (TOML), or the map alone.
 
     Summary, group table (linked to the runs), power-law fits, μ_K(p) per pair, flagged
     and excluded runs, failures with their reasons, and every run's trace plot.
     """
     from ..report import make_report
 
-    if config is None and map_path is None:
-        from ._common import DEFAULT_MAP
-
-        map_path = DEFAULT_MAP
-    path = make_report(output, config=config, map_path=map_path, processed_dir=processed_dir)
+    if campaign is None:
+        map_path = chosen_map(map_path)
+    path = make_report(output, config=campaign, map_path=map_path, processed_dir=processed_dir)
     say(str(path))

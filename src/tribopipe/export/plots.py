@@ -222,22 +222,25 @@ def plot_pair(
 
 
 def plot_pairs(
-    runs: pd.DataFrame, out_dir: str | Path, *, fmt: str = "png"
+    runs: pd.DataFrame, out_dir: str | Path, *, fmt: str = "png", dpi: int = DPI
 ) -> list[Path]:
-    """One μ_K(p) plot per pair of ``runs`` in ``out_dir`` (``pair_<pin>__<disc>.<fmt>``)."""
+    """One μ_K(p) plot per pair of ``runs`` in ``out_dir`` (``pair_<pin>__<disc>.<fmt>``),
+    a PNG at ``dpi`` dots per inch."""
     image_format("x", fmt)
     fits = fit_power_law(runs)
     written = []
     for pin, disc in pairs(runs):
         target = Path(out_dir) / f"pair_{slug(pin)}__{slug(disc)}.{fmt}"
-        written.append(_path(plot_pair(runs, pin, disc, target, fits=fits, fmt=fmt)))
+        written.append(_path(plot_pair(runs, pin, disc, target, fits=fits, fmt=fmt,
+                                       dpi=dpi)))
     return written
 
 
 def plot_map_pairs(map_path: MapSource, out_dir: str | Path, *, fmt: str = "png",
-                   pin: str | None = None, disc: str | None = None) -> list[Path]:
+                   pin: str | None = None, disc: str | None = None,
+                   dpi: int | None = None) -> list[Path]:
     """:func:`plot_pairs` for the friction map (Parquet) at ``map_path``, optionally one
-    pin and/or disc."""
+    pin and/or disc; ``dpi``: a PNG's resolution (default :data:`DPI`)."""
     runs = _read_runs(map_path)
     if pin is not None:
         runs = runs[runs["pin"].str.casefold() == pin.casefold()]
@@ -245,7 +248,7 @@ def plot_map_pairs(map_path: MapSource, out_dir: str | Path, *, fmt: str = "png"
         runs = runs[runs["disc"].str.casefold() == disc.casefold()]
     if runs.empty:
         raise ExportError("no runs match the selection", path=map_path)
-    return plot_pairs(runs, out_dir, fmt=fmt)
+    return plot_pairs(runs, out_dir, fmt=fmt, dpi=DPI if dpi is None else dpi)
 
 
 def plot_map_runs(map_path: MapSource, traces_dir: str | Path, out_dir: str | Path, *,

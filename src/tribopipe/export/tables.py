@@ -14,8 +14,14 @@ Layouts (each a DataFrame; units in the column names):
     holds several sliding speeds), ``n``, ``μ_S ± U``, ``μ_K ± U`` and ``flags``. U is the
     expanded uncertainty (k = 2) of the group mean (:func:`tribopipe.stats.group_u`),
     rounded the GUM way (:mod:`tribopipe.rounding`); the μ_S column is left out when no
-    group holds μ_S. Flags: ``range > r``, ``flagged run``, ``no budget`` (U holds the
-    repeat scatter only), ``n = 1``. As CSV the value and U are separate columns.
+    group holds μ_S. ``n`` counts the runs that have μ_K; ``n (μ_S)`` (CSV ``mu_s_n``),
+    shown where some group holds μ_S for fewer runs, those that have μ_S. ``labs``
+    (where the groups come from more than one lab) names the labs of each value.
+    Flags: ``range > r``, ``labs disagree`` (beyond R, :mod:`tribopipe.stats`),
+    ``flagged run``, ``stated u`` (some run carries no budget of its own: its u is the
+    stated estimate, :func:`tribopipe.stats.stated_u`), ``n = 1``, ``N reviewed`` (runs a
+    reviewer accepted or re-windowed, :mod:`tribopipe.review`). As CSV the value and U
+    are separate columns.
 ``frictionmap``
     one row per included run in the published schema ``pin, disc, contactForce,
     contactPressure, temperature, measurementNo, cof`` (force [N], pressure [kPa],
@@ -30,9 +36,11 @@ from __future__ import annotations
 
 import math
 import os
-from collections.abc import Hashable, Sequence
+import re
+from collections.abc import Hashable, Mapping, Sequence
 from typing import TYPE_CHECKING, Any
 
+from ..config import TEST_METHODS
 from ..errors import ExportError
 from ..escape import csv_cell, latex_cell, markdown_cell, printable
 from ..files import write_text_atomic
@@ -41,10 +49,14 @@ from ..frictionmap.snapshot import MapSource, as_snapshot
 from ..query import estimate_text
 from ..rounding import known_u, round_gum
 from ..stats import (
+    LABS,
+    LABS_DISAGREE,
     NOMINAL_SPEED,
+    TEST_METHOD,
     group_keys,
     group_statistics,
     group_u,
+    test_methods,
 )
 
 if TYPE_CHECKING:
@@ -54,6 +66,28 @@ LAYOUTS: tuple[str, ...] = ("group", "abstract", "paper")
 FORMATS: tuple[str, ...] = ("csv", "markdown", "latex", "frictionmap")
 #: Temperatures closer than this [K] to a --temperature filter value match it.
 TEMPERATURE_MATCH_K = 0.005
+
+
+#: how the tables print a condition: pressure [kPa] to 4 significant digits (11.79, the
+#: paper's), temperature [°C] as measured (format "g"), nominal speed [mm/s] to 2
+CONDITION_SPECS = {"pressure_kPa": ".4g", "temperature_C": "g", NOMINAL_SPEED: ".2g"}
+
+
+def condition_text(column: str, value: Any) -> str:
+    """A condition value of ``column`` (a key of :data:`CONDITION_SPECS`) as every table
+    prints it ('' where missing); the explorer's chips and inputs read the same."""
+    return _cell(value, CONDITION_SPECS[column])
+
+
+def group_flags(group: Mapping[Any, Any], middle: Sequence[str] = ()) -> list[str]:
+    """A group row's flags as every table (and the explorer's QC column) writes them:
+    ``range > r``, ``labs disagree``, ``flagged run``, then ``middle`` (the paper layout's
+    uncertainty flags), then ``N reviewed``."""
+    reviewed = group.get("reviewed") or 0
+    return (["range > r"] if group.get("range_exceeds_r") is True else []) + (
+        ["labs disagree"] if group.get(LABS_DISAGREE) is True else []) + (
+        ["flagged run"] if group.get("qc_flagged") is True else []) + list(middle) + (
+        [f"{reviewed} reviewed"] if reviewed else [])
 
 
 def _select(
@@ -103,7 +137,8 @@ def abstract_table(
     μ_K the group mean rounded half-up to two decimals, as printed in the paper."""
     groups = group_table(runs, pin=pin, disc=disc, temperature_C=temperature_C)
     condition = ["pin", "disc", "pressure_kPa", "temperature_C"] + (
-        [NOMINAL_SPEED] if NOMINAL_SPEED in groups.columns else [])
+        [NOMINAL_SPEED] if NOMINAL_SPEED in groups.columns else []) + (
+        [TEST_METHOD] if TEST_METHOD in groups.columns else [])
     table = groups.loc[:, condition].copy()
     table["mu_k"] = [round_half_up(v, 2) for v in groups["mu_k_mean"]]
     return table
@@ -139,15 +174,23 @@ def paper_table(
     names = (("pressure_kPa", "temperature_C", NOMINAL_SPEED) if machine
              else ("p [kPa]", "T [°C]", "v [mm/s]"))
     out: dict[str, list[Any]] = {"pin": list(groups["pin"]), "disc": list(groups["disc"]),
-                                 names[0]: [_cell(v, ".4g") for v in groups["pressure_kPa"]],
-                                 names[1]: [_cell(v, "g") for v in groups["temperature_C"]]}
+                                 names[0]: [condition_text("pressure_kPa", v)
+                                            for v in groups["pressure_kPa"]],
+                                 names[1]: [condition_text("temperature_C", v)
+                                            for v in groups["temperature_C"]]}
     if by_speed:
-        out[names[2]] = [_cell(v, ".2g") for v in groups[NOMINAL_SPEED]]
+        out[names[2]] = [condition_text(NOMINAL_SPEED, v) for v in groups[NOMINAL_SPEED]]
+    if TEST_METHOD in groups.columns:  # the map holds several methods: never pooled
+        out[TEST_METHOD if machine else "method"] = list(groups[TEST_METHOD])
+    if len({lab for v in groups[LABS] for lab in str(v).split(";")}) > 1:
+        out["labs"] = [str(v).replace(";", ", ") for v in groups[LABS]]
     out["n"] = [int(v) for v in groups["mu_k_n"]]
     flags: list[list[str]] = [[] for _ in range(len(groups))]
     for q, label in (("mu_s", "μ_S"), ("mu_k", "μ_K")):
         if q == "mu_s" and not with_mu_s:
             continue
+        if q == "mu_s" and (groups["mu_s_n"] != groups["mu_k_n"]).any():
+            out["mu_s_n" if machine else "n (μ_S)"] = [int(v) for v in groups["mu_s_n"]]
         u, budget = group_u(groups, q)
         texts = [_with_u(float(m), float(uu), bool(b), int(n), machine) for m, uu, b, n in
                  zip(groups[f"{q}_mean"], u, budget, groups[f"{q}_n"], strict=True)]
@@ -158,12 +201,11 @@ def paper_table(
             out[f"{label} ± U"] = [t[0] for t in texts]
         if q == "mu_k":
             for i, (b, n, uu) in enumerate(zip(budget, groups["mu_k_n"], u, strict=True)):
-                flags[i] += (["no budget"] if not b and n > 1 else []) + (
+                flags[i] += (["stated u"] if not b else []) + (
                     ["n = 1"] if n < 2 else []) + (
                     ["repeats identical"] if n > 1 and not known_u(2.0 * float(uu)) else [])
-    for i, g in enumerate(groups.itertuples(index=False)):
-        flags[i] = (["range > r"] if g.range_exceeds_r else []) + (
-            ["flagged run"] if g.qc_flagged else []) + flags[i]
+    for i, g in enumerate(groups.to_dict(orient="records")):
+        flags[i] = group_flags(g, flags[i])
     out["flags"] = [", ".join(f) for f in flags]
     import pandas as pd
 
@@ -174,9 +216,11 @@ def paper_table(
 PAPER_NOTE = (
     "± U: expanded uncertainty of the group mean (k = 2), from the runs' uncertainty "
     "budgets and the repeat scatter, rounded to two significant digits; an interval that "
-    "would reach below 0 is written +U/−value. no budget: the runs carry no uncertainty "
-    "budget, U holds the repeat scatter only; repeats identical: no scatter to estimate "
-    "U from."
+    "would reach below 0 is written +U/−value; where several labs measured a condition, U "
+    "holds the between-lab component. stated u: some runs carry no uncertainty budget of "
+    "their own (imported rows): theirs is the stated estimate of the founding cell at the "
+    "run's μ and force; labs disagree: two labs' means differ beyond the critical "
+    "difference of R; repeats identical: no scatter to estimate U from."
 )
 
 
@@ -313,14 +357,28 @@ def _is_bool(column: Any) -> bool:
     return bool(pd.api.types.is_bool_dtype(column.dtype))
 
 
-def to_csv(table: pd.DataFrame, formats: dict[str, str] | None = None) -> str:
+def to_csv(table: pd.DataFrame, formats: dict[str, str] | None = None, *,
+           decimal: str = ".") -> str:
     """CSV text (``\\n`` line ends); floats with ten significant digits, missing as empty,
-    text cells safe for spreadsheets (:func:`_safe_text_cells`).
+    text cells safe for spreadsheets (:func:`_safe_text_cells`). ``decimal=","`` writes
+    it for a decimal-comma locale: cells separated by ``;``, numbers with a decimal comma
+    (a rounded number kept as text, ``0.740``, too), as Excel there reads a CSV.
 
     ``formats`` is accepted for a uniform writer signature and ignored: CSV is for machines.
     """
-    return _safe_text_cells(table).to_csv(index=False, lineterminator="\n",
-                                          float_format="%.10g")
+    if decimal not in (".", ","):
+        raise ExportError(f"unknown decimal mark {decimal!r}; expected '.' or ','")
+    safe = _safe_text_cells(table)
+    if decimal == ".":
+        return safe.to_csv(index=False, lineterminator="\n", float_format="%.10g")
+    safe = safe.copy()
+    for column in safe.columns:
+        if not _numeric(safe, column) and not _is_bool(safe[column]):
+            safe[column] = safe[column].map(
+                lambda v: v.replace(".", ",") if isinstance(v, str) and _PLAIN_NUMBER.match(v)
+                else v)
+    return safe.to_csv(index=False, lineterminator="\n", float_format="%.10g", sep=";",
+                       decimal=",")
 
 
 def spreadsheet_csv(table: pd.DataFrame) -> str:
@@ -385,22 +443,145 @@ def to_markdown(table: pd.DataFrame, formats: dict[str, str] | None = None) -> s
     return "\n".join(lines) + "\n"
 
 
-def to_latex(table: pd.DataFrame, formats: dict[str, str] | None = None) -> str:
-    """A booktabs ``tabular`` (needs ``\\usepackage{booktabs}``); numbers right-aligned,
-    floats formatted as in :func:`to_markdown`."""
+#: the packages a LaTeX table needs in the document's preamble (its first lines say so)
+LATEX_PACKAGES: tuple[str, ...] = ("booktabs", "siunitx")
+_PLAIN_NUMBER = re.compile(r"^(-?)(\d+)(?:\.(\d+))?$")
+
+
+def latex_header(what: str) -> list[str]:
+    """The comment lines that open every LaTeX table: what it is and what it needs."""
+    return [f"% {latex_comment(what)}",
+            "% Needs in the preamble: " + " ".join(f"\\usepackage{{{p}}}"
+                                                  for p in LATEX_PACKAGES),
+            "% Put it in a table with \\input{this file}."]
+
+
+def latex_comment(text: str) -> str:
+    """One line of inert text for a LaTeX comment (a name in it is escaped as in a cell,
+    so no newline ends the comment and no ``%`` or ``\\`` acts)."""
+    return latex_cell(text)
+
+
+def _number_column(cells: Sequence[str]) -> str | None:
+    """The siunitx ``S`` column spec aligning ``cells`` on the decimal point
+    (``S[table-format=-2.3]``), or ``None`` when a cell is not a plain decimal number."""
+    ints, decs, sign = 1, 0, ""
+    seen = False
+    for cell in cells:
+        if cell == "":
+            continue
+        m = _PLAIN_NUMBER.match(cell)
+        if m is None:
+            return None
+        seen = True
+        sign = sign or m.group(1)
+        ints = max(ints, len(m.group(2)))
+        decs = max(decs, len(m.group(3) or ""))
+    if not seen:
+        return None
+    return f"S[table-format={sign}{ints}.{decs}]" if decs else f"S[table-format={sign}{ints}]"
+
+
+def to_latex(table: pd.DataFrame, formats: dict[str, str] | None = None, *,
+             what: str = "tribopipe friction-map table") -> str:
+    """A booktabs ``tabular`` that compiles as written with the packages its first lines
+    name (:data:`LATEX_PACKAGES`): numeric columns aligned on the decimal point
+    (siunitx ``S``; ``r`` where a cell is not a plain decimal), every text cell escaped
+    (:func:`~tribopipe.escape.latex_cell`), floats formatted as in :func:`to_markdown`."""
     table = _short_values(table)
     specs = _specs(table, formats)
-    spec = "".join("r" if _numeric(table, c) else "l" for c in table.columns)
-    lines = [
-        f"\\begin{{tabular}}{{{spec}}}",
-        "\\toprule",
-        " & ".join(latex_cell(str(c)) for c in table.columns) + " \\\\",
-        "\\midrule",
-    ]
-    for row in table.itertuples(index=False, name=None):
-        cells = (latex_cell(_cell(v, f)) for v, f in zip(row, specs, strict=True))
+    rows = [[_cell(v, f) for v, f in zip(row, specs, strict=True)]
+            for row in table.itertuples(index=False, name=None)]
+    columns: list[str] = []
+    for i, c in enumerate(table.columns):
+        number = _number_column([r[i] for r in rows]) if _numeric(table, c) else None
+        columns.append(number or ("r" if _numeric(table, c) else "l"))
+    head = [("{" + latex_cell(str(c)) + "}") if spec.startswith("S") else latex_cell(str(c))
+            for c, spec in zip(table.columns, columns, strict=True)]
+    lines = [*latex_header(what),
+             f"\\begin{{tabular}}{{{''.join(columns)}}}",
+             "\\toprule",
+             " & ".join(head) + " \\\\",
+             "\\midrule"]
+    for row in rows:
+        cells = (latex_cell(v) if not spec.startswith("S") or v == "" else v
+                 for v, spec in zip(row, columns, strict=True))
         lines.append(" & ".join(cells) + " \\\\")
     lines += ["\\bottomrule", "\\end{tabular}"]
+    return "\n".join(lines) + "\n"
+
+
+def runs_of_methods(runs: pd.DataFrame, methods: Sequence[str]) -> pd.DataFrame:
+    """The runs measured with one of ``methods`` (a row naming none was measured on the
+    rheometer cell, :func:`tribopipe.stats.test_methods`); :class:`ExportError` naming the
+    known methods for an unknown one."""
+    unknown = [m for m in methods if m not in TEST_METHODS]
+    if unknown:
+        raise ExportError(f"unknown test method {printable(unknown[0])[:60]!r}; expected one "
+                          "of " + ", ".join(repr(m) for m in TEST_METHODS))
+    return runs.loc[[m in set(methods) for m in test_methods(runs)]]
+
+
+#: the paper layout's column heads in LaTeX (the units upright, siunitx's °C)
+_PAPER_LATEX_HEADS = {"pin": "pin", "disc": "disc", "pressure_kPa": "{$p$ [kPa]}",
+                      "temperature_C": "{$T$ [\\si{\\degreeCelsius}]}",
+                      NOMINAL_SPEED: "{$v$ [mm/s]}", "n": "{$n$}", "flags": "flags",
+                      TEST_METHOD: "method"}
+
+
+def _pm_cells(value: str, expanded: str) -> tuple[str, str, str]:
+    """A group mean for the LaTeX paper table as three cells: value, ``$\\pm$``, U
+    (:func:`tribopipe.rounding.plus_minus`'s rule: bounded at zero where value − U < 0,
+    written +U/−value as a superscript and subscript; no U: the value alone)."""
+    from decimal import Decimal
+
+    if value == "":
+        return "{--}", "", ""
+    if expanded == "":
+        return value, "", ""
+    if Decimal(value) < Decimal(expanded):
+        return value, "", f"{{$^{{+{expanded}}}_{{-{value}}}$}}"
+    return value, "$\\pm$", expanded
+
+
+def paper_latex(runs: pd.DataFrame, **filters: Any) -> str:
+    """The paper layout as a LaTeX table that compiles as written (:func:`to_latex`'s
+    header): μ_S and μ_K each as value, ±, U in three columns, the value and U aligned on
+    the decimal point, and the ± U note under the table."""
+    table = paper_table(runs, machine=True, **filters)
+    plain = [c for c in table.columns if c not in ("mu_s", "mu_s_U", "mu_k", "mu_k_U")]
+    quantities = [q for q in ("mu_s", "mu_k") if q in table.columns]
+    spec: list[str] = []
+    head: list[str] = []
+    body: list[list[str]] = [[] for _ in range(len(table))]
+    for column in plain[:-1]:  # the conditions and n, then the coefficients, then flags
+        cells = [_cell(v, "g") for v in table[column]]
+        spec.append(_number_column(cells) or "l")
+        head.append(_PAPER_LATEX_HEADS.get(column, latex_cell(str(column))))
+        for i, cell in enumerate(cells):
+            body[i].append(cell if spec[-1].startswith("S") else latex_cell(cell))
+    for q in quantities:
+        triples = [_pm_cells(str(v), str(u)) for v, u in zip(table[q], table[f"{q}_U"],
+                                                             strict=True)]
+        values = [t[0] for t in triples if not t[0].startswith("{")]
+        errors = [t[2] for t in triples if not t[2].startswith("{")]
+        spec += [_number_column(values) or "r", "@{\\,}c@{\\,}",
+                 _number_column(errors) or "l"]
+        symbol = "S" if q == "mu_s" else "K"
+        head.append(f"\\multicolumn{{3}}{{c}}{{$\\mu_{symbol} \\pm U$}}")
+        for i, t in enumerate(triples):
+            body[i] += list(t)
+    spec.append("l")
+    head.append("flags")
+    for i, flags in enumerate(table["flags"]):
+        body[i].append(latex_cell(str(flags)))
+    lines = [*latex_header("tribopipe friction-map table, paper layout"),
+             f"\\begin{{tabular}}{{{''.join(spec)}}}", "\\toprule",
+             " & ".join(head) + " \\\\", "\\midrule",
+             *(" & ".join(row) + " \\\\" for row in body),
+             "\\bottomrule", "\\end{tabular}",
+             "\\par\\smallskip",
+             "{\\footnotesize " + _latex_symbols(latex_cell(PAPER_NOTE)) + "\\par}"]
     return "\n".join(lines) + "\n"
 
 
@@ -413,10 +594,20 @@ def render_table(
     disc: Sequence[str] | None = None,
     temperature_C: Sequence[float] | None = None,
     by_speed: bool = False,
+    decimal: str = ".",
+    method: Sequence[str] | None = None,
 ) -> str:
     """A table of the map as text: ``fmt`` one of :data:`FORMATS`, ``layout`` one of
-    :data:`LAYOUTS` (``frictionmap`` has its own layout). Raises :class:`ExportError` for an
-    unknown format/layout or when no row matches the filters."""
+    :data:`LAYOUTS` (``frictionmap`` has its own layout); ``decimal`` the decimal mark of a
+    CSV (``","``: for a decimal-comma locale, :func:`to_csv`); ``method`` keeps the runs of
+    these test methods only (:data:`tribopipe.config.TEST_METHODS`). Raises
+    :class:`ExportError` for an unknown format/layout/method or when no row matches the
+    filters."""
+    if decimal != "." and fmt != "csv":
+        raise ExportError(f"a decimal comma is for --format csv, not {fmt}",
+                          hint="drop --decimal")
+    if method:
+        runs = runs_of_methods(runs, method)
     if fmt not in FORMATS:
         raise ExportError(f"unknown table format {fmt!r}; expected one of {', '.join(FORMATS)}")
     if layout not in LAYOUTS:
@@ -437,11 +628,17 @@ def render_table(
         if by_speed:
             raise ExportError("the paper layout splits by speed where the map holds several",
                               hint="drop --by-speed")
+        if fmt == "latex":
+            if paper_table(runs, **filters).empty:
+                table = paper_table(runs, **filters)  # the "no rows" error below
+            else:
+                return paper_latex(runs, **filters)
         table = paper_table(runs, machine=fmt == "csv", **filters)
     else:
         table = group_table(runs, by_speed=by_speed, **filters)
     if table.empty:
-        given = ", ".join(f"{k}={list(v)}" for k, v in filters.items() if v) or "no filter"
+        given = ", ".join(f"{k}={list(v)}" for k, v in {**filters, "method": method}.items()
+                          if v) or "no filter"
         raise ExportError(
             f"no rows to tabulate ({given}; the map holds {len(runs)} runs)",
             hint="check `tribopipe map show` for the pins, discs and temperatures",
@@ -450,18 +647,19 @@ def render_table(
         return frictionmap_csv(table)
     # The paper prints μ_K with two decimals; keep "0.30", not "0.3".
     formats = {"mu_k": ".2f"} if layout == "abstract" else None
-    text = {"csv": to_csv, "markdown": to_markdown, "latex": to_latex}[fmt](table, formats)
-    if layout == "paper" and fmt == "latex":
-        text = _latex_symbols(text)
-    elif layout == "paper" and fmt == "markdown":
+    if fmt == "csv":
+        return to_csv(table, formats, decimal=decimal)
+    text = {"markdown": to_markdown, "latex": to_latex}[fmt](table, formats)
+    if layout == "paper" and fmt == "markdown":
         text += "\n" + markdown_cell(PAPER_NOTE) + "\n"
     return text
 
 
 def _latex_symbols(text: str) -> str:
     """The paper layout's symbols in LaTeX math (after escaping: nothing else is touched)."""
-    for plain, latex in (("μ\\_S", r"$\mu_S$"), ("μ\\_K", r"$\mu_K$"), ("±", r"$\pm$"),
-                         ("−", r"$-$"), ("°C", r"$^\circ$C")):
+    for plain, latex in ((r"\ensuremath{\mu}\_S", r"$\mu_S$"),
+                         (r"\ensuremath{\mu}\_K", r"$\mu_K$"),
+                         (r"\textdegree{}C", r"\si{\degreeCelsius}")):
         text = text.replace(plain, latex)
     return text
 

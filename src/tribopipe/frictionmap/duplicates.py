@@ -20,7 +20,7 @@ from typing import TYPE_CHECKING, Any
 
 from ..stats import FORCE_DECIMALS, TEMPERATURE_DECIMALS, group_statistics
 from .records import stored_file_name
-from .schema import unvalidated_frame
+from .schema import MapRow, unvalidated_frame
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -46,9 +46,11 @@ def _value(column: str, value: Any) -> Any:
     return str(value)
 
 
-def labels_of(row: Mapping[str, Any] | None) -> dict[str, Any]:
-    """The :data:`LABEL_COLUMNS` of a record, a map row or a ``RunLabels`` dict, with
-    unknown values as ``None`` and numbers as float."""
+def labels_of(row: MapRow | Mapping[str, Any] | None) -> dict[str, Any]:
+    """The :data:`LABEL_COLUMNS` of a map row or a ``RunLabels`` dict, with unknown values
+    as ``None`` and numbers as float."""
+    if isinstance(row, MapRow):
+        return {c: _value(c, getattr(row, c)) for c in LABEL_COLUMNS}
     return {c: _value(c, (row or {}).get(c)) for c in LABEL_COLUMNS}
 
 
@@ -183,7 +185,7 @@ def _coarse_key(pin: Any, disc: Any, force: Any, temperature: Any, repeat: Any
             number)
 
 
-def repeat_clashes(current: pd.DataFrame, records: Sequence[Mapping[str, Any]],
+def repeat_clashes(current: pd.DataFrame, records: Sequence[MapRow],
                    drop_ids: Collection[str] = ()) -> list[str]:
     """The repeat numbers that more than one run of one condition group would carry once
     ``records`` are folded into the map ``current`` (rows ``drop_ids`` gone), where one of
@@ -199,7 +201,7 @@ def repeat_clashes(current: pd.DataFrame, records: Sequence[Mapping[str, Any]],
     import pandas as pd
 
     columns = ("pin", "disc", "normal_force_N", "temperature_C", "repeat")
-    new_ids = {str(r["measurement_id"]) for r in records}
+    new_ids = {r.measurement_id for r in records}
     old = current.loc[~current["measurement_id"].isin(new_ids | set(drop_ids))
                       & ~current["excluded"].fillna(False).astype(bool)]
     seen: dict[tuple[Any, ...], int] = {}
@@ -209,7 +211,7 @@ def repeat_clashes(current: pd.DataFrame, records: Sequence[Mapping[str, Any]],
             seen[key] = seen.get(key, 0) + 1
     clash = False
     for record in records:
-        key = _coarse_key(*(record.get(c) for c in columns))
+        key = _coarse_key(*(getattr(record, c) for c in columns))
         if key is not None:
             clash = clash or key in seen
             seen[key] = seen.get(key, 0) + 1

@@ -25,7 +25,7 @@ from ..validate import text_problem
 from .datapackage import DESCRIPTOR
 from .package import package_runs
 from .parts import MANIFEST
-from .schema import frame_records, is_missing
+from .schema import frame_rows, is_missing
 from .store import AppendReport, append_records, read_map
 
 
@@ -87,14 +87,14 @@ def merge_map(
         if lab is not None:
             raise MapError(f"a data package names its lab ({package_lab!r}); --lab is for a "
                            "Parquet map whose rows name none", path=other)
-        return MergeReport(append_records(path, frame_records(runs), replace=replace))
+        return MergeReport(append_records(path, frame_rows(runs), replace=replace))
     if os.path.realpath(other) == os.path.realpath(path):
         raise MapError("cannot merge a friction map into itself", path=other)
     runs = read_map(other)  # validated: a damaged or foreign file is refused before any write
     unnamed = runs["lab"].map(is_missing).astype(bool)
     if lab is not None:
         runs.loc[unnamed, "lab"] = lab
-    report = append_records(path, frame_records(runs), replace=replace)
+    report = append_records(path, frame_rows(runs), replace=replace)
     n = int(unnamed.sum())
     return MergeReport(report, labelled=n if lab else 0, without_lab=0 if lab else n, lab=lab)
 

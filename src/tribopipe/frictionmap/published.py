@@ -14,20 +14,18 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any, TypedDict
 
 from .. import __version__
-from ..errors import MapError, ReadError
+from ..errors import MapError, ReadError, RowError
 from ..escape import csv_uncell
 from ..files import file_sha256, regular_file
 from ..physics import FOUNDING_SLIDING_SPEED_MM_S
 from ..validate import name_problem
 from .records import imported_id
-from .schema import SOURCE_PUBLISHED, is_missing, records_frame, utc_now
+from .schema import SOURCE_PUBLISHED, MapRow, is_missing, records_frame, utc_now
 from .store import AppendReport, append_records
 
 if TYPE_CHECKING:
     import pandas as pd
 
-#: The founding paper's fixed sliding speed [mm/s] (recorded for published rows).
-PUBLISHED_SLIDING_SPEED_MM_S = FOUNDING_SLIDING_SPEED_MM_S
 #: ``lab`` of the published rows: the founding paper's authors measured them.
 PUBLISHED_LAB = "Berthold et al. (founding paper)"
 
@@ -184,8 +182,8 @@ def published_csv_path() -> Path:
 
 def import_records(
     path: str | os.PathLike[str], *, source: str | None = None
-) -> list[dict[str, Any]]:
-    """Friction-map records for a table in the published 7-column schema (.mat or CSV).
+) -> list[MapRow]:
+    """Friction-map rows for a table in the published 7-column schema (.mat or CSV).
 
     ``source`` labels where the rows came from; by default ``published:Berthold2023`` when
     every row is one of the published map's rows (whatever the file's name or format),
@@ -206,51 +204,32 @@ def import_records(
     ):
         repeat = int(number) if float(number).is_integer() else None
         records.append(
-            {
-                "measurement_id": imported_id(source, pin, disc, force, temperature, repeat),
-                "source": source,
-                "lab": PUBLISHED_LAB if published else None,
-                "pin": pin,
-                "disc": disc,
-                "normal_force_N": force,
-                "pressure_kPa": pressure,
-                "normal_force_measured_N": None,
-                "pressure_measured_kPa": None,
-                "temperature_C": temperature,
-                "temperature_measured_C": None,
-                "sliding_speed_mm_s": PUBLISHED_SLIDING_SPEED_MM_S if published else None,
-                "repeat": repeat,
-                "mu_s": None,
-                "mu_k": cof,
-                "u_mu_s": None,
-                "u_mu_k": None,
-                "mu_s_distance_mm": None,
-                "mu_s_time_s": None,
-                "mu_k_window_start_mm": None,
-                "mu_k_window_end_mm": None,
-                "mu_k_window_start_s": None,
-                "mu_k_window_end_s": None,
-                "plateau_std": None,
-                "plateau_drift_per_mm": None,
-                "flags": "",
-                "method": "published" if published else "imported",
-                "source_file": p.name,
-                "file_hash": file_hash,
-                "test": None,
-                "result": None,
-                "interval": None,
-                "config_hash": None,
-                "tribopipe_version": __version__,
-                "reduced_at": stamp,
-                "excluded": False,
-                "exclusion_reason": None,
-            }
+            MapRow(
+                measurement_id=imported_id(source, pin, disc, force, temperature, repeat),
+                source=source,
+                lab=PUBLISHED_LAB if published else None,
+                pin=pin,
+                disc=disc,
+                normal_force_N=force,
+                pressure_kPa=pressure,
+                temperature_C=temperature,
+                sliding_speed_mm_s=FOUNDING_SLIDING_SPEED_MM_S if published else None,
+                repeat=repeat,
+                mu_k=cof,
+                flags="",
+                method="published" if published else "imported",
+                source_file=p.name,
+                file_hash=file_hash,
+                tribopipe_version=__version__,
+                reduced_at=stamp,
+                excluded=False,
+            )
         )
     _validate_rows(p, records)
     seen: set[str] = set()
     for row, rec in enumerate(records):
-        if rec["measurement_id"] not in seen:
-            seen.add(rec["measurement_id"])
+        if rec.measurement_id not in seen:
+            seen.add(rec.measurement_id)
             continue
         raise MapError(
             "two rows have the same pin, disc, force, temperature and measurementNo",
@@ -261,7 +240,7 @@ def import_records(
     return records
 
 
-def _validate_rows(path: Path, records: list[dict[str, Any]]) -> None:
+def _validate_rows(path: Path, records: list[MapRow]) -> None:
     """Check the records of an imported table as every map row is checked
     (:func:`~tribopipe.frictionmap.checks.validate_runs`: force > 0, temperature above
     −273.15 °C, 0 ≤ μ ≤ 10 ...); :class:`MapError` naming the file, the line (CSV) or
@@ -275,8 +254,8 @@ def _validate_rows(path: Path, records: list[dict[str, Any]]) -> None:
     for row, rec in enumerate(records):
         try:
             records_frame([rec])
-        except MapError as exc:
-            problem = exc.problem.split(": ", 1)[-1]
+        except RowError as exc:
+            problem = exc.row_problem
             csv_line = row + 2 if path.suffix.lower() != ".mat" else None
             where = "" if csv_line else f"row {row + 1}: "
             raise MapError(where + problem, path=path, line=csv_line,

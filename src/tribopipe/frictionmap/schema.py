@@ -16,11 +16,12 @@ Parquet metadata (:mod:`tribopipe.frictionmap.store`).
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field, fields, replace
 from datetime import UTC, datetime
 from typing import TYPE_CHECKING, Any
 
-from ..errors import MapError
+from ..config import DEFAULT_TEST_METHOD, TEST_METHODS
+from ..errors import MapError, RowError
 from ..escape import printable
 from ..validate import (
     FORCE_N,
@@ -41,7 +42,7 @@ if TYPE_CHECKING:
 #: Parquet key-value metadata key holding the schema and provenance (JSON).
 META_KEY = b"tribopipe.frictionmap"
 SCHEMA_NAME = "tribopipe.frictionmap"
-SCHEMA_VERSION = 5
+SCHEMA_VERSION = 6
 
 #: ``source`` of runs reduced by tribopipe (imported rows name their origin instead).
 SOURCE_REDUCED = "reduced"
@@ -66,7 +67,8 @@ class Column:
 
     ``kind`` is ``"str"``, ``"float"``, ``"int"`` (nullable) or ``"bool"``; ``unit`` is
     ``""`` for none. ``bounds`` is the physical range of a number (``None``: a float need
-    only be finite); ``reason`` says why. ``required`` is ``""`` (may be missing),
+    only be finite); ``reason`` says why; ``choices`` the values a text column may hold.
+    ``required`` is ``""`` (may be missing),
     :data:`ALWAYS`, :data:`IN_REDUCED_ROWS` or :data:`IN_PACKAGES`. A text column
     required :data:`ALWAYS` is a name (one printable line of at most 200 characters, not
     blank); every other text is one printable line.
@@ -79,6 +81,8 @@ class Column:
     bounds: Range | None = None
     reason: str = ""
     required: str = ""
+    #: the values a text column may hold (``()``: any one printable line)
+    choices: tuple[str, ...] = ()
 
 
 _CONTACT = "a run in contact presses the pins on the disc"
@@ -136,6 +140,9 @@ COLUMNS: tuple[Column, ...] = (
     Column("plateau_drift_per_mm", "float", "1/mm", "slope of μ over the plateau window"),
     Column("flags", "str", "", "QC flags, ';'-joined"),
     Column("method", "str", "", "reduction method (or 'published'/'imported')"),
+    Column("test_method", "str", "", "instrument kind and test method: "
+           + ", ".join(f"'{m}'" for m in TEST_METHODS) + " (missing in rows older than "
+           f"schema version 6: '{DEFAULT_TEST_METHOD}')", choices=TEST_METHODS),
     Column("source_file", "str", "", "name of the raw or imported file"),
     Column("file_hash", "str", "", "SHA-256 of that file"),
     Column("test", "str", "", "Test name in the export the run came from (as the export "
@@ -148,14 +155,51 @@ COLUMNS: tuple[Column, ...] = (
     Column("reduced_at", "str", "", "UTC time of reduction or import (ISO 8601)"),
     Column("excluded", "bool", "", "left out of the statistics", required=ALWAYS),
     Column("exclusion_reason", "str", "", "why it was excluded"),
+    Column("review", "str", "", "a reviewer's decision on the run: 'accept' (its QC flags "
+           "do not count against its group), 'exclude' or 'window' (μ_K, and μ_S where a "
+           "peak was given, re-read where the reviewer chose); missing: not reviewed"),
+    Column("review_by", "str", "", "who reviewed the run"),
+    Column("review_date", "str", "", "when the run was reviewed (as the decisions file says)"),
+    Column("review_reason", "str", "", "why the reviewer decided so"),
+    Column("review_kinetic_from_mm", "float", "mm", "start of the μ_K window the reviewer "
+           "gave", _DISTANCE, _ALONG),
+    Column("review_kinetic_to_mm", "float", "mm", "end of the μ_K window the reviewer gave",
+           _DISTANCE, _ALONG),
+    Column("review_static_peak_mm", "float", "mm", "the static peak position the reviewer "
+           "gave", _DISTANCE, _ALONG),
+    Column("auto_mu_s", "float", "", "μ_S as the reduction found it (reviewed rows)", MU,
+           _RATIO),
+    Column("auto_mu_k", "float", "", "μ_K as the reduction found it (reviewed rows)", MU,
+           _RATIO),
+    Column("auto_u_mu_s", "float", "", "u(μ_S) as the reduction found it (reviewed rows)",
+           _SPREAD, "a standard uncertainty is not negative"),
+    Column("auto_u_mu_k", "float", "", "u(μ_K) as the reduction found it (reviewed rows)",
+           _SPREAD, "a standard uncertainty is not negative"),
+    Column("auto_mu_s_distance_mm", "float", "mm", "the reduction's static peak position "
+           "(reviewed rows)", _DISTANCE, _ALONG),
+    Column("auto_mu_k_window_start_mm", "float", "mm", "start of the reduction's μ_K window "
+           "(reviewed rows)", _DISTANCE, _ALONG),
+    Column("auto_mu_k_window_end_mm", "float", "mm", "end of the reduction's μ_K window "
+           "(reviewed rows)", _DISTANCE, _ALONG),
 )
+
+#: the columns a review sets (:mod:`tribopipe.review`); the ``auto_`` ones keep the
+#: reduction's own values beside the reviewed ones
+REVIEW_COLUMNS: tuple[str, ...] = (
+    "review", "review_by", "review_date", "review_reason", "review_kinetic_from_mm",
+    "review_kinetic_to_mm", "review_static_peak_mm", "auto_mu_s", "auto_mu_k",
+    "auto_u_mu_s", "auto_u_mu_k", "auto_mu_s_distance_mm", "auto_mu_k_window_start_mm",
+    "auto_mu_k_window_end_mm")
 
 RUN_COLUMNS: tuple[str, ...] = tuple(c.name for c in COLUMNS)
 #: Columns added after schema version 1, with the version that added them: a map written
 #: before that version lacks them and reads with them missing, and a record built by older
 #: code may leave them out.
 ADDED_IN_VERSION: dict[str, int] = {"lab": 2, "u_mu_s": 3, "u_mu_k": 3, "test": 4, "result": 4,
-                                    "nominal_speed_mm_s": 5}
+                                    "nominal_speed_mm_s": 5, "test_method": 6,
+                                    **{c: 6 for c in REVIEW_COLUMNS}}
+#: the values each text column with a closed vocabulary may hold
+CHOICES: dict[str, tuple[str, ...]] = {c.name: c.choices for c in COLUMNS if c.choices}
 #: the kind of each column: ``"str"``, ``"float"``, ``"int"`` or ``"bool"``
 KIND: dict[str, str] = {c.name: c.kind for c in COLUMNS}
 #: the physical range of each bounded number column; a float column not listed need only
@@ -177,6 +221,138 @@ PROVENANCE_COLUMNS: frozenset[str] = frozenset(
      "excluded", "exclusion_reason"}
 )
 CONTENT_COLUMNS: tuple[str, ...] = tuple(c for c in RUN_COLUMNS if c not in PROVENANCE_COLUMNS)
+#: The content columns :data:`ADDED_IN_VERSION` a later schema: a row written before the
+#: column existed lacks it, so where the older of two rows of one run lacks it, that is no
+#: difference of the run (the store compares rows with this rule). The review's columns
+#: are not among them: missing there means "not reviewed", and a review that fills them
+#: changes the row.
+ADDED_LATER_CONTENT: frozenset[str] = frozenset(c for c in ADDED_IN_VERSION
+                                                if c in CONTENT_COLUMNS
+                                                and c not in REVIEW_COLUMNS)
+
+
+@dataclass(frozen=True, kw_only=True)
+class MapRow:
+    """One map row, typed: one field per column of :data:`COLUMNS`, in its order, of its
+    kind (``str``, ``float``, ``int``, ``bool``); a column not required in every row
+    (:data:`ALWAYS`) may be ``None`` (missing). A misspelt column is a type error.
+
+    The fields are held to :data:`COLUMNS` when this module is imported
+    (:func:`_check_row_type`), so the table of row rules stays the one place a column is
+    declared. Build one from a mapping with :meth:`from_mapping`, from a map DataFrame
+    with :func:`frame_rows`; :func:`records_frame` turns rows into a map DataFrame. A row
+    built by :func:`checked_row` has kept the row rules and is not checked again; a copy
+    changed with :func:`dataclasses.replace` is checked again.
+    """
+
+    measurement_id: str
+    source: str
+    lab: str | None = None
+    pin: str
+    disc: str
+    normal_force_N: float
+    pressure_kPa: float
+    normal_force_measured_N: float | None = None
+    pressure_measured_kPa: float | None = None
+    temperature_C: float | None = None
+    temperature_measured_C: float | None = None
+    sliding_speed_mm_s: float | None = None
+    nominal_speed_mm_s: float | None = None
+    repeat: int | None = None
+    mu_s: float | None = None
+    mu_k: float
+    u_mu_s: float | None = None
+    u_mu_k: float | None = None
+    mu_s_distance_mm: float | None = None
+    mu_s_time_s: float | None = None
+    mu_k_window_start_mm: float | None = None
+    mu_k_window_end_mm: float | None = None
+    mu_k_window_start_s: float | None = None
+    mu_k_window_end_s: float | None = None
+    plateau_std: float | None = None
+    plateau_drift_per_mm: float | None = None
+    flags: str | None = None
+    method: str | None = None
+    test_method: str | None = None
+    source_file: str | None = None
+    file_hash: str | None = None
+    test: str | None = None
+    result: str | None = None
+    interval: int | None = None
+    config_hash: str | None = None
+    tribopipe_version: str | None = None
+    reduced_at: str | None = None
+    excluded: bool = False
+    exclusion_reason: str | None = None
+    review: str | None = None
+    review_by: str | None = None
+    review_date: str | None = None
+    review_reason: str | None = None
+    review_kinetic_from_mm: float | None = None
+    review_kinetic_to_mm: float | None = None
+    review_static_peak_mm: float | None = None
+    auto_mu_s: float | None = None
+    auto_mu_k: float | None = None
+    auto_u_mu_s: float | None = None
+    auto_u_mu_k: float | None = None
+    auto_mu_s_distance_mm: float | None = None
+    auto_mu_k_window_start_mm: float | None = None
+    auto_mu_k_window_end_mm: float | None = None
+    #: set by :func:`checked_row` only: the row kept the row rules when it was built
+    checked: bool = field(default=False, init=False, compare=False, repr=False)
+
+    @classmethod
+    def from_mapping(cls, values: Mapping[str, Any], *, where: str = "record") -> MapRow:
+        """The row of a mapping keyed by :data:`RUN_COLUMNS` (missing values ``None`` or
+        NaN; the columns :data:`ADDED_IN_VERSION` may be left out). Raises
+        :class:`MapError` naming the column when one is absent, unknown or of the wrong
+        kind; the row rules are not checked here (:func:`checked_row` does)."""
+        unknown = [k for k in values if k not in KIND]
+        if unknown:
+            raise MapError(f"{where} has unknown column(s) "
+                           f"{', '.join(printable(str(k))[:40] for k in unknown[:5])}",
+                           hint="build rows with tribopipe.frictionmap.make_record")
+        absent = [c for c in RUN_COLUMNS if c not in values and c not in ADDED_IN_VERSION]
+        if absent:
+            raise MapError(f"{where} lacks column(s) {', '.join(absent)}",
+                           hint="build rows with tribopipe.frictionmap.make_record")
+        typed: dict[str, Any] = {}
+        for name in RUN_COLUMNS:
+            value = values.get(name)
+            try:
+                typed[name] = _typed(value, KIND[name])
+            except (TypeError, ValueError, OverflowError):
+                raise MapError(f"{where}: expected {KIND[name]} values, got {value!r}",
+                               column=name) from None
+        return cls(**typed)
+
+    def as_dict(self) -> dict[str, Any]:
+        """The row as a dict keyed by :data:`RUN_COLUMNS` (missing values ``None``), for
+        writers of outside formats (JSON, CSV)."""
+        return {name: getattr(self, name) for name in RUN_COLUMNS}
+
+
+#: the annotation each kind of column has in :class:`MapRow`
+_ROW_TYPE = {"str": "str", "float": "float", "int": "int", "bool": "bool"}
+
+
+def _check_row_type() -> None:
+    """Hold :class:`MapRow` to :data:`COLUMNS`: the same columns in the same order, each
+    of its kind, ``None`` allowed exactly where the column is not required in every row
+    (a ``bool`` is never missing)."""
+    row_fields = [f for f in fields(MapRow) if f.init]
+    names = tuple(f.name for f in row_fields)
+    if names != RUN_COLUMNS:
+        raise AssertionError(f"MapRow's fields {names} differ from COLUMNS {RUN_COLUMNS}")
+    for f, column in zip(row_fields, COLUMNS, strict=True):
+        expected = _ROW_TYPE[column.kind]
+        if column.required != ALWAYS and column.kind != "bool":
+            expected += " | None"
+        if f.type != expected:
+            raise AssertionError(f"MapRow.{f.name} is {f.type}, COLUMNS says {expected}")
+
+
+_check_row_type()
 
 
 def utc_now() -> str:
@@ -199,56 +375,37 @@ def is_missing(value: Any) -> bool:
         return False
 
 
-class CheckedRecord(dict[str, Any]):
-    """A run record that has kept the rules of :func:`check_runs` (built by
-    :func:`checked_record`): :func:`records_frame` does not check it again while it holds
-    what was checked, so a reduced run's row is checked once on its way into the map. It
-    keeps a copy of what was checked; a record changed since is checked again."""
-
-    __slots__ = ("_checked",)
-    _checked: dict[str, Any]
-
-    def unchanged(self) -> bool:
-        """True while the record holds exactly what was checked."""
-        # the same value objects (a NaN is equal to itself by identity here)
-        return dict.__eq__(self, self._checked) is True
-
-    def __reduce__(self) -> tuple[Any, ...]:
-        # pickled as a checked record (a batch worker's record crosses to the parent)
-        return (_rebuild_checked, (dict(self), self.unchanged()))
+def checked_row(record: MapRow | Mapping[str, Any], *, where: str = "record") -> MapRow:
+    """``record`` as a :class:`MapRow` checked against the row rules
+    (:func:`check_runs`; a :class:`MapError` naming the column otherwise), marked so that
+    :func:`records_frame` does not check it again."""
+    row = record if isinstance(record, MapRow) else MapRow.from_mapping(record, where=where)
+    check_runs(unvalidated_frame([row], where=where), where)
+    if not row.checked:
+        row = replace(row)
+        object.__setattr__(row, "checked", True)
+    return row
 
 
-def _rebuild_checked(values: dict[str, Any], unchanged: bool = True) -> CheckedRecord:
-    record = CheckedRecord(values)
-    record._checked = dict(values) if unchanged else {}
-    return record
+def records_frame(records: Sequence[MapRow | Mapping[str, Any]], *,
+                  where: str = "record") -> pd.DataFrame:
+    """Validate map rows and return them as a map DataFrame (schema dtypes, in order).
 
-
-def checked_record(record: Mapping[str, Any], *, where: str = "record") -> CheckedRecord:
-    """``record`` checked against the row rules (:func:`records_frame`, a
-    :class:`MapError` naming the column otherwise), as a :class:`CheckedRecord`."""
-    records_frame([record], where=where)
-    return _rebuild_checked(dict(record))
-
-
-def records_frame(records: Sequence[Mapping[str, Any]], *, where: str = "record") -> pd.DataFrame:
-    """Validate run records and return them as a map DataFrame (schema dtypes, in order).
-
-    Every record needs every column of :data:`RUN_COLUMNS` (those of
-    :data:`ADDED_IN_VERSION` may be left out: missing) with a value of its kind (a
-    ``bool`` is no number, text is no ``bool``) that keeps the rules of
-    :func:`check_runs` (not checked again for records that are all unchanged
-    :class:`CheckedRecord`). Raises :class:`MapError` naming the record and column
-    otherwise; nothing is written on error.
+    A row is a :class:`MapRow` or a mapping keyed by :data:`RUN_COLUMNS` (rows from
+    outside: those of :data:`ADDED_IN_VERSION` may be left out: missing) with a value of
+    its kind (a ``bool`` is no number, text is no ``bool``). Every row must keep the rules
+    of :func:`check_runs` (not checked again when every row is a :class:`MapRow` built by
+    :func:`checked_row`). Raises :class:`MapError` naming the row and column otherwise;
+    nothing is written on error.
     """
     frame = unvalidated_frame(records, where=where)
-    if records and all(isinstance(r, CheckedRecord) and r.unchanged() for r in records):
-        return frame  # each kept the rules when it was built (checked_record)
+    if records and all(isinstance(r, MapRow) and r.checked for r in records):
+        return frame  # each kept the rules when it was built (checked_row)
     return check_runs(frame, where)
 
 
 def unvalidated_frame(
-    records: Sequence[Mapping[str, Any]], *, where: str = "record"
+    records: Sequence[MapRow | Mapping[str, Any]], *, where: str = "record"
 ) -> pd.DataFrame:
     """:func:`records_frame` without its row rules: the schema's columns and dtypes only
     (a value of the wrong kind is still a :class:`MapError`). For checks that want to see
@@ -258,6 +415,8 @@ def unvalidated_frame(
 
     columns: dict[str, Any] = {}
     for i, rec in enumerate(records):
+        if isinstance(rec, MapRow):
+            continue
         absent = [c for c in RUN_COLUMNS if c not in rec and c not in ADDED_IN_VERSION]
         if absent:
             raise MapError(
@@ -266,16 +425,16 @@ def unvalidated_frame(
             )
     for name in RUN_COLUMNS:
         kind = KIND[name]
-        values = [rec.get(name) for rec in records]
+        values = [getattr(rec, name) if isinstance(rec, MapRow) else rec.get(name)
+                  for rec in records]
         try:
             columns[name] = _column(values, kind)
         except (TypeError, ValueError, OverflowError) as exc:
             bad = next((i for i, v in enumerate(values) if not _ok(v, kind)), None)
-            row = "" if bad is None else f"{where} {bad + 1}: "
-            raise MapError(
-                f"{row}expected {kind} values, got {values[bad] if bad is not None else exc!r}",
-                column=name,
-            ) from None
+            if bad is None:
+                raise MapError(f"expected {kind} values, got {exc!r}", column=name) from None
+            raise RowError(f"expected {kind} values, got {values[bad]!r}", row=f"{where} {bad + 1}",
+                           column=name) from None
     return pd.DataFrame(columns, columns=list(RUN_COLUMNS), index=pd.RangeIndex(len(records)))
 
 
@@ -284,10 +443,10 @@ def unvalidated_frame(
 FILE_NAME_COLUMNS: tuple[str, ...] = ("source_file",)
 
 
-def _row_error(frame: pd.DataFrame, where: str, i: int, column: str, problem: str) -> MapError:
+def _row_error(frame: pd.DataFrame, where: str, i: int, column: str, problem: str) -> RowError:
     ident = frame["measurement_id"].iloc[i]
     label = f" ({printable(str(ident))[:40]})" if isinstance(ident, str) else ""
-    return MapError(f"{where} {i + 1}{label}: {problem}", column=column)
+    return RowError(problem, row=f"{where} {i + 1}{label}", column=column)
 
 
 def check_runs(frame: pd.DataFrame, where: str = "row") -> pd.DataFrame:
@@ -319,6 +478,9 @@ def check_runs(frame: pd.DataFrame, where: str = "row") -> pd.DataFrame:
                 if missing and name not in NAME_COLUMNS:
                     continue
                 problem = "missing, expected a name" if missing else checker(value)
+                if problem is None and column.choices and value not in column.choices:
+                    problem = (f"{printable(str(value))[:60]!r} is not one of "
+                               + ", ".join(repr(c) for c in column.choices))
                 if problem is not None:
                     raise _row_error(frame, where, i, name, f"{name}: {problem}")
         elif kind == "float":
@@ -442,8 +604,44 @@ def _column(values: list[Any], kind: str) -> Any:
     return pd.array(out_s, dtype="str")
 
 
+def _typed(value: Any, kind: str) -> Any:
+    """One value of a column of ``kind`` as :class:`MapRow` holds it (missing: ``None``);
+    raises ``TypeError`` or ``ValueError`` for a value of another kind."""
+    import numpy as np
+
+    if kind == "bool":
+        if isinstance(value, bool | np.bool_):
+            return bool(value)
+        raise TypeError(f"not true/false: {value!r}")
+    if is_missing(value):
+        return None
+    if kind == "str":
+        if isinstance(value, str):
+            return str(value)
+        raise TypeError(f"not text: {value!r}")
+    if isinstance(value, bool | str | np.bool_):
+        raise TypeError(f"not a number: {value!r}")
+    if kind == "int":
+        if float(value) != int(float(value)):
+            raise TypeError(f"not a whole number: {value!r}")
+        return int(value)
+    return float(value)
+
+
+def frame_rows(runs: pd.DataFrame) -> list[MapRow]:
+    """The rows of a map DataFrame (schema dtypes) as :class:`MapRow` (missing values as
+    ``None``), not checked again."""
+    kinds = [KIND[c] for c in RUN_COLUMNS]
+    out = []
+    for row in runs.loc[:, list(RUN_COLUMNS)].itertuples(index=False, name=None):
+        out.append(MapRow(**{c: _typed(v, k) for c, k, v in zip(RUN_COLUMNS, kinds, row,
+                                                                  strict=True)}))
+    return out
+
+
 def frame_records(runs: pd.DataFrame) -> list[dict[str, Any]]:
-    """The rows of a map DataFrame as record dicts (missing values as ``None``)."""
+    """The rows of a map DataFrame as dicts (missing values as ``None``), for writers of
+    outside formats."""
     out = []
     for row in runs.loc[:, list(RUN_COLUMNS)].itertuples(index=False, name=None):
         pairs = zip(RUN_COLUMNS, row, strict=True)

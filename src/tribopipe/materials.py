@@ -1,0 +1,328 @@
+"""The one vocabulary of materials: canonical names, aliases, class and identifying
+properties, and the resolution of every incoming pin or disc name.
+
+The package ships ``tribopipe/data/materials.toml`` (every material of the founding map
+and a few more); a lab extends it with a file of the same form (:func:`load_vocabulary`).
+Every name that comes in (a pattern, a manifest cell, an option, a merged map or
+package) goes through :meth:`Vocabulary.resolve` at the edge: it gives the canonical name
+(stored in the map; the name as given is kept in ``pin_as_given``/``disc_as_given``), or
+a :class:`MaterialError` of one line with a did-you-mean. Names are compared by
+:func:`name_key`: case, accents, spaces and punctuation ignored, so "Dragon Skin 30",
+"dragonskin-30" and "Dragonskin 30" are one name. An alias listed under two materials is
+ambiguous and refused with both (the lab says which it means).
+
+A material file: a ``[materials]`` table, one entry per canonical name, each a table with
+``class`` (one of :data:`CLASSES`) and optional ``aliases`` (list), ``supplier``,
+``shore``, ``finish``, ``note``. One line adds a material::
+
+    [materials]
+    "Sylgard 184" = { class = "silicone elastomer", supplier = "Dow" }
+"""
+
+from __future__ import annotations
+
+import difflib
+import functools
+import tomllib
+import unicodedata
+from collections.abc import Iterable, Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from .errors import ConfigError, ReadError, TribopipeError, ValidationError
+from .files import read_regular, write_text_atomic
+from .validate import check_name, name_problem
+
+#: the classes a material may have
+CLASSES: tuple[str, ...] = ("silicone elastomer", "elastomer", "metal", "polymer", "glass",
+                            "ceramic", "wood", "paper", "composite", "other")
+#: the optional text properties of a material, besides its class and aliases
+PROPERTIES: tuple[str, ...] = ("supplier", "shore", "finish", "note")
+#: the name of a lab's own materials file, found beside its campaign config
+LAB_FILE = "materials.toml"
+#: the largest materials file read [bytes]
+MAX_FILE_BYTES = 4 * 1024 * 1024
+#: how close a name must be to suggest it (difflib ratio)
+SUGGEST_CUTOFF = 0.6
+
+
+class MaterialError(TribopipeError):
+    """A material name that the vocabulary does not know, or knows twice (ambiguous)."""
+
+
+@dataclass(frozen=True)
+class Material:
+    """One material: its canonical ``name``, ``material_class`` (one of :data:`CLASSES`),
+    ``aliases`` (spellings, vendor codes, translations), the identifying properties
+    ``supplier``, ``shore`` (Shore hardness as the supplier states it), ``finish`` (a
+    disc's surface) and ``note`` (empty when unknown), and the file it came from."""
+
+    name: str
+    material_class: str
+    aliases: tuple[str, ...] = ()
+    supplier: str = ""
+    shore: str = ""
+    finish: str = ""
+    note: str = ""
+    origin: str = "tribopipe"
+
+    def describe(self) -> str:
+        """``name (class; supplier, Shore 30A, finish ...)`` on one line."""
+        props = [self.material_class] + [
+            f"{'Shore ' if p == 'shore' else ''}{getattr(self, p)}"
+            for p in PROPERTIES if getattr(self, p)]
+        return f"{self.name} ({'; '.join(props[:1])}{', ' if len(props) > 1 else ''}"\
+               f"{', '.join(props[1:])})"
+
+
+def name_key(name: str) -> str:
+    """The form two names are compared in: NFKD, accents and every character that is not
+    a letter or digit dropped, case folded ("Dragon Skin™ 30" → "dragonskin30")."""
+    decomposed = unicodedata.normalize("NFKD", name)
+    return "".join(c for c in decomposed if c.isalnum()).casefold()
+
+
+@dataclass(frozen=True)
+class Resolved:
+    """A name resolved: the canonical ``name`` and the name ``given``."""
+
+    name: str
+    given: str
+
+    @property
+    def changed(self) -> bool:
+        """True when the given name is not written as the canonical one."""
+        return self.name != self.given
+
+
+@dataclass(frozen=True)
+class Vocabulary:
+    """The materials known, by canonical name (:func:`load_vocabulary`)."""
+
+    materials: tuple[Material, ...]
+
+    @functools.cached_property
+    def _index(self) -> dict[str, tuple[str, ...]]:
+        index: dict[str, list[str]] = {}
+        for m in self.materials:
+            for text in (m.name, *m.aliases):
+                key = name_key(text)
+                if key and m.name not in index.setdefault(key, []):
+                    index[key].append(m.name)
+        # a canonical name is never ambiguous: it names its own material
+        for m in self.materials:
+            index[name_key(m.name)] = [m.name]
+        return {k: tuple(v) for k, v in index.items()}
+
+    @functools.cached_property
+    def _by_name(self) -> dict[str, Material]:
+        return {m.name: m for m in self.materials}
+
+    def get(self, name: str) -> Material | None:
+        """The material of a canonical ``name``, else ``None``."""
+        return self._by_name.get(name)
+
+    def __contains__(self, name: object) -> bool:
+        return isinstance(name, str) and name in self._by_name
+
+    def candidates(self, name: str) -> tuple[str, ...]:
+        """The canonical names ``name`` may stand for: one (known), several (ambiguous)
+        or none (unknown)."""
+        return self._index.get(name_key(name), ())
+
+    def suggest(self, name: str) -> tuple[str, ...]:
+        """Up to three canonical names close to an unknown ``name`` (did-you-mean)."""
+        key = name_key(name)
+        keys = difflib.get_close_matches(key, list(self._index), n=6, cutoff=SUGGEST_CUTOFF)
+        out: list[str] = []
+        for k in keys:
+            for canonical in self._index[k]:
+                if canonical not in out:
+                    out.append(canonical)
+        return tuple(out[:3])
+
+    def problem(self, name: str, what: str = "material") -> str | None:
+        """Why ``name`` does not resolve (one line, with a did-you-mean or the choices),
+        or ``None`` when it does."""
+        found = self.candidates(name)
+        if len(found) == 1:
+            return None
+        if found:
+            choices = " or ".join(repr(c) for c in found)
+            return f"{what} {name!r} is ambiguous: {choices}"
+        near = self.suggest(name)
+        hint = f"; did you mean {' or '.join(repr(n) for n in near)}?" if near else ""
+        return f"unknown {what} {name!r}{hint}"
+
+    def resolve(self, name: str, what: str = "material") -> Resolved:
+        """``name`` (checked as a name) resolved to its canonical name; a
+        :class:`MaterialError` of one line (did-you-mean, or the choices of an ambiguous
+        name, and how to add a material) otherwise."""
+        check_name(name, what)
+        problem = self.problem(name, what)
+        if problem is not None:
+            raise MaterialError(problem, hint=ADD_HINT)
+        return Resolved(self.candidates(name)[0], name)
+
+    def with_materials(self, extra: Iterable[Material]) -> Vocabulary:
+        """This vocabulary and ``extra``: a material of the same canonical name replaces
+        the shipped one (a lab may add aliases or properties)."""
+        added = list(extra)
+        names = {m.name for m in added}
+        return Vocabulary(tuple(m for m in self.materials if m.name not in names) + tuple(added))
+
+
+#: how to add a material, for every refusal
+ADD_HINT = (f"fix the name, map it in the campaign's [names], or add the material: one line "
+            f"in {LAB_FILE} beside the campaign config, or `tribopipe materials add NAME "
+            f"--class CLASS`")
+
+
+def _text(value: Any, where: str, key: str) -> str:
+    if not isinstance(value, str):
+        raise ConfigError(f"{where}: {key} must be text, got {value!r}")
+    problem = name_problem(value) if value else None
+    if problem is not None:
+        raise ConfigError(f"{where}: {key}: {problem}")
+    return value
+
+
+def parse_materials(data: Mapping[str, Any], origin: str) -> tuple[Material, ...]:
+    """The materials of a parsed materials file (its ``[materials]`` table, see the module
+    docstring); a :class:`ConfigError` naming the file and the material otherwise."""
+    unknown = sorted(set(data) - {"materials"})
+    if unknown:
+        raise ConfigError(f"unknown table(s) {', '.join(unknown)}; expected [materials]",
+                          path=origin)
+    table = data.get("materials", {})
+    if not isinstance(table, dict):
+        raise ConfigError("[materials] must be a table of materials", path=origin)
+    out: list[Material] = []
+    for name, entry in table.items():
+        where = f"[materials] {name[:40]!r}"
+        try:
+            check_name(name, where)
+        except ValidationError as exc:
+            raise ConfigError(exc.problem, path=origin) from None
+        if not isinstance(entry, dict):
+            raise ConfigError(f"{where} must be a table, e.g. {{ class = \"metal\" }}",
+                              path=origin)
+        extra = sorted(set(entry) - {"class", "aliases", *PROPERTIES})
+        if extra:
+            raise ConfigError(f"{where}: unknown key(s) {', '.join(extra)}; expected class, "
+                              f"aliases, {', '.join(PROPERTIES)}", path=origin)
+        cls = entry.get("class")
+        if cls not in CLASSES:
+            raise ConfigError(f"{where}: class must be one of {', '.join(CLASSES)}, "
+                              f"got {cls!r}", path=origin)
+        aliases = entry.get("aliases", [])
+        if not isinstance(aliases, list):
+            raise ConfigError(f"{where}: aliases must be a list of names", path=origin)
+        try:
+            out.append(Material(
+                name=name, material_class=cls,
+                aliases=tuple(check_name(_text(a, where, "alias"), f"{where} alias")
+                              for a in aliases),
+                origin=origin,
+                **{p: _text(entry.get(p, ""), where, p) for p in PROPERTIES}))
+        except (ConfigError, ValidationError) as exc:
+            raise ConfigError(exc.problem, path=origin) from None
+    return tuple(out)
+
+
+def read_materials(path: str | Path) -> tuple[Material, ...]:
+    """The materials of a lab's file (TOML, the module docstring's form)."""
+    p = Path(path)
+    try:
+        raw = read_regular(p, max_bytes=MAX_FILE_BYTES, what="a materials file (TOML)")
+    except ReadError as exc:
+        raise ConfigError(f"cannot read materials file: {exc.problem}", path=p) from None
+    try:
+        data = tomllib.loads(raw.decode("utf-8"))
+    except tomllib.TOMLDecodeError as exc:
+        raise ConfigError(f"not valid TOML: {exc}", path=p) from None
+    except UnicodeDecodeError as exc:
+        raise ConfigError(f"not UTF-8 text (byte {exc.start})", path=p) from None
+    return parse_materials(data, str(p))
+
+
+@functools.lru_cache(maxsize=1)
+def shipped_vocabulary() -> Vocabulary:
+    """The vocabulary shipped in the package (``tribopipe/data/materials.toml``)."""
+    from importlib import resources
+
+    text = resources.files("tribopipe").joinpath("data", "materials.toml").read_text("utf-8")
+    return Vocabulary(parse_materials(tomllib.loads(text), "tribopipe"))
+
+
+def load_vocabulary(files: Sequence[str | Path] = ()) -> Vocabulary:
+    """The shipped vocabulary extended by a lab's ``files`` (later files win)."""
+    vocabulary = shipped_vocabulary()
+    for f in files:
+        vocabulary = vocabulary.with_materials(read_materials(f))
+    return vocabulary
+
+
+def lab_files(folder: str | Path | None, named: Sequence[str | Path] = ()) -> list[Path]:
+    """A lab's materials files: :data:`LAB_FILE` in ``folder`` (a campaign config's
+    folder) when it is there, then the files ``named``."""
+    out: list[Path] = []
+    if folder is not None:
+        candidate = Path(folder) / LAB_FILE
+        if candidate.is_file():
+            out.append(candidate)
+    out.extend(Path(n) for n in named if Path(n) not in out)
+    return out
+
+
+def material_line(material: Material) -> str:
+    """The one TOML line under ``[materials]`` that adds ``material``."""
+    import json
+
+    fields = [f"class = {json.dumps(material.material_class, ensure_ascii=False)}"]
+    if material.aliases:
+        fields.append("aliases = [" + ", ".join(json.dumps(a, ensure_ascii=False)
+                                                for a in material.aliases) + "]")
+    fields += [f"{p} = {json.dumps(getattr(material, p), ensure_ascii=False)}"
+               for p in PROPERTIES if getattr(material, p)]
+    return f"{json.dumps(material.name, ensure_ascii=False)} = {{ {', '.join(fields)} }}"
+
+
+def add_material(path: str | Path, material: Material) -> str:
+    """Add ``material`` to a lab's materials file (created when missing) as one line under
+    ``[materials]``, and return that line. Refused (:class:`ConfigError`) when the file
+    or the shipped vocabulary already knows the name or one of its aliases as another
+    material, or the file is not a materials file; the file is written atomically."""
+    p = Path(path)
+    existing: tuple[Material, ...] = read_materials(p) if p.exists() else ()
+    vocabulary = load_vocabulary().with_materials(existing)
+    for text in (material.name, *material.aliases):
+        taken = [c for c in vocabulary.candidates(text) if c != material.name]
+        if taken:
+            raise ConfigError(f"{text!r} already names {taken[0]!r}", path=p,
+                              hint="choose another name, or add an alias to that material")
+    if material.name in vocabulary:
+        raise ConfigError(f"{material.name!r} is already a material", path=p)
+    line = material_line(material)
+    text = p.read_text("utf-8") if p.exists() else ""
+    if "[materials]" not in text:
+        text = (text.rstrip("\n") + "\n\n" if text.strip() else "") + "[materials]\n"
+    if not text.endswith("\n"):
+        text += "\n"
+    new_text = _insert_after_table(text, line)
+    parse_materials(tomllib.loads(new_text), str(p))  # the file still reads
+    write_text_atomic(p, new_text)
+    return line
+
+
+def _insert_after_table(text: str, line: str) -> str:
+    """``text`` with ``line`` placed as the last line of its ``[materials]`` table."""
+    lines = text.splitlines()
+    start = next(i for i, x in enumerate(lines) if x.strip() == "[materials]")
+    end = start + 1
+    while end < len(lines) and not lines[end].lstrip().startswith("["):
+        end += 1
+    while end > start + 1 and not lines[end - 1].strip():
+        end -= 1
+    return "\n".join(lines[:end] + [line] + lines[end:]) + "\n"

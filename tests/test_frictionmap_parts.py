@@ -262,3 +262,17 @@ def test_a_snapshot_reads_the_columns_asked_and_derives_once(tmp_path: Path) -> 
     runs = full.runs
     runs.loc[0, "mu_k"] = 0.99
     assert full.runs["mu_k"].iloc[0] != 0.99
+
+
+def test_a_snapshot_gives_each_group_s_runs_without_a_growing_cell(tmp_path: Path) -> None:
+    path = _map(tmp_path, 6)
+    snap = open_map(path)
+    groups = snap.groups()
+    members = snap.group_members()
+    assert list(members.columns) == ["group", "measurement_id"]
+    assert len(members) == 6 and members["group"].is_monotonic_increasing
+    assert sorted(members["measurement_id"]) == sorted(snap.runs["measurement_id"])
+    for g in range(len(groups)):
+        runs = snap.group_runs(g)
+        assert set(runs["measurement_id"]) == set(str(groups["run_ids"].iloc[g]).split(";"))
+        assert runs["pin"].nunique() == 1

@@ -96,6 +96,32 @@ class MapSnapshot:
         return self.derived(("groups", by_speed),
                             lambda: group_statistics(self._runs, by_speed=by_speed))
 
+    def group_members(self, *, by_speed: bool = False) -> pd.DataFrame:
+        """Which run belongs to which condition group: one row per (group, run), columns
+        ``group`` (the row of :meth:`groups` with the same ``by_speed``) and
+        ``measurement_id``, in the groups' order; computed once per snapshot. The
+        membership as its own table: no cell grows with the number of runs."""
+        import pandas as pd
+
+        def members() -> pd.DataFrame:
+            groups = self.groups(by_speed=by_speed)
+            ids = [str(cell).split(";") if isinstance(cell, str) and cell else []
+                   for cell in groups["run_ids"]] if "run_ids" in groups.columns else []
+            return pd.DataFrame({
+                "group": [g for g, run_ids in enumerate(ids) for _ in run_ids],
+                "measurement_id": [m for run_ids in ids for m in run_ids]})
+
+        return self.derived(("group_members", by_speed), members)
+
+    def group_runs(self, group: int, *, by_speed: bool = False) -> pd.DataFrame:
+        """The runs (rows of :attr:`runs`) of condition group ``group`` (a row number of
+        :meth:`groups`), in the group's order."""
+        index = self.derived(("run_index",), lambda: {
+            m: i for i, m in enumerate(self._runs["measurement_id"].astype(str))})
+        members = self.group_members(by_speed=by_speed)
+        ids = members.loc[members["group"] == group, "measurement_id"]
+        return self._runs.iloc[[index[m] for m in ids]].copy(deep=False)
+
     def derived(self, key: Any, compute: Callable[[], T]) -> T:
         """The value ``compute()`` gives for this snapshot, computed once per ``key``: the
         place where rooms above the map keep what they derive from it (fits, labs …)."""

@@ -33,6 +33,7 @@ import tempfile
 import time
 import uuid
 from pathlib import Path
+from typing import Any
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))  # the generators
 
@@ -370,6 +371,44 @@ def per_group(folder: Path, groups: list[int], template: dict) -> dict:
     return out
 
 
+def map_costs(folder: Path, sizes: list[int], template: dict) -> dict:
+    """CPU seconds (``time.process_time``: what the load of other processes does not
+    change) of the map's own operations at each size, the map folder of parts against
+    the same rows in one file (the format before parts): open all columns, open the ids
+    only, append one run, the full check of ``map validate``."""
+    from tribopipe.frictionmap import records_frame, update_map
+    from tribopipe.frictionmap.snapshot import open_map
+    from tribopipe.frictionmap.store import verify_map, write_map_copy
+
+    out: dict = {}
+    for n in sizes:
+        base = folder / f"costs_{n}.parquet"
+        build_map(base, template, n)
+        single = folder / f"costs_{n}_single.parquet"
+        runs = open_map(base).runs
+        write_map_copy(single, runs)
+        one = records(template, 1, 10_000_000)
+        counter = iter(range(10**6))
+
+        def append(path: Path, one: list = one, counter: Any = counter) -> None:
+            rec = dict(one[0])
+            rec["measurement_id"] = uuid.UUID(int=(1 << 100) + next(counter)).hex[-16:]
+            update_map(path, records_frame([rec]).to_dict("records"))
+
+        row = {
+            "open_all_parts": cpu(lambda b=base: open_map(b)),
+            "open_ids_parts": cpu(lambda b=base: open_map(b, ["measurement_id"])),
+            "open_all_single_file": cpu(lambda s=single: open_map(s)),
+            "append_one_parts": cpu(lambda b=base: append(b)),
+            "append_one_single_file": cpu(lambda s=single: append(s)),
+            "validate_parts": cpu(lambda b=base: verify_map(b), 1),
+            "parts": int(open_map(base, ["measurement_id"]).info["parts"]),
+        }
+        out[str(n)] = row
+        print(f"  {n} rows: " + ", ".join(f"{k} {v:.3g}" for k, v in row.items()), flush=True)
+    return out
+
+
 def main(argv: list[str] | None = None) -> dict:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--sizes", default="1000,10000,100000")
@@ -378,12 +417,27 @@ def main(argv: list[str] | None = None) -> dict:
     parser.add_argument("--commands", action="store_true",
                         help="time the commands of the map's targets as processes instead "
                              "(writes bench/scale_commands.json)")
+    parser.add_argument("--map-costs", action="store_true",
+                        help="CPU time of the map's own operations, parts against one file "
+                             "(writes bench/scale_map.json)")
     parser.add_argument("--groups", default="",
                         help="with --commands: also the per-group costs on maps of these "
                              "numbers of groups, e.g. 1000,10000")
     args = parser.parse_args(argv)
     sizes = [int(s) for s in args.sizes.split(",")]
     load_start = os.getloadavg()
+    if args.map_costs:
+        with tempfile.TemporaryDirectory(prefix="tribopipe-scale-") as tmp:
+            folder = Path(tmp)
+            costs = map_costs(folder, sizes, template_record(folder))
+        results = {"when_utc": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
+                   "load_average_at_start": load_start, "load_average_at_end": os.getloadavg(),
+                   "python": platform.python_version(), "cpus": os.cpu_count(),
+                   "map_cpu_s": costs}
+        target = HERE / "scale_map.json"
+        target.write_text(json.dumps(results, indent=1) + "\n", encoding="utf-8")
+        print(f"wrote {target}")
+        return results
     if args.commands:
         with tempfile.TemporaryDirectory(prefix="tribopipe-scale-") as tmp:
             folder = Path(tmp)

@@ -17,6 +17,7 @@ from tribopipe import frictionmap as fm
 from tribopipe.errors import MapError
 from tribopipe.frictionmap.schema import (
     BOUNDS,
+    CHOICES,
     KIND,
     REQUIRED,
     SOURCE_PUBLISHED,
@@ -63,6 +64,8 @@ def records(draw, min_size: int = 0, max_size: int = 6) -> list[dict]:
                 rec[name] = draw(int_values(name))
             elif kind == "bool":
                 rec[name] = draw(st.booleans())
+            elif name in CHOICES:  # a closed vocabulary: one of its words, or missing
+                rec[name] = draw(st.none() | st.sampled_from(CHOICES[name]))
             else:
                 rec[name] = draw(MAYBE_TEXT)
         source = draw(st.sampled_from([SOURCE_REDUCED, SOURCE_PUBLISHED]) | NAME)

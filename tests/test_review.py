@@ -350,11 +350,12 @@ def test_every_output_marks_and_counts_reviewed_runs(campaign: Path, tmp_path: P
     html = (tmp_path / "r.html").read_text(encoding="utf-8")
     assert "reviewed runs" in html and "reviewed: window" in html and "1 reviewed" in html
     assert "reviewed: exclude" in html
+    import json
+
     from tribopipe.export.explorer import explorer_data
 
-    data = explorer_data(the_map(campaign), title="t")
-    marks = [r["review"] for p in data["pairs"] for r in p["runs"]]
-    assert "window" in marks
+    data = json.dumps(explorer_data(the_map(campaign), title="t"), ensure_ascii=False)
+    assert data.count("(reviewed: window)") == 1
     package = tmp_path / "pkg"
     publish_map(map_file, package, Publisher(lab="Test Lab", contact="A. Person"),
                 allow_synthetic=True)
@@ -390,3 +391,57 @@ def test_reduce_replace_never_silently_re_automates_a_reviewed_run(campaign: Pat
     after = the_map(campaign).set_index("measurement_id").loc[mid]
     assert after["review"] == "window" and after["mu_k"] == reviewed["mu_k"]
     assert after["auto_mu_k"] == row["mu_k"]
+
+
+def test_the_review_page_of_a_map_with_its_traces(campaign: Path, tmp_path: Path):
+    """`tribopipe review --map` (traces/ beside the map by default), as a subprocess: one
+    self-contained page holding every run, its samples and the decisions the map holds."""
+    import subprocess
+    import sys
+
+    from tribopipe.export.review_page import DATA_ELEMENT_ID
+
+    mid = str(the_map(campaign)["measurement_id"].iloc[0])
+    path = write_review(campaign, [[mid, "accept", "", "", "", "fine", "A", "2026-11-27"]])
+    assert batch(campaign, "--review", str(path)).exit_code == 0
+    page = tmp_path / "page.html"
+    done = subprocess.run([sys.executable, "-m", "tribopipe", "review", "--map",
+                           str(campaign / "out" / "friction_map.parquet"), "-o", str(page)],
+                          capture_output=True, text=True, timeout=300, check=False)
+    assert done.returncode == 0, done.stderr
+    html = page.read_text(encoding="utf-8")
+    assert f'id="{DATA_ELEMENT_ID}"' in html and "Content-Security-Policy" in html
+    assert "<script src" not in html and "http://" not in html and "https://" not in html
+    import json
+    import re
+
+    data = json.loads(re.search(rf'id="{DATA_ELEMENT_ID}">(.*?)</script>', html, re.S).group(1))
+    assert len(data["runs"]) == len(FILES) and all(r["trace"] for r in data["runs"])
+    assert [r["decision"]["action"] for r in data["runs"] if r["decision"]] == ["accept"]
+    assert all(r["trace"]["n"] > 1000 for r in data["runs"])
+    # without a config or --map: one usage line
+    bad = CliRunner().invoke(main, ["review"])
+    assert bad.exit_code == 2 and "give a campaign CONFIG or --map PATH" in bad.output
+
+
+def test_a_decisions_file_that_is_no_text_is_one_line(tmp_path: Path):
+    from tribopipe.review import read_review
+
+    raw = tmp_path / "review.csv"
+    raw.write_bytes(b"run,action\xff\xfe\n")
+    with pytest.raises(ReviewError, match="not UTF-8 text"):
+        read_review(raw)
+    with pytest.raises(ReviewError):
+        read_review(tmp_path)  # a folder
+    with pytest.raises(ReviewError, match="empty"):
+        (tmp_path / "empty.csv").write_text("", encoding="utf-8")
+        read_review(tmp_path / "empty.csv")
+
+
+def test_the_trace_plot_says_a_run_was_reviewed():
+    from tribopipe.figures.runinfo import TraceMarks
+
+    marks = TraceMarks(mu_s=0.7, mu_s_distance_mm=0.1, mu_k=0.5, mu_k_window_mm=(0.6, 1.1),
+                       review="window")
+    assert marks.line().endswith(" · reviewed: window")
+    assert "reviewed" not in TraceMarks(0.7, 0.1, 0.5, (0.6, 1.1)).line()

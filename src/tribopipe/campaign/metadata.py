@@ -45,6 +45,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from ..errors import CampaignError, ConfigError, ReadError, ValidationError
+from ..escape import csv_uncell
 from ..files import read_regular
 from ..labels import RunLabels
 from ..readers.textio import decode, detect_delimiter
@@ -258,7 +259,8 @@ def _manifest_rows(p: Path, text: str, delimiter: str) -> Manifest:
         if not any(c.strip() for c in cells):
             continue
         cells = cells + [""] * (len(header) - len(cells))
-        file = cells[index["file"]].strip()
+        # a template we wrote keeps a name starting with =, +, - or @ text for a spreadsheet
+        file = csv_uncell(cells[index["file"]].strip())
         if not file:
             raise ConfigError("empty 'file' cell", path=p, line=lineno, column="file")
         if len(file) > 4096 or not file.isprintable():
@@ -291,7 +293,7 @@ def _manifest_rows(p: Path, text: str, delimiter: str) -> Manifest:
             )
         fields: dict[str, Any] = {}
         for name in LABEL_FIELDS:
-            raw = cells[index[name]].strip()
+            raw = csv_uncell(cells[index[name]].strip())
             if not raw:
                 continue
             try:

@@ -214,7 +214,10 @@ def validate_cmd(path: str | None, map_path: str | None, recompute: bool) -> Non
         raise click.UsageError("give PATH or --map, not both")
     if path is None:
         path = chosen_map(map_path)
-    if recompute and not path.lower().endswith(".parquet"):
+    if recompute and path.lower().endswith(".parquet"):
+        raise click.UsageError("--recompute checks a package against its evidence; a map "
+                               "file holds none (publish it first: `tribopipe map publish`)")
+    if recompute:
         from ..evidence import recompute_package
 
         again = recompute_package(path)

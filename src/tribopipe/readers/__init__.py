@@ -36,6 +36,7 @@ from typing import Any
 from ..errors import ReadError, TribopipeError
 from ..escape import display_path
 from ..measurement import (
+    FRICTION_FORCE,
     NORMAL_FORCE,
     TORQUE,
     Measurement,
@@ -57,6 +58,7 @@ from .textio import (
     decode,
     detect_decimal,
     detect_delimiter,
+    foreign_kind,
     head_lines,
     plain_line_ends,
     read_bytes,
@@ -68,6 +70,7 @@ from .textio import (
 
 __all__ = [
     "EXPORT_SUFFIXES",
+    "export_kind",
     "FORMATS",
     "READERS",
     "AliasTable",
@@ -228,6 +231,51 @@ def _parse_text(
     return info, reader.parse(items, path, aliases)
 
 
+#: bytes of a file's start that :func:`export_kind` looks at
+_SNIFF_BYTES = 256 * 1024
+
+
+def export_kind(path: str | PathLike[str], aliases: AliasTable | None = None) -> str | None:
+    """What a file is when it is surely not an instrument export, from its first bytes,
+    else ``None`` (an export, or maybe one: the reader decides).
+
+    Not an export: a document, an image or an archive by its magic bytes ("a PDF
+    document"), a binary file, an empty file, a text with no cell delimiter in its
+    first lines (a note), or a text that no format recognises when the whole file was
+    looked at. A file that cannot be opened is ``None`` too: the reader says why. Cheap
+    (one read of at most 256 KiB): a campaign asks it of the files it is about to read
+    and of those no label source describes, before it names their labels."""
+    name = str(path)
+    try:
+        with open(path, "rb") as fh:
+            raw = fh.read(_SNIFF_BYTES + 1)
+    except OSError:
+        return None
+    whole = len(raw) <= _SNIFF_BYTES
+    raw = raw[:_SNIFF_BYTES]
+    if not raw.strip():
+        return "an empty file"
+    if raw.startswith(_OLE_MAGIC) or any(
+            r.magic is not None and raw.startswith(r.magic) for r in READERS):
+        return None
+    kind = foreign_kind(raw, name)
+    if kind is not None:
+        return kind[0]
+    try:
+        decoded = decode(raw, name)
+    except ReadError:
+        return "a binary file" if whole else None
+    lines = head_lines(decoded.text, _HEAD_LINES)
+    delim = detect_delimiter(lines)
+    if delim is None:
+        return "a text with no table: no TAB, ';' or ',' between cells"
+    rows = split_plain(lines, delim)
+    table = aliases if aliases is not None else load_aliases(None)
+    if any(r.looks_like and r.looks_like(rows, table) for r in _text_readers()):
+        return None
+    return "a text that no export format recognises" if whole else None
+
+
 def read_export(
     path: str | PathLike[str],
     *,
@@ -304,9 +352,11 @@ class IntervalSummary:
 
     @property
     def friction_ready(self) -> bool:
-        """True when the interval has torque and normal force columns (what reduce needs)."""
+        """True when the interval has what reduce needs: torque and normal force columns,
+        or a friction-force column (a sled's normal force may come from its weight in the
+        instrument file)."""
         names = {c.column for c in self.columns}
-        return TORQUE in names and NORMAL_FORCE in names
+        return (TORQUE in names and NORMAL_FORCE in names) or FRICTION_FORCE in names
 
 
 @dataclass(frozen=True)
@@ -427,7 +477,10 @@ class ExportSummary:
                 skipped.append(f"{i.n_waveform_rows} waveform rows")
             if i.n_invalid_values:
                 skipped.append(f"{i.n_invalid_values} missing or invalid values")
-            ready = "  [torque + normal force]" if i.friction_ready else ""
+            names = {c.column for c in i.columns}
+            ready = ("" if not i.friction_ready else "  [torque + normal force]"
+                     if TORQUE in names else "  [friction force + normal force]"
+                     if NORMAL_FORCE in names else "  [friction force]")
             lines.append("")
             lines.append(
                 f"{label}: {i.n_points}{declared} points"

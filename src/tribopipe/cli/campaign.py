@@ -148,7 +148,7 @@ def _remember(map_path: Any) -> None:
     from ..errors import TribopipeError
     from ..project import PROJECT_FILE, remember_map
 
-    if not Path(map_path).is_file():
+    if not Path(map_path).exists():
         return
     try:
         remember_map(map_path)

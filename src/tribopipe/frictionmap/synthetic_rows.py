@@ -12,7 +12,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from ..labels import FLAG_SYNTHETIC, flag_list
-from .snapshot import MapSource, as_snapshot
+from .snapshot import MapSnapshot, MapSource, as_snapshot
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -49,7 +49,7 @@ def synthetic_note(runs: pd.DataFrame) -> str | None:
 def map_synthetic_note(path: MapSource) -> str | None:
     """:func:`synthetic_note` of the map at ``path`` (``None`` for a map without synthetic
     rows, or no map)."""
-    if not Path(path).is_file():
+    if not (isinstance(path, MapSnapshot) and path.exists or Path(path).exists()):
         return None
     note = synthetic_note(as_snapshot(path).runs)
     return None if note is None else note.replace(" runs are", " runs of this map are", 1)

@@ -13,6 +13,7 @@ import pandas as pd
 import pytest
 
 from generators.synthetic import SyntheticRun, write_rheocompass_export
+from helpers import write_campaign_config
 from map_files import map_bytes
 from tribopipe.campaign import campaign_listing, campaign_table, load_campaign, run_campaign
 from tribopipe.campaign.table import CHANGED, FAILED, NEW, REDUCED
@@ -39,21 +40,12 @@ def write_run(path: Path, mu_s: float, mu_k: float, force_N: float, seed: int,
 
 
 def write_config(root: Path, extra: str = "", instrument: str | None = None) -> Path:
-    lines = [
-        "[campaign]",
-        'name = "lab check"',
-        'raw_dir = "raw"',
-        'output_dir = "out"',
-        f'filename_pattern = "{PATTERN}"',
-        "plots = false",
-    ]
+    lines = ['name = "lab check"', 'raw_dir = "raw"', 'output_dir = "out"',
+             f'filename_pattern = "{PATTERN}"', "plots = false"]
     if instrument:
         lines.append(f'instrument = "{instrument}"')
-    body = "\n".join(lines) + "\n" + extra + '\n[names]\nDS30 = "Dragonskin 30"\n' \
-        'EF50 = "Ecoflex 00-50"\n'
-    cfg = root / "campaign.toml"
-    cfg.write_text(body, encoding="utf-8")
-    return cfg
+    return write_campaign_config(root, lines, extra,
+                                 {"DS30": "Dragonskin 30", "EF50": "Ecoflex 00-50"})
 
 
 @pytest.fixture(scope="module")

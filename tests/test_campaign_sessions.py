@@ -18,6 +18,7 @@ import pytest
 from click.testing import CliRunner
 
 from generators.synthetic import write_rheocompass_export
+from helpers import write_campaign_config
 from map_files import map_bytes
 from multi_exports import (
     SESSION_TRUTH,
@@ -68,16 +69,12 @@ def folder(tmp_path_factory: pytest.TempPathFactory) -> Path:
 
 def write_config(root: Path, extra: str = "", *, manifest: bool = True,
                  test_pattern: bool = True) -> Path:
-    lines = ["[campaign]", 'name = "sessions"', 'raw_dir = "raw"', 'output_dir = "out"',
-             "plots = false"]
+    lines = ['name = "sessions"', 'raw_dir = "raw"', 'output_dir = "out"', "plots = false"]
     if manifest:
         lines.append('manifest = "raw/manifest.csv"')
     if test_pattern:
         lines.append(f'test_pattern = "{TEST_PATTERN}"')
-    cfg = root / "campaign.toml"
-    cfg.write_text("\n".join(lines) + "\n" + extra + '\n[names]\nDS30 = "Dragonskin 30"\n',
-                   encoding="utf-8")
-    return cfg
+    return write_campaign_config(root, lines, extra)
 
 
 @pytest.fixture()

@@ -382,7 +382,7 @@ def publish_map(map_path: MapSource, out_dir: str | os.PathLike[str],
     found = None
     if evidence:
         traces = Path(traces_dir) if traces_dir is not None else Path(map_path).parent / "traces"
-        found = gather_evidence(runs, traces_dir=traces if traces.is_dir() else None,
+        found = gather_evidence(runs, traces_dir=traces,
                                 raw_dirs=[Path(p) for p in raw_dirs], settings=settings,
                                 with_raw=with_raw)
     target.parent.mkdir(parents=True, exist_ok=True)

@@ -22,7 +22,6 @@ import tribopipe.campaign.state as state
 import tribopipe.pipeline as pipeline
 from helpers import reduce_cli
 from tribopipe.cli import main
-from tribopipe.errors import OutputError
 
 ROOT = Path(__file__).resolve().parents[1]
 EXAMPLE = ROOT / "raw" / "example"
@@ -82,9 +81,11 @@ def test_batch_on_a_full_disk_lists_every_run_it_could_not_write(
     _no_space(monkeypatch, only=R2.stem)
 
     def no_state(*_: Any, **__: Any) -> None:
-        raise OutputError("cannot write: No space left on device", path=tmp_path / "state")
+        import sqlite3  # what SQLite raises when the disk is full
 
-    monkeypatch.setattr(state, "write_text_atomic", no_state)
+        raise sqlite3.OperationalError("database or disk is full")
+
+    monkeypatch.setattr(state, "_connect", no_state)
     done = _batch(raw, tmp_path, "--no-plots")
     assert done.exit_code == 1 and "Traceback" not in done.output
     errors = _errors(done.stderr)

@@ -8,12 +8,11 @@ flags every run it records with :data:`FLAG_SYNTHETIC`. The flag is the one rule
 
 from __future__ import annotations
 
-import os
 from pathlib import Path
 from typing import TYPE_CHECKING
 
 from ..labels import FLAG_SYNTHETIC, flag_list
-from .store import read_map
+from .snapshot import MapSnapshot, MapSource, as_snapshot
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -52,9 +51,9 @@ def synthetic_note(runs: pd.DataFrame, of: str = "") -> str | None:
     return f"note: {whole} {runs_of} are {SYNTHETIC_MEANS}"
 
 
-def map_synthetic_note(path: str | os.PathLike[str]) -> str | None:
+def map_synthetic_note(path: MapSource) -> str | None:
     """:func:`synthetic_note` of the map at ``path`` (``None`` for a map without synthetic
     rows, or no map)."""
-    if not Path(path).is_file():
+    if not (isinstance(path, MapSnapshot) and path.exists or Path(path).exists()):
         return None
-    return synthetic_note(read_map(path), of="this map")
+    return synthetic_note(as_snapshot(path).runs, of="this map")

@@ -37,7 +37,7 @@ from typing import TYPE_CHECKING, Any
 
 from .config import InstrumentConfig
 from .errors import ExportError
-from .frictionmap import read_map
+from .frictionmap.snapshot import MapSource, as_snapshot
 from .interpolation import (
     EXTRAPOLATED,
     curvature,
@@ -696,9 +696,12 @@ def friction_table(
     return pd.DataFrame(rows)
 
 
-def load_groups(map_path: str | Path) -> pd.DataFrame:
-    """Read a friction map (Parquet) and return its group statistics (excluded runs out)."""
-    return groups_of(read_map(map_path), map_path)
+def load_groups(map_path: MapSource) -> pd.DataFrame:
+    """The group statistics (excluded runs out) of a friction map: opened
+    (:func:`~tribopipe.frictionmap.snapshot.open_map`), or its path; kept with the
+    snapshot."""
+    snap = as_snapshot(map_path)
+    return snap.derived(("query.groups",), lambda: groups_of(snap.runs, snap.path))
 
 
 def groups_of(runs: pd.DataFrame, map_path: str | Path) -> pd.DataFrame:
@@ -716,7 +719,7 @@ def groups_of(runs: pd.DataFrame, map_path: str | Path) -> pd.DataFrame:
 
 
 def query_map(
-    map_path: str | Path,
+    map_path: MapSource,
     pin: str,
     disc: str,
     pressure_kPa: float,

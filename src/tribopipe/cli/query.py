@@ -75,7 +75,8 @@ def query_cmd(
     from ..frictionmap.snapshot import open_map
     from ..frictionmap.synthetic_rows import map_synthetic_note
     from ..numeric import finite_json
-    from ..query import format_result, query_map
+    from ..query import query_map
+    from ..query_text import format_result
 
     if (pressure_kPa is None) == (normal_force_N is None):
         raise click.UsageError("give exactly one of --pressure and --force")

@@ -11,6 +11,7 @@ read from there (``published_map.PUBLISHED_CSV``).
 from __future__ import annotations
 
 import os
+import shutil
 from collections.abc import Iterator
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -94,3 +95,40 @@ def groups(published_groups: pd.DataFrame) -> pd.DataFrame:
     """:func:`published_groups`, the groups most tests query (a module may define its own,
     e.g. with a μ_S: :func:`helpers.with_mu_s`)."""
     return published_groups
+
+
+# ------------------------------------------------------------------ one browser per session
+# Playwright's sync API runs one driver per thread: every browser test of a session shares
+# this one (the explorer's, the review page's).
+
+CHROMIUM_ARGS = [
+    "--headless", "--no-sandbox", "--disable-gpu", "--disable-background-networking",
+    "--disable-component-update", "--disable-sync", "--no-first-run",
+]
+
+
+def _unavailable(reason: str) -> None:
+    if os.environ.get("TRIBOPIPE_REQUIRE_BROWSER") == "1":
+        pytest.fail(f"TRIBOPIPE_REQUIRE_BROWSER=1 but {reason}")
+    pytest.skip(reason)
+
+
+@pytest.fixture(scope="session")
+def browser():
+    """A headless Chromium (the system's ``chromium``) under Playwright."""
+    executable = os.environ.get("TRIBOPIPE_CHROMIUM") or shutil.which("chromium")
+    if not executable:
+        _unavailable("no chromium on PATH (Debian: apt-get install chromium)")
+    try:
+        from playwright.sync_api import sync_playwright
+    except ImportError:
+        _unavailable("playwright is not installed (pip install -e '.[test]')")
+    manager = sync_playwright().start()
+    try:
+        instance = manager.chromium.launch(executable_path=executable, args=CHROMIUM_ARGS)
+    except Exception as exc:  # the browser exists but cannot start here
+        manager.stop()
+        _unavailable(f"chromium at {executable} did not start: {str(exc).splitlines()[0]}")
+    yield instance
+    instance.close()
+    manager.stop()

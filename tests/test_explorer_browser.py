@@ -14,8 +14,6 @@ from __future__ import annotations
 import functools
 import http.server
 import math
-import os
-import shutil
 import threading
 import time
 from pathlib import Path
@@ -34,41 +32,10 @@ from tribopipe.frictionmap.published import published_csv_path
 from tribopipe.query import groups_of, pairs, query
 from tribopipe.report import make_report
 
-CHROMIUM_ARGS = [
-    "--headless", "--no-sandbox", "--disable-gpu", "--disable-background-networking",
-    "--disable-component-update", "--disable-sync", "--no-first-run",
-]
 HOSTILE_PIN = "</script><script>alert(1)</script>"
 HOSTILE_DISC = "<img src=x onerror=alert(2)> & co"
 #: values agree to rounding: numpy's dot may fuse multiply-adds, JavaScript never does
 REL = 1e-12
-
-
-def _unavailable(reason: str) -> None:
-    if os.environ.get("TRIBOPIPE_REQUIRE_BROWSER") == "1":
-        pytest.fail(f"TRIBOPIPE_REQUIRE_BROWSER=1 but {reason}")
-    pytest.skip(reason)
-
-
-@pytest.fixture(scope="session")
-def browser():
-    """A headless Chromium (the system's ``chromium``) under Playwright."""
-    executable = os.environ.get("TRIBOPIPE_CHROMIUM") or shutil.which("chromium")
-    if not executable:
-        _unavailable("no chromium on PATH (Debian: apt-get install chromium)")
-    try:
-        from playwright.sync_api import sync_playwright
-    except ImportError:
-        _unavailable("playwright is not installed (pip install -e '.[test]')")
-    manager = sync_playwright().start()
-    try:
-        instance = manager.chromium.launch(executable_path=executable, args=CHROMIUM_ARGS)
-    except Exception as exc:  # the browser exists but cannot start here
-        manager.stop()
-        _unavailable(f"chromium at {executable} did not start: {str(exc).splitlines()[0]}")
-    yield instance
-    instance.close()
-    manager.stop()
 
 
 class Tab:

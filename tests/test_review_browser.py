@@ -20,7 +20,7 @@ import pandas as pd
 import pytest
 from click.testing import CliRunner
 
-from test_explorer_browser import Tab, browser  # noqa: F401  (the shared browser fixture)
+from test_explorer_browser import Tab
 from test_review import FILES, independent_mu_k, make_campaign, samples_of, the_map
 from tribopipe.campaign import load_campaign, run_campaign
 from tribopipe.cli import main
@@ -44,7 +44,7 @@ def reviewed_campaign(tmp_path_factory) -> Path:
     return root
 
 
-def open_page(browser, page: Path, width: int) -> Tab:  # noqa: F811
+def open_page(browser, page: Path, width: int) -> Tab:
     tab = Tab(browser, viewport={"width": width, "height": 900},
               permissions=["clipboard-read", "clipboard-write"])
     tab.page.goto(page.resolve().as_uri())
@@ -63,7 +63,7 @@ def close(a: float, b: float) -> bool:
     return math.isclose(a, b, rel_tol=REL, abs_tol=1e-15)
 
 
-def test_the_pages_estimator_is_the_reductions(browser, reviewed_campaign: Path):  # noqa: F811
+def test_the_pages_estimator_is_the_reductions(browser, reviewed_campaign: Path):
     """Differential: μ_K and u(μ_K) over a grid of windows, μ_S and u(μ_S) over a grid of
     peaks, and the refusals, in the page and in Python."""
     tab = open_page(browser, reviewed_campaign / "review.html", 1024)
@@ -103,7 +103,7 @@ def test_the_pages_estimator_is_the_reductions(browser, reviewed_campaign: Path)
 
 
 @pytest.mark.parametrize("width", [800, 1024, 1400])
-def test_review_in_the_browser_then_batch(browser, reviewed_campaign: Path, tmp_path: Path,  # noqa: F811
+def test_review_in_the_browser_then_batch(browser, reviewed_campaign: Path, tmp_path: Path,
                                           width: int):
     root = tmp_path / "c"
     shutil.copytree(reviewed_campaign, root)
@@ -206,7 +206,7 @@ def test_review_in_the_browser_then_batch(browser, reviewed_campaign: Path, tmp_
     assert len(after) == len(FILES)
 
 
-def test_hostile_names_and_reasons_stay_text(browser, tmp_path: Path):  # noqa: F811
+def test_hostile_names_and_reasons_stay_text(browser, tmp_path: Path):
     """A pin named like markup and a reason that would be markup are shown as text: no
     script runs, no element is made from them, nothing leaves the page."""
     from test_explorer_browser import HOSTILE_DISC, HOSTILE_PIN

@@ -83,7 +83,7 @@ def test_writing_to_an_old_map_keeps_its_rows_and_stores_the_current_schema(
                                        "--map", str(v1_map), "--output", str(tmp_path / "out")])
     assert result.exit_code == 0, result.output
     info = json.loads(pq.read_schema(v1_map).metadata[fm.schema.META_KEY])
-    assert info["schema_version"] == fm.schema.SCHEMA_VERSION == 5
+    assert info["schema_version"] == fm.schema.SCHEMA_VERSION == 6
     runs = fm.read_map(v1_map)
     assert len(runs) == 5
     old = runs[runs["method"].str.startswith("tribopipe-v1")]
@@ -178,7 +178,7 @@ def test_a_version_3_package_validates_and_merges(tmp_path: Path) -> None:
     runs = fm.read_map(merged)
     assert len(runs) == 5 and set(runs["lab"]) >= {"Fixture Lab"}
     assert runs["test"].isna().all() and runs["result"].isna().all()
-    assert fm.store.map_metadata(merged)["schema_version"] == 5
+    assert fm.store.map_metadata(merged)["schema_version"] == fm.schema.SCHEMA_VERSION == 6
 
 
 def test_map_show_runs_names_what_each_map_knows_of_a_run_s_origin(tmp_path: Path) -> None:

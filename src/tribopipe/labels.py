@@ -13,12 +13,13 @@ table and JSON, the summary, the trace plot, the map row, ``runs.csv``) shows
 from __future__ import annotations
 
 from collections.abc import Iterable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 from .config import InstrumentConfig
 from .errors import CampaignError
 from .numeric import is_finite
 from .physics import sliding_speed_mm_s
+from .reporting import RunReport
 from .rounding import round_significant
 from .validate import FORCE_N, MAX_REPEAT, TEMPERATURE_C, check_count, check_name, check_number
 
@@ -87,6 +88,12 @@ class RunLabels:
     normal_force_N: float | None = None
     temperature_C: float | None = None
     repeat: int | None = None
+    #: the names as they came in, before the materials vocabulary resolved them
+    #: (:mod:`tribopipe.materials`); ``None``: as ``pin``/``disc``, or not resolved
+    pin_as_given: str | None = None
+    disc_as_given: str | None = None
+    #: the run's reporting items (:mod:`tribopipe.reporting`): humidity, roughness, ...
+    report: RunReport = field(default_factory=RunReport)
 
     def __post_init__(self) -> None:
         for name in ("pin", "disc"):

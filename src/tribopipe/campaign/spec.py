@@ -26,10 +26,13 @@ from ..errors import CampaignError, ConfigError, ValidationError
 from ..escape import display_path
 from ..labels import Tolerances
 from ..layout import DEFAULT_OUTPUT_DIR, OutputLayout
+from ..materials import Vocabulary, lab_files, load_vocabulary, shipped_vocabulary
 from ..pipeline import ReadOptions
 from ..readers import EXPORT_SUFFIXES
 from ..readers.textio import foreign_kind
-from ..validate import MAX_NAME_CHARS, check_name
+from ..reporting import NAMES as REPORTING_NAMES
+from ..reporting import RunReport, parse_item
+from ..validate import MAX_NAME_CHARS, check_name, text_problem
 from .patterns import compile_pattern
 
 _CAMPAIGN_KEYS = frozenset(
@@ -38,9 +41,10 @@ _CAMPAIGN_KEYS = frozenset(
         "filename_pattern", "test_pattern", "use_export_names", "export_pattern",
         "force_tolerance_N", "force_tolerance_rel", "temperature_tolerance_C",
         "speed_tolerance_rel", "plots", "encoding", "delimiter", "decimal", "synthetic",
+        "materials",
     }
 )
-_TOP_LEVEL_TABLES = frozenset({"campaign", "reduction", "names"})
+_TOP_LEVEL_TABLES = frozenset({"campaign", "reduction", "names", "metadata"})
 
 
 @dataclass(frozen=True)
@@ -68,6 +72,11 @@ class Campaign:
     synthetic: bool = False
     read_options: ReadOptions = field(default_factory=ReadOptions)
     source: Path | None = None
+    #: the materials vocabulary: the shipped one, extended by the lab's files
+    #: (``materials.toml`` beside the config, ``[campaign] materials``)
+    vocabulary: Vocabulary = field(default_factory=shipped_vocabulary)
+    #: the reporting items of every run (``[metadata]``); a manifest cell overrides them
+    report: RunReport = field(default_factory=RunReport)
 
     @property
     def use_export_names(self) -> bool:
@@ -203,7 +212,7 @@ def load_campaign(path: str | Path) -> Campaign:
     if unknown_tables:
         raise ConfigError(
             f"unknown table(s) {', '.join(unknown_tables)}; expected [campaign], "
-            "optional [reduction] and [names]",
+            "optional [reduction], [names] and [metadata]",
             path=cfg_path,
         )
     table = data.get("campaign")
@@ -311,7 +320,15 @@ def load_campaign(path: str | Path) -> Campaign:
         delimiter=_optional_str(table, "delimiter", cfg_path),
         decimal=decimal,
     )
+    materials = table.get("materials", [])
+    materials = [materials] if isinstance(materials, str) else materials
+    if not isinstance(materials, list) or not all(isinstance(m, str) for m in materials):
+        raise ConfigError("[campaign] materials must name a materials file (or a list of "
+                          "them)", path=cfg_path)
+    vocabulary = load_vocabulary(lab_files(base, [(base / m).resolve() for m in materials]))
     return Campaign(
+        vocabulary=vocabulary,
+        report=campaign_report(data.get("metadata", {}), cfg_path),
         name=name,
         raw_dir=raw_dir,
         glob=glob,
@@ -328,6 +345,39 @@ def load_campaign(path: str | Path) -> Campaign:
         read_options=options,
         source=cfg_path,
     )
+
+
+def campaign_report(table: Any, cfg_path: Path) -> RunReport:
+    """The ``[metadata]`` table of a campaign config: reporting items
+    (:data:`tribopipe.reporting.ITEMS`) that hold for every run, and an ``extra`` table of
+    other text items. An unknown key is refused by name (with a did-you-mean)."""
+    import difflib
+
+    if not isinstance(table, dict):
+        raise ConfigError("[metadata] must be a table of reporting items", path=cfg_path)
+    values: dict[str, float | str] = {}
+    extra: dict[str, str] = {}
+    for key, value in table.items():
+        if key == "extra":
+            if not isinstance(value, dict) or not all(
+                    isinstance(v, str) and text_problem(v, max_chars=300) is None
+                    for v in value.values()):
+                raise ConfigError("[metadata.extra] must map names to one line of text "
+                                  "each", path=cfg_path)
+            extra.update(value)
+            continue
+        if key not in REPORTING_NAMES:
+            near = difflib.get_close_matches(key, REPORTING_NAMES, n=1, cutoff=0.6)
+            raise ConfigError(
+                f"[metadata] unknown key {key[:40]!r}; expected one of "
+                f"{', '.join(REPORTING_NAMES)} or an [metadata.extra] table", path=cfg_path,
+                hint=f"did you mean {near[0]!r}?" if near else
+                "put other items in [metadata.extra]")
+        try:
+            values[key] = parse_item(key, value, what=f"[metadata] {key}")
+        except ValidationError as exc:
+            raise ConfigError(exc.problem, path=cfg_path) from None
+    return RunReport.of(values, extra)
 
 
 def _test_pattern(table: Mapping[str, Any], filename_pattern: str | None,
@@ -375,6 +425,7 @@ def folder_campaign(
     instrument: str | Path | None = None,
     plots: bool = True,
     test_pattern: str | None = None,
+    materials: tuple[str | Path, ...] = (),
 ) -> Campaign:
     """A quick campaign without a config file: a folder of exports plus a manifest CSV,
     a file-name pattern and/or a test-name pattern, reduced with an instrument config
@@ -416,4 +467,5 @@ def folder_campaign(
         filename_pattern=filename_pattern,
         test_pattern=test_pattern,
         plots=plots,
+        vocabulary=load_vocabulary(lab_files(raw_dir, materials)),
     )

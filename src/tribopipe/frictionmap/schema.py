@@ -22,6 +22,8 @@ from typing import TYPE_CHECKING, Any
 
 from ..errors import MapError, RowError
 from ..escape import printable
+from ..reporting import EXTRA_COLUMN
+from ..reporting import ITEMS as REPORTING_ITEMS
 from ..validate import (
     FORCE_N,
     MAX_REPEAT,
@@ -41,7 +43,7 @@ if TYPE_CHECKING:
 #: Parquet key-value metadata key holding the schema and provenance (JSON).
 META_KEY = b"tribopipe.frictionmap"
 SCHEMA_NAME = "tribopipe.frictionmap"
-SCHEMA_VERSION = 5
+SCHEMA_VERSION = 6
 
 #: ``source`` of runs reduced by tribopipe (imported rows name their origin instead).
 SOURCE_REDUCED = "reduced"
@@ -148,6 +150,15 @@ COLUMNS: tuple[Column, ...] = (
     Column("reduced_at", "str", "", "UTC time of reduction or import (ISO 8601)"),
     Column("excluded", "bool", "", "left out of the statistics", required=ALWAYS),
     Column("exclusion_reason", "str", "", "why it was excluded"),
+    Column("pin_as_given", "str", "", "the pin's name as it came in (a pattern, manifest, "
+           "option or merged map), before the materials vocabulary resolved it"),
+    Column("disc_as_given", "str", "", "the disc's name as it came in, before the materials "
+           "vocabulary resolved it"),
+    *(Column(item.name, item.kind, item.unit, item.meaning, item.bounds,
+             "a physical range" if item.bounds is not None else "")
+      for item in REPORTING_ITEMS),
+    Column(EXTRA_COLUMN, "str", "", "metadata columns tribopipe does not know, as a JSON "
+           "object of text values"),
 )
 
 RUN_COLUMNS: tuple[str, ...] = tuple(c.name for c in COLUMNS)
@@ -155,7 +166,9 @@ RUN_COLUMNS: tuple[str, ...] = tuple(c.name for c in COLUMNS)
 #: before that version lacks them and reads with them missing, and a record built by older
 #: code may leave them out.
 ADDED_IN_VERSION: dict[str, int] = {"lab": 2, "u_mu_s": 3, "u_mu_k": 3, "test": 4, "result": 4,
-                                    "nominal_speed_mm_s": 5}
+                                    "nominal_speed_mm_s": 5, "pin_as_given": 6,
+                                    "disc_as_given": 6, EXTRA_COLUMN: 6,
+                                    **{item.name: 6 for item in REPORTING_ITEMS}}
 #: the kind of each column: ``"str"``, ``"float"``, ``"int"`` or ``"bool"``
 KIND: dict[str, str] = {c.name: c.kind for c in COLUMNS}
 #: the physical range of each bounded number column; a float column not listed need only
@@ -174,7 +187,7 @@ NAME_COLUMNS: tuple[str, ...] = tuple(
 #: them (a row of a map older than schema version 4).
 PROVENANCE_COLUMNS: frozenset[str] = frozenset(
     {"lab", "source_file", "file_hash", "test", "result", "tribopipe_version", "reduced_at",
-     "excluded", "exclusion_reason"}
+     "excluded", "exclusion_reason", "pin_as_given", "disc_as_given"}
 )
 CONTENT_COLUMNS: tuple[str, ...] = tuple(c for c in RUN_COLUMNS if c not in PROVENANCE_COLUMNS)
 
@@ -231,6 +244,20 @@ class MapRow:
     reduced_at: str | None = None
     excluded: bool = False
     exclusion_reason: str | None = None
+    pin_as_given: str | None = None
+    disc_as_given: str | None = None
+    humidity_pct: float | None = None
+    disc_Ra_um: float | None = None
+    surface_finish: str | None = None
+    specimen_batch: str | None = None
+    specimen_cure: str | None = None
+    conditioning_h: float | None = None
+    instrument: str | None = None
+    instrument_serial: str | None = None
+    software_version: str | None = None
+    operator: str | None = None
+    measured_on: str | None = None
+    extra_metadata: str | None = None
     #: set by :func:`checked_row` only: the row kept the row rules when it was built
     checked: bool = field(default=False, init=False, compare=False, repr=False)
 

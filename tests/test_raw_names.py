@@ -122,6 +122,8 @@ def test_batch_after_its_state_is_lost_finds_the_same_file_not_a_duplicate(
     cfg.write_text('[campaign]\nname = "c"\nraw_dir = "raw"\noutput_dir = "out"\n'
                    'filename_pattern = "{pin}_{disc}_{force}N_{temperature}C_r{repeat}_{note}"'
                    "\nplots = false\n", encoding="utf-8")
+    (tmp_path / "materials.toml").write_text(
+        '[materials]\nP = { class = "other" }\nD = { class = "other" }\n', encoding="utf-8")
     first = invoke("batch", str(cfg), "--jobs", "1")
     assert first.exit_code == 0, first.output
     for state in (tmp_path / "out").glob(".tribopipe-state*"):

@@ -13,10 +13,11 @@ table and JSON, the summary, the trace plot, the map row, ``runs.csv``) shows
 from __future__ import annotations
 
 from collections.abc import Iterable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 from .config import InstrumentConfig
 from .errors import CampaignError
+from .materials import Vocabulary
 from .numeric import is_finite
 from .physics import sliding_speed_mm_s
 from .reporting import RunReport
@@ -106,6 +107,29 @@ class RunLabels:
             check_number(self.temperature_C, TEMPERATURE_C, "nominal temperature")
         if self.repeat is not None:
             check_count(self.repeat, "repeat", high=MAX_REPEAT)
+
+    def resolved(self, vocabulary: Vocabulary) -> tuple[RunLabels, list[str]]:
+        """These labels with pin and disc resolved through ``vocabulary``
+        (:meth:`tribopipe.materials.Vocabulary.resolve`: the canonical name, the given one
+        kept in ``pin_as_given``/``disc_as_given``), and one line per name that does not
+        resolve (with a did-you-mean): such a name is kept as given (``map validate``
+        reports it); a campaign refuses it instead
+        (:func:`tribopipe.campaign.table.check_materials`)."""
+        out, problems = self, []
+        for what in ("pin", "disc"):
+            name = getattr(self, what)
+            if name is None:
+                continue
+            problem = vocabulary.problem(name, what)
+            if problem is not None:
+                problems.append(problem)
+                continue
+            found = vocabulary.resolve(name, what)
+            if what == "pin":
+                out = replace(out, pin=found.name, pin_as_given=self.pin_as_given or name)
+            else:
+                out = replace(out, disc=found.name, disc_as_given=self.disc_as_given or name)
+        return out, problems
 
     @property
     def complete(self) -> bool:

@@ -77,9 +77,11 @@ class Material:
 
 
 def name_key(name: str) -> str:
-    """The form two names are compared in: NFKD, accents and every character that is not
-    a letter or digit dropped, case folded ("Dragon Skin™ 30" → "dragonskin30")."""
-    decomposed = unicodedata.normalize("NFKD", name)
+    """The form two names are compared in: symbols (™, ®) dropped, NFKD, accents and
+    every character that is not a letter or digit dropped, case folded ("Dragon Skin™ 30"
+    → "dragonskin30")."""
+    plain = "".join(c for c in name if not unicodedata.category(c).startswith("S"))
+    decomposed = unicodedata.normalize("NFKD", plain)
     return "".join(c for c in decomposed if c.isalnum()).casefold()
 
 

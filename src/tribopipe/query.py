@@ -31,6 +31,7 @@ from __future__ import annotations
 
 import difflib
 import math
+from collections.abc import Sequence
 from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -51,7 +52,15 @@ from .labels import FOUNDING_NOMINAL_SPEED_MM_S
 from .numeric import finite_or_none
 from .physics import contact_pressure_kPa
 from .rounding import known_u, lower_bound, plus_minus
-from .stats import NOMINAL_SPEED, group_statistics, group_u
+from .stats import (
+    LABS,
+    LABS_DISAGREE,
+    NOMINAL_SPEED,
+    group_statistics,
+    group_u,
+    lab_names,
+    select_labs,
+)
 
 if TYPE_CHECKING:
     import numpy as np
@@ -647,16 +656,26 @@ def friction_table(
     return pd.DataFrame(rows)
 
 
-def load_groups(map_path: str | Path) -> pd.DataFrame:
-    """Read a friction map (Parquet) and return its group statistics (excluded runs out)."""
-    return groups_of(read_map(map_path), map_path)
+def load_groups(map_path: str | Path, labs: Sequence[str] | None = None) -> pd.DataFrame:
+    """Read a friction map (Parquet) and return its group statistics (excluded runs out;
+    with ``labs``, only the runs those labs measured)."""
+    return groups_of(read_map(map_path), map_path, labs)
 
 
-def groups_of(runs: pd.DataFrame, map_path: str | Path) -> pd.DataFrame:
+def groups_of(runs: pd.DataFrame, map_path: str | Path,
+              labs: Sequence[str] | None = None) -> pd.DataFrame:
     """Group statistics of friction-map ``runs`` (excluded runs out, the nominal speed
-    always shown); an :class:`ExportError` naming ``map_path`` when no run is left."""
+    always shown; with ``labs`` only those labs' runs, :func:`tribopipe.stats.select_labs`);
+    an :class:`ExportError` naming ``map_path`` when no run is left."""
     if "excluded" in runs.columns:
         runs = runs[~runs["excluded"].fillna(False).astype(bool)]
+    if labs:
+        held = sorted(set(lab_names(runs)))
+        runs = select_labs(runs, labs)
+        if runs.empty:
+            raise ExportError(f"no run of lab {', '.join(repr(x) for x in labs)} in the map; "
+                              f"it holds runs of {', '.join(repr(x) for x in held)}",
+                              path=map_path)
     if runs.empty:
         raise ExportError(
             "the friction map is empty or absent",
@@ -673,9 +692,48 @@ def query_map(
     pressure_kPa: float,
     temperature_C: float | None = None,
     speed_mm_s: float | None = None,
+    labs: Sequence[str] | None = None,
 ) -> QueryResult:
-    """:func:`query` on the friction map (Parquet) at ``map_path``."""
-    return query(load_groups(map_path), pin, disc, pressure_kPa, temperature_C, speed_mm_s)
+    """:func:`query` on the friction map (Parquet) at ``map_path`` (with ``labs``: on
+    those labs' runs only)."""
+    return query(load_groups(map_path, labs), pin, disc, pressure_kPa, temperature_C,
+                 speed_mm_s)
+
+
+@dataclass(frozen=True)
+class ValueLabs:
+    """Which labs a queried value comes from (``labs``, the labs of the groups it was
+    read from) and the conditions among them where labs disagree beyond R
+    (``disagree``: ``(pressure_kPa, temperature_C)``, :mod:`tribopipe.stats`)."""
+
+    labs: tuple[str, ...]
+    disagree: tuple[tuple[float, float | None], ...] = ()
+
+    def lines(self) -> list[str]:
+        """What a person reads: the labs, then each disagreement."""
+        out = [f"labs: {', '.join(self.labs)}"]
+        out += [f"labs disagree beyond R at {p:.4g} kPa"
+                + ("" if t is None else f", {t:g} °C") for p, t in self.disagree]
+        return out
+
+
+def value_labs(map_path: str | Path, result: QueryResult,
+               labs: Sequence[str] | None = None) -> ValueLabs:
+    """The :class:`ValueLabs` of a :func:`query_map` result (the same ``labs``)."""
+    groups = load_groups(map_path, labs)
+    pair = select_pair(groups, result.pin, result.disc)
+    used = {(round(u.pressure_kPa, 6), u.temperature_C) for est in (result.mu_k, result.mu_s)
+            if est is not None for u in est.used}
+    found: set[str] = set()
+    disagree = []
+    for row in pair.to_dict(orient="records"):
+        temperature = finite_or_none(row["temperature_C"])
+        if (round(float(row["pressure_kPa"]), 6), temperature) not in used:
+            continue
+        found.update(str(row[LABS]).split(";"))
+        if bool(row[LABS_DISAGREE]):
+            disagree.append((float(row["pressure_kPa"]), temperature))
+    return ValueLabs(tuple(sorted(found)), tuple(sorted(set(disagree), key=str)))
 
 
 def pressure_of_force(normal_force_N: float, instrument: InstrumentConfig) -> float:

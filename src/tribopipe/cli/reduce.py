@@ -16,6 +16,7 @@ from ._common import (
     lazy_map_option,
     read_options,
     renamed,
+    say,
 )
 
 if TYPE_CHECKING:
@@ -59,6 +60,11 @@ def _with_u(value: float | None, expanded: float | None) -> tuple[str, str]:
     "--temperature", "temperature_C", type=float, help="Nominal chamber temperature [°C]."
 )
 @click.option("--repeat", type=int, help="Repeat number of this run within its condition.")
+@click.option("--materials", "materials_files", multiple=True,
+              type=click.Path(dir_okay=False),
+              help="A lab's materials file extending the vocabulary --pin and --disc are "
+                   "resolved through (repeatable; default: materials.toml in the current "
+                   "folder when it is there).")
 @instrument_option
 @lazy_map_option
 @click.option("--no-map", is_flag=True,
@@ -91,6 +97,7 @@ def reduce_cmd(
     force_N: float | None,
     temperature_C: float | None,
     repeat: int | None,
+    materials_files: tuple[str, ...],
     instrument_path: str | None,
     map_path: str | None,
     no_map: bool,
@@ -125,11 +132,15 @@ def reduce_cmd(
     from ..config import load_settings
     from ..frictionmap.store import read_map
     from ..labels import RunLabels
+    from ..materials import lab_files, load_vocabulary
     from ..pipeline import ReadOptions, reduce_files
 
-    labels = RunLabels(
+    labels, unknown = RunLabels(
         pin=pin, disc=disc, normal_force_N=force_N, temperature_C=temperature_C, repeat=repeat
-    )
+    ).resolved(load_vocabulary(lab_files(".", materials_files)))
+    for problem in unknown:
+        say(f"note: {problem}: kept as given (add it with `tribopipe materials add`)",
+            err=True)
     if no_map and plots and output is None:
         raise click.UsageError("--plots with --no-map: give -o/--output, the folder for the "
                                "plots (--no-map alone writes nothing)")

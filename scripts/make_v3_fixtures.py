@@ -28,7 +28,7 @@ from tribopipe import frictionmap as fm
 from tribopipe.config import load_settings
 from tribopipe.export.citation import Publisher
 from tribopipe.export.publish import publish_map
-from tribopipe.frictionmap.records import RunLabels
+from tribopipe.labels import RunLabels
 from tribopipe.pipeline import reduce_export
 
 #: Test name -> (mu_s, mu_k, force [N], seed)

@@ -44,9 +44,10 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     # the reduction method, one package (its docstring describes the method): the signal
     # filters and a run's uncertainty budget, the friction interval, the detection steps,
     # the reduction of one run
-    ("tribopipe.reduction", "tribopipe.reduction.signals", "tribopipe.reduction.uncertainty"),
+    ("tribopipe.reduction", "tribopipe.reduction.signals", "tribopipe.reduction.uncertainty",
+     "tribopipe.reduction.manual"),
     ("tribopipe.reduction.intervals",),
-    ("tribopipe.reduction.detection",),
+    ("tribopipe.reduction.detection", "tribopipe.reduction.reciprocating"),
     ("tribopipe.reduction.reduce",),
     # what a run is and its QC flags, decided once from its labels and its reduction,
     # before anything prints, plots or stores it
@@ -55,13 +56,14 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     # pure statistics over map rows: below the map, whose printed summary uses them
     ("tribopipe.stats",),
     ("tribopipe.frictionmap",),
-    ("tribopipe.pipeline",),
-    ("tribopipe.campaign",),
+    ("tribopipe.pipeline", "tribopipe.review"),
+    # many exports, incrementally; a package's evidence re-derived through the one route
+    ("tribopipe.campaign", "tribopipe.evidence"),
     # the one rule for μ between measured conditions, below everything that reads it
     ("tribopipe.interpolation",),
     ("tribopipe.query", "tribopipe.fit", "tribopipe.mastercurve"),
     ("tribopipe.export",),
-    ("tribopipe.report",),
+    ("tribopipe.report", "tribopipe.hub"),
     ("tribopipe.cli", "tribopipe.__main__"),
 )
 

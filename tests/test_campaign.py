@@ -397,3 +397,33 @@ def test_workers_return_typed_picklable_results(campaign_dir: Path) -> None:
     assert good.trace is not None and good.trace.is_file()
     assert good.trace.is_relative_to(campaign.output_dir)
     assert bad.reason.startswith("DS30_steel_9N_20C_r1.csv") and not bad.transient
+
+
+def test_the_groups_updated_are_the_statistics_groups(tmp_path: Path) -> None:
+    """The batch counts condition groups as the statistics group runs: two runs of one
+    pair, force and temperature at two nominal speeds are two groups, and a replaced run
+    counts its group."""
+    from tribopipe.frictionmap import read_map
+    from tribopipe.stats import group_statistics
+
+    raw = tmp_path / "raw"
+    raw.mkdir()
+    for repeat, rpm in ((1, 0.005), (2, 0.005), (3, 0.05)):
+        run = SyntheticRun(mu_s=0.8, mu_k=0.6, normal_force_N=1.0, temperature_C=20.0,
+                           duration_s=DURATION_S, noise=0.004, seed=repeat, speed_rpm=rpm)
+        write_rheocompass_export(raw / f"DS30_steel_1N_20C_r{repeat}.csv", run,
+                                 project="speeds", test="friction", sample="pin")
+    campaign = load_campaign(write_config(tmp_path))
+    report = run_campaign(campaign, jobs=1)
+    assert sorted(report.reduced) == [f"DS30_steel_1N_20C_r{r}.csv" for r in (1, 2, 3)]
+    groups = group_statistics(read_map(campaign.map_path))
+    assert len(groups) == 2  # one pair, force and temperature; two nominal speeds
+    assert report.groups_updated == len(groups)
+    # the fast run reduced again from a changed file: its one group, nothing else
+    run = SyntheticRun(mu_s=0.8, mu_k=0.5, normal_force_N=1.0, temperature_C=20.0,
+                       duration_s=DURATION_S, noise=0.004, seed=9, speed_rpm=0.05)
+    write_rheocompass_export(raw / "DS30_steel_1N_20C_r3.csv", run, project="speeds",
+                             test="friction", sample="pin")
+    again = run_campaign(campaign, jobs=1)
+    assert again.reduced == ["DS30_steel_1N_20C_r3.csv"]
+    assert again.groups_updated == 1

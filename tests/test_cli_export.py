@@ -89,6 +89,11 @@ def test_query_force_converts_through_the_instrument_config(map_path, groups, tm
     both = CliRunner().invoke(main, ["query", "--map", str(map_path), "--pin", PIN, "--disc",
                                      DISC, "--force", "1", "--pressure", "10"])
     assert both.exit_code == 2 and "exactly one of --pressure and --force" in both.output
+    for bad in ("0", "-3", "nan", "inf"):
+        refused = CliRunner().invoke(main, ["query", "--map", str(map_path), "--pin", PIN,
+                                            "--disc", DISC, "--force", bad])
+        assert refused.exit_code == 2 and "Traceback" not in refused.output, refused.output
+        assert "--force" in refused.output and "finite number > 0 N" in refused.output
 
 
 def test_query_unknown_pair_is_one_friendly_line(map_path):
@@ -322,7 +327,7 @@ def test_export_mu_s_from_reduced_runs(reduced_map, tmp_path):
     g = groups[(groups.disc == "steel")].sort_values("pressure_kPa").iloc[0]
     common = ["--map", str(reduced_map), "--pin", PIN, "--disc", DISC, "--pressure",
               repr(float(g.pressure_kPa)), "--coefficient", "mu_s"]
-    pair = mujoco_pair(_run("export", "mujoco", *common).output)
+    pair = mujoco_pair(_run("export", "mujoco", *common).stdout)
     assert float(pair.get("friction").split()[0]) == pytest.approx(g.mu_s_mean, rel=1e-8)
     out = tmp_path / "contact.k"
     result = _run("export", "lsdyna", *common, "--units", "m-N-s", "-o", str(out))

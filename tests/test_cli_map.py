@@ -91,8 +91,9 @@ def test_table_frictionmap_is_the_published_schema(published_map):
 def test_table_latex(published_map):
     result = invoke("map", "table", "--map", str(published_map), "--format", "latex",
                     "--disc", "cardboard")
-    assert result.output.startswith("\\begin{tabular}")
-    assert "pressure\\_kPa" in result.output and result.output.count("cardboard") == 8
+    assert result.stdout.startswith("% tribopipe friction-map table\n% Needs in the preamble:")
+    assert "\\begin{tabular}" in result.stdout
+    assert "pressure\\_kPa" in result.stdout and result.stdout.count("cardboard") == 8
 
 
 def test_table_with_no_matching_rows_is_a_clean_error(published_map):

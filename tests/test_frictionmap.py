@@ -25,8 +25,7 @@ from tribopipe import __version__
 from tribopipe import frictionmap as fm
 from tribopipe.config import InstrumentConfig, load_settings, settings_from_dict
 from tribopipe.errors import MapError, ValidationError
-from tribopipe.frictionmap.records import nominal_pressure_kPa
-from tribopipe.labels import RunLabels, Tolerances
+from tribopipe.labels import RunLabels, Tolerances, decide_run
 from tribopipe.measurement import Measurement, MeasurementMeta
 from tribopipe.reduction.reduce import ReductionResult, reduce_measurement
 
@@ -65,8 +64,19 @@ def run_record(
     meta = MeasurementMeta(source_file=f"data/run{i}.txt", file_format="synthetic", interval=2)
     labels = RunLabels(pin=pin, disc=disc, normal_force_N=force_N,
                        temperature_C=temperature_C, repeat=repeat)
-    return fm.make_record(result=result, labels=labels, meta=meta, file_hash=file_hash_of(i),
-                          settings=settings or load_settings())
+    return record_of(result, labels, meta, file_hash_of(i), settings or load_settings())
+
+
+def record_of(result, labels, meta, file_hash, settings, tolerances=None):
+    """``make_record`` of a run whose flags are decided by ``decide_run`` from ``labels``
+    and ``tolerances``, as the pipeline decides them."""
+    verdict = decide_run(labels, result.flags, result.normal_force_mean_N,
+                         result.temperature_C, tolerances,
+                         speed_set_point_rpm=result.speed_set_point_rpm,
+                         sliding_speed_measured_mm_s=result.sliding_speed_mm_s,
+                         instrument=settings.instrument)
+    return fm.make_record(result=result, verdict=verdict, meta=meta, file_hash=file_hash,
+                          settings=settings)
 
 
 # --------------------------------------------------------------------------- records
@@ -75,11 +85,11 @@ def run_record(
 def test_nominal_pressure_converts_newtons_on_three_pins_to_kilopascal():
     cell = InstrumentConfig()
     # (1 N / 3) / (π · 9 mm²) = 0.011789 N/mm² = 11.789 kPa: the published 11.79
-    assert nominal_pressure_kPa(1.0, cell) == pytest.approx(1 / 3 / (math.pi * 9e-6) / 1e3)
-    assert round(nominal_pressure_kPa(1.0, cell), 2) == 11.79
-    assert round(nominal_pressure_kPa(9.0, cell), 1) == 106.1
+    assert cell.pressure_kPa(1.0) == pytest.approx(1 / 3 / (math.pi * 9e-6) / 1e3)
+    assert round(cell.pressure_kPa(1.0), 2) == 11.79
+    assert round(cell.pressure_kPa(9.0), 1) == 106.1
     one_pin = InstrumentConfig(n_pins=1, pin_radius_mm=2.0)
-    assert nominal_pressure_kPa(1.0, one_pin) == pytest.approx(1.0 / (math.pi * 4e-6) / 1e3)
+    assert one_pin.pressure_kPa(1.0) == pytest.approx(1.0 / (math.pi * 4e-6) / 1e3)
 
 
 def test_make_record_carries_the_reduction_and_its_provenance():
@@ -92,7 +102,7 @@ def test_make_record_carries_the_reduction_and_its_provenance():
     assert (rec.mu_k_window_start_mm, rec.mu_k_window_end_mm) == result.mu_k_window_mm
     assert (rec.mu_k_window_start_s, rec.mu_k_window_end_s) == result.mu_k_window_s
     assert rec.normal_force_measured_N == result.normal_force_mean_N
-    assert rec.pressure_kPa == pytest.approx(nominal_pressure_kPa(3.0, settings.instrument))
+    assert rec.pressure_kPa == pytest.approx(settings.instrument.pressure_kPa(3.0))
     assert rec.sliding_speed_mm_s == pytest.approx(0.007, rel=0.02)
     assert rec.source == "reduced" and rec.source_file == "run5.txt"
     assert rec.file_hash == file_hash_of(5) and rec.config_hash == settings.config_hash
@@ -118,7 +128,7 @@ def test_missing_nominal_force_uses_the_measured_mean_and_is_flagged():
     rec = run_record(force_N=None, normal_force_mean_N=2.96)
     assert rec.normal_force_N == 3.0
     assert "nominal_force_estimated" in rec.flags.split(";")
-    assert rec.pressure_kPa == pytest.approx(nominal_pressure_kPa(3.0, InstrumentConfig()))
+    assert rec.pressure_kPa == pytest.approx(InstrumentConfig().pressure_kPa(3.0))
 
 
 def test_off_nominal_force_and_temperature_are_flagged():
@@ -135,8 +145,8 @@ def test_off_nominal_flags_follow_the_tolerances_given():
                        temperature_C=21.5, repeat=1)
 
     def flags(tolerances):
-        return fm.make_record(result=result, labels=labels, meta=meta, file_hash=file_hash_of(0),
-                              settings=load_settings(), tolerances=tolerances).flags
+        return record_of(result, labels, meta, file_hash_of(0), load_settings(),
+                         tolerances).flags
 
     assert flags(None) == ""
     assert flags(Tolerances(force_rel=0.05)) == "normal_force_off_nominal"
@@ -361,7 +371,7 @@ def test_importing_the_published_csv_gives_169_published_rows_without_mu_s(tmp_p
     assert set(runs["method"]) == {"published"} and runs["config_hash"].isna().all()
     assert runs["measurement_id"].is_unique
     # imported pressure is the published one; it matches the cell geometry to 4 digits
-    expected = [nominal_pressure_kPa(f, InstrumentConfig()) for f in runs["normal_force_N"]]
+    expected = [InstrumentConfig().pressure_kPa(f) for f in runs["normal_force_N"]]
     np.testing.assert_allclose(runs["pressure_kPa"], expected, rtol=5e-4)
 
 

@@ -213,3 +213,31 @@ def test_map_show_runs_names_what_each_map_knows_of_a_run_s_origin(tmp_path: Pat
         assert f"v4_session.txt [{name} / " in line and "/ interval 2]" in line
     plain = CliRunner().invoke(main, ["map", "show", "--map", str(new_map)]).output
     assert "v4_session.txt" not in plain  # the list only with --runs
+
+
+def test_a_column_added_later_missing_in_the_older_row_is_no_difference() -> None:
+    """The rule lives beside the schema versions: every content column a later schema
+    added, missing in the map's older row, is no difference of the run; present and
+    different, it is one."""
+    import dataclasses
+
+    from test_frictionmap import run_record
+    from tribopipe.frictionmap.schema import (
+        ADDED_IN_VERSION,
+        ADDED_LATER_CONTENT,
+        CONTENT_COLUMNS,
+        REVIEW_COLUMNS,
+    )
+
+    # a review's columns are the exception: missing there means "not reviewed"
+    assert ADDED_LATER_CONTENT == {c for c in ADDED_IN_VERSION if c in CONTENT_COLUMNS
+                                   and c not in REVIEW_COLUMNS}
+    new = run_record(1)
+    older = dataclasses.replace(new, **dict.fromkeys(ADDED_LATER_CONTENT))
+    runs = fm.records_frame([older])
+    _, report = fm.store.fold_records(runs, [new])
+    assert report.unchanged_ids == (new.measurement_id,) and not report.conflicting_ids
+    changed = dataclasses.replace(new, u_mu_k=(new.u_mu_k or 0.0) + 0.01)
+    _, report = fm.store.fold_records(fm.records_frame([new]), [changed])
+    assert report.conflicting_ids == (new.measurement_id,)
+    assert report.differences[new.measurement_id] == ("u_mu_k",)

@@ -182,3 +182,4 @@ def test_the_real_two_test_relaxation_export_has_no_friction_interval_in_either_
         assert str(r.problem).startswith(
             f"{path}: {r.test} / Step strain 1: no friction interval: not a pin-on-disc "
             "friction test: it looks like a stress relaxation test")
+        assert r.problem.looks_like.startswith("a stress relaxation test")  # a field

@@ -38,3 +38,15 @@ def test_the_set_up_torque_offset_is_a_typed_field() -> None:
     assert meta.torque_offset is None and meta.extra == ()
     offset = TorqueOffset(torque_Nm=3e-4, source="set-up interval 1")
     assert MeasurementMeta("a.csv", "csv", torque_offset=offset).torque_offset.torque_Nm == 3e-4
+
+
+def test_a_run_is_named_one_way() -> None:
+    """``measurement.run_name`` is the one name of a run: messages, the reduce table,
+    the map's account and the trace plot all read it."""
+    from tribopipe.measurement import interval_label, run_name
+
+    assert run_name("a.csv") == "a.csv"
+    assert run_name("a.csv", "friction", None, 3) == "a.csv [friction / interval 3]"
+    assert run_name("a.csv", "friction", "r1", 3, 2) == "a.csv [friction / r1 / interval 3 #2]"
+    assert run_name("a.csv", occurrence=2) == "a.csv [#2]"
+    assert interval_label(None, None, None) == ""

@@ -105,6 +105,16 @@ def test_a_failing_test_stands_alone(tmp_path: Path) -> None:
     error = result.runs[1].reason
     assert error.count(str(path)) == 1 and "\n" not in error
     assert "DS30 on steel, 3 N, 20 °C, #1" in error and "contact threshold" in error
+    # the failure is fields, formatted once: the file as named, where in it, what, the fix
+    failure = result.runs[1].failure
+    assert failure.path == str(path) and failure.place is not None
+    assert "DS30 on steel, 3 N, 20 °C, #1" in failure.place
+    assert failure.problem.startswith("the normal force never reaches the contact threshold")
+    assert failure.hint and "contact_threshold_N" in failure.hint
+    assert str(path) not in failure.problem and error == failure.text()
+    shown = reduce_export(path, SETTINGS, name="lifted.csv").runs[1]
+    assert shown.failure.path == "lifted.csv" and str(path) not in shown.reason
+    assert shown.reason.startswith("lifted.csv [") and shown.failure.problem == failure.problem
 
 
 def test_two_tests_of_one_name_get_two_ids_and_the_first_keeps_its_own(tmp_path: Path) -> None:

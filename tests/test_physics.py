@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import csv
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -100,10 +101,8 @@ def test_the_founding_speeds_are_defined_once() -> None:
         FOUNDING_SLIDING_SPEED_MM_S, abs=5e-6)
     from generators import synthetic
     from tribopipe.config import InstrumentConfig
-    from tribopipe.frictionmap.published import PUBLISHED_SLIDING_SPEED_MM_S
 
     assert InstrumentConfig().friction_radius_mm == FOUNDING_FRICTION_RADIUS_MM
-    assert PUBLISHED_SLIDING_SPEED_MM_S is FOUNDING_SLIDING_SPEED_MM_S
     assert synthetic.SyntheticRun().speed_rpm is FOUNDING_SPEED_RPM
 
 
@@ -216,3 +215,21 @@ def test_distance_from_angle_ignores_start_and_direction(
     t = np.arange(100.0)
     s = distance_from_angle_mm(start + sign * rate * t, R_EFF)
     np.testing.assert_allclose(s, rate * t * R_EFF, rtol=1e-6, atol=1e-9)
+
+
+def test_the_founding_speed_is_one_constant_in_physics():
+    """No module but ``physics`` names a founding or published speed: every reader of the
+    founding 0.007 mm/s imports :data:`FOUNDING_SLIDING_SPEED_MM_S`."""
+    import ast
+    import re
+
+    src = Path(__file__).resolve().parents[1] / "src" / "tribopipe"
+    pattern = re.compile(r"(FOUNDING|PUBLISHED)\w*_(MM_S|RPM)")
+    defined = []
+    for path in sorted(src.rglob("*.py")):
+        for node in ast.parse(path.read_text(encoding="utf-8")).body:
+            targets = (node.targets if isinstance(node, ast.Assign) else
+                       [node.target] if isinstance(node, ast.AnnAssign) else [])
+            defined += [f"{path.relative_to(src)}:{t.id}" for t in targets
+                        if isinstance(t, ast.Name) and pattern.fullmatch(t.id)]
+    assert defined == ["physics.py:FOUNDING_SPEED_RPM", "physics.py:FOUNDING_SLIDING_SPEED_MM_S"]

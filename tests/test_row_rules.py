@@ -36,7 +36,7 @@ def valid_record() -> dict[str, Any]:
     record: dict[str, Any] = {}
     for c in COLUMNS:
         if c.kind == "str":
-            record[c.name] = "x"
+            record[c.name] = c.choices[0] if c.choices else "x"
         elif c.kind == "bool":
             record[c.name] = False
         elif c.kind == "int":

@@ -17,14 +17,13 @@ from tribopipe import frictionmap as fm
 from tribopipe.config import InstrumentConfig
 from tribopipe.labels import (
     FLAG_SPEED_OFF,
-    FOUNDING_NOMINAL_SPEED_MM_S,
     RunLabels,
     Tolerances,
     decide_run,
     nominal_speed_mm_s,
     round_speed,
 )
-from tribopipe.physics import sliding_speed_mm_s
+from tribopipe.physics import FOUNDING_SLIDING_SPEED_MM_S, sliding_speed_mm_s
 from tribopipe.stats import group_statistics, nominal_speeds
 
 DATA = Path(__file__).parent / "data"
@@ -37,7 +36,7 @@ def test_nominal_speed_rounds_the_set_point_then_the_sliding_speed():
     assert nominal_speed_mm_s(0.00503, cell) == expected
     assert nominal_speed_mm_s(0.00497, cell) == expected
     # no set point: the instrument's nominal speed
-    assert nominal_speed_mm_s(None, cell) == expected == FOUNDING_NOMINAL_SPEED_MM_S
+    assert nominal_speed_mm_s(None, cell) == expected == FOUNDING_SLIDING_SPEED_MM_S
     assert nominal_speed_mm_s(float("nan"), cell) == expected
     faster = nominal_speed_mm_s(0.15, cell)
     assert faster == pytest.approx(30 * expected, rel=0.02)
@@ -91,7 +90,7 @@ def test_groups_split_by_nominal_speed_and_show_it_only_where_a_pair_has_several
 
 
 def test_a_row_without_a_nominal_speed_counts_as_the_founding_speed():
-    rows = [_pair(1, "A", None, 0.50), _pair(2, "A", FOUNDING_NOMINAL_SPEED_MM_S, 0.52)]
+    rows = [_pair(1, "A", None, 0.50), _pair(2, "A", FOUNDING_SLIDING_SPEED_MM_S, 0.52)]
     groups = group_statistics(fm.records_frame(rows))
     assert groups["mu_k_n"].tolist() == [2] and "nominal_speed_mm_s" not in groups.columns
 
@@ -100,7 +99,7 @@ def test_a_row_without_a_nominal_speed_counts_as_the_founding_speed():
 def test_older_maps_read_and_group_as_before(name):
     runs = fm.read_map(DATA / name)
     assert runs["nominal_speed_mm_s"].isna().all()
-    assert (nominal_speeds(runs) == FOUNDING_NOMINAL_SPEED_MM_S).all()
+    assert (nominal_speeds(runs) == FOUNDING_SLIDING_SPEED_MM_S).all()
     groups = group_statistics(runs)
     assert "nominal_speed_mm_s" not in groups.columns
     # the same groups as without any speed: one per pin, disc, force, temperature

@@ -162,7 +162,7 @@ def test_columns_follow_the_design_contract():
     expected = ["pin", "disc", "normal_force_N", "pressure_kPa", "temperature_C"]
     for q in ("mu_k", "mu_s"):
         expected += [f"{q}_{f}" for f in GROUP_FIELDS]
-    expected += ["labs", "range_exceeds_r", "labs_disagree", "qc_flagged", "run_ids"]
+    expected += ["labs", "range_exceeds_r", "labs_disagree", "qc_flagged", "reviewed", "run_ids"]
     assert list(groups.columns) == expected
     empty = group_statistics(fm.schema.empty_map())
     assert list(empty.columns) == expected and empty.empty

@@ -153,15 +153,20 @@ def test_markdown_writer_aligns_numbers_escapes_pipes_and_leaves_missing_blank()
     assert md[0] == "| pin | pressure_kPa | mu_k_n | mu_k_std | qc_flagged |"
     assert md[1] == "| --- | ---: | ---: | ---: | --- |"
     assert md[2] == "| Ecoflex 00-50 | 11.79 | 2 | 0.01414 | yes |"
-    assert md[3] == "| A\\|B &amp; 50% #1_x | 106.1 | 1 |  | no |"
+    assert md[3] == "| A\\|B \\& 50% #1_x | 106.1 | 1 |  | no |"
     assert len(md) == 4
 
 
 def test_latex_writer_escapes_specials_and_uses_booktabs():
     tex = tables.to_latex(_small_groups()).splitlines()
-    assert tex[0] == "\\begin{tabular}{lrrrl}"
+    assert tex[1] == "% Needs in the preamble: \\usepackage{booktabs} \\usepackage{siunitx}"
+    tex = tex[3:]
+    # numbers aligned on the decimal point (siunitx S), text left
+    assert tex[0] == ("\\begin{tabular}{lS[table-format=3.2]S[table-format=1]"
+                      "S[table-format=1.5]l}")
     assert tex[1] == "\\toprule" and tex[-2] == "\\bottomrule" and tex[-1] == "\\end{tabular}"
-    assert tex[2] == "pin & pressure\\_kPa & mu\\_k\\_n & mu\\_k\\_std & qc\\_flagged \\\\"
+    assert tex[2] == ("pin & {pressure\\_kPa} & {mu\\_k\\_n} & {mu\\_k\\_std} & qc\\_flagged "
+                      "\\\\")
     assert tex[5] == "A|B \\& 50\\% \\#1\\_x & 106.1 & 1 &  & no \\\\"
 
 
@@ -259,8 +264,10 @@ def test_the_paper_layout_of_the_published_map(published_runs):
 
 def test_the_paper_layout_as_latex_and_csv(published_runs):
     latex = tables.render_table(published_runs, fmt="latex", layout="paper", disc=["steel"])
-    assert r"$\mu_K$ $\pm$ U" in latex and r"0.903 $\pm$ 0.092" in latex
+    assert r"\multicolumn{3}{c}{$\mu_K \pm U$}" in latex
+    assert r"0.903 & $\pm$ & 0.092" in latex
     assert "±" not in latex and "μ" not in latex
+    assert "expanded uncertainty of the group mean (k = 2)" in latex
     csv = tables.render_table(published_runs, fmt="csv", layout="paper", disc=["steel"])
     frame = pd.read_csv(io.StringIO(csv), dtype=str, keep_default_na=False)
     assert list(frame.columns) == ["pin", "disc", "pressure_kPa", "temperature_C", "n",

@@ -22,7 +22,7 @@ import json
 import math
 import tomllib
 from collections.abc import Mapping
-from dataclasses import asdict, dataclass, fields
+from dataclasses import asdict, dataclass, fields, replace
 from pathlib import Path
 from typing import Any
 
@@ -31,8 +31,10 @@ from .files import read_regular
 from .physics import (
     FOUNDING_FRICTION_RADIUS_MM,
     FOUNDING_SPEED_RPM,
+    contact_pressure_kPa,
     sliding_speed_mm_s,
 )
+from .units import STANDARD_GRAVITY_M_S2
 from .validate import (
     FORCE_N,
     FRICTION_RADIUS_MM,
@@ -61,10 +63,30 @@ FOUNDING_FRICTION_RADIUS_U_MM = round(
 )
 
 
+#: The test methods a run can come from: the instrument kind and the method it follows.
+#: One truth: the map's ``test_method`` column, the statistics' condition key, the tables'
+#: and the explorer's filter read this tuple. The first is the founding rheometer cell.
+TEST_METHODS: tuple[str, ...] = (
+    "rheometer pin-on-disc",   # Anton Paar MCR + T-PID/44: torque and angle at R_eff
+    "sled D1894",              # a sled pulled over a plane (ASTM D1894 / ISO 8295)
+    "linear reciprocating",    # a pin or ball stroking back and forth (ASTM G133)
+    "rotary pin-on-disc",      # a force-based pin-on-disc tribometer (ASTM G99)
+)
+#: the method a row that names none was measured with (every map before schema 6)
+DEFAULT_TEST_METHOD = TEST_METHODS[0]
+#: the zero settings of a tangential channel besides a number: estimate it, or take 0
+ZERO_MODES: tuple[str, ...] = ("auto", "off")
+
 #: most pins a cell may carry
 MAX_PINS = 1000
 #: the contact threshold [N]: from 0 up to the largest force a run may carry
 _CONTACT_THRESHOLD_N = Range(0.0, FORCE_N.high, "N")
+#: a sled's mass [g]: from a milligram to a tonne
+_SLED_MASS_G = Range(1e-3, 1e6, "g", low_open=True)
+#: a linear instrument's set speed [mm/s]: from 1 nm/s to 10 m/s
+_LINEAR_SPEED_MM_S = Range(1e-6, 1e4, "mm/s", low_open=True)
+#: the largest zero a user may give [N·m or N]
+_ZERO_LIMIT = 1e5
 
 
 @dataclass(frozen=True)
@@ -81,6 +103,21 @@ class InstrumentConfig:
     (relative) and ``normal_force_u_N`` [N] of the normal-force sensor;
     ``normal_force_resolution_N`` [N]; ``torque_offset_unknown_Nm`` [N·m], the plausible
     size (rectangular half-width) of a torque zero offset that could not be estimated.
+
+    Force-based instruments (``test_method`` other than ``"rheometer pin-on-disc"``)
+    measure the friction force itself: ``friction_force_u_rel``,
+    ``friction_force_resolution_N`` [N] and ``friction_force_offset_unknown_N`` [N] are
+    that channel's uncertainties, and ``friction_radius_mm`` is the wear track's radius of
+    a rotary tribometer (distance from its angle or speed). A sled (ASTM D1894) has no
+    normal-force sensor: ``sled_mass_g`` [g] (F_N = m·g) or ``sled_weight_N`` [N] gives the
+    normal force of a run without a normal-force column. ``nominal_speed_mm_s`` [mm/s] is
+    a linear instrument's set speed (150 mm/min = 2.5 mm/s for D1894).
+
+    ``zero_offset``: the tangential channel's zero — ``"auto"`` (estimated where the
+    instrument is known unloaded, see :mod:`tribopipe.reduction`), ``"off"`` (0, not
+    estimated) or a number [N·m for torque, N for a friction force].
+    ``rest_after_sliding``: the protocol ends with the tangential load released and the
+    instrument at rest, so a rest after sliding is a second zero.
     """
 
     name: str = "Anton Paar MCR 302e, T-PID/44 pin-on-disc, 3 pins"
@@ -96,12 +133,26 @@ class InstrumentConfig:
     normal_force_u_N: float = 0.005
     normal_force_resolution_N: float = 5e-4
     torque_offset_unknown_Nm: float = 5e-4
+    test_method: str = DEFAULT_TEST_METHOD
+    sled_mass_g: float | None = None
+    sled_weight_N: float | None = None
+    nominal_speed_mm_s: float | None = None
+    friction_force_u_rel: float = 0.005
+    friction_force_resolution_N: float = 1e-4
+    friction_force_offset_unknown_N: float = 0.01
+    zero_offset: str | float = "auto"
+    rest_after_sliding: bool = False
 
     def __post_init__(self) -> None:
+        self._check_uncertainties()
+        self._check_force_instrument()
+
+    def _check_uncertainties(self) -> None:
         for name in (
             "friction_radius_u_mm", "torque_u_rel", "torque_resolution_Nm",
             "normal_force_u_rel", "normal_force_u_N", "normal_force_resolution_N",
-            "torque_offset_unknown_Nm",
+            "torque_offset_unknown_Nm", "friction_force_u_rel",
+            "friction_force_resolution_N", "friction_force_offset_unknown_N",
         ):
             value = getattr(self, name)
             if not (
@@ -122,6 +173,47 @@ class InstrumentConfig:
         except ValidationError as exc:
             raise ConfigError(f"[instrument] {exc.problem}") from None
 
+    def _check_force_instrument(self) -> None:
+        if self.test_method not in TEST_METHODS:
+            raise ConfigError(f"[instrument] test_method: expected one of "
+                              f"{', '.join(repr(m) for m in TEST_METHODS)}, got "
+                              f"{self.test_method!r}")
+        if self.sled_mass_g is not None and self.sled_weight_N is not None:
+            raise ConfigError("[instrument] give sled_mass_g or sled_weight_N, not both")
+        try:
+            if self.sled_mass_g is not None:
+                check_number(self.sled_mass_g, _SLED_MASS_G, "sled_mass_g")
+            if self.sled_weight_N is not None:
+                check_number(self.sled_weight_N, FORCE_N, "sled_weight_N")
+            if self.nominal_speed_mm_s is not None:
+                check_number(self.nominal_speed_mm_s, _LINEAR_SPEED_MM_S, "nominal_speed_mm_s")
+        except ValidationError as exc:
+            raise ConfigError(f"[instrument] {exc.problem}") from None
+        zero = self.zero_offset
+        numeric = isinstance(zero, int | float) and not isinstance(zero, bool)
+        if not (zero in ZERO_MODES if isinstance(zero, str) else
+                numeric and math.isfinite(zero) and abs(zero) <= _ZERO_LIMIT):
+            raise ConfigError(f"[instrument] zero_offset: expected \"auto\", \"off\" or a "
+                              f"number (N·m for torque, N for a friction force), got {zero!r}")
+        if not isinstance(self.rest_after_sliding, bool):
+            raise ConfigError("[instrument] rest_after_sliding: expected true or false, got "
+                              f"{self.rest_after_sliding!r}")
+
+    @property
+    def force_based(self) -> bool:
+        """Whether the instrument measures the friction force (not a torque)."""
+        return self.test_method != "rheometer pin-on-disc"
+
+    @property
+    def sled_normal_force_N(self) -> float | None:
+        """The normal force [N] a sled's mass or weight gives (``None`` when neither is
+        set): ``m · g`` with standard gravity, m in g."""
+        if self.sled_weight_N is not None:
+            return float(self.sled_weight_N)
+        if self.sled_mass_g is not None:
+            return float(self.sled_mass_g) * 1e-3 * STANDARD_GRAVITY_M_S2
+        return None
+
     @property
     def pin_area_mm2(self) -> float:
         """Contact area of one pin, π r² [mm²]."""
@@ -129,8 +221,17 @@ class InstrumentConfig:
 
     @property
     def nominal_sliding_speed_mm_s(self) -> float:
-        """Nominal sliding speed at the friction radius, ω·R_eff [mm/s]."""
+        """Nominal sliding speed [mm/s]: ``nominal_speed_mm_s`` where set (a linear
+        instrument), else ω·R_eff at the friction radius."""
+        if self.nominal_speed_mm_s is not None:
+            return float(self.nominal_speed_mm_s)
         return sliding_speed_mm_s(self.nominal_speed_rpm, self.friction_radius_mm)
+
+    def pressure_kPa(self, normal_force_N: float) -> float:
+        """The contact pressure per pin [kPa] of a total normal force [N] on these pins:
+        the one force → pressure conversion (:func:`tribopipe.physics.contact_pressure_kPa`,
+        F / n / (π r²)); the founding cell (3 pins, r = 3 mm) gives 1 N → 11.79 kPa."""
+        return float(contact_pressure_kPa(normal_force_N, self.n_pins, self.pin_radius_mm))
 
 
 @dataclass(frozen=True)
@@ -197,6 +298,23 @@ class ReductionParams:
         At-rest samples needed to estimate a torque offset from the friction interval.
     max_missing_fraction
         More missing torque or normal-force values than this fraction is an error [-].
+    zero_load_max_fraction
+        At-rest samples whose mean tangential reading exceeds this fraction of the
+        sliding level above it are under load, not a zero (flag ``zero_under_load``) [-].
+    stop_speed_fraction
+        The end of a record where the sliding speed stays below this fraction of the
+        run's median speed is a stop, trimmed before the plateau search [-].
+    stroke_core_fraction
+        Of each stroke of a reciprocating run, the central fraction of its length whose
+        mean friction force is that stroke's (ASTM G133: away from the reversals) [-].
+    run_out_tolerance
+        An oscillation whose period lies within this relative distance of one revolution
+        or a harmonic (1/2, 1/3) is run-out, not stick-slip (plus the periodogram's own
+        resolution) [-].
+
+    Every window is a distance along the sliding path [mm] or a number of samples, and
+    its bounds fit a tribometer's metres as well as a rheometer's millimetres (up to
+    1 km); windows wider than the run act as the whole run.
     """
 
     median_window: int = 3
@@ -224,6 +342,10 @@ class ReductionParams:
     motion_tol_mm: float = 1e-3
     offset_min_samples: int = 5
     max_missing_fraction: float = 0.5
+    zero_load_max_fraction: float = 0.5
+    stop_speed_fraction: float = 0.5
+    stroke_core_fraction: float = 0.5
+    run_out_tolerance: float = 0.05
 
     def __post_init__(self) -> None:
         for f in fields(self):
@@ -252,20 +374,21 @@ class ReductionParams:
 #: the ``[reduction]`` keys that may be left out or set to nothing (``None``)
 OPTIONAL_REDUCTION_KEYS = frozenset({"static_search_mm"})
 #: what each ``[reduction]`` key may hold: a :class:`~tribopipe.validate.Range` of numbers
-#: in its unit, or ``(low, high)`` for a whole number. The bounds are generous, but no
-#: setting may make a reduction allocate without bound (``block_mm`` ≥ 1 µm: a block
-#: needs samples; windows ≤ 100 mm).
+#: in its unit, or ``(low, high)`` for a whole number. The bounds are generous and fit a
+#: tribometer's metres of sliding as well as a rheometer's millimetres, but no setting may
+#: make a reduction allocate without bound (``block_mm`` ≥ 1 µm: a block needs samples;
+#: windows ≤ 1 km, capped at the run's own length in samples by the detection).
 REDUCTION_BOUNDS: dict[str, Range | tuple[int, int]] = {
     "median_window": (1, 1001),
-    "peak_window_mm": Range(0.0, 100.0, "mm", low_open=True),
-    "cliff_window_mm": Range(0.0, 100.0, "mm", low_open=True),
+    "peak_window_mm": Range(0.0, 1e6, "mm", low_open=True),
+    "cliff_window_mm": Range(0.0, 1e6, "mm", low_open=True),
     "cliff_sigma": Range(0.0, 1e3),
     "peak_ici_gamma": Range(0.0, 1e3),
-    "static_search_mm": Range(0.0, 1e4, "mm", low_open=True),
-    "run_in_mm": Range(0.0, 1e4, "mm"),
-    "plateau_min_mm": Range(0.0, 1e4, "mm"),
-    "plateau_confirm_mm": Range(0.0, 1e4, "mm"),
-    "block_mm": Range(1e-3, 100.0, "mm"),
+    "static_search_mm": Range(0.0, 1e7, "mm", low_open=True),
+    "run_in_mm": Range(0.0, 1e7, "mm"),
+    "plateau_min_mm": Range(0.0, 1e7, "mm"),
+    "plateau_confirm_mm": Range(0.0, 1e7, "mm"),
+    "block_mm": Range(1e-3, 1e6, "mm"),
     "settle_tol": Range(0.0, 100.0),
     "settle_alpha": Range(0.0, 1.0, low_open=True),
     "max_drift_per_mm": Range(0.0, 1e6, "1/mm"),
@@ -277,10 +400,14 @@ REDUCTION_BOUNDS: dict[str, Range | tuple[int, int]] = {
     "normal_force_cv_max": Range(0.0, 1e3),
     "min_contact_samples": (1, 10_000_000),
     "min_plateau_samples": (0, 10_000_000),
-    "min_travel_mm": Range(0.0, 1e4, "mm"),
-    "motion_tol_mm": Range(0.0, 1e4, "mm"),
+    "min_travel_mm": Range(0.0, 1e7, "mm"),
+    "motion_tol_mm": Range(0.0, 1e7, "mm"),
     "offset_min_samples": (1, 10_000_000),
     "max_missing_fraction": Range(0.0, 1.0),
+    "zero_load_max_fraction": Range(0.0, 1e3, low_open=True),
+    "stop_speed_fraction": Range(0.0, 1.0),
+    "stroke_core_fraction": Range(0.0, 1.0, low_open=True),
+    "run_out_tolerance": Range(0.0, 1.0),
 }
 
 
@@ -298,10 +425,28 @@ class Settings:
         """A stable 16-hex-digit hash of the reduction method's name, the instrument and
         the reduction parameters (computed once per settings object: every run of a batch
         asks for it)."""
-        payload = {"method": REDUCTION_METHOD, "instrument": asdict(self.instrument),
-                   "reduction": asdict(self.reduction)}
+        payload = {"method": REDUCTION_METHOD,
+                   "instrument": _hashed(asdict(self.instrument), InstrumentConfig),
+                   "reduction": _hashed(asdict(self.reduction), ReductionParams)}
         text = json.dumps(payload, sort_keys=True, default=str)
         return hashlib.sha256(text.encode()).hexdigest()[:16]
+
+
+#: keys added after the hash was first defined: left out of it while at their default, so
+#: that a config that does not use them keeps its hash (and a batch its reduced runs)
+_LATER_KEYS = frozenset({
+    "test_method", "sled_mass_g", "sled_weight_N", "nominal_speed_mm_s",
+    "friction_force_u_rel", "friction_force_resolution_N", "friction_force_offset_unknown_N",
+    "zero_offset", "rest_after_sliding", "zero_load_max_fraction", "stop_speed_fraction",
+    "stroke_core_fraction", "run_out_tolerance",
+})
+
+
+def _hashed(values: dict[str, Any], cls: type) -> dict[str, Any]:
+    """``values`` without the :data:`_LATER_KEYS` that hold ``cls``'s default."""
+    defaults = {f.name: f.default for f in fields(cls)}
+    return {k: v for k, v in values.items()
+            if not (k in _LATER_KEYS and v == defaults.get(k))}
 
 
 def reject_unknown_keys(
@@ -358,6 +503,25 @@ def settings_from_dict(data: Mapping[str, Any], *, source: str | None = None) ->
     instrument = _build(InstrumentConfig, tables["instrument"], "instrument", source)
     reduction = _build(ReductionParams, tables["reduction"], "reduction", source)
     return Settings(instrument=instrument, reduction=reduction, source=source)
+
+
+def with_zero(settings: Settings, text: str) -> Settings:
+    """``settings`` with the instrument's ``zero_offset`` from a command-line word:
+    ``auto``, ``off`` or a number (N·m for torque, N for a friction force);
+    :class:`ConfigError` in one line otherwise."""
+    value: str | float = text.strip().lower()
+    if value not in ZERO_MODES:
+        try:
+            value = float(text)
+        except ValueError:
+            raise ConfigError(f"--zero: expected auto, off or a number (N·m for torque, N "
+                              f"for a friction force), got {text[:40]!r}") from None
+    try:
+        instrument = replace(settings.instrument, zero_offset=value)
+    except ConfigError as exc:
+        raise ConfigError(f"--zero: {exc.problem.removeprefix('[instrument] ')}") from None
+    return Settings(instrument=instrument, reduction=settings.reduction,
+                    source=settings.source)
 
 
 def read_toml(path: str | Path) -> dict[str, Any]:

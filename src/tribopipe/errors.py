@@ -9,9 +9,49 @@ shows a traceback for these.
 from __future__ import annotations
 
 import os
+from dataclasses import dataclass
 from os import PathLike
 
 from .escape import display_path, printable
+
+
+@dataclass(frozen=True)
+class Failure:
+    """What went wrong, as fields: the ``problem``, the file it concerns (``path``, as
+    messages name it), the ``line`` and ``column`` in it and a ``hint`` for the fix.
+    ``place`` says where in the file (``test / result / interval i`` of an export).
+    :meth:`text` formats them, the one place a failure becomes a line (every
+    :class:`TribopipeError`'s message too): nothing parses a line back into its parts."""
+
+    problem: str
+    path: str | None = None
+    line: int | None = None
+    column: str | None = None
+    hint: str | None = None
+    place: str | None = None
+
+    def text(self) -> str:
+        """``path [place]:line: problem (column 'c'); hint: ...``, leaving out what is
+        unknown: one printable line whatever the fields hold."""
+        where = ""
+        if self.path is not None:
+            where = display_path(self.path)
+            if self.place:
+                where += f" [{self.place}]"
+            if self.line is not None:
+                where += f":{self.line}"
+            where += ": "
+        elif self.place:
+            where = f"{self.place}: " if self.line is None else f"{self.place}, line {self.line}: "
+        elif self.line is not None:
+            where = f"line {self.line}: "
+        text = where + self.problem
+        if self.column is not None:
+            text += f" (column {self.column!r})"
+        if self.hint:
+            text += f"; hint: {self.hint}"
+        # names and cells in a message are data: one printable line whatever they hold
+        return printable(text.replace("\n", " "))
 
 
 class TribopipeError(Exception):
@@ -25,30 +65,20 @@ class TribopipeError(Exception):
         line: int | None = None,
         column: str | None = None,
         hint: str | None = None,
+        place: str | None = None,
     ) -> None:
         self.problem = problem
+        self.place = place
         self.path = None if path is None else os.fsdecode(path)
         self.line = line
         self.column = column
         self.hint = hint
-        super().__init__(self._format())
+        super().__init__(self.failure.text())
 
-    def _format(self) -> str:
-        where = ""
-        if self.path is not None:
-            where = display_path(self.path)
-            if self.line is not None:
-                where += f":{self.line}"
-            where += ": "
-        elif self.line is not None:
-            where = f"line {self.line}: "
-        text = where + self.problem
-        if self.column is not None:
-            text += f" (column {self.column!r})"
-        if self.hint:
-            text += f"; hint: {self.hint}"
-        # names and cells in a message are data: one printable line whatever they hold
-        return printable(text.replace("\n", " "))
+    @property
+    def failure(self) -> Failure:
+        """The error's fields as a :class:`Failure`."""
+        return Failure(self.problem, self.path, self.line, self.column, self.hint, self.place)
 
 
 class ValidationError(TribopipeError, ValueError):
@@ -69,7 +99,15 @@ class MissingQuantityError(ReadError):
 
 class NotFrictionTestError(ReadError):
     """The export holds no pin-on-disc friction test: no steady rotation in one direction
-    under normal force (an oscillation, a flow curve, a relaxation test ...)."""
+    under normal force (an oscillation, a flow curve, a relaxation test ...); ``looks_like``
+    names what its test looks like instead, where that is known."""
+
+    def __init__(self, problem: str, *, looks_like: str | None = None,
+                 path: str | PathLike[str] | None = None, line: int | None = None,
+                 column: str | None = None, hint: str | None = None,
+                 place: str | None = None) -> None:
+        self.looks_like = looks_like
+        super().__init__(problem, path=path, line=line, column=column, hint=hint, place=place)
 
 
 class ConfigError(TribopipeError):

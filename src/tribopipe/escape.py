@@ -14,15 +14,16 @@ terminal line, message   :func:`printable` (a path: :func:`display_path`): contr
 CSV cell                 :func:`csv_cell`: one printable line, and the OWASP rule: a leading
                          ``'`` before ``=``, ``+``, ``-``, ``@``, TAB or CR (and before
                          ``'``, so :func:`csv_uncell` can undo it exactly)
-Markdown cell or line    :func:`markdown_cell`: Markdown punctuation backslash-escaped,
-                         ``<``, ``>``, ``&`` as entities, one printable line
+Markdown cell or line    :func:`markdown_cell`: Markdown punctuation backslash-escaped
+                         (``<`` and ``&`` too: no raw HTML, no entity), one printable line
 HTML text or attribute   :func:`html_text`: one printable line with ``&``, ``<``, ``>``,
                          ``"`` and ``'`` as entities (inert in element text and in a quoted
                          attribute value)
 JSON in an HTML page     :func:`script_json`: JSON that no ``</script>`` or ``<!--`` can
                          close, read back as the same data
 YAML scalar              :func:`yaml_text`: a double-quoted scalar, read back unchanged
-LaTeX table cell         :func:`latex_cell`: one printable line, LaTeX specials escaped
+LaTeX table cell         :func:`latex_cell`: one printable line, LaTeX specials escaped,
+                         beyond Latin-1 a code point (compiles in a default document)
 simulator comment        :func:`sim_comment`: one line for a comment of the given syntax
                          (``**`` ABAQUS/CalculiX, ``$`` LS-DYNA, ``!`` Ansys MAPDL, ``#``
                          Python, ``<!--`` XML)
@@ -49,14 +50,14 @@ _QUOTE = "'"
 
 #: Markdown: the ASCII punctuation that makes code, emphasis, links and images (``[``),
 #: cells, math and strike-through, backslash-escaped (CommonMark shows an escaped
-#: punctuation mark as itself); HTML's three as entities. ``_`` is left alone (GitHub
-#: never reads it as emphasis inside a word, ``pressure_kPa``), and so are ``(``, ``#``
-#: and ``!``, which make no markup without an escaped ``[`` or a line start.
+#: punctuation mark as itself), and so are ``<`` (no raw HTML, no autolink) and ``&`` (no
+#: character reference): the text carries no HTML entity, and a reader of the Markdown
+#: source sees ``range > r``. ``>`` makes markup only at the start of a line (a quote),
+#: where a cell never is; ``_`` is left alone (GitHub never reads it as emphasis inside a
+#: word, ``pressure_kPa``), and so are ``(``, ``#`` and ``!``, which make no markup
+#: without an escaped ``[`` or a line start.
 _MARKDOWN = {
-    **{ch: "\\" + ch for ch in "\\`*[]|~$"},
-    "<": "&lt;",
-    ">": "&gt;",
-    "&": "&amp;",
+    **{ch: "\\" + ch for ch in "\\`*[]|~$<&"},
     "\n": " ",
     "\r": " ",
 }
@@ -79,6 +80,15 @@ _LATEX = {
     "}": r"\}",
     "~": r"\textasciitilde{}",
     "^": r"\textasciicircum{}",
+    # OT1, pdflatex's default font encoding, prints these two as ¡ and ¿ in text
+    "<": r"\textless{}",
+    ">": r"\textgreater{}",
+    # the symbols of the tables' notes; other characters beyond Latin-1 have no glyph in
+    # a default pdflatex document and are written as their code point (latex_cell)
+    "μ": r"\ensuremath{\mu}",
+    "±": r"\ensuremath{\pm}",
+    "−": r"\ensuremath{-}",
+    "°": r"\textdegree{}",
 }
 
 #: what YAML may hold literally in a quoted scalar, less NEL (U+0085, a line break in YAML 1.1)
@@ -143,8 +153,8 @@ def csv_uncell(text: str) -> str:
 def markdown_cell(text: str) -> str:
     """Markdown text (a table cell, or a line after a fixed prefix) that stays inert:
     the punctuation that can make markup there (``\\``, ``|``, backticks, ``*``, ``[``,
-    ``]``, ``~``, ``$``) backslash-escaped, ``<``, ``>``, ``&`` as entities (no raw
-    HTML), line breaks as spaces, then :func:`printable`."""
+    ``]``, ``~``, ``$``, ``<``, ``&``) backslash-escaped (no raw HTML, no entity), line
+    breaks as spaces, then :func:`printable`."""
     return printable("".join(_MARKDOWN.get(ch, ch) for ch in text))
 
 
@@ -178,9 +188,13 @@ def yaml_text(text: str) -> str:
 
 
 def latex_cell(text: str) -> str:
-    """Plain text for LaTeX (a ``tabular`` cell): one printable line (no blank line can
-    end the row's paragraph), LaTeX's special characters escaped."""
-    return "".join(_LATEX.get(ch, ch) for ch in printable(text))
+    """Plain text for LaTeX (a ``tabular`` cell) that compiles in a default pdflatex
+    document: one printable line (no blank line can end the row's paragraph), LaTeX's
+    special characters escaped, ``<`` and ``>`` as the characters they are, μ ± − °
+    as their LaTeX symbols, and any other character beyond Latin-1 written as its code
+    point (``[U+4E2D]``) rather than one pdflatex has no glyph for."""
+    return "".join(_LATEX.get(ch) or (ch if ord(ch) < 0x100 else f"[U+{ord(ch):04X}]")
+                   for ch in printable(text))
 
 
 def sim_comment(value: object, syntax: str = "#", *, ascii_only: bool = False) -> str:

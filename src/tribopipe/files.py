@@ -89,13 +89,28 @@ def write_text_atomic(
     Raises :class:`OutputError` (one line naming the target) when the folder cannot be
     made or written (read-only, full, a file in the way, a name too long); the target is
     then untouched and no temporary file is left behind."""
+    return _write_atomic(target, text, newline)
+
+
+def write_bytes_atomic(target: str | os.PathLike[str], data: bytes) -> Path:
+    """Write ``data`` to ``target`` as :func:`write_text_atomic` writes text (a binary
+    output: a spreadsheet)."""
+    return _write_atomic(target, data, None)
+
+
+def _write_atomic(target: str | os.PathLike[str], content: str | bytes,
+                  newline: str | None) -> Path:
     path = Path(target)
     # the process id keeps two processes writing the same target off each other's temp file
     tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
-        with open(tmp, "w", encoding="utf-8", newline=newline) as fh:
-            fh.write(text)
+        if isinstance(content, bytes):
+            with open(tmp, "wb") as fh:
+                fh.write(content)
+        else:
+            with open(tmp, "w", encoding="utf-8", newline=newline) as fh:
+                fh.write(content)
         os.replace(tmp, path)
     except OSError as exc:
         with suppress(OSError):

@@ -173,11 +173,6 @@ def nominal_speed_mm_s(set_point_rpm: float | None, instrument: InstrumentConfig
     return round_speed(sliding_speed_mm_s(round_speed(rpm), instrument.friction_radius_mm))
 
 
-#: The nominal sliding speed [mm/s] of the founding paper (0.005 rpm at its friction
-#: radius): a map row written before nominal speeds were recorded counts as this speed
-FOUNDING_NOMINAL_SPEED_MM_S = nominal_speed_mm_s(None, InstrumentConfig())
-
-
 def qc_flags(labels: RunLabels, normal_force_measured_N: float | None,
              temperature_measured_C: float | None, tolerances: Tolerances) -> list[str]:
     """The off-nominal QC flags of a run: ``normal_force_off_nominal`` when the measured

@@ -44,6 +44,8 @@ PLOTS_DIR = "plots"
 RUNS_CSV = "runs.csv"
 FAILURES_CSV = "failures.csv"
 REPORT_HTML = "report.html"
+#: the review page (``tribopipe review``)
+REVIEW_HTML = "review.html"
 #: the incremental state, one file per campaign name (campaigns may share an output folder)
 STATE_FILE = ".tribopipe-state.{name}.json"
 #: held while a batch runs, so two batches of one campaign never interleave their state
@@ -54,7 +56,7 @@ FAILURES_HEADER: tuple[str, str] = ("file", "reason")
 #: the previous map, kept by every rewrite (:func:`tribopipe.frictionmap.store.backup_path`)
 MAP_BACKUP = MAP_FILE + ".bak"
 OUTPUT_FILES: frozenset[str] = frozenset({MAP_FILE, MAP_BACKUP, RUNS_CSV, FAILURES_CSV,
-                                          REPORT_HTML})
+                                          REPORT_HTML, REVIEW_HTML})
 OUTPUT_DIRS: frozenset[str] = frozenset({TRACES_DIR, SUMMARIES_DIR, PLOTS_DIR})
 
 
@@ -142,6 +144,11 @@ class OutputLayout:
     def report_html(self) -> Path:
         """The campaign report: ``<root>/report.html``."""
         return self.root / REPORT_HTML
+
+    @property
+    def review_html(self) -> Path:
+        """The review page: ``<root>/review.html``."""
+        return self.root / REVIEW_HTML
 
     @property
     def batch_lock(self) -> Path:

@@ -11,7 +11,13 @@ The canonical quantities, when present, use exactly these names:
 ``angle_rad``       deflection angle [rad]
 ``speed_rad_s``     rotational speed [rad/s]
 ``temperature_C``   temperature [°C]
+``friction_force_N`` friction (tangential) force of a force-based tribometer [N]
+``position_m``      linear position, crosshead travel or sliding distance [m]
 ==================  =====================================================
+
+A rheometer export carries torque and angle or speed; a force-based tribometer (a sled on
+a universal testing machine, a linear or rotary tribometer) carries the friction force and
+a position or distance, or an angle or speed of its disc.
 
 Any other column keeps a snake_case name with its (converted where known) unit suffix,
 e.g. ``shear_stress_Pa``. ``point_no`` holds the instrument's point number.
@@ -35,15 +41,33 @@ NORMAL_FORCE = "normal_force_N"
 ANGLE = "angle_rad"
 SPEED = "speed_rad_s"
 TEMPERATURE = "temperature_C"
-CANONICAL_COLUMNS: tuple[str, ...] = (TIME, TORQUE, NORMAL_FORCE, ANGLE, SPEED, TEMPERATURE)
+FRICTION_FORCE = "friction_force_N"
+POSITION = "position_m"
+CANONICAL_COLUMNS: tuple[str, ...] = (TIME, TORQUE, NORMAL_FORCE, ANGLE, SPEED, TEMPERATURE,
+                                      FRICTION_FORCE, POSITION)
 
 
-def interval_label(test: str | None, result: str | None, interval: int | None) -> str:
-    """``test / result / interval i``, leaving out what is unknown (``""`` when all are)."""
+def interval_label(test: str | None, result: str | None, interval: int | None,
+                   occurrence: int = 1) -> str:
+    """``test / result / interval i``, leaving out what is unknown (``""`` when all are);
+    `` #n`` added for the n-th run of an export at the same place (``occurrence`` > 1)."""
     parts = [p for p in (test, result) if p]
     if interval is not None:
         parts.append(f"interval {interval}")
-    return " / ".join(parts)
+    text = " / ".join(parts)
+    if occurrence > 1:
+        return f"{text} #{occurrence}" if text else f"#{occurrence}"
+    return text
+
+
+def run_name(file: str, test: str | None = None, result: str | None = None,
+             interval: int | None = None, occurrence: int = 1) -> str:
+    """The one way a run is named in messages, tables, plots and the map's account:
+    ``file [test / result / interval i]`` (:func:`interval_label` of the parts known), the
+    file alone where none is (or where the caller leaves them out: an export with one
+    run)."""
+    label = interval_label(test, result, interval, occurrence)
+    return f"{file} [{label}]" if label else file
 
 
 @dataclass(frozen=True)
@@ -90,9 +114,14 @@ class MeasurementMeta:
 
     @property
     def label(self) -> str:
-        """A short human label: ``file [test / result / interval i]``."""
-        where = interval_label(self.test, self.result, self.interval)
-        return f"{self.source_file} [{where}]" if where else self.source_file
+        """A short human label: ``file [test / result / interval i]`` (:func:`run_name`)."""
+        return run_name(self.source_file, self.test, self.result, self.interval)
+
+    @property
+    def place(self) -> str | None:
+        """Where the interval sits in its export, ``test / result / interval i``
+        (:func:`interval_label`; ``None`` when the export names none of them)."""
+        return interval_label(self.test, self.result, self.interval) or None
 
 
 @dataclass(frozen=True)

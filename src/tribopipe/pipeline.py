@@ -22,12 +22,19 @@ the reduced files against the map and appends them, under the map's lock.
 from __future__ import annotations
 
 import json
+import os
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from .errors import NotFrictionTestError, OutputError, ReductionError, TribopipeError
+from .errors import (
+    Failure,
+    NotFrictionTestError,
+    OutputError,
+    ReductionError,
+    TribopipeError,
+)
 from .escape import display_path, printable
 from .figures import TraceConditions, plot_trace
 from .files import file_sha256, os_reason, write_text_atomic
@@ -44,10 +51,11 @@ from .frictionmap.schema import MapRow
 from .frictionmap.store import AppendReport, update_map_with
 from .labels import RunLabels, RunVerdict, Tolerances, Undescribed, decide_run
 from .layout import OutputLayout
-from .measurement import interval_label
+from .measurement import interval_label, run_name
 from .numeric import finite_json, finite_or_nan, finite_or_none
 from .readers import read_export
 from .reduction.intervals import friction_intervals
+from .reduction.manual import TRACE_META_KEY, terms_from_parameters
 from .reduction.reduce import reduce_measurement
 
 if TYPE_CHECKING:
@@ -80,15 +88,14 @@ class RunPlace:
     @property
     def label(self) -> str:
         """``test / result / interval i`` (``#n`` added for a repeated place)."""
-        text = interval_label(self.test, self.result, self.interval)
-        return f"{text} #{self.occurrence}" if self.occurrence > 1 else text
+        return interval_label(self.test, self.result, self.interval, self.occurrence)
 
-
-def run_name(file: str, place: RunPlace, several: bool) -> str:
-    """How a run is named in messages and tables: the file alone for an export with one
-    run, ``file [test / result / interval i]`` for one with several."""
-    label = place.label
-    return f"{file} [{label}]" if several and label else file
+    def run_name(self, file: str, several: bool) -> str:
+        """The run's name (:func:`tribopipe.measurement.run_name`): the file alone for an
+        export with one run, ``file [test / result / interval i]`` for one with several."""
+        if not several:
+            return file
+        return run_name(file, self.test, self.result, self.interval, self.occurrence)
 
 
 @dataclass(frozen=True)
@@ -115,8 +122,8 @@ class ExportRuns:
         return len(self.runs) + len(self.problems) > 1
 
     def name(self, place: RunPlace, file: str | None = None) -> str:
-        """:func:`run_name` of a run of this export (``file`` defaults to the path)."""
-        return run_name(self.path if file is None else file, place, self.several)
+        """The name of a run of this export (``file`` defaults to the path)."""
+        return place.run_name(self.path if file is None else file, self.several)
 
 
 @dataclass(frozen=True)
@@ -146,8 +153,8 @@ class RunOutcome:
 
     @property
     def name(self) -> str:
-        """:func:`run_name`: the file, with the run's place when its export holds several."""
-        return run_name(self.path, self.place, self.several)
+        """The run's name: the file, with its place when its export holds several."""
+        return self.place.run_name(self.path, self.several)
 
 
 def read_runs(
@@ -189,7 +196,8 @@ def read_runs(
             runs.append((place_of(m.meta.test, m.meta.result, m.meta.interval), m))
             order.append(runs[-1][0])
     if not runs and problems and all(isinstance(e, NotFrictionTestError) for _, e in problems):
-        raise _not_friction(path, [e for _, e in problems])  # said once for the file
+        # said once for the file
+        raise _not_friction(path, [e for _, e in problems if isinstance(e, NotFrictionTestError)])
     return ExportRuns(
         path=str(path),
         file_hash=file_hash or file_sha256(path),
@@ -200,14 +208,16 @@ def read_runs(
     )
 
 
-def _not_friction(path: str | Path, problems: Sequence[TribopipeError]) -> NotFrictionTestError:
+def _not_friction(path: str | Path,
+                  problems: Sequence[NotFrictionTestError]) -> NotFrictionTestError:
     """One refusal for an export none of whose tests is pin-on-disc sliding, naming what
     its tests look like (an oscillation, a flow curve ...)."""
-    kinds = list(dict.fromkeys(p.problem.split("it looks like ", 1)[-1] for p in problems))
+    kinds = list(dict.fromkeys(p.looks_like or p.problem for p in problems))
     tests = (f"its {len(problems)} tests (or results) look like" if len(problems) > 1
              else "it looks like")
     return NotFrictionTestError(f"not a pin-on-disc friction test: {tests} "
-                                + "; ".join(kinds), path=path, hint=problems[0].hint)
+                                + "; ".join(kinds), looks_like="; ".join(kinds), path=path,
+                                hint=problems[0].hint)
 
 
 def reduce_run(
@@ -308,6 +318,9 @@ def write_trace(out_dir: str | Path | OutputLayout, outcome: RunOutcome) -> Path
     target.parent.mkdir(parents=True, exist_ok=True)
     trace = outcome.result.trace
     table = pa.table({str(c): trace[c].to_numpy() for c in trace.columns})
+    # what a reviewer's window is read with (tribopipe.reduction.manual)
+    table = table.replace_schema_metadata(
+        {TRACE_META_KEY: terms_from_parameters(outcome.result.parameters).to_json()})
     tmp = target.with_suffix(".parquet.tmp")
     try:
         pq.write_table(table, tmp, use_dictionary=False)
@@ -395,11 +408,11 @@ def plot_run(out_dir: str | Path | OutputLayout, outcome: RunOutcome) -> Path:
 
 def run_conditions(outcome: RunOutcome) -> TraceConditions:
     """What a run's trace plot names: its file (with the run's test and place when the
-    export holds several, :func:`run_name`) and its nominal conditions (the labels; the
+    export holds several, :meth:`RunPlace.run_name`) and its nominal conditions (the labels; the
     nominal pressure from its map record when it has one)."""
     labels = outcome.labels
     return TraceConditions(
-        source=run_name(Path(outcome.path).name, outcome.place, outcome.several),
+        source=outcome.place.run_name(Path(outcome.path).name, outcome.several),
         pin=labels.pin, disc=labels.disc,
         normal_force_N=finite_or_none(labels.normal_force_N),
         pressure_kPa=None if outcome.record is None else outcome.record.pressure_kPa,
@@ -463,16 +476,22 @@ class ReducedRun:
 @dataclass(frozen=True)
 class FailedRun:
     """A run (or a test without a friction interval; ``place`` ``None``: the whole file)
-    that could not be reduced, labelled or written, with its one-line ``reason`` (naming
-    the file and, for an output, the output). ``transient`` when it was not the file's
-    fault (a crashed worker, an internal error: tried again next time); ``undescribed``
-    when no metadata source described it (:class:`~tribopipe.labels.Undescribed`)."""
+    that could not be reduced, labelled or written: its ``failure`` as fields (the file
+    named as the caller names it, or the output, the problem, the hint), its one-line
+    :attr:`reason` formatted from them. ``transient`` when it was not the file's fault (a
+    crashed worker, an internal error: tried again next time); ``undescribed`` when no
+    metadata source described it (:class:`~tribopipe.labels.Undescribed`)."""
 
     name: str
-    reason: str
+    failure: Failure
     place: RunPlace | None = None
     transient: bool = False
     undescribed: bool = False
+
+    @property
+    def reason(self) -> str:
+        """The failure in one line (:meth:`~tribopipe.errors.Failure.text`)."""
+        return self.failure.text()
 
 
 @dataclass(frozen=True)
@@ -515,22 +534,23 @@ class FileOutcome:
         return any(r.transient for r in self.failed)
 
 
-def failure_reason(exc: BaseException, path: str | Path, name: str,
-                   run: str | None = None) -> str:
-    """One line naming the file once, as the caller names it (``name``; a reader names
-    the path it was given, which may be long and machine-specific): the error's text, its
-    path swapped for ``name``, or prefixed with the run's name (``run``, default
-    ``name``) when it names no file."""
+def failure_of(exc: BaseException, path: str | Path, name: str,
+               run: str | None = None) -> Failure:
+    """The :class:`~tribopipe.errors.Failure` of an error met reading or reducing the
+    export at ``path``, naming the file as the caller names it (``name``; a reader names
+    the path it was given, which may be long and machine-specific): an error naming the
+    export names ``name`` instead, one naming no file names the run (``run``, default
+    ``name``), one naming another file (a manifest, an output) keeps it."""
     if isinstance(exc, OSError):
-        return f"{display_path(run or name)}: {os_reason(exc)}"
-    text = str(exc)
-    where = getattr(exc, "path", None)
-    if where is not None and where != str(path) and display_path(where) in text:
-        return text  # it names another file (a manifest, an output)
-    full = display_path(path)
-    if text.startswith(full):
-        return display_path(name) + text[len(full):]
-    return text if full in text else f"{display_path(run or name)}: {text}"
+        return Failure(os_reason(exc), path=run or name)
+    if not isinstance(exc, TribopipeError):
+        return Failure(str(exc), path=run or name)
+    failure = exc.failure
+    if failure.path is None:
+        return replace(failure, path=run or name)
+    if failure.path == os.fsdecode(path):
+        return replace(failure, path=name)
+    return failure
 
 
 def _written(what: str, target: Path, write: Callable[[], Path]) -> Path:
@@ -596,16 +616,15 @@ def reduce_export(
         export = read_runs(path, read_options, file_hash=file_hash)
     except (TribopipeError, OSError) as exc:
         return FileOutcome(path=str(path), name=shown, file_hash=file_hash,
-                           error=FailedRun(name=shown,
-                                           reason=failure_reason(exc, path, shown)))
+                           error=FailedRun(name=shown, failure=failure_of(exc, path, shown)))
     problems = dict(export.problems)
     measurements = dict(export.runs)
     runs: list[ReducedRun | FailedRun] = []
     for place in export.order:
-        run = run_name(shown, place, export.several)
+        run = place.run_name(shown, export.several)
         if place in problems:
             runs.append(FailedRun(name=run, place=place,
-                                  reason=failure_reason(problems[place], path, shown, run)))
+                                  failure=failure_of(problems[place], path, shown, run)))
             continue
         try:
             given = labels(export, place, run) if callable(labels) else labels
@@ -615,7 +634,7 @@ def reduce_export(
         except (TribopipeError, OSError) as exc:
             # an output that could not be written is not the export's fault: tried again
             runs.append(FailedRun(name=run, place=place,
-                                  reason=failure_reason(exc, path, shown, run),
+                                  failure=failure_of(exc, path, shown, run),
                                   transient=isinstance(exc, OutputError),
                                   undescribed=isinstance(exc, Undescribed)))
     return FileOutcome(path=str(path), name=shown, file_hash=export.file_hash,

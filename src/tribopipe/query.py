@@ -48,9 +48,8 @@ from .interpolation import (
     speed_bracket,
     stencil,
 )
-from .labels import FOUNDING_NOMINAL_SPEED_MM_S
 from .numeric import finite_or_none
-from .physics import contact_pressure_kPa
+from .physics import FOUNDING_SLIDING_SPEED_MM_S
 from .rounding import known_u, lower_bound, plus_minus
 from .stats import (
     LABS,
@@ -424,10 +423,10 @@ def pair_speeds(pair_groups: pd.DataFrame) -> list[float]:
     """The nominal sliding speeds [mm/s] of a pair's groups, sorted (the founding speed
     where the group table shows none: every group of a one-speed map)."""
     if NOMINAL_SPEED not in pair_groups.columns:
-        return [FOUNDING_NOMINAL_SPEED_MM_S]
+        return [FOUNDING_SLIDING_SPEED_MM_S]
     values = pd_numeric(pair_groups[NOMINAL_SPEED])
     found = sorted({float(v) for v in values if math.isfinite(v) and v > 0})
-    return found or [FOUNDING_NOMINAL_SPEED_MM_S]
+    return found or [FOUNDING_SLIDING_SPEED_MM_S]
 
 
 def groups_at_speed(pair: pd.DataFrame, speed_mm_s: float) -> pd.DataFrame:
@@ -734,16 +733,6 @@ def value_labs(map_path: str | Path, result: QueryResult,
         if bool(row[LABS_DISAGREE]):
             disagree.append((float(row["pressure_kPa"]), temperature))
     return ValueLabs(tuple(sorted(found)), tuple(sorted(set(disagree), key=str)))
-
-
-def pressure_of_force(normal_force_N: float, instrument: InstrumentConfig) -> float:
-    """The contact pressure per pin [kPa] of a total normal force [N] on ``instrument``'s
-    pins (:func:`tribopipe.physics.contact_pressure_kPa`); an :class:`ExportError` for a
-    force that is not a finite number > 0."""
-    if not (math.isfinite(normal_force_N) and normal_force_N > 0):
-        raise ExportError(f"normal force must be a finite number > 0 N, got {normal_force_N}")
-    return float(contact_pressure_kPa(normal_force_N, instrument.n_pins,
-                                      instrument.pin_radius_mm))
 
 
 def format_result(res: QueryResult, normal_force_N: float | None = None,

@@ -242,6 +242,7 @@ def _summary(inp: ReportInputs) -> str:
         ("sources", ", ".join(f"{k}: {v}" for k, v in sorted(sources.items()))),
         ("labs", ", ".join(f"{k}: {v}" for k, v in sorted(labs.items()))),
         ("runs with QC flags", str(int(flagged.sum()))),
+        *([("reviewed runs", reviewed)] if (reviewed := _review_count(runs)) else []),
         *([("synthetic runs", note)] if (note := synthetic_note(runs)) else []),
         ("failures", str(len(inp.failures)) if inp.failures_known else "no failures.csv"),
     ]
@@ -289,6 +290,8 @@ def _group_table(inp: ReportInputs) -> str:
                       else "range &gt; r")
         if g.get("qc_flagged"):
             qc.append("flagged run")
+        if g.get("reviewed"):
+            qc.append(f"{int(g['reviewed'])} reviewed")
         ci = _interval(g["mu_k_ci95_low"], g["mu_k_ci95_high"])
         pair = f'<a href="#{pair_anchor(str(g["pin"]), str(g["disc"]))}">{_e(g["disc"])}</a>'
         cls = ' class="flag"' if qc else ""
@@ -379,6 +382,8 @@ def _flagged(inp: ReportInputs) -> str:
     # a provenance flag (synthetic) is said once, in the summary: no run is listed for it
     mask = runs["flags"].map(lambda f: bool(quality_flags(f))) | runs["excluded"].fillna(
         False).astype(bool)
+    if "review" in runs:
+        mask |= runs["review"].notna()
     sel = runs[mask]
     if sel.empty:
         body = "<p>No run carries a QC flag or is excluded.</p>"
@@ -395,12 +400,14 @@ def _flagged(inp: ReportInputs) -> str:
                 f"<td class=t>{_e(r['disc'])}</td><td>{_num(r['pressure_kPa'], '.4g')}</td>"
                 f"<td>{_run_value(r['mu_k'], r.get('u_mu_k'))}</td>"
                 f"<td class=t>{html_text(', '.join(flag_list(r.get('flags'))))}</td>"
-                f"<td class=t>{'excluded: ' + reason if excluded else ''}</td></tr>"
+                f"<td class=t>{'excluded: ' + reason if excluded else ''}</td>"
+                f"<td class=t>{html_text(_review_text(r))}</td></tr>"
             )
         body = (
             "<table id=flagged-table><thead><tr><th class=t>run</th><th class=t>file</th>"
             "<th class=t>pin</th><th class=t>disc</th><th>p [kPa]</th><th>μ_K ± U</th>"
-            "<th class=t>flags</th><th class=t>exclusion</th></tr></thead>"
+            "<th class=t>flags</th><th class=t>exclusion</th><th class=t>review</th>"
+            "</tr></thead>"
             f"<tbody>{''.join(rows)}</tbody></table>"
         )
     return f'<section id="flagged"><h2>Flagged and excluded runs</h2>{body}</section>'
@@ -422,6 +429,38 @@ def _failures(inp: ReportInputs) -> str:
             f"</tr></thead><tbody>{rows}</tbody></table>"
         )
     return f'<section id="failures"><h2>Failures</h2>{body}</section>'
+
+
+def _review_count(runs: pd.DataFrame) -> str:
+    """``N (accept a, exclude b, window c)`` for the reviewed runs; '' when none."""
+    if "review" not in runs or not runs["review"].notna().any():
+        return ""
+    counts = runs["review"].dropna().astype(str).value_counts().sort_index()
+    return f"{int(counts.sum())} (" + ", ".join(f"{a} {n}" for a, n in counts.items()) + ")"
+
+
+def _review_text(r: Mapping[Any, Any]) -> str:
+    """What a reviewer decided on a run, by whom, when and why, with the automatic
+    values beside the reviewed ones (plain text); '' for a run not reviewed."""
+    action = r.get("review")
+    if action is None or (isinstance(action, float) and math.isnan(action)):
+        return ""
+    text = f"reviewed: {action}"
+    if action == "window":
+        text += (f" {_num(r.get('mu_k_window_start_mm'), '.4g')}–"
+                 f"{_num(r.get('mu_k_window_end_mm'), '.4g')} mm, μ_K {_num(r.get('mu_k'), '.4f')}"
+                 f" (automatic {_num(r.get('auto_mu_k'), '.4f')} over "
+                 f"{_num(r.get('auto_mu_k_window_start_mm'), '.4g')}–"
+                 f"{_num(r.get('auto_mu_k_window_end_mm'), '.4g')} mm)")
+        peak = r.get("review_static_peak_mm")
+        if peak is not None and not (isinstance(peak, float) and math.isnan(peak)):
+            text += (f", μ_S {_num(r.get('mu_s'), '.4f')} at {_num(peak, '.4g')} mm (automatic "
+                     f"{_num(r.get('auto_mu_s'), '.4f')})")
+    for key, label in (("review_by", "by"), ("review_date", "on"), ("review_reason", "why:")):
+        value = r.get(key)
+        if value is not None and not (isinstance(value, float) and math.isnan(value)):
+            text += f" {label} {value}"
+    return text
 
 
 def _runs(inp: ReportInputs) -> str:
@@ -477,7 +516,9 @@ def _runs(inp: ReportInputs) -> str:
             f"{_e(r.get('source'))}; "
             f"flags: {html_text(flags)}; μ_K window: {_num(r.get('mu_k_window_start_mm'), '.3f')}"
             f"–{_num(r.get('mu_k_window_end_mm'), '.3f')} mm; method: {_e(r.get('method'))}"
-            "</p>"
+            + (f"; <strong class=reviewed>{html_text(_review_text(r))}</strong>"
+               if _review_text(r) else "")
+            + "</p>"
         )
         # the id sits inside the <details> so that following a link opens it
         blocks.append(

@@ -10,6 +10,12 @@ speeds to two significant digits, :func:`tribopipe.labels.round_speed`) so 11.79
 groups without a speed column, as before speeds were recorded; where a pair holds several
 nominal speeds the groups carry ``nominal_speed_mm_s``.
 
+Test methods are never pooled: the instrument kind and test method (``test_method``, one
+of :data:`tribopipe.config.TEST_METHODS`; a row that names none was measured on the
+founding rheometer cell) is part of every condition group's key, and where a map holds
+several methods the groups carry a ``test_method`` column (a sled's μ on a film and a
+rheometer's μ on the same pair are two groups, side by side).
+
 Beside the repeat statistics each group carries its combined standard uncertainty (GUM,
 k = 1) from the runs' own budgets (:mod:`tribopipe.reduction.uncertainty`): ``u_run`` is the mean of
 the runs' combined standard uncertainties, and the group mean's is
@@ -56,8 +62,9 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
-from .config import InstrumentConfig
-from .labels import FOUNDING_NOMINAL_SPEED_MM_S, quality_flags, round_speed
+from .config import DEFAULT_TEST_METHOD, InstrumentConfig
+from .labels import quality_flags, round_speed
+from .physics import FOUNDING_SLIDING_SPEED_MM_S
 from .reduction.uncertainty import budget, unknown_offset_u_Nm
 from .rounding import lower_bound
 
@@ -94,6 +101,26 @@ LABS = "labs"
 LABS_DISAGREE = "labs_disagree"
 #: the group column of a per-lab table (``by_lab``): the one lab of the row
 LAB = "lab"
+#: the group column of the instrument kind and test method
+TEST_METHOD = "test_method"
+
+
+def test_methods(runs: pd.DataFrame) -> Any:
+    """The test method each run is grouped under (an object array of text): its
+    ``test_method``, or :data:`~tribopipe.config.DEFAULT_TEST_METHOD` where the row names
+    none (a map older than schema version 6, an imported row)."""
+    import numpy as np
+
+    if TEST_METHOD not in runs.columns:
+        return np.full(len(runs), DEFAULT_TEST_METHOD, dtype=object)
+    return np.array([v if isinstance(v, str) and v else DEFAULT_TEST_METHOD
+                     for v in runs[TEST_METHOD].tolist()], dtype=object)
+
+
+def several_methods(runs: pd.DataFrame) -> bool:
+    """Whether the included runs of a map hold more than one test method."""
+    included = runs.loc[~runs["excluded"].astype(bool)]
+    return len(set(test_methods(included).tolist())) > 1
 
 
 def describe_values(values: Sequence[float]) -> dict[str, Any]:
@@ -266,16 +293,16 @@ def select_labs(runs: pd.DataFrame, labs: Sequence[str] | None) -> pd.DataFrame:
 def nominal_speeds(runs: pd.DataFrame) -> Any:
     """The nominal sliding speed [mm/s] each run is grouped under (a float array): its
     ``nominal_speed_mm_s`` rounded by :func:`~tribopipe.labels.round_speed`, or
-    :data:`~tribopipe.labels.FOUNDING_NOMINAL_SPEED_MM_S` where the row has none (a map
+    :data:`~tribopipe.physics.FOUNDING_SLIDING_SPEED_MM_S` where the row has none (a map
     written before schema version 5, an imported row: measured at one speed as far as the
     map can tell, which the published map and tribopipe's default instrument both are)."""
     import numpy as np
 
     if NOMINAL_SPEED not in runs.columns:
-        return np.full(len(runs), FOUNDING_NOMINAL_SPEED_MM_S)
+        return np.full(len(runs), FOUNDING_SLIDING_SPEED_MM_S)
     values = runs[NOMINAL_SPEED].to_numpy(dtype=float)
     return np.array([round_speed(float(v)) if math.isfinite(v) and v > 0
-                     else FOUNDING_NOMINAL_SPEED_MM_S for v in values], dtype=float)
+                     else FOUNDING_SLIDING_SPEED_MM_S for v in values], dtype=float)
 
 
 def pairs_with_several_speeds(runs: pd.DataFrame) -> set[tuple[str, str]]:
@@ -290,8 +317,8 @@ def pairs_with_several_speeds(runs: pd.DataFrame) -> set[tuple[str, str]]:
 
 def group_keys(runs: pd.DataFrame, by_speed: bool, by_lab: bool = False) -> pd.DataFrame:
     """The rounded grouping keys of each run (a new frame; ``runs`` is not modified):
-    pin, disc, force, temperature, nominal speed (and the measured speed with
-    ``by_speed``, the lab with ``by_lab``)."""
+    pin, disc, force, temperature, nominal speed, test method (and the measured speed
+    with ``by_speed``, the lab with ``by_lab``)."""
     import pandas as pd
 
     keys = pd.DataFrame(
@@ -301,6 +328,7 @@ def group_keys(runs: pd.DataFrame, by_speed: bool, by_lab: bool = False) -> pd.D
             "normal_force_N": runs["normal_force_N"].round(FORCE_DECIMALS).to_numpy(),
             "temperature_C": runs["temperature_C"].round(TEMPERATURE_DECIMALS).to_numpy(),
             NOMINAL_SPEED: nominal_speeds(runs),
+            TEST_METHOD: test_methods(runs),
         },
         index=runs.index,
     )
@@ -311,6 +339,17 @@ def group_keys(runs: pd.DataFrame, by_speed: bool, by_lab: bool = False) -> pd.D
     if by_lab:
         keys[LAB] = lab_names(runs)
     return keys
+
+
+def condition_keys(runs: pd.DataFrame) -> dict[str, tuple[Any, ...]]:
+    """The condition group of each run, by ``measurement_id``: the key
+    :func:`group_statistics` groups it under (:func:`group_keys`: pin, disc, nominal force
+    [N] and temperature [°C] rounded, nominal speed [mm/s]), unknown values as ``None``.
+    What a count of the groups a change touches compares."""
+    keys = group_keys(runs, by_speed=False)
+    ids = runs["measurement_id"].astype(str).tolist()
+    return {mid: tuple(None if isinstance(v, float) and v != v else v for v in key)
+            for mid, key in zip(ids, keys.itertuples(index=False, name=None), strict=True)}
 
 
 def _pressure_clusters(pressures: Sequence[float]) -> list[int]:
@@ -335,21 +374,26 @@ def _pressure_clusters(pressures: Sequence[float]) -> list[int]:
 
 def group_statistics(runs: pd.DataFrame, *, by_speed: bool = False,
                      show_speed: bool | None = None, by_lab: bool = False,
-                     labs: Sequence[str] | None = None) -> pd.DataFrame:
+                     labs: Sequence[str] | None = None,
+                     show_method: bool | None = None) -> pd.DataFrame:
     """Repeat statistics per condition group of a friction map (see module docstring).
 
     ``runs`` is a map DataFrame (:func:`tribopipe.frictionmap.read_map`); it is not
     modified. Excluded runs are left out, and with ``labs`` the runs of other labs
     (:func:`select_labs`); groups with no remaining run are dropped.
-    Groups always split by nominal speed; ``show_speed`` says whether the table shows it
-    (default: where some pair holds several nominal speeds). With ``by_lab`` each lab's
-    runs of a condition are a group of their own (column ``lab``).
+    Groups always split by nominal speed and by test method; ``show_speed`` says whether
+    the table shows the speed (default: where some pair holds several nominal speeds),
+    ``show_method`` whether it shows ``test_method`` (default: where the map holds several
+    methods). With ``by_lab`` each lab's runs of a condition are a group of their own
+    (column ``lab``).
     Columns: ``pin, disc, normal_force_N, pressure_kPa, temperature_C``
     (+ ``nominal_speed_mm_s`` when shown, + ``sliding_speed_mm_s``, the measured speed,
     with ``by_speed``, + ``lab`` with ``by_lab``), then for q in ``mu_k``, ``mu_s``:
     ``q_n, q_mean, q_std, q_sem, q_ci95_low, q_ci95_high, q_cv, q_min, q_max, q_u_run,
     q_u, q_u_estimated, q_labs, q_s_r, q_s_L, q_s_R, q_values``,
-    then ``labs, range_exceeds_r, labs_disagree, qc_flagged, run_ids``. Within a group,
+    then ``labs, range_exceeds_r, labs_disagree, qc_flagged, reviewed, run_ids``
+    (``reviewed``: how many of the group's runs a reviewer accepted or re-windowed,
+    :mod:`tribopipe.review`; an accepted run's QC flags do not make ``qc_flagged``). Within a group,
     values and ids are in (repeat, measurement_id) order, so the result does not depend
     on the row order. Rows are sorted by pin, disc, temperature, pressure, force, nominal
     speed (measured speed, lab).
@@ -360,16 +404,20 @@ def group_statistics(runs: pd.DataFrame, *, by_speed: bool = False,
     runs = select_labs(runs, labs)
     if show_speed is None:
         show_speed = bool(pairs_with_several_speeds(runs))
+    if show_method is None:
+        show_method = several_methods(runs)
     condition_cols = ["pin", "disc", "normal_force_N", "pressure_kPa", "temperature_C"]
     if show_speed:
         condition_cols.append(NOMINAL_SPEED)
+    if show_method:
+        condition_cols.append(TEST_METHOD)
     if by_speed:
         condition_cols.append("sliding_speed_mm_s")
     if by_lab:
         condition_cols.append(LAB)
     stat_cols = [f"{q}_{f}" for q in QUANTITIES for f in GROUP_FIELDS]
     columns = condition_cols + stat_cols + [LABS, "range_exceeds_r", LABS_DISAGREE,
-                                            "qc_flagged", "run_ids"]
+                                            "qc_flagged", "reviewed", "run_ids"]
 
     included = runs.loc[~runs["excluded"].astype(bool)]
     keys = group_keys(included, by_speed, by_lab)
@@ -381,6 +429,8 @@ def group_statistics(runs: pd.DataFrame, *, by_speed: bool = False,
         "repeat": included["repeat"].astype("Float64").to_numpy(dtype=float, na_value=np.nan),
         "measurement_id": included["measurement_id"].astype(str).to_numpy(dtype=object),
         "flags": included["flags"].fillna("").astype(str).to_numpy(dtype=object),
+        "review": (included["review"].fillna("").astype(str).to_numpy(dtype=object)
+                   if "review" in included else np.full(len(included), "", dtype=object)),
         "lab": lab_names(included),
     }
     for q in QUANTITIES:
@@ -401,8 +451,8 @@ def group_statistics(runs: pd.DataFrame, *, by_speed: bool = False,
         return pd.DataFrame({c: pd.Series(dtype=_dtype(c)) for c in columns})
     groups = pd.DataFrame(rows)
     groups = groups.sort_values(
-        ["pin", "disc", "temperature_C", "pressure_kPa", "normal_force_N", NOMINAL_SPEED]
-        + (["sliding_speed_mm_s"] if by_speed else []) + ([LAB] if by_lab else []),
+        ["pin", "disc", "temperature_C", "pressure_kPa", "normal_force_N", NOMINAL_SPEED,
+         TEST_METHOD] + (["sliding_speed_mm_s"] if by_speed else []) + ([LAB] if by_lab else []),
         na_position="last",
         kind="mergesort",
     ).reset_index(drop=True)
@@ -441,9 +491,10 @@ def _labs_disagree(groups: pd.DataFrame, q: str, rep: Reproducibility) -> Any:
 
 
 def _dtype(column: str) -> str:
-    if column in ("pin", "disc", "run_ids", LABS, LAB) or column.endswith("_values"):
+    if column in ("pin", "disc", "run_ids", LABS, LAB, TEST_METHOD) or \
+            column.endswith("_values"):
         return "str"
-    if column.endswith("_n") or column.endswith("_labs"):
+    if column.endswith("_n") or column.endswith("_labs") or column == "reviewed":
         return "int64"
     if column in ("range_exceeds_r", "qc_flagged", LABS_DISAGREE) or \
             column.endswith("_u_estimated"):
@@ -479,7 +530,10 @@ def _group_row(
         row.update(_lab_precision(values[finite], u_runs, labs_of[finite], q))
         row[f"{q}_u_estimated"] = bool(estimated.any())
     row[LABS] = ";".join(sorted(set(labs_of.tolist())))
-    row["qc_flagged"] = any(quality_flags(f) for f in data["flags"][order])
+    # a reviewer who accepted a run has judged its flags: they no longer count
+    row["qc_flagged"] = any(quality_flags(f) for f, r in zip(data["flags"][order],
+                            data["review"][order], strict=True) if r != "accept")
+    row["reviewed"] = sum(1 for r in data["review"][order] if r)
     row["run_ids"] = ";".join(data["measurement_id"][order])
     return row
 

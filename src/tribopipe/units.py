@@ -43,12 +43,20 @@ class UnitSpec:
 
 
 _REV_PER_MIN = 2 * math.pi / 60  # one revolution per minute in rad/s
+#: standard gravity [m/s²] (CGPM 1901): 1 gf = 9.80665 mN, 1 kgf = 9.80665 N
+STANDARD_GRAVITY_M_S2 = 9.80665
+#: one pound-force [N]: 0.45359237 kg × standard gravity (exact by definition)
+POUND_FORCE_N = 0.45359237 * STANDARD_GRAVITY_M_S2
+#: one inch [m] (exact by definition)
+INCH_M = 0.0254
 
 #: normalised unit (see :func:`normalize_unit`) → (factor, SI suffix[, offset])
 _GENERIC: dict[str, tuple[float, str] | tuple[float, str, float]] = {
     # time
     "s": (1.0, "s"),
     "ms": (1e-3, "s"),
+    "µs": (1e-6, "s"),
+    "us": (1e-6, "s"),
     "min": (60.0, "s"),
     "h": (3600.0, "s"),
     # torque
@@ -61,10 +69,15 @@ _GENERIC: dict[str, tuple[float, str] | tuple[float, str, float]] = {
     "mN": (1e-3, "N"),
     "µN": (1e-6, "N"),
     "kN": (1e3, "N"),
+    # force in mass units (standard gravity, 9.80665 m/s²) and pound-force
+    "gf": (STANDARD_GRAVITY_M_S2 * 1e-3, "N"),
+    "kgf": (STANDARD_GRAVITY_M_S2, "N"),
+    "lbf": (POUND_FORCE_N, "N"),
     # angle
     "rad": (1.0, "rad"),
     "mrad": (1e-3, "rad"),
     "µrad": (1e-6, "rad"),
+    "rev": (2 * math.pi, "rad"),  # whole revolutions (laps of a rotary tribometer)
     "°": (math.pi / 180, "rad"),  # also "deg" (normalize_unit)
     # angular velocity, frequency, rates
     "rad/s": (1.0, "rad_s"),
@@ -90,8 +103,12 @@ _GENERIC: dict[str, tuple[float, str] | tuple[float, str, float]] = {
     # length
     "m": (1.0, "m"),
     "mm": (1e-3, "m"),
+    "cm": (1e-2, "m"),
     "µm": (1e-6, "m"),
+    "um": (1e-6, "m"),
+    "in": (INCH_M, "m"),
     "mm/s": (1e-3, "m_s"),
+    "mm/min": (1e-3 / 60, "m_s"),
     "m/s": (1.0, "m_s"),
     # dimensionless
     "%": (1.0, "pct"),
@@ -141,6 +158,8 @@ def normalize_unit(text: str) -> str:
     unit = re.sub(r"(?<=[A-Za-zµ])[·.*](?=[A-Za-z])", "", unit)
     if unit.lower() == "rpm":
         unit = "rpm"
+    if unit in ("revs", "revolutions", "laps"):
+        unit = "rev"
     return "°" if unit == "deg" else unit
 
 
@@ -178,6 +197,8 @@ CANONICAL_SUFFIX: dict[str, str] = {
     "angle": "rad",
     "speed": "rad_s",
     "temperature": "C",
+    "friction_force": "N",
+    "position": "m",
 }
 
 

@@ -29,10 +29,13 @@ from ..frictionmap.duplicates import (
     repeat_clashes,
 )
 from ..frictionmap.records import stored_file_name
-from ..frictionmap.schema import MapRow
+from ..frictionmap.schema import MapRow, unvalidated_frame
 from ..frictionmap.store import read_map, update_map_with
 from ..labels import flags_text, quality_flags
+from ..measurement import run_name
 from ..pipeline import FileOutcome, ReducedRun
+from ..review import Review, ReviewOutcome, landing_records, read_review
+from ..stats import condition_keys
 from .metadata import Manifest, read_manifest
 from .outputs import write_failures_csv, write_runs_csv
 from .spec import Campaign
@@ -251,6 +254,9 @@ def _run_locked(campaign: Campaign, *, jobs: int | None, plots: bool | None,
     jobs = default_jobs() if jobs is None else max(1, int(jobs))
     plots = campaign.plots if plots is None else plots
     state = load_state(campaign)
+    # a decisions file is checked before any work (its runs only under the map's lock)
+    review = read_review(campaign.review) if campaign.review is not None and (
+        campaign.review.exists() or campaign.review.is_symlink()) else None
     entries: dict[str, FileState] = dict(state.entries)
     missing_ids, map_checked = _ids_missing_from_map(campaign, state)
     manifest = read_manifest(campaign.manifest) if campaign.manifest is not None else None
@@ -275,9 +281,12 @@ def _run_locked(campaign: Campaign, *, jobs: int | None, plots: bool | None,
     failures = plan.failures
     map_summary, landed, removed, landing = _land(
         campaign, results, lambda in_map: _apply(campaign, results, by_file, entries, failures,
-                                                 notes, vanished, in_map), entries)
+                                                 notes, vanished, in_map), entries,
+        review)
+    if landing.review is not None:
+        notes.append(landing.review.line(campaign.review))
     _forget_vanished(campaign, entries, set(by_file), notes)
-    groups = _groups_updated(state, landing.records, landed, removed)
+    groups = _groups_updated(landing, landed, removed)
 
     duplicates = {**plan.duplicates, **landing.duplicates}
     outcomes = {**plan.outcomes, **landing.outcomes}
@@ -434,6 +443,11 @@ class _Landing:
     runs_failed: int
     #: repeat numbers used twice in one condition once the records land
     repeats: list[str] = field(default_factory=list)
+    #: what the review did (:func:`tribopipe.review.landing_records`), when one applied
+    review: ReviewOutcome | None = None
+    #: the condition group (:func:`tribopipe.stats.condition_keys`) of each map row the
+    #: records replace or the stale ids drop, as the map held them before this batch
+    old_groups: dict[str, tuple[Any, ...]] = field(default_factory=dict)
 
 
 def _owners(by_file: Mapping[str, CampaignRow], redone: set[str],
@@ -589,8 +603,7 @@ def _ledger(rows: Sequence[CampaignRow], entries: Mapping[str, FileState],
         known[row.file] = set(found)
         places[row.file] = {(r.test, r.interval) for r in entry.runs}
         tests[row.file] = len(found)
-        undescribed += [row.file if r.test is None else f"{row.file} [{r.test}]"
-                        for r in entry.runs if r.undescribed]
+        undescribed += [run_name(row.file, r.test) for r in entry.runs if r.undescribed]
     unmatched: list[str] = []
     if manifest is not None:
         names = {row.file for row in rows} | {row.path.name for row in rows}
@@ -610,16 +623,14 @@ def _ledger(rows: Sequence[CampaignRow], entries: Mapping[str, FileState],
     return tests, unmatched, list(dict.fromkeys(undescribed))
 
 
-def _groups_updated(state: CampaignState, records: Sequence[MapRow],
-                    landed: set[str], removed: set[str]) -> set[tuple[Any, ...]]:
-    """The condition groups with a map row added, replaced or removed by this batch."""
-    old_groups = {
-        _group_key(r.labels or {}) for e in state.entries.values()
-        for r in e.runs if r.measurement_id in removed
-    }
-    return {
-        _group_key(labels_of(r)) for r in records if r.measurement_id in landed
-    } | old_groups
+def _groups_updated(landing: _Landing, landed: set[str],
+                    removed: set[str]) -> set[tuple[Any, ...]]:
+    """The condition groups (those of the statistics, :func:`condition_keys`) with a map
+    row added, replaced (its group before and after) or removed by this batch."""
+    touched = [r for r in landing.records if r.measurement_id in landed]
+    new = condition_keys(unvalidated_frame(touched)) if touched else {}
+    old = {k for mid, k in landing.old_groups.items() if mid in landed | removed}
+    return set(new.values()) | old
 
 
 def _save_state_with_map(campaign: Campaign, entries: dict[str, FileState],
@@ -654,14 +665,16 @@ def _ids_missing_from_map(campaign: Campaign, state: CampaignState) -> tuple[set
 
 
 def _land(campaign: Campaign, results: Sequence[FileOutcome],
-          apply: Callable[[FilesByHash], _Landing], entries: Mapping[str, FileState]
-          ) -> tuple[str, set[str], set[str], _Landing]:
+          apply: Callable[[FilesByHash], _Landing], entries: Mapping[str, FileState],
+          review: Review | None = None) -> tuple[str, set[str], set[str], _Landing]:
     """Check the results against the map and fold them in, under the map's lock, in one
     atomic write (new records added or replaced, rows of runs whose raw file changed
     dropped); the map is locked and read only when a result brings or replaces runs.
-    Returns the map's summary line, the ids added or replaced, the ids removed and what
-    ``apply`` made of the results."""
-    touches = any(r.reduced for r in results) or any(
+    The review (``review``, else the one each row holds) is applied in the same write
+    (:func:`tribopipe.review.landing_records`); a decision that fails raises before
+    anything is written. Returns the map's summary line, the ids added or replaced, the
+    ids removed and what ``apply`` made of the results."""
+    touches = review is not None or any(r.reduced for r in results) or any(
         _run_ids(entries.get(r.name)) for r in results)
     if not touches:
         return "unchanged", set(), set(), apply({})
@@ -671,15 +684,17 @@ def _land(campaign: Campaign, results: Sequence[FileOutcome],
         landing.append(apply(map_files_by_hash(current)))
         records, stale = landing[0].records, landing[0].stale_ids
         landing[0].repeats.extend(repeat_clashes(current, records, stale))
-        return records, stale
+        folded, outcome = landing_records(current, records, stale, review,
+                                          campaign.layout.traces_dir)
+        landing[0] = replace(landing[0], review=outcome)
+        ids = stale | {r.measurement_id for r in folded}
+        landing[0].old_groups.update(
+            condition_keys(current.loc[current["measurement_id"].isin(ids)]))
+        return folded, stale
 
     report = update_map_with(campaign.map_path, decide, replace=True)
-    if not (landing[0].records or landing[0].stale_ids):
+    if not (landing[0].records or landing[0].stale_ids or report.changed):
         return "unchanged", set(), set(), landing[0]
     return (report.summary(), set(report.added_ids) | set(report.replaced_ids),
             set(report.dropped_ids), landing[0])
 
-
-def _group_key(row: Mapping[str, Any]) -> tuple[Any, ...]:
-    """The condition group of a record or label dict: pin, disc, nominal F [N], T [°C]."""
-    return (row.get("pin"), row.get("disc"), row.get("normal_force_N"), row.get("temperature_C"))

@@ -42,6 +42,7 @@ _CAMPAIGN_KEYS = frozenset(
         "force_tolerance_N", "force_tolerance_rel", "temperature_tolerance_C",
         "speed_tolerance_rel", "plots", "encoding", "delimiter", "decimal", "synthetic",
         "materials",
+        "review",
     }
 )
 _TOP_LEVEL_TABLES = frozenset({"campaign", "reduction", "names", "metadata"})
@@ -77,6 +78,9 @@ class Campaign:
     vocabulary: Vocabulary = field(default_factory=shipped_vocabulary)
     #: the reporting items of every run (``[metadata]``); a manifest cell overrides them
     report: RunReport = field(default_factory=RunReport)
+    #: the lab's decisions file (``review.csv``, :mod:`tribopipe.review`), applied on every
+    #: batch; ``None``: the map's rows keep the reviews they hold
+    review: Path | None = None
 
     @property
     def use_export_names(self) -> bool:
@@ -271,6 +275,7 @@ def load_campaign(path: str | Path) -> Campaign:
         raise ConfigError(f"[campaign] output_dir: {problem}", path=cfg_path,
                           hint="name a folder (it is created when missing)")
     map_path = rel("map") or OutputLayout(output_dir).map_path
+    review = rel("review")
     manifest = rel("manifest")
     if manifest is not None and not manifest.is_file():
         raise ConfigError(f"[campaign] manifest: file {manifest} not found", path=cfg_path)
@@ -344,6 +349,7 @@ def load_campaign(path: str | Path) -> Campaign:
         synthetic=synthetic,
         read_options=options,
         source=cfg_path,
+        review=review,
     )
 
 

@@ -5,8 +5,8 @@ Which files
 :func:`discover_files`: by default every export the readers know in the raw folder (the
 suffixes of :data:`tribopipe.readers.EXPORT_SUFFIXES`, in any case: ``.csv``, ``.txt``,
 ``.tsv``, ``.xlsx`` and ``.xls``, which is refused with its reason), else the campaign's
-``glob``. Never taken: hidden files, the manifest, campaign configs (``.toml``), and the
-tool's own outputs (the map, anything the output folder holds, ``runs.csv`` and
+``glob``. Never taken: hidden files, the manifest, the review file, campaign configs
+(``.toml``), and the tool's own outputs (the map, anything the output folder holds, ``runs.csv`` and
 ``failures.csv`` tables, state and ``.lock`` files). Any other file that matches and is
 not an export fails with the reader's reason.
 
@@ -128,7 +128,8 @@ def discover_files(campaign: Campaign) -> list[Path]:
                           and not e.name.startswith(".")]
     else:
         candidates = [p for p in root.glob(campaign.glob) if not p.name.startswith(".")]
-    not_runs = {p for p in (campaign.manifest, campaign.source, campaign.map_path) if p}
+    not_runs = {p for p in (campaign.manifest, campaign.source, campaign.map_path,
+                            campaign.review) if p}
     layout = campaign.layout
     inside = campaign.output_dir != root and campaign.output_dir.is_relative_to(root)
     files = [

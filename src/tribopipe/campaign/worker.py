@@ -17,8 +17,7 @@ from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
-from ..errors import CampaignError, TribopipeError
-from ..escape import display_path, printable
+from ..errors import CampaignError, Failure, TribopipeError
 from ..figures import trace_figure
 from ..labels import FLAG_SYNTHETIC, RunLabels, Undescribed
 from ..pipeline import (
@@ -27,7 +26,7 @@ from ..pipeline import (
     FileOutcome,
     RunOutputs,
     RunPlace,
-    failure_reason,
+    failure_of,
     reduce_export,
 )
 from .metadata import ManifestRow, labels_from, merge_metadata, run_report, run_rows
@@ -167,10 +166,10 @@ def fewer_gc_passes() -> Iterator[None]:
         gc.set_threshold(*before)
 
 
-def _failed_file(job: Job, reason: str, *, transient: bool = False) -> FileOutcome:
+def _failed_file(job: Job, failure: Failure, *, transient: bool = False) -> FileOutcome:
     """A file that failed as a whole, outside the route (its labels, a crash)."""
     return FileOutcome(path=job.path, name=job.file, file_hash=job.sha256,
-                       error=FailedRun(name=job.file, reason=reason, transient=transient))
+                       error=FailedRun(name=job.file, failure=failure, transient=transient))
 
 
 def reduce_chunk(jobs: Sequence[Job], ctx: WorkerContext) -> list[FileOutcome]:
@@ -180,18 +179,17 @@ def reduce_chunk(jobs: Sequence[Job], ctx: WorkerContext) -> list[FileOutcome]:
         try:
             out.append(_reduce_one(job, ctx))
         except TribopipeError as exc:
-            out.append(_failed_file(job, failure_reason(exc, job.path, job.file)))
+            out.append(_failed_file(job, failure_of(exc, job.path, job.file)))
         except Exception as exc:  # noqa: BLE001 - one broken file must not stop a campaign
-            out.append(_failed_file(job, printable(
-                f"{display_path(job.file)}: internal error {type(exc).__name__}: {exc} "
-                "(please report with the file)"), transient=True))
+            out.append(_failed_file(job, Failure(
+                f"internal error {type(exc).__name__}: {exc} (please report with the file)",
+                path=job.file), transient=True))
     return out
 
 
 def crashed(jobs: Sequence[Job], exc: BaseException) -> list[FileOutcome]:
     """The results of a chunk whose worker process died (e.g. killed for memory): each
     file a transient failure, tried again next time."""
-    return [_failed_file(job, printable(f"{display_path(job.file)}: worker process failed "
-                                        f"({type(exc).__name__}: {exc}); run again"),
-                         transient=True)
+    return [_failed_file(job, Failure(f"worker process failed ({type(exc).__name__}: {exc}); "
+                                      "run again", path=job.file), transient=True)
             for job in jobs]

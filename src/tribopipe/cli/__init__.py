@@ -26,6 +26,8 @@ COMMANDS: dict[str, str] = {
     "export": "tribopipe.cli.export:export_group",
     "plot": "tribopipe.cli.plot:plot_group",
     "report": "tribopipe.cli.report:report_cmd",
+    "review": "tribopipe.cli.review:review_cmd",
+    "hub": "tribopipe.cli.hub:hub_group",
 }
 
 

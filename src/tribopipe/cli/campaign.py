@@ -35,7 +35,7 @@ def _open(target: str, options: dict[str, Any]) -> Any:
             instrument=options.get("instrument_path"),
             test_pattern=options.get("test_pattern"),
         )
-        return campaign
+        return _with_review(campaign, options.get("review"))
     given = [flag for name, flag in _FOLDER_ONLY.items() if options.get(name)]
     if given:
         flags = ", ".join(given)
@@ -46,7 +46,15 @@ def _open(target: str, options: dict[str, Any]) -> Any:
         from dataclasses import replace
 
         campaign = replace(campaign, map_path=Path(options["map_path"]).resolve())
-    return campaign
+    return _with_review(campaign, options.get("review"))
+
+
+def _with_review(campaign: Any, review: str | None) -> Any:
+    """The campaign with the decisions file ``--review`` gave (else its own)."""
+    from dataclasses import replace
+    from pathlib import Path
+
+    return campaign if review is None else replace(campaign, review=Path(review).resolve())
 
 
 def _shorten(path: Any) -> str:
@@ -141,6 +149,12 @@ def _remember(map_path: Any) -> None:
 
 def _common_run_options(func: Any) -> Any:
     func = click.option(
+        "--review", "review", type=click.Path(exists=True, dir_okay=False), default=None,
+        help="A lab's decisions file (review.csv: accept, exclude or re-window runs; "
+             "`tribopipe review` writes it), applied to every run (default: the config's "
+             "`review`).",
+    )(func)
+    func = click.option(
         "--plots/--no-plots", default=None,
         help="Draw a trace plot per reduced run. Default: the campaign file's `plots`, "
         "else on.",
@@ -196,7 +210,7 @@ _FOLDER_OPTIONS = [
 def batch_cmd(target: str, manifest: str | None, filename_pattern: str | None,
               test_pattern: str | None, glob: str | None, instrument_path: str | None,
               output: str | None, map_path: str | None, jobs: int | None,
-              plots: bool | None) -> None:
+              plots: bool | None, review: str | None) -> None:
     """Reduce a whole campaign: a CAMPAIGN file (TOML) or a FOLDER of exports.
 
     Every friction interval of every test of every export is a run. Only new and changed
@@ -216,7 +230,7 @@ def batch_cmd(target: str, manifest: str | None, filename_pattern: str | None,
     campaign = _open(target, {
         "manifest": manifest, "filename_pattern": filename_pattern,
         "test_pattern": test_pattern, "glob": glob, "instrument_path": instrument_path,
-        "output": output, "map_path": map_path,
+        "output": output, "map_path": map_path, "review": review,
     })
     _run(campaign, jobs, plots)
 
@@ -230,9 +244,10 @@ def campaign_group() -> None:
 @click.argument("campaign", type=click.Path(exists=True, dir_okay=False))
 @_common_run_options
 @friendly_errors
-def run_cmd(campaign: str, map_path: str | None, jobs: int | None, plots: bool | None) -> None:
+def run_cmd(campaign: str, map_path: str | None, jobs: int | None, plots: bool | None,
+            review: str | None) -> None:
     """Reduce the new and changed runs of a CAMPAIGN file (as `tribopipe batch` does)."""
-    _run(_open(campaign, {"map_path": map_path}), jobs, plots)
+    _run(_open(campaign, {"map_path": map_path, "review": review}), jobs, plots)
 
 
 @campaign_group.command("list")

@@ -50,27 +50,31 @@ def _selection(func: Callable[..., Any]) -> Callable[..., Any]:
 
     for option in reversed(
         [
-            click.option("--pin", help="Pin material (default: every pin)."),
-            click.option("--disc", help="Disc material (default: every disc)."),
+            click.option("--pin", help="Pin material. Default: every pin for a table; "
+                         "for one condition, the map's only pin (else required)."),
+            click.option("--disc", help="Disc material. Default: every disc for a table; "
+                         "for one condition, the pin's only disc (else required)."),
             click.option(
                 "--temperature",
                 "temperature_C",
                 type=float,
-                help="One temperature [°C] (interpolated); default: every measured one.",
+                help="One temperature [°C] (interpolated). Default: every measured one for "
+                "a table; for one condition, the pair's only one (else required).",
             ),
             click.option(
                 "--pressure",
                 "pressure_kPa",
                 type=float,
                 help="Contact pressure [kPa] for single-condition input ("
-                + ", ".join(condition_labels()) + ").",
+                + ", ".join(condition_labels()) + "). Default: the pair's only measured "
+                "pressure (else required).",
             ),
             click.option(
                 "--speed",
                 "speed_mm_s",
                 type=float,
-                help="Sliding speed [mm/s] for single-condition input where the pair is "
-                "measured at several (interpolated in log v).",
+                help="Sliding speed [mm/s] for single-condition input (interpolated in "
+                "log v). Default: the pair's only measured speed (else required).",
             ),
             map_option,
             click.option(
@@ -111,7 +115,10 @@ def _command(writer: Writer) -> click.Command:
     def run(output: str | None, map_path: str, **options: Any) -> None:
         from ..export.simulators import export_from_map
 
-        _emit(export_from_map(map_path, writer.name, **options), output)
+        def note(text: str) -> None:
+            say(f"note: {text}", err=True)
+
+        _emit(export_from_map(map_path, writer.name, on_note=note, **options), output)
 
     run.__doc__ = writer.title + (f"\n\n{writer.description}" if writer.description else "")
     func: Callable[..., Any] = friendly_errors(run)

@@ -4,7 +4,14 @@ from __future__ import annotations
 
 import click
 
-from ._common import chosen_map, friendly_errors, lazy_map_option, map_option, say
+from ._common import (
+    chosen_map,
+    friendly_errors,
+    instrument_option,
+    lazy_map_option,
+    map_option,
+    say,
+)
 from .fit import fit_cmd
 from .mastercurve import master_curve_cmd
 
@@ -112,15 +119,31 @@ def merge_cmd(other: str, replace: bool, lab: str | None, map_path: str) -> None
 @click.option("--overwrite", is_flag=True, help="Replace a package already in FOLDER.")
 @click.option("--allow-synthetic", is_flag=True,
               help="Publish rows flagged synthetic (demo data) too; refused without it.")
+@click.option("--traces", "traces_dir", type=click.Path(file_okay=False),
+              help="Folder of the runs' reduced traces (default: traces/ beside the map).")
+@click.option("--with-raw", is_flag=True,
+              help="Include each run's raw export (found in --raw-dir by name and SHA-256).")
+@click.option("--raw-dir", "raw_dirs", multiple=True, type=click.Path(file_okay=False),
+              help="Folder of the raw exports, searched with its sub-folders (repeatable).")
+@click.option("--no-evidence", is_flag=True,
+              help="Leave out the traces and raw exports (summary rows only).")
+@instrument_option
 @map_option
 @friendly_errors
 def publish_cmd(folder: str | None, output: str | None, lab: str, contact: str | None,
                 email: str | None, licence: str, title: str | None, overwrite: bool,
-                allow_synthetic: bool, map_path: str) -> None:
+                allow_synthetic: bool, traces_dir: str | None, with_raw: bool,
+                raw_dirs: tuple[str, ...], no_evidence: bool, instrument_path: str | None,
+                map_path: str) -> None:
     """Write the map as a Frictionless Data Package in the folder -o/--output:
     datapackage.json (schema, units, licence, sources, size and SHA-256 of every file),
     the runs and groups as CSV and Parquet, the 7-column FrictionMap table, the explorer
     page, a README and a CITATION.cff that cites the founding paper.
+
+    The package carries its evidence: each reduced run's trace (Parquet) and, with
+    --with-raw, its raw export, each with its SHA-256 and the method and settings that
+    reduced it (the defaults, or the instrument file given with --instrument), so that
+    `map validate --recompute` can re-derive every μ.
 
     The data licence defaults to CC-BY-4.0. The package is checked as `map validate`
     would before it is moved into place; it is never half-written. A map with runs
@@ -131,6 +154,7 @@ def publish_cmd(folder: str | None, output: str | None, lab: str, contact: str |
       tribopipe map publish -o contribution --lab "Soft Robotics Lab, Uni X" \\
           --contact "A. Person" --email a.person@uni-x.example
     """
+    from ..config import load_settings
     from ..export.citation import Publisher
     from ..export.publish import publish_map
 
@@ -143,16 +167,26 @@ def publish_cmd(folder: str | None, output: str | None, lab: str, contact: str |
     if output is None:
         raise click.UsageError("give the folder to write the package in: -o/--output FOLDER")
     done = publish_map(map_path, output, Publisher(lab, contact, email, licence, title),
-                       overwrite=overwrite, allow_synthetic=allow_synthetic)
+                       overwrite=overwrite, allow_synthetic=allow_synthetic,
+                       evidence=not no_evidence, traces_dir=traces_dir, with_raw=with_raw,
+                       raw_dirs=raw_dirs,
+                       settings=[load_settings(instrument_path)] if instrument_path else [])
     say(f"wrote {done.path}: {done.n_runs} runs in {len(done.files)} files "
         f"(check it with `tribopipe map validate {done.path}`)")
+    if not no_evidence:
+        say(f"evidence: {done.n_traces} traces, {done.n_raw} raw exports")
+    for note in done.notes:
+        say(f"note: {note}")
 
 
 @map_group.command("validate")
 @click.argument("path", required=False, type=click.Path())
+@click.option("--recompute", is_flag=True,
+              help="Also re-derive μ_S and μ_K of every run from the package's traces and "
+              "raw exports, and refuse each row that disagrees beyond its stated U.")
 @lazy_map_option
 @friendly_errors
-def validate_cmd(path: str | None, map_path: str | None) -> None:
+def validate_cmd(path: str | None, map_path: str | None, recompute: bool) -> None:
     """Check a data package someone sent (its folder or datapackage.json): schema and
     units of every field, physical ranges, duplicate ids, provenance (lab, hashes,
     versions, times), licences, the size and SHA-256 of every file, and that the Parquet,
@@ -165,6 +199,12 @@ def validate_cmd(path: str | None, map_path: str | None) -> None:
     PATH may also be a friction map (a .parquet file): its rows are checked as `map
     publish` checks them before writing a package. With --map, or with no PATH, the map
     is checked.
+
+    With --recompute, μ_S and μ_K of every run are re-derived from its raw export where
+    the package holds it (read and reduced again with the package's settings), else
+    from its reduced trace; a row whose stored value differs by more than its stated
+    U = 2u is refused, naming the row and both values. The account says which rows were
+    checked from the trace only and which carry no evidence.
     """
     from ..frictionmap import check_package
 
@@ -172,10 +212,29 @@ def validate_cmd(path: str | None, map_path: str | None) -> None:
         raise click.UsageError("give PATH or --map, not both")
     if path is None:
         path = chosen_map(map_path)
+    if recompute and not path.lower().endswith(".parquet"):
+        from ..evidence import recompute_package
+
+        again = recompute_package(path)
+        for note in again.check.notes:
+            say(f"note: {note}")
+        for line in again.lines():
+            say(line)
+        for line in again.account():
+            say(line)
+        if not again.ok:
+            raise SystemExit(1)
+        say(again.check.verdict() + "; every re-derived μ agrees within its U")
+        return
     if path.lower().endswith(".parquet"):
+        from ..frictionmap.profile import map_upgrade_note
+        from ..frictionmap.store import map_metadata
         from ..frictionmap.summary import check_map_file
 
         problems, verdict = check_map_file(path)
+        upgraded = map_upgrade_note(int(map_metadata(path)["schema_version"]))
+        if upgraded is not None:
+            say(f"note: {upgraded}")
         for line in problems:
             say(line)
         say(verdict)
@@ -183,6 +242,8 @@ def validate_cmd(path: str | None, map_path: str | None) -> None:
             raise SystemExit(1)
         return
     result = check_package(path)
+    for note in result.notes:
+        say(f"note: {note}")
     for line in result.lines():
         say(line)
     if not result.ok:
@@ -194,10 +255,12 @@ def validate_cmd(path: str | None, map_path: str | None) -> None:
 @click.option(
     "--format",
     "fmt",
-    type=click.Choice(["csv", "markdown", "latex", "frictionmap"]),
+    type=click.Choice(["csv", "markdown", "latex", "xlsx", "frictionmap"]),
     default="csv",
     show_default=True,
-    help="Output format; 'frictionmap' is the published 7-column CSV, one row per run.",
+    help="Output format. 'latex' compiles as written with booktabs and siunitx; 'xlsx' is "
+    "a spreadsheet with one sheet per layout and a notes sheet (needs -o); 'frictionmap' "
+    "is the published 7-column CSV, one row per run.",
 )
 @click.option(
     "--layout",
@@ -215,7 +278,14 @@ def validate_cmd(path: str | None, map_path: str | None) -> None:
     "--temperature", "temperature_C", type=float, multiple=True, help="Only this nominal °C."
 )
 @click.option("--by-speed", is_flag=True, help="Also split condition groups by sliding speed.")
-@click.option("-o", "--output", type=click.Path(dir_okay=False), help="Write to FILE.")
+@click.option("--decimal", type=click.Choice([".", ","]), default=".", show_default=True,
+              help="Decimal mark of a CSV: ',' writes it for a decimal-comma locale (cells "
+              "separated by ';'), as Excel there opens a CSV.")
+@click.option("--method", multiple=True,
+              help="Only runs of this test method (repeatable): 'rheometer pin-on-disc', "
+              "'sled D1894', 'linear reciprocating' or 'rotary pin-on-disc'.")
+@click.option("-o", "--output", type=click.Path(dir_okay=False),
+              help="Write to FILE. Default: standard output (not for xlsx).")
 @map_option
 @friendly_errors
 def table_cmd(
@@ -225,10 +295,34 @@ def table_cmd(
     disc: tuple[str, ...],
     temperature_C: tuple[float, ...],
     by_speed: bool,
+    decimal: str,
+    method: tuple[str, ...],
     output: str | None,
     map_path: str,
 ) -> None:
-    """Regenerate a table from the friction map (to stdout, or -o FILE)."""
+    """Regenerate a table from the friction map (to stdout, or -o FILE).
+
+    \b
+      tribopipe map table --layout paper --format latex -o table.tex
+      tribopipe map table --format xlsx -o friction_map.xlsx
+      tribopipe map table --layout paper --decimal , -o table.csv
+    """
+    if fmt == "xlsx":
+        from ..export.workbook import export_workbook
+
+        if output is None:
+            raise click.UsageError("--format xlsx writes a binary file: give -o FILE.xlsx")
+        source = click.get_current_context().get_parameter_source("layout")
+        if source is not None and source.name == "COMMANDLINE":
+            say("note: an xlsx holds every layout, one sheet each: --layout is not needed",
+                err=True)
+        if decimal != ".":
+            raise click.UsageError("--decimal is for --format csv (an xlsx stores numbers)")
+        written = export_workbook(map_path, output, pin=pin, disc=disc,
+                                  temperature_C=temperature_C, by_speed=by_speed,
+                                  method=method)
+        say(f"wrote {written}", err=True)
+        return
     from ..export.tables import export_table
 
     text = export_table(
@@ -240,6 +334,8 @@ def table_cmd(
         disc=disc,
         temperature_C=temperature_C,
         by_speed=by_speed,
+        decimal=decimal,
+        method=method,
     )
     if output is None:
         click.echo(text, nl=False)

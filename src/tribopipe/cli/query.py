@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import math
 
 import click
 
@@ -79,15 +80,18 @@ def query_cmd(
     from ..frictionmap.synthetic_rows import map_synthetic_note
     from ..materials import lab_files, load_vocabulary
     from ..numeric import finite_json
-    from ..query import format_result, pressure_of_force, query_map, value_labs
+    from ..query import format_result, query_map, value_labs
     from ._common import say
 
     if (pressure_kPa is None) == (normal_force_N is None):
         raise click.UsageError("give exactly one of --pressure and --force")
     instrument = None
     if normal_force_N is not None:
+        if not (math.isfinite(normal_force_N) and normal_force_N > 0):
+            raise click.BadParameter(f"expected a finite number > 0 N, got {normal_force_N}",
+                                     param_hint="--force")
         instrument = load_settings(instrument_path).instrument
-        pressure_kPa = pressure_of_force(normal_force_N, instrument)
+        pressure_kPa = instrument.pressure_kPa(normal_force_N)
     assert pressure_kPa is not None
     if use_master_curve:
         _master_curve_query(map_path, pin, disc, pressure_kPa, temperature_C, speed_mm_s,

@@ -66,6 +66,11 @@ def _with_u(value: float | None, expanded: float | None) -> tuple[str, str]:
                    "resolved through (repeatable; default: materials.toml in the current "
                    "folder when it is there).")
 @instrument_option
+@click.option("--zero", "zero",
+              help="The zero of the torque or friction force: 'auto' (estimated where the "
+              "instrument is at rest and unloaded; refused and flagged zero_under_load when "
+              "already loaded), 'off' (0), or a value in N·m (torque) or N (friction "
+              "force). Default: the instrument file's zero_offset.")
 @lazy_map_option
 @click.option("--no-map", is_flag=True,
               help="Do not append the runs to the friction map, and write nothing unless "
@@ -99,6 +104,7 @@ def reduce_cmd(
     repeat: int | None,
     materials_files: tuple[str, ...],
     instrument_path: str | None,
+    zero: str | None,
     map_path: str | None,
     no_map: bool,
     replace: bool,
@@ -129,7 +135,7 @@ def reduce_cmd(
     How μ_S and μ_K are found: docs/method.md, which points to the method's one
     description (the docstring of the package tribopipe.reduction).
     """
-    from ..config import load_settings
+    from ..config import load_settings, with_zero
     from ..frictionmap.store import read_map
     from ..labels import RunLabels
     from ..materials import lab_files, load_vocabulary
@@ -145,6 +151,8 @@ def reduce_cmd(
         raise click.UsageError("--plots with --no-map: give -o/--output, the folder for the "
                                "plots (--no-map alone writes nothing)")
     settings = load_settings(instrument_path)
+    if zero is not None:
+        settings = with_zero(settings, zero)
     if not no_map:
         map_path = chosen_map(map_path)
         if labels.complete:
@@ -200,6 +208,8 @@ def _reduced(results: list[FileOutcome]) -> list[tuple[FileOutcome, ReducedRun]]
 def _run_labels(runs: list[tuple[FileOutcome, ReducedRun]]) -> dict[int, str]:
     """The run column: test and interval (the result too where a test has several) for
     the runs of files that hold several; empty for one-run files."""
+    from ..measurement import interval_label
+
     results_per_test: dict[tuple[str, object], set[str | None]] = {}
     for f, o in runs:
         results_per_test.setdefault((f.path, o.place.test), set()).add(o.place.result)
@@ -208,13 +218,9 @@ def _run_labels(runs: list[tuple[FileOutcome, ReducedRun]]) -> dict[int, str]:
         if not f.several:
             continue
         place = o.place
-        parts = [p for p in (place.test,) if p]
-        if len(results_per_test[(f.path, place.test)]) > 1 and place.result:
-            parts.append(place.result)
-        if place.interval is not None:
-            parts.append(f"interval {place.interval}")
-        text = " / ".join(parts)
-        shown[k] = f"{text} #{place.occurrence}" if place.occurrence > 1 else text
+        several_results = len(results_per_test[(f.path, place.test)]) > 1
+        shown[k] = interval_label(place.test, place.result if several_results else None,
+                                  place.interval, place.occurrence)
     return shown
 
 

@@ -59,7 +59,7 @@ from ..query import (
     select_pair,
 )
 from ..rounding import known_u
-from ..stats import NOMINAL_SPEED, group_statistics, group_u
+from ..stats import NOMINAL_SPEED, TEST_METHOD, group_statistics, group_u, test_methods
 from .registry import WRITERS
 from .simulators import snippet_header
 
@@ -196,8 +196,12 @@ def _runs(pair_runs: pd.DataFrame) -> list[dict[str, Any]]:
             else None,
             "test": _plain(r.get("test")),
             "result": _plain(r.get("result")),
+            "test_method": method,
+            # a reviewer's decision (tribopipe.review): accept or window; None when none
+            "review": _plain(r.get("review")),
         }
-        for r in ordered.to_dict(orient="records")
+        for r, method in zip(ordered.to_dict(orient="records"), test_methods(ordered),
+                             strict=True)
     ]
 
 
@@ -237,10 +241,12 @@ def explorer_data(
     tribopipe_version, generated, pairs`` (per pair: ``pin, disc, mu_k_points,
     mu_s_points, speed_mm_s, speeds, left_out, runs, fits``; ``speeds`` lists
     ``speed_mm_s, mu_k_points, mu_s_points`` per measured nominal speed where the pair
-    has several, else it is empty), ``groups`` (the group table, each row with
-    the index of its ``pair``), ``snippets`` (the simulator formats the page copies:
-    name, label, file suffix) and ``snippet_headers`` (the opening lines of
-    :func:`tribopipe.export.simulators.snippet` per format). Pressures in kPa,
+    has several, else it is empty; each run with its ``test_method``), ``groups`` (the
+    group table, each row with the index of its ``pair`` and its ``test_method``),
+    ``methods`` (the test methods of the included runs, in the map's order: the page
+    filters the group table by them where there are several), ``snippets`` (the
+    simulator formats the page copies: name, label, file suffix) and ``snippet_headers``
+    (the opening lines of :func:`tribopipe.export.simulators.snippet` per format). Pressures in kPa,
     temperatures in °C. Raises :class:`ExportError` when no run is left. Inputs are not
     modified.
     """
@@ -253,7 +259,9 @@ def explorer_data(
             hint="reduce runs first (tribopipe reduce / batch) or import the published map",
         )
     if groups is None:
-        groups = group_statistics(included)
+        groups = group_statistics(included, show_method=True)
+    run_methods = test_methods(included)
+    methods = list(dict.fromkeys(str(m) for m in run_methods))
     if fits is None:
         fits = fit_power_law(runs)
     run_pin, run_disc = included["pin"].map(_key), included["disc"].map(_key)
@@ -300,6 +308,10 @@ def explorer_data(
         row.update({name: _plain(g.get(name)) for name in GROUP_FIELDS})
         if NOMINAL_SPEED in g:  # a map with a pair of several speeds
             row[NOMINAL_SPEED] = _plain(g[NOMINAL_SPEED])
+        # the group's one test method (groups never pool two; a table that does not
+        # show it comes from a map of one method)
+        row[TEST_METHOD] = str(g[TEST_METHOD]) if isinstance(g.get(TEST_METHOD), str) \
+            else methods[0]
         for q, values in expanded.items():  # U (k = 2) of the group mean, where known
             row[f"{q}_U"] = float(values.iloc[i]) if known_u(float(values.iloc[i])) else None
         group_rows.append(row)
@@ -311,6 +323,9 @@ def explorer_data(
         "generated": datetime.now(UTC).strftime("%Y-%m-%d %H:%M UTC"),
         "pairs": pair_rows,
         "groups": group_rows,
+        # the test methods of the included runs, in the map's order (the page filters
+        # the group table by them where there are several)
+        "methods": methods,
         # the map's κ for the interpolation's own uncertainty (tribopipe.interpolation)
         "curvature": {q: map_curvature(groups, q) for q in ("mu_k", "mu_s")},
         # the simulator formats the page copies (every registered format with a

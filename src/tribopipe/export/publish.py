@@ -39,7 +39,18 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from .. import __version__
+from ..config import Settings
 from ..errors import ExportError
+from ..evidence import (
+    INDEX_FIELDS,
+    INDEX_PATH,
+    INDEX_RESOURCE,
+    SETTINGS_PATH,
+    SETTINGS_RESOURCE,
+    Evidence,
+    gather_evidence,
+    write_evidence,
+)
 from ..fit import fit_power_law
 from ..frictionmap import RUN_COLUMNS, check_package, read_map
 from ..frictionmap.checks import validate_runs
@@ -62,6 +73,7 @@ from ..frictionmap.package import (
     RUNS,
     RUNS_PARQUET,
 )
+from ..frictionmap.profile import PROFILE_NAME, PROFILE_VERSION, profile_schema, schema_file
 from ..frictionmap.published import FOUNDING_PAPER, PUBLISHED_LAB
 from ..frictionmap.schema import KIND, SCHEMA_NAME, SCHEMA_VERSION, SOURCE_PUBLISHED
 from ..frictionmap.store import write_map_copy
@@ -92,6 +104,11 @@ class PublishedPackage:
     path: Path
     n_runs: int
     files: tuple[str, ...]
+    #: what the evidence lacks (runs without a trace or raw export, unknown settings)
+    notes: tuple[str, ...] = ()
+    #: runs with a trace, and with a raw export, in ``evidence/``
+    n_traces: int = 0
+    n_raw: int = 0
 
 
 # --------------------------------------------------------------------------- CSV
@@ -193,11 +210,12 @@ def _resource(name: str, path: str, data: bytes, *, title: str, fmt: str, mediat
     }
     if fmt == "csv":
         res["encoding"] = "utf-8"
-    if fmt == "parquet":
+    if fmt == "parquet" or mediatype == "application/schema+json":
         # A Parquet file carries its own schema (the runs' with units in the metadata) and
         # the CSV resource beside it describes the same table; as a "file" the frictionless
         # tools check its size and hash rather than reading it through their Parquet plugin
-        # (which takes NaN for a value and cannot count its bytes).
+        # (which takes NaN for a value and cannot count its bytes). A JSON Schema is a
+        # "file" too: the frictionless tools would read it as a Table Schema.
         res["type"] = "file"
     if schema is not None:
         res["schema"] = schema
@@ -205,9 +223,10 @@ def _resource(name: str, path: str, data: bytes, *, title: str, fmt: str, mediat
 
 
 def build_package(runs: pd.DataFrame, publisher: Publisher, folder: Path, *,
-                  date: str) -> list[str]:
-    """Write the package of ``runs`` (labs filled) into the existing empty ``folder``;
-    returns the files written (relative paths), the descriptor last."""
+                  date: str, evidence: Evidence | None = None) -> list[str]:
+    """Write the package of ``runs`` (labs filled) into the existing empty ``folder``,
+    with ``evidence`` (:mod:`tribopipe.evidence`) when given; returns the files written
+    (relative paths), the descriptor last."""
     year = int(date[:4])
     (folder / "data").mkdir()
     groups = group_statistics(runs)
@@ -247,6 +266,20 @@ def build_package(runs: pd.DataFrame, publisher: Publisher, folder: Path, *,
         frictionmap_csv(frictionmap_table(runs)).encode(),
         title="The included runs in the 7-column table of the founding paper's MATLAB app",
         fmt="csv", mediatype="text/csv", schema=table_schema(FRICTIONMAP_FIELDS))
+    if evidence is not None:
+        index, settings_json = write_evidence(folder, evidence)
+        add(INDEX_RESOURCE, INDEX_PATH, index,
+            title="Evidence: each run's reduced trace and raw export, with their SHA-256, "
+                  "settings and method (files under evidence/)",
+            fmt="csv", mediatype="text/csv", schema=table_schema(list(INDEX_FIELDS)))
+        add(SETTINGS_RESOURCE, SETTINGS_PATH, settings_json,
+            title="The settings that reduced the runs, by config hash (method, instrument, "
+                  "reduction parameters)", fmt="json", mediatype="application/json")
+    (folder / "profile").mkdir()
+    add("profile-schema", schema_file(),
+        (json.dumps(profile_schema(), indent=2, ensure_ascii=False) + "\n").encode(),
+        title=f"JSON Schema of this package's descriptor (package profile version "
+              f"{PROFILE_VERSION})", fmt="json", mediatype="application/schema+json")
     page = explorer_page(explorer_data(runs, groups=groups, fits=fits,
                                        title=publisher.package_title, source=publisher.lab))
     add("explorer", "explorer.html", page.encode(), title="Explorer page (open in a browser)",
@@ -286,6 +319,7 @@ def build_package(runs: pd.DataFrame, publisher: Publisher, folder: Path, *,
         "keywords": ["friction", "tribology", "coefficient of friction", "soft robotics"],
         "citation": citation_text(publisher, year),
         TRIBOPIPE_KEY: {
+            "profile": PROFILE_NAME, "profile_version": PROFILE_VERSION,
             "schema": SCHEMA_NAME, "schema_version": SCHEMA_VERSION, "lab": publisher.lab,
             "tribopipe_version": __version__, "n_runs": len(runs),
             "labs": sorted(set(runs["lab"].dropna().astype(str))),
@@ -299,7 +333,10 @@ def build_package(runs: pd.DataFrame, publisher: Publisher, folder: Path, *,
 
 def publish_map(map_path: str | os.PathLike[str], out_dir: str | os.PathLike[str],
                 publisher: Publisher, *, overwrite: bool = False,
-                date: str | None = None, allow_synthetic: bool = False) -> PublishedPackage:
+                date: str | None = None, allow_synthetic: bool = False,
+                evidence: bool = True, traces_dir: str | os.PathLike[str] | None = None,
+                with_raw: bool = False, raw_dirs: Sequence[str | os.PathLike[str]] = (),
+                settings: Sequence[Settings] = ()) -> PublishedPackage:
     """Write the map at ``map_path`` as a data package in the folder ``out_dir`` (see the
     module docstring). ``date`` (``YYYY-MM-DD``, default today, UTC) is the release date.
 
@@ -308,6 +345,12 @@ def publish_map(map_path: str | os.PathLike[str], out_dir: str | os.PathLike[str
     empty — unless it is a package and ``overwrite`` is given; and for a map with rows
     flagged synthetic (:mod:`tribopipe.frictionmap.synthetic_rows`) unless
     ``allow_synthetic`` is given (they are never a lab's measurements).
+
+    With ``evidence`` (the default) the package carries each reduced run's trace, found
+    under ``traces_dir`` (default: ``traces/`` beside the map), and with ``with_raw`` its
+    raw export, found by name and SHA-256 under ``raw_dirs``; the settings that reduced
+    them are those of ``settings`` (and the defaults) whose config hash the rows name
+    (:mod:`tribopipe.evidence`). What cannot be found is in the result's ``notes``.
     """
     publisher = publisher.checked()
     date = date or datetime.now(UTC).strftime("%Y-%m-%d")
@@ -335,11 +378,17 @@ def publish_map(map_path: str | os.PathLike[str], out_dir: str | os.PathLike[str
         more = f" (and {len(problems) - 1} more)" if len(problems) > 1 else ""
         raise ExportError(f"{problems[0].line('map')}{more}; fix or exclude the run before "
                           "publishing", path=map_path)
+    found = None
+    if evidence:
+        traces = Path(traces_dir) if traces_dir is not None else Path(map_path).parent / "traces"
+        found = gather_evidence(runs, traces_dir=traces if traces.is_dir() else None,
+                                raw_dirs=[Path(p) for p in raw_dirs], settings=settings,
+                                with_raw=with_raw)
     target.parent.mkdir(parents=True, exist_ok=True)
     tmp = Path(tempfile.mkdtemp(prefix=f".{target.name}.", suffix=".tmp", dir=target.parent))
     try:
         tmp.chmod(0o755)  # mkdtemp's 0700 would make the published folder private
-        files = build_package(runs, publisher, tmp, date=date)
+        files = build_package(runs, publisher, tmp, date=date, evidence=found)
         check = check_package(tmp)
         if not check.ok:  # a package we write must validate: a bug, said plainly
             raise ExportError("the package written does not validate: "
@@ -348,7 +397,11 @@ def publish_map(map_path: str | os.PathLike[str], out_dir: str | os.PathLike[str
     except BaseException:
         shutil.rmtree(tmp, ignore_errors=True)
         raise
-    return PublishedPackage(target, len(runs), tuple(files))
+    if found is None:
+        return PublishedPackage(target, len(runs), tuple(files))
+    return PublishedPackage(target, len(runs), tuple(files), found.notes,
+                            sum(f.trace is not None for f in found.files),
+                            sum(f.raw is not None for f in found.files))
 
 
 def _check_target(target: Path, overwrite: bool) -> None:

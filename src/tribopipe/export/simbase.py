@@ -31,8 +31,8 @@ from xml.sax.saxutils import quoteattr
 from .. import __version__
 from ..errors import ExportError
 from ..escape import sim_comment
-from ..frictionmap.published import PUBLISHED_SLIDING_SPEED_MM_S
 from ..interpolation import ENGINE_TOLERANCE
+from ..physics import FOUNDING_SLIDING_SPEED_MM_S
 from ..query import (
     QueryResult,
     friction_table,
@@ -46,9 +46,6 @@ from .registry import COEFFICIENT
 
 if TYPE_CHECKING:
     import pandas as pd
-
-#: The founding paper's sliding speed [mm/s]: the slip rate where no run records one.
-FOUNDING_SLIP_RATE_MM_S = PUBLISHED_SLIDING_SPEED_MM_S
 
 #: Which measured coefficient a single-coefficient engine gets for the onset of slip.
 COEFFICIENTS = COEFFICIENT.choices
@@ -226,7 +223,7 @@ def static_and_dynamic(res: QueryResult) -> tuple[float, float, str]:
     return res.mu_s.value, mu_k, "static = mu_s (breakaway), dynamic = mu_k (sliding)"
 
 
-def default_decay_s_per_mm(slip_rate_mm_s: float = FOUNDING_SLIP_RATE_MM_S) -> float:
+def default_decay_s_per_mm(slip_rate_mm_s: float = FOUNDING_SLIDING_SPEED_MM_S) -> float:
     """d_c [s/mm] that lets μ decay 99 % of the way from μ_S to μ_K at the measured slip rate.
 
     The exponential model (ABAQUS, LS-DYNA) is μ = μ_k + (μ_s − μ_k)·exp(−d_c·v); a
@@ -281,7 +278,7 @@ class SlipRate:
         return text
 
 
-FOUNDING_SLIP_RATE = SlipRate(FOUNDING_SLIP_RATE_MM_S, 0, math.nan, math.nan)
+FOUNDING_SLIP_RATE = SlipRate(FOUNDING_SLIDING_SPEED_MM_S, 0, math.nan, math.nan)
 
 
 def slip_rate_of(rates: Mapping[tuple[str, str], SlipRate] | None, pin: str, disc: str) -> SlipRate:

@@ -11,14 +11,15 @@ touches the file system beyond reading the map.
 from __future__ import annotations
 
 import inspect
-from collections.abc import Mapping
+import math
+from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from ..errors import ExportError
 from ..escape import markdown_cell
 from ..frictionmap import read_map
-from ..query import QueryResult, groups_of, pairs, query, select_pair
+from ..query import QueryResult, groups_of, pair_speeds, query, select_pair
 from .registry import (
     FORMATS,
     WRITERS,
@@ -63,6 +64,79 @@ def _mode_options(
     return chosen
 
 
+def _narrowed(groups: pd.DataFrame, column: str, value: str | None) -> pd.DataFrame:
+    """The groups whose ``column`` is ``value`` (case-insensitive); all of them when
+    ``value`` is not given or matches none (the pair's own check names it then)."""
+    if value is None:
+        return groups
+    sel = groups[groups[column].astype(str).str.strip().str.casefold()
+                 == value.strip().casefold()]
+    return groups if sel.empty else sel
+
+
+def _numbers(values: Any) -> list[float]:
+    """The distinct finite numbers of a column, sorted."""
+    return sorted({float(v) for v in values if v is not None and math.isfinite(float(v))})
+
+
+def one_condition(
+    groups: pd.DataFrame,
+    what: str,
+    pin: str | None,
+    disc: str | None,
+    pressure_kPa: float | None,
+    temperature_C: float | None,
+    speed_mm_s: float | None,
+    on_note: Callable[[str], None] | None = None,
+) -> tuple[str, str, float, float | None, float | None]:
+    """The condition a single-condition output is written for: ``(pin, disc, pressure
+    [kPa], temperature [°C], speed [mm/s])``. A choice not given where the map holds
+    one value (among the groups the given choices leave) takes that value, said through
+    ``on_note``; every choice still missing is named in ONE :class:`ExportError` with the
+    values the map holds for it, so that one more command is enough."""
+    missing: list[str] = []
+    for column, given in (("pin", pin), ("disc", disc)):
+        names = sorted({str(v) for v in groups[column]}) if not groups.empty else []
+        if given is not None and given.strip().casefold() not in {n.casefold() for n in names}:
+            missing.append(f"--{column} that the map holds ({', '.join(names)}; "
+                           f"{given!r} is not one)")
+    held = _narrowed(_narrowed(groups, "pin", pin), "disc", disc)
+
+    def choose(flag: str, given: Any, values: list[Any], shown: list[str], unit: str) -> Any:
+        if given is not None or not values:
+            return given
+        if len(values) == 1:
+            if on_note is not None:
+                on_note(f"{flag} {shown[0]}{unit}: the only value the map holds here; taken")
+            return values[0]
+        missing.append(f"{flag} ({', '.join(shown)}{unit})")
+        return None
+
+    pins = sorted({str(v) for v in held["pin"]})
+    pin = choose("--pin", pin, pins, pins, "")
+    discs = sorted({str(v) for v in _narrowed(held, "pin", pin)["disc"]})
+    disc = choose("--disc", disc, discs, discs, "")
+    held = _narrowed(_narrowed(held, "pin", pin), "disc", disc)
+    pressures = _numbers(held["pressure_kPa"])
+    pressure_kPa = choose("--pressure", pressure_kPa, pressures,
+                          [f"{p:.4g}" for p in pressures], " kPa")
+    temps = _numbers(held["temperature_C"]) if "temperature_C" in held.columns else []
+    temperature_C = choose("--temperature", temperature_C, temps,
+                           [f"{t:g}" for t in temps], " °C")
+    speeds = pair_speeds(held) if not held.empty else []
+    if speed_mm_s is None and len(speeds) > 1:
+        missing.append(f"--speed ({', '.join(f'{v:g}' for v in speeds)} mm/s)")
+    if missing or pin is None or disc is None or pressure_kPa is None:
+        if held.empty:
+            raise ExportError(f"{what} takes one condition, and the friction map is empty",
+                              hint="reduce runs first (tribopipe batch)")
+        raise ExportError(
+            f"{what} takes one condition; give " + "; ".join(missing)
+            + (" (the values the map holds; a pressure or temperature between them is "
+               "interpolated)"))
+    return pin, disc, float(pressure_kPa), temperature_C, speed_mm_s
+
+
 def export_simulator_input(
     groups: pd.DataFrame,
     fmt: str,
@@ -74,14 +148,16 @@ def export_simulator_input(
     slip_rates: Mapping[tuple[str, str], SlipRate] | None = None,
     source: str | None = None,
     speed_mm_s: float | None = None,
+    on_note: Callable[[str], None] | None = None,
     **options: Any,
 ) -> str:
     """The input text for simulator ``fmt`` (one of :data:`FORMATS`).
 
     Table formats take any selection of pairs (``pin``/``disc`` ``None`` = all) and every
     measured pressure; single-condition formats need ``pin``, ``disc`` and
-    ``pressure_kPa`` [kPa] (a missing one is an :class:`ExportError` that lists what the
-    map holds), at ``temperature_C`` [°C]. ``options`` are the format's own (its
+    ``pressure_kPa`` [kPa], at ``temperature_C`` [°C]: :func:`one_condition` takes a
+    choice the map holds one value for (said through ``on_note``) and names every one
+    still missing in one :class:`ExportError`. ``options`` are the format's own (its
     :class:`~tribopipe.export.registry.Writer` declares them, e.g. ``coefficient``,
     ``units``); one it does not take is refused. ``slip_rates`` holds each pair's
     measured sliding speed (:func:`~tribopipe.export.simbase.pair_slip_rates`); pairs
@@ -113,20 +189,9 @@ def export_simulator_input(
         return function(writer.table)(groups, pin=pin, disc=disc,
                                       temperature_C=temperature_C, source=source, **chosen)
     what = f"{fmt} --pressure" if constant else writer.label(True)
-    if pin is None or disc is None:
-        listing = "; ".join(f"{p} on {d}" for p, d in pairs(groups)) or "nothing"
-        raise ExportError(
-            f"{what} takes one condition: give the pin and the disc; the map holds: {listing}",
-            hint="pass --pin and --disc",
-        )
+    pin, disc, pressure_kPa, temperature_C, speed_mm_s = one_condition(
+        groups, what, pin, disc, pressure_kPa, temperature_C, speed_mm_s, on_note)
     pair = select_pair(groups, pin, disc)
-    if pressure_kPa is None:
-        measured = ", ".join(f"{p:g}" for p in sorted(set(pair["pressure_kPa"])))
-        raise ExportError(
-            f"{what} takes one condition: give the contact pressure; "
-            f"{pin} on {disc} is measured at {measured} kPa",
-            hint="pass --pressure KPA",
-        )
     res = query(groups, pin, disc, pressure_kPa, temperature_C, speed_mm_s)
     if constant:
         write = function(writer.snippet)

@@ -19,8 +19,9 @@ Layouts (each a DataFrame; units in the column names):
     (where the groups come from more than one lab) names the labs of each value.
     Flags: ``range > r``, ``labs disagree`` (beyond R, :mod:`tribopipe.stats`),
     ``flagged run``, ``stated u`` (some run carries no budget of its own: its u is the
-    stated estimate, :func:`tribopipe.stats.stated_u`), ``n = 1``. As CSV the value and
-    U are separate columns.
+    stated estimate, :func:`tribopipe.stats.stated_u`), ``n = 1``, ``N reviewed`` (runs a
+    reviewer accepted or re-windowed, :mod:`tribopipe.review`). As CSV the value and U
+    are separate columns.
 ``frictionmap``
     one row per included run in the published schema ``pin, disc, contactForce,
     contactPressure, temperature, measurementNo, cof`` (force [N], pressure [kPa],
@@ -35,10 +36,12 @@ from __future__ import annotations
 
 import math
 import os
+import re
 from collections.abc import Hashable, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from ..config import TEST_METHODS
 from ..errors import ExportError
 from ..escape import csv_cell, latex_cell, markdown_cell, printable
 from ..files import write_text_atomic
@@ -50,9 +53,11 @@ from ..stats import (
     LABS,
     LABS_DISAGREE,
     NOMINAL_SPEED,
+    TEST_METHOD,
     group_keys,
     group_statistics,
     group_u,
+    test_methods,
 )
 
 if TYPE_CHECKING:
@@ -111,7 +116,8 @@ def abstract_table(
     μ_K the group mean rounded half-up to two decimals, as printed in the paper."""
     groups = group_table(runs, pin=pin, disc=disc, temperature_C=temperature_C)
     condition = ["pin", "disc", "pressure_kPa", "temperature_C"] + (
-        [NOMINAL_SPEED] if NOMINAL_SPEED in groups.columns else [])
+        [NOMINAL_SPEED] if NOMINAL_SPEED in groups.columns else []) + (
+        [TEST_METHOD] if TEST_METHOD in groups.columns else [])
     table = groups.loc[:, condition].copy()
     table["mu_k"] = [round_half_up(v, 2) for v in groups["mu_k_mean"]]
     return table
@@ -151,6 +157,8 @@ def paper_table(
                                  names[1]: [_cell(v, "g") for v in groups["temperature_C"]]}
     if by_speed:
         out[names[2]] = [_cell(v, ".2g") for v in groups[NOMINAL_SPEED]]
+    if TEST_METHOD in groups.columns:  # the map holds several methods: never pooled
+        out[TEST_METHOD if machine else "method"] = list(groups[TEST_METHOD])
     if len({lab for v in groups[LABS] for lab in str(v).split(";")}) > 1:
         out["labs"] = [str(v).replace(";", ", ") for v in groups[LABS]]
     out["n"] = [int(v) for v in groups["mu_k_n"]]
@@ -176,7 +184,8 @@ def paper_table(
     for i, g in enumerate(groups.itertuples(index=False)):
         flags[i] = (["range > r"] if g.range_exceeds_r else []) + (
             ["labs disagree"] if getattr(g, LABS_DISAGREE) else []) + (
-            ["flagged run"] if g.qc_flagged else []) + flags[i]
+            ["flagged run"] if g.qc_flagged else []) + flags[i] + (
+            [f"{g.reviewed} reviewed"] if getattr(g, "reviewed", 0) else [])
     out["flags"] = [", ".join(f) for f in flags]
     import pandas as pd
 
@@ -327,14 +336,28 @@ def _is_bool(column: Any) -> bool:
     return bool(pd.api.types.is_bool_dtype(column.dtype))
 
 
-def to_csv(table: pd.DataFrame, formats: dict[str, str] | None = None) -> str:
+def to_csv(table: pd.DataFrame, formats: dict[str, str] | None = None, *,
+           decimal: str = ".") -> str:
     """CSV text (``\\n`` line ends); floats with ten significant digits, missing as empty,
-    text cells safe for spreadsheets (:func:`_safe_text_cells`).
+    text cells safe for spreadsheets (:func:`_safe_text_cells`). ``decimal=","`` writes
+    it for a decimal-comma locale: cells separated by ``;``, numbers with a decimal comma
+    (a rounded number kept as text, ``0.740``, too), as Excel there reads a CSV.
 
     ``formats`` is accepted for a uniform writer signature and ignored: CSV is for machines.
     """
-    return _safe_text_cells(table).to_csv(index=False, lineterminator="\n",
-                                          float_format="%.10g")
+    if decimal not in (".", ","):
+        raise ExportError(f"unknown decimal mark {decimal!r}; expected '.' or ','")
+    safe = _safe_text_cells(table)
+    if decimal == ".":
+        return safe.to_csv(index=False, lineterminator="\n", float_format="%.10g")
+    safe = safe.copy()
+    for column in safe.columns:
+        if not _numeric(safe, column) and not _is_bool(safe[column]):
+            safe[column] = safe[column].map(
+                lambda v: v.replace(".", ",") if isinstance(v, str) and _PLAIN_NUMBER.match(v)
+                else v)
+    return safe.to_csv(index=False, lineterminator="\n", float_format="%.10g", sep=";",
+                       decimal=",")
 
 
 def spreadsheet_csv(table: pd.DataFrame) -> str:
@@ -399,22 +422,145 @@ def to_markdown(table: pd.DataFrame, formats: dict[str, str] | None = None) -> s
     return "\n".join(lines) + "\n"
 
 
-def to_latex(table: pd.DataFrame, formats: dict[str, str] | None = None) -> str:
-    """A booktabs ``tabular`` (needs ``\\usepackage{booktabs}``); numbers right-aligned,
-    floats formatted as in :func:`to_markdown`."""
+#: the packages a LaTeX table needs in the document's preamble (its first lines say so)
+LATEX_PACKAGES: tuple[str, ...] = ("booktabs", "siunitx")
+_PLAIN_NUMBER = re.compile(r"^(-?)(\d+)(?:\.(\d+))?$")
+
+
+def latex_header(what: str) -> list[str]:
+    """The comment lines that open every LaTeX table: what it is and what it needs."""
+    return [f"% {latex_comment(what)}",
+            "% Needs in the preamble: " + " ".join(f"\\usepackage{{{p}}}"
+                                                  for p in LATEX_PACKAGES),
+            "% Put it in a table with \\input{this file}."]
+
+
+def latex_comment(text: str) -> str:
+    """One line of inert text for a LaTeX comment (a name in it is escaped as in a cell,
+    so no newline ends the comment and no ``%`` or ``\\`` acts)."""
+    return latex_cell(text)
+
+
+def _number_column(cells: Sequence[str]) -> str | None:
+    """The siunitx ``S`` column spec aligning ``cells`` on the decimal point
+    (``S[table-format=-2.3]``), or ``None`` when a cell is not a plain decimal number."""
+    ints, decs, sign = 1, 0, ""
+    seen = False
+    for cell in cells:
+        if cell == "":
+            continue
+        m = _PLAIN_NUMBER.match(cell)
+        if m is None:
+            return None
+        seen = True
+        sign = sign or m.group(1)
+        ints = max(ints, len(m.group(2)))
+        decs = max(decs, len(m.group(3) or ""))
+    if not seen:
+        return None
+    return f"S[table-format={sign}{ints}.{decs}]" if decs else f"S[table-format={sign}{ints}]"
+
+
+def to_latex(table: pd.DataFrame, formats: dict[str, str] | None = None, *,
+             what: str = "tribopipe friction-map table") -> str:
+    """A booktabs ``tabular`` that compiles as written with the packages its first lines
+    name (:data:`LATEX_PACKAGES`): numeric columns aligned on the decimal point
+    (siunitx ``S``; ``r`` where a cell is not a plain decimal), every text cell escaped
+    (:func:`~tribopipe.escape.latex_cell`), floats formatted as in :func:`to_markdown`."""
     table = _short_values(table)
     specs = _specs(table, formats)
-    spec = "".join("r" if _numeric(table, c) else "l" for c in table.columns)
-    lines = [
-        f"\\begin{{tabular}}{{{spec}}}",
-        "\\toprule",
-        " & ".join(latex_cell(str(c)) for c in table.columns) + " \\\\",
-        "\\midrule",
-    ]
-    for row in table.itertuples(index=False, name=None):
-        cells = (latex_cell(_cell(v, f)) for v, f in zip(row, specs, strict=True))
+    rows = [[_cell(v, f) for v, f in zip(row, specs, strict=True)]
+            for row in table.itertuples(index=False, name=None)]
+    columns: list[str] = []
+    for i, c in enumerate(table.columns):
+        number = _number_column([r[i] for r in rows]) if _numeric(table, c) else None
+        columns.append(number or ("r" if _numeric(table, c) else "l"))
+    head = [("{" + latex_cell(str(c)) + "}") if spec.startswith("S") else latex_cell(str(c))
+            for c, spec in zip(table.columns, columns, strict=True)]
+    lines = [*latex_header(what),
+             f"\\begin{{tabular}}{{{''.join(columns)}}}",
+             "\\toprule",
+             " & ".join(head) + " \\\\",
+             "\\midrule"]
+    for row in rows:
+        cells = (latex_cell(v) if not spec.startswith("S") or v == "" else v
+                 for v, spec in zip(row, columns, strict=True))
         lines.append(" & ".join(cells) + " \\\\")
     lines += ["\\bottomrule", "\\end{tabular}"]
+    return "\n".join(lines) + "\n"
+
+
+def runs_of_methods(runs: pd.DataFrame, methods: Sequence[str]) -> pd.DataFrame:
+    """The runs measured with one of ``methods`` (a row naming none was measured on the
+    rheometer cell, :func:`tribopipe.stats.test_methods`); :class:`ExportError` naming the
+    known methods for an unknown one."""
+    unknown = [m for m in methods if m not in TEST_METHODS]
+    if unknown:
+        raise ExportError(f"unknown test method {printable(unknown[0])[:60]!r}; expected one "
+                          "of " + ", ".join(repr(m) for m in TEST_METHODS))
+    return runs.loc[[m in set(methods) for m in test_methods(runs)]]
+
+
+#: the paper layout's column heads in LaTeX (the units upright, siunitx's °C)
+_PAPER_LATEX_HEADS = {"pin": "pin", "disc": "disc", "pressure_kPa": "{$p$ [kPa]}",
+                      "temperature_C": "{$T$ [\\si{\\degreeCelsius}]}",
+                      NOMINAL_SPEED: "{$v$ [mm/s]}", "n": "{$n$}", "flags": "flags",
+                      TEST_METHOD: "method"}
+
+
+def _pm_cells(value: str, expanded: str) -> tuple[str, str, str]:
+    """A group mean for the LaTeX paper table as three cells: value, ``$\\pm$``, U
+    (:func:`tribopipe.rounding.plus_minus`'s rule: bounded at zero where value − U < 0,
+    written +U/−value as a superscript and subscript; no U: the value alone)."""
+    from decimal import Decimal
+
+    if value == "":
+        return "{--}", "", ""
+    if expanded == "":
+        return value, "", ""
+    if Decimal(value) < Decimal(expanded):
+        return value, "", f"{{$^{{+{expanded}}}_{{-{value}}}$}}"
+    return value, "$\\pm$", expanded
+
+
+def paper_latex(runs: pd.DataFrame, **filters: Any) -> str:
+    """The paper layout as a LaTeX table that compiles as written (:func:`to_latex`'s
+    header): μ_S and μ_K each as value, ±, U in three columns, the value and U aligned on
+    the decimal point, and the ± U note under the table."""
+    table = paper_table(runs, machine=True, **filters)
+    plain = [c for c in table.columns if c not in ("mu_s", "mu_s_U", "mu_k", "mu_k_U")]
+    quantities = [q for q in ("mu_s", "mu_k") if q in table.columns]
+    spec: list[str] = []
+    head: list[str] = []
+    body: list[list[str]] = [[] for _ in range(len(table))]
+    for column in plain[:-1]:  # the conditions and n, then the coefficients, then flags
+        cells = [_cell(v, "g") for v in table[column]]
+        spec.append(_number_column(cells) or "l")
+        head.append(_PAPER_LATEX_HEADS.get(column, latex_cell(str(column))))
+        for i, cell in enumerate(cells):
+            body[i].append(cell if spec[-1].startswith("S") else latex_cell(cell))
+    for q in quantities:
+        triples = [_pm_cells(str(v), str(u)) for v, u in zip(table[q], table[f"{q}_U"],
+                                                             strict=True)]
+        values = [t[0] for t in triples if not t[0].startswith("{")]
+        errors = [t[2] for t in triples if not t[2].startswith("{")]
+        spec += [_number_column(values) or "r", "@{\\,}c@{\\,}",
+                 _number_column(errors) or "l"]
+        symbol = "S" if q == "mu_s" else "K"
+        head.append(f"\\multicolumn{{3}}{{c}}{{$\\mu_{symbol} \\pm U$}}")
+        for i, t in enumerate(triples):
+            body[i] += list(t)
+    spec.append("l")
+    head.append("flags")
+    for i, flags in enumerate(table["flags"]):
+        body[i].append(latex_cell(str(flags)))
+    lines = [*latex_header("tribopipe friction-map table, paper layout"),
+             f"\\begin{{tabular}}{{{''.join(spec)}}}", "\\toprule",
+             " & ".join(head) + " \\\\", "\\midrule",
+             *(" & ".join(row) + " \\\\" for row in body),
+             "\\bottomrule", "\\end{tabular}",
+             "\\par\\smallskip",
+             "{\\footnotesize " + _latex_symbols(latex_cell(PAPER_NOTE)) + "\\par}"]
     return "\n".join(lines) + "\n"
 
 
@@ -427,10 +573,20 @@ def render_table(
     disc: Sequence[str] | None = None,
     temperature_C: Sequence[float] | None = None,
     by_speed: bool = False,
+    decimal: str = ".",
+    method: Sequence[str] | None = None,
 ) -> str:
     """A table of the map as text: ``fmt`` one of :data:`FORMATS`, ``layout`` one of
-    :data:`LAYOUTS` (``frictionmap`` has its own layout). Raises :class:`ExportError` for an
-    unknown format/layout or when no row matches the filters."""
+    :data:`LAYOUTS` (``frictionmap`` has its own layout); ``decimal`` the decimal mark of a
+    CSV (``","``: for a decimal-comma locale, :func:`to_csv`); ``method`` keeps the runs of
+    these test methods only (:data:`tribopipe.config.TEST_METHODS`). Raises
+    :class:`ExportError` for an unknown format/layout/method or when no row matches the
+    filters."""
+    if decimal != "." and fmt != "csv":
+        raise ExportError(f"a decimal comma is for --format csv, not {fmt}",
+                          hint="drop --decimal")
+    if method:
+        runs = runs_of_methods(runs, method)
     if fmt not in FORMATS:
         raise ExportError(f"unknown table format {fmt!r}; expected one of {', '.join(FORMATS)}")
     if layout not in LAYOUTS:
@@ -451,11 +607,17 @@ def render_table(
         if by_speed:
             raise ExportError("the paper layout splits by speed where the map holds several",
                               hint="drop --by-speed")
+        if fmt == "latex":
+            if paper_table(runs, **filters).empty:
+                table = paper_table(runs, **filters)  # the "no rows" error below
+            else:
+                return paper_latex(runs, **filters)
         table = paper_table(runs, machine=fmt == "csv", **filters)
     else:
         table = group_table(runs, by_speed=by_speed, **filters)
     if table.empty:
-        given = ", ".join(f"{k}={list(v)}" for k, v in filters.items() if v) or "no filter"
+        given = ", ".join(f"{k}={list(v)}" for k, v in {**filters, "method": method}.items()
+                          if v) or "no filter"
         raise ExportError(
             f"no rows to tabulate ({given}; the map holds {len(runs)} runs)",
             hint="check `tribopipe map show` for the pins, discs and temperatures",
@@ -464,18 +626,19 @@ def render_table(
         return frictionmap_csv(table)
     # The paper prints μ_K with two decimals; keep "0.30", not "0.3".
     formats = {"mu_k": ".2f"} if layout == "abstract" else None
-    text = {"csv": to_csv, "markdown": to_markdown, "latex": to_latex}[fmt](table, formats)
-    if layout == "paper" and fmt == "latex":
-        text = _latex_symbols(text)
-    elif layout == "paper" and fmt == "markdown":
+    if fmt == "csv":
+        return to_csv(table, formats, decimal=decimal)
+    text = {"markdown": to_markdown, "latex": to_latex}[fmt](table, formats)
+    if layout == "paper" and fmt == "markdown":
         text += "\n" + markdown_cell(PAPER_NOTE) + "\n"
     return text
 
 
 def _latex_symbols(text: str) -> str:
     """The paper layout's symbols in LaTeX math (after escaping: nothing else is touched)."""
-    for plain, latex in (("μ\\_S", r"$\mu_S$"), ("μ\\_K", r"$\mu_K$"), ("±", r"$\pm$"),
-                         ("−", r"$-$"), ("°C", r"$^\circ$C")):
+    for plain, latex in ((r"\ensuremath{\mu}\_S", r"$\mu_S$"),
+                         (r"\ensuremath{\mu}\_K", r"$\mu_K$"),
+                         (r"\textdegree{}C", r"\si{\degreeCelsius}")):
         text = text.replace(plain, latex)
     return text
 

@@ -26,10 +26,11 @@ from dataclasses import dataclass
 from datetime import datetime
 from typing import TYPE_CHECKING, Any, cast
 
-from ..escape import FORMULA_TRIGGERS
+from ..escape import FORMULA_TRIGGERS, printable
 from ..validate import file_name_problem, name_problem, text_problem
 from .schema import (
     ALWAYS,
+    CHOICES,
     COLUMNS,
     FILE_NAME_COLUMNS,
     IN_PACKAGES,
@@ -151,6 +152,9 @@ def _check_text(name: str, text: str, add: Any) -> None:
         add(name, "contains a control character or line break, expected one line of text")
     elif problem is not None:
         add(name, problem)
+    elif CHOICES.get(name) and text not in CHOICES[name]:
+        add(name, f"{printable(text)[:60]!r} is not one of "
+            + ", ".join(repr(c) for c in CHOICES[name]))
     elif text.startswith(FORMULA_START):
         add(name, f"starts with {text[0]!r}, which a spreadsheet runs as a formula")
 

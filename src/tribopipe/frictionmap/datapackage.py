@@ -137,6 +137,8 @@ def runs_fields(version: int | None = None) -> list[dict[str, Any]]:
         if column.bounds is not None:
             constraints["minimum"] = column.bounds.low
             constraints["maximum"] = column.bounds.high
+        if column.choices:
+            constraints["enum"] = list(column.choices)
         f = field(column.name, column.kind, column.unit, column.meaning, **constraints)
         if column.name == "reduced_at":
             f["type"] = "datetime"

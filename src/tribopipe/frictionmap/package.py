@@ -51,6 +51,7 @@ from .datapackage import (
     runs_fields,
     sha256_hash,
 )
+from .profile import PROFILE_NAME, PROFILE_VERSION, descriptor_profile_version, upgrade_note
 from .published import FOUNDING_PAPER
 from .schema import (
     SCHEMA_NAME,
@@ -96,6 +97,10 @@ class PackageCheck:
     more: int = 0
     lab: str | None = None
     runs: pd.DataFrame | None = None
+    #: the package profile version it declares (:mod:`tribopipe.frictionmap.profile`)
+    profile_version: int = PROFILE_VERSION
+    #: what reading it had to say that is not a problem (an older version upgraded)
+    notes: list[str] = field(default_factory=list)
 
     @property
     def ok(self) -> bool:
@@ -207,6 +212,20 @@ def _check_descriptor(check: _Checker, d: dict[str, Any]) -> int | None:
         check.add(where, f"no {TRIBOPIPE_KEY!r} block naming the schema {SCHEMA_NAME!r}; "
                   "not a friction-map package")
         return None
+    profile = descriptor_profile_version(d)
+    if profile is None:
+        check.add(where, f"package profile {info.get('profile')!r} version "
+                  f"{info.get('profile_version')!r}; expected {PROFILE_NAME!r} with a version "
+                  "number")
+        return None
+    if profile > PROFILE_VERSION:
+        check.add(where, f"package profile version {profile}; this tribopipe reads versions "
+                  f"1 to {PROFILE_VERSION} (upgrade tribopipe for a newer one)")
+        return None
+    check.result.profile_version = profile
+    note = upgrade_note(profile)
+    if note is not None:
+        check.result.notes.append(note)
     version = info.get("schema_version")
     if isinstance(version, bool) or not isinstance(version, int) or not (
             FIRST_PACKAGE_VERSION <= version <= SCHEMA_VERSION):

@@ -26,8 +26,6 @@ from .store import AppendReport, append_records
 if TYPE_CHECKING:
     import pandas as pd
 
-#: The founding paper's fixed sliding speed [mm/s] (recorded for published rows).
-PUBLISHED_SLIDING_SPEED_MM_S = FOUNDING_SLIDING_SPEED_MM_S
 #: ``lab`` of the published rows: the founding paper's authors measured them.
 PUBLISHED_LAB = "Berthold et al. (founding paper)"
 
@@ -215,7 +213,7 @@ def import_records(
                 normal_force_N=force,
                 pressure_kPa=pressure,
                 temperature_C=temperature,
-                sliding_speed_mm_s=PUBLISHED_SLIDING_SPEED_MM_S if published else None,
+                sliding_speed_mm_s=FOUNDING_SLIDING_SPEED_MM_S if published else None,
                 repeat=repeat,
                 mu_k=cof,
                 flags="",

@@ -16,24 +16,14 @@ from typing import TYPE_CHECKING
 
 from .. import __version__
 from ..errors import MapError, RowError
-from ..labels import RunLabels, RunVerdict, Tolerances, decide_run, flags_text
+from ..labels import RunVerdict, flags_text
 from ..numeric import finite_or_nan, finite_or_none
-from ..physics import contact_pressure_kPa
 from .schema import SOURCE_REDUCED, MapRow, checked_row, utc_now
 
 if TYPE_CHECKING:
-    from ..config import InstrumentConfig, Settings
+    from ..config import Settings
     from ..measurement import MeasurementMeta
     from ..reduction.reduce import ReductionResult
-
-def nominal_pressure_kPa(force_N: float, instrument: InstrumentConfig) -> float:
-    """Nominal contact pressure per pin [kPa] for a total normal force [N].
-
-    p = (F / n_pins) / (π r²); with F in N and r in mm, N/mm² = MPa, hence × 1000 → kPa.
-    The founding cell (3 pins, r = 3 mm) gives 1 N → 11.79 kPa.
-    """
-    return float(contact_pressure_kPa(force_N, instrument.n_pins, instrument.pin_radius_mm))
-
 
 def measurement_id(file_hash: str, meta: MeasurementMeta, occurrence: int = 1) -> str:
     """Stable id of a run: 16 hex digits of SHA-256 over the raw file's content hash and
@@ -80,9 +70,7 @@ def make_record(
     meta: MeasurementMeta,
     file_hash: str,
     settings: Settings,
-    verdict: RunVerdict | None = None,
-    labels: RunLabels | None = None,
-    tolerances: Tolerances | None = None,
+    verdict: RunVerdict,
     occurrence: int = 1,
 ) -> MapRow:
     """One friction-map row (a checked :class:`~tribopipe.frictionmap.schema.MapRow`) for a
@@ -90,24 +78,16 @@ def make_record(
 
     ``verdict`` is the run's labels, nominal force and flags as
     :func:`tribopipe.labels.decide_run` decided them (the pipeline passes the one every
-    other output of the run shows); without it they are decided here from ``labels`` and
-    ``tolerances`` by the same function. The nominal pressure [kPa] follows from the
-    nominal force and ``settings.instrument``. ``occurrence`` is the run's place among
-    runs of the export with the same test/result/interval (:func:`measurement_id`).
+    other output of the run shows: nothing is decided here). The nominal pressure [kPa]
+    follows from the nominal force and ``settings.instrument``. ``occurrence`` is the
+    run's place among runs of the export with the same test/result/interval
+    (:func:`measurement_id`).
 
     Raises :class:`MapError` when pin or disc is unknown, μ_K is not a finite number, the
     run has neither a nominal nor a measured normal force, or the row would break a rule
     of :func:`~tribopipe.frictionmap.schema.check_runs` (e.g. a measured sliding speed
     beyond any instrument).
     """
-    measured_force = finite_or_nan(result.normal_force_mean_N)
-    measured_temperature = finite_or_nan(result.temperature_C)
-    if verdict is None:
-        verdict = decide_run(labels or RunLabels(), result.flags, measured_force,
-                             measured_temperature, tolerances,
-                             speed_set_point_rpm=result.speed_set_point_rpm,
-                             sliding_speed_measured_mm_s=result.sliding_speed_mm_s,
-                             instrument=settings.instrument)
     labels = verdict.labels
     pin, disc = labels.pin, labels.disc
     if not (pin and disc):
@@ -139,11 +119,11 @@ def make_record(
         pin=pin,
         disc=disc,
         normal_force_N=force,
-        pressure_kPa=nominal_pressure_kPa(force, settings.instrument),
-        normal_force_measured_N=finite_or_none(measured_force),
+        pressure_kPa=settings.instrument.pressure_kPa(force),
+        normal_force_measured_N=finite_or_none(result.normal_force_mean_N),
         pressure_measured_kPa=finite_or_none(result.pressure_kPa),
         temperature_C=temperature,
-        temperature_measured_C=finite_or_none(measured_temperature),
+        temperature_measured_C=finite_or_none(result.temperature_C),
         sliding_speed_mm_s=finite_or_none(result.sliding_speed_mm_s),
         nominal_speed_mm_s=verdict.nominal_speed_mm_s,
         repeat=labels.repeat,
@@ -161,6 +141,7 @@ def make_record(
         plateau_drift_per_mm=finite_or_none(result.plateau_drift_per_mm),
         flags=flags_text(verdict.flags),
         method=result.method,
+        test_method=settings.instrument.test_method,
         source_file=stored_file_name(meta.source_file),
         file_hash=file_hash,
         test=meta.test,

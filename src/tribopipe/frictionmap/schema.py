@@ -20,6 +20,7 @@ from dataclasses import dataclass, field, fields, replace
 from datetime import UTC, datetime
 from typing import TYPE_CHECKING, Any
 
+from ..config import DEFAULT_TEST_METHOD, TEST_METHODS
 from ..errors import MapError, RowError
 from ..escape import printable
 from ..reporting import EXTRA_COLUMN
@@ -68,7 +69,8 @@ class Column:
 
     ``kind`` is ``"str"``, ``"float"``, ``"int"`` (nullable) or ``"bool"``; ``unit`` is
     ``""`` for none. ``bounds`` is the physical range of a number (``None``: a float need
-    only be finite); ``reason`` says why. ``required`` is ``""`` (may be missing),
+    only be finite); ``reason`` says why; ``choices`` the values a text column may hold.
+    ``required`` is ``""`` (may be missing),
     :data:`ALWAYS`, :data:`IN_REDUCED_ROWS` or :data:`IN_PACKAGES`. A text column
     required :data:`ALWAYS` is a name (one printable line of at most 200 characters, not
     blank); every other text is one printable line.
@@ -81,6 +83,8 @@ class Column:
     bounds: Range | None = None
     reason: str = ""
     required: str = ""
+    #: the values a text column may hold (``()``: any one printable line)
+    choices: tuple[str, ...] = ()
 
 
 _CONTACT = "a run in contact presses the pins on the disc"
@@ -138,6 +142,9 @@ COLUMNS: tuple[Column, ...] = (
     Column("plateau_drift_per_mm", "float", "1/mm", "slope of μ over the plateau window"),
     Column("flags", "str", "", "QC flags, ';'-joined"),
     Column("method", "str", "", "reduction method (or 'published'/'imported')"),
+    Column("test_method", "str", "", "instrument kind and test method: "
+           + ", ".join(f"'{m}'" for m in TEST_METHODS) + " (missing in rows older than "
+           f"schema version 6: '{DEFAULT_TEST_METHOD}')", choices=TEST_METHODS),
     Column("source_file", "str", "", "name of the raw or imported file"),
     Column("file_hash", "str", "", "SHA-256 of that file"),
     Column("test", "str", "", "Test name in the export the run came from (as the export "
@@ -150,6 +157,32 @@ COLUMNS: tuple[Column, ...] = (
     Column("reduced_at", "str", "", "UTC time of reduction or import (ISO 8601)"),
     Column("excluded", "bool", "", "left out of the statistics", required=ALWAYS),
     Column("exclusion_reason", "str", "", "why it was excluded"),
+    Column("review", "str", "", "a reviewer's decision on the run: 'accept' (its QC flags "
+           "do not count against its group), 'exclude' or 'window' (μ_K, and μ_S where a "
+           "peak was given, re-read where the reviewer chose); missing: not reviewed"),
+    Column("review_by", "str", "", "who reviewed the run"),
+    Column("review_date", "str", "", "when the run was reviewed (as the decisions file says)"),
+    Column("review_reason", "str", "", "why the reviewer decided so"),
+    Column("review_kinetic_from_mm", "float", "mm", "start of the μ_K window the reviewer "
+           "gave", _DISTANCE, _ALONG),
+    Column("review_kinetic_to_mm", "float", "mm", "end of the μ_K window the reviewer gave",
+           _DISTANCE, _ALONG),
+    Column("review_static_peak_mm", "float", "mm", "the static peak position the reviewer "
+           "gave", _DISTANCE, _ALONG),
+    Column("auto_mu_s", "float", "", "μ_S as the reduction found it (reviewed rows)", MU,
+           _RATIO),
+    Column("auto_mu_k", "float", "", "μ_K as the reduction found it (reviewed rows)", MU,
+           _RATIO),
+    Column("auto_u_mu_s", "float", "", "u(μ_S) as the reduction found it (reviewed rows)",
+           _SPREAD, "a standard uncertainty is not negative"),
+    Column("auto_u_mu_k", "float", "", "u(μ_K) as the reduction found it (reviewed rows)",
+           _SPREAD, "a standard uncertainty is not negative"),
+    Column("auto_mu_s_distance_mm", "float", "mm", "the reduction's static peak position "
+           "(reviewed rows)", _DISTANCE, _ALONG),
+    Column("auto_mu_k_window_start_mm", "float", "mm", "start of the reduction's μ_K window "
+           "(reviewed rows)", _DISTANCE, _ALONG),
+    Column("auto_mu_k_window_end_mm", "float", "mm", "end of the reduction's μ_K window "
+           "(reviewed rows)", _DISTANCE, _ALONG),
     Column("pin_as_given", "str", "", "the pin's name as it came in (a pattern, manifest, "
            "option or merged map), before the materials vocabulary resolved it"),
     Column("disc_as_given", "str", "", "the disc's name as it came in, before the materials "
@@ -161,14 +194,26 @@ COLUMNS: tuple[Column, ...] = (
            "object of text values"),
 )
 
+#: the columns a review sets (:mod:`tribopipe.review`); the ``auto_`` ones keep the
+#: reduction's own values beside the reviewed ones
+REVIEW_COLUMNS: tuple[str, ...] = (
+    "review", "review_by", "review_date", "review_reason", "review_kinetic_from_mm",
+    "review_kinetic_to_mm", "review_static_peak_mm", "auto_mu_s", "auto_mu_k",
+    "auto_u_mu_s", "auto_u_mu_k", "auto_mu_s_distance_mm", "auto_mu_k_window_start_mm",
+    "auto_mu_k_window_end_mm")
+
 RUN_COLUMNS: tuple[str, ...] = tuple(c.name for c in COLUMNS)
 #: Columns added after schema version 1, with the version that added them: a map written
 #: before that version lacks them and reads with them missing, and a record built by older
 #: code may leave them out.
 ADDED_IN_VERSION: dict[str, int] = {"lab": 2, "u_mu_s": 3, "u_mu_k": 3, "test": 4, "result": 4,
-                                    "nominal_speed_mm_s": 5, "pin_as_given": 6,
-                                    "disc_as_given": 6, EXTRA_COLUMN: 6,
+                                    "nominal_speed_mm_s": 5, "test_method": 6,
+                                    **{c: 6 for c in REVIEW_COLUMNS},
+                                    "pin_as_given": 6, "disc_as_given": 6,
+                                    EXTRA_COLUMN: 6,
                                     **{item.name: 6 for item in REPORTING_ITEMS}}
+#: the values each text column with a closed vocabulary may hold
+CHOICES: dict[str, tuple[str, ...]] = {c.name: c.choices for c in COLUMNS if c.choices}
 #: the kind of each column: ``"str"``, ``"float"``, ``"int"`` or ``"bool"``
 KIND: dict[str, str] = {c.name: c.kind for c in COLUMNS}
 #: the physical range of each bounded number column; a float column not listed need only
@@ -190,6 +235,14 @@ PROVENANCE_COLUMNS: frozenset[str] = frozenset(
      "excluded", "exclusion_reason", "pin_as_given", "disc_as_given"}
 )
 CONTENT_COLUMNS: tuple[str, ...] = tuple(c for c in RUN_COLUMNS if c not in PROVENANCE_COLUMNS)
+#: The content columns :data:`ADDED_IN_VERSION` a later schema: a row written before the
+#: column existed lacks it, so where the older of two rows of one run lacks it, that is no
+#: difference of the run (the store compares rows with this rule). The review's columns
+#: are not among them: missing there means "not reviewed", and a review that fills them
+#: changes the row.
+ADDED_LATER_CONTENT: frozenset[str] = frozenset(c for c in ADDED_IN_VERSION
+                                                if c in CONTENT_COLUMNS
+                                                and c not in REVIEW_COLUMNS)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -234,6 +287,7 @@ class MapRow:
     plateau_drift_per_mm: float | None = None
     flags: str | None = None
     method: str | None = None
+    test_method: str | None = None
     source_file: str | None = None
     file_hash: str | None = None
     test: str | None = None
@@ -244,6 +298,20 @@ class MapRow:
     reduced_at: str | None = None
     excluded: bool = False
     exclusion_reason: str | None = None
+    review: str | None = None
+    review_by: str | None = None
+    review_date: str | None = None
+    review_reason: str | None = None
+    review_kinetic_from_mm: float | None = None
+    review_kinetic_to_mm: float | None = None
+    review_static_peak_mm: float | None = None
+    auto_mu_s: float | None = None
+    auto_mu_k: float | None = None
+    auto_u_mu_s: float | None = None
+    auto_u_mu_k: float | None = None
+    auto_mu_s_distance_mm: float | None = None
+    auto_mu_k_window_start_mm: float | None = None
+    auto_mu_k_window_end_mm: float | None = None
     pin_as_given: str | None = None
     disc_as_given: str | None = None
     humidity_pct: float | None = None
@@ -438,6 +506,9 @@ def check_runs(frame: pd.DataFrame, where: str = "row") -> pd.DataFrame:
                 if missing and name not in NAME_COLUMNS:
                     continue
                 problem = "missing, expected a name" if missing else checker(value)
+                if problem is None and column.choices and value not in column.choices:
+                    problem = (f"{printable(str(value))[:60]!r} is not one of "
+                               + ", ".join(repr(c) for c in column.choices))
                 if problem is not None:
                     raise _row_error(frame, where, i, name, f"{name}: {problem}")
         elif kind == "float":

@@ -32,12 +32,14 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from .. import __version__
+from ..config import DEFAULT_TEST_METHOD
 from ..errors import MapError, ReadError
 from ..escape import display_path
 from ..files import file_kind, os_reason, regular_file
 from ..validate import text_problem
 from .schema import (
     ADDED_IN_VERSION,
+    ADDED_LATER_CONTENT,
     COLUMNS,
     CONTENT_COLUMNS,
     KIND,
@@ -320,16 +322,21 @@ def same_value(a: Any, b: Any) -> bool:
     return a == b
 
 
-#: content columns a re-reduction fills where a map's older row lacks them (the row was
-#: written before the column existed): no difference of the run
-_FILLED_LATER: frozenset[str] = frozenset({"nominal_speed_mm_s"})
+#: content columns whose missing value in an older row means one value: a row written
+#: before schema version 6 was measured on the founding rheometer cell
+_MISSING_MEANS: dict[str, str] = {"test_method": DEFAULT_TEST_METHOD}
 
 
 def _differences(old: Mapping[str, Any], new: Mapping[str, Any]) -> tuple[str, ...]:
-    """The content columns where ``new`` differs from ``old`` (:data:`_FILLED_LATER`
-    missing in ``old`` is none)."""
-    return tuple(c for c in CONTENT_COLUMNS if not same_value(old[c], new[c])
-                 and not (c in _FILLED_LATER and is_missing(old[c])))
+    """The content columns where ``new`` differs from ``old`` (a column
+    :data:`~tribopipe.frictionmap.schema.ADDED_LATER_CONTENT` missing in ``old`` is none,
+    but a missing :data:`_MISSING_MEANS` column is that value)."""
+    def value(row: Mapping[str, Any], c: str) -> Any:
+        return _MISSING_MEANS[c] if c in _MISSING_MEANS and is_missing(row[c]) else row[c]
+
+    return tuple(c for c in CONTENT_COLUMNS if not same_value(value(old, c), value(new, c))
+                 and not (c in ADDED_LATER_CONTENT and c not in _MISSING_MEANS
+                          and is_missing(old[c])))
 
 
 def fold_records(
@@ -338,7 +345,9 @@ def fold_records(
     """Pure core of :func:`append_records`: the map with ``records`` folded in, and the report.
 
     Existing rows keep their position; new runs are added at the end in the given order.
-    A replaced row keeps the map's exclusion state (a human decision about the run).
+    A replaced row keeps the map's exclusion state (a human decision about the run),
+    unless the record or the row holds a review (:mod:`tribopipe.review`), which decides
+    the exclusion itself.
     Neither input is modified. Every row of the result keeps the rules of
     :func:`~tribopipe.frictionmap.schema.check_runs` (``runs`` may come from anywhere).
     """
@@ -383,7 +392,9 @@ def _fold(
         differences[mid] = diff
         values[mid] = tuple((c, old[c], rec[c]) for c in diff)
         if replace:
-            rec = {**rec, "excluded": old["excluded"], "exclusion_reason": old["exclusion_reason"]}
+            if is_missing(rec.get("review")) and is_missing(old.get("review")):
+                rec = {**rec, "excluded": old["excluded"],
+                       "exclusion_reason": old["exclusion_reason"]}
             if mid in fresh:
                 fresh[mid] = rec
             else:

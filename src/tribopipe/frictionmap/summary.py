@@ -9,7 +9,7 @@ from typing import Any
 from ..errors import MapError
 from ..escape import display_path, printable
 from ..labels import flag_list
-from ..measurement import interval_label
+from ..measurement import run_name
 from ..stats import group_statistics, repeatability
 from .checks import validate_runs
 from .schema import is_missing
@@ -76,6 +76,7 @@ def map_summary(path: str | os.PathLike[str], *, runs_listed: bool = False) -> s
                          f"{_text(row['disc'])}, {row['normal_force_N']:g} N, "
                          f"{_fmt_t(row['temperature_C'])}, repeat {_fmt_repeat(row['repeat'])}"
                          f", from {run_origin(row)}: {_text(row['exclusion_reason'])}")
+    lines += _review_lines(runs, groups)
     if runs_listed:
         lines.append("")
         lines.append("  runs: id, from (file [test / result / interval]), pin / disc, "
@@ -84,6 +85,35 @@ def map_summary(path: str | os.PathLike[str], *, runs_listed: bool = False) -> s
                                     "measurement_id"], kind="mergesort", na_position="first")
         lines += ["    " + run_line(row) for row in ordered.to_dict(orient="records", into=dict)]
     return "\n".join(lines)
+
+
+def _review_lines(runs: Any, groups: Any) -> list[str]:
+    """The reviewed runs (a lab's ``review.csv``, :mod:`tribopipe.review`): how many by
+    decision and per condition group, and one line per run with the automatic μ beside
+    the reviewed one, who, when and why."""
+    if "review" not in runs.columns or not runs["review"].notna().any():
+        return []
+    done = runs[runs["review"].notna()]
+    counts = done["review"].astype(str).value_counts().sort_index()
+    lines = ["", f"  reviewed runs: {len(done)} ("
+             + ", ".join(f"{a} {n}" for a, n in counts.items()) + ")"]
+    in_groups = groups[groups["reviewed"] > 0] if "reviewed" in groups else groups.iloc[:0]
+    for g in in_groups.to_dict(orient="records", into=dict):
+        lines.append(f"    group {_text(g['pin'])} / {_text(g['disc'])}, "
+                     f"{g['normal_force_N']:g} N, {_fmt_t(g['temperature_C'])}: "
+                     f"{g['reviewed']} of {g['mu_k_n']} runs reviewed")
+    for row in done.to_dict(orient="records", into=dict):
+        what = _text(row["review"])
+        if row["review"] == "window":
+            what += (f" {row['mu_k_window_start_mm']:.4g}–{row['mu_k_window_end_mm']:.4g} mm: "
+                     f"mu_k {row['mu_k']:.4f} (automatic {row['auto_mu_k']:.4f})")
+            if not is_missing(row.get("review_static_peak_mm")):
+                what += f", mu_s {row['mu_s']:.4f} (automatic {row['auto_mu_s']:.4f})"
+        who = ", ".join(_text(row[c]) for c in ("review_by", "review_date")
+                        if not is_missing(row.get(c)))
+        why = "" if is_missing(row.get("review_reason")) else f": {_text(row['review_reason'])}"
+        lines.append(f"    {row['measurement_id']}  {what}" + (f" [{who}]" if who else "") + why)
+    return lines
 
 
 def _text(value: Any) -> str:
@@ -100,9 +130,7 @@ def run_origin(row: dict[str, Any]) -> str:
     interval = None if is_missing(row.get("interval")) else int(row["interval"])
     test, result = (None if is_missing(row.get(k)) else _text(row[k])
                     for k in ("test", "result"))
-    place = interval_label(test, result, interval)
-    file = _text(row.get("source_file"))
-    return f"{file} [{place}]" if place else file
+    return run_name(_text(row.get("source_file")), test, result, interval)
 
 
 def run_line(row: dict[str, Any]) -> str:
@@ -111,6 +139,8 @@ def run_line(row: dict[str, Any]) -> str:
     mu_s = "" if is_missing(row.get("mu_s")) else f", mu_s {row['mu_s']:.3f}"
     flags = printable(", ".join(flag_list(row.get("flags")))) or "-"
     excluded = " (excluded)" if row.get("excluded") else ""
+    if not is_missing(row.get("review")):
+        excluded += f" (reviewed: {_text(row['review'])})"
     return (f"{row['measurement_id']}  {run_origin(row)}  {_text(row['pin'])} / "
             f"{_text(row['disc'])}, {row['normal_force_N']:g} N, {_fmt_t(row['temperature_C'])}"
             f", repeat {_fmt_repeat(row['repeat'])}: mu_k {row['mu_k']:.3f}{mu_s}; flags "

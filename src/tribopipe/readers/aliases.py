@@ -21,7 +21,16 @@ from pathlib import Path
 from typing import Any
 
 from ..errors import ConfigError
-from ..measurement import ANGLE, NORMAL_FORCE, SPEED, TEMPERATURE, TIME, TORQUE
+from ..measurement import (
+    ANGLE,
+    FRICTION_FORCE,
+    NORMAL_FORCE,
+    POSITION,
+    SPEED,
+    TEMPERATURE,
+    TIME,
+    TORQUE,
+)
 
 #: canonical quantity → its column name in a Measurement
 CANONICAL_COLUMN: dict[str, str] = {
@@ -31,6 +40,8 @@ CANONICAL_COLUMN: dict[str, str] = {
     "angle": ANGLE,
     "speed": SPEED,
     "temperature": TEMPERATURE,
+    "friction_force": FRICTION_FORCE,
+    "position": POSITION,
 }
 
 #: the user extension looked for when no alias file is given

@@ -30,7 +30,9 @@ from ..config import ReductionParams
 from ..errors import MissingQuantityError, NotFrictionTestError, ReductionError, TribopipeError
 from ..measurement import (
     ANGLE,
+    FRICTION_FORCE,
     NORMAL_FORCE,
+    POSITION,
     SPEED,
     TEMPERATURE,
     TIME,
@@ -49,7 +51,7 @@ if TYPE_CHECKING:
 #: instrument measures beyond these, and larger values would overflow the statistics
 SAMPLE_LIMITS: dict[str, float] = {
     TIME: 1e10, TORQUE: 1e6, NORMAL_FORCE: FORCE_N.high, ANGLE: 1e9, SPEED: 1e6,
-    TEMPERATURE: 1e4,
+    TEMPERATURE: 1e4, FRICTION_FORCE: FORCE_N.high, POSITION: 1e6,
 }
 #: an interval "rotates" when its deflection angle travels at least this far [rad]
 #: (0.002 rad ≈ 0.027 mm at R = 13.37 mm, ~4 s at 0.005 rpm) ...
@@ -74,6 +76,20 @@ def _column(m: Measurement, name: str) -> np.ndarray | None:
         return None
     values = np.array(m.data[name], dtype=float)
     return values if np.isfinite(values).any() else None
+
+
+def tangential_column(m: Measurement) -> str:
+    """The column holding ``m``'s tangential reading: ``torque_Nm`` (a rheometer) when it
+    has torque values, else ``friction_force_N`` (a force-based tribometer)."""
+    return TORQUE if m.has(TORQUE) or not m.has(FRICTION_FORCE) else FRICTION_FORCE
+
+
+def _usable(m: Measurement) -> bool:
+    """Time and a tangential reading, and a normal force (a force-based run may lack it:
+    a sled's weight gives it, see ``InstrumentConfig.sled_mass_g``)."""
+    if m.has(TIME, TORQUE, NORMAL_FORCE):
+        return True
+    return not m.has(TORQUE) and m.has(TIME, FRICTION_FORCE)
 
 
 def _rotation_known(m: Measurement) -> bool:
@@ -256,9 +272,8 @@ def _result_intervals(items: list[Measurement], several: bool) -> ResultInterval
     if held and len(named) == len(held):
         return ResultIntervals(first.test, first.result, (), NotFrictionTestError(
             f"{prefix}not a pin-on-disc friction test: it looks like {_most_telling(named)}",
-            path=source, hint=NOT_FRICTION_HINT))
-    usable = [i for i, m in enumerate(items)
-              if m.has(TIME, TORQUE, NORMAL_FORCE) and kinds[i] is None]
+            looks_like=_most_telling(named), path=source, hint=NOT_FRICTION_HINT))
+    usable = [i for i, m in enumerate(items) if _usable(m) and kinds[i] is None]
     if not usable:
         found = sorted({c for m in items for c in m.data.columns})
         absent = [c for c in (TIME, TORQUE, NORMAL_FORCE) if not any(m.has(c) for m in items)]
@@ -285,8 +300,7 @@ def _result_intervals(items: list[Measurement], several: bool) -> ResultInterval
     try:
         friction = tuple(_with_setup_offset(items, i) for i in chosen)
     except ReductionError as exc:          # a set-up torque beyond any measurement
-        return ResultIntervals(first.test, first.result, (), ReductionError(
-            exc.problem, path=source, hint=exc.hint))
+        return ResultIntervals(first.test, first.result, (), exc)
     return ResultIntervals(first.test, first.result, friction)
 
 
@@ -346,7 +360,7 @@ def select_friction_interval(measurements: Sequence[Measurement]) -> Measurement
 
 
 def _median_abs_torque(m: Measurement) -> float:
-    torque = _column(m, TORQUE)
+    torque = _column(m, tangential_column(m))
     return float(np.nanmedian(np.abs(torque))) if torque is not None else 0.0
 
 
@@ -358,6 +372,7 @@ class IntervalSamples:
     """The complete samples of one interval, time-ordered, as new float arrays."""
 
     t: np.ndarray
+    #: the tangential reading: torque [N·m], or a force-based instrument's friction force [N]
     torque: np.ndarray
     force: np.ndarray  # made positive in compression
     angle: np.ndarray | None
@@ -366,22 +381,28 @@ class IntervalSamples:
     n_total: int
     n_dropped: int
     force_sign: float
+    #: linear position, crosshead travel or sliding distance [m] (``None`` without one)
+    position: np.ndarray | None = None
 
 
-def interval_samples(m: Measurement, params: ReductionParams) -> IntervalSamples:
-    """Validate and copy the quantities of ``m`` (raises ReductionError for bad input)."""
-    label = m.meta.label
+def interval_samples(
+    m: Measurement, params: ReductionParams, tangential: str = TORQUE
+) -> IntervalSamples:
+    """Validate and copy the quantities of ``m`` (raises ReductionError for bad input);
+    ``tangential`` names the column of the tangential reading (torque or friction force)."""
+    meta = m.meta
     data = m.data
     t = np.array(data[TIME], dtype=float)
-    torque = np.array(data[TORQUE], dtype=float)
+    torque = np.array(data[tangential], dtype=float)
     force = np.array(data[NORMAL_FORCE], dtype=float)
     n_total = int(t.size)
-    for name, values in ((TORQUE, torque), (NORMAL_FORCE, force)):
+    for name, values in ((tangential, torque), (NORMAL_FORCE, force)):
         missing = int((~np.isfinite(values)).sum())
         if missing > params.max_missing_fraction * n_total:
             raise ReductionError(
-                f"{label}: {missing} of {n_total} {name} values are missing "
-                f"(more than {params.max_missing_fraction:.0%}); cannot reduce"
+                f"{missing} of {n_total} {name} values are missing "
+                f"(more than {params.max_missing_fraction:.0%}); cannot reduce",
+                path=meta.source_file, place=meta.place,
             )
     keep = np.isfinite(t) & np.isfinite(torque) & np.isfinite(force)
     _check_magnitudes(m)
@@ -400,8 +421,9 @@ def interval_samples(m: Measurement, params: ReductionParams) -> IntervalSamples
     t, torque, force = pick(t), pick(torque), pick(force)
     if t.size < params.min_contact_samples:
         raise ReductionError(
-            f"{label}: only {t.size} complete samples (time, torque and normal force); "
-            f"need at least {params.min_contact_samples}"
+            f"only {t.size} complete samples (time, {tangential} and normal force); "
+            f"need at least {params.min_contact_samples}",
+            path=meta.source_file, place=meta.place,
         )
     force_sign = -1.0 if np.median(force) < 0 else 1.0
     return IntervalSamples(
@@ -414,6 +436,7 @@ def interval_samples(m: Measurement, params: ReductionParams) -> IntervalSamples
         n_total=n_total,
         n_dropped=int(n_total - t.size),
         force_sign=force_sign,
+        position=optional(POSITION),
     )
 
 
@@ -426,6 +449,7 @@ def _point(m: Measurement, row: int) -> Any:
 def _check_magnitudes(m: Measurement) -> None:
     """Refuse (:class:`ReductionError`) a sample beyond :data:`SAMPLE_LIMITS`: a column
     holding such values is not what its name and unit say."""
+    meta = m.meta
     for name, limit in SAMPLE_LIMITS.items():
         if name not in m.data.columns:
             continue
@@ -435,10 +459,11 @@ def _check_magnitudes(m: Measurement) -> None:
             row = int(beyond[0])
             point = _point(m, row)
             raise ReductionError(
-                f"{m.meta.label}: {name} is {float(m.data[name].iloc[row]):.4g} at point "
+                f"{name} is {float(m.data[name].iloc[row]):.4g} at point "
                 f"{point}, beyond any measurement (|value| <= {limit:g}): the column is not "
                 "what its name and unit say",
                 hint="check the export's columns and units",
+                path=meta.source_file, place=meta.place,
             )
 
 
@@ -446,6 +471,7 @@ def _check_time(m: Measurement, t: np.ndarray, keep: np.ndarray) -> None:
     """Refuse (:class:`ReductionError`, naming the point) a time column that goes
     backwards between complete samples or never advances: the samples of an interval are
     written in the order they were taken, so either means the column is not the time."""
+    meta = m.meta
     t_kept = t[keep]
     if t_kept.size < 2:
         return
@@ -455,15 +481,17 @@ def _check_time(m: Measurement, t: np.ndarray, keep: np.ndarray) -> None:
         row = int(np.flatnonzero(keep)[k])
         point = _point(m, row)
         raise ReductionError(
-            f"{m.meta.label}: time goes backwards at point {point} ({t_kept[k]:g} s after "
+            f"time goes backwards at point {point} ({t_kept[k]:g} s after "
             f"{t_kept[k - 1]:g} s): expected increasing time",
             hint="check the time column (or its unit)",
+            path=meta.source_file, place=meta.place,
         )
     if t_kept[-1] == t_kept[0]:
         raise ReductionError(
-            f"{m.meta.label}: time is constant ({t_kept[0]:g} s) over all {t_kept.size} "
+            f"time is constant ({t_kept[0]:g} s) over all {t_kept.size} "
             "complete samples: expected increasing time",
             hint="check the time column (or its unit)",
+            path=meta.source_file, place=meta.place,
         )
 
 
@@ -496,26 +524,167 @@ def estimate_torque_offset_Nm(
     return robust_mean(torque[rest]), n
 
 
-def choose_torque_offset(
-    m: Measurement, x: IntervalSamples, at_rest: np.ndarray, given_Nm: float | None,
-    params: ReductionParams, *, unknown_u_Nm: float = 0.0,
-) -> tuple[float, str, float]:
-    """The torque zero offset [N·m], where it came from — given > set-up interval >
-    at-rest start of this interval > none (0) — and its standard uncertainty [N·m]: 0 when
-    given, the estimate's standard error (autocorrelation counted) when measured,
-    ``unknown_u_Nm`` when it could not be estimated — or when a set-up interval too short
-    to show its own scatter gave it (a single sample may sit anywhere in the noise)."""
+def trailing_rest(s_mm: Any, motion_tol_mm: float) -> np.ndarray:
+    """Boolean mask (shape (n,)) of the samples after the last movement: from the first
+    sample from which ``s_mm`` [mm] stays within ``motion_tol_mm`` of its final value."""
+    s = np.asarray(s_mm, dtype=float)
+    if s.size == 0:
+        return np.zeros(0, dtype=bool)
+    away = np.flatnonzero(np.abs(s - s[-1]) > motion_tol_mm)
+    first = int(away[-1]) + 1 if away.size else 0
+    return np.arange(s.size) >= first
+
+
+def end_stop(t_s: Any, s_mm: Any, moving: Any, fraction: float) -> np.ndarray:
+    """Boolean mask (shape (n,)) of a stop at the end of a record: the last samples over
+    which the sliding speed [mm/s] stays below ``fraction`` of the median speed of the
+    ``moving`` samples (a motor slowing down, then at rest). The speed is read over
+    windows of 1 % of the record (at least 2 samples each side), so that a distance
+    column's noise is not taken for a stop; nothing is marked when the record ends
+    sliding."""
+    t = np.asarray(t_s, dtype=float)
+    s = np.asarray(s_mm, dtype=float)
+    n = s.size
+    stop = np.zeros(n, dtype=bool)
+    h = max(2, n // 100)
+    if n < 4 * h + 1 or fraction <= 0:
+        return stop
+    lo, hi = np.arange(n) - h, np.arange(n) + h
+    lo, hi = np.clip(lo, 0, n - 1), np.clip(hi, 0, n - 1)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        speed = np.abs(s[hi] - s[lo]) / (t[hi] - t[lo])
+    move = np.asarray(moving, dtype=bool) & np.isfinite(speed)
+    if move.sum() < 4 * h:
+        return stop
+    typical = float(np.median(speed[move]))
+    if not typical > 0:
+        return stop
+    slow = ~(speed >= fraction * typical)
+    if not slow[-1]:
+        return stop
+    fast = np.flatnonzero(~slow)
+    if fast.size == 0:
+        return stop
+    # the window of the last fast sample still reaches into the slowing: start past it
+    first = min(n, int(fast[-1]) + 1)
+    stop[first:] = True
+    return stop
+
+
+@dataclass(frozen=True)
+class ZeroChoice:
+    """The tangential channel's zero [N·m, or N for a friction force] and what it rests
+    on: ``source`` (words), ``u`` its standard uncertainty, ``known`` whether it was
+    estimated or given, ``under_load`` whether at-rest samples that carry a tangential load
+    were refused as a zero, ``disagree`` whether a second zero (a rest after sliding)
+    disagrees with the first, ``load_fraction`` the refused samples' level over the
+    sliding level above it, ``second`` the second zero (``None`` without one)."""
+
+    offset: float
+    source: str
+    u: float
+    known: bool = True
+    under_load: bool = False
+    disagree: bool = False
+    load_fraction: float | None = None
+    second: float | None = None
+
+
+def load_fraction(zero: float, sliding_level: float) -> float:
+    """How much of a tangential load an at-rest level ``zero`` carries: ``|zero|`` over
+    the sliding level above it, ``|sliding_level − zero|`` (inf when that is 0). A
+    transducer's zero offset is small beside the friction it measures; a pull or a shear
+    already applied at rest is as large as the friction."""
+    above = abs(sliding_level - zero)
+    return abs(zero) / above if above > 0 else math.inf
+
+
+def choose_zero(
+    m: Measurement, x: IntervalSamples, at_rest: np.ndarray, given: float | str | None,
+    params: ReductionParams, *, unknown_u: float = 0.0, sliding: np.ndarray | None = None,
+    after: np.ndarray | None = None, lever_N_per_unit: float = 1.0,
+    force_N: float = 1.0,
+) -> ZeroChoice:
+    """The zero of the tangential channel (torque [N·m] or friction force [N]).
+
+    ``given``: a number (used as it is, u = 0), ``"off"`` (0, u = 0), or ``"auto"`` /
+    ``None``: estimated where the instrument is known unloaded, in this order: the set-up
+    interval before the friction interval; the samples before the first movement
+    (``at_rest``, at least ``offset_min_samples``). An estimate whose level is more than
+    ``zero_load_max_fraction`` of the sliding level above it (:func:`load_fraction`;
+    ``sliding`` masks the sliding samples) carries a load: it is refused and
+    ``under_load`` set. ``after`` masks a rest after sliding that the protocol unloads
+    (``InstrumentConfig.rest_after_sliding``): a second zero. With two zeros the mean is
+    used (a drift between them counts half each way) and ``disagree`` is set when they
+    differ by more than 3 combined standard errors and by more than ``settle_tol`` in μ
+    (``lever_N_per_unit`` converts the channel to newtons, ``force_N`` is the mean normal
+    force). Nothing estimable: 0, with ``unknown_u``."""
+    if isinstance(given, int | float) and not isinstance(given, bool):
+        return ZeroChoice(float(given), "given", 0.0)
+    if given == "off":
+        return ZeroChoice(0.0, "off (switched off: 0 taken)", 0.0)
+    level = (float(np.median(x.torque[sliding])) if sliding is not None and sliding.any()
+             else math.nan)
+    refused: list[tuple[str, float]] = []
+
+    def loaded(value: float) -> float | None:
+        if not math.isfinite(level):
+            return None
+        fraction = load_fraction(value, level)
+        return fraction if fraction > params.zero_load_max_fraction else None
+
+    first: ZeroChoice | None = None
     meta_offset, meta_source, meta_u = _offset_from_meta(m)
     rest_offset, n_rest = estimate_torque_offset_Nm(x.torque, at_rest, params.offset_min_samples)
-    if given_Nm is not None:
-        return float(given_Nm), "given", 0.0
     if meta_offset is not None:
-        if not math.isfinite(meta_u):
-            return (meta_offset, f"{meta_source} (too few samples for its scatter: "
-                    "the unknown offset's uncertainty applies)", unknown_u_Nm)
-        return meta_offset, str(meta_source), meta_u
-    if rest_offset is not None:
-        u = zero_offset_standard_error(x.torque[at_rest])
-        return rest_offset, f"at-rest start ({n_rest} samples)", u if math.isfinite(u) else 0.0
-    return (0.0, "not estimated (no set-up interval, no at-rest samples): 0 assumed",
-            unknown_u_Nm)
+        frac = loaded(meta_offset)
+        if frac is not None:
+            refused.append((str(meta_source), frac))
+        elif not math.isfinite(meta_u):
+            first = ZeroChoice(meta_offset, f"{meta_source} (too few samples for its scatter: "
+                               "the unknown offset's uncertainty applies)", unknown_u)
+        else:
+            first = ZeroChoice(meta_offset, str(meta_source), meta_u)
+    if first is None and rest_offset is not None:
+        frac = loaded(rest_offset)
+        if frac is not None:
+            refused.append((f"at-rest start ({n_rest} samples)", frac))
+        else:
+            u = zero_offset_standard_error(x.torque[at_rest])
+            first = ZeroChoice(rest_offset, f"at-rest start ({n_rest} samples)",
+                               u if math.isfinite(u) else 0.0)
+    second: ZeroChoice | None = None
+    if after is not None and int(after.sum()) >= params.offset_min_samples:
+        value = robust_mean(x.torque[after])
+        frac = loaded(value)
+        if frac is not None:
+            refused.append((f"rest after sliding ({int(after.sum())} samples)", frac))
+        else:
+            u = zero_offset_standard_error(x.torque[after])
+            second = ZeroChoice(value, f"rest after sliding ({int(after.sum())} samples)",
+                                u if math.isfinite(u) else 0.0)
+    under = bool(refused)
+    worst = max((f for _, f in refused), default=None)
+    note = ("; refused as under load: " + ", ".join(
+        f"{where} at {f:.0%} of the sliding level" for where, f in refused)) if refused else ""
+    if first is not None and second is not None:
+        delta = abs(first.offset - second.offset)
+        se = math.hypot(first.u, second.u)
+        in_mu = delta * lever_N_per_unit / force_N if force_N > 0 else math.inf
+        disagree = delta > 3 * se and in_mu > params.settle_tol
+        u = math.sqrt((first.u**2 + second.u**2) / 4 + (delta / 2) ** 2 / 3)
+        return ZeroChoice(0.5 * (first.offset + second.offset),
+                          f"mean of {first.source} and {second.source}{note}", u,
+                          under_load=under, disagree=disagree, load_fraction=worst,
+                          second=second.offset)
+    chosen = first or second
+    if chosen is not None:
+        return replace(chosen, source=chosen.source + note, under_load=under,
+                       load_fraction=worst,
+                       second=None if second is None else second.offset)
+    if under:
+        return ZeroChoice(0.0, "not subtracted (the at-rest samples carry a tangential "
+                          f"load){note}: 0 assumed", unknown_u, known=False,
+                          under_load=True, load_fraction=worst)
+    return ZeroChoice(0.0, "not estimated (no set-up interval, no at-rest samples): 0 assumed",
+                      unknown_u, known=False)

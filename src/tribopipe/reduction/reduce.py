@@ -7,18 +7,19 @@ The method (its steps, parameters and flags) is described once, in the docstring
 from __future__ import annotations
 
 import math
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from ..config import REDUCTION_METHOD, InstrumentConfig, ReductionParams
-from ..errors import ReductionError
+from ..errors import MissingQuantityError, ReductionError
 from ..measurement import (
     NORMAL_FORCE,
     TIME,
     TORQUE,
     Measurement,
+    MeasurementMeta,
     require_columns,
 )
 from ..physics import (
@@ -31,14 +32,21 @@ from ..validate import FORCE_N, MU, TEMPERATURE_C
 from . import uncertainty
 from .detection import (
     Detection,
+    noise_std,
     run_detection,
+    static_peak_curve,
 )
 from .intervals import (
     IntervalSamples,
-    choose_torque_offset,
+    ZeroChoice,
+    choose_zero,
+    end_stop,
     interval_samples,
     leading_rest,
+    tangential_column,
+    trailing_rest,
 )
+from .reciprocating import reciprocating_cycles, stroke_path
 
 if TYPE_CHECKING:
 
@@ -61,7 +69,14 @@ FLAGS: tuple[str, ...] = (
     "normal_force_unstable",
     "short_trace",
     "torque_offset_unknown",
+    "zero_under_load",
+    "zero_drift",
+    "run_out",
 )
+
+#: the lever of a force channel [mm]: a friction force F [N] read as a torque F·1 m, so
+#: that one set of formulas serves both channels (F_R = M / R with R = 1 m exactly)
+FORCE_LEVER_MM = 1000.0
 
 
 @dataclass(frozen=True)
@@ -106,11 +121,13 @@ class ReductionResult:
 def _flags(
     det: Detection, s_v: np.ndarray, total_mm: float, force_cv: float,
     offset_known: bool, params: ReductionParams, *, no_signal: bool = False,
+    zero: ZeroChoice | None = None, run_out: bool = False,
 ) -> list[str]:
     """The QC flags of a detection (definitions in the module docstring); ``force_cv`` is
     the normal force's coefficient of variation over the sliding contact samples,
     ``offset_known`` whether the torque zero offset could be estimated or was given,
-    ``no_signal`` whether the torque carries no friction."""
+    ``no_signal`` whether the torque carries no friction, ``zero`` the zero's choice,
+    ``run_out`` whether the plateau's oscillation is locked to the rotation."""
     flags: list[str] = ["no_friction_signal"] if no_signal else []
     n_window = int(det.window.sum())
     w_s = s_v[det.window]
@@ -132,17 +149,65 @@ def _flags(
         and det.stick_slip.oscillates
         and det.stick_slip.std > params.stick_slip_min_std
     ):
-        flags.append("stick_slip")
+        flags.append("run_out" if run_out else "stick_slip")
     if force_cv > params.normal_force_cv_max:
         flags.append("normal_force_unstable")
     if short or n_window < params.min_plateau_samples:
         flags.append("short_trace")
-    if not offset_known:
+    if not offset_known and not (zero is not None and zero.under_load):
         flags.append("torque_offset_unknown")
+    if zero is not None and zero.under_load:
+        flags.append("zero_under_load")
+    if zero is not None and zero.disagree:
+        flags.append("zero_drift")
     return flags
 
 
-def _check_physical(label: str, force_N: float, temperature_C: float | None,
+def force_lever(instrument: InstrumentConfig) -> InstrumentConfig:
+    """The instrument as the torque formulas and the uncertainty budget see a force
+    channel: the friction force F [N] is a torque F·1 m at an exact lever of
+    :data:`FORCE_LEVER_MM` (u = 0), with the force channel's calibration, resolution and
+    unknown-zero size in the torque's place (N × 1 m = N·m)."""
+    return replace(
+        instrument, friction_radius_mm=FORCE_LEVER_MM, friction_radius_u_mm=0.0,
+        torque_u_rel=instrument.friction_force_u_rel,
+        torque_resolution_Nm=instrument.friction_force_resolution_N,
+        torque_offset_unknown_Nm=instrument.friction_force_offset_unknown_N,
+    )
+
+
+def with_sled_force(m: Measurement, instrument: InstrumentConfig) -> tuple[Measurement, str]:
+    """``m`` with its normal force, and where it came from: ``"measured"``, or, for a run
+    without a normal-force column, the sled's weight (``sled_mass_g`` · g or
+    ``sled_weight_N``) as a constant column. :class:`MissingQuantityError` when neither
+    exists."""
+    if m.has(NORMAL_FORCE):
+        return m, "measured"
+    weight = instrument.sled_normal_force_N
+    if weight is None:
+        require_columns(m, NORMAL_FORCE)  # raises, naming the columns found
+        raise MissingQuantityError(f"{m.meta.label}: no normal force")  # pragma: no cover
+    data = m.data.copy()
+    data[NORMAL_FORCE] = weight
+    source = (f"sled weight {instrument.sled_weight_N:g} N" if instrument.sled_weight_N
+              is not None else f"sled mass {instrument.sled_mass_g:g} g × g = {weight:.6g} N")
+    return Measurement(data=data, meta=m.meta), source
+
+
+def revolution_locked(period_mm: float, window_mm: float, revolution_mm: float | None,
+                      tolerance: float) -> bool:
+    """Whether an oscillation of period ``period_mm`` [mm], seen over ``window_mm`` [mm]
+    of sliding, is locked to the rotation: its period lies within ``tolerance`` (relative)
+    plus the periodogram's resolution (one cycle over the window: period/window) of one
+    revolution ``revolution_mm`` [mm] or of its 2nd or 3rd harmonic. Run-out (a disc not
+    flat, a pin not centred) repeats with every turn; stick-slip has its own period."""
+    if revolution_mm is None or not (math.isfinite(period_mm) and period_mm > 0):
+        return False
+    slack = tolerance + period_mm / window_mm if window_mm > 0 else tolerance
+    return any(abs(period_mm / (revolution_mm / h) - 1.0) <= slack for h in (1, 2, 3))
+
+
+def _check_physical(meta: MeasurementMeta, force_N: float, temperature_C: float | None,
                     det: Detection) -> None:
     """:class:`ReductionError` when the measured mean normal force [N], temperature [°C],
     μ_K or μ_S lies outside its physical range (:mod:`tribopipe.validate`)."""
@@ -151,46 +216,67 @@ def _check_physical(label: str, force_N: float, temperature_C: float | None,
                                 ("mu_s", det.mu_s, MU)):
         if value is not None and value not in bounds:
             raise ReductionError(
-                f"{label}: measured {what} {value:.4g} is outside the physical range "
+                f"measured {what} {value:.4g} is outside the physical range "
                 f"({bounds.describe()}): the column is not what its name and unit say",
                 hint="check the export's columns and units",
+                path=meta.source_file, place=meta.place,
             )
 
 
-def _in_contact(x: IntervalSamples, instrument: InstrumentConfig, label: str) -> np.ndarray:
+def _in_contact(x: IntervalSamples, instrument: InstrumentConfig,
+                meta: MeasurementMeta) -> np.ndarray:
     """Boolean mask (shape (n,)) of the samples with F_N ≥ the contact threshold [N];
     :class:`ReductionError` when there is none."""
     threshold = instrument.contact_threshold_N
     in_contact = x.force >= threshold
     if not in_contact.any() or x.force.max() <= 0:
         raise ReductionError(
-            f"{label}: the normal force never reaches the contact threshold "
+            f"the normal force never reaches the contact threshold "
             f"{threshold:g} N (largest {x.force.max():.3g} N): no contact, no friction",
             hint="check the normal-force column or lower contact_threshold_N",
+            path=meta.source_file, place=meta.place,
         )
     return in_contact
 
 
 def _travel(
-    x: IntervalSamples, instrument: InstrumentConfig, params: ReductionParams, label: str
+    x: IntervalSamples, instrument: InstrumentConfig, params: ReductionParams,
+    meta: MeasurementMeta,
 ) -> tuple[np.ndarray, str, np.ndarray]:
-    """Sliding distance [mm] (shape (n,)), its source (``angle``, ``speed``, ``nominal``)
-    and the mask of the samples at rest before the disc moves; :class:`ReductionError`
-    when a measured distance shows no rotation."""
-    s, distance_source = sliding_distance_mm(
-        x.t, instrument.friction_radius_mm, angle_rad=x.angle, speed_rad_s=x.speed,
-        nominal_speed_rpm=instrument.nominal_speed_rpm,
-    )
+    """Sliding distance [mm] (shape (n,)), its source (``position``, ``angle``,
+    ``speed``, ``nominal``) and the mask of the samples at rest before the disc moves;
+    :class:`ReductionError` when a measured distance shows no rotation. A position,
+    crosshead or distance column [m] gives the distance directly (counted along the
+    direction of travel); a linear instrument without one slides at
+    ``nominal_speed_mm_s``."""
+    if x.position is not None and np.isfinite(x.position).sum() >= 2:
+        ok = np.isfinite(x.position)
+        pos = np.interp(x.t, x.t[ok], x.position[ok]) if not ok.all() else x.position
+        travel = (pos - pos[0]) * 1e3
+        s = travel if travel[-1] >= 0 else -travel
+        distance_source = "position"
+    elif instrument.nominal_speed_mm_s is not None and x.angle is None and x.speed is None:
+        s = (x.t - x.t[0]) * float(instrument.nominal_speed_mm_s)
+        distance_source = "nominal"
+    else:
+        s, distance_source = sliding_distance_mm(
+            x.t, instrument.friction_radius_mm, angle_rad=x.angle, speed_rad_s=x.speed,
+            nominal_speed_rpm=instrument.nominal_speed_rpm,
+        )
     if not np.isfinite(s).all():
         raise ReductionError(
-            f"{label}: the sliding distance from the {distance_source} column is not finite "
+            f"the sliding distance from the {distance_source} column is not finite "
             "(values too large for their unit?)",
             hint="check the angle or speed column and its unit",
+            path=meta.source_file, place=meta.place,
         )
     if distance_source != "nominal" and float(s.max()) < params.min_travel_mm:
+        what = ("no sliding: the position moved" if distance_source == "position" else
+                "no rotation: the disc travelled")
         raise ReductionError(
-            f"{label}: no rotation: the disc travelled {float(s.max()):.3g} mm "
-            f"(< {params.min_travel_mm:g} mm); this is not a friction interval"
+            f"{what} {float(s.max()):.3g} mm "
+            f"(< {params.min_travel_mm:g} mm); this is not a friction interval",
+            path=meta.source_file, place=meta.place,
         )
     if distance_source == "nominal":
         at_rest = np.zeros(s.size, dtype=bool)
@@ -309,36 +395,55 @@ def reduce_measurement(
 ) -> ReductionResult:
     """Reduce one friction interval to μ_S and μ_K with their evidence (see module doc).
 
-    ``m.data`` needs ``time_s`` [s], ``torque_Nm`` [N·m], ``normal_force_N`` [N] and uses
-    ``angle_rad`` or ``speed_rad_s`` (else the nominal speed) and ``temperature_C`` when
-    present. ``torque_offset_Nm`` [N·m] overrides the offset estimate. ``m`` is not
+    ``m.data`` needs ``time_s`` [s], a tangential reading — ``torque_Nm`` [N·m] (a
+    rheometer) or ``friction_force_N`` [N] (a force-based tribometer) — and
+    ``normal_force_N`` [N] (or, for a sled, ``instrument.sled_mass_g``); it uses
+    ``position_m``, ``angle_rad`` or ``speed_rad_s`` (else the nominal speed) and
+    ``temperature_C`` when present. ``torque_offset_Nm`` [N·m, or N for a friction force]
+    overrides ``instrument.zero_offset``. A ``"linear reciprocating"`` instrument is
+    reduced stroke by stroke (:mod:`tribopipe.reduction.reciprocating`). ``m`` is not
     modified.
 
-    Raises :class:`ReductionError` (naming ``m.meta.label``) for zero normal force, more
-    than half of torque or normal force missing, no rotation, or too few contact samples.
+    Raises :class:`ReductionError` (naming the file and the interval's place) for zero
+    normal force, more than half of torque or normal force missing, no rotation, or too
+    few contact samples.
     """
-    require_columns(m, TIME, TORQUE, NORMAL_FORCE)
-    label = m.meta.label
-    x = interval_samples(m, params)
-    in_contact = _in_contact(x, instrument, label)
-    s, distance_source, at_rest = _travel(x, instrument, params, label)
+    tangential = tangential_column(m)
+    m, normal_force_source = with_sled_force(m, instrument)
+    require_columns(m, TIME, tangential, NORMAL_FORCE)
+    lever = instrument if tangential == TORQUE else force_lever(instrument)
+    meta = m.meta
+    x = interval_samples(m, params, tangential)
+    in_contact = _in_contact(x, instrument, meta)
+    if instrument.test_method == "linear reciprocating":
+        return _reduce_reciprocating(m, x, in_contact, instrument, lever, params,
+                                     torque_offset_Nm, normal_force_source)
+    s, distance_source, at_rest = _travel(x, instrument, params, m.meta)
     total_mm = float(s[-1] - s[0])
-    offset, offset_source, offset_u = choose_torque_offset(
-        m, x, at_rest, torque_offset_Nm, params,
-        unknown_u_Nm=uncertainty.unknown_offset_u_Nm(instrument),
+    stop = end_stop(x.t, s, ~at_rest, params.stop_speed_fraction) & ~at_rest
+    sliding = ~at_rest & ~stop & in_contact
+    after = (trailing_rest(s, params.motion_tol_mm) & ~at_rest
+             if instrument.rest_after_sliding else None)
+    f_guess = float(np.mean(x.force[sliding])) if sliding.any() else 1.0
+    given = torque_offset_Nm if torque_offset_Nm is not None else instrument.zero_offset
+    zero = choose_zero(
+        m, x, at_rest, given, params, unknown_u=uncertainty.unknown_offset_u_Nm(lever),
+        sliding=sliding, after=after, lever_N_per_unit=1.0 / (lever.friction_radius_mm * 1e-3),
+        force_N=f_guess,
     )
+    offset, offset_source, offset_u = zero.offset, zero.source, zero.u
 
     corrected = x.torque - offset
-    sliding = ~at_rest & in_contact
     n_sliding = int(sliding.sum())
     if n_sliding < params.min_contact_samples:
         raise ReductionError(
-            f"{label}: only {n_sliding} samples in contact "
+            f"only {n_sliding} samples in contact "
             f"(F_N ≥ {instrument.contact_threshold_N:g} N) while "
-            f"sliding; need at least {params.min_contact_samples}"
+            f"sliding; need at least {params.min_contact_samples}",
+            path=meta.source_file, place=meta.place,
         )
     torque_sign = -1.0 if np.median(corrected[sliding]) < 0 else 1.0
-    f_r = torque_sign * friction_force_N(corrected, instrument.friction_radius_mm)
+    f_r = torque_sign * friction_force_N(corrected, lever.friction_radius_mm)
     mu = np.where(in_contact, coefficient_of_friction(f_r, x.force), np.nan)
 
     idx = np.flatnonzero(sliding)
@@ -348,17 +453,21 @@ def reduce_measurement(
     f_mean = float(np.mean(f_slide))
     cv = float(np.std(f_slide) / f_mean) if f_mean > 0 else math.inf
     temperature = _mean_temperature(x, in_contact)
-    _check_physical(label, f_mean, temperature, det)
-    offset_known = not offset_source.startswith("not estimated")
+    _check_physical(m.meta, f_mean, temperature, det)
     se_k, tau = uncertainty.mean_standard_error(mu_v[det.window])
     no_signal = bool(np.ptp(x.torque[sliding]) == 0) or det.mu_k <= 3 * se_k
-    flags = _flags(det, s_v, total_mm, cv, offset_known, params, no_signal=no_signal)
-    u_k = uncertainty.budget(det.mu_k, se_k, normal_force_N=f_mean, instrument=instrument,
+    w_s, w_t = s_v[det.window], t_v[det.window]
+    revolution = _revolution_mm(instrument, distance_source)
+    run_out = revolution_locked(det.stick_slip.period_mm, float(w_s[-1] - w_s[0]), revolution,
+                                params.run_out_tolerance)
+    flags = _flags(det, s_v, total_mm, cv, zero.known, params, no_signal=no_signal,
+                   zero=zero, run_out=run_out)
+    u_k = uncertainty.budget(det.mu_k, se_k, normal_force_N=f_mean, instrument=lever,
                              offset_u_Nm=offset_u)
     u_s = u_k
     if det.distinct:
         u_s = uncertainty.budget(det.mu_s, det.peak_reading_u, normal_force_N=f_mean,
-                                 instrument=instrument, offset_u_Nm=offset_u)
+                                 instrument=lever, offset_u_Nm=offset_u)
     uncertainties = {
         "mu_k": u_k,
         "mu_s": u_s,
@@ -366,10 +475,19 @@ def reduce_measurement(
         "coverage_factor_expanded": uncertainty.COVERAGE_FACTOR,
         "plateau_tau_int_samples": tau,
         "torque_offset_u_Nm": offset_u,
-        "friction_radius_u_mm": instrument.friction_radius_u_mm,
+        "friction_radius_u_mm": lever.friction_radius_u_mm,
+        "terms": dict(zip(("relative", "absolute"), uncertainty.budget_terms(
+            normal_force_N=f_mean, instrument=lever, offset_u_Nm=offset_u), strict=True)),
     }
-
-    w_s, w_t = s_v[det.window], t_v[det.window]
+    parameters = _parameters(
+        params, instrument, x, det, distance_source=distance_source, offset=offset,
+        offset_source=offset_source, torque_sign=torque_sign, cv=cv,
+        in_contact=in_contact, uncertainties=uncertainties,
+    )
+    parameters.update(_instrument_parameters(
+        instrument, tangential, normal_force_source, zero, s, stop, revolution,
+        run_out and "run_out" in flags,
+    ))
     return ReductionResult(
         mu_s=det.mu_s,
         mu_s_distance_mm=float(s_v[det.k_s]),
@@ -386,15 +504,150 @@ def reduce_measurement(
             contact_pressure_kPa(f_mean, instrument.n_pins, instrument.pin_radius_mm)
         ),
         temperature_C=temperature,
-        sliding_speed_mm_s=_measured_speed(x, s, at_rest, instrument),
+        sliding_speed_mm_s=_measured_speed(x, s, at_rest | stop, instrument),
         sliding_distance_mm=total_mm,
         flags=tuple(f for f in FLAGS if f in flags),
         method=METHOD,
-        parameters=_parameters(
-            params, instrument, x, det, distance_source=distance_source, offset=offset,
-            offset_source=offset_source, torque_sign=torque_sign, cv=cv,
-            in_contact=in_contact, uncertainties=uncertainties,
-        ),
+        parameters=parameters,
         trace=_trace_frame(x, s, f_r, mu, in_contact, idx, det, instrument),
         speed_set_point_rpm=_speed_set_point_rpm(x, at_rest),
+    )
+
+
+def _revolution_mm(instrument: InstrumentConfig, distance_source: str) -> float | None:
+    """One revolution's sliding distance [mm], 2π·R, for a rotating instrument (the
+    rheometer's cell, a rotary tribometer); ``None`` for a sled or a linear stroke."""
+    if instrument.test_method in ("rheometer pin-on-disc", "rotary pin-on-disc"):
+        return 2.0 * math.pi * instrument.friction_radius_mm
+    return None
+
+
+def _instrument_parameters(
+    instrument: InstrumentConfig, tangential: str, normal_force_source: str, zero: ZeroChoice,
+    s: np.ndarray, stop: np.ndarray, revolution_mm: float | None, run_out: bool,
+) -> dict[str, Any]:
+    """The diagnostics of the instrument's side of a run: its method and channel, where
+    the normal force and the zero came from, a stop trimmed at the end, the rotation."""
+    trimmed = float(s[-1] - s[int(np.argmax(stop))]) if stop.any() else 0.0
+    return {
+        "test_method": instrument.test_method,
+        "tangential_channel": tangential,
+        "normal_force_source": normal_force_source,
+        "zero_load_fraction": zero.load_fraction,
+        "zero_second": zero.second,
+        "end_stop_samples": int(stop.sum()),
+        "end_stop_trimmed_mm": trimmed,
+        "revolution_mm": revolution_mm,
+        "run_out": run_out,
+    }
+
+
+def _reduce_reciprocating(
+    m: Measurement, x: IntervalSamples, in_contact: np.ndarray, instrument: InstrumentConfig,
+    lever: InstrumentConfig, params: ReductionParams, given: float | None,
+    normal_force_source: str,
+) -> ReductionResult:
+    """A linear reciprocating run (ASTM G133), stroke by stroke: the module docstring of
+    :mod:`tribopipe.reduction`, "Reciprocating runs"."""
+    label = m.meta.label
+    lever_m = lever.friction_radius_mm * 1e-3
+    p, s, at_rest = stroke_path(x, label, params.motion_tol_mm)
+    moving = ~at_rest & in_contact
+    f_guess = float(np.mean(x.force[moving])) if moving.any() else 1.0
+    zero = choose_zero(
+        m, x, at_rest, given if given is not None else instrument.zero_offset, params,
+        unknown_u=uncertainty.unknown_offset_u_Nm(lever), sliding=None,
+        lever_N_per_unit=1.0 / lever_m, force_N=f_guess,
+    )
+    c = reciprocating_cycles(x, p, s, at_rest, in_contact, zero.offset, lever_m,
+                             params.stroke_core_fraction, label)
+    total_mm = float(s[-1] - s[0])
+    det = run_detection(c.s_cycle_mm, c.t_cycle_s, c.mu_cycle, total_mm, params)
+    window = det.window
+    mu_k = float(np.mean(c.mu_cycle[window]))
+    se_k, tau = uncertainty.mean_standard_error(c.mu_cycle[window])
+    in_window = [row for row, w in zip(c.table, window, strict=True) if w]
+    # μ_S: the breakaway of the first stroke, the static peak before the pin first slides
+    head = c.first_stroke
+    mu_head = c.mu[head]
+    sigma = noise_std(mu_head) if head.size > 2 else 0.0
+    curve = static_peak_curve(mu_head, 5) if head.size >= 5 else mu_head
+    k_rel = int(np.argmax(curve)) if head.size else 0
+    mu_peak = float(curve[k_rel]) if head.size else math.nan
+    prominence = mu_peak - max(c.first_level, mu_k)
+    sigma_peak = sigma * math.sqrt(9.0 / 20.0)
+    distinct = bool(prominence > max(params.static_min_prominence,
+                                     params.static_prominence_sigma * sigma_peak))
+    mu_s = mu_peak if distinct else mu_k
+    k_s = int(head[k_rel]) if head.size else 0
+    sliding = ~at_rest & in_contact
+    f_slide = x.force[sliding]
+    f_mean = float(np.mean([row["normal_force_N"] for row in c.table]))
+    cv = float(np.std(f_slide) / np.mean(f_slide))
+    temperature = _mean_temperature(x, in_contact)
+    flag_det = replace(det, mu_k=mu_k, mu_s=mu_s, distinct=distinct, peak_at_limit=False)
+    _check_physical(m.meta, f_mean, temperature, flag_det)
+    no_signal = bool(np.ptp(x.torque[sliding]) == 0) or mu_k <= 3 * se_k
+    flags = _flags(flag_det, c.s_cycle_mm, total_mm, cv, True, params, no_signal=no_signal,
+                   zero=replace(zero, under_load=False))
+    # each cycle's forward − backward mean holds no zero: no offset term for μ_K
+    u_k = uncertainty.budget(mu_k, se_k, normal_force_N=f_mean, instrument=lever,
+                             offset_u_Nm=0.0)
+    u_s = u_k if not distinct else uncertainty.budget(
+        mu_s, sigma_peak, normal_force_N=f_mean, instrument=lever, offset_u_Nm=zero.u)
+    w_s, w_t = c.s_cycle_mm[window], c.t_cycle_s[window]
+    import pandas as pd
+
+    trace = pd.DataFrame({
+        "time_s": x.t, "sliding_distance_mm": s, "normal_force_N": x.force,
+        "pressure_kPa": contact_pressure_kPa(x.force, instrument.n_pins,
+                                             instrument.pin_radius_mm),
+        "friction_force_N": c.friction_N, "mu": c.mu,
+        "mu_smooth": np.full(x.t.size, np.nan), "in_contact": in_contact,
+    })
+    parameters: dict[str, Any] = dict(asdict(params))
+    parameters.update({
+        "distance_source": "position (strokes)",
+        "torque_offset_Nm": zero.offset,
+        "torque_offset_source": zero.source + " (per stroke only: each cycle's forward − "
+                                              "backward mean cancels it)",
+        "friction_sign": c.sign,
+        "n_strokes": c.n_strokes,
+        "n_cycles": len(c.table),
+        "stroke_length_mm": c.stroke_length_mm,
+        "mu_k_forward": float(np.mean([row["mu_forward"] for row in in_window])),
+        "mu_k_backward": float(np.mean([row["mu_backward"] for row in in_window])),
+        "cycles": [dict(row) for row in c.table],
+        "plateau_first_cycle": int(np.flatnonzero(window)[0]) + 1,
+        "plateau_settled": det.settled,
+        "mu_s_peak_raw": mu_peak,
+        "static_prominence": prominence,
+        "normal_force_cv": cv,
+        "n_samples": x.n_total,
+        "uncertainty": {"mu_k": u_k, "mu_s": u_s, "k": 1,
+                        "coverage_factor_expanded": uncertainty.COVERAGE_FACTOR,
+                        "plateau_tau_int_samples": tau, "torque_offset_u_Nm": 0.0},
+    })
+    parameters.update(_instrument_parameters(
+        instrument, tangential_column(m), normal_force_source, zero, s,
+        np.zeros(s.size, dtype=bool), None, False))
+    moving_t, moving_s = x.t[~at_rest], s[~at_rest]
+    speed = (float((moving_s[-1] - moving_s[0]) / (moving_t[-1] - moving_t[0]))
+             if moving_t.size >= 2 and moving_t[-1] > moving_t[0]
+             else instrument.nominal_sliding_speed_mm_s)
+    return ReductionResult(
+        mu_s=float(mu_s), mu_s_distance_mm=float(s[k_s]), mu_s_time_s=float(x.t[k_s]),
+        mu_k=mu_k, mu_k_window_mm=(float(w_s[0]), float(w_s[-1])),
+        mu_k_window_s=(float(w_t[0]), float(w_t[-1])),
+        plateau_std=float(np.std(c.mu_cycle[window], ddof=1)) if window.sum() > 1 else 0.0,
+        plateau_drift_per_mm=float(det.drift),
+        u_mu_k=float(u_k["combined"]), u_mu_s=float(u_s["combined"]),
+        normal_force_mean_N=f_mean,
+        pressure_kPa=float(contact_pressure_kPa(f_mean, instrument.n_pins,
+                                                instrument.pin_radius_mm)),
+        temperature_C=temperature, sliding_speed_mm_s=speed, sliding_distance_mm=total_mm,
+        flags=tuple(f for f in FLAGS if f in flags),
+        method=METHOD + "; reciprocating (ASTM G133): μ per cycle = (forward − backward)/2 "
+        "over each stroke's core, plateau over cycles",
+        parameters=parameters, trace=trace, speed_set_point_rpm=None,
     )

@@ -120,6 +120,24 @@ def budget(
     return parts
 
 
+def budget_terms(
+    *, normal_force_N: float, instrument: InstrumentConfig, offset_u_Nm: float
+) -> tuple[float, float]:
+    """The parts of :func:`budget` that do not depend on the reading, folded in two:
+    ``(relative, absolute)`` such that the combined standard uncertainty [COF, k = 1] of
+    a μ read with statistical part ``reading`` is ``√(reading² + (μ·relative)² +
+    absolute²)``. ``relative`` [1] holds the friction radius, torque calibration and
+    normal force terms (∝ μ); ``absolute`` [COF] the torque resolution and zero. A μ
+    read over a window or at a peak a reviewer chose takes the run's terms
+    (:mod:`tribopipe.reduction.manual`)."""
+    parts = budget(1.0, 0.0, normal_force_N=normal_force_N, instrument=instrument,
+                   offset_u_Nm=offset_u_Nm)
+    relative = math.hypot(parts["friction_radius"], parts["torque_calibration"],
+                          parts["normal_force"])
+    absolute = math.hypot(parts["torque_resolution"], parts["torque_offset"])
+    return relative, absolute
+
+
 def unknown_offset_u_Nm(instrument: InstrumentConfig) -> float:
     """Standard uncertainty [N·m] of a torque zero that could not be estimated: the
     plausible offset ``torque_offset_unknown_Nm`` as a rectangular half-width, b/√3."""

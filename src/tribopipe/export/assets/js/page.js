@@ -241,7 +241,8 @@ function renderResult(res, error) {
     // one line per repeat: its μ_K and the file and test it came from
     u.run_ids.map(function (id) { return runs[id]; }).filter(Boolean).forEach(function (r) {
       var from = runOrigin(r);
-      cell.appendChild(make("div", f3(r.mu_k) + (from ? " — " + from : ""), "tpx-repeat"));
+      cell.appendChild(make("div", f3(r.mu_k) + (r.review ? " (reviewed: " + r.review + ")" : "") +
+        (from ? " — " + from : ""), "tpx-repeat"));
     });
     tr.appendChild(cell);
     body.appendChild(tr);
@@ -359,6 +360,9 @@ $("tpx-copy").addEventListener("click", copyText);
 $("tpx-download").addEventListener("click", download);
 $("tpx-group-filter").addEventListener("input", renderTable);
 $("tpx-group-scope").addEventListener("change", renderTable);
+METHODS.forEach(function (m) { $("tpx-group-method").appendChild(make("option", m)); });
+$("tpx-group-method-label").hidden = METHODS.length < 2;
+$("tpx-group-method").addEventListener("change", renderTable);
 
 if (!PAIRS.length) {
   renderResult(null, "the map holds no pair with a finite μ_K");

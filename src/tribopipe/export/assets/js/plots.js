@@ -92,6 +92,7 @@ function drawPairPlot(res) {
       tip(c, "run " + r.id.slice(0, 8) + ": " + pyG(r.pressure_kPa) + " kPa, " + tLabel(r.temperature_C) +
         ", repeat " + (r.repeat === null ? "?" : r.repeat) + ": μ_K " + f3(r.mu_k) +
         (r.flags.length ? " (" + r.flags.join(", ") + ")" : "") +
+        (r.review ? " [reviewed: " + r.review + "]" : "") +
         (runOrigin(r) ? " — from " + runOrigin(r) : ""));
     });
     groups.filter(function (g) { return sameT(g.temperature_C, t) && finite(g.mu_k_mean); })

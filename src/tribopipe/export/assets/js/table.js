@@ -4,6 +4,7 @@ function qcText(g) {
   var out = [];
   if (g.range_exceeds_r) out.push("range > r");
   if (g.qc_flagged) out.push("flagged run");
+  if (g.reviewed) out.push(g.reviewed + " reviewed");
   return out.join(", ");
 }
 
@@ -34,6 +35,13 @@ var COLUMNS = [
 /* the nominal sliding speed, where a pair of the map holds several (the group table has it) */
 if (GROUPS.some(function (g) { return finite(g.nominal_speed_mm_s); })) {
   COLUMNS.splice(5, 0, { key: "nominal_speed_mm_s", label: "v [mm/s]", fmt: g6 });
+}
+
+/* the test methods of the groups (the map's, in its own order): a column and a filter
+   where there are several; methods are never pooled, each group has one */
+var METHODS = DATA.methods || [];
+if (METHODS.length > 1) {
+  COLUMNS.splice(2, 0, { key: "test_method", label: "method", text: true });
 }
 
 function cellValue(col, g) { return col.get ? col.get(g) : g[col.key]; }
@@ -74,6 +82,7 @@ function renderTable() {
   var body = $("tpx-group-table").tBodies[0];
   clear(body);
   var scope = $("tpx-group-scope").value;
+  var method = $("tpx-group-method").value;
   var tokens = $("tpx-group-filter").value.toLowerCase().split(/\s+/).filter(Boolean);
   var pinKey = key(PAIRS[state.pair].pin);
   var used = {};
@@ -84,6 +93,7 @@ function renderTable() {
     var g = gi[0];
     if (scope === "pin" && key(g.pin) !== pinKey) return false;
     if (scope === "pair" && g.pair !== state.pair) return false;
+    if (method && g.test_method !== method) return false;
     var hay = [g.pin, g.disc, qcText(g), g6(g.pressure_kPa), g6(g.temperature_C) + " °C"].join(" ").toLowerCase();
     return tokens.every(function (t) { return hay.indexOf(t) >= 0; });
   });

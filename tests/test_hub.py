@@ -1,0 +1,344 @@
+"""A hub grown by three labs, as they would grow it: real reduced runs published with their
+evidence, checked, refused or filed through the real CLI, the site built and driven in a
+real headless Chromium at three widths, and the pull-request workflow's own command run.
+
+Lab A's package is clean. Lab B's has one μ_K raised and every checksum re-hashed (and the
+tables that would betray it removed): the recompute refuses it; its honest package goes in.
+Lab C's holds two of Lab A's raw exports as its own: refused as a duplicate.
+"""
+
+from __future__ import annotations
+
+import csv
+import functools
+import http.server
+import io
+import json
+import os
+import shlex
+import shutil
+import subprocess
+import sys
+import threading
+import zipfile
+from pathlib import Path
+
+import pandas as pd
+import pytest
+from click.testing import CliRunner
+
+from generators.synthetic import SyntheticRun
+from reduced_runs import RUNS, make_processed
+from tribopipe.cli import main
+from tribopipe.evidence import recompute_package
+from tribopipe.frictionmap.datapackage import sha256_hash
+from tribopipe.hub.folder import CHECK_COMMAND, WORKFLOW, workflow_command
+from tribopipe.stats import group_statistics
+
+REPO = Path(__file__).resolve().parents[1]
+#: Lab B: its own exports (other seeds), two conditions shared with Lab A
+RUNS_B = [
+    ("b_ds_steel_3N_r1", "Dragonskin 30", "steel", 3.0, 20.0, 1,
+     SyntheticRun(mu_s=0.81, mu_k=0.56, normal_force_N=3.0, seed=31)),
+    ("b_ds_steel_3N_r2", "Dragonskin 30", "steel", 3.0, 20.0, 2,
+     SyntheticRun(mu_s=0.80, mu_k=0.55, normal_force_N=3.0, seed=32)),
+    ("b_ds_steel_9N_r1", "Dragonskin 30", "steel", 9.0, 20.0, 1,
+     SyntheticRun(mu_s=0.61, mu_k=0.40, normal_force_N=9.0, seed=33)),
+]
+
+
+def invoke(*args):
+    result = CliRunner().invoke(main, [str(a) for a in args], catch_exceptions=False)
+    return result
+
+
+def publish(root: Path, runs, lab: str, name: str) -> Path:
+    map_path, _ = make_processed(root / name, runs)
+    out = root / f"package-{name}"
+    result = invoke("map", "publish", "-o", out, "--lab", lab, "--contact", f"{lab} contact",
+                    "--email", "data@lab.example", "--map", map_path, "--with-raw",
+                    "--raw-dir", root / name / "raw")
+    assert result.exit_code == 0, result.output
+    return out
+
+
+def tamper_mu_k(package: Path, target: Path, delta: float) -> str:
+    """Raise the first run's μ_K in data/runs.csv by ``delta``, drop the tables that would
+    still hold the old value, re-hash the descriptor; returns the run's id."""
+    shutil.copytree(package, target)
+    text = (target / "data/runs.csv").read_text(encoding="utf-8")
+    rows = list(csv.DictReader(io.StringIO(text)))
+    rows[0]["mu_k"] = repr(float(rows[0]["mu_k"]) + delta)
+    buf = io.StringIO()
+    writer = csv.DictWriter(buf, fieldnames=list(rows[0]), lineterminator="\n")
+    writer.writeheader()
+    writer.writerows(rows)
+    (target / "data/runs.csv").write_text(buf.getvalue(), encoding="utf-8")
+    desc = json.loads((target / "datapackage.json").read_text(encoding="utf-8"))
+    keep = []
+    for res in desc["resources"]:
+        if res["name"] in ("runs-parquet", "groups", "groups-parquet", "frictionmap-app"):
+            (target / res["path"]).unlink()
+            continue
+        data = (target / res["path"]).read_bytes()
+        res["bytes"], res["hash"] = len(data), sha256_hash(data)
+        keep.append(res)
+    desc["resources"] = keep
+    (target / "datapackage.json").write_text(json.dumps(desc, indent=1), encoding="utf-8")
+    return rows[0]["measurement_id"]
+
+
+@pytest.fixture(scope="module")
+def grown(tmp_path_factory):
+    """The hub after the three labs tried: A and B filed, B's tampered copy and C refused;
+    returns the folders and each command's result."""
+    root = tmp_path_factory.mktemp("hub")
+    pkg_a = publish(root, RUNS, "Lab A", "a")
+    pkg_b = publish(root, RUNS_B, "Lab B", "b")
+    pkg_c = publish(root, RUNS[:2], "Lab C", "c")  # Lab A's raw exports, again
+    tampered = root / "package-b-tampered"
+    edited = tamper_mu_k(pkg_b, tampered, 0.05)
+    hub = root / "hub"
+    out = {"init": invoke("hub", "init", hub, "--title", "Soft friction hub")}
+    out["add_a"] = invoke("hub", "add", pkg_a, "--hub", hub)
+    out["check_tampered"] = invoke("hub", "check", tampered, "--hub", hub)
+    out["add_tampered"] = invoke("hub", "add", tampered, "--hub", hub)
+    out["add_b"] = invoke("hub", "add", pkg_b, "--hub", hub)
+    out["check_c"] = invoke("hub", "check", pkg_c, "--hub", hub)
+    out["add_c"] = invoke("hub", "add", pkg_c, "--hub", hub)
+    out["build"] = invoke("hub", "build", hub, "-o", root / "site")
+    return {"root": root, "hub": hub, "site": root / "site", "a": pkg_a, "b": pkg_b,
+            "c": pkg_c, "tampered": tampered, "edited": edited, "out": out}
+
+
+def test_package_carries_its_evidence(grown):
+    pkg = grown["a"]
+    desc = json.loads((pkg / "datapackage.json").read_text(encoding="utf-8"))
+    names = {r["name"] for r in desc["resources"]}
+    assert {"evidence", "evidence-settings"} <= names
+    index = list(csv.DictReader(io.StringIO((pkg / "evidence/index.csv").read_text())))
+    assert len(index) == len(RUNS)
+    for row in index:
+        trace = (pkg / row["trace_path"]).read_bytes()
+        raw = (pkg / row["raw_path"]).read_bytes()
+        assert sha256_hash(trace)[7:] == row["trace_sha256"]
+        assert sha256_hash(raw)[7:] == row["raw_sha256"]
+        assert row["method"].startswith("tribopipe-v")
+    settings = json.loads((pkg / "evidence/settings.json").read_text())
+    assert set(settings) == {row["config_hash"] for row in index}
+    again = recompute_package(pkg)
+    assert again.ok, again.lines()
+    assert all(r.basis == "raw export" for r in again.rows)
+    assert all(r.recomputed[1] is not None for r in again.rows)
+
+
+def test_recompute_names_the_edited_row_and_both_values(grown):
+    result = invoke("map", "validate", "--recompute", grown["tampered"])
+    assert result.exit_code == 1
+    # the package alone no longer betrays the edit ...
+    assert invoke("map", "validate", grown["tampered"]).exit_code == 0
+    bad = [line for line in result.output.splitlines() if grown["edited"] in line]
+    assert len(bad) == 1, result.output
+    assert "mu_k stored" in bad[0] and "re-derived from the raw export" in bad[0]
+    assert "beyond its stated U" in bad[0]
+
+
+def test_recompute_from_the_trace_only_says_so(grown, tmp_path):
+    target = tmp_path / "no-raw"
+    publish_root = grown["root"]
+    result = invoke("map", "publish", "-o", target, "--lab", "Lab A",
+                    "--map", publish_root / "a/processed/friction_map.parquet")
+    assert result.exit_code == 0, result.output
+    again = invoke("map", "validate", "--recompute", target)
+    assert again.exit_code == 0, again.output
+    assert f"{len(RUNS)} runs could only be checked from their trace" in again.output
+    bare = tmp_path / "bare"
+    result = invoke("map", "publish", "-o", bare, "--lab", "Lab A", "--no-evidence",
+                    "--map", publish_root / "a/processed/friction_map.parquet")
+    again = invoke("map", "validate", "--recompute", bare)
+    assert again.exit_code == 0, again.output
+    assert f"{len(RUNS)} runs carry no evidence" in again.output
+
+
+def test_hub_refuses_the_tampered_and_the_duplicate(grown):
+    out = grown["out"]
+    assert out["init"].exit_code == 0
+    assert out["add_a"].exit_code == 0 and "labs/lab-a/" in out["add_a"].output
+    assert out["check_tampered"].exit_code == 1
+    assert grown["edited"] in out["check_tampered"].output
+    assert out["add_tampered"].exit_code == 1 and "not added" in out["add_tampered"].output
+    assert out["add_b"].exit_code == 0, out["add_b"].output
+    assert out["check_c"].exit_code == 1
+    lines = [x for x in out["check_c"].output.splitlines() if "raw content" in x]
+    assert len(lines) == 2 and all("'Lab A'" in x for x in lines)
+    assert out["add_c"].exit_code == 1
+    labs = sorted(p.name for p in (grown["hub"] / "labs").iterdir() if p.is_dir())
+    assert labs == ["lab-a", "lab-b"]
+
+
+def test_workflow_runs_the_check_it_names(grown):
+    text = (grown["hub"] / WORKFLOW).read_text(encoding="utf-8")
+    assert "pull_request" in text
+    command = workflow_command(text)
+    assert command == CHECK_COMMAND
+    argv = shlex.split(command)
+    assert argv[0] == "tribopipe"
+    env = {**os.environ, "PYTHONPATH": str(REPO / "src")}
+    done = subprocess.run([sys.executable, "-m", "tribopipe", *argv[1:]], cwd=grown["hub"],
+                          capture_output=True, text=True, env=env, timeout=600)
+    assert done.returncode == 0, done.stdout + done.stderr
+    assert "2 packages checked, 0 refused" in done.stdout
+    # the refused package, put in by hand as a pull request would, fails the same command
+    shutil.copytree(grown["c"], grown["root"] / "hub-pr" / "x", dirs_exist_ok=True)
+    pr = grown["root"] / "hub-pr"
+    shutil.rmtree(pr)
+    shutil.copytree(grown["hub"], pr)
+    shutil.copytree(grown["c"], pr / "labs/lab-c/2099-01-01")
+    done = subprocess.run([sys.executable, "-m", "tribopipe", *argv[1:]], cwd=pr,
+                          capture_output=True, text=True, env=env, timeout=600)
+    assert done.returncode == 1
+    assert "raw content" in done.stdout and "1 refused" in done.stdout
+
+
+def test_merged_map_and_downloads(grown):
+    assert grown["out"]["build"].exit_code == 0, grown["out"]["build"].output
+    site = grown["site"]
+    merged = pd.read_parquet(site / "downloads/friction_map.parquet")
+    assert len(merged) == len(RUNS) + len(RUNS_B)
+    assert sorted(set(merged["lab"])) == ["Lab A", "Lab B"]
+    csv_rows = list(csv.DictReader(io.StringIO(
+        (site / "downloads/friction_map.csv").read_text(encoding="utf-8"))))
+    assert len(csv_rows) == len(merged)
+    for name in ("lab-a", "lab-b"):
+        [zipped] = site.glob(f"downloads/{name}-*.zip")
+        with zipfile.ZipFile(zipped) as zf:
+            assert any(n.endswith("/datapackage.json") for n in zf.namelist())
+    comparisons = (site / "comparisons.html").read_text(encoding="utf-8")
+    assert comparisons.count("<tr><td>Dragonskin 30</td>") == 2  # 3 N and 9 N shared
+    # the page shows the map's own between-lab statistics, not a copy of them
+    pooled = group_statistics(merged)
+    shared = pooled[pooled["mu_k_labs"] >= 2]
+    assert len(shared) == 2
+    for s_R in shared["mu_k_s_R"]:
+        assert f"<td>{s_R:.3g}</td>" in comparisons
+
+
+# --------------------------------------------------------------------------- browser
+
+
+CHROMIUM_ARGS = ["--headless", "--no-sandbox", "--disable-gpu",
+                 "--disable-background-networking", "--no-first-run"]
+
+
+def _unavailable(reason: str) -> None:
+    if os.environ.get("TRIBOPIPE_REQUIRE_BROWSER") == "1":
+        pytest.fail(f"TRIBOPIPE_REQUIRE_BROWSER=1 but {reason}")
+    pytest.skip(reason)
+
+
+@pytest.fixture(scope="module")
+def browser():
+    executable = os.environ.get("TRIBOPIPE_CHROMIUM") or shutil.which("chromium")
+    if not executable:
+        _unavailable("no chromium on PATH (Debian: apt-get install chromium)")
+    try:
+        from playwright.sync_api import sync_playwright
+    except ImportError:
+        _unavailable("playwright is not installed (pip install -e '.[test]')")
+    manager = sync_playwright().start()
+    try:
+        instance = manager.chromium.launch(executable_path=executable, args=CHROMIUM_ARGS)
+    except Exception as exc:
+        manager.stop()
+        _unavailable(f"chromium at {executable} did not start: {str(exc).splitlines()[0]}")
+    yield instance
+    instance.close()
+    manager.stop()
+
+
+@pytest.mark.parametrize("width", [800, 1024, 1400])
+def test_site_in_a_browser(grown, browser, served, width):
+    site = grown["site"]
+    context = browser.new_context(viewport={"width": width, "height": 900},
+                                  accept_downloads=True)
+    page = context.new_page()
+    errors: list[str] = []
+    page.on("pageerror", lambda exc: errors.append(str(exc)))
+    page.on("console", lambda m: errors.append(m.text) if m.type == "error" else None)
+    page.goto((site / "index.html").as_uri())
+    rows = page.locator("#groups tbody tr")
+    total = rows.count()
+    assert total > 0
+    # the lab filter: untick Lab B, only Lab A's rows stay
+    page.locator('input.lab-filter[value="Lab B"]').uncheck()
+    visible = page.locator("#groups tbody tr:not([hidden])")
+    assert 0 < visible.count() < total
+    assert set(visible.evaluate_all("rs => rs.map(r => r.dataset.lab)")) == {"Lab A"}
+    assert f"of {total} lab groups shown" in page.locator("#shown-count").inner_text()
+    # nothing wider than the window
+    assert page.evaluate("document.documentElement.scrollWidth") <= width
+    # a lab page, with its citation
+    page.locator('#lab-filter a:has-text("Lab B")').click()
+    page.wait_for_url("**/labs/lab-b.html")
+    bib = page.locator("#bibtex").inner_text()
+    assert bib.startswith("@misc{labb") and "author = {{Lab B}}" in bib
+    assert "cff-version" in page.locator("#cff").inner_text()
+    assert page.locator("#lab-email").inner_text() == "data@lab.example"
+    assert page.locator("#conditions tbody tr").count() == 2
+    href = page.locator('#releases a:has-text("CITATION.cff")').get_attribute("href")
+    assert (site / "labs" / href).resolve().read_bytes().count(b"Lab B") >= 1
+    # the explorer over all labs opens from the lab page's navigation
+    page.locator('nav a:has-text("explorer")').click()
+    page.wait_for_load_state()
+    assert page.locator("#pin").count() == 1
+    assert not errors, errors
+    # a download link, with the site served as GitHub Pages serves it
+    page.goto(f"{served}/index.html")
+    with page.expect_download() as info:
+        page.locator("#download-csv").click()
+    saved = Path(info.value.path())
+    assert saved.read_bytes() == (site / "downloads/friction_map.csv").read_bytes()
+    assert info.value.suggested_filename == "friction_map.csv"
+    context.close()
+
+
+class _Quiet(http.server.SimpleHTTPRequestHandler):
+    def log_message(self, *args) -> None:
+        pass
+
+
+@pytest.fixture(scope="module")
+def served(grown):
+    """The built site over HTTP on localhost (as GitHub Pages would serve it)."""
+    handler = functools.partial(_Quiet, directory=str(grown["site"]))
+    server = http.server.ThreadingHTTPServer(("127.0.0.1", 0), handler)
+    thread = threading.Thread(target=server.serve_forever, daemon=True)
+    thread.start()
+    yield f"http://127.0.0.1:{server.server_address[1]}"
+    server.shutdown()
+    server.server_close()
+
+
+def test_materials_outside_the_vocabulary_are_refused_until_the_hub_adds_them(grown,
+                                                                               tmp_path):
+    hub = tmp_path / "hub"
+    shutil.copytree(grown["hub"], hub)
+    runs = [("s_new_3N_r1", "Mold Star 15", "steel", 3.0, 20.0, 1,
+             SyntheticRun(mu_s=0.9, mu_k=0.6, normal_force_N=3.0, seed=41)),
+            ("s_typo_3N_r1", "Dragonskn 30", "steel", 3.0, 20.0, 1,
+             SyntheticRun(mu_s=0.9, mu_k=0.6, normal_force_N=3.0, seed=42))]
+    pkg = publish(tmp_path, runs, "Lab D", "d")
+    result = invoke("hub", "check", pkg, "--hub", hub)
+    assert result.exit_code == 1
+    lines = [x for x in result.output.splitlines() if x.startswith("data/runs.csv: ")]
+    assert len(lines) == 2, result.output
+    assert "unknown pin 'Dragonskn 30'; did you mean 'Dragonskin 30'" in lines[0]
+    assert "unknown pin 'Mold Star 15'" in lines[1]
+    # one line in the hub's materials file (a pull request) adds the genuinely new one
+    (hub / "materials.toml").write_text(
+        '[materials]\n"Mold Star 15" = { class = "silicone elastomer", supplier = "Smooth-On" }\n',
+        encoding="utf-8")
+    again = invoke("hub", "check", pkg, "--hub", hub)
+    assert again.exit_code == 1
+    assert [x for x in again.output.splitlines() if x.startswith("data/runs.csv: ")] \
+        == [lines[0]]

@@ -12,6 +12,7 @@ import json
 import shutil
 import subprocess
 import sys
+from dataclasses import replace
 from pathlib import Path
 
 import pandas as pd
@@ -271,3 +272,64 @@ def test_the_materials_command_runs_as_a_subprocess(tmp_path):
     assert result.returncode == 1 and "Traceback" not in result.stderr
     assert result.stderr.strip() == ("unknown material 'Aul'; did you mean 'aluminium sheet' "
                                      "or 'lathed aluminium disk'?")
+
+
+# ------------------------------------------------------------------ labels against the export
+
+
+def test_a_force_label_the_export_contradicts_is_refused_with_both_values(tmp_path):
+    raw = tmp_path / "raw"
+    raw.mkdir()
+    for seed, (stem, force) in enumerate((("DS30_steel_9N_20C_r1", 5.0),
+                                          ("DS30_steel_5N_20C_r1", 5.0),
+                                          ("DS30_steel_1N_20C_r1", 1.13))):
+        run = SyntheticRun(mu_s=0.6, mu_k=0.45, normal_force_N=force, temperature_C=20.0,
+                           duration_s=150.0, noise=0.004, seed=7 + seed)
+        write_rheocompass_export(raw / f"{stem}.csv", run, project="labs", test="t",
+                                 sample="pin")
+    args = ["batch", str(raw), "--pattern", PATTERN, "-o", str(tmp_path / "out"),
+            "--no-plots", "--jobs", "1"]
+    result = CliRunner().invoke(main, args)
+    assert result.exit_code == 1
+    (line,) = [ln for ln in result.stderr.splitlines() if "labels contradict" in ln]
+    assert "DS30_steel_9N_20C_r1.csv" in line
+    assert "measured mean normal force 5 N is 44% off the label 9 N (stated tolerance 25%)" \
+        in line and "--keep-labels" in line
+    runs = fm.read_map(tmp_path / "out" / "friction_map.parquet")
+    # the 5 N run lands; 1.13 N labelled 1 N (13 %) is within 25 %: flagged, not refused
+    assert sorted(runs["normal_force_N"]) == [1.0, 5.0]
+    flagged = runs[runs["normal_force_N"] == 1.0]["flags"].iloc[0]
+    assert "normal_force_off_nominal" in flagged
+
+    kept = CliRunner().invoke(main, [*args, "--keep-labels"])
+    assert kept.exit_code == 0, kept.output
+    runs = fm.read_map(tmp_path / "out" / "friction_map.parquet")
+    nine = runs[runs["normal_force_N"] == 9.0]
+    assert len(nine) == 1 and "normal_force_off_nominal" in nine["flags"].iloc[0]
+
+
+def test_a_test_name_naming_other_materials_than_the_labels_is_refused(tmp_path):
+    raw = tmp_path / "raw"
+    raw.mkdir()
+    run = SyntheticRun(mu_s=0.6, mu_k=0.45, normal_force_N=3.0, temperature_C=20.0,
+                       duration_s=150.0, noise=0.004, seed=3)
+    write_rheocompass_export(raw / "DS30_Alu_3N_20C_r1.csv", run, project="labs",
+                             test="Dragonskin 30 on steel", sample="Dragon Skin 30 pin")
+    write_rheocompass_export(raw / "DS30_steel_3N_20C_r1.csv", replace(run, seed=4),
+                             project="labs", test="Dragonskin 30 on steel",
+                             sample="Dragon Skin 30 pin")
+    cfg = tmp_path / "c.toml"
+    cfg.write_text(f'[campaign]\nraw_dir = "raw"\noutput_dir = "out"\nplots = false\n'
+                   f'filename_pattern = "{PATTERN}"\n[names]\nAlu = "aluminium sheet"\n',
+                   encoding="utf-8")
+    result = batch(cfg)
+    assert result.exit_code == 1
+    (line,) = [ln for ln in result.stderr.splitlines() if "labels contradict" in ln]
+    assert line.startswith("failed: DS30_Alu_3N_20C_r1.csv")
+    assert ("Test name 'Dragonskin 30 on steel' names 'steel', the labels say pin "
+            "'Dragonskin 30' on disc 'aluminium sheet'") in line
+    runs = fm.read_map(tmp_path / "out" / "friction_map.parquet")
+    assert list(runs["disc"]) == ["steel"]  # the file whose names agree landed
+    cfg.write_text(cfg.read_text(encoding="utf-8").replace(
+        "plots = false\n", "plots = false\nkeep_labels = true\n"), encoding="utf-8")
+    assert batch(cfg).exit_code == 0

@@ -17,7 +17,7 @@ from dataclasses import dataclass, field, replace
 
 from .config import InstrumentConfig
 from .errors import CampaignError
-from .materials import Vocabulary
+from .materials import Vocabulary, shipped_vocabulary
 from .numeric import is_finite
 from .physics import sliding_speed_mm_s
 from .reporting import RunReport
@@ -155,6 +155,73 @@ class Tolerances:
     def force_limit_N(self, nominal_N: float) -> float:
         """Allowed |F_measured − F_nominal| [N] at a nominal total force [N]."""
         return max(self.force_N, self.force_rel * abs(nominal_N))
+
+
+#: The default stated tolerance beyond which a measured mean normal force refuses its
+#: label: 25 % of the nominal force. A 10 % deviation is a QC flag
+#: (:data:`FLAG_FORCE_OFF`); a run measured at 5 N and labelled 9 N (44 %) is mislabelled.
+LABEL_FORCE_REL = 0.25
+
+
+class LabelMismatch(CampaignError):
+    """A run's labels contradict its own export (measured force, Test name, sample): the
+    run is refused unless the labels are kept explicitly (``--keep-labels``)."""
+
+
+@dataclass(frozen=True)
+class LabelCheck:
+    """How a run's labels are checked against its export before it is stored:
+    ``force_rel``, the stated tolerance (a fraction of the nominal force) beyond which the
+    measured mean normal force refuses the label; ``vocabulary``, the materials a Test
+    name or sample field is read for (``None``: the shipped one); ``keep_labels`` keeps
+    the labels whatever the export says (the run is then only flagged)."""
+
+    force_rel: float = LABEL_FORCE_REL
+    keep_labels: bool = False
+    vocabulary: Vocabulary | None = None
+
+    def problems(self, labels: RunLabels, normal_force_measured_N: float | None,
+                 texts: Iterable[tuple[str, str | None]]) -> list[str]:
+        """What in the export contradicts ``labels`` (none with ``keep_labels``): the
+        measured mean normal force [N] beyond ``force_rel`` of the nominal (both values),
+        and each of ``texts`` (``(what, text)``: the Test name, the sample field) that
+        names materials other than the labelled pin and disc
+        (:meth:`tribopipe.materials.Vocabulary.mentioned`)."""
+        if self.keep_labels:
+            return []
+        out = []
+        nominal = labels.normal_force_N
+        if nominal is not None and normal_force_measured_N is not None and \
+                is_finite(normal_force_measured_N) and nominal > 0:
+            off = abs(normal_force_measured_N - nominal) / nominal
+            if off > self.force_rel:
+                out.append(f"measured mean normal force {normal_force_measured_N:.3g} N is "
+                           f"{off:.0%} off the label {nominal:g} N (stated tolerance "
+                           f"{self.force_rel:.0%})")
+        vocabulary = self.vocabulary or shipped_vocabulary()
+        labelled = {labels.pin, labels.disc} - {None}
+        # names compare only when both labels are the vocabulary's own
+        if labels.complete and all(name in vocabulary for name in labelled):
+            for what, text in texts:
+                if not text:
+                    continue
+                named = vocabulary.mentioned(text)
+                others = [choices for choices in named if not set(choices) & labelled]
+                if others:
+                    names = ", ".join(" or ".join(repr(c) for c in choices)
+                                      for choices in others)
+                    out.append(f"{what} {text!r} names {names}, the labels say pin "
+                               f"{labels.pin!r} on disc {labels.disc!r}")
+        return out
+
+    def check(self, labels: RunLabels, normal_force_measured_N: float | None,
+              texts: Iterable[tuple[str, str | None]]) -> None:
+        """:meth:`problems` as one :class:`LabelMismatch` line, with the way out."""
+        found = self.problems(labels, normal_force_measured_N, texts)
+        if found:
+            raise LabelMismatch("labels contradict the export: " + "; ".join(found),
+                                hint="fix the labels, or keep them with --keep-labels "
+                                     "(a campaign: keep_labels = true)")
 
 
 def round_speed(value: float) -> float:

@@ -24,7 +24,7 @@ from ..config import (
 )
 from ..errors import CampaignError, ConfigError, ValidationError
 from ..escape import display_path
-from ..labels import Tolerances
+from ..labels import LABEL_FORCE_REL, LabelCheck, Tolerances
 from ..layout import DEFAULT_OUTPUT_DIR, OutputLayout
 from ..materials import Vocabulary, lab_files, load_vocabulary, shipped_vocabulary
 from ..pipeline import ReadOptions
@@ -41,7 +41,7 @@ _CAMPAIGN_KEYS = frozenset(
         "filename_pattern", "test_pattern", "use_export_names", "export_pattern",
         "force_tolerance_N", "force_tolerance_rel", "temperature_tolerance_C",
         "speed_tolerance_rel", "plots", "encoding", "delimiter", "decimal", "synthetic",
-        "materials",
+        "materials", "keep_labels", "label_force_tolerance_rel",
         "review",
     }
 )
@@ -78,6 +78,9 @@ class Campaign:
     vocabulary: Vocabulary = field(default_factory=shipped_vocabulary)
     #: the reporting items of every run (``[metadata]``); a manifest cell overrides them
     report: RunReport = field(default_factory=RunReport)
+    #: how the labels are checked against each export (``keep_labels``,
+    #: ``label_force_tolerance_rel``)
+    label_check: LabelCheck = field(default_factory=LabelCheck)
     #: the lab's decisions file (``review.csv``, :mod:`tribopipe.review`), applied on every
     #: batch; ``None``: the map's rows keep the reviews they hold
     review: Path | None = None
@@ -331,7 +334,12 @@ def load_campaign(path: str | Path) -> Campaign:
         raise ConfigError("[campaign] materials must name a materials file (or a list of "
                           "them)", path=cfg_path)
     vocabulary = load_vocabulary(lab_files(base, [(base / m).resolve() for m in materials]))
+    keep_labels = _check_type(table.get("keep_labels", False), bool, "keep_labels", cfg_path)
+    label_force = _non_negative(table.get("label_force_tolerance_rel", LABEL_FORCE_REL),
+                                "label_force_tolerance_rel", cfg_path)
     return Campaign(
+        label_check=LabelCheck(force_rel=label_force, keep_labels=keep_labels,
+                               vocabulary=vocabulary),
         vocabulary=vocabulary,
         report=campaign_report(data.get("metadata", {}), cfg_path),
         name=name,
@@ -432,6 +440,7 @@ def folder_campaign(
     plots: bool = True,
     test_pattern: str | None = None,
     materials: tuple[str | Path, ...] = (),
+    keep_labels: bool = False,
 ) -> Campaign:
     """A quick campaign without a config file: a folder of exports plus a manifest CSV,
     a file-name pattern and/or a test-name pattern, reduced with an instrument config
@@ -458,6 +467,7 @@ def folder_campaign(
     problem = None if glob is None else glob_problem(glob)
     if problem is not None:
         raise CampaignError(f"--glob: {problem}", path=folder)
+    vocabulary = load_vocabulary(lab_files(raw_dir, materials))
     out = Path(output_dir).resolve()
     problem = _output_folder_problem(out)
     if problem is not None:
@@ -473,5 +483,6 @@ def folder_campaign(
         filename_pattern=filename_pattern,
         test_pattern=test_pattern,
         plots=plots,
-        vocabulary=load_vocabulary(lab_files(raw_dir, materials)),
+        vocabulary=vocabulary,
+        label_check=LabelCheck(keep_labels=keep_labels, vocabulary=vocabulary),
     )

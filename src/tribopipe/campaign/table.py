@@ -32,7 +32,7 @@ from typing import Any
 from ..errors import CampaignError, ReadError
 from ..escape import display_path
 from ..files import file_sha256, regular_file
-from ..labels import RunLabels
+from ..labels import LABEL_FORCE_REL, RunLabels
 from ..layout import FAILURES_CSV, RUNS_CSV
 from ..materials import ADD_HINT
 from ..readers import EXPORT_SUFFIXES
@@ -179,6 +179,10 @@ def _campaign_key(campaign: Campaign) -> str:
         "tolerances": asdict(campaign.tolerances),
         # only when set, so the hashes of every other campaign stay what they were
         **({"synthetic": True} if campaign.synthetic else {}),
+        # the label check, only when not the default (older hashes stay valid)
+        **({"label_check": [campaign.label_check.keep_labels, campaign.label_check.force_rel]}
+           if (campaign.label_check.keep_labels
+               or campaign.label_check.force_rel != LABEL_FORCE_REL) else {}),
         # the labels in recipe_hash already carry the [names] aliases, except those read
         # from Test names, so the aliases only matter with a test-name pattern
         "export_names": [campaign.test_pattern, list(campaign.names)]

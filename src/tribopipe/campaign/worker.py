@@ -117,7 +117,8 @@ def _reduce_one(job: Job, ctx: WorkerContext) -> FileOutcome:
                          tolerances=campaign.tolerances,
                          extra_flags=(FLAG_SYNTHETIC,) if campaign.synthetic else (),
                          file_hash=job.sha256,
-                         outputs=RunOutputs(campaign.layout, plot=ctx.plots), name=job.file)
+                         outputs=RunOutputs(campaign.layout, plot=ctx.plots), name=job.file,
+                         check=campaign.label_check)
 
 
 #: Cyclic-GC thresholds while reducing. Parsing an export allocates ~10⁵ short-lived

@@ -56,7 +56,8 @@ def _explorer_run_flags(data: object, run_id: str) -> list[str] | None:
 def test_reduce_shows_the_maps_flags_in_every_output(tmp_path: Path) -> None:
     out, mapfile = tmp_path / "out", tmp_path / "map.parquet"
     args = ["reduce", str(ONE_NEWTON), "--keep-labels", "--pin", "DS30", "--disc", "steel",
-            "--force", "3", "--temperature", "10", "--repeat", "1", "--output", str(out), "--map", str(mapfile)]
+            "--force", "3", "--temperature", "10", "--repeat", "1", "--output", str(out),
+            "--map", str(mapfile)]
     table = CliRunner().invoke(main, [*args, "--plot"])
     assert table.exit_code == 0, table.output
     header_after_reduce = _header_flags()

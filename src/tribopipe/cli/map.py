@@ -90,8 +90,10 @@ def merge_cmd(other: str, replace: bool, lab: str | None, map_path: str) -> None
     both values (exit code 1 when any were kept).
     """
     from ..frictionmap import merge_map
+    from ..materials import lab_files, load_vocabulary
 
-    merged = merge_map(map_path, other, replace=replace, lab=lab)
+    merged = merge_map(map_path, other, replace=replace, lab=lab,
+                       vocabulary=load_vocabulary(lab_files(".")))
     report = merged.report
     for line in report.conflict_lines(theirs=other):
         say(line)
@@ -230,8 +232,9 @@ def validate_cmd(path: str | None, map_path: str | None, recompute: bool) -> Non
         from ..frictionmap.profile import map_upgrade_note
         from ..frictionmap.store import map_metadata
         from ..frictionmap.summary import check_map_file
+        from ..materials import lab_files, load_vocabulary
 
-        problems, verdict = check_map_file(path)
+        problems, verdict = check_map_file(path, load_vocabulary(lab_files(".")))
         upgraded = map_upgrade_note(int(map_metadata(path)["schema_version"]))
         if upgraded is not None:
             say(f"note: {upgraded}")

@@ -251,3 +251,39 @@ def test_map_validate_reports_unresolved_names_with_the_fix(tmp_path):
     assert any("unknown pin 'Dragonskni 30'; did you mean 'Dragonskin 30'" in ln
                and "tribopipe materials add" in ln for ln in lines)
     assert not any("'Dragonskin 30' (" in ln for ln in lines)
+
+
+def test_map_compare_puts_labs_side_by_side_with_en_and_z(tmp_path):
+    import io
+
+    from click.testing import CliRunner
+
+    from tribopipe.cli import main
+    from tribopipe.frictionmap import store
+    from tribopipe.stats import lab_comparison
+
+    rows = [lab_row(i, "Lab A", v, 0.01) for i, v in enumerate([0.50, 0.52])] + \
+        [lab_row(10 + i, "Lab B", v, 0.01) for i, v in enumerate([0.56, 0.58])]
+    path = tmp_path / "m.parquet"
+    store.append_records(path, rows)
+    (row,) = lab_comparison(fm.read_map(path)).to_dict(orient="records")
+    by_lab = group_statistics(fm.read_map(path), by_lab=True)
+    u_a, u_b = (2 * float(u) for u in by_lab["mu_k_u"])
+    assert (row["lab_a"], row["lab_b"]) == ("Lab A", "Lab B")
+    assert row["difference"] == pytest.approx(0.51 - 0.57)
+    assert row["En"] == pytest.approx((0.51 - 0.57) / math.hypot(u_a, u_b))
+    sigma = reproducibility(group_statistics(fm.read_map(path))).s_R
+    assert row["z_a"] == pytest.approx((0.51 - 0.54) / sigma)
+    assert row["z_b"] == pytest.approx((0.57 - 0.54) / sigma)
+
+    text = CliRunner().invoke(main, ["map", "compare", "--map", str(path)])
+    assert text.exit_code == 0, text.output
+    assert "Lab A: n = 2" in text.output and "En = " in text.output
+    assert "(ISO 5725-2)" in text.output
+    csv = CliRunner().invoke(main, ["map", "compare", "--map", str(path), "--format", "csv"])
+    table = pd.read_csv(io.StringIO(csv.output))
+    assert list(table["lab_a"]) == ["Lab A"] and "En" in table.columns
+    alone = tmp_path / "alone.parquet"
+    store.append_records(alone, rows[:2])
+    none = CliRunner().invoke(main, ["map", "compare", "--map", str(alone)])
+    assert "no condition was measured by two labs" in none.output

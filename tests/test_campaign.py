@@ -55,7 +55,8 @@ def write_config(root: Path, extra: str = "", instrument: str | None = None) -> 
 
 @pytest.fixture(scope="module")
 def exports(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    """Four good exports, one truncated export and one text file that is no export."""
+    """Four good exports and two truncated ones (a note is no export: skipped, tested in
+    tests/test_content_first.py)."""
     folder = tmp_path_factory.mktemp("exports")
     for seed, (stem, (mu_s, mu_k, force)) in enumerate(GOOD.items()):
         write_run(folder / f"{stem}.csv", mu_s, mu_k, force, seed=seed)
@@ -63,8 +64,7 @@ def exports(tmp_path_factory: pytest.TempPathFactory) -> Path:
     whole = (folder / "DS30_steel_1N_20C_r1.csv").read_bytes()
     cut = len(whole) // 2 // 2 * 2  # whole UTF-16 code units
     (folder / "DS30_steel_9N_20C_r1.csv").write_bytes(whole[:cut])
-    (folder / "DS30_steel_3N_20C_r1.csv").write_text("operator notes: disc re-polished\n",
-                                                     encoding="utf-8")
+    (folder / "DS30_steel_3N_20C_r1.csv").write_bytes(whole[: len(whole) // 3 // 2 * 2])
     return folder
 
 

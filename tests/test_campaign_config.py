@@ -11,6 +11,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
+from generators.synthetic import SyntheticRun, write_rheocompass_export
 from tribopipe.campaign import campaign_table, load_campaign, read_manifest
 from tribopipe.campaign.metadata import labels_from, merge_metadata
 from tribopipe.campaign.patterns import match_pattern
@@ -33,8 +34,10 @@ def make_campaign(tmp_path: Path, *, manifest: str | None = None, pattern: bool 
                   extra: str = "", files: tuple[str, ...] = ()) -> object:
     raw = tmp_path / "raw"
     raw.mkdir(exist_ok=True)
-    for f in files:
-        (raw / f).write_text("placeholder", encoding="utf-8")
+    for i, f in enumerate(files):
+        # a real export: a campaign looks at the content before it judges the labels
+        write_rheocompass_export(raw / f, SyntheticRun(duration_s=40.0, seed=i),
+                                 project="p", test="t", sample="s")
     lines = ['[campaign]', 'raw_dir = "raw"', 'output_dir = "out"']
     if pattern:
         lines.append(f'filename_pattern = "{PATTERN}"')

@@ -130,12 +130,13 @@ def test_a_mixed_folder_lands_every_run_and_names_what_it_left_out(lab: Path) ->
     campaign = load_campaign(lab / "campaign.toml")
     report = run_campaign(campaign, jobs=1)
 
-    assert report.files == 6
-    assert report.tests == 3 + 3 + 3 + 1  # the two files that are no exports hold none
+    assert report.files == 5  # notes.txt is no export: set aside, never a failure
+    assert report.tests == 3 + 3 + 3 + 1  # legacy.xls is not read: it holds none
     assert len(report.reduced) == 10 and report.skipped == []
     failed = dict(report.failures)
-    assert set(failed) == {"notes.txt", "legacy.xls"}
-    assert "not a table export" in failed["notes.txt"]
+    assert set(failed) == {"legacy.xls"}
+    assert "not an export: skipped: notes.txt (a text with no table: no TAB, ';' or ',' " \
+        "between cells)" in report.notes
     assert "legacy Excel .xls workbook" in failed["legacy.xls"]
     assert report.unmatched == [
         "file: manifest.csv line 7 (ghost.txt)",
@@ -158,11 +159,11 @@ def test_a_mixed_folder_lands_every_run_and_names_what_it_left_out(lab: Path) ->
     assert single["mu_k"] == pytest.approx(0.33, abs=0.01)
 
     table = runs_csv(campaign.runs_csv)
-    assert len(table) == 12  # 10 runs + the two files that are no exports
+    assert len(table) == 11  # 10 runs + legacy.xls, which failed
     session = [r for r in table if r["file"] == "session.txt"]
     assert [(r["test"], r["interval"], r["status"]) for r in session] == [
         (NAMES[0], "2", "reduced"), (NAMES[1], "1", "reduced"), (NAMES[2], "2", "reduced")]
-    assert [r["status"] for r in table if r["file"] == "notes.txt"] == ["failed"]
+    assert [r["status"] for r in table if r["file"] == "notes.txt"] == []
 
 
 def test_a_rerun_skips_every_run_and_a_changed_row_redoes_only_its_file(lab: Path) -> None:
@@ -171,7 +172,7 @@ def test_a_rerun_skips_every_run_and_a_changed_row_redoes_only_its_file(lab: Pat
     before = campaign.map_path.read_bytes()
     again = run_campaign(campaign, jobs=1)
     assert again.reduced == [] and len(again.skipped) == 10
-    assert again.tests == 10 and again.files == 6
+    assert again.tests == 10 and again.files == 5
     assert campaign.map_path.read_bytes() == before
     assert len(again.unmatched) == 2  # still named, still exit 1
 
@@ -215,8 +216,8 @@ def test_the_ledger_adds_up_with_duplicates_conflicts_and_failures(lab: Path) ->
     for batch in (1, 2):
         report = run_campaign(campaign, jobs=1)
         # what the folder holds, counted by hand
-        assert report.file_tally == Tally(read=4, duplicate=1, conflict=1, failed=2)
-        assert report.files == report.file_tally.found == 8
+        assert report.file_tally == Tally(read=4, duplicate=1, conflict=1, failed=1)
+        assert report.files == report.file_tally.found == 7  # notes.txt: not an export
         assert report.test_tally == Tally(read=3 + 3 + 3 + 1, duplicate=3, conflict=1)
         assert report.tests == report.test_tally.found == 14
         reduced, skipped = (9, 0) if batch == 1 else (0, 9)
@@ -225,11 +226,11 @@ def test_the_ledger_adds_up_with_duplicates_conflicts_and_failures(lab: Path) ->
         assert report.total == len(report.reduced) + len(report.skipped) + report.runs_failed
         # every failure listed is a failed file, a conflict or a failed run, once
         assert len(report.failures) == (report.file_tally.failed + report.file_tally.conflict
-                                        + report.runs_failed) == 4
+                                        + report.runs_failed) == 3
         assert [f for f, _ in report.conflicts] == ["single_r2.csv"]
         assert [f for f, _ in report.duplicates] == ["session_fr (copy).txt"]
         assert report.summary() == (
-            "sessions: 8 file(s) found (4 read, 1 duplicate, 1 conflict, 2 failed), 14 test(s) "
+            "sessions: 7 file(s) found (4 read, 1 duplicate, 1 conflict, 1 failed), 14 test(s) "
             "(10 in files read, 3 in duplicates, 1 in conflicts); 10 run(s) in the files read: "
             f"{reduced} reduced, {skipped} skipped (unchanged), 1 failed; "
             f"{4 if batch == 1 else 0} condition group(s) updated")  # 1, 3, 5 N; 7 N
@@ -433,7 +434,7 @@ def test_a_renamed_and_relabelled_file_takes_its_runs_along(lab: Path) -> None:
         encoding="utf-8")
     report = run_campaign(campaign, jobs=1)
     assert report.reduced == ["single_r2.csv"]
-    assert sorted(dict(report.failures)) == ["legacy.xls", "notes.txt"]
+    assert sorted(dict(report.failures)) == ["legacy.xls"]
     assert any("single_r2.csv: same content as single.csv, which left the folder: taken as "
                "renamed" in n for n in report.notes)
     runs = pd.read_parquet(campaign.map_path)
@@ -455,7 +456,7 @@ def test_batch_folder_with_a_test_manifest_and_a_test_pattern(lab: Path) -> None
         TEST_PATTERN, "--output", str(lab / "proc"), "--no-plots", "--jobs", "1"])
     assert result.exit_code == 1, result.output
     out = result.stdout
-    assert "raw: 6 file(s) found (4 read, 2 failed), 10 test(s); 10 run(s) in the files " \
+    assert "raw: 5 file(s) found (4 read, 1 failed), 10 test(s); 10 run(s) in the files " \
            "read: 10 reduced, 0 skipped (unchanged), 0 failed" in out
     assert "  manifest row matching no file: manifest.csv line 7 (ghost.txt)" in out
     assert "  manifest row matching no test: manifest.csv line 5 (session.txt, test " \
@@ -481,7 +482,8 @@ def test_campaign_list_shows_one_row_per_run(lab: Path) -> None:
     fr = [ln for ln in lines if ln.startswith("SESSION_FR.CSV")]
     assert len(fr) == 3 and all("reduced" in ln for ln in fr)
     assert any("DS30 on steel, 5 N, 20 °C, #2" in ln for ln in fr)
-    assert "12 row(s) in 6 file(s): 2 failed, 10 reduced" in result.stdout
+    assert "12 row(s) in 6 file(s): 1 failed, 10 reduced, 1 skipped (not an export)" \
+        in result.stdout
 
 
 @pytest.mark.slow  # a real process or a larger data set: `pytest -m slow`

@@ -30,7 +30,9 @@ def exports(tmp_path_factory: pytest.TempPathFactory) -> Path:
                            duration_s=150.0, noise=0.004, seed=seed)
         write_rheocompass_export(folder / f"{stem}.csv", run, project="cli", test="t",
                                  sample="DS30")
-    (folder / BAD).write_text("this is a lab note, not an export\n", encoding="utf-8")
+    # an export cut off mid-file (a note is no export: tests/test_content_first.py)
+    whole = next(iter(sorted(folder.glob("*.csv")))).read_bytes()
+    (folder / BAD).write_bytes(whole[: len(whole) // 2 // 2 * 2])
     return folder
 
 

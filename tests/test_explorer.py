@@ -122,7 +122,7 @@ def test_the_page_loads_nothing_from_anywhere(published_html):
         "http://drake.mit.edu", SVG_NAMESPACE]
     assert "@import" not in html and "url(" not in html
     # no fetch, XHR, websocket, beacon or worker in the script
-    script = page.scripts[1][1]
+    script = page.scripts[-1][1]
     for call in ("fetch(", "XMLHttpRequest", "WebSocket", "sendBeacon", "Worker(", "import("):
         assert call not in script, call
 
@@ -146,38 +146,47 @@ def test_the_content_security_policy_admits_exactly_the_page_own_script_and_styl
 def test_embedded_json_round_trips(published_html):
     data, html = published_html
     page = parse(html)
-    blocks = [text for attrs, text in page.scripts if attrs.get("type") == "application/json"]
-    assert len(blocks) == 1
-    assert json.loads(blocks[0]) == data
+    blocks = [(attrs["id"], text) for attrs, text in page.scripts
+              if attrs.get("type") == "application/json"]
+    # the document, then each pair's runs in an element of its own (read when shown)
+    assert [i for i, _ in blocks] == [DATA_ELEMENT_ID] + [
+        f"tpx-runs-{i}" for i in range(len(data["pairs"]))]
+    head = {k: v for k, v in data.items() if k != "runs"}
+    assert json.loads(blocks[0][1]) == head
+    assert [json.loads(text) for _, text in blocks[1:]] == data["runs"]
     assert read_embedded_data(html) == data
-    assert f'id="{DATA_ELEMENT_ID}"' in html
 
 
 def test_the_data_hold_query_points_runs_groups_and_fits(published, published_html):
     _, runs = published
     data, _ = published_html
     groups = group_statistics(runs)
-    assert data["format"] == "tribopipe-explorer/1"
-    assert len(data["pairs"]) == 11
+    assert data["format"] == "tribopipe-explorer/2"
+    assert len(data["pairs"]) == 11 == len(data["runs"])
     assert len(data["groups"]) == len(groups) == 76
-    assert sum(len(p["runs"]) for p in data["pairs"]) == 169
-    for pair in data["pairs"]:
+    assert sum(len(r) for r in data["runs"]) == 169
+    for pair, pair_runs in zip(data["pairs"], data["runs"], strict=True):
         points = pair_points(select_pair(groups, pair["pin"], pair["disc"]), "mu_k")
+        (speed,) = pair["speeds"]  # the published map: one speed
         assert [(p["pressure_kPa"], p["temperature_C"], p["mean"], p["n"])
-                for p in pair["mu_k_points"]] == list(
+                for p in speed["mu_k_points"]] == list(
             zip(points["pressure_kPa"], points["temperature_C"], points["mean"], points["n"],
                 strict=True))
-        assert pair["mu_s_points"] == []  # the published map holds no μ_S
-        ids = {r["id"] for r in pair["runs"]}
-        for point in pair["mu_k_points"]:
+        assert speed["mu_s_points"] == []  # the published map holds no μ_S
+        for point in speed["mu_k_points"]:
             # the repeats behind a point are the pair's runs at its condition
-            behind = [r for r in pair["runs"] if r["id"] in point["run_ids"]]
+            behind = [pair_runs[i] for i in point["runs"]]
             assert len(behind) == point["n"]
             assert all(r["pressure_kPa"] == pytest.approx(point["pressure_kPa"], rel=1e-3)
                        and r["temperature_C"] == point["temperature_C"] for r in behind)
             assert math.fsum(r["mu_k"] for r in behind) / len(behind) == pytest.approx(
                 point["mean"], rel=1e-12)
-            assert set(point["run_ids"]) <= ids
+            # its texts are the tables' (pressure to 4 significant digits, μ to 3 decimals)
+            assert point["text"]["p"] == f"{point['pressure_kPa']:.4g}"
+            assert point["text"]["mean"] == f"{point['mean']:.3f}"
+        # the chips: each measured pressure once, as the tables print it
+        assert [c["text"] for c in speed["pressures"]] == [
+            f"{v:.4g}" for v in sorted(set(points["pressure_kPa"]))]
 
 
 def test_fits_are_fit_py_fits_with_their_curves(published, published_html):
@@ -202,10 +211,10 @@ def test_missing_numbers_are_null_never_nan(tmp_path):
     text = script_json(data)
     assert "NaN" not in text and "Infinity" not in text
     one_run = next(p for p in data["pairs"] if p["pin"] == "Ecoflex 00-50")
-    assert one_run["mu_k_points"][0]["half"] is None  # one run: CI unknown
+    assert one_run["speeds"][0]["mu_k_points"][0]["half"] is None  # one run: CI unknown
     assert one_run["fits"][0]["k"] is None and one_run["fits"][0]["curve"] == []
     ds = next(p for p in data["pairs"] if p["pin"] == "Dragonskin 30")
-    assert len(ds["mu_s_points"]) == 2  # reduced runs hold μ_S
+    assert len(ds["speeds"][0]["mu_s_points"]) == 2  # reduced runs hold μ_S
 
 
 def test_each_point_carries_the_combined_uncertainty_query_interpolates(tmp_path):
@@ -220,7 +229,8 @@ def test_each_point_carries_the_combined_uncertainty_query_interpolates(tmp_path
     checked = 0
     for pair in data["pairs"]:
         want = pair_points(select_pair(groups, pair["pin"], pair["disc"]), "mu_k")
-        for got, (_, row) in zip(pair["mu_k_points"], want.iterrows(), strict=True):
+        for got, (_, row) in zip(pair["speeds"][0]["mu_k_points"], want.iterrows(),
+                                 strict=True):
             if row["u"] == row["u"]:  # not NaN: reduced runs carry their budgets
                 assert got["u"] == pytest.approx(float(row["u"]), rel=1e-12)
                 assert got["u"] > 0
@@ -237,9 +247,11 @@ def test_excluded_runs_are_left_out(tmp_path):
     victim = runs.loc[runs["pin"] == "Dragonskin 30", "measurement_id"].iloc[0]
     exclude_runs(map_path, [victim], "pin torn")
     data = explorer_data(read_map(map_path))
-    ids = {r["id"] for p in data["pairs"] for r in p["runs"]}
+    ids = {r["id"] for chunk in data["runs"] for r in chunk}
     assert victim not in ids and len(ids) == len(runs) - 1
-    assert all(victim not in pt["run_ids"] for p in data["pairs"] for pt in p["mu_k_points"])
+    behind = [chunk[i]["id"] for p, chunk in zip(data["pairs"], data["runs"], strict=True)
+              for pt in p["speeds"][0]["mu_k_points"] for i in pt["runs"]]
+    assert victim not in behind and len(behind) == len(runs) - 1
 
 
 def test_script_json_escapes_what_could_close_the_element():
@@ -270,7 +282,8 @@ def test_hostile_names_never_become_markup(tmp_path):
     map_path = hostile_map(tmp_path)
     html = write_explorer(map_path, tmp_path / "explorer.html").read_text(encoding="utf-8")
     page = parse(html)
-    assert len(page.scripts) == 2  # the data and the page's own script, nothing injected
+    # the data, its pair's runs and the page's own script, nothing injected
+    assert [a.get("type") for a, _ in page.scripts] == ["application/json"] * 2 + [None]
     assert "img" not in page.tags
     assert HOSTILE_PIN not in html and "<img" not in html and "\u2028" not in html
     data = read_embedded_data(html)

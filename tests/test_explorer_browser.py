@@ -28,6 +28,7 @@ from tribopipe.export.explorer import write_explorer
 from tribopipe.export.fe_decks import condition_snippet
 from tribopipe.export.registry import WRITERS
 from tribopipe.export.simulators import snippet
+from tribopipe.export.tables import condition_text
 from tribopipe.frictionmap import import_table, read_map
 from tribopipe.frictionmap.published import published_csv_path
 from tribopipe.query import groups_of, pairs, query
@@ -412,9 +413,17 @@ def test_temperature_needed_and_bad_pressure_are_said(tab, published):
         "contact pressure must be a finite number >= 0 kPa, got -3.0")
 
 
+def open_export(tab) -> None:
+    """Unfold the copy-or-download box (folded until asked for)."""
+    assert tab.page.evaluate("document.getElementById('tpx-export-box').open") is False
+    tab.page.click("#tpx-export-box summary")
+    assert tab.page.evaluate("document.getElementById('tpx-export-box').open") is True
+
+
 def test_downloads_and_snippets_are_the_python_writers(tab, reduced):
     map_path, page, groups, _ = reduced
     tab.open(page_url(page, pin="Dragonskin 30", disc="steel", pressure="60", temperature="20"))
+    open_export(tab)
     res = query(groups, "Dragonskin 30", "steel", 60.0, 20.0)
     for fmt, suffix in (("abaqus", ".inp"), ("ansys", ".mac")):
         tab.page.select_option("#tpx-export-format", fmt)
@@ -447,6 +456,7 @@ def test_copy_puts_the_text_on_the_clipboard(browser, reduced):
     _, page, _, _ = reduced
     t = Tab(browser, permissions=["clipboard-read", "clipboard-write"])
     t.open(page_url(page, pin="Dragonskin 30", disc="steel", pressure="30", temperature="20"))
+    open_export(t)
     t.page.select_option("#tpx-export-format", "abaqus")
     t.page.click("#tpx-copy")
     t.wait_until("document.getElementById('tpx-export-status').textContent !== ''")
@@ -536,15 +546,23 @@ def test_hostile_names_render_as_text(tab, tmp_path):
     s = shown(tab)
     assert (s["pin"], s["disc"]) == (HOSTILE_PIN, HOSTILE_DISC)
     counts = tab.page.evaluate("""() => ({scripts: document.scripts.length,
+      code: document.querySelectorAll('script:not([type])').length,
       images: document.images.length, onerror: document.querySelectorAll('[onerror]').length})""")
-    assert counts == {"scripts": 2, "images": 0, "onerror": 0}
+    # the data, the pair's runs and the page's own script: nothing injected
+    assert counts == {"scripts": 3, "code": 1, "images": 0, "onerror": 0}
     assert f"{HOSTILE_PIN} on {HOSTILE_DISC}" in tab.page.text_content("#tpx-pair-plot")
     assert tab.page.text_content("#tpx-group-table tbody td") == HOSTILE_PIN
     assert_shows(tab, query(groups_of(read_map(map_path), map_path), HOSTILE_PIN, HOSTILE_DISC,
                             20.0, None))
     # the CSV keeps the names as data: quoted where needed, no cell starts a formula
+    open_export(tab)
     tab.page.select_option("#tpx-export-format", "csv")
-    assert HOSTILE_PIN in tab.page.input_value("#tpx-export-text")
+    import csv
+    import io
+
+    text = tab.page.input_value("#tpx-export-text")
+    (row,) = csv.DictReader(io.StringIO(text))
+    assert (row["pin"], row["disc"]) == (HOSTILE_PIN, HOSTILE_DISC)
 
 
 class _Quiet(http.server.SimpleHTTPRequestHandler):
@@ -689,39 +707,44 @@ def test_a_published_packages_explorer_opens_from_disk(tab, reduced, tmp_path):
 
 
 def test_a_measured_pressure_shows_rounded_and_counts_exact(tab, reduced):
-    # 3 N on three pins of r = 3 mm is 35.36776... kPa: the input shows it as the chips do,
-    # while μ_K, the address and a link keep the measured value, not the rounded text
+    # 3 N on three pins of r = 3 mm is 35.36776... kPa: the input and the chips show it as
+    # the tables print it (4 significant digits, 35.37), while μ_K and a link keep the
+    # measured value, not the rounded text
     _, page, groups, _ = reduced
     tab.open(page_url(page, pin="Dragonskin 30", disc="steel"))
     pair = groups[(groups["pin"] == "Dragonskin 30") & (groups["disc"] == "steel")]
     p = float(sorted(pair["pressure_kPa"])[0])
-    assert f"{p:g}" != repr(p)  # the case: six digits are not the value
+    text = condition_text("pressure_kPa", p)
+    assert text == "35.37" and float(text) != p  # the case: the text is not the value
     s = shown(tab)
-    assert (s["pressure"], s["temperature"]) == (f"{p:g}", "20")
+    assert (s["pressure"], s["temperature"]) == (text, "20")
     res = query(groups, "Dragonskin 30", "steel", p, 20.0)
     assert len(res.mu_k.used) == 1 and res.mu_k.used[0].weight == 1.0
     assert_shows(tab, res)
-    # the address carries 4 significant digits, and a link with them means the measured value
-    assert f"pressure={p:.4g}&" in tab.address() and repr(p) not in tab.address()
-    # the group table and the chips fill in the exact value the same way
+    # the address carries the text, and a link with it means the measured value
+    assert f"pressure={text}&" in tab.address() and repr(p) not in tab.address()
+    # the chips say what the tables say, and fill in the exact value the same way
+    chips = tab.page.locator("#tpx-measured button").all_text_contents()
+    assert chips == ["20 °C"] + [condition_text("pressure_kPa", v) + " kPa"
+                                 for v in sorted(set(pair["pressure_kPa"]))]
     tab.page.fill("#pressure", "50")
-    tab.page.locator("#tpx-measured button", has_text=f"{p:g} kPa").click()
-    assert shown(tab)["pressure"] == f"{p:g}" and f"pressure={p:.4g}&" in tab.address()
+    tab.page.locator("#tpx-measured button", has_text=f"{text} kPa").click()
+    assert shown(tab)["pressure"] == text and f"pressure={text}&" in tab.address()
     assert_shows(tab, res)
     link = tab.address()
     tab.open(link)
-    assert shown(tab)["pressure"] == f"{p:g}"
+    assert shown(tab)["pressure"] == text
     assert_shows(tab, res)
     # so does a link with the full digits; a measured value typed exactly stays as typed
     tab.open(page_url(page, pin="Dragonskin 30", disc="steel", pressure=repr(p),
                       temperature="20.0"))
-    assert shown(tab)["pressure"] == f"{p:g}"
+    assert shown(tab)["pressure"] == text
     assert_shows(tab, res)
     assert "temperature=20.0" in tab.address()
     # typing makes the typed text the value: the rounded number is then what is asked
-    tab.page.fill("#pressure", f"{p:g}")
-    assert_shows(tab, query(groups, "Dragonskin 30", "steel", float(f"{p:g}"), 20.0))
-    assert f"pressure={p:g}&" in tab.address() or tab.address().endswith(f"pressure={p:g}")
+    tab.page.fill("#pressure", text)
+    assert_shows(tab, query(groups, "Dragonskin 30", "steel", float(text), 20.0))
+    assert f"pressure={text}&" in tab.address() or tab.address().endswith(f"pressure={text}")
 
 
 def test_each_repeat_says_which_file_and_test_it_came_from(tab, reduced):
@@ -751,6 +774,8 @@ OVERFLOWS = """cards => {
     const box = card.getBoundingClientRect();
     for (const e of card.querySelectorAll('*')) {
       if (e.closest('[hidden], datalist, option, title, script')) continue;
+      // folded until asked for, or inside a box that scrolls (checked apart)
+      if (e.closest('details:not([open]) > :not(summary), .tpx-scroll')) continue;
       const r = e.getBoundingClientRect();
       if (r.width === 0 && r.height === 0) continue;
       if (r.left < box.left - 1 || r.right > box.right + 1 || r.top < box.top - 1
@@ -763,6 +788,54 @@ OVERFLOWS = """cards => {
     }
   }
   return out;
+}"""
+
+
+#: what a reader sees: label sizes on screen, where the plot is, what is folded, words
+#: broken across lines (each word's text range in more than one line box)
+LAYOUT = r"""() => {
+  const texts = Array.from(document.querySelectorAll('.tpx svg text'));
+  const size = t => {
+    const s = t.ownerSVGElement;
+    const scale = s.getBoundingClientRect().width / s.viewBox.baseVal.width;
+    return parseFloat(getComputedStyle(t).fontSize) * scale;
+  };
+  const plot = document.querySelector('#tpx-pair-plot svg').getBoundingClientRect();
+  // the fold: the window's height below the page's top, or below the explorer's own top
+  // where a report embeds it (its link scrolls there)
+  const top = document.body.classList.contains('tpx-page') ? 0 :
+    document.getElementById('tpx').getBoundingClientRect().top;
+  const broken = [];
+  const named = document.querySelectorAll(
+    '.tpx td.tpx-t, .tpx th, .tpx select option:checked, .tpx svg text.tpx-title, .tpx .tpx-chip');
+  for (const e of named) {
+    const walker = document.createTreeWalker(e, NodeFilter.SHOW_TEXT);
+    for (let n = walker.nextNode(); n; n = walker.nextNode()) {
+      const re = /\S+/g;
+      let m;
+      while ((m = re.exec(n.data))) {
+        const r = document.createRange();
+        r.setStart(n, m.index);
+        r.setEnd(n, m.index + m[0].length);
+        const tops = new Set(Array.from(r.getClientRects(), q => Math.round(q.top)));
+        if (tops.size > 1) broken.push(m[0]);
+      }
+    }
+  }
+  const scroll = document.querySelector('.tpx .tpx-scroll');
+  const box = document.getElementById('tpx-export-box');
+  return {
+    labels: texts.length,
+    smallest_label_px: Math.min(...texts.map(size)),
+    plot_top: plot.top - top,
+    plot_middle: plot.top - top + plot.height / 2,
+    export_open: box.open,
+    textarea_shown: document.getElementById('tpx-export-text').checkVisibility(),
+    broken_words: broken,
+    table_overflow_px: scroll.scrollWidth - scroll.clientWidth,
+    selectors_shown: Array.from(document.querySelectorAll('.tpx-select select'))
+      .filter(s => s.checkVisibility()).map(s => s.id),
+  };
 }"""
 
 
@@ -780,6 +853,20 @@ def test_no_element_overflows_its_card(browser, reduced, published, width, tmp_p
                           temperature="15"))
         tab.page.screenshot(path=str(tmp_path / f"explorer-{name}-{width}.png"), full_page=True)
         assert tab.page.evaluate(OVERFLOWS, CARDS) == [], f"{name} at {width} px"
+        layout = tab.page.evaluate(LAYOUT)
+        where = f"{name} at {width} px: {layout}"
+        # every label of every plot is at least 11 px on the screen
+        assert layout["labels"] > 20 and layout["smallest_label_px"] >= 11, where
+        # the plot starts above the fold and at least half of it shows there
+        assert layout["plot_top"] < 900 and layout["plot_middle"] < 900, where
+        # the copy-or-download box is folded until asked for
+        assert layout["export_open"] is False and layout["textarea_shown"] is False, where
+        # no word of a name or a heading is broken across lines
+        assert layout["broken_words"] == [], where
+        # the group table fits its card: nothing to scroll for these maps
+        assert layout["table_overflow_px"] <= 1, where
+        # one speed, one lab: no empty selector
+        assert layout["selectors_shown"] == ["pin", "disc"], where
         # each repeat stays on one or two lines
         heights = tab.page.evaluate("""() => Array.from(
           document.querySelectorAll('.tpx-repeat'), d => d.getBoundingClientRect().height /

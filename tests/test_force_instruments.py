@@ -439,8 +439,9 @@ def test_explorer_data_carries_the_methods(tmp_path: Path) -> None:
     data = explorer_data(read_map(_two_method_map(tmp_path)))
     assert data["methods"] == ["rheometer pin-on-disc", "sled D1894"]
     assert {g["test_method"] for g in data["groups"]} == set(data["methods"])
-    ds = next(p for p in data["pairs"] if (p["pin"], p["disc"]) == ("Dragonskin 30", "steel"))
-    assert {r["test_method"] for r in ds["runs"]} == {"sled D1894"}
+    i = next(i for i, p in enumerate(data["pairs"])
+             if (p["pin"], p["disc"]) == ("Dragonskin 30", "steel"))
+    assert {r["test_method"] for r in data["runs"][i]} == {"sled D1894"}  # the pair's runs
 
 
 # ------------------------------------------------------------------- end to end

@@ -445,14 +445,20 @@ def check_campaign(first_case: int, n_cases: int, tmp_path: Path) -> None:
     assert "Traceback" not in result.output, result.output
     failures = pd.read_csv(tmp_path / "out" / "failures.csv", dtype=str)
     failed_lines = [ln for ln in result.stderr.splitlines() if ln.startswith("failed: ")]
-    assert len(failed_lines) == len(failures), result.stderr
+    # files that failed alike are said once, with their count
+    alike = [re.match(r"failed: (\d+) files alike, e\.g\. ", ln) for ln in failed_lines]
+    assert sum(int(m.group(1)) if m else 1 for m in alike) == len(failures), result.stderr
     for name in failures["file"]:
-        assert sum(ln.startswith(f"failed: {name}") for ln in failed_lines) == 1, \
-            (name, result.stderr)
+        assert sum(ln.startswith((f"failed: {name}", "failed: ")) and name in ln
+                   for ln in failed_lines) <= 1, (name, result.stderr)
         assert name.split(" ")[0].rstrip(":") in names, name
     table = pd.read_csv(tmp_path / "out" / "runs.csv", dtype=str, keep_default_na=False)
-    assert set(table["file"]) == set(names) | {f"DS30_steel_3N_20C_r{r}_good.csv"
-                                               for r in (1, 2, 3)}   # no file is silent
+    # what is no export (an emptied file, NUL bytes) is set aside and said, never a failure
+    set_aside = {m.group(1) for ln in result.stderr.splitlines()
+                 if (m := re.match(r"note: not an export: skipped: (\S+) \(", ln))}
+    assert not set_aside & set(table["file"])
+    assert set(table["file"]) | set_aside == set(names) | {
+        f"DS30_steel_3N_20C_r{r}_good.csv" for r in (1, 2, 3)}   # no file is silent
     good = table[table["file"].str.endswith("_good.csv")]
     assert (good["status"] == "reduced").all() and len(good) == 3
     runs = read_map(tmp_path / "out" / "friction_map.parquet")

@@ -157,7 +157,7 @@ def test_pair_plot_of_the_published_map(published, tmp_path):
     text = svg.read_text()
     # one series per temperature, each with its fitted curve in the legend
     assert "10 °C" in text and "20 °C" in text
-    assert text.count("fit μ") == 2
+    assert text.count("fit $\\mu_K$ = ") == 2 and text.count("(p / kPa)") == 2
 
 
 def test_pair_plots_one_file_per_pair(published, tmp_path):

@@ -242,8 +242,14 @@ def test_result_to_dict_is_json_ready(groups):
     assert back["mu_s"] is None
     res = query(groups, "Dragonskin 30", "steel", 20.0, 15.0)
     assert back["mu_k"]["text"] == res.mu_k.text()
-    assert back["mu_k"]["lower"] == pytest.approx(max(0.0, res.mu_k.value - res.mu_k.expanded))
+    # held below the lowest measured pressure: the value says so, and carries no U
+    assert back["mu_k"]["text"] == f"{res.mu_k.value:.3f} (extrapolated: U not valid)"
+    assert back["mu_k"]["expanded"] is None and back["mu_k"]["lower"] is None
     assert back["mu_k"]["used"][0]["weight"] > 0
+    inside = query(groups, "Dragonskin 30", "steel", 50.0, 15.0).to_dict()
+    assert inside["clamped"] is False and inside["mu_k"]["expanded"] > 0
+    assert inside["mu_k"]["lower"] == pytest.approx(
+        max(0.0, inside["mu_k"]["value"] - inside["mu_k"]["expanded"]))
 
 
 # ---------------------------------------------------------------------------- properties

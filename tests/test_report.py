@@ -209,7 +209,7 @@ def test_published_map_report_without_traces_or_failures(tmp_path):
     assert "Map summary" in html and "Campaign summary" not in html
     assert page.sections == list(report_sections(map_report=True))
     assert "μ_S" not in group_header(html) and "μ_S" not in runs_header(html)
-    assert "no trace (" not in html and "<details" not in html
+    assert "no trace (" not in html and "<details class=\"run\"" not in html
     assert page.rows["runs-table"] == 169
     assert all(run_anchor(m) in page.ids for m in read_map(map_path)["measurement_id"])
     assert "<th class=t>test</th>" not in runs_header(html)  # imported rows name none

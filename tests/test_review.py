@@ -369,3 +369,23 @@ def test_a_map_of_schema_5_still_reads(tmp_path: Path, reduced: Path):
     with them missing."""
     runs = the_map(reduced)
     assert runs["review"].isna().all() and runs["auto_mu_k"].isna().all()
+
+
+def test_reduce_replace_never_silently_re_automates_a_reviewed_run(campaign: Path):
+    """`tribopipe reduce --replace` of a reviewed run's export: the run takes its review
+    again (from its own row), its automatic values stay beside."""
+    runs = the_map(campaign)
+    row = runs[runs["source_file"] == FILES[0]].iloc[0]
+    mid = str(row["measurement_id"])
+    path = write_review(campaign, [[mid, "window", "0.6", "1.1", "", "late", "A", "2026-11-27"]])
+    assert batch(campaign, "--review", str(path)).exit_code == 0
+    reviewed = the_map(campaign).set_index("measurement_id").loc[mid]
+    result = CliRunner().invoke(main, [
+        "reduce", str(campaign / "raw" / FILES[0]), "--pin", "Dragonskin 30", "--disc",
+        "acrylic glass", "--force", "1", "--temperature", "10", "--repeat", "1",
+        "--map", str(campaign / "out" / "friction_map.parquet"), "--out",
+        str(campaign / "out"), "--replace"], catch_exceptions=False)
+    assert result.exit_code == 0, result.output
+    after = the_map(campaign).set_index("measurement_id").loc[mid]
+    assert after["review"] == "window" and after["mu_k"] == reviewed["mu_k"]
+    assert after["auto_mu_k"] == row["mu_k"]

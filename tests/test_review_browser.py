@@ -45,7 +45,8 @@ def reviewed_campaign(tmp_path_factory) -> Path:
 
 
 def open_page(browser, page: Path, width: int) -> Tab:  # noqa: F811
-    tab = Tab(browser, viewport={"width": width, "height": 900})
+    tab = Tab(browser, viewport={"width": width, "height": 900},
+              permissions=["clipboard-read", "clipboard-write"])
     tab.page.goto(page.resolve().as_uri())
     tab.wait_until("window.tribopipeReview !== undefined && window.tribopipeReview.ready")
     return tab
@@ -145,6 +146,24 @@ def test_review_in_the_browser_then_batch(browser, reviewed_campaign: Path, tmp_
         page.fill(f"#run-{excluded} input.reason", "pin slipped, see notebook p. 12")
         page.click(f"#run-{excluded} button.exclude")
         assert page.locator("#decision-count").text_content() == "3"
+        # the copy button puts the same text on the clipboard
+        page.click("#copy")
+        tab.wait_until("document.getElementById('copied').textContent === 'copied'")
+        assert page.evaluate("navigator.clipboard.readText()") == page.input_value("#decisions")
+        # the filters: one pair, then one flag, then all again
+        total = len(runs)
+        pair = f"{runs.iloc[0]['pin']} / {runs.iloc[0]['disc']}"
+        page.select_option("#filter-pair", pair)
+        shown = page.locator(".run:visible").count()
+        in_pair = int((runs["pin"] + " / " + runs["disc"] == pair).sum())
+        assert 0 < shown < total and shown == in_pair
+        page.select_option("#filter-pair", "")
+        page.select_option("#filter-flag", "*")
+        assert page.locator(".run:visible").count() == int(
+            runs["flags"].str.contains("off_nominal|no_steady|stick|static|peak|short|torque|"
+                                       "unstable|plateau|no_friction", regex=True).sum())
+        page.select_option("#filter-flag", "")
+        assert page.locator(".run:visible").count() == total
         # save the decisions file
         with page.expect_download() as info:
             page.click("#download")

@@ -445,7 +445,13 @@ def test_abaqus_and_ansys_take_a_single_condition(groups, fmt):
     res = query(groups, PIN, DISC, 35.0, 12.0)
     assert text == condition_snippet(res, fmt, source="m.parquet")
     assert f"{res.mu_k.value:.10g}" in text.splitlines()[-1]
-    assert "(U, k = 2)" in text
+    # at 10 °C the pair is measured from 35.37 kPa up: 35 kPa is held at that edge, and
+    # the value carries no U
+    assert res.mu_k.clamped_pressure and "(U, k = 2)" not in text
+    assert "extrapolated: U not valid" in text
+    inside = query(groups, PIN, DISC, 50.0, 12.0)
+    assert not inside.clamped
+    assert "(U, k = 2)" in condition_snippet(inside, fmt, source="m.parquet")
     with pytest.raises(ExportError, match="takes one condition; give --pin .*; --disc "):
         export_simulator_input(groups, fmt, pressure_kPa=35.0)
 

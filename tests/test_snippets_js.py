@@ -2,7 +2,8 @@
 
 The page offers every format of :data:`tribopipe.export.registry.WRITERS` that has a
 snippet; its text is the Python writer's opening lines (rendered into the page) plus what
-``snippets.js`` adds for the condition. Here Node runs ``pyformat.js`` and ``snippets.js``
+``snippets.js`` adds for the condition (every line that names the pair comes escaped from
+Python: the script holds no escaping rule). Here Node runs ``pyformat.js`` and ``snippets.js``
 on the page's own data and on query results of a grid of conditions (measured, between
 groups, clamped, without and with μ_S, μ_S below μ_K, hostile names), and every text must
 equal :func:`tribopipe.export.simulators.snippet`'s, byte for byte. (The browser tests
@@ -33,8 +34,10 @@ HARNESS = """
 const fs = require("fs");
 const input = JSON.parse(fs.readFileSync(0, "utf-8"));
 var DATA = input.data;
+var PAIRS = DATA.pairs;
 %s
 const out = input.results.map(res => input.formats.map(fmt => {
+  res.pair = findPair(res.pin, res.disc);  // the page's own result knows its pair
   try { return EXPORTS[fmt].make(res); } catch (e) { return "ERROR " + e.message; }
 }));
 process.stdout.write(JSON.stringify({out: out, snippets: Object.keys(SNIPPETS)}));
@@ -79,7 +82,12 @@ def _run_js(node: str, data: dict, results: list, formats: list[str]) -> dict:
 
 
 def test_every_registered_snippet_has_its_javascript_and_equals_the_writer(node, groups):
-    data = explorer_data(published_runs(PUBLISHED_CSV), title="t", source=SOURCE)
+    runs = published_runs(PUBLISHED_CSV)
+    hostile = runs[(runs.pin == PIN) & (runs.disc == DISC)].copy()
+    hostile["pin"] = HOSTILE
+    hostile["measurement_id"] = hostile["measurement_id"] + "-hostile"
+    data = explorer_data(pd.concat([runs, hostile], ignore_index=True), title="t", source=SOURCE)
+    assert HOSTILE in [pair["pin"] for pair in data["pairs"]]
     formats = [w.name for w in WRITERS if w.snippet is not None]
     assert [s["name"] for s in data["snippets"]] == formats
     assert {"usd", "pybullet", "drake", "abaqus", "ansys"} <= set(formats)

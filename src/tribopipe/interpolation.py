@@ -19,7 +19,10 @@ A pair is measured at a few contact pressures [kPa] and temperatures [°C]. Betw
   Grosch's master curves on the side of the peak where maps are measured), the value at
   each speed read by the rules above;
 * **outside the measured range** the edge value is held (as ABAQUS and Ansys hold a
-  table's ends), and the result says so.
+  table's ends), the value is marked extrapolated and its U is withdrawn
+  (:data:`EXTRAPOLATED`, :func:`held_u`): the repeats and the curvature say how well μ is
+  known where it was measured, nothing says how μ moves beyond the last measured
+  pressure, temperature or speed, so no number could be an honest U there.
 
 The interpolation's own standard uncertainty: between p₀ and p₁ the rule misses the
 curve by its bend, ln μ − ln μ̂ ≈ (κ/2)·(x − x₀)(x₁ − x) with x = ln p and κ = d²ln μ/dx²
@@ -63,6 +66,25 @@ DENSIFY_TARGET = 0.0025
 DENSIFY_SAMPLES = 64
 #: significant digits of an added pressure row [kPa]
 DENSIFY_DIGITS = 4
+
+
+#: what every output writes in place of U for a value read outside the measured range
+EXTRAPOLATED = "extrapolated: U not valid"
+
+
+def held_u(expanded: float | None, clamped: bool) -> float | None:
+    """U (k = 2) of a value, ``None`` when the value was ``clamped`` (held at the edge of
+    the measured pressures, temperatures or speeds): outside the measured range the rule
+    holds a value but knows nothing of its error, so U is withdrawn, never extrapolated
+    (every output then writes :data:`EXTRAPOLATED`)."""
+    return None if clamped else expanded
+
+
+def temperature_needed(temperatures_C: Sequence[float]) -> str:
+    """What a request without a temperature is told for a pair measured at several
+    (sorted) ``temperatures_C`` [°C]."""
+    listed = ", ".join(f"{v:g}" for v in temperatures_C)
+    return f"temperature needed: this pair is measured at {listed} °C"
 
 
 @dataclass(frozen=True)
@@ -175,11 +197,7 @@ def stencil(
         temps = [float(v) for v in np.unique(t[known_t])]
         if temperature_C is None:
             if len(temps) > 1:
-                listed = ", ".join(f"{v:g}" for v in temps)
-                raise ExportError(
-                    f"temperature needed: this pair is measured at {listed} °C",
-                    hint="pass --temperature",
-                )
+                raise ExportError(temperature_needed(temps), hint="pass --temperature")
             t_brackets = [(0, 1.0)]
         else:
             t_brackets, clamped_t = bracket(temps, float(temperature_C))

@@ -64,6 +64,7 @@ from .readers import read_export
 from .reduction.intervals import friction_intervals
 from .reduction.manual import TRACE_META_KEY, terms_from_parameters
 from .reduction.reduce import reduce_measurement
+from .review import landing_records
 
 if TYPE_CHECKING:
     from .config import Settings
@@ -728,9 +729,13 @@ def store_runs(map_path: str | Path, files: Sequence[FileOutcome], *,
     file against the map under its lock (:class:`ContentOwners`, the batch's check too):
     a file whose runs the map already holds under another file name is a duplicate (its
     records are left out, the map keeps the first name) or, where the labels differ, a
-    conflict (refused, unless ``replace``)."""
+    conflict (refused, unless ``replace``). A run the map holds reviewed takes its review
+    again (:func:`tribopipe.review.landing_records`, from its trace): never silently
+    re-automated."""
     same: list[SameContent] = []
     repeats: list[str] = []
+    traces = [r.trace for f in files for r in f.reduced if r.trace is not None]
+    traces_dir = traces[0].parent if traces else None
 
     def decide(current: Any) -> tuple[list[MapRow], tuple[str, ...]]:
         owners = ContentOwners(map_files_by_hash(current))
@@ -747,7 +752,8 @@ def store_runs(map_path: str | Path, files: Sequence[FileOutcome], *,
                 keep += records
                 owners.landed(f.path, f.file_hash, runs)
         repeats.extend(repeat_clashes(current, keep))
-        return keep, ()
+        kept, _ = landing_records(current, keep, (), None, traces_dir)
+        return kept, ()
 
     appended = update_map_with(map_path, decide, replace=replace)
     return StoreReport(appended=appended, same=tuple(same), repeats=tuple(repeats))

@@ -40,10 +40,12 @@ from .config import InstrumentConfig
 from .errors import ExportError
 from .frictionmap import read_map
 from .interpolation import (
+    EXTRAPOLATED,
     curvature,
     curve,
     densify,
     evaluate,
+    held_u,
     interpolation_u,
     speed_bracket,
     stencil,
@@ -88,6 +90,36 @@ class UsedPoint:
     speed_mm_s: float | None = None
 
 
+#: the notes a result carries, each worded once here (the explorer page receives these
+#: texts; ``{n}`` is a count)
+NOTES = {
+    "left_out": "{n} group(s) without a temperature were left out",
+    "mu_s_unknown": "mu_s unknown: no group of this pair holds a static coefficient",
+    "mu_s_unknown_speeds": "mu_s unknown: no group of this pair holds a static coefficient"
+                           " at every speed used",
+    "single_run": "n = 1, no repeat scatter: a group used has a single run",
+    "no_budget": "runs of a group used carry no uncertainty budget of their own (e.g. an "
+                 "imported map): their u is the stated estimate of the founding cell at the "
+                 "run's μ and force",
+    "clamped_pressure": "pressure outside the range measured (at a temperature used): edge "
+                        "value held",
+    "clamped_temperature": "temperature outside the measured range: edge value held",
+    "clamped_speed": "sliding speed outside the measured speeds: edge value held",
+}
+#: what a request out of bounds is told (``{}``: the value asked for)
+REQUEST_ERRORS = {
+    "pressure": "contact pressure must be a finite number >= 0 kPa, got {}",
+    "temperature": "temperature must be a finite number in °C, got {}",
+    "speed": "sliding speed must be a finite number > 0 mm/s, got {}",
+}
+#: why a coefficient is printed without U (:func:`estimate_text`)
+WHY_NO_U = {
+    "extrapolated": EXTRAPOLATED,
+    "single_run": "n = 1, no repeat scatter",
+    "unknown": "uncertainty unknown",
+}
+
+
 @dataclass(frozen=True)
 class Estimate:
     """One interpolated coefficient with its evidence.
@@ -126,10 +158,17 @@ class Estimate:
         """The lower end of value ± U, bounded at 0 (:func:`tribopipe.rounding.lower_bound`)."""
         return None if self.expanded is None else lower_bound(self.value, self.expanded)
 
+    @property
+    def extrapolated(self) -> bool:
+        """True when the value was held outside the measured pressures, temperatures or
+        speeds: its U is withdrawn (:func:`tribopipe.interpolation.held_u`)."""
+        return self.clamped_pressure or self.clamped_temperature or self.clamped_speed
+
     def text(self, *, ascii_only: bool = False) -> str:
         """``value ± U`` rounded the GUM way (:func:`tribopipe.rounding.plus_minus`), or
         the value with three decimals and why U is unknown."""
-        return estimate_text(self.value, self.expanded, self.n_min, ascii_only=ascii_only)
+        return estimate_text(self.value, self.expanded, self.n_min, ascii_only=ascii_only,
+                             extrapolated=self.extrapolated)
 
 
 @dataclass(frozen=True)
@@ -385,6 +424,7 @@ def _estimate(
     expanded = None if u_groups is None else 2.0 * math.hypot(u_groups, u_interp)
     if not known_u(expanded):
         expanded = None  # nothing known about the spread: never "± 0"
+    expanded = held_u(expanded, st.clamped_pressure or st.clamped_temperature)
     used = tuple(
         UsedPoint(
             pressure_kPa=float(points["pressure_kPa"].iloc[i]),
@@ -405,14 +445,17 @@ def _estimate(
 
 
 def estimate_text(
-    value: float, expanded: float | None, n_min: int, *, ascii_only: bool = False
+    value: float, expanded: float | None, n_min: int, *, ascii_only: bool = False,
+    extrapolated: bool = False,
 ) -> str:
     """The headline of a coefficient: ``value ± U`` (:func:`tribopipe.rounding.plus_minus`);
-    without a U the value to three decimals and why ("n = 1, no repeat scatter" where a
-    group used holds a single run), never "± 0"."""
-    if expanded is not None:
+    without a U the value to three decimals and why (:data:`tribopipe.interpolation.EXTRAPOLATED`
+    outside the measured range, "n = 1, no repeat scatter" where a group used holds a
+    single run), never "± 0"."""
+    if expanded is not None and not extrapolated:
         return plus_minus(value, expanded, ascii_only=ascii_only)
-    why = "n = 1, no repeat scatter" if n_min < 2 else "uncertainty unknown"
+    why = WHY_NO_U["extrapolated" if extrapolated else "single_run" if n_min < 2 else
+                   "unknown"]
     return f"{value:.3f} ({why})"
 
 
@@ -437,6 +480,13 @@ def groups_at_speed(pair: pd.DataFrame, speed_mm_s: float) -> pd.DataFrame:
     return pair.loc[values == speed_mm_s]
 
 
+def speed_needed(speeds_mm_s: list[float]) -> str:
+    """What a request without a speed is told for a pair measured at several (sorted)
+    nominal ``speeds_mm_s`` [mm/s]."""
+    listed = ", ".join(f"{v:g}" for v in speeds_mm_s)
+    return f"sliding speed needed: this pair is measured at {listed} mm/s"
+
+
 def speed_weights(
     speeds_mm_s: list[float], speed_mm_s: float | None
 ) -> tuple[list[tuple[int, float]], bool]:
@@ -447,12 +497,10 @@ def speed_weights(
     allowed only for a pair of one speed; else an :class:`ExportError` lists the speeds."""
     if speed_mm_s is None:
         if len(speeds_mm_s) > 1:
-            listed = ", ".join(f"{v:g}" for v in speeds_mm_s)
-            raise ExportError(f"sliding speed needed: this pair is measured at {listed} mm/s",
-                              hint="pass --speed")
+            raise ExportError(speed_needed(speeds_mm_s), hint="pass --speed")
         return [(0, 1.0)], False
     if not (math.isfinite(speed_mm_s) and speed_mm_s > 0):
-        raise ExportError(f"sliding speed must be a finite number > 0 mm/s, got {speed_mm_s}")
+        raise ExportError(REQUEST_ERRORS["speed"].format(speed_mm_s))
     for i, v in enumerate(speeds_mm_s):
         if abs(math.log(speed_mm_s / v)) <= SPEED_MATCH_REL:
             return [(i, 1.0)], False
@@ -478,6 +526,7 @@ def _blend(parts: list[tuple[float, float, Estimate]]) -> Estimate:
     expanded = None if u_groups is None else 2.0 * math.hypot(u_groups, u_interp)
     if not known_u(expanded):
         expanded = None
+    expanded = held_u(expanded, any(e.extrapolated for e in ests))
     used = tuple(replace(u, weight=u.weight * w, speed_mm_s=v)
                  for w, v, e in parts for u in e.used)
     return Estimate(
@@ -487,6 +536,13 @@ def _blend(parts: list[tuple[float, float, Estimate]]) -> Estimate:
         expanded=expanded, budgets_known=all(e.budgets_known for e in ests),
         n_min=min(e.n_min for e in ests),
     )
+
+
+def _held_speed(est: Estimate, clamped_speed: bool) -> Estimate:
+    """``est`` marked held outside the measured speeds, its U withdrawn there
+    (:func:`tribopipe.interpolation.held_u`)."""
+    return replace(est, clamped_speed=clamped_speed,
+                   expanded=held_u(est.expanded, clamped_speed))
 
 
 def query(
@@ -510,9 +566,9 @@ def query(
     request.
     """
     if not math.isfinite(pressure_kPa) or pressure_kPa < 0:
-        raise ExportError(f"contact pressure must be a finite number >= 0 kPa, got {pressure_kPa}")
+        raise ExportError(REQUEST_ERRORS["pressure"].format(pressure_kPa))
     if temperature_C is not None and not math.isfinite(temperature_C):
-        raise ExportError(f"temperature must be a finite number in °C, got {temperature_C}")
+        raise ExportError(REQUEST_ERRORS["temperature"].format(temperature_C))
     pair = select_pair(groups, pin, disc)
     speeds = pair_speeds(pair)
     brackets, clamped_speed = speed_weights(speeds, speed_mm_s)
@@ -529,8 +585,7 @@ def query(
                               + (f" at {speeds[index]:g} mm/s" if len(speeds) > 1 else ""))
         kept = _with_temperature(mu_k_points)
         if len(kept) < len(mu_k_points):
-            note = (f"{len(mu_k_points) - len(kept)} group(s) without a temperature were "
-                    "left out")
+            note = NOTES["left_out"].format(n=len(mu_k_points) - len(kept))
             notes += [] if note in notes else [note]
             mu_k_points = kept
         k_parts.append((weight, speeds[index], _estimate(
@@ -545,23 +600,20 @@ def query(
         temps |= {float(t) for t in mu_k_points["temperature_C"] if math.isfinite(t)}
         p_range = (min(p_range[0], float(mu_k_points["pressure_kPa"].min())),
                    max(p_range[1], float(mu_k_points["pressure_kPa"].max())))
-    mu_k = replace(_blend(k_parts), clamped_speed=clamped_speed)
+    mu_k = _held_speed(_blend(k_parts), clamped_speed)
     mu_s = None
     if all(e is not None for _, _, e in s_parts):
-        mu_s = replace(_blend([(w, v, e) for w, v, e in s_parts if e is not None]),
-                       clamped_speed=clamped_speed)
+        mu_s = _held_speed(_blend([(w, v, e) for w, v, e in s_parts if e is not None]),
+                           clamped_speed)
     if mu_s is None:
-        notes.append("mu_s unknown: no group of this pair holds a static coefficient"
-                      + (" at every speed used" if len(speeds) > 1 else ""))
+        notes.append(NOTES["mu_s_unknown_speeds" if len(speeds) > 1 else "mu_s_unknown"])
     notes += uncertainty_notes(mu_k)
     if mu_k.clamped_pressure:
-        notes.append(
-            "pressure outside the range measured (at a temperature used): edge value held"
-        )
+        notes.append(NOTES["clamped_pressure"])
     if mu_k.clamped_temperature:
-        notes.append("temperature outside the measured range: edge value held")
+        notes.append(NOTES["clamped_temperature"])
     if clamped_speed:
-        notes.append("sliding speed outside the measured speeds: edge value held")
+        notes.append(NOTES["clamped_speed"])
 
     first = pair.iloc[0]
     return QueryResult(
@@ -583,11 +635,9 @@ def uncertainty_notes(est: Estimate) -> list[str]:
     """What a result says about its μ_K uncertainty: a single run, missing budgets."""
     notes = []
     if est.n_min < 2:
-        notes.append("n = 1, no repeat scatter: a group used has a single run")
+        notes.append(NOTES["single_run"])
     if not est.budgets_known:
-        notes.append("runs of a group used carry no uncertainty budget of their own (e.g. "
-                     "an imported map): their u is the stated estimate of the founding cell "
-                     "at the run's μ and force")
+        notes.append(NOTES["no_budget"])
     return notes
 
 

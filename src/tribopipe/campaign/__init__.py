@@ -61,7 +61,7 @@ from __future__ import annotations
 from .batch import BatchReport, run_campaign
 from .metadata import read_manifest
 from .spec import Campaign, folder_campaign, load_campaign
-from .table import campaign_listing, campaign_table
+from .table import campaign_listing, campaign_table, manifest_template
 
 __all__ = [
     "Campaign",
@@ -70,6 +70,7 @@ __all__ = [
     "read_manifest",
     "campaign_table",
     "campaign_listing",
+    "manifest_template",
     "run_campaign",
     "BatchReport",
 ]

@@ -273,8 +273,8 @@ def _run_locked(campaign: Campaign, *, jobs: int | None, plots: bool | None,
     results = _execute(plan.todo, WorkerContext(campaign=campaign, plots=plots), jobs,
                        progress, done, files)
 
-    notes: list[str] = []
-    if not rows:
+    notes: list[str] = rows.not_export_notes()  # content before labels: never a failure
+    if not rows and not rows.not_exports:
         notes.append(f"no file matches {describe_glob(campaign)} in {campaign.raw_dir}")
     by_file = {row.file: row for row in rows}
     vanished = {f: e for f, e in entries.items() if f not in by_file}

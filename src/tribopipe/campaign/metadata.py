@@ -45,6 +45,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from ..errors import CampaignError, ConfigError, ReadError, ValidationError
+from ..escape import csv_uncell
 from ..files import read_regular
 from ..labels import RunLabels
 from ..materials import MaterialError, Resolved
@@ -281,7 +282,8 @@ def _manifest_rows(p: Path, text: str, delimiter: str) -> Manifest:
         if not any(c.strip() for c in cells):
             continue
         cells = cells + [""] * (len(header) - len(cells))
-        file = cells[index["file"]].strip()
+        # a template we wrote keeps a name starting with =, +, - or @ text for a spreadsheet
+        file = csv_uncell(cells[index["file"]].strip())
         if not file:
             raise ConfigError("empty 'file' cell", path=p, line=lineno, column="file")
         if len(file) > 4096 or not file.isprintable():
@@ -314,7 +316,7 @@ def _manifest_rows(p: Path, text: str, delimiter: str) -> Manifest:
             )
         fields: dict[str, Any] = {}
         for name, i in extra_index.items():
-            raw = cells[i].strip()
+            raw = csv_uncell(cells[i].strip())
             if raw:
                 if text_problem(raw, max_chars=300) is None:
                     fields[EXTRA_PREFIX + name] = raw
@@ -322,7 +324,7 @@ def _manifest_rows(p: Path, text: str, delimiter: str) -> Manifest:
                     problem = str(ValidationError("expected one line of printable text",
                                                   path=p, line=lineno, column=name))
         for name in [*LABEL_FIELDS, *(n for n in REPORTING_NAMES if n in index)]:
-            raw = cells[index[name]].strip()
+            raw = csv_uncell(cells[index[name]].strip())
             if not raw:
                 continue
             try:

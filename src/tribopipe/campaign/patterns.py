@@ -101,3 +101,43 @@ def match_pattern(pattern: str, text: str) -> dict[str, Any] | None:
         else:
             found[key] = value.strip()
     return found
+
+
+def _tokens(pattern: str) -> list[tuple[str, str]]:
+    """A pattern as ``(its text, its regex)`` pieces: each placeholder, each literal
+    character (as :func:`compile_pattern` reads it)."""
+    out: list[tuple[str, str]] = []
+    pos = 0
+    for match in re.finditer(r"\{([A-Za-z_][A-Za-z0-9_]*)\}", pattern):
+        out += [(ch, re.escape(ch)) for ch in pattern[pos:match.start()]]
+        target = PATTERN_FIELDS.get(match.group(1))
+        out.append((match.group(0), ".+?" if target is None
+                    else f"(?:{_PATTERN_REGEX.get(target, '.+?')})"))
+        pos = match.end()
+    out += [(ch, re.escape(ch)) for ch in pattern[pos:]]
+    return out
+
+
+def pattern_break(pattern: str, text: str) -> str:
+    """Where ``text`` (a file stem) stops following ``pattern``, in words that do not
+    depend on the text's own values, so files that break alike read alike: ``"it follows
+    '{pin}_{disc}_{force}', then the pattern expects 'N'"``."""
+    tokens = _tokens(pattern)
+    text = text.strip()
+    followed = 0
+    for k in range(len(tokens), 0, -1):
+        if re.match("".join(r for _, r in tokens[:k]), text, re.IGNORECASE):
+            followed = k
+            break
+    if followed == len(tokens):
+        return "it follows the whole pattern, then goes on"
+    piece = tokens[followed][0]
+    kinds = {"normal_force_N": "a number", "temperature_C": "a number",
+             "repeat": "a whole number"}
+    name = PATTERN_FIELDS.get(piece.strip("{}")) if piece.startswith("{") else None
+    expected = (f"{piece} ({kinds[name]})" if name in kinds else piece) \
+        if piece.startswith("{") else repr(piece)
+    if followed == 0:
+        return f"it does not start as the pattern does: the pattern expects {expected} first"
+    done = "".join(t for t, _ in tokens[:followed])
+    return f"it follows {done!r}, then the pattern expects {expected}"

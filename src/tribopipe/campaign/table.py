@@ -6,9 +6,19 @@ Which files
 suffixes of :data:`tribopipe.readers.EXPORT_SUFFIXES`, in any case: ``.csv``, ``.txt``,
 ``.tsv``, ``.xlsx`` and ``.xls``, which is refused with its reason), else the campaign's
 ``glob``. Never taken: hidden files, the manifest, the review file, campaign configs
-(``.toml``), and the tool's own outputs (the map, anything the output folder holds, ``runs.csv`` and
-``failures.csv`` tables, state and ``.lock`` files). Any other file that matches and is
-not an export fails with the reader's reason.
+(``.toml``), and the tool's own outputs (the map, anything the output folder holds,
+``runs.csv`` and ``failures.csv`` tables, state and ``.lock`` files).
+
+Content before labels
+---------------------
+A file about to be read (new, changed or failed before) and a file no label source
+describes is first looked at (:func:`tribopipe.readers.export_kind`): one that is surely
+not an instrument export (a note, a PDF, an image) is set aside as ``not an export:
+skipped`` (:attr:`CampaignTable.not_exports`), never a failure. A file that is an export
+but that no label source describes is read before its labels are judged: when none of
+its tests is a friction test, it is named for what it is ("it looks like a stress
+relaxation test"), as it would be with every label given; an export that cannot be read
+fails with the reader's reason.
 
 Incremental state
 -----------------
@@ -20,8 +30,10 @@ of an unchanged file is skipped.
 
 from __future__ import annotations
 
+import csv
 import functools
 import hashlib
+import io
 import json
 import os
 from collections.abc import Mapping, Sequence
@@ -30,13 +42,15 @@ from pathlib import Path
 from typing import Any
 
 from ..errors import CampaignError, ReadError
-from ..escape import display_path
+from ..escape import csv_cell, display_path
 from ..files import file_sha256, regular_file
 from ..labels import LABEL_FORCE_REL, RunLabels
 from ..layout import FAILURES_CSV, RUNS_CSV
 from ..materials import ADD_HINT
-from ..readers import EXPORT_SUFFIXES
+from ..pipeline import read_runs
+from ..readers import EXPORT_SUFFIXES, export_kind
 from .metadata import (
+    MANIFEST_COLUMNS,
     Manifest,
     ManifestRow,
     labels_from,
@@ -44,7 +58,7 @@ from .metadata import (
     merge_metadata,
     read_manifest,
 )
-from .patterns import LABEL_FIELDS, match_pattern
+from .patterns import LABEL_FIELDS, match_pattern, pattern_break
 from .spec import Campaign
 from .state import (
     CHANGED,
@@ -206,8 +220,38 @@ def _traces_present(campaign: Campaign, entry: FileState) -> bool:
     return True
 
 
+class CampaignTable(list[CampaignRow]):
+    """The rows of :func:`campaign_table`, and the files set aside as not an export:
+    ``not_exports`` holds ``(file, what it is)``, e.g. ``("notes.txt", "a text with no
+    table …")``."""
+
+    def __init__(self, rows: Sequence[CampaignRow] = (),
+                 not_exports: Sequence[tuple[str, str]] = ()) -> None:
+        super().__init__(rows)
+        self.not_exports: list[tuple[str, str]] = list(not_exports)
+
+    def not_export_notes(self) -> list[str]:
+        """One line per file set aside: ``not an export: skipped: notes.txt (a text …)``."""
+        return [f"not an export: skipped: {display_path(f)} ({what})"
+                for f, what in self.not_exports]
+
+
+def _content_problem(campaign: Campaign, path: Path, rel: str) -> str | None:
+    """Why an export no label source describes cannot be reduced whatever its labels: it
+    holds no friction test (named for what it is) or cannot be read; ``None`` when it
+    reads as a friction export (then its labels are what is missing)."""
+    try:
+        read_runs(path, campaign.read_options, file_hash="-")
+    except ReadError as exc:
+        return f"{display_path(rel)}: {exc.problem}" + (f"; hint: {exc.hint}" if exc.hint
+                                                        else "")
+    except (OSError, ValueError):
+        return None
+    return None
+
+
 def campaign_table(campaign: Campaign, *, state: CampaignState | None = None,
-                   manifest: Manifest | None = None) -> list[CampaignRow]:
+                   manifest: Manifest | None = None) -> CampaignTable:
     """The campaign as a table, before anything runs: one row per file with its metadata
     and status (``new, reduced, changed, failed, duplicate``).
 
@@ -221,7 +265,7 @@ def campaign_table(campaign: Campaign, *, state: CampaignState | None = None,
     if manifest is None and campaign.manifest is not None:
         manifest = read_manifest(campaign.manifest)
     per_test_possible = campaign.test_pattern is not None
-    rows: list[CampaignRow] = []
+    rows = CampaignTable()
     for path in discover_files(campaign):
         rel = _relative(path, campaign.raw_dir)
         try:
@@ -249,7 +293,8 @@ def campaign_table(campaign: Campaign, *, state: CampaignState | None = None,
         if campaign.filename_pattern is not None:
             found = match_pattern(campaign.filename_pattern, path.stem)
             if found is None:
-                hints.append(f"name does not match pattern {campaign.filename_pattern!r}")
+                hints.append(f"name does not match pattern {campaign.filename_pattern!r}: "
+                             + pattern_break(campaign.filename_pattern, path.stem))
             else:
                 sources.append(("file name", found))
         merged: dict[str, Any] = {}
@@ -278,6 +323,15 @@ def campaign_table(campaign: Campaign, *, state: CampaignState | None = None,
                 status, reason = FAILED, previous.reason
             else:
                 status = CHANGED
+        # content before labels: what is not an export is set aside, and an export no
+        # label source describes is named for what it holds before its labels are judged
+        if status in (NEW, CHANGED, FAILED) or problem is not None:
+            kind = export_kind(path)
+            if kind is not None:
+                rows.not_exports.append((rel, kind))
+                continue
+            if problem is not None and not test_rows:
+                problem = _content_problem(campaign, path, rel) or problem
         if problem is not None:
             status, reason = FAILED, problem
         rows.append(CampaignRow(
@@ -322,13 +376,15 @@ def campaign_listing(campaign: Campaign) -> list[dict[str, Any]]:
 
     Keys: ``file, test, result, interval, run, status, pin, disc, normal_force_N,
     temperature_C, repeat, mu_s, mu_k, flags, measurement_id, sources, reason``. A file
+    that is not an export is listed last with the status :data:`NOT_AN_EXPORT`. A file
     the last batch read gives a row per run it found (and per test without a friction
     interval), with the labels it used (so they include fields read from Test names) and
     μ values for reduced runs; a file not read yet gives a row per test its manifest rows
     name, else one row (its tests are known once it is read).
     """
     out: list[dict[str, Any]] = []
-    for row in campaign_table(campaign):
+    table = campaign_table(campaign)
+    for row in table:
         base = {k: row.merged.get(k) for k in LABEL_FIELDS}
         sources = [name for name, _ in row.sources]
         if row.status in (REDUCED, DUPLICATE) and row.runs:
@@ -346,7 +402,13 @@ def campaign_listing(campaign: Campaign) -> list[dict[str, Any]]:
                                    [*sources, f"manifest line {test_row.line}"], row.reason))
         else:
             out.append(_listed(row.file, {}, row.status, base, sources, row.reason))
+    for file, what in table.not_exports:  # content before labels: set aside, not failed
+        out.append(_listed(file, {}, NOT_AN_EXPORT, {}, [], f"not an export: {what}"))
     return out
+
+
+#: the status ``campaign list`` gives a file set aside as not an export (never a failure)
+NOT_AN_EXPORT = "skipped (not an export)"
 
 
 def _listed(file: str, run: Mapping[str, Any], status: str, labels: Mapping[str, Any],
@@ -369,3 +431,38 @@ def _listed(file: str, run: Mapping[str, Any], status: str, labels: Mapping[str,
         "sources": sources,
         "reason": reason,
     }
+
+
+def manifest_template(campaign: Campaign) -> tuple[str, list[tuple[str, str]]]:
+    """A manifest to fill in for a campaign's folder (``tribopipe campaign manifest``):
+    ``(CSV text, files set aside as not an export)``. One row per export found
+    (:func:`discover_files`; what :func:`tribopipe.readers.export_kind` calls no export
+    is left out and returned), columns :data:`MANIFEST_COLUMNS`; the labels the
+    campaign's file-name pattern finds are filled in, the rest left empty. The text
+    starts with a UTF-8 BOM, so a spreadsheet opens it as UTF-8, and every cell is safe
+    for a spreadsheet (:func:`~tribopipe.escape.csv_cell`; the manifest reader undoes
+    it)."""
+    buffer = io.StringIO()
+    out = csv.writer(buffer, lineterminator="\n")
+    out.writerow(MANIFEST_COLUMNS)
+    skipped: list[tuple[str, str]] = []
+    for path in discover_files(campaign):
+        rel = _relative(path, campaign.raw_dir)
+        kind = export_kind(path)
+        if kind is not None:
+            skipped.append((rel, kind))
+            continue
+        found = (match_pattern(campaign.filename_pattern, path.stem)
+                 if campaign.filename_pattern is not None else None) or {}
+        cells = [rel] + [_template_cell(found.get(k)) for k in LABEL_FIELDS]
+        out.writerow([csv_cell(c) for c in cells])
+    return "\ufeff" + buffer.getvalue(), skipped
+
+
+def _template_cell(value: Any) -> str:
+    """A label as a manifest cell: numbers without a needless ``.0``, missing as empty."""
+    if value is None:
+        return ""
+    if isinstance(value, float):
+        return f"{value:g}"
+    return str(value)

@@ -104,10 +104,13 @@ def _run(campaign: Any, jobs: int | None, plots: bool | None) -> None:
         click.echo(f"note: {printable(note)}", err=True)
     if campaign.synthetic:
         click.echo(f"note: {campaign_note()}", err=True)
-    for file, reason in report.failures:
-        # reasons name their file already (campaign-relative), except rare library ones
-        name, reason = display_path(file), printable(reason)
-        click.echo(f"failed: {reason if name in reason else f'{name}: {reason}'}", err=True)
+    for names, reason in grouped_reasons(report.failures):
+        # files that failed alike (a pattern that breaks at the same place) are said once
+        if len(names) == 1:
+            click.echo(f"failed: {names[0]}: {reason}", err=True)
+        else:
+            click.echo(f"failed: {len(names)} files alike, e.g. {names[0]}: {reason}",
+                       err=True)
     for file, flags in report.flagged:
         click.echo(f"flagged: {display_path(file)}: {', '.join(flag_list(flags))}")
     click.echo(f"map {_shorten(report.map_path)}: {report.map_summary}")
@@ -150,6 +153,22 @@ def _remember(map_path: Any) -> None:
         return
     say(f"note: commands run here without --map now read {_shorten(map_path)} "
         f"(./{PROJECT_FILE})", err=True)
+
+
+def grouped_reasons(failures: Any) -> list[tuple[list[str], str]]:
+    """``(file, reason)`` pairs grouped by what the reason says besides its file's name
+    (printable, in first-seen order): ``[(names, reason), …]``. A reason names its file
+    first (``notes.txt: …``); one that names it nowhere is its own group."""
+    from ..escape import display_path, printable
+
+    groups: dict[str, list[str]] = {}
+    for file, reason in failures:
+        name, text = display_path(file), printable(reason)
+        key = text[len(name) + 2:] if text.startswith(f"{name}: ") else (
+            text if name not in text else f"{name}: {text}\0")
+        groups.setdefault(key, []).append(name)
+    return [(names, key.rstrip("\0").removeprefix(f"{names[0]}: ")
+             if key.endswith("\0") else key) for key, names in groups.items()]
 
 
 def _common_run_options(func: Any) -> Any:
@@ -296,6 +315,52 @@ def list_cmd(target: str, manifest: str | None, filename_pattern: str | None,
     _print_table(rows)
 
 
+@campaign_group.command("manifest")
+@click.argument("folder", type=click.Path(exists=True, file_okay=False))
+@click.option("--pattern", "filename_pattern",
+              help="Fill in the labels this file-name pattern finds, e.g. "
+                   "'{pin}_{disc}_{force}N_{temperature}C_r{repeat}'. Default: all empty.")
+@click.option("--glob", help="Which files are exports (default: every export the readers "
+                             "know: .csv, .txt, .tsv, .xlsx, .xls, any case).")
+@click.option("-o", "--output", type=click.Path(dir_okay=False),
+              help="The manifest to write. Default: manifest.csv in FOLDER.")
+@click.option("--overwrite", is_flag=True, help="Replace a manifest already there.")
+@friendly_errors
+def manifest_cmd(folder: str, filename_pattern: str | None, glob: str | None,
+                 output: str | None, overwrite: bool) -> None:
+    """Write a manifest to fill in for a FOLDER of exports: one row per export (columns
+    file, pin, disc, normal_force_N, temperature_C, repeat), with the labels --pattern
+    finds filled in. A file that is not an export is left out and named. Then check it
+    with `tribopipe campaign list FOLDER --manifest FILE` and reduce with `tribopipe
+    batch FOLDER --manifest FILE`.
+
+    \b
+      tribopipe campaign manifest raw/mine
+      tribopipe campaign manifest raw/mine --pattern '{pin}_{disc}_{force}N_{temperature}C'
+    """
+    from pathlib import Path
+
+    from ..campaign import folder_campaign, manifest_template
+    from ..escape import display_path
+    from ..files import write_text_atomic
+
+    target = Path(output) if output is not None else Path(folder) / "manifest.csv"
+    if (target.exists() or target.is_symlink()) and not overwrite:
+        raise click.UsageError(f"{display_path(target)} exists: pass --overwrite to replace "
+                               "it, or -o another file")
+    # a folder campaign needs a label source: without --pattern the Test names stand in
+    # (they label nothing here: the template is written from the files alone)
+    campaign = folder_campaign(folder, filename_pattern=filename_pattern, glob=glob,
+                               test_pattern=None if filename_pattern else "{pin}")
+    text, skipped = manifest_template(campaign)
+    for file, what in skipped:
+        say(f"not an export: skipped: {display_path(file)} ({what})", err=True)
+    write_text_atomic(target, text, newline="")
+    rows = text.count("\n") - 1
+    say(f"wrote {display_path(target)}: {rows} export(s) to label; then: tribopipe campaign "
+        f"list {display_path(folder)} --manifest {display_path(target)}")
+
+
 def _print_table(rows: list[dict[str, Any]]) -> None:
     from ..escape import printable
 
@@ -311,6 +376,13 @@ def _print_table(rows: list[dict[str, Any]]) -> None:
             return f"{value:.3f}" if col == "mu_k" else f"{value:g}"
         return printable(str(value))
 
+    grouped = grouped_reasons([(r["file"], r["reason"]) for r in rows if r.get("reason")])
+    number = {name: i for i, (names, _) in enumerate(grouped, 1) for name in names}
+    if any(len(names) > 1 for names, _ in grouped):  # say a shared reason once, below
+        rows = [{**r, "reason": f"({number[r['file']]})"} if r.get("reason") else r
+                for r in rows]
+    else:
+        grouped = []
     body = [[cell(r, c) for c in columns] for r in rows]
     widths = [max([len(heads.get(c, c))] + [len(b[i]) for b in body]) for i, c in
               enumerate(columns[:-1])]
@@ -326,3 +398,7 @@ def _print_table(rows: list[dict[str, Any]]) -> None:
     # a row is a run, or a file (or test) not read as runs yet or that failed as a whole
     click.echo(f"{len(rows)} row(s) in {files} file(s): "
                + ", ".join(f"{n} {s}" for s, n in sorted(counts.items())))
+    for i, (names, reason) in enumerate(grouped, 1):
+        click.echo(f"({i}) {len(names)} file(s)"
+                   + (f", e.g. {names[0]}" if len(names) > 1 else f": {names[0]}")
+                   + f": {reason}")

@@ -38,6 +38,7 @@ import hashlib
 import json
 import math
 import re
+from collections.abc import Mapping
 from datetime import UTC, datetime
 from importlib.resources import files
 from pathlib import Path
@@ -45,35 +46,70 @@ from typing import TYPE_CHECKING, Any
 
 from .. import __version__
 from ..errors import ExportError
-from ..escape import html_text, printable, script_json
+from ..escape import csv_cell, html_text, printable, script_json
 from ..files import write_text_atomic
 from ..fit import fit_power_law, power_law
 from ..frictionmap import read_map
+from ..interpolation import EXTRAPOLATED, temperature_needed
 from ..labels import flag_list
+from ..physics import FOUNDING_SLIDING_SPEED_MM_S
 from ..query import (
+    NOTES,
+    REQUEST_ERRORS,
+    WHY_NO_U,
+    estimate_text,
     groups_at_speed,
     map_curvature,
     pair_points,
     pair_speeds,
     pairs,
     select_pair,
+    speed_needed,
 )
 from ..rounding import known_u
-from ..stats import NOMINAL_SPEED, TEST_METHOD, group_statistics, group_u, test_methods
+from ..stats import (
+    LABS,
+    LABS_DISAGREE,
+    NOMINAL_SPEED,
+    TEST_METHOD,
+    group_statistics,
+    group_u,
+    nominal_speeds,
+    test_methods,
+)
+from .fe_decks import CONSTANT_NOTE, MATERIAL_LINE, abaqus_name, ansys_safe, deck_safe
 from .registry import WRITERS
+from .simbase import (
+    HELD_LINE,
+    MU_S_UNKNOWN,
+    PAIR_LINE,
+    STATIC_WHY,
+    comment_block,
+    xml_comment,
+)
 from .simulators import snippet_header
+from .tables import condition_text, group_flags
+from .usd import comment as usd_comment
 
 if TYPE_CHECKING:
     import pandas as pd
 
 #: identifies the embedded JSON document and its layout
-DATA_FORMAT = "tribopipe-explorer/1"
+DATA_FORMAT = "tribopipe-explorer/2"
 #: id of the ``<script type="application/json">`` element that holds the data
 DATA_ELEMENT_ID = "explorer-data"
+#: id prefix of the data elements that hold each pair's runs (``tpx-runs-0``, …)
+RUNS_ELEMENT_PREFIX = "tpx-runs-"
 #: the parts of the page's script (``assets/js/``), in the order they are joined
 SCRIPT_PARTS = (
     "prelude.js", "pyformat.js", "query.js", "snippets.js", "dom.js", "plots.js", "table.js",
     "page.js",
+)
+#: the columns of the page's CSV of one condition
+CSV_COLUMNS = (
+    "pin", "disc", "pressure_kPa", "temperature_C", "mu_k", "mu_k_U_k2", "mu_k_ci95_half_width",
+    "mu_s", "mu_s_U_k2", "mu_s_ci95_half_width", "clamped_pressure", "clamped_temperature",
+    "measured_groups", "notes", "map", "tribopipe_version",
 )
 #: points per fitted power-law curve (log-spaced over the fitted pressure range)
 FIT_CURVE_POINTS = 48
@@ -124,9 +160,18 @@ def _key(name: Any) -> str:
     return str(name).strip().casefold()
 
 
-def _points(points: pd.DataFrame, pair_groups: pd.DataFrame) -> list[dict[str, Any]]:
+def _text3(value: Any) -> str:
+    """A coefficient or a CI half-width to three decimals, as the tables print one ('–'
+    where unknown)."""
+    v = _plain(value)
+    return "–" if not isinstance(v, int | float) else f"{v:.3f}"
+
+
+def _points(points: pd.DataFrame, pair_groups: pd.DataFrame,
+            run_index: dict[str, int]) -> list[dict[str, Any]]:
     """Rows of :func:`tribopipe.query.pair_points` as dicts, in their order, each with the
-    ids of the runs behind it (``run_ids`` of the groups at its pressure and temperature)."""
+    positions (in the pair's runs, :func:`_runs`) of the runs behind it and its texts as
+    the tables print them (``text``: ``p``, ``t``, ``mean``, ``half``, ``u``)."""
     import pandas as pd
 
     p = pd.to_numeric(pair_groups["pressure_kPa"], errors="coerce").to_numpy(dtype=float)
@@ -137,28 +182,58 @@ def _points(points: pd.DataFrame, pair_groups: pd.DataFrame) -> list[dict[str, A
         at = p == r["pressure_kPa"]
         at &= (t == r["temperature_C"]) if math.isfinite(r["temperature_C"]) else (t != t)
         run_ids = [] if ids is None else [i for cell in ids[at] for i in cell.split(";") if i]
+        temperature = _plain(r["temperature_C"])
         out.append(
             {
                 "pressure_kPa": _plain(r["pressure_kPa"]),
-                "temperature_C": _plain(r["temperature_C"]),
+                "temperature_C": temperature,
                 "mean": _plain(r["mean"]),
                 "half": _plain(r["half"]),
                 "u": _plain(r["u"]) if "u" in r else None,
                 "budget": bool(r.get("budget", False)),
                 "n": int(r["n"]),
-                "run_ids": run_ids,
+                "runs": [run_index[i] for i in run_ids if i in run_index],
+                "text": {
+                    "p": condition_text("pressure_kPa", r["pressure_kPa"]),
+                    "t": "?" if temperature is None
+                    else condition_text("temperature_C", temperature),
+                    "mean": _text3(r["mean"]),
+                    "half": _text3(r["half"]),
+                    "u": _text3(r.get("u")),
+                },
             }
         )
     return out
 
 
-def _speed_points(at_speed: pd.DataFrame, speed_mm_s: float) -> dict[str, Any]:
-    """One measured speed [mm/s] of a pair: its μ_K and μ_S points (:func:`_points`)."""
+def _measured(points: list[dict[str, Any]], column: str, text: str) -> list[dict[str, Any]]:
+    """The distinct measured values of ``column`` among ``points`` (sorted), each with its
+    text as the tables print it (the page's chips)."""
+    seen: dict[float, str] = {}
+    for q in points:
+        if q[column] is not None:
+            seen.setdefault(q[column], q["text"][text])
+    return [{"value": v, "text": seen[v]} for v in sorted(seen)]
+
+
+def _speed_points(at_speed: pd.DataFrame, speed_mm_s: float,
+                  run_index: dict[str, int]) -> dict[str, Any]:
+    """One measured speed [mm/s] of a pair: its μ_K and μ_S points (:func:`_points`), the
+    measured temperatures and pressures with their texts, and what a request without a
+    temperature is told (``None`` where one temperature leaves no choice)."""
+    mu_k = _points(pair_points(at_speed, "mu_k"), at_speed, run_index)
+    mu_s = (_points(pair_points(at_speed, "mu_s"), at_speed, run_index)
+            if "mu_s_mean" in at_speed.columns else [])
+    temperatures = _measured(mu_k, "temperature_C", "t")
     return {
         "speed_mm_s": float(speed_mm_s),
-        "mu_k_points": _points(pair_points(at_speed, "mu_k"), at_speed),
-        "mu_s_points": _points(pair_points(at_speed, "mu_s"), at_speed)
-        if "mu_s_mean" in at_speed.columns else [],
+        "text": condition_text(NOMINAL_SPEED, speed_mm_s),
+        "mu_k_points": mu_k,
+        "mu_s_points": mu_s,
+        "temperatures": temperatures,
+        "pressures": _measured(mu_k, "pressure_kPa", "p"),
+        "temperature_needed": temperature_needed([t["value"] for t in temperatures])
+        if len(temperatures) > 1 else None,
     }
 
 
@@ -176,43 +251,66 @@ def _left_out(pair_groups: pd.DataFrame) -> int:
     return int(p[finite & t.isna()].nunique())
 
 
-def _runs(pair_runs: pd.DataFrame) -> list[dict[str, Any]]:
-    """The pair's included runs (the repeats) for the page, in a stable order, each with
-    the file, test and result it came from (``None`` where the map does not say)."""
+def _origin(r: Mapping[Any, Any]) -> str:
+    """Where a run came from, in words: ``file · test / result`` (the parts the map
+    knows; a file's own name, raw in the map, as one printable line)."""
+    file = printable(r["source_file"]) if isinstance(r.get("source_file"), str) else ""
+    place = " / ".join(printable(str(v)) for v in (_plain(r.get("test")), _plain(r.get("result")))
+                       if v)
+    return " · ".join(v for v in (file, place) if v)
+
+
+def _runs(pair_runs: pd.DataFrame, labs: dict[str, int]) -> list[dict[str, Any]]:
+    """The pair's included runs (the repeats) for the page, in a stable order: μ_K, μ_S,
+    the condition, its speed [mm/s] and lab (an index into the page's ``labs``), its flags,
+    and ``line``: its μ_K as the tables print it and the file, test and result it came
+    from."""
     ordered = pair_runs.sort_values(
         ["temperature_C", "pressure_kPa", "repeat", "measurement_id"], kind="mergesort"
     )
-    return [
-        {
+    speeds = nominal_speeds(ordered)
+    out = []
+    for r, speed, method in zip(ordered.to_dict(orient="records"), speeds,
+                                test_methods(ordered), strict=True):
+        origin = _origin(r)
+        lab = r.get("lab")
+        review = _plain(r.get("review"))
+        out.append({
             "id": str(r["measurement_id"]),
             "pressure_kPa": _plain(r["pressure_kPa"]),
             "temperature_C": _plain(r["temperature_C"]),
+            "speed_mm_s": float(speed),
             "mu_k": _plain(r["mu_k"]),
             "mu_s": _plain(r["mu_s"]),
             "repeat": _plain(r["repeat"]),
+            "lab": labs.get(_lab_name(lab), 0),
             "flags": flag_list(r.get("flags")),
-            # a file's own name, raw in the map: shown as one printable line
-            "file": printable(r["source_file"]) if isinstance(r.get("source_file"), str)
-            else None,
-            "test": _plain(r.get("test")),
-            "result": _plain(r.get("result")),
             "test_method": method,
             # a reviewer's decision (tribopipe.review): accept or window; None when none
-            "review": _plain(r.get("review")),
-        }
-        for r, method in zip(ordered.to_dict(orient="records"), test_methods(ordered),
-                             strict=True)
-    ]
+            "line": _text3(r["mu_k"]) + (f" (reviewed: {printable(str(review))})" if review
+                                         else "") + (f" — {origin}" if origin else ""),
+        })
+    return out
+
+
+def _lab_name(value: Any) -> str:
+    """A row's lab as the page lists it: one printable line, or ``unknown lab``."""
+    v = _plain(value)
+    return printable(str(v)) if v not in (None, "") else "unknown lab"
 
 
 def _fits(pair_fits: pd.DataFrame) -> list[dict[str, Any]]:
     """The pair's power-law fits with their curves μ = k·p^(n−1) sampled over the fitted
-    pressure range (log-spaced, :data:`FIT_CURVE_POINTS` points)."""
+    pressure range (log-spaced, :data:`FIT_CURVE_POINTS` points), their speed [mm/s] and
+    their legend as the page writes it."""
     import numpy as np
 
     out = []
-    for f in pair_fits.to_dict(orient="records"):
+    speeds = (pair_fits[NOMINAL_SPEED].to_numpy(dtype=float) if NOMINAL_SPEED in pair_fits
+              else [FOUNDING_SLIDING_SPEED_MM_S] * len(pair_fits))
+    for f, speed in zip(pair_fits.to_dict(orient="records"), speeds, strict=True):
         row = {name: _plain(f[name]) for name in FIT_FIELDS}
+        row["speed_mm_s"] = float(speed)
         curve: list[list[float]] = []
         k, exponent = row["k"], row["exponent"]
         lo, hi = row["pressure_min_kPa"], row["pressure_max_kPa"]
@@ -221,8 +319,90 @@ def _fits(pair_fits: pd.DataFrame) -> list[dict[str, Any]]:
             mu = power_law(p, k, exponent)
             curve = [[float(a), float(b)] for a, b in zip(p, mu, strict=True)]
         row["curve"] = curve
+        row["legend"] = ("not fitted" if k is None else
+                         f"μ_K = {k:.3f}·(p/kPa)^{exponent:.3f}, R² {row['r_squared']:.3f}"
+                         if row["r_squared"] is not None else
+                         f"μ_K = {k:.3f}·(p/kPa)^{exponent:.3f}")
         out.append(row)
     return out
+
+
+def _group_texts(g: Mapping[Any, Any], expanded: dict[str, float | None]) -> dict[str, str]:
+    """A group row's cells as the page's group table shows them (the tables' rounding:
+    :func:`tribopipe.export.tables.condition_text`, GUM ``value ± U``, three decimals)."""
+    def with_u(q: str) -> str:
+        mean = _plain(g.get(f"{q}_mean"))
+        if not isinstance(mean, int | float):
+            return ""
+        n = _plain(g.get(f"{q}_n"))
+        return estimate_text(float(mean), expanded[q], int(n) if isinstance(n, int) else 0)
+
+    def count(name: str) -> str:
+        v = _plain(g.get(name))
+        return "" if v is None else str(int(v))
+
+    def num(name: str) -> str:
+        v = _plain(g.get(name))
+        return "" if v is None else f"{v:.3f}"
+
+    qc = ", ".join(group_flags({k: _plain(v) for k, v in g.items()}))
+    return {
+        "normal_force_N": _cell_g(g.get("normal_force_N")),
+        "pressure_kPa": condition_text("pressure_kPa", _plain(g.get("pressure_kPa"))),
+        "temperature_C": condition_text("temperature_C", _plain(g.get("temperature_C"))),
+        NOMINAL_SPEED: condition_text(NOMINAL_SPEED, _plain(g.get(NOMINAL_SPEED))),
+        "mu_k_n": count("mu_k_n"),
+        "mu_k_mean": with_u("mu_k"),
+        "mu_k_std": num("mu_k_std"),
+        "mu_k_ci95_low": num("mu_k_ci95_low"),
+        "mu_k_ci95_high": num("mu_k_ci95_high"),
+        "mu_k_cv": num("mu_k_cv"),
+        "mu_s_n": count("mu_s_n"),
+        "mu_s_mean": with_u("mu_s"),
+        "qc": qc,
+    }
+
+
+def _cell_g(value: Any) -> str:
+    """A number as format "g" writes it ('' where missing)."""
+    v = _plain(value)
+    return "" if not isinstance(v, int | float) else f"{v:g}"
+
+
+def _pair_snippets(pin: str, disc: str) -> dict[str, dict[str, list[str]]]:
+    """The lines of each page snippet that name the pair, escaped and laid out by the
+    writers' own rules: ``head`` (:data:`~tribopipe.export.simbase.PAIR_LINE`, the first
+    of :func:`~tribopipe.export.simbase.condition_lines`) and, for the decks, ``name``
+    (ABAQUS's interaction name) and ``material`` (Ansys's material line)."""
+    out: dict[str, dict[str, list[str]]] = {}
+    for fmt, syntax, safe in (("abaqus", "**", deck_safe), ("ansys", "!", ansys_safe)):
+        out[fmt] = {"head": comment_block(syntax, [PAIR_LINE.format(pin=safe(pin),
+                                                                   disc=safe(disc))])}
+    out["abaqus"]["name"] = [abaqus_name(pin, disc)]
+    out["ansys"]["material"] = comment_block("!", [MATERIAL_LINE.format(
+        number=1, pin=ansys_safe(pin), disc=ansys_safe(disc))])
+    plain = PAIR_LINE.format(pin=pin, disc=disc)
+    out["usd"] = {"head": [usd_comment(plain)]}
+    for fmt in ("pybullet", "drake"):
+        out[fmt] = {"head": [xml_comment(plain, ascii_only=True)]}
+    return out
+
+
+def _texts() -> dict[str, Any]:
+    """The words the page shows around its numbers, each from where the library keeps it."""
+    return {
+        "notes": dict(NOTES),
+        "why_no_u": dict(WHY_NO_U),
+        "extrapolated": EXTRAPOLATED,
+        "errors": {**REQUEST_ERRORS,
+                   "no_pair": "no groups for pin {pin} on disc {disc} in this map"},
+        "snippet": {
+            "note": CONSTANT_NOTE,
+            "clamped": HELD_LINE,
+            "mu_s_unknown": MU_S_UNKNOWN,
+            "static": dict(STATIC_WHY),
+        },
+    }
 
 
 def explorer_data(
@@ -238,16 +418,21 @@ def explorer_data(
     ``groups`` defaults to :func:`tribopipe.stats.group_statistics` of the included runs
     and ``fits`` to :func:`tribopipe.fit.fit_power_law` of ``runs``. Returns a dict of
     plain values (``None`` for missing numbers): ``format, title, source,
-    tribopipe_version, generated, pairs`` (per pair: ``pin, disc, mu_k_points,
-    mu_s_points, speed_mm_s, speeds, left_out, runs, fits``; ``speeds`` lists
-    ``speed_mm_s, mu_k_points, mu_s_points`` per measured nominal speed where the pair
-    has several, else it is empty; each run with its ``test_method``), ``groups`` (the
-    group table, each row with the index of its ``pair`` and its ``test_method``),
-    ``methods`` (the test methods of the included runs, in the map's order: the page
-    filters the group table by them where there are several), ``snippets`` (the
-    simulator formats the page copies: name, label, file suffix) and ``snippet_headers``
-    (the opening lines of :func:`tribopipe.export.simulators.snippet` per format). Pressures in kPa,
-    temperatures in °C. Raises :class:`ExportError` when no run is left. Inputs are not
+    tribopipe_version, generated``; ``pairs`` (per pair: ``pin, disc``, ``keys`` (the
+    casefolded names :func:`tribopipe.query.select_pair` matches), ``speeds`` (one entry
+    per measured nominal speed: ``speed_mm_s, text, mu_k_points, mu_s_points,
+    temperatures, pressures, temperature_needed``), ``speed_needed``, ``left_out``,
+    ``fits``, ``labs`` and ``snippet`` (the lines of each snippet that name the pair));
+    ``runs`` (per pair, the included runs, each with its ``test_method``: the page reads
+    them when the pair is shown); ``groups`` (the group table, each row with the index of
+    its ``pair``, its ``test_method`` and its cells' ``text``); ``labs``; ``methods`` (the
+    test methods of the included runs, in the map's order: the page filters the group
+    table by them where there are several); ``texts`` (the notes, errors and snippet words
+    the page shows); ``csv`` (the CSV header and the cells that are text); ``snippets``
+    and ``snippet_headers`` (the simulator formats the page copies and their opening
+    lines). Every text is made here, by the library's own rules; the page's script only
+    computes numbers and puts these texts around them. Pressures in kPa, temperatures in
+    °C, speeds in mm/s. Raises :class:`ExportError` when no run is left. Inputs are not
     modified.
     """
     included = runs
@@ -266,40 +451,46 @@ def explorer_data(
         fits = fit_power_law(runs)
     run_pin, run_disc = included["pin"].map(_key), included["disc"].map(_key)
     fit_pin, fit_disc = fits["pin"].map(_key), fits["disc"].map(_key)
+    lab_names = sorted({_lab_name(v) for v in included["lab"]}) if "lab" in included else []
+    labs = {name: i for i, name in enumerate(lab_names or ["unknown lab"])}
 
     pair_index: dict[tuple[str, str], int] = {}
     pair_rows: list[dict[str, Any]] = []
+    run_chunks: list[list[dict[str, Any]]] = []
     for pin, disc in pairs(groups):
         key = (_key(pin), _key(disc))
         if key in pair_index:  # another spelling of a pair already listed (query merges them)
             continue
         pair_groups = select_pair(groups, pin, disc)
-        mu_k_points = pair_points(pair_groups, "mu_k")
-        if mu_k_points.empty:
+        if pair_points(pair_groups, "mu_k").empty:
             continue
         first = pair_groups.iloc[0]
+        pair_runs = _runs(included[(run_pin == key[0]) & (run_disc == key[1])], labs)
+        run_index = {r["id"]: i for i, r in enumerate(pair_runs)}
+        measured = pair_speeds(pair_groups)
+        speeds = [_speed_points(groups_at_speed(pair_groups, v), v, run_index)
+                  for v in measured]
         pair_index[key] = len(pair_rows)
-        speeds = [_speed_points(groups_at_speed(pair_groups, v), v)
-                  for v in pair_speeds(pair_groups)]
+        run_chunks.append(pair_runs)
+        pin_name, disc_name = str(first["pin"]), str(first["disc"])
         pair_rows.append(
             {
-                "pin": str(first["pin"]),
-                "disc": str(first["disc"]),
-                # a pair of several speeds shows its first speed's points until one is chosen
-                **({k: speeds[0][k] for k in ("mu_k_points", "mu_s_points")}
-                   if len(speeds) > 1 else {
-                    "mu_k_points": _points(mu_k_points, pair_groups),
-                    "mu_s_points": _points(pair_points(pair_groups, "mu_s"), pair_groups)
-                    if "mu_s_mean" in pair_groups.columns else []}),
-                "speed_mm_s": speeds[0]["speed_mm_s"],
-                "speeds": speeds if len(speeds) > 1 else [],
+                "pin": pin_name,
+                "disc": disc_name,
+                "keys": list(key),
+                "speeds": speeds,
+                "speed_needed": speed_needed(measured) if len(measured) > 1 else None,
                 "left_out": _left_out(pair_groups),
-                "runs": _runs(included[(run_pin == key[0]) & (run_disc == key[1])]),
+                "labs": sorted({r["lab"] for r in pair_runs}),
                 "fits": _fits(fits[(fit_pin == key[0]) & (fit_disc == key[1])]),
+                "snippet": _pair_snippets(pin_name, disc_name),
+                "csv": [_csv_field(pin_name), _csv_field(disc_name)],
+                "slug": _slug(pin_name, disc_name),
             }
         )
     group_rows = []
     expanded = {q: 2.0 * group_u(groups, q)[0] for q in ("mu_k", "mu_s")}
+    lab_of_run = {r["id"]: r["lab"] for chunk in run_chunks for r in chunk}
     for i, g in enumerate(groups.to_dict(orient="records")):
         index = pair_index.get((_key(g["pin"]), _key(g["disc"])))
         if index is None:
@@ -312,8 +503,15 @@ def explorer_data(
         # show it comes from a map of one method)
         row[TEST_METHOD] = str(g[TEST_METHOD]) if isinstance(g.get(TEST_METHOD), str) \
             else methods[0]
+        u_known: dict[str, float | None] = {}
         for q, values in expanded.items():  # U (k = 2) of the group mean, where known
-            row[f"{q}_U"] = float(values.iloc[i]) if known_u(float(values.iloc[i])) else None
+            u = float(values.iloc[i])
+            row[f"{q}_U"] = u_known[q] = u if known_u(u) else None
+        named = str(g.get(LABS) or "").split(";") if LABS in g else []
+        row["labs"] = sorted({labs[n] for n in map(printable, named) if n in labs}) or sorted(
+            {lab_of_run[r] for r in str(g.get("run_ids") or "").split(";") if r in lab_of_run})
+        row[LABS_DISAGREE] = bool(g.get(LABS_DISAGREE) is True)
+        row["text"] = _group_texts(g, u_known)
         group_rows.append(row)
     return {
         "format": DATA_FORMAT,
@@ -322,10 +520,15 @@ def explorer_data(
         "tribopipe_version": __version__,
         "generated": datetime.now(UTC).strftime("%Y-%m-%d %H:%M UTC"),
         "pairs": pair_rows,
+        "runs": run_chunks,
         "groups": group_rows,
+        "labs": list(labs),
         # the test methods of the included runs, in the map's order (the page filters
         # the group table by them where there are several)
         "methods": methods,
+        "texts": _texts(),
+        "csv": {"header": ",".join(CSV_COLUMNS),
+                "cells": [_csv_field(source or ""), _csv_field(__version__)]},
         # the map's κ for the interpolation's own uncertainty (tribopipe.interpolation)
         "curvature": {q: map_curvature(groups, q) for q in ("mu_k", "mu_s")},
         # the simulator formats the page copies (every registered format with a
@@ -336,6 +539,25 @@ def explorer_data(
         "snippet_headers": {w.name: snippet_header(w.name, source)
                             for w in WRITERS if w.snippet is not None},
     }
+
+
+def _csv_field(text: str) -> str:
+    """``text`` as one field of a CSV line: :func:`tribopipe.escape.csv_cell`, quoted as
+    the csv module quotes it (where it holds a comma, a quote or surrounding space)."""
+    import csv
+    import io
+
+    out = io.StringIO()
+    csv.writer(out, lineterminator="").writerow([csv_cell(text)])
+    return out.getvalue()
+
+
+def _slug(pin: str, disc: str) -> str:
+    """The pair's part of a downloaded file's name: each name casefolded, runs of other
+    characters than a–z and 0–9 as one hyphen, at most 40 characters (``x`` when empty)."""
+    def one(name: str) -> str:
+        return re.sub(r"[^a-z0-9]+", "-", _key(name)).strip("-")[:40] or "x"
+    return f"{one(pin)}_{one(disc)}"
 
 
 # ---------------------------------------------------------------------------- the page
@@ -386,13 +608,22 @@ def explorer_fragment(data: dict[str, Any]) -> str:
 
 
 def _fragment(data: dict[str, Any], js: str) -> str:
-    """The fragment template filled with ``data`` (embedded JSON) and the script ``js``."""
+    """The fragment template filled with ``data`` (embedded JSON) and the script ``js``.
+
+    Each pair's runs travel in their own data element (``#tpx-runs-<pair>``), which the
+    page parses only when it shows that pair: a large map's page opens on its groups and
+    fits, and reads the runs of one pair at a time."""
     options = "".join(
         f'\n   <option value="{html_text(s["name"])}">{html_text(s["label"])}</option>'
         for s in data["snippets"])
+    head = {k: v for k, v in data.items() if k != "runs"}
+    chunks = "".join(
+        f'\n<script type="application/json" id="{RUNS_ELEMENT_PREFIX}{i}">'
+        f"{script_json(chunk)}</script>"
+        for i, chunk in enumerate(data.get("runs", [])))
     return _fill(_asset("explorer_fragment.html"),
-                 {"data": script_json(data), "script": js, "data_id": DATA_ELEMENT_ID,
-                  "snippet_options": options})
+                 {"data": script_json(head), "script": js, "data_id": DATA_ELEMENT_ID,
+                  "snippet_options": options, "runs": chunks})
 
 
 def explorer_style() -> str:
@@ -440,7 +671,12 @@ def read_embedded_data(html: str) -> dict[str, Any]:
     )
     if match is None:
         raise ExportError(f"no explorer data (script element #{DATA_ELEMENT_ID}) in the page")
-    return json.loads(match.group(1))
+    data: dict[str, Any] = json.loads(match.group(1))
+    chunks = re.findall(
+        r'<script type="application/json" id="' + re.escape(RUNS_ELEMENT_PREFIX)
+        + r'(\d+)">(.*?)</script>', html, re.DOTALL)
+    data["runs"] = [json.loads(text) for _, text in sorted(chunks, key=lambda c: int(c[0]))]
+    return data
 
 
 # ---------------------------------------------------------------------------- I/O edge

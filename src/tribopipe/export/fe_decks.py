@@ -455,6 +455,8 @@ def write_lsdyna(
 #: formats of :func:`condition_snippet`: a constant μ_K at one condition
 CONDITION_FORMATS = ("abaqus", "ansys")
 
+#: the Ansys single-condition file's last comment line, naming the pair's material
+MATERIAL_LINE = "material {number}: pin {pin} on disc {disc}"
 #: said in every single-condition file, after the condition
 CONSTANT_NOTE = (
     "a constant coefficient: the solver uses it at every pressure and temperature; for the "
@@ -503,7 +505,8 @@ def condition_snippet(
             raise ExportError(f"material number must be >= 1, got {material_id}")
         lines += comment_block("!", [
             *condition_lines(res, ansys_safe), note,
-            f"material {material_id}: pin {ansys_safe(res.pin)} on disc {ansys_safe(res.disc)}",
+            MATERIAL_LINE.format(number=material_id, pin=ansys_safe(res.pin),
+                                 disc=ansys_safe(res.disc)),
         ])
         lines += [f"TB,FRIC,{material_id},,,ISO", f"TBDATA,1,{mu}"]
     return "\n".join(lines) + "\n"

@@ -129,50 +129,83 @@ def plot_group_overlay(
 # ---------------------------------------------------------------------------- per pair
 
 
-def draw_pair(ax: Any, runs: pd.DataFrame, fits: pd.DataFrame | None) -> None:
-    """Draw μ_K against contact pressure for one pair's runs on ``ax``.
+#: how each coefficient is drawn in a pair plot: μ_K filled markers and a solid fit, μ_S
+#: open markers and a dashed fit, in the temperature's colour
+_QUANTITIES: tuple[tuple[str, str, dict[str, Any], str], ...] = (
+    ("mu_k", "$\\mu_K$", {"fmt": "o"}, "-"),
+    ("mu_s", "$\\mu_S$", {"fmt": "s", "mfc": "white"}, "--"),
+)
+
+
+def fit_label(symbol: str, k: float, exponent: float, r_squared: float) -> str:
+    """The legend text of a power-law fit with its units: μ = k·(p / 1 kPa)^(n−1), so the
+    reader knows k is μ at 1 kPa (mathtext for the exponent)."""
+    return (f"fit {symbol} = {k:.2f}·(p / kPa)$^{{{exponent:.3f}}}$, "
+            f"R² = {r_squared:.3f}")
+
+
+def draw_pair(ax: Any, runs: pd.DataFrame, fits: pd.DataFrame | None,
+              fits_s: pd.DataFrame | None = None) -> None:
+    """Draw μ_K and, where measured, μ_S against contact pressure for one pair's runs on
+    ``ax``.
 
     One colour per temperature: the runs (small dots), the group means with error bars of
-    ±1 standard deviation of the repeats, and the fitted power law over the measured
-    pressure range when ``fits`` (from :func:`tribopipe.fit.fit_power_law`) has a row for
-    the temperature.
+    ±1 standard deviation of the repeats (μ_K filled, μ_S open markers), and the fitted
+    power law over the measured pressure range (μ_K solid, μ_S dashed) where ``fits`` /
+    ``fits_s`` (from :func:`tribopipe.fit.fit_power_law`) have a row for the
+    temperature; the fit's legend says p is in kPa.
     """
     import numpy as np
 
-    data = runs.assign(
-        _t=runs["temperature_C"].astype(float),
-        _p=runs["pressure_kPa"].astype(float),
-        _mu=runs["mu_k"].astype(float),
-    )
     colours = ["tab:blue", "tab:red", "tab:green", "tab:purple", "tab:orange", "tab:brown"]
-    temps = sorted(data["_t"].dropna().unique()) + ([math.nan] if data["_t"].isna().any() else [])
-    for i, t in enumerate(temps):
-        at = data[data["_t"].isna()] if math.isnan(t) else data[data["_t"] == t]
-        colour = colours[i % len(colours)]
-        label_t = "T unknown" if math.isnan(t) else f"{t:g} °C"
-        ax.plot(at["_p"], at["_mu"], ".", color=colour, alpha=0.45, ms=5)
-        stats = at.groupby("_p")["_mu"].agg(["mean", "std", "count"]).reset_index()
-        ax.errorbar(stats["_p"], stats["mean"], yerr=stats["std"].fillna(0.0), fmt="o",
-                    color=colour, capsize=3, ms=6, label=f"{label_t}: mean ± SD of repeats")
-        if fits is None or fits.empty:
+    temp = runs["temperature_C"].astype(float)
+    temps = sorted(temp.dropna().unique()) + ([math.nan] if temp.isna().any() else [])
+    tops: list[float] = []
+    for quantity, symbol, style, line in _QUANTITIES:
+        if quantity not in runs.columns:
             continue
-        match = fits[fits["temperature_C"].isna()] if math.isnan(t) else fits[
-            fits["temperature_C"] == t]
-        if match.empty or not is_finite(match["k"].iloc[0]):
+        data = runs.assign(_t=temp, _p=runs["pressure_kPa"].astype(float),
+                           _mu=runs[quantity].astype(float))
+        data = data[data["_mu"].notna()]
+        if data.empty:
             continue
-        f = match.iloc[0]
-        p = np.geomspace(float(f["pressure_min_kPa"]), float(f["pressure_max_kPa"]), 100)
-        ax.plot(p, power_law(p, float(f["k"]), float(f["exponent"])), "-", color=colour,
-                lw=1.3, label=(f"{label_t}: fit μ = {f['k']:.2f}·p$^{{{f['exponent']:.3f}}}$, "
-                               f"R² = {f['r_squared']:.3f}"))
+        tops.append(float(np.nanmax(data["_mu"])))
+        quantity_fits = fits if quantity == "mu_k" else fits_s
+        for i, t in enumerate(temps):
+            at = data[data["_t"].isna()] if math.isnan(t) else data[data["_t"] == t]
+            if at.empty:
+                continue
+            colour = colours[i % len(colours)]
+            label_t = "T unknown" if math.isnan(t) else f"{t:g} °C"
+            ax.plot(at["_p"], at["_mu"], ".", color=colour, alpha=0.45, ms=5)
+            stats = at.groupby("_p")["_mu"].agg(["mean", "std", "count"]).reset_index()
+            ax.errorbar(stats["_p"], stats["mean"], yerr=stats["std"].fillna(0.0),
+                        color=colour, capsize=3, ms=6, **style,
+                        label=f"{label_t} {symbol}: mean ± SD of repeats")
+            if quantity_fits is None or quantity_fits.empty:
+                continue
+            match = quantity_fits[quantity_fits["temperature_C"].isna()] if math.isnan(t) \
+                else quantity_fits[quantity_fits["temperature_C"] == t]
+            if match.empty or not is_finite(match["k"].iloc[0]):
+                continue
+            f = match.iloc[0]
+            p = np.geomspace(float(f["pressure_min_kPa"]), float(f["pressure_max_kPa"]), 100)
+            ax.plot(p, power_law(p, float(f["k"]), float(f["exponent"])), line,
+                    color=colour, lw=1.3,
+                    label=f"{label_t} " + fit_label(symbol, float(f["k"]),
+                                                    float(f["exponent"]),
+                                                    float(f["r_squared"])))
     ax.set_xlabel("contact pressure p [kPa]")
-    ax.set_ylabel("kinetic coefficient of friction $\\mu_K$")
-    ax.set_xlim(left=0, right=float(data["_p"].max()) * 1.08)
-    # headroom above the highest point for the legend
-    top = float(np.nanmax(data["_mu"])) if data["_mu"].notna().any() else 1.0
-    ax.set_ylim(bottom=0, top=top * 1.35)
+    with_s = len(tops) > 1
+    ax.set_ylabel("coefficient of friction $\\mu_S$ (open), $\\mu_K$ (filled)" if with_s
+                  else "kinetic coefficient of friction $\\mu_K$")
+    ax.set_xlim(left=0, right=float(runs["pressure_kPa"].astype(float).max()) * 1.08)
+    top = max(tops) if tops else 1.0
+    ax.set_ylim(bottom=0, top=top * 1.1)
     ax.grid(True, alpha=0.3)
-    ax.legend(fontsize="small", loc="upper right")
+    # below the axes: the legend never hides a point, however many series
+    ax.legend(fontsize="x-small", loc="upper center", bbox_to_anchor=(0.5, -0.16), ncol=2,
+              frameon=False)
 
 
 def _pair_runs(runs: pd.DataFrame, pin: str, disc: str) -> pd.DataFrame:
@@ -202,10 +235,11 @@ def plot_pair(
     fmt: str | None = None,
     dpi: int = DPI,
 ) -> Target:
-    """μ_K against contact pressure for one pair (Fig. 5 style) to ``target``.
+    """μ_K and μ_S (where measured) against contact pressure for one pair (Fig. 5 style)
+    to ``target``, at ``dpi`` for a PNG.
 
-    ``runs`` are friction-map rows (excluded runs are left out); ``fits`` defaults to
-    :func:`tribopipe.fit.fit_power_law` of the pair's runs.
+    ``runs`` are friction-map rows (excluded runs are left out); ``fits`` (μ_K) defaults
+    to :func:`tribopipe.fit.fit_power_law` of the pair's runs; μ_S is fitted here.
     """
     sel = _pair_runs(runs, pin, disc)
     if fits is None:
@@ -213,9 +247,11 @@ def plot_pair(
     else:
         fits = fits[(fits["pin"].str.casefold() == pin.casefold())
                     & (fits["disc"].str.casefold() == disc.casefold())]
-    fig = new_figure(6.4, 4.2)
+    fits_s = (fit_power_law(sel, quantity="mu_s")
+              if "mu_s" in sel.columns and sel["mu_s"].notna().any() else None)
+    fig = new_figure(6.4, 5.2)
     ax = fig.add_subplot()
-    draw_pair(ax, sel, fits)
+    draw_pair(ax, sel, fits, fits_s)
     ax.set_title(picture_text(f"{sel['pin'].iloc[0]} on {sel['disc'].iloc[0]}"),
                  fontsize="medium")
     return save_figure(fig, target, fmt, dpi)

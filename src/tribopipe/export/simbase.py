@@ -145,16 +145,23 @@ def header_bodies(
     ]
 
 
+#: :func:`condition_lines`' words for a pair without μ_S and for a value held at an edge
+MU_S_UNKNOWN = "unknown (not in the map)"
+HELD_LINE = "outside the measured range: edge value held constant"
+#: :func:`condition_lines`' first line, naming the pair (the names escaped for the file)
+PAIR_LINE = "pair: pin {pin} on disc {disc}"
+
+
 def condition_lines(res: QueryResult, safe: Callable[[object], str] = sim_comment) -> list[str]:
     """Comment bodies naming the pair, the condition, both coefficients and the measured
     groups they were interpolated from."""
     t = "unknown" if res.temperature_C is None else f"{res.temperature_C:g} C"
     lines = [
-        f"pair: pin {safe(res.pin)} on disc {safe(res.disc)}",
+        PAIR_LINE.format(pin=safe(res.pin), disc=safe(res.disc)),
         f"condition: contact pressure {res.pressure_kPa:g} kPa, temperature {t}",
         f"mu_k = {num(res.mu_k.value)}; {res.mu_k.text(ascii_only=True)}"
         + ("" if res.mu_k.expanded is None else " (U, k = 2)"),
-        "mu_s = " + ("unknown (not in the map)" if res.mu_s is None else
+        "mu_s = " + (MU_S_UNKNOWN if res.mu_s is None else
                      f"{num(res.mu_s.value)}; {res.mu_s.text(ascii_only=True)}"
                      + ("" if res.mu_s.expanded is None else " (U, k = 2)")),
     ]
@@ -166,7 +173,7 @@ def condition_lines(res: QueryResult, safe: Callable[[object], str] = sim_commen
     )
     lines.append(f"from measured groups: {used}")
     if res.clamped:
-        lines.append("outside the measured range: edge value held constant")
+        lines.append(HELD_LINE)
     return lines
 
 
@@ -200,6 +207,18 @@ def breakaway(res: QueryResult, coefficient: str, engine: str) -> float:
     return res.mu_s.value
 
 
+#: where :func:`static_and_dynamic`'s static coefficient came from, worded once (the
+#: explorer page receives these texts; ``{mu_s}`` is the map's μ_S)
+STATIC_WHY = {
+    "no_mu_s": "static = mu_k: the map holds no mu_s for this pair (an imported published map "
+               "holds mu_k only), so the onset of slip takes the kinetic coefficient; the "
+               "static coefficient is written all the same, never left to the engine's default",
+    "raised": "static = mu_k: the map's mu_s ({mu_s}) is below mu_k at this condition and "
+              "the engine needs static >= dynamic, so static is raised to mu_k",
+    "mu_s": "static = mu_s (breakaway), dynamic = mu_k (sliding)",
+}
+
+
 def static_and_dynamic(res: QueryResult) -> tuple[float, float, str]:
     """The static and dynamic coefficients for an engine that takes both, and one line
     saying where the static one came from.
@@ -212,15 +231,10 @@ def static_and_dynamic(res: QueryResult) -> tuple[float, float, str]:
     """
     mu_k = res.mu_k.value
     if res.mu_s is None:
-        return mu_k, mu_k, (
-            "static = mu_k: the map holds no mu_s for this pair (an imported published map "
-            "holds mu_k only), so the onset of slip takes the kinetic coefficient; the static "
-            "coefficient is written all the same, never left to the engine's default")
+        return mu_k, mu_k, STATIC_WHY["no_mu_s"]
     if res.mu_s.value < mu_k:
-        return mu_k, mu_k, (
-            f"static = mu_k: the map's mu_s ({num(res.mu_s.value)}) is below mu_k at this "
-            "condition and the engine needs static >= dynamic, so static is raised to mu_k")
-    return res.mu_s.value, mu_k, "static = mu_s (breakaway), dynamic = mu_k (sliding)"
+        return mu_k, mu_k, STATIC_WHY["raised"].format(mu_s=num(res.mu_s.value))
+    return res.mu_s.value, mu_k, STATIC_WHY["mu_s"]
 
 
 def default_decay_s_per_mm(slip_rate_mm_s: float = FOUNDING_SLIDING_SPEED_MM_S) -> float:

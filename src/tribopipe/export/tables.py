@@ -37,7 +37,7 @@ from __future__ import annotations
 import math
 import os
 import re
-from collections.abc import Hashable, Sequence
+from collections.abc import Hashable, Mapping, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -67,6 +67,28 @@ LAYOUTS: tuple[str, ...] = ("group", "abstract", "paper")
 FORMATS: tuple[str, ...] = ("csv", "markdown", "latex", "frictionmap")
 #: Temperatures closer than this [K] to a --temperature filter value match it.
 TEMPERATURE_MATCH_K = 0.005
+
+
+#: how the tables print a condition: pressure [kPa] to 4 significant digits (11.79, the
+#: paper's), temperature [°C] as measured (format "g"), nominal speed [mm/s] to 2
+CONDITION_SPECS = {"pressure_kPa": ".4g", "temperature_C": "g", NOMINAL_SPEED: ".2g"}
+
+
+def condition_text(column: str, value: Any) -> str:
+    """A condition value of ``column`` (a key of :data:`CONDITION_SPECS`) as every table
+    prints it ('' where missing); the explorer's chips and inputs read the same."""
+    return _cell(value, CONDITION_SPECS[column])
+
+
+def group_flags(group: Mapping[Any, Any], middle: Sequence[str] = ()) -> list[str]:
+    """A group row's flags as every table (and the explorer's QC column) writes them:
+    ``range > r``, ``labs disagree``, ``flagged run``, then ``middle`` (the paper layout's
+    uncertainty flags), then ``N reviewed``."""
+    reviewed = group.get("reviewed") or 0
+    return (["range > r"] if group.get("range_exceeds_r") is True else []) + (
+        ["labs disagree"] if group.get(LABS_DISAGREE) is True else []) + (
+        ["flagged run"] if group.get("qc_flagged") is True else []) + list(middle) + (
+        [f"{reviewed} reviewed"] if reviewed else [])
 
 
 def _select(
@@ -153,10 +175,12 @@ def paper_table(
     names = (("pressure_kPa", "temperature_C", NOMINAL_SPEED) if machine
              else ("p [kPa]", "T [°C]", "v [mm/s]"))
     out: dict[str, list[Any]] = {"pin": list(groups["pin"]), "disc": list(groups["disc"]),
-                                 names[0]: [_cell(v, ".4g") for v in groups["pressure_kPa"]],
-                                 names[1]: [_cell(v, "g") for v in groups["temperature_C"]]}
+                                 names[0]: [condition_text("pressure_kPa", v)
+                                            for v in groups["pressure_kPa"]],
+                                 names[1]: [condition_text("temperature_C", v)
+                                            for v in groups["temperature_C"]]}
     if by_speed:
-        out[names[2]] = [_cell(v, ".2g") for v in groups[NOMINAL_SPEED]]
+        out[names[2]] = [condition_text(NOMINAL_SPEED, v) for v in groups[NOMINAL_SPEED]]
     if TEST_METHOD in groups.columns:  # the map holds several methods: never pooled
         out[TEST_METHOD if machine else "method"] = list(groups[TEST_METHOD])
     if len({lab for v in groups[LABS] for lab in str(v).split(";")}) > 1:
@@ -181,11 +205,8 @@ def paper_table(
                 flags[i] += (["stated u"] if not b else []) + (
                     ["n = 1"] if n < 2 else []) + (
                     ["repeats identical"] if n > 1 and not known_u(2.0 * float(uu)) else [])
-    for i, g in enumerate(groups.itertuples(index=False)):
-        flags[i] = (["range > r"] if g.range_exceeds_r else []) + (
-            ["labs disagree"] if getattr(g, LABS_DISAGREE) else []) + (
-            ["flagged run"] if g.qc_flagged else []) + flags[i] + (
-            [f"{g.reviewed} reviewed"] if getattr(g, "reviewed", 0) else [])
+    for i, g in enumerate(groups.to_dict(orient="records")):
+        flags[i] = group_flags(g, flags[i])
     out["flags"] = [", ".join(f) for f in flags]
     import pandas as pd
 

@@ -55,7 +55,7 @@ HOLDS = ("physics:dynamicFriction = mu_k, physics:staticFriction = mu_s (mu_k wh
          f"bound to both bodies, physxMaterial:frictionCombineMode = {COMBINE_MODE}")
 
 
-def _comment(body: str) -> str:
+def comment(body: str) -> str:
     """One ASCII ``#`` comment line that no content can break."""
     return f"# {sim_comment(body, '#', ascii_only=True)}".rstrip()
 
@@ -69,7 +69,7 @@ def usd_header(source: str | None = None) -> list[str]:
         "(rel material:binding:physics), as the example prims Pin and Disc do",
     ]
     return ["#usda 1.0", "(", "    metersPerUnit = 1", '    upAxis = "Z"', ")",
-            *(_comment(b) for b in bodies)]
+            *(comment(b) for b in bodies)]
 
 
 def write_usd(res: QueryResult, *, source: str | None = None) -> str:
@@ -80,7 +80,7 @@ def write_usd(res: QueryResult, *, source: str | None = None) -> str:
     on a cylinder Disc."""
     static, dynamic, how = static_and_dynamic(res)
     lines = usd_header(source)
-    lines += [_comment(b) for b in [*condition_lines(res, str), how]]
+    lines += [comment(b) for b in [*condition_lines(res, str), how]]
     lines += [
         "",
         'def Scope "TribopipeFriction"',

@@ -57,6 +57,7 @@ from .textio import (
     decode,
     detect_decimal,
     detect_delimiter,
+    foreign_kind,
     head_lines,
     plain_line_ends,
     read_bytes,
@@ -68,6 +69,7 @@ from .textio import (
 
 __all__ = [
     "EXPORT_SUFFIXES",
+    "export_kind",
     "FORMATS",
     "READERS",
     "AliasTable",
@@ -226,6 +228,51 @@ def _parse_text(
         scan_lines(text, delim, reader.data_line(delim)) if plain else list(rows)
     )
     return info, reader.parse(items, path, aliases)
+
+
+#: bytes of a file's start that :func:`export_kind` looks at
+_SNIFF_BYTES = 256 * 1024
+
+
+def export_kind(path: str | PathLike[str], aliases: AliasTable | None = None) -> str | None:
+    """What a file is when it is surely not an instrument export, from its first bytes,
+    else ``None`` (an export, or maybe one: the reader decides).
+
+    Not an export: a document, an image or an archive by its magic bytes ("a PDF
+    document"), a binary file, an empty file, a text with no cell delimiter in its
+    first lines (a note), or a text that no format recognises when the whole file was
+    looked at. A file that cannot be opened is ``None`` too: the reader says why. Cheap
+    (one read of at most 256 KiB): a campaign asks it of the files it is about to read
+    and of those no label source describes, before it names their labels."""
+    name = str(path)
+    try:
+        with open(path, "rb") as fh:
+            raw = fh.read(_SNIFF_BYTES + 1)
+    except OSError:
+        return None
+    whole = len(raw) <= _SNIFF_BYTES
+    raw = raw[:_SNIFF_BYTES]
+    if not raw.strip():
+        return "an empty file"
+    if raw.startswith(_OLE_MAGIC) or any(
+            r.magic is not None and raw.startswith(r.magic) for r in READERS):
+        return None
+    kind = foreign_kind(raw, name)
+    if kind is not None:
+        return kind[0]
+    try:
+        decoded = decode(raw, name)
+    except ReadError:
+        return "a binary file" if whole else None
+    lines = head_lines(decoded.text, _HEAD_LINES)
+    delim = detect_delimiter(lines)
+    if delim is None:
+        return "a text with no table: no TAB, ';' or ',' between cells"
+    rows = split_plain(lines, delim)
+    table = aliases if aliases is not None else load_aliases(None)
+    if any(r.looks_like and r.looks_like(rows, table) for r in _text_readers()):
+        return None
+    return "a text that no export format recognises" if whole else None
 
 
 def read_export(

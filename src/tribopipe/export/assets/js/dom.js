@@ -35,34 +35,32 @@ function inputNumber(input) {
   return input.dataset.shown === s ? Number(input.dataset.exact) : Number(s);
 }
 
-/* Fill a number input with a value (a measured pressure, say 11.78925504 kPa): shown as
-   Python's format(v, "g") (6 significant digits, as the chips show it), the exact value
-   kept for the computation and the address until the user types. */
-function setNumber(input, value) {
-  var shown = pyG(value);
-  input.value = shown;
-  if (Number(shown) === value) {
+/* Fill a number input with a measured value (say 11.78925504 kPa) and its text as the
+   tables print it (from Python: "11.79"): the text is shown, the exact value kept for the
+   computation until the user types. */
+function setNumber(input, value, text) {
+  input.value = text;
+  if (Number(text) === value) {
     delete input.dataset.shown;
     delete input.dataset.exact;
   } else {
-    input.dataset.shown = shown;
-    input.dataset.exact = pyRepr(value);
+    input.dataset.shown = text;
+    input.dataset.exact = String(value);  // the shortest text that reads back as value
   }
 }
 
-/* A number to 4 significant digits, as the address writes a value the page filled in
-   (35.36776… kPa -> "35.37"; 0.000123456 -> "0.0001235"; 123456 -> "123500"). */
-function sig4(value) { return String(Number(value.toPrecision(4))); }
+/* An input's text as the address carries it: what the user typed, or the text of a value
+   the page filled in (a link reading it back means the measured value). */
+function urlText(input) { return input.value.trim(); }
 
-/* An input's text as the address carries it: what the user typed, or a value the page
-   filled in to 4 significant digits (a link reading it back means the measured value). */
-function urlText(input) {
-  var s = input.value.trim();
-  return s !== "" && input.dataset.shown === s ? sig4(Number(input.dataset.exact)) : s;
-}
-
-/* Where a run came from, in words: "file · test / result" (the parts the map knows). */
-function runOrigin(run) {
-  var place = [run.test, run.result].filter(function (v) { return v; }).join(" / ");
-  return [run.file, place].filter(function (v) { return v; }).join(" · ");
+/* A name or heading as text that may break between its words, never inside one (a hyphen
+   inside a name such as "00-50" is no place to break): each word in a .tpx-word span. */
+function words(text) {
+  var frag = document.createDocumentFragment();
+  String(text).split(/( +)/).forEach(function (part) {
+    if (part === "") return;
+    if (/^ +$/.test(part)) frag.appendChild(document.createTextNode(part));
+    else frag.appendChild(make("span", part, "tpx-word"));
+  });
+  return frag;
 }

@@ -5,20 +5,23 @@ var discSelect = $("disc");
 var tInput = $("temperature");
 var pInput = $("pressure");
 var vSelect = $("speed");
+var labSelect = $("lab");
+var colourSelect = $("colour-by");
 /* `missing`: what the link asked for that the map does not hold (a pin, a disc, a pair):
-   no μ is shown until the user chooses a pair. */
-var state = { pair: 0, result: null, sortKey: null, sortDir: 1, missing: null, speed: 0 };
+   no μ is shown until the user chooses a pair. `lab`: the lab shown (-1: every lab). */
+var state = { pair: 0, result: null, sortKey: null, sortDir: 1, missing: null, speed: 0,
+  lab: -1, colour: "temperature" };
 
 var PINS = []; // [{key, name, pairs: [index...]}]
 PAIRS.forEach(function (pair, i) {
-  var k = key(pair.pin);
+  var k = pair.keys[0];
   var pin = PINS.find(function (q) { return q.key === k; });
   if (!pin) { pin = { key: k, name: pair.pin, pairs: [] }; PINS.push(pin); }
   pin.pairs.push(i);
 });
 
 function pinOf(pairIndex) {
-  var k = key(PAIRS[pairIndex].pin);
+  var k = PAIRS[pairIndex].keys[0];
   return PINS.findIndex(function (q) { return q.key === k; });
 }
 
@@ -31,48 +34,41 @@ function fillSelect(select, items) {
   });
 }
 
-function pairTemperatures(pair) {
-  return sortedUnique(pair.mu_k_points.map(function (q) { return q.temperature_C; }).filter(finite));
-}
-
-function pairPressures(pair, t) {
-  return sortedUnique(pair.mu_k_points.filter(function (q) {
-    return t === undefined || q.temperature_C === t;
-  }).map(function (q) { return q.pressure_kPa; }));
+/* The speed shown for a pair: its points, measured temperatures and pressures. */
+function speedOf(pair) {
+  if (state.speed >= pair.speeds.length) state.speed = 0;
+  return pair.speeds[state.speed];
 }
 
 function fillDefaults(pair) {
-  var temps = pairTemperatures(pair);
-  if (tInput.value.trim() === "" && !tInput.validity.badInput && temps.length) {
-    setNumber(tInput, temps[0]);
+  var at = speedOf(pair);
+  if (tInput.value.trim() === "" && !tInput.validity.badInput && at.temperatures.length) {
+    setNumber(tInput, at.temperatures[0].value, at.temperatures[0].text);
   }
   if (pInput.value.trim() === "" && !pInput.validity.badInput) {
     var t = inputNumber(tInput);
-    var at = pairPressures(pair, temps.indexOf(t) >= 0 ? t : undefined);
-    setNumber(pInput, at[0]);
+    var first = at.mu_k_points.filter(function (q) { return q.temperature_C === t; })
+      .sort(function (a, b) { return a.pressure_kPa - b.pressure_kPa; })[0];
+    var p = first ? { value: first.pressure_kPa, text: first.text.p } : at.pressures[0];
+    setNumber(pInput, p.value, p.text);
   }
 }
 
-/* The speed selector: shown for a pair measured at several sliding speeds; the chosen
-   speed's points become the pair's points (plots, chips) and the query's speed. */
-function pairSpeedList(pair) { return pair.speeds && pair.speeds.length > 1 ? pair.speeds : []; }
-
+/* The speed selector: shown only for a pair measured at several sliding speeds. */
 function renderSpeeds(pair) {
-  var speeds = pairSpeedList(pair);
-  $("tpx-speed-label").hidden = !speeds.length;
-  if (!speeds.length) { clear(vSelect); return; }
-  if (state.speed >= speeds.length) state.speed = 0;
-  if (vSelect.options.length !== speeds.length) {
-    fillSelect(vSelect, speeds.map(function (x, i) { return { value: i, text: pyG(x.speed_mm_s) }; }));
+  var several = pair.speeds.length > 1;
+  $("tpx-speed-label").hidden = !several;
+  if (!several) { clear(vSelect); state.speed = 0; return; }
+  speedOf(pair);
+  if (vSelect.options.length !== pair.speeds.length || vSelect.dataset.pair !== String(state.pair)) {
+    fillSelect(vSelect, pair.speeds.map(function (x, i) { return { value: i, text: x.text }; }));
+    vSelect.dataset.pair = String(state.pair);
   }
   vSelect.value = String(state.speed);
-  pair.mu_k_points = speeds[state.speed].mu_k_points;
-  pair.mu_s_points = speeds[state.speed].mu_s_points;
 }
 
 function chosenSpeed(pair) {
-  var speeds = pairSpeedList(pair);
-  return speeds.length ? speeds[state.speed].speed_mm_s : null;
+  return pair.speeds.length > 1 ? speedOf(pair).speed_mm_s : null;
 }
 
 function chip(text, active, onClick) {
@@ -85,31 +81,39 @@ function chip(text, active, onClick) {
 function renderMeasured(pair) {
   var box = $("tpx-measured");
   clear(box);
-  var temps = pairTemperatures(pair);
+  var at = speedOf(pair);
   var t = inputNumber(tInput);
-  box.appendChild(document.createTextNode("measured temperatures: "));
-  if (!temps.length) box.appendChild(document.createTextNode("unknown "));
-  temps.forEach(function (v) {
-    box.appendChild(chip(pyG(v) + " °C", v === t, function () { setNumber(tInput, v); update(false); }));
-  });
   var p = inputNumber(pInput);
-  box.appendChild(document.createTextNode(" · pressures: "));
-  pairPressures(pair).forEach(function (v) {
-    box.appendChild(chip(pyG(v) + " kPa", v === p, function () { setNumber(pInput, v); update(false); }));
+  var temps = make("span", "measured temperatures: ", "tpx-chips");
+  if (!at.temperatures.length) temps.appendChild(document.createTextNode("unknown"));
+  at.temperatures.forEach(function (v) {
+    temps.appendChild(chip(v.text + " °C", v.value === t, function () {
+      setNumber(tInput, v.value, v.text); update(false);
+    }));
   });
+  var ps = make("span", "pressures: ", "tpx-chips");
+  at.pressures.forEach(function (v) {
+    ps.appendChild(chip(v.text + " kPa", v.value === p, function () {
+      setNumber(pInput, v.value, v.text); update(false);
+    }));
+  });
+  box.appendChild(temps);
+  box.appendChild(ps);
   var tl = $("tpx-temperature-list");
   var pl = $("tpx-pressure-list");
   clear(tl);
   clear(pl);
-  temps.forEach(function (v) { var o = make("option"); o.value = String(v); tl.appendChild(o); });
-  pairPressures(pair).forEach(function (v) { var o = make("option"); o.value = String(v); pl.appendChild(o); });
+  at.temperatures.forEach(function (v) { var o = make("option"); o.value = v.text; tl.appendChild(o); });
+  at.pressures.forEach(function (v) { var o = make("option"); o.value = v.text; pl.appendChild(o); });
 }
 
-function setPin(pinIndex, discKey) {
+function setPin(pinIndex, discName) {
   var pin = PINS[pinIndex];
   pinSelect.value = String(pinIndex);
   fillSelect(discSelect, pin.pairs.map(function (i) { return { value: i, text: PAIRS[i].disc }; }));
-  var chosen = pin.pairs.find(function (i) { return key(PAIRS[i].disc) === discKey; });
+  var chosen = discName === null ? undefined : pin.pairs.find(function (i) {
+    return sameName(discName, PAIRS[i].disc, PAIRS[i].keys[1]);
+  });
   state.pair = chosen === undefined ? pin.pairs[0] : chosen;
   discSelect.value = String(state.pair);
 }
@@ -127,8 +131,9 @@ function writeUrl() {
   q.set("disc", PAIRS[state.pair].disc);
   if (urlText(pInput) !== "") q.set("pressure", urlText(pInput));
   if (urlText(tInput) !== "") q.set("temperature", urlText(tInput));
-  var speed = chosenSpeed(PAIRS[state.pair]);
-  if (speed !== null) q.set("speed", pyRepr(speed));
+  var pair = PAIRS[state.pair];
+  if (pair.speeds.length > 1) q.set("speed", speedOf(pair).text);
+  if (state.lab >= 0) q.set("lab", DATA.labs[state.lab]);
   var url = location.pathname + "?" + q.toString() + location.hash;
   try {
     history.replaceState(history.state, "", url);
@@ -143,39 +148,47 @@ function readUrl() {
   var missing = [];
   var pinIndex = 0;
   if (q.has("pin")) {
-    var k = key(q.get("pin"));
-    var found = PINS.findIndex(function (p) { return p.key === k; });
+    var found = PINS.findIndex(function (p) {
+      return sameName(q.get("pin"), p.name, p.key);
+    });
     if (found < 0) missing.push("the link's pin “" + q.get("pin") + "” is not in this map");
     else pinIndex = found;
   }
-  var discKey = q.has("disc") ? key(q.get("disc")) : null;
-  setPin(pinIndex, discKey);
-  if (!missing.length && discKey !== null && key(PAIRS[state.pair].disc) !== discKey) {
-    var known = PAIRS.some(function (p) { return key(p.disc) === discKey; });
-    missing.push("the link's disc “" + q.get("disc") + "” " + (known ?
+  var discName = q.has("disc") ? q.get("disc") : null;
+  setPin(pinIndex, discName);
+  var pair = PAIRS[state.pair];
+  if (!missing.length && discName !== null && !sameName(discName, pair.disc, pair.keys[1])) {
+    var known = PAIRS.some(function (p) { return sameName(discName, p.disc, p.keys[1]); });
+    missing.push("the link's disc “" + discName + "” " + (known ?
       "is not measured with " + PINS[pinIndex].name : "is not in this map"));
   }
-  var pair = PAIRS[state.pair];
   if (q.has("speed")) {
-    var wanted = Number(q.get("speed"));
-    var at = pairSpeedList(pair).findIndex(function (x) { return x.speed_mm_s === wanted; });
+    var text = q.get("speed").trim();
+    var at = pair.speeds.length > 1 ? pair.speeds.findIndex(function (x) {
+      return x.text === text || x.speed_mm_s === Number(text);
+    }) : -1;
     if (at >= 0) state.speed = at;
-    else notes.push("the link's speed “" + q.get("speed") + "” is not measured for this pair");
+    else if (pair.speeds.length > 1) {
+      notes.push("the link's speed “" + q.get("speed") + "” is not measured for this pair");
+    }
+  }
+  if (q.has("lab")) {
+    state.lab = DATA.labs.indexOf(q.get("lab"));
+    if (state.lab < 0) notes.push("the link's lab “" + q.get("lab") + "” is not in this map");
   }
   renderSpeeds(pair);
-  [["temperature", tInput, pairTemperatures(pair)], ["pressure", pInput, pairPressures(pair)]]
+  var measured = speedOf(pair);
+  [["temperature", tInput, measured.temperatures], ["pressure", pInput, measured.pressures]]
     .forEach(function (f) {
       if (!q.has(f[0])) return;
-      var text = q.get(f[0]).trim();
-      var n = Number(text);
-      if (text !== "" && Number.isFinite(n)) {
-        // a measured value written to 4 significant digits (or in full) means that value:
-        // it shows rounded and counts exact
-        var measured = f[2].find(function (v) { return v === n || sig4(v) === text; });
-        if (Number(pyG(n)) === n && measured === n) f[1].value = text;  // as typed
-        else if (measured !== undefined) setNumber(f[1], measured);
-        else if (Number(pyG(n)) === n) f[1].value = text;
-        else setNumber(f[1], n);
+      var typed = q.get(f[0]).trim();
+      var n = Number(typed);
+      if (typed !== "" && Number.isFinite(n)) {
+        // a measured value written as the tables print it (or in full) means that value
+        var m = f[2].find(function (v) { return v.text === typed || v.value === n; });
+        // (shown as the tables print it where that text is not the value itself)
+        if (m !== undefined && Number(m.text) !== m.value) setNumber(f[1], m.value, m.text);
+        else f[1].value = typed;
       } else notes.push("the link's " + f[0] + " “" + q.get(f[0]) + "” is not a number");
     });
   state.missing = missing.length ? missing.join("; ") +
@@ -185,6 +198,9 @@ function readUrl() {
 
 
 // ---------------------------------------------------------------- the result
+
+/* A standard uncertainty to two significant digits, by the GUM rule (rounding.round_gum). */
+function uText(u) { return u > 0 ? roundGum(u, u)[1] : "0"; }
 
 function renderResult(res, error) {
   var muK = $("mu-k");
@@ -211,13 +227,13 @@ function renderResult(res, error) {
     return;
   }
   muK.textContent = estimateText(res.mu_k);
-  muK.dataset.value = pyRepr(res.mu_k.value);
-  muK.dataset.uncertainty = res.mu_k.expanded === null ? "" : pyRepr(res.mu_k.expanded);
+  muK.dataset.value = String(res.mu_k.value);
+  muK.dataset.uncertainty = res.mu_k.expanded === null ? "" : String(res.mu_k.expanded);
   // GUM combined standard uncertainty (k = 1) and the expanded U = 2u, beside the CI
-  muKu.textContent = "interpolation u = " + pyG(res.mu_k.u_interpolation, 2) +
-    (res.mu_k.budgets_known ? "" : "; some runs carry no budget of their own: their u is the stated estimate of the founding cell") +
-    "; repeats' 95 % CI half-width " + (res.mu_k.uncertainty === null ? "unknown" : f3(res.mu_k.uncertainty));
-  muKu.dataset.u = res.mu_k.u_combined === null ? "" : pyRepr(res.mu_k.u_combined);
+  muKu.textContent = "interpolation u = " + uText(res.mu_k.u_interpolation) +
+    "; repeats' 95 % CI half-width " + (res.mu_k.uncertainty === null ? "unknown" :
+      pyFixed(res.mu_k.uncertainty, 3));
+  muKu.dataset.u = res.mu_k.u_combined === null ? "" : String(res.mu_k.u_combined);
   muK.dataset.clampedPressure = String(res.mu_k.clamped_pressure);
   muK.dataset.clampedTemperature = String(res.mu_k.clamped_temperature);
   muS.textContent = res.mu_s === null ? "unknown (no group of this pair holds it)" :
@@ -225,28 +241,30 @@ function renderResult(res, error) {
   var what = [];
   if (res.mu_k.clamped_pressure) what.push("pressure");
   if (res.mu_k.clamped_temperature) what.push("temperature");
-  clamped.textContent = res.clamped ?
-    "yes: " + what.join(" and ") + " outside the measured range, edge value held" : "no";
+  if (res.mu_k.clamped_speed) what.push("speed");
+  clamped.textContent = res.clamped ? "yes: " + what.join(" and ") +
+    " outside the measured range, edge value held; " + DATA.texts.extrapolated : "no";
   clamped.className = res.clamped ? "tpx-clamped" : "";
   res.notes.forEach(function (n) { notes.appendChild(make("li", n)); });
-  var runs = {};
-  PAIRS[res.pair].runs.forEach(function (r) { runs[r.id] = r; });
+  var runs = runsOf(res.pair);
   res.mu_k.used.forEach(function (u) {
+    var text = u.point.text;
     var tr = make("tr");
-    [g6(u.pressure_kPa), u.temperature_C === null ? "?" : g6(u.temperature_C), f3(u.mean),
-      u.ci95_half_width === null ? "–" : f3(u.ci95_half_width),
-      u.u === null ? "–" : f3(u.u), String(u.n), f3(u.weight)]
-      .forEach(function (v) { tr.appendChild(make("td", v)); });
+    var cells = [text.p, text.t, text.mean, text.half, text.u, String(u.n), pyFixed(u.weight, 3)];
+    if (PAIRS[res.pair].speeds.length > 1) cells.splice(2, 0, speedText(res.pair, u.speed_mm_s));
+    cells.forEach(function (v) { tr.appendChild(make("td", v)); });
     var cell = make("td", null, "tpx-t");
     // one line per repeat: its μ_K and the file and test it came from
-    u.run_ids.map(function (id) { return runs[id]; }).filter(Boolean).forEach(function (r) {
-      var from = runOrigin(r);
-      cell.appendChild(make("div", f3(r.mu_k) + (r.review ? " (reviewed: " + r.review + ")" : "") +
-        (from ? " — " + from : ""), "tpx-repeat"));
-    });
+    u.point.runs.forEach(function (i) { cell.appendChild(make("div", runs[i].line, "tpx-repeat")); });
     tr.appendChild(cell);
     body.appendChild(tr);
   });
+  $("tpx-used-speed").hidden = PAIRS[res.pair].speeds.length < 2;
+}
+
+function speedText(pairIndex, v) {
+  var at = PAIRS[pairIndex].speeds.find(function (x) { return x.speed_mm_s === v; });
+  return at ? at.text : "";
 }
 
 function renderExport() {
@@ -327,14 +345,17 @@ function update(withDefaults) {
   writeUrl();
 }
 
-fillSelect(pinSelect, PINS.map(function (p, i) { return { value: i, text: p.name }; }));
-pinSelect.addEventListener("change", function () {
-  setPin(Number(pinSelect.value), key(PAIRS[state.pair].disc));
+function newPair() {
   state.speed = 0;
-  clear(vSelect);
   state.missing = null;
   note("");
   update(true);
+}
+
+fillSelect(pinSelect, PINS.map(function (p, i) { return { value: i, text: p.name }; }));
+pinSelect.addEventListener("change", function () {
+  setPin(Number(pinSelect.value), PAIRS[state.pair].disc);
+  newPair();
 });
 vSelect.addEventListener("change", function () {
   state.speed = Number(vSelect.value);
@@ -342,11 +363,7 @@ vSelect.addEventListener("change", function () {
 });
 discSelect.addEventListener("change", function () {
   state.pair = Number(discSelect.value);
-  state.speed = 0;
-  clear(vSelect);
-  state.missing = null;
-  note("");
-  update(true);
+  newPair();
 });
 [tInput, pInput].forEach(function (input) {
   input.addEventListener("input", function () {
@@ -354,12 +371,28 @@ discSelect.addEventListener("change", function () {
     update(false);
   });
 });
+/* the labs: a filter and a colouring, offered where the map holds more than one */
+$("tpx-lab-label").hidden = DATA.labs.length < 2;
+$("tpx-colour-label").hidden = DATA.labs.length < 2;
+fillSelect(labSelect, [{ value: -1, text: "every lab" }].concat(
+  DATA.labs.map(function (name, i) { return { value: i, text: name }; })));
+labSelect.addEventListener("change", function () { state.lab = Number(labSelect.value); update(false); });
+colourSelect.addEventListener("change", function () { state.colour = colourSelect.value; update(false); });
 $("tpx-form").addEventListener("submit", function (ev) { ev.preventDefault(); });
 $("tpx-export-format").addEventListener("change", renderExport);
 $("tpx-copy").addEventListener("click", copyText);
 $("tpx-download").addEventListener("click", download);
 $("tpx-group-filter").addEventListener("input", renderTable);
 $("tpx-group-scope").addEventListener("change", renderTable);
+/* the plots are drawn at the size they are shown, so their text keeps its size: again
+   when the window changes width */
+var drawnWidth = root.clientWidth;
+window.addEventListener("resize", function () {
+  if (root.clientWidth === drawnWidth || !PAIRS.length) return;
+  drawnWidth = root.clientWidth;
+  drawPairPlot(state.result);
+  drawOverview();
+});
 METHODS.forEach(function (m) { $("tpx-group-method").appendChild(make("option", m)); });
 $("tpx-group-method-label").hidden = METHODS.length < 2;
 $("tpx-group-method").addEventListener("change", renderTable);
@@ -369,12 +402,14 @@ if (!PAIRS.length) {
   return;
 }
 readUrl();
+labSelect.value = String(state.lab);
 update(true);
 
 /* For scripts and tests: the page's own computation, and its current selection. */
 window.tribopipeExplorer = Object.freeze({
   data: DATA,
   query: query,
+  runs: runsOf,
   result: function () { return state.result; },
   exportText: function (fmt, res) { return EXPORTS[fmt].make(res || state.result); },
   fileName: function (fmt) { return state.result ? fileName(state.result, fmt) : null; },

@@ -38,8 +38,9 @@ function pressureSegment(ps, mus, p) {
   return {lo: lo, hi: hi, w: 1.0 - b[0][0][1], log: false, span: 0.0, clamped: false};
 }
 
-/* interpolation.stencil: {segments: [{tWeight, lo, hi, w, log, span}], clampedP, clampedT}. */
-function stencil(ps, ts, mus, p, t) {
+/* interpolation.stencil: {segments: [{tWeight, lo, hi, w, log, span}], clampedP, clampedT};
+   `needed` is what a request without a temperature is told (Python's text). */
+function stencil(ps, ts, mus, p, t, needed) {
   var n = ps.length;
   var all = [];
   for (var i = 0; i < n; i += 1) all.push(i);
@@ -50,10 +51,7 @@ function stencil(ps, ts, mus, p, t) {
     var temps = sortedUnique(known);
     var tBrackets;
     if (t === null) {
-      if (temps.length > 1) {
-        throw new QueryError("temperature needed: this pair is measured at " +
-          temps.map(function (v) { return pyG(v); }).join(", ") + " °C");
-      }
+      if (temps.length > 1) throw new QueryError(needed);
       tBrackets = [[0, 1.0]];
     } else {
       var b = bracket(temps, t);
@@ -109,13 +107,13 @@ function interpolationU(st, mus, kappa) {
 }
 
 /* query._estimate over a pair's points (each {pressure_kPa, temperature_C, mean, half, u,
-   budget, n}) with the map's curvature kappa. */
-function estimate(points, p, t, kappa) {
+   budget, n}) with the map's curvature kappa; `needed` as stencil's. */
+function estimate(points, p, t, kappa, needed) {
   var mus = points.map(function (q) { return q.mean; });
   var st = stencil(
     points.map(function (q) { return q.pressure_kPa; }),
     points.map(function (q) { return q.temperature_C === null ? NaN : q.temperature_C; }),
-    mus, p, t);
+    mus, p, t, needed);
   var w = stencilWeights(st, points.length);
   var unc = 0;
   var uncKnown = true;
@@ -136,12 +134,13 @@ function estimate(points, p, t, kappa) {
       n: q.n,
       weight: w[i],
       u: finite(q.u) ? q.u : null,
-      run_ids: q.run_ids,
+      point: q,
     });
   });
   var uInterp = interpolationU(st, mus, kappa);
   var expanded = uKnown ? 2.0 * Math.hypot(uGroups, uInterp) : null;
   if (expanded !== null && !(expanded >= U_FLOOR)) expanded = null; // rounding.known_u
+  expanded = heldU(expanded, st.clampedP || st.clampedT);
   return {
     value: evaluateStencil(st, mus),
     uncertainty: uncKnown ? unc : null,
@@ -159,6 +158,13 @@ function estimate(points, p, t, kappa) {
 
 /* rounding.U_FLOOR: a smaller U is identical repeats or floating-point noise */
 var U_FLOOR = 1e-6;
+
+/* interpolation.held_u: outside the measured range U is withdrawn */
+function heldU(expanded, clamped) { return clamped ? null : expanded; }
+
+function extrapolated(est) {
+  return est.clamped_pressure || est.clamped_temperature || est.clamped_speed === true;
+}
 
 /* rounding.round_gum: [valueText, UText], U to two significant digits, the value to the
    same decimal, half away from zero on the shortest decimal text of each number. */
@@ -218,31 +224,36 @@ function plusMinus(value, U, asciiOnly) {
   return r[0] + (asciiOnly ? " +/- " : " \u00b1 ") + r[1];
 }
 
-/* query.estimate_text */
+/* query.estimate_text (the words from DATA.texts.why_no_u) */
 function estimateText(est, asciiOnly) {
-  if (est.expanded !== null) return plusMinus(est.value, est.expanded, asciiOnly);
-  return pyFixed(est.value, 3) + " (" + (est.n_min < 2 ? "n = 1, no repeat scatter" : "uncertainty unknown") + ")";
+  var out = extrapolated(est);
+  if (est.expanded !== null && !out) return plusMinus(est.value, est.expanded, asciiOnly);
+  var why = DATA.texts.why_no_u;
+  return pyFixed(est.value, 3) + " (" + (out ? why.extrapolated : est.n_min < 2 ?
+    why.single_run : why.unknown) + ")";
 }
 
 /* query.uncertainty_notes */
 function uncertaintyNotes(est) {
   var notes = [];
-  if (est.n_min < 2) notes.push("n = 1, no repeat scatter: a group used has a single run");
-  if (!est.budgets_known) {
-    notes.push("runs of a group used carry no uncertainty budget of their own (e.g. " +
-      "an imported map): their u is the stated estimate of the founding cell " +
-      "at the run's μ and force");
-  }
+  if (est.n_min < 2) notes.push(DATA.texts.notes.single_run);
+  if (!est.budgets_known) notes.push(DATA.texts.notes.no_budget);
   return notes;
 }
 
-function key(name) { return String(name).trim().toLowerCase(); }
+/* A name as a link or a caller writes it, against a pair's name: the name itself, the
+   casefolded key Python matches (DATA.pairs[i].keys), or equal to the name but for case
+   and width in the browser's own Unicode comparison. */
+var SAME_NAME = new Intl.Collator(undefined, { sensitivity: "accent" });
+function sameName(text, name, nameKey) {
+  var s = String(text);
+  return s === name || s.trim() === nameKey || SAME_NAME.compare(s.trim(), name.trim()) === 0;
+}
 
 function findPair(pin, disc) {
-  var kp = key(pin);
-  var kd = key(disc);
   for (var i = 0; i < PAIRS.length; i += 1) {
-    if (key(PAIRS[i].pin) === kp && key(PAIRS[i].disc) === kd) return i;
+    if (sameName(pin, PAIRS[i].pin, PAIRS[i].keys[0]) &&
+        sameName(disc, PAIRS[i].disc, PAIRS[i].keys[1])) return i;
   }
   return -1;
 }
@@ -252,16 +263,13 @@ var SPEED_MATCH_REL = 0.01;
 
 /* query.speed_weights: [[index, weight], ...] into a pair's sorted speeds [mm/s] for v
    (linear in ln v, interpolation.speed_bracket), and clamped. */
-function speedWeights(speeds, v) {
+function speedWeights(speeds, v, needed) {
   if (v === null) {
-    if (speeds.length > 1) {
-      throw new QueryError("sliding speed needed: this pair is measured at " +
-        speeds.map(function (x) { return pyG(x); }).join(", ") + " mm/s");
-    }
+    if (speeds.length > 1) throw new QueryError(needed);
     return [[[0, 1.0]], false];
   }
   if (typeof v !== "number" || !Number.isFinite(v) || !(v > 0)) {
-    throw new QueryError("sliding speed must be a finite number > 0 mm/s, got " + pyRepr(Number(v)));
+    throw new QueryError(DATA.texts.errors.speed.replace("{}", pyRepr(Number(v))));
   }
   for (var i = 0; i < speeds.length; i += 1) {
     if (Math.abs(Math.log(v / speeds[i])) <= SPEED_MATCH_REL) return [[[i, 1.0]], false];
@@ -286,6 +294,7 @@ function blend(parts) {
   var uGroups = weighted("u_groups");
   var expanded = uGroups === null ? null : 2.0 * Math.hypot(uGroups, uInterp);
   if (expanded !== null && !(expanded >= U_FLOOR)) expanded = null;
+  expanded = heldU(expanded, parts.some(function (q) { return extrapolated(q[2]); }));
   var used = [];
   parts.forEach(function (q) {
     q[2].used.forEach(function (u) {
@@ -311,12 +320,14 @@ function blend(parts) {
   };
 }
 
-/* The pair's measured speeds: [{speed_mm_s, mu_k_points, mu_s_points}], one entry (the
-   pair's own points, speed from the data) for a pair of one speed. */
-function pairSpeeds(pair) {
-  if (pair.speeds && pair.speeds.length) return pair.speeds;
-  return [{speed_mm_s: pair.speed_mm_s === undefined ? null : pair.speed_mm_s,
-           mu_k_points: pair.mu_k_points, mu_s_points: pair.mu_s_points}];
+/* The pair's measured speeds: [{speed_mm_s, text, mu_k_points, mu_s_points, ...}]. */
+function pairSpeeds(pair) { return pair.speeds; }
+
+/* query._held_speed */
+function heldSpeed(est, clamped) {
+  est.clamped_speed = clamped;
+  est.expanded = heldU(est.expanded, clamped);
+  return est;
 }
 
 /* query.query: mu_K (and mu_S) of a pair at a pressure [kPa], temperature [°C] (or
@@ -325,39 +336,38 @@ function pairSpeeds(pair) {
 function query(pin, disc, p, t, v) {
   if (t === undefined) t = null;
   if (v === undefined) v = null;
+  var errors = DATA.texts.errors;
   if (typeof p !== "number" || !Number.isFinite(p) || p < 0) {
-    throw new QueryError("contact pressure must be a finite number >= 0 kPa, got " + pyRepr(Number(p)));
+    throw new QueryError(errors.pressure.replace("{}", pyRepr(Number(p))));
   }
   if (t !== null && (typeof t !== "number" || !Number.isFinite(t))) {
-    throw new QueryError("temperature must be a finite number in °C, got " + pyRepr(Number(t)));
+    throw new QueryError(errors.temperature.replace("{}", pyRepr(Number(t))));
   }
   var index = findPair(pin, disc);
   if (index < 0) {
-    throw new QueryError("no groups for pin " + JSON.stringify(String(pin)) + " on disc " +
-      JSON.stringify(String(disc)) + " in this map");
+    throw new QueryError(errors.no_pair.replace("{pin}", JSON.stringify(String(pin)))
+      .replace("{disc}", JSON.stringify(String(disc))));
   }
   var pair = PAIRS[index];
   var speeds = pairSpeeds(pair);
-  var sw = speedWeights(speeds.map(function (x) { return x.speed_mm_s; }), v);
+  var sw = speedWeights(speeds.map(function (x) { return x.speed_mm_s; }), v, pair.speed_needed);
   var notes = [];
-  if (pair.left_out) notes.push(pair.left_out + " group(s) without a temperature were left out");
+  if (pair.left_out) notes.push(DATA.texts.notes.left_out.replace("{n}", String(pair.left_out)));
   var kParts = [];
   var sParts = [];
   var kPoints = [];
   sw[0].forEach(function (iw) {
     var at = speeds[iw[0]];
-    kParts.push([iw[1], at.speed_mm_s, estimate(at.mu_k_points, p, t, DATA.curvature.mu_k)]);
-    sParts.push(at.mu_s_points.length ?
-      [iw[1], at.speed_mm_s, estimate(at.mu_s_points, p, t, DATA.curvature.mu_s)] : null);
+    kParts.push([iw[1], at.speed_mm_s,
+      estimate(at.mu_k_points, p, t, DATA.curvature.mu_k, at.temperature_needed)]);
+    sParts.push(at.mu_s_points.length ? [iw[1], at.speed_mm_s,
+      estimate(at.mu_s_points, p, t, DATA.curvature.mu_s, at.temperature_needed)] : null);
     kPoints = kPoints.concat(at.mu_k_points);
   });
-  var muK = blend(kParts);
-  muK.clamped_speed = sw[1];
-  var muS = sParts.every(function (q) { return q !== null; }) ? blend(sParts) : null;
-  if (muS !== null) muS.clamped_speed = sw[1];
+  var muK = heldSpeed(blend(kParts), sw[1]);
+  var muS = sParts.every(function (q) { return q !== null; }) ? heldSpeed(blend(sParts), sw[1]) : null;
   if (muS === null) {
-    notes.push("mu_s unknown: no group of this pair holds a static coefficient" +
-      (speeds.length > 1 ? " at every speed used" : ""));
+    notes.push(DATA.texts.notes[speeds.length > 1 ? "mu_s_unknown_speeds" : "mu_s_unknown"]);
   }
   notes = notes.concat(uncertaintyNotes(muK));
   [muK, muS].forEach(function (est) { // QueryResult.to_dict's text and lower
@@ -365,11 +375,9 @@ function query(pin, disc, p, t, v) {
     est.text = estimateText(est);
     est.lower = est.expanded === null ? null : Math.max(0.0, est.value - est.expanded);
   });
-  if (muK.clamped_pressure) {
-    notes.push("pressure outside the range measured (at a temperature used): edge value held");
-  }
-  if (muK.clamped_temperature) notes.push("temperature outside the measured range: edge value held");
-  if (sw[1]) notes.push("sliding speed outside the measured speeds: edge value held");
+  if (muK.clamped_pressure) notes.push(DATA.texts.notes.clamped_pressure);
+  if (muK.clamped_temperature) notes.push(DATA.texts.notes.clamped_temperature);
+  if (sw[1]) notes.push(DATA.texts.notes.clamped_speed);
   var pressures = kPoints.map(function (q) { return q.pressure_kPa; });
   return {
     pin: pair.pin,

@@ -4,30 +4,6 @@
    lines that depend on the condition, each function the copy of its Python writer
    (tests/test_snippets_js.py holds every one equal to it, and SNIPPETS to the registry). */
 
-/* escape.sim_comment(value, "**"): Python's ascii() without the quotes, so no
-   newline, control or non-ASCII character of a name survives into a deck's comment. */
-function deckSafe(value) {
-  var s = String(value);
-  var quote = s.indexOf("'") >= 0 && s.indexOf('"') < 0 ? '"' : "'";
-  var out = "";
-  var hex = function (c, n) { return c.toString(16).padStart(n, "0"); };
-  for (var ch of s) {
-    var c = ch.codePointAt(0);
-    if (ch === "\\") out += "\\\\";
-    else if (ch === quote) out += "\\" + ch;
-    else if (ch === "\t") out += "\\t";
-    else if (ch === "\n") out += "\\n";
-    else if (ch === "\r") out += "\\r";
-    else if (c < 0x20 || c >= 0x7f) {
-      out += c < 0x100 ? "\\x" + hex(c, 2) : c < 0x10000 ? "\\u" + hex(c, 4) : "\\U" + hex(c, 8);
-    } else out += ch;
-  }
-  return out;
-}
-
-/* escape.sim_comment(value, "!"): also "$", MAPDL's command separator. */
-function ansysSafe(value) { return deckSafe(value).replace(/\$/g, "\\x24"); }
-
 /* textwrap.wrap(text, width, subsequent_indent=indent, break_on_hyphens=False), for text
    whose only whitespace is ASCII (what the deck-safe comment bodies hold). */
 function wrap(text, width, indent) {
@@ -71,12 +47,6 @@ function commentBlock(comment, bodies, width) {
   return out;
 }
 
-/* fe_decks.abaqus_name */
-function abaqusName(pin, disc) {
-  var text = (pin + "__ON__" + disc).replace(/[^A-Za-z0-9]+/g, "_").replace(/^_+|_+$/g, "");
-  return ("FRIC_" + text.toUpperCase()).slice(0, 80);
-}
-
 function num(x) { return pyG(x, 10); } // simbase.num
 
 function usedText(res) {
@@ -86,93 +56,80 @@ function usedText(res) {
   }).join(", ");
 }
 
-/* simbase.condition_lines */
-function conditionLines(res, safe) {
+/* simbase.condition_lines after the first (the pair's, which Python renders escaped for
+   each format: PAIRS[i].snippet): numbers and the library's words only */
+function conditionLines(res) {
   var t = res.temperature_C === null ? "unknown" : pyG(res.temperature_C) + " C";
   var lines = [
-    "pair: pin " + safe(res.pin) + " on disc " + safe(res.disc),
     "condition: contact pressure " + pyG(res.pressure_kPa) + " kPa, temperature " + t,
     "mu_k = " + num(res.mu_k.value) + "; " + estimateText(res.mu_k, true) +
       (res.mu_k.expanded === null ? "" : " (U, k = 2)"),
-    "mu_s = " + (res.mu_s === null ? "unknown (not in the map)" : num(res.mu_s.value) + "; " +
+    "mu_s = " + (res.mu_s === null ? DATA.texts.snippet.mu_s_unknown : num(res.mu_s.value) + "; " +
       estimateText(res.mu_s, true) + (res.mu_s.expanded === null ? "" : " (U, k = 2)")),
     "from measured groups: " + usedText(res),
   ];
-  if (res.clamped) lines.push("outside the measured range: edge value held constant");
+  if (res.clamped) lines.push(DATA.texts.snippet.clamped);
   return lines;
 }
 
 /* fe_decks.condition_snippet(res, fmt, source=map): a constant mu_K for ABAQUS or Ansys;
-   the header lines, which do not depend on the condition, come rendered from Python. */
+   the header lines, which do not depend on the condition, come rendered from Python, and
+   so do the lines that name the pair. */
 function conditionSnippet(res, fmt) {
-  var lines = DATA.snippet_headers[fmt].slice();
-  var note = "a constant coefficient: the solver uses it at every pressure and temperature; for " +
-    "the dependence export the pair's table (tribopipe export " + fmt + " --pin PIN --disc DISC)";
+  var named = PAIRS[res.pair].snippet[fmt];
+  var note = DATA.texts.snippet.note.replace("{fmt}", fmt);
   var mu = num(res.mu_k.value);
+  var lines = DATA.snippet_headers[fmt].concat(named.head);
   if (fmt === "abaqus") {
-    lines = lines.concat(commentBlock("**", conditionLines(res, deckSafe).concat([note])));
-    lines.push("*SURFACE INTERACTION, NAME=" + abaqusName(res.pin, res.disc), "*FRICTION", mu);
+    lines = lines.concat(commentBlock("**", conditionLines(res).concat([note])));
+    lines.push("*SURFACE INTERACTION, NAME=" + named.name[0], "*FRICTION", mu);
   } else {
-    lines = lines.concat(commentBlock("!", conditionLines(res, ansysSafe).concat([note,
-      "material 1: pin " + ansysSafe(res.pin) + " on disc " + ansysSafe(res.disc)])));
+    lines = lines.concat(commentBlock("!", conditionLines(res).concat([note])), named.material);
     lines.push("TB,FRIC,1,,,ISO", "TBDATA,1," + mu);
   }
   return lines.join("\n") + "\n";
 }
 
-var CSV_COLUMNS = ["pin", "disc", "pressure_kPa", "temperature_C", "mu_k", "mu_k_U_k2",
-  "mu_k_ci95_half_width", "mu_s", "mu_s_U_k2", "mu_s_ci95_half_width", "clamped_pressure", "clamped_temperature", "measured_groups",
-  "notes", "map", "tribopipe_version"];
+/* A computed text as one CSV field (RFC 4180: quoted, quotes doubled). */
+function csvQuoted(text) { return '"' + String(text).replace(/"/g, '""') + '"'; }
 
-/* One CSV cell: numbers at full precision, text quoted where needed; text that a
-   spreadsheet would run as a formula (= + - @ first) is prefixed with an apostrophe. */
-function csvCell(v) {
-  if (v === null || v === undefined) return "";
-  if (typeof v === "number") return pyRepr(v);
-  if (typeof v === "boolean") return v ? "True" : "False";
-  var s = String(v);
-  if (/^[=+\-@\t\r]/.test(s)) s = "'" + s;
-  return /[",\r\n]|^\s|\s$/.test(s) ? '"' + s.replace(/"/g, '""') + '"' : s;
-}
+function csvNumber(v) { return v === null || v === undefined ? "" : pyRepr(v); }
 
+/* The condition as CSV: the header and the cells that are text come from Python
+   (DATA.csv, PAIRS[i].csv: tribopipe.escape.csv_cell, quoted as the csv module does). */
 function csvText(res) {
-  var row = [res.pin, res.disc, res.pressure_kPa, res.temperature_C, res.mu_k.value,
-    res.mu_k.expanded, res.mu_k.uncertainty, res.mu_s ? res.mu_s.value : null,
-    res.mu_s ? res.mu_s.expanded : null, res.mu_s ? res.mu_s.uncertainty : null,
-    res.mu_k.clamped_pressure, res.mu_k.clamped_temperature, usedText(res), res.notes.join("; "),
-    DATA.source, DATA.tribopipe_version];
-  return CSV_COLUMNS.join(",") + "\r\n" + row.map(csvCell).join(",") + "\r\n";
+  var pair = PAIRS[res.pair];
+  var row = [pair.csv[0], pair.csv[1], csvNumber(res.pressure_kPa), csvNumber(res.temperature_C),
+    csvNumber(res.mu_k.value), csvNumber(res.mu_k.expanded), csvNumber(res.mu_k.uncertainty),
+    csvNumber(res.mu_s ? res.mu_s.value : null), csvNumber(res.mu_s ? res.mu_s.expanded : null),
+    csvNumber(res.mu_s ? res.mu_s.uncertainty : null),
+    res.mu_k.clamped_pressure ? "True" : "False", res.mu_k.clamped_temperature ? "True" : "False",
+    csvQuoted(usedText(res)), csvQuoted(res.notes.join("; "))].concat(DATA.csv.cells);
+  return DATA.csv.header + "\r\n" + row.join(",") + "\r\n";
 }
 
-/* simbase.xml_comment(text, ascii_only=True); the opening is split because a page's
+/* simbase.xml_comment and usd._comment of a line of numbers and the library's words (no
+   name: those lines come escaped from Python); the opening is split because a page's
    script may not hold "<" "!--" (explorer._script refuses it) */
-function xmlComment(text) {
-  return "<" + "!-- " + deckSafe(text).replace(/-(?=-)/g, "- ") + " -->";
-}
+function xmlComment(text) { return "<" + "!-- " + text + " -->"; }
 
-/* usd._comment */
-function hashComment(text) { return ("# " + deckSafe(text)).replace(/\s+$/, ""); }
+function hashComment(text) { return ("# " + text).replace(/\s+$/, ""); }
 
-/* simbase.static_and_dynamic: [static, dynamic, where the static came from] */
+/* simbase.static_and_dynamic: [static, dynamic, where the static came from] (the words
+   from DATA.texts.snippet.static) */
 function staticAndDynamic(res) {
   var muK = res.mu_k.value;
-  if (res.mu_s === null) {
-    return [muK, muK, "static = mu_k: the map holds no mu_s for this pair (an imported " +
-      "published map holds mu_k only), so the onset of slip takes the kinetic coefficient; " +
-      "the static coefficient is written all the same, never left to the engine's default"];
-  }
-  if (res.mu_s.value < muK) {
-    return [muK, muK, "static = mu_k: the map's mu_s (" + num(res.mu_s.value) + ") is below " +
-      "mu_k at this condition and the engine needs static >= dynamic, so static is raised to mu_k"];
-  }
-  return [res.mu_s.value, muK, "static = mu_s (breakaway), dynamic = mu_k (sliding)"];
+  var why = DATA.texts.snippet.static;
+  if (res.mu_s === null) return [muK, muK, why.no_mu_s];
+  if (res.mu_s.value < muK) return [muK, muK, why.raised.replace("{mu_s}", num(res.mu_s.value))];
+  return [res.mu_s.value, muK, why.mu_s];
 }
 
 /* usd.write_usd(res, source=map) */
 function usdSnippet(res) {
   var sd = staticAndDynamic(res);
-  var lines = DATA.snippet_headers.usd.concat(
-    conditionLines(res, String).concat([sd[2]]).map(hashComment));
+  var lines = DATA.snippet_headers.usd.concat(PAIRS[res.pair].snippet.usd.head,
+    conditionLines(res).concat([sd[2]]).map(hashComment));
   lines.push("", 'def Scope "TribopipeFriction"', "{", '    def Material "PinOnDisc" (',
     '        prepend apiSchemas = ["PhysicsMaterialAPI", "PhysxMaterialAPI"]', "    )", "    {",
     "        float physics:dynamicFriction = " + num(sd[1]),
@@ -194,7 +151,8 @@ function usdSnippet(res) {
 /* pybullet.write_pybullet(res, source=map): the pin's link, mu_K */
 function pybulletSnippet(res) {
   var mu = res.mu_k.value;
-  var lines = DATA.snippet_headers.pybullet.concat(conditionLines(res, String).concat([
+  var lines = DATA.snippet_headers.pybullet.concat(PAIRS[res.pair].snippet.pybullet.head,
+    conditionLines(res).concat([
     "contact: pin " + num(mu) + " x disc " + num(1.0) + " = " + num(mu * 1.0)]).map(xmlComment));
   lines.push('<robot name="pin">', '  <link name="pin">', "    <contact>",
     '      <lateral_friction value="' + num(mu) + '"/>', "    </contact>", "    <inertial>",
@@ -208,8 +166,8 @@ function pybulletSnippet(res) {
 /* drake.write_drake(res, source=map) */
 function drakeSnippet(res) {
   var sd = staticAndDynamic(res);
-  var lines = DATA.snippet_headers.drake.concat(
-    conditionLines(res, String).concat([sd[2]]).map(xmlComment));
+  var lines = DATA.snippet_headers.drake.concat(PAIRS[res.pair].snippet.drake.head,
+    conditionLines(res).concat([sd[2]]).map(xmlComment));
   lines.push('<sdf version="1.9" xmlns:drake="http://drake.mit.edu">',
     '  <model name="tribopipe_pin_on_disc">');
   [["pin", "0 0 0.02 0 0 0", "0.02 0.02 0.02", "0.1", "6.667e-06", "6.667e-06"],
@@ -243,12 +201,8 @@ DATA.snippets.forEach(function (s) {
   EXPORTS[s.name] = { ext: s.suffix, mime: "text/plain", make: SNIPPETS[s.name] };
 });
 
-function slug(text) {
-  return key(text).replace(/[^a-z0-9]+/g, "-").replace(/^-+|-+$/g, "").slice(0, 40) || "x";
-}
-
 function fileName(res, fmt) {
   var t = res.temperature_C === null ? "" : "_" + pyG(res.temperature_C) + "C";
-  return "tribopipe_" + slug(res.pin) + "_" + slug(res.disc) + "_" + pyG(res.pressure_kPa) + "kPa" +
-    t + "." + EXPORTS[fmt].ext;
+  return "tribopipe_" + PAIRS[res.pair].slug + "_" + pyG(res.pressure_kPa) + "kPa" + t + "." +
+    EXPORTS[fmt].ext;
 }

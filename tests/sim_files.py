@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import ast
 import xml.etree.ElementTree as ET
+from collections.abc import Callable
 
 
 def parse_abaqus(text: str) -> dict[str, dict]:
@@ -242,3 +243,25 @@ def engine_reading(entries: list[tuple[float | None, float, float]], p: float,
     hi = next(i for i, v in enumerate(temps) if v > t)
     w = (t - temps[hi - 1]) / (temps[hi] - temps[hi - 1])
     return (1 - w) * at(temps[hi - 1]) + w * at(temps[hi])
+
+
+def engine_reading_by_speed(entries: list[tuple[float | None, float, float, float]]
+                            ) -> Callable[[float, float | None, float], float]:
+    """μ as ABAQUS or Ansys reads a (temperature, pressure, slip rate, μ) table, as a
+    function of (pressure, temperature, slip rate): linear in slip rate between rows at
+    each pressure, then as :func:`engine_reading` over pressure and temperature (the end
+    values held outside)."""
+    import numpy as np
+
+    by_row: dict[tuple[float | None, float], list[tuple[float, float]]] = {}
+    for temp, pressure, slip, mu in entries:
+        by_row.setdefault((temp, pressure), []).append((slip, mu))
+    curves = {key: (np.array([r[0] for r in sorted(rows)]), np.array([r[1] for r in sorted(rows)]))
+              for key, rows in by_row.items()}
+
+    def reading(p: float, t: float | None, v: float) -> float:
+        at_speed = [(temp, pressure, float(np.interp(v, slips, mus)))
+                    for (temp, pressure), (slips, mus) in curves.items()]
+        return engine_reading(at_speed, p, t)
+
+    return reading

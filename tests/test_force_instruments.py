@@ -495,3 +495,72 @@ def test_reduce_a_sled_export_into_the_map(tmp_path: Path) -> None:
     assert bad.returncode != 0
     assert "--zero: expected auto, off or a number" in bad.stderr
     assert "Traceback" not in bad.stderr
+
+
+def test_a_rheometer_run_whose_pins_start_pre_sheared() -> None:
+    """The torque channel keeps the same rule: a rest that already carries the sliding
+    torque is no zero (flagged); a small true offset still is one (subtracted)."""
+    from tribopipe.config import load_settings as settings_of
+
+    rng = np.random.default_rng(5)
+    t = np.arange(0.0, 1200.0, 0.1)
+    angle = np.clip(t - 100.0, 0.0, None) * 0.005 * 2 * math.pi / 60  # 0.005 rpm
+    r_m = 13.37e-3
+    sliding_torque = 0.4 * 3.0 * r_m
+    at_rest = angle == 0
+    base = settings_of(None)
+
+    def run(rest_torque: float, offset: float) -> Measurement:
+        torque = np.where(at_rest, rest_torque, sliding_torque) + offset
+        torque = torque + rng.normal(0, 2e-6, t.size)
+        return _measurement({TIME: t, "angle_rad": angle, "torque_Nm": torque,
+                             NORMAL_FORCE: 3.0 + rng.normal(0, 0.003, t.size)})
+
+    sheared = reduce_measurement(run(0.9 * sliding_torque, 0.0), base.instrument,
+                                 base.reduction)
+    assert "zero_under_load" in sheared.flags
+    assert sheared.mu_k == pytest.approx(0.4, abs=0.003)
+    honest = reduce_measurement(run(0.0, 2e-4), base.instrument, base.reduction)
+    assert "zero_under_load" not in honest.flags
+    assert honest.parameters["torque_offset_Nm"] == pytest.approx(2e-4, rel=0.02)
+    assert honest.mu_k == pytest.approx(0.4, abs=0.003)
+
+
+def test_inspect_names_the_force_channel(tmp_path: Path) -> None:
+    from click.testing import CliRunner
+
+    from tribopipe.cli import main
+
+    export = _sled_csv(tmp_path / "sled.csv")
+    out = CliRunner().invoke(main, ["inspect", str(export)])
+    assert out.exit_code == 0, out.output
+    assert "[friction force]" in out.output
+    assert "Load [N]       → friction_force_N" in out.output
+    assert "header block lines: 2" in out.output
+    assert "reduce reads: interval 1" in out.output
+
+
+def test_a_batch_of_sled_runs(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """A folder of sled exports through `batch`: the nominal speed is the instrument
+    file's 150 mm/min (no rotational set point), so the runs are not off nominal."""
+    from click.testing import CliRunner
+
+    from tribopipe.cli import main
+    from tribopipe.frictionmap import read_map
+
+    folder = tmp_path / "raw"
+    folder.mkdir()
+    _sled_csv(folder / "PE_steel_2N_23C_r1.csv", seed=1)
+    _sled_csv(folder / "PE_steel_2N_23C_r2.csv", seed=2, rest_load_N=0.4)
+    monkeypatch.chdir(tmp_path)
+    out = CliRunner().invoke(main, [
+        "batch", str(folder), "--pattern", "{pin}_{disc}_{force}N_{temperature}C_r{repeat}",
+        "--instrument", str(CONFIGS / "sled-d1894.toml"), "-o", str(tmp_path / "out"),
+        "--jobs", "1", "--no-plots"])
+    assert out.exit_code == 0, out.output
+    runs = read_map(tmp_path / "out" / "friction_map.parquet").sort_values("repeat")
+    assert list(runs["test_method"]) == ["sled D1894"] * 2
+    assert list(runs["nominal_speed_mm_s"]) == [2.5, 2.5]
+    assert "sliding_speed_off_nominal" not in ";".join(runs["flags"].fillna(""))
+    assert runs["flags"].fillna("").tolist()[1] == "zero_under_load"
+    assert runs["mu_k"].tolist() == pytest.approx([0.25, 0.25], abs=0.004)

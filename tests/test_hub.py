@@ -342,3 +342,55 @@ def test_materials_outside_the_vocabulary_are_refused_until_the_hub_adds_them(gr
     assert again.exit_code == 1
     assert [x for x in again.output.splitlines() if x.startswith("data/runs.csv: ")] \
         == [lines[0]]
+
+
+HOSTILE_LAB = '<script>alert(1)</script> & "Lab" {\\x}'
+
+
+def test_hostile_names_stay_text_on_every_page(tmp_path, browser):
+    pkg = publish(tmp_path, RUNS[:1], HOSTILE_LAB, "h")
+    hub = tmp_path / "hub"
+    assert invoke("hub", "init", hub).exit_code == 0
+    added = invoke("hub", "add", pkg, "--hub", hub)
+    assert added.exit_code == 0, added.output
+    [folder] = [p for p in (hub / "labs").iterdir() if p.is_dir()]
+    assert folder.name == "script-alert-1-script-lab-x"
+    assert invoke("hub", "build", hub, "-o", tmp_path / "site").exit_code == 0
+    pages = list((tmp_path / "site").rglob("*.html"))
+    for page in pages:
+        text = page.read_text(encoding="utf-8")
+        assert "<script>alert(1)" not in text, page
+    lab_page = tmp_path / "site/labs" / f"{folder.name}.html"
+    context = browser.new_context()
+    tab = context.new_page()
+    dialogs: list[str] = []
+    tab.on("dialog", lambda d: (dialogs.append(d.message), d.dismiss()))
+    tab.goto(lab_page.as_uri())
+    assert tab.locator("h1").inner_text() == HOSTILE_LAB
+    assert "\\{\\textbackslash{}x\\}" in tab.locator("#bibtex").inner_text()
+    tab.goto((tmp_path / "site/index.html").as_uri())
+    assert tab.locator("input.lab-filter").get_attribute("value") == HOSTILE_LAB
+    assert not dialogs
+    context.close()
+
+
+def test_hub_init_writes_its_files_with_the_title_inert(tmp_path):
+    import tomllib
+
+    import yaml
+
+    title = 'Hub <script>x</script> "q" *b* \\ é'
+    result = invoke("hub", "init", tmp_path / "h", "--title", title)
+    assert result.exit_code == 0, result.output
+    h = tmp_path / "h"
+    assert tomllib.loads((h / "hub.toml").read_text(encoding="utf-8"))["hub"]["title"] == title
+    assert yaml.safe_load((h / "CITATION.cff").read_text(encoding="utf-8"))["title"] == title
+    assert json.loads((h / ".zenodo.json").read_text(encoding="utf-8"))["title"] == title
+    heading = (h / "README.md").read_text(encoding="utf-8").splitlines()[0]
+    assert heading.startswith("# Hub \\<script>")  # a backslash-escaped "<": text
+    workflow = yaml.safe_load((h / WORKFLOW).read_text(encoding="utf-8"))
+    steps = workflow["jobs"]["check"]["steps"]
+    assert steps[-1]["run"] == CHECK_COMMAND
+    assert "pull_request" in workflow[True]  # YAML 1.1 reads the key `on` as true
+    again = invoke("hub", "init", h)
+    assert again.exit_code == 1 and "a hub starts empty" in again.output

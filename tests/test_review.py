@@ -18,6 +18,7 @@ import pyarrow.parquet as pq
 import pytest
 from click.testing import CliRunner
 
+from map_files import map_bytes
 from tribopipe.campaign import load_campaign, run_campaign
 from tribopipe.cli import main
 from tribopipe.export.citation import Publisher
@@ -237,11 +238,11 @@ def test_batch_applies_each_decision_and_keeps_the_automatic_values(campaign: Pa
     assert after.loc[ids[2], "mu_k"] == before.loc[ids[2], "mu_k"]
     # the same file again changes nothing, to the byte
     map_file = campaign / "out" / "friction_map.parquet"
-    stamp = map_file.read_bytes()
+    stamp = map_bytes(map_file)
     again = batch(campaign, "--review", str(path))
     assert again.exit_code == 0 and "map out/friction_map.parquet: unchanged" in again.output \
         or "unchanged" in again.output
-    assert map_file.read_bytes() == stamp
+    assert map_bytes(map_file) == stamp
 
 
 @pytest.mark.parametrize(("row", "words"), [
@@ -254,14 +255,14 @@ def test_a_decision_that_cannot_apply_is_refused_naming_its_line(campaign: Path,
     good = [str(the_map(campaign)["measurement_id"].iloc[1]), "accept", "", "", "", "ok", "", ""]
     path = write_review(campaign, [good, [c.format(id=mid) for c in row]])
     map_file = campaign / "out" / "friction_map.parquet"
-    stamp = map_file.read_bytes()
+    stamp = map_bytes(map_file)
     result = CliRunner().invoke(main, ["batch", str(campaign / "campaign.toml"), "-j", "1",
                                        "--review", str(path)])
     assert result.exit_code != 0
     lines = [line for line in result.output.splitlines() if line.startswith("Error")]
     assert len(lines) == 1 and "review.csv line 3" in lines[0] and words in lines[0]
     assert "Traceback" not in result.output
-    assert map_file.read_bytes() == stamp  # nothing else changed: not even the good decision
+    assert map_bytes(map_file) == stamp  # nothing else changed: not even the good decision
 
 
 def test_a_re_reduced_run_keeps_its_review(campaign: Path):
@@ -349,11 +350,12 @@ def test_every_output_marks_and_counts_reviewed_runs(campaign: Path, tmp_path: P
     html = (tmp_path / "r.html").read_text(encoding="utf-8")
     assert "reviewed runs" in html and "reviewed: window" in html and "1 reviewed" in html
     assert "reviewed: exclude" in html
+    import json
+
     from tribopipe.export.explorer import explorer_data
 
-    data = explorer_data(the_map(campaign), title="t")
-    marks = [r["review"] for p in data["pairs"] for r in p["runs"]]
-    assert "window" in marks
+    data = json.dumps(explorer_data(the_map(campaign), title="t"), ensure_ascii=False)
+    assert data.count("(reviewed: window)") == 1
     package = tmp_path / "pkg"
     publish_map(map_file, package, Publisher(lab="Test Lab", contact="A. Person"),
                 allow_synthetic=True)
@@ -389,3 +391,57 @@ def test_reduce_replace_never_silently_re_automates_a_reviewed_run(campaign: Pat
     after = the_map(campaign).set_index("measurement_id").loc[mid]
     assert after["review"] == "window" and after["mu_k"] == reviewed["mu_k"]
     assert after["auto_mu_k"] == row["mu_k"]
+
+
+def test_the_review_page_of_a_map_with_its_traces(campaign: Path, tmp_path: Path):
+    """`tribopipe review --map` (traces/ beside the map by default), as a subprocess: one
+    self-contained page holding every run, its samples and the decisions the map holds."""
+    import subprocess
+    import sys
+
+    from tribopipe.export.review_page import DATA_ELEMENT_ID
+
+    mid = str(the_map(campaign)["measurement_id"].iloc[0])
+    path = write_review(campaign, [[mid, "accept", "", "", "", "fine", "A", "2026-11-27"]])
+    assert batch(campaign, "--review", str(path)).exit_code == 0
+    page = tmp_path / "page.html"
+    done = subprocess.run([sys.executable, "-m", "tribopipe", "review", "--map",
+                           str(campaign / "out" / "friction_map.parquet"), "-o", str(page)],
+                          capture_output=True, text=True, timeout=300, check=False)
+    assert done.returncode == 0, done.stderr
+    html = page.read_text(encoding="utf-8")
+    assert f'id="{DATA_ELEMENT_ID}"' in html and "Content-Security-Policy" in html
+    assert "<script src" not in html and "http://" not in html and "https://" not in html
+    import json
+    import re
+
+    data = json.loads(re.search(rf'id="{DATA_ELEMENT_ID}">(.*?)</script>', html, re.S).group(1))
+    assert len(data["runs"]) == len(FILES) and all(r["trace"] for r in data["runs"])
+    assert [r["decision"]["action"] for r in data["runs"] if r["decision"]] == ["accept"]
+    assert all(r["trace"]["n"] > 1000 for r in data["runs"])
+    # without a config or --map: one usage line
+    bad = CliRunner().invoke(main, ["review"])
+    assert bad.exit_code == 2 and "give a campaign CONFIG or --map PATH" in bad.output
+
+
+def test_a_decisions_file_that_is_no_text_is_one_line(tmp_path: Path):
+    from tribopipe.review import read_review
+
+    raw = tmp_path / "review.csv"
+    raw.write_bytes(b"run,action\xff\xfe\n")
+    with pytest.raises(ReviewError, match="not UTF-8 text"):
+        read_review(raw)
+    with pytest.raises(ReviewError):
+        read_review(tmp_path)  # a folder
+    with pytest.raises(ReviewError, match="empty"):
+        (tmp_path / "empty.csv").write_text("", encoding="utf-8")
+        read_review(tmp_path / "empty.csv")
+
+
+def test_the_trace_plot_says_a_run_was_reviewed():
+    from tribopipe.figures.runinfo import TraceMarks
+
+    marks = TraceMarks(mu_s=0.7, mu_s_distance_mm=0.1, mu_k=0.5, mu_k_window_mm=(0.6, 1.1),
+                       review="window")
+    assert marks.line().endswith(" · reviewed: window")
+    assert "reviewed" not in TraceMarks(0.7, 0.1, 0.5, (0.6, 1.1)).line()

@@ -327,20 +327,21 @@ def _chord_error(value_at: Callable[[float], float], a: float, b: float) -> floa
 
 
 def densify(
-    pressures_kPa: Sequence[float],
+    measured: Sequence[float],
     value_at: Callable[[float], float],
     target: float = DENSIFY_TARGET,
 ) -> list[float]:
-    """Pressure rows [kPa] (the measured ones and added ones, sorted) such that reading
-    ``value_at`` linearly between consecutive rows, as ABAQUS and Ansys read a table,
-    stays within ``target`` of ``value_at`` (checked on samples between the rows).
+    """Rows of a table axis read in log (pressures [kPa], sliding speeds [mm/s]): the
+    measured ones and added ones, sorted, such that reading ``value_at`` linearly between
+    consecutive rows, as ABAQUS and Ansys read a table, stays within ``target`` of
+    ``value_at`` (checked on samples between the rows).
 
-    Each gap between measured pressures is cut into the fewest parts equal in ln p whose
-    chords all pass the check; added pressures are rounded to :data:`DENSIFY_DIGITS`
+    Each gap between measured values is cut into the fewest parts equal in ln x whose
+    chords all pass the check; added rows are rounded to :data:`DENSIFY_DIGITS`
     significant digits (and the check is made on the rounded rows), unless rounding would
     merge rows of a narrow gap: then they are kept as they are.
     """
-    rows = sorted({float(p) for p in pressures_kPa})
+    rows = sorted({float(p) for p in measured})
     out = rows[:1]
     for a, b in zip(rows, rows[1:], strict=False):
         for parts in range(1, 257):

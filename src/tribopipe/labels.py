@@ -234,7 +234,12 @@ def nominal_speed_mm_s(set_point_rpm: float | None, instrument: InstrumentConfig
     """The nominal sliding speed [mm/s] of a run: its interval's rotational-speed set point
     [rpm] (else the instrument's ``nominal_speed_rpm``), rounded to
     :data:`SPEED_SIGNIFICANT` significant digits, times the friction radius, rounded
-    again the same way (the one rounding rule of nominal speeds: the map groups by it)."""
+    again the same way (the one rounding rule of nominal speeds: the map groups by it).
+    A linear instrument without a rotational set point slides at its
+    ``nominal_speed_mm_s`` (rounded the same way)."""
+    no_set_point = set_point_rpm is None or not is_finite(set_point_rpm) or set_point_rpm <= 0
+    if no_set_point and instrument.nominal_speed_mm_s is not None:
+        return round_speed(float(instrument.nominal_speed_mm_s))
     rpm = set_point_rpm if set_point_rpm is not None and is_finite(set_point_rpm) and \
         set_point_rpm > 0 else instrument.nominal_speed_rpm
     return round_speed(sliding_speed_mm_s(round_speed(rpm), instrument.friction_radius_mm))

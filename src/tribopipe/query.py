@@ -38,7 +38,7 @@ from typing import TYPE_CHECKING, Any
 
 from .config import InstrumentConfig
 from .errors import ExportError
-from .frictionmap import read_map
+from .frictionmap.snapshot import MapSource, as_snapshot
 from .interpolation import (
     EXTRAPOLATED,
     curvature,
@@ -705,10 +705,13 @@ def friction_table(
     return pd.DataFrame(rows)
 
 
-def load_groups(map_path: str | Path, labs: Sequence[str] | None = None) -> pd.DataFrame:
-    """Read a friction map (Parquet) and return its group statistics (excluded runs out;
-    with ``labs``, only the runs those labs measured)."""
-    return groups_of(read_map(map_path), map_path, labs)
+def load_groups(map_path: MapSource, labs: Sequence[str] | None = None) -> pd.DataFrame:
+    """The group statistics (excluded runs out; with ``labs``, only the runs those labs
+    measured) of a friction map: opened (:func:`~tribopipe.frictionmap.snapshot.open_map`),
+    or its path; kept with the snapshot."""
+    snap = as_snapshot(map_path)
+    key = ("query.groups", *sorted(labs or ()))
+    return snap.derived(key, lambda: groups_of(snap.runs, snap.path, labs))
 
 
 def groups_of(runs: pd.DataFrame, map_path: str | Path,
@@ -735,7 +738,7 @@ def groups_of(runs: pd.DataFrame, map_path: str | Path,
 
 
 def query_map(
-    map_path: str | Path,
+    map_path: MapSource,
     pin: str,
     disc: str,
     pressure_kPa: float,
@@ -766,7 +769,7 @@ class ValueLabs:
         return out
 
 
-def value_labs(map_path: str | Path, result: QueryResult,
+def value_labs(map_path: MapSource, result: QueryResult,
                labs: Sequence[str] | None = None) -> ValueLabs:
     """The :class:`ValueLabs` of a :func:`query_map` result (the same ``labs``)."""
     groups = load_groups(map_path, labs)

@@ -41,7 +41,7 @@ from .export.tables import spreadsheet_csv
 from .figures.trace import plot_trace_row
 from .files import write_text_atomic
 from .fit import fit_power_law
-from .frictionmap import read_map
+from .frictionmap.snapshot import as_snapshot
 from .frictionmap.synthetic_rows import synthetic_note
 from .labels import flag_list, quality_flags
 from .layout import OutputLayout, find_trace, read_failures
@@ -669,7 +669,7 @@ def report_inputs(
     source: str | None = None,
 ) -> ReportInputs:
     """Read what a report shows from a map and a processed folder (default: the map's)."""
-    runs = read_map(map_path)
+    runs = as_snapshot(map_path).runs
     if runs.empty:
         raise MapError("the friction map is empty or absent", path=map_path,
                        hint="run tribopipe batch first, or pass --map")

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import math
+from typing import Any
 
 import click
 
@@ -77,6 +78,7 @@ def query_cmd(
     and where they disagree beyond R; --lab restricts it to one lab's runs.
     """
     from ..config import load_settings
+    from ..frictionmap.snapshot import open_map
     from ..frictionmap.synthetic_rows import map_synthetic_note
     from ..materials import lab_files, load_vocabulary
     from ..numeric import finite_json
@@ -93,15 +95,16 @@ def query_cmd(
         instrument = load_settings(instrument_path).instrument
         pressure_kPa = instrument.pressure_kPa(normal_force_N)
     assert pressure_kPa is not None
+    snap = open_map(map_path)  # the one read and check of the map
     if use_master_curve:
-        _master_curve_query(map_path, pin, disc, pressure_kPa, temperature_C, speed_mm_s,
+        _master_curve_query(snap, pin, disc, pressure_kPa, temperature_C, speed_mm_s,
                             as_json)
         return
     vocabulary = load_vocabulary(lab_files("."))
     pin, disc = (vocabulary.candidates(n)[0] if len(vocabulary.candidates(n)) == 1 else n
                  for n in (pin, disc))
-    result = query_map(map_path, pin, disc, pressure_kPa, temperature_C, speed_mm_s, labs)
-    origin = value_labs(map_path, result, labs)
+    result = query_map(snap, pin, disc, pressure_kPa, temperature_C, speed_mm_s, labs)
+    origin = value_labs(snap, result, labs)
     if as_json:
         data = result.to_dict()
         if normal_force_N is not None:
@@ -113,12 +116,12 @@ def query_cmd(
         click.echo(format_result(result, normal_force_N, instrument))
         for line in origin.lines():
             say(f"  {line}")
-    note = map_synthetic_note(map_path)
+    note = map_synthetic_note(snap)
     if note is not None:  # on stderr with --json, so the JSON stays one document
         click.echo(note, err=as_json)
 
 
-def _master_curve_query(map_path: str, pin: str, disc: str, pressure_kPa: float,
+def _master_curve_query(map_path: Any, pin: str, disc: str, pressure_kPa: float,
                         temperature_C: float | None, speed_mm_s: float | None,
                         as_json: bool) -> None:
     """``query --master-curve``: the model-based prediction, as JSON or a few lines."""

@@ -18,10 +18,11 @@ from typing import TYPE_CHECKING
 
 from ..errors import ExportError
 from ..escape import sim_comment
+from ..fit import DecayFit, fit_decay
+from ..interpolation import ENGINE_TOLERANCE
 from ..query import QueryResult
 from .simbase import (
     FOUNDING_SLIP_RATE,
-    DecayFit,
     Engine,
     SlipRate,
     breakaway,
@@ -31,7 +32,6 @@ from .simbase import (
     default_decay_s_per_mm,
     densify_lines,
     filled_lines,
-    fit_decay,
     header_bodies,
     num,
     selected_pairs,
@@ -195,11 +195,17 @@ def write_abaqus(
 def speed_table_note(rows: pd.DataFrame, per_mm_s: float, unit: str, engine: str) -> str:
     """The comment of a table over slip rate: the measured nominal speeds, and how the
     engine reads between them."""
-    speeds = sorted(set(float(v) for v in rows["speed_mm_s"]))
+    speeds = sorted(set(float(v) for v in rows.loc[~rows["speed_added"], "speed_mm_s"]))
+    added = sorted(set(float(v) for v in rows.loc[rows["speed_added"], "speed_mm_s"]))
     listed = ", ".join(num(v * per_mm_s) for v in speeds)
-    return (f"slip rates {listed} {unit}: this pair's measured nominal sliding speeds; "
-            f"{engine} interpolates linearly in slip rate between them and holds the ends, "
-            "tribopipe query interpolates in log v (the two agree at the measured speeds)")
+    text = (f"slip rates {listed} {unit}: this pair's measured nominal sliding speeds; "
+            f"{engine} interpolates linearly in slip rate between rows and holds the ends, "
+            "tribopipe query interpolates in log v")
+    if not added:
+        return text + " (the two agree at the measured speeds)"
+    return (text + f"; with {len(added)} slip rate(s) added between the measured speeds "
+            f"the two differ by at most {ENGINE_TOLERANCE:g} in mu over the measured range. "
+            f"Added at ({unit}): " + ", ".join(num(v * per_mm_s) for v in added))
 
 
 def write_abaqus_decay(
@@ -367,7 +373,7 @@ def write_lsdyna(
 
     Where the pair is measured at three or more sliding speeds (``speed_curve``: μ_K at
     each, [mm/s]) and ``coefficient="mu_k"``, FS, FD and DC are fitted to μ_K(v)
-    (:func:`tribopipe.export.simbase.fit_decay`) and the header gives the fit's
+    (:func:`tribopipe.fit.fit_decay`) and the header gives the fit's
     residuals; otherwise as follows, and the header says no speed dependence was
     measured.
 

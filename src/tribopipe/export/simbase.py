@@ -31,7 +31,7 @@ from xml.sax.saxutils import quoteattr
 from .. import __version__
 from ..errors import ExportError
 from ..escape import sim_comment
-from ..interpolation import ENGINE_TOLERANCE
+from ..interpolation import ENGINE_TOLERANCE, densify
 from ..physics import FOUNDING_SLIDING_SPEED_MM_S
 from ..query import (
     QueryResult,
@@ -41,6 +41,7 @@ from ..query import (
     pairs,
     query,
     select_pair,
+    speed_weights,
 )
 from .registry import COEFFICIENT
 
@@ -448,73 +449,52 @@ def speed_curve(groups: pd.DataFrame, pin: str, disc: str, pressure_kPa: float,
             for v in speeds]
 
 
-@dataclass(frozen=True)
-class DecayFit:
-    """μ(v) = FD + (FS − FD)·exp(−DC·v) fitted to μ_K at the measured speeds: ``fs``,
-    ``fd``, ``dc_s_per_mm`` [s/mm]; ``rms`` and ``max_abs`` the residuals (in μ) at the
-    ``n`` speeds; ``rising`` when μ grows with speed (FS < FD: elastomers below their
-    loss peak)."""
+def _steepest(speeds: list[float], rows: list[list[float]]) -> Callable[[float], float]:
+    """μ [-] over speed [mm/s] that is, between each two measured ``speeds``, linear in
+    ln v with the steepest slope of any of ``rows`` (μ at the measured speeds) there: the
+    error of reading a function linear in ln v linearly in v scales with its slope, so
+    speed rows that keep this one within a target keep every row within it."""
+    logs = [math.log(v) for v in speeds]
+    slopes = [max(abs(r[i + 1] - r[i]) for r in rows) / (logs[i + 1] - logs[i])
+              for i in range(len(speeds) - 1)]
 
-    fs: float
-    fd: float
-    dc_s_per_mm: float
-    rms: float
-    max_abs: float
-    n: int
+    def value_at(v: float) -> float:
+        x = math.log(v)
+        total = 0.0
+        for i, slope in enumerate(slopes):
+            total += slope * (min(max(x, logs[i]), logs[i + 1]) - logs[i])
+        return total
 
-    @property
-    def rising(self) -> bool:
-        """True when μ rises with speed (FS < FD)."""
-        return self.fs < self.fd
-
-
-def fit_decay(curve: list[tuple[float, float]]) -> DecayFit | None:
-    """:class:`DecayFit` of ``[(v [mm/s], μ)]`` by least squares (DC ≥ 0, started at the
-    inverse middle speed); ``None`` with fewer than 3 speeds (three parameters)."""
-    import numpy as np
-    from scipy.optimize import least_squares
-
-    if len(curve) < 3:
-        return None
-    v = np.array([c[0] for c in curve], dtype=float)
-    mu = np.array([c[1] for c in curve], dtype=float)
-
-    def model(theta: np.ndarray) -> np.ndarray:
-        return theta[1] + (theta[0] - theta[1]) * np.exp(-theta[2] * v)
-
-    start = np.array([mu[0], mu[-1], 1.0 / float(np.exp(np.mean(np.log(v))))])
-    best = None
-    for scale in (0.1, 1.0, 10.0):
-        theta0 = start.copy()
-        theta0[2] *= scale
-        sol = least_squares(lambda t: model(t) - mu, theta0,
-                            bounds=([-np.inf, -np.inf, 0.0], [np.inf, np.inf, np.inf]))
-        if best is None or sol.cost < best.cost:
-            best = sol
-    assert best is not None
-    res = model(best.x) - mu
-    return DecayFit(float(best.x[0]), float(best.x[1]), float(best.x[2]),
-                    float(np.sqrt(np.mean(res**2))), float(np.max(np.abs(res))), len(curve))
+    return value_at
 
 
 def speed_rows(groups: pd.DataFrame, pin: str, disc: str,
                temperature_C: float | None) -> pd.DataFrame | None:
     """A pair's μ_K table over pressure, temperature and sliding speed where it is
     measured at several nominal speeds (else ``None``): ``pressure_kPa, temperature_C,
-    speed_mm_s, mu_k, measured, added``, temperature outer, pressure, then speed inner
-    (ABAQUS wants the first variable, the slip rate, to vary fastest). Pressures are
-    every speed's rows of :func:`table_at` (measured and densified), so the grid is
-    rectangular; each cell is :func:`tribopipe.query.query` at its speed."""
+    speed_mm_s, mu_k, measured, added, speed_added``, temperature outer, pressure, then
+    speed inner (ABAQUS wants the first variable, the slip rate, to vary fastest).
+    Pressures are every speed's rows of :func:`table_at` (measured and densified), so the
+    grid is rectangular; each cell is :func:`tribopipe.query.query` at its speed (between
+    measured speeds by query's own weights, :func:`tribopipe.query.speed_weights`).
+
+    Speeds: the measured ones, and between them the rows of
+    :func:`tribopipe.interpolation.densify` (``speed_added``): :func:`~tribopipe.query.query`
+    reads μ linearly in ln v between measured speeds, an engine reads the table linearly
+    in v, so rows are added until the engine's reading of every pressure and temperature
+    row stays within :data:`~tribopipe.interpolation.DENSIFY_TARGET` of it; with the
+    pressure rows' own margin the engine stays within
+    :data:`~tribopipe.interpolation.ENGINE_TOLERANCE` of ``query`` over the table."""
     import pandas as pd
 
-    speeds = pair_speeds(select_pair(groups, pin, disc))
-    if len(speeds) < 2:
+    measured_speeds = pair_speeds(select_pair(groups, pin, disc))
+    if len(measured_speeds) < 2:
         return None
     pressures: set[float] = set()
     temps: set[float] = set()
     measured: set[tuple[float, float, float]] = set()
     measured_p: set[float] = set()
-    for v in speeds:
+    for v in measured_speeds:
         part = table_at(groups_at_speed(groups, v), pin, disc, temperature_C, dense=True)
         pressures |= {float(p) for p in part["pressure_kPa"]}
         temps |= {float(t) for t in part["temperature_C"]}
@@ -527,12 +507,19 @@ def speed_rows(groups: pd.DataFrame, pin: str, disc: str,
                 measured.add((float(p_row), float(t_row), v))
             if not added:
                 measured_p.add(float(p_row))
+    ordered_t = sorted(temps, key=lambda x: (math.isnan(x), x))
+    cells = [(t, p) for t in ordered_t for p in sorted(pressures)]
+    # μ_K of every pressure and temperature row at the measured speeds (query)
+    at_measured = [[query(groups, pin, disc, p, None if math.isnan(t) else t, v).mu_k.value
+                    for v in measured_speeds] for t, p in cells]
+    grid = densify(measured_speeds, _steepest(measured_speeds, at_measured))
     rows = []
-    for t in sorted(temps, key=lambda x: (math.isnan(x), x)):
-        for p in sorted(pressures):
-            for v in speeds:
-                res = query(groups, pin, disc, p, None if math.isnan(t) else t, v)
-                rows.append({"pressure_kPa": p, "temperature_C": t, "speed_mm_s": v,
-                             "mu_k": res.mu_k.value, "measured": (p, t, v) in measured,
-                             "added": p not in measured_p})
+    for (t, p), mus in zip(cells, at_measured, strict=True):
+        for v in grid:
+            # query's rule between measured speeds (its weights, linear in ln v)
+            weights, _ = speed_weights(measured_speeds, v)
+            rows.append({"pressure_kPa": p, "temperature_C": t, "speed_mm_s": v,
+                         "mu_k": sum(w * mus[i] for i, w in weights),
+                         "measured": (p, t, v) in measured, "added": p not in measured_p,
+                         "speed_added": v not in measured_speeds})
     return pd.DataFrame(rows)

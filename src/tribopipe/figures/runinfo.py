@@ -83,6 +83,9 @@ class TraceMarks:
     #: standard uncertainties (k = 1) of μ_S and μ_K when known; drawn as U = 2u
     u_mu_s: float | None = None
     u_mu_k: float | None = None
+    #: a reviewer's decision on the run (``accept``, ``exclude``, ``window``;
+    #: :mod:`tribopipe.review`): the readings line says so
+    review: str | None = None
 
     @property
     def peak_at_limit(self) -> bool:
@@ -130,7 +133,8 @@ class TraceMarks:
                 kinetic += f" over {self.window[0]:.3g}–{self.window[1]:.3g} mm"
         else:
             kinetic = "μ_K not found"
-        return f"{static} · {kinetic}"
+        reviewed = f" · reviewed: {self.review}" if self.review else ""
+        return f"{static} · {kinetic}{reviewed}"
 
 
 #: Header lines are cut to this many characters (a file name can be any length).

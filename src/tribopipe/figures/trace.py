@@ -612,6 +612,7 @@ def plot_trace_row(
         flags=tuple(flag_list(row.get("flags"))),
         u_mu_s=finite_or_none(row.get("u_mu_s")),
         u_mu_k=finite_or_none(row.get("u_mu_k")),
+        review=row.get("review") if isinstance(row.get("review"), str) else None,
     )
     figure = trace_figure(dpi).draw(
         trace["sliding_distance_mm"].to_numpy(), trace["mu"].to_numpy(), marks,

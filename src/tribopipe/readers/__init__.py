@@ -36,6 +36,7 @@ from typing import Any
 from ..errors import ReadError, TribopipeError
 from ..escape import display_path
 from ..measurement import (
+    FRICTION_FORCE,
     NORMAL_FORCE,
     TORQUE,
     Measurement,
@@ -351,9 +352,11 @@ class IntervalSummary:
 
     @property
     def friction_ready(self) -> bool:
-        """True when the interval has torque and normal force columns (what reduce needs)."""
+        """True when the interval has what reduce needs: torque and normal force columns,
+        or a friction-force column (a sled's normal force may come from its weight in the
+        instrument file)."""
         names = {c.column for c in self.columns}
-        return TORQUE in names and NORMAL_FORCE in names
+        return (TORQUE in names and NORMAL_FORCE in names) or FRICTION_FORCE in names
 
 
 @dataclass(frozen=True)
@@ -474,7 +477,10 @@ class ExportSummary:
                 skipped.append(f"{i.n_waveform_rows} waveform rows")
             if i.n_invalid_values:
                 skipped.append(f"{i.n_invalid_values} missing or invalid values")
-            ready = "  [torque + normal force]" if i.friction_ready else ""
+            names = {c.column for c in i.columns}
+            ready = ("" if not i.friction_ready else "  [torque + normal force]"
+                     if TORQUE in names else "  [friction force + normal force]"
+                     if NORMAL_FORCE in names else "  [friction force]")
             lines.append("")
             lines.append(
                 f"{label}: {i.n_points}{declared} points"

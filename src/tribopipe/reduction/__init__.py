@@ -1,13 +1,15 @@
-"""The reduction method: a pin-on-disc run's COF trace, μ_S and μ_K with their evidence.
+"""The reduction method: a friction run's COF trace, μ_S and μ_K with their evidence.
 
 This docstring is the one description of the method; the modules of the package carry
 it out:
 
-* :mod:`~tribopipe.reduction.intervals`: the friction interval of an export and its
-  torque zero offset;
+* :mod:`~tribopipe.reduction.intervals`: the friction interval of an export, its zero
+  offset, the rest before and after sliding and a stop at the end;
 * :mod:`~tribopipe.reduction.signals`: the signal filters (NumPy, no SciPy);
 * :mod:`~tribopipe.reduction.detection`: the detection steps 1–7 below;
 * :mod:`~tribopipe.reduction.uncertainty`: each run's uncertainty budget (GUM, k = 1);
+* :mod:`~tribopipe.reduction.reciprocating`: a linear reciprocating run's strokes and
+  cycles;
 * :mod:`~tribopipe.reduction.reduce`: one run end to end (``reduce_measurement``), the
   flags and the ``ReductionResult``.
 
@@ -19,19 +21,55 @@ Physics (formulas in :mod:`tribopipe.physics`; ``n_pins`` pins of radius ``r``, 
 * sliding distance ``s = φ · R_eff`` from the deflection angle (rad × mm → mm); else the
   integral of the rotational speed; else nominal speed × time.
 
+Instruments (``InstrumentConfig.test_method``). The rheometer (``"rheometer
+pin-on-disc"``) measures a torque M at R_eff. A force-based instrument (``"sled D1894"``,
+``"linear reciprocating"``, ``"rotary pin-on-disc"``) measures the friction force F itself
+(``friction_force_N``); it is read as a torque F·1 m at an exact lever of 1 m, so one set
+of formulas and one uncertainty budget serve both (the force channel's own calibration,
+resolution and unknown zero in the torque's place, no friction-radius term). A sled has no
+normal-force sensor: a run without a normal-force column takes F_N = m·g from
+``sled_mass_g`` (or ``sled_weight_N``), stated in ``parameters["normal_force_source"]``.
+Sliding distance, in this order: a position, crosshead or distance column (counted along
+the direction of travel); an angle or rotational speed at the friction radius (a rotary
+tribometer's wear track); a linear instrument's ``nominal_speed_mm_s`` × time; the
+nominal rpm × time.
+
+Windows scale with the run. Every window and search bound is a distance along the sliding
+path [mm] (``*_mm``), a number of samples, or a probability, never a time: an instrument
+file states them for its own run — a rheometer's hundredths of a millimetre, a sled's
+centimetres, a tribometer's metres (bounds up to 1 km) — and a window wider than the run
+acts as the whole run, so none allocates beyond the run's own length.
+
 Signs. The rotation direction decides the signs of angle, speed and torque. Distance is
 counted along the direction of travel (``s`` grows from 0); the friction force takes the
 sign that makes the median offset-corrected torque of the sliding part positive. We use
 that sign, not ``|M|``, so that noise around zero is not rectified into a positive bias.
 A negative median normal force (compression written as negative) is flipped likewise.
 
-Torque zero offset. A torque offset shows up as torque while the disc does not move. It is
-estimated (:func:`.intervals.robust_mean` of the torque: efficient on noise, deaf to
-spikes) from, in this order: an explicit value; the set-up interval before the friction
-interval (attached by :func:`.intervals.friction_intervals` as
-``meta.torque_offset``); the samples of the friction interval before the disc starts to
-move (at least ``ReductionParams.offset_min_samples``). If neither exists the offset is
-taken as 0 and ``parameters["torque_offset_source"]`` says it could not be estimated.
+Zero offset. The zero of the tangential channel (torque or friction force) is read only
+where the instrument is known unloaded. ``InstrumentConfig.zero_offset`` (or ``tribopipe
+reduce --zero``): a number is used as given; ``"off"`` takes 0; ``"auto"`` (default)
+estimates it (:func:`.intervals.robust_mean`: efficient on noise, deaf to spikes) from,
+in this order, the set-up interval before the friction interval (attached by
+:func:`.intervals.friction_intervals` as ``meta.torque_offset``) and the samples before
+the first movement (at least ``ReductionParams.offset_min_samples``). Samples at rest may
+already carry a tangential load — a sled's string pulled taut before the record started,
+pins pre-sheared by the set-up: an estimate whose level exceeds
+``zero_load_max_fraction`` of the sliding level above it
+(:func:`.intervals.load_fraction`: a transducer's offset is small beside the friction it
+measures, a load as large as it) is refused, not subtracted, and flagged
+``zero_under_load``; 0 is taken and the unknown zero's size enters the uncertainty. Where
+the protocol ends with the load released at rest (``rest_after_sliding``), the rest after
+the last movement is a second zero: the mean of the two is used (u from half their
+difference, rectangular) and ``zero_drift`` is flagged when they differ by more than 3
+combined standard errors and by more than ``settle_tol`` in μ. Nothing estimable: 0, with
+``parameters["torque_offset_source"]`` saying so (``torque_offset_unknown``).
+
+End stop. A stop at the end of the record — the sliding speed falling below
+``stop_speed_fraction`` of the run's median speed and staying there to the end (a motor
+ramping down, then at rest; the force falling with it) — is trimmed before the plateau is
+searched (:func:`.intervals.end_stop`; speed over windows of 1 % of the record, so a
+distance column's noise is no stop); ``parameters["end_stop_trimmed_mm"]`` says how much.
 
 Contact. Samples with ``F_N`` below ``InstrumentConfig.contact_threshold_N`` are masked
 (``in_contact`` False, ``mu`` NaN in the trace) and take no part in any statistic.
@@ -117,6 +155,31 @@ may creep to the plateau with no peak at all.
    oscillation that averaging over a second cannot separate from the noise (a
    0.01-peak-to-peak saw-tooth under noise 0.015 in a few millimetres of plateau).
 
+Run-out is not stick-slip. A rotating disc that is not flat, or a pin off its track's
+centre, adds an oscillation that repeats with every turn: a sinusoid at the rotation
+frequency or its harmonics, not a saw-tooth. Where the plateau's line (step 7) has a
+period within ``run_out_tolerance`` (plus the periodogram's own resolution, one period
+over the window) of one revolution 2π·R or of its 2nd or 3rd harmonic, it is flagged
+``run_out``, not ``stick_slip`` (:func:`.reduce.revolution_locked`; rotating instruments
+only). Stick-slip keeps its own test; where a saw-tooth and run-out ride together the
+strongest line names the flag.
+
+Reciprocating runs (``"linear reciprocating"``, ASTM G133). The position is split into
+strokes at its reversals (:func:`.reciprocating.split_strokes`: the position turns back by
+more than a tenth of its range; a stroke shorter than half the range is not a full
+stroke). Each stroke's μ is the mean friction force over its central
+``stroke_core_fraction`` (away from the reversals, where the pin stops and turns) over
+the mean F_N there, with the zero subtracted and signed against the motion. A cycle is a
+forward and the following backward stroke; its μ is half the forward minus the backward
+mean force over F_N, in which a zero offset and a tilt of the flat (a tangential load of
+one sign both ways) cancel. The cycle series over the sliding path (each stroke adds its
+length) goes through steps 1–7: μ_K is the mean over the settled plateau of cycles, with
+its forward and backward averages (``parameters["mu_k_forward"]``, ``["mu_k_backward"]``)
+and every cycle's μ (``parameters["cycles"]``). μ_S is the breakaway of the first stroke:
+the maximum of the peak curve over its first half, distinct as in step 6 against that
+stroke's own level and μ_K. The cycle means hold no zero, so μ_K's budget has no offset
+term.
+
 Flags (thresholds in :class:`~tribopipe.config.ReductionParams`)
 ----------------------------------------------
 ``static_not_distinct``  step 6 failed.
@@ -142,6 +205,13 @@ Flags (thresholds in :class:`~tribopipe.config.ReductionParams`)
 ``torque_offset_unknown`` no set-up interval and no rest before motion: the torque zero
                          offset could not be estimated; 0 is assumed and the offset's
                          plausible size enters the uncertainty.
+``zero_under_load``      the samples the zero would be read from already carry a
+                         tangential load (above ``zero_load_max_fraction`` of the sliding
+                         level): not subtracted; 0 is assumed and the unknown zero's size
+                         enters the uncertainty.
+``zero_drift``           the zero before sliding and the rest after it disagree.
+``run_out``              the settled plateau oscillates with the disc's rotation (1×, 2×,
+                         3×): run-out, not stick-slip.
 ``no_friction_signal``   the torque carries no friction: its samples while sliding are all
                          equal (a zero or stuck channel), or μ_K is within three standard
                          errors of zero (the plateau mean's, autocorrelation included).
@@ -152,5 +222,6 @@ outside its range in :mod:`tribopipe.validate` (the column is not what its name 
 
 References: ASTM D1894 (static and kinetic COF of plastic film: static = initial peak,
 kinetic = average during uniform sliding); ISO 8295 (same principle for plastics film);
-ASTM D2534 (kinetic COF of wax coatings: averaging after a run-in distance).
+ASTM D2534 (kinetic COF of wax coatings: averaging after a run-in distance); ASTM G133
+(linear reciprocating ball-on-flat sliding); ASTM G99 (pin-on-disk).
 """

@@ -82,7 +82,8 @@ def query_cmd(
     from ..frictionmap.synthetic_rows import map_synthetic_note
     from ..materials import lab_files, load_vocabulary
     from ..numeric import finite_json
-    from ..query import format_result, query_map, value_labs
+    from ..query import query_map, value_labs
+    from ..query_text import format_result
     from ._common import say
 
     if (pressure_kPa is None) == (normal_force_N is None):

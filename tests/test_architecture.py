@@ -60,7 +60,7 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("tribopipe.campaign", "tribopipe.evidence"),
     # the one rule for μ between measured conditions, below everything that reads it
     ("tribopipe.interpolation",),
-    ("tribopipe.query", "tribopipe.fit", "tribopipe.mastercurve"),
+    ("tribopipe.query", "tribopipe.query_text", "tribopipe.fit", "tribopipe.mastercurve"),
     ("tribopipe.export",),
     ("tribopipe.report", "tribopipe.hub"),
     ("tribopipe.cli", "tribopipe.__main__"),

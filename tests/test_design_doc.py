@@ -203,3 +203,25 @@ def test_no_docstring_points_to_a_name_that_is_gone() -> None:
             if why is not None:
                 problems.append(f"{path.relative_to(SRC)}: :{role}:`{target}`: {why}")
     assert problems == []
+
+
+def test_the_schema_version_the_docs_name_is_the_codes() -> None:
+    """docs/DESIGN.md and docs/map.md name the schema version the code writes and the
+    version each later column came in (read from ``schema.SCHEMA_VERSION`` and
+    ``ADDED_IN_VERSION``, never a number copied here)."""
+    import re
+
+    from tribopipe.frictionmap.schema import ADDED_IN_VERSION, REVIEW_COLUMNS, SCHEMA_VERSION
+
+    design = (REPO / "docs" / "DESIGN.md").read_text(encoding="utf-8")
+    guide = (REPO / "docs" / "map.md").read_text(encoding="utf-8")
+    assert re.findall(r"`SCHEMA_VERSION`, now (\d+)", design) == [str(SCHEMA_VERSION)]
+    assert re.findall(r"has a version\s+\(now (\d+)", guide) == [str(SCHEMA_VERSION)]
+    named = {c: v for c, v in ADDED_IN_VERSION.items() if c not in REVIEW_COLUMNS}
+    added = design[design.index("with the version that added it"):]
+    added = added[:added.index("): a map of an")]
+    for column, version in named.items():
+        said = re.search(rf"`{column}`[^;]*?: (\d+)", added)
+        assert said is not None and int(said.group(1)) == version, column
+        assert re.search(rf"version {version} (?:(?!version)[^;)])*`{column}`", guide), column
+    assert f"the review columns: {ADDED_IN_VERSION[REVIEW_COLUMNS[0]]}" in added

@@ -123,3 +123,31 @@ def test_recompute_of_a_map_file_says_what_it_takes(package):
     result = invoke("map", "validate", "--recompute", package / "data/runs.parquet")
     assert result.exit_code == 2
     assert "--recompute checks a package against its evidence" in result.output
+
+
+def test_another_method_is_said_and_a_false_one_refused(copy):
+    settings = json.loads((copy / SETTINGS_PATH).read_text(encoding="utf-8"))
+    key = next(iter(settings))
+    settings[key]["method"] = "tribopipe-v1"
+    (copy / SETTINGS_PATH).write_text(json.dumps(settings), encoding="utf-8")
+    rehash(copy, SETTINGS_PATH)
+    again = recompute_package(copy)
+    # the rows say they were reduced by today's method: the settings cannot say otherwise
+    assert not again.ok
+    assert len([x for x in again.lines() if "its settings in evidence/settings.json say "
+                "'tribopipe-v1'" in x]) == 3
+    assert any("reduced by method 'tribopipe-v1', which this tribopipe" in line
+               for line in again.account())
+
+
+def test_publish_says_which_evidence_it_could_not_find(tmp_path):
+    map_path, processed = make_processed(tmp_path, RUNS[:2])
+    shutil.rmtree(processed / "traces")
+    result = invoke("map", "publish", "-o", tmp_path / "pkg", "--lab", "Lab E",
+                    "--map", map_path, "--with-raw", "--raw-dir", tmp_path / "raw")
+    assert result.exit_code == 0, result.output
+    assert "evidence: 0 traces, 2 raw exports" in result.output
+    assert f"note: 2 of 2 reduced runs have no trace under {processed / 'traces'}" \
+        in result.output
+    again = recompute_package(tmp_path / "pkg")
+    assert again.ok and [r.basis for r in again.rows] == ["raw export"] * 2

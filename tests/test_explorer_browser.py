@@ -867,6 +867,11 @@ def test_no_element_overflows_its_card(browser, reduced, published, width, tmp_p
         assert layout["table_overflow_px"] <= 1, where
         # one speed, one lab: no empty selector
         assert layout["selectors_shown"] == ["pin", "disc"], where
+        if name == "report":  # the report's own tables fit the window too
+            cut = tab.page.evaluate("""() => Array.from(document.querySelectorAll(
+              'table'), t => [t.id, t.getBoundingClientRect().right -
+              document.documentElement.clientWidth]).filter(x => x[1] > 1)""")
+            assert cut == [], f"report at {width} px: {cut}"
         # each repeat stays on one or two lines
         heights = tab.page.evaluate("""() => Array.from(
           document.querySelectorAll('.tpx-repeat'), d => d.getBoundingClientRect().height /
@@ -903,11 +908,101 @@ def test_a_pair_of_several_speeds_gets_a_speed_selector_and_link(browser, tmp_pa
         "[...document.getElementById('tpx-group-table').tHead.rows[0].cells]"
         ".map(c => c.textContent)")
     assert heads[5] == "v [mm/s]"
+    # each speed drawn, listed and labelled apart: the plot holds this speed's repeats and
+    # group means only, its title names the speed, the groups used list it
+    runs = read_map(map_path)
+    at = runs[(runs["pin"] == pin) & (runs["disc"] == disc)
+              & (runs["nominal_speed_mm_s"].round(4) == 0.07)]
+    drawn = first.page.evaluate("""() => ({
+      runs: document.querySelectorAll('#tpx-pair-plot circle.tpx-run').length,
+      means: document.querySelectorAll('#tpx-pair-plot circle.tpx-mean').length,
+      title: document.querySelector('#tpx-pair-plot text.tpx-title').textContent,
+      used: [...document.querySelectorAll('#tpx-used-points tbody tr')]
+        .map(tr => tr.cells[2].textContent)})""")
+    assert drawn["runs"] == len(at) > 0
+    assert drawn["means"] == at.groupby(["normal_force_N", "temperature_C"]).ngroups
+    assert drawn["title"] == f"{pin} on {disc}, 0.07 mm/s"
+    assert drawn["used"] and set(drawn["used"]) == {"0.07"}
     # a pair of one speed: no selector
     first.page.select_option("#disc", label="steel")
     assert first.page.evaluate("document.getElementById('tpx-speed-label').hidden")
+    assert not first.page.is_visible("#speed")
     first.check_clean()
     first.close()
+
+
+def test_a_large_maps_runs_load_from_beside_the_page(tab, reduced, tmp_path):
+    """Above the limit the page carries groups and fits, and each pair's runs come from
+    a file beside it when the pair is shown; a missing file is said, the rest works."""
+    from tribopipe.export.explorer import runs_folder
+
+    map_path, _, groups, _ = reduced
+    page = write_explorer(map_path, tmp_path / "big.html", runs_inline_limit=0)
+    folder = runs_folder(page)
+    html = page.read_text(encoding="utf-8")
+    assert "tpx-runs-0" not in html and '"runs_beside":"big_runs"' in html
+    assert sorted(p.name for p in folder.iterdir()) == [
+        f"pair-{i}.js" for i in range(len(list(folder.iterdir())))]
+    tab.open(page_url(page, pin="Dragonskin 30", disc="steel", pressure="50",
+                      temperature="20"))
+    tab.wait_until("document.querySelectorAll('.tpx-repeat').length > 0")
+    assert_shows(tab, query(groups, "Dragonskin 30", "steel", 50.0, 20.0))
+    runs = read_map(map_path)
+    pair = runs[(runs["pin"] == "Dragonskin 30") & (runs["disc"] == "steel")]
+    assert tab.page.locator("#tpx-pair-plot circle.tpx-run").count() == len(pair)
+    assert any(u.startswith(folder.resolve().as_uri()) for u in tab.requests)
+    # a pair whose file is gone: μ still shows, the note says where the runs should be
+    other = next(i for i, p in enumerate(tab.page.evaluate(
+        "window.tribopipeExplorer.data.pairs.map(p => p.pin + '|' + p.disc)"))
+        if p == "Ecoflex 00-50|wood (smooth)")
+    (folder / f"pair-{other}.js").unlink()
+    tab.problems.clear()
+    tab.page.select_option("#pin", label="Ecoflex 00-50")
+    tab.page.select_option("#disc", label="wood (smooth)")
+    tab.wait_until("!document.getElementById('tpx-selection-note').hidden")
+    assert f"big_runs/pair-{other}.js" in tab.page.text_content("#tpx-selection-note")
+    assert tab.page.text_content("#mu-k") != "–"
+    # the browser reports the missing file itself; nothing else went wrong
+    assert all("ERR_FILE_NOT_FOUND" in p or "Failed to load" in p for p in tab.problems)
+    tab.problems.clear()
+
+
+def test_labs_filter_the_groups_and_colour_the_repeats(tab, reduced, tmp_path):
+    from tribopipe.frictionmap import write_map
+
+    map_path, _, _, _ = reduced
+    runs = read_map(map_path)
+    runs["lab"] = ["Lab A" if i % 2 else "Lab B" for i in range(len(runs))]
+    two = tmp_path / "two_labs.parquet"
+    write_map(two, runs)
+    page = write_explorer(two, tmp_path / "labs.html")
+    tab.open(page_url(page, pin="Dragonskin 30", disc="steel", pressure="50",
+                      temperature="20"))
+    assert tab.page.is_visible("#lab") and tab.page.is_visible("#colour-by")
+    options = tab.page.locator("#lab option").all_text_contents()
+    assert options == ["every lab", "Lab A", "Lab B"]
+    every = tab.page.locator("#tpx-pair-plot circle.tpx-run").count()
+    total = len(group_rows(tab))
+    tab.page.select_option("#lab", label="Lab A")
+    assert "lab=Lab+A" in tab.address()
+    labs = tab.page.evaluate("""() => [...document.querySelectorAll(
+      '#tpx-pair-plot circle.tpx-run')].map(c => c.dataset.lab)""")
+    assert labs and set(labs) == {"0"} and len(labs) < every
+    rows = group_rows(tab)
+    assert 0 < len(rows) <= total and all("Lab A" in r[-1] for r in rows)
+    # colour by lab: each lab its colour, named in the legend
+    tab.page.select_option("#lab", label="every lab")
+    tab.page.select_option("#colour-by", "lab")
+    fills = tab.page.evaluate("""() => {
+      const out = {};
+      for (const c of document.querySelectorAll('#tpx-pair-plot circle.tpx-run'))
+        (out[c.dataset.lab] = out[c.dataset.lab] || new Set()).add(c.getAttribute('fill'));
+      return Object.fromEntries(Object.entries(out).map(([k, v]) => [k, [...v]]));
+    }""")
+    assert len(fills) == 2 and all(len(v) == 1 for v in fills.values())
+    assert fills["0"] != fills["1"]
+    legend = tab.page.locator("#tpx-pair-plot text.tpx-legend").all_text_contents()
+    assert "repeats of Lab A" in legend and "repeats of Lab B" in legend
 
 
 def test_the_group_table_filters_by_test_method(tab, tmp_path):

@@ -372,3 +372,25 @@ def test_hostile_names_stay_text_on_every_page(tmp_path, browser):
     assert tab.locator("input.lab-filter").get_attribute("value") == HOSTILE_LAB
     assert not dialogs
     context.close()
+
+
+def test_hub_init_writes_its_files_with_the_title_inert(tmp_path):
+    import tomllib
+
+    import yaml
+
+    title = 'Hub <script>x</script> "q" *b* \\ é'
+    result = invoke("hub", "init", tmp_path / "h", "--title", title)
+    assert result.exit_code == 0, result.output
+    h = tmp_path / "h"
+    assert tomllib.loads((h / "hub.toml").read_text(encoding="utf-8"))["hub"]["title"] == title
+    assert yaml.safe_load((h / "CITATION.cff").read_text(encoding="utf-8"))["title"] == title
+    assert json.loads((h / ".zenodo.json").read_text(encoding="utf-8"))["title"] == title
+    heading = (h / "README.md").read_text(encoding="utf-8").splitlines()[0]
+    assert heading.startswith("# Hub \\<script>")  # a backslash-escaped "<": text
+    workflow = yaml.safe_load((h / WORKFLOW).read_text(encoding="utf-8"))
+    steps = workflow["jobs"]["check"]["steps"]
+    assert steps[-1]["run"] == CHECK_COMMAND
+    assert "pull_request" in workflow[True]  # YAML 1.1 reads the key `on` as true
+    again = invoke("hub", "init", h)
+    assert again.exit_code == 1 and "a hub starts empty" in again.output

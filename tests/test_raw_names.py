@@ -13,6 +13,7 @@ from pathlib import Path
 import pandas as pd
 import pytest
 
+from helpers import reduce_cli
 from hostile import good_export, invoke
 from tribopipe.frictionmap.records import stored_file_name
 
@@ -20,8 +21,8 @@ NAMES = ["evil\u202etxt.csv", "two\nlines.csv", "cr\rname.csv"]
 
 
 def _reduce(export: Path, map_path: Path, out: Path, *extra: str):
-    return invoke("reduce", str(export), "--pin", "P", "--disc", "D", "--temperature", "20",
-                  "--map", str(map_path), "--output", str(out), *extra)
+    return reduce_cli(export, "--pin", "P", "--disc", "D", "--temperature", "20",
+                      "--map", map_path, "--output", out, *extra)
 
 
 def _lines_are_printable(stderr: str) -> None:

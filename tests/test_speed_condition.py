@@ -309,8 +309,8 @@ def test_the_engines_reading_between_speeds_stays_within_tolerance_of_query(
 
 
 def test_lsdyna_fits_fs_fd_dc_to_the_measured_speeds():
-    from tribopipe.export.simbase import fit_decay
     from tribopipe.export.simulators import export_simulator_input
+    from tribopipe.fit import fit_decay
 
     truth = (0.4, 0.7, 20.0)
     curve = [(v, truth[1] + (truth[0] - truth[1]) * math.exp(-truth[2] * v))

@@ -178,7 +178,8 @@ def gather_evidence(runs: pd.DataFrame, *, traces_dir: Path | None,
             files.append(EvidenceFile(mid, trace, raw, chash, str(row.method or "")))
     if missing_trace:
         notes.append(f"{missing_trace} of {len(reduced)} reduced runs have no trace under "
-                     f"{traces_dir}" if traces_dir else "no traces folder given")
+                     f"{traces_dir} (pass --traces FOLDER)" if traces_dir is not None
+                     else "no traces folder given")
     if missing_raw:
         notes.append(f"{missing_raw} of {len(reduced)} reduced runs have no raw export "
                      f"(by name and SHA-256) under {', '.join(map(str, raw_dirs))}")
@@ -317,8 +318,21 @@ def recompute_package(path: str | os.PathLike[str],
     except PackageRefused as exc:
         out.problems.append(f"{DESCRIPTOR}: {exc.problem}")
         return out
-    index, settings = _read_evidence(descriptor, base, limits, out.problems)
+    index, settings, other_methods = _read_evidence(descriptor, base, limits, out.problems)
     for row in check.runs.itertuples(index=False):
+        method = other_methods.get(str(row.config_hash or ""))
+        if method is not None and str(row.measurement_id) in index:
+            mid = str(row.measurement_id)
+            # the row itself names the method that reduced it: the two must agree
+            said = str(row.method or "").split(":", 1)[0]
+            problems = () if said == method else (
+                f"run {mid}: its row says method {printable(said)!r}, its settings in "
+                f"{SETTINGS_PATH} say {method!r}",)
+            out.rows.append(RowCheck(
+                mid, NO_EVIDENCE, (_number(row.mu_s), _number(row.mu_k)), problems=problems,
+                why=f"reduced by method {method!r}, which this tribopipe "
+                    f"({REDUCTION_METHOD}) cannot run"))
+            continue
         out.rows.append(_check_row(row, index, settings, base, limits))
     return out
 
@@ -337,24 +351,25 @@ def _resource_bytes(descriptor: dict[str, Any], name: str, base: Path,
 
 def _read_evidence(descriptor: dict[str, Any], base: Path, limits: PackageLimits,
                    problems: list[str]) -> tuple[dict[str, dict[str, str]],
-                                                 dict[str, Settings]]:
-    """The index rows by measurement id and the settings by config hash (each checked to
-    hash to its key); problems appended one line each."""
+                                                 dict[str, Settings], dict[str, str]]:
+    """The index rows by measurement id, the settings by config hash (each checked to
+    hash to its key) and the methods other than this tribopipe's by config hash (their
+    rows cannot be re-derived here); problems appended one line each."""
     try:
         index_bytes = _resource_bytes(descriptor, INDEX_RESOURCE, base, limits)
         settings_bytes = _resource_bytes(descriptor, SETTINGS_RESOURCE, base, limits)
     except PackageRefused as exc:
         problems.append(f"{EVIDENCE_DIR}: {exc.problem}")
-        return {}, {}
+        return {}, {}, {}
     if index_bytes is None:
-        return {}, {}
+        return {}, {}, {}
     index: dict[str, dict[str, str]] = {}
     try:
         reader = csv.DictReader(io.StringIO(index_bytes.decode("utf-8")))
         if tuple(reader.fieldnames or ()) != INDEX_COLUMNS:
             problems.append(f"{INDEX_PATH}: columns {reader.fieldnames}, expected "
                             f"{', '.join(INDEX_COLUMNS)}")
-            return {}, {}
+            return {}, {}, {}
         for line, row in enumerate(reader, 2):
             mid = row.get("measurement_id") or ""
             if not _HEX.fullmatch(mid):
@@ -364,8 +379,9 @@ def _read_evidence(descriptor: dict[str, Any], base: Path, limits: PackageLimits
             index[mid] = row
     except (UnicodeDecodeError, csv.Error) as exc:
         problems.append(f"{INDEX_PATH}: not a UTF-8 CSV ({exc})")
-        return {}, {}
+        return {}, {}, {}
     settings: dict[str, Settings] = {}
+    other_methods: dict[str, str] = {}
     if settings_bytes is not None:
         try:
             records = json.loads(settings_bytes)
@@ -374,6 +390,10 @@ def _read_evidence(descriptor: dict[str, Any], base: Path, limits: PackageLimits
             records = {}
         for key, record in (records.items() if isinstance(records, dict) else ()):
             where = f"{SETTINGS_PATH}: {printable(str(key))}"
+            method = record.get("method") if isinstance(record, dict) else None
+            if isinstance(method, str) and method != REDUCTION_METHOD:
+                other_methods[str(key)] = printable(method)
+                continue
             try:
                 found = settings_from_record(record, where)
             except ConfigError as exc:
@@ -384,11 +404,10 @@ def _read_evidence(descriptor: dict[str, Any], base: Path, limits: PackageLimits
                                 "to their key (edited after the runs were reduced)")
                 continue
             if record.get("method") != REDUCTION_METHOD:
-                problems.append(f"{where}: method {printable(str(record.get('method')))!r} "
-                                f"is not this tribopipe's {REDUCTION_METHOD!r}")
+                problems.append(f"{where}: expected 'method', the reduction method's name")
                 continue
             settings[key] = found
-    return index, settings
+    return index, settings, other_methods
 
 
 def _number(value: Any) -> float | None:

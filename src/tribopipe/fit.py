@@ -1,4 +1,7 @@
-"""Power-law pressure dependence of μ_K: μ = k·p^(n−1), fitted per pair and temperature.
+"""The fits of the map's μ_K: its power-law pressure dependence μ = k·p^(n−1), fitted per
+pair and temperature (:func:`fit_power_law`), and its speed dependence as an exponential
+decay μ(v) = FD + (FS − FD)·exp(−DC·v) over a pair's measured speeds (:func:`fit_decay`,
+what LS-DYNA's friction card holds).
 
 Elastomer friction falls with contact pressure; a Hertz-type contact gives
 n − 1 ≈ −1/3. We fit on the individual runs (not the group means) as a straight line in
@@ -17,11 +20,11 @@ coefficient of determination of the log–log regression.
 from __future__ import annotations
 
 import math
-from pathlib import Path
+from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 from .errors import MapError
-from .frictionmap import read_map
+from .frictionmap.snapshot import MapSource, as_snapshot
 from .stats import NOMINAL_SPEED, nominal_speeds, pairs_with_several_speeds, t975
 
 if TYPE_CHECKING:
@@ -158,9 +161,9 @@ def fit_power_law(runs: pd.DataFrame, *, quantity: str = "mu_k") -> pd.DataFrame
     return pd.DataFrame(rows, columns=columns)
 
 
-def fit_map(map_path: str | Path) -> pd.DataFrame:
+def fit_map(map_path: MapSource) -> pd.DataFrame:
     """:func:`fit_power_law` on the runs of the friction map (Parquet) at ``map_path``."""
-    runs = read_map(map_path)
+    runs = as_snapshot(map_path).runs
     if runs.empty:
         raise MapError(
             "the friction map is empty or absent",
@@ -168,3 +171,55 @@ def fit_map(map_path: str | Path) -> pd.DataFrame:
             hint="reduce runs first (tribopipe reduce / batch) or import the published map",
         )
     return fit_power_law(runs)
+
+
+# ---------------------------------------------------------------------------- speed decay
+
+
+@dataclass(frozen=True)
+class DecayFit:
+    """μ(v) = FD + (FS − FD)·exp(−DC·v) fitted to μ_K at the measured speeds: ``fs``,
+    ``fd``, ``dc_s_per_mm`` [s/mm]; ``rms`` and ``max_abs`` the residuals (in μ) at the
+    ``n`` speeds; ``rising`` when μ grows with speed (FS < FD: elastomers below their
+    loss peak)."""
+
+    fs: float
+    fd: float
+    dc_s_per_mm: float
+    rms: float
+    max_abs: float
+    n: int
+
+    @property
+    def rising(self) -> bool:
+        """True when μ rises with speed (FS < FD)."""
+        return self.fs < self.fd
+
+
+def fit_decay(curve: list[tuple[float, float]]) -> DecayFit | None:
+    """:class:`DecayFit` of ``[(v [mm/s], μ)]`` by least squares (DC ≥ 0, started at the
+    inverse middle speed); ``None`` with fewer than 3 speeds (three parameters)."""
+    import numpy as np
+    from scipy.optimize import least_squares
+
+    if len(curve) < 3:
+        return None
+    v = np.array([c[0] for c in curve], dtype=float)
+    mu = np.array([c[1] for c in curve], dtype=float)
+
+    def model(theta: np.ndarray) -> np.ndarray:
+        return theta[1] + (theta[0] - theta[1]) * np.exp(-theta[2] * v)
+
+    start = np.array([mu[0], mu[-1], 1.0 / float(np.exp(np.mean(np.log(v))))])
+    best = None
+    for scale in (0.1, 1.0, 10.0):
+        theta0 = start.copy()
+        theta0[2] *= scale
+        sol = least_squares(lambda t: model(t) - mu, theta0,
+                            bounds=([-np.inf, -np.inf, 0.0], [np.inf, np.inf, np.inf]))
+        if best is None or sol.cost < best.cost:
+            best = sol
+    assert best is not None
+    res = model(best.x) - mu
+    return DecayFit(float(best.x[0]), float(best.x[1]), float(best.x[2]),
+                    float(np.sqrt(np.mean(res**2))), float(np.max(np.abs(res))), len(curve))

@@ -340,7 +340,9 @@ def trace_table(traces_dir: Path | None, measurement_id: str,
     terms = TraceTerms.from_json((table.schema.metadata or {}).get(TRACE_META_KEY, b""))
     if terms is None:
         raise ReviewError(f"{where}: the trace {display_path(path)} was written before traces "
-                          "kept their uncertainty terms; reduce the run again")
+                          "kept their uncertainty terms; reduce the run again",
+                          hint="remove the campaign's .tribopipe-state.*.json from its output "
+                               "folder and run batch: every run is reduced again")
     frame = table.to_pandas()
     return SlidingSamples.of_trace(frame), terms, frame
 

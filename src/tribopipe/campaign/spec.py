@@ -90,9 +90,14 @@ class Campaign:
 
     @property
     def state_path(self) -> Path:
-        """The incremental state file: ``<output_dir>/.tribopipe-state.<name>.json``
+        """The incremental state file: ``<output_dir>/.tribopipe-state.<name>.sqlite``
         (the name reduced to letters, digits, ``-`` and ``_``)."""
         return self.layout.state_path(self.name)
+
+    @property
+    def legacy_state_path(self) -> Path:
+        """The JSON state older versions wrote (read once, then converted)."""
+        return self.layout.legacy_state_path(self.name)
 
     @property
     def runs_csv(self) -> Path:

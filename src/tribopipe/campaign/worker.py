@@ -143,10 +143,15 @@ def prepare_plots(ctx: WorkerContext) -> None:
 def worker_init() -> None:
     """Start a worker process (ours for its whole life): fewer garbage-collector passes
     and one BLAS thread (see :data:`GC_THRESHOLDS`)."""
+    import signal
+
     from threadpoolctl import threadpool_limits
 
     gc.set_threshold(*GC_THRESHOLDS)
     threadpool_limits(limits=1, user_api="blas")
+    # Ctrl-C reaches the whole process group: the batch (the parent) decides what stops,
+    # and ends its workers itself
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
 
 
 @contextlib.contextmanager

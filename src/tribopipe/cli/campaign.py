@@ -74,6 +74,7 @@ def _run(campaign: Any, jobs: int | None, plots: bool | None) -> None:
     from ..campaign import run_campaign
     from ..escape import display_path, printable
     from ..export.tables import map_paper_text
+    from ..frictionmap.snapshot import snapshot_of
     from ..frictionmap.synthetic_rows import campaign_note
     from ..labels import flag_list
     from ..layout import OutputLayout
@@ -83,7 +84,7 @@ def _run(campaign: Any, jobs: int | None, plots: bool | None) -> None:
     def progress(done: int, total: int) -> None:
         nonlocal bar
         if bar is None:
-            bar = click.progressbar(length=total, label="reducing", file=sys.stderr,
+            bar = click.progressbar(length=total, label="files landed", file=sys.stderr,
                                     show_pos=True)
             bar.__enter__()
         bar.update(done - bar.pos)
@@ -111,12 +112,20 @@ def _run(campaign: Any, jobs: int | None, plots: bool | None) -> None:
     click.echo(f"map {_shorten(report.map_path)}: {report.map_summary}")
     click.echo(f"outputs in {_shorten(report.output_dir)}/: runs.csv, failures.csv, traces/"
                + (", plots/traces/" if OutputLayout(report.output_dir).plots_dir.is_dir() else ""))
-    click.echo(map_paper_text(report.map_path), nl=False)  # the groups, rounded for print
+    # the groups, rounded for print, of the map as the batch's last write left it
+    shown = report.map_path if report.map_after is None else snapshot_of(
+        report.map_after, report.map_path, {"format": "rows"})
+    click.echo(map_paper_text(shown), nl=False)
     for line in report.ledger():  # the account comes last, where a user looks
         click.echo(printable(line))
     _remember(report.map_path)
     for problem in report.output_errors:
         click.echo(f"error: {printable(problem)}", err=True)
+    if report.interrupted is not None:
+        click.echo(f"interrupted by {report.interrupted}: {len(report.reduced)} run(s) "
+                   "landed in the map and are kept; run the batch again to reduce the rest",
+                   err=True)
+        sys.exit(130 if report.interrupted == "SIGINT" else 143)
     if not report.ok:
         parts = []
         if report.failures:
@@ -139,7 +148,7 @@ def _remember(map_path: Any) -> None:
     from ..errors import TribopipeError
     from ..project import PROJECT_FILE, remember_map
 
-    if not Path(map_path).is_file():
+    if not Path(map_path).exists():
         return
     try:
         remember_map(map_path)
@@ -183,7 +192,7 @@ def _common_run_options(func: Any) -> Any:
         help="Worker processes (default: one per available CPU).",
     )(func)
     func = click.option(
-        "--map", "map_path", type=click.Path(dir_okay=False), default=None,
+        "--map", "map_path", type=click.Path(), default=None,
         help="Friction map to update. Default: the campaign file's `map`, else "
         "friction_map.parquet in the output folder.",
     )(func)

@@ -157,6 +157,7 @@ def publish_cmd(folder: str | None, output: str | None, lab: str, contact: str |
     from ..config import load_settings
     from ..export.citation import Publisher
     from ..export.publish import publish_map
+    from ..frictionmap.snapshot import open_map
 
     if folder is not None and output is not None:
         raise click.UsageError("give the package folder once: -o/--output FOLDER")
@@ -166,7 +167,8 @@ def publish_cmd(folder: str | None, output: str | None, lab: str, contact: str |
         output = folder
     if output is None:
         raise click.UsageError("give the folder to write the package in: -o/--output FOLDER")
-    done = publish_map(map_path, output, Publisher(lab, contact, email, licence, title),
+    done = publish_map(open_map(map_path), output,
+                       Publisher(lab, contact, email, licence, title),
                        overwrite=overwrite, allow_synthetic=allow_synthetic,
                        evidence=not no_evidence, traces_dir=traces_dir, with_raw=with_raw,
                        raw_dirs=raw_dirs,
@@ -327,9 +329,10 @@ def table_cmd(
         say(f"wrote {written}", err=True)
         return
     from ..export.tables import export_table
+    from ..frictionmap.snapshot import open_map
 
     text = export_table(
-        map_path,
+        open_map(map_path),
         output,
         fmt=fmt,
         layout=layout,
@@ -360,10 +363,12 @@ def show_cmd(runs_listed: bool, groups_listed: bool, map_path: str) -> None:
     runs (with the file and test each came from) and the pooled repeatability."""
     from ..export.tables import map_paper_text
     from ..frictionmap import map_summary
+    from ..frictionmap.snapshot import open_map
 
-    click.echo(map_summary(map_path, runs_listed=runs_listed))
+    snap = open_map(map_path)  # the one read and check of the map
+    click.echo(map_summary(snap, runs_listed=runs_listed))
     if groups_listed:
-        click.echo(map_paper_text(map_path), nl=False)
+        click.echo(map_paper_text(snap), nl=False)
 
 
 @map_group.command("exclude")
@@ -390,3 +395,35 @@ def include_cmd(ids: tuple[str, ...], map_path: str) -> None:
 
     changed = include_runs(map_path, ids)
     say(f"included {len(changed)} run(s)" + (": " + ", ".join(changed) if changed else ""))
+
+
+@map_group.command("upgrade")
+@map_option
+@friendly_errors
+def upgrade_cmd(map_path: str) -> None:
+    """Convert a map kept as one Parquet file (the format before map folders) into a map
+    folder of parts at the same path, so that every later write adds a part instead of
+    rewriting the whole map. Every row is checked on the way; the old file is kept as
+    <map>.bak. A map folder already is left as it is."""
+    from ..frictionmap.store import upgrade_map
+
+    n_runs, kept = upgrade_map(map_path)
+    if kept is None:
+        say(f"{map_path}: a map folder of parts already ({n_runs} runs); nothing to do")
+    else:
+        say(f"{map_path}: converted to a map folder of parts ({n_runs} runs); the single "
+            f"file is kept as {kept}")
+
+
+@map_group.command("compact")
+@map_option
+@friendly_errors
+def compact_cmd(map_path: str) -> None:
+    """Rewrite a map folder's parts as one part (with the safety of every write: the new
+    part fsynced, the manifest swapped atomically, the previous commit kept as
+    _manifest.json.bak). Writes keep the number of parts small on their own; compact
+    before copying a map, or after many exclusions."""
+    from ..frictionmap.store import compact_map
+
+    before, after = compact_map(map_path)
+    say(f"{map_path}: {before} part(s) → {after}")

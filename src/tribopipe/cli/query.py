@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import math
+from typing import Any
 
 import click
 
@@ -71,9 +72,11 @@ def query_cmd(
     (--force, converted with the instrument file's pins).
     """
     from ..config import load_settings
+    from ..frictionmap.snapshot import open_map
     from ..frictionmap.synthetic_rows import map_synthetic_note
     from ..numeric import finite_json
-    from ..query import format_result, query_map
+    from ..query import query_map
+    from ..query_text import format_result
 
     if (pressure_kPa is None) == (normal_force_N is None):
         raise click.UsageError("give exactly one of --pressure and --force")
@@ -85,11 +88,12 @@ def query_cmd(
         instrument = load_settings(instrument_path).instrument
         pressure_kPa = instrument.pressure_kPa(normal_force_N)
     assert pressure_kPa is not None
+    snap = open_map(map_path)  # the one read and check of the map
     if use_master_curve:
-        _master_curve_query(map_path, pin, disc, pressure_kPa, temperature_C, speed_mm_s,
+        _master_curve_query(snap, pin, disc, pressure_kPa, temperature_C, speed_mm_s,
                             as_json)
         return
-    result = query_map(map_path, pin, disc, pressure_kPa, temperature_C, speed_mm_s)
+    result = query_map(snap, pin, disc, pressure_kPa, temperature_C, speed_mm_s)
     if as_json:
         data = result.to_dict()
         if normal_force_N is not None:
@@ -97,12 +101,12 @@ def query_cmd(
         click.echo(json.dumps(finite_json(data), indent=2, allow_nan=False))
     else:
         click.echo(format_result(result, normal_force_N, instrument))
-    note = map_synthetic_note(map_path)
+    note = map_synthetic_note(snap)
     if note is not None:  # on stderr with --json, so the JSON stays one document
         click.echo(note, err=as_json)
 
 
-def _master_curve_query(map_path: str, pin: str, disc: str, pressure_kPa: float,
+def _master_curve_query(map_path: Any, pin: str, disc: str, pressure_kPa: float,
                         temperature_C: float | None, speed_mm_s: float | None,
                         as_json: bool) -> None:
     """``query --master-curve``: the model-based prediction, as JSON or a few lines."""

@@ -49,7 +49,7 @@ from ..errors import ExportError
 from ..escape import csv_cell, html_text, printable, script_json
 from ..files import write_text_atomic
 from ..fit import fit_power_law, power_law
-from ..frictionmap import read_map
+from ..frictionmap.snapshot import MapSource, as_snapshot
 from ..interpolation import EXTRAPOLATED, temperature_needed
 from ..labels import flag_list
 from ..physics import FOUNDING_SLIDING_SPEED_MM_S
@@ -100,6 +100,9 @@ DATA_FORMAT = "tribopipe-explorer/2"
 DATA_ELEMENT_ID = "explorer-data"
 #: id prefix of the data elements that hold each pair's runs (``tpx-runs-0``, …)
 RUNS_ELEMENT_PREFIX = "tpx-runs-"
+#: a page carries its runs up to this many; a larger map's runs lie beside it, one file
+#: per pair (a run costs about 150 bytes of page: 20,000 keep a page near 3 MB)
+RUNS_INLINE_LIMIT = 20_000
 #: the parts of the page's script (``assets/js/``), in the order they are joined
 SCRIPT_PARTS = (
     "prelude.js", "pyformat.js", "query.js", "snippets.js", "dom.js", "plots.js", "table.js",
@@ -111,8 +114,9 @@ CSV_COLUMNS = (
     "mu_s", "mu_s_U_k2", "mu_s_ci95_half_width", "clamped_pressure", "clamped_temperature",
     "measured_groups", "notes", "map", "tribopipe_version",
 )
-#: points per fitted power-law curve (log-spaced over the fitted pressure range)
-FIT_CURVE_POINTS = 48
+#: points per fitted power-law curve (log-spaced over the fitted pressure range), each
+#: coordinate to 4 significant digits (they are drawn, never computed with)
+FIT_CURVE_POINTS = 24
 
 _PLACEHOLDER = re.compile(r"\{\{(\w+)\}\}")
 #: group-table columns carried to the page (the others stay in the map's own tables)
@@ -317,7 +321,7 @@ def _fits(pair_fits: pd.DataFrame) -> list[dict[str, Any]]:
         if None not in (k, exponent, lo, hi) and 0 < lo < hi:
             p = np.geomspace(lo, hi, FIT_CURVE_POINTS)
             mu = power_law(p, k, exponent)
-            curve = [[float(a), float(b)] for a, b in zip(p, mu, strict=True)]
+            curve = [[float(f"{a:.4g}"), float(f"{b:.4g}")] for a, b in zip(p, mu, strict=True)]
         row["curve"] = curve
         row["legend"] = ("not fitted" if k is None else
                          f"μ_K = {k:.3f}·(p/kPa)^{exponent:.3f}, R² {row['r_squared']:.3f}"
@@ -599,28 +603,76 @@ def _sha256(text: str) -> str:
     return "'sha256-" + base64.b64encode(digest).decode("ascii") + "'"
 
 
-def explorer_fragment(data: dict[str, Any]) -> str:
+def explorer_fragment(data: dict[str, Any], *, runs_beside: str | None = None) -> str:
     """The explorer as a block of HTML for a page that already has a ``<head>``: its
     markup, the data element and the script. The page must also carry
     :func:`explorer_style` (the rules are scoped to the block's ``.tpx`` class). One
-    explorer per page (its elements have fixed ids such as ``mu-k``)."""
-    return _fragment(data, _script())
+    explorer per page (its elements have fixed ids such as ``mu-k``). ``runs_beside``: the
+    folder (relative to the page) where :func:`runs_files` were written, instead of
+    carrying the runs in the page."""
+    return _fragment(data, _script(), runs_beside)
 
 
-def _fragment(data: dict[str, Any], js: str) -> str:
+def _packed(rows: list[dict[str, Any]]) -> dict[str, Any]:
+    """Rows (a pair's runs, the groups) as columns and rows: each key written once, not
+    once per row; a dict value's keys become columns ``name/key``."""
+    columns: list[str] = []
+    for name, value in (rows[0].items() if rows else ()):
+        columns += [f"{name}/{k}" for k in value] if isinstance(value, dict) else [name]
+
+    def cell(row: dict[str, Any], column: str) -> Any:
+        name, _, key = column.partition("/")
+        return row[name][key] if key else row[name]
+
+    return {"columns": columns, "rows": [[cell(r, c) for c in columns] for r in rows]}
+
+
+def _unpacked(packed: dict[str, Any]) -> list[dict[str, Any]]:
+    """:func:`_packed` undone."""
+    out = []
+    for row in packed["rows"]:
+        item: dict[str, Any] = {}
+        for column, value in zip(packed["columns"], row, strict=True):
+            name, _, key = column.partition("/")
+            if key:
+                item.setdefault(name, {})[key] = value
+            else:
+                item[name] = value
+        out.append(item)
+    return out
+
+
+def runs_files(data: dict[str, Any]) -> dict[str, str]:
+    """The runs of each pair as a script file of its own (name → text), for a page whose
+    runs lie beside it (:func:`explorer_page` ``runs_beside``): the page loads a pair's
+    file when it shows that pair. Each file hands its data, JSON escaped as inside a page
+    (:func:`tribopipe.escape.script_json`), to ``window.tribopipeRuns``."""
+    return {f"pair-{i}.js": f"window.tribopipeRuns({i}, {script_json(_packed(chunk))});\n"
+            for i, chunk in enumerate(data.get("runs", []))}
+
+
+def _fragment(data: dict[str, Any], js: str, runs_beside: str | None = None) -> str:
     """The fragment template filled with ``data`` (embedded JSON) and the script ``js``.
 
     Each pair's runs travel in their own data element (``#tpx-runs-<pair>``), which the
-    page parses only when it shows that pair: a large map's page opens on its groups and
+    page parses only when it shows that pair, or in files beside the page
+    (``runs_beside``) which it loads then: a large map's page opens on its groups and
     fits, and reads the runs of one pair at a time."""
     options = "".join(
         f'\n   <option value="{html_text(s["name"])}">{html_text(s["label"])}</option>'
         for s in data["snippets"])
     head = {k: v for k, v in data.items() if k != "runs"}
-    chunks = "".join(
-        f'\n<script type="application/json" id="{RUNS_ELEMENT_PREFIX}{i}">'
-        f"{script_json(chunk)}</script>"
-        for i, chunk in enumerate(data.get("runs", [])))
+    # the groups packed, their names left to their pair's (the page restores both)
+    head["groups"] = _packed([{k: v for k, v in g.items() if k not in ("pin", "disc")}
+                              for g in data["groups"]])
+    chunks = ""
+    if runs_beside is None:
+        chunks = "".join(
+            f'\n<script type="application/json" id="{RUNS_ELEMENT_PREFIX}{i}">'
+            f"{script_json(_packed(chunk))}</script>"
+            for i, chunk in enumerate(data.get("runs", [])))
+    else:
+        head["runs_beside"] = runs_beside
     return _fill(_asset("explorer_fragment.html"),
                  {"data": script_json(head), "script": js, "data_id": DATA_ELEMENT_ID,
                   "snippet_options": options, "runs": chunks})
@@ -631,15 +683,19 @@ def explorer_style() -> str:
     return _style()
 
 
-def explorer_page(data: dict[str, Any]) -> str:
+def explorer_page(data: dict[str, Any], *, runs_beside: str | None = None) -> str:
     """The standalone explorer page (UTF-8 HTML text) for :func:`explorer_data` ``data``.
 
     Its Content-Security-Policy allows only its own inline script and style (by SHA-256)
-    and ``data:`` images: the page loads nothing from anywhere.
+    and ``data:`` images: the page loads nothing from anywhere. With ``runs_beside`` (a
+    folder name relative to the page, holding :func:`runs_files`) the page carries no run
+    and its script may add the scripts of that folder ('strict-dynamic': only what its
+    own hashed script inserts runs, never markup).
     """
     js, css = _script(), _style()
+    dynamic = " 'strict-dynamic'" if runs_beside is not None else ""
     csp = (
-        f"default-src 'none'; script-src {_sha256(js)}; style-src {_sha256(css)}; "
+        f"default-src 'none'; script-src {_sha256(js)}{dynamic}; style-src {_sha256(css)}; "
         "img-src data:; base-uri 'none'; form-action 'none'"
     )
     source = data.get("source")
@@ -654,7 +710,7 @@ def explorer_page(data: dict[str, Any]) -> str:
             "title": html_text(str(data.get("title", ""))),
             "subtitle": html_text(subtitle),
             "style": css,
-            "fragment": _fragment(data, js),
+            "fragment": _fragment(data, js, runs_beside),
         },
     )
 
@@ -672,19 +728,41 @@ def read_embedded_data(html: str) -> dict[str, Any]:
     if match is None:
         raise ExportError(f"no explorer data (script element #{DATA_ELEMENT_ID}) in the page")
     data: dict[str, Any] = json.loads(match.group(1))
+    data["groups"] = [{"pin": data["pairs"][g["pair"]]["pin"],
+                       "disc": data["pairs"][g["pair"]]["disc"], **g}
+                      for g in _unpacked(data["groups"])]
     chunks = re.findall(
         r'<script type="application/json" id="' + re.escape(RUNS_ELEMENT_PREFIX)
         + r'(\d+)">(.*?)</script>', html, re.DOTALL)
-    data["runs"] = [json.loads(text) for _, text in sorted(chunks, key=lambda c: int(c[0]))]
+    data["runs"] = [_unpacked(json.loads(text))
+                    for _, text in sorted(chunks, key=lambda c: int(c[0]))]
     return data
 
 
 # ---------------------------------------------------------------------------- I/O edge
 
 
-def build_explorer(map_path: str | Path, *, title: str | None = None) -> str:
-    """The explorer page (HTML text) of the friction map (Parquet) at ``map_path``."""
-    runs = read_map(map_path)
+def runs_folder(output: str | Path) -> Path:
+    """The folder beside an explorer page ``output`` that holds its runs when the map is
+    too large to carry them in the page: ``<name>_runs``."""
+    out = Path(output)
+    return out.with_name(out.stem + "_runs")
+
+
+def write_explorer(
+    map_path: MapSource,
+    output: str | Path,
+    *,
+    title: str | None = None,
+    runs_inline_limit: int = RUNS_INLINE_LIMIT,
+) -> Path:
+    """Write the explorer page of the map at ``map_path`` to ``output`` (atomically).
+
+    A map of more than ``runs_inline_limit`` included runs gets its runs in
+    :func:`runs_folder` beside the page, one file per pair (written first, each
+    atomically), so the page stays small; a smaller map's page carries them and is one
+    file."""
+    runs = as_snapshot(map_path).runs
     if runs.empty:
         raise ExportError(
             "the friction map is empty or absent",
@@ -694,9 +772,10 @@ def build_explorer(map_path: str | Path, *, title: str | None = None) -> str:
     data = explorer_data(
         runs, title=title or "tribopipe friction-map explorer", source=str(map_path)
     )
-    return explorer_page(data)
-
-
-def write_explorer(map_path: str | Path, output: str | Path, *, title: str | None = None) -> Path:
-    """Write the explorer page of the map at ``map_path`` to ``output`` (atomically)."""
-    return write_text_atomic(output, build_explorer(map_path, title=title))
+    if sum(len(chunk) for chunk in data["runs"]) <= runs_inline_limit:
+        return write_text_atomic(output, explorer_page(data))
+    folder = runs_folder(output)
+    folder.mkdir(parents=True, exist_ok=True)
+    for name, text in runs_files(data).items():
+        write_text_atomic(folder / name, text)
+    return write_text_atomic(output, explorer_page(data, runs_beside=folder.name))

@@ -18,11 +18,11 @@ from typing import TYPE_CHECKING
 
 from ..errors import ExportError
 from ..escape import sim_comment
+from ..fit import DecayFit, fit_decay
 from ..interpolation import ENGINE_TOLERANCE
 from ..query import QueryResult
 from .simbase import (
     FOUNDING_SLIP_RATE,
-    DecayFit,
     Engine,
     SlipRate,
     breakaway,
@@ -32,7 +32,6 @@ from .simbase import (
     default_decay_s_per_mm,
     densify_lines,
     filled_lines,
-    fit_decay,
     header_bodies,
     num,
     selected_pairs,
@@ -374,7 +373,7 @@ def write_lsdyna(
 
     Where the pair is measured at three or more sliding speeds (``speed_curve``: μ_K at
     each, [mm/s]) and ``coefficient="mu_k"``, FS, FD and DC are fitted to μ_K(v)
-    (:func:`tribopipe.export.simbase.fit_decay`) and the header gives the fit's
+    (:func:`tribopipe.fit.fit_decay`) and the header gives the fit's
     residuals; otherwise as follows, and the header says no speed dependence was
     measured.
 

@@ -449,55 +449,6 @@ def speed_curve(groups: pd.DataFrame, pin: str, disc: str, pressure_kPa: float,
             for v in speeds]
 
 
-@dataclass(frozen=True)
-class DecayFit:
-    """μ(v) = FD + (FS − FD)·exp(−DC·v) fitted to μ_K at the measured speeds: ``fs``,
-    ``fd``, ``dc_s_per_mm`` [s/mm]; ``rms`` and ``max_abs`` the residuals (in μ) at the
-    ``n`` speeds; ``rising`` when μ grows with speed (FS < FD: elastomers below their
-    loss peak)."""
-
-    fs: float
-    fd: float
-    dc_s_per_mm: float
-    rms: float
-    max_abs: float
-    n: int
-
-    @property
-    def rising(self) -> bool:
-        """True when μ rises with speed (FS < FD)."""
-        return self.fs < self.fd
-
-
-def fit_decay(curve: list[tuple[float, float]]) -> DecayFit | None:
-    """:class:`DecayFit` of ``[(v [mm/s], μ)]`` by least squares (DC ≥ 0, started at the
-    inverse middle speed); ``None`` with fewer than 3 speeds (three parameters)."""
-    import numpy as np
-    from scipy.optimize import least_squares
-
-    if len(curve) < 3:
-        return None
-    v = np.array([c[0] for c in curve], dtype=float)
-    mu = np.array([c[1] for c in curve], dtype=float)
-
-    def model(theta: np.ndarray) -> np.ndarray:
-        return theta[1] + (theta[0] - theta[1]) * np.exp(-theta[2] * v)
-
-    start = np.array([mu[0], mu[-1], 1.0 / float(np.exp(np.mean(np.log(v))))])
-    best = None
-    for scale in (0.1, 1.0, 10.0):
-        theta0 = start.copy()
-        theta0[2] *= scale
-        sol = least_squares(lambda t: model(t) - mu, theta0,
-                            bounds=([-np.inf, -np.inf, 0.0], [np.inf, np.inf, np.inf]))
-        if best is None or sol.cost < best.cost:
-            best = sol
-    assert best is not None
-    res = model(best.x) - mu
-    return DecayFit(float(best.x[0]), float(best.x[1]), float(best.x[2]),
-                    float(np.sqrt(np.mean(res**2))), float(np.max(np.abs(res))), len(curve))
-
-
 def _steepest(speeds: list[float], rows: list[list[float]]) -> Callable[[float], float]:
     """μ [-] over speed [mm/s] that is, between each two measured ``speeds``, linear in
     ln v with the steepest slope of any of ``rows`` (μ at the measured speeds) there: the

@@ -24,6 +24,7 @@ from ..errors import MapError
 from ..validate import text_problem
 from .datapackage import DESCRIPTOR
 from .package import package_runs
+from .parts import MANIFEST
 from .schema import frame_rows, is_missing
 from .store import AppendReport, append_records, read_map
 
@@ -53,9 +54,12 @@ class MergeReport:
 
 
 def is_package(path: str | os.PathLike[str]) -> bool:
-    """True when ``path`` names a data package: a folder, or a ``.json`` descriptor."""
+    """True when ``path`` names a data package: a folder (not a map folder of parts, which
+    holds a manifest), or a ``.json`` descriptor."""
     p = Path(path)
-    return p.is_dir() or p.name == DESCRIPTOR or p.suffix.lower() == ".json"
+    if p.is_dir():
+        return not (p / MANIFEST).exists()
+    return p.name == DESCRIPTOR or p.suffix.lower() == ".json"
 
 
 def merge_map(

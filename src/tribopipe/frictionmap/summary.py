@@ -10,21 +10,25 @@ from ..errors import MapError
 from ..escape import display_path, printable
 from ..labels import flag_list
 from ..measurement import run_name
-from ..stats import group_statistics, repeatability
+from ..stats import repeatability
 from .checks import validate_runs
 from .schema import is_missing
-from .store import read_map
+from .snapshot import MapSource, as_snapshot
+from .store import verify_map
 from .synthetic_rows import synthetic_note
 
 
-def map_summary(path: str | os.PathLike[str], *, runs_listed: bool = False) -> str:
+def map_summary(path: MapSource, *, runs_listed: bool = False) -> str:
     """A readable multi-line summary of the map at ``path``: runs, pairs, conditions,
     sources, flags, excluded runs (with reasons and where each came from) and the pooled
-    repeatability; with ``runs_listed``, then one line per run (:func:`run_line`)."""
-    p = Path(path)
-    if not p.exists():
+    repeatability; with ``runs_listed``, then one line per run (:func:`run_line`).
+    ``path``: the map opened (:func:`~tribopipe.frictionmap.snapshot.open_map`), or its
+    path."""
+    snap = as_snapshot(path)
+    p = snap.path
+    if not snap.exists:
         raise MapError("friction map not found", path=p, hint="pass --map PATH")
-    runs = read_map(p)
+    runs = snap.runs
     lines = [f"friction map {display_path(p)}"]
     n_ex = int(runs["excluded"].sum())
     lines.append(f"  runs: {len(runs)} ({n_ex} excluded)")
@@ -33,7 +37,7 @@ def map_summary(path: str | os.PathLike[str], *, runs_listed: bool = False) -> s
     note = synthetic_note(runs)
     if note is not None:
         lines.append(f"  {note}")
-    groups = group_statistics(runs)
+    groups = snap.groups()
     pairs = runs.groupby(["pin", "disc"], sort=True)
     lines.append(f"  contact pairs: {pairs.ngroups}; condition groups: {len(groups)}")
     for source, n in runs["source"].value_counts().sort_index().items():
@@ -169,7 +173,7 @@ def check_map_file(path: str | os.PathLike[str]) -> tuple[list[str], str]:
     if not os.path.lexists(p):  # read_map takes an absent map as empty: no file to pass
         raise MapError("file not found, expected a friction map (Parquet) or a data "
                        "package", path=p)
-    runs = read_map(p)
+    runs, _ = verify_map(p)  # every check there is: parts, checksums, every row
     problems = [problem.line(display_path(p)) for problem in validate_runs(runs)]
     note = synthetic_note(runs)
     verdict = (f"friction map {display_path(p)}: {_runs(len(runs))}, "

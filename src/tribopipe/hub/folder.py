@@ -22,7 +22,7 @@ from typing import Any
 
 from .. import __version__
 from ..errors import ExportError, MapError
-from ..escape import yaml_text
+from ..escape import markdown_cell, yaml_text
 from ..files import write_text_atomic
 from ..frictionmap.datapackage import DESCRIPTOR, PackageRefused, load_descriptor
 
@@ -151,7 +151,7 @@ def init_hub(folder: Path, *, title: str) -> list[str]:
 
 def hub_readme(title: str) -> str:
     """The contributor README of a new hub."""
-    return f"""# {title}
+    return f"""# {markdown_cell(title)}
 
 A friction map that many labs grow together. Each lab's contributions are friction-map
 data packages written by tribopipe, one folder per lab and release under `labs/`. Every
@@ -171,6 +171,11 @@ the lab includes them).
 
 A new release of your lab is a new package with a new date; the newest release of each
 lab makes up the merged map.
+
+Pin and disc names must be canonical names of tribopipe's materials vocabulary. A material
+it does not know yet is one line in this hub's `materials.toml`, e.g.
+`"Mold Star 15" = {{ class = "silicone elastomer", supplier = "Smooth-On" }}` under
+`[materials]`, added in the same pull request.
 
 ## Build the site
 

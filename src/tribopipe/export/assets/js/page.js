@@ -255,7 +255,11 @@ function renderResult(res, error) {
     cells.forEach(function (v) { tr.appendChild(make("td", v)); });
     var cell = make("td", null, "tpx-t");
     // one line per repeat: its μ_K and the file and test it came from
-    u.point.runs.forEach(function (i) { cell.appendChild(make("div", runs[i].line, "tpx-repeat")); });
+    u.point.runs.forEach(function (i) {
+      if (runs[i]) cell.appendChild(make("div", runs[i].line, "tpx-repeat"));
+    });
+    if (!runs.length) cell.appendChild(make("div", DATA.runs_beside && !RUNS_MISSING[res.pair] ?
+      "loading the repeats…" : "repeats not at hand", "tpx-muted"));
     tr.appendChild(cell);
     body.appendChild(tr);
   });
@@ -343,6 +347,22 @@ function update(withDefaults) {
   drawOverview();
   renderTable();
   writeUrl();
+  sayMissingRuns();
+}
+
+/* A pair's runs arrived from beside the page (or were found missing): redraw what
+   shows them. */
+function runsArrived(index) {
+  if (index !== state.pair) return;
+  renderResult(state.result, compute()[1]);
+  drawPairPlot(state.result);
+  sayMissingRuns();
+}
+
+function sayMissingRuns() {
+  if (!DATA.runs_beside || !RUNS_MISSING[state.pair]) return;
+  note("the runs of this pair are not beside the page (" + DATA.runs_beside + "/pair-" +
+    state.pair + ".js): the groups and fits show, the repeats do not");
 }
 
 function newPair() {

@@ -13,17 +13,49 @@ var dataElement = document.getElementById("explorer-data");
 if (!root || !dataElement) return;
 var DATA = JSON.parse(dataElement.textContent);
 var PAIRS = DATA.pairs;
-var GROUPS = DATA.groups;
+var GROUPS;
 var SVG_NS = "http://www.w3.org/2000/svg";
 var COLOURS = ["#0072B2", "#D55E00", "#009E73", "#CC79A7", "#E69F00", "#56B4E9", "#7f7f7f"];
 
-/* A pair's runs (explorer.py's _runs), read from their own data element the first time
-   the pair is shown: a large map's page parses one pair's runs at a time. */
+/* A pair's runs (explorer.py's _runs, packed as columns and rows), read from their own
+   data element the first time the pair is shown; or, for a large map, from the file
+   DATA.runs_beside/pair-<i>.js beside the page, added as a script when the pair is shown
+   (it calls window.tribopipeRuns; the page redraws when it arrives). Until then, and
+   where the file is missing, the pair has no runs to show and says so. */
 var RUNS = {};
+var RUNS_MISSING = {};
+/* Rows packed as columns and rows (explorer.py's _packed; "name/key" a nested key). */
+function unpack(packed) {
+  var cols = packed.columns.map(function (c) { return c.split("/"); });
+  return packed.rows.map(function (row) {
+    var r = {};
+    cols.forEach(function (c, k) {
+      if (c.length > 1) (r[c[0]] = r[c[0]] || {})[c[1]] = row[k];
+      else r[c[0]] = row[k];
+    });
+    return r;
+  });
+}
+GROUPS = unpack(DATA.groups);
+GROUPS.forEach(function (g) { g.pin = PAIRS[g.pair].pin; g.disc = PAIRS[g.pair].disc; });
+
+window.tribopipeRuns = function (index, packed) {
+  RUNS[index] = unpack(packed);
+  if (typeof runsArrived === "function") runsArrived(index);
+};
 function runsOf(index) {
-  if (!(index in RUNS)) {
-    var e = document.getElementById("tpx-runs-" + index);
-    RUNS[index] = e ? JSON.parse(e.textContent) : (DATA.runs ? DATA.runs[index] : []);
+  if (index in RUNS) return RUNS[index];
+  var e = document.getElementById("tpx-runs-" + index);
+  if (e) {
+    RUNS[index] = unpack(JSON.parse(e.textContent));
+    return RUNS[index];
   }
-  return RUNS[index];
+  if (DATA.runs_beside && !RUNS_MISSING[index] && !document.getElementById("tpx-load-" + index)) {
+    var s = document.createElement("script");
+    s.id = "tpx-load-" + index;
+    s.src = DATA.runs_beside + "/pair-" + index + ".js";
+    s.onerror = function () { RUNS_MISSING[index] = true; runsArrived(index); };
+    document.head.appendChild(s);
+  }
+  return [];
 }

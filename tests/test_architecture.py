@@ -34,7 +34,8 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     # disk, numbers from outside, units, the output folder
     ("tribopipe", "tribopipe.errors", "tribopipe.escape", "tribopipe.validate",
      "tribopipe.files", "tribopipe.numeric", "tribopipe.units", "tribopipe.layout",
-     "tribopipe.rounding", "tribopipe.project", "tribopipe.materials"),
+     "tribopipe.rounding", "tribopipe.project", "tribopipe.materials",
+     "tribopipe.reporting"),
     ("tribopipe.measurement",),
     ("tribopipe.physics",),
     ("tribopipe.config",),

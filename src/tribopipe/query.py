@@ -31,6 +31,7 @@ from __future__ import annotations
 
 import difflib
 import math
+from collections.abc import Sequence
 from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -51,7 +52,15 @@ from .interpolation import (
 from .numeric import finite_or_none
 from .physics import FOUNDING_SLIDING_SPEED_MM_S
 from .rounding import known_u, lower_bound, plus_minus
-from .stats import NOMINAL_SPEED, group_statistics, group_u
+from .stats import (
+    LABS,
+    LABS_DISAGREE,
+    NOMINAL_SPEED,
+    group_statistics,
+    group_u,
+    lab_names,
+    select_labs,
+)
 
 if TYPE_CHECKING:
     import numpy as np
@@ -695,19 +704,29 @@ def friction_table(
     return pd.DataFrame(rows)
 
 
-def load_groups(map_path: MapSource) -> pd.DataFrame:
-    """The group statistics (excluded runs out) of a friction map: opened
-    (:func:`~tribopipe.frictionmap.snapshot.open_map`), or its path; kept with the
-    snapshot."""
+def load_groups(map_path: MapSource, labs: Sequence[str] | None = None) -> pd.DataFrame:
+    """The group statistics (excluded runs out; with ``labs``, only the runs those labs
+    measured) of a friction map: opened (:func:`~tribopipe.frictionmap.snapshot.open_map`),
+    or its path; kept with the snapshot."""
     snap = as_snapshot(map_path)
-    return snap.derived(("query.groups",), lambda: groups_of(snap.runs, snap.path))
+    key = ("query.groups", *sorted(labs or ()))
+    return snap.derived(key, lambda: groups_of(snap.runs, snap.path, labs))
 
 
-def groups_of(runs: pd.DataFrame, map_path: str | Path) -> pd.DataFrame:
+def groups_of(runs: pd.DataFrame, map_path: str | Path,
+              labs: Sequence[str] | None = None) -> pd.DataFrame:
     """Group statistics of friction-map ``runs`` (excluded runs out, the nominal speed
-    always shown); an :class:`ExportError` naming ``map_path`` when no run is left."""
+    always shown; with ``labs`` only those labs' runs, :func:`tribopipe.stats.select_labs`);
+    an :class:`ExportError` naming ``map_path`` when no run is left."""
     if "excluded" in runs.columns:
         runs = runs[~runs["excluded"].fillna(False).astype(bool)]
+    if labs:
+        held = sorted(set(lab_names(runs)))
+        runs = select_labs(runs, labs)
+        if runs.empty:
+            raise ExportError(f"no run of lab {', '.join(repr(x) for x in labs)} in the map; "
+                              f"it holds runs of {', '.join(repr(x) for x in held)}",
+                              path=map_path)
     if runs.empty:
         raise ExportError(
             "the friction map is empty or absent",
@@ -724,6 +743,45 @@ def query_map(
     pressure_kPa: float,
     temperature_C: float | None = None,
     speed_mm_s: float | None = None,
+    labs: Sequence[str] | None = None,
 ) -> QueryResult:
-    """:func:`query` on the friction map (Parquet) at ``map_path``."""
-    return query(load_groups(map_path), pin, disc, pressure_kPa, temperature_C, speed_mm_s)
+    """:func:`query` on the friction map (Parquet) at ``map_path`` (with ``labs``: on
+    those labs' runs only)."""
+    return query(load_groups(map_path, labs), pin, disc, pressure_kPa, temperature_C,
+                 speed_mm_s)
+
+
+@dataclass(frozen=True)
+class ValueLabs:
+    """Which labs a queried value comes from (``labs``, the labs of the groups it was
+    read from) and the conditions among them where labs disagree beyond R
+    (``disagree``: ``(pressure_kPa, temperature_C)``, :mod:`tribopipe.stats`)."""
+
+    labs: tuple[str, ...]
+    disagree: tuple[tuple[float, float | None], ...] = ()
+
+    def lines(self) -> list[str]:
+        """What a person reads: the labs, then each disagreement."""
+        out = [f"labs: {', '.join(self.labs)}"]
+        out += [f"labs disagree beyond R at {p:.4g} kPa"
+                + ("" if t is None else f", {t:g} °C") for p, t in self.disagree]
+        return out
+
+
+def value_labs(map_path: MapSource, result: QueryResult,
+               labs: Sequence[str] | None = None) -> ValueLabs:
+    """The :class:`ValueLabs` of a :func:`query_map` result (the same ``labs``)."""
+    groups = load_groups(map_path, labs)
+    pair = select_pair(groups, result.pin, result.disc)
+    used = {(round(u.pressure_kPa, 6), u.temperature_C) for est in (result.mu_k, result.mu_s)
+            if est is not None for u in est.used}
+    found: set[str] = set()
+    disagree = []
+    for row in pair.to_dict(orient="records"):
+        temperature = finite_or_none(row["temperature_C"])
+        if (round(float(row["pressure_kPa"]), 6), temperature) not in used:
+            continue
+        found.update(str(row[LABS]).split(";"))
+        if bool(row[LABS_DISAGREE]):
+            disagree.append((float(row["pressure_kPa"]), temperature))
+    return ValueLabs(tuple(sorted(found)), tuple(sorted(set(disagree), key=str)))

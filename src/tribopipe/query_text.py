@@ -27,7 +27,8 @@ def format_result(res: QueryResult, normal_force_N: float | None = None,
             return [f"{name} = unknown (no group of this pair holds it)"]
         head = f"{name} = {est.text()}" + ("" if est.expanded is None else " (U, k = 2)")
         groups_u = ("unknown" if est.u_groups is None else f"{est.u_groups:.2g}"
-                    + ("" if est.budgets_known else " (repeat scatter only)"))
+                    + ("" if est.budgets_known
+                       else " (with the stated u of runs without a budget)"))
         lines = [head, f"  U = 2·√(u_groups² + u_interp²): u_groups = {groups_u}, "
                        f"u_interp = {est.u_interpolation:.2g}"]
         if est.expanded is not None and est.lower is not None:

@@ -33,6 +33,7 @@ import tempfile
 import time
 import uuid
 from pathlib import Path
+from typing import Any
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))  # the generators
 
@@ -228,14 +229,231 @@ def per_size(folder: Path, n: int, template: dict) -> dict:
     return row
 
 
+# --------------------------------------------------------------------------- commands
+
+
+def _timed(argv: list[str], cwd: Path) -> tuple[float, float]:
+    """Wall seconds and peak memory [MB] of ``tribopipe ARGV`` run as a process."""
+    import subprocess
+
+    code = ("import resource, subprocess, sys, time\n"
+            "t = time.perf_counter()\n"
+            "r = subprocess.run(sys.argv[1:], stdout=subprocess.DEVNULL, "
+            "stderr=subprocess.PIPE, text=True)\n"
+            "dt = time.perf_counter() - t\n"
+            "kb = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss\n"
+            "print(dt, kb / 1024, r.returncode)\n"
+            "sys.stderr.write(r.stderr[-400:] if r.returncode > 1 else '')\n")
+    out = subprocess.run([sys.executable, "-c", code, sys.executable, "-m", "tribopipe",
+                          *argv], capture_output=True, text=True, cwd=cwd, check=True)
+    dt, mb, rc = out.stdout.split()
+    if int(rc) > 1:
+        raise SystemExit(f"tribopipe {' '.join(argv)}: exit {rc}: {out.stderr}")
+    return float(dt), float(mb)
+
+
+def build_map(path: Path, template: dict, n: int, *, pairs: bool = False) -> None:
+    """A map of ``n`` rows at ``path`` through the package's own API, landed in chunks of
+    20,000 (as a batch lands them); ``pairs``: every copy of 1,000 runs gets its own pin
+    (the pairs grow with the runs, as when labs add their own materials)."""
+    from tribopipe.frictionmap import update_map
+
+    for k in range(0, n, 20_000):
+        chunk = records(template, min(20_000, n - k), k)
+        if pairs:
+            for r in chunk:
+                r["pin"] = f"{r['pin']} lot {int(r['source_file'][10:16]) // 1000}"
+        update_map(path, chunk)
+
+
+def _commands_at(folder: Path, n: int, template: dict, export: Path, raw: Path,
+                 repeat: int) -> dict:
+    """:func:`commands` on a map of ``n`` rows (``0``: an empty map)."""
+    base = folder / f"cmd_{n}.parquet"
+    if n:
+        build_map(base, template, n)
+    row: dict = {}
+    work = folder / "work.parquet"
+
+    def fresh() -> Path:
+        if work.exists():
+            shutil.rmtree(work) if work.is_dir() else work.unlink()
+        if base.exists():
+            shutil.copytree(base, work)
+        return work
+
+    def median(argv_of, prepare=None) -> tuple[float, float]:
+        runs = []
+        for _ in range(repeat):
+            if prepare is not None:
+                prepare()
+            runs.append(_timed(argv_of(), folder))
+        return (statistics.median(r[0] for r in runs), max(r[1] for r in runs))
+
+    def reduce_argv() -> list[str]:
+        return ["reduce", str(export), "--pin", "Bench pin", "--disc", "steel", "--force",
+                "3", "--temperature", "20", "--repeat", "1", "--map", str(work),
+                "--out", str(folder / "reduced")]
+
+    def batch_prepare() -> None:
+        fresh()
+        shutil.rmtree(folder / "batch_out", ignore_errors=True)
+        shutil.rmtree(raw)
+        raw.mkdir()
+        shutil.copy(export, raw / "Benchpin_steel_3N_20C_r1.csv")
+
+    def batch_argv() -> list[str]:
+        return ["batch", str(raw), "--pattern", "{pin}_{disc}_{force}N_{temperature}C_r{repeat}",
+                "--map", str(work), "--out", str(folder / "batch_out"), "--no-plots",
+                "-j", "1"]
+
+    row["reduce"] = median(reduce_argv, fresh)
+    row["batch_one_new"] = median(batch_argv, batch_prepare)
+    if n:
+        m = ["--map", str(base)]
+        row["query"] = median(lambda: ["query", "--pin", "Dragonskin 30", "--disc",
+                                       "steel", "--pressure", "40", "--temperature",
+                                       "20", *m])
+        row["map_show"] = median(lambda: ["map", "show", *m])
+        row["map_table_paper"] = median(lambda: ["map", "table", "--layout", "paper", *m])
+        row["export_abaqus_one_pair"] = median(lambda: [
+            "export", "abaqus", "--pin", "Dragonskin 30", "--disc", "steel", *m,
+            "-o", str(folder / "f.inp")])
+        row["map_validate"] = median(lambda: ["map", "validate", str(base)], None)
+        pkg = folder / "pkg"
+        row["map_publish"] = median(
+            lambda: ["map", "publish", str(pkg), "--lab", "Bench Lab", "--overwrite",
+                     "--allow-synthetic", *m])
+        row["map_MB_on_disk"] = (sum(f.stat().st_size for f in base.rglob("*")
+                                     if f.is_file()) / 1e6, 0.0)
+    return row
+
+
+def commands(folder: Path, sizes: list[int], template: dict, repeat: int) -> dict:
+    """Wall time [s] and peak memory [MB] of each command of the issue's targets on maps
+    of each size (median of ``repeat`` runs; the appending commands on a fresh copy of
+    the map each time), and on an empty map for ``reduce`` and ``batch``."""
+    from generators.synthetic import SyntheticRun, write_rheocompass_export
+
+    export = write_rheocompass_export(folder / "new_export.csv", SyntheticRun(seed=7),
+                                      project="p", test="t", sample="s")
+    raw = folder / "raw"
+    raw.mkdir()
+    results: dict = {}
+    for n in [0, *sizes]:
+        row = _commands_at(folder, n, template, export, raw, repeat)
+        results[str(n)] = row
+        print(f"  {n} rows: " + ", ".join(f"{k} {v[0]:.2f} s/{v[1]:.0f} MB"
+                                          for k, v in row.items()), flush=True)
+    return results
+
+
+def per_group(folder: Path, groups: list[int], template: dict) -> dict:
+    """Wall seconds per condition group of the commands over every pair (``export
+    abaqus`` of every pair, ``explore``, ``report``) on maps whose pairs grow with the
+    runs (one run per group)."""
+    out: dict = {}
+    for n in groups:
+        base = folder / f"groups_{n}.parquet"
+        build_map(base, template, n, pairs=True)
+        m = ["--map", str(base)]
+        row = {
+            "export_abaqus_every_pair": _timed(["export", "abaqus", *m,
+                                                "-o", str(folder / "all.inp")], folder),
+            "explore": _timed(["explore", *m, "-o", str(folder / "e.html")], folder),
+            "report": _timed(["report", *m, "--processed", str(folder / "none"),
+                              "-o", str(folder / "r.html")], folder),
+        }
+        out[str(n)] = {k: (v[0], v[0] / n * 1e3, v[1]) for k, v in row.items()}
+        print(f"  {n} groups: " + ", ".join(f"{k} {v[0]:.1f} s ({v[1]:.2f} ms/group, "
+                                            f"{v[2]:.0f} MB)" for k, v in out[str(n)].items()),
+              flush=True)
+    return out
+
+
+def map_costs(folder: Path, sizes: list[int], template: dict) -> dict:
+    """CPU seconds (``time.process_time``: what the load of other processes does not
+    change) of the map's own operations at each size, the map folder of parts against
+    the same rows in one file (the format before parts): open all columns, open the ids
+    only, append one run, the full check of ``map validate``."""
+    from tribopipe.frictionmap import records_frame, update_map
+    from tribopipe.frictionmap.snapshot import open_map
+    from tribopipe.frictionmap.store import verify_map, write_map_copy
+
+    out: dict = {}
+    for n in sizes:
+        base = folder / f"costs_{n}.parquet"
+        build_map(base, template, n)
+        single = folder / f"costs_{n}_single.parquet"
+        runs = open_map(base).runs
+        write_map_copy(single, runs)
+        one = records(template, 1, 10_000_000)
+        counter = iter(range(10**6))
+
+        def append(path: Path, one: list = one, counter: Any = counter) -> None:
+            rec = dict(one[0])
+            rec["measurement_id"] = uuid.UUID(int=(1 << 100) + next(counter)).hex[-16:]
+            update_map(path, records_frame([rec]).to_dict("records"))
+
+        row = {
+            "open_all_parts": cpu(lambda b=base: open_map(b)),
+            "open_ids_parts": cpu(lambda b=base: open_map(b, ["measurement_id"])),
+            "open_all_single_file": cpu(lambda s=single: open_map(s)),
+            "append_one_parts": cpu(lambda b=base: append(b)),
+            "append_one_single_file": cpu(lambda s=single: append(s)),
+            "validate_parts": cpu(lambda b=base: verify_map(b), 1),
+            "parts": int(open_map(base, ["measurement_id"]).info["parts"]),
+        }
+        out[str(n)] = row
+        print(f"  {n} rows: " + ", ".join(f"{k} {v:.3g}" for k, v in row.items()), flush=True)
+    return out
+
+
 def main(argv: list[str] | None = None) -> dict:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--sizes", default="1000,10000,100000")
     parser.add_argument("--repeat", type=int, default=5, help="per-file repeats (5)")
     parser.add_argument("--out", type=Path, default=HERE / "scale.json")
+    parser.add_argument("--commands", action="store_true",
+                        help="time the commands of the map's targets as processes instead "
+                             "(writes bench/scale_commands.json)")
+    parser.add_argument("--map-costs", action="store_true",
+                        help="CPU time of the map's own operations, parts against one file "
+                             "(writes bench/scale_map.json)")
+    parser.add_argument("--groups", default="",
+                        help="with --commands: also the per-group costs on maps of these "
+                             "numbers of groups, e.g. 1000,10000")
     args = parser.parse_args(argv)
     sizes = [int(s) for s in args.sizes.split(",")]
     load_start = os.getloadavg()
+    if args.map_costs:
+        with tempfile.TemporaryDirectory(prefix="tribopipe-scale-") as tmp:
+            folder = Path(tmp)
+            costs = map_costs(folder, sizes, template_record(folder))
+        results = {"when_utc": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
+                   "load_average_at_start": load_start, "load_average_at_end": os.getloadavg(),
+                   "python": platform.python_version(), "cpus": os.cpu_count(),
+                   "map_cpu_s": costs}
+        target = HERE / "scale_map.json"
+        target.write_text(json.dumps(results, indent=1) + "\n", encoding="utf-8")
+        print(f"wrote {target}")
+        return results
+    if args.commands:
+        with tempfile.TemporaryDirectory(prefix="tribopipe-scale-") as tmp:
+            folder = Path(tmp)
+            template = template_record(folder)
+            print("commands ...", flush=True)
+            timed = commands(folder, sizes, template, max(1, min(args.repeat, 3)))
+            grouped = per_group(folder, [int(g) for g in args.groups.split(",") if g],
+                                template)
+        results = {"when_utc": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
+                   "load_average_at_start": load_start, "load_average_at_end": os.getloadavg(),
+                   "python": platform.python_version(), "cpus": os.cpu_count(),
+                   "commands_wall_s_peak_MB": timed, "per_group": grouped}
+        target = HERE / "scale_commands.json" if args.out == HERE / "scale.json" else args.out
+        target.write_text(json.dumps(results, indent=1) + "\n", encoding="utf-8")
+        print(f"wrote {target}")
+        return results
     with tempfile.TemporaryDirectory(prefix="tribopipe-scale-") as tmp:
         folder = Path(tmp)
         print("per-file steps ...", flush=True)

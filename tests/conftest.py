@@ -13,8 +13,12 @@ from __future__ import annotations
 import os
 from collections.abc import Iterator
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import pytest
+
+if TYPE_CHECKING:
+    import pandas as pd
 
 REPO = Path(__file__).resolve().parents[1]
 DATA = Path(__file__).resolve().parent / "data"
@@ -58,3 +62,35 @@ def _no_project_file() -> Iterator[None]:
         project.unlink(missing_ok=True)
         if kept is not None:
             project.write_bytes(kept)
+
+
+@pytest.fixture(scope="session")
+def published_runs() -> pd.DataFrame:
+    """The founding paper's published map (shipped CSV) as map rows. Read-only: a test
+    that changes it works on a copy."""
+    from published_map import PUBLISHED_CSV
+    from published_map import published_runs as runs_of
+
+    return runs_of(PUBLISHED_CSV)
+
+
+@pytest.fixture(scope="session")
+def published_groups(published_runs: pd.DataFrame) -> pd.DataFrame:
+    """The group table (``query.group_table``) of :func:`published_runs`. Read-only: a
+    test that changes it works on a copy."""
+    from published_map import group_table
+
+    return group_table(published_runs)
+
+
+@pytest.fixture(scope="session")
+def runs(published_runs: pd.DataFrame) -> pd.DataFrame:
+    """:func:`published_runs`, the map rows most tests read (a module may define its own)."""
+    return published_runs
+
+
+@pytest.fixture(scope="session")
+def groups(published_groups: pd.DataFrame) -> pd.DataFrame:
+    """:func:`published_groups`, the groups most tests query (a module may define its own,
+    e.g. with a μ_S: :func:`helpers.with_mu_s`)."""
+    return published_groups

@@ -4,6 +4,7 @@ what changed. Real synthetic RheoCompass exports, real Parquet maps, no mocks.""
 from __future__ import annotations
 
 import csv
+import json
 import os
 import shutil
 from pathlib import Path
@@ -12,8 +13,11 @@ import pandas as pd
 import pytest
 
 from generators.synthetic import SyntheticRun, write_rheocompass_export
+from helpers import write_campaign_config
+from map_files import map_bytes
 from tribopipe.campaign import campaign_listing, campaign_table, load_campaign, run_campaign
 from tribopipe.campaign.table import CHANGED, FAILED, NEW, REDUCED
+from tribopipe.frictionmap import parts as fm_parts
 
 PATTERN = "{pin}_{disc}_{force}N_{temperature}C_r{repeat}"
 DURATION_S = 150.0
@@ -36,21 +40,12 @@ def write_run(path: Path, mu_s: float, mu_k: float, force_N: float, seed: int,
 
 
 def write_config(root: Path, extra: str = "", instrument: str | None = None) -> Path:
-    lines = [
-        "[campaign]",
-        'name = "lab check"',
-        'raw_dir = "raw"',
-        'output_dir = "out"',
-        f'filename_pattern = "{PATTERN}"',
-        "plots = false",
-    ]
+    lines = ['name = "lab check"', 'raw_dir = "raw"', 'output_dir = "out"',
+             f'filename_pattern = "{PATTERN}"', "plots = false"]
     if instrument:
         lines.append(f'instrument = "{instrument}"')
-    body = "\n".join(lines) + "\n" + extra + '\n[names]\nDS30 = "Dragonskin 30"\n' \
-        'EF50 = "Ecoflex 00-50"\n'
-    cfg = root / "campaign.toml"
-    cfg.write_text(body, encoding="utf-8")
-    return cfg
+    return write_campaign_config(root, lines, extra,
+                                 {"DS30": "Dragonskin 30", "EF50": "Ecoflex 00-50"})
 
 
 @pytest.fixture(scope="module")
@@ -135,8 +130,9 @@ def read_runs_csv_like(path: Path) -> list[dict[str, str]]:
 def test_rerun_skips_everything_and_leaves_the_map_alone(campaign_dir: Path) -> None:
     campaign = load_campaign(campaign_dir / "campaign.toml")
     run_campaign(campaign, jobs=1)
-    before = campaign.map_path.read_bytes()
-    mtime = campaign.map_path.stat().st_mtime_ns
+    before = map_bytes(campaign.map_path)
+    manifest = campaign.map_path / fm_parts.MANIFEST
+    mtime = manifest.stat().st_mtime_ns
 
     again = run_campaign(campaign, jobs=1)
     assert again.reduced == []
@@ -145,8 +141,8 @@ def test_rerun_skips_everything_and_leaves_the_map_alone(campaign_dir: Path) -> 
     assert {f for f, _ in again.failures} == {"DS30_steel_9N_20C_r1.csv",
                                               "DS30_steel_3N_20C_r1.csv"}
     assert again.groups_updated == 0
-    assert campaign.map_path.read_bytes() == before
-    assert campaign.map_path.stat().st_mtime_ns == mtime
+    assert map_bytes(campaign.map_path) == before
+    assert manifest.stat().st_mtime_ns == mtime
     statuses = {r.file: r.status for r in campaign_table(campaign)}
     assert statuses["DS30_steel_1N_20C_r1.csv"] == REDUCED
     assert statuses["DS30_steel_3N_20C_r1.csv"] == FAILED
@@ -226,7 +222,7 @@ def test_tolerance_decides_the_qc_flag(campaign_dir: Path) -> None:
 def test_lost_map_makes_the_runs_land_again(campaign_dir: Path) -> None:
     campaign = load_campaign(campaign_dir / "campaign.toml")
     run_campaign(campaign, jobs=1)
-    campaign.map_path.unlink()
+    shutil.rmtree(campaign.map_path)
     report = run_campaign(campaign, jobs=1)
     assert len(report.reduced) == len(GOOD)
     assert len(pd.read_parquet(campaign.map_path)) == len(GOOD)
@@ -347,7 +343,7 @@ def test_campaigns_sharing_an_output_folder_keep_their_own_state(
         f'filename_pattern = "{PATTERN}"\nplots = false\n', encoding="utf-8")
     second = load_campaign(cfg)
     assert second.state_path != first.state_path
-    assert second.state_path.name == ".tribopipe-state.second-lab.json"
+    assert second.state_path.name == ".tribopipe-state.second-lab.sqlite"
 
     run_campaign(first, jobs=1)
     assert run_campaign(second, jobs=1).reduced == ["EF50_steel_1N_20C_r1.csv"]
@@ -397,6 +393,28 @@ def test_workers_return_typed_picklable_results(campaign_dir: Path) -> None:
     assert good.trace is not None and good.trace.is_file()
     assert good.trace.is_relative_to(campaign.output_dir)
     assert bad.reason.startswith("DS30_steel_9N_20C_r1.csv") and not bad.transient
+
+
+def test_the_state_is_sqlite_updated_row_by_row_and_an_old_json_state_converts(
+        campaign_dir: Path) -> None:
+    import sqlite3
+
+    from tribopipe.campaign.state import CampaignState, load_state
+
+    campaign = load_campaign(campaign_dir / "campaign.toml")
+    run_campaign(campaign, jobs=1)
+    state = load_state(campaign)
+    with sqlite3.connect(campaign.state_path) as con:
+        rows = con.execute("SELECT count(*) FROM files").fetchone()[0]
+    assert rows == len(state.entries) >= len(GOOD) and state.map is not None
+    # a state written as JSON by an older version is read, converted, and still counts
+    legacy = CampaignState(campaign=state.campaign, entries=state.entries, map=state.map)
+    campaign.state_path.unlink()
+    campaign.legacy_state_path.write_text(json.dumps(legacy.to_json()), encoding="utf-8")
+    assert load_state(campaign) == legacy
+    assert campaign.state_path.is_file()                 # converted
+    again = run_campaign(campaign, jobs=1)
+    assert again.reduced == [] and len(again.skipped) == len(GOOD)
 
 
 def test_the_groups_updated_are_the_statistics_groups(tmp_path: Path) -> None:

@@ -18,6 +18,8 @@ import pytest
 from click.testing import CliRunner
 
 from generators.synthetic import write_rheocompass_export
+from helpers import write_campaign_config
+from map_files import map_bytes
 from multi_exports import (
     SESSION_TRUTH,
     TEST_PATTERN,
@@ -67,16 +69,12 @@ def folder(tmp_path_factory: pytest.TempPathFactory) -> Path:
 
 def write_config(root: Path, extra: str = "", *, manifest: bool = True,
                  test_pattern: bool = True) -> Path:
-    lines = ["[campaign]", 'name = "sessions"', 'raw_dir = "raw"', 'output_dir = "out"',
-             "plots = false"]
+    lines = ['name = "sessions"', 'raw_dir = "raw"', 'output_dir = "out"', "plots = false"]
     if manifest:
         lines.append('manifest = "raw/manifest.csv"')
     if test_pattern:
         lines.append(f'test_pattern = "{TEST_PATTERN}"')
-    cfg = root / "campaign.toml"
-    cfg.write_text("\n".join(lines) + "\n" + extra + '\n[names]\nDS30 = "Dragonskin 30"\n',
-                   encoding="utf-8")
-    return cfg
+    return write_campaign_config(root, lines, extra)
 
 
 @pytest.fixture()
@@ -169,11 +167,11 @@ def test_a_mixed_folder_lands_every_run_and_names_what_it_left_out(lab: Path) ->
 def test_a_rerun_skips_every_run_and_a_changed_row_redoes_only_its_file(lab: Path) -> None:
     campaign = load_campaign(lab / "campaign.toml")
     run_campaign(campaign, jobs=1)
-    before = campaign.map_path.read_bytes()
+    before = map_bytes(campaign.map_path)
     again = run_campaign(campaign, jobs=1)
     assert again.reduced == [] and len(again.skipped) == 10
     assert again.tests == 10 and again.files == 5
-    assert campaign.map_path.read_bytes() == before
+    assert map_bytes(campaign.map_path) == before
     assert len(again.unmatched) == 2  # still named, still exit 1
 
     manifest = lab / "raw" / "manifest.csv"
@@ -464,7 +462,8 @@ def test_batch_folder_with_a_test_manifest_and_a_test_pattern(lab: Path) -> None
     assert "2 manifest row(s) matched nothing" in result.stderr
     assert "Traceback" not in result.output
     runs = pd.read_parquet(lab / "proc" / "friction_map.parquet")
-    assert len(runs) == 10 and set(runs["pin"]) == {"DS30"}
+    assert len(runs) == 10 and set(runs["pin"]) == {"Dragonskin 30"}
+    assert set(runs["pin_as_given"]) == {"DS30"}
 
 
 def test_campaign_list_shows_one_row_per_run(lab: Path) -> None:

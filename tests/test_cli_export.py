@@ -14,7 +14,7 @@ import pandas as pd
 import pytest
 from click.testing import CliRunner
 
-from published_map import PUBLISHED_CSV, group_table, published_runs, write_published_map
+from published_map import PUBLISHED_CSV, write_published_map
 from sim_files import (
     lsdyna_contact,
     mujoco_pair,
@@ -36,11 +36,6 @@ PIN, DISC = "Dragonskin 30", "steel"
 def map_path(tmp_path_factory) -> Path:
     return write_published_map(PUBLISHED_CSV,
                                tmp_path_factory.mktemp("map") / "friction_map.parquet")
-
-
-@pytest.fixture(scope="module")
-def groups() -> pd.DataFrame:
-    return group_table(published_runs(PUBLISHED_CSV))
 
 
 def _run(*args: str):

@@ -8,7 +8,6 @@ import math
 
 import pytest
 
-from published_map import group_table, published_runs
 from tribopipe.errors import ExportError
 from tribopipe.export.fe_decks import (
     abaqus_name,
@@ -17,13 +16,7 @@ from tribopipe.export.fe_decks import (
     deck_safe,
 )
 from tribopipe.export.simbase import comment_block, condition_lines
-from tribopipe.frictionmap.published import published_csv_path
 from tribopipe.query import query
-
-
-@pytest.fixture(scope="module")
-def groups():
-    return group_table(published_runs(published_csv_path()))
 
 
 def test_abaqus_constant_friction_at_an_interpolated_condition(groups):

@@ -10,6 +10,7 @@ import hashlib
 import json
 import math
 import re
+import shutil
 import subprocess
 import sys
 from html.parser import HTMLParser
@@ -322,7 +323,7 @@ def test_the_command_writes_the_page(published, tmp_path):
 def test_the_command_defaults_to_explorer_html_beside_the_map(published, tmp_path):
     map_path, _ = published
     copy = tmp_path / "friction_map.parquet"
-    copy.write_bytes(map_path.read_bytes())
+    shutil.copytree(map_path, copy)
     proc = subprocess.run(
         [sys.executable, "-m", "tribopipe", "explore", "--map", str(copy)],
         capture_output=True, text=True, cwd=tmp_path,

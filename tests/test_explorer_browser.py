@@ -867,6 +867,11 @@ def test_no_element_overflows_its_card(browser, reduced, published, width, tmp_p
         assert layout["table_overflow_px"] <= 1, where
         # one speed, one lab: no empty selector
         assert layout["selectors_shown"] == ["pin", "disc"], where
+        if name == "report":  # the report's own tables fit the window too
+            cut = tab.page.evaluate("""() => Array.from(document.querySelectorAll(
+              'table'), t => [t.id, t.getBoundingClientRect().right -
+              document.documentElement.clientWidth]).filter(x => x[1] > 1)""")
+            assert cut == [], f"report at {width} px: {cut}"
         # each repeat stays on one or two lines
         heights = tab.page.evaluate("""() => Array.from(
           document.querySelectorAll('.tpx-repeat'), d => d.getBoundingClientRect().height /

@@ -8,7 +8,7 @@ from pathlib import Path
 import pytest
 from click.testing import CliRunner
 
-from published_map import PUBLISHED_CSV, group_table, published_runs, write_published_map
+from published_map import PUBLISHED_CSV, write_published_map
 from tribopipe.cli import main
 from tribopipe.errors import ExportError
 from tribopipe.export.simulators import one_condition
@@ -20,11 +20,6 @@ PIN, DISC = "Dragonskin 30", "steel"
 def map_path(tmp_path_factory: pytest.TempPathFactory) -> Path:
     return write_published_map(PUBLISHED_CSV,
                                tmp_path_factory.mktemp("map") / "friction_map.parquet")
-
-
-@pytest.fixture(scope="module")
-def groups():
-    return group_table(published_runs(PUBLISHED_CSV))
 
 
 def _messages(args: list[str]) -> tuple[int, list[str]]:

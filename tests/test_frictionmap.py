@@ -21,6 +21,7 @@ import pytest
 
 from conftest import shared_file
 from generators.synthetic import SyntheticRun, make_intervals
+from map_files import map_bytes, the_part
 from tribopipe import __version__
 from tribopipe import frictionmap as fm
 from tribopipe.config import InstrumentConfig, load_settings, settings_from_dict
@@ -198,7 +199,7 @@ def test_append_then_read_gives_the_same_rows_and_schema_metadata(tmp_path):
     assert report.added == 3 and report.added_ids == tuple(r.measurement_id for r in records)
     runs = fm.read_map(path)
     pd.testing.assert_frame_equal(runs, fm.records_frame(records))
-    info = pq.read_schema(path).metadata[fm.schema.META_KEY]
+    info = pq.read_schema(the_part(path)).metadata[fm.schema.META_KEY]
     assert f'"schema_version": {fm.schema.SCHEMA_VERSION}'.encode() in info
     assert b'"unit": "kPa"' in info
     meta = fm.store.map_metadata(path)
@@ -217,11 +218,11 @@ def test_read_map_of_an_absent_file_is_an_empty_map(tmp_path):
 def test_appending_the_same_run_twice_keeps_one_row_and_leaves_the_file_alone(tmp_path):
     path = tmp_path / "map.parquet"
     fm.append_records(path, [run_record(1)])
-    before = path.read_bytes()
+    before = map_bytes(path)
     again = run_record(1)  # a fresh reduction: new reduced_at, same content
     report = fm.append_records(path, [again])
     assert (report.added, report.unchanged) == (0, 1)
-    assert path.read_bytes() == before
+    assert map_bytes(path) == before
     assert len(fm.read_map(path)) == 1
 
 
@@ -309,8 +310,8 @@ def test_a_map_from_a_newer_schema_or_with_a_missing_column_is_refused(tmp_path)
 
 
 def test_a_map_with_a_nan_mu_k_is_refused_on_read(tmp_path):
-    path = tmp_path / "map.parquet"
-    fm.append_records(path, [run_record(1)])
+    path = tmp_path / "map.parquet"  # a single-file map: its reader checks every row
+    fm.store.write_map_copy(path, fm.records_frame([run_record(1)]))
     table = pq.read_table(path)
     i = table.column_names.index("mu_k")
     broken = table.set_column(i, "mu_k", pa.array([float("nan")]))
@@ -378,10 +379,10 @@ def test_importing_the_published_csv_gives_169_published_rows_without_mu_s(tmp_p
 def test_importing_twice_is_idempotent(tmp_path):
     path = tmp_path / "map.parquet"
     fm.import_table(path, PUBLISHED_CSV)
-    before = path.read_bytes()
+    before = map_bytes(path)
     report = fm.import_table(path, PUBLISHED_CSV)
     assert (report.added, report.unchanged) == (0, 169)
-    assert path.read_bytes() == before
+    assert map_bytes(path) == before
 
 
 def test_the_mat_and_the_csv_import_to_identical_rows(tmp_path):
@@ -569,8 +570,8 @@ def test_real_exports_reduced_by_the_pipeline_land_once_in_the_map(tmp_path):
 
 
 def test_a_map_with_a_text_column_stored_as_numbers_is_refused(tmp_path):
-    path = tmp_path / "map.parquet"
-    fm.append_records(path, [run_record(1)])
+    path = tmp_path / "map.parquet"  # a single-file map: its reader checks every row
+    fm.store.write_map_copy(path, fm.records_frame([run_record(1)]))
     table = pq.read_table(path)
     i = table.column_names.index("pin")
     pq.write_table(table.set_column(i, "pin", pa.array([7])), path)
@@ -591,9 +592,9 @@ def test_update_map_drops_stale_runs_and_adds_new_ones_in_one_write(tmp_path):
     ids = fm.read_map(path)["measurement_id"].tolist()
     assert ids == [old[1].measurement_id, old[2].measurement_id,
                    run_record(4).measurement_id]
-    before = path.read_bytes()
+    before = map_bytes(path)
     assert not fm.update_map(path, [], drop_ids=["not-in-the-map"]).changed
-    assert path.read_bytes() == before
+    assert map_bytes(path) == before
 
 
 def test_a_map_path_inside_a_file_is_a_clean_error(tmp_path):

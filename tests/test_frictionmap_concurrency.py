@@ -13,6 +13,7 @@ from pathlib import Path
 
 import pytest
 
+from map_files import map_bytes
 from test_frictionmap import run_record
 from tribopipe import frictionmap as fm
 
@@ -28,19 +29,19 @@ for record in records:  # one append (one lock, one atomic write) per run
 print("done", len(records))
 """
 
-#: the writer, stopped once its temporary map is fully written, before it touches the map
-#: (it first links the map as <map>.bak, then renames the temporary file over the map):
-#: it writes MARKER and sleeps there until the test kills it
+#: the writer, stopped once its new part and its new manifest are fully written, before it
+#: renames the manifest over the committed one: it writes MARKER and sleeps there until
+#: the test kills it
 PAUSED_WRITER = """
 import os, pathlib, time
 map_path, marker = os.environ["MAP"], os.environ["MARKER"]
-link = os.link
-def link_after_a_pause(src, dst, *args, **kwargs):
-    if os.fspath(src) == map_path:
+replace = os.replace
+def replace_after_a_pause(src, dst, *args, **kwargs):
+    if os.fspath(dst) == os.path.join(map_path, "_manifest.json"):
         pathlib.Path(marker).write_text(str(os.getpid()))
         time.sleep(600)
-    return link(src, dst, *args, **kwargs)
-os.link = link_after_a_pause
+    return replace(src, dst, *args, **kwargs)
+os.replace = replace_after_a_pause
 """ + WRITER
 
 
@@ -82,7 +83,7 @@ def test_two_processes_appending_at_once_lose_no_run(tmp_path):
 def test_a_writer_killed_before_the_rename_leaves_the_previous_map_intact(tmp_path):
     map_path = tmp_path / "friction_map.parquet"
     fm.append_records(map_path, [run_record(1), run_record(2)])
-    before = map_path.read_bytes()
+    before = map_bytes(map_path)
     marker = tmp_path / "paused"
     writer = _start_writer(tmp_path, "new", map_path, [run_record(3)],
                            env={"MAP": str(map_path), "MARKER": str(marker)},
@@ -92,26 +93,37 @@ def test_a_writer_killed_before_the_rename_leaves_the_previous_map_intact(tmp_pa
         assert writer.poll() is None, writer.communicate()[1]
         assert time.monotonic() < deadline, "writer never reached the pause"
         time.sleep(0.05)
-    temps = list(tmp_path.glob(f".{map_path.name}.*.tmp"))
-    assert len(temps) == 1 and temps[0].stat().st_size > 0  # the new map was fully written
+    temps = list(map_path.glob(".*.tmp"))
+    assert len(temps) == 1 and temps[0].stat().st_size > 0  # the new manifest was written
     writer.send_signal(signal.SIGKILL)
     writer.communicate(timeout=60)
     assert writer.returncode == -signal.SIGKILL
 
-    assert map_path.read_bytes() == before
+    after = map_bytes(map_path)
+    # the committed manifest and its parts are byte-identical; the killed writer's part
+    # (named by no manifest), its temporary manifest and the backup of the committed
+    # manifest (written before the new one replaces it) are all it left
+    assert {k: v for k, v in after.items() if k in before} == before
+    left = set(after) - set(before) - {fm.parts.MANIFEST_BACKUP}
+    assert len(left) == 2 and {n.endswith(".tmp") for n in left} == {True, False}, left
+    backup = json.loads(after[fm.parts.MANIFEST_BACKUP])["parts"]
+    assert [p.sha256 for p in fm.parts.read_manifest(map_path).parts] == [
+        p["sha256"] for p in backup]
     runs = fm.read_map(map_path)
     assert len(runs) == 2
-    # the lock died with the writer; the next append works and clears the stale temp file
+    # the lock died with the writer; the next append works and clears what it left
     report = fm.append_records(map_path, [run_record(3)])
     assert report.added == 1 and len(fm.read_map(map_path)) == 3
-    assert not list(tmp_path.glob(f".{map_path.name}.*.tmp"))
+    assert not list(map_path.glob(".*.tmp"))
+    assert not list(fm.parts.leftovers(map_path))
 
 
 def test_a_backup_that_is_already_the_map_leaves_no_temporary_file(tmp_path):
     """A writer killed after linking the map as <map>.bak and before its rename leaves
-    <map>.bak a link of the map itself; the next write keeps it and leaves nothing else."""
+    <map>.bak a link of the map itself; the next write keeps it and leaves nothing else
+    (a single-file map: the format before map folders, rewritten whole)."""
     map_path = tmp_path / "friction_map.parquet"
-    fm.append_records(map_path, [run_record(1)])
+    fm.store.write_map_copy(map_path, fm.records_frame([run_record(1)]))
     backup = fm.store.backup_path(map_path)
     backup.unlink(missing_ok=True)
     os.link(map_path, backup)
@@ -152,7 +164,7 @@ def test_a_live_lock_refuses_in_one_line_and_a_killed_holder_s_lock_blocks_nothi
 
     map_path = tmp_path / "friction_map.parquet"
     fm.append_records(map_path, [run_record(1)])
-    before = map_path.read_bytes()
+    before = map_bytes(map_path)
     lock_path = Path(str(map_path) + ".lock")
     holder = _hold_lock(tmp_path, lock_path)
     try:
@@ -168,7 +180,7 @@ def test_a_live_lock_refuses_in_one_line_and_a_killed_holder_s_lock_blocks_nothi
                                            run_record(1)["measurement_id"], "--reason", "x"])
         assert result.exit_code == 1 and "Traceback" not in result.output
         assert "locked by another process" in result.output
-        assert map_path.read_bytes() == before
+        assert map_bytes(map_path) == before
     finally:
         holder.send_signal(signal.SIGKILL)
         holder.communicate(timeout=60)

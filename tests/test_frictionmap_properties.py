@@ -12,6 +12,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+from map_files import map_bytes
 from tribopipe import frictionmap as fm
 from tribopipe.errors import MapError
 from tribopipe.frictionmap.schema import (
@@ -96,13 +97,13 @@ def test_appending_the_same_runs_again_changes_nothing(recs, rnd):
     with tempfile.TemporaryDirectory() as tmp:
         path = Path(tmp) / "map.parquet"
         fm.append_records(path, recs)
-        before = path.read_bytes()
+        before = map_bytes(path)
         again = list(recs)
         rnd.shuffle(again)
         report = fm.append_records(path, again)
         assert report.added == report.replaced == report.kept_conflicting == 0
         assert report.unchanged == len(recs)
-        assert path.read_bytes() == before
+        assert map_bytes(path) == before
 
 
 BREAKERS = {
@@ -123,12 +124,12 @@ def test_a_failing_append_changes_no_byte_of_the_map(existing, new, breaker, dat
     with tempfile.TemporaryDirectory() as tmp:
         path = Path(tmp) / "map.parquet"
         fm.append_records(path, existing)
-        before = path.read_bytes()
+        before = map_bytes(path)
         bad = [dict(r) for r in new]
         BREAKERS[breaker](bad[data.draw(st.integers(0, len(bad) - 1))])
         with pytest.raises(MapError):
             fm.append_records(path, bad, replace=data.draw(st.booleans()))
-        assert path.read_bytes() == before
+        assert map_bytes(path) == before
         assert not [p.name for p in Path(tmp).iterdir() if p.name.endswith(".tmp")]
 
 
@@ -151,7 +152,7 @@ def test_a_raw_file_that_fails_to_reduce_changes_no_byte_of_the_map(map_with_run
 
     from tribopipe.cli import main
 
-    before = map_with_runs.read_bytes()
+    before = map_bytes(map_with_runs)
     with tempfile.TemporaryDirectory() as tmp:
         raw = Path(tmp) / "broken_export.csv"
         raw.write_bytes(content)
@@ -162,7 +163,7 @@ def test_a_raw_file_that_fails_to_reduce_changes_no_byte_of_the_map(map_with_run
         )
     assert result.exit_code == 1, result.output
     assert "Traceback" not in result.output
-    assert map_with_runs.read_bytes() == before
+    assert map_bytes(map_with_runs) == before
 
 
 @settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])

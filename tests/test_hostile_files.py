@@ -247,10 +247,10 @@ def test_batch_whose_state_cannot_be_saved_is_one_line(tmp_path: Path) -> None:
     good_export(raw / "DS30_steel_3N_20C_r1_x.csv")
     out = tmp_path / "out"
     out.mkdir()
-    (out / ".tribopipe-state.fs.json").mkdir()   # the state's name is taken by a folder
+    (out / ".tribopipe-state.fs.sqlite").mkdir()   # the state's name is taken by a folder
     result = invoke("batch", str(cfg), "--jobs", "1")
     stderr = assert_clean_failure(result)
-    assert ".tribopipe-state.fs.json" in stderr and len(error_lines(stderr)) == 1, stderr
+    assert ".tribopipe-state.fs.sqlite" in stderr and len(error_lines(stderr)) == 1, stderr
     assert (out / "runs.csv").is_file() and (out / "failures.csv").is_file()
 
 

@@ -16,6 +16,7 @@ import pandas as pd
 import pytest
 
 from generators.synthetic import make_intervals, write_intervals_export
+from helpers import reduce_cli
 from hostile import (
     GOOD_RUN,
     assert_clean_failure,
@@ -217,7 +218,7 @@ def _plain_export(path: Path, change=None) -> Path:
 
 
 def _reduce_json(tmp_path: Path, export: Path):
-    return invoke("reduce", str(export), "--json", "--no-map", "--output", str(tmp_path / "o"))
+    return reduce_cli(export, "--json", "--no-map", "--output", tmp_path / "o")
 
 
 def test_zero_torque_is_flagged_no_friction_signal(tmp_path: Path) -> None:

@@ -14,6 +14,7 @@ from __future__ import annotations
 import json
 import os
 import random
+import shutil
 import stat
 from pathlib import Path
 
@@ -23,6 +24,7 @@ import pyarrow.parquet as pq
 import pytest
 
 from hostile import assert_clean_failure, invoke
+from map_files import map_bytes, single_file, the_part
 from reduced_runs import make_processed
 from tribopipe import frictionmap as fm
 from tribopipe.errors import MapError
@@ -34,14 +36,17 @@ N_FLIPS = 300
 
 @pytest.fixture(scope="module")
 def small_map(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    """A real map: six reduced runs and ten rows of the published map imported."""
+    """A real map: six reduced runs and ten rows of the published map imported, as one
+    Parquet file (the format before map folders of parts, whose reader checks every row
+    and the checksum of the rows; a map folder's parts are checked by
+    tests/test_frictionmap_parts.py)."""
     root = tmp_path_factory.mktemp("hostile_map")
     map_path, _ = make_processed(root)
     lines = fm.published.published_csv_path().read_text(encoding="utf-8").splitlines()[:11]
     table = root / "published_part.csv"
     table.write_text("\n".join(lines) + "\n", encoding="utf-8")
     fm.import_table(map_path, table)
-    return map_path
+    return single_file(map_path, root / "single.parquet")
 
 
 def _copy(src: Path, dst: Path) -> Path:
@@ -224,7 +229,7 @@ def test_every_flipped_bit_is_refused_or_reads_identically(small_map: Path,
 def test_map_merge_of_flipped_maps_is_one_line(small_map: Path, tmp_path: Path) -> None:
     ours = tmp_path / "ours.parquet"
     fm.import_table(ours)                      # the published map
-    before = ours.read_bytes()
+    saved = shutil.copytree(ours, tmp_path / "saved.parquet")
     raw = small_map.read_bytes()
     rng = random.Random(4)
     other = tmp_path / "other.parquet"
@@ -242,7 +247,8 @@ def test_map_merge_of_flipped_maps_is_one_line(small_map: Path, tmp_path: Path) 
             refused += 1
         else:
             assert result.exit_code == 0, result.output
-            ours.write_bytes(before)           # a clean merge: start again from ours
+            shutil.rmtree(ours)                # a clean merge: start again from ours
+            shutil.copytree(saved, ours)
     assert refused > 5
 
 
@@ -283,11 +289,11 @@ def test_map_merge_checks_every_row(small_map: Path, tmp_path: Path, column: str
     other = _bad_other(small_map, tmp_path / "other.parquet", column, value, arrow_type)
     ours = tmp_path / "ours.parquet"
     fm.import_table(ours)
-    before = ours.read_bytes()
+    before = map_bytes(ours)
     stderr = assert_clean_failure(invoke("map", "merge", str(other), "--map", str(ours)))
     assert str(other) in stderr and expected in stderr, stderr
     assert len(stderr.strip().splitlines()) == 1, stderr
-    assert ours.read_bytes() == before
+    assert map_bytes(ours) == before
 
 
 HEADER = "pin,disc,contactForce,contactPressure,temperature,measurementNo,cof\n"
@@ -343,4 +349,18 @@ def test_a_new_map_gets_the_umasks_mode(tmp_path: Path, umask: int, mode: int) -
         fm.import_table(tmp_path / "new.parquet")
     finally:
         os.umask(old)
-    assert stat.S_IMODE((tmp_path / "new.parquet").stat().st_mode) == mode
+    folder = tmp_path / "new.parquet"
+    files = [folder / fm.parts.MANIFEST, the_part(folder)]
+    assert [stat.S_IMODE(f.stat().st_mode) for f in files] == [mode, mode]
+    assert stat.S_IMODE(folder.stat().st_mode) == 0o777 & ~umask
+
+
+def test_a_commit_keeps_the_map_folder_s_mode(small_map: Path, tmp_path: Path) -> None:
+    folder = tmp_path / "shared.parquet"
+    fm.write_map(folder, fm.read_map(small_map))
+    for f in folder.iterdir():
+        f.chmod(0o664)                         # colleagues on the shared drive read it
+    first = fm.read_map(folder)["measurement_id"].iloc[0]
+    fm.exclude_runs(folder, [first], "pin debonded")
+    assert stat.S_IMODE(the_part(folder).stat().st_mode) == 0o664
+    assert stat.S_IMODE((folder / fm.parts.MANIFEST).stat().st_mode) == 0o664

@@ -16,7 +16,6 @@ import pytest
 from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
-from published_map import PUBLISHED_CSV, group_table, published_runs
 from tribopipe.export.explorer import explorer_data
 from tribopipe.interpolation import (
     DENSIFY_TARGET,
@@ -34,16 +33,6 @@ from tribopipe.rounding import known_u, lower_bound, plus_minus, round_gum
 
 JS = Path(__file__).resolve().parents[1] / "src" / "tribopipe" / "export" / "assets" / "js"
 NODE = shutil.which("node")
-
-
-@pytest.fixture(scope="module")
-def runs() -> pd.DataFrame:
-    return published_runs(PUBLISHED_CSV)
-
-
-@pytest.fixture(scope="module")
-def groups(runs) -> pd.DataFrame:
-    return group_table(runs)
 
 
 def published_series(groups: pd.DataFrame) -> list[tuple[str, list[float], list[float]]]:

@@ -38,9 +38,11 @@ def test_the_folder_level_files(tmp_path: Path) -> None:
     assert out.pair_plots_dir == tmp_path / "plots" / "pairs"
     assert out.batch_lock == tmp_path / ".tribopipe-batch.lock"
     # a campaign name becomes a safe file name: never a path, never empty
-    assert out.state_path("example") == tmp_path / ".tribopipe-state.example.json"
-    assert out.state_path("../../etc/x y").name == ".tribopipe-state.etc-x-y.json"
-    assert out.state_path("///").name == ".tribopipe-state.campaign.json"
+    assert out.state_path("example") == tmp_path / ".tribopipe-state.example.sqlite"
+    assert out.state_path("../../etc/x y").name == ".tribopipe-state.etc-x-y.sqlite"
+    assert out.state_path("///").name == ".tribopipe-state.campaign.sqlite"
+    # the JSON state of older versions, read once and converted
+    assert out.legacy_state_path("../../etc/x y").name == ".tribopipe-state.etc-x-y.json"
 
 
 def test_a_trace_is_found_by_its_measurement_id(tmp_path: Path) -> None:

@@ -20,8 +20,8 @@ from click.testing import CliRunner
 
 import tribopipe.campaign.state as state
 import tribopipe.pipeline as pipeline
+from helpers import reduce_cli
 from tribopipe.cli import main
-from tribopipe.errors import OutputError
 
 ROOT = Path(__file__).resolve().parents[1]
 EXAMPLE = ROOT / "raw" / "example"
@@ -31,10 +31,6 @@ PATTERN = "{pin}_{disc}_{force}N_{temperature}C_r{repeat}"
 pytestmark = pytest.mark.skipif(not (R1.exists() and R2.exists() and OTHER.exists()),
                                 reason="the example campaign is not here")
 LABELS = ["--pin", "DS30", "--disc", "steel", "--temperature", "10"]
-
-
-def _reduce(*args: Any) -> Any:
-    return CliRunner().invoke(main, ["reduce", *map(str, args)])
 
 
 def _batch(raw: Path, tmp_path: Path, *more: str) -> Any:
@@ -68,7 +64,7 @@ def test_reduce_on_a_full_disk_names_the_output_not_the_input(
         tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     _no_space(monkeypatch)
     out, mapfile = tmp_path / "out", tmp_path / "map.parquet"
-    done = _reduce(R1, *LABELS, "--force", "1", "--output", out, "--map", mapfile)
+    done = reduce_cli(R1, *LABELS, "--force", "1", "--output", out, "--map", mapfile)
     assert done.exit_code == 1 and "Traceback" not in done.output
     (line,) = _errors(done.stderr)
     assert str(out / "traces") in line and "No space left on device" in line
@@ -85,9 +81,11 @@ def test_batch_on_a_full_disk_lists_every_run_it_could_not_write(
     _no_space(monkeypatch, only=R2.stem)
 
     def no_state(*_: Any, **__: Any) -> None:
-        raise OutputError("cannot write: No space left on device", path=tmp_path / "state")
+        import sqlite3  # what SQLite raises when the disk is full
 
-    monkeypatch.setattr(state, "write_text_atomic", no_state)
+        raise sqlite3.OperationalError("database or disk is full")
+
+    monkeypatch.setattr(state, "_connect", no_state)
     done = _batch(raw, tmp_path, "--no-plots")
     assert done.exit_code == 1 and "Traceback" not in done.output
     errors = _errors(done.stderr)
@@ -113,7 +111,7 @@ def test_a_plot_that_fails_costs_neither_its_run_nor_the_other_files(
 
     monkeypatch.setattr(pipeline, "plot_run", fragile)
     out, mapfile = tmp_path / "out", tmp_path / "map.parquet"
-    done = _reduce(R1, R2, OTHER, *LABELS, "--output", out, "--map", mapfile, "--plots")
+    done = reduce_cli(R1, R2, OTHER, *LABELS, "--output", out, "--map", mapfile, "--plots")
     assert done.exit_code == 0, done.output
     (warning,) = [ln for ln in done.stderr.splitlines() if ln.startswith("warning:")]
     assert R2.name in warning and str(out / "plots") in warning and "raqm_layout" in warning
@@ -127,7 +125,7 @@ def test_reduce_plot_of_a_file_named_with_a_newline(tmp_path: Path) -> None:
     odd = raw / "DS30_steel\n1N\r_r2.csv"
     shutil.copyfile(R2, odd)
     out, mapfile = tmp_path / "out", tmp_path / "map.parquet"
-    done = _reduce(R1, odd, OTHER, *LABELS, "--output", out, "--map", mapfile, "--plots")
+    done = reduce_cli(R1, odd, OTHER, *LABELS, "--output", out, "--map", mapfile, "--plots")
     assert "Traceback" not in done.output and done.exception is None or \
         isinstance(done.exception, SystemExit)
     assert done.exit_code == 0, done.output
@@ -147,7 +145,7 @@ def test_reduce_plot_of_a_file_named_with_a_newline(tmp_path: Path) -> None:
 def test_reduce_refuses_a_damaged_map_before_any_work(tmp_path: Path) -> None:
     mapfile, out = tmp_path / "map.parquet", tmp_path / "out"
     mapfile.write_bytes(b"PAR1 not a map at all")
-    done = _reduce(R1, *LABELS, "--force", "1", "--output", out, "--map", mapfile)
+    done = reduce_cli(R1, *LABELS, "--force", "1", "--output", out, "--map", mapfile)
     assert done.exit_code == 1 and str(mapfile) in done.output
     assert done.stdout == ""  # no results printed
     assert not out.exists()  # no trace, no summary written
@@ -160,13 +158,13 @@ def test_a_relabel_kept_conflicting_exits_1_with_the_way_out(tmp_path: Path) -> 
     mapfile, out = tmp_path / "map.parquet", tmp_path / "out"
     args = [R1, "--pin", "DS30", "--force", "1", "--temperature", "10", "--repeat", "1",
             "--output", out, "--map", mapfile]
-    assert _reduce(*args, "--disc", "stel").exit_code == 0
-    again = _reduce(*args, "--disc", "steel")
+    assert reduce_cli(*args, "--disc", "stel").exit_code == 0
+    again = reduce_cli(*args, "--disc", "steel")
     assert again.exit_code == 1
     assert "--replace" in again.stderr.splitlines()[-1]
     assert "disc 'stel' in the map, 'steel'" in again.stderr
     assert list(pd.read_parquet(mapfile)["disc"]) == ["stel"]
-    fixed = _reduce(*args, "--disc", "steel", "--replace")
+    fixed = reduce_cli(*args, "--disc", "steel", "--replace")
     assert fixed.exit_code == 0, fixed.output
     assert list(pd.read_parquet(mapfile)["disc"]) == ["steel"]
 
@@ -181,14 +179,14 @@ def test_reduce_help_says_a_kept_conflict_exits_1() -> None:
 
 def test_reduce_reports_one_repeat_number_used_twice(tmp_path: Path) -> None:
     mapfile, out = tmp_path / "map.parquet", tmp_path / "out"
-    done = _reduce(R1, R2, *LABELS, "--force", "1", "--repeat", "1", "--output", out,
+    done = reduce_cli(R1, R2, *LABELS, "--force", "1", "--repeat", "1", "--output", out,
                    "--map", mapfile, "--json")
     assert done.exit_code == 0, done.output
     (warning,) = [ln for ln in done.stderr.splitlines() if ln.startswith("warning:")]
-    assert "repeat 1 used by 2 runs of DS30 on steel, 1 N, 10 °C" in warning
+    assert "repeat 1 used by 2 runs of Dragonskin 30 on steel, 1 N, 10 °C" in warning
     assert R1.name in warning and R2.name in warning
     assert len(json.loads(done.stdout)) == 2  # reported, not refused
-    again = _reduce(R1, *LABELS, "--force", "1", "--repeat", "2", "--output", out,
+    again = reduce_cli(R1, *LABELS, "--force", "1", "--repeat", "2", "--output", out,
                     "--map", tmp_path / "other.parquet")
     assert "warning:" not in again.stderr
 

@@ -18,6 +18,7 @@ from filelock import FileLock, Timeout
 
 import tribopipe.campaign.batch as batch
 import tribopipe.pipeline as pipeline
+from helpers import reduce_cli
 from tribopipe.cli import main
 from tribopipe.frictionmap.store import update_map_with
 
@@ -62,9 +63,8 @@ def test_update_map_with_decides_under_the_lock(tmp_path: Path) -> None:
 
 
 def _reduce(path: Path, mapfile: Path, out: Path, disc: str = "steel") -> Any:
-    return CliRunner().invoke(main, [
-        "reduce", str(path), "--pin", "DS30", "--disc", disc, "--force", "1",
-        "--temperature", "10", "--repeat", "1", "--map", str(mapfile), "--output", str(out)])
+    return reduce_cli(path, "--pin", "DS30", "--disc", disc, "--force", "1",
+                      "--temperature", "10", "--repeat", "1", "--map", mapfile, "--output", out)
 
 
 def test_reduce_checks_the_same_content_under_the_map_lock(

@@ -16,6 +16,7 @@ import pandas as pd
 import pytest
 from click.testing import CliRunner
 
+from map_files import single_file
 from reduced_runs import make_processed
 from tribopipe import frictionmap as fm
 from tribopipe.cli import main
@@ -367,7 +368,7 @@ def test_merge_reports_each_conflicting_row_with_both_values(source_map, tmp_pat
     pkg = tmp_path / "pkg"
     publish_map(theirs, pkg, Publisher("Lab B"))
     ours = tmp_path / "ours.parquet"
-    shutil.copy(source_map, ours)
+    shutil.copytree(source_map, ours)
     result = invoke("map", "merge", pkg, "--map", ours)
     assert result.exit_code == 1
     conflicts = [line for line in result.output.splitlines() if line.startswith("conflict:")]
@@ -488,14 +489,14 @@ def test_a_package_of_one_lab_s_runs_says_so_in_one_line(tmp_path):
 
 def test_merge_lab_names_who_measured_a_parquet_map_s_unnamed_rows(source_map, tmp_path):
     theirs = tmp_path / "theirs.parquet"
-    shutil.copyfile(source_map, theirs)  # 6 reduced rows without a lab, 169 published
+    single_file(source_map, theirs)  # 6 reduced rows without a lab, 169 published
     ours = tmp_path / "ours.parquet"
     # without --lab their reduced rows would read as ours: said, not silent
     plain = CliRunner().invoke(main, ["map", "merge", str(theirs), "--map", str(ours)])
     assert plain.exit_code == 0, plain.output
     assert f"note: 6 row(s) of {theirs} name no lab and now read as this map's own; if " \
            "another lab measured them, merge with --lab NAME" in plain.stderr
-    ours.unlink()
+    shutil.rmtree(ours)
     named = CliRunner().invoke(main, ["map", "merge", str(theirs), "--map", str(ours),
                                       "--lab", "  Lab D  "])
     assert named.exit_code == 0, named.output

@@ -12,21 +12,15 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from published_map import PUBLISHED_CSV, group_table, published_runs
+from published_map import PUBLISHED_CSV
 from tribopipe.errors import ExportError, TribopipeError
 from tribopipe.query import (
-    format_result,
     friction_table,
     interpolation_weights,
     query,
     select_pair,
 )
-
-
-@pytest.fixture(scope="module")
-def groups() -> pd.DataFrame:
-    runs = published_runs(PUBLISHED_CSV)
-    return group_table(runs)
+from tribopipe.query_text import format_result
 
 
 def _mean(groups: pd.DataFrame, pin: str, disc: str, p: float, t: float) -> float:

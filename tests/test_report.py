@@ -183,7 +183,7 @@ def test_excluded_run_is_shown_with_its_reason(processed, tmp_path):
 
     map_path, proc = processed
     copy = tmp_path / "friction_map.parquet"
-    copy.write_bytes(map_path.read_bytes())
+    shutil.copytree(map_path, copy)
     victim = read_map(copy)["measurement_id"].iloc[0]
     exclude_runs(copy, [victim], "pin torn <after> run")
     html = build_report(report_inputs(copy, proc))
@@ -220,7 +220,7 @@ def test_runs_without_a_trace_say_which_test_and_result_they_came_from(tmp_path)
     made, _ = make_processed(tmp_path / "lab")
     map_path = tmp_path / "alone" / "friction_map.parquet"  # no traces beside it
     map_path.parent.mkdir()
-    shutil.copyfile(made, map_path)
+    shutil.copytree(made, map_path)
     html = make_report(map_path=map_path, output=tmp_path / "r.html").read_text(
         encoding="utf-8")
     header = runs_header(html)

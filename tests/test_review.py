@@ -18,6 +18,7 @@ import pyarrow.parquet as pq
 import pytest
 from click.testing import CliRunner
 
+from map_files import map_bytes
 from tribopipe.campaign import load_campaign, run_campaign
 from tribopipe.cli import main
 from tribopipe.export.citation import Publisher
@@ -237,11 +238,11 @@ def test_batch_applies_each_decision_and_keeps_the_automatic_values(campaign: Pa
     assert after.loc[ids[2], "mu_k"] == before.loc[ids[2], "mu_k"]
     # the same file again changes nothing, to the byte
     map_file = campaign / "out" / "friction_map.parquet"
-    stamp = map_file.read_bytes()
+    stamp = map_bytes(map_file)
     again = batch(campaign, "--review", str(path))
     assert again.exit_code == 0 and "map out/friction_map.parquet: unchanged" in again.output \
         or "unchanged" in again.output
-    assert map_file.read_bytes() == stamp
+    assert map_bytes(map_file) == stamp
 
 
 @pytest.mark.parametrize(("row", "words"), [
@@ -254,14 +255,14 @@ def test_a_decision_that_cannot_apply_is_refused_naming_its_line(campaign: Path,
     good = [str(the_map(campaign)["measurement_id"].iloc[1]), "accept", "", "", "", "ok", "", ""]
     path = write_review(campaign, [good, [c.format(id=mid) for c in row]])
     map_file = campaign / "out" / "friction_map.parquet"
-    stamp = map_file.read_bytes()
+    stamp = map_bytes(map_file)
     result = CliRunner().invoke(main, ["batch", str(campaign / "campaign.toml"), "-j", "1",
                                        "--review", str(path)])
     assert result.exit_code != 0
     lines = [line for line in result.output.splitlines() if line.startswith("Error")]
     assert len(lines) == 1 and "review.csv line 3" in lines[0] and words in lines[0]
     assert "Traceback" not in result.output
-    assert map_file.read_bytes() == stamp  # nothing else changed: not even the good decision
+    assert map_bytes(map_file) == stamp  # nothing else changed: not even the good decision
 
 
 def test_a_re_reduced_run_keeps_its_review(campaign: Path):

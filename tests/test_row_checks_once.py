@@ -1,6 +1,7 @@
 """A reduced run's row is checked against the row rules once on its way into the map (when
-its record is built, so a bad run fails alone) and the map's rows once on read: the store
-takes the checked record as it is."""
+its record is built, so a bad run fails alone): the store takes the checked record as it
+is, and a map of parts is not checked row by row again on read (each part's checksum
+vouches for it); a single-file map is checked on read."""
 
 from __future__ import annotations
 
@@ -45,11 +46,22 @@ def test_a_reduced_run_is_checked_once_on_its_way_in(tmp_path: Path,
         "--output", str(tmp_path / "out")])
     assert result.exit_code == 0, result.output
     assert len(store.read_map(map_path)) == n_map + 1
-    # the new run's row once (its record; the store folds it in unchecked), the map's rows
-    # on each read (reduce checks the map before any work, then reads it under the lock)
-    # and the written map only when read again (here, by the test itself)
-    assert seen.count(1) == 1 and seen.count(n_map + 1) == 1, seen
-    assert set(seen) == {1, n_map, n_map + 1}, seen
+    # the new run's row once (its record; the store folds it in unchecked) and nothing
+    # else: the map's rows were checked as they came in, and a read checks each part's
+    # bytes against its checksum instead (`map validate` checks every row again)
+    assert seen == [1], seen
+
+
+def test_a_single_file_map_s_rows_are_checked_on_every_read(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """A map in the format before parts carries only a checksum of its rows computed by
+    whoever wrote the file: its reader checks every row."""
+    built = tmp_path / "built.parquet"
+    CliRunner().invoke(main, ["map", "import", "--published", "--map", str(built)])
+    single = store.write_map_copy(tmp_path / "single.parquet", store.read_map(built))
+    seen = _count_rows_checked(monkeypatch)
+    assert len(store.read_map(single)) == 169
+    assert seen == [169], seen
 
 
 def test_a_checked_row_changed_since_is_checked_again(monkeypatch: pytest.MonkeyPatch

@@ -22,7 +22,7 @@ import runpy
 import pandas as pd
 import pytest
 
-from published_map import PUBLISHED_CSV, group_table, published_runs
+from helpers import with_mu_s
 from sim_files import pyelastica_values
 from tribopipe.export.simulators import export_simulator_input
 from tribopipe.query import query
@@ -34,13 +34,9 @@ HOSTILE = "Evil\n*HEADING\r\n'\"</pair><!-- -->--$ import os\x1b\u2028end"
 
 
 @pytest.fixture(scope="module")
-def groups() -> pd.DataFrame:
+def groups(published_groups: pd.DataFrame) -> pd.DataFrame:
     """The published groups with a μ_S 1.4 × μ_K, and one pin renamed to a hostile name."""
-    g = group_table(published_runs(PUBLISHED_CSV))
-    g["mu_s_n"] = g["mu_k_n"]
-    g["mu_s_mean"] = g["mu_k_mean"] * 1.4
-    g["mu_s_ci95_low"] = g["mu_s_mean"] - 0.02
-    g["mu_s_ci95_high"] = g["mu_s_mean"] + 0.02
+    g = with_mu_s(published_groups)
     hostile = g[(g.pin == PIN) & (g.disc == DISC)].copy()
     hostile["pin"] = HOSTILE
     return pd.concat([g, hostile], ignore_index=True)

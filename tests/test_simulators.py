@@ -10,7 +10,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from published_map import PUBLISHED_CSV, group_table, published_runs
+from helpers import with_mu_s
 from sim_files import (
     lsdyna_contact,
     mujoco_pair,
@@ -64,24 +64,9 @@ PIN, DISC = "Dragonskin 30", "steel"
 
 
 @pytest.fixture(scope="module")
-def runs() -> pd.DataFrame:
-    return published_runs(PUBLISHED_CSV)
-
-
-@pytest.fixture(scope="module")
-def groups(runs) -> pd.DataFrame:
-    return group_table(runs)
-
-
-@pytest.fixture(scope="module")
 def groups_with_mu_s(groups) -> pd.DataFrame:
     """The published groups plus a μ_S column (the published map has none)."""
-    g = groups.copy()
-    g["mu_s_n"] = g["mu_k_n"]
-    g["mu_s_mean"] = g["mu_k_mean"] * 1.4
-    g["mu_s_ci95_low"] = g["mu_s_mean"] - 0.02
-    g["mu_s_ci95_high"] = g["mu_s_mean"] + 0.02
-    return g
+    return with_mu_s(groups)
 
 
 def _steel_rates() -> dict[tuple[str, str], SlipRate]:

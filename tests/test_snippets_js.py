@@ -20,7 +20,8 @@ from importlib.resources import files
 import pandas as pd
 import pytest
 
-from published_map import PUBLISHED_CSV, group_table, published_runs
+from helpers import with_mu_s
+from published_map import PUBLISHED_CSV, published_runs
 from tribopipe.export.explorer import explorer_data
 from tribopipe.export.registry import WRITERS
 from tribopipe.export.simulators import snippet
@@ -57,20 +58,11 @@ def node() -> str:
 
 
 @pytest.fixture(scope="module")
-def groups() -> pd.DataFrame:
-    g = group_table(published_runs(PUBLISHED_CSV))
+def groups(published_groups: pd.DataFrame) -> pd.DataFrame:
+    g = published_groups
     hostile = g[(g.pin == PIN) & (g.disc == DISC)].copy()
     hostile["pin"] = HOSTILE
     return pd.concat([g, hostile], ignore_index=True)
-
-
-def _with_mu_s(groups: pd.DataFrame, factor: float) -> pd.DataFrame:
-    g = groups.copy()
-    g["mu_s_n"] = g["mu_k_n"]
-    g["mu_s_mean"] = g["mu_k_mean"] * factor
-    g["mu_s_ci95_low"] = g["mu_s_mean"] - 0.02
-    g["mu_s_ci95_high"] = g["mu_s_mean"] + 0.02
-    return g
 
 
 def _run_js(node: str, data: dict, results: list, formats: list[str]) -> dict:
@@ -92,7 +84,7 @@ def test_every_registered_snippet_has_its_javascript_and_equals_the_writer(node,
     assert [s["name"] for s in data["snippets"]] == formats
     assert {"usd", "pybullet", "drake", "abaqus", "ansys"} <= set(formats)
     results = []
-    for table in (groups, _with_mu_s(groups, 1.4), _with_mu_s(groups, 0.8)):
+    for table in (groups, with_mu_s(groups, 1.4), with_mu_s(groups, 0.8)):
         for pin in (PIN, HOSTILE):
             for p, t in ((35.37, 20.0), (47.16, 20.0), (50.0, 15.0), (500.0, 40.0), (1.0, 5.0)):
                 results.append(query(table, pin, DISC, p, t))

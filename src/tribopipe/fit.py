@@ -21,11 +21,10 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from .errors import MapError
-from .frictionmap import read_map
+from .frictionmap.snapshot import MapSource, as_snapshot
 from .stats import NOMINAL_SPEED, nominal_speeds, pairs_with_several_speeds, t975
 
 if TYPE_CHECKING:
@@ -162,9 +161,9 @@ def fit_power_law(runs: pd.DataFrame, *, quantity: str = "mu_k") -> pd.DataFrame
     return pd.DataFrame(rows, columns=columns)
 
 
-def fit_map(map_path: str | Path) -> pd.DataFrame:
+def fit_map(map_path: MapSource) -> pd.DataFrame:
     """:func:`fit_power_law` on the runs of the friction map (Parquet) at ``map_path``."""
-    runs = read_map(map_path)
+    runs = as_snapshot(map_path).runs
     if runs.empty:
         raise MapError(
             "the friction map is empty or absent",

@@ -12,7 +12,7 @@ Everything tribopipe writes for a reduction or a campaign goes below one folder
       plots/pairs/pair_<pin>__<disc>.png μ_K(p) per pair (``tribopipe plot pairs``)
       runs.csv, failures.csv             the runs and the failures of the last batch
       report.html                        the campaign report
-      .tribopipe-state.<name>.json       a campaign's incremental state
+      .tribopipe-state.<name>.sqlite     a campaign's incremental state (SQLite)
       .tribopipe-batch.lock              held while a batch of the folder runs
 
 ``<stem>`` is the raw file's name without its suffix and ``<id8>`` the first 8 hex digits of
@@ -46,8 +46,10 @@ FAILURES_CSV = "failures.csv"
 REPORT_HTML = "report.html"
 #: the review page (``tribopipe review``)
 REVIEW_HTML = "review.html"
-#: the incremental state, one file per campaign name (campaigns may share an output folder)
-STATE_FILE = ".tribopipe-state.{name}.json"
+#: the incremental state, one SQLite file per campaign name (campaigns may share an output
+#: folder); :data:`LEGACY_STATE_FILE` is the JSON state older versions wrote, read once
+STATE_FILE = ".tribopipe-state.{name}.sqlite"
+LEGACY_STATE_FILE = ".tribopipe-state.{name}.json"
 #: held while a batch runs, so two batches of one campaign never interleave their state
 BATCH_LOCK = ".tribopipe-batch.lock"
 #: the header of ``failures.csv``
@@ -87,6 +89,11 @@ def find_trace(traces_dir: str | Path, measurement_id: str) -> Path | None:
     """The trace Parquet of a run under ``traces_dir`` (``<stem>_<id[:8]>.parquet``)."""
     matches = sorted(Path(traces_dir).glob(f"*_{measurement_id[:8]}.parquet"))
     return matches[0] if matches else None
+
+
+def _slug(campaign_name: str) -> str:
+    """A campaign name as a file-name part: letters, digits, ``-`` and ``_``."""
+    return re.sub(r"[^A-Za-z0-9_-]+", "-", campaign_name).strip("-")[:100] or "campaign"
 
 
 @dataclass(frozen=True)
@@ -156,10 +163,13 @@ class OutputLayout:
         return self.root / BATCH_LOCK
 
     def state_path(self, campaign_name: str) -> Path:
-        """A campaign's incremental state: ``<root>/.tribopipe-state.<name>.json`` (the
+        """A campaign's incremental state: ``<root>/.tribopipe-state.<name>.sqlite`` (the
         name reduced to letters, digits, ``-`` and ``_``)."""
-        slug = re.sub(r"[^A-Za-z0-9_-]+", "-", campaign_name).strip("-")[:100] or "campaign"
-        return self.root / STATE_FILE.format(name=slug)
+        return self.root / STATE_FILE.format(name=_slug(campaign_name))
+
+    def legacy_state_path(self, campaign_name: str) -> Path:
+        """The JSON state of older versions: ``<root>/.tribopipe-state.<name>.json``."""
+        return self.root / LEGACY_STATE_FILE.format(name=_slug(campaign_name))
 
     def trace_path(self, source: str | Path, measurement_id: str) -> Path:
         """A run's reduced trace: ``<root>/traces/<stem>_<id8>.parquet``."""

@@ -37,10 +37,10 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
-from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from .errors import ExportError
+from .frictionmap.snapshot import MapSource
 from .query import load_groups, pair_speeds, select_pair
 from .stats import NOMINAL_SPEED
 
@@ -396,7 +396,7 @@ def predict(mc: MasterCurve, pressure_kPa: float, temperature_C: float,
                            mc.shift, a)
 
 
-def map_master_curve(map_path: str | Path, pin: str, disc: str, *,
+def map_master_curve(map_path: MapSource, pin: str, disc: str, *,
                      shift: str = "arrhenius") -> MasterCurve:
     """:func:`master_curve` of the friction map (Parquet) at ``map_path``."""
     return master_curve(load_groups(map_path), pin, disc, shift=shift)

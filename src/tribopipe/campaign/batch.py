@@ -14,10 +14,12 @@ from __future__ import annotations
 
 import math
 import os
-from collections.abc import Callable, Mapping, Sequence
+import time
+from collections.abc import Callable, Iterator, Mapping, Sequence
+from contextlib import contextmanager, suppress
 from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from ..errors import CampaignError, OutputError, TribopipeError
 from ..files import file_sha256, os_reason
@@ -30,7 +32,8 @@ from ..frictionmap.duplicates import (
 )
 from ..frictionmap.records import stored_file_name
 from ..frictionmap.schema import MapRow, unvalidated_frame
-from ..frictionmap.store import read_map, update_map_with
+from ..frictionmap.snapshot import open_map
+from ..frictionmap.store import AppendReport, change_map_with
 from ..labels import flags_text, quality_flags
 from ..measurement import run_name
 from ..pipeline import FileOutcome, ReducedRun
@@ -52,7 +55,7 @@ from .state import (
     load_state,
     save_state,
 )
-from .table import CampaignRow, campaign_table, describe_glob, recipe_hash
+from .table import CampaignRow, campaign_table, check_materials, describe_glob, recipe_hash
 from .worker import (
     Job,
     WorkerContext,
@@ -63,7 +66,18 @@ from .worker import (
     worker_init,
 )
 
+if TYPE_CHECKING:
+    import pandas as pd
+
 ProgressCallback = Callable[[int, int], None]
+
+#: a batch lands what finished every this many files, or every :data:`LAND_EVERY_S`
+#: seconds (at least ten times what the last landing took: landing stays a tenth of the
+#: work), whichever comes first: each landing is one locked atomic write of the map and
+#: of the state, and lets the results go, so memory stays flat and a stopped batch keeps
+#: what it finished
+LAND_EVERY_FILES = 256
+LAND_EVERY_S = 2.0
 
 #: what became of a file found, as the ledger counts it: its runs were reduced, skipped or
 #: failed one by one (read); its content came under another name with the same labels
@@ -156,6 +170,12 @@ class BatchReport:
     repeats: list[str] = field(default_factory=list)
     #: the batch's own outputs (state, runs.csv, failures.csv) that could not be written
     output_errors: list[str] = field(default_factory=list)
+    #: the signal that stopped the batch (``"SIGINT"``, ``"SIGTERM"``), else ``None``:
+    #: what finished landed, the rest is for the next batch
+    interrupted: str | None = None
+    #: the map's rows as the batch's last write left them (``None`` when it did not read
+    #: the map): what the command shows of the map, without reading it again
+    map_after: Any = field(default=None, repr=False, compare=False)
 
     @property
     def ok(self) -> bool:
@@ -261,6 +281,7 @@ def _run_locked(campaign: Campaign, *, jobs: int | None, plots: bool | None,
     missing_ids, map_checked = _ids_missing_from_map(campaign, state)
     manifest = read_manifest(campaign.manifest) if campaign.manifest is not None else None
     rows = campaign_table(campaign, state=state, manifest=manifest)
+    check_materials(campaign, rows)  # an unknown name refuses the campaign before any work
     plan = _plan(rows, missing_ids)
     files = len(rows)
     done = files - len(plan.todo)
@@ -268,9 +289,8 @@ def _run_locked(campaign: Campaign, *, jobs: int | None, plots: bool | None,
         progress(done, files)
 
     if plan.todo and not map_checked and campaign.map_path.exists():
-        read_map(campaign.map_path)  # refuse a foreign or corrupt map before any work
-    results = _execute(plan.todo, WorkerContext(campaign=campaign, plots=plots), jobs,
-                       progress, done, files)
+        # refuse a foreign or corrupt map before any work (its ids only: a check, not a use)
+        open_map(campaign.map_path, ["measurement_id"])
 
     notes: list[str] = rows.not_export_notes()  # content before labels: never a failure
     if not rows and not rows.not_exports:
@@ -278,14 +298,64 @@ def _run_locked(campaign: Campaign, *, jobs: int | None, plots: bool | None,
     by_file = {row.file: row for row in rows}
     vanished = {f: e for f, e in entries.items() if f not in by_file}
     failures = plan.failures
-    map_summary, landed, removed, landing = _land(
-        campaign, results, lambda in_map: _apply(campaign, results, by_file, entries, failures,
-                                                 notes, vanished, in_map), entries,
-        review)
+    # reduced and landed in the order of their names (the order results are checked in
+    # against each other), whichever worker ends first
+    todo = sorted(plan.todo, key=lambda job: job.file)
+    order = [job.file for job in todo]
+    redone = set(order)
+    landing = _Landing(records=[], stale_ids=set(), reduced=[], flagged=[], duplicates={},
+                       outcomes={}, runs_failed=0)
+    appended: AppendReport | None = None
+    groups: set[tuple[Any, ...]] = set()
+    after: pd.DataFrame | None = None
+    stop = StopFlag()
+    # what the state file holds (the state as loaded, when it was this SQLite file's)
+    saved: list[CampaignState | None] = [state if campaign.state_path.is_file() else None]
+
+    def land(results: list[FileOutcome]) -> None:
+        """Fold ``results`` into the map (one locked atomic write) and the state; what
+        is kept of them afterwards is their names and counts, not their rows."""
+        nonlocal landing, appended, after
+        report, landed, removed, part, after = _land(
+            campaign, results, lambda in_map: _apply(
+                campaign, results, by_file, entries, failures, notes, vanished, in_map,
+                redone), entries, review)
+        if report is not None:
+            appended = report if appended is None else _combined(appended, report)
+        groups.update(_groups_updated(part, landed, removed))
+        landing = _plus(landing, part)
+        with suppress(OutputError):  # said by the batch's last save, which meets it again
+            saved[0] = _save_state_with_map(campaign, entries, state, saved[0])
+
+    pending: dict[str, FileOutcome] = {}
+    ready: list[FileOutcome] = []
+    landed_files, at, last, cost = 0, 0, time.monotonic(), 0.0
+    with _stop_on_signals(stop):
+        for part in _execute(todo, WorkerContext(campaign=campaign, plots=plots), jobs, stop):
+            pending.update((r.name, r) for r in part)
+            while at < len(order) and order[at] in pending:
+                ready.append(pending.pop(order[at]))
+                at += 1
+            if len(ready) >= LAND_EVERY_FILES or (
+                    ready and time.monotonic() - last >= max(LAND_EVERY_S, 10 * cost)):
+                started = time.monotonic()
+                land(ready)
+                landed_files += len(ready)
+                ready, last = [], time.monotonic()
+                cost = last - started
+                if progress:
+                    progress(done + landed_files, files)
+        # what finished lands, in order; after a signal, what finished out of order too
+        ready += [pending.pop(name) for name in sorted(pending)]
+        if ready or not landed_files:
+            land(ready)
+            landed_files += len(ready)
+            if progress:
+                progress(done + landed_files, files)
     if landing.review is not None:
         notes.append(landing.review.line(campaign.review))
     _forget_vanished(campaign, entries, set(by_file), notes)
-    groups = _groups_updated(landing, landed, removed)
+    map_summary = "unchanged" if appended is None else appended.summary()
 
     duplicates = {**plan.duplicates, **landing.duplicates}
     outcomes = {**plan.outcomes, **landing.outcomes}
@@ -295,7 +365,7 @@ def _run_locked(campaign: Campaign, *, jobs: int | None, plots: bool | None,
     # each output is tried even when one fails (a full disk may free up); those that
     # fail are in the report, beside every run's outcome
     problems: list[str] = []
-    for write in (lambda: _save_state_with_map(campaign, entries, state),
+    for write in (lambda: _save_state_with_map(campaign, entries, state, saved[0]),
                   lambda: write_runs_csv(campaign, rows, entries, this_batch, failures),
                   lambda: write_failures_csv(campaign, failures)):
         try:
@@ -306,13 +376,15 @@ def _run_locked(campaign: Campaign, *, jobs: int | None, plots: bool | None,
     runs_failed = plan.runs_failed + landing.runs_failed
     test_tally = tally(outcomes, tests_in)
     return BatchReport(
+        interrupted=stop.name,
+        map_after=after,
         campaign=campaign.name,
         total=len(landing.reduced) + len(plan.skipped) + runs_failed,
         reduced=landing.reduced,
         skipped=plan.skipped,
         failures=sorted(failures.items()),
         groups_updated=len(groups),
-        removed=len(removed),
+        removed=0 if appended is None else len(appended.dropped_ids),
         map_path=campaign.map_path,
         map_summary=map_summary,
         output_dir=campaign.output_dir,
@@ -391,39 +463,45 @@ def _plan(rows: Sequence[CampaignRow], missing_ids: set[str]) -> _Plan:
                  outcomes=outcomes, runs_failed=runs_failed)
 
 
-def _execute(todo: list[Job], ctx: WorkerContext, jobs: int, progress: ProgressCallback | None,
-             done: int, total: int) -> list[FileOutcome]:
-    """Reduce the jobs: in this process for one worker, else in a pool of ``jobs``
-    processes; ``progress(done, total)`` after every chunk. A crashed worker's files come
-    back as transient failures."""
-    results: list[FileOutcome] = []
+def _execute(todo: list[Job], ctx: WorkerContext, jobs: int,
+             stop: StopFlag) -> Iterator[list[FileOutcome]]:
+    """Reduce the jobs, yielding the results as they finish: in this process, file by
+    file, for one worker, else in a pool of ``jobs`` processes, chunk by chunk. A crashed
+    worker's files come back as transient failures. Once ``stop`` is raised (a signal),
+    nothing new starts: the pool's workers are ended and the jobs not finished are not
+    yielded (the next batch reduces them)."""
     if not todo:
-        return results
+        return
     workers = min(jobs, len(todo))
-    chunks = chunk_jobs(todo, workers)
     if workers == 1:
         with fewer_gc_passes():
-            for chunk in chunks:
-                results.extend(reduce_chunk(chunk, ctx))
-                done += len(chunk)
-                if progress:
-                    progress(done, total)
-        return results
-    from concurrent.futures import ProcessPoolExecutor, as_completed
+            for job in todo:
+                if stop.raised:
+                    return
+                yield reduce_chunk([job], ctx)
+        return
+    from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 
     prepare_plots(ctx)
-    with ProcessPoolExecutor(max_workers=workers, initializer=worker_init) as pool:
-        futures = {pool.submit(reduce_chunk, chunk, ctx): chunk for chunk in chunks}
-        for future in as_completed(futures):
-            try:
-                part = future.result()
-            except Exception as exc:  # noqa: BLE001 - e.g. a worker killed (OOM)
-                part = crashed(futures[future], exc)
-            results.extend(part)
-            done += len(part)
-            if progress:
-                progress(done, total)
-    return results
+    pool = ProcessPoolExecutor(max_workers=workers, initializer=worker_init)
+    try:
+        futures = {pool.submit(reduce_chunk, chunk, ctx): chunk
+                   for chunk in chunk_jobs(todo, workers)}
+        while futures and not stop.raised:
+            finished, _ = wait(futures, timeout=0.5, return_when=FIRST_COMPLETED)
+            for future in finished:
+                chunk = futures.pop(future)
+                try:
+                    part = future.result()
+                except Exception as exc:  # noqa: BLE001 - e.g. a worker killed (OOM)
+                    part = crashed(chunk, exc)
+                yield part
+    finally:
+        if futures:  # stopped: what did not finish is left for the next batch
+            for process in list(getattr(pool, "_processes", {}).values()):
+                with suppress(OSError):
+                    process.terminate()
+        pool.shutdown(wait=True, cancel_futures=True)
 
 
 @dataclass(frozen=True)
@@ -470,10 +548,13 @@ def _owners(by_file: Mapping[str, CampaignRow], redone: set[str],
 
 def _apply(campaign: Campaign, results: Sequence[FileOutcome], by_file: Mapping[str, CampaignRow],
            entries: dict[str, FileState], failures: dict[str, str], notes: list[str],
-           vanished: Mapping[str, FileState], in_map: FilesByHash) -> _Landing:
+           vanished: Mapping[str, FileState], in_map: FilesByHash,
+           redone: set[str] | None = None) -> _Landing:
     """Fold the workers' results into the state ``entries`` and ``failures`` (in file
     order, both updated in place; plot and rename notes added to ``notes``), each file
-    checked against the files before it and the map (``in_map``, read under its lock)."""
+    checked against the files before it and the map (``in_map``, read under its lock).
+    ``redone``: every file the batch reduces again (default: those of ``results``); the
+    state's account of them no longer holds."""
     records: list[MapRow] = []
     old_ids: set[str] = set()
     reduced: list[str] = []
@@ -482,7 +563,8 @@ def _apply(campaign: Campaign, results: Sequence[FileOutcome], by_file: Mapping[
     outcomes: dict[str, str] = {}
     runs_failed = 0
     config_hash = campaign.settings.config_hash  # hashes the settings: once, not per run
-    owners = _owners(by_file, {r.name for r in results}, vanished, in_map)
+    owners = _owners(by_file, redone if redone is not None else {r.name for r in results},
+                     vanished, in_map)
     for done in sorted(results, key=lambda r: r.name):
         row = by_file[done.name]
         old = entries.get(row.file)
@@ -633,13 +715,16 @@ def _groups_updated(landing: _Landing, landed: set[str],
 
 
 def _save_state_with_map(campaign: Campaign, entries: dict[str, FileState],
-                         before: CampaignState) -> None:
+                         before: CampaignState, saved: CampaignState | None
+                         ) -> CampaignState:
     """Save the state with the map's size and ``mtime_ns`` as this batch leaves it (so the
-    next batch trusts an untouched map without reading it); not rewritten when it equals
-    the state the batch started from (nothing changed)."""
+    next batch trusts an untouched map without reading it), writing only the files whose
+    entry differs from ``saved`` (what the state file holds; ``None``: all); nothing is
+    written when it equals ``saved``. Returns the state now saved."""
     new_state = before.with_entries(campaign.name, entries, campaign.map_path)
-    if new_state != before or not campaign.state_path.exists():
-        save_state(campaign, new_state)
+    if new_state != saved or not campaign.state_path.exists():
+        save_state(campaign, new_state, saved if campaign.state_path.is_file() else None)
+    return new_state
 
 
 def _ids_missing_from_map(campaign: Campaign, state: CampaignState) -> tuple[set[str], bool]:
@@ -659,24 +744,26 @@ def _ids_missing_from_map(campaign: Campaign, state: CampaignState) -> tuple[set
         return ids, False
     if state.map is not None and state.map == MapStamp.of(campaign.map_path):
         return set(), False
-    present = set(read_map(campaign.map_path)["measurement_id"].astype(str))
+    present = open_map(campaign.map_path, ["measurement_id"]).ids  # the ids only
     return ids - present, True
 
 
 def _land(campaign: Campaign, results: Sequence[FileOutcome],
           apply: Callable[[FilesByHash], _Landing], entries: Mapping[str, FileState],
-          review: Review | None = None) -> tuple[str, set[str], set[str], _Landing]:
+          review: Review | None = None
+          ) -> tuple[AppendReport | None, set[str], set[str], _Landing, pd.DataFrame | None]:
     """Check the results against the map and fold them in, under the map's lock, in one
     atomic write (new records added or replaced, rows of runs whose raw file changed
     dropped); the map is locked and read only when a result brings or replaces runs.
     The review (``review``, else the one each row holds) is applied in the same write
     (:func:`tribopipe.review.landing_records`); a decision that fails raises before
-    anything is written. Returns the map's summary line, the ids added or replaced, the
-    ids removed and what ``apply`` made of the results."""
+    anything is written. Returns the map's report (``None``: nothing changed), the ids
+    added or replaced, the ids removed, what ``apply`` made of the results, and the map's
+    rows as the write left them (``None`` when the map was not read)."""
     touches = review is not None or any(r.reduced for r in results) or any(
         _run_ids(entries.get(r.name)) for r in results)
     if not touches:
-        return "unchanged", set(), set(), apply({})
+        return None, set(), set(), apply({}), None
     landing: list[_Landing] = []
 
     def decide(current: Any) -> tuple[list[MapRow], set[str]]:
@@ -691,9 +778,68 @@ def _land(campaign: Campaign, results: Sequence[FileOutcome],
             condition_keys(current.loc[current["measurement_id"].isin(ids)]))
         return folded, stale
 
-    report = update_map_with(campaign.map_path, decide, replace=True)
+    # the one landing of the batch and of `reduce`: the map read again under its lock
+    report, after = change_map_with(campaign.map_path, decide, replace=True)
     if not (landing[0].records or landing[0].stale_ids or report.changed):
-        return "unchanged", set(), set(), landing[0]
-    return (report.summary(), set(report.added_ids) | set(report.replaced_ids),
-            set(report.dropped_ids), landing[0])
+        return None, set(), set(), landing[0], after
+    return (report, set(report.added_ids) | set(report.replaced_ids),
+            set(report.dropped_ids), landing[0], after)
+
+
+def _combined(a: AppendReport, b: AppendReport) -> AppendReport:
+    """Two successive appends' reports as one (the landings of one batch)."""
+    return AppendReport(
+        added_ids=a.added_ids + b.added_ids, unchanged_ids=a.unchanged_ids + b.unchanged_ids,
+        replaced_ids=a.replaced_ids + b.replaced_ids,
+        conflicting_ids=a.conflicting_ids + b.conflicting_ids,
+        differences={**a.differences, **b.differences}, dropped_ids=a.dropped_ids + b.dropped_ids,
+        values={**a.values, **b.values})
+
+
+def _plus(a: _Landing, b: _Landing) -> _Landing:
+    """What two landings brought, without their records (landed and let go)."""
+    review = a.review if b.review is None else b.review if a.review is None else ReviewOutcome(
+        records=[], applied={k: a.review.applied.get(k, 0) + b.review.applied.get(k, 0)
+                             for k in {*a.review.applied, *b.review.applied}},
+        withdrawn=a.review.withdrawn + b.review.withdrawn)
+    return _Landing(records=[], stale_ids=set(), reduced=a.reduced + b.reduced,
+                    flagged=a.flagged + b.flagged, duplicates={**a.duplicates, **b.duplicates},
+                    outcomes={**a.outcomes, **b.outcomes},
+                    runs_failed=a.runs_failed + b.runs_failed, repeats=a.repeats + b.repeats,
+                    review=review)
+
+
+class StopFlag:
+    """Raised by SIGINT or SIGTERM during a batch: nothing new starts, what finished
+    lands. ``name``: the signal's name once raised, else ``None``."""
+
+    def __init__(self) -> None:
+        self.name: str | None = None
+
+    @property
+    def raised(self) -> bool:
+        """True once a signal asked the batch to stop."""
+        return self.name is not None
+
+
+@contextmanager
+def _stop_on_signals(stop: StopFlag) -> Iterator[None]:
+    """Let SIGINT (Ctrl-C) and SIGTERM raise ``stop`` instead of killing the batch while
+    the body runs (in the main thread only: elsewhere signals cannot be caught)."""
+    import signal
+    import threading
+
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+
+    def handler(signum: int, _frame: Any) -> None:
+        stop.name = signal.Signals(signum).name
+
+    old = {s: signal.signal(s, handler) for s in (signal.SIGINT, signal.SIGTERM)}
+    try:
+        yield
+    finally:
+        for s, h in old.items():
+            signal.signal(s, h)
 

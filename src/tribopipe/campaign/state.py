@@ -1,24 +1,28 @@
 """A campaign's incremental state: typed, and read and written in this one place.
 
-``<output_dir>/.tribopipe-state.<name>.json`` remembers, per file (:class:`FileState`):
+``<output_dir>/.tribopipe-state.<name>.sqlite`` (SQLite, updated row by row: one row per
+file, the JSON of its :class:`FileState`) remembers, per file (:class:`FileState`):
 size, ``mtime_ns``, SHA-256, the config hash, a recipe hash (config + the labels known
 before reading + QC tolerances), the file's status, its tests and, per run
 (:class:`RunState`), its status and what :class:`RunEntry` holds of a reduced run; and
 the map's size and ``mtime_ns`` as the last batch left it (:class:`MapStamp`). One state
 per campaign name, so campaigns may share an output folder and a map.
-:meth:`CampaignState.to_json` and :meth:`CampaignState.from_json` are the only
-translation between these types and the JSON file; :func:`load_state` and
-:func:`save_state` the only reads and writes.
+:meth:`FileState.to_json` and :meth:`FileState.from_json` are the only translation
+between these types and a row; :func:`load_state` and :func:`save_state` the only reads
+and writes. The JSON state file older versions wrote (``.tribopipe-state.<name>.json``,
+:meth:`CampaignState.from_json`) is read once and converted.
 """
 
 from __future__ import annotations
 
 import json
+import sqlite3
 from dataclasses import asdict, dataclass, field, fields, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from ..files import write_text_atomic
+from ..errors import OutputError
+from ..frictionmap.parts import MANIFEST
 from ..labels import flags_text
 from ..numeric import finite_json
 
@@ -214,10 +218,14 @@ class MapStamp:
 
     @classmethod
     def of(cls, path: Path) -> MapStamp | None:
-        """The stamp of the map at ``path`` (``None`` when there is none)."""
+        """The stamp of the map at ``path`` (``None`` when there is none): of its
+        manifest for a map folder (every commit replaces it), else of the file."""
         if not path.exists():
             return None
-        st = path.stat()
+        try:
+            st = (path / MANIFEST).stat() if path.is_dir() else path.stat()
+        except OSError:
+            return None
         return cls(size=st.st_size, mtime_ns=st.st_mtime_ns)
 
 
@@ -264,24 +272,92 @@ class CampaignState:
 
 def load_state(campaign: Campaign) -> CampaignState:
     """The incremental state of a campaign (empty when there is none or it is unreadable:
-    a lost state only costs a full re-run)."""
+    a lost state only costs a full re-run). Where only the JSON state of an older version
+    exists, it is read and converted: written into the SQLite state, which is read from
+    then on."""
+    path = campaign.state_path
+    if path.is_file():
+        try:
+            return _read_sqlite(path)
+        except (sqlite3.Error, ValueError, TypeError, KeyError):
+            return CampaignState()
     try:
-        data = json.loads(campaign.state_path.read_text(encoding="utf-8"))
+        data = json.loads(campaign.legacy_state_path.read_text(encoding="utf-8"))
     except (OSError, ValueError):
         return CampaignState()
-    return CampaignState.from_json(data)
+    state = CampaignState.from_json(data)
+    if state.entries or state.campaign is not None:
+        try:
+            save_state(campaign, state)
+        except OutputError:
+            pass  # read again next time: the batch says so when it saves
+    return state
 
 
-def save_state(campaign: Campaign, state: CampaignState) -> None:
-    """Write the incremental state atomically (temporary file + rename). Compact, strict
-    JSON: without ``indent`` the json module's C encoder writes it (an indented state of
-    1,000 files took a third of an unchanged re-run); a value that is not finite is
-    ``null`` (the entries hold none: the slow walk of :func:`finite_json` is the rare
-    fallback)."""
-    data = state.to_json()
+def _connect(path: Path) -> sqlite3.Connection:
+    con = sqlite3.connect(path, timeout=60, isolation_level=None)
+    con.execute("PRAGMA synchronous=FULL")
+    con.execute("CREATE TABLE IF NOT EXISTS meta (key TEXT PRIMARY KEY, value TEXT NOT NULL)")
+    con.execute("CREATE TABLE IF NOT EXISTS files (name TEXT PRIMARY KEY, state TEXT NOT NULL)")
+    return con
+
+
+def _read_sqlite(path: Path) -> CampaignState:
+    con = sqlite3.connect(f"file:{path}?mode=ro", uri=True, timeout=60)
     try:
-        text = json.dumps(data, sort_keys=True, separators=(",", ":"), allow_nan=False)
+        meta = dict(con.execute("SELECT key, value FROM meta").fetchall())
+        if meta.get("version") != str(STATE_VERSION):
+            return CampaignState()
+        loads = json.loads
+        entries = {loads(name): FileState.from_json(loads(text))
+                   for name, text in con.execute("SELECT name, state FROM files")}
+    finally:
+        con.close()
+    stamp = json.loads(meta.get("map", "null"))
+    return CampaignState(campaign=json.loads(meta.get("campaign", "null")), entries=entries,
+                         map=None if not stamp else MapStamp(int(stamp["size"]),
+                                                             int(stamp["mtime_ns"])))
+
+
+def save_state(campaign: Campaign, state: CampaignState,
+               saved: CampaignState | None = None) -> None:
+    """Write the incremental state into its SQLite file, in one transaction: the files
+    whose entry differs from ``saved`` (what the file holds already; ``None``: every
+    file) row by row, the files gone from it removed, and the campaign's name and the
+    map's stamp. A batch saves after each landing, so its cost is what changed. Raises
+    :class:`~tribopipe.errors.OutputError` naming the file when it cannot be written."""
+    path = campaign.state_path
+    before = {} if saved is None else saved.entries
+    # a name is kept as its JSON (ASCII): a file name that is not valid UTF-8 (its bytes
+    # kept as surrogates) stays exactly that name
+    changed = [(json.dumps(name), _entry_text(entry)) for name, entry in state.entries.items()
+               if before.get(name) is not entry and before.get(name) != entry]
+    gone = [(json.dumps(name),) for name in before if name not in state.entries]
+    meta = [("version", str(STATE_VERSION)), ("campaign", json.dumps(state.campaign)),
+            ("map", json.dumps(None if state.map is None else asdict(state.map)))]
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        con = _connect(path)
+        try:
+            con.execute("BEGIN IMMEDIATE")
+            if saved is None:
+                con.execute("DELETE FROM files")
+            con.executemany("INSERT OR REPLACE INTO files (name, state) VALUES (?, ?)", changed)
+            con.executemany("DELETE FROM files WHERE name = ?", gone)
+            con.executemany("INSERT OR REPLACE INTO meta (key, value) VALUES (?, ?)", meta)
+            con.execute("COMMIT")
+        finally:
+            con.close()
+    except (OSError, sqlite3.Error) as exc:
+        raise OutputError(f"cannot write the campaign state ({exc})", path=path) from None
+
+
+def _entry_text(entry: FileState) -> str:
+    """A file's entry as the state stores it: compact, strict JSON (a value that is not
+    finite is ``null``; the entries hold none, so the slow walk is the rare fallback)."""
+    data = entry.to_json()
+    try:
+        return json.dumps(data, sort_keys=True, separators=(",", ":"), allow_nan=False)
     except ValueError:
-        text = json.dumps(finite_json(data), sort_keys=True, separators=(",", ":"),
+        return json.dumps(finite_json(data), sort_keys=True, separators=(",", ":"),
                           allow_nan=False)
-    write_text_atomic(campaign.state_path, text)

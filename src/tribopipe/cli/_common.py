@@ -71,11 +71,12 @@ def _map_option(func: F, callback: Any) -> F:
     return click.option(
         "--map",
         "map_path",
-        # checked by the library (a folder, a FIFO, a device: one line, never opened)
+        # checked by the library (a folder that is not a map, a FIFO, a device: one line)
         type=click.Path(),
         default=None,
         callback=callback,
-        help="The friction map (Parquet file). " + MAP_DEFAULT_HELP,
+        help="The friction map (a folder of Parquet parts; a single file still reads). "
+             + MAP_DEFAULT_HELP,
     )(func)
 
 

@@ -35,7 +35,8 @@ def _open(target: str, options: dict[str, Any]) -> Any:
             instrument=options.get("instrument_path"),
             test_pattern=options.get("test_pattern"),
         )
-        return _with_review(campaign, options.get("review"))
+        return _with_review(campaign, options.get("review"),
+                            bool(options.get("keep_labels")))
     given = [flag for name, flag in _FOLDER_ONLY.items() if options.get(name)]
     if given:
         flags = ", ".join(given)
@@ -46,14 +47,18 @@ def _open(target: str, options: dict[str, Any]) -> Any:
         from dataclasses import replace
 
         campaign = replace(campaign, map_path=Path(options["map_path"]).resolve())
-    return _with_review(campaign, options.get("review"))
+    return _with_review(campaign, options.get("review"), bool(options.get("keep_labels")))
 
 
-def _with_review(campaign: Any, review: str | None) -> Any:
-    """The campaign with the decisions file ``--review`` gave (else its own)."""
+def _with_review(campaign: Any, review: str | None, keep_labels: bool = False) -> Any:
+    """The campaign with the decisions file ``--review`` gave (else its own), and
+    keeping its labels with ``--keep-labels``."""
     from dataclasses import replace
     from pathlib import Path
 
+    if keep_labels:
+        campaign = replace(campaign, label_check=replace(campaign.label_check,
+                                                         keep_labels=True))
     return campaign if review is None else replace(campaign, review=Path(review).resolve())
 
 
@@ -74,6 +79,7 @@ def _run(campaign: Any, jobs: int | None, plots: bool | None) -> None:
     from ..campaign import run_campaign
     from ..escape import display_path, printable
     from ..export.tables import map_paper_text
+    from ..frictionmap.snapshot import snapshot_of
     from ..frictionmap.synthetic_rows import campaign_note
     from ..labels import flag_list
     from ..layout import OutputLayout
@@ -83,7 +89,7 @@ def _run(campaign: Any, jobs: int | None, plots: bool | None) -> None:
     def progress(done: int, total: int) -> None:
         nonlocal bar
         if bar is None:
-            bar = click.progressbar(length=total, label="reducing", file=sys.stderr,
+            bar = click.progressbar(length=total, label="files landed", file=sys.stderr,
                                     show_pos=True)
             bar.__enter__()
         bar.update(done - bar.pos)
@@ -111,12 +117,20 @@ def _run(campaign: Any, jobs: int | None, plots: bool | None) -> None:
     click.echo(f"map {_shorten(report.map_path)}: {report.map_summary}")
     click.echo(f"outputs in {_shorten(report.output_dir)}/: runs.csv, failures.csv, traces/"
                + (", plots/traces/" if OutputLayout(report.output_dir).plots_dir.is_dir() else ""))
-    click.echo(map_paper_text(report.map_path), nl=False)  # the groups, rounded for print
+    # the groups, rounded for print, of the map as the batch's last write left it
+    shown = report.map_path if report.map_after is None else snapshot_of(
+        report.map_after, report.map_path, {"format": "rows"})
+    click.echo(map_paper_text(shown), nl=False)
     for line in report.ledger():  # the account comes last, where a user looks
         click.echo(printable(line))
     _remember(report.map_path)
     for problem in report.output_errors:
         click.echo(f"error: {printable(problem)}", err=True)
+    if report.interrupted is not None:
+        click.echo(f"interrupted by {report.interrupted}: {len(report.reduced)} run(s) "
+                   "landed in the map and are kept; run the batch again to reduce the rest",
+                   err=True)
+        sys.exit(130 if report.interrupted == "SIGINT" else 143)
     if not report.ok:
         parts = []
         if report.failures:
@@ -139,7 +153,7 @@ def _remember(map_path: Any) -> None:
     from ..errors import TribopipeError
     from ..project import PROJECT_FILE, remember_map
 
-    if not Path(map_path).is_file():
+    if not Path(map_path).exists():
         return
     try:
         remember_map(map_path)
@@ -168,6 +182,13 @@ def grouped_reasons(failures: Any) -> list[tuple[list[str], str]]:
 
 def _common_run_options(func: Any) -> Any:
     func = click.option(
+        "--keep-labels", "keep_labels", is_flag=True, default=False,
+        help="Keep the labels where an export contradicts them (a measured mean normal "
+             "force beyond the stated tolerance, 25 % unless the config's "
+             "label_force_tolerance_rel says otherwise; a Test name or sample naming other "
+             "materials). Default: the config's keep_labels, else such a run is refused.",
+    )(func)
+    func = click.option(
         "--review", "review", type=click.Path(exists=True, dir_okay=False), default=None,
         help="A lab's decisions file (review.csv: accept, exclude or re-window runs; "
              "`tribopipe review` writes it), applied to every run (default: the config's "
@@ -183,7 +204,7 @@ def _common_run_options(func: Any) -> Any:
         help="Worker processes (default: one per available CPU).",
     )(func)
     func = click.option(
-        "--map", "map_path", type=click.Path(dir_okay=False), default=None,
+        "--map", "map_path", type=click.Path(), default=None,
         help="Friction map to update. Default: the campaign file's `map`, else "
         "friction_map.parquet in the output folder.",
     )(func)
@@ -229,7 +250,7 @@ _FOLDER_OPTIONS = [
 def batch_cmd(target: str, manifest: str | None, filename_pattern: str | None,
               test_pattern: str | None, glob: str | None, instrument_path: str | None,
               output: str | None, map_path: str | None, jobs: int | None,
-              plots: bool | None, review: str | None) -> None:
+              plots: bool | None, review: str | None, keep_labels: bool) -> None:
     """Reduce a whole campaign: a CAMPAIGN file (TOML) or a FOLDER of exports.
 
     Every friction interval of every test of every export is a run. Only new and changed
@@ -250,6 +271,7 @@ def batch_cmd(target: str, manifest: str | None, filename_pattern: str | None,
         "manifest": manifest, "filename_pattern": filename_pattern,
         "test_pattern": test_pattern, "glob": glob, "instrument_path": instrument_path,
         "output": output, "map_path": map_path, "review": review,
+        "keep_labels": keep_labels,
     })
     _run(campaign, jobs, plots)
 
@@ -264,9 +286,10 @@ def campaign_group() -> None:
 @_common_run_options
 @friendly_errors
 def run_cmd(campaign: str, map_path: str | None, jobs: int | None, plots: bool | None,
-            review: str | None) -> None:
+            review: str | None, keep_labels: bool) -> None:
     """Reduce the new and changed runs of a CAMPAIGN file (as `tribopipe batch` does)."""
-    _run(_open(campaign, {"map_path": map_path, "review": review}), jobs, plots)
+    _run(_open(campaign, {"map_path": map_path, "review": review,
+                          "keep_labels": keep_labels}), jobs, plots)
 
 
 @campaign_group.command("list")

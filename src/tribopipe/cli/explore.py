@@ -34,6 +34,7 @@ def explore_cmd(map_path: str, output: str | None, title: str | None) -> None:
     from pathlib import Path
 
     from ..export.explorer import write_explorer
+    from ..frictionmap.snapshot import open_map
 
     target = output if output is not None else Path(map_path).parent / "explorer.html"
-    say(str(write_explorer(map_path, target, title=title)))
+    say(str(write_explorer(open_map(map_path), target, title=title)))

@@ -34,8 +34,9 @@ def fit_cmd(
     Hertz-type contact of an elastomer gives n−1 ≈ −1/3.
     """
     from ..fit import fit_map
+    from ..frictionmap.snapshot import open_map
 
-    fits = fit_map(map_path)
+    fits = fit_map(open_map(map_path))
     if pin is not None:
         fits = fits[fits["pin"].str.casefold() == pin.casefold()]
     if disc is not None:

@@ -90,8 +90,10 @@ def merge_cmd(other: str, replace: bool, lab: str | None, map_path: str) -> None
     both values (exit code 1 when any were kept).
     """
     from ..frictionmap import merge_map
+    from ..materials import lab_files, load_vocabulary
 
-    merged = merge_map(map_path, other, replace=replace, lab=lab)
+    merged = merge_map(map_path, other, replace=replace, lab=lab,
+                       vocabulary=load_vocabulary(lab_files(".")))
     report = merged.report
     for line in report.conflict_lines(theirs=other):
         say(line)
@@ -157,6 +159,7 @@ def publish_cmd(folder: str | None, output: str | None, lab: str, contact: str |
     from ..config import load_settings
     from ..export.citation import Publisher
     from ..export.publish import publish_map
+    from ..frictionmap.snapshot import open_map
 
     if folder is not None and output is not None:
         raise click.UsageError("give the package folder once: -o/--output FOLDER")
@@ -166,7 +169,8 @@ def publish_cmd(folder: str | None, output: str | None, lab: str, contact: str |
         output = folder
     if output is None:
         raise click.UsageError("give the folder to write the package in: -o/--output FOLDER")
-    done = publish_map(map_path, output, Publisher(lab, contact, email, licence, title),
+    done = publish_map(open_map(map_path), output,
+                       Publisher(lab, contact, email, licence, title),
                        overwrite=overwrite, allow_synthetic=allow_synthetic,
                        evidence=not no_evidence, traces_dir=traces_dir, with_raw=with_raw,
                        raw_dirs=raw_dirs,
@@ -233,8 +237,9 @@ def validate_cmd(path: str | None, map_path: str | None, recompute: bool) -> Non
         from ..frictionmap.profile import map_upgrade_note
         from ..frictionmap.store import map_metadata
         from ..frictionmap.summary import check_map_file
+        from ..materials import lab_files, load_vocabulary
 
-        problems, verdict = check_map_file(path)
+        problems, verdict = check_map_file(path, load_vocabulary(lab_files(".")))
         upgraded = map_upgrade_note(int(map_metadata(path)["schema_version"]))
         if upgraded is not None:
             say(f"note: {upgraded}")
@@ -327,9 +332,10 @@ def table_cmd(
         say(f"wrote {written}", err=True)
         return
     from ..export.tables import export_table
+    from ..frictionmap.snapshot import open_map
 
     text = export_table(
-        map_path,
+        open_map(map_path),
         output,
         fmt=fmt,
         layout=layout,
@@ -346,6 +352,65 @@ def table_cmd(
         say(f"wrote {output}", err=True)
 
 
+@map_group.command("compare")
+@click.option("--quantity", type=click.Choice(["mu_k", "mu_s"]), default="mu_k",
+              show_default=True, help="The coefficient to compare.")
+@click.option("--format", "fmt", type=click.Choice(["text", "csv", "markdown"]),
+              default="text", show_default=True, help="How to print the comparison.")
+@click.option("-o", "--output", type=click.Path(dir_okay=False),
+              help="Write to FILE instead of standard output.")
+@map_option
+@friendly_errors
+def compare_cmd(quantity: str, fmt: str, output: str | None, map_path: str) -> None:
+    """Labs side by side at every condition two of them measured.
+
+    Per condition and pair of labs: each lab's n and mean ± U (k = 2, its own
+    uncertainty), the difference and its U, ISO 13528's En number (|En| > 1: the labs
+    disagree beyond their stated uncertainties) and each lab's z score against the
+    condition's pooled mean with σ_pt = the map's reproducibility s_R (ISO 5725-2), and
+    whether the labs disagree beyond R. Then the map's s_r, s_R, r and R.
+    """
+    from ..export.tables import to_csv, to_markdown
+    from ..files import write_text_atomic
+    from ..frictionmap import read_map
+    from ..rounding import plus_minus, round_gum
+    from ..stats import group_statistics, lab_comparison, reproducibility
+
+    runs = read_map(map_path)
+    table = lab_comparison(runs, quantity)
+    rep = reproducibility(group_statistics(runs), quantity)
+    footer = (f"{quantity}: s_r = {rep.s_r:.3g}, s_R = {rep.s_R:.3g}, r = {rep.r:.3g}, "
+              f"R = {rep.R:.3g} over {rep.n_conditions} condition(s) several labs measured "
+              "(ISO 5725-2)")
+    if fmt == "csv":
+        text = to_csv(table)
+    elif fmt == "markdown":
+        text = to_markdown(table) + "\n" + footer + "\n"
+    else:
+        lines = []
+        if table.empty:
+            lines.append("no condition was measured by two labs")
+        for r in table.to_dict(orient="records"):
+            lines.append(f"{r['pin']} on {r['disc']}, {r['pressure_kPa']:.4g} kPa, "
+                         f"{r['temperature_C']:g} °C, {r['nominal_speed_mm_s']:.2g} mm/s")
+            for side in ("a", "b"):
+                lines.append(f"  {r['lab_' + side]}: n = {r['n_' + side]}, "
+                             f"{plus_minus(r['mean_' + side], r['U_' + side])}, "
+                             f"z = {r['z_' + side]:.2f}")
+            diff, u_diff = round_gum(r["difference"], r["U_difference"])
+            lines.append(f"  difference {diff} ± {u_diff}, "
+                         f"En = {r['En']:.2f}"
+                         + ("; labs disagree beyond R" if r["labs_disagree"] else ""))
+        lines.append(footer)
+        text = "\n".join(lines) + "\n"
+    if output:
+        write_text_atomic(output, text, newline="")
+        say(f"wrote {output}", err=True)
+    else:
+        for line in text.splitlines():
+            say(line)
+
+
 @map_group.command("show")
 @click.option("--runs", "runs_listed", is_flag=True,
               help="Then list every run: id, file [test / result / interval], pin / disc, "
@@ -360,10 +425,12 @@ def show_cmd(runs_listed: bool, groups_listed: bool, map_path: str) -> None:
     runs (with the file and test each came from) and the pooled repeatability."""
     from ..export.tables import map_paper_text
     from ..frictionmap import map_summary
+    from ..frictionmap.snapshot import open_map
 
-    click.echo(map_summary(map_path, runs_listed=runs_listed))
+    snap = open_map(map_path)  # the one read and check of the map
+    click.echo(map_summary(snap, runs_listed=runs_listed))
     if groups_listed:
-        click.echo(map_paper_text(map_path), nl=False)
+        click.echo(map_paper_text(snap), nl=False)
 
 
 @map_group.command("exclude")
@@ -390,3 +457,35 @@ def include_cmd(ids: tuple[str, ...], map_path: str) -> None:
 
     changed = include_runs(map_path, ids)
     say(f"included {len(changed)} run(s)" + (": " + ", ".join(changed) if changed else ""))
+
+
+@map_group.command("upgrade")
+@map_option
+@friendly_errors
+def upgrade_cmd(map_path: str) -> None:
+    """Convert a map kept as one Parquet file (the format before map folders) into a map
+    folder of parts at the same path, so that every later write adds a part instead of
+    rewriting the whole map. Every row is checked on the way; the old file is kept as
+    <map>.bak. A map folder already is left as it is."""
+    from ..frictionmap.store import upgrade_map
+
+    n_runs, kept = upgrade_map(map_path)
+    if kept is None:
+        say(f"{map_path}: a map folder of parts already ({n_runs} runs); nothing to do")
+    else:
+        say(f"{map_path}: converted to a map folder of parts ({n_runs} runs); the single "
+            f"file is kept as {kept}")
+
+
+@map_group.command("compact")
+@map_option
+@friendly_errors
+def compact_cmd(map_path: str) -> None:
+    """Rewrite a map folder's parts as one part (with the safety of every write: the new
+    part fsynced, the manifest swapped atomically, the previous commit kept as
+    _manifest.json.bak). Writes keep the number of parts small on their own; compact
+    before copying a map, or after many exclusions."""
+    from ..frictionmap.store import compact_map
+
+    before, after = compact_map(map_path)
+    say(f"{map_path}: {before} part(s) → {after}")

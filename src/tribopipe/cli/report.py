@@ -12,7 +12,7 @@ from ._common import chosen_map, friendly_errors, say
 @click.option(
     "--map",
     "map_path",
-    type=click.Path(dir_okay=False),
+    type=click.Path(),
     help="Friction map (Parquet). Default: the CAMPAIGN file's; without one, the map the "
     "last `tribopipe batch` run in this folder updated (named in ./.tribopipe-map), else "
     "processed/friction_map.parquet.",

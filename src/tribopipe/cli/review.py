@@ -9,7 +9,7 @@ from ._common import friendly_errors, say
 
 @click.command("review")
 @click.argument("config", required=False, type=click.Path(exists=True, dir_okay=False))
-@click.option("--map", "map_path", type=click.Path(dir_okay=False), default=None,
+@click.option("--map", "map_path", type=click.Path(), default=None,
               help="A friction map to review instead of a campaign (its traces: --traces).")
 @click.option("--traces", "traces_dir", type=click.Path(file_okay=False), default=None,
               help="The folder of the map's trace Parquet files (default: traces/ beside "

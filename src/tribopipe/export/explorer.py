@@ -49,7 +49,7 @@ from ..errors import ExportError
 from ..escape import csv_cell, html_text, printable, script_json
 from ..files import write_text_atomic
 from ..fit import fit_power_law, power_law
-from ..frictionmap import read_map
+from ..frictionmap.snapshot import MapSource, as_snapshot
 from ..interpolation import EXTRAPOLATED, temperature_needed
 from ..labels import flag_list
 from ..physics import FOUNDING_SLIDING_SPEED_MM_S
@@ -750,7 +750,7 @@ def runs_folder(output: str | Path) -> Path:
 
 
 def write_explorer(
-    map_path: str | Path,
+    map_path: MapSource,
     output: str | Path,
     *,
     title: str | None = None,
@@ -762,7 +762,7 @@ def write_explorer(
     :func:`runs_folder` beside the page, one file per pair (written first, each
     atomically), so the page stays small; a smaller map's page carries them and is one
     file."""
-    runs = read_map(map_path)
+    runs = as_snapshot(map_path).runs
     if runs.empty:
         raise ExportError(
             "the friction map is empty or absent",

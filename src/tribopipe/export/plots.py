@@ -27,7 +27,7 @@ from ..figures import (
     save_figure,
 )
 from ..fit import fit_power_law, power_law
-from ..frictionmap import read_map
+from ..frictionmap.snapshot import MapSource, as_snapshot
 from ..layout import find_trace
 from ..mastercurve import MasterCurve
 from ..numeric import finite_or_none, is_finite
@@ -272,7 +272,7 @@ def plot_pairs(
     return written
 
 
-def plot_map_pairs(map_path: str | Path, out_dir: str | Path, *, fmt: str = "png",
+def plot_map_pairs(map_path: MapSource, out_dir: str | Path, *, fmt: str = "png",
                    pin: str | None = None, disc: str | None = None,
                    dpi: int | None = None) -> list[Path]:
     """:func:`plot_pairs` for the friction map (Parquet) at ``map_path``, optionally one
@@ -287,7 +287,7 @@ def plot_map_pairs(map_path: str | Path, out_dir: str | Path, *, fmt: str = "png
     return plot_pairs(runs, out_dir, fmt=fmt, dpi=DPI if dpi is None else dpi)
 
 
-def plot_map_runs(map_path: str | Path, traces_dir: str | Path, out_dir: str | Path, *,
+def plot_map_runs(map_path: MapSource, traces_dir: str | Path, out_dir: str | Path, *,
                   fmt: str = "png") -> tuple[list[Path], list[str]]:
     """:func:`plot_runs` for the friction map (Parquet) at ``map_path``."""
     if not Path(traces_dir).is_dir():
@@ -296,9 +296,9 @@ def plot_map_runs(map_path: str | Path, traces_dir: str | Path, out_dir: str | P
     return plot_runs(_read_runs(map_path), traces_dir, out_dir, fmt=fmt)
 
 
-def _read_runs(map_path: str | Path) -> pd.DataFrame:
+def _read_runs(map_path: MapSource) -> pd.DataFrame:
     """The runs of the map at ``map_path``; :class:`ExportError` when it is empty."""
-    runs = read_map(map_path)
+    runs = as_snapshot(map_path).runs
     if runs.empty:
         raise ExportError("the friction map is empty or absent", path=map_path,
                           hint="reduce runs first (tribopipe reduce / batch)")

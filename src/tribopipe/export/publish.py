@@ -52,7 +52,7 @@ from ..evidence import (
     write_evidence,
 )
 from ..fit import fit_power_law
-from ..frictionmap import RUN_COLUMNS, check_package, read_map
+from ..frictionmap import RUN_COLUMNS, check_package
 from ..frictionmap.checks import validate_runs
 from ..frictionmap.datapackage import (
     DESCRIPTOR,
@@ -76,9 +76,9 @@ from ..frictionmap.package import (
 from ..frictionmap.profile import PROFILE_NAME, PROFILE_VERSION, profile_schema, schema_file
 from ..frictionmap.published import FOUNDING_PAPER, PUBLISHED_LAB
 from ..frictionmap.schema import KIND, SCHEMA_NAME, SCHEMA_VERSION, SOURCE_PUBLISHED
+from ..frictionmap.snapshot import MapSource, as_snapshot
 from ..frictionmap.store import write_map_copy
-from ..frictionmap.synthetic_rows import synthetic_count
-from ..labels import FLAG_SYNTHETIC
+from ..frictionmap.synthetic_rows import SYNTHETIC_MEANS, synthetic_count
 from ..query import pairs
 from ..stats import group_statistics
 from .citation import (
@@ -331,7 +331,7 @@ def build_package(runs: pd.DataFrame, publisher: Publisher, folder: Path, *,
     return [*files, DESCRIPTOR]
 
 
-def publish_map(map_path: str | os.PathLike[str], out_dir: str | os.PathLike[str],
+def publish_map(map_path: MapSource, out_dir: str | os.PathLike[str],
                 publisher: Publisher, *, overwrite: bool = False,
                 date: str | None = None, allow_synthetic: bool = False,
                 evidence: bool = True, traces_dir: str | os.PathLike[str] | None = None,
@@ -358,16 +358,15 @@ def publish_map(map_path: str | os.PathLike[str], out_dir: str | os.PathLike[str
         raise ExportError(f"release date {date!r}, expected YYYY-MM-DD")
     target = Path(out_dir)
     _check_target(target, overwrite)
-    runs = read_map(map_path)
+    runs = as_snapshot(map_path).runs
     if runs.empty:
         raise ExportError("the friction map is empty or absent; nothing to publish",
                           path=map_path)
     n_synthetic = synthetic_count(runs)
     if n_synthetic and not allow_synthetic:
         raise ExportError(
-            f"{n_synthetic} of {len(runs)} runs are synthetic (flagged "
-            f"'{FLAG_SYNTHETIC}': demo data, not measured); they cannot be published as a "
-            "lab's measurements",
+            f"{n_synthetic} of {len(runs)} runs are {SYNTHETIC_MEANS}; they cannot be "
+            "published as a lab's measurements",
             path=map_path,
             hint="publish a map of your own runs, or pass --allow-synthetic for a "
                  "package of demo data",

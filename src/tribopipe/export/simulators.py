@@ -13,13 +13,12 @@ from __future__ import annotations
 import inspect
 import math
 from collections.abc import Callable, Mapping
-from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from ..errors import ExportError
 from ..escape import markdown_cell
-from ..frictionmap import read_map
-from ..query import QueryResult, groups_of, pair_speeds, query, select_pair
+from ..frictionmap.snapshot import MapSource, as_snapshot
+from ..query import QueryResult, load_groups, pair_speeds, query, select_pair
 from .registry import (
     FORMATS,
     WRITERS,
@@ -207,14 +206,14 @@ def export_simulator_input(
     return function(writer.condition)(res, source=source, **chosen)
 
 
-def export_from_map(map_path: str | Path, fmt: str, **options: Any) -> str:
+def export_from_map(map_path: MapSource, fmt: str, **options: Any) -> str:
     """:func:`export_simulator_input` on the friction map (Parquet) at ``map_path``; every
     pair's slip rate is the median sliding speed of its own runs."""
     writer_named(fmt)  # an unknown format is refused before the map is read
-    runs = read_map(map_path)
-    groups = groups_of(runs, map_path)
-    return export_simulator_input(groups, fmt, source=str(map_path),
-                                  slip_rates=pair_slip_rates(runs), **options)
+    snap = as_snapshot(map_path)
+    groups = load_groups(snap)
+    return export_simulator_input(groups, fmt, source=str(snap.path),
+                                  slip_rates=pair_slip_rates(snap.runs), **options)
 
 
 def snippet(fmt: str, res: QueryResult, source: str | None = None) -> str:

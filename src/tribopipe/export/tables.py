@@ -38,15 +38,14 @@ import math
 import os
 import re
 from collections.abc import Hashable, Mapping, Sequence
-from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from ..config import TEST_METHODS
 from ..errors import ExportError
 from ..escape import csv_cell, latex_cell, markdown_cell, printable
 from ..files import write_text_atomic
-from ..frictionmap import read_map
 from ..frictionmap.published import FRICTIONMAP_COLUMNS
+from ..frictionmap.snapshot import MapSource, as_snapshot
 from ..query import estimate_text
 from ..rounding import known_u, round_gum
 from ..stats import (
@@ -239,12 +238,13 @@ def paper_text(runs: pd.DataFrame) -> str:
     return "\n".join(lines) + "\n" + PAPER_NOTE + "\n"
 
 
-def map_paper_text(map_path: str | os.PathLike[str]) -> str:
+def map_paper_text(map_path: MapSource) -> str:
     """:func:`paper_text` of the map at ``map_path`` (excluded runs left out); '' when
     there is no map or no included run (nothing was reduced)."""
-    if not Path(map_path).is_file():
+    snap = as_snapshot(map_path)
+    if not snap.exists:
         return ""
-    runs = read_map(map_path)
+    runs = snap.runs
     if runs.empty or runs["excluded"].astype(bool).all():
         return ""
     return paper_text(runs)
@@ -665,15 +665,16 @@ def _latex_symbols(text: str) -> str:
 
 
 def export_table(
-    map_path: str | os.PathLike[str],
+    map_path: MapSource,
     output: str | os.PathLike[str] | None = None,
     **options: Any,
 ) -> str:
     """Read the map at ``map_path``, render a table (options of :func:`render_table`) and,
     when ``output`` is given, write it there (UTF-8). Returns the text."""
-    if not Path(map_path).exists():
-        raise ExportError("friction map not found", path=map_path, hint="pass --map PATH")
-    text = render_table(read_map(map_path), **options)
+    snap = as_snapshot(map_path)
+    if not snap.exists:
+        raise ExportError("friction map not found", path=snap.path, hint="pass --map PATH")
+    text = render_table(snap.runs, **options)
     if output is not None:
 
         write_text_atomic(output, text, newline="")

@@ -24,6 +24,7 @@ import glob
 import json
 import math
 import os
+import shutil
 import stat
 from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from contextlib import contextmanager, suppress
@@ -37,6 +38,20 @@ from ..errors import MapError, ReadError
 from ..escape import display_path
 from ..files import file_kind, os_reason, regular_file
 from ..validate import text_problem
+from .parts import (
+    MANIFEST,
+    Manifest,
+    Part,
+    collect_garbage,
+    commit,
+    file_mode,
+    manifest_path,
+    read_manifest,
+    read_part_bytes,
+    restore_hint,
+    settle,
+    write_part,
+)
 from .schema import (
     ADDED_IN_VERSION,
     ADDED_LATER_CONTENT,
@@ -208,6 +223,10 @@ def write_map(path: str | os.PathLike[str], runs: pd.DataFrame) -> None:
     p = Path(path)
     frame = records_frame(frame_records(runs), where="row")
     with _locked(p):
+        if _writes_parts(p):
+            _, _, manifest = _read_parts_map(p, ["measurement_id"])  # refuse a foreign one
+            _commit_parts(p, manifest, [frame])
+            return
         read_map(p)  # refuse foreign or corrupt files before replacing them
         _write_atomic(p, frame)
 
@@ -454,11 +473,16 @@ def update_map(
     p = Path(path)
     new_frame = records_frame(records)  # validate before touching anything
     with _locked(p):
-        return _fold_and_write(p, read_map(p), new_frame, replace, drop_ids)
+        if _writes_parts(p):
+            return _update_parts(p, lambda _: (new_frame, drop_ids), replace)[0]
+        # the locked read-modify-write: the map read again under the lock
+        return _fold_and_write(p, read_map(p), new_frame, replace, drop_ids)[0]
 
 
 #: what to fold into a map, decided from the map as it is: the records and the ids to drop
 MapChange = tuple[Sequence[MapRow], Iterable[str]]
+#: a :data:`MapChange` with the records checked into a frame
+FrameChange = tuple["pd.DataFrame", Iterable[str]]
 
 
 def update_map_with(
@@ -471,15 +495,43 @@ def update_map_with(
     ``decide(current)`` from the map as read under its lock, so that a check against the
     map (the same content under another name) cannot race another writer. ``decide``
     runs once; the map is rewritten only when something changed."""
+    return change_map_with(path, decide, replace=replace)[0]
+
+
+def change_map_with(
+    path: str | os.PathLike[str],
+    decide: Callable[[pd.DataFrame], MapChange],
+    *,
+    replace: bool = False,
+) -> tuple[AppendReport, pd.DataFrame]:
+    """:func:`update_map_with`, returning also the rows of the map as this change left it
+    (all columns, in the map's order), so that a command that shows the map after its
+    write need not read it again."""
     p = Path(path)
-    with _locked(p):
-        current = read_map(p)
+
+    def checked(current: pd.DataFrame) -> FrameChange:
         records, drop_ids = decide(current)
-        return _fold_and_write(p, current, records_frame(records), replace, drop_ids)
+        return records_frame(records), drop_ids
+
+    with _locked(p):
+        # A command that appends reads the map once more here, under the lock: the check
+        # against the map and the write see one map, which no other writer can change
+        # in between.
+        if _writes_parts(p):
+            return _update_parts(p, checked, replace)
+        new_frame, drop_ids = checked(current := read_map(p))
+        return _fold_and_write(p, current, new_frame, replace, drop_ids)
+
+
+def _writes_parts(p: Path) -> bool:
+    """True when a change of the map at ``p`` is committed as parts: a map folder, or no
+    map yet (a new map is a folder); a single-file map is rewritten whole until it is
+    converted (:func:`upgrade_map`)."""
+    return p.is_dir() or not (p.exists() or p.is_symlink())
 
 
 def _fold_and_write(p: Path, current: pd.DataFrame, new_frame: pd.DataFrame, replace: bool,
-                    drop_ids: Iterable[str]) -> AppendReport:
+                    drop_ids: Iterable[str]) -> tuple[AppendReport, pd.DataFrame]:
     """Fold validated records into the map read under the lock, drop ``drop_ids`` and
     write it atomically when something changed. The caller holds the lock."""
     import dataclasses
@@ -492,7 +544,8 @@ def _fold_and_write(p: Path, current: pd.DataFrame, new_frame: pd.DataFrame, rep
     )
     if report.changed:
         _write_atomic(p, merged)
-    return report
+        return report, merged
+    return report, current
 
 
 # --------------------------------------------------------------------------- exclusions
@@ -536,19 +589,37 @@ def set_excluded(
     if not p.exists():
         raise MapError("friction map not found", path=p, hint="pass --map PATH")
     with _locked(p):
-        runs = read_map(p)
+        # the locked read-modify-write: the map read under the lock
+        parts_map = p.is_dir()
+        if parts_map:
+            runs, _, manifest = _read_parts_map(p)
+        else:
+            runs = read_map(p)
         positions = _resolve_ids(runs, ids, p)
-        rows = frame_records(runs)
-        changed = []
-        for i in positions:
-            new_state = (reason is not None, None if reason is None else reason.strip())
-            if (rows[i]["excluded"], rows[i]["exclusion_reason"]) != new_state:
-                rows[i] = {**rows[i], "excluded": new_state[0], "exclusion_reason": new_state[1]}
-                changed.append(rows[i]["measurement_id"])
+        new_state = (reason is not None, None if reason is None else reason.strip())
+        changed_at = [i for i in dict.fromkeys(positions)
+                      if (bool(runs["excluded"].iat[i]),
+                          _or_none(runs["exclusion_reason"].iat[i])) != new_state]
+        changed = [str(runs["measurement_id"].iat[i]) for i in changed_at]
         if changed:
-            # rows read (and checked) with a checked reason: not checked a second time
-            _write_atomic(p, unvalidated_frame(rows, where="row"))
+            new = runs.copy()
+            column = list(new.columns).index("excluded")
+            reasons = list(new.columns).index("exclusion_reason")
+            for i in changed_at:
+                new.iat[i, column] = new_state[0]
+                new.iat[i, reasons] = new_state[1]
+            if parts_map:
+                owner = _owner(manifest)
+                _change_parts(p, manifest, runs, owner, owner < 0, new,
+                              {int(owner[i]) for i in changed_at}, None)
+            else:
+                # rows read (and checked) with a checked reason: not checked a second time
+                _write_atomic(p, unvalidated_frame(frame_records(new), where="row"))
     return changed
+
+
+def _or_none(value: Any) -> Any:
+    return None if is_missing(value) else value
 
 
 def exclude_runs(path: str | os.PathLike[str], ids: Sequence[str], reason: str) -> list[str]:
@@ -574,6 +645,8 @@ def backup_path(path: str | os.PathLike[str]) -> Path:
 
 
 def _restore_hint(path: Path) -> str:
+    if path.is_dir():
+        return restore_hint(path)
     backup = backup_path(path)
     try:
         kept = backup.is_file()
@@ -604,19 +677,63 @@ def read_map(path: str | os.PathLike[str]) -> pd.DataFrame:
     written: a map changed outside tribopipe, or damaged on disk, is refused rather than
     read with other values). A map written before the checksum existed is read, and
     gains one on its next write.
-    """
-    import pyarrow.parquet as pq
 
+    A map folder of parts (:mod:`~tribopipe.frictionmap.parts`) is read through its
+    manifest, each part checked against its SHA-256 there. A command opens a map once, as
+    a :class:`~tribopipe.frictionmap.snapshot.MapSnapshot`; this is the snapshot's rows.
+    """
+    return load_map(path)[0]
+
+
+def load_map(path: str | os.PathLike[str], columns: Sequence[str] | None = None
+             ) -> tuple[pd.DataFrame, dict[str, Any]]:
+    """The one reader of a friction map: its rows (the map's ``columns`` only, all when
+    ``None``) and its metadata (as :func:`map_metadata` gives it). A map folder of parts
+    reads only those columns of each part, after checking the part's bytes against the
+    manifest's SHA-256 (its rows were checked as they came in: ``map validate`` checks
+    them all again); a single-file map (the format before parts) is read and checked
+    whole, as :func:`read_map` describes. Raises :class:`MapError` in one line."""
     p = Path(path)
     try:
         st = os.stat(p)
     except FileNotFoundError:
-        return empty_map()
+        _refuse_interrupted_upgrade(p)
+        return _select(empty_map(), columns), _empty_info()
     except OSError as exc:
         raise MapError(f"cannot read the friction map: {os_reason(exc)}", path=p) from None
+    if stat.S_ISDIR(st.st_mode):
+        runs, info, _ = _read_parts_map(p, columns)
+        return runs, info
     if not stat.S_ISREG(st.st_mode):
         raise MapError(f"is {file_kind(st.st_mode)}, expected a friction-map Parquet file; "
                        "not opened", path=p, hint="pass another --map")
+    runs, info = _read_file_map(p)
+    return _select(runs, columns), info
+
+
+def _select(runs: pd.DataFrame, columns: Sequence[str] | None) -> pd.DataFrame:
+    if columns is None:
+        return runs
+    return runs.loc[:, _wanted(columns)]
+
+
+def _wanted(columns: Sequence[str]) -> list[str]:
+    """``columns`` in the map's order; an unknown name is refused."""
+    unknown = sorted(set(columns) - set(RUN_COLUMNS))
+    if unknown:
+        raise MapError(f"no map column named {', '.join(unknown)}")
+    return [c for c in RUN_COLUMNS if c in set(columns)]
+
+
+def _empty_info() -> dict[str, Any]:
+    return {"schema": SCHEMA_NAME, "schema_version": SCHEMA_VERSION, "n_runs": 0,
+            "sources": [], "format": "none"}
+
+
+def _read_file_map(p: Path) -> tuple[pd.DataFrame, dict[str, Any]]:
+    """A single-file map (the format before parts), read and checked whole."""
+    import pyarrow.parquet as pq
+
     try:
         table = pq.read_table(p)
         # every buffer checked, text for valid UTF-8 too (Parquet readers do not)
@@ -645,7 +762,7 @@ def read_map(path: str | os.PathLike[str]) -> pd.DataFrame:
     if runs["measurement_id"].duplicated().any():
         dup = runs.loc[runs["measurement_id"].duplicated(), "measurement_id"].iloc[0]
         raise MapError(f"duplicate measurement_id {dup}", path=p, column="measurement_id")
-    return runs
+    return runs, info
 
 
 def _first_line(exc: BaseException) -> str:
@@ -658,10 +775,14 @@ def map_metadata(path: str | os.PathLike[str]) -> dict[str, Any]:
     """The schema and provenance a map carries in its Parquet metadata: ``schema``,
     ``schema_version``, ``columns`` (name, kind, unit, meaning), ``tribopipe_version`` and
     ``written_at`` of the last write, ``n_runs``, ``sources``, ``content_sha256``.
-    Validated like :func:`read_map` (the rows are not read)."""
+    Validated like :func:`read_map` (the rows are not read). A map folder of parts
+    gives its manifest's account instead of ``content_sha256``: ``format`` ``"parts"``,
+    ``generation`` and ``parts`` (each part's checksum is in the manifest)."""
     import pyarrow.parquet as pq
 
     p = Path(path)
+    if p.is_dir():
+        return load_map(p, ["measurement_id"])[1]
     try:
         regular_file(p, what="a friction-map Parquet file")
         schema = pq.read_schema(p)
@@ -672,13 +793,14 @@ def map_metadata(path: str | os.PathLike[str]) -> dict[str, Any]:
     return _check_metadata(schema.metadata or {}, p)
 
 
-def _with_added_columns(table: Any, version: int) -> Any:
-    """``table`` with the columns a map of schema ``version`` could not have had (those of
-    :data:`ADDED_IN_VERSION` added later) appended as all missing."""
+def _with_added_columns(table: Any, version: int,
+                        columns: Sequence[str] = RUN_COLUMNS) -> Any:
+    """``table`` with the columns (of ``columns``) a map of schema ``version`` could not
+    have had (those of :data:`ADDED_IN_VERSION` added later) appended as all missing."""
     import pyarrow as pa
 
     types = {"str": pa.string(), "float": pa.float64(), "int": pa.int64()}
-    for name in RUN_COLUMNS:
+    for name in columns:
         if name not in table.column_names and ADDED_IN_VERSION.get(name, 1) > version:
             table = table.append_column(name, pa.nulls(table.num_rows, types[KIND[name]]))
     return table
@@ -699,14 +821,18 @@ def _arrow_type_ok(kind: str, arrow_type: Any) -> bool:
     return pa.types.is_string(arrow_type) or pa.types.is_large_string(arrow_type)
 
 
-def _from_arrow(table: Any) -> pd.DataFrame:
+def _from_arrow(table: Any, columns: Sequence[str] = RUN_COLUMNS, *,
+                check: bool = True) -> pd.DataFrame:
     """The map DataFrame of an Arrow table of the run columns, coerced column by column
     (vectorised: the read path of every command) and validated. Each column must be
     stored with an Arrow type of its kind (``excluded`` stored as the text ``"false"`` is
-    refused, not read as true)."""
+    refused, not read as true). ``columns``: those to read (in the map's order);
+    ``check``: apply :func:`~tribopipe.frictionmap.schema.check_runs` (a full set of
+    columns only; parts whose checksum the manifest vouches for were checked as they came
+    in)."""
     import pandas as pd
 
-    for name in RUN_COLUMNS:
+    for name in columns:
         arrow_type = table.schema.field(name).type
         if not _arrow_type_ok(KIND[name], arrow_type):
             kind = KIND[name]
@@ -718,25 +844,25 @@ def _from_arrow(table: Any) -> pd.DataFrame:
         frame = table.replace_schema_metadata(None).to_pandas(ignore_metadata=True)
     except Exception as exc:  # noqa: BLE001 - a damaged column
         raise MapError(f"cannot read the rows ({_first_line(exc)})") from None
-    columns: dict[str, Any] = {}
-    for name in RUN_COLUMNS:
+    out: dict[str, Any] = {}
+    for name in columns:
         kind = KIND[name]
         col = frame[name]
         try:
             if kind == "float":
-                columns[name] = pd.to_numeric(col, errors="raise").astype("float64").to_numpy()
+                out[name] = pd.to_numeric(col, errors="raise").astype("float64").to_numpy()
             elif kind == "int":
-                columns[name] = pd.array(col, dtype="Int64")
+                out[name] = pd.array(col, dtype="Int64")
             elif kind == "bool":
                 if col.isna().any():
                     raise ValueError("missing true/false")
-                columns[name] = col.astype(bool).to_numpy()
+                out[name] = col.astype(bool).to_numpy()
             else:
-                columns[name] = pd.array(col.astype(object).where(col.notna(), None), dtype="str")
+                out[name] = pd.array(col.astype(object).where(col.notna(), None), dtype="str")
         except (TypeError, ValueError, OverflowError) as exc:
             raise MapError(f"expected {kind} values ({exc})", column=name) from None
-    runs = pd.DataFrame(columns, columns=list(RUN_COLUMNS), index=pd.RangeIndex(len(frame)))
-    return check_runs(runs, "row")
+    runs = pd.DataFrame(out, columns=list(columns), index=pd.RangeIndex(len(frame)))
+    return check_runs(runs, "row") if check else runs
 
 
 def _check_metadata(metadata: Mapping[bytes, bytes], path: Path) -> dict[str, Any]:
@@ -789,3 +915,337 @@ def map_info(runs: pd.DataFrame) -> bytes:
         "content_sha256": content_sha256(runs),
     }
     return json.dumps(info, ensure_ascii=False).encode()
+
+
+# --------------------------------------------------------------------------- parts
+
+
+def _folder_manifest(p: Path) -> Manifest | None:
+    """The committed manifest of the map folder ``p``; ``None`` for a folder holding
+    nothing of a map yet (empty, or only a killed writer's temporary files): an empty
+    map. A folder with anything else but no manifest is refused."""
+    if manifest_path(p).exists() or manifest_path(p).is_symlink():
+        return read_manifest(p)
+    try:
+        others = [e.name for e in p.iterdir()
+                  if not (e.name.startswith(".") and e.name.endswith(".tmp"))]
+    except OSError as exc:
+        raise MapError(f"cannot read the map folder ({os_reason(exc)})", path=p) from None
+    if others:
+        raise MapError(f"a folder that is not a friction map (no {MANIFEST}); refusing to "
+                       "read or write into it", path=p, hint="pass another --map")
+    return None
+
+
+def _read_parts_map(p: Path, columns: Sequence[str] | None = None, *, full: bool = False
+                    ) -> tuple[pd.DataFrame, dict[str, Any], Manifest | None]:
+    """The rows (``columns`` only) and metadata of the map folder ``p``, and its manifest.
+    Each part's bytes are checked against the manifest before they are parsed; ``full``
+    checks more, as ``map validate`` does: every buffer, each part's rows against the
+    checksum of its content in its own metadata, and every row against the row rules."""
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    if not p.exists():
+        _refuse_interrupted_upgrade(p)
+    manifest = _folder_manifest(p) if p.exists() else None
+    if manifest is None:
+        return _select(empty_map(), columns), {**_empty_info(), "format": "parts"}, None
+    wanted = list(RUN_COLUMNS) if columns is None else _wanted(columns)
+    tables = []
+    for part in manifest.parts:
+        data = read_part_bytes(p, part)
+        try:
+            table = pq.read_table(pa.BufferReader(data),
+                                  columns=_stored(pq.read_schema(pa.BufferReader(data)),
+                                                  wanted))
+            meta = table.schema.metadata or {}
+        except Exception as exc:  # noqa: BLE001 - pyarrow raises many types
+            raise MapError(f"part {part.file}: not a readable Parquet file "
+                           f"({_first_line(exc)})", path=p) from None
+        info = _check_metadata(meta, p)
+        if table.num_rows != part.n_runs or info["schema_version"] != part.schema_version:
+            raise MapError(f"part {part.file} is not the part its manifest names", path=p)
+        if full:
+            _verify_part(p, part.file, table, info)
+        table = _with_added_columns(table, part.schema_version, wanted)
+        absent = [c for c in wanted if c not in table.column_names]
+        if absent:
+            raise MapError(f"part {part.file} lacks column(s) {', '.join(absent)}", path=p,
+                           column=absent[0])
+        tables.append(table.select(wanted).replace_schema_metadata(None))
+    if tables:
+        table = pa.concat_tables(tables, promote_options="permissive")
+    else:
+        table = pa.Table.from_pandas(empty_map().loc[:, wanted], preserve_index=False)
+    try:
+        runs = _from_arrow(table, wanted, check=full)
+    except MapError as exc:
+        raise MapError(exc.problem, path=p, column=exc.column) from None
+    if "measurement_id" in wanted and runs["measurement_id"].duplicated().any():
+        dup = runs.loc[runs["measurement_id"].duplicated(), "measurement_id"].iloc[0]
+        raise MapError(f"duplicate measurement_id {dup}", path=p, column="measurement_id")
+    versions = [part.schema_version for part in manifest.parts]
+    info = {
+        "schema": SCHEMA_NAME,
+        "schema_version": max(versions) if versions else SCHEMA_VERSION,
+        "columns": _columns_info(),
+        "tribopipe_version": manifest.tribopipe_version,
+        "written_at": manifest.written_at,
+        "n_runs": manifest.n_runs,
+        "sources": list(manifest.sources),
+        "format": "parts",
+        "generation": manifest.generation,
+        "parts": len(manifest.parts),
+    }
+    return runs, info, manifest
+
+
+def _verify_part(p: Path, name: str, table: Any, info: Mapping[str, Any]) -> None:
+    """Check a part read whole as ``map validate`` does: every buffer (text as UTF-8) and
+    its rows against the checksum of its content in its own metadata."""
+    try:
+        table.validate(full=True)
+    except Exception as exc:  # noqa: BLE001 - pyarrow raises many types
+        raise MapError(f"part {name}: damaged ({_first_line(exc)})", path=p) from None
+    stored = info.get("content_sha256")
+    whole = _with_added_columns(table, info["schema_version"])
+    try:
+        rows = _from_arrow(whole.select(list(RUN_COLUMNS)), check=False)
+    except MapError as exc:
+        raise MapError(f"part {name}: {exc.problem}", path=p, column=exc.column) from None
+    if stored is None or stored != content_sha256(rows, info["schema_version"]):
+        raise MapError(f"part {name} fails the checksum of its rows", path=p)
+
+
+def verify_map(path: str | os.PathLike[str]) -> tuple[pd.DataFrame, dict[str, Any]]:
+    """Read the map at ``path`` with every check there is (``map validate``): for a map
+    folder, each part's bytes against the manifest, every buffer, each part's rows against
+    the checksum in its metadata, and every row against the row rules; a single-file map
+    as :func:`read_map` reads it (which checks all of that)."""
+    p = Path(path)
+    if p.is_dir():
+        runs, info, _ = _read_parts_map(p, full=True)
+        return runs, info
+    return load_map(p)
+
+
+def _stored(schema: Any, wanted: Sequence[str]) -> list[str]:
+    names = set(schema.names)
+    return [c for c in wanted if c in names]
+
+
+def _columns_info() -> list[dict[str, str]]:
+    return [{"name": c.name, "kind": c.kind, "unit": c.unit, "meaning": c.meaning}
+            for c in COLUMNS]
+
+
+def _part_bytes(runs: pd.DataFrame) -> bytes:
+    """``runs`` (checked rows) as one friction-map Parquet file, in memory."""
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    table = pa.Table.from_pandas(runs.loc[:, list(RUN_COLUMNS)], preserve_index=False)
+    meta = dict(table.schema.metadata or {})
+    meta[META_KEY] = map_info(runs)
+    sink = pa.BufferOutputStream()
+    pq.write_table(table.replace_schema_metadata(meta), sink)
+    return bytes(sink.getvalue())
+
+
+#: a new part is merged with the part before it when that one holds at most this many
+#: times its rows: parts stay few (about log N) and a row is rewritten about log N times
+MERGE_FACTOR = 4
+
+
+def _commit_parts(p: Path, manifest: Manifest | None, pieces: list[Part | pd.DataFrame]
+                  ) -> None:
+    """Commit the map folder ``p`` as ``pieces`` in order: parts kept as they are, and
+    frames (checked rows) written as new parts. Trailing pieces are merged first while
+    the one before the last holds at most :data:`MERGE_FACTOR` times the last one's rows
+    (the frames of kept parts come from ``frames_of``). The caller holds the lock and has
+    read the map (the manifest ``manifest``, ``None`` for a new map)."""
+    generation = 1 if manifest is None else manifest.generation + 1
+    mode = file_mode(manifest_path(p))
+    written: list[Part] = []
+    try:
+        p.mkdir(exist_ok=True)
+        for piece in pieces:
+            if isinstance(piece, Part):
+                written.append(piece)
+            elif len(piece):
+                written.append(write_part(p, generation, _part_bytes(piece), len(piece),
+                                          SCHEMA_VERSION, mode))
+        sources: set[str] = set(manifest.sources if manifest is not None else ())
+        for piece in pieces:
+            if not isinstance(piece, Part):
+                sources |= set(piece["source"].dropna().astype(str))
+        commit(p, Manifest(generation=generation, parts=settle(p, tuple(written)),
+                           written_at=utc_now(), tribopipe_version=__version__,
+                           sources=tuple(sorted(sources))), manifest, mode)
+    except OSError as exc:  # disk full, permissions: the committed map is untouched
+        raise MapError(f"cannot write the friction map ({os_reason(exc)})", path=p) from None
+    collect_garbage(p)
+
+
+def _merged_tail(pieces: list[Part | pd.DataFrame], frames: Callable[[int], pd.DataFrame],
+                 origin: list[int | None]) -> list[Part | pd.DataFrame]:
+    """``pieces`` with trailing pieces merged while the one before the last holds at most
+    :data:`MERGE_FACTOR` times the last one's rows; a kept part's rows come from
+    ``frames(k)``, ``k`` its place in the manifest (``origin``)."""
+    import pandas as pd
+
+    out = list(pieces)
+    where = list(origin)
+
+    def rows(i: int) -> int:
+        piece = out[i]
+        return piece.n_runs if isinstance(piece, Part) else len(piece)
+
+    def frame(i: int) -> pd.DataFrame:
+        piece = out[i]
+        if isinstance(piece, Part):
+            k = where[i]
+            assert k is not None
+            return frames(k)
+        return piece
+
+    while len(out) >= 2 and not isinstance(out[-1], Part) and rows(-2) <= MERGE_FACTOR * rows(-1):
+        both = pd.concat([frame(-2), frame(-1)], ignore_index=True)
+        out[-2:] = [both]
+        where[-2:] = [None]
+    return out
+
+
+def _change_parts(p: Path, manifest: Manifest | None, current: pd.DataFrame,
+                  owner: Any, gone: Any, kept_rows: pd.DataFrame, dirty: set[int],
+                  fresh: pd.DataFrame | None) -> None:
+    """Commit a change of the map folder ``p`` read as ``current`` (all columns, part of
+    each row in ``owner``): rows ``gone`` removed, the remaining rows now ``kept_rows`` (in
+    order, same length), the parts ``dirty`` rewritten from them, ``fresh`` rows added as
+    a new part. Untouched parts are kept as they are."""
+    import numpy as np
+
+    kept_owner = np.asarray(owner)[~np.asarray(gone)]
+    pieces: list[Part | pd.DataFrame] = []
+    origin: list[int | None] = []
+    parts_ = manifest.parts if manifest is not None else ()
+    for k, part in enumerate(parts_):
+        if k in dirty:
+            pieces.append(kept_rows.loc[kept_owner == k].reset_index(drop=True))
+            origin.append(None)
+        else:
+            pieces.append(part)
+            origin.append(k)
+    if fresh is not None and len(fresh):
+        pieces.append(fresh.reset_index(drop=True))
+        origin.append(None)
+
+    def frames(k: int) -> pd.DataFrame:
+        return current.loc[np.asarray(owner) == k].reset_index(drop=True)
+
+    keep = [i for i, piece in enumerate(pieces) if isinstance(piece, Part) or len(piece)]
+    pieces, origin = [pieces[i] for i in keep], [origin[i] for i in keep]
+    _commit_parts(p, manifest, _merged_tail(pieces, frames, origin))
+
+
+def _owner(manifest: Manifest | None) -> Any:
+    """The place in ``manifest`` of the part each row comes from."""
+    import numpy as np
+
+    if manifest is None:
+        return np.zeros(0, dtype=int)
+    return np.repeat(np.arange(len(manifest.parts)), [q.n_runs for q in manifest.parts])
+
+
+def _update_parts(p: Path, decide: Callable[[pd.DataFrame], FrameChange], replace: bool
+                  ) -> tuple[AppendReport, pd.DataFrame]:
+    """The locked read-modify-write of a map folder: the map read (under the lock: the
+    second read of a command that appends, so that no other writer slips in between the
+    duplicate check and the write), ``decide`` asked once, the change committed as new
+    parts. The caller holds the lock."""
+    import dataclasses
+
+    current, _, manifest = _read_parts_map(p)
+    new_frame, drop_ids = decide(current)
+    drop = set(drop_ids) - set(new_frame["measurement_id"])
+    gone = current["measurement_id"].isin(sorted(drop)).to_numpy()
+    kept = current.loc[~gone].reset_index(drop=True)
+    merged, report = _fold(kept, new_frame, replace=replace)
+    report = dataclasses.replace(
+        report, dropped_ids=tuple(current.loc[gone, "measurement_id"].astype(str)))
+    if not report.changed:
+        return report, current
+    owner = _owner(manifest)
+    by_id = dict(zip(current["measurement_id"], owner, strict=True))
+    dirty = {int(by_id[m]) for m in report.replaced_ids} | {
+        int(k) for k in owner[gone]}
+    _change_parts(p, manifest, current, owner, gone, merged.iloc[:len(kept)], dirty,
+                  merged.iloc[len(kept):])
+    return report, merged
+
+
+def upgrade_map(path: str | os.PathLike[str]) -> tuple[int, Path | None]:
+    """Convert the single-file map at ``path`` (the format before parts) into a map folder
+    of one part at the same path, under the map's lock: every row read and checked, the
+    folder built beside it and fsynced, the file kept as ``<map>.bak``, then the folder
+    renamed into its place. Returns the number of runs and where the old file is kept
+    (``None`` when the map was a folder already: nothing to do). A conversion killed
+    between its two renames is finished by running it again (reads refuse the map until
+    then, in one line that says so)."""
+    p = Path(path)
+    staged = _upgrade_folder(p)
+    with _locked(p):
+        if not p.exists() and staged.is_dir():  # a conversion killed between its renames
+            read_manifest(staged)
+            os.replace(staged, p)
+            _fsync_dir(p.parent)
+            return load_map(p, ["measurement_id"])[1]["n_runs"], backup_path(p)
+        if not p.exists():
+            raise MapError("friction map not found", path=p, hint="pass --map PATH")
+        if p.is_dir():
+            return load_map(p, ["measurement_id"])[1]["n_runs"], None
+        runs, _ = _read_file_map(p)  # every row checked once more, as map validate does
+        if staged.exists():
+            shutil.rmtree(staged)
+        staged.mkdir()
+        try:
+            _commit_parts(staged, None, [runs])
+            os.replace(p, backup_path(p))
+            os.replace(staged, p)
+        except OSError as exc:
+            raise MapError(f"cannot convert the friction map ({os_reason(exc)})",
+                           path=p) from None
+        _fsync_dir(p.parent)
+        return len(runs), backup_path(p)
+
+
+def _upgrade_folder(p: Path) -> Path:
+    return p.with_name(f".{p.name}.upgrade")
+
+
+def _refuse_interrupted_upgrade(p: Path) -> None:
+    if _upgrade_folder(p).is_dir():
+        raise MapError("the map's conversion to a folder of parts was interrupted",
+                       path=p, hint="run `tribopipe map upgrade` again to finish it")
+
+
+def compact_map(path: str | os.PathLike[str]) -> tuple[int, int]:
+    """Rewrite the map folder at ``path`` as one part, under the map's lock, with the
+    safety of every write (new part fsynced, the manifest swapped atomically, the previous
+    commit kept as ``_manifest.json.bak`` with its parts until the next write). Returns
+    the number of parts before and after. A single-file map is refused: convert it first
+    (:func:`upgrade_map`)."""
+    p = Path(path)
+    if not p.exists():
+        raise MapError("friction map not found", path=p, hint="pass --map PATH")
+    if not p.is_dir():
+        raise MapError("a single-file map has nothing to compact", path=p,
+                       hint="convert it first: tribopipe map upgrade")
+    with _locked(p):
+        runs, _, manifest = _read_parts_map(p)
+        before = 0 if manifest is None else len(manifest.parts)
+        if before <= 1:
+            return before, before
+        _commit_parts(p, manifest, [runs])
+        return before, 1

@@ -23,7 +23,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))  # the ge
 from generators.synthetic import SyntheticRun, write_rheocompass_export
 from tribopipe import frictionmap as fm
 from tribopipe.config import load_settings
-from tribopipe.frictionmap.records import RunLabels
+from tribopipe.labels import RunLabels
 from tribopipe.pipeline import reduce_file
 
 

@@ -34,7 +34,8 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     # disk, numbers from outside, units, the output folder
     ("tribopipe", "tribopipe.errors", "tribopipe.escape", "tribopipe.validate",
      "tribopipe.files", "tribopipe.numeric", "tribopipe.units", "tribopipe.layout",
-     "tribopipe.rounding", "tribopipe.project", "tribopipe.materials"),
+     "tribopipe.rounding", "tribopipe.project", "tribopipe.materials",
+     "tribopipe.reporting"),
     ("tribopipe.measurement",),
     ("tribopipe.physics",),
     ("tribopipe.config",),
@@ -60,7 +61,7 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("tribopipe.campaign", "tribopipe.evidence"),
     # the one rule for μ between measured conditions, below everything that reads it
     ("tribopipe.interpolation",),
-    ("tribopipe.query", "tribopipe.fit", "tribopipe.mastercurve"),
+    ("tribopipe.query", "tribopipe.query_text", "tribopipe.fit", "tribopipe.mastercurve"),
     ("tribopipe.export",),
     ("tribopipe.report", "tribopipe.hub"),
     ("tribopipe.cli", "tribopipe.__main__"),

@@ -183,12 +183,14 @@ def test_pattern_round_trip(pin: str, disc: str, force: int, tenths: int, temper
 
 def test_manifest_rows_and_extra_columns(tmp_path: Path) -> None:
     path = tmp_path / "m.csv"
-    path.write_text("file,pin,disc,normal_force_N,temperature_C,repeat,operator\n"
-                    "a.csv,Dragonskin 30,steel,3,20,1,RB\n"
+    path.write_text("file,pin,disc,normal_force_N,temperature_C,repeat,operator,lot\n"
+                    "a.csv,Dragonskin 30,steel,3,20,1,RB,L7\n"
                     "b.csv,Ecoflex 00-50,steel,,10,\n", encoding="utf-8")
     rows = read_manifest(path)
+    # a reporting item is kept as its column, an unknown column as extra metadata
     assert rows.get("a.csv").fields == {"pin": "Dragonskin 30", "disc": "steel",
-                                    "normal_force_N": 3.0, "temperature_C": 20.0, "repeat": 1}
+                                    "normal_force_N": 3.0, "temperature_C": 20.0, "repeat": 1,
+                                    "operator": "RB", "extra:lot": "L7"}
     assert rows.get("a.csv").line == 2
     assert rows.get("b.csv").fields == {"pin": "Ecoflex 00-50", "disc": "steel",
                                     "temperature_C": 10.0}
@@ -275,9 +277,10 @@ def test_manifest_and_name_agree_through_aliases(tmp_path: Path) -> None:
     (row,) = campaign_table(campaign)
     assert row.problem is None, row.problem
     assert row.status == "new"
-    # the manifest comes first, so its spelling wins
-    assert row.labels == RunLabels(pin="Dragonskin 30", disc="Steel", normal_force_N=3.0,
-                                   temperature_C=20.0, repeat=1)
+    # the vocabulary's canonical name is stored; the manifest, first, gave the spelling
+    assert row.labels == RunLabels(pin="Dragonskin 30", disc="steel", normal_force_N=3.0,
+                                   temperature_C=20.0, repeat=1, pin_as_given="Dragonskin 30",
+                                   disc_as_given="Steel")
     # the manifest itself is not a run
     assert [r.file for r in campaign_table(campaign)] == ["DS30_steel_3N_20C_r1.csv"]
 
@@ -317,9 +320,11 @@ def test_merge_is_order_sensitive_only_for_spelling(tmp_path: Path) -> None:
     b = ("file name", {"pin": "Ecoflex 00-50", "temperature_C": 20.0})
     ab = merge_metadata("x.csv", [a, b], campaign)
     ba = merge_metadata("x.csv", [b, a], campaign)
-    assert ab["pin"] == "ecoflex 00-50" and ba["pin"] == "Ecoflex 00-50"
-    assert {k: v for k, v in ab.items() if k != "pin"} == \
-        {k: v for k, v in ba.items() if k != "pin"}
+    # both store the vocabulary's canonical name; the first source's spelling is kept
+    assert ab["pin"] == ba["pin"] == "Ecoflex 00-50"
+    assert ab["pin_as_given"] == "ecoflex 00-50" and ba["pin_as_given"] == "Ecoflex 00-50"
+    assert {k: v for k, v in ab.items() if k != "pin_as_given"} == \
+        {k: v for k, v in ba.items() if k != "pin_as_given"}
     with pytest.raises(CampaignError, match="contradictory temperature_C"):
         merge_metadata("x.csv", [b, ("export", {"temperature_C": 10.0})], campaign)
     with pytest.raises(CampaignError, match="metadata missing: disc"):

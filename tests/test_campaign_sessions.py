@@ -462,7 +462,8 @@ def test_batch_folder_with_a_test_manifest_and_a_test_pattern(lab: Path) -> None
     assert "2 manifest row(s) matched nothing" in result.stderr
     assert "Traceback" not in result.output
     runs = pd.read_parquet(lab / "proc" / "friction_map.parquet")
-    assert len(runs) == 10 and set(runs["pin"]) == {"DS30"}
+    assert len(runs) == 10 and set(runs["pin"]) == {"Dragonskin 30"}
+    assert set(runs["pin_as_given"]) == {"DS30"}
 
 
 def test_campaign_list_shows_one_row_per_run(lab: Path) -> None:

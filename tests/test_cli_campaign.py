@@ -196,8 +196,8 @@ def test_quick_batch_of_a_folder_by_file_names(exports: Path, tmp_path: Path) ->
     assert "3 file(s) found (2 read, 1 failed)" in result.stdout, result.output
     assert "2 run(s) in the files read: 2 reduced" in result.stdout, result.output
     runs = pd.read_parquet(tmp_path / "proc" / "friction_map.parquet")
-    # no [names] table for a folder: the short name stays
-    assert set(runs["pin"]) == {"DS30"}
+    # no [names] table for a folder: the vocabulary knows the vendor code
+    assert set(runs["pin"]) == {"Dragonskin 30"} and set(runs["pin_as_given"]) == {"DS30"}
     assert sorted(runs["normal_force_N"]) == [1.0, 5.0]
 
 

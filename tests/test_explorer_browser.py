@@ -867,6 +867,11 @@ def test_no_element_overflows_its_card(browser, reduced, published, width, tmp_p
         assert layout["table_overflow_px"] <= 1, where
         # one speed, one lab: no empty selector
         assert layout["selectors_shown"] == ["pin", "disc"], where
+        if name == "report":  # the report's own tables fit the window too
+            cut = tab.page.evaluate("""() => Array.from(document.querySelectorAll(
+              'table'), t => [t.id, t.getBoundingClientRect().right -
+              document.documentElement.clientWidth]).filter(x => x[1] > 1)""")
+            assert cut == [], f"report at {width} px: {cut}"
         # each repeat stays on one or two lines
         heights = tab.page.evaluate("""() => Array.from(
           document.querySelectorAll('.tpx-repeat'), d => d.getBoundingClientRect().height /
@@ -998,3 +1003,35 @@ def test_labs_filter_the_groups_and_colour_the_repeats(tab, reduced, tmp_path):
     assert fills["0"] != fills["1"]
     legend = tab.page.locator("#tpx-pair-plot text.tpx-legend").all_text_contents()
     assert "repeats of Lab A" in legend and "repeats of Lab B" in legend
+
+
+def test_the_group_table_filters_by_test_method(tab, tmp_path):
+    """A map of two test methods: a method column and a method filter; a map of one
+    method shows neither (groups never pool two methods)."""
+    from tribopipe.frictionmap import write_map
+
+    map_path = tmp_path / "friction_map.parquet"
+    import_table(map_path, published_csv_path())
+    single = write_explorer(map_path, tmp_path / "one.html")
+    runs = read_map(map_path)
+    sled = (runs["pin"] == "Dragonskin 30") & (runs["disc"] == "steel")
+    runs.loc[sled, "test_method"] = "sled D1894"
+    write_map(map_path, runs)
+    both = write_explorer(map_path, tmp_path / "two.html")
+
+    tab.open(page_url(single))
+    assert tab.page.is_hidden("#tpx-group-method-label")
+    heads = tab.page.locator("#tpx-group-table th").all_text_contents()
+    assert "method" not in heads
+    tab.open(page_url(both))
+    assert tab.page.is_visible("#tpx-group-method-label")
+    all_rows = group_rows(tab)
+    assert {r[2] for r in all_rows} == {"rheometer pin-on-disc", "sled D1894"}
+    tab.page.select_option("#tpx-group-method", "sled D1894")
+    sled_rows = group_rows(tab)
+    assert sled_rows and {(r[0], r[1], r[2]) for r in sled_rows} == {
+        ("Dragonskin 30", "steel", "sled D1894")}
+    tab.page.select_option("#tpx-group-method", "rheometer pin-on-disc")
+    rest = group_rows(tab)
+    assert len(rest) + len(sled_rows) == len(all_rows)
+    assert ("Dragonskin 30", "steel") not in {(r[0], r[1]) for r in rest}

@@ -1,7 +1,8 @@
 """A run's QC flags are decided once: every output of `reduce` and of `batch` shows the same.
 
-The real 1 N run of the example campaign, labelled 3 N: the measured force strays from
-nominal by more than the 10 % tolerance, so the run carries ``normal_force_off_nominal``
+The real 1 N run of the example campaign, labelled 3 N and kept so (``--keep-labels``:
+without it such a run is refused): the measured force strays from nominal by more than the
+10 % tolerance, so the run carries ``normal_force_off_nominal``
 in the `reduce` table and JSON, its summary, the trace plot's header, the map and (for a
 batch) ``runs.csv``, the report and the explorer page.
 """
@@ -54,8 +55,9 @@ def _explorer_run_flags(data: object, run_id: str) -> list[str] | None:
 @pytest.mark.skipif(not ONE_NEWTON.exists(), reason="the example campaign is not here")
 def test_reduce_shows_the_maps_flags_in_every_output(tmp_path: Path) -> None:
     out, mapfile = tmp_path / "out", tmp_path / "map.parquet"
-    args = ["reduce", str(ONE_NEWTON), "--pin", "DS30", "--disc", "steel", "--force", "3",
-            "--temperature", "10", "--repeat", "1", "--output", str(out), "--map", str(mapfile)]
+    args = ["reduce", str(ONE_NEWTON), "--keep-labels", "--pin", "DS30", "--disc", "steel",
+            "--force", "3", "--temperature", "10", "--repeat", "1", "--output", str(out),
+            "--map", str(mapfile)]
     table = CliRunner().invoke(main, [*args, "--plot"])
     assert table.exit_code == 0, table.output
     header_after_reduce = _header_flags()
@@ -81,7 +83,8 @@ def test_batch_shows_the_same_flags_as_reduce(tmp_path: Path) -> None:
     out, mapfile = tmp_path / "out", tmp_path / "map.parquet"
     done = CliRunner().invoke(main, [
         "batch", str(raw), "--pattern", "{pin}_{disc}_{force}N_{temperature}C_r{repeat}",
-        "--output", str(out), "--map", str(mapfile), "--jobs", "1", "--plots"])
+        "--output", str(out), "--map", str(mapfile), "--jobs", "1", "--plots",
+        "--keep-labels"])
     assert done.exit_code == 0, done.output
     header = _header_flags()
 
@@ -110,8 +113,9 @@ def test_batch_shows_the_same_flags_as_reduce(tmp_path: Path) -> None:
 
     # the same run through `reduce` with the same labels: the same flags
     again = CliRunner().invoke(main, [
-        "reduce", str(raw / "DS30_steel_3N_10C_r1.csv"), "--pin", "DS30", "--disc", "steel",
-        "--force", "3", "--temperature", "10", "--repeat", "1", "--no-map", "--json",
+        "reduce", str(raw / "DS30_steel_3N_10C_r1.csv"), "--keep-labels", "--pin", "DS30",
+        "--disc", "steel", "--force", "3", "--temperature", "10", "--repeat", "1",
+        "--no-map", "--json",
         "--output", str(tmp_path / "again")])
     assert again.exit_code == 0, again.output
     assert json.loads(again.stdout)[0]["flags"] == [OFF]

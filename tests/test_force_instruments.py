@@ -550,8 +550,8 @@ def test_a_batch_of_sled_runs(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -
 
     folder = tmp_path / "raw"
     folder.mkdir()
-    _sled_csv(folder / "PE_steel_2N_23C_r1.csv", seed=1)
-    _sled_csv(folder / "PE_steel_2N_23C_r2.csv", seed=2, rest_load_N=0.4)
+    _sled_csv(folder / "PTFE_steel_2N_23C_r1.csv", seed=1)
+    _sled_csv(folder / "PTFE_steel_2N_23C_r2.csv", seed=2, rest_load_N=0.4)
     monkeypatch.chdir(tmp_path)
     out = CliRunner().invoke(main, [
         "batch", str(folder), "--pattern", "{pin}_{disc}_{force}N_{temperature}C_r{repeat}",

@@ -178,7 +178,7 @@ def test_a_version_3_package_validates_and_merges(tmp_path: Path) -> None:
     runs = fm.read_map(merged)
     assert len(runs) == 5 and set(runs["lab"]) >= {"Fixture Lab"}
     assert runs["test"].isna().all() and runs["result"].isna().all()
-    assert fm.store.map_metadata(merged)["schema_version"] == 6
+    assert fm.store.map_metadata(merged)["schema_version"] == fm.schema.SCHEMA_VERSION == 6
 
 
 def test_map_show_runs_names_what_each_map_knows_of_a_run_s_origin(tmp_path: Path) -> None:

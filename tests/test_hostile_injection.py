@@ -53,6 +53,10 @@ def campaign(tmp_path_factory: pytest.TempPathFactory) -> Path:
         'filename_pattern = "{pin}_{disc}_{force}N_{temperature}C_r{repeat}"\nplots = false\n'
         f"[names]\nP1 = {json.dumps(PIN)}\nP2 = {json.dumps(PLUS)}\nD1 = {json.dumps(DISC)}\n",
         encoding="utf-8")
+    # a hostile lab's materials file names them (an unknown name refuses the campaign)
+    (root / "materials.toml").write_text(
+        "[materials]\n" + "".join(f'{json.dumps(n)} = {{ class = "other" }}\n'
+                                   for n in (PIN, PLUS, DISC)), encoding="utf-8")
     result = invoke("batch", str(cfg), "--jobs", "1")
     assert result.exit_code == 0, result.output
     return cfg

@@ -36,7 +36,8 @@ def lab_row(i: int, lab: str | None, mu_k: float, u: float | None = 0.01, **chan
     """A map record (id ``r<i>``) of ``lab`` at Dragonskin 30 / steel, 3 N, 20 °C."""
     rec = dict(BASE)
     rec.update(measurement_id=f"r{i}", lab=lab, pin="Dragonskin 30", disc="steel",
-               mu_k=mu_k, u_mu_k=u, repeat=i, **changes)
+               mu_k=mu_k, u_mu_k=u, repeat=i)
+    rec.update(changes)
     return rec
 
 
@@ -200,3 +201,89 @@ def test_two_labs_packages_merged_where_they_overlap_keep_u_honest(tmp_path):
     assert expanded >= max(alone_u.values()) and expanded > 0.03
     assert alone_u["founding"] > 0.03  # the founding rows carry the stated estimate
     assert g["mu_k_mean"] == pytest.approx((0.45 * 2 + 0.440 + 0.451 + 0.462) / 5)
+
+
+# ------------------------------------------------------------------ names on the way in
+
+
+def _map_with(tmp_path, name, pins):
+    from tribopipe.frictionmap import store
+
+    path = tmp_path / name
+    rows = [lab_row(i, "Lab B", 0.5 + i / 100, pin=pin, disc=disc)
+            for i, (pin, disc) in enumerate(pins)]
+    store.append_records(path, rows)  # below the edges: names as they are
+    return path
+
+
+def test_a_merge_stores_canonical_names_and_keeps_the_given_ones(tmp_path):
+    from click.testing import CliRunner
+
+    from tribopipe.cli import main
+
+    other = _map_with(tmp_path, "other.parquet", [("Dragon Skin 30", "Stahl"),
+                                                   ("Unobtainium", "steel")])
+    target = tmp_path / "map.parquet"
+    result = CliRunner().invoke(main, ["map", "merge", str(other), "--map", str(target)])
+    assert result.exit_code == 0, result.output
+    assert "1 row(s) of" in result.stdout and "name 'Dragon Skin 30': stored as " \
+        "'Dragonskin 30'" in result.stdout
+    assert "note: unknown pin 'Unobtainium'" in result.stderr
+    runs = fm.read_map(target).sort_values("measurement_id")
+    assert runs["pin"].tolist() == ["Dragonskin 30", "Unobtainium"]
+    assert runs["disc"].tolist() == ["steel", "steel"]
+    assert runs["pin_as_given"].tolist()[0] == "Dragon Skin 30"
+    assert runs["disc_as_given"].tolist()[0] == "Stahl"
+
+
+def test_map_validate_reports_unresolved_names_with_the_fix(tmp_path):
+    from click.testing import CliRunner
+
+    from tribopipe.cli import main
+
+    path = _map_with(tmp_path, "m.parquet", [("DS30", "steel"), ("Dragonskni 30", "steel"),
+                                             ("Dragonskin 30", "steel")])
+    result = CliRunner().invoke(main, ["map", "validate", str(path)])
+    assert result.exit_code == 1
+    lines = result.output.splitlines()
+    assert any("pin 'DS30' (1 row(s)) is not a canonical name: it is 'Dragonskin 30'" in ln
+               for ln in lines)
+    assert any("unknown pin 'Dragonskni 30'; did you mean 'Dragonskin 30'" in ln
+               and "tribopipe materials add" in ln for ln in lines)
+    assert not any("'Dragonskin 30' (" in ln for ln in lines)
+
+
+def test_map_compare_puts_labs_side_by_side_with_en_and_z(tmp_path):
+    import io
+
+    from click.testing import CliRunner
+
+    from tribopipe.cli import main
+    from tribopipe.frictionmap import store
+    from tribopipe.stats import lab_comparison
+
+    rows = [lab_row(i, "Lab A", v, 0.01) for i, v in enumerate([0.50, 0.52])] + \
+        [lab_row(10 + i, "Lab B", v, 0.01) for i, v in enumerate([0.56, 0.58])]
+    path = tmp_path / "m.parquet"
+    store.append_records(path, rows)
+    (row,) = lab_comparison(fm.read_map(path)).to_dict(orient="records")
+    by_lab = group_statistics(fm.read_map(path), by_lab=True)
+    u_a, u_b = (2 * float(u) for u in by_lab["mu_k_u"])
+    assert (row["lab_a"], row["lab_b"]) == ("Lab A", "Lab B")
+    assert row["difference"] == pytest.approx(0.51 - 0.57)
+    assert row["En"] == pytest.approx((0.51 - 0.57) / math.hypot(u_a, u_b))
+    sigma = reproducibility(group_statistics(fm.read_map(path))).s_R
+    assert row["z_a"] == pytest.approx((0.51 - 0.54) / sigma)
+    assert row["z_b"] == pytest.approx((0.57 - 0.54) / sigma)
+
+    text = CliRunner().invoke(main, ["map", "compare", "--map", str(path)])
+    assert text.exit_code == 0, text.output
+    assert "Lab A: n = 2" in text.output and "En = " in text.output
+    assert "(ISO 5725-2)" in text.output
+    csv = CliRunner().invoke(main, ["map", "compare", "--map", str(path), "--format", "csv"])
+    table = pd.read_csv(io.StringIO(csv.output))
+    assert list(table["lab_a"]) == ["Lab A"] and "En" in table.columns
+    alone = tmp_path / "alone.parquet"
+    store.append_records(alone, rows[:2])
+    none = CliRunner().invoke(main, ["map", "compare", "--map", str(alone)])
+    assert "no condition was measured by two labs" in none.output

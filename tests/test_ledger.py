@@ -183,7 +183,7 @@ def test_reduce_reports_one_repeat_number_used_twice(tmp_path: Path) -> None:
                    "--map", mapfile, "--json")
     assert done.exit_code == 0, done.output
     (warning,) = [ln for ln in done.stderr.splitlines() if ln.startswith("warning:")]
-    assert "repeat 1 used by 2 runs of DS30 on steel, 1 N, 10 °C" in warning
+    assert "repeat 1 used by 2 runs of Dragonskin 30 on steel, 1 N, 10 °C" in warning
     assert R1.name in warning and R2.name in warning
     assert len(json.loads(done.stdout)) == 2  # reported, not refused
     again = reduce_cli(R1, *LABELS, "--force", "1", "--repeat", "2", "--output", out,

@@ -28,7 +28,7 @@ from tribopipe.cli import main
 from tribopipe.config import load_settings
 from tribopipe.errors import ReductionError
 from tribopipe.frictionmap import measurement_id
-from tribopipe.labels import RunLabels
+from tribopipe.labels import LabelCheck, RunLabels
 from tribopipe.pipeline import ReducedRun, read_runs, reduce_export, reduce_file
 
 SETTINGS = load_settings()
@@ -202,8 +202,10 @@ def test_reduce_a_copy_twice_is_one_duplicate_and_the_map_names_both(raw: Path,
     copy = tmp_path / "DS30_steel_r1 (copy).csv"
     shutil.copy(first, copy)
     map_path = tmp_path / "map.parquet"
-    labels = ["--pin", "DS30", "--disc", "steel", "--force", "3", "--temperature", "20",
-              "--repeat", "1", "--map", str(map_path), "--output", str(tmp_path / "o")]
+    # one --force for both steps: the 5 N step contradicts it; kept, explicitly (flagged)
+    labels = ["--keep-labels", "--pin", "DS30", "--disc", "steel", "--force", "3",
+              "--temperature", "20", "--repeat", "1", "--map", str(map_path),
+              "--output", str(tmp_path / "o")]
     both = reduce_cli(str(first), str(copy), *labels)
     assert both.exit_code == 0, both.output
     assert f"duplicate: {copy}: same content as {first}" in both.stderr
@@ -239,7 +241,13 @@ def test_reduce_a_session_as_a_subprocess(raw: Path, tmp_path: Path) -> None:
 def test_map_rows_keep_labels_given_per_run(raw: Path) -> None:
     labels = RunLabels(pin="Dragonskin 30", disc="steel", normal_force_N=3.0,
                        temperature_C=20.0, repeat=1)
-    result = reduce_export(raw / "steps.csv", SETTINGS, labels)
+    refused = reduce_export(raw / "steps.csv", SETTINGS, labels)
+    # the 5 N step is not a 3 N run: refused, both forces named, the 3 N step lands
+    assert [o.record.interval for o in refused.reduced] == [2]
+    (failed,) = refused.failed
+    assert "measured mean normal force 5 N is 67% off the label 3 N" in failed.reason
+    result = reduce_export(raw / "steps.csv", SETTINGS, labels,
+                           check=LabelCheck(keep_labels=True))
     records = [o.record for o in result.reduced]
     assert [r.interval for r in records] == [2, 3]
     # the 5 N step strays from the 3 N label: flagged, not silently averaged in
@@ -258,8 +266,11 @@ def test_reduce_force_steps_without_force_gives_each_step_its_own_nominal(raw: P
     assert runs["normal_force_N"].tolist() == [3.0, 5.0]
     assert all("nominal_force_estimated" in f.split(";") for f in runs["flags"])
     # with --force every step is labelled alike: said, and the stray step flagged
+    refused = reduce_cli(str(raw / "steps.csv"), *labels, "--force", "3", "--no-map",
+                         "--output", str(tmp_path / "o3"))
+    assert refused.exit_code == 1 and "67% off the label 3 N" in refused.stderr
     forced = reduce_cli(str(raw / "steps.csv"), *labels, "--force", "3", "--no-map",
-                        "--output", str(tmp_path / "o2"))
+                        "--keep-labels", "--output", str(tmp_path / "o2"))
     assert forced.exit_code == 0, forced.output
     assert "holds 2 friction intervals (force or speed steps): --force labels each alike" \
         in forced.stderr

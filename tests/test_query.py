@@ -15,12 +15,12 @@ from hypothesis import strategies as st
 from published_map import PUBLISHED_CSV
 from tribopipe.errors import ExportError, TribopipeError
 from tribopipe.query import (
-    format_result,
     friction_table,
     interpolation_weights,
     query,
     select_pair,
 )
+from tribopipe.query_text import format_result
 
 
 def _mean(groups: pd.DataFrame, pin: str, disc: str, p: float, t: float) -> float:

@@ -45,7 +45,7 @@ def test_a_hostile_file_name_is_the_same_file_reduced_again(tmp_path: Path, name
     assert "0 added, 1 unchanged" in again.stderr
     _lines_are_printable(again.stderr)
 
-    relabelled = _reduce(export, map_path, out, "--force", "9", "--replace")
+    relabelled = _reduce(export, map_path, out, "--force", "9", "--replace", "--keep-labels")
     assert relabelled.exit_code == 0, relabelled.output
     assert "same content" not in relabelled.stderr, relabelled.stderr
     assert "1 replaced" in relabelled.stderr
@@ -84,7 +84,7 @@ def test_a_note_naming_a_file_with_a_newline_stays_one_line(tmp_path: Path) -> N
     raw = write_rheocompass_session(tmp_path / "two\nsteps\u202e.csv", [steps_test()],
                                     project="steps")
     result = invoke("reduce", str(raw), "--pin", "P", "--disc", "D", "--force", "3",
-                    "--no-map", "--output", str(tmp_path / "o"))
+                    "--keep-labels", "--no-map", "--output", str(tmp_path / "o"))
     assert result.exit_code == 0, result.output
     _lines_are_printable(result.stderr)
     (note,) = [ln for ln in result.stderr.splitlines() if "friction intervals" in ln]
@@ -123,6 +123,8 @@ def test_batch_after_its_state_is_lost_finds_the_same_file_not_a_duplicate(
     cfg.write_text('[campaign]\nname = "c"\nraw_dir = "raw"\noutput_dir = "out"\n'
                    'filename_pattern = "{pin}_{disc}_{force}N_{temperature}C_r{repeat}_{note}"'
                    "\nplots = false\n", encoding="utf-8")
+    (tmp_path / "materials.toml").write_text(
+        '[materials]\nP = { class = "other" }\nD = { class = "other" }\n', encoding="utf-8")
     first = invoke("batch", str(cfg), "--jobs", "1")
     assert first.exit_code == 0, first.output
     for state in (tmp_path / "out").glob(".tribopipe-state*"):

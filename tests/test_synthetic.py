@@ -28,7 +28,7 @@ from generators.synthetic import (
     write_rheocompass_export,
 )
 from tribopipe.config import InstrumentConfig, ReductionParams
-from tribopipe.measurement import CANONICAL_COLUMNS
+from tribopipe.measurement import RHEOMETER_COLUMNS
 from tribopipe.readers import read_export
 from tribopipe.reduction.intervals import select_friction_interval
 from tribopipe.reduction.reduce import reduce_measurement
@@ -46,8 +46,8 @@ def test_same_seed_same_numbers_other_seed_other_numbers() -> None:
 
 def test_intervals_have_the_canonical_columns_and_lengths() -> None:
     setup, friction = make_intervals(RUN)
-    assert list(setup.columns) == list(CANONICAL_COLUMNS)
-    assert list(friction.columns) == list(CANONICAL_COLUMNS)
+    assert list(setup.columns) == list(RHEOMETER_COLUMNS)
+    assert list(friction.columns) == list(RHEOMETER_COLUMNS)
     assert len(setup) == round(RUN.setup_s * RUN.sample_rate_Hz)
     assert len(friction) == round(RUN.duration_s * RUN.sample_rate_Hz)
     assert np.allclose(np.diff(friction["time_s"]), 0.1)

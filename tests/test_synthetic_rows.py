@@ -111,3 +111,27 @@ def test_report_lists_no_run_for_the_synthetic_flag_alone(tmp_path: Path) -> Non
     page = out.read_text(encoding="utf-8")
     assert "<dt>runs with QC flags</dt><dd>0</dd>" in page
     assert "No run carries a QC flag or is excluded." in page
+
+
+def test_what_synthetic_means_is_worded_once(tmp_path: Path) -> None:
+    """``map show``, ``query``, the campaign's note and the refusal of ``map publish`` all
+    say it with the one wording (``SYNTHETIC_MEANS``); the map's note names the map as a
+    field, not by rewriting the text."""
+    from tribopipe.frictionmap.synthetic_rows import (
+        SYNTHETIC_MEANS,
+        campaign_note,
+        map_synthetic_note,
+        synthetic_note,
+    )
+
+    path = _map(tmp_path, 3)
+    runs = fm.read_map(path)
+    n = len(runs)
+    assert synthetic_note(runs) == f"note: 3 of {n} runs are {SYNTHETIC_MEANS}"
+    assert map_synthetic_note(path) == f"note: 3 of {n} runs of this map are {SYNTHETIC_MEANS}"
+    assert SYNTHETIC_MEANS in campaign_note()
+    shown = invoke("map", "show", "--map", str(path)).output
+    assert SYNTHETIC_MEANS in shown
+    refused = CliRunner().invoke(main, ["map", "publish", "-o", str(tmp_path / "pkg"),
+                                        "--lab", "Some Lab", "--map", str(path)])
+    assert refused.exit_code == 1 and SYNTHETIC_MEANS in refused.output, refused.output

@@ -41,7 +41,7 @@ def test_one_sheet_per_layout_and_notes(runs) -> None:
     notes = {row[0].value: row[1].value for row in book["notes"].iter_rows()}
     assert notes["source"] == "m.parquet" and notes["± U"] == PAPER_NOTE
     assert notes["by"].startswith("tribopipe ")
-    assert {"flag range > r", "flag no budget", "sheet paper"} <= set(notes)
+    assert {"flag range > r", "flag stated u", "sheet paper"} <= set(notes)
 
 
 def test_numbers_are_numbers_shown_as_rounded(runs) -> None:

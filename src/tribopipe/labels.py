@@ -13,12 +13,14 @@ table and JSON, the summary, the trace plot, the map row, ``runs.csv``) shows
 from __future__ import annotations
 
 from collections.abc import Iterable
-from dataclasses import dataclass
+from dataclasses import dataclass, field, replace
 
 from .config import InstrumentConfig
 from .errors import CampaignError
+from .materials import Vocabulary, shipped_vocabulary
 from .numeric import is_finite
 from .physics import sliding_speed_mm_s
+from .reporting import RunReport
 from .rounding import round_significant
 from .validate import FORCE_N, MAX_REPEAT, TEMPERATURE_C, check_count, check_name, check_number
 
@@ -87,6 +89,12 @@ class RunLabels:
     normal_force_N: float | None = None
     temperature_C: float | None = None
     repeat: int | None = None
+    #: the names as they came in, before the materials vocabulary resolved them
+    #: (:mod:`tribopipe.materials`); ``None``: as ``pin``/``disc``, or not resolved
+    pin_as_given: str | None = None
+    disc_as_given: str | None = None
+    #: the run's reporting items (:mod:`tribopipe.reporting`): humidity, roughness, ...
+    report: RunReport = field(default_factory=RunReport)
 
     def __post_init__(self) -> None:
         for name in ("pin", "disc"):
@@ -99,6 +107,29 @@ class RunLabels:
             check_number(self.temperature_C, TEMPERATURE_C, "nominal temperature")
         if self.repeat is not None:
             check_count(self.repeat, "repeat", high=MAX_REPEAT)
+
+    def resolved(self, vocabulary: Vocabulary) -> tuple[RunLabels, list[str]]:
+        """These labels with pin and disc resolved through ``vocabulary``
+        (:meth:`tribopipe.materials.Vocabulary.resolve`: the canonical name, the given one
+        kept in ``pin_as_given``/``disc_as_given``), and one line per name that does not
+        resolve (with a did-you-mean): such a name is kept as given (``map validate``
+        reports it); a campaign refuses it instead
+        (:func:`tribopipe.campaign.table.check_materials`)."""
+        out, problems = self, []
+        for what in ("pin", "disc"):
+            name = getattr(self, what)
+            if name is None:
+                continue
+            problem = vocabulary.problem(name, what)
+            if problem is not None:
+                problems.append(problem)
+                continue
+            found = vocabulary.resolve(name, what)
+            if what == "pin":
+                out = replace(out, pin=found.name, pin_as_given=self.pin_as_given or name)
+            else:
+                out = replace(out, disc=found.name, disc_as_given=self.disc_as_given or name)
+        return out, problems
 
     @property
     def complete(self) -> bool:
@@ -124,6 +155,73 @@ class Tolerances:
     def force_limit_N(self, nominal_N: float) -> float:
         """Allowed |F_measured − F_nominal| [N] at a nominal total force [N]."""
         return max(self.force_N, self.force_rel * abs(nominal_N))
+
+
+#: The default stated tolerance beyond which a measured mean normal force refuses its
+#: label: 25 % of the nominal force. A 10 % deviation is a QC flag
+#: (:data:`FLAG_FORCE_OFF`); a run measured at 5 N and labelled 9 N (44 %) is mislabelled.
+LABEL_FORCE_REL = 0.25
+
+
+class LabelMismatch(CampaignError):
+    """A run's labels contradict its own export (measured force, Test name, sample): the
+    run is refused unless the labels are kept explicitly (``--keep-labels``)."""
+
+
+@dataclass(frozen=True)
+class LabelCheck:
+    """How a run's labels are checked against its export before it is stored:
+    ``force_rel``, the stated tolerance (a fraction of the nominal force) beyond which the
+    measured mean normal force refuses the label; ``vocabulary``, the materials a Test
+    name or sample field is read for (``None``: the shipped one); ``keep_labels`` keeps
+    the labels whatever the export says (the run is then only flagged)."""
+
+    force_rel: float = LABEL_FORCE_REL
+    keep_labels: bool = False
+    vocabulary: Vocabulary | None = None
+
+    def problems(self, labels: RunLabels, normal_force_measured_N: float | None,
+                 texts: Iterable[tuple[str, str | None]]) -> list[str]:
+        """What in the export contradicts ``labels`` (none with ``keep_labels``): the
+        measured mean normal force [N] beyond ``force_rel`` of the nominal (both values),
+        and each of ``texts`` (``(what, text)``: the Test name, the sample field) that
+        names materials other than the labelled pin and disc
+        (:meth:`tribopipe.materials.Vocabulary.mentioned`)."""
+        if self.keep_labels:
+            return []
+        out = []
+        nominal = labels.normal_force_N
+        if nominal is not None and normal_force_measured_N is not None and \
+                is_finite(normal_force_measured_N) and nominal > 0:
+            off = abs(normal_force_measured_N - nominal) / nominal
+            if off > self.force_rel:
+                out.append(f"measured mean normal force {normal_force_measured_N:.3g} N is "
+                           f"{off:.0%} off the label {nominal:g} N (stated tolerance "
+                           f"{self.force_rel:.0%})")
+        vocabulary = self.vocabulary or shipped_vocabulary()
+        labelled = {labels.pin, labels.disc} - {None}
+        # names compare only when both labels are the vocabulary's own
+        if labels.complete and all(name in vocabulary for name in labelled):
+            for what, text in texts:
+                if not text:
+                    continue
+                named = vocabulary.mentioned(text)
+                others = [choices for choices in named if not set(choices) & labelled]
+                if others:
+                    names = ", ".join(" or ".join(repr(c) for c in choices)
+                                      for choices in others)
+                    out.append(f"{what} {text!r} names {names}, the labels say pin "
+                               f"{labels.pin!r} on disc {labels.disc!r}")
+        return out
+
+    def check(self, labels: RunLabels, normal_force_measured_N: float | None,
+              texts: Iterable[tuple[str, str | None]]) -> None:
+        """:meth:`problems` as one :class:`LabelMismatch` line, with the way out."""
+        found = self.problems(labels, normal_force_measured_N, texts)
+        if found:
+            raise LabelMismatch("labels contradict the export: " + "; ".join(found),
+                                hint="fix the labels, or keep them with --keep-labels "
+                                     "(a campaign: keep_labels = true)")
 
 
 def round_speed(value: float) -> float:

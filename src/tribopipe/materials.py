@@ -77,10 +77,22 @@ class Material:
 
 
 def name_key(name: str) -> str:
-    """The form two names are compared in: NFKD, accents and every character that is not
-    a letter or digit dropped, case folded ("Dragon Skin™ 30" → "dragonskin30")."""
-    decomposed = unicodedata.normalize("NFKD", name)
+    """The form two names are compared in: symbols (™, ®) dropped, NFKD, accents and
+    every character that is not a letter or digit dropped, case folded ("Dragon Skin™ 30"
+    → "dragonskin30")."""
+    plain = "".join(c for c in name if not unicodedata.category(c).startswith("S"))
+    decomposed = unicodedata.normalize("NFKD", plain)
     return "".join(c for c in decomposed if c.isalnum()).casefold()
+
+
+def name_words(text: str) -> tuple[str, ...]:
+    """The words of a text as names are matched in it: symbols dropped, NFKD, accents
+    dropped, case folded, split at every character that is not a letter or digit."""
+    plain = "".join(c for c in text if not unicodedata.category(c).startswith("S"))
+    decomposed = unicodedata.normalize("NFKD", plain)
+    kept = "".join(c if c.isalnum() else " " for c in decomposed
+                   if not unicodedata.combining(c))
+    return tuple(kept.casefold().split())
 
 
 @dataclass(frozen=True)
@@ -164,6 +176,39 @@ class Vocabulary:
         if problem is not None:
             raise MaterialError(problem, hint=ADD_HINT)
         return Resolved(self.candidates(name)[0], name)
+
+    @functools.cached_property
+    def _phrases(self) -> dict[tuple[str, ...], tuple[str, ...]]:
+        """Every name and alias as its word sequence (:func:`name_words`) → the canonical
+        names it stands for."""
+        out: dict[tuple[str, ...], list[str]] = {}
+        for m in self.materials:
+            for text in (m.name, *m.aliases):
+                words = name_words(text)
+                if words and m.name not in out.setdefault(words, []):
+                    out[words].append(m.name)
+        return {k: tuple(v) for k, v in out.items()}
+
+    def mentioned(self, text: str) -> list[tuple[str, ...]]:
+        """The materials a free text names (a Test name, a sample field), in order: each
+        mention as the canonical names it may stand for (one, or several for an ambiguous
+        alias). Words are matched whole, the longest name first ("acrylic glass" is not
+        also "glass")."""
+        words = name_words(text)
+        longest = max((len(k) for k in self._phrases), default=0)
+        found: list[tuple[str, ...]] = []
+        i = 0
+        while i < len(words):
+            for size in range(min(longest, len(words) - i), 0, -1):
+                hit = self._phrases.get(tuple(words[i:i + size]))
+                if hit is not None:
+                    if hit not in found:
+                        found.append(hit)
+                    i += size
+                    break
+            else:
+                i += 1
+        return found
 
     def with_materials(self, extra: Iterable[Material]) -> Vocabulary:
         """This vocabulary and ``extra``: a material of the same canonical name replaces

@@ -43,8 +43,10 @@ SPEED = "speed_rad_s"
 TEMPERATURE = "temperature_C"
 FRICTION_FORCE = "friction_force_N"
 POSITION = "position_m"
-CANONICAL_COLUMNS: tuple[str, ...] = (TIME, TORQUE, NORMAL_FORCE, ANGLE, SPEED, TEMPERATURE,
-                                      FRICTION_FORCE, POSITION)
+#: what a rheometer export holds
+RHEOMETER_COLUMNS: tuple[str, ...] = (TIME, TORQUE, NORMAL_FORCE, ANGLE, SPEED, TEMPERATURE)
+#: every canonical quantity: the rheometer's and a force-based instrument's
+CANONICAL_COLUMNS: tuple[str, ...] = (*RHEOMETER_COLUMNS, FRICTION_FORCE, POSITION)
 
 
 def interval_label(test: str | None, result: str | None, interval: int | None,

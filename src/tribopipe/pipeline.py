@@ -49,7 +49,14 @@ from .frictionmap.duplicates import (
 from .frictionmap.records import make_record, measurement_id
 from .frictionmap.schema import MapRow
 from .frictionmap.store import AppendReport, update_map_with
-from .labels import RunLabels, RunVerdict, Tolerances, Undescribed, decide_run
+from .labels import (
+    LabelCheck,
+    RunLabels,
+    RunVerdict,
+    Tolerances,
+    Undescribed,
+    decide_run,
+)
 from .layout import OutputLayout
 from .measurement import interval_label, run_name
 from .numeric import finite_json, finite_or_nan, finite_or_none
@@ -230,17 +237,24 @@ def reduce_run(
     *,
     tolerances: Tolerances | None = None,
     extra_flags: tuple[str, ...] = (),
+    check: LabelCheck | None = None,
 ) -> RunOutcome:
     """Reduce one run of an export (``place`` and ``measurement`` from ``export.runs``)
     and build its map record.
 
     The map record is built only when ``labels`` name pin and disc; ``tolerances``
     (default: the map's 10 %, 2 K) decide its off-nominal QC flags; ``extra_flags``
-    (e.g. ``synthetic``) join them (:func:`tribopipe.labels.decide_run`). Raises
+    (e.g. ``synthetic``) join them (:func:`tribopipe.labels.decide_run`). The labels
+    are checked against the export first (``check``, default :class:`LabelCheck`: the
+    measured force within 25 % of the label, no other material in the Test name or
+    sample field), a :class:`~tribopipe.labels.LabelMismatch` otherwise. Raises
     :class:`tribopipe.errors.TribopipeError` subclasses for every bad input.
     """
     labels = labels or RunLabels()
     result = reduce_measurement(measurement, settings.instrument, settings.reduction)
+    (check or LabelCheck()).check(labels, finite_or_none(result.normal_force_mean_N),
+                                  (("Test name", measurement.meta.test),
+                                   ("sample", measurement.meta.sample)))
     verdict = decide_run(labels, result.flags, finite_or_nan(result.normal_force_mean_N),
                          finite_or_nan(result.temperature_C), tolerances, extra_flags,
                          speed_set_point_rpm=result.speed_set_point_rpm,
@@ -601,6 +615,7 @@ def reduce_export(
     file_hash: str | None = None,
     outputs: RunOutputs | None = None,
     name: str | None = None,
+    check: LabelCheck | None = None,
 ) -> FileOutcome:
     """The one route from an export to its runs, for ``tribopipe reduce`` and the batch:
     read it once (:func:`read_runs`), label each run (``labels``, the same for every run,
@@ -630,7 +645,7 @@ def reduce_export(
         try:
             given = labels(export, place, run) if callable(labels) else labels
             outcome = reduce_run(export, place, measurements[place], settings, given,
-                                 tolerances=tolerances, extra_flags=extra_flags)
+                                 tolerances=tolerances, extra_flags=extra_flags, check=check)
             runs.append(_reduced(outcome, run, outputs))
         except (TribopipeError, OSError) as exc:
             # an output that could not be written is not the export's fault: tried again
@@ -652,6 +667,7 @@ def reduce_files(
     summaries: bool = True,
     plots: bool = False,
     on_file: Callable[[FileOutcome], None] | None = None,
+    check: LabelCheck | None = None,
 ) -> list[FileOutcome]:
     """``tribopipe reduce`` over several files: each file alone through
     :func:`reduce_export`, writing each run's trace, its summary (``summaries``) and its
@@ -678,7 +694,7 @@ def reduce_files(
             if sha is not None:
                 first_with[sha] = str(path)
             result = reduce_export(path, settings, labels, read_options, file_hash=sha,
-                                   outputs=outputs)
+                                   outputs=outputs, check=check)
         if on_file is not None:
             on_file(result)
         results.append(result)

@@ -31,11 +31,11 @@ from __future__ import annotations
 
 import difflib
 import math
+from collections.abc import Sequence
 from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from .config import InstrumentConfig
 from .errors import ExportError
 from .frictionmap.snapshot import MapSource, as_snapshot
 from .interpolation import (
@@ -52,7 +52,15 @@ from .interpolation import (
 from .numeric import finite_or_none
 from .physics import FOUNDING_SLIDING_SPEED_MM_S
 from .rounding import known_u, lower_bound, plus_minus
-from .stats import NOMINAL_SPEED, group_statistics, group_u
+from .stats import (
+    LABS,
+    LABS_DISAGREE,
+    NOMINAL_SPEED,
+    group_statistics,
+    group_u,
+    lab_names,
+    select_labs,
+)
 
 if TYPE_CHECKING:
     import numpy as np
@@ -696,19 +704,29 @@ def friction_table(
     return pd.DataFrame(rows)
 
 
-def load_groups(map_path: MapSource) -> pd.DataFrame:
-    """The group statistics (excluded runs out) of a friction map: opened
-    (:func:`~tribopipe.frictionmap.snapshot.open_map`), or its path; kept with the
-    snapshot."""
+def load_groups(map_path: MapSource, labs: Sequence[str] | None = None) -> pd.DataFrame:
+    """The group statistics (excluded runs out; with ``labs``, only the runs those labs
+    measured) of a friction map: opened (:func:`~tribopipe.frictionmap.snapshot.open_map`),
+    or its path; kept with the snapshot."""
     snap = as_snapshot(map_path)
-    return snap.derived(("query.groups",), lambda: groups_of(snap.runs, snap.path))
+    key = ("query.groups", *sorted(labs or ()))
+    return snap.derived(key, lambda: groups_of(snap.runs, snap.path, labs))
 
 
-def groups_of(runs: pd.DataFrame, map_path: str | Path) -> pd.DataFrame:
+def groups_of(runs: pd.DataFrame, map_path: str | Path,
+              labs: Sequence[str] | None = None) -> pd.DataFrame:
     """Group statistics of friction-map ``runs`` (excluded runs out, the nominal speed
-    always shown); an :class:`ExportError` naming ``map_path`` when no run is left."""
+    always shown; with ``labs`` only those labs' runs, :func:`tribopipe.stats.select_labs`);
+    an :class:`ExportError` naming ``map_path`` when no run is left."""
     if "excluded" in runs.columns:
         runs = runs[~runs["excluded"].fillna(False).astype(bool)]
+    if labs:
+        held = sorted(set(lab_names(runs)))
+        runs = select_labs(runs, labs)
+        if runs.empty:
+            raise ExportError(f"no run of lab {', '.join(repr(x) for x in labs)} in the map; "
+                              f"it holds runs of {', '.join(repr(x) for x in held)}",
+                              path=map_path)
     if runs.empty:
         raise ExportError(
             "the friction map is empty or absent",
@@ -725,55 +743,45 @@ def query_map(
     pressure_kPa: float,
     temperature_C: float | None = None,
     speed_mm_s: float | None = None,
+    labs: Sequence[str] | None = None,
 ) -> QueryResult:
-    """:func:`query` on the friction map (Parquet) at ``map_path``."""
-    return query(load_groups(map_path), pin, disc, pressure_kPa, temperature_C, speed_mm_s)
+    """:func:`query` on the friction map (Parquet) at ``map_path`` (with ``labs``: on
+    those labs' runs only)."""
+    return query(load_groups(map_path, labs), pin, disc, pressure_kPa, temperature_C,
+                 speed_mm_s)
 
 
-def format_result(res: QueryResult, normal_force_N: float | None = None,
-                  instrument: InstrumentConfig | None = None) -> str:
-    """A short human-readable report of a query (several lines, no trailing newline);
-    ``normal_force_N`` and ``instrument`` say the force the pressure was converted from."""
+@dataclass(frozen=True)
+class ValueLabs:
+    """Which labs a queried value comes from (``labs``, the labs of the groups it was
+    read from) and the conditions among them where labs disagree beyond R
+    (``disagree``: ``(pressure_kPa, temperature_C)``, :mod:`tribopipe.stats`)."""
 
-    def est_text(name: str, est: Estimate | None) -> list[str]:
-        """The lines of an estimate: value ± U (k = 2), then what U holds and the repeats'
-        interval in its own line; or 'unknown'."""
-        if est is None:
-            return [f"{name} = unknown (no group of this pair holds it)"]
-        head = f"{name} = {est.text()}" + ("" if est.expanded is None else " (U, k = 2)")
-        groups_u = ("unknown" if est.u_groups is None else f"{est.u_groups:.2g}"
-                    + ("" if est.budgets_known else " (repeat scatter only)"))
-        lines = [head, f"  U = 2·√(u_groups² + u_interp²): u_groups = {groups_u}, "
-                       f"u_interp = {est.u_interpolation:.2g}"]
-        if est.expanded is not None and est.lower is not None:
-            lines[-1] += f"; interval [{est.lower:.3g}, {est.value + est.expanded:.3g}]"
-        if est.uncertainty is not None:
-            lines.append(f"  repeats' 95 % CI half-width (interpolated): {est.uncertainty:.3f}")
-        return lines
+    labs: tuple[str, ...]
+    disagree: tuple[tuple[float, float | None], ...] = ()
 
-    t = "" if res.temperature_C is None else f", {res.temperature_C:g} °C"
-    if len(res.speeds_mm_s) > 1 and res.speed_mm_s is not None:
-        t += f", {res.speed_mm_s:g} mm/s"
-    force = ""
-    if normal_force_N is not None and instrument is not None:
-        force = (f" ({normal_force_N:g} N on {instrument.n_pins} pin(s) of radius "
-                 f"{instrument.pin_radius_mm:g} mm)")
-    lines = [
-        f"{res.pin} on {res.disc} at {res.pressure_kPa:.4g} kPa{force}{t}",
-        *("  " + line for line in est_text("mu_k", res.mu_k)),
-        *("  " + line for line in est_text("mu_s", res.mu_s)),
-        "  from measured groups (pressure, temperature, mean, n, weight):",
-    ]
-    for u in res.mu_k.used:
-        t_u = "?" if u.temperature_C is None else f"{u.temperature_C:g} °C"
-        lines.append(
-            f"    {u.pressure_kPa:g} kPa, {t_u}, {u.mean:.3f}, n={u.n}, w={u.weight:.3f}"
-        )
-    lo, hi = res.pressure_range_kPa
-    temps = ", ".join(f"{v:g}" for v in res.temperatures_C) or "unknown"
-    lines.append(f"  measured: {lo:g}–{hi:g} kPa at {temps} °C"
-                 + (f", {', '.join(f'{v:g}' for v in res.speeds_mm_s)} mm/s"
-                    if len(res.speeds_mm_s) > 1 else ""))
-    lines.append(f"  clamped: {'yes' if res.clamped else 'no'}")
-    lines += [f"  note: {n}" for n in res.notes]
-    return "\n".join(lines)
+    def lines(self) -> list[str]:
+        """What a person reads: the labs, then each disagreement."""
+        out = [f"labs: {', '.join(self.labs)}"]
+        out += [f"labs disagree beyond R at {p:.4g} kPa"
+                + ("" if t is None else f", {t:g} °C") for p, t in self.disagree]
+        return out
+
+
+def value_labs(map_path: MapSource, result: QueryResult,
+               labs: Sequence[str] | None = None) -> ValueLabs:
+    """The :class:`ValueLabs` of a :func:`query_map` result (the same ``labs``)."""
+    groups = load_groups(map_path, labs)
+    pair = select_pair(groups, result.pin, result.disc)
+    used = {(round(u.pressure_kPa, 6), u.temperature_C) for est in (result.mu_k, result.mu_s)
+            if est is not None for u in est.used}
+    found: set[str] = set()
+    disagree = []
+    for row in pair.to_dict(orient="records"):
+        temperature = finite_or_none(row["temperature_C"])
+        if (round(float(row["pressure_kPa"]), 6), temperature) not in used:
+            continue
+        found.update(str(row[LABS]).split(";"))
+        if bool(row[LABS_DISAGREE]):
+            disagree.append((float(row["pressure_kPa"]), temperature))
+    return ValueLabs(tuple(sorted(found)), tuple(sorted(set(disagree), key=str)))

@@ -66,7 +66,8 @@ h1{font-size:1.6em;margin-bottom:.2em}h2{border-bottom:2px solid #d0d7de;padding
  margin-top:2em}nav a{margin-right:1em}
 table{border-collapse:collapse;font-size:.88em;margin:.5em 0}
 th,td{border:1px solid #d0d7de;padding:.25em .5em;text-align:right;vertical-align:top}
-th{background:#f6f8fa;position:sticky;top:0}td.t,th.t{text-align:left}
+th{background:#f6f8fa;position:sticky;top:0}td.t,th.t{text-align:left}.w{white-space:nowrap}
+@media (max-width:1000px){body{padding:.8em}table{font-size:.74em}th,td{padding:.2em .28em}}
 tr.flag td{background:#fff4e5}tr.excl td{background:#f0f0f0;color:#666}
 .muted{color:#666}.bad{color:#b42318;font-weight:600}
 dl.summary{display:grid;grid-template-columns:max-content auto;gap:.2em 1.5em}
@@ -136,6 +137,12 @@ def _e(value: Any) -> str:
     except (TypeError, ValueError):
         pass
     return html_text(str(value))
+
+
+def _name(value: Any) -> str:
+    """A pin or disc name for a table cell: escaped, each word kept whole (a name breaks
+    between its words, never inside one, nor at a hyphen such as "00-50")."""
+    return " ".join(f"<span class=w>{word}</span>" for word in _e(value).split(" ") if word)
 
 
 def _num(value: Any, spec: str) -> str:
@@ -293,10 +300,10 @@ def _group_table(inp: ReportInputs) -> str:
         if g.get("reviewed"):
             qc.append(f"{int(g['reviewed'])} reviewed")
         ci = _interval(g["mu_k_ci95_low"], g["mu_k_ci95_high"])
-        pair = f'<a href="#{pair_anchor(str(g["pin"]), str(g["disc"]))}">{_e(g["disc"])}</a>'
+        pair = f'<a href="#{pair_anchor(str(g["pin"]), str(g["disc"]))}">{_name(g["disc"])}</a>'
         cls = ' class="flag"' if qc else ""
         rows.append(
-            f"<tr{cls}><td class=t>{_e(g['pin'])}</td><td class=t>{pair}</td>"
+            f"<tr{cls}><td class=t>{_name(g['pin'])}</td><td class=t>{pair}</td>"
             f"<td>{_num(g['normal_force_N'], 'g')}</td><td>{_num(g['pressure_kPa'], '.4g')}</td>"
             f"<td>{_num(g['temperature_C'], 'g')}</td><td>{g['mu_k_n']}</td>"
             f"<td>{_group_value(g['mu_k_mean'], u_k.iloc[i], g['mu_k_n'])}</td>"
@@ -338,7 +345,7 @@ def _fits_table(inp: ReportInputs) -> str:
     rows = []
     for f in inp.fits.to_dict(orient="records"):
         rows.append(
-            f"<tr><td class=t>{_e(f['pin'])}</td><td class=t>{_e(f['disc'])}</td>"
+            f"<tr><td class=t>{_name(f['pin'])}</td><td class=t>{_name(f['disc'])}</td>"
             f"<td>{_num(f['temperature_C'], 'g')}</td><td>{_num(f['k'], '.3f')}</td>"
             f"<td>{_interval(f['k_ci95_low'], f['k_ci95_high'])}</td>"
             f"<td>{_num(f['exponent'], '.3f')}</td>"
@@ -396,8 +403,8 @@ def _flagged(inp: ReportInputs) -> str:
             rows.append(
                 f'<tr class="{"excl" if excluded else "flag"}"><td class=t>'
                 f'<a href="#{run_anchor(mid)}">{html_text(mid[:8])}</a></td>'
-                f"<td class=t>{_e(r.get('source_file'))}</td><td class=t>{_e(r['pin'])}</td>"
-                f"<td class=t>{_e(r['disc'])}</td><td>{_num(r['pressure_kPa'], '.4g')}</td>"
+                f"<td class=t>{_e(r.get('source_file'))}</td><td class=t>{_name(r['pin'])}</td>"
+                f"<td class=t>{_name(r['disc'])}</td><td>{_num(r['pressure_kPa'], '.4g')}</td>"
                 f"<td>{_run_value(r['mu_k'], r.get('u_mu_k'))}</td>"
                 f"<td class=t>{html_text(', '.join(flag_list(r.get('flags'))))}</td>"
                 f"<td class=t>{'excluded: ' + reason if excluded else ''}</td>"
@@ -484,7 +491,7 @@ def _runs(inp: ReportInputs) -> str:
         if mid not in traces:
             plain.append(
                 f'<tr id="{run_anchor(mid)}"><td class=t>{html_text(mid[:8])}</td>'
-                f"<td class=t>{_e(r['pin'])}</td><td class=t>{_e(r['disc'])}</td>"
+                f"<td class=t>{_name(r['pin'])}</td><td class=t>{_e(r['disc'])}</td>"
                 f"<td>{_num(r['pressure_kPa'], '.4g')}</td>"
                 f"<td>{_num(r['temperature_C'], 'g')}</td><td>{html_text(repeat)}</td>"
                 f"<td>{_run_value(r['mu_k'], r.get('u_mu_k'))}</td>"

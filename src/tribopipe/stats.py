@@ -43,8 +43,8 @@ the lab's own group-mean u; so a second lab's data never make a value look more 
 than either lab alone (the pooled value stands for what a lab measures, not for a mean
 over labs that grows more certain the more labs are counted). A condition whose labs'
 means differ by more than ISO 5725-6's critical difference
-CD = √(R² − r²(1 − 1/2nᵢ − 1/2nⱼ)), with s_r and s_R pooled over the map's conditions, is
-flagged ``labs_disagree`` (with one shared condition it never is: its own spread is R).
+CD = √(R² − r²(1 − 1/2nᵢ − 1/2nⱼ)), with the map's pooled s_r and s_R = √(s_L² + s_r²)
+(s_L² pooled over the conditions several labs measured), is flagged ``labs_disagree``.
 
 With two or three repeats per group no statistical outlier test is meaningful (ISO 5725,
 ASTM E178). Instead, the within-group standard deviations are pooled over all groups into
@@ -228,10 +228,11 @@ def repeatability(groups: pd.DataFrame, quantity: str = "mu_k") -> Repeatability
 
 @dataclass(frozen=True)
 class Reproducibility:
-    """ISO 5725-2 precision of one quantity pooled over the conditions several labs
-    measured: ``s_r`` (the map's pooled repeatability, :func:`repeatability`), ``s_R``
-    (``sqrt(Σ (pᵢ−1)·s_Rᵢ² / Σ (pᵢ−1))`` over those conditions), ``r = 2.8·s_r``,
-    ``R = 2.8·s_R``, ``n_conditions``; NaN where unknown."""
+    """ISO 5725-2 precision of one quantity pooled over the map: ``s_r`` (the map's pooled
+    repeatability, :func:`repeatability`), ``s_R = √(s_L² + s_r²)`` with the between-lab
+    variance s_L² pooled over the conditions several labs measured
+    (``Σ (pᵢ−1)·s_Lᵢ² / Σ (pᵢ−1)``), ``r = 2.8·s_r``, ``R = 2.8·s_R``, ``n_conditions``;
+    NaN where unknown (no condition measured by two labs)."""
 
     quantity: str
     s_r: float
@@ -249,11 +250,12 @@ def reproducibility(groups: pd.DataFrame, quantity: str = "mu_k") -> Reproducibi
     if f"{quantity}_s_R" not in groups.columns:
         return Reproducibility(quantity, rep.s_r, math.nan, rep.r, math.nan, 0)
     p = groups[f"{quantity}_labs"].to_numpy(dtype=float)
-    s_R = groups[f"{quantity}_s_R"].to_numpy(dtype=float)
-    use = (p >= 2) & np.isfinite(s_R)
+    s_L = groups[f"{quantity}_s_L"].to_numpy(dtype=float)
+    use = (p >= 2) & np.isfinite(s_L)
     if not use.any():
         return Reproducibility(quantity, rep.s_r, math.nan, rep.r, math.nan, 0)
-    pooled = math.sqrt(float(np.sum((p[use] - 1) * s_R[use] ** 2) / np.sum(p[use] - 1)))
+    s_L2 = float(np.sum((p[use] - 1) * s_L[use] ** 2) / np.sum(p[use] - 1))
+    pooled = math.sqrt(s_L2 + (rep.s_r ** 2 if math.isfinite(rep.s_r) else 0.0))
     return Reproducibility(quantity, rep.s_r, pooled, rep.r, R_FACTOR * pooled,
                            int(use.sum()))
 
@@ -625,3 +627,76 @@ def group_u(groups: pd.DataFrame, quantity: str = "mu_k") -> tuple[pd.Series, pd
     else:
         budget = known
     return u_group.where(known, column(f"{quantity}_sem")), budget
+
+
+#: the columns of :func:`lab_comparison`, after the condition's
+COMPARE_FIELDS: tuple[str, ...] = (
+    "lab_a", "n_a", "mean_a", "U_a", "lab_b", "n_b", "mean_b", "U_b", "difference",
+    "U_difference", "En", "z_a", "z_b", "labs_disagree")
+
+
+def lab_comparison(runs: pd.DataFrame, quantity: str = "mu_k") -> pd.DataFrame:
+    """Labs side by side at every condition two of them measured (``map compare``): one
+    row per condition and pair of labs, the condition's columns, then
+    :data:`COMPARE_FIELDS`: each lab's number of runs, mean and expanded uncertainty of
+    its mean (U = 2u, k = 2, its own budget), the difference a − b and its
+    U = √(U_a² + U_b²), ISO 13528's En number (difference / U_difference; |En| > 1: the
+    two disagree beyond their stated uncertainties) and each lab's z score
+    (ISO 13528 §9.4: z = (x − x_pt)/σ_pt, with x_pt the condition's pooled mean over its
+    labs and σ_pt the map's pooled reproducibility s_R, :func:`reproducibility`; NaN where
+    no condition gives s_R), and the condition's ``labs_disagree``."""
+    import numpy as np
+    import pandas as pd
+
+    by_lab = group_statistics(runs, by_lab=True, show_speed=True)
+    pooled = group_statistics(runs, show_speed=True)
+    keys = ["pin", "disc", "normal_force_N", "temperature_C", NOMINAL_SPEED]
+    sigma = reproducibility(pooled, quantity).s_R
+    rows = []
+    pooled_rows = {tuple(_key_value(g[k]) for k in keys): g
+                   for g in pooled.to_dict(orient="records")}
+    grouped: dict[tuple[Any, ...], list[dict[Any, Any]]] = {}
+    for g in by_lab.to_dict(orient="records"):
+        if g[f"{quantity}_n"] > 0:
+            grouped.setdefault(tuple(_key_value(g[k]) for k in keys), []).append(g)
+    for key, labs in grouped.items():
+        if len(labs) < 2:
+            continue
+        condition = pooled_rows[key]
+        centre = float(condition[f"{quantity}_mean"])
+        for i in range(len(labs)):
+            for j in range(i + 1, len(labs)):
+                a, b = labs[i], labs[j]
+                u_a, u_b = 2 * float(a[f"{quantity}_u"]), 2 * float(b[f"{quantity}_u"])
+                diff = float(a[f"{quantity}_mean"]) - float(b[f"{quantity}_mean"])
+                u_diff = math.hypot(u_a, u_b)
+                rows.append({
+                    **{k: condition[k] for k in ("pin", "disc", "normal_force_N",
+                                                 "pressure_kPa", "temperature_C",
+                                                 NOMINAL_SPEED)},
+                    "lab_a": a[LAB], "n_a": int(a[f"{quantity}_n"]),
+                    "mean_a": float(a[f"{quantity}_mean"]), "U_a": u_a,
+                    "lab_b": b[LAB], "n_b": int(b[f"{quantity}_n"]),
+                    "mean_b": float(b[f"{quantity}_mean"]), "U_b": u_b,
+                    "difference": diff, "U_difference": u_diff,
+                    "En": diff / u_diff if u_diff > 0 else math.nan,
+                    "z_a": (float(a[f"{quantity}_mean"]) - centre) / sigma
+                    if sigma > 0 else math.nan,
+                    "z_b": (float(b[f"{quantity}_mean"]) - centre) / sigma
+                    if sigma > 0 else math.nan,
+                    "labs_disagree": bool(condition[LABS_DISAGREE]),
+                })
+    columns = ["pin", "disc", "normal_force_N", "pressure_kPa", "temperature_C",
+               NOMINAL_SPEED, *COMPARE_FIELDS]
+    if not rows:
+        return pd.DataFrame({c: pd.Series(dtype=object) for c in columns})
+    out = pd.DataFrame(rows, columns=columns)
+    out["En"] = out["En"].astype(float)
+    return out.replace({np.inf: np.nan})
+
+
+def _key_value(value: Any) -> Any:
+    """A grouping key as compared across tables (floats rounded, NaN as ``None``)."""
+    if isinstance(value, float):
+        return None if math.isnan(value) else round(value, 6)
+    return value

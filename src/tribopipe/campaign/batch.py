@@ -55,7 +55,7 @@ from .state import (
     load_state,
     save_state,
 )
-from .table import CampaignRow, campaign_table, describe_glob, recipe_hash
+from .table import CampaignRow, campaign_table, check_materials, describe_glob, recipe_hash
 from .worker import (
     Job,
     WorkerContext,
@@ -281,6 +281,7 @@ def _run_locked(campaign: Campaign, *, jobs: int | None, plots: bool | None,
     missing_ids, map_checked = _ids_missing_from_map(campaign, state)
     manifest = read_manifest(campaign.manifest) if campaign.manifest is not None else None
     rows = campaign_table(campaign, state=state, manifest=manifest)
+    check_materials(campaign, rows)  # an unknown name refuses the campaign before any work
     plan = _plan(rows, missing_ids)
     files = len(rows)
     done = files - len(plan.todo)

@@ -48,8 +48,19 @@ from ..errors import CampaignError, ConfigError, ReadError, ValidationError
 from ..escape import csv_uncell
 from ..files import read_regular
 from ..labels import RunLabels
+from ..materials import MaterialError, Resolved
 from ..readers.textio import decode, detect_delimiter
-from ..validate import FORCE_N, MAX_REPEAT, TEMPERATURE_C, check_count, check_name, check_number
+from ..reporting import NAMES as REPORTING_NAMES
+from ..reporting import RunReport, from_export, parse_item
+from ..validate import (
+    FORCE_N,
+    MAX_REPEAT,
+    TEMPERATURE_C,
+    check_count,
+    check_name,
+    check_number,
+    text_problem,
+)
 from .patterns import LABEL_FIELDS, REQUIRED_FIELDS, parse_number
 
 if TYPE_CHECKING:
@@ -169,7 +180,10 @@ def _test_key(test: str | None) -> str | None:
 
 def read_manifest(path: str | Path) -> Manifest:
     """Read a manifest CSV: one row per file, columns ``file, pin, disc, normal_force_N,
-    temperature_C, repeat`` (more allowed, ignored; empty cells mean unknown); with an
+    temperature_C, repeat`` (empty cells mean unknown); a column named for a reporting
+    item (:data:`tribopipe.reporting.ITEMS`: ``humidity_pct``, ``disc_Ra_um``,
+    ``operator`` ...) gives that item, any other column is kept as the run's extra
+    metadata (never dropped); with an
     optional ``test`` column, one row per test of a session export (the Test name as the
     export writes it; rows with the same file and different tests describe one export's
     tests, a row with an empty test cell the whole file); with an optional ``interval``
@@ -220,8 +234,10 @@ def _no_cell_size_limit(size: int) -> Iterator[None]:
 
 
 def _cell_value(name: str, raw: str) -> Any:
-    """A manifest cell as the label field ``name`` holds it; :class:`ValidationError`
-    saying what was expected otherwise."""
+    """A manifest cell as the label field or reporting item ``name`` holds it;
+    :class:`ValidationError` saying what was expected otherwise."""
+    if name in REPORTING_NAMES:
+        return parse_item(name, raw)
     if name in ("pin", "disc"):
         return check_name(raw, name)
     try:
@@ -252,6 +268,13 @@ def _manifest_rows(p: Path, text: str, delimiter: str) -> Manifest:
             path=p, line=1,
         )
     index = {name: header.index(name) for name in MANIFEST_COLUMNS}
+    # reporting items become their map columns; any other column is kept as extra metadata
+    known = {*MANIFEST_COLUMNS, TEST_COLUMN, INTERVAL_COLUMN}
+    for i, name in enumerate(header):
+        if name in REPORTING_NAMES:
+            index.setdefault(name, i)
+    extra_index = {name: i for i, name in enumerate(header)
+                   if name and name not in known and name not in REPORTING_NAMES}
     test_index = header.index(TEST_COLUMN) if TEST_COLUMN in header else None
     interval_index = header.index(INTERVAL_COLUMN) if INTERVAL_COLUMN in header else None
     rows: dict[tuple[str, str | None, int | None], ManifestRow] = {}
@@ -292,7 +315,15 @@ def _manifest_rows(p: Path, text: str, delimiter: str) -> Manifest:
                 "file" if test is None else TEST_COLUMN,
             )
         fields: dict[str, Any] = {}
-        for name in LABEL_FIELDS:
+        for name, i in extra_index.items():
+            raw = csv_uncell(cells[i].strip())
+            if raw:
+                if text_problem(raw, max_chars=300) is None:
+                    fields[EXTRA_PREFIX + name] = raw
+                elif problem is None:
+                    problem = str(ValidationError("expected one line of printable text",
+                                                  path=p, line=lineno, column=name))
+        for name in [*LABEL_FIELDS, *(n for n in REPORTING_NAMES if n in index)]:
             raw = csv_uncell(cells[index[name]].strip())
             if not raw:
                 continue
@@ -310,7 +341,51 @@ def _manifest_rows(p: Path, text: str, delimiter: str) -> Manifest:
 def _same(field_name: str, a: Any, b: Any, campaign: Campaign) -> bool:
     if field_name in ("pin", "disc"):
         return campaign.alias(str(a)).casefold() == campaign.alias(str(b)).casefold()
+    if isinstance(a, str) or isinstance(b, str):
+        return str(a).strip() == str(b).strip()
     return math.isclose(float(a), float(b), rel_tol=1e-9, abs_tol=1e-9)
+
+
+#: the key prefix of a manifest column tribopipe does not know, in a row's fields
+EXTRA_PREFIX = "extra:"
+
+
+def resolve_material(campaign: Campaign, name: str, what: str, file: str) -> Resolved:
+    """A pin or disc name as a campaign gives it: its ``[names]`` alias, then resolved
+    through the campaign's materials vocabulary (:mod:`tribopipe.materials`);
+    :class:`CampaignError` naming the file, with a did-you-mean, otherwise."""
+    full = campaign.alias(name)
+    try:
+        resolved = campaign.vocabulary.resolve(full, what)
+    except (MaterialError, ValidationError) as exc:
+        raise CampaignError(exc.problem, path=file, hint=exc.hint) from None
+    return Resolved(resolved.name, name.strip())
+
+
+def material_problems(campaign: Campaign,
+                      named: Sequence[tuple[str, str, str]]) -> list[str]:
+    """One line per pin or disc name of ``named`` (``(what, name, where)``) that the
+    campaign's vocabulary cannot resolve, with a did-you-mean and where it is used (the
+    first place and how many more), in the order first met."""
+    seen: dict[tuple[str, str], list[str]] = {}
+    problems: dict[tuple[str, str], str] = {}
+    for what, name, where in named:
+        key = (what, name.strip())
+        if key not in problems:
+            full = campaign.alias(name)
+            problem = campaign.vocabulary.problem(full, what) if full.strip() else None
+            if problem is None:
+                problems[key] = ""
+                continue
+            problems[key] = problem if full == name.strip() else \
+                f"{problem} (from {name.strip()!r} by [names])"
+        if problems[key]:
+            seen.setdefault(key, []).append(where)
+    lines = []
+    for key, places in seen.items():
+        more = f" and {len(places) - 1} more" if len(places) > 1 else ""
+        lines.append(f"{problems[key]} [in {places[0]}{more}]")
+    return lines
 
 
 def merge_metadata(
@@ -329,7 +404,9 @@ def merge_metadata(
             if value is None:
                 continue
             if key in ("pin", "disc"):
-                value = campaign.alias(str(value))
+                given = str(value).strip()
+                value = resolve_material(campaign, given, key, file).name
+                merged.setdefault(f"{key}_as_given", given)
             if key in merged:
                 if not _same(key, merged[key], value, campaign):
                     raise CampaignError(
@@ -344,9 +421,28 @@ def merge_metadata(
     return merged
 
 
-def labels_from(file: str, merged: Mapping[str, Any], *, hints: Sequence[str] = ()) -> RunLabels:
-    """Build :class:`RunLabels` from merged fields; :class:`CampaignError` when a required
-    field (pin, disc, normal_force_N, temperature_C) is missing."""
+def run_report(merged: Mapping[str, Any], defaults: RunReport | None = None,
+               header: Mapping[str, str] | None = None) -> RunReport:
+    """A run's reporting items: those of its merged metadata (the manifest), else the
+    campaign's ``[metadata]`` (``defaults``), else what its export's header says
+    (``header``, :func:`tribopipe.reporting.from_export`); the manifest's unknown columns
+    as extra metadata."""
+    values = {k: v for k, v in merged.items() if k in REPORTING_NAMES}
+    extra = {k[len(EXTRA_PREFIX):]: str(v) for k, v in merged.items()
+             if k.startswith(EXTRA_PREFIX)}
+    report = RunReport.of(values, extra)
+    if defaults is not None:
+        report = report.over(defaults)
+    if header:
+        report = report.over(RunReport.of(from_export(header)))
+    return report
+
+
+def labels_from(file: str, merged: Mapping[str, Any], *, hints: Sequence[str] = (),
+                report: RunReport | None = None) -> RunLabels:
+    """Build :class:`RunLabels` from merged fields (with the run's reporting items,
+    ``report``: default :func:`run_report` of ``merged``); :class:`CampaignError` when a
+    required field (pin, disc, normal_force_N, temperature_C) is missing."""
     missing = [f for f in REQUIRED_FIELDS if merged.get(f) is None]
     if missing:
         hint = "; ".join(hints) if hints else (
@@ -359,6 +455,9 @@ def labels_from(file: str, merged: Mapping[str, Any], *, hints: Sequence[str] = 
             normal_force_N=float(merged["normal_force_N"]),
             temperature_C=float(merged["temperature_C"]),
             repeat=None if merged.get("repeat") is None else merged["repeat"],
+            pin_as_given=merged.get("pin_as_given"),
+            disc_as_given=merged.get("disc_as_given"),
+            report=report if report is not None else run_report(merged),
         )
     except ValidationError as exc:
         raise CampaignError(exc.problem, path=file) from None

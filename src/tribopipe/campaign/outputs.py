@@ -14,6 +14,8 @@ from typing import Any
 from ..escape import csv_cell
 from ..files import write_text_atomic
 from ..layout import write_failures
+from ..reporting import EXTRA_COLUMN, RunReport
+from ..reporting import NAMES as REPORTING_NAMES
 from .patterns import LABEL_FIELDS
 from .spec import Campaign
 from .state import DUPLICATE, ENTRY_KEYS, FAILED, REDUCED, FileState
@@ -23,7 +25,7 @@ RUNS_COLUMNS: tuple[str, ...] = (
     "file", "test", "result", "interval", "status", "pin", "disc", "normal_force_N",
     "temperature_C", "repeat", "mu_s", "mu_k", "pressure_kPa", "normal_force_measured_N",
     "pressure_measured_kPa", "temperature_measured_C", "flags", "measurement_id", "trace",
-    "reason",
+    "reason", "pin_as_given", "disc_as_given", *REPORTING_NAMES, EXTRA_COLUMN,
 )
 #: the values a run row takes from its state entry (where it sits, what it measured)
 _RUN_KEYS: tuple[str, ...] = tuple(k for k in ENTRY_KEYS if k not in ("labels", "name"))
@@ -75,13 +77,27 @@ def _values(file: str, run: Mapping[str, Any], status: str, labels: Mapping[str,
             reason: str | None, *, measured: bool = False) -> list[Any]:
     """One ``runs.csv`` row, in :data:`RUNS_COLUMNS` order."""
     values: dict[str, Any] = {
-        "file": file, "status": status, **labels,
+        "file": file, "status": status, **labels, **_report_cells(labels),
         "test": run.get("test"), "result": run.get("result"), "interval": run.get("interval"),
         **({k: run.get(k) for k in _RUN_KEYS if k not in ("test", "result", "interval")}
            if measured else {}),
         "reason": reason,
     }
     return [values.get(c) for c in RUNS_COLUMNS]
+
+
+def _report_cells(labels: Mapping[str, Any]) -> dict[str, Any]:
+    """The reporting-item cells of a run's labels as the state keeps them (``report``:
+    ``values`` and ``extra`` as lists of pairs), empty when it holds none."""
+    report = labels.get("report")
+    if not isinstance(report, Mapping):
+        return {}
+    try:
+        values = {str(k): v for k, v in report.get("values") or []}
+        extra = {str(k): str(v) for k, v in report.get("extra") or []}
+        return RunReport.of(values, extra).columns()
+    except (TypeError, ValueError):  # a hand-edited state: the cells stay empty
+        return {}
 
 
 def write_failures_csv(campaign: Campaign, failures: Mapping[str, str]) -> None:

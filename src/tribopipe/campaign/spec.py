@@ -24,12 +24,15 @@ from ..config import (
 )
 from ..errors import CampaignError, ConfigError, ValidationError
 from ..escape import display_path
-from ..labels import Tolerances
+from ..labels import LABEL_FORCE_REL, LabelCheck, Tolerances
 from ..layout import DEFAULT_OUTPUT_DIR, OutputLayout
+from ..materials import Vocabulary, lab_files, load_vocabulary, shipped_vocabulary
 from ..pipeline import ReadOptions
 from ..readers import EXPORT_SUFFIXES
 from ..readers.textio import foreign_kind
-from ..validate import MAX_NAME_CHARS, check_name
+from ..reporting import NAMES as REPORTING_NAMES
+from ..reporting import RunReport, parse_item
+from ..validate import MAX_NAME_CHARS, check_name, text_problem
 from .patterns import compile_pattern
 
 _CAMPAIGN_KEYS = frozenset(
@@ -38,10 +41,11 @@ _CAMPAIGN_KEYS = frozenset(
         "filename_pattern", "test_pattern", "use_export_names", "export_pattern",
         "force_tolerance_N", "force_tolerance_rel", "temperature_tolerance_C",
         "speed_tolerance_rel", "plots", "encoding", "delimiter", "decimal", "synthetic",
+        "materials", "keep_labels", "label_force_tolerance_rel",
         "review",
     }
 )
-_TOP_LEVEL_TABLES = frozenset({"campaign", "reduction", "names"})
+_TOP_LEVEL_TABLES = frozenset({"campaign", "reduction", "names", "metadata"})
 
 
 @dataclass(frozen=True)
@@ -69,6 +73,14 @@ class Campaign:
     synthetic: bool = False
     read_options: ReadOptions = field(default_factory=ReadOptions)
     source: Path | None = None
+    #: the materials vocabulary: the shipped one, extended by the lab's files
+    #: (``materials.toml`` beside the config, ``[campaign] materials``)
+    vocabulary: Vocabulary = field(default_factory=shipped_vocabulary)
+    #: the reporting items of every run (``[metadata]``); a manifest cell overrides them
+    report: RunReport = field(default_factory=RunReport)
+    #: how the labels are checked against each export (``keep_labels``,
+    #: ``label_force_tolerance_rel``)
+    label_check: LabelCheck = field(default_factory=LabelCheck)
     #: the lab's decisions file (``review.csv``, :mod:`tribopipe.review`), applied on every
     #: batch; ``None``: the map's rows keep the reviews they hold
     review: Path | None = None
@@ -212,7 +224,7 @@ def load_campaign(path: str | Path) -> Campaign:
     if unknown_tables:
         raise ConfigError(
             f"unknown table(s) {', '.join(unknown_tables)}; expected [campaign], "
-            "optional [reduction] and [names]",
+            "optional [reduction], [names] and [metadata]",
             path=cfg_path,
         )
     table = data.get("campaign")
@@ -321,7 +333,20 @@ def load_campaign(path: str | Path) -> Campaign:
         delimiter=_optional_str(table, "delimiter", cfg_path),
         decimal=decimal,
     )
+    materials = table.get("materials", [])
+    materials = [materials] if isinstance(materials, str) else materials
+    if not isinstance(materials, list) or not all(isinstance(m, str) for m in materials):
+        raise ConfigError("[campaign] materials must name a materials file (or a list of "
+                          "them)", path=cfg_path)
+    vocabulary = load_vocabulary(lab_files(base, [(base / m).resolve() for m in materials]))
+    keep_labels = _check_type(table.get("keep_labels", False), bool, "keep_labels", cfg_path)
+    label_force = _non_negative(table.get("label_force_tolerance_rel", LABEL_FORCE_REL),
+                                "label_force_tolerance_rel", cfg_path)
     return Campaign(
+        label_check=LabelCheck(force_rel=label_force, keep_labels=keep_labels,
+                               vocabulary=vocabulary),
+        vocabulary=vocabulary,
+        report=campaign_report(data.get("metadata", {}), cfg_path),
         name=name,
         raw_dir=raw_dir,
         glob=glob,
@@ -339,6 +364,39 @@ def load_campaign(path: str | Path) -> Campaign:
         source=cfg_path,
         review=review,
     )
+
+
+def campaign_report(table: Any, cfg_path: Path) -> RunReport:
+    """The ``[metadata]`` table of a campaign config: reporting items
+    (:data:`tribopipe.reporting.ITEMS`) that hold for every run, and an ``extra`` table of
+    other text items. An unknown key is refused by name (with a did-you-mean)."""
+    import difflib
+
+    if not isinstance(table, dict):
+        raise ConfigError("[metadata] must be a table of reporting items", path=cfg_path)
+    values: dict[str, float | str] = {}
+    extra: dict[str, str] = {}
+    for key, value in table.items():
+        if key == "extra":
+            if not isinstance(value, dict) or not all(
+                    isinstance(v, str) and text_problem(v, max_chars=300) is None
+                    for v in value.values()):
+                raise ConfigError("[metadata.extra] must map names to one line of text "
+                                  "each", path=cfg_path)
+            extra.update(value)
+            continue
+        if key not in REPORTING_NAMES:
+            near = difflib.get_close_matches(key, REPORTING_NAMES, n=1, cutoff=0.6)
+            raise ConfigError(
+                f"[metadata] unknown key {key[:40]!r}; expected one of "
+                f"{', '.join(REPORTING_NAMES)} or an [metadata.extra] table", path=cfg_path,
+                hint=f"did you mean {near[0]!r}?" if near else
+                "put other items in [metadata.extra]")
+        try:
+            values[key] = parse_item(key, value, what=f"[metadata] {key}")
+        except ValidationError as exc:
+            raise ConfigError(exc.problem, path=cfg_path) from None
+    return RunReport.of(values, extra)
 
 
 def _test_pattern(table: Mapping[str, Any], filename_pattern: str | None,
@@ -386,6 +444,8 @@ def folder_campaign(
     instrument: str | Path | None = None,
     plots: bool = True,
     test_pattern: str | None = None,
+    materials: tuple[str | Path, ...] = (),
+    keep_labels: bool = False,
 ) -> Campaign:
     """A quick campaign without a config file: a folder of exports plus a manifest CSV,
     a file-name pattern and/or a test-name pattern, reduced with an instrument config
@@ -412,6 +472,7 @@ def folder_campaign(
     problem = None if glob is None else glob_problem(glob)
     if problem is not None:
         raise CampaignError(f"--glob: {problem}", path=folder)
+    vocabulary = load_vocabulary(lab_files(raw_dir, materials))
     out = Path(output_dir).resolve()
     problem = _output_folder_problem(out)
     if problem is not None:
@@ -427,4 +488,6 @@ def folder_campaign(
         filename_pattern=filename_pattern,
         test_pattern=test_pattern,
         plots=plots,
+        vocabulary=vocabulary,
+        label_check=LabelCheck(keep_labels=keep_labels, vocabulary=vocabulary),
     )

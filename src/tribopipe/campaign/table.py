@@ -44,8 +44,9 @@ from typing import Any
 from ..errors import CampaignError, ReadError
 from ..escape import csv_cell, display_path
 from ..files import file_sha256, regular_file
-from ..labels import RunLabels
+from ..labels import LABEL_FORCE_REL, RunLabels
 from ..layout import FAILURES_CSV, RUNS_CSV
+from ..materials import ADD_HINT
 from ..pipeline import read_runs
 from ..readers import EXPORT_SUFFIXES, export_kind
 from .metadata import (
@@ -53,6 +54,7 @@ from .metadata import (
     Manifest,
     ManifestRow,
     labels_from,
+    material_problems,
     merge_metadata,
     read_manifest,
 )
@@ -104,6 +106,7 @@ class CampaignRow:
         return RunLabels(
             pin=m.get("pin"), disc=m.get("disc"), normal_force_N=m.get("normal_force_N"),
             temperature_C=m.get("temperature_C"), repeat=m.get("repeat"),
+            pin_as_given=m.get("pin_as_given"), disc_as_given=m.get("disc_as_given"),
         )
 
     @property
@@ -168,6 +171,11 @@ def recipe_hash(campaign: Campaign, merged: Mapping[str, Any],
     digits)."""
     payload: dict[str, Any] = {"campaign": _campaign_key(campaign),
                                "labels": {k: merged.get(k) for k in LABEL_FIELDS}}
+    # the reporting items and extra metadata, only when given (older hashes stay valid)
+    report = {k: v for k, v in merged.items()
+              if k not in LABEL_FIELDS and not k.endswith("_as_given")}
+    if report or campaign.report.values or campaign.report.extra:
+        payload["report"] = [sorted(report.items(), key=str), campaign.report.columns()]
     if test_rows:
         payload["tests"] = sorted(
             # a row without an interval hashes as before the interval column existed
@@ -185,6 +193,10 @@ def _campaign_key(campaign: Campaign) -> str:
         "tolerances": asdict(campaign.tolerances),
         # only when set, so the hashes of every other campaign stay what they were
         **({"synthetic": True} if campaign.synthetic else {}),
+        # the label check, only when not the default (older hashes stay valid)
+        **({"label_check": [campaign.label_check.keep_labels, campaign.label_check.force_rel]}
+           if (campaign.label_check.keep_labels
+               or campaign.label_check.force_rel != LABEL_FORCE_REL) else {}),
         # the labels in recipe_hash already carry the [names] aliases, except those read
         # from Test names, so the aliases only matter with a test-name pattern
         "export_names": [campaign.test_pattern, list(campaign.names)]
@@ -329,6 +341,34 @@ def campaign_table(campaign: Campaign, *, state: CampaignState | None = None,
             test_rows=test_rows,
         ))
     return rows
+
+
+def named_materials(rows: Sequence[CampaignRow]) -> list[tuple[str, str, str]]:
+    """Every pin and disc name the campaign's metadata gives before any export is read
+    (the manifest's rows, the file names), as ``(what, name, file)``."""
+    out = []
+    for row in rows:
+        fields = [f for _, f in row.sources] + [r.fields for r in row.test_rows]
+        for given in fields:
+            for what in ("pin", "disc"):
+                value = given.get(what)
+                if isinstance(value, str):
+                    out.append((what, value, display_path(row.file)))
+    return out
+
+
+def check_materials(campaign: Campaign, rows: Sequence[CampaignRow]) -> None:
+    """Refuse the whole campaign, before any work, when a pin or disc name its metadata
+    gives is not in its materials vocabulary: one :class:`CampaignError` naming each such
+    name, with a did-you-mean and a file that uses it
+    (:func:`~tribopipe.campaign.metadata.material_problems`). Names read from Test names
+    are checked as each export is read (that run fails alone)."""
+    problems = material_problems(campaign, named_materials(rows))
+    if problems:
+        raise CampaignError(
+            f"{len(problems)} material name(s) not in the vocabulary, nothing reduced: "
+            + "; ".join(problems),
+            path=campaign.source or campaign.raw_dir, hint=ADD_HINT)
 
 
 def campaign_listing(campaign: Campaign) -> list[dict[str, Any]]:

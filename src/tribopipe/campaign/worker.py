@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import contextlib
 import gc
-from collections.abc import Iterator, Sequence
+from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -29,7 +29,7 @@ from ..pipeline import (
     failure_of,
     reduce_export,
 )
-from .metadata import ManifestRow, labels_from, merge_metadata, run_rows
+from .metadata import ManifestRow, labels_from, merge_metadata, run_report, run_rows
 from .patterns import match_pattern
 from .spec import Campaign
 
@@ -55,7 +55,7 @@ class WorkerContext:
 
 
 def run_labels(job: Job, place: RunPlace, name: str, campaign: Campaign,
-               tests_with_runs: int) -> RunLabels:
+               tests_with_runs: int, header: Mapping[str, str] | None = None) -> RunLabels:
     """The labels of one run, from the metadata sources of its test, in order: the
     manifest rows of its interval and of its test (:func:`run_rows`), the file-level
     sources (manifest row of the file, file name), the test-name pattern on its Test name.
@@ -98,7 +98,9 @@ def run_labels(job: Job, place: RunPlace, name: str, campaign: Campaign,
                  "pattern (test_pattern, --test-pattern)" + (f"; {'; '.join(hints)}"
                                                              if hints else ""),
         )
-    return labels_from(name, merge_metadata(name, sources, campaign), hints=hints)
+    merged = merge_metadata(name, sources, campaign)
+    return labels_from(name, merged, hints=hints,
+                       report=run_report(merged, campaign.report, header))
 
 
 def _reduce_one(job: Job, ctx: WorkerContext) -> FileOutcome:
@@ -108,13 +110,15 @@ def _reduce_one(job: Job, ctx: WorkerContext) -> FileOutcome:
 
     def labels_for(export: ExportRuns, place: RunPlace, name: str) -> RunLabels:
         tests_with_runs = len({p.test for p, _ in export.runs})
-        return run_labels(job, place, name, campaign, tests_with_runs)
+        header = next((dict(m.meta.extra) for p, m in export.runs if p == place), None)
+        return run_labels(job, place, name, campaign, tests_with_runs, header)
 
     return reduce_export(job.path, campaign.settings, labels_for, campaign.read_options,
                          tolerances=campaign.tolerances,
                          extra_flags=(FLAG_SYNTHETIC,) if campaign.synthetic else (),
                          file_hash=job.sha256,
-                         outputs=RunOutputs(campaign.layout, plot=ctx.plots), name=job.file)
+                         outputs=RunOutputs(campaign.layout, plot=ctx.plots), name=job.file,
+                         check=campaign.label_check)
 
 
 #: Cyclic-GC thresholds while reducing. Parsing an export allocates ~10⁵ short-lived

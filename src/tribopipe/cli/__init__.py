@@ -20,6 +20,7 @@ COMMANDS: dict[str, str] = {
     "batch": "tribopipe.cli.campaign:batch_cmd",
     "campaign": "tribopipe.cli.campaign:campaign_group",
     "map": "tribopipe.cli.map:map_group",
+    "materials": "tribopipe.cli.materials:materials_group",
     "query": "tribopipe.cli.query:query_cmd",
     "explore": "tribopipe.cli.explore:explore_cmd",
     "export": "tribopipe.cli.export:export_group",

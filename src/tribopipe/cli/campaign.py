@@ -35,7 +35,8 @@ def _open(target: str, options: dict[str, Any]) -> Any:
             instrument=options.get("instrument_path"),
             test_pattern=options.get("test_pattern"),
         )
-        return _with_review(campaign, options.get("review"))
+        return _with_review(campaign, options.get("review"),
+                            bool(options.get("keep_labels")))
     given = [flag for name, flag in _FOLDER_ONLY.items() if options.get(name)]
     if given:
         flags = ", ".join(given)
@@ -46,14 +47,18 @@ def _open(target: str, options: dict[str, Any]) -> Any:
         from dataclasses import replace
 
         campaign = replace(campaign, map_path=Path(options["map_path"]).resolve())
-    return _with_review(campaign, options.get("review"))
+    return _with_review(campaign, options.get("review"), bool(options.get("keep_labels")))
 
 
-def _with_review(campaign: Any, review: str | None) -> Any:
-    """The campaign with the decisions file ``--review`` gave (else its own)."""
+def _with_review(campaign: Any, review: str | None, keep_labels: bool = False) -> Any:
+    """The campaign with the decisions file ``--review`` gave (else its own), and
+    keeping its labels with ``--keep-labels``."""
     from dataclasses import replace
     from pathlib import Path
 
+    if keep_labels:
+        campaign = replace(campaign, label_check=replace(campaign.label_check,
+                                                         keep_labels=True))
     return campaign if review is None else replace(campaign, review=Path(review).resolve())
 
 
@@ -177,6 +182,13 @@ def grouped_reasons(failures: Any) -> list[tuple[list[str], str]]:
 
 def _common_run_options(func: Any) -> Any:
     func = click.option(
+        "--keep-labels", "keep_labels", is_flag=True, default=False,
+        help="Keep the labels where an export contradicts them (a measured mean normal "
+             "force beyond the stated tolerance, 25 % unless the config's "
+             "label_force_tolerance_rel says otherwise; a Test name or sample naming other "
+             "materials). Default: the config's keep_labels, else such a run is refused.",
+    )(func)
+    func = click.option(
         "--review", "review", type=click.Path(exists=True, dir_okay=False), default=None,
         help="A lab's decisions file (review.csv: accept, exclude or re-window runs; "
              "`tribopipe review` writes it), applied to every run (default: the config's "
@@ -238,7 +250,7 @@ _FOLDER_OPTIONS = [
 def batch_cmd(target: str, manifest: str | None, filename_pattern: str | None,
               test_pattern: str | None, glob: str | None, instrument_path: str | None,
               output: str | None, map_path: str | None, jobs: int | None,
-              plots: bool | None, review: str | None) -> None:
+              plots: bool | None, review: str | None, keep_labels: bool) -> None:
     """Reduce a whole campaign: a CAMPAIGN file (TOML) or a FOLDER of exports.
 
     Every friction interval of every test of every export is a run. Only new and changed
@@ -261,6 +273,7 @@ def batch_cmd(target: str, manifest: str | None, filename_pattern: str | None,
         "manifest": manifest, "filename_pattern": filename_pattern,
         "test_pattern": test_pattern, "glob": glob, "instrument_path": instrument_path,
         "output": output, "map_path": map_path, "review": review,
+        "keep_labels": keep_labels,
     })
     _run(campaign, jobs, plots)
 
@@ -275,9 +288,10 @@ def campaign_group() -> None:
 @_common_run_options
 @friendly_errors
 def run_cmd(campaign: str, map_path: str | None, jobs: int | None, plots: bool | None,
-            review: str | None) -> None:
+            review: str | None, keep_labels: bool) -> None:
     """Reduce the new and changed runs of a CAMPAIGN file (as `tribopipe batch` does)."""
-    _run(_open(campaign, {"map_path": map_path, "review": review}), jobs, plots)
+    _run(_open(campaign, {"map_path": map_path, "review": review,
+                          "keep_labels": keep_labels}), jobs, plots)
 
 
 @campaign_group.command("list")

@@ -90,8 +90,10 @@ def merge_cmd(other: str, replace: bool, lab: str | None, map_path: str) -> None
     both values (exit code 1 when any were kept).
     """
     from ..frictionmap import merge_map
+    from ..materials import lab_files, load_vocabulary
 
-    merged = merge_map(map_path, other, replace=replace, lab=lab)
+    merged = merge_map(map_path, other, replace=replace, lab=lab,
+                       vocabulary=load_vocabulary(lab_files(".")))
     report = merged.report
     for line in report.conflict_lines(theirs=other):
         say(line)
@@ -235,8 +237,9 @@ def validate_cmd(path: str | None, map_path: str | None, recompute: bool) -> Non
         from ..frictionmap.profile import map_upgrade_note
         from ..frictionmap.store import map_metadata
         from ..frictionmap.summary import check_map_file
+        from ..materials import lab_files, load_vocabulary
 
-        problems, verdict = check_map_file(path)
+        problems, verdict = check_map_file(path, load_vocabulary(lab_files(".")))
         upgraded = map_upgrade_note(int(map_metadata(path)["schema_version"]))
         if upgraded is not None:
             say(f"note: {upgraded}")
@@ -347,6 +350,65 @@ def table_cmd(
         click.echo(text, nl=False)
     else:
         say(f"wrote {output}", err=True)
+
+
+@map_group.command("compare")
+@click.option("--quantity", type=click.Choice(["mu_k", "mu_s"]), default="mu_k",
+              show_default=True, help="The coefficient to compare.")
+@click.option("--format", "fmt", type=click.Choice(["text", "csv", "markdown"]),
+              default="text", show_default=True, help="How to print the comparison.")
+@click.option("-o", "--output", type=click.Path(dir_okay=False),
+              help="Write to FILE instead of standard output.")
+@map_option
+@friendly_errors
+def compare_cmd(quantity: str, fmt: str, output: str | None, map_path: str) -> None:
+    """Labs side by side at every condition two of them measured.
+
+    Per condition and pair of labs: each lab's n and mean ± U (k = 2, its own
+    uncertainty), the difference and its U, ISO 13528's En number (|En| > 1: the labs
+    disagree beyond their stated uncertainties) and each lab's z score against the
+    condition's pooled mean with σ_pt = the map's reproducibility s_R (ISO 5725-2), and
+    whether the labs disagree beyond R. Then the map's s_r, s_R, r and R.
+    """
+    from ..export.tables import to_csv, to_markdown
+    from ..files import write_text_atomic
+    from ..frictionmap import read_map
+    from ..rounding import plus_minus, round_gum
+    from ..stats import group_statistics, lab_comparison, reproducibility
+
+    runs = read_map(map_path)
+    table = lab_comparison(runs, quantity)
+    rep = reproducibility(group_statistics(runs), quantity)
+    footer = (f"{quantity}: s_r = {rep.s_r:.3g}, s_R = {rep.s_R:.3g}, r = {rep.r:.3g}, "
+              f"R = {rep.R:.3g} over {rep.n_conditions} condition(s) several labs measured "
+              "(ISO 5725-2)")
+    if fmt == "csv":
+        text = to_csv(table)
+    elif fmt == "markdown":
+        text = to_markdown(table) + "\n" + footer + "\n"
+    else:
+        lines = []
+        if table.empty:
+            lines.append("no condition was measured by two labs")
+        for r in table.to_dict(orient="records"):
+            lines.append(f"{r['pin']} on {r['disc']}, {r['pressure_kPa']:.4g} kPa, "
+                         f"{r['temperature_C']:g} °C, {r['nominal_speed_mm_s']:.2g} mm/s")
+            for side in ("a", "b"):
+                lines.append(f"  {r['lab_' + side]}: n = {r['n_' + side]}, "
+                             f"{plus_minus(r['mean_' + side], r['U_' + side])}, "
+                             f"z = {r['z_' + side]:.2f}")
+            diff, u_diff = round_gum(r["difference"], r["U_difference"])
+            lines.append(f"  difference {diff} ± {u_diff}, "
+                         f"En = {r['En']:.2f}"
+                         + ("; labs disagree beyond R" if r["labs_disagree"] else ""))
+        lines.append(footer)
+        text = "\n".join(lines) + "\n"
+    if output:
+        write_text_atomic(output, text, newline="")
+        say(f"wrote {output}", err=True)
+    else:
+        for line in text.splitlines():
+            say(line)
 
 
 @map_group.command("show")

@@ -43,6 +43,9 @@ from ._common import friendly_errors, instrument_option, map_option
     "temperature; needs --temperature and --speed): a model-based prediction at an "
     "unmeasured temperature or speed, refused outside the reduced-speed range covered.",
 )
+@click.option("--lab", "labs", multiple=True,
+              help="Only the runs this lab measured (repeatable); the map's own runs are "
+                   "'(own lab)'.")
 @map_option
 @click.option("--json", "as_json", is_flag=True, help="Print the result as JSON.")
 @friendly_errors
@@ -55,6 +58,7 @@ def query_cmd(
     temperature_C: float | None,
     speed_mm_s: float | None,
     use_master_curve: bool,
+    labs: tuple[str, ...],
     map_path: str,
     as_json: bool,
 ) -> None:
@@ -69,13 +73,18 @@ def query_cmd(
     interpolation's own uncertainty, rounded to two significant digits; then the repeats'
     95 % CI apart, the measured groups used with their weights and whether the value was
     clamped. Give the contact pressure per pin (--pressure) or the total normal force
-    (--force, converted with the instrument file's pins).
+    (--force, converted with the instrument file's pins). Names are resolved through the
+    materials vocabulary (DS30 is Dragonskin 30). Says which labs the value comes from
+    and where they disagree beyond R; --lab restricts it to one lab's runs.
     """
     from ..config import load_settings
     from ..frictionmap.snapshot import open_map
     from ..frictionmap.synthetic_rows import map_synthetic_note
+    from ..materials import lab_files, load_vocabulary
     from ..numeric import finite_json
-    from ..query import format_result, query_map
+    from ..query import query_map, value_labs
+    from ..query_text import format_result
+    from ._common import say
 
     if (pressure_kPa is None) == (normal_force_N is None):
         raise click.UsageError("give exactly one of --pressure and --force")
@@ -92,14 +101,22 @@ def query_cmd(
         _master_curve_query(snap, pin, disc, pressure_kPa, temperature_C, speed_mm_s,
                             as_json)
         return
-    result = query_map(snap, pin, disc, pressure_kPa, temperature_C, speed_mm_s)
+    vocabulary = load_vocabulary(lab_files("."))
+    pin, disc = (vocabulary.candidates(n)[0] if len(vocabulary.candidates(n)) == 1 else n
+                 for n in (pin, disc))
+    result = query_map(snap, pin, disc, pressure_kPa, temperature_C, speed_mm_s, labs)
+    origin = value_labs(snap, result, labs)
     if as_json:
         data = result.to_dict()
         if normal_force_N is not None:
             data["normal_force_N"] = normal_force_N
+        data["labs"] = list(origin.labs)
+        data["labs_disagree"] = [list(c) for c in origin.disagree]
         click.echo(json.dumps(finite_json(data), indent=2, allow_nan=False))
     else:
         click.echo(format_result(result, normal_force_N, instrument))
+        for line in origin.lines():
+            say(f"  {line}")
     note = map_synthetic_note(snap)
     if note is not None:  # on stderr with --json, so the JSON stays one document
         click.echo(note, err=as_json)

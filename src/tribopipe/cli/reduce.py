@@ -16,6 +16,7 @@ from ._common import (
     lazy_map_option,
     read_options,
     renamed,
+    say,
 )
 
 if TYPE_CHECKING:
@@ -59,6 +60,15 @@ def _with_u(value: float | None, expanded: float | None) -> tuple[str, str]:
     "--temperature", "temperature_C", type=float, help="Nominal chamber temperature [°C]."
 )
 @click.option("--repeat", type=int, help="Repeat number of this run within its condition.")
+@click.option("--materials", "materials_files", multiple=True,
+              type=click.Path(dir_okay=False),
+              help="A lab's materials file extending the vocabulary --pin and --disc are "
+                   "resolved through (repeatable; default: materials.toml in the current "
+                   "folder when it is there).")
+@click.option("--keep-labels", is_flag=True,
+              help="Keep the labels when the export contradicts them (a measured mean "
+                   "normal force more than 25 % off --force, a Test name or sample naming "
+                   "other materials); default: such a run is refused.")
 @instrument_option
 @click.option("--zero", "zero",
               help="The zero of the torque or friction force: 'auto' (estimated where the "
@@ -96,6 +106,8 @@ def reduce_cmd(
     force_N: float | None,
     temperature_C: float | None,
     repeat: int | None,
+    materials_files: tuple[str, ...],
+    keep_labels: bool,
     instrument_path: str | None,
     zero: str | None,
     map_path: str | None,
@@ -130,12 +142,18 @@ def reduce_cmd(
     """
     from ..config import load_settings, with_zero
     from ..frictionmap.store import read_map
-    from ..labels import RunLabels
+    from ..labels import LabelCheck, RunLabels
+    from ..materials import lab_files, load_vocabulary
     from ..pipeline import ReadOptions, reduce_files
 
-    labels = RunLabels(
+    vocabulary = load_vocabulary(lab_files(".", materials_files))
+    check = LabelCheck(keep_labels=keep_labels, vocabulary=vocabulary)
+    labels, unknown = RunLabels(
         pin=pin, disc=disc, normal_force_N=force_N, temperature_C=temperature_C, repeat=repeat
-    )
+    ).resolved(vocabulary)
+    for problem in unknown:
+        say(f"note: {problem}: kept as given (add it with `tribopipe materials add`)",
+            err=True)
     if no_map and plots and output is None:
         raise click.UsageError("--plots with --no-map: give -o/--output, the folder for the "
                                "plots (--no-map alone writes nothing)")
@@ -151,7 +169,7 @@ def reduce_cmd(
     results = reduce_files(
         files, settings, labels,
         ReadOptions(encoding=encoding, delimiter=delimiter, decimal=decimal),
-        out_dir=output, plots=plots, on_file=_echo_file,
+        out_dir=output, plots=plots, on_file=_echo_file, check=check,
     )
     _print(results, as_json)
     _note_alike(results, labels)

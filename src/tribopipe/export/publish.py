@@ -78,8 +78,7 @@ from ..frictionmap.published import FOUNDING_PAPER, PUBLISHED_LAB
 from ..frictionmap.schema import KIND, SCHEMA_NAME, SCHEMA_VERSION, SOURCE_PUBLISHED
 from ..frictionmap.snapshot import MapSource, as_snapshot
 from ..frictionmap.store import write_map_copy
-from ..frictionmap.synthetic_rows import synthetic_count
-from ..labels import FLAG_SYNTHETIC
+from ..frictionmap.synthetic_rows import SYNTHETIC_MEANS, synthetic_count
 from ..query import pairs
 from ..stats import group_statistics
 from .citation import (
@@ -366,9 +365,8 @@ def publish_map(map_path: MapSource, out_dir: str | os.PathLike[str],
     n_synthetic = synthetic_count(runs)
     if n_synthetic and not allow_synthetic:
         raise ExportError(
-            f"{n_synthetic} of {len(runs)} runs are synthetic (flagged "
-            f"'{FLAG_SYNTHETIC}': demo data, not measured); they cannot be published as a "
-            "lab's measurements",
+            f"{n_synthetic} of {len(runs)} runs are {SYNTHETIC_MEANS}; they cannot be "
+            "published as a lab's measurements",
             path=map_path,
             hint="publish a map of your own runs, or pass --allow-synthetic for a "
                  "package of demo data",

@@ -51,8 +51,12 @@ SHEETS: tuple[tuple[str, str], ...] = (
 FLAG_NOTES: tuple[tuple[str, str], ...] = (
     ("range > r", "the repeats of the group differ by more than the pooled repeatability "
                   "limit r = 2.8·s_r (ISO 5725)"),
+    ("labs disagree", "two labs' means differ beyond the critical difference of R "
+                      "(ISO 5725-6)"),
     ("flagged run", "the group holds a run with a QC flag (see the runs in the map)"),
-    ("no budget", "the runs carry no uncertainty budget: U holds the repeat scatter only"),
+    ("stated u", "some runs carry no uncertainty budget of their own (imported rows): "
+                 "theirs is the stated estimate of the founding cell at the run's μ and "
+                 "force"),
     ("n = 1", "a single run: no repeat scatter"),
     ("repeats identical", "no scatter to estimate U from"),
 )

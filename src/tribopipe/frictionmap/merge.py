@@ -19,14 +19,19 @@ from __future__ import annotations
 import os
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from ..errors import MapError
+from ..materials import Vocabulary, shipped_vocabulary
 from ..validate import text_problem
 from .datapackage import DESCRIPTOR
 from .package import package_runs
 from .parts import MANIFEST
 from .schema import frame_rows, is_missing
 from .store import AppendReport, append_records, read_map
+
+if TYPE_CHECKING:
+    import pandas as pd
 
 
 @dataclass(frozen=True)
@@ -39,10 +44,18 @@ class MergeReport:
     labelled: int = 0
     without_lab: int = 0
     lab: str | None = None
+    #: names the materials vocabulary resolved (given → canonical, rows)
+    resolved: tuple[tuple[str, str, int], ...] = ()
+    #: names it does not know, one line each (kept as given; ``map validate`` reports them)
+    unresolved: tuple[str, ...] = ()
 
     def notes(self, other: str) -> list[str]:
-        """One line per thing to know about the rows' labs (nothing when all named one)."""
-        lines = []
+        """One line per thing to know about the rows' labs and names (nothing when all
+        named a lab and every name was canonical)."""
+        lines = [f"{n} row(s) of {other} name {given!r}: stored as {name!r} (the given name "
+                 f"kept in pin_as_given/disc_as_given)" for given, name, n in self.resolved]
+        lines += [f"note: {line}: kept as given; add it with `tribopipe materials add`"
+                  for line in self.unresolved]
         if self.labelled:
             lines.append(f"{self.labelled} row(s) of {other} named no lab: recorded as "
                          f"measured by {self.lab!r}")
@@ -64,7 +77,7 @@ def is_package(path: str | os.PathLike[str]) -> bool:
 
 def merge_map(
     path: str | os.PathLike[str], other: str | os.PathLike[str], *, replace: bool = False,
-    lab: str | None = None,
+    lab: str | None = None, vocabulary: Vocabulary | None = None,
 ) -> MergeReport:
     """Fold ``other`` — a friction map (Parquet) or a data package (folder or
     ``datapackage.json``) — into the map at ``path``.
@@ -75,28 +88,65 @@ def merge_map(
     ``lab`` given with one is refused). A package with any problem is a
     :class:`~tribopipe.frictionmap.package.PackageInvalid` naming the first and counting
     the others; a missing ``other``, a map merged into itself or a ``lab`` that is not
-    one line of text a :class:`MapError`.
+    one line of text a :class:`MapError`. Every pin and disc name is resolved through
+    the materials ``vocabulary`` (default: the shipped one) on the way in
+    (:func:`resolve_names`); a name it does not know is kept as given and said.
     """
     if lab is not None:
         lab = _lab_name(lab)
     if not Path(other).exists():
         raise MapError("file not found, expected a friction map (Parquet) or a data package "
                        "(folder or datapackage.json) to merge", path=other)
+    vocabulary = vocabulary or shipped_vocabulary()
     if is_package(other):
         runs, package_lab = package_runs(other)
         if lab is not None:
             raise MapError(f"a data package names its lab ({package_lab!r}); --lab is for a "
                            "Parquet map whose rows name none", path=other)
-        return MergeReport(append_records(path, frame_rows(runs), replace=replace))
+        runs, resolved, unresolved = resolve_names(runs, vocabulary)
+        return MergeReport(append_records(path, frame_rows(runs), replace=replace),
+                           resolved=resolved, unresolved=unresolved)
     if os.path.realpath(other) == os.path.realpath(path):
         raise MapError("cannot merge a friction map into itself", path=other)
     runs = read_map(other)  # validated: a damaged or foreign file is refused before any write
     unnamed = runs["lab"].map(is_missing).astype(bool)
     if lab is not None:
         runs.loc[unnamed, "lab"] = lab
+    runs, resolved, unresolved = resolve_names(runs, vocabulary)
     report = append_records(path, frame_rows(runs), replace=replace)
     n = int(unnamed.sum())
-    return MergeReport(report, labelled=n if lab else 0, without_lab=0 if lab else n, lab=lab)
+    return MergeReport(report, labelled=n if lab else 0, without_lab=0 if lab else n, lab=lab,
+                       resolved=resolved, unresolved=unresolved)
+
+
+def resolve_names(runs: pd.DataFrame, vocabulary: Vocabulary) -> tuple[
+        pd.DataFrame, tuple[tuple[str, str, int], ...], tuple[str, ...]]:
+    """``runs`` (a copy) with every pin and disc name the vocabulary resolves stored
+    under its canonical name, the given one kept in ``pin_as_given``/``disc_as_given``
+    (unless the row already keeps one); the names resolved (given, canonical, rows) and
+    one line per name it does not resolve (kept as given)."""
+    runs = runs.copy()
+    resolved: list[tuple[str, str, int]] = []
+    unresolved: list[str] = []
+    for what in ("pin", "disc"):
+        given_column = f"{what}_as_given"
+        if given_column not in runs.columns:  # rows of an older schema
+            runs[given_column] = None
+        names = runs[what].astype(str)
+        for name in sorted(set(names)):
+            if name in vocabulary:
+                continue
+            rows = names == name
+            problem = vocabulary.problem(name, what)
+            if problem is not None:
+                unresolved.append(f"{problem} ({int(rows.sum())} row(s))")
+                continue
+            canonical = vocabulary.candidates(name)[0]
+            keep = rows & runs[given_column].map(is_missing).astype(bool)
+            runs.loc[keep, given_column] = name
+            runs.loc[rows, what] = canonical
+            resolved.append((name, canonical, int(rows.sum())))
+    return runs, tuple(resolved), tuple(unresolved)
 
 
 def _lab_name(lab: str) -> str:

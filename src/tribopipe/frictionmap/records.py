@@ -152,6 +152,9 @@ def make_record(
         reduced_at=utc_now(),
         excluded=False,
         exclusion_reason=None,
+        pin_as_given=labels.pin_as_given,
+        disc_as_given=labels.disc_as_given,
+        **labels.report.columns(),
     )
     try:
         # the rules every map row keeps, checked here, once, so a bad run fails alone (in

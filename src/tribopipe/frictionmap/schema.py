@@ -23,6 +23,8 @@ from typing import TYPE_CHECKING, Any
 from ..config import DEFAULT_TEST_METHOD, TEST_METHODS
 from ..errors import MapError, RowError
 from ..escape import printable
+from ..reporting import EXTRA_COLUMN
+from ..reporting import ITEMS as REPORTING_ITEMS
 from ..validate import (
     FORCE_N,
     MAX_REPEAT,
@@ -181,6 +183,15 @@ COLUMNS: tuple[Column, ...] = (
            "(reviewed rows)", _DISTANCE, _ALONG),
     Column("auto_mu_k_window_end_mm", "float", "mm", "end of the reduction's μ_K window "
            "(reviewed rows)", _DISTANCE, _ALONG),
+    Column("pin_as_given", "str", "", "the pin's name as it came in (a pattern, manifest, "
+           "option or merged map), before the materials vocabulary resolved it"),
+    Column("disc_as_given", "str", "", "the disc's name as it came in, before the materials "
+           "vocabulary resolved it"),
+    *(Column(item.name, item.kind, item.unit, item.meaning, item.bounds,
+             "a physical range" if item.bounds is not None else "")
+      for item in REPORTING_ITEMS),
+    Column(EXTRA_COLUMN, "str", "", "metadata columns tribopipe does not know, as a JSON "
+           "object of text values"),
 )
 
 #: the columns a review sets (:mod:`tribopipe.review`); the ``auto_`` ones keep the
@@ -197,7 +208,10 @@ RUN_COLUMNS: tuple[str, ...] = tuple(c.name for c in COLUMNS)
 #: code may leave them out.
 ADDED_IN_VERSION: dict[str, int] = {"lab": 2, "u_mu_s": 3, "u_mu_k": 3, "test": 4, "result": 4,
                                     "nominal_speed_mm_s": 5, "test_method": 6,
-                                    **{c: 6 for c in REVIEW_COLUMNS}}
+                                    **{c: 6 for c in REVIEW_COLUMNS},
+                                    "pin_as_given": 6, "disc_as_given": 6,
+                                    EXTRA_COLUMN: 6,
+                                    **{item.name: 6 for item in REPORTING_ITEMS}}
 #: the values each text column with a closed vocabulary may hold
 CHOICES: dict[str, tuple[str, ...]] = {c.name: c.choices for c in COLUMNS if c.choices}
 #: the kind of each column: ``"str"``, ``"float"``, ``"int"`` or ``"bool"``
@@ -218,7 +232,7 @@ NAME_COLUMNS: tuple[str, ...] = tuple(
 #: them (a row of a map older than schema version 4).
 PROVENANCE_COLUMNS: frozenset[str] = frozenset(
     {"lab", "source_file", "file_hash", "test", "result", "tribopipe_version", "reduced_at",
-     "excluded", "exclusion_reason"}
+     "excluded", "exclusion_reason", "pin_as_given", "disc_as_given"}
 )
 CONTENT_COLUMNS: tuple[str, ...] = tuple(c for c in RUN_COLUMNS if c not in PROVENANCE_COLUMNS)
 #: The content columns :data:`ADDED_IN_VERSION` a later schema: a row written before the
@@ -298,6 +312,20 @@ class MapRow:
     auto_mu_s_distance_mm: float | None = None
     auto_mu_k_window_start_mm: float | None = None
     auto_mu_k_window_end_mm: float | None = None
+    pin_as_given: str | None = None
+    disc_as_given: str | None = None
+    humidity_pct: float | None = None
+    disc_Ra_um: float | None = None
+    surface_finish: str | None = None
+    specimen_batch: str | None = None
+    specimen_cure: str | None = None
+    conditioning_h: float | None = None
+    instrument: str | None = None
+    instrument_serial: str | None = None
+    software_version: str | None = None
+    operator: str | None = None
+    measured_on: str | None = None
+    extra_metadata: str | None = None
     #: set by :func:`checked_row` only: the row kept the row rules when it was built
     checked: bool = field(default=False, init=False, compare=False, repr=False)
 

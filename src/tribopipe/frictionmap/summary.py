@@ -4,11 +4,12 @@ from __future__ import annotations
 
 import os
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from ..errors import MapError
 from ..escape import display_path, printable
 from ..labels import flag_list
+from ..materials import Vocabulary, shipped_vocabulary
 from ..measurement import run_name
 from ..stats import repeatability
 from .checks import validate_runs
@@ -16,6 +17,9 @@ from .schema import is_missing
 from .snapshot import MapSource, as_snapshot
 from .store import verify_map
 from .synthetic_rows import synthetic_note
+
+if TYPE_CHECKING:
+    import pandas as pd
 
 
 def map_summary(path: MapSource, *, runs_listed: bool = False) -> str:
@@ -163,18 +167,48 @@ def _fmt_repeat(value: Any) -> str:
     return "?" if is_missing(value) else str(value)
 
 
-def check_map_file(path: str | os.PathLike[str]) -> tuple[list[str], str]:
+def unresolved_names(runs: pd.DataFrame, vocabulary: Vocabulary) -> list[str]:
+    """One line per pin or disc name of ``runs`` that is not a canonical name of
+    ``vocabulary``, with how many rows hold it and the fix: the canonical name it
+    resolves to (re-import or merge it again, or relabel), or a did-you-mean and how to
+    add the material."""
+    lines = []
+    for what in ("pin", "disc"):
+        counts: dict[str, int] = {}
+        for value in runs[what].dropna().astype(str):
+            counts[value] = counts.get(value, 0) + 1
+        for name, n in sorted(counts.items()):
+            if name in vocabulary:
+                continue
+            found = vocabulary.candidates(name)
+            rows = f"{n} row(s)"
+            if len(found) == 1:
+                lines.append(f"{what} {name!r} ({rows}) is not a canonical name: it is "
+                             f"{found[0]!r}; merge or import the rows again (names are "
+                             "resolved on the way in), or reduce them again")
+            else:
+                problem = vocabulary.problem(name, what)
+                lines.append(f"{problem} ({rows}); add it to the lab's materials.toml "
+                             f"(`tribopipe materials add`) or relabel the runs")
+    return lines
+
+
+def check_map_file(path: str | os.PathLike[str],
+                   vocabulary: Vocabulary | None = None) -> tuple[list[str], str]:
     """Check the friction map (Parquet) at ``path`` as ``map publish`` would before
     writing a package: every row against the map's rules
-    (:func:`~tribopipe.frictionmap.checks.validate_runs`). Returns one line per problem
-    and a verdict line. Raises :class:`MapError` for a file that is absent or not a
-    friction map."""
+    (:func:`~tribopipe.frictionmap.checks.validate_runs`), and every pin and disc name
+    against the materials ``vocabulary`` (default: the shipped one,
+    :func:`unresolved_names`). Returns one line per problem and a verdict line. Raises
+    :class:`MapError` for a file that is absent or not a friction map."""
     p = Path(path)
     if not os.path.lexists(p):  # read_map takes an absent map as empty: no file to pass
         raise MapError("file not found, expected a friction map (Parquet) or a data "
                        "package", path=p)
     runs, _ = verify_map(p)  # every check there is: parts, checksums, every row
     problems = [problem.line(display_path(p)) for problem in validate_runs(runs)]
+    problems += [f"{display_path(p)}: {line}" for line in
+                 unresolved_names(runs, vocabulary or shipped_vocabulary())]
     note = synthetic_note(runs)
     verdict = (f"friction map {display_path(p)}: {_runs(len(runs))}, "
                + (f"{len(problems)} problem(s)" if problems else "every row passes the checks")

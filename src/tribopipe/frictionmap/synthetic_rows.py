@@ -17,10 +17,14 @@ from .snapshot import MapSnapshot, MapSource, as_snapshot
 if TYPE_CHECKING:
     import pandas as pd
 
+#: what synthetic runs are, worded once for every output that says so
+SYNTHETIC_MEANS = f"SYNTHETIC (demo data flagged '{FLAG_SYNTHETIC}'), not measurements"
+
+
 def campaign_note() -> str:
     """What a campaign with ``synthetic = true`` says once after its batch."""
-    return (f"the campaign says synthetic = true: its runs are flagged '{FLAG_SYNTHETIC}' "
-            "(demo data, never published as a lab's measurements)")
+    return (f"the campaign says synthetic = true: its runs are {SYNTHETIC_MEANS}; they are "
+            "never published as a lab's measurements")
 
 
 def synthetic_mask(runs: pd.DataFrame) -> pd.Series:
@@ -36,14 +40,15 @@ def synthetic_count(runs: pd.DataFrame) -> int:
     return int(synthetic_mask(runs).sum())
 
 
-def synthetic_note(runs: pd.DataFrame) -> str | None:
-    """One line saying how many of ``runs`` are synthetic (``None`` when none are)."""
+def synthetic_note(runs: pd.DataFrame, of: str = "") -> str | None:
+    """One line saying how many of ``runs`` are synthetic (``None`` when none are);
+    ``of`` names whose runs they are (e.g. ``"this map"``)."""
     n = synthetic_count(runs)
     if n == 0:
         return None
     whole = f"all {n}" if n == len(runs) else f"{n} of {len(runs)}"
-    return (f"note: {whole} runs are SYNTHETIC (demo data flagged '{FLAG_SYNTHETIC}'), "
-            "not measurements")
+    runs_of = f"runs of {of}" if of else "runs"
+    return f"note: {whole} {runs_of} are {SYNTHETIC_MEANS}"
 
 
 def map_synthetic_note(path: MapSource) -> str | None:
@@ -51,5 +56,4 @@ def map_synthetic_note(path: MapSource) -> str | None:
     rows, or no map)."""
     if not (isinstance(path, MapSnapshot) and path.exists or Path(path).exists()):
         return None
-    note = synthetic_note(as_snapshot(path).runs)
-    return None if note is None else note.replace(" runs are", " runs of this map are", 1)
+    return synthetic_note(as_snapshot(path).runs, of="this map")

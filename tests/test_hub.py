@@ -236,8 +236,10 @@ def _unavailable(reason: str) -> None:
     pytest.skip(reason)
 
 
-@pytest.fixture(scope="module")
-def browser():
+def with_browser(body) -> None:
+    """Run ``body(browser)`` with a headless Chromium (the system's, under Playwright) in a
+    thread of its own: Playwright's sync API allows one instance per thread, and other
+    test modules keep theirs open for the session."""
     executable = os.environ.get("TRIBOPIPE_CHROMIUM") or shutil.which("chromium")
     if not executable:
         _unavailable("no chromium on PATH (Debian: apt-get install chromium)")
@@ -245,19 +247,37 @@ def browser():
         from playwright.sync_api import sync_playwright
     except ImportError:
         _unavailable("playwright is not installed (pip install -e '.[test]')")
-    manager = sync_playwright().start()
-    try:
-        instance = manager.chromium.launch(executable_path=executable, args=CHROMIUM_ARGS)
-    except Exception as exc:
-        manager.stop()
-        _unavailable(f"chromium at {executable} did not start: {str(exc).splitlines()[0]}")
-    yield instance
-    instance.close()
-    manager.stop()
+    outcome: dict[str, BaseException] = {}
+
+    def run() -> None:
+        try:
+            with sync_playwright() as manager:
+                try:
+                    instance = manager.chromium.launch(executable_path=executable,
+                                                       args=CHROMIUM_ARGS)
+                except Exception as exc:  # the browser exists but cannot start here
+                    _unavailable(f"chromium at {executable} did not start: "
+                                 f"{str(exc).splitlines()[0]}")
+                try:
+                    body(instance)
+                finally:
+                    instance.close()
+        except BaseException as exc:  # re-raised in the test's own thread
+            outcome["exc"] = exc
+
+    thread = threading.Thread(target=run)
+    thread.start()
+    thread.join()
+    if "exc" in outcome:
+        raise outcome["exc"]
 
 
 @pytest.mark.parametrize("width", [800, 1024, 1400])
-def test_site_in_a_browser(grown, browser, served, width):
+def test_site_in_a_browser(grown, served, width):
+    with_browser(lambda browser: site_steps(browser, grown, served, width))
+
+
+def site_steps(browser, grown, served, width):
     site = grown["site"]
     context = browser.new_context(viewport={"width": width, "height": 900},
                                   accept_downloads=True)
@@ -347,7 +367,7 @@ def test_materials_outside_the_vocabulary_are_refused_until_the_hub_adds_them(gr
 HOSTILE_LAB = '<script>alert(1)</script> & "Lab" {\\x}'
 
 
-def test_hostile_names_stay_text_on_every_page(tmp_path, browser):
+def test_hostile_names_stay_text_on_every_page(tmp_path):
     pkg = publish(tmp_path, RUNS[:1], HOSTILE_LAB, "h")
     hub = tmp_path / "hub"
     assert invoke("hub", "init", hub).exit_code == 0
@@ -361,6 +381,10 @@ def test_hostile_names_stay_text_on_every_page(tmp_path, browser):
         text = page.read_text(encoding="utf-8")
         assert "<script>alert(1)" not in text, page
     lab_page = tmp_path / "site/labs" / f"{folder.name}.html"
+    with_browser(lambda browser: hostile_steps(browser, lab_page, tmp_path))
+
+
+def hostile_steps(browser, lab_page, tmp_path):
     context = browser.new_context()
     tab = context.new_page()
     dialogs: list[str] = []

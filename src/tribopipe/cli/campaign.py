@@ -257,10 +257,12 @@ def batch_cmd(target: str, manifest: str | None, filename_pattern: str | None,
     files are reduced (content + config hash); the others are skipped. A bad file, test
     or run is listed with its reason and the good ones still land; a file whose content
     another already brought is a duplicate (stored once) or, with other labels, a
-    conflict (refused); the map is updated once. Writes traces/, runs.csv and
-    failures.csv to the output folder and ends with a ledger: files and tests found,
-    runs reduced, skipped and failed, and every manifest row and test left out. Exit code
-    1 when anything named was not reduced. The map it updated is recorded in
+    conflict (refused). What finished lands in the map as the batch goes; Ctrl-C (or
+    SIGTERM) keeps every run landed, says how many, and exits 130 (143): run it again to
+    reduce the rest. Writes traces/, runs.csv and failures.csv to the output folder and
+    ends with a ledger: files and tests found, runs reduced, skipped and failed, and
+    every manifest row and test left out. Exit code 1 when anything named was not
+    reduced. The map it updated is recorded in
     ./.tribopipe-map: commands run in this folder without --map read that map.
 
     \b

@@ -341,7 +341,7 @@ def trace_table(traces_dir: Path | None, measurement_id: str,
     if terms is None:
         raise ReviewError(f"{where}: the trace {display_path(path)} was written before traces "
                           "kept their uncertainty terms; reduce the run again",
-                          hint="remove the campaign's .tribopipe-state.*.json from its output "
+                          hint="remove the campaign's .tribopipe-state.*.sqlite from its output "
                                "folder and run batch: every run is reduced again")
     frame = table.to_pandas()
     return SlidingSamples.of_trace(frame), terms, frame

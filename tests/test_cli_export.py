@@ -183,7 +183,7 @@ def test_every_format_is_a_command_with_the_options_it_declares():
 
     ctx = click.Context(export_group)
     assert export_group.list_commands(ctx) == [w.name for w in WRITERS]
-    shared = {"pin", "disc", "temperature_C", "pressure_kPa", "speed_mm_s", "map_path",
+    shared = {"pin", "disc", "temperature_C", "pressure_kPa", "speed_mm_s", "method", "map_path",
               "output"}
     for writer in WRITERS:
         command = export_group.get_command(ctx, writer.name)

@@ -564,3 +564,71 @@ def test_a_batch_of_sled_runs(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -
     assert "sliding_speed_off_nominal" not in ";".join(runs["flags"].fillna(""))
     assert runs["flags"].fillna("").tolist()[1] == "zero_under_load"
     assert runs["mu_k"].tolist() == pytest.approx([0.25, 0.25], abs=0.004)
+
+
+def _pair_of_two_methods(tmp_path: Path) -> tuple[Path, pd.DataFrame]:
+    """The published map plus a copy of the Dragonskin 30 on steel runs, labelled as sled
+    runs with μ 1.5 times the rheometer's: one pair measured by two methods."""
+    from tribopipe.frictionmap import import_table, read_map, write_map
+    from tribopipe.frictionmap.published import published_csv_path
+
+    path = tmp_path / "friction_map.parquet"
+    import_table(path, published_csv_path())
+    runs = read_map(path)
+    sled = runs[(runs["pin"] == "Dragonskin 30") & (runs["disc"] == "steel")].copy()
+    sled["test_method"] = "sled D1894"
+    sled["measurement_id"] = sled["measurement_id"] + "-sled"
+    sled["mu_k"] = sled["mu_k"] * 1.5
+    write_map(path, pd.concat([runs, sled], ignore_index=True))
+    return path, sled
+
+
+def test_query_and_export_never_pool_two_methods(tmp_path: Path) -> None:
+    import json
+
+    from click.testing import CliRunner
+
+    from tribopipe.cli import main
+
+    path, sled = _pair_of_two_methods(tmp_path)
+    p, t = float(sled["pressure_kPa"].iloc[0]), float(sled["temperature_C"].iloc[0])
+    at = sled[(sled["pressure_kPa"] == p) & (sled["temperature_C"] == t)]
+    runner = CliRunner()
+    ask = ["query", "--map", str(path), "--pin", "Dragonskin 30", "--disc", "steel",
+           "--pressure", f"{p!r}", "--temperature", f"{t!r}"]
+    refused = runner.invoke(main, ask)
+    assert refused.exit_code != 0 and "Traceback" not in refused.output
+    assert "2 test methods (rheometer pin-on-disc; sled D1894)" in refused.output
+    assert "--method" in refused.output
+    sled_out = runner.invoke(main, [*ask, "--method", "sled D1894", "--json"])
+    assert sled_out.exit_code == 0, sled_out.output
+    data = json.loads(sled_out.output)
+    assert data["method"] == "sled D1894"
+    assert data["mu_k"]["value"] == pytest.approx(float(at["mu_k"].mean()), rel=1e-9)
+    rheo = json.loads(runner.invoke(main, [*ask, "--method", "RHEOMETER pin-on-disc",
+                                           "--json"]).output)
+    assert rheo["method"] == "rheometer pin-on-disc"
+    assert data["mu_k"]["value"] == pytest.approx(1.5 * rheo["mu_k"]["value"], rel=1e-9)
+    text = runner.invoke(main, [*ask, "--method", "sled D1894"])
+    assert text.exit_code == 0 and "test method: sled D1894" in text.output
+    absent = runner.invoke(main, [*ask, "--method", "rotary pin-on-disc"])
+    assert absent.exit_code != 0 and "no group measured by 'rotary pin-on-disc'" in \
+        absent.output
+    # a single-condition export reads the same rule
+    export = ["export", "mujoco", "--map", str(path), "--pin", "Dragonskin 30", "--disc",
+              "steel", "--pressure", f"{p!r}", "--temperature", f"{t!r}"]
+    no_choice = runner.invoke(main, export)
+    assert no_choice.exit_code != 0 and "sled D1894" in no_choice.output
+    chosen = runner.invoke(main, [*export, "--method", "sled D1894"])
+    assert chosen.exit_code == 0, chosen.output
+    assert f"{float(at['mu_k'].mean()):.3f}"[:4] in chosen.output
+    # a pair of one method needs no choice
+    from tribopipe.frictionmap import read_map
+
+    runs = read_map(path)
+    eco = runs[(runs["pin"] == "Ecoflex 00-50") & (runs["disc"] == "steel")].iloc[0]
+    other = runner.invoke(main, ["query", "--map", str(path), "--pin", "Ecoflex 00-50",
+                                 "--disc", "steel", "--pressure", f"{float(eco['pressure_kPa'])!r}",
+                                 "--temperature", f"{float(eco['temperature_C'])!r}", "--json"])
+    assert other.exit_code == 0, other.output
+    assert json.loads(other.output)["method"] == "rheometer pin-on-disc"

@@ -14,7 +14,9 @@ import functools
 import http.server
 import io
 import json
+import math
 import os
+import re
 import shlex
 import shutil
 import subprocess
@@ -30,10 +32,12 @@ from click.testing import CliRunner
 from generators.synthetic import SyntheticRun
 from reduced_runs import RUNS, make_processed
 from tribopipe.cli import main
+from tribopipe.escape import html_text
 from tribopipe.evidence import recompute_package
 from tribopipe.frictionmap.datapackage import sha256_hash
 from tribopipe.hub.folder import CHECK_COMMAND, WORKFLOW, workflow_command
-from tribopipe.stats import group_statistics
+from tribopipe.hub.site import comparisons_page
+from tribopipe.stats import group_statistics, lab_comparison, reproducibility
 
 REPO = Path(__file__).resolve().parents[1]
 #: Lab B: its own exports (other seeds), two conditions shared with Lab A
@@ -219,8 +223,56 @@ def test_merged_map_and_downloads(grown):
     pooled = group_statistics(merged)
     shared = pooled[pooled["mu_k_labs"] >= 2]
     assert len(shared) == 2
-    for s_R in shared["mu_k_s_R"]:
-        assert f"<td>{s_R:.3g}</td>" in comparisons
+    rows = comparison_rows(comparisons)
+    assert len(rows) == 2
+    assert [r[13] for r in rows] == ["yes" if d else "no" for d in shared["labs_disagree"]]
+    s_R = reproducibility(pooled, "mu_k").s_R
+    assert math.isfinite(s_R) and f"s_R = {s_R:.3g} (ISO 5725-2)" in comparisons
+    for r in rows:
+        en = float(r[9])
+        assert r[10] == ("agree" if abs(en) <= 1 else "disagree")
+
+
+def comparison_rows(page: str) -> list[list[str]]:
+    """The cells of each row of the comparisons table, as text (tags removed)."""
+    body = page.split('<table id="comparisons">', 1)[1].split("<tbody>", 1)[1]
+    return [[re.sub(r"<[^>]+>", "", cell) for cell in re.findall(r"<td>(.*?)</td>", row)]
+            for row in re.findall(r"<tr>(.*?)</tr>", body.split("</tbody>", 1)[0])]
+
+
+def test_comparisons_page_reads_map_compare(grown):
+    """The site's comparisons are ``map compare``'s (:func:`lab_comparison`) for the same
+    merged map, number for number, so the two can never disagree."""
+    assert grown["out"]["build"].exit_code == 0, grown["out"]["build"].output
+    site = grown["site"]
+    merged = pd.read_parquet(site / "downloads/friction_map.parquet")
+    table = lab_comparison(merged, "mu_k")
+    rows = comparison_rows((site / "comparisons.html").read_text(encoding="utf-8"))
+    assert len(rows) == len(table) == 2
+    for row, expected in zip(rows, table.to_dict(orient="records"), strict=True):
+        assert row[:2] == [expected["pin"], expected["disc"]]
+        assert float(row[2]) == pytest.approx(expected["normal_force_N"], rel=1e-3)
+        assert float(row[3]) == pytest.approx(expected["pressure_kPa"], rel=1e-3)
+        assert float(row[4]) == pytest.approx(expected["temperature_C"], rel=1e-3)
+        for cell, side in ((row[6], "a"), (row[7], "b")):
+            lab, rest = cell.split(" (n = ", 1)
+            n, mean_pm = rest.split("): ", 1)
+            assert lab == expected["lab_" + side] and int(n) == expected["n_" + side]
+            mean, u = (float(x) for x in mean_pm.split(" ± "))
+            assert mean == pytest.approx(expected["mean_" + side], abs=u / 10)
+            assert u == pytest.approx(expected["U_" + side], rel=0.05)
+        diff, u_diff = (float(x) for x in row[8].split(" ± "))
+        assert u_diff == pytest.approx(expected["U_difference"], rel=0.05)
+        assert diff == pytest.approx(expected["difference"], abs=u_diff / 10)
+        assert float(row[9]) == pytest.approx(expected["En"], abs=0.005)
+        assert float(row[11]) == pytest.approx(expected["z_a"], abs=0.005)
+        assert float(row[12]) == pytest.approx(expected["z_b"], abs=0.005)
+        assert row[13] == ("yes" if expected["labs_disagree"] else "no")
+    # a hostile lab or material name in a comparison row stays text
+    hostile = table.assign(lab_a=HOSTILE_LAB, pin=HOSTILE_LAB)
+    page = comparisons_page("hub", hostile, {}, 0.1)
+    assert "<script>alert(1)" not in page
+    assert page.count(html_text(HOSTILE_LAB)) == 2 * len(table)
 
 
 # --------------------------------------------------------------------------- browser

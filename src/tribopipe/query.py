@@ -36,6 +36,7 @@ from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from .config import DEFAULT_TEST_METHOD
 from .errors import ExportError
 from .frictionmap.snapshot import MapSource, as_snapshot
 from .interpolation import (
@@ -56,6 +57,7 @@ from .stats import (
     LABS,
     LABS_DISAGREE,
     NOMINAL_SPEED,
+    TEST_METHOD,
     group_statistics,
     group_u,
     lab_names,
@@ -188,6 +190,8 @@ class QueryResult:
     speed_mm_s: float | None = None
     #: the pair's measured nominal speeds [mm/s]
     speeds_mm_s: tuple[float, ...] = ()
+    #: the test method of every group the value was read from (:func:`one_method`)
+    method: str = DEFAULT_TEST_METHOD
 
     @property
     def clamped(self) -> bool:
@@ -254,6 +258,41 @@ def select_pair(groups: pd.DataFrame, pin: str, disc: str) -> pd.DataFrame:
 
 
 # ---------------------------------------------------------------------------- numerics
+
+
+def pair_methods(pair_groups: pd.DataFrame) -> list[str]:
+    """The test methods of a pair's groups, sorted (the founding rheometer cell's where
+    the table carries no ``test_method`` column)."""
+    if TEST_METHOD not in pair_groups.columns:
+        return [DEFAULT_TEST_METHOD]
+    return sorted({str(v) if isinstance(v, str) and v else DEFAULT_TEST_METHOD
+                   for v in pair_groups[TEST_METHOD]})
+
+
+def one_method(groups: pd.DataFrame, pin: str, disc: str,
+               method: str | None = None) -> tuple[pd.DataFrame, str]:
+    """``groups`` with the pair's groups of other test methods left out, and the method
+    kept: the one rule by which a value read for one pair (:func:`query`, the simulator
+    files) never pools two methods. ``method`` (case-insensitive) chooses; without it a
+    pair measured by one method keeps it, and a pair measured by several is refused in
+    one :class:`ExportError` listing them (no method is chosen for the user: which one
+    a simulation wants is the user's to say). A method the pair lacks is refused too."""
+    pair = select_pair(groups, pin, disc)
+    held = pair_methods(pair)
+    if method is None:
+        if len(held) > 1:
+            raise ExportError(
+                f"pin {pin!r} on disc {disc!r} is measured by {len(held)} test methods "
+                f"({'; '.join(held)}), never pooled: give --method with one of them")
+        return groups, held[0]
+    chosen = [m for m in held if m.casefold() == method.strip().casefold()]
+    if not chosen:
+        raise ExportError(f"pin {pin!r} on disc {disc!r} has no group measured by "
+                          f"{method!r}; its test methods: {'; '.join(held)}")
+    if len(held) == 1:
+        return groups, chosen[0]
+    other = groups.index.isin(pair.index) & (groups[TEST_METHOD].astype(str) != chosen[0])
+    return groups.loc[~other].copy(), chosen[0]
 
 
 def interpolation_weights(
@@ -551,6 +590,7 @@ def query(
     pressure_kPa: float,
     temperature_C: float | None = None,
     speed_mm_s: float | None = None,
+    method: str | None = None,
 ) -> QueryResult:
     """μ_K (and μ_S where measured) of a pair at a contact pressure [kPa], temperature [°C]
     and sliding speed [mm/s].
@@ -561,13 +601,15 @@ def query(
     held constant outside the measured range, with U (k = 2) as in the module docstring.
     ``temperature_C`` may be ``None`` only when the pair is measured at a single
     temperature, ``speed_mm_s`` only when it is measured at a single nominal speed.
-    Raises :class:`ExportError` for an unknown pair (listing the pairs held) or a bad
-    request.
+    Only the groups of one test method are read (``method``, :func:`one_method`: needed
+    where the pair is measured by several). Raises :class:`ExportError` for an unknown
+    pair (listing the pairs held) or a bad request.
     """
     if not math.isfinite(pressure_kPa) or pressure_kPa < 0:
         raise ExportError(REQUEST_ERRORS["pressure"].format(pressure_kPa))
     if temperature_C is not None and not math.isfinite(temperature_C):
         raise ExportError(REQUEST_ERRORS["temperature"].format(temperature_C))
+    groups, method = one_method(groups, pin, disc, method)
     pair = select_pair(groups, pin, disc)
     speeds = pair_speeds(pair)
     brackets, clamped_speed = speed_weights(speeds, speed_mm_s)
@@ -627,6 +669,7 @@ def query(
         notes=tuple(notes),
         speed_mm_s=speeds[0] if speed_mm_s is None else float(speed_mm_s),
         speeds_mm_s=tuple(speeds),
+        method=method,
     )
 
 
@@ -733,7 +776,7 @@ def groups_of(runs: pd.DataFrame, map_path: str | Path,
             path=map_path,
             hint="reduce runs first (tribopipe reduce / batch) or import the published map",
         )
-    return group_statistics(runs, show_speed=True)
+    return group_statistics(runs, show_speed=True, show_method=True)
 
 
 def query_map(
@@ -744,11 +787,12 @@ def query_map(
     temperature_C: float | None = None,
     speed_mm_s: float | None = None,
     labs: Sequence[str] | None = None,
+    method: str | None = None,
 ) -> QueryResult:
     """:func:`query` on the friction map (Parquet) at ``map_path`` (with ``labs``: on
-    those labs' runs only)."""
+    those labs' runs only; ``method``: the test method read)."""
     return query(load_groups(map_path, labs), pin, disc, pressure_kPa, temperature_C,
-                 speed_mm_s)
+                 speed_mm_s, method)
 
 
 @dataclass(frozen=True)
@@ -771,7 +815,8 @@ class ValueLabs:
 def value_labs(map_path: MapSource, result: QueryResult,
                labs: Sequence[str] | None = None) -> ValueLabs:
     """The :class:`ValueLabs` of a :func:`query_map` result (the same ``labs``)."""
-    groups = load_groups(map_path, labs)
+    groups, _ = one_method(load_groups(map_path, labs), result.pin, result.disc,
+                           result.method)
     pair = select_pair(groups, result.pin, result.disc)
     used = {(round(u.pressure_kPa, 6), u.temperature_C) for est in (result.mu_k, result.mu_s)
             if est is not None for u in est.used}

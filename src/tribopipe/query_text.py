@@ -1,9 +1,9 @@
 """A query's result as text for a person: the lines ``tribopipe query`` prints.
 
 The estimation is :mod:`tribopipe.query`'s (:func:`~tribopipe.query.query`, its
-:class:`~tribopipe.query.QueryResult`); this room only words it: the condition, μ_K and
-μ_S with U (k = 2) and what U holds, the groups used with their weights, the measured
-range and the notes.
+:class:`~tribopipe.query.QueryResult`); this room only words it: the condition, the test
+method, μ_K and μ_S with U (k = 2) and what U holds, the groups used with their
+weights, the measured range and the notes.
 """
 
 from __future__ import annotations
@@ -46,6 +46,7 @@ def format_result(res: QueryResult, normal_force_N: float | None = None,
                  f"{instrument.pin_radius_mm:g} mm)")
     lines = [
         f"{res.pin} on {res.disc} at {res.pressure_kPa:.4g} kPa{force}{t}",
+        f"  test method: {res.method}",
         *("  " + line for line in est_text("mu_k", res.mu_k)),
         *("  " + line for line in est_text("mu_s", res.mu_s)),
         "  from measured groups (pressure, temperature, mean, n, weight):",

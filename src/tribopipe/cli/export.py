@@ -76,6 +76,13 @@ def _selection(func: Callable[..., Any]) -> Callable[..., Any]:
                 help="Sliding speed [mm/s] for single-condition input (interpolated in "
                 "log v). Default: the pair's only measured speed (else required).",
             ),
+            click.option(
+                "--method",
+                "method",
+                metavar="METHOD",
+                help="Test method for single-condition input, e.g. 'sled D1894'. Default: "
+                "the pair's only method (else required: methods are never pooled).",
+            ),
             map_option,
             click.option(
                 "-o",

@@ -46,6 +46,9 @@ from ._common import friendly_errors, instrument_option, map_option
 @click.option("--lab", "labs", multiple=True,
               help="Only the runs this lab measured (repeatable); the map's own runs are "
                    "'(own lab)'.")
+@click.option("--method", "method", metavar="METHOD",
+              help="Test method whose groups are read, e.g. 'sled D1894'. Default: the "
+              "pair's only method (else required: methods are never pooled).")
 @map_option
 @click.option("--json", "as_json", is_flag=True, help="Print the result as JSON.")
 @friendly_errors
@@ -59,6 +62,7 @@ def query_cmd(
     speed_mm_s: float | None,
     use_master_curve: bool,
     labs: tuple[str, ...],
+    method: str | None,
     map_path: str,
     as_json: bool,
 ) -> None:
@@ -104,7 +108,8 @@ def query_cmd(
     vocabulary = load_vocabulary(lab_files("."))
     pin, disc = (vocabulary.candidates(n)[0] if len(vocabulary.candidates(n)) == 1 else n
                  for n in (pin, disc))
-    result = query_map(snap, pin, disc, pressure_kPa, temperature_C, speed_mm_s, labs)
+    result = query_map(snap, pin, disc, pressure_kPa, temperature_C, speed_mm_s, labs,
+                       method)
     origin = value_labs(snap, result, labs)
     if as_json:
         data = result.to_dict()

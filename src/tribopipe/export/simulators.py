@@ -18,7 +18,7 @@ from typing import TYPE_CHECKING, Any
 from ..errors import ExportError
 from ..escape import markdown_cell
 from ..frictionmap.snapshot import MapSource, as_snapshot
-from ..query import QueryResult, load_groups, pair_speeds, query, select_pair
+from ..query import QueryResult, load_groups, one_method, pair_speeds, query, select_pair
 from .registry import (
     FORMATS,
     WRITERS,
@@ -148,6 +148,7 @@ def export_simulator_input(
     source: str | None = None,
     speed_mm_s: float | None = None,
     on_note: Callable[[str], None] | None = None,
+    method: str | None = None,
     **options: Any,
 ) -> str:
     """The input text for simulator ``fmt`` (one of :data:`FORMATS`).
@@ -163,6 +164,8 @@ def export_simulator_input(
     without one get the founding paper's 0.007 mm/s. ``source`` (the map's path) is named
     in the file's header. ``speed_mm_s`` [mm/s] is the sliding speed of a single
     condition (needed where the pair is measured at several; tables carry every speed).
+    ``method`` is the test method a single condition is read from
+    (:func:`tribopipe.query.one_method`: needed where the pair is measured by several).
     """
     writer = writer_named(fmt)
     switch = writer.switch
@@ -183,6 +186,10 @@ def export_simulator_input(
         if speed_mm_s is not None:
             raise ExportError(f"the {fmt} table carries every measured speed; a single speed "
                               "is for one condition", hint="leave out --speed, or add --pressure")
+        if method is not None:
+            raise ExportError(f"the {fmt} table carries every group with its own method; "
+                              "a single method is for one condition",
+                              hint="leave out --method, or add --pressure")
         if writer.slip_rate:
             chosen["slip_rates"] = slip_rates
         return function(writer.table)(groups, pin=pin, disc=disc,
@@ -190,8 +197,9 @@ def export_simulator_input(
     what = f"{fmt} --pressure" if constant else writer.label(True)
     pin, disc, pressure_kPa, temperature_C, speed_mm_s = one_condition(
         groups, what, pin, disc, pressure_kPa, temperature_C, speed_mm_s, on_note)
+    groups, method = one_method(groups, pin, disc, method)
     pair = select_pair(groups, pin, disc)
-    res = query(groups, pin, disc, pressure_kPa, temperature_C, speed_mm_s)
+    res = query(groups, pin, disc, pressure_kPa, temperature_C, speed_mm_s, method)
     if constant:
         write = function(writer.snippet)
         takes = inspect.signature(write).parameters

@@ -14,9 +14,8 @@ relative links, so it works from ``file://`` and on GitHub Pages::
     downloads/<lab>-<release>-CITATION.cff                       every package's citation
 
 The group statistics are :func:`tribopipe.stats.group_statistics`, each lab's runs apart
-(``by_lab``) and, for the comparisons, pooled over the labs (ISO 5725-2's s_R and the
-labs-disagree flag); a comparison's z' is the difference of two labs' means over the
-root sum of squares of their standard uncertainties (ISO 13528, with the labs' own u).
+(``by_lab``); the comparisons are :func:`tribopipe.stats.lab_comparison`, the table
+``map compare`` prints (ISO 13528's En and z, the labs-disagree flag of ISO 5725-6).
 Every text from a package is escaped where it is written (:mod:`tribopipe.escape`).
 """
 
@@ -39,8 +38,8 @@ from ..files import write_text_atomic
 from ..frictionmap.package import package_runs
 from ..frictionmap.schema import KIND
 from ..frictionmap.store import write_map_copy
-from ..rounding import plus_minus
-from ..stats import LAB, LABS_DISAGREE, group_statistics, group_u
+from ..rounding import plus_minus, round_gum
+from ..stats import LAB, group_statistics, group_u, lab_comparison, reproducibility
 from .folder import HubPackage, hub_packages, hub_title, lab_slug, latest_releases
 
 if TYPE_CHECKING:
@@ -118,8 +117,9 @@ def build_site(hub: Path, out: Path) -> BuiltSite:
     for slug, lab_releases in by_lab.items():
         write_text_atomic(tmp / "labs" / f"{slug}.html",
                           lab_page(title, lab_releases, groups, colours))
-    write_text_atomic(tmp / "comparisons.html",
-                      comparisons_page(title, groups, colours, pooled_precision(merged)))
+    write_text_atomic(tmp / "comparisons.html", comparisons_page(
+        title, lab_comparison(merged, "mu_k"), colours,
+        reproducibility(group_statistics(merged), "mu_k").s_R))
     write_text_atomic(tmp / "changelog.html", changelog_page(title, releases))
     if out.exists():
         shutil.rmtree(out)
@@ -167,46 +167,6 @@ def lab_groups(runs: pd.DataFrame) -> list[dict[str, Any]]:
             "mu_k": float(g["mu_k_mean"]), "u_mu_k": float(u_k.iloc[i]),
             "mu_s": float(g["mu_s_mean"]), "u_mu_s": float(u_s.iloc[i]),
         })
-    return out
-
-
-def pooled_precision(runs: pd.DataFrame) -> dict[tuple[str, str, float, float],
-                                                  dict[str, Any]]:
-    """ISO 5725-2 precision of μ_K at each condition several labs measured, from
-    :func:`tribopipe.stats.group_statistics` (labs pooled): ``s_r``, ``s_R`` and whether
-    the labs disagree beyond the critical difference, by :func:`condition_key`."""
-    groups = group_statistics(runs)
-    out = {}
-    for g in groups.to_dict("records"):
-        if int(g["mu_k_labs"]) >= 2:
-            out[condition_key({str(k): v for k, v in g.items()})] = {
-                "s_r": float(g["mu_k_s_r"]), "s_R": float(g["mu_k_s_R"]),
-                "disagree": bool(g[LABS_DISAGREE])}
-    return out
-
-
-def condition_key(g: dict[str, Any]) -> tuple[str, str, float, float]:
-    """The condition of a lab group: pin, disc, pressure (to 0.1 kPa), temperature (to
-    0.1 °C)."""
-    return (g["pin"], g["disc"], round(g["pressure_kPa"], 1), round(g["temperature_C"], 1))
-
-
-def comparisons(groups: list[dict[str, Any]]) -> list[dict[str, Any]]:
-    """Each pair of labs at each condition they share: both means and u of μ_K, the
-    difference (first lab minus second) and z' = difference / √(u₁² + u₂²) (NaN when a u
-    is unknown)."""
-    by_condition: dict[tuple[str, str, float, float], list[dict[str, Any]]] = {}
-    for g in groups:
-        by_condition.setdefault(condition_key(g), []).append(g)
-    out = []
-    for key in sorted(by_condition):
-        items = by_condition[key]
-        for i, a in enumerate(items):
-            for b in items[i + 1:]:
-                diff = a["mu_k"] - b["mu_k"]
-                u = math.hypot(a["u_mu_k"], b["u_mu_k"])
-                z = diff / u if math.isfinite(u) and u > 0 else math.nan
-                out.append({"condition": key, "a": a, "b": b, "difference": diff, "z": z})
     return out
 
 
@@ -371,42 +331,77 @@ def html_text_block(text: str) -> str:
     return "\n".join(html_text(line) for line in text.splitlines())
 
 
-def comparisons_page(title: str, groups: list[dict[str, Any]], colours: dict[str, str],
-                     precision: dict[tuple[str, str, float, float], dict[str, Any]]) -> str:
-    """Where labs share a condition: each lab's μ_K ± U, the difference, z', and the
-    condition's ISO 5725-2 reproducibility s_R with the labs-disagree flag."""
+def comparisons_page(title: str, table: pd.DataFrame, colours: dict[str, str],
+                     s_R: float) -> str:
+    """Where labs share a condition: the rows of :func:`tribopipe.stats.lab_comparison`
+    (its condition columns; each lab's n and μ_K ± U, k = 2; the difference ± U; En with
+    its verdict; each lab's z; the labs-disagree flag), and the map's s_R (σ_pt of z)."""
     rows = []
-    for c in comparisons(groups):
-        pin, disc, p, t = c["condition"]
-        a, b = c["a"], c["b"]
-        z = c["z"]
-        prec = precision.get(c["condition"], {})
-        verdict = ("–" if not math.isfinite(z) else "agree" if abs(z) <= 2
-                   else "questionable" if abs(z) < 3 else "disagree")
+    for r in table.to_dict(orient="records"):
+        en = float(r["En"])
+        verdict = ("–" if not math.isfinite(en) else "agree" if abs(en) <= 1
+                   else "disagree")
         rows.append(
-            f'<tr><td>{html_text(pin)}</td><td>{html_text(disc)}</td><td>{p:.1f}</td>'
-            f'<td>{t:g}</td><td>{_swatch(colours[a["lab"]])}{html_text(a["lab"])}: '
-            f'{html_text(_pm(a["mu_k"], a["u_mu_k"]))}</td>'
-            f'<td>{_swatch(colours[b["lab"]])}{html_text(b["lab"])}: '
-            f'{html_text(_pm(b["mu_k"], b["u_mu_k"]))}</td>'
-            f'<td>{c["difference"]:+.3f}</td>'
-            f'<td>{"–" if not math.isfinite(z) else f"{z:+.2f}"}</td><td>{verdict}</td>'
-            f'<td>{_number(prec.get("s_R"))}</td>'
-            f'<td>{"yes" if prec.get("disagree") else "no"}</td></tr>')
-    table = ("<p>No condition is shared by two labs yet.</p>" if not rows else
-             '<table id="comparisons"><thead><tr><th>pin</th><th>disc</th><th>p [kPa]</th>'
-             "<th>T [°C]</th><th>lab 1 μ_K ± U</th><th>lab 2 μ_K ± U</th><th>difference</th>"
-             "<th>z'</th><th></th><th>s_R</th><th>labs disagree (ISO 5725-6)</th></tr>"
-             "</thead><tbody>" + "".join(rows) + "</tbody></table>")
-    body = f"""<section><p>Each pair of labs at each condition both measured (the same pin,
-disc, nominal pressure to 0.1 kPa and temperature to 0.1 °C): each lab's mean μ_K with its
-expanded uncertainty U (k = 2), the difference, and z' = difference / √(u₁² + u₂²)
-(ISO 13528): |z'| ≤ 2 agree, 2 &lt; |z'| &lt; 3 questionable, |z'| ≥ 3 disagree. Beside
-them, the condition's reproducibility standard deviation s_R (ISO 5725-2, all labs that
-measured it) and whether the labs' means differ by more than the critical difference of
-ISO 5725-6, as the map's statistics decide it.</p>
-{table}</section>"""
+            f'<tr><td>{html_text(str(r["pin"]))}</td><td>{html_text(str(r["disc"]))}</td>'
+            f'<td>{_number(float(r["normal_force_N"]))}</td>'
+            f'<td>{_number(float(r["pressure_kPa"]))}</td>'
+            f'<td>{_number(float(r["temperature_C"]))}</td>'
+            f'<td>{_number(float(r["nominal_speed_mm_s"]))}</td>'
+            + "".join(
+                f'<td>{_lab_swatch(colours, r["lab_" + s])}{html_text(str(r["lab_" + s]))}'
+                f' (n = {int(r["n_" + s])}): '
+                f'{html_text(_expanded(float(r["mean_" + s]), float(r["U_" + s])))}</td>'
+                for s in ("a", "b"))
+            + f'<td>{html_text(_difference(float(r["difference"]), float(r["U_difference"])))}'
+            f'</td><td>{_signed(en)}</td><td>{verdict}</td>'
+            f'<td>{_signed(float(r["z_a"]))}</td><td>{_signed(float(r["z_b"]))}</td>'
+            f'<td>{"yes" if r["labs_disagree"] else "no"}</td></tr>')
+    table_html = ("<p>No condition is shared by two labs yet.</p>" if not rows else
+                  '<table id="comparisons"><thead><tr><th>pin</th><th>disc</th>'
+                  "<th>F [N]</th><th>p [kPa]</th><th>T [°C]</th><th>v [mm/s]</th>"
+                  "<th>lab 1 μ_K ± U</th><th>lab 2 μ_K ± U</th><th>difference ± U</th>"
+                  "<th>En</th><th></th><th>z lab 1</th><th>z lab 2</th>"
+                  "<th>labs disagree (ISO 5725-6)</th></tr></thead><tbody>"
+                  + "".join(rows) + "</tbody></table>")
+    body = f"""<section><p>Each pair of labs at each condition both measured (the map's
+condition groups: pin, disc, nominal force, temperature, nominal sliding speed and test
+method), as <code>tribopipe map compare</code> prints it: each lab's number of runs and
+mean μ_K with its expanded uncertainty U (k = 2), the difference and its
+U = √(U₁² + U₂²), and ISO 13528's En = difference / U: |En| ≤ 1 agree, |En| &gt; 1
+disagree beyond the labs' stated uncertainties. Each lab's z score is its mean less the
+condition's pooled mean over σ_pt, the map's reproducibility standard deviation
+s_R = {_number(s_R)} (ISO 5725-2). The last column says whether the labs' means differ by
+more than the critical difference of ISO 5725-6, as the map's statistics decide it.</p>
+{table_html}</section>"""
     return _page(title, "Inter-lab comparisons", body)
+
+
+def _lab_swatch(colours: dict[str, str], lab: Any) -> str:
+    colour = colours.get(str(lab))
+    return _swatch(colour) if colour else ""
+
+
+def _expanded(value: float, expanded: float) -> str:
+    """``value ± U`` of a mean (U at k = 2 already), or the mean alone when U is unknown."""
+    if not math.isfinite(value):
+        return "–"
+    if not math.isfinite(expanded) or expanded <= 0:
+        return f"{value:.3f} (U unknown)"
+    return plus_minus(value, expanded)
+
+
+def _difference(value: float, expanded: float) -> str:
+    """A signed difference ± its U, by :func:`tribopipe.rounding.round_gum`."""
+    if not math.isfinite(value):
+        return "–"
+    if not math.isfinite(expanded) or expanded <= 0:
+        return f"{value:+.3f} (U unknown)"
+    v_text, u_text = round_gum(value, expanded)
+    return f"{'' if v_text.startswith('-') else '+'}{v_text} ± {u_text}"
+
+
+def _signed(value: float) -> str:
+    return f"{value:+.2f}" if math.isfinite(value) else "–"
 
 
 def _number(value: Any) -> str:

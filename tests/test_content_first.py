@@ -183,7 +183,16 @@ def test_campaign_manifest_writes_a_template_that_reads_back(workdir: Path) -> N
         is not None
     again = CliRunner().invoke(main, ["campaign", "manifest", "raw"])
     assert again.exit_code == 2 and "exists: pass --overwrite" in again.stderr
-    # the template, as written (labels from the names), reduces
+    # the template, as written (labels from the names), is checked against the materials
+    # vocabulary before any work: '=cmd' is no material, and nothing is reduced
+    batch = CliRunner().invoke(main, ["batch", "raw", "--manifest", "raw/manifest.csv",
+                                      "--no-plots"])
+    assert batch.exit_code != 0
+    assert "unknown pin '=cmd'" in batch.output and "nothing reduced" in batch.output
+    assert not (workdir / "processed" / "friction_map.parquet").exists()
+    # once the lab fills in the material, the template reduces
+    (raw / "manifest.csv").write_text(text.replace("'=cmd,steel", "Dragonskin 30,steel"),
+                                      encoding="utf-8")
     batch = CliRunner().invoke(main, ["batch", "raw", "--manifest", "raw/manifest.csv",
                                       "--no-plots"])
     assert "3 reduced" in batch.stdout, batch.output

@@ -287,3 +287,22 @@ def test_map_compare_puts_labs_side_by_side_with_en_and_z(tmp_path):
     store.append_records(alone, rows[:2])
     none = CliRunner().invoke(main, ["map", "compare", "--map", str(alone)])
     assert "no condition was measured by two labs" in none.output
+
+
+def test_map_compare_never_compares_two_test_methods_as_one_condition():
+    """Lab B measured the condition on the rheometer and with a sled: only its rheometer
+    runs meet Lab A's rheometer runs, and the sled runs, which no other lab measured by
+    that method, meet nobody."""
+    from tribopipe.stats import lab_comparison
+
+    rows = [lab_row(i, "Lab A", v) for i, v in enumerate([0.50, 0.52])] + \
+        [lab_row(10 + i, "Lab B", v) for i, v in enumerate([0.56, 0.58])] + \
+        [lab_row(20 + i, "Lab B", v, test_method="sled D1894")
+         for i, v in enumerate([0.80, 0.82])]
+    table = lab_comparison(frame(rows))
+    assert len(table) == 1
+    (row,) = table.to_dict(orient="records")
+    assert row["test_method"] == "rheometer pin-on-disc"
+    assert (row["lab_a"], row["lab_b"]) == ("Lab A", "Lab B")
+    assert (row["n_a"], row["n_b"]) == (2, 2)
+    assert row["difference"] == pytest.approx(0.51 - 0.57)

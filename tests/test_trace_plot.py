@@ -266,7 +266,8 @@ def test_the_figures_palette_keeps_every_runs_colours(outcomes, tmp_path):
         raw = write_rheocompass_export(tmp_path / f"p{i}.csv",
                                        SyntheticRun(duration_s=500.0, seed=40 + i, **kw),
                                        project="p", test="t", sample="s")
-        runs.append(reduce_file(raw, settings_, RunLabels("a", "b", 3.0, None, None)))
+        force_N = float(kw.get("normal_force_N", SyntheticRun().normal_force_N))
+        runs.append(reduce_file(raw, settings_, RunLabels("a", "b", force_N, None, None)))
     for outcome in runs:
         for force in (True, False):
             exact = draw(figure, outcome, force=force).render()

@@ -648,9 +648,10 @@ def lab_comparison(runs: pd.DataFrame, quantity: str = "mu_k") -> pd.DataFrame:
     import numpy as np
     import pandas as pd
 
-    by_lab = group_statistics(runs, by_lab=True, show_speed=True)
-    pooled = group_statistics(runs, show_speed=True)
-    keys = ["pin", "disc", "normal_force_N", "temperature_C", NOMINAL_SPEED]
+    # the test method is part of the condition: two methods are never compared as one
+    by_lab = group_statistics(runs, by_lab=True, show_speed=True, show_method=True)
+    pooled = group_statistics(runs, show_speed=True, show_method=True)
+    keys = ["pin", "disc", "normal_force_N", "temperature_C", NOMINAL_SPEED, TEST_METHOD]
     sigma = reproducibility(pooled, quantity).s_R
     rows = []
     pooled_rows = {tuple(_key_value(g[k]) for k in keys): g
@@ -673,7 +674,7 @@ def lab_comparison(runs: pd.DataFrame, quantity: str = "mu_k") -> pd.DataFrame:
                 rows.append({
                     **{k: condition[k] for k in ("pin", "disc", "normal_force_N",
                                                  "pressure_kPa", "temperature_C",
-                                                 NOMINAL_SPEED)},
+                                                 NOMINAL_SPEED, TEST_METHOD)},
                     "lab_a": a[LAB], "n_a": int(a[f"{quantity}_n"]),
                     "mean_a": float(a[f"{quantity}_mean"]), "U_a": u_a,
                     "lab_b": b[LAB], "n_b": int(b[f"{quantity}_n"]),
@@ -687,7 +688,7 @@ def lab_comparison(runs: pd.DataFrame, quantity: str = "mu_k") -> pd.DataFrame:
                     "labs_disagree": bool(condition[LABS_DISAGREE]),
                 })
     columns = ["pin", "disc", "normal_force_N", "pressure_kPa", "temperature_C",
-               NOMINAL_SPEED, *COMPARE_FIELDS]
+               NOMINAL_SPEED, TEST_METHOD, *COMPARE_FIELDS]
     if not rows:
         return pd.DataFrame({c: pd.Series(dtype=object) for c in columns})
     out = pd.DataFrame(rows, columns=columns)

@@ -390,9 +390,11 @@ def compare_cmd(quantity: str, fmt: str, output: str | None, map_path: str) -> N
         lines = []
         if table.empty:
             lines.append("no condition was measured by two labs")
+        several_methods = table["test_method"].nunique() > 1
         for r in table.to_dict(orient="records"):
             lines.append(f"{r['pin']} on {r['disc']}, {r['pressure_kPa']:.4g} kPa, "
-                         f"{r['temperature_C']:g} °C, {r['nominal_speed_mm_s']:.2g} mm/s")
+                         f"{r['temperature_C']:g} °C, {r['nominal_speed_mm_s']:.2g} mm/s"
+                         + (f", {r['test_method']}" if several_methods else ""))
             for side in ("a", "b"):
                 lines.append(f"  {r['lab_' + side]}: n = {r['n_' + side]}, "
                              f"{plus_minus(r['mean_' + side], r['U_' + side])}, "

@@ -38,10 +38,12 @@ def exports(tmp_path_factory: pytest.TempPathFactory) -> Path:
     return folder
 
 
-def _start(raw: Path, map_path: Path, out: Path, jobs: int) -> subprocess.Popen[str]:
+def _start(raw: Path, map_path: Path, out: Path, jobs: int,
+           plots: bool = False) -> subprocess.Popen[str]:
     return subprocess.Popen(
         [sys.executable, "-m", "tribopipe", "batch", str(raw), "--pattern", PATTERN,
-         "--map", str(map_path), "--out", str(out), "--no-plots", "-j", str(jobs)],
+         "--map", str(map_path), "--out", str(out), "--plots" if plots else "--no-plots",
+         "-j", str(jobs)],
         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
         env={**os.environ, "PYTHONPATH": os.pathsep.join(sys.path)})
 
@@ -62,13 +64,15 @@ def _copy(exports: Path, tmp_path: Path) -> Path:
     return raw
 
 
+# the pool of two workers also draws each run's plot: a longer batch, so that the signal
+# comes while runs are still being reduced
 @pytest.mark.parametrize(("sig", "code", "jobs"), [
     (signal.SIGINT, 130, 1), (signal.SIGTERM, 143, 2)])
 def test_a_stopped_batch_keeps_what_landed_and_the_next_reduces_the_rest(
         exports: Path, tmp_path: Path, sig: signal.Signals, code: int, jobs: int) -> None:
     raw = _copy(exports, tmp_path)
     map_path, out = tmp_path / "friction_map.parquet", tmp_path / "out"
-    proc = _start(raw, map_path, out, jobs)
+    proc = _start(raw, map_path, out, jobs, plots=jobs > 1)
     _wait_for_a_landing(proc, map_path)
     proc.send_signal(sig)
     stdout, stderr = proc.communicate(timeout=600)
@@ -80,6 +84,8 @@ def test_a_stopped_batch_keeps_what_landed_and_the_next_reduces_the_rest(
     assert len(line) == 1, stderr
     landed = int(line[0].split(": ", 1)[1].split(" ")[0])
     kept = fm.read_map(map_path)
+    if landed == N_FILES == len(kept):  # pragma: no cover - every run landed first
+        pytest.skip("every run had landed before the signal reached the batch")
     assert 0 < landed == len(kept) < N_FILES, (landed, len(kept))
     assert f"interrupted by {sig.name}" in line[0]
     # its locks are gone or block nothing: the next batch runs and reduces only the rest

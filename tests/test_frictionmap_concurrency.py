@@ -16,16 +16,18 @@ import pytest
 from map_files import map_bytes
 from test_frictionmap import run_record
 from tribopipe import frictionmap as fm
+from tribopipe.frictionmap.schema import MapRow
 
 pytestmark = pytest.mark.slow
 
 WRITER = """
 import json, sys
 from tribopipe.frictionmap import append_records
+from tribopipe.frictionmap.schema import MapRow
 map_path, records_path = sys.argv[1], sys.argv[2]
 records = json.loads(open(records_path).read())
 for record in records:  # one append (one lock, one atomic write) per run
-    append_records(map_path, [record])
+    append_records(map_path, [MapRow.from_mapping(record)])
 print("done", len(records))
 """
 
@@ -45,12 +47,12 @@ os.replace = replace_after_a_pause
 """ + WRITER
 
 
-def _start_writer(tmp_path: Path, name: str, map_path: Path, records: list[dict],
+def _start_writer(tmp_path: Path, name: str, map_path: Path, records: list[MapRow],
                   env: dict[str, str] | None = None, code: str = WRITER) -> subprocess.Popen:
     script = tmp_path / f"writer_{name}.py"
     script.write_text(code)
     records_path = tmp_path / f"{name}.json"
-    records_path.write_text(json.dumps(records))
+    records_path.write_text(json.dumps([r.as_dict() for r in records]))
     return subprocess.Popen(
         [sys.executable, str(script), str(map_path), str(records_path)],
         stdout=subprocess.PIPE,
@@ -70,12 +72,12 @@ def test_two_processes_appending_at_once_lose_no_run(tmp_path):
         assert w.returncode == 0, err
         assert out.strip() == "done 12"
     runs = fm.read_map(map_path)
-    expected = {r["measurement_id"] for r in a + b}
+    expected = {r.measurement_id for r in a + b}
     assert set(runs["measurement_id"]) == expected and len(runs) == 24
     # every writer's runs are there in its own order
     order = list(runs["measurement_id"])
     for batch in (a, b):
-        positions = [order.index(r["measurement_id"]) for r in batch]
+        positions = [order.index(r.measurement_id) for r in batch]
         assert positions == sorted(positions)
     assert not list(map_path.parent.glob(".*.tmp"))
 
@@ -177,7 +179,7 @@ def test_a_live_lock_refuses_in_one_line_and_a_killed_holder_s_lock_blocks_nothi
         assert "a killed process releases it" in line
         # the command line says the same in one line, exit code 1
         result = CliRunner().invoke(main, ["map", "exclude", "--map", str(map_path),
-                                           run_record(1)["measurement_id"], "--reason", "x"])
+                                           run_record(1).measurement_id, "--reason", "x"])
         assert result.exit_code == 1 and "Traceback" not in result.output
         assert "locked by another process" in result.output
         assert map_bytes(map_path) == before

@@ -307,6 +307,10 @@ def test_a_damaged_workbook_is_one_line_and_its_neighbour_reduces(tmp_path: Path
 @pytest.mark.parametrize("kind", ["fifo", "directory", "dev_zero"])
 def test_a_map_path_that_is_not_a_file_is_refused(tmp_path: Path, kind: str) -> None:
     target = _bad_object(tmp_path, kind)
+    if kind == "directory":
+        # a map is a folder of parts now, and an empty folder an empty map: a folder
+        # holding anything but a map is what must be refused
+        (target / "notes.txt").write_text("not a map\n", encoding="utf-8")
     done = run_subprocess("map", "show", "--map", target, timeout=90, preexec_fn=_limited)
     stderr = done.stderr.decode()
     assert b"Traceback" not in done.stderr and done.returncode == 1, stderr

@@ -240,7 +240,11 @@ def _campaign(root: Path) -> Path:
         ("DS30_steel_9N_20C_r1", SyntheticRun(mu_s=0.6, mu_k=0.41, normal_force_N=9.0, seed=3)),
     ]:
         write_rheocompass_export(raw / f"{name}.csv", run, project="p", test=name, sample="s")
-    (raw / "DS30_steel_5N_20C_r1.csv").write_text("not an export\n", encoding="utf-8")
+    # a run of 3 N whose name says 5 N: refused by the label check, the failure to report
+    # (a file that is no export at all is skipped, not failed)
+    write_rheocompass_export(raw / "DS30_steel_5N_20C_r1.csv",
+                             SyntheticRun(mu_s=0.8, mu_k=0.55, normal_force_N=3.0, seed=4),
+                             project="p", test="DS30_steel_5N_20C_r1", sample="s")
     cfg = root / "campaign.toml"
     cfg.write_text(
         '[campaign]\nname = "report test"\nraw_dir = "raw"\nglob = "*.csv"\n'

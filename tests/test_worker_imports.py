@@ -66,8 +66,9 @@ def campaign(tmp_path: Path) -> Path:
     raw = tmp_path / "raw"
     raw.mkdir()
     runs = {
-        "DS30_steel_5N_20C_r1": SyntheticRun(duration_s=400.0, seed=1),
-        "DS30_steel_5N_20C_r2": SyntheticRun(shape="stick_slip", duration_s=400.0, seed=2),
+        "DS30_steel_5N_20C_r1": SyntheticRun(normal_force_N=5.0, duration_s=400.0, seed=1),
+        "DS30_steel_5N_20C_r2": SyntheticRun(normal_force_N=5.0, shape="stick_slip",
+                                             duration_s=400.0, seed=2),
         "DS30_steel_1N_20C_r1": SyntheticRun(normal_force_N=1.0, mu_s=0.7, mu_k=0.6,
                                              duration_s=400.0, seed=3),
         "DS30_steel_1N_20C_r2": SyntheticRun(normal_force_N=1.0, peak_distance_mm=1.0,

@@ -119,6 +119,21 @@ def _write_atomic(target: str | os.PathLike[str], content: str | bytes,
     return path
 
 
+def fsync_dir(directory: Path) -> None:
+    """Make a rename or a new file in ``directory`` durable (fsync of the folder itself);
+    a platform that cannot open a folder is passed over (the rename is atomic anyway)."""
+    try:
+        fd = os.open(directory, os.O_RDONLY)
+    except OSError:
+        return
+    try:
+        os.fsync(fd)
+    except OSError:
+        pass
+    finally:
+        os.close(fd)
+
+
 def file_sha256(path: str | os.PathLike[str]) -> str:
     """SHA-256 hex digest of a regular file's bytes; :class:`ReadError` naming the path
     when it is not a regular file or cannot be read."""

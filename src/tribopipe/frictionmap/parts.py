@@ -40,7 +40,7 @@ from pathlib import Path
 from typing import Any
 
 from ..errors import MapError
-from ..files import os_reason
+from ..files import fsync_dir, os_reason
 
 #: the manifest's file name inside the map folder (a leading ``_``: Parquet readers of the
 #: folder skip it)
@@ -221,19 +221,6 @@ def read_part_bytes(folder: Path, part: Part) -> bytes:
     return data
 
 
-def _fsync_dir(directory: Path) -> None:
-    try:
-        fd = os.open(directory, os.O_RDONLY)
-    except OSError:  # some platforms cannot open directories; the rename is still atomic
-        return
-    try:
-        os.fsync(fd)
-    except OSError:
-        pass
-    finally:
-        os.close(fd)
-
-
 def _write_new(folder: Path, final: str, data: bytes, mode: int | None) -> None:
     """Write ``data`` to ``folder/final`` through a fsynced temporary file and a rename
     (``final`` must not exist yet: parts are never overwritten)."""
@@ -340,9 +327,9 @@ def commit(folder: Path, manifest: Manifest, previous: Manifest | None,
         _write_json(folder, MANIFEST_BACKUP,
                     Manifest(previous.generation, tuple(moved), previous.written_at,
                              previous.tribopipe_version, previous.sources), mode)
-    _fsync_dir(folder)  # new parts and the backup are durable before the manifest names them
+    fsync_dir(folder)  # new parts and the backup are durable before the manifest names them
     _write_json(folder, MANIFEST, manifest, mode)
-    _fsync_dir(folder)
+    fsync_dir(folder)
 
 
 def kept_parts(folder: Path) -> set[str]:

@@ -36,7 +36,7 @@ from .. import __version__
 from ..config import DEFAULT_TEST_METHOD
 from ..errors import MapError, ReadError
 from ..escape import display_path
-from ..files import file_kind, os_reason, regular_file
+from ..files import file_kind, fsync_dir, os_reason, regular_file
 from ..validate import text_problem
 from .parts import (
     MANIFEST,
@@ -121,19 +121,6 @@ def _clean_stale_temps(path: Path) -> None:
             stale.unlink()
 
 
-def _fsync_dir(directory: Path) -> None:
-    try:
-        fd = os.open(directory, os.O_RDONLY)
-    except OSError:  # some platforms cannot open directories; the rename is still atomic
-        return
-    try:
-        os.fsync(fd)
-    except OSError:
-        pass
-    finally:
-        os.close(fd)
-
-
 def _new_temp(path: Path) -> tuple[int, Path]:
     """A new temporary file beside ``path`` (its name matches :func:`_clean_stale_temps`)
     with the map's mode: the mode the map has, or for a new map ``0o666`` less the umask
@@ -212,7 +199,7 @@ def _write_atomic(path: Path, runs: pd.DataFrame) -> None:
             raise MapError(f"cannot write the friction map ({os_reason(exc)})",
                            path=path) from None
         raise
-    _fsync_dir(path.parent)
+    fsync_dir(path.parent)
 
 
 def write_map(path: str | os.PathLike[str], runs: pd.DataFrame) -> None:
@@ -1199,7 +1186,7 @@ def upgrade_map(path: str | os.PathLike[str]) -> tuple[int, Path | None]:
         if not p.exists() and staged.is_dir():  # a conversion killed between its renames
             read_manifest(staged)
             os.replace(staged, p)
-            _fsync_dir(p.parent)
+            fsync_dir(p.parent)
             return load_map(p, ["measurement_id"])[1]["n_runs"], backup_path(p)
         if not p.exists():
             raise MapError("friction map not found", path=p, hint="pass --map PATH")
@@ -1216,7 +1203,7 @@ def upgrade_map(path: str | os.PathLike[str]) -> tuple[int, Path | None]:
         except OSError as exc:
             raise MapError(f"cannot convert the friction map ({os_reason(exc)})",
                            path=p) from None
-        _fsync_dir(p.parent)
+        fsync_dir(p.parent)
         return len(runs), backup_path(p)
 
 

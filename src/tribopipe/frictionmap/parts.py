@@ -223,7 +223,8 @@ def read_part_bytes(folder: Path, part: Part) -> bytes:
 
 def _write_new(folder: Path, final: str, data: bytes, mode: int | None) -> None:
     """Write ``data`` to ``folder/final`` through a fsynced temporary file and a rename
-    (``final`` must not exist yet: parts are never overwritten)."""
+    (a part's ``final`` does not exist yet: parts are never overwritten; a manifest's
+    rename replaces the one before it)."""
     tmp = folder / f".{final}.{os.getpid()}.{secrets.token_hex(4)}.tmp"
     fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666)
     try:
@@ -263,21 +264,7 @@ PREVIOUS = "_previous"
 def _write_json(folder: Path, final: str, manifest: Manifest, mode: int | None) -> None:
     data = (json.dumps(manifest.as_json(), ensure_ascii=False, indent=1) + "\n").encode(
         "utf-8", "surrogatepass")
-    tmp = folder / f".{final}.{os.getpid()}.{secrets.token_hex(4)}.tmp"
-    fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666)
-    try:
-        if mode is not None:
-            with suppress(OSError):
-                os.fchmod(fd, mode)
-        with os.fdopen(fd, "wb") as fh:
-            fh.write(data)
-            fh.flush()
-            os.fsync(fh.fileno())
-        os.replace(tmp, folder / final)
-    except BaseException:
-        with suppress(OSError):
-            tmp.unlink()
-        raise
+    _write_new(folder, final, data, mode)
 
 
 def _link(src: Path, dst: Path) -> None:

@@ -1,7 +1,8 @@
 """Write ``tests/data/package_profile2/``: a data package of package profile version 2 (map
-schema 6, each group's runs and values joined into one cell of ``data/groups.csv``), written by the tribopipe of commit 788c7f1, so the tests can check
-that a package written before the group table linked its runs (profile version 3) still
-reads, validates, merges and is said to be upgraded.
+schema 6, each group's runs and values joined into one cell of ``data/groups.csv``),
+written by the tribopipe of commit 788c7f1, so the tests can check that a package written
+before the group table linked its runs (profile version 3) still reads, validates, merges
+and is said to be upgraded.
 
 Run it against that commit's source, not the current one::
 

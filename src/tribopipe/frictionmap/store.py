@@ -225,8 +225,40 @@ def write_map_copy(path: str | os.PathLike[str], runs: pd.DataFrame) -> Path:
     p = Path(path)
     if p.exists():
         raise MapError("exists already; a map copy is written only to a new path", path=p)
-    _write_atomic(p, records_frame(frame_records(runs), where="row"))
+    _write_atomic(p, check_runs(_schema_frame(runs), "row"))
     return p
+
+
+def _schema_frame(runs: pd.DataFrame) -> pd.DataFrame:
+    """``runs`` with the schema's columns, in order, each in its kind's dtype, converted
+    column by column (what :func:`records_frame` makes of the same rows one by one,
+    without a copy of every row); a value of another kind is a :class:`MapError` naming
+    the column."""
+    import pandas as pd
+
+    out: dict[str, Any] = {}
+    for name in RUN_COLUMNS:
+        kind, col = KIND[name], runs[name]
+        loose = col.dtype == object  # a column of a typed dtype holds its kind already
+        try:
+            if kind == "float":
+                if loose and col.map(lambda v: isinstance(v, bool | str)).any():
+                    raise TypeError("text or true/false is not a number")
+                out[name] = pd.to_numeric(col, errors="raise").astype("float64").to_numpy()
+            elif kind == "int":
+                out[name] = pd.array(col.to_numpy(dtype=object), dtype="Int64")
+            elif kind == "bool":
+                if col.dtype != bool and not col.map(lambda v: isinstance(v, bool)).all():
+                    raise TypeError("expected true or false")
+                out[name] = col.astype(bool).to_numpy()
+            else:
+                if loose and not col.map(lambda v: is_missing(v) or isinstance(v, str)).all():
+                    raise TypeError("expected text")
+                texts = col.astype(object).where(col.notna(), None).to_numpy()
+                out[name] = pd.array(texts, dtype="str")
+        except (TypeError, ValueError, OverflowError) as exc:
+            raise MapError(f"expected {kind} values ({exc})", column=name) from None
+    return pd.DataFrame(out, columns=list(RUN_COLUMNS), index=pd.RangeIndex(len(runs)))
 
 
 # --------------------------------------------------------------------------- appending

@@ -52,7 +52,8 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("tribopipe.reduction", "tribopipe.reduction.signals", "tribopipe.reduction.uncertainty",
      "tribopipe.reduction.manual"),
     ("tribopipe.reduction.intervals",),
-    ("tribopipe.reduction.detection", "tribopipe.reduction.reciprocating"),
+    ("tribopipe.reduction.detection", "tribopipe.reduction.reciprocating",
+     "tribopipe.reduction.parameters"),
     ("tribopipe.reduction.reduce",),
     # what a run is and its QC flags, decided once from its labels and its reduction,
     # before anything prints, plots or stores it

@@ -28,6 +28,7 @@ from tribopipe.escape import SIM_COMMENTS, sim_comment
 from tribopipe.export import drake, fe_decks, pybullet, scenes, usd
 from tribopipe.export.fe_decks import abaqus_name, deck_names, field10, write_abaqus, write_ansys
 from tribopipe.export.formats import FORMATS
+from tribopipe.export.simulators import export_simulator_input
 from tribopipe.export.slip_rates import (
     FOUNDING_SLIP_RATE,
     SlipRate,
@@ -36,7 +37,6 @@ from tribopipe.export.slip_rates import (
 )
 from tribopipe.export.unit_systems import UNIT_SYSTEMS, convert_pressure_kPa
 from tribopipe.export.xml_text import xml_comment
-from tribopipe.export.simulators import export_simulator_input
 from tribopipe.query import pairs, query
 
 

@@ -28,7 +28,7 @@ imported from the room that defines it.
 from __future__ import annotations
 
 from .landing import store_runs
-from .route import read_runs, reduce_export, reduce_file, reduce_files
+from .route import read_runs, reduce_export, reduce_file, reduce_files, reduce_run
 from .run_outputs import plot_run, run_summary, write_summary, write_trace
 from .runs import FailedRun, FileOutcome, ReadOptions, ReducedRun, RunOutcome
 
@@ -36,6 +36,7 @@ __all__ = [
     "reduce_export",
     "reduce_file",
     "reduce_files",
+    "reduce_run",
     "read_runs",
     "store_runs",
     "write_trace",

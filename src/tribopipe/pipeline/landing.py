@@ -63,13 +63,6 @@ class Landed:
     repeats: tuple[str, ...] = ()
     review: ReviewOutcome | None = None
     groups: frozenset[tuple[Any, ...]] = frozenset()
-    #: the records and ids the caller brought (before the review)
-    arrivals: Arrivals = Arrivals()
-
-    @property
-    def landed_ids(self) -> set[str]:
-        """The ids of the rows added or replaced."""
-        return set(self.appended.added_ids) | set(self.appended.replaced_ids)
 
 
 def land_runs(
@@ -117,7 +110,7 @@ def land_runs(
     groups = set(condition_keys(unvalidated_frame(touched)).values()) if touched else set()
     groups |= {k for mid, k in before.items() if mid in landed | set(appended.dropped_ids)}
     return Landed(appended=appended, rows=rows, repeats=tuple(repeats), review=outcome,
-                  groups=frozenset(groups), arrivals=arrivals)
+                  groups=frozenset(groups))
 
 
 def check_map_before_work(map_path: str | Path) -> None:

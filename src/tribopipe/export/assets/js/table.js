@@ -72,9 +72,10 @@ function compare(col, a, b, dir) {
   return dir * (va - vb);
 }
 
-/* A filter word as a pattern: matched anywhere, in any case (the browser's Unicode rule). */
+/* A filter word as a test: found anywhere, names compared by query.name_key's rule. */
 function wordPattern(word) {
-  return new RegExp(word.replace(/[.*+?^${}()|[\]\\]/g, "\\$&"), "iu");
+  var key = nameKey(word);
+  return { test: function (hay) { return nameKey(hay).indexOf(key) >= 0; } };
 }
 
 function renderTable() {
@@ -136,5 +137,5 @@ function renderTable() {
     tr.addEventListener("keydown", function (ev) { if (ev.key === "Enter") choose(); });
     body.appendChild(tr);
   });
-  $("tpx-group-count").textContent = rows.length + " of " + GROUPS.length + " groups";
+  $("tpx-group-count").textContent = say("group_count", { shown: rows.length, total: GROUPS.length });
 }

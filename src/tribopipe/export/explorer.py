@@ -453,7 +453,9 @@ def _texts() -> dict[str, Any]:
         "page": PAGE_TEXTS,
         "names": name_rule(),
         "snippet": {
-            "note": CONSTANT_NOTE,
+            # the decks' note, laid out as their comment lines
+            "note_lines": {fmt: comment_block(syntax, [CONSTANT_NOTE.format(fmt=fmt)])
+                           for fmt, syntax in (("abaqus", "**"), ("ansys", "!"))},
             "clamped": HELD_LINE,
             "mu_s_unknown": MU_S_UNKNOWN,
             "static": dict(STATIC_WHY),

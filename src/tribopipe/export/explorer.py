@@ -150,6 +150,36 @@ PAGE_TEXTS = {
     "temperature_chip": "{t} °C",
     "pressure_chip": "{p} kPa",
     "group_count": "{shown} of {total} groups",
+    # the plots
+    "pair_title": "{pin} on {disc}",
+    "pair_title_speed": "{pin} on {disc}, {speed} mm/s",
+    "speed_mark": "{speed} mm/s",
+    "x_axis": "contact pressure p [kPa]",
+    "y_axis": "μ_K",
+    "t_label": "{t} °C",
+    "t_unknown": "T unknown",
+    "fit_tip": "fit: {legend}",
+    "legend": "{t}",
+    "legend_fit": "{t}: {fit}",
+    "run_tip": "repeat {repeat}, {lab}: μ_K {line}",
+    "run_tip_flags": "repeat {repeat}, {lab}: μ_K {line} ({flags})",
+    "repeat_unknown": "?",
+    "mean_tip": "{p} kPa, {t}: mean μ_K {mean} (SD {sd}), n = {n}",
+    "sd_unknown": "–",
+    "lab_legend": "repeats of {lab}",
+    "chosen_tip": "chosen: {p} kPa, {t}: μ_K {mu}",
+    "panel_label": "select disc {disc}",
+    "panel_tip": "{disc}, {p} kPa, {t}: mean μ_K {mean}, n = {n}",
+    "list_join": ", ",
+}
+#: the heads of the page's group table, by column
+GROUP_TABLE_HEADS = {
+    "pin": "pin", "disc": "disc", "test_method": "method", "normal_force_N": "F [N]",
+    "pressure_kPa": "p [kPa]", "temperature_C": "T [°C]", "nominal_speed_mm_s": "v [mm/s]",
+    "mu_k_n": "n", "mu_k_mean": "μ_K ± U (k = 2)", "mu_k_std": "μ_K SD",
+    "mu_k_ci95_low": "μ_K 95 % CI low (repeats)", "mu_k_ci95_high": "μ_K 95 % CI high (repeats)",
+    "mu_k_cv": "μ_K CV", "mu_s_n": "μ_S n", "mu_s_mean": "μ_S ± U (k = 2)", "qc": "QC",
+    "labs": "labs",
 }
 #: group-table columns carried to the page (the others stay in the map's own tables)
 GROUP_FIELDS = (
@@ -451,6 +481,7 @@ def _texts() -> dict[str, Any]:
         "errors": {**REQUEST_ERRORS,
                    "no_pair": "no groups for pin {pin} on disc {disc} in this map"},
         "page": PAGE_TEXTS,
+        "heads": GROUP_TABLE_HEADS,
         "names": name_rule(),
         "snippet": {
             # the decks' note, laid out as their comment lines

@@ -119,7 +119,8 @@ def check_map_before_work(map_path: str | Path) -> None:
     :func:`~tribopipe.frictionmap.parts.read_manifest`), a single file's Parquet schema
     and metadata (:func:`~tribopipe.frictionmap.store.map_metadata`). No map yet is
     fine. A part damaged on disk is refused by the landing's read, before the map is
-    written (the runs' traces are already written then). Raises :class:`~tribopipe.errors.MapError` in one line."""
+    written (the runs' traces are already written then). Raises
+    :class:`~tribopipe.errors.MapError` in one line."""
     p = Path(map_path)
     if not (p.exists() or p.is_symlink()):
         return

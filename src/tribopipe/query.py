@@ -52,7 +52,7 @@ from .interpolation import (
 )
 from .numeric import finite_or_none
 from .physics import FOUNDING_SLIDING_SPEED_MM_S
-from .rounding import known_u, lower_bound, plus_minus
+from .rounding import decimal_text, known_u, lower_bound, plus_minus
 from .stats import (
     LABS,
     LABS_DISAGREE,
@@ -107,7 +107,7 @@ NOTES = {
     "clamped_temperature": "temperature outside the measured range: edge value held",
     "clamped_speed": "sliding speed outside the measured speeds: edge value held",
 }
-#: what a request out of bounds is told (``{}``: the value asked for)
+#: what a request out of bounds is told (``{}``: the value asked for, :func:`request_value`)
 REQUEST_ERRORS = {
     "pressure": "contact pressure must be a finite number >= 0 kPa, got {}",
     "temperature": "temperature must be a finite number in °C, got {}",
@@ -234,6 +234,14 @@ def _held_pairs_text(groups: pd.DataFrame) -> str:
     return "the map holds: " + "; ".join(f"{p} on {d}" for p, d in held)
 
 
+def name_key(name: object) -> str:
+    """A pin or disc name as a request is matched against it: stripped of white space
+    (``str.strip``) and casefolded (``str.casefold``); the explorer's script matches a
+    link's names by the same rule (its table comes from
+    :func:`tribopipe.export.explorer.explorer_data`)."""
+    return str(name).strip().casefold()
+
+
 def select_pair(groups: pd.DataFrame, pin: str, disc: str) -> pd.DataFrame:
     """The groups of one pair (pin and disc matched case-insensitively), as a new frame.
 
@@ -244,9 +252,9 @@ def select_pair(groups: pd.DataFrame, pin: str, disc: str) -> pd.DataFrame:
             f"no groups for pin {pin!r} on disc {disc!r}: the friction map is empty",
             hint="reduce runs first (tribopipe reduce / batch) or import the published map",
         )
-    pin_key = groups["pin"].astype(str).str.strip().str.casefold()
-    disc_key = groups["disc"].astype(str).str.strip().str.casefold()
-    mask = (pin_key == pin.strip().casefold()) & (disc_key == disc.strip().casefold())
+    pin_key = groups["pin"].map(name_key)
+    disc_key = groups["disc"].map(name_key)
+    mask = (pin_key == name_key(pin)) & (disc_key == name_key(disc))
     if not mask.any():
         names = [f"{p} on {d}" for p, d in pairs(groups)]
         close = difflib.get_close_matches(f"{pin} on {disc}", names, n=1, cutoff=0.6)
@@ -482,6 +490,13 @@ def _estimate(
     )
 
 
+def request_value(value: float) -> str:
+    """A requested value as :data:`REQUEST_ERRORS` quote it: every digit it was given
+    (:func:`tribopipe.rounding.decimal_text` to 17 significant digits, the shortest text
+    that reads back as it)."""
+    return decimal_text(value, digits=17)
+
+
 def estimate_text(
     value: float, expanded: float | None, n_min: int, *, ascii_only: bool = False,
     extrapolated: bool = False,
@@ -494,7 +509,7 @@ def estimate_text(
         return plus_minus(value, expanded, ascii_only=ascii_only)
     why = WHY_NO_U["extrapolated" if extrapolated else "single_run" if n_min < 2 else
                    "unknown"]
-    return f"{value:.3f} ({why})"
+    return f"{decimal_text(value, places=3)} ({why})"
 
 
 # ---------------------------------------------------------------------------- public API
@@ -538,7 +553,7 @@ def speed_weights(
             raise ExportError(speed_needed(speeds_mm_s), hint="pass --speed")
         return [(0, 1.0)], False
     if not (math.isfinite(speed_mm_s) and speed_mm_s > 0):
-        raise ExportError(REQUEST_ERRORS["speed"].format(speed_mm_s))
+        raise ExportError(REQUEST_ERRORS["speed"].format(request_value(speed_mm_s)))
     for i, v in enumerate(speeds_mm_s):
         if abs(math.log(speed_mm_s / v)) <= SPEED_MATCH_REL:
             return [(i, 1.0)], False
@@ -606,9 +621,9 @@ def query(
     pair (listing the pairs held) or a bad request.
     """
     if not math.isfinite(pressure_kPa) or pressure_kPa < 0:
-        raise ExportError(REQUEST_ERRORS["pressure"].format(pressure_kPa))
+        raise ExportError(REQUEST_ERRORS["pressure"].format(request_value(pressure_kPa)))
     if temperature_C is not None and not math.isfinite(temperature_C):
-        raise ExportError(REQUEST_ERRORS["temperature"].format(temperature_C))
+        raise ExportError(REQUEST_ERRORS["temperature"].format(request_value(temperature_C)))
     groups, method = one_method(groups, pin, disc, method)
     pair = select_pair(groups, pin, disc)
     speeds = pair_speeds(pair)

@@ -879,6 +879,7 @@ def explorer_files(
     fits: pd.DataFrame | None = None,
     runs_inline_limit: int = RUNS_INLINE_LIMIT,
     groups_page_limit: int = GROUPS_PAGE_LIMIT,
+    runs_beside_pages: bool = True,
 ) -> dict[str, str]:
     """Every file of the explorer of ``runs`` whose page is ``name`` (relative paths →
     text; the page ``name`` last), so that no page grows with the map.
@@ -889,8 +890,9 @@ def explorer_files(
     loaded when the pair is shown). A map of more groups gets, at ``name``, an index of its
     pins (each pin's name, discs, groups and runs, linking to its page), and its pins'
     explorers as pages of whole pins of at most ``groups_page_limit`` groups in
-    :func:`pages_folder`, each with its runs beside it; every page interpolates with the
-    whole map's curvature, so each gives what ``query`` gives on the whole map."""
+    :func:`pages_folder`, each with its runs beside it (``runs_beside_pages``; else as
+    ``runs_inline_limit`` says); every page interpolates with the whole map's curvature,
+    so each gives what ``query`` gives on the whole map."""
     included = runs
     if "excluded" in runs.columns:
         included = runs[~runs["excluded"].fillna(False).astype(bool)]
@@ -914,7 +916,7 @@ def explorer_files(
         data = explorer_data(shard_runs, groups=shard_groups, fits=fits[fit_pins.isin(keys)],
                              title=f"{title} — page {k} of {len(shards)}", source=source)
         data["curvature"] = curvature  # the whole map's: query's own uncertainty
-        files.update(_page_files(data, page, runs_inline_limit=0))
+        files.update(_page_files(data, page, 0 if runs_beside_pages else runs_inline_limit))
         for key in keys:
             of_pin = shard_groups[shard_groups["pin"].map(_key) == key]
             pin = str(of_pin["pin"].iloc[0])

@@ -39,6 +39,8 @@ from .escape import display_path, printable
 from .figures import TraceConditions, plot_trace
 from .files import file_sha256, os_reason, write_text_atomic
 from .frictionmap.duplicates import (
+    CHECK_COLUMNS,
+    GROUP_COLUMNS,
     LABEL_COLUMNS,
     ContentOwners,
     SameContent,
@@ -755,5 +757,13 @@ def store_runs(map_path: str | Path, files: Sequence[FileOutcome], *,
         kept, _ = landing_records(current, keep, (), None, traces_dir)
         return kept, ()
 
-    appended = update_map_with(map_path, decide, replace=replace)
+    fresh = {r.measurement_id for f in files for r in f.reduced if r.record is not None}
+
+    def reviewed_again(current: Any) -> bool:  # landing_records then reads whole rows
+        reviewed = current.loc[current["review"].notna(), "measurement_id"]
+        return bool(fresh.intersection(reviewed.astype(str)))
+
+    appended = update_map_with(map_path, decide, replace=replace,
+                               columns=(*CHECK_COLUMNS, *GROUP_COLUMNS),
+                               needs_all=reviewed_again)
     return StoreReport(appended=appended, same=tuple(same), repeats=tuple(repeats))

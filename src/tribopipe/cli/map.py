@@ -333,9 +333,12 @@ def table_cmd(
         return
     from ..export.tables import export_table
     from ..frictionmap.snapshot import open_map
+    from ..stats import GROUP_INPUT_COLUMNS
 
+    # the group layouts read the groups (stored in a map folder) and the columns of the
+    # statistics where none are stored; the 7-column table reads the runs themselves
     text = export_table(
-        open_map(map_path),
+        open_map(map_path, None if fmt == "frictionmap" else GROUP_INPUT_COLUMNS),
         output,
         fmt=fmt,
         layout=layout,
@@ -428,8 +431,13 @@ def show_cmd(runs_listed: bool, groups_listed: bool, map_path: str) -> None:
     from ..export.tables import map_paper_text
     from ..frictionmap import map_summary
     from ..frictionmap.snapshot import open_map
+    from ..frictionmap.summary import SUMMARY_COLUMNS
+    from ..stats import GROUP_INPUT_COLUMNS
 
-    snap = open_map(map_path)  # the one read and check of the map
+    # the one read and check of the map: the columns the account reads (all of them to
+    # list every run); a map folder's groups are stored, not grouped again
+    snap = open_map(map_path, None if runs_listed else (*SUMMARY_COLUMNS,
+                                                        *GROUP_INPUT_COLUMNS))
     click.echo(map_summary(snap, runs_listed=runs_listed))
     if groups_listed:
         click.echo(map_paper_text(snap), nl=False)

@@ -141,7 +141,7 @@ def reduce_cmd(
     description (the docstring of the package tribopipe.reduction).
     """
     from ..config import load_settings, with_zero
-    from ..frictionmap.store import read_map
+    from ..frictionmap.snapshot import open_map
     from ..labels import LabelCheck, RunLabels
     from ..materials import lab_files, load_vocabulary
     from ..pipeline import ReadOptions, reduce_files
@@ -163,7 +163,9 @@ def reduce_cmd(
     if not no_map:
         map_path = chosen_map(map_path)
         if labels.complete:
-            read_map(map_path)  # refuse a damaged or foreign map before any work
+            # refuse a damaged or foreign map before any work (its ids: a map folder's
+            # parts are checked against their checksums; a single file is read whole)
+            open_map(map_path, ["measurement_id"])
         if output is None:
             output = str(Path(map_path).parent)
     results = reduce_files(

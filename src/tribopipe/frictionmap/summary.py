@@ -22,6 +22,16 @@ if TYPE_CHECKING:
     import pandas as pd
 
 
+#: the map columns :func:`map_summary` reads without ``runs_listed`` (besides those its
+#: groups need where the map stores none: :data:`~tribopipe.stats.GROUP_INPUT_COLUMNS`)
+SUMMARY_COLUMNS: tuple[str, ...] = (
+    "measurement_id", "pin", "disc", "normal_force_N", "temperature_C", "repeat",
+    "excluded", "exclusion_reason", "flags", "source", "lab", "source_file", "test",
+    "result", "interval", "mu_k", "mu_s", "mu_k_window_start_mm", "mu_k_window_end_mm",
+    "auto_mu_k", "auto_mu_s", "review", "review_by", "review_date", "review_reason",
+    "review_static_peak_mm")
+
+
 def map_summary(path: MapSource, *, runs_listed: bool = False) -> str:
     """A readable multi-line summary of the map at ``path``: runs, pairs, conditions,
     sources, flags, excluded runs (with reasons and where each came from) and the pooled
@@ -57,9 +67,10 @@ def map_summary(path: MapSource, *, runs_listed: bool = False) -> str:
         lines.append(f"    {_text(pin)} / {_text(disc)}: {_runs(len(sub))}, {n_cond} conditions, "
                      f"F {forces or '-'}, T {temps or '-'}")
     flag_counts: dict[str, int] = {}
-    for text in runs["flags"]:
-        for f in flag_list(text):
-            flag_counts[f] = flag_counts.get(f, 0) + 1
+    # each distinct flags text once (a map holds few), counted by its rows
+    for text, n in runs["flags"].fillna("").value_counts(sort=False).items():
+        for f in flag_list(str(text)):
+            flag_counts[f] = flag_counts.get(f, 0) + int(n)
     lines.append("")
     if flag_counts:
         lines.append("  flags: " + ", ".join(f"{k} {v}" for k, v in sorted(flag_counts.items())))

@@ -135,8 +135,7 @@ def _one(job: tuple[int, GridPoint, str, bool]) -> dict[str, Any]:
         mu_s_distance_mm=got.mu_s_distance_mm, mu_k_window_mm=list(got.mu_k_window_mm),
         mu_k_error=got.mu_k - want_k, mu_s_error=got.mu_s - want_s,
         u_mu_k=got.u_mu_k, u_mu_s=got.u_mu_s,
-        u_mu_k_plateau=(got.parameters.get("uncertainty", {}) or {})
-        .get("mu_k", {}).get("reading"),
+        u_mu_k_plateau=got.parameters.uncertainty.mu_k["reading"],
     )
     return row
 

@@ -89,8 +89,7 @@ def _one(job: tuple[int, GridPoint, str]) -> dict[str, Any]:
         mu_k_window_mm=list(got.mu_k_window_mm),
         mu_k_error=got.mu_k - want.mu_k, mu_s_error=got.mu_s - want.mu_s,
         u_mu_k=getattr(got, "u_mu_k", None), u_mu_s=getattr(got, "u_mu_s", None),
-        u_mu_k_plateau=(got.parameters.get("uncertainty", {}) or {})
-        .get("mu_k", {}).get("reading"),
+        u_mu_k_plateau=got.parameters.uncertainty.mu_k["reading"],
     )
     return row
 

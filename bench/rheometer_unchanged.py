@@ -86,7 +86,10 @@ def reduce_all(paths: list[Path]) -> dict[str, Any]:
                 "mu_k_window_mm": list(r.mu_k_window_mm), "plateau_std": r.plateau_std,
                 "flags": list(r.flags), "normal_force_mean_N": r.normal_force_mean_N,
                 "sliding_distance_mm": r.sliding_distance_mm,
-                "offset": r.parameters.get("torque_offset_Nm"),
+                # a typed record since the typed parameters, a dict before
+                "offset": (r.parameters.get("torque_offset_Nm")
+                           if isinstance(r.parameters, dict)
+                           else r.parameters.torque_offset_Nm),
             }
     return out
 

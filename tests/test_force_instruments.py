@@ -138,21 +138,21 @@ SLED = load_settings(CONFIGS / "sled-d1894.toml")
 def test_sled_normal_force_from_its_mass() -> None:
     got = reduce_measurement(sled_trace(), SLED.instrument, SLED.reduction)
     assert got.normal_force_mean_N == pytest.approx(0.2 * G)
-    assert got.parameters["normal_force_source"] == "sled mass 200 g × g = 1.96133 N"
-    assert got.parameters["test_method"] == "sled D1894"
-    assert got.parameters["tangential_channel"] == FRICTION_FORCE
+    assert got.parameters.instrument.normal_force_source == "sled mass 200 g × g = 1.96133 N"
+    assert got.parameters.instrument.test_method == "sled D1894"
+    assert got.parameters.instrument.tangential_channel == FRICTION_FORCE
     assert got.mu_k == pytest.approx(0.25, abs=0.003)
     assert got.mu_s == pytest.approx(0.35, abs=0.01)
     assert "zero_under_load" not in got.flags
     # the sled's ± 5 g enters the budget: 1.44 % of μ
-    assert got.parameters["uncertainty"]["mu_k"]["normal_force"] == pytest.approx(
+    assert got.parameters.uncertainty.mu_k["normal_force"] == pytest.approx(
         0.25 * 0.0144, rel=0.05)
 
 
 def test_sled_weight_in_newtons_and_no_normal_force_refused() -> None:
     weight = replace(SLED.instrument, sled_mass_g=None, sled_weight_N=0.2 * G)
     got = reduce_measurement(sled_trace(), weight, SLED.reduction)
-    assert got.parameters["normal_force_source"].startswith("sled weight 1.96")
+    assert got.parameters.instrument.normal_force_source.startswith("sled weight 1.96")
     none = replace(SLED.instrument, sled_mass_g=None)
     with pytest.raises(MissingQuantityError, match="normal_force_N"):
         reduce_measurement(sled_trace(), none, SLED.reduction)
@@ -166,17 +166,17 @@ def test_zero_under_load_is_flagged_and_not_subtracted() -> None:
     assert "zero_under_load" in got.flags
     assert "torque_offset_unknown" not in got.flags
     assert got.mu_k == pytest.approx(0.25, abs=0.003)
-    assert got.parameters["torque_offset_Nm"] == 0.0
-    assert got.parameters["zero_load_fraction"] > 1.0
+    assert got.parameters.torque_offset_Nm == 0.0
+    assert got.parameters.instrument.zero_load_fraction > 1.0
     # the unknown zero's size enters the uncertainty
-    assert got.parameters["uncertainty"]["torque_offset_u_Nm"] == pytest.approx(
+    assert got.parameters.uncertainty.torque_offset_u_Nm == pytest.approx(
         0.01 / math.sqrt(3))
 
 
 def test_true_zero_offset_is_subtracted() -> None:
     got = reduce_measurement(sled_trace(offset_N=0.05), SLED.instrument, SLED.reduction)
     assert "zero_under_load" not in got.flags
-    assert got.parameters["torque_offset_Nm"] == pytest.approx(0.05, abs=0.002)
+    assert got.parameters.torque_offset_Nm == pytest.approx(0.05, abs=0.002)
     assert got.mu_k == pytest.approx(0.25, abs=0.003)
 
 
@@ -184,11 +184,11 @@ def test_zero_given_or_off() -> None:
     trace = sled_trace(offset_N=0.05)
     given = replace(SLED.instrument, zero_offset=0.05)
     got = reduce_measurement(trace, given, SLED.reduction)
-    assert got.parameters["torque_offset_source"] == "given"
+    assert got.parameters.torque_offset_source == "given"
     assert got.mu_k == pytest.approx(0.25, abs=0.003)
     off = replace(SLED.instrument, zero_offset="off")
     got = reduce_measurement(trace, off, SLED.reduction)
-    assert got.parameters["torque_offset_Nm"] == 0.0
+    assert got.parameters.torque_offset_Nm == 0.0
     assert got.mu_k == pytest.approx(0.25 + 0.05 / (0.2 * G), abs=0.003)
     # the keyword overrides the file
     got = reduce_measurement(trace, off, SLED.reduction, torque_offset_Nm=0.05)
@@ -207,7 +207,7 @@ def test_rest_after_sliding_is_a_second_zero() -> None:
     inst = replace(SLED.instrument, rest_after_sliding=True)
     got = reduce_measurement(trace, inst, SLED.reduction)
     assert "zero_drift" in got.flags
-    assert got.parameters["zero_second"] == pytest.approx(0.02 * 64 / 66, abs=0.002)
+    assert got.parameters.instrument.zero_second == pytest.approx(0.02 * 64 / 66, abs=0.002)
     assert got.mu_k == pytest.approx(0.25, abs=0.004)
     steady = _measurement({TIME: t, POSITION: x * 1e-3,
                            FRICTION_FORCE: load + rng.normal(0, 0.001, t.size)})
@@ -217,12 +217,12 @@ def test_rest_after_sliding_is_a_second_zero() -> None:
 def test_end_stop_is_trimmed() -> None:
     stop = sled_trace(stop_s=5.0)
     got = reduce_measurement(stop, SLED.instrument, SLED.reduction)
-    assert got.parameters["end_stop_samples"] >= 450
+    assert got.parameters.instrument.end_stop_samples >= 450
     assert got.mu_k == pytest.approx(0.25, abs=0.003)
     assert got.mu_k_window_s[1] <= 62.0 + 0.05
     # a record that ends sliding trims nothing
     assert reduce_measurement(sled_trace(), SLED.instrument,
-                              SLED.reduction).parameters["end_stop_samples"] == 0
+                              SLED.reduction).parameters.instrument.end_stop_samples == 0
 
 
 def test_end_stop_mask() -> None:
@@ -307,19 +307,19 @@ def reciprocating_trace(*, mu: float = 0.3, offset_N: float = 0.1, tilt: float =
 def test_reciprocating_cycles(sign: float) -> None:
     got = reduce_measurement(reciprocating_trace(sign=sign), RECIP.instrument, RECIP.reduction)
     p = got.parameters
-    assert p["n_cycles"] >= 58
+    assert p.n_cycles >= 58
     assert got.mu_k == pytest.approx(0.3, abs=0.002)
     # the tilt and the offset show at rest too: the zero takes them, both directions agree
-    assert p["mu_k_forward"] == pytest.approx(p["mu_k_backward"], abs=0.005)
-    assert 0.5 * (p["mu_k_forward"] + p["mu_k_backward"]) == pytest.approx(0.3, abs=0.002)
+    assert p.mu_k_forward == pytest.approx(p.mu_k_backward, abs=0.005)
+    assert 0.5 * (p.mu_k_forward + p.mu_k_backward) == pytest.approx(0.3, abs=0.002)
     # without the zero each stroke carries them one way; the cycle's mean cancels them
     off = reduce_measurement(reciprocating_trace(sign=sign),
                              replace(RECIP.instrument, zero_offset="off"), RECIP.reduction)
     q = off.parameters
-    assert abs(q["mu_k_forward"] - q["mu_k_backward"]) == pytest.approx(2 * 0.03, abs=0.005)
+    assert abs(q.mu_k_forward - q.mu_k_backward) == pytest.approx(2 * 0.03, abs=0.005)
     assert off.mu_k == pytest.approx(got.mu_k, abs=1e-9)
-    assert p["stroke_length_mm"] == pytest.approx(10.0, abs=0.05)
-    assert len(p["cycles"]) == p["n_cycles"]
+    assert p.stroke_length_mm == pytest.approx(10.0, abs=0.05)
+    assert len(p.cycles) == p.n_cycles
     assert got.sliding_distance_mm == pytest.approx(60 * 20.0, rel=0.01)
 
 
@@ -522,7 +522,7 @@ def test_a_rheometer_run_whose_pins_start_pre_sheared() -> None:
     assert sheared.mu_k == pytest.approx(0.4, abs=0.003)
     honest = reduce_measurement(run(0.0, 2e-4), base.instrument, base.reduction)
     assert "zero_under_load" not in honest.flags
-    assert honest.parameters["torque_offset_Nm"] == pytest.approx(2e-4, rel=0.02)
+    assert honest.parameters.torque_offset_Nm == pytest.approx(2e-4, rel=0.02)
     assert honest.mu_k == pytest.approx(0.4, abs=0.003)
 
 

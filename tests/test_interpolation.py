@@ -22,6 +22,8 @@ from tribopipe.interpolation import (
     ENGINE_TOLERANCE,
     LOO_METHODS,
     PUBLISHED_CURVATURE,
+    curvature,
+    curvature_terms,
     curve,
     densify,
     evaluate,
@@ -80,6 +82,17 @@ def test_the_published_curvature_is_the_published_map_s(groups):
     assert map_curvature(groups, "mu_k") == pytest.approx(PUBLISHED_CURVATURE, abs=5e-5)
     # no mu_s in the published map: its kappa is mu_k's
     assert map_curvature(groups, "mu_s") == map_curvature(groups, "mu_k")
+
+
+def test_two_pressures_a_rounding_apart_give_no_curvature_term_and_no_crash():
+    # ln(199.99999999999997) == ln(200.0) in floating point: no second difference there
+    series = [([1.0, 199.99999999999997, 200.0], [1.0, 1.0, 1.0])]
+    assert curvature_terms(series) == []
+    assert curvature(series) == PUBLISHED_CURVATURE
+    # a well-spaced triple still gives its term: ln mu = -0.5 ln p + 0.1 (ln p)^2, d2 = 0.2
+    ps = [10.0, 20.0, 40.0]
+    mus = [math.exp(-0.5 * math.log(p) + 0.1 * math.log(p) ** 2) for p in ps]
+    assert curvature_terms([(ps, mus)]) == [pytest.approx(0.2)]
 
 
 def test_the_interpolation_u_is_zero_at_measured_points_and_grows_between(groups):

@@ -176,14 +176,6 @@ def test_fast_and_row_by_row_paths_agree_on_every_odd_cell(
                                               "rheoplus_mcr302_stress_relaxation.txt",
                                               "rheoplus_after_excel_roundtrip.csv"]))
 @pytest.mark.slow  # a real process or a larger data set: `pytest -m slow`
-# A known defect, open: since plain CSV learnt header blocks above the table, an edited
-# first line of the Rheoplus Excel round-trip (its first cell made a number, '0.1') lets
-# the fast path find the table at line 92 under a header block while the row-by-row path
-# takes line 1 as the header (hypothesis: @reproduce_failure('6.170.17',
-# b'AEEDQQFBAEEAQQBBAA==')). Kept running, and reported, until the fast path declines there.
-@pytest.mark.xfail(strict=False, reason="known defect: the two read paths can disagree on "
-                   "where the table starts after an edited first line (plain CSV header "
-                   "block)")
 def test_fast_and_row_by_row_paths_agree_on_edited_real_exports(
     data_dir: Path, data: st.DataObject, name: str
 ) -> None:
@@ -216,6 +208,28 @@ def test_fast_and_row_by_row_paths_agree_on_edited_real_exports(
     assert fast == slow
 
 
+def test_a_header_whose_first_cell_is_a_number_is_the_header_on_both_paths(
+    data_dir: Path, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The case hypothesis found: the Rheoplus Excel round-trip with its first cell made a
+    number ('Meas. Pts.' -> '0.1'). Line 1 still names time, torque, temperature ... and is
+    the header on both paths (the fast path once took the header block's table at line
+    92, dropping the first table)."""
+    lines = (data_dir / "rheoplus_after_excel_roundtrip.csv").read_bytes().decode(
+        "cp1252").split("\n")
+    assert lines[0].startswith("Meas. Pts.,Time,")
+    lines[0] = "0.1" + lines[0].removeprefix("Meas. Pts.")
+    path = tmp_path / "edited.csv"
+    path.write_bytes("\n".join(lines).encode("cp1252"))
+    fast, slow = both_paths(path, monkeypatch)
+    assert fast == slow
+    assert fast[0] == "ok"
+    (columns, _, meta), = fast[1]
+    assert meta.header_line == 1
+    assert meta.original_columns[:3] == ("0.1", "Time", "Storage Modulus")
+    assert "header_block_lines" not in dict(meta.extra)
+
+
 # --------------------------------------------------------------------------- the pieces
 
 _TEXT_CELLS = st.sampled_from(["", "a", "1,5", " x ", '"q"', '"a\tb"', '""', "\t", ";",
@@ -245,6 +259,29 @@ def test_scanned_lines_expand_to_the_rows_of_every_line(
         assert "\r" in text.replace("\r\n", "")  # only a CR that ends no line declines
         return
     assert got == want
+
+
+@SETTINGS
+@given(lines=st.lists(st.lists(st.sampled_from(["1", "2,5", "-3", "1e5", "x", "Time [s]",
+                                                 "Torque", "\xa0", "µ", ""]),
+                               min_size=1, max_size=4).map(lambda c: ["7", *c]),
+                      min_size=1, max_size=8),
+       ending=st.sampled_from(["\n", "\r\n"]), cut=st.integers(0, 7))
+def test_a_run_cut_at_a_line_keeps_every_row(lines: list[list[str]], ending: str,
+                                             cut: int) -> None:
+    """``Run.split_at`` (the header search cutting a run of data lines) gives back the
+    run's rows, and ``Run.lines_with_letters`` the rows of the lines holding a letter."""
+    text = ending.join(";".join(cells_) for cells_ in lines)
+    (run,) = scan_lines(text, ";", DataLine("", "7"))
+    rows = run.rows()
+    assert run.lines_with_letters() == [
+        r for r, line in zip(rows, text.split(ending), strict=True)
+        if any(ch.isalpha() for ch in line)]
+    line = run.first_line + cut % run.n_lines
+    before, row, after = run.split_at(line)
+    got = (before.rows() if before else []) + [row] + (after.rows() if after else [])
+    assert got == rows
+    assert row[0] == line
 
 
 @SETTINGS

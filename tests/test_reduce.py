@@ -100,15 +100,15 @@ def test_known_truth_across_the_grid(
 def test_the_offset_is_found_in_the_set_up_interval() -> None:
     run = SyntheticRun(torque_offset_Nm=4e-4, noise=0.003, seed=3)
     got = reduce_run(run)
-    assert got.parameters["torque_offset_source"].startswith("set-up interval")
-    assert got.parameters["torque_offset_Nm"] == pytest.approx(4e-4, abs=2e-5)
+    assert got.parameters.torque_offset_source.startswith("set-up interval")
+    assert got.parameters.torque_offset_Nm == pytest.approx(4e-4, abs=2e-5)
 
 
 def test_without_set_up_the_offset_comes_from_the_rest_before_motion() -> None:
     run = SyntheticRun(torque_offset_Nm=4e-4, setup_interval=False, rest_s=3.0, seed=4)
     got = reduce_run(run)
-    assert got.parameters["torque_offset_source"].startswith("at-rest start")
-    assert got.parameters["torque_offset_Nm"] == pytest.approx(4e-4, abs=5e-5)
+    assert got.parameters.torque_offset_source.startswith("at-rest start")
+    assert got.parameters.torque_offset_Nm == pytest.approx(4e-4, abs=5e-5)
     assert got.mu_k == pytest.approx(run.mu_k, abs=0.01)
 
 
@@ -120,10 +120,10 @@ def test_a_set_up_of_one_sample_gives_the_offset_but_not_a_false_precision() -> 
     items[0] = Measurement(items[0].data.iloc[:1].reset_index(drop=True), items[0].meta)
     one = reduce_measurement(select_friction_interval(items), INSTRUMENT, PARAMS)
     full = reduce_run(run)
-    assert one.parameters["torque_offset_source"].startswith("set-up interval 1 (too few")
-    u_one = one.parameters["uncertainty"]["torque_offset_u_Nm"]
+    assert one.parameters.torque_offset_source.startswith("set-up interval 1 (too few")
+    u_one = one.parameters.uncertainty.torque_offset_u_Nm
     assert u_one == pytest.approx(INSTRUMENT.torque_offset_unknown_Nm / math.sqrt(3))
-    assert full.parameters["uncertainty"]["torque_offset_u_Nm"] < u_one / 10
+    assert full.parameters.uncertainty.torque_offset_u_Nm < u_one / 10
     assert one.u_mu_k > full.u_mu_k
 
 
@@ -131,14 +131,14 @@ def test_an_offset_that_cannot_be_estimated_is_said_so() -> None:
     run = SyntheticRun(torque_offset_Nm=4e-4, setup_interval=False, rest_s=0.0,
                        normal_force_N=1.0, seed=5)
     got = reduce_run(run)
-    assert got.parameters["torque_offset_source"].startswith("not estimated")
-    assert got.parameters["torque_offset_Nm"] == 0.0
+    assert got.parameters.torque_offset_source.startswith("not estimated")
+    assert got.parameters.torque_offset_Nm == 0.0
     # the offset stays in μ: 0.4 mN·m / 13.37 mm / 1 N = 0.030
     assert got.mu_k - run.mu_k == pytest.approx(0.030, abs=0.01)
     # ... and giving it explicitly removes it
     fixed = reduce_measurement(select_friction_interval(measurements(run)), INSTRUMENT,
                                PARAMS, torque_offset_Nm=4e-4)
-    assert fixed.parameters["torque_offset_source"] == "given"
+    assert fixed.parameters.torque_offset_source == "given"
     assert fixed.mu_k == pytest.approx(run.mu_k, abs=0.01)
 
 
@@ -157,7 +157,7 @@ def test_no_overshoot_reports_mu_s_equal_to_mu_k() -> None:
     got = reduce_run(SyntheticRun(shape="no_overshoot", mu_k=0.7, noise=0.015, seed=12))
     assert got.flags == ("static_not_distinct",)
     assert got.mu_s == got.mu_k
-    assert got.parameters["mu_s_peak_raw"] >= got.mu_k - 0.02
+    assert got.parameters.mu_s_peak_raw >= got.mu_k - 0.02
 
 
 def test_a_short_trace_is_flagged() -> None:
@@ -169,7 +169,7 @@ def test_a_short_trace_is_flagged() -> None:
 def test_an_unstable_normal_force_is_flagged() -> None:
     got = reduce_run(SyntheticRun(normal_force_wobble=0.15, seed=14))
     assert "normal_force_unstable" in got.flags
-    assert got.parameters["normal_force_cv"] > PARAMS.normal_force_cv_max
+    assert got.parameters.normal_force_cv > PARAMS.normal_force_cv_max
     assert got.mu_k == pytest.approx(0.55, abs=0.01)
 
 
@@ -221,9 +221,9 @@ def test_the_result_carries_its_evidence() -> None:
     assert got.plateau_std == pytest.approx(0.005, abs=0.002)
     assert abs(got.plateau_drift_per_mm) < PARAMS.max_drift_per_mm
     assert got.method.startswith("tribopipe-v2")
-    assert got.parameters["distance_source"] == "angle"
-    assert got.parameters["run_in_mm"] == PARAMS.run_in_mm
-    json.dumps(got.parameters)  # provenance must be storable as JSON
+    assert got.parameters.distance_source == "angle"
+    assert got.parameters.settings.run_in_mm == PARAMS.run_in_mm
+    json.dumps(got.parameters.to_json())  # provenance must be storable as JSON
 
 
 def test_the_trace_round_trips_through_parquet(tmp_path) -> None:
@@ -258,7 +258,7 @@ def test_out_of_contact_samples_are_masked() -> None:
 def test_distance_without_angle(change: dict) -> None:
     run = SyntheticRun(rest_s=0.0, seed=24)
     got = reduce_measurement(friction_only(run, **change), INSTRUMENT, PARAMS)
-    assert got.parameters["distance_source"] == ("speed" if len(change) == 1 else "nominal")
+    assert got.parameters.distance_source == ("speed" if len(change) == 1 else "nominal")
     assert got.mu_k == pytest.approx(run.mu_k, abs=0.01)
     assert got.sliding_distance_mm == pytest.approx(truth(run).sliding_distance_mm, abs=0.01)
 
@@ -269,7 +269,7 @@ def test_reverse_rotation_and_negative_normal_force_give_the_same_numbers() -> N
     reverse = reduce_run(replace(run, direction=-1))
     # same friction, the noise draws add rather than flip: equal within the noise
     assert reverse.mu_k == pytest.approx(forward.mu_k, abs=0.003)
-    assert reverse.parameters["torque_sign"] == -1.0
+    assert reverse.parameters.torque_sign == -1.0
     frames = make_intervals(run)
     flipped = [
         Measurement(f.assign(normal_force_N=-f["normal_force_N"]),
@@ -309,7 +309,7 @@ def test_a_few_missing_values_are_dropped_and_counted() -> None:
     torque = make_intervals(run)[-1]["torque_Nm"].to_numpy().copy()
     torque[500:520] = np.nan
     got = reduce_measurement(friction_only(run, torque_Nm=torque), INSTRUMENT, PARAMS)
-    assert got.parameters["n_dropped_incomplete"] == 20
+    assert got.parameters.n_dropped_incomplete == 20
     assert got.mu_k == pytest.approx(run.mu_k, abs=0.01)
 
 
@@ -462,5 +462,5 @@ def test_a_longer_run_in_moves_the_window() -> None:
     run = SyntheticRun(seed=61)
     late = reduce_run(run, replace(PARAMS, run_in_mm=1.0))
     assert late.mu_k_window_mm[0] >= 1.0
-    assert late.parameters["run_in_mm"] == 1.0
+    assert late.parameters.settings.run_in_mm == 1.0
     assert late.mu_k == pytest.approx(run.mu_k, abs=0.01)

@@ -75,7 +75,7 @@ def test_a_search_cap_short_of_the_peak_reads_low_and_says_so() -> None:
     # a cap below the plateau's level: nothing distinct, and still the limit is named
     low = reduce_run(run, replace(PARAMS, static_search_mm=0.5))
     assert {"static_not_distinct", "peak_at_search_limit"} <= set(low.flags)
-    assert low.parameters["mu_s_peak_distance_mm"] == pytest.approx(0.5, abs=0.002)
+    assert low.parameters.mu_s_peak_distance_mm == pytest.approx(0.5, abs=0.002)
     assert "peak_at_search_limit" not in reduce_run(run).flags  # no cap: no limit
 
 
@@ -107,7 +107,7 @@ def test_weak_stick_slip_is_flagged(amplitude: float, noise: float) -> None:
     got = reduce_run(run)
     assert "stick_slip" in got.flags
     assert got.mu_k == pytest.approx(0.55, abs=0.01)
-    assert got.parameters["stick_slip_period_mm"] == pytest.approx(0.06, rel=0.1)
+    assert got.parameters.stick_slip_period_mm == pytest.approx(0.06, rel=0.1)
 
 
 @pytest.mark.parametrize("noise", [0.003, 0.015])
@@ -115,8 +115,7 @@ def test_a_steady_plateau_is_not_called_stick_slip(noise: float) -> None:
     for seed in range(5):
         got = reduce_run(SyntheticRun(noise=noise, duration_s=600.0, seed=100 + seed))
         assert "stick_slip" not in got.flags
-        assert got.parameters["stick_slip_line_ratio"] < got.parameters[
-            "stick_slip_line_threshold"]
+        assert got.parameters.stick_slip_line_ratio < got.parameters.stick_slip_line_threshold
 
 
 def test_settling_blocks_hold_whole_stick_slip_cycles() -> None:

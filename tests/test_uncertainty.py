@@ -114,13 +114,14 @@ def _reduce(run: SyntheticRun):
 
 def test_a_reduced_run_carries_its_budget() -> None:
     got = _reduce(SyntheticRun(mu_s=0.85, mu_k=0.6, noise=0.008, seed=9))
-    u = got.parameters["uncertainty"]
-    assert got.u_mu_k == pytest.approx(u["mu_k"]["combined"])
-    assert got.u_mu_s == pytest.approx(u["mu_s"]["combined"])
-    assert u["k"] == 1 and u["coverage_factor_expanded"] == 2.0
-    assert u["mu_k"]["friction_radius"] == pytest.approx(got.mu_k * 0.55 / 13.37)
+    u = got.parameters.uncertainty
+    assert got.u_mu_k == pytest.approx(u.mu_k["combined"])
+    assert got.u_mu_s == pytest.approx(u.mu_s["combined"])
+    as_json = u.to_json()
+    assert as_json["k"] == 1 and as_json["coverage_factor_expanded"] == 2.0
+    assert u.mu_k["friction_radius"] == pytest.approx(got.mu_k * 0.55 / 13.37)
     # the plateau mean is known far better than the radius
-    assert u["mu_k"]["reading"] < 0.1 * u["mu_k"]["friction_radius"]
+    assert u.mu_k["reading"] < 0.1 * u.mu_k["friction_radius"]
     assert got.u_mu_s > got.u_mu_k  # a higher μ and a noisier reading
 
 

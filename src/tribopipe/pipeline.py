@@ -64,7 +64,7 @@ from .measurement import interval_label, run_name
 from .numeric import finite_json, finite_or_nan, finite_or_none
 from .readers import read_export
 from .reduction.intervals import friction_intervals
-from .reduction.manual import TRACE_META_KEY, terms_from_parameters
+from .reduction.manual import TRACE_META_KEY
 from .reduction.reduce import reduce_measurement
 from .review import landing_records
 
@@ -335,9 +335,11 @@ def write_trace(out_dir: str | Path | OutputLayout, outcome: RunOutcome) -> Path
     target.parent.mkdir(parents=True, exist_ok=True)
     trace = outcome.result.trace
     table = pa.table({str(c): trace[c].to_numpy() for c in trace.columns})
-    # what a reviewer's window is read with (tribopipe.reduction.manual)
-    table = table.replace_schema_metadata(
-        {TRACE_META_KEY: terms_from_parameters(outcome.result.parameters).to_json()})
+    # what a reviewer's window is read with (tribopipe.reduction.manual); a run read over
+    # cycles (reciprocating) has no window terms, so a review refuses a window over it
+    terms = outcome.result.parameters.trace_terms()
+    if terms is not None:
+        table = table.replace_schema_metadata({TRACE_META_KEY: terms.to_json()})
     tmp = target.with_suffix(".parquet.tmp")
     try:
         pq.write_table(table, tmp, use_dictionary=False)
@@ -399,7 +401,7 @@ def run_summary(outcome: RunOutcome) -> dict[str, Any]:
         "interval": meta.interval,
         "occurrence": outcome.place.occurrence,
         "method": r.method,
-        "parameters": dict(r.parameters),
+        "parameters": r.parameters.to_json(),
         "file_hash": outcome.file_hash,
         "config_hash": outcome.config_hash,
     })

@@ -70,13 +70,23 @@ HEADER_MIN_QUANTITIES = 2
 
 
 def _header_index(rows: list[Row | Run], aliases: AliasTable) -> int:
-    """Index in ``rows`` of the header row: the first row naming at least
-    :data:`HEADER_MIN_QUANTITIES` canonical quantities (a header block above it may hold
-    lines that start like numbers: dates, counts); else the first non-empty item (the
-    header of a file without a header block)."""
+    """Index in ``rows`` of the header row: the first line naming at least
+    :data:`HEADER_MIN_QUANTITIES` canonical quantities, whatever its first cell (a header
+    block above it may hold lines that start like numbers: dates, counts); else the first
+    non-empty item (the header of a file without a header block).
+
+    One rule for both read paths: a line in a run of data lines (a header whose first
+    cell was made a number) is a header as it would be as a row; such a run is cut there
+    in place, so that ``rows[index]`` is the header row."""
     for i, item in enumerate(rows):
         if isinstance(item, Run):
-            continue
+            header = next((number for number, cells in item.lines_with_letters()
+                           if _quantities(cells, aliases) >= HEADER_MIN_QUANTITIES), None)
+            if header is None:
+                continue
+            before, row, after = item.split_at(header)
+            rows[i : i + 1] = [r for r in (before, row, after) if r is not None]
+            return i + (before is not None)
         if _quantities(item[1], aliases) >= HEADER_MIN_QUANTITIES:
             return i
     return next(i for i, item in enumerate(rows) if isinstance(item, Run) or any(item[1]))

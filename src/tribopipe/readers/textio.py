@@ -355,6 +355,10 @@ def head_lines(text: str, n: int) -> list[str]:
     return _without_cr(parts)
 
 
+#: a letter in any script (what a column name holds and a number does not)
+_LETTER = re.compile(r"[^\W\d_]")
+
+
 @dataclass(frozen=True)
 class Run:
     """Consecutive data lines of a plain text, not yet split: ``n_lines`` lines from the
@@ -397,6 +401,34 @@ class Run:
         lines = plain_lines(self.block())
         offset = self.first_line - 1
         return [(offset + k, cells[self.skip :]) for k, cells in split_cells(lines, self.delimiter)]
+
+    def lines_with_letters(self) -> list[Row]:
+        """The run's lines that hold a letter, split as :meth:`rows` splits them: the
+        only lines of a run that can name a column (a line of numbers names none)."""
+        block = self.block()
+        if not _LETTER.search(block):
+            return []
+        offset = self.first_line
+        return [(offset + k, split_cells([line], self.delimiter)[0][1][self.skip :])
+                for k, line in enumerate(plain_lines(block)) if _LETTER.search(line)]
+
+    def split_at(self, line: int) -> tuple[Run | None, Row, Run | None]:
+        """The run cut at its 1-based file line ``line``: the run of the lines before it
+        (``None`` if none), that line as a row, the run of the lines after it."""
+        k = line - self.first_line
+        if not 0 <= k < self.n_lines:
+            raise ValueError(f"line {line} is not in the run")
+        start = self.start
+        for _ in range(k):
+            start = self.text.index("\n", start, self.end) + 1
+        before = None
+        if k:
+            end = start - 1
+            end -= self.text[end - 1] == "\r"
+            before = replace(self, end=end, n_lines=k)
+        row, after = replace(self, start=start, first_line=line,
+                             n_lines=self.n_lines - k).split_first()
+        return before, row, after
 
     def split_first(self) -> tuple[Row, Run | None]:
         """The first line as a row, and the run of the lines after it (``None`` if none)."""

@@ -28,7 +28,7 @@ pin-on-disc"``) measures a torque M at R_eff. A force-based instrument (``"sled 
 of formulas and one uncertainty budget serve both (the force channel's own calibration,
 resolution and unknown zero in the torque's place, no friction-radius term). A sled has no
 normal-force sensor: a run without a normal-force column takes F_N = m·g from
-``sled_mass_g`` (or ``sled_weight_N``), stated in ``parameters["normal_force_source"]``.
+``sled_mass_g`` (or ``sled_weight_N``), stated in ``parameters.instrument.normal_force_source``.
 Sliding distance, in this order: a position, crosshead or distance column (counted along
 the direction of travel); an angle or rotational speed at the friction radius (a rotary
 tribometer's wear track); a linear instrument's ``nominal_speed_mm_s`` × time; the
@@ -63,13 +63,13 @@ the protocol ends with the load released at rest (``rest_after_sliding``), the r
 the last movement is a second zero: the mean of the two is used (u from half their
 difference, rectangular) and ``zero_drift`` is flagged when they differ by more than 3
 combined standard errors and by more than ``settle_tol`` in μ. Nothing estimable: 0, with
-``parameters["torque_offset_source"]`` saying so (``torque_offset_unknown``).
+``parameters.torque_offset_source`` saying so (``torque_offset_unknown``).
 
 End stop. A stop at the end of the record — the sliding speed falling below
 ``stop_speed_fraction`` of the run's median speed and staying there to the end (a motor
 ramping down, then at rest; the force falling with it) — is trimmed before the plateau is
 searched (:func:`.intervals.end_stop`; speed over windows of 1 % of the record, so a
-distance column's noise is no stop); ``parameters["end_stop_trimmed_mm"]`` says how much.
+distance column's noise is no stop); ``parameters.instrument.end_stop_trimmed_mm`` says how much.
 
 Contact. Samples with ``F_N`` below ``InstrumentConfig.contact_threshold_N`` are masked
 (``in_contact`` False, ``mu`` NaN in the trace) and take no part in any statistic.
@@ -142,7 +142,7 @@ may creep to the plateau with no peak at all.
    ``static_prominence_sigma`` × the smoothed noise. Otherwise μ_S is reported equal to
    μ_K (the peak is not resolved), placed where the smoothed trace first reaches μ_K,
    and ``static_not_distinct`` is flagged; the raw peak is kept in
-   ``parameters["mu_s_peak_raw"]``. So μ_S ≥ μ_K always.
+   ``parameters.mu_s_peak_raw``. So μ_S ≥ μ_K always.
 7. Stick-slip: a periodic oscillation of the plateau. Its periodogram (after removing a
    quadratic trend, and divided by the power law fitted to it, so that a drifting
    zero's 1/f noise is locally flat) is searched for a line with at least
@@ -174,8 +174,8 @@ forward and the following backward stroke; its μ is half the forward minus the 
 mean force over F_N, in which a zero offset and a tilt of the flat (a tangential load of
 one sign both ways) cancel. The cycle series over the sliding path (each stroke adds its
 length) goes through steps 1–7: μ_K is the mean over the settled plateau of cycles, with
-its forward and backward averages (``parameters["mu_k_forward"]``, ``["mu_k_backward"]``)
-and every cycle's μ (``parameters["cycles"]``). μ_S is the breakaway of the first stroke:
+its forward and backward averages (``parameters.mu_k_forward``, ``.mu_k_backward``)
+and every cycle's μ (``parameters.cycles``). μ_S is the breakaway of the first stroke:
 the maximum of the peak curve over its first half, distinct as in step 6 against that
 stroke's own level and μ_K. The cycle means hold no zero, so μ_K's budget has no offset
 term.

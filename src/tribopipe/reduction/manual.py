@@ -29,7 +29,7 @@ from __future__ import annotations
 import json
 import math
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -211,10 +211,3 @@ def static_at(samples: SlidingSamples, peak_mm: float, terms: TraceTerms, *,
     nearest = int(np.argmin(np.abs(s - peak_mm)))
     return StaticReading(mu_s=value, u_mu_s=combined(value, se, terms), distance_mm=peak_mm,
                          time_s=float(samples.t_s[nearest]), n=n)
-
-
-def terms_from_parameters(parameters: dict[str, Any]) -> TraceTerms:
-    """The :class:`TraceTerms` of a reduced run from its ``ReductionResult.parameters``."""
-    terms = parameters["uncertainty"]["terms"]
-    return TraceTerms(float(terms["relative"]), float(terms["absolute"]),
-                      int(parameters["min_plateau_samples"]), float(parameters["peak_window_mm"]))

@@ -8,7 +8,7 @@ runs"); :func:`reduce_reciprocating` carries it out on the samples of one run, a
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 from numpy.typing import NDArray
@@ -91,6 +91,41 @@ def _core(p: NDArray[np.float64], stroke: Stroke, fraction: float) -> NDArray[np
     return idx[inside]
 
 
+class StrokeMean(NamedTuple):
+    """One stroke's core averaged: its ``direction`` (±1), the raw channel ``raw_N`` [N],
+    its ``mu`` with the zero subtracted, the normal force ``force_N`` [N], and where and
+    when the stroke ends (``end_mm`` [mm] along the path, ``t_end_s`` [s])."""
+
+    direction: int
+    raw_N: float
+    mu: float
+    force_N: float
+    end_mm: float
+    t_end_s: float
+
+
+@dataclass(frozen=True)
+class Cycle:
+    """One cycle of a reciprocating run (a stroke forward and one back): its number
+    ``cycle`` (from 1), ``mu`` = (forward − backward)/2 of the raw channel over the normal
+    force, each stroke's own μ (``mu_forward``, ``mu_backward``), where and when it ends
+    (``distance_mm`` [mm], ``time_s`` [s]) and its mean ``normal_force_N`` [N]."""
+
+    cycle: int
+    mu: float
+    mu_forward: float
+    mu_backward: float
+    distance_mm: float
+    time_s: float
+    normal_force_N: float
+
+    def to_json(self) -> dict[str, float]:
+        """The cycle as JSON (the run's summary)."""
+        return {"cycle": self.cycle, "mu": self.mu, "mu_forward": self.mu_forward,
+                "mu_backward": self.mu_backward, "distance_mm": self.distance_mm,
+                "time_s": self.time_s, "normal_force_N": self.normal_force_N}
+
+
 @dataclass(frozen=True)
 class Cycles:
     """What a reciprocating run's strokes give (arrays over the run's samples, shape (n,),
@@ -100,8 +135,7 @@ class Cycles:
     ``friction_N`` the friction force [N] with the zero subtracted, positive against the
     motion; ``mu`` μ of every sample (NaN out of contact); ``sign`` the instrument's
     sign convention (+1: the force reads positive when the pin moves forward);
-    ``n_strokes`` the full strokes used; ``table`` one dict per cycle (``cycle``, ``mu``,
-    ``mu_forward``, ``mu_backward``, ``distance_mm``, ``time_s``, ``normal_force_N``);
+    ``n_strokes`` the full strokes used; ``table`` one :class:`Cycle` per cycle;
     ``s_cycle_mm``, ``t_cycle_s``, ``mu_cycle`` the cycles' end distance [mm], end time
     [s] and μ; ``stroke_length_mm`` the median stroke; ``first_stroke`` the indices of the
     first full stroke's first half (where the static peak is read) and ``first_level``
@@ -112,7 +146,7 @@ class Cycles:
     mu: NDArray[np.float64]
     sign: float
     n_strokes: int
-    table: tuple[dict[str, Any], ...]
+    table: tuple[Cycle, ...]
     s_cycle_mm: NDArray[np.float64]
     t_cycle_s: NDArray[np.float64]
     mu_cycle: NDArray[np.float64]
@@ -163,32 +197,32 @@ def reciprocating_cycles(
     signed = [st.direction * float(np.mean(raw_n[_core(p_mm, st, core_fraction)]))
               for st in strokes]
     sign = -1.0 if float(np.median(signed)) < 0 else 1.0
-    rows: list[dict[str, Any]] = []
+    rows: list[StrokeMean] = []
     for st in strokes:
         core = _core(p_mm, st, core_fraction)
         core = core[in_contact[core]]
         if core.size < 3:
             continue
         fn = float(np.mean(x.force[core]))
-        rows.append({"direction": st.direction, "raw_N": float(np.mean(raw_n[core])),
-                     "mu": sign * st.direction * float(np.mean(corrected[core])) / fn,
-                     "force_N": fn, "end_mm": float(s_mm[st.stop]),
-                     "t_end_s": float(x.t[st.stop])})
-    first_dir = rows[0]["direction"] if rows else 1
-    cycles: list[dict[str, Any]] = []
+        rows.append(StrokeMean(
+            direction=st.direction, raw_N=float(np.mean(raw_n[core])),
+            mu=sign * st.direction * float(np.mean(corrected[core])) / fn, force_N=fn,
+            end_mm=float(s_mm[st.stop]), t_end_s=float(x.t[st.stop])))
+    first_dir = rows[0].direction if rows else 1
+    cycles: list[Cycle] = []
     k = 0
     while k + 1 < len(rows):
         a, b = rows[k], rows[k + 1]
-        if a["direction"] == b["direction"]:
+        if a.direction == b.direction:
             k += 1
             continue
-        fwd, bwd = (a, b) if a["direction"] == first_dir else (b, a)
-        n_mean = 0.5 * (a["force_N"] + b["force_N"])
+        fwd, bwd = (a, b) if a.direction == first_dir else (b, a)
+        n_mean = 0.5 * (a.force_N + b.force_N)
         # forward and backward means: the zero cancels in their difference
-        mu_cycle = sign * first_dir * (fwd["raw_N"] - bwd["raw_N"]) / (2.0 * n_mean)
-        cycles.append({"cycle": len(cycles) + 1, "mu": mu_cycle, "mu_forward": fwd["mu"],
-                       "mu_backward": bwd["mu"], "distance_mm": b["end_mm"],
-                       "time_s": b["t_end_s"], "normal_force_N": n_mean})
+        mu_cycle = sign * first_dir * (fwd.raw_N - bwd.raw_N) / (2.0 * n_mean)
+        cycles.append(Cycle(cycle=len(cycles) + 1, mu=mu_cycle, mu_forward=fwd.mu,
+                            mu_backward=bwd.mu, distance_mm=b.end_mm, time_s=b.t_end_s,
+                            normal_force_N=n_mean))
         k += 2
     if len(cycles) < 3:
         raise ReductionError(
@@ -204,10 +238,10 @@ def reciprocating_cycles(
     return Cycles(
         s_mm=s_mm, friction_N=friction, mu=mu, sign=sign, n_strokes=len(rows),
         table=tuple(cycles),
-        s_cycle_mm=np.array([c["distance_mm"] for c in cycles]),
-        t_cycle_s=np.array([c["time_s"] for c in cycles]),
-        mu_cycle=np.array([c["mu"] for c in cycles]),
+        s_cycle_mm=np.array([c.distance_mm for c in cycles]),
+        t_cycle_s=np.array([c.time_s for c in cycles]),
+        mu_cycle=np.array([c.mu for c in cycles]),
         stroke_length_mm=float(np.median([st.span_mm for st in strokes])),
-        first_stroke=head[np.isfinite(mu[head])], first_level=float(rows[0]["mu"]),
+        first_stroke=head[np.isfinite(mu[head])], first_level=float(rows[0].mu),
         at_rest=at_rest,
     )

@@ -7,8 +7,8 @@ The method (its steps, parameters and flags) is described once, in the docstring
 from __future__ import annotations
 
 import math
-from dataclasses import asdict, dataclass, field, replace
-from typing import TYPE_CHECKING, Any
+from dataclasses import dataclass, field, replace
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -45,6 +45,12 @@ from .intervals import (
     leading_rest,
     tangential_column,
     trailing_rest,
+)
+from .parameters import (
+    Budgets,
+    InstrumentSide,
+    ReciprocatingParameters,
+    RotaryParameters,
 )
 from .reciprocating import reciprocating_cycles, stroke_path
 
@@ -88,7 +94,8 @@ class ReductionResult:
     standard deviation of μ in the μ_K window (not an error of the mean);
     ``plateau_drift_per_mm`` the slope of μ over s there [1/mm]. ``u_mu_k`` and
     ``u_mu_s`` are the combined standard uncertainties (GUM, k = 1) of μ_K and μ_S, their
-    budgets in ``parameters["uncertainty"]`` (:mod:`tribopipe.reduction.uncertainty`). ``trace`` has
+    budgets in ``parameters.uncertainty`` (:mod:`tribopipe.reduction.uncertainty`);
+    ``parameters`` is typed per method (:mod:`tribopipe.reduction.parameters`). ``trace`` has
     the columns ``time_s, sliding_distance_mm, normal_force_N, pressure_kPa,
     friction_force_N, mu, mu_smooth, in_contact`` (one row per complete sample,
     time-ordered; μ is NaN where not in contact).
@@ -111,7 +118,7 @@ class ReductionResult:
     sliding_distance_mm: float
     flags: tuple[str, ...]
     method: str
-    parameters: dict[str, Any]
+    parameters: RotaryParameters | ReciprocatingParameters
     trace: pd.DataFrame = field(repr=False)
     #: the interval's rotational-speed set point [rpm]: the median |rotational speed| of
     #: the moving samples; ``None`` where the export has no speed column
@@ -345,45 +352,44 @@ def _trace_frame(
 def _parameters(
     params: ReductionParams, instrument: InstrumentConfig, x: IntervalSamples, det: Detection, *,
     distance_source: str, offset: float, offset_source: str, torque_sign: float,
-    cv: float, in_contact: np.ndarray, uncertainties: dict[str, Any],
-) -> dict[str, Any]:
-    """``ReductionResult.parameters``: the method's parameters, the diagnostics of this
-    run and its uncertainty budgets (``uncertainties``)."""
-    parameters: dict[str, Any] = dict(asdict(params))
-    parameters.update(
-        {
-            "contact_threshold_N": instrument.contact_threshold_N,
-            "friction_radius_mm": instrument.friction_radius_mm,
-            "n_pins": instrument.n_pins,
-            "pin_radius_mm": instrument.pin_radius_mm,
-            "distance_source": distance_source,
-            "torque_offset_Nm": offset,
-            "torque_offset_source": offset_source,
-            "torque_sign": torque_sign,
-            "normal_force_sign": x.force_sign,
-            "noise_std": det.sigma,
-            "settle_tolerance": det.tol,
-            "plateau_settled": det.settled,
-            "plateau_drift_se_per_mm": det.drift_se if math.isfinite(det.drift_se) else None,
-            "mu_s_peak_raw": det.mu_peak,
-            "mu_s_peak_distance_mm": det.s_peak,
-            "static_prominence": det.prominence,
-            "mu_s_search_end_mm": det.search_end_mm,
-            "stick_slip_line_ratio": det.stick_slip.ratio,
-            "stick_slip_line_threshold": det.stick_slip.threshold,
-            "stick_slip_std": det.stick_slip.std,
-            "stick_slip_period_mm": (
-                det.stick_slip.period_mm if math.isfinite(det.stick_slip.period_mm) else None
-            ),
-            "normal_force_cv": cv,
-            "n_samples": x.n_total,
-            "n_dropped_incomplete": x.n_dropped,
-            "n_in_contact": int(in_contact.sum()),
-            "n_plateau": int(det.window.sum()),
-            "uncertainty": uncertainties,
-        }
+    cv: float, in_contact: np.ndarray, uncertainties: Budgets, side: InstrumentSide,
+) -> RotaryParameters:
+    """``ReductionResult.parameters`` of a run over one sliding path: the method's
+    settings, the diagnostics of this run, its uncertainty budgets (``uncertainties``)
+    and the instrument's side (``side``)."""
+    return RotaryParameters(
+        settings=params,
+        instrument=side,
+        uncertainty=uncertainties,
+        contact_threshold_N=instrument.contact_threshold_N,
+        friction_radius_mm=instrument.friction_radius_mm,
+        n_pins=instrument.n_pins,
+        pin_radius_mm=instrument.pin_radius_mm,
+        distance_source=distance_source,
+        torque_offset_Nm=offset,
+        torque_offset_source=offset_source,
+        torque_sign=torque_sign,
+        normal_force_sign=x.force_sign,
+        noise_std=det.sigma,
+        settle_tolerance=det.tol,
+        plateau_settled=det.settled,
+        plateau_drift_se_per_mm=det.drift_se if math.isfinite(det.drift_se) else None,
+        mu_s_peak_raw=det.mu_peak,
+        mu_s_peak_distance_mm=det.s_peak,
+        static_prominence=det.prominence,
+        mu_s_search_end_mm=det.search_end_mm,
+        stick_slip_line_ratio=det.stick_slip.ratio,
+        stick_slip_line_threshold=det.stick_slip.threshold,
+        stick_slip_std=det.stick_slip.std,
+        stick_slip_period_mm=(
+            det.stick_slip.period_mm if math.isfinite(det.stick_slip.period_mm) else None
+        ),
+        normal_force_cv=cv,
+        n_samples=x.n_total,
+        n_dropped_incomplete=x.n_dropped,
+        n_in_contact=int(in_contact.sum()),
+        n_plateau=int(det.window.sum()),
     )
-    return parameters
 
 
 def reduce_measurement(
@@ -468,26 +474,22 @@ def reduce_measurement(
     if det.distinct:
         u_s = uncertainty.budget(det.mu_s, det.peak_reading_u, normal_force_N=f_mean,
                                  instrument=lever, offset_u_Nm=offset_u)
-    uncertainties = {
-        "mu_k": u_k,
-        "mu_s": u_s,
-        "k": 1,
-        "coverage_factor_expanded": uncertainty.COVERAGE_FACTOR,
-        "plateau_tau_int_samples": tau,
-        "torque_offset_u_Nm": offset_u,
-        "friction_radius_u_mm": lever.friction_radius_u_mm,
-        "terms": dict(zip(("relative", "absolute"), uncertainty.budget_terms(
-            normal_force_N=f_mean, instrument=lever, offset_u_Nm=offset_u), strict=True)),
-    }
+    uncertainties = Budgets(
+        mu_k=u_k,
+        mu_s=u_s,
+        plateau_tau_int_samples=tau,
+        torque_offset_u_Nm=offset_u,
+        friction_radius_u_mm=lever.friction_radius_u_mm,
+        terms=uncertainty.budget_terms(normal_force_N=f_mean, instrument=lever,
+                                       offset_u_Nm=offset_u),
+    )
     parameters = _parameters(
         params, instrument, x, det, distance_source=distance_source, offset=offset,
         offset_source=offset_source, torque_sign=torque_sign, cv=cv,
         in_contact=in_contact, uncertainties=uncertainties,
+        side=_instrument_side(instrument, tangential, normal_force_source, zero, s, stop,
+                              revolution, run_out and "run_out" in flags),
     )
-    parameters.update(_instrument_parameters(
-        instrument, tangential, normal_force_source, zero, s, stop, revolution,
-        run_out and "run_out" in flags,
-    ))
     return ReductionResult(
         mu_s=det.mu_s,
         mu_s_distance_mm=float(s_v[det.k_s]),
@@ -522,24 +524,24 @@ def _revolution_mm(instrument: InstrumentConfig, distance_source: str) -> float 
     return None
 
 
-def _instrument_parameters(
+def _instrument_side(
     instrument: InstrumentConfig, tangential: str, normal_force_source: str, zero: ZeroChoice,
     s: np.ndarray, stop: np.ndarray, revolution_mm: float | None, run_out: bool,
-) -> dict[str, Any]:
+) -> InstrumentSide:
     """The diagnostics of the instrument's side of a run: its method and channel, where
     the normal force and the zero came from, a stop trimmed at the end, the rotation."""
     trimmed = float(s[-1] - s[int(np.argmax(stop))]) if stop.any() else 0.0
-    return {
-        "test_method": instrument.test_method,
-        "tangential_channel": tangential,
-        "normal_force_source": normal_force_source,
-        "zero_load_fraction": zero.load_fraction,
-        "zero_second": zero.second,
-        "end_stop_samples": int(stop.sum()),
-        "end_stop_trimmed_mm": trimmed,
-        "revolution_mm": revolution_mm,
-        "run_out": run_out,
-    }
+    return InstrumentSide(
+        test_method=instrument.test_method,
+        tangential_channel=tangential,
+        normal_force_source=normal_force_source,
+        zero_load_fraction=zero.load_fraction,
+        zero_second=zero.second,
+        end_stop_samples=int(stop.sum()),
+        end_stop_trimmed_mm=trimmed,
+        revolution_mm=revolution_mm,
+        run_out=run_out,
+    )
 
 
 def _reduce_reciprocating(
@@ -582,7 +584,7 @@ def _reduce_reciprocating(
     k_s = int(head[k_rel]) if head.size else 0
     sliding = ~at_rest & in_contact
     f_slide = x.force[sliding]
-    f_mean = float(np.mean([row["normal_force_N"] for row in c.table]))
+    f_mean = float(np.mean([row.normal_force_N for row in c.table]))
     cv = float(np.std(f_slide) / np.mean(f_slide))
     temperature = _mean_temperature(x, in_contact)
     flag_det = replace(det, mu_k=mu_k, mu_s=mu_s, distinct=distinct, peak_at_limit=False)
@@ -605,32 +607,30 @@ def _reduce_reciprocating(
         "friction_force_N": c.friction_N, "mu": c.mu,
         "mu_smooth": np.full(x.t.size, np.nan), "in_contact": in_contact,
     })
-    parameters: dict[str, Any] = dict(asdict(params))
-    parameters.update({
-        "distance_source": "position (strokes)",
-        "torque_offset_Nm": zero.offset,
-        "torque_offset_source": zero.source + " (per stroke only: each cycle's forward − "
-                                              "backward mean cancels it)",
-        "friction_sign": c.sign,
-        "n_strokes": c.n_strokes,
-        "n_cycles": len(c.table),
-        "stroke_length_mm": c.stroke_length_mm,
-        "mu_k_forward": float(np.mean([row["mu_forward"] for row in in_window])),
-        "mu_k_backward": float(np.mean([row["mu_backward"] for row in in_window])),
-        "cycles": [dict(row) for row in c.table],
-        "plateau_first_cycle": int(np.flatnonzero(window)[0]) + 1,
-        "plateau_settled": det.settled,
-        "mu_s_peak_raw": mu_peak,
-        "static_prominence": prominence,
-        "normal_force_cv": cv,
-        "n_samples": x.n_total,
-        "uncertainty": {"mu_k": u_k, "mu_s": u_s, "k": 1,
-                        "coverage_factor_expanded": uncertainty.COVERAGE_FACTOR,
-                        "plateau_tau_int_samples": tau, "torque_offset_u_Nm": 0.0},
-    })
-    parameters.update(_instrument_parameters(
-        instrument, tangential_column(m), normal_force_source, zero, s,
-        np.zeros(s.size, dtype=bool), None, False))
+    parameters = ReciprocatingParameters(
+        settings=params,
+        instrument=_instrument_side(instrument, tangential_column(m), normal_force_source,
+                                    zero, s, np.zeros(s.size, dtype=bool), None, False),
+        uncertainty=Budgets(mu_k=u_k, mu_s=u_s, plateau_tau_int_samples=tau,
+                            torque_offset_u_Nm=0.0),
+        distance_source="position (strokes)",
+        torque_offset_Nm=zero.offset,
+        torque_offset_source=zero.source + " (per stroke only: each cycle's forward − "
+                                           "backward mean cancels it)",
+        friction_sign=c.sign,
+        n_strokes=c.n_strokes,
+        n_cycles=len(c.table),
+        stroke_length_mm=c.stroke_length_mm,
+        mu_k_forward=float(np.mean([row.mu_forward for row in in_window])),
+        mu_k_backward=float(np.mean([row.mu_backward for row in in_window])),
+        cycles=c.table,
+        plateau_first_cycle=int(np.flatnonzero(window)[0]) + 1,
+        plateau_settled=det.settled,
+        mu_s_peak_raw=mu_peak,
+        static_prominence=prominence,
+        normal_force_cv=cv,
+        n_samples=x.n_total,
+    )
     moving_t, moving_s = x.t[~at_rest], s[~at_rest]
     speed = (float((moving_s[-1] - moving_s[0]) / (moving_t[-1] - moving_t[0]))
              if moving_t.size >= 2 and moving_t[-1] > moving_t[0]

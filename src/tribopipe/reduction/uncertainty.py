@@ -30,7 +30,7 @@ during the run.
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, TypedDict
 
 import numpy as np
 
@@ -38,6 +38,20 @@ if TYPE_CHECKING:
     from ..config import InstrumentConfig
 
 COVERAGE_FACTOR = 2.0
+
+
+class Budget(TypedDict):
+    """The uncertainty budget of one μ (:func:`budget`): each source's contribution
+    [COF, k = 1] (the module docstring names them) and ``combined``, their root sum of
+    squares."""
+
+    reading: float
+    friction_radius: float
+    torque_calibration: float
+    torque_resolution: float
+    torque_offset: float
+    normal_force: float
+    combined: float
 
 
 def integrated_autocorrelation_time(values: Any, c: float = 5.0) -> float:
@@ -96,28 +110,28 @@ def budget(
     normal_force_N: float,
     instrument: InstrumentConfig,
     offset_u_Nm: float,
-) -> dict[str, float]:
+) -> Budget:
     """The uncertainty budget of one μ (module doc): each source's contribution [COF,
     k = 1] and ``combined`` (root sum of squares). ``reading`` is the statistical part
     [COF], ``normal_force_N`` the mean normal force [N], ``offset_u_Nm`` the standard
     uncertainty of the torque zero [N·m]."""
     R_m = instrument.friction_radius_mm * 1e-3
     force = max(float(normal_force_N), 1e-12)
-    parts = {
-        "reading": float(reading),
-        "friction_radius": abs(mu) * instrument.friction_radius_u_mm
-        / instrument.friction_radius_mm,
-        "torque_calibration": abs(mu) * instrument.torque_u_rel,
-        "torque_resolution": instrument.torque_resolution_Nm / math.sqrt(12) / (R_m * force),
-        "torque_offset": float(offset_u_Nm) / (R_m * force),
-        "normal_force": abs(mu) * math.sqrt(
+    parts = (
+        float(reading),
+        abs(mu) * instrument.friction_radius_u_mm / instrument.friction_radius_mm,
+        abs(mu) * instrument.torque_u_rel,
+        instrument.torque_resolution_Nm / math.sqrt(12) / (R_m * force),
+        float(offset_u_Nm) / (R_m * force),
+        abs(mu) * math.sqrt(
             instrument.normal_force_u_rel**2
             + (instrument.normal_force_u_N / force) ** 2
             + (instrument.normal_force_resolution_N / math.sqrt(12) / force) ** 2
         ),
-    }
-    parts["combined"] = math.sqrt(sum(v * v for v in parts.values()))
-    return parts
+    )
+    return Budget(reading=parts[0], friction_radius=parts[1], torque_calibration=parts[2],
+                  torque_resolution=parts[3], torque_offset=parts[4], normal_force=parts[5],
+                  combined=math.sqrt(sum(v * v for v in parts)))
 
 
 def budget_terms(

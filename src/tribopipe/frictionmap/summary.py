@@ -22,16 +22,6 @@ if TYPE_CHECKING:
     import pandas as pd
 
 
-#: the map columns :func:`map_summary` reads without ``runs_listed`` (besides those its
-#: groups need where the map stores none: :data:`~tribopipe.stats.GROUP_INPUT_COLUMNS`)
-SUMMARY_COLUMNS: tuple[str, ...] = (
-    "measurement_id", "pin", "disc", "normal_force_N", "temperature_C", "repeat",
-    "excluded", "exclusion_reason", "flags", "source", "lab", "source_file", "test",
-    "result", "interval", "mu_k", "mu_s", "mu_k_window_start_mm", "mu_k_window_end_mm",
-    "auto_mu_k", "auto_mu_s", "review", "review_by", "review_date", "review_reason",
-    "review_static_peak_mm")
-
-
 def map_summary(path: MapSource, *, runs_listed: bool = False) -> str:
     """A readable multi-line summary of the map at ``path``: runs, pairs, conditions,
     sources, flags, excluded runs (with reasons and where each came from) and the pooled

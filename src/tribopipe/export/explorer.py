@@ -100,8 +100,7 @@ RUNS_ELEMENT_PREFIX = "tpx-runs-"
 RUNS_INLINE_LIMIT = 20_000
 #: the parts of the page's script (``assets/js/``), in the order they are joined
 SCRIPT_PARTS = (
-    "prelude.js", "pyformat.js", "query.js", "snippets.js", "dom.js", "plots.js", "table.js",
-    "page.js",
+    "prelude.js", "query.js", "snippets.js", "dom.js", "plots.js", "table.js", "page.js",
 )
 #: the columns of the page's CSV of one condition
 CSV_COLUMNS = (

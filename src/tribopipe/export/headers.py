@@ -19,6 +19,7 @@ from typing import TYPE_CHECKING
 
 from .. import __version__
 from ..escape import sim_comment
+from ..rounding import decimal_text
 from .unit_systems import num
 
 if TYPE_CHECKING:
@@ -64,10 +65,13 @@ PAIR_LINE = "pair: pin {pin} on disc {disc}"
 def condition_lines(res: QueryResult, safe: Callable[[object], str] = sim_comment) -> list[str]:
     """Comment bodies naming the pair, the condition, both coefficients and the measured
     groups they were interpolated from."""
-    t = "unknown" if res.temperature_C is None else f"{res.temperature_C:g} C"
+    def g(value: float, digits: int = 6) -> str:
+        return decimal_text(value, digits=digits)
+
+    t = "unknown" if res.temperature_C is None else f"{g(res.temperature_C)} C"
     lines = [
         PAIR_LINE.format(pin=safe(res.pin), disc=safe(res.disc)),
-        f"condition: contact pressure {res.pressure_kPa:g} kPa, temperature {t}",
+        f"condition: contact pressure {g(res.pressure_kPa)} kPa, temperature {t}",
         f"mu_k = {num(res.mu_k.value)}; {res.mu_k.text(ascii_only=True)}"
         + ("" if res.mu_k.expanded is None else " (U, k = 2)"),
         "mu_s = " + (MU_S_UNKNOWN if res.mu_s is None else
@@ -75,9 +79,9 @@ def condition_lines(res: QueryResult, safe: Callable[[object], str] = sim_commen
                      + ("" if res.mu_s.expanded is None else " (U, k = 2)")),
     ]
     used = ", ".join(
-        f"{u.pressure_kPa:g} kPa"
-        + ("" if u.temperature_C is None else f"/{u.temperature_C:g} C")
-        + f" (w={u.weight:.3g})"
+        f"{g(u.pressure_kPa)} kPa"
+        + ("" if u.temperature_C is None else f"/{g(u.temperature_C)} C")
+        + f" (w={g(u.weight, 3)})"
         for u in res.mu_k.used
     )
     lines.append(f"from measured groups: {used}")

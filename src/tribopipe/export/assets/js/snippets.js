@@ -33,7 +33,7 @@ function wrap(text, width, indent) {
   return lines;
 }
 
-/* simbase.comment_block: comment lines of at most `width` (100) characters. */
+/* headers.comment_block: comment lines of at most `width` (100) characters. */
 function commentBlock(comment, bodies, width) {
   if (width === undefined) width = 100;
   var out = [];
@@ -56,7 +56,7 @@ function usedText(res) {
   }).join(", ");
 }
 
-/* simbase.condition_lines after the first (the pair's, which Python renders escaped for
+/* headers.condition_lines after the first (the pair's, which Python renders escaped for
    each format: PAIRS[i].snippet): numbers and the library's words only */
 function conditionLines(res) {
   var t = res.temperature_C === null ? "unknown" : g6(res.temperature_C) + " C";
@@ -109,14 +109,14 @@ function csvText(res) {
   return DATA.csv.header + "\r\n" + row.join(",") + "\r\n";
 }
 
-/* simbase.xml_comment and usd._comment of a line of numbers and the library's words (no
+/* xml_text.xml_comment and usd._comment of a line of numbers and the library's words (no
    name: those lines come escaped from Python); the opening is split because a page's
    script may not hold "<" "!--" (explorer._script refuses it) */
 function xmlComment(text) { return "<" + "!-- " + text + " -->"; }
 
 function hashComment(text) { return ("# " + text).replace(/\s+$/, ""); }
 
-/* simbase.static_and_dynamic: [static, dynamic, where the static came from] (the words
+/* coefficients.static_and_dynamic: [static, dynamic, where the static came from] (the words
    from DATA.texts.snippet.static) */
 function staticAndDynamic(res) {
   var muK = res.mu_k.value;

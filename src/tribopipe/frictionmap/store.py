@@ -603,7 +603,8 @@ def set_excluded(
         # columns the decision reads, then every column of the parts it changes only)
         parts_map = p.is_dir()
         if parts_map:
-            runs, _, manifest = _read_parts_map(p, EXCLUSION_COLUMNS)
+            runs, _, manifest = _read_parts_map(p, (*EXCLUSION_COLUMNS,
+                                                    *GROUP_INPUT_COLUMNS))
         else:
             runs = read_map(p)
         positions = _resolve_ids(runs, ids, p)
@@ -628,7 +629,8 @@ def set_excluded(
                 assert manifest is not None
                 return rewritten[k] if k in rewritten else _read_parts(p, [manifest.parts[k]])
 
-            _change_parts(p, manifest, rewritten, None, frame_of, touched)
+            _change_parts(p, manifest, rewritten, None, frame_of, touched,
+                          _by_part(runs, manifest, owner))
         elif changed:
             new = runs.copy()
             _set_state(new, new["measurement_id"].isin(changed).to_numpy(), new_state)
@@ -1103,16 +1105,19 @@ MERGE_FACTOR = 4
 
 
 def _commit_parts(p: Path, manifest: Manifest | None, pieces: list[Part | pd.DataFrame],
-                  touched: set[Key] | None = None) -> None:
+                  touched: set[Key] | None = None,
+                  read: Mapping[str, pd.DataFrame] | None = None) -> None:
     """Commit the map folder ``p`` as ``pieces`` in order: parts kept as they are, and
     frames (checked rows) written as new parts, with the stored condition groups brought
     up to date in the same commit: those of the conditions ``touched`` computed again
-    (all of them when ``None``, or when the map had none stored). The caller holds the
-    lock and has read the map (the manifest ``manifest``, ``None`` for a new map)."""
+    (all of them when ``None``, or when the map had none stored; ``read``: the rows of
+    kept parts the caller has read already, by part file, with the statistics' columns).
+    The caller holds the lock and has read the map (the manifest ``manifest``, ``None``
+    for a new map)."""
     generation = 1 if manifest is None else manifest.generation + 1
     mode = file_mode(manifest_path(p))
     written: list[Part] = []
-    groups = _groups_after(p, manifest, pieces, touched)
+    groups = _groups_after(p, manifest, pieces, touched, read or {})
     try:
         p.mkdir(exist_ok=True)
         for piece in pieces:
@@ -1135,22 +1140,26 @@ def _commit_parts(p: Path, manifest: Manifest | None, pieces: list[Part | pd.Dat
 
 
 def _groups_after(p: Path, manifest: Manifest | None, pieces: list[Part | pd.DataFrame],
-                  touched: set[Key] | None) -> pd.DataFrame:
+                  touched: set[Key] | None, known: Mapping[str, pd.DataFrame]
+                  ) -> pd.DataFrame:
     """The stored group rows of the map ``pieces`` will make: the stored ones with the
     conditions ``touched`` computed again from their runs (those columns of every piece
     read, :data:`~tribopipe.stats.GROUP_INPUT_COLUMNS`), or all computed when ``touched``
-    is ``None`` or the map has none stored yet."""
+    is ``None`` or the map has none stored yet. The rows of a kept part are taken from
+    ``known`` (by part file) where the caller read them, else read."""
     import pandas as pd
 
     old = _stored_rows(p, manifest)
     if old is None:
         touched = None
-    kept = [piece for piece in pieces if isinstance(piece, Part)]
-    read = iter(_split(_read_parts(p, kept, GROUP_INPUT_COLUMNS), kept))
+    kept = [piece for piece in pieces if isinstance(piece, Part) and piece.file not in known]
+    read = dict(zip([q.file for q in kept],
+                    _split(_read_parts(p, kept, GROUP_INPUT_COLUMNS), kept), strict=True)
+                ) if kept else {}
     frames = []
     for piece in pieces:
-        rows = next(read) if isinstance(piece, Part) else piece.loc[:, list(
-            GROUP_INPUT_COLUMNS)]
+        rows = ((known[piece.file] if piece.file in known else read[piece.file])
+                if isinstance(piece, Part) else piece).loc[:, list(GROUP_INPUT_COLUMNS)]
         frames.append(rows if touched is None else of_keys(rows, touched))
     runs = (pd.concat(frames, ignore_index=True) if frames
             else unvalidated_frame([], where="row").loc[:, list(GROUP_INPUT_COLUMNS)])
@@ -1223,7 +1232,8 @@ def _merged_tail(pieces: list[Part | pd.DataFrame], frames: Callable[[int], pd.D
 
 def _change_parts(p: Path, manifest: Manifest | None,
                   rewritten: Mapping[int, pd.DataFrame], fresh: pd.DataFrame | None,
-                  frame_of: Callable[[int], pd.DataFrame], touched: set[Key]) -> None:
+                  frame_of: Callable[[int], pd.DataFrame], touched: set[Key],
+                  read: Mapping[str, pd.DataFrame] | None = None) -> None:
     """Commit a change of the map folder ``p``: the parts ``rewritten`` (places in
     ``manifest``) replaced by their new rows (checked rows, in order; none: the part
     goes), ``fresh`` rows added as a new part. Untouched parts are kept as they are; a
@@ -1246,7 +1256,7 @@ def _change_parts(p: Path, manifest: Manifest | None,
         origin.append(None)
     keep = [i for i, piece in enumerate(pieces) if isinstance(piece, Part) or len(piece)]
     pieces, origin = [pieces[i] for i in keep], [origin[i] for i in keep]
-    _commit_parts(p, manifest, _merged_tail(pieces, frame_of, origin), touched)
+    _commit_parts(p, manifest, _merged_tail(pieces, frame_of, origin), touched, read)
 
 
 def _owner(manifest: Manifest | None) -> Any:
@@ -1276,7 +1286,9 @@ def _update_parts(p: Path, decide: Callable[[pd.DataFrame], FrameChange], replac
     import numpy as np
     import pandas as pd
 
-    need = None if columns is None else ["measurement_id", *columns]
+    # with the statistics' columns: the stored groups of the touched conditions are
+    # computed again from the rows read here, not read a second time
+    need = None if columns is None else ["measurement_id", *columns, *GROUP_INPUT_COLUMNS]
     current, _, manifest = _read_parts_map(p, need)
     if (need is not None and needs_all is not None and manifest is not None
             and needs_all(current)):
@@ -1310,15 +1322,29 @@ def _update_parts(p: Path, decide: Callable[[pd.DataFrame], FrameChange], replac
     old_rows = merged.iloc[:len(kept)]
     rewritten = {k: old_rows.loc[kept_owner == k] for k in dirty}
 
-    def frame_of(k: int) -> pd.DataFrame:
+    def frame_of(k: int) -> pd.DataFrame:  # a kept part's rows, to merge the new ones in
         assert manifest is not None
-        return rows_of[k] if k in rows_of else _read_parts(p, [manifest.parts[k]])
+        if k in rows_of:
+            return rows_of[k]
+        if need is None:  # every column read already
+            return current.loc[owner == k].reset_index(drop=True)
+        return _read_parts(p, [manifest.parts[k]])
 
     touched_keys = keys_of(new_frame) | keys_of(
         base.loc[base["measurement_id"].isin(sorted(new_ids | drop))])
-    _change_parts(p, manifest, rewritten, merged.iloc[len(kept):], frame_of, touched_keys)
+    _change_parts(p, manifest, rewritten, merged.iloc[len(kept):], frame_of, touched_keys,
+                  _by_part(current, manifest, owner))
     return report, _after(current.loc[~gone].reset_index(drop=True), old_rows,
                           merged.iloc[len(kept):], set(report.replaced_ids))
+
+
+def _by_part(rows: pd.DataFrame, manifest: Manifest | None, owner: Any
+             ) -> dict[str, pd.DataFrame]:
+    """``rows`` (every row of ``manifest``'s parts, in order; ``owner``: each row's part)
+    by part file."""
+    if manifest is None:
+        return {}
+    return {part.file: rows.loc[owner == k] for k, part in enumerate(manifest.parts)}
 
 
 def _after(kept: pd.DataFrame, changed: pd.DataFrame, fresh: pd.DataFrame,

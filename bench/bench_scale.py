@@ -450,6 +450,47 @@ def map_costs(folder: Path, sizes: list[int], template: dict) -> dict:
     return out
 
 
+#: the issue's targets: (command, what it is compared with, the ratio or seconds allowed)
+TARGETS: tuple[tuple[str, str, float], ...] = (
+    ("reduce", "empty", 1.5), ("batch_one_new", "empty", 1.5), ("query", "1000", 1.5),
+    ("map_show", "1000", 1.5), ("map_table_paper", "1000", 1.5),
+    ("export_abaqus_one_pair", "1000", 1.5), ("map_validate", "seconds", 10.0),
+    ("map_publish", "seconds", 30.0))
+
+
+def table(results: dict) -> str:
+    """The Markdown table of ``--commands`` results (``bench/README.md``): per command, CPU
+    and wall seconds at each size, the ratio of CPU seconds at 10⁵ rows to the command
+    on an empty map (``reduce``, ``batch``) or on the 10³-row map, and whether the
+    target holds (in CPU time, and in wall time)."""
+    timed = results["commands_wall_s_peak_MB"]
+    sizes = [k for k in timed if k != "0"]
+    largest = sizes[-1]
+    head = ("| command | " + " | ".join(f"{int(n):,} rows: CPU / wall [s]" for n in
+                                      ["0", *sizes])
+            + f" | {int(largest):,} rows / base: CPU (wall) | target |")
+    lines = [head, "|---" * (len(sizes) + 4) + "|"]
+    for name, base, limit in TARGETS:
+        cells = []
+        for n in ["0", *sizes]:
+            v = timed[n].get(name)
+            cells.append("" if v is None else f"{v['cpu_s']:.2f} / {v['wall_s']:.2f}")
+        top = timed[largest].get(name)
+        if base == "seconds":
+            ratio = "—"
+            met = (f"< {limit:g} s: {'met' if top['cpu_s'] < limit else 'not met'} in CPU, "
+                   f"{'met' if top['wall_s'] < limit else 'not met'} in wall")
+        else:
+            ref = timed["0" if base == "empty" else base][name]
+            r_cpu, r_wall = top["cpu_s"] / ref["cpu_s"], top["wall_s"] / ref["wall_s"]
+            ratio = f"{r_cpu:.2f} ({r_wall:.2f})"
+            met = (f"≤ {limit:g}× {'empty map' if base == 'empty' else '10³ rows'}: "
+                   f"{'met' if r_cpu <= limit else 'not met'} in CPU, "
+                   f"{'met' if r_wall <= limit else 'not met'} in wall")
+        lines.append(f"| `{name}` | " + " | ".join(cells) + f" | {ratio} | {met} |")
+    return "\n".join(lines)
+
+
 def main(argv: list[str] | None = None) -> dict:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--sizes", default="1000,10000,100000")
@@ -467,7 +508,13 @@ def main(argv: list[str] | None = None) -> dict:
     parser.add_argument("--timeout", type=float, default=TIMEOUT_S,
                         help="with --commands: seconds after which a command is stopped "
                              f"and reported as not finished ({TIMEOUT_S:g})")
+    parser.add_argument("--table", type=Path, default=None,
+                        help="print the Markdown table of a --commands results file and stop")
     args = parser.parse_args(argv)
+    if args.table is not None:
+        results = json.loads(args.table.read_text(encoding="utf-8"))
+        print(table(results))
+        return results
     sizes = [int(s) for s in args.sizes.split(",") if s]
     globals()["TIMEOUT_S"] = args.timeout
     load_start = os.getloadavg()

@@ -72,13 +72,6 @@ class Landed:
     repeats: tuple[str, ...] = ()
     review: ReviewOutcome | None = None
     groups: frozenset[tuple[Any, ...]] = frozenset()
-    #: the records and ids the caller brought (before the review)
-    arrivals: Arrivals = Arrivals()
-
-    @property
-    def landed_ids(self) -> set[str]:
-        """The ids of the rows added or replaced."""
-        return set(self.appended.added_ids) | set(self.appended.replaced_ids)
 
 
 def land_runs(
@@ -140,7 +133,7 @@ def land_runs(
     groups = set(condition_keys(unvalidated_frame(touched)).values()) if touched else set()
     groups |= {k for mid, k in before.items() if mid in landed | set(appended.dropped_ids)}
     return Landed(appended=appended, rows=rows, repeats=tuple(repeats), review=outcome,
-                  groups=frozenset(groups), arrivals=arrivals)
+                  groups=frozenset(groups))
 
 
 def check_map_before_work(map_path: str | Path) -> None:
@@ -148,8 +141,9 @@ def check_map_before_work(map_path: str | Path) -> None:
     map folder's manifest (its digest, every part named:
     :func:`~tribopipe.frictionmap.parts.read_manifest`), a single file's Parquet schema
     and metadata (:func:`~tribopipe.frictionmap.store.map_metadata`). No map yet is
-    fine. A part damaged on disk is refused by the landing's read, before anything is
-    written. Raises :class:`~tribopipe.errors.MapError` in one line."""
+    fine. A part damaged on disk is refused by the landing's read, before the map is
+    written (the runs' traces are already written then). Raises
+    :class:`~tribopipe.errors.MapError` in one line."""
     p = Path(map_path)
     if not (p.exists() or p.is_symlink()):
         return

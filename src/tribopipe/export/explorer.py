@@ -980,7 +980,8 @@ def write_explorer(
     ``groups_page_limit`` condition groups an index page at ``output`` and its pins'
     pages in :func:`pages_folder`; a smaller map's page carries everything and is one
     file."""
-    runs = as_snapshot(map_path).runs
+    snap = as_snapshot(map_path)
+    runs = snap.runs
     if runs.empty:
         raise ExportError(
             "the friction map is empty or absent",
@@ -988,8 +989,10 @@ def write_explorer(
             hint="reduce runs first (tribopipe reduce / batch) or import the published map",
         )
     out = Path(output)
+    # the map's groups (a map folder's are stored): those of its included runs
     files = explorer_files(runs, out.name, title=title or "tribopipe friction-map explorer",
-                           source=str(map_path), runs_inline_limit=runs_inline_limit,
+                           source=str(map_path), groups=snap.groups(show_method=True),
+                           runs_inline_limit=runs_inline_limit,
                            groups_page_limit=groups_page_limit)
     for name, text in files.items():
         if name != out.name:

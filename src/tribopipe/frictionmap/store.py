@@ -225,8 +225,44 @@ def write_map_copy(path: str | os.PathLike[str], runs: pd.DataFrame) -> Path:
     p = Path(path)
     if p.exists():
         raise MapError("exists already; a map copy is written only to a new path", path=p)
-    _write_atomic(p, records_frame(frame_records(runs), where="row"))
+    _write_atomic(p, check_runs(_schema_frame(runs), "row"))
     return p
+
+
+def _schema_frame(runs: pd.DataFrame) -> pd.DataFrame:
+    """``runs`` with the schema's columns, in order, each in its kind's dtype, converted
+    column by column (what :func:`records_frame` makes of the same rows one by one,
+    without a copy of every row); a value of another kind is a :class:`MapError` naming
+    the column."""
+    import pandas as pd
+
+    out: dict[str, Any] = {}
+    typed = {"float": "float64", "int": "Int64", "bool": "bool", "str": "str"}
+    for name in RUN_COLUMNS:
+        kind, col = KIND[name], runs[name]
+        if str(col.dtype) == typed[kind]:  # already the schema's dtype: kept, not copied
+            out[name] = col.array
+            continue
+        loose = col.dtype == object  # a column of a typed dtype holds its kind already
+        try:
+            if kind == "float":
+                if loose and col.map(lambda v: isinstance(v, bool | str)).any():
+                    raise TypeError("text or true/false is not a number")
+                out[name] = pd.to_numeric(col, errors="raise").astype("float64").to_numpy()
+            elif kind == "int":
+                out[name] = pd.array(col.to_numpy(dtype=object), dtype="Int64")
+            elif kind == "bool":
+                if col.dtype != bool and not col.map(lambda v: isinstance(v, bool)).all():
+                    raise TypeError("expected true or false")
+                out[name] = col.astype(bool).to_numpy()
+            else:
+                if loose and not col.map(lambda v: is_missing(v) or isinstance(v, str)).all():
+                    raise TypeError("expected text")
+                texts = col.astype(object).where(col.notna(), None).to_numpy()
+                out[name] = pd.array(texts, dtype="str")
+        except (TypeError, ValueError, OverflowError) as exc:
+            raise MapError(f"expected {kind} values ({exc})", column=name) from None
+    return pd.DataFrame(out, columns=list(RUN_COLUMNS), index=pd.RangeIndex(len(runs)))
 
 
 # --------------------------------------------------------------------------- appending
@@ -367,12 +403,20 @@ def _fold(
     """:func:`fold_records` of records already validated into ``new_frame``; the rows
     of ``runs`` are not checked again (:func:`update_map` has them from :func:`read_map`,
     which checked every one), nor are the rows of ``new_frame``."""
+    import numpy as np
     import pandas as pd
 
     base = runs.loc[:, list(RUN_COLUMNS)].reset_index(drop=True)
     position = {m: i for i, m in enumerate(base["measurement_id"])}
+    # a new row whose id is neither in the map nor repeated among the new rows is added
+    # as it is, column-wise; only the others are compared record by record
+    new_ids = new_frame["measurement_id"]
+    plain = np.asarray(~new_ids.isin(list(position)) & ~new_ids.duplicated(keep=False),
+                       dtype=bool)
+    new_frame = new_frame.reset_index(drop=True)
+    others = new_frame.loc[~plain]
     # map rows looked at (then replaced), by position: converted in one pass, not per record
-    hits = sorted({position[m] for m in new_frame["measurement_id"] if m in position})
+    hits = sorted({position[m] for m in others["measurement_id"] if m in position})
     touched = dict(zip(hits, frame_records(base.iloc[hits]), strict=True))
     fresh: dict[str, dict[str, Any]] = {}  # runs new to the map, in order (= the added ids)
     # ids in first-seen order (dicts as ordered sets: a repeated id keeps its place)
@@ -381,8 +425,10 @@ def _fold(
     conflicting: dict[str, None] = {}
     differences: dict[str, tuple[str, ...]] = {}
     values: dict[str, tuple[tuple[str, Any, Any], ...]] = {}
-    for rec in frame_records(new_frame):
+    first_at: dict[str, int] = {}  # where each fresh run of the others first came
+    for at, rec in zip(others.index, frame_records(others), strict=True):
         mid = rec["measurement_id"]
+        first_at.setdefault(mid, int(at))
         if mid in fresh:
             old = fresh[mid]
         elif mid in position:
@@ -408,8 +454,12 @@ def _fold(
                 replaced[mid] = None
         else:
             conflicting[mid] = None
+    # the added runs in the order they came: the plain rows and the first of the others
+    order = sorted([(int(i), None) for i in np.flatnonzero(plain)]
+                   + [(first_at[m], m) for m in fresh], key=lambda x: x[0])
+    added = [str(new_ids.iat[i]) if m is None else m for i, m in order]
     report = AppendReport(
-        added_ids=tuple(fresh),
+        added_ids=tuple(added),
         unchanged_ids=tuple(unchanged),
         replaced_ids=tuple(replaced),
         conflicting_ids=tuple(conflicting),
@@ -422,8 +472,12 @@ def _fold(
         swapped = unvalidated_frame([touched[i] for i in where], where="row")
         swapped.index = pd.Index(where)
         merged = pd.concat([merged.drop(index=where), swapped]).sort_index()
-    if fresh:
-        extra = unvalidated_frame(list(fresh.values()), where="record")
+    if order:
+        extra = new_frame.loc[plain, list(RUN_COLUMNS)]
+        if fresh:
+            others_fresh = unvalidated_frame(list(fresh.values()), where="record")
+            others_fresh.index = pd.Index([first_at[m] for m in fresh])
+            extra = pd.concat([extra, others_fresh]).sort_index()
         merged = pd.concat([merged, extra], ignore_index=True) if len(merged) else extra
     return merged.reset_index(drop=True), report
 
@@ -442,6 +496,19 @@ def append_records(
     something was added or replaced, so a failing append leaves the map byte-identical.
     """
     return update_map(path, records, replace=replace)
+
+
+def append_frame(path: str | os.PathLike[str], runs: pd.DataFrame, *,
+                 replace: bool = False) -> AppendReport:
+    """:func:`append_records` of rows already in a map DataFrame (another map's or a
+    package's runs), converted and checked column by column: no row object per run, so a
+    merge of 10⁵ rows does not hold them twice over."""
+    p = Path(path)
+    new_frame = check_runs(_schema_frame(runs), "row")  # validate before touching anything
+    with _locked(p):
+        if _writes_parts(p):
+            return _update_parts(p, lambda _: (new_frame, ()), replace)[0]
+        return _fold_and_write(p, read_map(p), new_frame, replace, ())[0]
 
 
 def update_map(

@@ -120,14 +120,15 @@ def _command(entry: Format) -> click.Command:
     """The ``export`` subcommand of format ``entry``: the selection, then its own options."""
 
     def run(output: str | None, map_path: str, **options: Any) -> None:
-        from ..export.simulators import export_from_map
+        from ..export.simulators import MAP_COLUMNS, export_from_map
         from ..frictionmap.snapshot import open_map
 
         def note(text: str) -> None:
             say(f"note: {text}", err=True)
 
-        _emit(export_from_map(open_map(map_path), entry.name, on_note=note, **options),
-              output)
+        # the columns it reads: a map folder's groups are stored, not grouped again
+        _emit(export_from_map(open_map(map_path, MAP_COLUMNS), entry.name, on_note=note,
+                              **options), output)
 
     run.__doc__ = entry.title + (f"\n\n{entry.description}" if entry.description else "")
     func: Callable[..., Any] = friendly_errors(run)

@@ -145,14 +145,16 @@ def discover_files(campaign: Campaign) -> list[Path]:
                             campaign.review) if p}
     layout = campaign.layout
     inside = campaign.output_dir != root and campaign.output_dir.is_relative_to(root)
+    # the output folder's own files can only be met where it is, or holds, the raw folder
+    outputs_here = inside or root.is_relative_to(campaign.output_dir)
     files = [
         p for p in candidates
         if p.suffix.lower() != ".toml" and not p.name.endswith(".lock")
         and p not in not_runs
         and not (inside and p.is_relative_to(campaign.output_dir))
-        and not layout.written_here(p) and not _is_tool_table(p)
+        and not (outputs_here and layout.written_here(p)) and not _is_tool_table(p)
     ]
-    return sorted(files, key=lambda p: p.relative_to(root).as_posix())
+    return sorted(files, key=lambda p: _relative(p, root))
 
 
 def describe_glob(campaign: Campaign) -> str:
@@ -221,6 +223,12 @@ def _compute_campaign_key(campaign: Campaign) -> str:
 
 
 def _relative(path: Path, root: Path) -> str:
+    """``path`` relative to ``root`` (below it), as a POSIX path; by its text when it
+    starts with the root's (as every discovered file's does: a campaign has thousands)."""
+    text, prefix = str(path), str(root) + os.sep
+    if text.startswith(prefix) and root.is_absolute():
+        rel = text[len(prefix):]
+        return rel if os.sep == "/" else rel.replace(os.sep, "/")
     return path.relative_to(root).as_posix()
 
 

@@ -33,6 +33,7 @@ from tribopipe.export.explorer import (
 from tribopipe.fit import fit_power_law, power_law
 from tribopipe.frictionmap import exclude_runs, import_table, read_map
 from tribopipe.frictionmap.published import published_csv_path
+from tribopipe.materials import Material, shipped_vocabulary
 from tribopipe.query import pair_points, select_pair
 from tribopipe.stats import group_statistics
 
@@ -286,7 +287,9 @@ def hostile_map(root: Path) -> Path:
                         f"{mu + 0.01 * repeat}")
     csv.write_text("\n".join(rows) + "\n", encoding="utf-8")
     map_path = root / "friction_map.parquet"
-    import_table(map_path, csv)
+    # a hostile lab's materials file names them: names are data, whatever they hold
+    lab = [Material(name=n, material_class="other") for n in (HOSTILE_PIN, HOSTILE_DISC)]
+    import_table(map_path, csv, vocabulary=shipped_vocabulary().with_materials(lab))
     return map_path
 
 

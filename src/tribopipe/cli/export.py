@@ -12,7 +12,7 @@ from typing import TYPE_CHECKING, Any
 
 import click
 
-from ._common import friendly_errors, map_option, say
+from ._common import friendly_errors, map_option, material_filters, say
 
 if TYPE_CHECKING:
     from ..export.registry import Option, Writer
@@ -126,8 +126,10 @@ def _command(writer: Writer) -> click.Command:
         def note(text: str) -> None:
             say(f"note: {text}", err=True)
 
-        _emit(export_from_map(open_map(map_path), writer.name, on_note=note, **options),
-              output)
+        snap = open_map(map_path)
+        options["pin"], options["disc"] = material_filters(snap, options["pin"],
+                                                           options["disc"])
+        _emit(export_from_map(snap, writer.name, on_note=note, **options), output)
 
     run.__doc__ = writer.title + (f"\n\n{writer.description}" if writer.description else "")
     func: Callable[..., Any] = friendly_errors(run)

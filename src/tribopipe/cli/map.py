@@ -10,6 +10,7 @@ from ._common import (
     instrument_option,
     lazy_map_option,
     map_option,
+    material_filters,
     say,
 )
 from .fit import fit_cmd
@@ -68,7 +69,10 @@ def import_cmd(
 
     if published == (file is not None):
         raise click.UsageError("give a FILE or --published (not both)")
-    report = import_table(map_path, file, source=source, replace=replace)
+    from ..materials import lab_files, load_vocabulary
+
+    report = import_table(map_path, file, source=source, replace=replace,
+                          vocabulary=load_vocabulary(lab_files(".")))
     say(f"map {map_path}: {report.summary()}")
 
 
@@ -315,6 +319,10 @@ def table_cmd(
       tribopipe map table --format xlsx -o friction_map.xlsx
       tribopipe map table --layout paper --decimal , -o table.csv
     """
+    from ..frictionmap.snapshot import open_map
+
+    snap = open_map(map_path)
+    pin, disc = material_filters(snap, pin, disc)
     if fmt == "xlsx":
         from ..export.workbook import export_workbook
 
@@ -332,10 +340,9 @@ def table_cmd(
         say(f"wrote {written}", err=True)
         return
     from ..export.tables import export_table
-    from ..frictionmap.snapshot import open_map
 
     text = export_table(
-        open_map(map_path),
+        snap,
         output,
         fmt=fmt,
         layout=layout,

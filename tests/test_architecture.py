@@ -5,6 +5,10 @@ functions and in ``if TYPE_CHECKING:`` blocks (a type-only import is still a dep
 a cycle through one says a type lives in the wrong room). Importing ``a.b.c`` also runs the
 packages ``a.b`` above it, so that counts as depending on them too.
 
+A module or function named as text (``"tribopipe.export.fe_decks:write_abaqus"``, for
+``importlib`` to import later) counts as an import of that module too, so a cycle through
+such a name shows; and outside the CLI's lazy command table no function is named so.
+
 The checks: no import cycle; no module imports one from a higher layer of :data:`LAYERS`;
 click only under ``tribopipe.cli``, whose modules import only click and the standard
 library at module level (so ``tribopipe --help`` stays light); no library module imports
@@ -17,6 +21,7 @@ length is no rule: a room holds one concept, whatever its length.
 from __future__ import annotations
 
 import ast
+import re
 import sys
 from collections.abc import Iterator
 from dataclasses import dataclass
@@ -82,6 +87,7 @@ class Import:
     line: int
     in_function: bool
     type_only: bool
+    by_name: bool = False
 
 
 def module_name(path: Path) -> str:
@@ -125,13 +131,51 @@ def _resolve(importer: str, node: ast.ImportFrom) -> str:
     return ".".join(base + ([node.module] if node.module else []))
 
 
+#: a module, or a name in it, written as text for importlib: ``tribopipe.x.y:name``
+NAMED = re.compile(r"(tribopipe(?:\.\w+)*):\w+")
+
+
+def _named_module(text: str) -> str | None:
+    """The package module a ``"module:name"`` text names (its longest known prefix)."""
+    match = NAMED.fullmatch(text)
+    if match is None:
+        return None
+    parts = match.group(1).split(".")
+    for cut in range(len(parts), 0, -1):
+        if ".".join(parts[:cut]) in MODULES:
+            return ".".join(parts[:cut])
+    return None
+
+
+def _import_by_name(node: ast.AST) -> str | None:
+    """The text of ``importlib.import_module("...")`` / ``__import__("...")`` (None for any
+    other node; ``"?"`` when the argument is not a constant text)."""
+    if not isinstance(node, ast.Call):
+        return None
+    func = node.func
+    called = (func.attr if isinstance(func, ast.Attribute) else
+              func.id if isinstance(func, ast.Name) else "")
+    if called not in {"import_module", "__import__"}:
+        return None
+    arg = node.args[0] if node.args else None
+    return arg.value if isinstance(arg, ast.Constant) and isinstance(arg.value, str) else "?"
+
+
 def imports_of(name: str) -> list[Import]:
-    """Every import of a package module by module ``name`` (own ancestors excluded)."""
+    """Every import of a package module by module ``name`` (own ancestors excluded),
+    references by name (``"module:function"`` texts, ``importlib`` calls) included."""
     tree = ast.parse(MODULES[name].read_text(encoding="utf-8"))
     found: list[Import] = []
     for node, in_function, type_only in _walk(tree):
         targets: list[str] = []
-        if isinstance(node, ast.Import):
+        by_name = False
+        dynamic = _import_by_name(node)
+        if isinstance(node, ast.Constant) and isinstance(node.value, str):
+            named = _named_module(node.value)
+            targets, by_name = ([named] if named else []), True
+        elif dynamic is not None and dynamic in MODULES:
+            targets, by_name = [dynamic], True
+        elif isinstance(node, ast.Import):
             targets = [a.name for a in node.names]
         elif isinstance(node, ast.ImportFrom):
             base = _resolve(name, node)
@@ -147,7 +191,8 @@ def imports_of(name: str) -> list[Import]:
             for k in range(1, len(parts) + 1):
                 dep = ".".join(parts[:k])
                 if dep in MODULES and dep != name and not name.startswith(dep + "."):
-                    found.append(Import(name, dep, node.lineno, in_function, type_only))
+                    found.append(Import(name, dep, node.lineno, in_function, type_only,
+                                        by_name))
     return list(dict.fromkeys(found))  # one per target and line
 
 
@@ -201,7 +246,8 @@ def cycles() -> list[list[str]]:
 
 
 def _where(imp: Import) -> str:
-    kind = " (type-only)" if imp.type_only else " (in a function)" if imp.in_function else ""
+    kind = (" (by name)" if imp.by_name else " (type-only)" if imp.type_only
+            else " (in a function)" if imp.in_function else "")
     where = f"{MODULES[imp.importer].relative_to(SRC)}:{imp.line}"
     return f"{where}: {imp.importer} -> {imp.target}{kind}"
 
@@ -223,6 +269,9 @@ def test_the_graph_sees_every_kind_of_import() -> None:
     assert ("tribopipe.pipeline", True) in cli_reduce
     # a package's own modules do not depend on the package they are in
     assert "tribopipe.frictionmap" not in {i.target for i in GRAPH["tribopipe.frictionmap.store"]}
+    # a module named as text for importlib (the CLI's lazy command table) is an import
+    cli = {(i.target, i.by_name) for i in GRAPH["tribopipe.cli"]}
+    assert ("tribopipe.cli.reduce", True) in cli
 
 
 def test_there_is_no_import_cycle() -> None:
@@ -232,6 +281,30 @@ def test_there_is_no_import_cycle() -> None:
         inside = set(component)
         details += [_where(i) for m in component for i in GRAPH[m] if i.target in inside]
     assert not found, "import cycles:\n" + "\n".join(details)
+
+
+def _dynamic_imports(name: str) -> Iterator[int]:
+    """The lines of module ``name`` that import a module whose name is only known at run
+    time (``importlib.import_module(x)``)."""
+    tree = ast.parse(MODULES[name].read_text(encoding="utf-8"))
+    for node, _, _ in _walk(tree):
+        if _import_by_name(node) == "?":
+            yield node.lineno  # type: ignore[attr-defined]
+
+
+def test_no_function_is_named_as_text() -> None:
+    """A function named as text (``"module:function"``, imported by ``importlib`` when it
+    is called) hides its import from the graph and its signature from mypy: a library
+    module holds the function itself (the simulator registry holds its writers). The
+    CLI's lazy command table is the exception: it keeps numpy and friends off the path
+    of ``--help``, and its names are the CLI's own modules."""
+    offenders = [_where(i) for imports in GRAPH.values() for i in imports
+                 if i.by_name and not i.importer.startswith("tribopipe.cli")]
+    offenders += [f"{MODULES[name].relative_to(SRC)}:{line}: an import by a name known "
+                  "only at run time"
+                  for name in MODULES if not name.startswith("tribopipe.cli")
+                  for line in _dynamic_imports(name)]
+    assert not offenders, "functions or modules named as text:\n" + "\n".join(offenders)
 
 
 def test_no_module_imports_from_a_higher_layer() -> None:
@@ -376,15 +449,25 @@ def test_the_checks_catch_what_they_are_for(tmp_path: Path) -> None:
     (pkg / "reduction" / "__init__.py").write_text("")
     (pkg / "reduction" / "reduce.py").write_text("import click\nfrom ..config import Y\n"
                                    "def f():\n    from ..report import Z\n")
-    (pkg / "report.py").write_text("x = 1\n")
+    (pkg / "report.py").write_text("x = 1\nWRITER = 'tribopipe.hub:write'\n")
+    (pkg / "hub.py").write_text("from .report import x\ndef write():\n    return x\n")
+    (pkg / "files.py").write_text("import importlib\n"
+                                  "def load(n):\n    return importlib.import_module(n)\n")
     (pkg / "cli" / "__init__.py").write_text("import numpy\nfrom ..report import W\n")
     try:
         SRC = tmp_path
         MODULES = {module_name(p): p for p in sorted(pkg.rglob("*.py"))}
         GRAPH = {name: imports_of(name) for name in MODULES}
-        assert cycles() == [["tribopipe.config", "tribopipe.reduction.reduce"]]
+        assert sorted(cycles()) == [["tribopipe.config", "tribopipe.reduction.reduce"],
+                                    ["tribopipe.hub", "tribopipe.report"]]
         with pytest.raises(AssertionError, match=r"config.py:3: .*\(type-only\)"):
             test_there_is_no_import_cycle()
+        with pytest.raises(AssertionError, match=r"report.py:2: .*report -> tribopipe\.hub "
+                                                 r"\(by name\)"):
+            test_there_is_no_import_cycle()
+        with pytest.raises(AssertionError, match=r"report -> tribopipe\.hub \(by name\)"
+                                                 r"(.|\n)*files\.py:3: an import by a name"):
+            test_no_function_is_named_as_text()
         reduce_layer = layer_of("tribopipe.reduction.reduce")
         report_layer = layer_of("tribopipe.report")
         upward = f"layer {reduce_layer} imports layer {report_layer}"

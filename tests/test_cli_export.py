@@ -179,10 +179,12 @@ def test_every_format_is_a_command_with_the_options_it_declares():
     import click
 
     from tribopipe.cli.export import export_group
-    from tribopipe.export.registry import WRITERS
+    from tribopipe.export.formats import ENTRIES as WRITERS
+    from tribopipe.export.registry import WRITERS as REGISTERED
 
     ctx = click.Context(export_group)
     assert export_group.list_commands(ctx) == [w.name for w in WRITERS]
+    assert [w.name for w in REGISTERED] == [w.name for w in WRITERS]
     shared = {"pin", "disc", "temperature_C", "pressure_kPa", "speed_mm_s", "method", "map_path",
               "output"}
     for writer in WRITERS:

@@ -15,7 +15,7 @@ from tribopipe.export.fe_decks import (
     condition_snippet,
     deck_safe,
 )
-from tribopipe.export.simbase import comment_block, condition_lines
+from tribopipe.export.headers import comment_block, condition_lines
 from tribopipe.query import query
 
 

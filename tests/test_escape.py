@@ -234,8 +234,12 @@ def test_trace_plot_of_hostile_file_and_pin_names(hostile_reduced, name: str) ->
     from tribopipe.figures import plot_trace_row, trace_figure
 
     _, map_path, out = hostile_reduced
-    row = pd.read_parquet(map_path).iloc[0].to_dict()
-    row.update(source_file=name, pin=name, disc=name)
+    from dataclasses import replace
+
+    from tribopipe.frictionmap.schema import frame_rows
+    from tribopipe.frictionmap.store import read_map
+
+    row = replace(frame_rows(read_map(map_path))[0], source_file=name, pin=name, disc=name)
     trace = pd.read_parquet(next((out / "traces").glob("*.parquet")))
     for fmt in ("png", "svg"):
         buf = plot_trace_row(trace, row, io.BytesIO(), fmt=fmt)
@@ -246,13 +250,17 @@ def test_trace_plot_of_hostile_file_and_pin_names(hostile_reduced, name: str) ->
 
 
 def test_map_plots_of_hostile_names(hostile_reduced, tmp_path: Path) -> None:
+    from dataclasses import replace
+
     from tribopipe.export.plots import plot_group_overlay, plot_pair
+    from tribopipe.frictionmap.schema import frame_rows
+    from tribopipe.frictionmap.store import read_map
 
     _, map_path, out = hostile_reduced
     runs = pd.read_parquet(map_path)
     trace = pd.read_parquet(next((out / "traces").glob("*.parquet")))
     for name in PICTURE_NAMES:
-        row = runs.iloc[0].to_dict() | {"measurement_id": name}
+        row = replace(frame_rows(read_map(map_path))[0], measurement_id=name)
         _assert_png(plot_group_overlay([(row, trace)], io.BytesIO(), title=name,
                                        fmt="png").getvalue())
         pair = runs.assign(pin=name, disc=name)

@@ -377,7 +377,7 @@ def test_temperature_needed_and_bad_pressure_are_said(tab, published):
     tab.page.fill("#temperature", "20")
     tab.page.fill("#pressure", "-3")
     assert tab.page.text_content("#tpx-error") == (
-        "contact pressure must be a finite number >= 0 kPa, got -3.0")
+        "contact pressure must be a finite number >= 0 kPa, got -3")
 
 
 def open_export(tab) -> None:
@@ -569,7 +569,11 @@ def test_the_report_embeds_the_explorer_for_its_campaign(tab, reduced):
     assert_shows(tab, query(groups, "Ecoflex 00-50", "wood (smooth)", 10.0, 20.0))
 
 
-def test_numbers_are_printed_as_python_prints_them(tab, reduced):
+def test_numbers_are_printed_by_the_one_rule(tab, reduced):
+    """What the page computes and prints (a value without U, a weight, a snippet's
+    coefficient) is rounded by :func:`tribopipe.rounding.decimal_text`, in the page."""
+    from tribopipe.rounding import decimal_text
+
     _, page, _, _ = reduced
     tab.open(page_url(page))
     import random
@@ -579,11 +583,12 @@ def test_numbers_are_printed_as_python_prints_them(tab, reduced):
               1.5e16, 11.79, 106.1, 35.37, -3.0, 0.9995, 9.9999995, 1e21, 2.5e-30, 0.3]
     values += [rng.uniform(-2, 2) for _ in range(200)]
     values += [rng.uniform(0, 1) * 10 ** rng.randint(-8, 20) for _ in range(200)]
-    got = tab.page.evaluate("""vs => { const f = window.tribopipeExplorer.format;
-      return vs.map(v => [f.fixed(v, 3), f.g(v), f.g(v, 3), f.g(v, 10), f.repr(v)]); }""", values)
-    for v, (fixed3, g6, g3, g10, text) in zip(values, got, strict=True):
-        assert (fixed3, g6, g3, g10, text) == (
-            f"{v:.3f}", f"{v:g}", f"{v:.3g}", f"{v:.10g}", repr(v)), v
+    got = tab.page.evaluate("""vs => { const f = window.tribopipeExplorer.format.decimal;
+      return vs.map(v => [f(v, null, 3), f(v, 6), f(v, 3), f(v, 10), f(v, 17)]); }""", values)
+    for v, row in zip(values, got, strict=True):
+        assert tuple(row) == (
+            decimal_text(v, places=3), decimal_text(v, digits=6), decimal_text(v, digits=3),
+            decimal_text(v, digits=10), decimal_text(v, digits=17)), v
 
 
 def test_page_equals_query_where_temperatures_are_unknown(tab, tmp_path):

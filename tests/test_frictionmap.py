@@ -516,15 +516,17 @@ def test_map_summary_lists_pairs_flags_exclusions_and_repeatability(tmp_path):
 def test_map_show_lists_a_runs_flags_as_every_output_writes_them(tmp_path):
     """``map show --runs`` writes a run's flags as a list (``a, b``), as the reduce
     table, the report and the batch's flagged lines do, not as the map's cell text."""
+    from dataclasses import replace
+
+    from tribopipe.frictionmap.schema import frame_rows
     from tribopipe.frictionmap.summary import run_line
 
     path = tmp_path / "map.parquet"
     fm.append_records(path, [run_record(1)])
-    row = fm.read_map(path).to_dict(orient="records")[0]
-    row["flags"] = "normal_force_off_nominal;temperature_off_nominal"
+    (row,) = frame_rows(fm.read_map(path))
+    row = replace(row, flags="normal_force_off_nominal;temperature_off_nominal")
     assert run_line(row).endswith("; flags normal_force_off_nominal, temperature_off_nominal")
-    row["flags"] = ""
-    assert run_line(row).endswith("; flags -")
+    assert run_line(replace(row, flags="")).endswith("; flags -")
 
 
 def test_map_summary_names_a_hostile_map_path_on_one_line(tmp_path):

@@ -22,6 +22,8 @@ from tribopipe.interpolation import (
     ENGINE_TOLERANCE,
     LOO_METHODS,
     PUBLISHED_CURVATURE,
+    curvature,
+    curvature_terms,
     curve,
     densify,
     evaluate,
@@ -29,7 +31,7 @@ from tribopipe.interpolation import (
     stencil,
 )
 from tribopipe.query import map_curvature, pairs, query
-from tribopipe.rounding import known_u, lower_bound, plus_minus, round_gum
+from tribopipe.rounding import decimal_text, known_u, lower_bound, plus_minus, round_gum
 
 JS = Path(__file__).resolve().parents[1] / "src" / "tribopipe" / "export" / "assets" / "js"
 NODE = shutil.which("node")
@@ -80,6 +82,17 @@ def test_the_published_curvature_is_the_published_map_s(groups):
     assert map_curvature(groups, "mu_k") == pytest.approx(PUBLISHED_CURVATURE, abs=5e-5)
     # no mu_s in the published map: its kappa is mu_k's
     assert map_curvature(groups, "mu_s") == map_curvature(groups, "mu_k")
+
+
+def test_two_pressures_a_rounding_apart_give_no_curvature_term_and_no_crash():
+    # ln(199.99999999999997) == ln(200.0) in floating point: no second difference there
+    series = [([1.0, 199.99999999999997, 200.0], [1.0, 1.0, 1.0])]
+    assert curvature_terms(series) == []
+    assert curvature(series) == PUBLISHED_CURVATURE
+    # a well-spaced triple still gives its term: ln mu = -0.5 ln p + 0.1 (ln p)^2, d2 = 0.2
+    ps = [10.0, 20.0, 40.0]
+    mus = [math.exp(-0.5 * math.log(p) + 0.1 * math.log(p) ** 2) for p in ps]
+    assert curvature_terms([(ps, mus)]) == [pytest.approx(0.2)]
 
 
 def test_the_interpolation_u_is_zero_at_measured_points_and_grows_between(groups):
@@ -173,13 +186,12 @@ def test_plus_minus_is_bounded_at_zero():
 
 def run_node(data: dict, body: str) -> object:
     """Run ``body`` (JavaScript returning a JSON-ready value) in node with the explorer's
-    pyformat.js and query.js loaded and ``DATA`` set; its result."""
+    query.js loaded and ``DATA`` set; its result."""
     if NODE is None:
         pytest.skip("node is not on PATH")
     script = "\n".join([
         "var DATA = " + json.dumps(data, allow_nan=False) + ";",
         "var PAIRS = DATA.pairs;",
-        (JS / "pyformat.js").read_text(encoding="utf-8"),
         (JS / "query.js").read_text(encoding="utf-8"),
         "process.stdout.write(JSON.stringify((function () {" + body + "})()));",
     ])
@@ -202,6 +214,51 @@ def test_the_js_rounding_is_the_python_rounding():
     for (v, u), (gum, pm, pm_ascii) in zip(pairs_, got, strict=True):
         assert tuple(gum) == round_gum(v, u), (v, u)
         assert pm == plus_minus(v, u) and pm_ascii == plus_minus(v, u, ascii_only=True)
+
+
+def decimal_cases() -> list[float]:
+    """Values for :func:`decimal_text`: ties in decimal text, carries, exponents, signs,
+    zeros, what the interpolation and the weights give, and random magnitudes."""
+    rng = np.random.default_rng(23)
+    values = [0.0, -0.0, 0.5625, 0.0625, 0.03125, 2.5, 3.5, 0.125, 0.0125, 0.0005, 1e-5,
+              0.0001, 9.9996, 0.9995, 9.9999995, 99999.95, 999999.5, 123456789.0, 1e16,
+              1.5e16, 1e21, 2.5e-30, 5e-324, 11.79, 106.1, 35.37, -3.0, -0.00049, 0.3,
+              0.12345678905, 0.5312345678449, 1 / 3, 2 / 3, 1 / 32, 1 / 1024]
+    values += [float(v) for v in rng.uniform(-2, 2, 300)]
+    values += [float(v) for v in rng.uniform(0, 1, 300) * 10.0 ** rng.integers(-9, 22, 300)]
+    values += [round(float(v), 4) for v in rng.uniform(0, 1, 200)]  # decimal ties at 3
+    return values
+
+
+def test_decimal_text_is_format_where_no_decimal_tie_is_met():
+    """The one rule for computed numbers rounds the shortest decimal text; away from a
+    tie in that text (and subnormals) it is Python's own ``format``."""
+    for v in decimal_cases():
+        for n in (3, 6, 10):
+            want = format(v, f".{n}g")
+            got = decimal_text(v, digits=n)
+            if got != want:  # only where the decimal text is a tie at the n-th digit
+                digits = repr(abs(v)).replace(".", "").lstrip("0").split("e")[0]
+                assert digits[n:] == "5" or abs(v) < 1e-300 or want in ("-0", "-0.0"), (v, n)
+    assert decimal_text(0.0125, places=3) == "0.013" and f"{0.0125:.3f}" == "0.013"
+    assert decimal_text(1.0005, places=3) == "1.001" and f"{1.0005:.3f}" == "1.000"
+    assert decimal_text(0.12345678905, digits=10) == "0.1234567891"
+    assert decimal_text(1e-5, digits=6) == "1e-05" and decimal_text(1e16, digits=10) == "1e+16"
+    assert decimal_text(-0.00049, places=3) == "0.000"
+    assert decimal_text(-5.0, digits=17) == "-5" and decimal_text(math.inf, digits=3) == "inf"
+    with pytest.raises(ValueError):
+        decimal_text(1.0)
+
+
+def test_the_js_decimal_text_is_the_python_one():
+    values = decimal_cases() + [math.nan, math.inf, -math.inf]
+    got = run_node({"pairs": []}, "var vs = " + json.dumps(values, allow_nan=True) + ";"
+                   "return vs.map(function (v) { return [decimalText(v, 3), decimalText(v, 6), "
+                   "decimalText(v, 10), decimalText(v, 17), decimalText(v, null, 3)]; });")
+    for v, row in zip(values, got, strict=True):
+        assert row == [decimal_text(v, digits=3), decimal_text(v, digits=6),
+                       decimal_text(v, digits=10), decimal_text(v, digits=17),
+                       decimal_text(v, places=3)], v
 
 
 def budgeted_runs(runs: pd.DataFrame) -> pd.DataFrame:

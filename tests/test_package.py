@@ -46,7 +46,7 @@ def package(source_map, tmp_path_factory) -> Path:
     result = invoke("map", "publish", "-o", out, "--lab", LAB, "--contact", "Ada Lovelace",
                     "--email", "ada@example.org", "--map", source_map)
     assert result.exit_code == 0, result.output
-    assert "175 runs in 12 files" in result.output
+    assert "175 runs in 13 files" in result.output
     assert "evidence: 6 traces, 0 raw exports" in result.output
     return out
 
@@ -98,11 +98,12 @@ def validate(pkg: Path) -> tuple[int, list[str]]:
 def test_publish_validate_merge_round_trip_gives_identical_runs(source_map, package, tmp_path):
     files = sorted(str(p.relative_to(package)) for p in package.rglob("*") if p.is_file())
     evidence = [f for f in files if f.startswith("evidence/")]
-    assert "profile/package-v2.schema.json" in files
+    assert "profile/package-v3.schema.json" in files
     files = [f for f in files if not f.startswith(("evidence/", "profile/"))]
     assert len([f for f in evidence if f.startswith("evidence/traces/")]) == 6
     assert "evidence/index.csv" in evidence and "evidence/settings.json" in evidence
-    assert files == ["CITATION.cff", "README.md", "data/frictionmap.csv", "data/groups.csv",
+    assert files == ["CITATION.cff", "README.md", "data/frictionmap.csv",
+                     "data/group_runs.csv", "data/groups.csv",
                      "data/groups.parquet", "data/runs.csv", "data/runs.parquet",
                      "datapackage.json", "explorer.html"]
     code, lines = validate(package)

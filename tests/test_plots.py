@@ -23,6 +23,7 @@ from tribopipe.errors import ExportError
 from tribopipe.export.plots import plot_pair, plot_pairs, plot_runs
 from tribopipe.figures.trace import plot_trace, plot_trace_row
 from tribopipe.frictionmap import read_map
+from tribopipe.frictionmap.schema import frame_rows
 from tribopipe.labels import RunLabels
 from tribopipe.layout import find_trace
 from tribopipe.pipeline import reduce_file
@@ -111,8 +112,8 @@ def test_a_boundary_reading_is_marked_on_the_trace_plot(tmp_path):
 
 def test_trace_plot_from_parquet_and_map_row_in_every_format(processed, tmp_path):
     map_path, proc = processed
-    row = read_map(map_path).iloc[0].to_dict()
-    trace = pd.read_parquet(find_trace(proc / "traces", row["measurement_id"]))
+    row = frame_rows(read_map(map_path))[0]
+    trace = pd.read_parquet(find_trace(proc / "traces", row.measurement_id))
     png = plot_trace_row(trace, row, tmp_path / "t.png")
     assert_png(Path(png))
     svg = Path(plot_trace_row(trace, row, tmp_path / "t.svg"))
@@ -128,8 +129,8 @@ def test_trace_plot_from_parquet_and_map_row_in_every_format(processed, tmp_path
 
 def test_plot_to_a_stream_needs_a_format(processed):
     map_path, proc = processed
-    row = read_map(map_path).iloc[0].to_dict()
-    trace = pd.read_parquet(find_trace(proc / "traces", row["measurement_id"]))
+    row = frame_rows(read_map(map_path))[0]
+    trace = pd.read_parquet(find_trace(proc / "traces", row.measurement_id))
     buf = io.BytesIO()
     plot_trace_row(trace, row, buf, fmt="png")
     assert png_size(buf.getvalue())[0] > 400

@@ -23,6 +23,7 @@ from tribopipe.campaign import load_campaign, run_campaign
 from tribopipe.cli import main
 from tribopipe.errors import ExportError
 from tribopipe.frictionmap import read_map
+from tribopipe.frictionmap.schema import frame_rows
 from tribopipe.layout import find_trace
 from tribopipe.report import (
     MAP_TITLE,
@@ -337,14 +338,14 @@ def test_the_overlay_draws_each_repeat_from_its_trace(spread, tmp_path):
 
     map_path, proc = spread
     runs = read_map(map_path)
-    rows = runs[runs["normal_force_N"] == 12.0].to_dict(orient="records")
-    traces = [(r, pd.read_parquet(find_trace(proc / "traces", r["measurement_id"])))
+    rows = frame_rows(runs[runs["normal_force_N"] == 12.0])
+    traces = [(r, pd.read_parquet(find_trace(proc / "traces", r.measurement_id)))
               for r in rows]
     out = plot_group_overlay(traces, tmp_path / "overlay.svg", title="12 N")
     svg = Path(out).read_text(encoding="utf-8")
     # one line per repeat plus its dashed μ_K, and a legend entry naming each run
     for r in rows:
-        assert r["measurement_id"][:8] in svg
+        assert r.measurement_id[:8] in svg
     with pytest.raises(ExportError, match="no traces"):
         plot_group_overlay([], tmp_path / "none.png", title="x")
 

@@ -335,7 +335,7 @@ def test_drake_parses_the_file_and_combines_to_the_pair_values(
     static = res.mu_s.value if mu_s == "measured" else res.mu_k.value
     pin_friction, disc_friction = _drake_friction(path)
     combined = CalcContactFrictionFromSurfaceProperties(pin_friction, disc_friction)
-    # the file holds 10 significant digits (simbase.num): the engine's value is the pair's
+    # the file holds 10 significant digits (unit_systems.num): the engine's value is the pair's
     # to half a unit of the 10th
     assert combined.dynamic_friction() == pytest.approx(res.mu_k.value, rel=1e-9)
     assert combined.static_friction() == pytest.approx(static, rel=1e-9)

@@ -27,17 +27,16 @@ from tribopipe.errors import ExportError
 from tribopipe.escape import SIM_COMMENTS, sim_comment
 from tribopipe.export import drake, fe_decks, pybullet, scenes, usd
 from tribopipe.export.fe_decks import abaqus_name, deck_names, field10, write_abaqus, write_ansys
-from tribopipe.export.registry import FORMATS
-from tribopipe.export.simbase import (
+from tribopipe.export.formats import FORMATS
+from tribopipe.export.simulators import export_simulator_input
+from tribopipe.export.slip_rates import (
     FOUNDING_SLIP_RATE,
-    UNIT_SYSTEMS,
     SlipRate,
-    convert_pressure_kPa,
     default_decay_s_per_mm,
     pair_slip_rates,
-    xml_comment,
 )
-from tribopipe.export.simulators import export_simulator_input
+from tribopipe.export.unit_systems import UNIT_SYSTEMS, convert_pressure_kPa
+from tribopipe.export.xml_text import xml_comment
 from tribopipe.query import pairs, query
 
 
@@ -678,30 +677,48 @@ def test_new_formats_refuse_what_they_do_not_take(groups):
 
 
 def test_every_registry_entry_resolves_and_declares_what_its_writer_takes():
-    """The registry names its functions as text: each must exist, and a writer's keyword
-    arguments must be exactly the options its entry declares (plus what
-    export_simulator_input passes), so that no option is dropped or unknown."""
+    """The registry holds the writer functions themselves, one entry per format in the
+    formats' order, and a writer's keyword arguments are exactly the options its format
+    declares (plus what export_simulator_input passes), so that no option is dropped or
+    unknown."""
     import inspect
 
-    from tribopipe.export.registry import UNITS, WRITERS, load
-    from tribopipe.export.simbase import Engine
+    from tribopipe.export.formats import ENTRIES, UNITS
+    from tribopipe.export.headers import Engine
+    from tribopipe.export.registry import WRITERS
 
     assert UNITS.choices == tuple(UNIT_SYSTEMS)
+    assert [w.format for w in WRITERS] == list(ENTRIES)
     for w in WRITERS:
-        assert isinstance(load(w.engine), Engine), w.name
+        spec = w.format
+        assert isinstance(w.engine, Engine), w.name
         for target, options, passed in (
-            (w.table, w.table_options, {"pin", "disc", "temperature_C", "source"}
-             | ({"slip_rates"} if w.slip_rate else set())),
-            (w.condition, w.condition_options,
-             {"source"} | ({"slip_rate"} if w.slip_rate else set())
-             | ({"speed_curve"} if w.speed_curve else set())),
+            (w.table, spec.table_options, {"pin", "disc", "temperature_C", "source"}
+             | ({"slip_rates"} if spec.slip_rate else set())),
+            (w.condition, spec.condition_options,
+             {"source"} | ({"slip_rate"} if spec.slip_rate else set())
+             | ({"speed_curve"} if spec.speed_curve else set())),
         ):
             if target is None:
                 continue
-            params = inspect.signature(load(target)).parameters
+            params = inspect.signature(target).parameters
             keywords = {n for n, p in params.items() if p.kind is p.KEYWORD_ONLY}
             assert keywords == passed | {o.name for o in options}, (w.name, target)
             for option in options:
-                assert option.check is None or callable(load(option.check))
+                assert option.check is None or callable(option.check)
+        assert (w.snippet is None) == (w.snippet_header is None) == (not spec.snippet), w.name
         if w.snippet is not None:
-            assert callable(load(w.snippet)) and callable(load(w.snippet_header)), w.name
+            assert callable(w.snippet) and callable(w.snippet_header), w.name
+
+
+def test_a_writer_entry_must_have_the_writers_its_format_declares():
+    """A registry entry whose functions are not those its format declares is refused
+    when it is made (so the light list the command line reads cannot drift)."""
+    from tribopipe.export.formats import format_named
+    from tribopipe.export.registry import Writer
+    from tribopipe.export.scenes import MUJOCO, write_mujoco
+
+    with pytest.raises(TypeError, match="the writers of abaqus are not those"):
+        Writer(format_named("abaqus"), MUJOCO, condition=write_mujoco)
+    with pytest.raises(TypeError, match="the writers of mujoco are not those"):
+        Writer(format_named("mujoco"), MUJOCO, table=write_abaqus, condition=write_mujoco)

@@ -3,7 +3,7 @@
 The page offers every format of :data:`tribopipe.export.registry.WRITERS` that has a
 snippet; its text is the Python writer's opening lines (rendered into the page) plus what
 ``snippets.js`` adds for the condition (every line that names the pair comes escaped from
-Python: the script holds no escaping rule). Here Node runs ``pyformat.js`` and ``snippets.js``
+Python: the script holds no escaping rule). Here Node runs ``query.js`` and ``snippets.js``
 on the page's own data and on query results of a grid of conditions (measured, between
 groups, clamped, without and with μ_S, μ_S below μ_K, hostile names), and every text must
 equal :func:`tribopipe.export.simulators.snippet`'s, byte for byte. (The browser tests
@@ -66,7 +66,7 @@ def groups(published_groups: pd.DataFrame) -> pd.DataFrame:
 
 
 def _run_js(node: str, data: dict, results: list, formats: list[str]) -> dict:
-    script = HARNESS % "\n".join(_js(name) for name in ("pyformat.js", "query.js", "snippets.js"))
+    script = HARNESS % "\n".join(_js(name) for name in ("query.js", "snippets.js"))
     proc = subprocess.run([node, "-e", script], input=json.dumps(
         {"data": data, "results": results, "formats": formats}),
         capture_output=True, text=True, check=True)

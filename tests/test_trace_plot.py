@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import io
 import math
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -34,6 +35,7 @@ from tribopipe.figures import (
     save_figure,
     trace_figure,
 )
+from tribopipe.frictionmap.schema import MapRow
 from tribopipe.labels import RunLabels
 from tribopipe.pipeline import plot_run, reduce_file, run_conditions
 
@@ -368,11 +370,13 @@ def test_conditions_line():
     assert TraceConditions(pin="DS30", normal_force_N=5.0).line() == "DS30 on disc ? · F 5 N"
     full = TraceConditions("f.csv", "DS30", "steel", 1.0, 11.79, 20.0, 3)
     assert full.line() == "DS30 on steel · F 1 N (11.79 kPa per pin) · 20 °C · repeat 3"
-    row = {"source_file": "f.csv", "pin": "DS30", "disc": "steel", "normal_force_N": 1.0,
-           "pressure_kPa": 11.79, "temperature_C": 20.0, "repeat": 3.0}
+    row = MapRow(measurement_id="x", source="reduced", source_file="f.csv", pin="DS30",
+                 disc="steel", normal_force_N=1.0, pressure_kPa=11.79, temperature_C=20.0,
+                 repeat=3, mu_k=0.5)
     assert TraceConditions.from_row(row) == full
-    assert TraceConditions.from_row({"repeat": math.nan, "pin": math.nan}).line() == \
-        "conditions unknown"
+    unknown = replace(row, source_file=None, pin="", disc="", normal_force_N=math.nan,
+                      pressure_kPa=math.nan, temperature_C=None, repeat=None)
+    assert TraceConditions.from_row(unknown).line() == "conditions unknown"
 
 
 def test_hostile_names_are_printed_not_parsed(outcomes, tmp_path):
@@ -419,9 +423,9 @@ def test_force_panel_shows_measured_and_nominal_force(outcomes):
 def test_a_trace_without_normal_force_says_so(outcomes, tmp_path):
     outcome = outcomes[0]
     trace = outcome.result.trace.drop(columns=["normal_force_N", "mu_smooth"])
-    row = {"mu_s": outcome.result.mu_s, "mu_s_distance_mm": outcome.result.mu_s_distance_mm,
-           "mu_k": outcome.result.mu_k, "mu_k_window_start_mm": math.nan,
-           "mu_k_window_end_mm": math.nan, "flags": None}
+    row = replace(outcome.record, mu_k_window_start_mm=math.nan, mu_k_window_end_mm=math.nan,
+                  flags=None, source_file=None, pin="", disc="", normal_force_N=math.nan,
+                  pressure_kPa=math.nan, temperature_C=None, repeat=None)
     target = plot_trace_row(trace, row, tmp_path / "no_force.png")
     figure = trace_figure()
     assert figure.no_force.get_visible()
@@ -447,11 +451,11 @@ def test_plot_trace_row_draws_a_stored_trace(outcomes, tmp_path):
     outcome = outcomes[1]
     stored = tmp_path / "t.parquet"
     outcome.result.trace.to_parquet(stored)
-    row = outcome.record.as_dict()
+    row = outcome.record
     png = plot_trace_row(pd.read_parquet(stored), row, io.BytesIO(), fmt="png", dpi=80)
     with Image.open(io.BytesIO(png.getvalue())) as image:
         assert image.size == (560, 424)
     figure = trace_figure(80)
     assert figure.title.get_text() == "EF50_acrylic_9N_10C_r2.csv"
     assert figure.conditions.get_text().startswith("Ecoflex 00-50 on acrylic · F 9 N")
-    assert figure.flags.get_text() == "flags: " + row["flags"].replace(";", ", ")
+    assert figure.flags.get_text() == "flags: " + str(row.flags).replace(";", ", ")

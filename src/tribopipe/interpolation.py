@@ -283,7 +283,8 @@ def curve(
 def curvature_terms(series: Iterable[tuple[Sequence[float], Sequence[float]]]) -> list[float]:
     """κ at every interior point of each series (pressures [kPa] sorted ascending, values
     μ): twice the second divided difference of ln μ over ln p, for consecutive triples
-    whose pressures and values are all positive."""
+    whose pressures and values are all positive and whose ln p strictly increase (two
+    pressures a rounding apart have one ln p, and no second difference between them)."""
     terms = []
     for ps, mus in series:
         for i in range(1, len(ps) - 1):
@@ -291,6 +292,8 @@ def curvature_terms(series: Iterable[tuple[Sequence[float], Sequence[float]]]) -
             if min(p3) <= 0 or min(m3) <= 0:
                 continue
             x = [math.log(v) for v in p3]
+            if not x[0] < x[1] < x[2]:
+                continue
             y = [math.log(v) for v in m3]
             slope_hi = (y[2] - y[1]) / (x[2] - x[1])
             slope_lo = (y[1] - y[0]) / (x[1] - x[0])

@@ -52,7 +52,7 @@ from .interpolation import (
 )
 from .numeric import finite_or_none
 from .physics import FOUNDING_SLIDING_SPEED_MM_S
-from .rounding import known_u, lower_bound, plus_minus
+from .rounding import decimal_text, known_u, lower_bound, plus_minus
 from .stats import (
     LABS,
     LABS_DISAGREE,
@@ -107,7 +107,7 @@ NOTES = {
     "clamped_temperature": "temperature outside the measured range: edge value held",
     "clamped_speed": "sliding speed outside the measured speeds: edge value held",
 }
-#: what a request out of bounds is told (``{}``: the value asked for)
+#: what a request out of bounds is told (``{}``: the value asked for, :func:`request_value`)
 REQUEST_ERRORS = {
     "pressure": "contact pressure must be a finite number >= 0 kPa, got {}",
     "temperature": "temperature must be a finite number in °C, got {}",
@@ -482,6 +482,13 @@ def _estimate(
     )
 
 
+def request_value(value: float) -> str:
+    """A requested value as :data:`REQUEST_ERRORS` quote it: every digit it was given
+    (:func:`tribopipe.rounding.decimal_text` to 17 significant digits, the shortest text
+    that reads back as it)."""
+    return decimal_text(value, digits=17)
+
+
 def estimate_text(
     value: float, expanded: float | None, n_min: int, *, ascii_only: bool = False,
     extrapolated: bool = False,
@@ -494,7 +501,7 @@ def estimate_text(
         return plus_minus(value, expanded, ascii_only=ascii_only)
     why = WHY_NO_U["extrapolated" if extrapolated else "single_run" if n_min < 2 else
                    "unknown"]
-    return f"{value:.3f} ({why})"
+    return f"{decimal_text(value, places=3)} ({why})"
 
 
 # ---------------------------------------------------------------------------- public API
@@ -538,7 +545,7 @@ def speed_weights(
             raise ExportError(speed_needed(speeds_mm_s), hint="pass --speed")
         return [(0, 1.0)], False
     if not (math.isfinite(speed_mm_s) and speed_mm_s > 0):
-        raise ExportError(REQUEST_ERRORS["speed"].format(speed_mm_s))
+        raise ExportError(REQUEST_ERRORS["speed"].format(request_value(speed_mm_s)))
     for i, v in enumerate(speeds_mm_s):
         if abs(math.log(speed_mm_s / v)) <= SPEED_MATCH_REL:
             return [(i, 1.0)], False
@@ -606,9 +613,9 @@ def query(
     pair (listing the pairs held) or a bad request.
     """
     if not math.isfinite(pressure_kPa) or pressure_kPa < 0:
-        raise ExportError(REQUEST_ERRORS["pressure"].format(pressure_kPa))
+        raise ExportError(REQUEST_ERRORS["pressure"].format(request_value(pressure_kPa)))
     if temperature_C is not None and not math.isfinite(temperature_C):
-        raise ExportError(REQUEST_ERRORS["temperature"].format(temperature_C))
+        raise ExportError(REQUEST_ERRORS["temperature"].format(request_value(temperature_C)))
     groups, method = one_method(groups, pin, disc, method)
     pair = select_pair(groups, pin, disc)
     speeds = pair_speeds(pair)

@@ -41,6 +41,7 @@ from .export.tables import spreadsheet_csv
 from .figures.trace import plot_trace_row
 from .files import write_text_atomic
 from .fit import fit_power_law
+from .frictionmap.schema import MapRow, frame_rows
 from .frictionmap.snapshot import as_snapshot
 from .frictionmap.synthetic_rows import synthetic_note
 from .labels import flag_list, quality_flags
@@ -396,17 +397,17 @@ def _flagged(inp: ReportInputs) -> str:
         body = "<p>No run carries a QC flag or is excluded.</p>"
     else:
         rows = []
-        for r in sel.to_dict(orient="records"):
-            mid = str(r["measurement_id"])
-            excluded = bool(r.get("excluded"))
-            reason = _e(r.get("exclusion_reason")) if excluded else ""
+        for r in frame_rows(sel):
+            mid = r.measurement_id
+            excluded = r.excluded
+            reason = _e(r.exclusion_reason) if excluded else ""
             rows.append(
                 f'<tr class="{"excl" if excluded else "flag"}"><td class=t>'
                 f'<a href="#{run_anchor(mid)}">{html_text(mid[:8])}</a></td>'
-                f"<td class=t>{_e(r.get('source_file'))}</td><td class=t>{_name(r['pin'])}</td>"
-                f"<td class=t>{_name(r['disc'])}</td><td>{_num(r['pressure_kPa'], '.4g')}</td>"
-                f"<td>{_run_value(r['mu_k'], r.get('u_mu_k'))}</td>"
-                f"<td class=t>{html_text(', '.join(flag_list(r.get('flags'))))}</td>"
+                f"<td class=t>{_e(r.source_file)}</td><td class=t>{_name(r.pin)}</td>"
+                f"<td class=t>{_name(r.disc)}</td><td>{_num(r.pressure_kPa, '.4g')}</td>"
+                f"<td>{_run_value(r.mu_k, r.u_mu_k)}</td>"
+                f"<td class=t>{html_text(', '.join(flag_list(r.flags)))}</td>"
                 f"<td class=t>{'excluded: ' + reason if excluded else ''}</td>"
                 f"<td class=t>{html_text(_review_text(r))}</td></tr>"
             )
@@ -446,26 +447,25 @@ def _review_count(runs: pd.DataFrame) -> str:
     return f"{int(counts.sum())} (" + ", ".join(f"{a} {n}" for a, n in counts.items()) + ")"
 
 
-def _review_text(r: Mapping[Any, Any]) -> str:
+def _review_text(r: MapRow) -> str:
     """What a reviewer decided on a run, by whom, when and why, with the automatic
     values beside the reviewed ones (plain text); '' for a run not reviewed."""
-    action = r.get("review")
-    if action is None or (isinstance(action, float) and math.isnan(action)):
+    action = r.review
+    if action is None:
         return ""
     text = f"reviewed: {action}"
     if action == "window":
-        text += (f" {_num(r.get('mu_k_window_start_mm'), '.4g')}–"
-                 f"{_num(r.get('mu_k_window_end_mm'), '.4g')} mm, μ_K {_num(r.get('mu_k'), '.4f')}"
-                 f" (automatic {_num(r.get('auto_mu_k'), '.4f')} over "
-                 f"{_num(r.get('auto_mu_k_window_start_mm'), '.4g')}–"
-                 f"{_num(r.get('auto_mu_k_window_end_mm'), '.4g')} mm)")
-        peak = r.get("review_static_peak_mm")
-        if peak is not None and not (isinstance(peak, float) and math.isnan(peak)):
-            text += (f", μ_S {_num(r.get('mu_s'), '.4f')} at {_num(peak, '.4g')} mm (automatic "
-                     f"{_num(r.get('auto_mu_s'), '.4f')})")
-    for key, label in (("review_by", "by"), ("review_date", "on"), ("review_reason", "why:")):
-        value = r.get(key)
-        if value is not None and not (isinstance(value, float) and math.isnan(value)):
+        text += (f" {_num(r.mu_k_window_start_mm, '.4g')}–"
+                 f"{_num(r.mu_k_window_end_mm, '.4g')} mm, μ_K {_num(r.mu_k, '.4f')}"
+                 f" (automatic {_num(r.auto_mu_k, '.4f')} over "
+                 f"{_num(r.auto_mu_k_window_start_mm, '.4g')}–"
+                 f"{_num(r.auto_mu_k_window_end_mm, '.4g')} mm)")
+        peak = r.review_static_peak_mm
+        if peak is not None:
+            text += (f", μ_S {_num(r.mu_s, '.4f')} at {_num(peak, '.4g')} mm (automatic "
+                     f"{_num(r.auto_mu_s, '.4f')})")
+    for value, label in ((r.review_by, "by"), (r.review_date, "on"), (r.review_reason, "why:")):
+        if value is not None:
             text += f" {label} {value}"
     return text
 
@@ -485,22 +485,22 @@ def _runs(inp: ReportInputs) -> str:
     # the test and result a run came from, where any run without a trace names one
     plain_runs = inp.runs[~inp.runs["measurement_id"].astype(str).isin(traces)]
     with_test = bool(plain_runs[["test", "result"]].notna().any(axis=None))
-    for r in ordered.to_dict(orient="records"):
-        mid = str(r["measurement_id"])
-        repeat = "" if pd.isna(r.get("repeat")) else str(r["repeat"])
+    for r in frame_rows(ordered):
+        mid = r.measurement_id
+        repeat = "" if r.repeat is None else str(r.repeat)
         if mid not in traces:
             plain.append(
                 f'<tr id="{run_anchor(mid)}"><td class=t>{html_text(mid[:8])}</td>'
-                f"<td class=t>{_name(r['pin'])}</td><td class=t>{_e(r['disc'])}</td>"
-                f"<td>{_num(r['pressure_kPa'], '.4g')}</td>"
-                f"<td>{_num(r['temperature_C'], 'g')}</td><td>{html_text(repeat)}</td>"
-                f"<td>{_run_value(r['mu_k'], r.get('u_mu_k'))}</td>"
-                + (f"<td>{_run_value(r['mu_s'], r.get('u_mu_s'))}</td>"
+                f"<td class=t>{_name(r.pin)}</td><td class=t>{_e(r.disc)}</td>"
+                f"<td>{_num(r.pressure_kPa, '.4g')}</td>"
+                f"<td>{_num(r.temperature_C, 'g')}</td><td>{html_text(repeat)}</td>"
+                f"<td>{_run_value(r.mu_k, r.u_mu_k)}</td>"
+                + (f"<td>{_run_value(r.mu_s, r.u_mu_s)}</td>"
                    if with_mu_s else "")
-                + f"<td class=t>{_e(r.get('source'))}</td><td class=t>{_e(r.get('lab'))}</td>"
-                + (f"<td class=t>{_e(r.get('test'))}</td><td class=t>{_e(r.get('result'))}</td>"
+                + f"<td class=t>{_e(r.source)}</td><td class=t>{_e(r.lab)}</td>"
+                + (f"<td class=t>{_e(r.test)}</td><td class=t>{_e(r.result)}</td>"
                    if with_test else "")
-                + f"<td class=t>{html_text(', '.join(flag_list(r.get('flags'))))}</td></tr>"
+                + f"<td class=t>{html_text(', '.join(flag_list(r.flags)))}</td></tr>"
             )
             continue
         trace = pd.read_parquet(traces[mid])
@@ -508,21 +508,21 @@ def _runs(inp: ReportInputs) -> str:
             lambda buf, trace=trace, r=r: plot_trace_row(trace, r, buf, fmt="png",
                                                          dpi=TRACE_DPI)
         )
-        flags = ", ".join(flag_list(r.get("flags"))) or "none"
+        flags = ", ".join(flag_list(r.flags)) or "none"
         summary = (
-            f"{html_text(mid[:8])} · {_e(r['pin'])} on {_e(r['disc'])} · "
-            f"{_num(r['pressure_kPa'], '.4g')} kPa · {_num(r['temperature_C'], 'g')} °C"
+            f"{html_text(mid[:8])} · {_e(r.pin)} on {_e(r.disc)} · "
+            f"{_num(r.pressure_kPa, '.4g')} kPa · {_num(r.temperature_C, 'g')} °C"
             f"{html_text(', repeat ' + repeat if repeat else '')} · "
-            f"μ_K {_run_value(r['mu_k'], r.get('u_mu_k'))}"
-            + (f" · μ_S {_run_value(r['mu_s'], r.get('u_mu_s'))}"
-               if _num(r["mu_s"], ".3f") else "")
+            f"μ_K {_run_value(r.mu_k, r.u_mu_k)}"
+            + (f" · μ_S {_run_value(r.mu_s, r.u_mu_s)}"
+               if _num(r.mu_s, ".3f") else "")
         )
         facts = (
-            f"<p>file: {_e(r.get('source_file'))}; test: {_e(r.get('test'))}; result: "
-            f"{_e(r.get('result'))}; interval: {_e(r.get('interval'))}; source: "
-            f"{_e(r.get('source'))}; "
-            f"flags: {html_text(flags)}; μ_K window: {_num(r.get('mu_k_window_start_mm'), '.3f')}"
-            f"–{_num(r.get('mu_k_window_end_mm'), '.3f')} mm; method: {_e(r.get('method'))}"
+            f"<p>file: {_e(r.source_file)}; test: {_e(r.test)}; result: "
+            f"{_e(r.result)}; interval: {_e(r.interval)}; source: "
+            f"{_e(r.source)}; "
+            f"flags: {html_text(flags)}; μ_K window: {_num(r.mu_k_window_start_mm, '.3f')}"
+            f"–{_num(r.mu_k_window_end_mm, '.3f')} mm; method: {_e(r.method)}"
             + (f"; <strong class=reviewed>{html_text(_review_text(r))}</strong>"
                if _review_text(r) else "")
             + "</p>"
@@ -581,7 +581,7 @@ def _spread(inp: ReportInputs) -> str:
     if inp.map_report:
         return ""
     groups = _overlay_groups(inp)
-    rows = {str(r["measurement_id"]): r for r in inp.runs.to_dict(orient="records")}
+    rows = {r.measurement_id: r for r in frame_rows(inp.runs)}
     rep = repeatability(inp.groups, "mu_k") if len(inp.groups) else None
     limit = f"{rep.r:.4f}" if rep is not None and not math.isnan(rep.r) else "?"
     figures = []

@@ -31,7 +31,7 @@ import csv
 import io
 import math
 from collections.abc import Callable, Iterable, Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -40,7 +40,7 @@ import numpy as np
 from .errors import ReductionError, TribopipeError
 from .escape import csv_cell, csv_uncell, display_path
 from .files import read_regular
-from .frictionmap.schema import MapRow, checked_row, frame_records, is_missing
+from .frictionmap.schema import MapRow, checked_row, frame_rows
 from .layout import find_trace
 from .reduction.manual import (
     TRACE_META_KEY,
@@ -231,82 +231,72 @@ def review_csv(decisions: Iterable[Decision]) -> str:
     return out.getvalue()
 
 
-def decision_of_row(row: Mapping[str, Any], line: int = 0) -> Decision | None:
+def decision_of_row(row: MapRow, line: int = 0) -> Decision | None:
     """The decision a reviewed map row holds (``None`` for a row not reviewed)."""
-    action = row.get("review")
-    if is_missing(action):
+    if row.review is None:
         return None
-
-    def num(c: str) -> float | None:
-        v: Any = row.get(c)
-        return None if is_missing(v) else float(v)
-
-    def text(c: str) -> str:
-        v = row.get(c)
-        return "" if is_missing(v) else str(v)
-
-    return Decision(line=line, run=str(row["measurement_id"]), action=str(action),
-                    kinetic_from_mm=num("review_kinetic_from_mm"),
-                    kinetic_to_mm=num("review_kinetic_to_mm"),
-                    static_peak_mm=num("review_static_peak_mm"), reason=text("review_reason"),
-                    who=text("review_by"), date=text("review_date"))
+    return Decision(line=line, run=row.measurement_id, action=row.review,
+                    kinetic_from_mm=row.review_kinetic_from_mm,
+                    kinetic_to_mm=row.review_kinetic_to_mm,
+                    static_peak_mm=row.review_static_peak_mm, reason=row.review_reason or "",
+                    who=row.review_by or "", date=row.review_date or "")
 
 
-def automatic(row: Mapping[str, Any], samples: Callable[[], tuple[SlidingSamples,
-              TraceTerms]] | None = None) -> dict[str, Any]:
+def _cleared(row: MapRow) -> MapRow:
+    """``row`` without a review: no decision and no ``auto_`` copy."""
+    none: dict[str, Any] = dict.fromkeys((*AUTO_OF, *DECISION_COLUMNS))
+    return replace(row, **none)
+
+
+def automatic(row: MapRow, samples: Callable[[], tuple[SlidingSamples,
+              TraceTerms]] | None = None) -> MapRow:
     """The row as the reduction made it: a reviewed row with its ``auto_`` values back,
     its decision cleared and, after an exclusion by review, included again. The columns
     a window re-reads without an ``auto_`` copy (its times, the plateau's scatter and
     drift, μ_S's time) are re-read over the automatic window from ``samples()`` when a
     window was applied."""
-    out = dict(row)
-    if is_missing(row.get("review")):
-        return out
-    for auto, col in AUTO_OF.items():
-        out[col] = row.get(auto)
-        out[auto] = None
-    for col in DECISION_COLUMNS:
-        out[col] = None
-    if row.get("review") == "exclude":
-        out["excluded"], out["exclusion_reason"] = False, None
-    if row.get("review") == "window" and samples is not None:
+    if row.review is None:
+        return row
+    out = _cleared(replace(row, **{col: getattr(row, auto) for auto, col in AUTO_OF.items()}))
+    if row.review == "exclude":
+        out = replace(out, excluded=False, exclusion_reason=None)
+    start, end = out.mu_k_window_start_mm, out.mu_k_window_end_mm
+    if row.review == "window" and samples is not None and start is not None and end is not None:
         smp, terms = samples()
-        k = kinetic_over(smp, float(out["mu_k_window_start_mm"]),
-                         float(out["mu_k_window_end_mm"]), terms)
-        out.update(mu_k_window_start_s=k.start_s, mu_k_window_end_s=k.end_s,
-                   plateau_std=k.std, plateau_drift_per_mm=k.drift_per_mm)
-        s_peak: Any = out.get("mu_s_distance_mm")
-        if not is_missing(s_peak) and smp.s_mm.size:
-            out["mu_s_time_s"] = float(smp.t_s[int(np.argmin(np.abs(smp.s_mm - float(s_peak))))])
+        k = kinetic_over(smp, start, end, terms)
+        out = replace(out, mu_k_window_start_s=k.start_s, mu_k_window_end_s=k.end_s,
+                      plateau_std=k.std, plateau_drift_per_mm=k.drift_per_mm)
+        s_peak = out.mu_s_distance_mm
+        if s_peak is not None and smp.s_mm.size:
+            out = replace(out, mu_s_time_s=float(
+                smp.t_s[int(np.argmin(np.abs(smp.s_mm - s_peak)))]))
     return out
 
 
-def reviewed(auto: Mapping[str, Any], d: Decision, where: str,
+def reviewed(auto: MapRow, d: Decision, where: str,
              samples: Callable[[], tuple[SlidingSamples, TraceTerms]]) -> MapRow:
     """The row ``auto`` (as the reduction made it) with decision ``d`` applied; the
     automatic values kept in the ``auto_`` columns. :class:`ReviewError` naming
     ``where`` when the decision cannot be applied."""
-    out = dict(auto)
-    for col_auto, col in AUTO_OF.items():
-        out[col_auto] = auto.get(col)
-    out.update(review=d.action, review_by=d.who or None, review_date=d.date or None,
-               review_reason=d.reason or None, review_kinetic_from_mm=d.kinetic_from_mm,
-               review_kinetic_to_mm=d.kinetic_to_mm, review_static_peak_mm=d.static_peak_mm)
+    out = replace(auto, **{col_auto: getattr(auto, col) for col_auto, col in AUTO_OF.items()})
+    out = replace(out, review=d.action, review_by=d.who or None, review_date=d.date or None,
+                  review_reason=d.reason or None, review_kinetic_from_mm=d.kinetic_from_mm,
+                  review_kinetic_to_mm=d.kinetic_to_mm, review_static_peak_mm=d.static_peak_mm)
     if d.action == "exclude":
-        out["excluded"], out["exclusion_reason"] = True, d.reason
+        out = replace(out, excluded=True, exclusion_reason=d.reason)
     elif d.action == "window":
         assert d.kinetic_from_mm is not None and d.kinetic_to_mm is not None
         smp, terms = samples()
         try:
             k = kinetic_over(smp, d.kinetic_from_mm, d.kinetic_to_mm, terms, where=where)
-            out.update(mu_k=k.mu_k, u_mu_k=k.u_mu_k, mu_k_window_start_mm=k.start_mm,
-                       mu_k_window_end_mm=k.end_mm, mu_k_window_start_s=k.start_s,
-                       mu_k_window_end_s=k.end_s, plateau_std=k.std,
-                       plateau_drift_per_mm=k.drift_per_mm)
+            out = replace(out, mu_k=k.mu_k, u_mu_k=k.u_mu_k, mu_k_window_start_mm=k.start_mm,
+                          mu_k_window_end_mm=k.end_mm, mu_k_window_start_s=k.start_s,
+                          mu_k_window_end_s=k.end_s, plateau_std=k.std,
+                          plateau_drift_per_mm=k.drift_per_mm)
             if d.static_peak_mm is not None:
-                s = static_at(smp, d.static_peak_mm, terms, where=where)
-                out.update(mu_s=s.mu_s, u_mu_s=s.u_mu_s, mu_s_distance_mm=s.distance_mm,
-                           mu_s_time_s=s.time_s)
+                st = static_at(smp, d.static_peak_mm, terms, where=where)
+                out = replace(out, mu_s=st.mu_s, u_mu_s=st.u_mu_s,
+                              mu_s_distance_mm=st.distance_mm, mu_s_time_s=st.time_s)
         except ReductionError as exc:
             raise ReviewError(str(exc)) from None
     try:
@@ -347,14 +337,13 @@ def trace_table(traces_dir: Path | None, measurement_id: str,
     return SlidingSamples.of_trace(frame), terms, frame
 
 
-def _resolve(review: Review, rows: Mapping[str, Mapping[str, Any]]) -> dict[str, Decision]:
+def _resolve(review: Review, rows: Mapping[str, MapRow]) -> dict[str, Decision]:
     """Run id → decision: each decision's run found by id or by its one-run file's name;
     :class:`ReviewError` for a run not in the map or named twice."""
     by_file: dict[str, list[str]] = {}
     for mid, row in rows.items():
-        f = row.get("source_file")
-        if not is_missing(f):
-            by_file.setdefault(str(f), []).append(mid)
+        if row.source_file is not None:
+            by_file.setdefault(row.source_file, []).append(mid)
     out: dict[str, Decision] = {}
     for d in review.decisions:
         where = review.where(d)
@@ -393,7 +382,7 @@ class ReviewOutcome:
         return text
 
 
-def review_records(rows: Sequence[Mapping[str, Any]], review: Review | None,
+def review_records(rows: Sequence[MapRow], review: Review | None,
                    traces_dir: Path | None, *, fresh: Iterable[str] = ()) -> ReviewOutcome:
     """Apply a review to map rows (``rows``: every row as the map will hold it, the
     records of runs reduced now included).
@@ -406,7 +395,7 @@ def review_records(rows: Sequence[Mapping[str, Any]], review: Review | None,
     whose content changes are needed, but every reviewed row is returned (folding an
     unchanged row changes nothing). Nothing is applied when any decision fails: the
     first failure is a :class:`ReviewError` naming its line."""
-    by_id = {str(r["measurement_id"]): r for r in rows}
+    by_id = {r.measurement_id: r for r in rows}
     fresh_ids = set(fresh)
     if review is not None:
         decided = _resolve(review, by_id)
@@ -423,7 +412,7 @@ def review_records(rows: Sequence[Mapping[str, Any]], review: Review | None,
     withdrawn: list[str] = []
     for mid, row in by_id.items():
         d = decided.get(mid)
-        was_reviewed = not is_missing(row.get("review"))
+        was_reviewed = row.review is not None
         if d is None and not was_reviewed:
             continue
         where = where_of.get(mid, f"run {mid}")
@@ -432,10 +421,7 @@ def review_records(rows: Sequence[Mapping[str, Any]], review: Review | None,
             return trace_samples(traces_dir, mid, where)
 
         # a fresh record is already automatic; an old row is made so (its auto_ values)
-        base = dict(row) if mid in fresh_ids else automatic(row, load)
-        if mid in fresh_ids:
-            for col in (*AUTO_OF, *DECISION_COLUMNS):
-                base[col] = None
+        base = _cleared(row) if mid in fresh_ids else automatic(row, load)
         if d is None:
             withdrawn.append(mid)
             records.append(checked_row(base, where=where))
@@ -472,25 +458,24 @@ def landing_records(current: pd.DataFrame, records: Sequence[MapRow],
         reviewed_now = set(current.loc[current["review"].notna(), "measurement_id"].astype(str))
     if review is None and not (reviewed_now & set(fresh)):
         return list(records), None
-    rows: list[dict[str, Any]] = []
-    old_rows = {str(r["measurement_id"]): r for r in frame_records(current)}
+    rows: list[MapRow] = []
+    old_rows = {r.measurement_id: r for r in frame_rows(current)}
     for mid, old in old_rows.items():
         if mid in stale:
             continue
         if mid in fresh:
-            row = fresh[mid].as_dict()
-            for col in DECISION_COLUMNS:
-                row[col] = old.get(col)  # the decision the old row held (used without a file)
-            if old.get("review") != "exclude":  # a `map exclude` stays
-                row["excluded"], row["exclusion_reason"] = old["excluded"], old["exclusion_reason"]
+            # the decision the old row held (used without a file)
+            row = replace(fresh[mid], **{col: getattr(old, col) for col in DECISION_COLUMNS})
+            if old.review != "exclude":  # a `map exclude` stays
+                row = replace(row, excluded=old.excluded, exclusion_reason=old.exclusion_reason)
             rows.append(row)
         else:
             if (review is not None and mid in reviewed_now and traces_dir is not None
                     and find_trace(traces_dir, mid) is None
-                    and not any(d.run in (mid, old.get("source_file")) for d in review.decisions)):
+                    and not any(d.run in (mid, old.source_file) for d in review.decisions)):
                 continue  # another campaign's reviewed run: not this file's to withdraw
-            rows.append(dict(old))
-    rows += [r.as_dict() for mid, r in fresh.items() if mid not in old_rows]
+            rows.append(old)
+    rows += [r for mid, r in fresh.items() if mid not in old_rows]
     outcome = review_records(rows, review, traces_dir, fresh=set(fresh) & set(old_rows))
     changed = {r.measurement_id: r for r in outcome.records}
     out: list[MapRow] = [changed.pop(mid, rec) for mid, rec in fresh.items()]

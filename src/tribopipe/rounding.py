@@ -8,9 +8,14 @@ binary ``0.01249999…``). :func:`plus_minus` writes ``value ± U`` and, because
 coefficient of friction is never negative, writes an interval whose lower end would fall
 below 0 as ``value +U/−value`` (the interval [0, value + U], bounded at zero).
 
-The explorer page carries a copy of this rule (``roundGum`` and ``plusMinus`` in
-``export/assets/js/query.js``); ``tests/test_interpolation.py`` holds the two equal on a
-grid of values by running the JavaScript in node.
+Every other number an output computes and prints (a simulator file's coefficient, an
+estimate without U, a weight) is written by :func:`decimal_text`, the same rounding to a
+number of significant digits or of decimals: so the explorer page, which computes such
+numbers for any condition, needs one rule, not a copy of Python's ``format``.
+
+The explorer page carries a copy of these rules (``roundGum``, ``plusMinus`` and
+``decimalText`` in ``export/assets/js/query.js``); ``tests/test_interpolation.py`` holds
+them equal on a grid of values by running the JavaScript in node.
 """
 
 from __future__ import annotations
@@ -39,6 +44,39 @@ def _fixed(value: Decimal) -> str:
     """``value`` as plain fixed-point text (no exponent; a rounded zero without its sign)."""
     text = format(value, "f")
     return text.lstrip("-") if value.is_zero() else text
+
+
+def decimal_text(value: float, *, digits: int | None = None, places: int | None = None) -> str:
+    """``value`` as text, rounded half away from zero on its shortest decimal text (the
+    rule of :func:`round_gum`): to ``digits`` significant digits laid out as ``format``'s
+    ``"g"`` lays them out (trailing zeros dropped, an exponent ``e-05``/``e+16`` below
+    10⁻⁴ or from 10^digits), or to ``places`` decimals as ``"f"`` does. A rounded zero
+    has no sign; ``nan``, ``inf``, ``-inf`` as Python writes them.
+
+    ``decimal_text(0.5312345678449, digits=10)`` → ``"0.5312345678"``;
+    ``decimal_text(0.0125, places=3)`` → ``"0.013"``; ``decimal_text(1e-5, digits=6)``
+    → ``"1e-05"``. Exactly one of ``digits`` (≥ 1) and ``places`` (≥ 0) is given."""
+    if (digits is None) == (places is None):
+        raise ValueError("decimal_text needs exactly one of digits and places")
+    if not math.isfinite(value):
+        return repr(float(value))
+    d = _decimal(value)
+    if places is not None:
+        return _fixed(d.quantize(Decimal(1).scaleb(-places), rounding=ROUND_HALF_UP))
+    assert digits is not None and digits >= 1
+    if d.is_zero():
+        return "0"
+    exp = d.adjusted()
+    r = d.quantize(Decimal(1).scaleb(exp - digits + 1), rounding=ROUND_HALF_UP)
+    if r.adjusted() > exp:  # 9.9996 → 10.00: one digit too many
+        exp += 1
+        r = d.quantize(Decimal(1).scaleb(exp - digits + 1), rounding=ROUND_HALF_UP)
+    if -4 <= exp < digits:
+        text = _fixed(r)
+        return text.rstrip("0").rstrip(".") if "." in text else text
+    mantissa = _fixed(r.scaleb(-exp))
+    mantissa = mantissa.rstrip("0").rstrip(".") if "." in mantissa else mantissa
+    return f"{mantissa}e{'-' if exp < 0 else '+'}{abs(exp):02d}"
 
 
 def round_gum(value: float, expanded: float) -> tuple[str, str]:

@@ -1,8 +1,8 @@
 """``tribopipe export FORMAT``: simulator input from the map, one command per format of
-:data:`tribopipe.export.registry.WRITERS`, its options those the format declares.
+:data:`tribopipe.export.formats.ENTRIES`, its options those the format declares.
 
-The registry is imported when a command is listed or run (it imports only the standard
-library), so that ``tribopipe --help`` stays light.
+The formats are imported when a command is listed or run (that module imports only the
+standard library), so that ``tribopipe --help`` stays light.
 """
 
 from __future__ import annotations
@@ -15,23 +15,23 @@ import click
 from ._common import friendly_errors, map_option, material_filters, say
 
 if TYPE_CHECKING:
-    from ..export.registry import Option, Writer
+    from ..export.formats import Format, Option
 
 
 class _FormatGroup(click.Group):
     """The ``export`` group: one command per registered format, built when needed."""
 
     def list_commands(self, ctx: click.Context) -> list[str]:
-        from ..export.registry import FORMATS
+        from ..export.formats import FORMATS
 
         return list(FORMATS)
 
     def get_command(self, ctx: click.Context, cmd_name: str) -> click.Command | None:
-        from ..export.registry import WRITERS
+        from ..export.formats import ENTRIES
 
-        for writer in WRITERS:
-            if writer.name == cmd_name:
-                return _command(writer)
+        for entry in ENTRIES:
+            if entry.name == cmd_name:
+                return _command(entry)
         return None
 
 
@@ -46,7 +46,7 @@ def export_group() -> None:
 
 def _selection(func: Callable[..., Any]) -> Callable[..., Any]:
     """--pin/--disc/--temperature/--pressure, --map and -o shared by every format."""
-    from ..export.registry import condition_labels
+    from ..export.formats import condition_labels
 
     for option in reversed(
         [
@@ -116,8 +116,8 @@ def _emit(text: str, output: str | None) -> None:
     say(f"wrote {output}", err=True)
 
 
-def _command(writer: Writer) -> click.Command:
-    """The ``export`` subcommand of ``writer``: the selection, then its own options."""
+def _command(entry: Format) -> click.Command:
+    """The ``export`` subcommand of format ``entry``: the selection, then its own options."""
 
     def run(output: str | None, map_path: str, **options: Any) -> None:
         from ..export.simulators import export_from_map
@@ -129,11 +129,11 @@ def _command(writer: Writer) -> click.Command:
         snap = open_map(map_path)
         options["pin"], options["disc"] = material_filters(snap, options["pin"],
                                                            options["disc"])
-        _emit(export_from_map(snap, writer.name, on_note=note, **options), output)
+        _emit(export_from_map(snap, entry.name, on_note=note, **options), output)
 
-    run.__doc__ = writer.title + (f"\n\n{writer.description}" if writer.description else "")
+    run.__doc__ = entry.title + (f"\n\n{entry.description}" if entry.description else "")
     func: Callable[..., Any] = friendly_errors(run)
-    for option in reversed(writer.options):
+    for option in reversed(entry.options):
         func = _click_option(option)(func)
-    return click.command(writer.name)(_selection(func))
+    return click.command(entry.name)(_selection(func))
 

@@ -4,7 +4,7 @@ coefficients as ``drake:proximity_properties``.
 Drake combines two geometries' coefficients as 2·μ₁·μ₂/(μ₁ + μ₂), static and dynamic
 separately (``CalcContactFrictionFromSurfaceProperties``): with the same value on both
 bodies this returns it, so pin and disc both carry the pair's μ. Drake refuses a dynamic
-coefficient above the static one; :func:`simbase.static_and_dynamic` raises the static to
+coefficient above the static one; :func:`~.coefficients.static_and_dynamic` raises the static to
 the dynamic there and says so. Drake's discrete solvers (``time_step > 0``: TAMSI, SAP)
 use only ``mu_dynamic``; ``mu_static`` matters to the continuous (Stribeck) model. Names
 from the map reach the file only as ASCII XML comments; model and link names are fixed.
@@ -13,14 +13,10 @@ from the map reach the file only as ASCII XML comments; model and link names are
 from __future__ import annotations
 
 from ..query import QueryResult
-from .simbase import (
-    Engine,
-    condition_lines,
-    header_bodies,
-    num,
-    static_and_dynamic,
-    xml_comment,
-)
+from .coefficients import static_and_dynamic
+from .headers import Engine, condition_lines, header_bodies
+from .unit_systems import num
+from .xml_text import xml_comment
 
 DRAKE = Engine(
     name="Drake",
@@ -64,7 +60,7 @@ def drake_header(source: str | None = None) -> list[str]:
 def write_drake(res: QueryResult, *, source: str | None = None) -> str:
     """An SDFormat model ``tribopipe_pin_on_disc`` with two links, ``pin`` and ``disc``,
     whose collision geometries both carry the pair's ``drake:mu_static`` and
-    ``drake:mu_dynamic`` (:func:`simbase.static_and_dynamic`) for one query result ``res``
+    ``drake:mu_dynamic`` (:func:`~.coefficients.static_and_dynamic`) for one query result ``res``
     (one pair at one contact pressure [kPa] and temperature [°C])."""
     static, dynamic, how = static_and_dynamic(res)
     lines = drake_header(source)

@@ -77,19 +77,14 @@ from ..stats import (
     nominal_speeds,
     test_methods,
 )
+from .coefficients import STATIC_WHY
 from .fe_decks import CONSTANT_NOTE, MATERIAL_LINE, abaqus_name, ansys_safe, deck_safe
-from .registry import WRITERS
-from .simbase import (
-    HELD_LINE,
-    MU_S_UNKNOWN,
-    PAIR_LINE,
-    STATIC_WHY,
-    comment_block,
-    xml_comment,
-)
+from .formats import ENTRIES
+from .headers import HELD_LINE, MU_S_UNKNOWN, PAIR_LINE, comment_block
 from .simulators import snippet_header
 from .tables import condition_text, group_flags
 from .usd import comment as usd_comment
+from .xml_text import xml_comment
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -105,8 +100,7 @@ RUNS_ELEMENT_PREFIX = "tpx-runs-"
 RUNS_INLINE_LIMIT = 20_000
 #: the parts of the page's script (``assets/js/``), in the order they are joined
 SCRIPT_PARTS = (
-    "prelude.js", "pyformat.js", "query.js", "snippets.js", "dom.js", "plots.js", "table.js",
-    "page.js",
+    "prelude.js", "query.js", "snippets.js", "dom.js", "plots.js", "table.js", "page.js",
 )
 #: the columns of the page's CSV of one condition
 CSV_COLUMNS = (
@@ -375,8 +369,8 @@ def _cell_g(value: Any) -> str:
 
 def _pair_snippets(pin: str, disc: str) -> dict[str, dict[str, list[str]]]:
     """The lines of each page snippet that name the pair, escaped and laid out by the
-    writers' own rules: ``head`` (:data:`~tribopipe.export.simbase.PAIR_LINE`, the first
-    of :func:`~tribopipe.export.simbase.condition_lines`) and, for the decks, ``name``
+    writers' own rules: ``head`` (:data:`~tribopipe.export.headers.PAIR_LINE`, the first
+    of :func:`~tribopipe.export.headers.condition_lines`) and, for the decks, ``name``
     (ABAQUS's interaction name) and ``material`` (Ansys's material line)."""
     out: dict[str, dict[str, list[str]]] = {}
     for fmt, syntax, safe in (("abaqus", "**", deck_safe), ("ansys", "!", ansys_safe)):
@@ -538,10 +532,10 @@ def explorer_data(
         # the simulator formats the page copies (every registered format with a
         # snippet); the opening lines of each do not depend on the condition: rendered
         # here by the writer itself, the page adds the rest (snippets.js)
-        "snippets": [{"name": w.name, "label": w.snippet_label, "suffix": w.snippet_suffix}
-                     for w in WRITERS if w.snippet is not None],
-        "snippet_headers": {w.name: snippet_header(w.name, source)
-                            for w in WRITERS if w.snippet is not None},
+        "snippets": [{"name": f.name, "label": f.snippet_label, "suffix": f.snippet_suffix}
+                     for f in ENTRIES if f.snippet],
+        "snippet_headers": {f.name: snippet_header(f.name, source)
+                            for f in ENTRIES if f.snippet},
     }
 
 

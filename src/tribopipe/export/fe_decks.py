@@ -21,25 +21,12 @@ from ..escape import sim_comment
 from ..fit import DecayFit, fit_decay
 from ..interpolation import ENGINE_TOLERANCE
 from ..query import QueryResult
-from .simbase import (
-    FOUNDING_SLIP_RATE,
-    Engine,
-    SlipRate,
-    breakaway,
-    check_decay,
-    comment_block,
-    condition_lines,
-    default_decay_s_per_mm,
-    densify_lines,
-    filled_lines,
-    header_bodies,
-    num,
-    selected_pairs,
-    slip_rate_of,
-    speed_rows,
-    table_at,
-    unit_system,
-)
+from .coefficients import breakaway, check_decay
+from .engine_tables import densify_lines, filled_lines, selected_pairs, table_at
+from .headers import Engine, comment_block, condition_lines, header_bodies
+from .slip_rates import FOUNDING_SLIP_RATE, SlipRate, default_decay_s_per_mm, slip_rate_of
+from .speed_tables import speed_rows
+from .unit_systems import num, unit_system
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -496,9 +483,10 @@ def condition_snippet(
 
     ``abaqus``: ``*SURFACE INTERACTION`` + ``*FRICTION`` with one coefficient; ``ansys``:
     ``TB,FRIC,mat,,,ISO`` + ``TBDATA,1,mu``. The comments are :func:`condition_header`
-    and the single-condition writers' :func:`simbase.condition_lines` (pair, condition,
-    μ_K ± CI, μ_S, the measured groups used with their weights, clamping). A constant
-    carries no pressure or temperature dependence, so no unit system enters.
+    and the single-condition writers' :func:`~tribopipe.export.headers.condition_lines`
+    (pair, condition, μ_K ± CI, μ_S, the measured groups used with their weights,
+    clamping). A constant carries no pressure or temperature dependence, so no unit
+    system enters.
     """
     lines = condition_header(fmt, source)
     note = CONSTANT_NOTE.format(fmt=fmt)
@@ -518,3 +506,21 @@ def condition_snippet(
     return "\n".join(lines) + "\n"
 
 
+def abaqus_snippet(res: QueryResult, *, source: str | None = None) -> str:
+    """:func:`condition_snippet` in ABAQUS: the explorer's copy for one condition."""
+    return condition_snippet(res, "abaqus", source=source)
+
+
+def ansys_snippet(res: QueryResult, *, source: str | None = None, material_id: int = 1) -> str:
+    """:func:`condition_snippet` in Ansys MAPDL (material number ``material_id``)."""
+    return condition_snippet(res, "ansys", source=source, material_id=material_id)
+
+
+def abaqus_snippet_header(*, source: str | None = None) -> list[str]:
+    """:func:`condition_header` of :func:`abaqus_snippet`."""
+    return condition_header("abaqus", source)
+
+
+def ansys_snippet_header(*, source: str | None = None) -> list[str]:
+    """:func:`condition_header` of :func:`ansys_snippet`."""
+    return condition_header("ansys", source)

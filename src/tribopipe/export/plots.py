@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import math
 import re
-from collections.abc import Mapping, Sequence
+from collections.abc import Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -27,6 +27,7 @@ from ..figures import (
     save_figure,
 )
 from ..fit import fit_power_law, power_law
+from ..frictionmap.schema import MapRow, frame_rows
 from ..frictionmap.snapshot import MapSource, as_snapshot
 from ..layout import find_trace
 from ..mastercurve import MasterCurve
@@ -62,14 +63,14 @@ def plot_runs(
     image_format("x", fmt)
     written: list[Path] = []
     missing: list[str] = []
-    for row in runs.to_dict(orient="records", into=dict):
-        mid = str(row["measurement_id"])
+    for row in frame_rows(runs):
+        mid = row.measurement_id
         path = find_trace(traces_dir, mid)
         if path is None:
             missing.append(mid)
             continue
         trace = pd.read_parquet(path)
-        title = f"{row.get('source_file') or path.stem}: {row['pin']} on {row['disc']}"
+        title = f"{row.source_file or path.stem}: {row.pin} on {row.disc}"
         target = Path(out_dir) / f"{path.stem}.{fmt}"
         written.append(_path(plot_trace_row(trace, row, target, title=title, fmt=fmt)))
     return written, missing
@@ -86,7 +87,7 @@ def _path(target: Target) -> Path:
 
 
 def plot_group_overlay(
-    traces: Sequence[tuple[Mapping[str, Any], pd.DataFrame]],
+    traces: Sequence[tuple[MapRow, pd.DataFrame]],
     target: Target,
     *,
     title: str,
@@ -106,15 +107,15 @@ def plot_group_overlay(
     for i, (row, trace) in enumerate(traces):
         colour = colours[i % len(colours)]
         column = "mu_smooth" if "mu_smooth" in trace.columns else "mu"
-        mu_k = finite_or_none(row.get("mu_k"))
-        repeat = finite_or_none(row.get("repeat"))
-        label = (f"{str(row['measurement_id'])[:8]}"
-                 + ("" if repeat is None else f", repeat {int(repeat)}")
+        mu_k = finite_or_none(row.mu_k)
+        label = (f"{row.measurement_id[:8]}"
+                 + ("" if row.repeat is None else f", repeat {row.repeat}")
                  + ("" if mu_k is None else f": μ_K {mu_k:.3f}"))
         ax.plot(trace["sliding_distance_mm"], trace[column], "-", color=colour, lw=0.9,
                 alpha=0.85, label=picture_text(label))
-        start, end = row.get("mu_k_window_start_mm"), row.get("mu_k_window_end_mm")
-        low, high = finite_or_none(start), finite_or_none(end)  # the μ_K window [mm]
+        # the μ_K window [mm]
+        low, high = (finite_or_none(row.mu_k_window_start_mm),
+                     finite_or_none(row.mu_k_window_end_mm))
         if mu_k is not None and low is not None and high is not None:
             ax.plot([low, high], [mu_k] * 2, "--", color=colour, lw=1.6)
     ax.set_xlabel("sliding distance s [mm]")

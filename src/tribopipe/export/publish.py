@@ -9,8 +9,10 @@ A package is a folder::
     explorer.html           the explorer page of the map (tribopipe explore)
     data/runs.csv           one row per run (the map's columns; every row names its lab)
     data/runs.parquet       the same rows as a friction map (query, explore, merge read it)
-    data/groups.csv         the repeat statistics per condition group
+    data/groups.csv         the repeat statistics per condition group, numbered (``group``)
     data/groups.parquet     the same
+    data/group_runs.csv     which runs each group holds: one row per (group, run), so that
+                            no cell grows with the number of runs
     data/frictionmap.csv    the 7-column table of the founding paper's MATLAB app
 
 :func:`publish_map` reads the map once, fills the ``lab`` of the rows that have none with the
@@ -58,6 +60,9 @@ from ..frictionmap.datapackage import (
     DESCRIPTOR,
     FALSE,
     FRICTIONMAP_FIELDS,
+    GROUP_ID,
+    GROUP_RUNS_FIELDS,
+    JOINED_COLUMNS,
     PROFILE,
     TRIBOPIPE_KEY,
     TRUE,
@@ -68,6 +73,7 @@ from ..frictionmap.datapackage import (
 )
 from ..frictionmap.package import (
     FRICTIONMAP_APP,
+    GROUP_RUNS,
     GROUPS,
     GROUPS_PARQUET,
     RUNS,
@@ -186,6 +192,27 @@ def package_runs_table(runs: pd.DataFrame, lab: str) -> pd.DataFrame:
     return out
 
 
+def package_groups(groups: pd.DataFrame) -> tuple[pd.DataFrame, pd.DataFrame]:
+    """The group table of a package and its linking table, from
+    :func:`tribopipe.stats.group_statistics` ``groups``: the groups numbered 1, 2, … in a
+    first column ``group``, without the columns that join a group's runs into one cell
+    (:data:`~tribopipe.frictionmap.datapackage.JOINED_COLUMNS`); and one row per (group,
+    measurement id), in the groups' order and each group's own (new frames)."""
+    import numpy as np
+    import pandas as pd
+
+    table = groups.drop(columns=[c for c in JOINED_COLUMNS if c in groups.columns])
+    table.insert(0, GROUP_ID, np.arange(1, len(table) + 1, dtype="int64"))
+    ids = [str(cell).split(";") if isinstance(cell, str) and cell else []
+           for cell in groups["run_ids"]]
+    counts = np.fromiter((len(i) for i in ids), dtype="int64", count=len(ids))
+    members = pd.DataFrame({
+        GROUP_ID: np.repeat(np.arange(1, len(ids) + 1, dtype="int64"), counts),
+        "measurement_id": pd.array([m for group in ids for m in group], dtype="str"),
+    })
+    return table, members
+
+
 def _slug(text: str) -> str:
     return re.sub(r"[^a-z0-9]+", "-", text.casefold()).strip("-") or "lab"
 
@@ -230,11 +257,12 @@ def build_package(runs: pd.DataFrame, publisher: Publisher, folder: Path, *,
     year = int(date[:4])
     (folder / "data").mkdir()
     groups = group_statistics(runs)
+    group_table, group_runs = package_groups(groups)
     fits = fit_power_law(runs)
     data_licence = [publisher.licence_entry()]
     sources = _sources(publisher, year)
     run_kinds = [KIND[c] for c in RUN_COLUMNS]
-    group_kinds = [column_kind(groups[c]) for c in groups.columns]
+    group_kinds = [column_kind(group_table[c]) for c in group_table.columns]
     files: dict[str, bytes] = {}
     resources = []
 
@@ -252,16 +280,22 @@ def build_package(runs: pd.DataFrame, publisher: Publisher, folder: Path, *,
     add(RUNS_PARQUET, "data/runs.parquet", (folder / "data/runs.parquet").read_bytes(),
         title="Runs as a tribopipe friction map (Parquet, schema in its metadata)",
         fmt="parquet", mediatype="application/vnd.apache.parquet")
-    groups_schema = table_schema(groups_fields(list(zip(groups.columns, group_kinds,
-                                                        strict=True))))
-    add(GROUPS, "data/groups.csv", table_csv(groups, group_kinds).encode(),
+    groups_schema = table_schema(groups_fields(list(zip(group_table.columns, group_kinds,
+                                                        strict=True))), primary_key=GROUP_ID)
+    add(GROUPS, "data/groups.csv", table_csv(group_table, group_kinds).encode(),
         title="Repeat statistics per condition group", fmt="csv", mediatype="text/csv",
         schema=groups_schema)
     buf = io.BytesIO()
-    groups.to_parquet(buf, index=False)
+    group_table.to_parquet(buf, index=False)
     add(GROUPS_PARQUET, "data/groups.parquet", buf.getvalue(),
         title="Repeat statistics per condition group (Parquet)", fmt="parquet",
         mediatype="application/vnd.apache.parquet")
+    add(GROUP_RUNS, "data/group_runs.csv", table_csv(group_runs, ["int", "str"]).encode(),
+        title="The runs of each condition group: one row per group and run", fmt="csv",
+        mediatype="text/csv",
+        schema=table_schema(GROUP_RUNS_FIELDS, primary_key="measurement_id",
+                            foreign_keys={GROUP_ID: (GROUPS, GROUP_ID),
+                                          "measurement_id": (RUNS, "measurement_id")}))
     add(FRICTIONMAP_APP, "data/frictionmap.csv",
         frictionmap_csv(frictionmap_table(runs)).encode(),
         title="The included runs in the 7-column table of the founding paper's MATLAB app",

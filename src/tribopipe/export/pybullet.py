@@ -13,14 +13,10 @@ from __future__ import annotations
 
 from ..errors import ExportError
 from ..query import QueryResult
-from .simbase import (
-    Engine,
-    breakaway,
-    condition_lines,
-    header_bodies,
-    num,
-    xml_comment,
-)
+from .coefficients import breakaway
+from .headers import Engine, condition_lines, header_bodies
+from .unit_systems import num
+from .xml_text import xml_comment
 
 PYBULLET = Engine(
     name="PyBullet",

@@ -28,7 +28,6 @@ import base64
 import hashlib
 import math
 import re
-from collections.abc import Mapping
 from datetime import UTC, datetime
 from importlib.resources import files
 from pathlib import Path
@@ -42,10 +41,10 @@ from ..escape import html_text, script_json
 from ..figures.decimate import minmax_decimate
 from ..files import write_text_atomic
 from ..frictionmap import read_map
-from ..frictionmap.schema import is_missing
+from ..frictionmap.schema import MapRow, frame_rows, is_missing
 from ..labels import flag_list, quality_flags
 from ..layout import find_trace
-from ..review import AUTO_OF, Review, decision_of_row, read_review, trace_table
+from ..review import AUTO_OF, Decision, Review, decision_of_row, read_review, trace_table
 from ..stats import group_statistics, repeatability
 
 if TYPE_CHECKING:
@@ -115,30 +114,28 @@ def _outlying(runs: pd.DataFrame) -> dict[str, float]:
     return out
 
 
-def _run_entry(row: Mapping[str, Any], decision: Any) -> dict[str, Any]:
+def _run_entry(row: MapRow, decision: Decision | None) -> dict[str, Any]:
     """A run's numbers, names and flags for the page (automatic and current values)."""
-    reviewed = not is_missing(row.get("review"))
+    reviewed = row.review is not None
 
     def auto(col: str) -> float | None:
         auto_col = next(a for a, c in AUTO_OF.items() if c == col)
-        return _num(row.get(auto_col) if reviewed else row.get(col))
+        return _num(getattr(row, auto_col) if reviewed else getattr(row, col))
 
-    flags = flag_list(row.get("flags"))
-    place = [str(row[c]) for c in ("test", "result") if not is_missing(row.get(c))]
-    if not is_missing(row.get("interval")):
-        place.append(f"interval {int(row['interval'])}")
+    place = [v for v in (row.test, row.result) if v is not None]
+    if row.interval is not None:
+        place.append(f"interval {row.interval}")
     return {
-        "id": str(row["measurement_id"]),
-        "file": None if is_missing(row.get("source_file")) else str(row["source_file"]),
+        "id": row.measurement_id,
+        "file": row.source_file,
         "place": " / ".join(place),
-        "pin": str(row["pin"]), "disc": str(row["disc"]),
-        "force_N": _num(row.get("normal_force_N")),
-        "temperature_C": _num(row.get("temperature_C")),
-        "flags": flags,
-        "qc": bool(quality_flags(row.get("flags"))),
-        "excluded": bool(row.get("excluded")),
-        "exclusion_reason": None if is_missing(row.get("exclusion_reason"))
-        else str(row["exclusion_reason"]),
+        "pin": row.pin, "disc": row.disc,
+        "force_N": _num(row.normal_force_N),
+        "temperature_C": _num(row.temperature_C),
+        "flags": flag_list(row.flags),
+        "qc": bool(quality_flags(row.flags)),
+        "excluded": row.excluded,
+        "exclusion_reason": row.exclusion_reason,
         "auto": {"mu_s": auto("mu_s"), "u_mu_s": auto("u_mu_s"),
                  "peak_mm": auto("mu_s_distance_mm"), "mu_k": auto("mu_k"),
                  "u_mu_k": auto("u_mu_k"), "from_mm": auto("mu_k_window_start_mm"),
@@ -156,7 +153,7 @@ def review_data(runs: pd.DataFrame, traces_dir: Path | None, *, review: Review |
     lies under ``traces_dir``, sorted flagged first, then by how far it lies from its
     group's mean; the decisions of ``review`` (else those the rows hold) filled in."""
     outlying = _outlying(runs)
-    decided: dict[str, Any] = {}
+    decided: dict[str, Decision] = {}
     if review is not None:
         by_file: dict[str, list[str]] = {}
         for mid, f in zip(runs["measurement_id"], runs["source_file"], strict=True):
@@ -166,8 +163,8 @@ def review_data(runs: pd.DataFrame, traces_dir: Path | None, *, review: Review |
             if len(ids) == 1:
                 decided[ids[0]] = d
     entries: list[dict[str, Any]] = []
-    for row in runs.to_dict(orient="records", into=dict):
-        mid = str(row["measurement_id"])
+    for row in frame_rows(runs):
+        mid = row.measurement_id
         decision = decided.get(mid) if review is not None else decision_of_row(row)
         entry = _run_entry(row, decision)
         entry["outlying"] = round(outlying.get(mid, 0.0), 3)

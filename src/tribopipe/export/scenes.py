@@ -13,15 +13,10 @@ string literals (:func:`repr`).
 from __future__ import annotations
 
 from ..query import QueryResult
-from .simbase import (
-    Engine,
-    breakaway,
-    condition_lines,
-    header_bodies,
-    num,
-    xml_comment,
-    xml_name,
-)
+from .coefficients import breakaway
+from .headers import Engine, condition_lines, header_bodies
+from .unit_systems import num
+from .xml_text import xml_comment, xml_name
 
 MUJOCO = Engine(
     name="MuJoCo",

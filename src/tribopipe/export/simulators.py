@@ -19,19 +19,10 @@ from ..errors import ExportError
 from ..escape import markdown_cell
 from ..frictionmap.snapshot import MapSource, as_snapshot
 from ..query import QueryResult, load_groups, one_method, pair_speeds, query, select_pair
-from .registry import (
-    FORMATS,
-    WRITERS,
-    Option,
-    Writer,
-    condition_labels,
-    function,
-    load,
-    option_named,
-    users,
-    writer_named,
-)
-from .simbase import Engine, SlipRate, pair_slip_rates, slip_rate_of, speed_curve
+from .formats import FORMATS, Option, condition_labels, option_named, users
+from .registry import WRITERS, Writer, writer_named
+from .slip_rates import SlipRate, pair_slip_rates, slip_rate_of
+from .speed_tables import speed_curve
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -44,21 +35,21 @@ def _mode_options(
 ) -> dict[str, Any]:
     """The options the chosen writer takes, checked; an :class:`ExportError` for one given
     that it would silently ignore."""
-    declared: tuple[Option, ...] = (writer.condition_options if condition
-                                    else writer.table_options)
+    declared: tuple[Option, ...] = (writer.format.condition_options if condition
+                                    else writer.format.table_options)
     names = {o.name for o in declared}
     for name, value in options.items():
         option = option_named(name)
         if name in names or value is None or value == option.default:
             continue
         raise ExportError(f"{option.flag} is for {', '.join(users(name))}; "
-                          f"not for {writer.label(condition)}")
+                          f"not for {writer.format.label(condition)}")
     chosen = {}
     for option in declared:
         value = options.get(option.name)
         value = option.default if value is None else value
         if option.check is not None and value is not None:
-            load(option.check)(value)
+            option.check(value)
         chosen[option.name] = value
     return chosen
 
@@ -158,9 +149,9 @@ def export_simulator_input(
     ``pressure_kPa`` [kPa], at ``temperature_C`` [°C]: :func:`one_condition` takes a
     choice the map holds one value for (said through ``on_note``) and names every one
     still missing in one :class:`ExportError`. ``options`` are the format's own (its
-    :class:`~tribopipe.export.registry.Writer` declares them, e.g. ``coefficient``,
+    :class:`~tribopipe.export.formats.Format` declares them, e.g. ``coefficient``,
     ``units``); one it does not take is refused. ``slip_rates`` holds each pair's
-    measured sliding speed (:func:`~tribopipe.export.simbase.pair_slip_rates`); pairs
+    measured sliding speed (:func:`~tribopipe.export.slip_rates.pair_slip_rates`); pairs
     without one get the founding paper's 0.007 mm/s. ``source`` (the map's path) is named
     in the file's header. ``speed_mm_s`` [mm/s] is the sliding speed of a single
     condition (needed where the pair is measured at several; tables carry every speed).
@@ -168,7 +159,8 @@ def export_simulator_input(
     (:func:`tribopipe.query.one_method`: needed where the pair is measured by several).
     """
     writer = writer_named(fmt)
-    switch = writer.switch
+    spec = writer.format
+    switch = spec.switch
     switched = bool(switch is not None and options.pop(switch.name, False))
     # a table format given one pressure writes that condition's constant, as the
     # explorer copies it (its snippet writer), where the format has one
@@ -176,7 +168,7 @@ def export_simulator_input(
                 and writer.snippet is not None)
     condition = writer.table is None or switched or constant
     chosen = _mode_options(writer, condition and not constant, options)
-    if not condition:
+    if writer.table is not None and not condition:
         if pressure_kPa is not None:
             raise ExportError(
                 f"the {fmt} table covers every measured pressure; a single pressure is for "
@@ -190,28 +182,29 @@ def export_simulator_input(
             raise ExportError(f"the {fmt} table carries every group with its own method; "
                               "a single method is for one condition",
                               hint="leave out --method, or add --pressure")
-        if writer.slip_rate:
+        if spec.slip_rate:
             chosen["slip_rates"] = slip_rates
-        return function(writer.table)(groups, pin=pin, disc=disc,
-                                      temperature_C=temperature_C, source=source, **chosen)
-    what = f"{fmt} --pressure" if constant else writer.label(True)
+        return writer.table(groups, pin=pin, disc=disc, temperature_C=temperature_C,
+                            source=source, **chosen)
+    what = f"{fmt} --pressure" if constant else spec.label(True)
     pin, disc, pressure_kPa, temperature_C, speed_mm_s = one_condition(
         groups, what, pin, disc, pressure_kPa, temperature_C, speed_mm_s, on_note)
     groups, method = one_method(groups, pin, disc, method)
     pair = select_pair(groups, pin, disc)
     res = query(groups, pin, disc, pressure_kPa, temperature_C, speed_mm_s, method)
-    if constant:
-        write = function(writer.snippet)
-        takes = inspect.signature(write).parameters
+    if constant and writer.snippet is not None:
+        takes = inspect.signature(writer.snippet).parameters
         # a constant has no pressure or temperature dependence: no unit system enters
         kept = {k: v for k, v in chosen.items() if k in takes}
-        return str(write(res, source=source, **dict(writer.snippet_options), **kept))
-    if writer.slip_rate:
+        return writer.snippet(res, source=source, **kept)
+    if writer.condition is None:
+        raise ExportError(f"{fmt} has no single-condition writer")
+    if spec.slip_rate:
         first = pair.iloc[0]
         chosen["slip_rate"] = slip_rate_of(slip_rates, str(first["pin"]), str(first["disc"]))
-    if writer.speed_curve:
+    if spec.speed_curve:
         chosen["speed_curve"] = speed_curve(groups, pin, disc, pressure_kPa, temperature_C)
-    return function(writer.condition)(res, source=source, **chosen)
+    return writer.condition(res, source=source, **chosen)
 
 
 def export_from_map(map_path: MapSource, fmt: str, **options: Any) -> str:
@@ -227,14 +220,18 @@ def export_from_map(map_path: MapSource, fmt: str, **options: Any) -> str:
 def snippet(fmt: str, res: QueryResult, source: str | None = None) -> str:
     """The text the explorer page copies for format ``fmt`` at one query result ``res``
     (an :class:`ExportError` for a format the page does not offer)."""
-    writer = writer_named(fmt)
-    return function(writer.snippet)(res, source=source, **dict(writer.snippet_options))
+    write = writer_named(fmt).snippet
+    if write is None:
+        raise ExportError(f"the explorer page offers no {fmt} text")
+    return write(res, source=source)
 
 
 def snippet_header(fmt: str, source: str | None = None) -> list[str]:
     """The lines of :func:`snippet` that do not depend on the condition."""
-    writer = writer_named(fmt)
-    return list(function(writer.snippet_header)(source=source, **dict(writer.snippet_options)))
+    header = writer_named(fmt).snippet_header
+    if header is None:
+        raise ExportError(f"the explorer page offers no {fmt} text")
+    return list(header(source=source))
 
 
 def formats_table() -> str:
@@ -244,11 +241,11 @@ def formats_table() -> str:
     rows = ["| format | engine | holds | takes | two bodies | checked against |",
             "|---|---|---|---|---|---|"]
     for w in WRITERS:
-        engine: Engine = load(w.engine)
+        engine = w.engine
         kind = " or ".join(k for k, f in (("a table", w.table), ("one condition", w.condition))
-                           if f)
+                           if f is not None)
         # the engines' texts are plain: a keyword's "*" must not start an emphasis
         cells = [markdown_cell(engine.combination), markdown_cell(engine.checked)]
-        rows.append(f"| `{w.name}` | {engine.name} | {w.holds} | {kind} | "
+        rows.append(f"| `{w.name}` | {engine.name} | {w.format.holds} | {kind} | "
                     f"{cells[0]} | {cells[1]} |")
     return "\n".join(rows) + "\n"

@@ -15,13 +15,9 @@ from __future__ import annotations
 
 from ..escape import sim_comment
 from ..query import QueryResult
-from .simbase import (
-    Engine,
-    condition_lines,
-    header_bodies,
-    num,
-    static_and_dynamic,
-)
+from .coefficients import static_and_dynamic
+from .headers import Engine, condition_lines, header_bodies
+from .unit_systems import num
 
 USD = Engine(
     name="OpenUSD UsdPhysics",
@@ -75,7 +71,8 @@ def usd_header(source: str | None = None) -> list[str]:
 def write_usd(res: QueryResult, *, source: str | None = None) -> str:
     """A ``.usda`` layer for one query result ``res`` (one pair at one contact pressure
     [kPa] and temperature [°C]): the material ``/TribopipeFriction/PinOnDisc`` with the
-    pair's static and dynamic friction (:func:`simbase.static_and_dynamic`) and the
+    pair's static and dynamic friction
+    (:func:`~.coefficients.static_and_dynamic`) and the
     combine mode, bound (purpose ``physics``) to two example colliders, a cube Pin resting
     on a cylinder Disc."""
     static, dynamic, how = static_and_dynamic(res)

@@ -2,17 +2,58 @@
 
 :class:`TraceConditions` are the run's file and nominal conditions (the header's first two
 lines), :class:`TraceMarks` what the reduction read and flagged (the marks on the μ panel
-and the header's last two lines). Plain data and text; nothing here draws.
+and the header's last two lines). Plain data and text; nothing here draws. A stored run is
+read through :class:`StoredRun`, the fields of a map row a plot needs: the map's typed
+row (``tribopipe.frictionmap.schema.MapRow``, a layer above) has them all.
 """
 
 from __future__ import annotations
 
-from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Protocol
 
 from ..numeric import finite_or_none, is_finite
 from ..rounding import known_u, plus_minus
+
+
+class StoredRun(Protocol):
+    """What a trace plot reads of a stored run (a map row): its file and nominal
+    conditions (force [N], pressure [kPa] per pin, temperature [°C], repeat), its readings
+    (μ_S at its distance [mm], μ_K over its window [mm], their standard uncertainties),
+    its flags (the map's ``;``-joined text) and its review decision; ``None`` is unknown."""
+
+    @property
+    def source_file(self) -> str | None: ...
+    @property
+    def pin(self) -> str | None: ...
+    @property
+    def disc(self) -> str | None: ...
+    @property
+    def normal_force_N(self) -> float | None: ...
+    @property
+    def pressure_kPa(self) -> float | None: ...
+    @property
+    def temperature_C(self) -> float | None: ...
+    @property
+    def repeat(self) -> int | None: ...
+    @property
+    def mu_s(self) -> float | None: ...
+    @property
+    def mu_s_distance_mm(self) -> float | None: ...
+    @property
+    def mu_k(self) -> float | None: ...
+    @property
+    def mu_k_window_start_mm(self) -> float | None: ...
+    @property
+    def mu_k_window_end_mm(self) -> float | None: ...
+    @property
+    def u_mu_s(self) -> float | None: ...
+    @property
+    def u_mu_k(self) -> float | None: ...
+    @property
+    def flags(self) -> str | None: ...
+    @property
+    def review(self) -> str | None: ...
 
 
 @dataclass(frozen=True)
@@ -33,16 +74,15 @@ class TraceConditions:
     repeat: int | None = None
 
     @classmethod
-    def from_row(cls, row: Mapping[str, Any]) -> TraceConditions:
-        """The conditions of a friction-map row (``source_file, pin, disc,
-        normal_force_N, pressure_kPa, temperature_C, repeat``; missing keys are unknown)."""
-        repeat = finite_or_none(row.get("repeat"))
-        return cls(source=_text_or_none(row.get("source_file")),
-                   pin=_text_or_none(row.get("pin")), disc=_text_or_none(row.get("disc")),
-                   normal_force_N=finite_or_none(row.get("normal_force_N")),
-                   pressure_kPa=finite_or_none(row.get("pressure_kPa")),
-                   temperature_C=finite_or_none(row.get("temperature_C")),
-                   repeat=None if repeat is None else int(repeat))
+    def from_row(cls, row: StoredRun) -> TraceConditions:
+        """The conditions of a stored run (a map row: ``source_file, pin, disc,
+        normal_force_N, pressure_kPa, temperature_C, repeat``; ``None`` is unknown)."""
+        return cls(source=_text_or_none(row.source_file),
+                   pin=_text_or_none(row.pin), disc=_text_or_none(row.disc),
+                   normal_force_N=finite_or_none(row.normal_force_N),
+                   pressure_kPa=finite_or_none(row.pressure_kPa),
+                   temperature_C=finite_or_none(row.temperature_C),
+                   repeat=row.repeat)
 
     def line(self) -> str:
         """One line: ``pin on disc · F 3 N (35.37 kPa per pin) · 20 °C · repeat 2``."""

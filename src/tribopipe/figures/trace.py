@@ -42,7 +42,7 @@ from .canvas import (
     write_png,
 )
 from .decimate import Columns
-from .runinfo import TraceConditions, TraceMarks, shorten
+from .runinfo import StoredRun, TraceConditions, TraceMarks, shorten
 from .typeset import Typesetter
 
 if TYPE_CHECKING:
@@ -590,7 +590,7 @@ def plot_trace(
 
 def plot_trace_row(
     trace: pd.DataFrame,
-    row: Mapping[str, Any],
+    row: StoredRun,
     target: Target,
     *,
     title: str | None = None,
@@ -599,20 +599,19 @@ def plot_trace_row(
 ) -> Target:
     """Plot a stored trace (Parquet columns) with its friction-map row's readings.
 
-    ``row`` needs ``mu_s, mu_s_distance_mm, mu_k, mu_k_window_start_mm,
-    mu_k_window_end_mm`` and optionally ``flags`` and the conditions of
-    :meth:`TraceConditions.from_row`; ``trace`` needs ``sliding_distance_mm`` and ``mu``
-    (``mu_smooth`` and ``normal_force_N`` drawn when present).
-    """
+    ``row`` is the run's map row (:class:`~tribopipe.figures.runinfo.StoredRun`: the
+    readings, flags, review and conditions it holds); ``trace`` needs
+    ``sliding_distance_mm`` and ``mu`` (``mu_smooth`` and ``normal_force_N`` drawn when
+    present)."""
     marks = TraceMarks(
-        mu_s=finite_or_none(row.get("mu_s")),
-        mu_s_distance_mm=finite_or_none(row.get("mu_s_distance_mm")),
-        mu_k=finite_or_none(row.get("mu_k")),
-        mu_k_window_mm=(row.get("mu_k_window_start_mm"), row.get("mu_k_window_end_mm")),
-        flags=tuple(flag_list(row.get("flags"))),
-        u_mu_s=finite_or_none(row.get("u_mu_s")),
-        u_mu_k=finite_or_none(row.get("u_mu_k")),
-        review=row.get("review") if isinstance(row.get("review"), str) else None,
+        mu_s=finite_or_none(row.mu_s),
+        mu_s_distance_mm=finite_or_none(row.mu_s_distance_mm),
+        mu_k=finite_or_none(row.mu_k),
+        mu_k_window_mm=(row.mu_k_window_start_mm, row.mu_k_window_end_mm),
+        flags=tuple(flag_list(row.flags)),
+        u_mu_s=finite_or_none(row.u_mu_s),
+        u_mu_k=finite_or_none(row.u_mu_k),
+        review=row.review,
     )
     figure = trace_figure(dpi).draw(
         trace["sliding_distance_mm"].to_numpy(), trace["mu"].to_numpy(), marks,

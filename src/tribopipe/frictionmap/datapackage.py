@@ -147,15 +147,21 @@ def runs_fields(version: int | None = None) -> list[dict[str, Any]]:
 
 
 def table_schema(fields: Sequence[Mapping[str, Any]], *,
-                 primary_key: str | None = None) -> dict[str, Any]:
+                 primary_key: str | None = None,
+                 foreign_keys: Mapping[str, tuple[str, str]] | None = None) -> dict[str, Any]:
     """A Table Schema of ``fields``: missing values are empty cells, booleans
-    ``true``/``false``."""
+    ``true``/``false``; ``foreign_keys`` maps a field to the (resource, field) it refers
+    to."""
     schema: dict[str, Any] = {"fields": [dict(f) for f in fields], "missingValues": [""]}
     for f in schema["fields"]:
         if f["type"] == "boolean":
             f["trueValues"], f["falseValues"] = [TRUE], [FALSE]
     if primary_key:
         schema["primaryKey"] = primary_key
+    if foreign_keys:
+        schema["foreignKeys"] = [
+            {"fields": name, "reference": {"resource": resource, "fields": target}}
+            for name, (resource, target) in foreign_keys.items()]
     return schema
 
 
@@ -172,6 +178,9 @@ def _group_field(name: str, kind: str) -> dict[str, Any]:
         "qc_flagged": ("", "the group holds a run with QC flags"),
         "run_ids": ("", "measurement ids of the group's runs, ';'-joined"),
     }
+    if name == GROUP_ID:
+        return field(name, kind, "", "the group's number (1, 2, …): data/group_runs.csv "
+                     "lists its runs", required=True, unique=True, minimum=1)
     if name in known:
         unit, meaning = known[name]
         return field(name, kind, unit, meaning)
@@ -193,6 +202,19 @@ def groups_fields(columns: Sequence[tuple[str, str]]) -> list[dict[str, Any]]:
     """The Table Schema fields of a group-statistics table given as ``(column, kind)``."""
     return [_group_field(name, kind) for name, kind in columns]
 
+
+#: the group table's column that numbers its groups (package profile version 3 on)
+GROUP_ID = "group"
+#: the group-statistics columns whose cells grow with the runs of a group: a package of
+#: profile version 3 leaves them out and lists each group's runs in ``group_runs.csv``
+JOINED_COLUMNS: tuple[str, ...] = ("mu_k_values", "mu_s_values", "run_ids")
+#: the table linking each condition group to its runs: one row per (group, run)
+GROUP_RUNS_FIELDS: tuple[dict[str, Any], ...] = (
+    field(GROUP_ID, "int", "", "the group's number in data/groups.csv", required=True,
+          minimum=1),
+    field("measurement_id", "str", "", "measurement id of one of the group's runs "
+          "(data/runs.csv); each included run is in one group", required=True, unique=True),
+)
 
 #: the 7-column FrictionMap table of the founding paper's MATLAB app
 FRICTIONMAP_FIELDS: tuple[dict[str, Any], ...] = (

@@ -35,6 +35,8 @@ from .datapackage import (
     DEFAULT_LIMITS,
     DESCRIPTOR,
     FRICTIONMAP_FIELDS,
+    GROUP_ID,
+    GROUP_RUNS_FIELDS,
     PROFILE,
     TABLE_TYPES,
     TRIBOPIPE_KEY,
@@ -51,7 +53,13 @@ from .datapackage import (
     runs_fields,
     sha256_hash,
 )
-from .profile import PROFILE_NAME, PROFILE_VERSION, descriptor_profile_version, upgrade_note
+from .profile import (
+    LINKED_GROUPS_VERSION,
+    PROFILE_NAME,
+    PROFILE_VERSION,
+    descriptor_profile_version,
+    upgrade_note,
+)
 from .published import FOUNDING_PAPER
 from .schema import (
     SCHEMA_NAME,
@@ -68,6 +76,8 @@ if TYPE_CHECKING:
 #: names of the resources tribopipe publishes (``runs`` is the one a package must have)
 RUNS, RUNS_PARQUET = "runs", "runs-parquet"
 GROUPS, GROUPS_PARQUET = "groups", "groups-parquet"
+#: the table of each group's runs (package profile version 3 on)
+GROUP_RUNS = "group-runs"
 FRICTIONMAP_APP = "frictionmap-app"
 #: the first schema version a package can declare (version 1 maps had no ``lab``)
 FIRST_PACKAGE_VERSION = 2
@@ -172,7 +182,15 @@ def check_package(path: str | os.PathLike[str],
     if (parquet := files.get(RUNS_PARQUET)) is not None:
         _check_parquet_copy(check, resources[RUNS_PARQUET], parquet, runs)
     if (groups := files.get(GROUPS)) is not None:
-        _check_groups(check, resources[GROUPS], groups, runs)
+        members = _check_groups(check, resources[GROUPS], groups, runs)
+        linked = check.result.profile_version >= LINKED_GROUPS_VERSION
+        if members is not None and (links := files.get(GROUP_RUNS)) is not None:
+            _check_group_runs(check, resources[GROUP_RUNS], links, members,
+                              str(resources[GROUPS].get("path")))
+        elif linked and GROUP_RUNS not in resources:
+            check.add(DESCRIPTOR, f"resource {GROUPS!r} without {GROUP_RUNS!r} (the runs of "
+                      f"each group), which package profile version "
+                      f"{check.result.profile_version} requires beside it")
     if (app_table := files.get(FRICTIONMAP_APP)) is not None:
         _check_frictionmap_table(check, resources[FRICTIONMAP_APP], app_table, runs)
     if (runs["source"] == SOURCE_PUBLISHED).any() and not _cites_founding_paper(descriptor):
@@ -446,9 +464,12 @@ def _check_parquet_copy(check: _Checker, res: dict[str, Any], data: bytes,
 
 
 def _check_groups(check: _Checker, res: dict[str, Any], data: bytes,
-                  runs: pd.DataFrame) -> None:
+                  runs: pd.DataFrame) -> dict[int, frozenset[str]] | None:
     """The group table parses by its own schema, and its μ_K n and mean follow from the
-    runs."""
+    runs. From package profile version 3 the groups are numbered (``group``, unique):
+    returns, per group number, the ids of the runs its conditions make in the runs table
+    (what ``group_runs.csv`` must list; ``None`` before version 3 or when the table cannot
+    be read)."""
     shown = str(res.get("path"))
     schema = res.get("schema")
     fields = schema.get("fields") if isinstance(schema, dict) else None
@@ -456,22 +477,40 @@ def _check_groups(check: _Checker, res: dict[str, Any], data: bytes,
             isinstance(f, dict) and isinstance(f.get("name"), str)
             and f.get("type") in TABLE_TYPES.values() for f in fields):
         check.add(shown, "schema: expected 'fields' with a name and a Table Schema type each")
-        return
+        return None
     rows = _table(check, data, fields, shown)
     if rows is None:
-        return
+        return None
     keys: tuple[str, ...] = ("pin", "disc", "normal_force_N", "temperature_C")
-    if not {*keys, "mu_k_n", "mu_k_mean"} <= {f["name"] for f in fields}:
+    names = {f["name"] for f in fields}
+    if not {*keys, "mu_k_n", "mu_k_mean"} <= names:
         check.add(shown, "schema: expected the fields pin, disc, normal_force_N, "
                   "temperature_C, mu_k_n and mu_k_mean")
-        return
-    if "nominal_speed_mm_s" in {f["name"] for f in fields}:
+        return None
+    linked = check.result.profile_version >= LINKED_GROUPS_VERSION
+    if linked and not any(f["name"] == GROUP_ID and f.get("type") == "integer"
+                          for f in fields):
+        check.add(shown, f"schema: expected the field {GROUP_ID!r} (integer), the group's "
+                  f"number, which package profile version {check.result.profile_version} "
+                  "requires")
+        return None
+    if "nominal_speed_mm_s" in names:
         keys += ("nominal_speed_mm_s",)  # a map of several speeds: groups split by speed
     computed = {_key(g, keys): g for g in group_statistics(runs, show_speed=True).to_dict(
         orient="records", into=dict)}
     if len(rows) != len(computed):
         check.add(shown, f"{len(rows)} groups, the runs make {len(computed)}")
+    members: dict[int, frozenset[str]] = {}
+    first: dict[int, int] = {}
     for n, row in enumerate(rows, 1):
+        number = row.get(GROUP_ID) if linked else None
+        if isinstance(number, int):
+            if number in first:
+                check.add(shown, f"row {n}, field {GROUP_ID}: group {number} appears twice "
+                          f"(first in row {first[number]})")
+                number = None
+            else:
+                first[number] = n
         g = computed.get(_key(row, keys))
         if g is None:
             check.add(shown, f"row {n}: no runs of this group in the runs table")
@@ -480,6 +519,49 @@ def _check_groups(check: _Checker, res: dict[str, Any], data: bytes,
             if not same_value(row[name], g[name]):
                 check.add(shown, f"row {n}, field {name}: {row[name]!r} does not follow "
                           f"from the runs ({g[name]!r})")
+        if isinstance(number, int):
+            members[number] = frozenset(i for i in str(g["run_ids"]).split(";") if i)
+    return members if linked else None
+
+
+def _check_group_runs(check: _Checker, res: dict[str, Any], data: bytes,
+                      members: dict[int, frozenset[str]], groups_shown: str) -> None:
+    """The linking table lists each numbered group's runs, each included run once, and
+    the runs of a group are those its conditions make in the runs table (``members``)."""
+    shown = str(res.get("path"))
+    fields = _check_fields(check, (res.get("schema") or {}), list(GROUP_RUNS_FIELDS), shown)
+    if fields is None:
+        return
+    rows = _table(check, data, fields, shown)
+    if rows is None:
+        return
+    owner = {mid: number for number, ids in members.items() for mid in ids}
+    seen: dict[str, int] = {}
+    listed: dict[int, set[str]] = {number: set() for number in members}
+    for n, row in enumerate(rows, 1):
+        number, mid = row[GROUP_ID], row["measurement_id"]
+        if number is None or mid is None:
+            continue  # said by the cell check
+        if mid in seen:
+            check.add(shown, f"row {n}, field measurement_id: run {mid[:40]!r} is listed "
+                      f"twice (first in row {seen[mid]})")
+            continue
+        seen[mid] = n
+        if number not in members:
+            check.add(shown, f"row {n}, field {GROUP_ID}: {number} is not a group of "
+                      f"{groups_shown}")
+        elif mid not in owner:
+            check.add(shown, f"row {n}, field measurement_id: {mid[:40]!r} is not an "
+                      "included run of the runs table")
+        else:
+            listed[number].add(mid)
+    for number in sorted(members):
+        got, expected = listed[number], members[number]
+        if got != expected:
+            check.add(shown, f"group {number}: lists {len(got)} run(s), the group's "
+                      f"conditions in the runs table make {len(expected)} "
+                      f"({len(expected - got)} of them not listed, {len(got - expected)} "
+                      "listed that belong to another group)")
 
 
 def _key(row: dict[str, Any], keys: tuple[str, ...]) -> tuple[Any, ...]:

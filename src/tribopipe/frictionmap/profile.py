@@ -13,6 +13,9 @@ the docs (``docs/package-profile/``, held equal by a test):
  2    version 1 plus the profile named in the descriptor, its JSON Schema in the package,
       and the evidence: ``evidence/index.csv`` and ``evidence/settings.json``
       (:mod:`tribopipe.evidence`).
+ 3    version 2 with no cell that grows with the number of runs: the group table numbers
+      its groups (``group``) and no longer joins each group's run ids and values into one
+      cell; ``data/group_runs.csv`` lists each group's runs, one row per (group, run).
 ====  =====================================================================================
 
 Readers take every version: an older package is read as the current one with what it
@@ -29,19 +32,26 @@ from .schema import ADDED_IN_VERSION, SCHEMA_NAME, SCHEMA_VERSION
 #: the profile's name in the descriptor
 PROFILE_NAME = "tribopipe-friction-map-package"
 #: the version this tribopipe writes
-PROFILE_VERSION = 2
+PROFILE_VERSION = 3
 #: what each version holds, one line (the module docstring's table)
 PROFILE_VERSIONS: dict[int, str] = {
     1: "summary rows only (runs, groups, the 7-column table, explorer, README, citation)",
     2: "version 1 plus the profile and its JSON Schema, and the evidence (each run's trace "
        "and raw export with their SHA-256 and the settings that reduced them)",
+    3: "version 2 with each group's runs in their own table (data/group_runs.csv: one row "
+       "per group and run) instead of one cell of the group table",
 }
+#: the first version whose group table links its runs through ``group-runs``
+LINKED_GROUPS_VERSION = 3
 #: the first map schema version of a package (version 1 maps had no ``lab``)
 FIRST_SCHEMA_VERSION = 2
 #: the last map schema version of a profile version 1 package
 LAST_V1_SCHEMA = 5
 #: the resource names each version requires, and those it may add
-REQUIRED_RESOURCES: dict[int, tuple[str, ...]] = {1: ("runs",), 2: ("runs",)}
+REQUIRED_RESOURCES: dict[int, tuple[str, ...]] = {1: ("runs",), 2: ("runs",), 3: ("runs",)}
+#: from :data:`LINKED_GROUPS_VERSION`: a resource that requires another beside it (the
+#: group table its linking table)
+COMPANION_RESOURCES: dict[str, str] = {"groups": "group-runs"}
 #: the path of a version's JSON Schema inside a package
 SCHEMA_FILE = "profile/package-v{version}.schema.json"
 
@@ -68,13 +78,19 @@ def descriptor_profile_version(descriptor: dict[str, Any]) -> int | None:
 
 
 def upgrade_note(version: int) -> str | None:
-    """The line that says an older package was read as the current version (``None``
-    for the current one)."""
+    """The line that says an older package was read as the current version, and what it
+    lacks (``None`` for the current one)."""
     if version >= PROFILE_VERSION:
         return None
+    lacks = []
+    if version < 2:
+        lacks.append("it carries no evidence, so `map validate --recompute` can check none "
+                     "of its rows")
+    if version < LINKED_GROUPS_VERSION:
+        lacks.append("its group table joins each group's run ids and values into one cell "
+                     "(read as they are; the groups are checked against its runs)")
     return (f"package profile version {version} ({PROFILE_VERSIONS[version]}), read as "
-            f"version {PROFILE_VERSION}: it carries no evidence, so `map validate "
-            "--recompute` can check none of its rows")
+            f"version {PROFILE_VERSION}: " + "; ".join(lacks))
 
 
 def map_upgrade_note(version: int) -> str | None:
@@ -123,9 +139,14 @@ def profile_schema(version: int = PROFILE_VERSION) -> dict[str, Any]:
         block["properties"]["profile_version"] = {"const": version}
     else:
         block["not"] = {"required": ["profile_version"]}
-    required = [{"contains": {"type": "object", "properties": {"name": {"const": name}},
-                              "required": ["name"]}}
-                for name in REQUIRED_RESOURCES[version]]
+    def named(name: str) -> dict[str, Any]:
+        return {"contains": {"type": "object", "properties": {"name": {"const": name}},
+                             "required": ["name"]}}
+
+    required = [named(name) for name in REQUIRED_RESOURCES[version]]
+    if version >= LINKED_GROUPS_VERSION:
+        required += [{"if": named(name), "then": named(companion)}
+                     for name, companion in COMPANION_RESOURCES.items()]
     return {
         "$schema": "https://json-schema.org/draft/2020-12/schema",
         "title": f"tribopipe friction-map package, profile version {version}",

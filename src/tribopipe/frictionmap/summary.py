@@ -13,7 +13,7 @@ from ..materials import Vocabulary, shipped_vocabulary
 from ..measurement import run_name
 from ..stats import repeatability
 from .checks import validate_runs
-from .schema import is_missing
+from .schema import MapRow, frame_rows, is_missing
 from .snapshot import MapSource, as_snapshot
 from .store import verify_map
 from .synthetic_rows import synthetic_note
@@ -79,11 +79,11 @@ def map_summary(path: MapSource, *, runs_listed: bool = False) -> str:
     if len(excluded):
         lines.append("")
         lines.append("  excluded runs:")
-        for row in excluded.to_dict(orient="records", into=dict):
-            lines.append(f"    {row['measurement_id']}  {_text(row['pin'])} / "
-                         f"{_text(row['disc'])}, {row['normal_force_N']:g} N, "
-                         f"{_fmt_t(row['temperature_C'])}, repeat {_fmt_repeat(row['repeat'])}"
-                         f", from {run_origin(row)}: {_text(row['exclusion_reason'])}")
+        for row in frame_rows(excluded):
+            lines.append(f"    {row.measurement_id}  {_text(row.pin)} / "
+                         f"{_text(row.disc)}, {row.normal_force_N:g} N, "
+                         f"{_fmt_t(row.temperature_C)}, repeat {_fmt_repeat(row.repeat)}"
+                         f", from {run_origin(row)}: {_text(row.exclusion_reason)}")
     lines += _review_lines(runs, groups)
     if runs_listed:
         lines.append("")
@@ -91,7 +91,7 @@ def map_summary(path: MapSource, *, runs_listed: bool = False) -> str:
                      "nominal F and T, repeat, mu_k, mu_s, flags")
         ordered = runs.sort_values(["source_file", "test", "result", "interval",
                                     "measurement_id"], kind="mergesort", na_position="first")
-        lines += ["    " + run_line(row) for row in ordered.to_dict(orient="records", into=dict)]
+        lines += ["    " + run_line(row) for row in frame_rows(ordered)]
     return "\n".join(lines)
 
 
@@ -110,17 +110,18 @@ def _review_lines(runs: Any, groups: Any) -> list[str]:
         lines.append(f"    group {_text(g['pin'])} / {_text(g['disc'])}, "
                      f"{g['normal_force_N']:g} N, {_fmt_t(g['temperature_C'])}: "
                      f"{g['reviewed']} of {g['mu_k_n']} runs reviewed")
-    for row in done.to_dict(orient="records", into=dict):
-        what = _text(row["review"])
-        if row["review"] == "window":
-            what += (f" {row['mu_k_window_start_mm']:.4g}–{row['mu_k_window_end_mm']:.4g} mm: "
-                     f"mu_k {row['mu_k']:.4f} (automatic {row['auto_mu_k']:.4f})")
-            if not is_missing(row.get("review_static_peak_mm")):
-                what += f", mu_s {row['mu_s']:.4f} (automatic {row['auto_mu_s']:.4f})"
-        who = ", ".join(_text(row[c]) for c in ("review_by", "review_date")
-                        if not is_missing(row.get(c)))
-        why = "" if is_missing(row.get("review_reason")) else f": {_text(row['review_reason'])}"
-        lines.append(f"    {row['measurement_id']}  {what}" + (f" [{who}]" if who else "") + why)
+    for row in frame_rows(done):
+        what = _text(row.review)
+        if row.review == "window":
+            what += (f" {_num(row.mu_k_window_start_mm, '.4g')}–"
+                     f"{_num(row.mu_k_window_end_mm, '.4g')} mm: "
+                     f"mu_k {row.mu_k:.4f} (automatic {_num(row.auto_mu_k, '.4f')})")
+            if row.review_static_peak_mm is not None:
+                what += (f", mu_s {_num(row.mu_s, '.4f')} "
+                         f"(automatic {_num(row.auto_mu_s, '.4f')})")
+        who = ", ".join(_text(v) for v in (row.review_by, row.review_date) if v is not None)
+        why = "" if row.review_reason is None else f": {_text(row.review_reason)}"
+        lines.append(f"    {row.measurement_id}  {what}" + (f" [{who}]" if who else "") + why)
     return lines
 
 
@@ -132,39 +133,42 @@ def _text(value: Any) -> str:
     return printable(str(value))
 
 
-def run_origin(row: dict[str, Any]) -> str:
+def run_origin(row: MapRow) -> str:
     """Where a map row came from: ``file [test / result / interval i]`` (the parts the row
     knows; a row of a map older than schema version 4 names no test or result)."""
-    interval = None if is_missing(row.get("interval")) else int(row["interval"])
-    test, result = (None if is_missing(row.get(k)) else _text(row[k])
-                    for k in ("test", "result"))
-    return run_name(_text(row.get("source_file")), test, result, interval)
+    test, result = (None if v is None else _text(v) for v in (row.test, row.result))
+    return run_name(_text(row.source_file), test, result, row.interval)
 
 
-def run_line(row: dict[str, Any]) -> str:
+def run_line(row: MapRow) -> str:
     """One run of the map on one line: the first 16 digits of its id, where it came from,
     pin / disc, nominal force [N] and temperature [°C], repeat, μ_K, μ_S and flags."""
-    mu_s = "" if is_missing(row.get("mu_s")) else f", mu_s {row['mu_s']:.3f}"
-    flags = printable(", ".join(flag_list(row.get("flags")))) or "-"
-    excluded = " (excluded)" if row.get("excluded") else ""
-    if not is_missing(row.get("review")):
-        excluded += f" (reviewed: {_text(row['review'])})"
-    return (f"{row['measurement_id']}  {run_origin(row)}  {_text(row['pin'])} / "
-            f"{_text(row['disc'])}, {row['normal_force_N']:g} N, {_fmt_t(row['temperature_C'])}"
-            f", repeat {_fmt_repeat(row['repeat'])}: mu_k {row['mu_k']:.3f}{mu_s}; flags "
+    mu_s = "" if row.mu_s is None else f", mu_s {row.mu_s:.3f}"
+    flags = printable(", ".join(flag_list(row.flags))) or "-"
+    excluded = " (excluded)" if row.excluded else ""
+    if row.review is not None:
+        excluded += f" (reviewed: {_text(row.review)})"
+    return (f"{row.measurement_id}  {run_origin(row)}  {_text(row.pin)} / "
+            f"{_text(row.disc)}, {row.normal_force_N:g} N, {_fmt_t(row.temperature_C)}"
+            f", repeat {_fmt_repeat(row.repeat)}: mu_k {row.mu_k:.3f}{mu_s}; flags "
             f"{flags}{excluded}")
+
+
+def _num(value: float | None, spec: str) -> str:
+    """A number of a row as ``format(value, spec)``; ``?`` where the row holds none."""
+    return "?" if value is None else format(value, spec)
 
 
 def _runs(n: int) -> str:
     return f"{n} run" if n == 1 else f"{n} runs"
 
 
-def _fmt_t(value: float) -> str:
+def _fmt_t(value: float | None) -> str:
     return "T ?" if is_missing(value) else f"{value:g} °C"
 
 
-def _fmt_repeat(value: Any) -> str:
-    return "?" if is_missing(value) else str(value)
+def _fmt_repeat(value: int | None) -> str:
+    return "?" if value is None else str(value)
 
 
 def unresolved_names(runs: pd.DataFrame, vocabulary: Vocabulary) -> list[str]:

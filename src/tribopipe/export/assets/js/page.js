@@ -232,7 +232,7 @@ function renderResult(res, error) {
   // GUM combined standard uncertainty (k = 1) and the expanded U = 2u, beside the CI
   muKu.textContent = "interpolation u = " + uText(res.mu_k.u_interpolation) +
     "; repeats' 95 % CI half-width " + (res.mu_k.uncertainty === null ? "unknown" :
-      pyFixed(res.mu_k.uncertainty, 3));
+      f3(res.mu_k.uncertainty));
   muKu.dataset.u = res.mu_k.u_combined === null ? "" : String(res.mu_k.u_combined);
   muK.dataset.clampedPressure = String(res.mu_k.clamped_pressure);
   muK.dataset.clampedTemperature = String(res.mu_k.clamped_temperature);
@@ -250,7 +250,7 @@ function renderResult(res, error) {
   res.mu_k.used.forEach(function (u) {
     var text = u.point.text;
     var tr = make("tr");
-    var cells = [text.p, text.t, text.mean, text.half, text.u, String(u.n), pyFixed(u.weight, 3)];
+    var cells = [text.p, text.t, text.mean, text.half, text.u, String(u.n), f3(u.weight)];
     if (PAIRS[res.pair].speeds.length > 1) cells.splice(2, 0, speedText(res.pair, u.speed_mm_s));
     cells.forEach(function (v) { tr.appendChild(make("td", v)); });
     var cell = make("td", null, "tpx-t");
@@ -433,5 +433,5 @@ window.tribopipeExplorer = Object.freeze({
   result: function () { return state.result; },
   exportText: function (fmt, res) { return EXPORTS[fmt].make(res || state.result); },
   fileName: function (fmt) { return state.result ? fileName(state.result, fmt) : null; },
-  format: { fixed: pyFixed, g: pyG, repr: pyRepr },
+  format: { decimal: decimalText },
 });

@@ -1,6 +1,7 @@
 /* tribopipe query, redone: the rule of tribopipe/interpolation.py and tribopipe/query.py on
-   the pair's points, and the GUM rounding of tribopipe/rounding.py (tests/test_interpolation.py
-   runs this file in node and holds it equal to the Python). */
+   the pair's points, and the rounding of tribopipe/rounding.py (round_gum, plus_minus,
+   decimal_text) for the numbers it computes (tests/test_interpolation.py runs this file in
+   node and holds it equal to the Python). Every other text comes from Python (DATA). */
 
 function QueryError(message) { this.name = "QueryError"; this.message = message; }
 QueryError.prototype = Object.create(Error.prototype);
@@ -216,6 +217,34 @@ function roundGum(value, U) {
   return [fixedText(v[0], v[1], q), fixedText(u[0], u[1], q)];
 }
 
+/* rounding.decimal_text: x rounded half away from zero on its shortest decimal text, to
+   `digits` significant digits laid out as Python's "g" lays them out, or (digits null) to
+   `places` decimals. */
+function decimalText(x, digits, places) {
+  if (!Number.isFinite(x)) return Number.isNaN(x) ? "nan" : x > 0 ? "inf" : "-inf";
+  var r;
+  if (digits === null || digits === undefined) {
+    r = quantize(x, -places);
+    return fixedText(r[0], r[1], -places);
+  }
+  if (x === 0) return "0";
+  var e = adjusted(x);
+  r = quantize(x, e - digits + 1);
+  if (r[1].toString().length > digits) { e += 1; r = quantize(x, e - digits + 1); }
+  var sign = r[0] ? "-" : "";
+  if (e >= -4 && e < digits) {
+    var text = fixedText(r[0], r[1], e - digits + 1);
+    return text.indexOf(".") < 0 ? text : text.replace(/\.?0+$/, "");
+  }
+  var d = r[1].toString();
+  var tail = d.slice(1).replace(/0+$/, "");
+  return sign + d[0] + (tail ? "." + tail : "") + "e" + (e < 0 ? "-" : "+") +
+    String(Math.abs(e)).padStart(2, "0");
+}
+
+function g6(x) { return decimalText(x, 6); }     // format "g" of a computed number
+function f3(x) { return decimalText(x, null, 3); } // three decimals, as the tables
+
 /* rounding.plus_minus: "0.53 ± 0.11", bounded at zero as "0.05 +0.11/−0.05" */
 function plusMinus(value, U, asciiOnly) {
   var r = roundGum(value, U);
@@ -229,7 +258,7 @@ function estimateText(est, asciiOnly) {
   var out = extrapolated(est);
   if (est.expanded !== null && !out) return plusMinus(est.value, est.expanded, asciiOnly);
   var why = DATA.texts.why_no_u;
-  return pyFixed(est.value, 3) + " (" + (out ? why.extrapolated : est.n_min < 2 ?
+  return f3(est.value) + " (" + (out ? why.extrapolated : est.n_min < 2 ?
     why.single_run : why.unknown) + ")";
 }
 
@@ -269,7 +298,7 @@ function speedWeights(speeds, v, needed) {
     return [[[0, 1.0]], false];
   }
   if (typeof v !== "number" || !Number.isFinite(v) || !(v > 0)) {
-    throw new QueryError(DATA.texts.errors.speed.replace("{}", pyRepr(Number(v))));
+    throw new QueryError(DATA.texts.errors.speed.replace("{}", decimalText(Number(v), 17)));
   }
   for (var i = 0; i < speeds.length; i += 1) {
     if (Math.abs(Math.log(v / speeds[i])) <= SPEED_MATCH_REL) return [[[i, 1.0]], false];
@@ -338,10 +367,10 @@ function query(pin, disc, p, t, v) {
   if (v === undefined) v = null;
   var errors = DATA.texts.errors;
   if (typeof p !== "number" || !Number.isFinite(p) || p < 0) {
-    throw new QueryError(errors.pressure.replace("{}", pyRepr(Number(p))));
+    throw new QueryError(errors.pressure.replace("{}", decimalText(Number(p), 17)));
   }
   if (t !== null && (typeof t !== "number" || !Number.isFinite(t))) {
-    throw new QueryError(errors.temperature.replace("{}", pyRepr(Number(t))));
+    throw new QueryError(errors.temperature.replace("{}", decimalText(Number(t), 17)));
   }
   var index = findPair(pin, disc);
   if (index < 0) {

@@ -47,21 +47,21 @@ function commentBlock(comment, bodies, width) {
   return out;
 }
 
-function num(x) { return pyG(x, 10); } // simbase.num
+function num(x) { return decimalText(x, 10); } // unit_systems.num
 
 function usedText(res) {
   return res.mu_k.used.map(function (u) {
-    return pyG(u.pressure_kPa) + " kPa" + (u.temperature_C === null ? "" : "/" + pyG(u.temperature_C) + " C") +
-      " (w=" + pyG(u.weight, 3) + ")";
+    return g6(u.pressure_kPa) + " kPa" + (u.temperature_C === null ? "" : "/" + g6(u.temperature_C) + " C") +
+      " (w=" + decimalText(u.weight, 3) + ")";
   }).join(", ");
 }
 
 /* simbase.condition_lines after the first (the pair's, which Python renders escaped for
    each format: PAIRS[i].snippet): numbers and the library's words only */
 function conditionLines(res) {
-  var t = res.temperature_C === null ? "unknown" : pyG(res.temperature_C) + " C";
+  var t = res.temperature_C === null ? "unknown" : g6(res.temperature_C) + " C";
   var lines = [
-    "condition: contact pressure " + pyG(res.pressure_kPa) + " kPa, temperature " + t,
+    "condition: contact pressure " + g6(res.pressure_kPa) + " kPa, temperature " + t,
     "mu_k = " + num(res.mu_k.value) + "; " + estimateText(res.mu_k, true) +
       (res.mu_k.expanded === null ? "" : " (U, k = 2)"),
     "mu_s = " + (res.mu_s === null ? DATA.texts.snippet.mu_s_unknown : num(res.mu_s.value) + "; " +
@@ -93,7 +93,8 @@ function conditionSnippet(res, fmt) {
 /* A computed text as one CSV field (RFC 4180: quoted, quotes doubled). */
 function csvQuoted(text) { return '"' + String(text).replace(/"/g, '""') + '"'; }
 
-function csvNumber(v) { return v === null || v === undefined ? "" : pyRepr(v); }
+/* a number in full: the shortest text that reads back as it (the browser's own) */
+function csvNumber(v) { return v === null || v === undefined ? "" : String(v); }
 
 /* The condition as CSV: the header and the cells that are text come from Python
    (DATA.csv, PAIRS[i].csv: tribopipe.escape.csv_cell, quoted as the csv module does). */
@@ -202,7 +203,7 @@ DATA.snippets.forEach(function (s) {
 });
 
 function fileName(res, fmt) {
-  var t = res.temperature_C === null ? "" : "_" + pyG(res.temperature_C) + "C";
-  return "tribopipe_" + PAIRS[res.pair].slug + "_" + pyG(res.pressure_kPa) + "kPa" + t + "." +
+  var t = res.temperature_C === null ? "" : "_" + g6(res.temperature_C) + "C";
+  return "tribopipe_" + PAIRS[res.pair].slug + "_" + g6(res.pressure_kPa) + "kPa" + t + "." +
     EXPORTS[fmt].ext;
 }

@@ -20,6 +20,7 @@ import pandas as pd
 import pytest
 from click.testing import CliRunner
 
+from helpers import lab_vocabulary
 from reduced_runs import make_processed
 from tribopipe.cli import main
 from tribopipe.escape import script_json
@@ -33,7 +34,6 @@ from tribopipe.export.explorer import (
 from tribopipe.fit import fit_power_law, power_law
 from tribopipe.frictionmap import exclude_runs, import_table, read_map
 from tribopipe.frictionmap.published import published_csv_path
-from tribopipe.materials import Material, shipped_vocabulary
 from tribopipe.query import pair_points, select_pair
 from tribopipe.stats import group_statistics
 
@@ -288,8 +288,7 @@ def hostile_map(root: Path) -> Path:
     csv.write_text("\n".join(rows) + "\n", encoding="utf-8")
     map_path = root / "friction_map.parquet"
     # a hostile lab's materials file names them: names are data, whatever they hold
-    lab = [Material(name=n, material_class="other") for n in (HOSTILE_PIN, HOSTILE_DISC)]
-    import_table(map_path, csv, vocabulary=shipped_vocabulary().with_materials(lab))
+    import_table(map_path, csv, vocabulary=lab_vocabulary(HOSTILE_PIN, HOSTILE_DISC))
     return map_path
 
 

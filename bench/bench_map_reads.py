@@ -55,6 +55,9 @@ def main() -> None:
     late = raw / "DS30_steel_9N_20C_r2.csv"
     held = work / late.name
     late.replace(held)                      # the new export of `batch` and `reduce`
+    later = raw / "DS30_steel_9N_20C_r1.csv"
+    held_later = work / later.name
+    later.replace(held_later)               # a second batch's new export
     mp = work / "map.parquet"
     out = work / "out"
     runner = CliRunner()
@@ -78,7 +81,10 @@ def main() -> None:
         ("reduce (one export into the map)",
          ["reduce", str(work / "new.csv"), "--pin", "DS30", "--disc", "steel", "--force", "9",
           "--temperature", "20", "--repeat", "2", "--map", str(mp), "--out", str(work / "r")]),
-        ("batch (one new export)",
+        ("batch (one new export, after `reduce` changed the map)",
+         ["batch", str(raw), "--manifest", str(raw / "manifest.csv"), "--map", str(mp),
+          "--out", str(out), "--no-plots", "-j", "1"]),
+        ("batch (one new export, the map as the last batch left it)",
          ["batch", str(raw), "--manifest", str(raw / "manifest.csv"), "--map", str(mp),
           "--out", str(out), "--no-plots", "-j", "1"]),
         ("batch (unchanged re-run)",
@@ -91,7 +97,8 @@ def main() -> None:
         ("map fit", ["map", "fit", "--map", str(mp)]),
         ("query", ["query", "--pin", "DS30", "--disc", "steel", "--pressure", "50",
                    "--temperature", "20", "--map", str(mp)]),
-        ("export abaqus (one pair)", ["export", "abaqus", "--pin", "DS30", "--disc", "steel",
+        ("export abaqus (one pair)", ["export", "abaqus", "--pin", "Dragonskin 30",
+                                      "--disc", "steel",
                                       "--map", str(mp), "-o", str(work / "f.inp")]),
         ("export abaqus (every pair)", ["export", "abaqus", "--map", str(mp),
                                         "-o", str(work / "all.inp")]),
@@ -105,8 +112,10 @@ def main() -> None:
     print("| command | map reads |")
     print("|---|---|")
     for name, argv in commands:
-        if name.startswith("batch (one new"):
+        if name.startswith("batch (one new export, after"):
             held.replace(late)
+        if name.startswith("batch (one new export, the map"):
+            held_later.replace(later)
         calls.clear()
         result = run(*argv)
         print(f"| `{name}` | {len(calls)} |" + ("" if result.exit_code == 0 else " (exit 1)"))

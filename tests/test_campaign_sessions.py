@@ -29,7 +29,7 @@ from multi_exports import (
     write_xlsx_twin,
 )
 from tribopipe.campaign import campaign_listing, load_campaign, run_campaign
-from tribopipe.campaign.batch import Tally
+from tribopipe.campaign.ledger import Tally
 from tribopipe.campaign.spec import folder_campaign
 from tribopipe.campaign.table import discover_files
 from tribopipe.cli import main

@@ -352,3 +352,33 @@ def test_a_foreign_file_at_the_map_path_is_refused(tmp_path):
     assert result.exit_code == 1
     assert len(result.output.strip().splitlines()) == 1
     assert "Traceback" not in result.output
+
+
+def test_the_page_writes_note_cells_without_an_escape_of_its_own():
+    """The page quotes its CSV cell of notes without escaping it (snippets.js csvQuoted):
+    the notes are the library's words, with no quote to double and no formula start for
+    :func:`tribopipe.escape.csv_cell` to neutralise, joined or alone."""
+    from tribopipe.escape import csv_cell
+    from tribopipe.query import NOTES
+
+    texts = [t.replace("{n}", "3") for t in NOTES.values()]
+    for text in [*texts, "; ".join(texts)]:
+        assert '"' not in text and csv_cell(text) == text, text
+
+
+def test_the_snippet_notes_and_name_rule_come_laid_out_from_python(published):
+    """What the page does not compute is handed to it: the decks' note as their comment
+    lines (wrapped by the writers' own rule), and the name rule as data."""
+    from tribopipe.export.explorer import name_rule
+    from tribopipe.export.fe_decks import CONSTANT_NOTE
+    from tribopipe.export.headers import comment_block
+    from tribopipe.query import name_key
+
+    data = explorer_data(published[1])
+    lines = data["texts"]["snippet"]["note_lines"]
+    assert lines["abaqus"] == comment_block("**", [CONSTANT_NOTE.format(fmt="abaqus")])
+    assert len(lines["ansys"]) > 1 and all(len(x) <= 100 for x in lines["ansys"])
+    rule = name_rule()
+    assert data["texts"]["names"] == rule
+    assert all(name_key(c) == rule["fold"][c] for c in rule["fold"] if not c.isspace())
+    assert "ß" in rule["fold"] and "\x1c" in rule["space"] and "A" not in rule["fold"]

@@ -1008,3 +1008,61 @@ def test_the_group_table_filters_by_test_method(tab, tmp_path):
     rest = group_rows(tab)
     assert len(rest) + len(sled_rows) == len(all_rows)
     assert ("Dragonskin 30", "steel") not in {(r[0], r[1]) for r in rest}
+
+
+def test_hostile_names_match_query_csv_and_snippets_as_python_does(tab, tmp_path):
+    """Names and a map path a spreadsheet, a shell or a browser would read as code, and
+    names whose casefold is not their lower case: a link spelt otherwise finds the pair
+    by :func:`tribopipe.query.name_key` (stripped of Python's white space, casefolded),
+    the page's query and snippets equal Python's, the CSV cells are
+    :func:`tribopipe.escape.csv_cell`'s and the table filter folds names the same way."""
+    import csv
+    import io
+
+    from tribopipe.escape import csv_cell
+    from tribopipe.query import name_key
+
+    pin = '=1+1 "Straße" it\'s <script>alert(1)</script> 🙂'
+    disc = "@SUM(A1) ﬁne STEEL; -2+3"
+    rows = io.StringIO()
+    writer = csv.writer(rows, lineterminator="\n")
+    writer.writerow(["pin", "disc", "contactForce", "contactPressure", "temperature",
+                     "measurementNo", "cof"])
+    for force, pressure, mu in ((1.0, 11.79, 0.6), (3.0, 35.37, 0.4)):
+        for t in (20, 40):
+            for repeat in (1, 2):
+                writer.writerow([pin, disc, force, pressure, t, repeat,
+                                 mu + 0.01 * repeat + 0.001 * t])
+    table = tmp_path / "names.csv"
+    table.write_text(rows.getvalue(), encoding="utf-8")
+    map_path = tmp_path / "map \u202egpj.=1+1 \u200f.parquet"
+    import_table(map_path, table)
+    groups = groups_of(read_map(map_path), map_path)
+    page = write_explorer(map_path, tmp_path / "explorer.html")
+    # spelt otherwise: upper case (ß → SS, ﬁ → FI), edged with white space JavaScript's
+    # trim() would keep (\x1c) or that only Python strips
+    link_pin, link_disc = "\x1c " + pin.upper() + "\u3000", "\x85" + disc.upper()
+    assert (name_key(link_pin), name_key(link_disc)) == (name_key(pin), name_key(disc))
+    # lower case is not the rule: the names' ß and ﬁ stay as they are in lower case
+    assert pin.lower() != name_key(pin) and disc.lower() != name_key(disc)
+    tab.open(page_url(page, pin=link_pin, disc=link_disc, pressure="20", temperature="30"))
+    s = shown(tab)
+    assert (s["pin"], s["disc"]) == (pin, disc)
+    assert tab.page.text_content("#tpx-selection-note") == ""
+    assert_shows(tab, query(groups, link_pin, link_disc, 20.0, 30.0))
+    conditions = [(link_pin, link_disc, p, t) for p in (5.0, 20.0, 35.37) for t in (None, 30.0)]
+    conditions = [c for c in conditions if c[3] is not None]
+    assert_snippets_are_the_writer_s(tab, groups, conditions, str(map_path))
+    # the CSV: the names and the map's path as csv_cell writes them, quoted by csv
+    open_export(tab)
+    tab.page.select_option("#tpx-export-format", "csv")
+    (row,) = csv.DictReader(io.StringIO(tab.page.input_value("#tpx-export-text")))
+    assert (row["pin"], row["disc"], row["map"]) == (
+        csv_cell(pin), csv_cell(disc), csv_cell(str(map_path)))
+    assert row["pin"].startswith("'=") and row["disc"].startswith("'@")
+    assert not any(v.startswith(("=", "+", "-", "@")) for v in row.values())
+    # the group table's filter folds names by the same rule
+    tab.page.fill("#tpx-group-filter", "STRASSE FINE")
+    assert tab.page.text_content("#tpx-group-count") == f"{len(groups)} of {len(groups)} groups"
+    tab.page.fill("#tpx-group-filter", "strasse fine x")
+    assert tab.page.text_content("#tpx-group-count") == f"0 of {len(groups)} groups"

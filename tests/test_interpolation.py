@@ -261,6 +261,23 @@ def test_the_js_decimal_text_is_the_python_one():
                        decimal_text(v, places=3)], v
 
 
+def test_the_js_name_key_is_the_python_one():
+    """The page matches a link's names by :func:`tribopipe.query.name_key` from the rule
+    Python hands it (white space, casefold table): every character whose casefold is not
+    its lower case, Python's white space at both ends, and mixed names."""
+    from tribopipe.export.explorer import name_rule
+    from tribopipe.query import name_key
+
+    names = name_rule()
+    rng = np.random.default_rng(29)
+    pool = list(names["fold"]) + list(names["space"]) + list("AbCßẞİıΣςﬁﬀǅ🙂é\u0301Ωω<>'\"=")
+    texts = list(names["fold"]) + [names["space"] + "Straße" + names["space"], "ǄǅǆX"]
+    texts += ["".join(rng.choice(pool, size=int(rng.integers(1, 12)))) for _ in range(400)]
+    got = run_node({"pairs": [], "texts": {"names": names}},
+                   "return " + json.dumps(texts) + ".map(nameKey);")
+    assert got == [name_key(t) for t in texts]
+
+
 def budgeted_runs(runs: pd.DataFrame) -> pd.DataFrame:
     """The published runs with uncertainty budgets and μ_S, a few groups cut to one run."""
     rng = np.random.default_rng(7)

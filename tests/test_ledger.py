@@ -19,7 +19,7 @@ import pytest
 from click.testing import CliRunner
 
 import tribopipe.campaign.state as state
-import tribopipe.pipeline as pipeline
+import tribopipe.pipeline.run_outputs as run_outputs
 from helpers import reduce_cli
 from tribopipe.cli import main
 
@@ -102,14 +102,14 @@ def test_batch_on_a_full_disk_lists_every_run_it_could_not_write(
 
 def test_a_plot_that_fails_costs_neither_its_run_nor_the_other_files(
         tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
-    real = pipeline.plot_run
+    real = run_outputs.plot_run
 
     def fragile(out: Any, outcome: Any) -> Path:
         if Path(outcome.path).name == R2.name:
             raise RuntimeError("raqm_layout() failed")
         return real(out, outcome)
 
-    monkeypatch.setattr(pipeline, "plot_run", fragile)
+    monkeypatch.setattr(run_outputs, "plot_run", fragile)
     out, mapfile = tmp_path / "out", tmp_path / "map.parquet"
     done = reduce_cli(R1, R2, OTHER, *LABELS, "--output", out, "--map", mapfile, "--plots")
     assert done.exit_code == 0, done.output

@@ -16,8 +16,7 @@ import pytest
 from click.testing import CliRunner
 from filelock import FileLock, Timeout
 
-import tribopipe.campaign.batch as batch
-import tribopipe.pipeline as pipeline
+import tribopipe.pipeline.landing as landing
 from helpers import reduce_cli
 from tribopipe.cli import main
 from tribopipe.frictionmap.store import update_map_with
@@ -74,7 +73,7 @@ def test_reduce_checks_the_same_content_under_the_map_lock(
     assert first.exit_code == 0, first.output
     copy = tmp_path / "copy_of_r1.csv"
     shutil.copyfile(EXAMPLE, copy)
-    held = _watching(pipeline, monkeypatch, mapfile)
+    held = _watching(landing, monkeypatch, mapfile)
     again = _reduce(copy, mapfile, out)
     assert again.exit_code == 0, again.output
     assert held == [True]
@@ -91,7 +90,7 @@ def test_batch_checks_the_same_content_under_the_map_lock(
     shutil.copyfile(EXAMPLE, raw / "a" / EXAMPLE.name)
     shutil.copyfile(EXAMPLE, raw / "b" / "DS30_steel_1N_10C_r2.csv")  # other repeat: a conflict
     mapfile = tmp_path / "map.parquet"
-    held = _watching(batch, monkeypatch, mapfile)
+    held = _watching(landing, monkeypatch, mapfile)
     done = CliRunner().invoke(main, ["batch", str(raw), "--pattern", PATTERN, "--glob",
                                      "*/*.csv", "--output", str(tmp_path / "out"), "--map",
                                      str(mapfile), "--jobs", "1", "--no-plots"])

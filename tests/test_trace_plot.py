@@ -37,7 +37,8 @@ from tribopipe.figures import (
 )
 from tribopipe.frictionmap.schema import MapRow
 from tribopipe.labels import RunLabels
-from tribopipe.pipeline import plot_run, reduce_file, run_conditions
+from tribopipe.pipeline import plot_run, reduce_file
+from tribopipe.pipeline.run_outputs import run_conditions
 
 
 def column_extremes(x, y, x_range, columns):

@@ -55,7 +55,7 @@ from .frictionmap.package import PackageCheck, check_package
 from .frictionmap.records import measurement_id, stored_file_name
 from .frictionmap.schema import SOURCE_REDUCED
 from .layout import find_trace
-from .pipeline import read_runs
+from .pipeline.route import read_runs
 from .reduction.detection import run_detection
 from .reduction.reduce import reduce_measurement
 

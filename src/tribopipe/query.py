@@ -234,6 +234,14 @@ def _held_pairs_text(groups: pd.DataFrame) -> str:
     return "the map holds: " + "; ".join(f"{p} on {d}" for p, d in held)
 
 
+def name_key(name: object) -> str:
+    """A pin or disc name as a request is matched against it: stripped of white space
+    (``str.strip``) and casefolded (``str.casefold``); the explorer's script matches a
+    link's names by the same rule (its table comes from
+    :func:`tribopipe.export.explorer.explorer_data`)."""
+    return str(name).strip().casefold()
+
+
 def select_pair(groups: pd.DataFrame, pin: str, disc: str) -> pd.DataFrame:
     """The groups of one pair (pin and disc matched case-insensitively), as a new frame.
 
@@ -244,9 +252,9 @@ def select_pair(groups: pd.DataFrame, pin: str, disc: str) -> pd.DataFrame:
             f"no groups for pin {pin!r} on disc {disc!r}: the friction map is empty",
             hint="reduce runs first (tribopipe reduce / batch) or import the published map",
         )
-    pin_key = groups["pin"].astype(str).str.strip().str.casefold()
-    disc_key = groups["disc"].astype(str).str.strip().str.casefold()
-    mask = (pin_key == pin.strip().casefold()) & (disc_key == disc.strip().casefold())
+    pin_key = groups["pin"].map(name_key)
+    disc_key = groups["disc"].map(name_key)
+    mask = (pin_key == name_key(pin)) & (disc_key == name_key(disc))
     if not mask.any():
         names = [f"{p} on {d}" for p, d in pairs(groups)]
         close = difflib.get_close_matches(f"{pin} on {disc}", names, n=1, cutoff=0.6)

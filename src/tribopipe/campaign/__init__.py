@@ -47,8 +47,11 @@ The package's rooms, each importing only those above it:
 * :mod:`~tribopipe.campaign.outputs` — ``runs.csv`` (one row per run) and ``failures.csv``;
 * :mod:`~tribopipe.campaign.worker` — one file in a worker: read once, every run labelled
   and reduced;
+* :mod:`~tribopipe.campaign.ledger` — a batch's account and its ledger
+  (:class:`BatchReport`), whose parts add up;
 * :mod:`~tribopipe.campaign.batch` — :func:`run_campaign`, the parallel batch, the same
-  content under two names (duplicate or conflict) and the ledger (:class:`BatchReport`).
+  content under two names (duplicate or conflict), landed as it goes through the one
+  landing (:func:`tribopipe.pipeline.landing.land_runs`).
 
 Every friction interval of every test of every export is a run. A file whose content,
 labels or config changed is reduced again and its old map rows replaced; a failed file is
@@ -58,7 +61,8 @@ retried once it changes. The package exports a campaign's everyday calls
 
 from __future__ import annotations
 
-from .batch import BatchReport, run_campaign
+from .batch import run_campaign
+from .ledger import BatchReport
 from .metadata import read_manifest
 from .spec import Campaign, folder_campaign, load_campaign
 from .table import campaign_listing, campaign_table, manifest_template

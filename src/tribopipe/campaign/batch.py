@@ -1,13 +1,16 @@
-"""The batch: every new or changed file of a campaign reduced in parallel, the map updated once.
+"""The batch: every new or changed file of a campaign reduced in parallel, landed as it goes.
 
 Workers (one process per CPU, :mod:`tribopipe.campaign.worker`) read each file once and
 reduce each of its runs (one per friction interval of every test), write each trace and
-trace plot at the layout's paths and return small picklable results; the parent checks
-each file's content against the files seen before it (in this batch, in the state, in
-the map: a duplicate is stored once, a conflict refused), folds the records into the map
-in one atomic update, then writes the state, ``runs.csv`` and ``failures.csv``, and
-accounts for everything in a :class:`BatchReport` whose ledger names what was found and
-what was left out. A failing file, test or run is reported and skipped, never fatal.
+trace plot at the layout's paths and return small picklable results; the parent lands
+what finished in chunks, each through the one landing of ``reduce`` and the batch
+(:func:`tribopipe.pipeline.landing.land_runs`: one locked atomic write of the map, the
+review applied in it), each file's content checked there against the files seen before
+it (in this batch, in the state, in the map: a duplicate is stored once, a conflict
+refused); then it writes the state, ``runs.csv`` and ``failures.csv``, and accounts for
+everything in a :class:`~tribopipe.campaign.ledger.BatchReport` whose ledger names what
+was found and what was left out (:mod:`tribopipe.campaign.ledger`). A failing file, test
+or run is reported and skipped, never fatal.
 """
 
 from __future__ import annotations
@@ -17,29 +20,22 @@ import os
 import time
 from collections.abc import Callable, Iterator, Mapping, Sequence
 from contextlib import contextmanager, suppress
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from ..errors import CampaignError, OutputError, TribopipeError
 from ..files import file_sha256, os_reason
-from ..frictionmap.duplicates import (
-    ContentOwners,
-    FilesByHash,
-    labels_of,
-    map_files_by_hash,
-    repeat_clashes,
-)
+from ..frictionmap.duplicates import ContentOwners, FilesByHash, labels_of
 from ..frictionmap.records import stored_file_name
-from ..frictionmap.schema import MapRow, unvalidated_frame
+from ..frictionmap.schema import MapRow
 from ..frictionmap.snapshot import open_map
-from ..frictionmap.store import AppendReport, change_map_with
 from ..labels import flags_text, quality_flags
-from ..measurement import run_name
-from ..pipeline import FileOutcome, ReducedRun
-from ..review import Review, ReviewOutcome, landing_records, read_review
-from ..stats import condition_keys
-from .metadata import Manifest, read_manifest
+from ..pipeline.landing import Arrivals, check_map_before_work, land_runs
+from ..pipeline.runs import FileOutcome, ReducedRun
+from ..review import Review, read_review
+from .ledger import CONFLICT, READ, Account, BatchReport, manifest_ledger, tally
+from .metadata import read_manifest
 from .outputs import write_failures_csv, write_runs_csv
 from .spec import Campaign
 from .state import (
@@ -78,140 +74,6 @@ ProgressCallback = Callable[[int, int], None]
 #: what it finished
 LAND_EVERY_FILES = 256
 LAND_EVERY_S = 2.0
-
-#: what became of a file found, as the ledger counts it: its runs were reduced, skipped or
-#: failed one by one (read); its content came under another name with the same labels
-#: (duplicate) or with other labels (conflict, refused); it was not read at all (failed)
-READ, CONFLICT = "read", "conflict"
-FILE_OUTCOMES: tuple[str, ...] = (READ, DUPLICATE, CONFLICT, FAILED)
-
-
-@dataclass(frozen=True)
-class Tally:
-    """Files (or their tests) found by a batch, by what became of their file
-    (:data:`FILE_OUTCOMES`); the parts add up to :attr:`found`."""
-
-    read: int = 0
-    duplicate: int = 0
-    conflict: int = 0
-    failed: int = 0
-
-    @property
-    def found(self) -> int:
-        """All of them: read + duplicate + conflict + failed."""
-        return self.read + self.duplicate + self.conflict + self.failed
-
-    def parts(self, *, of_files: bool = True) -> str:
-        """``3 read, 1 duplicate, 1 conflict, 1 failed`` (files), or with ``of_files``
-        false ``7 in files read, 3 in duplicates, 1 in conflicts`` (their tests); the
-        parts that are not 0, read always."""
-        words = ("read", "duplicate", "conflict", "failed") if of_files else (
-            "in files read", "in duplicates", "in conflicts", "in failed files")
-        counts = (self.read, self.duplicate, self.conflict, self.failed)
-        return ", ".join(f"{n} {word}" for k, (n, word) in enumerate(zip(counts, words,
-                                                                           strict=True))
-                         if n or k == 0)
-
-
-def tally(outcomes: Mapping[str, str], counts: Mapping[str, int] | None = None) -> Tally:
-    """The :class:`Tally` of files by outcome (``outcomes``: file → outcome), each counting
-    1 or ``counts[file]`` (its tests)."""
-    sums = dict.fromkeys(FILE_OUTCOMES, 0)
-    for file, outcome in outcomes.items():
-        sums[outcome] += 1 if counts is None else counts.get(file, 0)
-    return Tally(**sums)
-
-
-@dataclass(frozen=True)
-class BatchReport:
-    """What a batch did, run by run, and its ledger.
-
-    ``reduced``/``skipped``: names of the runs reduced now / unchanged since the last batch
-    (a run's name is its file, with ``[test / result / interval i]`` when the export holds
-    several); ``failures``: ``(name, reason)`` of every file, test or run that failed now
-    or earlier and is unchanged; ``duplicates``: ``(file, reason)`` of files whose content
-    another file already brought (stored once); ``groups_updated``: condition groups
-    (pin, disc, force, temperature) with a map row added, replaced or removed;
-    ``removed``: map rows dropped because their raw file changed; ``map_summary``: the
-    map's own account; ``notes``: things worth saying that are not failures (plots
-    skipped, files gone from the folder, a renamed file); ``flagged``: ``(name, flags)``
-    of the runs reduced now that carry QC flags (";"-joined). The ledger: ``files`` and
-    ``tests`` found, each split by what became of its file (``file_tally``,
-    ``test_tally``: read, duplicate, conflict, failed; the tests of a file never read are
-    unknown and not counted); ``total`` runs of the files read = reduced + skipped +
-    ``runs_failed``; ``unmatched``: manifest rows that matched no file or no test,
-    ``undescribed``: the tests (``file [test]``) no metadata source described.
-    ``failures`` lists the files that failed or were refused as a conflict, and the tests
-    and runs that failed in files read; ``conflicts`` (file, reason) the files refused.
-    """
-
-    campaign: str
-    total: int
-    reduced: list[str]
-    skipped: list[str]
-    failures: list[tuple[str, str]]
-    groups_updated: int
-    removed: int
-    map_path: Path
-    map_summary: str
-    output_dir: Path
-    notes: list[str]
-    flagged: list[tuple[str, str]] = field(default_factory=list)
-    duplicates: list[tuple[str, str]] = field(default_factory=list)
-    files: int = 0
-    tests: int = 0
-    unmatched: list[str] = field(default_factory=list)
-    undescribed: list[str] = field(default_factory=list)
-    file_tally: Tally = field(default_factory=Tally)
-    test_tally: Tally = field(default_factory=Tally)
-    runs_failed: int = 0
-    conflicts: list[tuple[str, str]] = field(default_factory=list)
-    #: repeat numbers used by several runs of one condition, with the runs reduced now
-    repeats: list[str] = field(default_factory=list)
-    #: the batch's own outputs (state, runs.csv, failures.csv) that could not be written
-    output_errors: list[str] = field(default_factory=list)
-    #: the signal that stopped the batch (``"SIGINT"``, ``"SIGTERM"``), else ``None``:
-    #: what finished landed, the rest is for the next batch
-    interrupted: str | None = None
-    #: the map's rows as the batch's last write left them (``None`` when it did not read
-    #: the map): what the command shows of the map, without reading it again
-    map_after: Any = field(default=None, repr=False, compare=False)
-
-    @property
-    def ok(self) -> bool:
-        """True when everything the user named was reduced and written: no file, test or
-        run failed, every manifest row matched a file (and its test) and every output of
-        the batch was written."""
-        return not self.failures and not self.unmatched and not self.output_errors
-
-    def summary(self) -> str:
-        """One line whose parts add up: files found (read, duplicate, conflict, failed);
-        tests found, split alike; the runs of the files read (reduced, skipped, failed);
-        groups updated."""
-        tests = f"{self.tests} test(s)"
-        if self.test_tally.found != self.test_tally.read:
-            tests += f" ({self.test_tally.parts(of_files=False)})"
-        text = (f"{self.campaign}: {self.files} file(s) found ({self.file_tally.parts()}), "
-                f"{tests}; {self.total} run(s) in the files read: {len(self.reduced)} "
-                f"reduced, {len(self.skipped)} skipped (unchanged), {self.runs_failed} "
-                f"failed; {self.groups_updated} condition group(s) updated")
-        if self.removed:
-            text += f"; {self.removed} stale map row(s) removed"
-        return text
-
-    def ledger(self) -> list[str]:
-        """The batch's account: :meth:`summary`, then one line per duplicate file, per
-        file refused as a conflict, per repeat number used twice in one condition, per
-        manifest row that matched no file or no test, and per test no metadata source
-        described."""
-        lines = [self.summary()]
-        lines += [f"  duplicate: {reason}" for _, reason in self.duplicates]
-        lines += [f"  conflict: {reason}" for _, reason in self.conflicts]
-        lines += [f"  warning: {line}" for line in self.repeats]
-        lines += [f"  manifest row matching no {what}" for what in self.unmatched]
-        lines += [f"  test no metadata source described: {name}" for name in self.undescribed]
-        return lines
-
 
 def chunk_jobs(items: Sequence[Any], workers: int) -> list[list[Any]]:
     """``items`` cut into a few chunks per worker: small enough to balance, large enough to
@@ -288,9 +150,10 @@ def _run_locked(campaign: Campaign, *, jobs: int | None, plots: bool | None,
     if progress:
         progress(done, files)
 
-    if plan.todo and not map_checked and campaign.map_path.exists():
-        # refuse a foreign or corrupt map before any work (its ids only: a check, not a use)
-        open_map(campaign.map_path, ["measurement_id"])
+    if plan.todo and not map_checked:
+        # refuse a foreign or corrupt map before any work, reading none of its rows (they
+        # are read once, under the map's lock, by each landing)
+        check_map_before_work(campaign.map_path)
 
     notes: list[str] = rows.not_export_notes()  # content before labels: never a failure
     if not rows and not rows.not_exports:
@@ -303,10 +166,7 @@ def _run_locked(campaign: Campaign, *, jobs: int | None, plots: bool | None,
     todo = sorted(plan.todo, key=lambda job: job.file)
     order = [job.file for job in todo]
     redone = set(order)
-    landing = _Landing(records=[], stale_ids=set(), reduced=[], flagged=[], duplicates={},
-                       outcomes={}, runs_failed=0)
-    appended: AppendReport | None = None
-    groups: set[tuple[Any, ...]] = set()
+    account = Account()
     after: pd.DataFrame | None = None
     stop = StopFlag()
     # what the state file holds (the state as loaded, when it was this SQLite file's)
@@ -315,15 +175,14 @@ def _run_locked(campaign: Campaign, *, jobs: int | None, plots: bool | None,
     def land(results: list[FileOutcome]) -> None:
         """Fold ``results`` into the map (one locked atomic write) and the state; what
         is kept of them afterwards is their names and counts, not their rows."""
-        nonlocal landing, appended, after
-        report, landed, removed, part, after = _land(
+        nonlocal account, after
+        part, rows_after = _land(
             campaign, results, lambda in_map: _apply(
                 campaign, results, by_file, entries, failures, notes, vanished, in_map,
                 redone), entries, review)
-        if report is not None:
-            appended = report if appended is None else _combined(appended, report)
-        groups.update(_groups_updated(part, landed, removed))
-        landing = _plus(landing, part)
+        account = account.plus(part)
+        if rows_after is not None:
+            after = rows_after
         with suppress(OutputError):  # said by the batch's last save, which meets it again
             saved[0] = _save_state_with_map(campaign, entries, state, saved[0])
 
@@ -352,14 +211,15 @@ def _run_locked(campaign: Campaign, *, jobs: int | None, plots: bool | None,
             landed_files += len(ready)
             if progress:
                 progress(done + landed_files, files)
-    if landing.review is not None:
-        notes.append(landing.review.line(campaign.review))
+    if account.review is not None:
+        notes.append(account.review.line(campaign.review))
     _forget_vanished(campaign, entries, set(by_file), notes)
+    appended = account.appended
     map_summary = "unchanged" if appended is None else appended.summary()
 
-    duplicates = {**plan.duplicates, **landing.duplicates}
-    outcomes = {**plan.outcomes, **landing.outcomes}
-    this_batch = {n: REDUCED for n in landing.reduced} | {n: SKIPPED for n in plan.skipped} | {
+    duplicates = {**plan.duplicates, **account.duplicates}
+    outcomes = {**plan.outcomes, **account.outcomes}
+    this_batch = {n: REDUCED for n in account.reduced} | {n: SKIPPED for n in plan.skipped} | {
         n: FAILED for n in failures
     }
     # each output is tried even when one fails (a full disk may free up); those that
@@ -372,24 +232,24 @@ def _run_locked(campaign: Campaign, *, jobs: int | None, plots: bool | None,
             write()
         except OutputError as exc:
             problems.append(str(exc))
-    tests_in, unmatched, undescribed = _ledger(rows, entries, manifest)
-    runs_failed = plan.runs_failed + landing.runs_failed
+    tests_in, unmatched, undescribed = manifest_ledger(rows, entries, manifest)
+    runs_failed = plan.runs_failed + account.runs_failed
     test_tally = tally(outcomes, tests_in)
     return BatchReport(
         interrupted=stop.name,
         map_after=after,
         campaign=campaign.name,
-        total=len(landing.reduced) + len(plan.skipped) + runs_failed,
-        reduced=landing.reduced,
+        total=len(account.reduced) + len(plan.skipped) + runs_failed,
+        reduced=account.reduced,
         skipped=plan.skipped,
         failures=sorted(failures.items()),
-        groups_updated=len(groups),
+        groups_updated=len(account.groups),
         removed=0 if appended is None else len(appended.dropped_ids),
         map_path=campaign.map_path,
         map_summary=map_summary,
         output_dir=campaign.output_dir,
         notes=notes,
-        flagged=landing.flagged,
+        flagged=account.flagged,
         duplicates=sorted(duplicates.items()),
         files=files,
         tests=test_tally.found,
@@ -399,7 +259,7 @@ def _run_locked(campaign: Campaign, *, jobs: int | None, plots: bool | None,
         test_tally=test_tally,
         runs_failed=runs_failed,
         conflicts=sorted((f, failures[f]) for f, o in outcomes.items() if o == CONFLICT),
-        repeats=landing.repeats,
+        repeats=account.repeats,
         output_errors=problems,
     )
 
@@ -504,29 +364,6 @@ def _execute(todo: list[Job], ctx: WorkerContext, jobs: int,
         pool.shutdown(wait=True, cancel_futures=True)
 
 
-@dataclass(frozen=True)
-class _Landing:
-    """What the workers' results bring to the map: the new records, the ids of rows to
-    drop (their raw file changed or a run now fails), the runs reduced, the flagged ones,
-    the duplicate files (file → reason), the outcome of each file reduced now (file → one
-    of :data:`FILE_OUTCOMES`) and the runs that failed in the files read."""
-
-    records: list[MapRow]
-    stale_ids: set[str]
-    reduced: list[str]
-    flagged: list[tuple[str, str]]
-    duplicates: dict[str, str]
-    outcomes: dict[str, str]
-    runs_failed: int
-    #: repeat numbers used twice in one condition once the records land
-    repeats: list[str] = field(default_factory=list)
-    #: what the review did (:func:`tribopipe.review.landing_records`), when one applied
-    review: ReviewOutcome | None = None
-    #: the condition group (:func:`tribopipe.stats.condition_keys`) of each map row the
-    #: records replace or the stale ids drop, as the map held them before this batch
-    old_groups: dict[str, tuple[Any, ...]] = field(default_factory=dict)
-
-
 def _owners(by_file: Mapping[str, CampaignRow], redone: set[str],
             vanished: Mapping[str, FileState], in_map: FilesByHash) -> ContentOwners:
     """The one duplicate check (:class:`ContentOwners`) for a batch: the contents the
@@ -549,7 +386,7 @@ def _owners(by_file: Mapping[str, CampaignRow], redone: set[str],
 def _apply(campaign: Campaign, results: Sequence[FileOutcome], by_file: Mapping[str, CampaignRow],
            entries: dict[str, FileState], failures: dict[str, str], notes: list[str],
            vanished: Mapping[str, FileState], in_map: FilesByHash,
-           redone: set[str] | None = None) -> _Landing:
+           redone: set[str] | None = None) -> tuple[Arrivals, Account]:
     """Fold the workers' results into the state ``entries`` and ``failures`` (in file
     order, both updated in place; plot and rename notes added to ``notes``), each file
     checked against the files before it and the map (``in_map``, read under its lock).
@@ -625,9 +462,9 @@ def _apply(campaign: Campaign, results: Sequence[FileOutcome], by_file: Mapping[
                 runs_state.append(RunState.failed(run))
         entries[row.file] = replace(base, runs=tuple(runs_state))
     alive = set().union(*(_run_ids(e) for e in entries.values())) if entries else set()
-    return _Landing(records=records, stale_ids=old_ids - alive, reduced=reduced,
-                    flagged=flagged, duplicates=duplicates, outcomes=outcomes,
-                    runs_failed=runs_failed)
+    return Arrivals(records, old_ids - alive), Account(
+        reduced=reduced, flagged=flagged, duplicates=duplicates, outcomes=outcomes,
+        runs_failed=runs_failed)
 
 
 def _drop_outputs(campaign: Campaign, done: FileOutcome,
@@ -667,53 +504,6 @@ def _forget_vanished(campaign: Campaign, entries: dict[str, FileState], present:
         del entries[gone]
 
 
-def _ledger(rows: Sequence[CampaignRow], entries: Mapping[str, FileState],
-            manifest: Manifest | None) -> tuple[dict[str, int], list[str], list[str]]:
-    """The tests found per file (the files whose tests are known), the manifest rows that
-    matched no file, no test or no friction interval, and the runs whose test no
-    metadata source described."""
-    tests: dict[str, int] = {}
-    undescribed: list[str] = []
-    known: dict[str, set[str | None]] = {}
-    places: dict[str, set[tuple[str | None, int | None]]] = {}
-    for row in rows:
-        entry = entries.get(row.file)
-        found = None if entry is None else entry.tests
-        if entry is None or found is None:
-            continue
-        known[row.file] = set(found)
-        places[row.file] = {(r.test, r.interval) for r in entry.runs}
-        tests[row.file] = len(found)
-        undescribed += [run_name(row.file, r.test) for r in entry.runs if r.undescribed]
-    unmatched: list[str] = []
-    if manifest is not None:
-        names = {row.file for row in rows} | {row.path.name for row in rows}
-        for mrow in manifest.rows:
-            if mrow.file not in names:
-                unmatched.append(f"file: {manifest.name} {mrow.describes()}")
-        for row in rows:
-            if row.file not in known:
-                continue
-            for mrow in row.test_rows:
-                if mrow.test is not None and mrow.test not in known[row.file]:
-                    unmatched.append(f"test: {manifest.name} {mrow.describes()}")
-                elif mrow.interval is not None and not any(
-                        i == mrow.interval and mrow.test in (None, t)
-                        for t, i in places[row.file]):
-                    unmatched.append(f"interval: {manifest.name} {mrow.describes()}")
-    return tests, unmatched, list(dict.fromkeys(undescribed))
-
-
-def _groups_updated(landing: _Landing, landed: set[str],
-                    removed: set[str]) -> set[tuple[Any, ...]]:
-    """The condition groups (those of the statistics, :func:`condition_keys`) with a map
-    row added, replaced (its group before and after) or removed by this batch."""
-    touched = [r for r in landing.records if r.measurement_id in landed]
-    new = condition_keys(unvalidated_frame(touched)) if touched else {}
-    old = {k for mid, k in landing.old_groups.items() if mid in landed | removed}
-    return set(new.values()) | old
-
-
 def _save_state_with_map(campaign: Campaign, entries: dict[str, FileState],
                          before: CampaignState, saved: CampaignState | None
                          ) -> CampaignState:
@@ -749,64 +539,34 @@ def _ids_missing_from_map(campaign: Campaign, state: CampaignState) -> tuple[set
 
 
 def _land(campaign: Campaign, results: Sequence[FileOutcome],
-          apply: Callable[[FilesByHash], _Landing], entries: Mapping[str, FileState],
-          review: Review | None = None
-          ) -> tuple[AppendReport | None, set[str], set[str], _Landing, pd.DataFrame | None]:
-    """Check the results against the map and fold them in, under the map's lock, in one
-    atomic write (new records added or replaced, rows of runs whose raw file changed
-    dropped); the map is locked and read only when a result brings or replaces runs.
-    The review (``review``, else the one each row holds) is applied in the same write
-    (:func:`tribopipe.review.landing_records`); a decision that fails raises before
-    anything is written. Returns the map's report (``None``: nothing changed), the ids
-    added or replaced, the ids removed, what ``apply`` made of the results, and the map's
-    rows as the write left them (``None`` when the map was not read)."""
+          apply: Callable[[FilesByHash], tuple[Arrivals, Account]],
+          entries: Mapping[str, FileState], review: Review | None = None
+          ) -> tuple[Account, pd.DataFrame | None]:
+    """One landing of the batch: the results checked against the map and folded in by
+    :func:`tribopipe.pipeline.landing.land_runs` (under the map's lock, in one atomic
+    write: new records added or replaced, rows of runs whose raw file changed dropped,
+    the review applied in the same write), the map locked and read only when a result
+    brings or replaces runs or a review is given. Returns what this landing adds to the
+    batch's account and the map's rows as the write left them (``None`` when the map was
+    not read)."""
     touches = review is not None or any(r.reduced for r in results) or any(
         _run_ids(entries.get(r.name)) for r in results)
     if not touches:
-        return None, set(), set(), apply({}), None
-    landing: list[_Landing] = []
+        return apply({})[1], None
+    brought: list[tuple[Arrivals, Account]] = []
 
-    def decide(current: Any) -> tuple[list[MapRow], set[str]]:
-        landing.append(apply(map_files_by_hash(current)))
-        records, stale = landing[0].records, landing[0].stale_ids
-        landing[0].repeats.extend(repeat_clashes(current, records, stale))
-        folded, outcome = landing_records(current, records, stale, review,
-                                          campaign.layout.traces_dir)
-        landing[0] = replace(landing[0], review=outcome)
-        ids = stale | {r.measurement_id for r in folded}
-        landing[0].old_groups.update(
-            condition_keys(current.loc[current["measurement_id"].isin(ids)]))
-        return folded, stale
+    def choose(in_map: FilesByHash) -> Arrivals:
+        brought.append(apply(in_map))
+        return brought[0][0]
 
-    # the one landing of the batch and of `reduce`: the map read again under its lock
-    report, after = change_map_with(campaign.map_path, decide, replace=True)
-    if not (landing[0].records or landing[0].stale_ids or report.changed):
-        return None, set(), set(), landing[0], after
-    return (report, set(report.added_ids) | set(report.replaced_ids),
-            set(report.dropped_ids), landing[0], after)
-
-
-def _combined(a: AppendReport, b: AppendReport) -> AppendReport:
-    """Two successive appends' reports as one (the landings of one batch)."""
-    return AppendReport(
-        added_ids=a.added_ids + b.added_ids, unchanged_ids=a.unchanged_ids + b.unchanged_ids,
-        replaced_ids=a.replaced_ids + b.replaced_ids,
-        conflicting_ids=a.conflicting_ids + b.conflicting_ids,
-        differences={**a.differences, **b.differences}, dropped_ids=a.dropped_ids + b.dropped_ids,
-        values={**a.values, **b.values})
-
-
-def _plus(a: _Landing, b: _Landing) -> _Landing:
-    """What two landings brought, without their records (landed and let go)."""
-    review = a.review if b.review is None else b.review if a.review is None else ReviewOutcome(
-        records=[], applied={k: a.review.applied.get(k, 0) + b.review.applied.get(k, 0)
-                             for k in {*a.review.applied, *b.review.applied}},
-        withdrawn=a.review.withdrawn + b.review.withdrawn)
-    return _Landing(records=[], stale_ids=set(), reduced=a.reduced + b.reduced,
-                    flagged=a.flagged + b.flagged, duplicates={**a.duplicates, **b.duplicates},
-                    outcomes={**a.outcomes, **b.outcomes},
-                    runs_failed=a.runs_failed + b.runs_failed, repeats=a.repeats + b.repeats,
-                    review=review)
+    # the map read once more, under its lock: inside land_runs (change_map_with)
+    landed = land_runs(campaign.map_path, choose, review=review,
+                       traces_dir=campaign.layout.traces_dir, replace=True)
+    arrivals, account = brought[0]
+    account = replace(account, repeats=list(landed.repeats), review=landed.review)
+    if not (arrivals.records or arrivals.stale_ids or landed.appended.changed):
+        return account, landed.rows
+    return replace(account, groups=landed.groups, appended=landed.appended), landed.rows
 
 
 class StopFlag:

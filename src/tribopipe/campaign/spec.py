@@ -27,7 +27,7 @@ from ..escape import display_path
 from ..labels import LABEL_FORCE_REL, LabelCheck, Tolerances
 from ..layout import DEFAULT_OUTPUT_DIR, OutputLayout
 from ..materials import Vocabulary, lab_files, load_vocabulary, shipped_vocabulary
-from ..pipeline import ReadOptions
+from ..pipeline.runs import ReadOptions
 from ..readers import EXPORT_SUFFIXES
 from ..readers.textio import foreign_kind
 from ..reporting import NAMES as REPORTING_NAMES

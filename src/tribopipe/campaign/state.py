@@ -27,7 +27,7 @@ from ..labels import flags_text
 from ..numeric import finite_json
 
 if TYPE_CHECKING:
-    from ..pipeline import FailedRun, ReducedRun
+    from ..pipeline.runs import FailedRun, ReducedRun
     from .spec import Campaign
 
 STATE_VERSION = 2

@@ -47,7 +47,7 @@ from ..files import file_sha256, regular_file
 from ..labels import LABEL_FORCE_REL, RunLabels
 from ..layout import FAILURES_CSV, RUNS_CSV
 from ..materials import ADD_HINT
-from ..pipeline import read_runs
+from ..pipeline.route import read_runs
 from ..readers import EXPORT_SUFFIXES, export_kind
 from .metadata import (
     MANIFEST_COLUMNS,

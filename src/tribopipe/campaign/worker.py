@@ -20,15 +20,9 @@ from typing import Any
 from ..errors import CampaignError, Failure, TribopipeError
 from ..figures import trace_figure
 from ..labels import FLAG_SYNTHETIC, RunLabels, Undescribed
-from ..pipeline import (
-    ExportRuns,
-    FailedRun,
-    FileOutcome,
-    RunOutputs,
-    RunPlace,
-    failure_of,
-    reduce_export,
-)
+from ..pipeline.route import failure_of, reduce_export
+from ..pipeline.run_outputs import RunOutputs
+from ..pipeline.runs import ExportRuns, FailedRun, FileOutcome, RunPlace
 from .metadata import ManifestRow, labels_from, merge_metadata, run_report, run_rows
 from .patterns import match_pattern
 from .spec import Campaign

@@ -20,7 +20,7 @@ from ._common import (
 
 if TYPE_CHECKING:
     from ..labels import RunLabels
-    from ..pipeline import FileOutcome, ReducedRun
+    from ..pipeline.runs import FileOutcome, ReducedRun
 
 
 def _fmt(value: object, spec: str) -> str:
@@ -142,10 +142,11 @@ def reduce_cmd(
     description (the docstring of the package tribopipe.reduction).
     """
     from ..config import load_settings, with_zero
-    from ..frictionmap.store import read_map
     from ..labels import LabelCheck, RunLabels
     from ..materials import lab_files, load_vocabulary
-    from ..pipeline import ReadOptions, reduce_files
+    from ..pipeline.landing import check_map_before_work
+    from ..pipeline.route import reduce_files
+    from ..pipeline.runs import ReadOptions
 
     vocabulary = load_vocabulary(lab_files(".", materials_files))
     check = LabelCheck(keep_labels=keep_labels, vocabulary=vocabulary)
@@ -161,7 +162,9 @@ def reduce_cmd(
     if not no_map:
         map_path = chosen_map(map_path)
         if labels.complete:
-            read_map(map_path)  # refuse a damaged or foreign map before any work
+            # refuse a damaged or foreign map before any work, reading none of its rows:
+            # they are read once, under the map's lock, when the runs land (store_runs)
+            check_map_before_work(map_path)
         if output is None:
             output = str(Path(map_path).parent)
     results = reduce_files(
@@ -295,7 +298,7 @@ def _store(results: list[FileOutcome], map_path: str, no_map: bool, replace: boo
         )
         return 0, 0
     from ..escape import display_path, printable
-    from ..pipeline import store_runs
+    from ..pipeline.landing import store_runs
 
     report = store_runs(map_path, results, replace=replace)
     refused = 0

@@ -34,6 +34,7 @@ the page.
 from __future__ import annotations
 
 import base64
+import functools
 import hashlib
 import json
 import math
@@ -60,6 +61,7 @@ from ..query import (
     estimate_text,
     groups_at_speed,
     map_curvature,
+    name_key,
     pair_points,
     pair_speeds,
     pairs,
@@ -113,6 +115,72 @@ CSV_COLUMNS = (
 FIT_CURVE_POINTS = 24
 
 _PLACEHOLDER = re.compile(r"\{\{(\w+)\}\}")
+#: the page's own words around its numbers and what a user typed or a link asked for
+#: (``{name}``: filled by the script's ``say``, in one pass, with text it never reads as
+#: markup)
+PAGE_TEXTS = {
+    "link_pin_missing": "the link's pin “{pin}” is not in this map",
+    "link_disc_other_pin": "the link's disc “{disc}” is not measured with {pin}",
+    "link_disc_missing": "the link's disc “{disc}” is not in this map",
+    "link_speed_missing": "the link's speed “{speed}” is not measured for this pair",
+    "link_lab_missing": "the link's lab “{lab}” is not in this map",
+    "link_not_number": "the link's {field} “{value}” is not a number",
+    "no_mu_shown": "{missing}: no μ is shown; choose a pin and a disc above",
+    "u_line": "interpolation u = {u}; repeats' 95 % CI half-width {half}",
+    "unknown": "unknown",
+    "mu_s_none": "unknown (no group of this pair holds it)",
+    "clamped_yes": "yes: {what} outside the measured range, edge value held; {extrapolated}",
+    "clamped_no": "no",
+    "and": " and ",
+    "pressure": "pressure",
+    "temperature": "temperature",
+    "speed": "speed",
+    "loading": "loading the repeats…",
+    "not_at_hand": "repeats not at hand",
+    "copied": "copied",
+    "copy_by_hand": "select the text below and copy it (Ctrl+C)",
+    "downloaded": "downloaded {name}",
+    "enter_pressure": "enter a contact pressure [kPa]",
+    "pressure_nan": "the contact pressure is not a number",
+    "temperature_nan": "the temperature is not a number",
+    "every_lab": "every lab",
+    "no_pair": "the map holds no pair with a finite μ_K",
+    "measured_temperatures": "measured temperatures: ",
+    "measured_pressures": "pressures: ",
+    "temperature_chip": "{t} °C",
+    "pressure_chip": "{p} kPa",
+    "group_count": "{shown} of {total} groups",
+    # the plots
+    "pair_title": "{pin} on {disc}",
+    "pair_title_speed": "{pin} on {disc}, {speed} mm/s",
+    "speed_mark": "{speed} mm/s",
+    "x_axis": "contact pressure p [kPa]",
+    "y_axis": "μ_K",
+    "t_label": "{t} °C",
+    "t_unknown": "T unknown",
+    "fit_tip": "fit: {legend}",
+    "legend": "{t}",
+    "legend_fit": "{t}: {fit}",
+    "run_tip": "repeat {repeat}, {lab}: μ_K {line}",
+    "run_tip_flags": "repeat {repeat}, {lab}: μ_K {line} ({flags})",
+    "repeat_unknown": "?",
+    "mean_tip": "{p} kPa, {t}: mean μ_K {mean} (SD {sd}), n = {n}",
+    "sd_unknown": "–",
+    "lab_legend": "repeats of {lab}",
+    "chosen_tip": "chosen: {p} kPa, {t}: μ_K {mu}",
+    "panel_label": "select disc {disc}",
+    "panel_tip": "{disc}, {p} kPa, {t}: mean μ_K {mean}, n = {n}",
+    "list_join": ", ",
+}
+#: the heads of the page's group table, by column
+GROUP_TABLE_HEADS = {
+    "pin": "pin", "disc": "disc", "test_method": "method", "normal_force_N": "F [N]",
+    "pressure_kPa": "p [kPa]", "temperature_C": "T [°C]", "nominal_speed_mm_s": "v [mm/s]",
+    "mu_k_n": "n", "mu_k_mean": "μ_K ± U (k = 2)", "mu_k_std": "μ_K SD",
+    "mu_k_ci95_low": "μ_K 95 % CI low (repeats)", "mu_k_ci95_high": "μ_K 95 % CI high (repeats)",
+    "mu_k_cv": "μ_K CV", "mu_s_n": "μ_S n", "mu_s_mean": "μ_S ± U (k = 2)", "qc": "QC",
+    "labs": "labs",
+}
 #: group-table columns carried to the page (the others stay in the map's own tables)
 GROUP_FIELDS = (
     "normal_force_N", "pressure_kPa", "temperature_C",
@@ -155,7 +223,25 @@ def _plain(value: Any) -> Any:
 
 def _key(name: Any) -> str:
     """A pin or disc name as :func:`tribopipe.query.select_pair` matches it."""
-    return str(name).strip().casefold()
+    return name_key(name)
+
+
+@functools.cache
+def name_rule() -> dict[str, Any]:
+    """:func:`tribopipe.query.name_key` as data for the page's script, which has no
+    ``casefold``: the characters ``str.strip`` removes (``space``) and every character
+    whose casefold differs from its lower case (``fold``: character → its casefold; the
+    script lower-cases the others one by one)."""
+    import sys
+
+    chars = (chr(i) for i in range(sys.maxunicode + 1) if not 0xD800 <= i <= 0xDFFF)
+    space, fold = [], {}
+    for c in chars:
+        if c.isspace():
+            space.append(c)
+        if c.casefold() != c.lower():
+            fold[c] = c.casefold()
+    return {"space": "".join(space), "fold": fold}
 
 
 def _text3(value: Any) -> str:
@@ -394,8 +480,13 @@ def _texts() -> dict[str, Any]:
         "extrapolated": EXTRAPOLATED,
         "errors": {**REQUEST_ERRORS,
                    "no_pair": "no groups for pin {pin} on disc {disc} in this map"},
+        "page": PAGE_TEXTS,
+        "heads": GROUP_TABLE_HEADS,
+        "names": name_rule(),
         "snippet": {
-            "note": CONSTANT_NOTE,
+            # the decks' note, laid out as their comment lines
+            "note_lines": {fmt: comment_block(syntax, [CONSTANT_NOTE.format(fmt=fmt)])
+                           for fmt, syntax in (("abaqus", "**"), ("ansys", "!"))},
             "clamped": HELD_LINE,
             "mu_s_unknown": MU_S_UNKNOWN,
             "static": dict(STATIC_WHY),

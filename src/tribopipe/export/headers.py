@@ -78,13 +78,12 @@ def condition_lines(res: QueryResult, safe: Callable[[object], str] = sim_commen
                      f"{num(res.mu_s.value)}; {res.mu_s.text(ascii_only=True)}"
                      + ("" if res.mu_s.expanded is None else " (U, k = 2)")),
     ]
-    used = ", ".join(
-        f"{g(u.pressure_kPa)} kPa"
-        + ("" if u.temperature_C is None else f"/{g(u.temperature_C)} C")
-        + f" (w={g(u.weight, 3)})"
-        for u in res.mu_k.used
-    )
-    lines.append(f"from measured groups: {used}")
+    # one group a line: no line of numbers is ever long enough to wrap, so the
+    # explorer's copy of these lines needs no line breaking of its own
+    lines.append("from measured groups:")
+    lines += [f"  {g(u.pressure_kPa)} kPa"
+              + ("" if u.temperature_C is None else f"/{g(u.temperature_C)} C")
+              + f" (w={g(u.weight, 3)})" for u in res.mu_k.used]
     if res.clamped:
         lines.append(HELD_LINE)
     return lines

@@ -2,6 +2,12 @@
 
 function $(id) { return document.getElementById(id); }
 
+/* One of the page's own texts (DATA.texts.page, made by Python) with its {names} filled
+   in one pass: a value is never read as a template or as markup. */
+function say(key, values) {
+  return DATA.texts.page[key].replace(/\{(\w+)\}/g, function (m, k) { return String(values[k]); });
+}
+
 function make(tag, text, cls) {
   var e = document.createElement(tag);
   if (text !== undefined && text !== null) e.textContent = String(text);

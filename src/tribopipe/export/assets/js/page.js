@@ -84,16 +84,16 @@ function renderMeasured(pair) {
   var at = speedOf(pair);
   var t = inputNumber(tInput);
   var p = inputNumber(pInput);
-  var temps = make("span", "measured temperatures: ", "tpx-chips");
-  if (!at.temperatures.length) temps.appendChild(document.createTextNode("unknown"));
+  var temps = make("span", say("measured_temperatures", {}), "tpx-chips");
+  if (!at.temperatures.length) temps.appendChild(document.createTextNode(say("unknown", {})));
   at.temperatures.forEach(function (v) {
-    temps.appendChild(chip(v.text + " °C", v.value === t, function () {
+    temps.appendChild(chip(say("temperature_chip", { t: v.text }), v.value === t, function () {
       setNumber(tInput, v.value, v.text); update(false);
     }));
   });
-  var ps = make("span", "pressures: ", "tpx-chips");
+  var ps = make("span", say("measured_pressures", {}), "tpx-chips");
   at.pressures.forEach(function (v) {
-    ps.appendChild(chip(v.text + " kPa", v.value === p, function () {
+    ps.appendChild(chip(say("pressure_chip", { p: v.text }), v.value === p, function () {
       setNumber(pInput, v.value, v.text); update(false);
     }));
   });
@@ -151,7 +151,7 @@ function readUrl() {
     var found = PINS.findIndex(function (p) {
       return sameName(q.get("pin"), p.name, p.key);
     });
-    if (found < 0) missing.push("the link's pin “" + q.get("pin") + "” is not in this map");
+    if (found < 0) missing.push(say("link_pin_missing", { pin: q.get("pin") }));
     else pinIndex = found;
   }
   var discName = q.has("disc") ? q.get("disc") : null;
@@ -159,8 +159,8 @@ function readUrl() {
   var pair = PAIRS[state.pair];
   if (!missing.length && discName !== null && !sameName(discName, pair.disc, pair.keys[1])) {
     var known = PAIRS.some(function (p) { return sameName(discName, p.disc, p.keys[1]); });
-    missing.push("the link's disc “" + discName + "” " + (known ?
-      "is not measured with " + PINS[pinIndex].name : "is not in this map"));
+    missing.push(known ? say("link_disc_other_pin", { disc: discName, pin: PINS[pinIndex].name })
+      : say("link_disc_missing", { disc: discName }));
   }
   if (q.has("speed")) {
     var text = q.get("speed").trim();
@@ -169,12 +169,12 @@ function readUrl() {
     }) : -1;
     if (at >= 0) state.speed = at;
     else if (pair.speeds.length > 1) {
-      notes.push("the link's speed “" + q.get("speed") + "” is not measured for this pair");
+      notes.push(say("link_speed_missing", { speed: q.get("speed") }));
     }
   }
   if (q.has("lab")) {
     state.lab = DATA.labs.indexOf(q.get("lab"));
-    if (state.lab < 0) notes.push("the link's lab “" + q.get("lab") + "” is not in this map");
+    if (state.lab < 0) notes.push(say("link_lab_missing", { lab: q.get("lab") }));
   }
   renderSpeeds(pair);
   var measured = speedOf(pair);
@@ -189,10 +189,9 @@ function readUrl() {
         // (shown as the tables print it where that text is not the value itself)
         if (m !== undefined && Number(m.text) !== m.value) setNumber(f[1], m.value, m.text);
         else f[1].value = typed;
-      } else notes.push("the link's " + f[0] + " “" + q.get(f[0]) + "” is not a number");
+      } else notes.push(say("link_not_number", { field: say(f[0], {}), value: q.get(f[0]) }));
     });
-  state.missing = missing.length ? missing.join("; ") +
-    ": no μ is shown; choose a pin and a disc above" : null;
+  state.missing = missing.length ? say("no_mu_shown", { missing: missing.join("; ") }) : null;
   note(notes.concat(missing).join("; "));
 }
 
@@ -230,20 +229,18 @@ function renderResult(res, error) {
   muK.dataset.value = String(res.mu_k.value);
   muK.dataset.uncertainty = res.mu_k.expanded === null ? "" : String(res.mu_k.expanded);
   // GUM combined standard uncertainty (k = 1) and the expanded U = 2u, beside the CI
-  muKu.textContent = "interpolation u = " + uText(res.mu_k.u_interpolation) +
-    "; repeats' 95 % CI half-width " + (res.mu_k.uncertainty === null ? "unknown" :
-      f3(res.mu_k.uncertainty));
+  muKu.textContent = say("u_line", { u: uText(res.mu_k.u_interpolation),
+    half: res.mu_k.uncertainty === null ? say("unknown", {}) : f3(res.mu_k.uncertainty) });
   muKu.dataset.u = res.mu_k.u_combined === null ? "" : String(res.mu_k.u_combined);
   muK.dataset.clampedPressure = String(res.mu_k.clamped_pressure);
   muK.dataset.clampedTemperature = String(res.mu_k.clamped_temperature);
-  muS.textContent = res.mu_s === null ? "unknown (no group of this pair holds it)" :
-    estimateText(res.mu_s);
+  muS.textContent = res.mu_s === null ? say("mu_s_none", {}) : estimateText(res.mu_s);
   var what = [];
-  if (res.mu_k.clamped_pressure) what.push("pressure");
-  if (res.mu_k.clamped_temperature) what.push("temperature");
-  if (res.mu_k.clamped_speed) what.push("speed");
-  clamped.textContent = res.clamped ? "yes: " + what.join(" and ") +
-    " outside the measured range, edge value held; " + DATA.texts.extrapolated : "no";
+  if (res.mu_k.clamped_pressure) what.push(say("pressure", {}));
+  if (res.mu_k.clamped_temperature) what.push(say("temperature", {}));
+  if (res.mu_k.clamped_speed) what.push(say("speed", {}));
+  clamped.textContent = res.clamped ? say("clamped_yes", { what: what.join(say("and", {})),
+    extrapolated: DATA.texts.extrapolated }) : say("clamped_no", {});
   clamped.className = res.clamped ? "tpx-clamped" : "";
   res.notes.forEach(function (n) { notes.appendChild(make("li", n)); });
   var runs = runsOf(res.pair);
@@ -258,8 +255,8 @@ function renderResult(res, error) {
     u.point.runs.forEach(function (i) {
       if (runs[i]) cell.appendChild(make("div", runs[i].line, "tpx-repeat"));
     });
-    if (!runs.length) cell.appendChild(make("div", DATA.runs_beside && !RUNS_MISSING[res.pair] ?
-      "loading the repeats…" : "repeats not at hand", "tpx-muted"));
+    if (!runs.length) cell.appendChild(make("div", say(DATA.runs_beside && !RUNS_MISSING[res.pair] ?
+      "loading" : "not_at_hand", {}), "tpx-muted"));
     tr.appendChild(cell);
     body.appendChild(tr);
   });
@@ -288,10 +285,11 @@ function copyText() {
     area.select();
     var ok = false;
     try { ok = document.execCommand("copy"); } catch (e) { ok = false; }
-    status.textContent = ok ? "copied" : "select the text below and copy it (Ctrl+C)";
+    status.textContent = say(ok ? "copied" : "copy_by_hand", {});
   }
   if (navigator.clipboard && window.isSecureContext) {
-    navigator.clipboard.writeText(text).then(function () { status.textContent = "copied"; }, fallback);
+    navigator.clipboard.writeText(text).then(function () { status.textContent = say("copied", {}); },
+      fallback);
   } else {
     fallback();
   }
@@ -309,7 +307,7 @@ function download() {
   a.click();
   a.remove();
   setTimeout(function () { URL.revokeObjectURL(url); }, 2000);
-  $("tpx-export-status").textContent = "downloaded " + a.download;
+  $("tpx-export-status").textContent = say("downloaded", { name: a.download });
 }
 
 
@@ -319,9 +317,9 @@ function compute() {
   if (state.missing) return [null, state.missing];
   var p = inputNumber(pInput);
   var t = inputNumber(tInput);
-  if (p === null) return [null, "enter a contact pressure [kPa]"];
-  if (Number.isNaN(p)) return [null, "the contact pressure is not a number"];
-  if (Number.isNaN(t)) return [null, "the temperature is not a number"];
+  if (p === null) return [null, say("enter_pressure", {})];
+  if (Number.isNaN(p)) return [null, say("pressure_nan", {})];
+  if (Number.isNaN(t)) return [null, say("temperature_nan", {})];
   var pair = PAIRS[state.pair];
   try {
     return [query(pair.pin, pair.disc, p, t, chosenSpeed(pair)), null];
@@ -394,7 +392,7 @@ discSelect.addEventListener("change", function () {
 /* the labs: a filter and a colouring, offered where the map holds more than one */
 $("tpx-lab-label").hidden = DATA.labs.length < 2;
 $("tpx-colour-label").hidden = DATA.labs.length < 2;
-fillSelect(labSelect, [{ value: -1, text: "every lab" }].concat(
+fillSelect(labSelect, [{ value: -1, text: say("every_lab", {}) }].concat(
   DATA.labs.map(function (name, i) { return { value: i, text: name }; })));
 labSelect.addEventListener("change", function () { state.lab = Number(labSelect.value); update(false); });
 colourSelect.addEventListener("change", function () { state.colour = colourSelect.value; update(false); });
@@ -418,7 +416,7 @@ $("tpx-group-method-label").hidden = METHODS.length < 2;
 $("tpx-group-method").addEventListener("change", renderTable);
 
 if (!PAIRS.length) {
-  renderResult(null, "the map holds no pair with a finite μ_K");
+  renderResult(null, say("no_pair", {}));
   return;
 }
 readUrl();

@@ -59,10 +59,10 @@ function seriesTemperatures(runs) {
 function sameT(a, b) { return a === b || (!finite(a) && !finite(b)); }
 
 function tLabel(pair, t) {
-  if (t === null) return "T unknown";
+  if (t === null) return say("t_unknown", {});
   var at = pair.speeds.map(function (s) { return s.temperatures; }).reduce(function (a, b) { return a.concat(b); }, [])
     .find(function (x) { return x.value === t; });
-  return (at ? at.text : tickText(t)) + " °C";
+  return say("t_label", { t: at ? at.text : tickText(t) });
 }
 
 function fitCurve(plot, f, colour, width) {
@@ -71,7 +71,7 @@ function fitCurve(plot, f, colour, width) {
     return (i ? "L" : "M") + plot.x(pt[0]).toFixed(2) + "," + plot.y(pt[1]).toFixed(2);
   }).join("");
   var path = svg("path", { d: d, fill: "none", stroke: colour, "stroke-width": width }, plot.s);
-  tip(path, "fit: " + f.legend);
+  tip(path, say("fit_tip", { legend: f.legend }));
 }
 
 /* The runs shown: the pair's at the chosen speed, of the chosen lab. */
@@ -109,10 +109,11 @@ function drawPairPlot(res) {
   var yMax = Math.max.apply(null, ys.filter(finite).concat([1e-9])) * 1.1;
   var plot = axes(box, W, H, M, xMax, yMax, false);
   var several = pair.speeds.length > 1;
-  svgText(plot.s, W / 2, 18, pair.pin + " on " + pair.disc + (several ? ", " + at.text + " mm/s" : ""),
+  svgText(plot.s, W / 2, 18, say(several ? "pair_title_speed" : "pair_title",
+    { pin: pair.pin, disc: pair.disc, speed: at.text }),
     { "text-anchor": "middle", "font-weight": "600", class: "tpx-title" });
-  svgText(plot.s, (M.l + W - M.r) / 2, H - 8, "contact pressure p [kPa]", { "text-anchor": "middle" });
-  svgText(plot.s, 14, (M.t + H - M.b) / 2, "μ_K", { "text-anchor": "middle",
+  svgText(plot.s, (M.l + W - M.r) / 2, H - 8, say("x_axis", {}), { "text-anchor": "middle" });
+  svgText(plot.s, 14, (M.t + H - M.b) / 2, say("y_axis", {}), { "text-anchor": "middle",
     transform: "rotate(-90 14 " + (M.t + H - M.b) / 2 + ")" });
   var byLab = state.colour === "lab";
   temps.forEach(function (t, i) {
@@ -125,8 +126,9 @@ function drawPairPlot(res) {
         fill: byLab ? COLOURS[(r.lab + 3) % COLOURS.length] : colour, "fill-opacity": byLab ? 0.8 : 0.45,
         class: "tpx-run" }, plot.s);
       c.dataset.lab = String(r.lab);
-      tip(c, "repeat " + (r.repeat === null ? "?" : r.repeat) + ", " + DATA.labs[r.lab] + ": μ_K " +
-        r.line + (r.flags.length ? " (" + r.flags.join(", ") + ")" : ""));
+      tip(c, say(r.flags.length ? "run_tip_flags" : "run_tip", {
+        repeat: r.repeat === null ? say("repeat_unknown", {}) : r.repeat, lab: DATA.labs[r.lab],
+        line: r.line, flags: r.flags.join(say("list_join", {})) }));
     });
     groups.filter(function (g) { return sameT(g.temperature_C, t) && finite(g.mu_k_mean); })
       .forEach(function (g) {
@@ -137,20 +139,20 @@ function drawPairPlot(res) {
         }
         var c = svg("circle", { cx: gx, cy: plot.y(g.mu_k_mean), r: 5, fill: colour,
           stroke: "#fff", "stroke-width": 1, class: "tpx-mean" }, plot.s);
-        tip(c, g.text.pressure_kPa + " kPa, " + tLabel(pair, g.temperature_C) + ": mean μ_K " +
-          g.text.mu_k_mean + " (SD " + (g.text.mu_k_std || "–") + "), n = " + g.text.mu_k_n);
+        tip(c, say("mean_tip", { p: g.text.pressure_kPa, t: tLabel(pair, g.temperature_C),
+          mean: g.text.mu_k_mean, sd: g.text.mu_k_std || say("sd_unknown", {}), n: g.text.mu_k_n }));
       });
     // legend: the temperature and its fit at this speed
     var ly = 30 + i * 18;
     svg("rect", { x: M.l + 6, y: ly - 9, width: 11, height: 11, fill: colour }, plot.s);
-    var fitText = fits.length ? ": " + fits[0].legend : "";
-    svgText(plot.s, M.l + 22, ly + 1, tLabel(pair, t) + fitText, { class: "tpx-legend" });
+    svgText(plot.s, M.l + 22, ly + 1, say(fits.length ? "legend_fit" : "legend",
+      { t: tLabel(pair, t), fit: fits.length ? fits[0].legend : "" }), { class: "tpx-legend" });
   });
   if (byLab) {
     DATA.labs.forEach(function (name, k) {
       var ly = 30 + (temps.length + k) * 18;
       svg("circle", { cx: M.l + 11, cy: ly - 4, r: 4, fill: COLOURS[(k + 3) % COLOURS.length] }, plot.s);
-      svgText(plot.s, M.l + 22, ly + 1, "repeats of " + name, { class: "tpx-legend" });
+      svgText(plot.s, M.l + 22, ly + 1, say("lab_legend", { lab: name }), { class: "tpx-legend" });
     });
   }
   if (res) {
@@ -162,9 +164,8 @@ function drawPairPlot(res) {
     }
     var dmd = svg("path", { d: "M" + px + "," + (py - 7) + "l7,7l-7,7l-7,-7z", fill: "#000",
       stroke: "#fff", "stroke-width": 1 }, plot.s);
-    tip(dmd, "chosen: " + pInput.value + " kPa, " +
-      (res.temperature_C === null ? "T unknown" : tInput.value + " °C") + ": μ_K " +
-      estimateText(res.mu_k));
+    tip(dmd, say("chosen_tip", { p: pInput.value, t: res.temperature_C === null ?
+      say("t_unknown", {}) : say("t_label", { t: tInput.value }), mu: estimateText(res.mu_k) }));
   }
 }
 
@@ -199,7 +200,7 @@ function drawOverview() {
     var panel = panels[k];
     panel.tabIndex = 0;
     panel.setAttribute("role", "button");
-    panel.setAttribute("aria-label", "select disc " + pair.disc);
+    panel.setAttribute("aria-label", say("panel_label", { disc: pair.disc }));
     panel.dataset.pair = String(i);
     var W = plotWidth(panel, 240) - 2;
     var H = Math.round(W * 0.72);
@@ -208,7 +209,8 @@ function drawOverview() {
     var at = pair.speeds.find(function (x) { return x.speed_mm_s === speed; });
     svgText(plot.s, W / 2, 15, pair.disc, { "text-anchor": "middle", "font-weight": "600", class: "tpx-title" });
     if (pair.speeds.length > 1) {
-      svgText(plot.s, W - M.r, M.t + 12, at.text + " mm/s", { "text-anchor": "end", class: "tpx-legend" });
+      svgText(plot.s, W - M.r, M.t + 12, say("speed_mark", { speed: at.text }),
+        { "text-anchor": "end", class: "tpx-legend" });
     }
     var groups = pairGroups(i, speed);
     var temps = sortedUnique(groups.map(function (g) { return g.temperature_C; }).filter(finite));
@@ -220,8 +222,8 @@ function drawOverview() {
       groups.filter(function (g) { return sameT(g.temperature_C, t) && finite(g.mu_k_mean); })
         .forEach(function (g) {
           var dot = svg("circle", { cx: plot.x(g.pressure_kPa), cy: plot.y(g.mu_k_mean), r: 3.5, fill: colour }, plot.s);
-          tip(dot, pair.disc + ", " + g.text.pressure_kPa + " kPa, " + tLabel(pair, g.temperature_C) +
-            ": mean μ_K " + g.text.mu_k_mean + ", n = " + g.text.mu_k_n);
+          tip(dot, say("panel_tip", { disc: pair.disc, p: g.text.pressure_kPa,
+            t: tLabel(pair, g.temperature_C), mean: g.text.mu_k_mean, n: g.text.mu_k_n }));
         });
     });
     var choose = function () {

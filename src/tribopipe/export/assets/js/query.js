@@ -270,13 +270,23 @@ function uncertaintyNotes(est) {
   return notes;
 }
 
-/* A name as a link or a caller writes it, against a pair's name: the name itself, the
-   casefolded key Python matches (DATA.pairs[i].keys), or equal to the name but for case
-   and width in the browser's own Unicode comparison. */
-var SAME_NAME = new Intl.Collator(undefined, { sensitivity: "accent" });
-function sameName(text, name, nameKey) {
-  var s = String(text);
-  return s === name || s.trim() === nameKey || SAME_NAME.compare(s.trim(), name.trim()) === 0;
+/* query.name_key, from Python's own rule as data (DATA.texts.names): the white space
+   str.strip removes, and each character whose casefold is not its lower case. */
+var NAME_EDGES = null;
+function nameKey(text) {
+  var names = DATA.texts.names;
+  if (NAME_EDGES === null) {
+    NAME_EDGES = new RegExp("^[" + names.space + "]+|[" + names.space + "]+$", "gu");
+  }
+  return Array.from(String(text).replace(NAME_EDGES, ""), function (c) {
+    return Object.prototype.hasOwnProperty.call(names.fold, c) ? names.fold[c] : c.toLowerCase();
+  }).join("");
+}
+
+/* A name as a link or a caller writes it, against a pair's name: the name itself or the
+   key Python matches (DATA.pairs[i].keys: query.name_key). */
+function sameName(text, name, key) {
+  return String(text) === name || nameKey(text) === key;
 }
 
 function findPair(pin, disc) {

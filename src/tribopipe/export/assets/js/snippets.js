@@ -4,47 +4,11 @@
    lines that depend on the condition, each function the copy of its Python writer
    (tests/test_snippets_js.py holds every one equal to it, and SNIPPETS to the registry). */
 
-/* textwrap.wrap(text, width, subsequent_indent=indent, break_on_hyphens=False), for text
-   whose only whitespace is ASCII (what the deck-safe comment bodies hold). */
-function wrap(text, width, indent) {
-  var chunks = text.split(/([\t\n\x0b\x0c\r ]+)/).filter(function (c) { return c !== ""; });
-  chunks.reverse();
-  var lines = [];
-  var top = function () { return chunks[chunks.length - 1]; };
-  while (chunks.length) {
-    var cur = [];
-    var curLen = 0;
-    var prefix = lines.length ? indent : "";
-    var w = width - prefix.length;
-    if (top().trim() === "" && lines.length) chunks.pop();
-    while (chunks.length && curLen + top().length <= w) {
-      curLen += top().length;
-      cur.push(chunks.pop());
-    }
-    if (chunks.length && top().length > w) { // a word longer than a line is cut
-      var left = w < 1 ? 1 : w - curLen;
-      cur.push(top().slice(0, left));
-      chunks[chunks.length - 1] = top().slice(left);
-      curLen = cur.join("").length;
-    }
-    if (cur.length && cur[cur.length - 1].trim() === "") cur.pop();
-    if (cur.length) lines.push(prefix + cur.join(""));
-  }
-  return lines;
-}
-
-/* simbase.comment_block: comment lines of at most `width` (100) characters. */
-function commentBlock(comment, bodies, width) {
-  if (width === undefined) width = 100;
-  var out = [];
-  bodies.forEach(function (body) {
-    var indent = " ".repeat(body.length - body.replace(/^ +/, "").length);
-    var wrapped = wrap(body, width - comment.length - 1, indent + "  ");
-    (wrapped.length ? wrapped : [""]).forEach(function (w) {
-      out.push((comment + " " + w).replace(/\s+$/, ""));
-    });
-  });
-  return out;
+/* headers.comment_block of lines that never wrap (numbers and the library's words: the
+   condition lines hold one measured group a line); every line that could wrap (the pair's,
+   the note) comes laid out from Python. */
+function commentLines(comment, bodies) {
+  return bodies.map(function (body) { return (comment + " " + body).replace(/\s+$/, ""); });
 }
 
 function num(x) { return decimalText(x, 10); } // unit_systems.num
@@ -56,7 +20,7 @@ function usedText(res) {
   }).join(", ");
 }
 
-/* simbase.condition_lines after the first (the pair's, which Python renders escaped for
+/* headers.condition_lines after the first (the pair's, which Python renders escaped for
    each format: PAIRS[i].snippet): numbers and the library's words only */
 function conditionLines(res) {
   var t = res.temperature_C === null ? "unknown" : g6(res.temperature_C) + " C";
@@ -66,8 +30,11 @@ function conditionLines(res) {
       (res.mu_k.expanded === null ? "" : " (U, k = 2)"),
     "mu_s = " + (res.mu_s === null ? DATA.texts.snippet.mu_s_unknown : num(res.mu_s.value) + "; " +
       estimateText(res.mu_s, true) + (res.mu_s.expanded === null ? "" : " (U, k = 2)")),
-    "from measured groups: " + usedText(res),
-  ];
+    "from measured groups:",
+  ].concat(res.mu_k.used.map(function (u) {
+    return "  " + g6(u.pressure_kPa) + " kPa" + (u.temperature_C === null ? "" : "/" +
+      g6(u.temperature_C) + " C") + " (w=" + decimalText(u.weight, 3) + ")";
+  }));
   if (res.clamped) lines.push(DATA.texts.snippet.clamped);
   return lines;
 }
@@ -77,21 +44,23 @@ function conditionLines(res) {
    so do the lines that name the pair. */
 function conditionSnippet(res, fmt) {
   var named = PAIRS[res.pair].snippet[fmt];
-  var note = DATA.texts.snippet.note.replace("{fmt}", fmt);
+  var note = DATA.texts.snippet.note_lines[fmt];
   var mu = num(res.mu_k.value);
   var lines = DATA.snippet_headers[fmt].concat(named.head);
   if (fmt === "abaqus") {
-    lines = lines.concat(commentBlock("**", conditionLines(res).concat([note])));
+    lines = lines.concat(commentLines("**", conditionLines(res)), note);
     lines.push("*SURFACE INTERACTION, NAME=" + named.name[0], "*FRICTION", mu);
   } else {
-    lines = lines.concat(commentBlock("!", conditionLines(res).concat([note])), named.material);
+    lines = lines.concat(commentLines("!", conditionLines(res)), note, named.material);
     lines.push("TB,FRIC,1,,,ISO", "TBDATA,1," + mu);
   }
   return lines.join("\n") + "\n";
 }
 
-/* A computed text as one CSV field (RFC 4180: quoted, quotes doubled). */
-function csvQuoted(text) { return '"' + String(text).replace(/"/g, '""') + '"'; }
+/* A text of numbers and the library's words (DATA.texts.notes: no quote and no formula
+   start in them, tests/test_explorer.py holds them so) as one quoted CSV field; every
+   other text cell comes from Python (DATA.csv, PAIRS[i].csv: escape.csv_cell). */
+function csvQuoted(text) { return '"' + text + '"'; }
 
 /* a number in full: the shortest text that reads back as it (the browser's own) */
 function csvNumber(v) { return v === null || v === undefined ? "" : String(v); }
@@ -109,14 +78,14 @@ function csvText(res) {
   return DATA.csv.header + "\r\n" + row.join(",") + "\r\n";
 }
 
-/* simbase.xml_comment and usd._comment of a line of numbers and the library's words (no
+/* xml_text.xml_comment and usd._comment of a line of numbers and the library's words (no
    name: those lines come escaped from Python); the opening is split because a page's
    script may not hold "<" "!--" (explorer._script refuses it) */
 function xmlComment(text) { return "<" + "!-- " + text + " -->"; }
 
 function hashComment(text) { return ("# " + text).replace(/\s+$/, ""); }
 
-/* simbase.static_and_dynamic: [static, dynamic, where the static came from] (the words
+/* coefficients.static_and_dynamic: [static, dynamic, where the static came from] (the words
    from DATA.texts.snippet.static) */
 function staticAndDynamic(res) {
   var muK = res.mu_k.value;

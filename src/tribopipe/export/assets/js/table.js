@@ -1,29 +1,30 @@
-/* The group table: filtered by words, scope and lab, sorted by any column. Every cell's
-   text comes from Python (GROUPS[i].text: the tables' rounding); the numbers sort. */
+/* The group table: filtered by words, scope and lab, sorted by any column. Every head and
+   cell's text comes from Python (DATA.texts.heads, GROUPS[i].text: the tables' rounding);
+   the numbers sort. */
 
 var COLUMNS = [
-  { key: "pin", label: "pin", text: true },
-  { key: "disc", label: "disc", text: true },
-  { key: "normal_force_N", label: "F [N]" },
-  { key: "pressure_kPa", label: "p [kPa]" },
-  { key: "temperature_C", label: "T [°C]" },
-  { key: "mu_k_n", label: "n" },
-  { key: "mu_k_mean", label: "μ_K ± U (k = 2)" },
-  { key: "mu_k_std", label: "μ_K SD" },
-  { key: "mu_k_ci95_low", label: "μ_K 95 % CI low (repeats)" },
-  { key: "mu_k_ci95_high", label: "μ_K 95 % CI high (repeats)" },
-  { key: "mu_k_cv", label: "μ_K CV" },
-  { key: "mu_s_n", label: "μ_S n" },
-  { key: "mu_s_mean", label: "μ_S ± U (k = 2)" },
-  { key: "qc", label: "QC", text: true },
+  { key: "pin", text: true },
+  { key: "disc", text: true },
+  { key: "normal_force_N" },
+  { key: "pressure_kPa" },
+  { key: "temperature_C" },
+  { key: "mu_k_n" },
+  { key: "mu_k_mean" },
+  { key: "mu_k_std" },
+  { key: "mu_k_ci95_low" },
+  { key: "mu_k_ci95_high" },
+  { key: "mu_k_cv" },
+  { key: "mu_s_n" },
+  { key: "mu_s_mean" },
+  { key: "qc", text: true },
 ];
 
 /* the nominal sliding speed, where a pair of the map holds several (the group table has it) */
 if (GROUPS.some(function (g) { return finite(g.nominal_speed_mm_s); })) {
-  COLUMNS.splice(5, 0, { key: "nominal_speed_mm_s", label: "v [mm/s]" });
+  COLUMNS.splice(5, 0, { key: "nominal_speed_mm_s" });
 }
 /* the labs, where the map holds several */
-if (DATA.labs.length > 1) COLUMNS.push({ key: "labs", label: "labs", text: true });
+if (DATA.labs.length > 1) COLUMNS.push({ key: "labs", text: true });
 
 function cellText(col, g) {
   if (col.key === "pin" || col.key === "disc" || col.key === "test_method") return g[col.key];
@@ -37,7 +38,7 @@ function sortValue(col, g) { return col.text ? cellText(col, g) : g[col.key]; }
    where there are several; methods are never pooled, each group has one */
 var METHODS = DATA.methods || [];
 if (METHODS.length > 1) {
-  COLUMNS.splice(2, 0, { key: "test_method", label: "method", text: true });
+  COLUMNS.splice(2, 0, { key: "test_method", text: true });
 }
 
 function renderTableHead() {
@@ -46,7 +47,7 @@ function renderTableHead() {
   var tr = make("tr");
   COLUMNS.forEach(function (col) {
     var th = make("th", null, col.text ? "tpx-t" : "");
-    th.appendChild(words(col.label));
+    th.appendChild(words(DATA.texts.heads[col.key]));
     th.dataset.key = col.key;
     th.tabIndex = 0;
     th.setAttribute("aria-sort", state.sortKey === col.key ? (state.sortDir > 0 ? "ascending" : "descending") : "none");
@@ -72,9 +73,10 @@ function compare(col, a, b, dir) {
   return dir * (va - vb);
 }
 
-/* A filter word as a pattern: matched anywhere, in any case (the browser's Unicode rule). */
+/* A filter word as a test: found anywhere, names compared by query.name_key's rule. */
 function wordPattern(word) {
-  return new RegExp(word.replace(/[.*+?^${}()|[\]\\]/g, "\\$&"), "iu");
+  var key = nameKey(word);
+  return { test: function (hay) { return nameKey(hay).indexOf(key) >= 0; } };
 }
 
 function renderTable() {
@@ -136,5 +138,5 @@ function renderTable() {
     tr.addEventListener("keydown", function (ev) { if (ev.key === "Enter") choose(); });
     body.appendChild(tr);
   });
-  $("tpx-group-count").textContent = rows.length + " of " + GROUPS.length + " groups";
+  $("tpx-group-count").textContent = say("group_count", { shown: rows.length, total: GROUPS.length });
 }

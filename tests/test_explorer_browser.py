@@ -1036,7 +1036,7 @@ def test_hostile_names_match_query_csv_and_snippets_as_python_does(tab, tmp_path
     table = tmp_path / "names.csv"
     table.write_text(rows.getvalue(), encoding="utf-8")
     map_path = tmp_path / "map \u202egpj.=1+1 \u200f.parquet"
-    import_table(map_path, table)
+    import_table(map_path, table, vocabulary=lab_vocabulary(pin, disc))
     groups = groups_of(read_map(map_path), map_path)
     page = write_explorer(map_path, tmp_path / "explorer.html")
     # spelt otherwise: upper case (ß → SS, ﬁ → FI), edged with white space JavaScript's

@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import os
 import platform
 import shutil
@@ -232,38 +233,71 @@ def per_size(folder: Path, n: int, template: dict) -> dict:
 # --------------------------------------------------------------------------- commands
 
 
-def _timed(argv: list[str], cwd: Path) -> tuple[float, float]:
-    """Wall seconds and peak memory [MB] of ``tribopipe ARGV`` run as a process."""
+#: seconds after which a timed command is stopped and reported as not finished
+TIMEOUT_S = 1200.0
+
+
+def _env(cwd: Path) -> dict[str, str]:
+    """The environment of a timed command: the package's source first, and compiled
+    bytecode kept (in ``cwd``/pycache, as an installed package keeps it), so that every
+    command is timed as a user runs it, not compiling its imports again."""
+    env = dict(os.environ)
+    env.pop("PYTHONDONTWRITEBYTECODE", None)
+    env["PYTHONPYCACHEPREFIX"] = str(cwd / "pycache")
+    src = str(Path(__file__).resolve().parents[1] / "src")
+    env["PYTHONPATH"] = src + os.pathsep + env.get("PYTHONPATH", "")
+    return env
+
+
+def _timed(argv: list[str], cwd: Path) -> dict[str, float]:
+    """Wall and CPU seconds (user + system, the command and its children) and peak
+    memory [MB] of ``tribopipe ARGV`` run as a process; ``wall_s`` is ``inf`` when it did
+    not finish within :data:`TIMEOUT_S`."""
     import subprocess
 
     code = ("import resource, subprocess, sys, time\n"
             "t = time.perf_counter()\n"
-            "r = subprocess.run(sys.argv[1:], stdout=subprocess.DEVNULL, "
-            "stderr=subprocess.PIPE, text=True)\n"
+            "try:\n"
+            "    r = subprocess.run(sys.argv[2:], stdout=subprocess.DEVNULL, "
+            "stderr=subprocess.PIPE, text=True, timeout=float(sys.argv[1]))\n"
+            "    rc, err = r.returncode, r.stderr\n"
+            "except subprocess.TimeoutExpired:\n"
+            "    rc, err = -1, ''\n"
             "dt = time.perf_counter() - t\n"
-            "kb = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss\n"
-            "print(dt, kb / 1024, r.returncode)\n"
-            "sys.stderr.write(r.stderr[-400:] if r.returncode > 1 else '')\n")
-    out = subprocess.run([sys.executable, "-c", code, sys.executable, "-m", "tribopipe",
-                          *argv], capture_output=True, text=True, cwd=cwd, check=True)
-    dt, mb, rc = out.stdout.split()
+            "u = resource.getrusage(resource.RUSAGE_CHILDREN)\n"
+            "print(dt, u.ru_utime + u.ru_stime, u.ru_maxrss / 1024, rc)\n"
+            "sys.stderr.write(err[-400:] if rc > 1 else '')\n")
+    out = subprocess.run([sys.executable, "-c", code, str(TIMEOUT_S), sys.executable, "-m",
+                          "tribopipe", *argv], capture_output=True, text=True, cwd=cwd,
+                         check=True, env=_env(cwd))
+    dt, cpu_s, mb, rc = out.stdout.split()
     if int(rc) > 1:
         raise SystemExit(f"tribopipe {' '.join(argv)}: exit {rc}: {out.stderr}")
-    return float(dt), float(mb)
+    if int(rc) == -1:
+        return {"wall_s": math.inf, "cpu_s": float(cpu_s), "peak_MB": float(mb)}
+    return {"wall_s": float(dt), "cpu_s": float(cpu_s), "peak_MB": float(mb)}
 
 
 def build_map(path: Path, template: dict, n: int, *, pairs: bool = False) -> None:
     """A map of ``n`` rows at ``path`` through the package's own API, landed in chunks of
-    20,000 (as a batch lands them); ``pairs``: every copy of 1,000 runs gets its own pin
-    (the pairs grow with the runs, as when labs add their own materials)."""
+    20,000 (as a batch lands them): relabelled copies of one real reduced run
+    (:func:`records`); ``pairs``: every 180 runs (one of each condition of the grid) get
+    their own pin, so that every run is a condition group of its own and the pairs grow
+    with the runs, as when labs add their own materials and lots."""
     from tribopipe.frictionmap import update_map
 
     for k in range(0, n, 20_000):
         chunk = records(template, min(20_000, n - k), k)
         if pairs:
-            for r in chunk:
-                r["pin"] = f"{r['pin']} lot {int(r['source_file'][10:16]) // 1000}"
+            for i, r in enumerate(chunk, start=k):
+                r["pin"] = f"{r['pin']} lot {i // 180}"
         update_map(path, chunk)
+
+
+def _median(runs: list[dict[str, float]]) -> dict[str, float]:
+    return {"wall_s": statistics.median(r["wall_s"] for r in runs),
+            "cpu_s": statistics.median(r["cpu_s"] for r in runs),
+            "peak_MB": max(r["peak_MB"] for r in runs)}
 
 
 def _commands_at(folder: Path, n: int, template: dict, export: Path, raw: Path,
@@ -282,18 +316,18 @@ def _commands_at(folder: Path, n: int, template: dict, export: Path, raw: Path,
             shutil.copytree(base, work)
         return work
 
-    def median(argv_of, prepare=None) -> tuple[float, float]:
+    def median(argv_of, prepare=None) -> dict[str, float]:
         runs = []
         for _ in range(repeat):
             if prepare is not None:
                 prepare()
             runs.append(_timed(argv_of(), folder))
-        return (statistics.median(r[0] for r in runs), max(r[1] for r in runs))
+        return _median(runs)
 
     def reduce_argv() -> list[str]:
         return ["reduce", str(export), "--pin", "Bench pin", "--disc", "steel", "--force",
                 "3", "--temperature", "20", "--repeat", "1", "--map", str(work),
-                "--out", str(folder / "reduced")]
+                "--out", str(folder / "reduced"), "--no-plots"]
 
     def batch_prepare() -> None:
         fresh()
@@ -324,15 +358,15 @@ def _commands_at(folder: Path, n: int, template: dict, export: Path, raw: Path,
         row["map_publish"] = median(
             lambda: ["map", "publish", str(pkg), "--lab", "Bench Lab", "--overwrite",
                      "--allow-synthetic", *m])
-        row["map_MB_on_disk"] = (sum(f.stat().st_size for f in base.rglob("*")
-                                     if f.is_file()) / 1e6, 0.0)
+        row["map_MB_on_disk"] = sum(f.stat().st_size for f in base.rglob("*")
+                                    if f.is_file()) / 1e6
     return row
 
 
 def commands(folder: Path, sizes: list[int], template: dict, repeat: int) -> dict:
-    """Wall time [s] and peak memory [MB] of each command of the issue's targets on maps
-    of each size (median of ``repeat`` runs; the appending commands on a fresh copy of
-    the map each time), and on an empty map for ``reduce`` and ``batch``."""
+    """Wall and CPU time [s] and peak memory [MB] of each command of the map's targets on
+    maps of each size (median of ``repeat`` runs; the appending commands on a fresh copy
+    of the map each time), and on an empty map for ``reduce`` and ``batch``."""
     from generators.synthetic import SyntheticRun, write_rheocompass_export
 
     export = write_rheocompass_export(folder / "new_export.csv", SyntheticRun(seed=7),
@@ -340,18 +374,22 @@ def commands(folder: Path, sizes: list[int], template: dict, repeat: int) -> dic
     raw = folder / "raw"
     raw.mkdir()
     results: dict = {}
-    for n in [0, *sizes]:
+    # every command once on a small map, untimed: the imports compiled into the cache
+    # (:func:`_env`), as an installed package has them
+    _commands_at(folder, 100, template, export, raw, 1) if sizes else None
+    for n in [0, *sizes] if sizes else []:
         row = _commands_at(folder, n, template, export, raw, repeat)
         results[str(n)] = row
-        print(f"  {n} rows: " + ", ".join(f"{k} {v[0]:.2f} s/{v[1]:.0f} MB"
-                                          for k, v in row.items()), flush=True)
+        print(f"  {n} rows (load {os.getloadavg()[0]:.1f}): " + ", ".join(
+            f"{k} {v['wall_s']:.2f} s wall/{v['cpu_s']:.2f} s CPU/{v['peak_MB']:.0f} MB"
+            if isinstance(v, dict) else f"{k} {v:.1f}" for k, v in row.items()), flush=True)
     return results
 
 
 def per_group(folder: Path, groups: list[int], template: dict) -> dict:
-    """Wall seconds per condition group of the commands over every pair (``export
-    abaqus`` of every pair, ``explore``, ``report``) on maps whose pairs grow with the
-    runs (one run per group)."""
+    """Wall and CPU seconds in all and per condition group of the commands over every
+    pair (``export abaqus`` of every pair, ``explore``, ``report``) on maps where every
+    run is a group of its own and the pairs grow with the runs (:func:`build_map`)."""
     out: dict = {}
     for n in groups:
         base = folder / f"groups_{n}.parquet"
@@ -364,10 +402,13 @@ def per_group(folder: Path, groups: list[int], template: dict) -> dict:
             "report": _timed(["report", *m, "--processed", str(folder / "none"),
                               "-o", str(folder / "r.html")], folder),
         }
-        out[str(n)] = {k: (v[0], v[0] / n * 1e3, v[1]) for k, v in row.items()}
-        print(f"  {n} groups: " + ", ".join(f"{k} {v[0]:.1f} s ({v[1]:.2f} ms/group, "
-                                            f"{v[2]:.0f} MB)" for k, v in out[str(n)].items()),
-              flush=True)
+        out[str(n)] = {k: {**v, "wall_ms_per_group": v["wall_s"] / n * 1e3,
+                           "cpu_ms_per_group": v["cpu_s"] / n * 1e3}
+                       for k, v in row.items()}
+        print(f"  {n} groups (load {os.getloadavg()[0]:.1f}): " + ", ".join(
+            f"{k} {v['wall_s']:.1f} s wall, {v['cpu_s']:.1f} s CPU "
+            f"({v['cpu_ms_per_group']:.2f} ms CPU/group, {v['peak_MB']:.0f} MB)"
+            for k, v in out[str(n)].items()), flush=True)
     return out
 
 
@@ -409,6 +450,47 @@ def map_costs(folder: Path, sizes: list[int], template: dict) -> dict:
     return out
 
 
+#: the issue's targets: (command, what it is compared with, the ratio or seconds allowed)
+TARGETS: tuple[tuple[str, str, float], ...] = (
+    ("reduce", "empty", 1.5), ("batch_one_new", "empty", 1.5), ("query", "1000", 1.5),
+    ("map_show", "1000", 1.5), ("map_table_paper", "1000", 1.5),
+    ("export_abaqus_one_pair", "1000", 1.5), ("map_validate", "seconds", 10.0),
+    ("map_publish", "seconds", 30.0))
+
+
+def table(results: dict) -> str:
+    """The Markdown table of ``--commands`` results (``bench/README.md``): per command, CPU
+    and wall seconds at each size, the ratio of CPU seconds at 10⁵ rows to the command
+    on an empty map (``reduce``, ``batch``) or on the 10³-row map, and whether the
+    target holds (in CPU time, and in wall time)."""
+    timed = results["commands_wall_s_peak_MB"]
+    sizes = [k for k in timed if k != "0"]
+    largest = sizes[-1]
+    head = ("| command | " + " | ".join(f"{int(n):,} rows: CPU / wall [s]" for n in
+                                      ["0", *sizes])
+            + f" | {int(largest):,} rows / base: CPU (wall) | target |")
+    lines = [head, "|---" * (len(sizes) + 4) + "|"]
+    for name, base, limit in TARGETS:
+        cells = []
+        for n in ["0", *sizes]:
+            v = timed[n].get(name)
+            cells.append("" if v is None else f"{v['cpu_s']:.2f} / {v['wall_s']:.2f}")
+        top = timed[largest].get(name)
+        if base == "seconds":
+            ratio = "—"
+            met = (f"< {limit:g} s: {'met' if top['cpu_s'] < limit else 'not met'} in CPU, "
+                   f"{'met' if top['wall_s'] < limit else 'not met'} in wall")
+        else:
+            ref = timed["0" if base == "empty" else base][name]
+            r_cpu, r_wall = top["cpu_s"] / ref["cpu_s"], top["wall_s"] / ref["wall_s"]
+            ratio = f"{r_cpu:.2f} ({r_wall:.2f})"
+            met = (f"≤ {limit:g}× {'empty map' if base == 'empty' else '10³ rows'}: "
+                   f"{'met' if r_cpu <= limit else 'not met'} in CPU, "
+                   f"{'met' if r_wall <= limit else 'not met'} in wall")
+        lines.append(f"| `{name}` | " + " | ".join(cells) + f" | {ratio} | {met} |")
+    return "\n".join(lines)
+
+
 def main(argv: list[str] | None = None) -> dict:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--sizes", default="1000,10000,100000")
@@ -423,8 +505,18 @@ def main(argv: list[str] | None = None) -> dict:
     parser.add_argument("--groups", default="",
                         help="with --commands: also the per-group costs on maps of these "
                              "numbers of groups, e.g. 1000,10000")
+    parser.add_argument("--timeout", type=float, default=TIMEOUT_S,
+                        help="with --commands: seconds after which a command is stopped "
+                             f"and reported as not finished ({TIMEOUT_S:g})")
+    parser.add_argument("--table", type=Path, default=None,
+                        help="print the Markdown table of a --commands results file and stop")
     args = parser.parse_args(argv)
-    sizes = [int(s) for s in args.sizes.split(",")]
+    if args.table is not None:
+        results = json.loads(args.table.read_text(encoding="utf-8"))
+        print(table(results))
+        return results
+    sizes = [int(s) for s in args.sizes.split(",") if s]
+    globals()["TIMEOUT_S"] = args.timeout
     load_start = os.getloadavg()
     if args.map_costs:
         with tempfile.TemporaryDirectory(prefix="tribopipe-scale-") as tmp:

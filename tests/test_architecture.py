@@ -62,6 +62,8 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     # pure statistics over map rows: below the map, whose printed summary uses them
     ("tribopipe.stats",),
     ("tribopipe.frictionmap",),
+    # one export to its runs, their files and their one landing in the map; a lab's
+    # decisions applied to the map's rows (in that landing)
     ("tribopipe.pipeline", "tribopipe.review"),
     # many exports, incrementally; a package's evidence re-derived through the one route
     ("tribopipe.campaign", "tribopipe.evidence"),

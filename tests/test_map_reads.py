@@ -66,7 +66,9 @@ def test_reduce_reads_the_map_once_under_its_lock(tmp_path: Path,
     held = _watch(monkeypatch, mapfile)
     second = reduce_cli(SECOND, *_labels(2), "--map", mapfile, "--output", out)
     assert second.exit_code == 0, second.output
-    assert held == [True]  # one read of the rows, the landing's, under the lock
+    # the landing's read under the lock: the columns its checks use of every part, then
+    # the one small part the new run merges into, read whole to be rewritten with it
+    assert held == [True, True]
     assert "1 added" in second.stderr
 
 
@@ -110,7 +112,7 @@ def test_batch_reads_the_map_once_under_its_lock(tmp_path: Path,
     held = _watch(monkeypatch, mapfile)
     done = _batch(raw, mapfile, out)
     assert done.exit_code == 0, done.output
-    assert held == [True]
+    assert held == [True, True]  # the landing's read and the small part merged, as reduce
     assert "1 reduced" in done.output
 
 
@@ -129,4 +131,4 @@ def test_batch_after_another_writer_reads_the_ids_then_lands(
     held = _watch(monkeypatch, mapfile)
     done = _batch(raw, mapfile, out)
     assert done.exit_code == 0, done.output
-    assert held == [False, True]
+    assert held == [False, True, True]

@@ -203,3 +203,64 @@ def test_a_profile_2_group_table_that_does_not_follow_from_its_runs_is_still_ref
     lines = check_package(target).lines()
     assert lines == ["data/groups.csv: row 1, field mu_k_n: 5 does not follow from the runs "
                      "(2)"]
+
+
+# --------------------------------------------------------------------------- streamed checks
+
+
+def test_a_parquet_copy_with_other_rows_is_named_cell_by_cell(copy, tmp_path):
+    """The Parquet copy is read a column at a time: a copy written as a valid map of other
+    values names each differing cell; one whose rows do not match its own checksum is
+    said to fail it."""
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    path = copy / "data" / "runs.parquet"
+    runs = fm.read_map(path)
+    runs.loc[[3, 7], "mu_k"] = 0.9
+    path.unlink()
+    fm.store.write_map_copy(path, runs)
+    rehash(copy, "data/runs.parquet")
+    table = rows(copy / "data" / "runs.csv")
+    mu_k = table[0].index("mu_k")
+    assert check_package(copy).lines() == [
+        f"data/runs.parquet: row {i}, field mu_k: 0.9 differs from the CSV's "
+        f"{float(table[i][mu_k])!r}" for i in (4, 8)]
+    arrow = pq.read_table(path)
+    scaled = pa.array(fm.read_map(path)["mu_k"].mul(1.5).to_numpy())
+    pq.write_table(arrow.set_column(arrow.schema.get_field_index("mu_k"), "mu_k", scaled),
+                   path)
+    rehash(copy, "data/runs.parquet")
+    assert check_package(copy).lines() == [
+        "data/runs.parquet: fails its checksum: its rows are not those tribopipe wrote "
+        "(damaged, or changed by another program)"]
+
+
+def test_the_streamed_csv_writer_writes_each_cell_as_package_cell(big_package):
+    """``write_table_csv`` (column-wise, in batches) writes what ``package_cell`` writes
+    cell by cell, for every kind: the published runs.csv, and a table with missing and
+    odd values."""
+    import numpy as np
+    import pandas as pd
+
+    from tribopipe.export.publish import CSV_BATCH_ROWS, package_cell, table_csv
+
+    map_path, pkg = big_package
+    runs = fm.read_map(pkg / "data" / "runs.parquet")
+    kinds = [fm.schema.KIND[c] for c in fm.schema.RUN_COLUMNS]
+    by_cell = [list(fm.schema.RUN_COLUMNS)] + [
+        [package_cell(v, k) for v, k in zip(row, kinds, strict=True)]
+        for row in runs.itertuples(index=False, name=None)]
+    assert rows(pkg / "data" / "runs.csv") == by_cell
+    odd = pd.DataFrame({
+        "f": np.array([0.1, np.nan, 1e-300, -0.0, 3.0] * (CSV_BATCH_ROWS // 2)),
+        "i": pd.array([1, None, -5, 0, 10**12] * (CSV_BATCH_ROWS // 2), dtype="Int64"),
+        "b": np.array([True, False, True, False, True] * (CSV_BATCH_ROWS // 2)),
+        "s": pd.array(["a,b", None, "", 'q"uote', "ü\nline"] * (CSV_BATCH_ROWS // 2),
+                      dtype="str")})
+    text = table_csv(odd, ["float", "int", "bool", "str"])
+    expected = [["f", "i", "b", "s"]] + [
+        [package_cell(v, k) for v, k in zip(row, ["float", "int", "bool", "str"],
+                                           strict=True)]
+        for row in odd.itertuples(index=False, name=None)]
+    assert list(csv.reader(io.StringIO(text))) == expected

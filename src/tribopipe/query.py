@@ -54,6 +54,7 @@ from .numeric import finite_or_none
 from .physics import FOUNDING_SLIDING_SPEED_MM_S
 from .rounding import decimal_text, known_u, lower_bound, plus_minus
 from .stats import (
+    GROUP_INPUT_COLUMNS,
     LABS,
     LABS_DISAGREE,
     NOMINAL_SPEED,
@@ -762,11 +763,21 @@ def friction_table(
     return pd.DataFrame(rows)
 
 
+#: the map columns ``query`` reads: those of the statistics (where the map stores no
+#: groups, or for one lab's runs), whose ``flags`` say which runs are synthetic
+QUERY_COLUMNS: tuple[str, ...] = GROUP_INPUT_COLUMNS
+
+
 def load_groups(map_path: MapSource, labs: Sequence[str] | None = None) -> pd.DataFrame:
     """The group statistics (excluded runs out; with ``labs``, only the runs those labs
     measured) of a friction map: opened (:func:`~tribopipe.frictionmap.snapshot.open_map`),
     or its path; kept with the snapshot."""
     snap = as_snapshot(map_path)
+    if not labs:  # every lab's runs: the map's groups (stored in a map folder)
+        groups = snap.groups(show_speed=True, show_method=True)
+        if groups.empty:
+            raise _no_runs(snap.path)
+        return groups
     key = ("query.groups", *sorted(labs or ()))
     return snap.derived(key, lambda: groups_of(snap.runs, snap.path, labs))
 
@@ -786,12 +797,17 @@ def groups_of(runs: pd.DataFrame, map_path: str | Path,
                               f"it holds runs of {', '.join(repr(x) for x in held)}",
                               path=map_path)
     if runs.empty:
-        raise ExportError(
-            "the friction map is empty or absent",
-            path=map_path,
-            hint="reduce runs first (tribopipe reduce / batch) or import the published map",
-        )
+        raise _no_runs(map_path)
     return group_statistics(runs, show_speed=True, show_method=True)
+
+
+def _no_runs(map_path: str | Path) -> ExportError:
+    """The error of a map without an included run to group."""
+    return ExportError(
+        "the friction map is empty or absent",
+        path=map_path,
+        hint="reduce runs first (tribopipe reduce / batch) or import the published map",
+    )
 
 
 def query_map(

@@ -48,7 +48,7 @@ from .labels import flag_list, quality_flags
 from .layout import OutputLayout, find_trace, read_failures
 from .query import estimate_text, pairs
 from .rounding import known_u, plus_minus
-from .stats import group_statistics, group_u, repeatability
+from .stats import group_u, repeatability
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -676,7 +676,8 @@ def report_inputs(
     source: str | None = None,
 ) -> ReportInputs:
     """Read what a report shows from a map and a processed folder (default: the map's)."""
-    runs = as_snapshot(map_path).runs
+    snap = as_snapshot(map_path)
+    runs = snap.runs
     if runs.empty:
         raise MapError("the friction map is empty or absent", path=map_path,
                        hint="run tribopipe batch first, or pass --map")
@@ -686,7 +687,7 @@ def report_inputs(
     traces = processed.traces_dir
     return ReportInputs(
         runs=runs,
-        groups=group_statistics(runs),
+        groups=snap.groups(),  # a map folder's are stored, not grouped again
         fits=fit_power_law(runs),
         failures=failures or (),
         failures_known=failures is not None,

@@ -399,27 +399,49 @@ def group_statistics(runs: pd.DataFrame, *, by_speed: bool = False,
     values and ids are in (repeat, measurement_id) order, so the result does not depend
     on the row order. Rows are sorted by pin, disc, temperature, pressure, force, nominal
     speed (measured speed, lab).
-    """
-    import numpy as np
-    import pandas as pd
 
+    Two steps, each its own function: :func:`group_rows` (each condition's own figures,
+    from its runs alone) and :func:`finish_groups` (what needs every group: the map's
+    pooled r and the labs' critical difference, the order, the columns shown). A map
+    folder keeps the first step's output for every condition
+    (:mod:`tribopipe.frictionmap.stored_groups`), brought up to date for the conditions a
+    write touches.
+    """
     runs = select_labs(runs, labs)
     if show_speed is None:
         show_speed = bool(pairs_with_several_speeds(runs))
     if show_method is None:
         show_method = several_methods(runs)
-    condition_cols = ["pin", "disc", "normal_force_N", "pressure_kPa", "temperature_C"]
-    if show_speed:
-        condition_cols.append(NOMINAL_SPEED)
-    if show_method:
-        condition_cols.append(TEST_METHOD)
-    if by_speed:
-        condition_cols.append("sliding_speed_mm_s")
-    if by_lab:
-        condition_cols.append(LAB)
-    stat_cols = [f"{q}_{f}" for q in QUANTITIES for f in GROUP_FIELDS]
-    columns = condition_cols + stat_cols + [LABS, "range_exceeds_r", LABS_DISAGREE,
-                                            "qc_flagged", "reviewed", "run_ids"]
+    return finish_groups(group_rows(runs, by_speed=by_speed, by_lab=by_lab),
+                         show_speed=show_speed, show_method=show_method,
+                         by_speed=by_speed, by_lab=by_lab)
+
+
+#: the map columns :func:`group_rows` reads (with ``sliding_speed_mm_s`` for ``by_speed``)
+GROUP_INPUT_COLUMNS: tuple[str, ...] = (
+    "measurement_id", "pin", "disc", "normal_force_N", "pressure_kPa", "temperature_C",
+    NOMINAL_SPEED, TEST_METHOD, "excluded", "repeat", "flags", "review", "lab",
+    "mu_k", "mu_s", "u_mu_k", "u_mu_s")
+#: the condition key of :func:`group_rows`' rows (rounded as :func:`group_keys` rounds):
+#: the rows of one key are the pressure clusters of one condition
+CONDITION_KEY: tuple[str, ...] = ("pin", "disc", "normal_force_N", "temperature_C",
+                                  NOMINAL_SPEED, TEST_METHOD)
+#: the version of :func:`group_rows`' output: a stored copy of another version is not
+#: used (raise it whenever what a group row holds, or how it is computed, changes)
+GROUP_ROWS_VERSION = 1
+
+
+def group_rows(runs: pd.DataFrame, *, by_speed: bool = False,
+               by_lab: bool = False) -> pd.DataFrame:
+    """Each condition group's own figures (the first step of :func:`group_statistics`),
+    unsorted: one row per group of the included runs of ``runs``, with every key column
+    (:data:`CONDITION_KEY`, the median nominal pressure [kPa]; the measured speed with
+    ``by_speed``, the lab with ``by_lab``), the statistics of each quantity, ``labs``,
+    ``qc_flagged``, ``reviewed``, ``run_ids``, and the private ``_q_lab_range`` and
+    ``_q_lab_means`` (each lab's range and (mean, n)) that :func:`finish_groups` compares
+    across groups. A row depends only on the runs of its own condition."""
+    import numpy as np
+    import pandas as pd
 
     included = runs.loc[~runs["excluded"].astype(bool)]
     keys = group_keys(included, by_speed, by_lab)
@@ -449,10 +471,44 @@ def group_statistics(runs: pd.DataFrame, *, by_speed: bool = False,
                 # .indices holds integer arrays (typed as array, Index or list)
                 members = np.asarray(positions)[[i for i, k in enumerate(clusters) if k == c]]
                 rows.append(_group_row(dict(zip(key_cols, key, strict=True)), members, data))
-    if not rows:
+    return pd.DataFrame(rows)
+
+
+def shown_columns(rows: pd.DataFrame) -> tuple[bool, bool]:
+    """Whether a group table of the rows of :func:`group_rows` shows the nominal speed
+    (some pair holds several) and the test method (the groups hold several): what
+    :func:`pairs_with_several_speeds` and :func:`several_methods` say of the included
+    runs, read from their groups."""
+    if rows.empty:
+        return False, False
+    speeds = rows.groupby([rows["pin"].astype(str), rows["disc"].astype(str)])[
+        NOMINAL_SPEED].nunique(dropna=False)
+    return bool((speeds > 1).any()), rows[TEST_METHOD].nunique(dropna=False) > 1
+
+
+def finish_groups(rows: pd.DataFrame, *, show_speed: bool, show_method: bool,
+                  by_speed: bool = False, by_lab: bool = False) -> pd.DataFrame:
+    """The group table of :func:`group_statistics` from the rows of :func:`group_rows`
+    (any order): sorted, ``range_exceeds_r`` and ``labs_disagree`` decided from every
+    group (the map's pooled r, the labs' critical difference), the columns shown."""
+    import numpy as np
+    import pandas as pd
+
+    condition_cols = ["pin", "disc", "normal_force_N", "pressure_kPa", "temperature_C"]
+    if show_speed:
+        condition_cols.append(NOMINAL_SPEED)
+    if show_method:
+        condition_cols.append(TEST_METHOD)
+    if by_speed:
+        condition_cols.append("sliding_speed_mm_s")
+    if by_lab:
+        condition_cols.append(LAB)
+    stat_cols = [f"{q}_{f}" for q in QUANTITIES for f in GROUP_FIELDS]
+    columns = condition_cols + stat_cols + [LABS, "range_exceeds_r", LABS_DISAGREE,
+                                            "qc_flagged", "reviewed", "run_ids"]
+    if rows.empty:
         return pd.DataFrame({c: pd.Series(dtype=_dtype(c)) for c in columns})
-    groups = pd.DataFrame(rows)
-    groups = groups.sort_values(
+    groups = rows.sort_values(
         ["pin", "disc", "temperature_C", "pressure_kPa", "normal_force_N", NOMINAL_SPEED,
          TEST_METHOD] + (["sliding_speed_mm_s"] if by_speed else []) + ([LAB] if by_lab else []),
         na_position="last",

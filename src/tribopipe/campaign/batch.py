@@ -561,7 +561,9 @@ def _land(campaign: Campaign, results: Sequence[FileOutcome],
 
     # the map read once more, under its lock: inside land_runs (change_map_with)
     landed = land_runs(campaign.map_path, choose, review=review,
-                       traces_dir=campaign.layout.traces_dir, replace=True)
+                       traces_dir=campaign.layout.traces_dir, replace=True,
+                       arriving={r.record.measurement_id for f in results for r in f.reduced
+                                 if r.record is not None})
     arrivals, account = brought[0]
     account = replace(account, repeats=list(landed.repeats), review=landed.review)
     if not (arrivals.records or arrivals.stale_ids or landed.appended.changed):

@@ -120,13 +120,14 @@ def _command(entry: Format) -> click.Command:
     """The ``export`` subcommand of format ``entry``: the selection, then its own options."""
 
     def run(output: str | None, map_path: str, **options: Any) -> None:
-        from ..export.simulators import export_from_map
+        from ..export.simulators import MAP_COLUMNS, export_from_map
         from ..frictionmap.snapshot import open_map
 
         def note(text: str) -> None:
             say(f"note: {text}", err=True)
 
-        snap = open_map(map_path)
+        # the columns it reads: a map folder's groups are stored, not grouped again
+        snap = open_map(map_path, MAP_COLUMNS)
         options["pin"], options["disc"] = material_filters(snap, options["pin"],
                                                            options["disc"])
         _emit(export_from_map(snap, entry.name, on_note=note, **options), output)

@@ -320,9 +320,12 @@ def table_cmd(
       tribopipe map table --layout paper --decimal , -o table.csv
     """
     from ..frictionmap.snapshot import open_map
+    from ..stats import GROUP_INPUT_COLUMNS
 
-    snap = open_map(map_path)
-    pin, disc = material_filters(snap, pin, disc)
+    # the group layouts read the groups (stored in a map folder) and the columns of the
+    # statistics where none are stored; the 7-column table reads the runs themselves
+    snap = open_map(map_path, None if fmt == "frictionmap" else GROUP_INPUT_COLUMNS)
+    pin, disc = material_filters(snap, pin, disc)  # against the names the map holds
     if fmt == "xlsx":
         from ..export.workbook import export_workbook
 
@@ -436,7 +439,9 @@ def show_cmd(runs_listed: bool, groups_listed: bool, map_path: str) -> None:
     from ..frictionmap import map_summary
     from ..frictionmap.snapshot import open_map
 
-    snap = open_map(map_path)  # the one read and check of the map
+    # the one read and check of the map (its excluded and reviewed runs are shown as
+    # whole rows); a map folder's groups are stored, not grouped again
+    snap = open_map(map_path)
     click.echo(map_summary(snap, runs_listed=runs_listed))
     if groups_listed:
         click.echo(map_paper_text(snap), nl=False)

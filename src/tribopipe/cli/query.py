@@ -85,7 +85,7 @@ def query_cmd(
     from ..frictionmap.snapshot import open_map
     from ..frictionmap.synthetic_rows import map_synthetic_note
     from ..numeric import finite_json
-    from ..query import query_map, value_labs
+    from ..query import QUERY_COLUMNS, query_map, value_labs
     from ..query_text import format_result
     from ._common import say
 
@@ -99,7 +99,9 @@ def query_cmd(
         instrument = load_settings(instrument_path).instrument
         pressure_kPa = instrument.pressure_kPa(normal_force_N)
     assert pressure_kPa is not None
-    snap = open_map(map_path)  # the one read and check of the map
+    # the one read and check of the map: the columns the query reads (its groups are
+    # stored in a map folder), all of them for the master curve
+    snap = open_map(map_path, None if use_master_curve else QUERY_COLUMNS)
     pin, disc = material_filters(snap, pin, disc)
     if use_master_curve:
         _master_curve_query(snap, pin, disc, pressure_kPa, temperature_C, speed_mm_s,

@@ -847,16 +847,18 @@ def write_explorer(
     :func:`runs_folder` beside the page, one file per pair (written first, each
     atomically), so the page stays small; a smaller map's page carries them and is one
     file."""
-    runs = as_snapshot(map_path).runs
+    snap = as_snapshot(map_path)
+    runs = snap.runs
     if runs.empty:
         raise ExportError(
             "the friction map is empty or absent",
             path=map_path,
             hint="reduce runs first (tribopipe reduce / batch) or import the published map",
         )
+    # the map's groups (a map folder's are stored): those of its included runs
     data = explorer_data(
-        runs, title=title or "tribopipe friction-map explorer", source=str(map_path)
-    )
+        runs, groups=snap.groups(show_method=True),
+        title=title or "tribopipe friction-map explorer", source=str(map_path))
     if sum(len(chunk) for chunk in data["runs"]) <= runs_inline_limit:
         return write_text_atomic(output, explorer_page(data))
     folder = runs_folder(output)

@@ -38,7 +38,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from datetime import UTC, datetime
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, TextIO
 
 from .. import __version__
 from ..config import Settings
@@ -66,9 +66,9 @@ from ..frictionmap.datapackage import (
     PROFILE,
     TRIBOPIPE_KEY,
     TRUE,
+    file_digest,
     groups_fields,
     runs_fields,
-    sha256_hash,
     table_schema,
 )
 from ..frictionmap.package import (
@@ -150,11 +150,43 @@ def _isna(value: Any) -> bool:
 def table_csv(table: pd.DataFrame, kinds: Sequence[str]) -> str:
     """CSV text (``\\n`` line ends, UTF-8) of ``table`` with one map kind per column."""
     buf = io.StringIO()
-    writer = csv.writer(buf, lineterminator="\n")
-    writer.writerow([str(c) for c in table.columns])
-    for row in table.itertuples(index=False, name=None):
-        writer.writerow([package_cell(v, k) for v, k in zip(row, kinds, strict=True)])
+    write_table_csv(buf, table, kinds)
     return buf.getvalue()
+
+
+#: rows of a table written to CSV at a time (their cells are text only while written)
+CSV_BATCH_ROWS = 8192
+
+
+def write_table_csv(out: TextIO, table: pd.DataFrame, kinds: Sequence[str]) -> None:
+    """Write ``table`` as CSV to the text stream ``out`` (``\\n`` line ends), each column
+    of its map kind written as :func:`package_cell` writes a value, column by column and
+    :data:`CSV_BATCH_ROWS` rows at a time, so that the table is never held as text."""
+    writer = csv.writer(out, lineterminator="\n")
+    writer.writerow([str(c) for c in table.columns])
+    for start in range(0, len(table), CSV_BATCH_ROWS):
+        part = table.iloc[start:start + CSV_BATCH_ROWS]
+        columns = [_column_cells(part.iloc[:, j], kind) for j, kind in enumerate(kinds)]
+        writer.writerows(zip(*columns, strict=True))
+
+
+def _column_cells(column: pd.Series, kind: str) -> list[str]:
+    """The CSV cells of one column of map kind ``kind`` (:func:`package_cell`, column-wise)."""
+    import numpy as np
+
+    missing = np.asarray(column.isna(), dtype=bool)
+    if kind == "float":
+        values = np.asarray(column, dtype=float)
+        if np.isinf(values).any():
+            number = float(values[np.isinf(values)][0])
+            raise ExportError(f"cannot publish an infinite number ({number})")
+        return ["" if m else repr(v) for v, m in zip(values.tolist(), missing, strict=True)]
+    if kind == "int":
+        return ["" if m else str(int(v)) for v, m in zip(column.tolist(), missing, strict=True)]
+    if kind == "bool":
+        return ["" if m else TRUE if v else FALSE
+                for v, m in zip(column.tolist(), missing, strict=True)]
+    return ["" if m else str(v) for v, m in zip(column.tolist(), missing, strict=True)]
 
 
 def column_kind(series: pd.Series) -> str:
@@ -178,17 +210,23 @@ def package_runs_table(runs: pd.DataFrame, lab: str) -> pd.DataFrame:
     """The map's runs with every missing ``lab`` filled: the founding paper's authors for
     its published rows, ``lab`` for the others; empty texts other than ``flags`` missing
     (a new frame)."""
-    out = runs.loc[:, list(RUN_COLUMNS)].copy()
-    missing = out["lab"].isna() | (out["lab"].astype(str).str.strip() == "")
+    # a shallow copy: the columns not changed below stay shared (copy-on-write), so a
+    # large map is not held twice
+    out = runs.loc[:, list(RUN_COLUMNS)].copy(deep=False)
+    missing = (out["lab"].isna() | (out["lab"].astype(str).str.strip() == "")).to_numpy()
     published = (out["source"] == SOURCE_PUBLISHED).to_numpy()
-    out.loc[missing & published, "lab"] = PUBLISHED_LAB
-    out.loc[missing & ~published, "lab"] = lab
+    if missing.any():
+        out.loc[missing & published, "lab"] = PUBLISHED_LAB
+        out.loc[missing & ~published, "lab"] = lab
     # a CSV cell cannot tell an empty text from a missing one: flags are "" when there are
     # none (never missing), every other empty text is written as missing
-    out["flags"] = out["flags"].fillna("")
+    if out["flags"].isna().any():
+        out["flags"] = out["flags"].fillna("")
     for name in RUN_COLUMNS:
         if KIND[name] == "str" and name != "flags":
-            out.loc[out[name].astype(str) == "", name] = None
+            empty = (out[name] == "").fillna(False).to_numpy(dtype=bool)
+            if empty.any():
+                out.loc[empty, name] = None
     return out
 
 
@@ -226,13 +264,13 @@ def _sources(publisher: Publisher, year: int) -> list[dict[str, str]]:
     ]
 
 
-def _resource(name: str, path: str, data: bytes, *, title: str, fmt: str, mediatype: str,
-              licences: list[dict[str, str]], sources: list[dict[str, str]],
+def _resource(name: str, path: str, size: int, digest: str, *, title: str, fmt: str,
+              mediatype: str, licences: list[dict[str, str]], sources: list[dict[str, str]],
               schema: dict[str, Any] | None = None) -> dict[str, Any]:
     res: dict[str, Any] = {
         "name": name, "path": path, "title": title,
         "profile": "tabular-data-resource" if schema is not None else "data-resource",
-        "format": fmt, "mediatype": mediatype, "bytes": len(data), "hash": sha256_hash(data),
+        "format": fmt, "mediatype": mediatype, "bytes": size, "hash": digest,
         "licenses": licences, "sources": sources,
     }
     if fmt == "csv":
@@ -263,21 +301,30 @@ def build_package(runs: pd.DataFrame, publisher: Publisher, folder: Path, *,
     sources = _sources(publisher, year)
     run_kinds = [KIND[c] for c in RUN_COLUMNS]
     group_kinds = [column_kind(group_table[c]) for c in group_table.columns]
-    files: dict[str, bytes] = {}
+    files: list[str] = []
     resources = []
 
-    def add(name: str, path: str, data: bytes, **meta: Any) -> None:
-        (folder / path).write_bytes(data)
-        files[path] = data
-        resources.append(_resource(name, path, data, sources=sources,
+    def add(name: str, path: str, data: bytes | None, **meta: Any) -> None:
+        """Describe the file ``path`` (written here from ``data``, or already written
+        when ``data`` is ``None``), its size and SHA-256 read back in blocks."""
+        if data is not None:
+            (folder / path).write_bytes(data)
+        size, digest = file_digest(folder / path, 1 << 62)
+        files.append(path)
+        resources.append(_resource(name, path, size, digest, sources=sources,
                                    licences=meta.pop("licences", data_licence), **meta))
 
+    def write_csv(path: str, table: pd.DataFrame, kinds: Sequence[str]) -> None:
+        with open(folder / path, "w", encoding="utf-8", newline="") as out:
+            write_table_csv(out, table, kinds)
+
     runs_schema = table_schema(runs_fields(), primary_key="measurement_id")
-    add(RUNS, "data/runs.csv", table_csv(runs, run_kinds).encode(),
+    write_csv("data/runs.csv", runs, run_kinds)
+    add(RUNS, "data/runs.csv", None,
         title="Runs: one row per friction run", fmt="csv", mediatype="text/csv",
         schema=runs_schema)
     write_map_copy(folder / "data/runs.parquet", runs).chmod(0o644)  # a map is 0600
-    add(RUNS_PARQUET, "data/runs.parquet", (folder / "data/runs.parquet").read_bytes(),
+    add(RUNS_PARQUET, "data/runs.parquet", None,
         title="Runs as a tribopipe friction map (Parquet, schema in its metadata)",
         fmt="parquet", mediatype="application/vnd.apache.parquet")
     groups_schema = table_schema(groups_fields(list(zip(group_table.columns, group_kinds,
@@ -290,7 +337,8 @@ def build_package(runs: pd.DataFrame, publisher: Publisher, folder: Path, *,
     add(GROUPS_PARQUET, "data/groups.parquet", buf.getvalue(),
         title="Repeat statistics per condition group (Parquet)", fmt="parquet",
         mediatype="application/vnd.apache.parquet")
-    add(GROUP_RUNS, "data/group_runs.csv", table_csv(group_runs, ["int", "str"]).encode(),
+    write_csv("data/group_runs.csv", group_runs, ["int", "str"])
+    add(GROUP_RUNS, "data/group_runs.csv", None,
         title="The runs of each condition group: one row per group and run", fmt="csv",
         mediatype="text/csv",
         schema=table_schema(GROUP_RUNS_FIELDS, primary_key="measurement_id",
@@ -422,6 +470,7 @@ def publish_map(map_path: MapSource, out_dir: str | os.PathLike[str],
     try:
         tmp.chmod(0o755)  # mkdtemp's 0700 would make the published folder private
         files = build_package(runs, publisher, tmp, date=date, evidence=found)
+        _return_free_memory()  # what writing freed, before the check reads it all again
         check = check_package(tmp)
         if not check.ok:  # a package we write must validate: a bug, said plainly
             raise ExportError("the package written does not validate: "
@@ -435,6 +484,24 @@ def publish_map(map_path: MapSource, out_dir: str | os.PathLike[str],
     return PublishedPackage(target, len(runs), tuple(files), found.notes,
                             sum(f.trace is not None for f in found.files),
                             sum(f.raw is not None for f in found.files))
+
+
+def _return_free_memory() -> None:
+    """Hand the memory freed so far back to the system: Python's garbage, Arrow's pool
+    and, where the C library has it (glibc), the heap's free pages. Writing a package of
+    10⁵ runs frees some hundred MB that would otherwise stay with the process while the
+    package is checked."""
+    import ctypes
+    import gc
+
+    import pyarrow as pa
+
+    gc.collect()
+    pa.default_memory_pool().release_unused()
+    try:
+        ctypes.CDLL("libc.so.6").malloc_trim(0)
+    except (OSError, AttributeError):  # not glibc: the pages stay until reused
+        pass
 
 
 def _check_target(target: Path, overwrite: bool) -> None:

@@ -19,6 +19,7 @@ from ..errors import ExportError
 from ..escape import markdown_cell
 from ..frictionmap.snapshot import MapSource, as_snapshot
 from ..query import QueryResult, load_groups, one_method, pair_speeds, query, select_pair
+from ..stats import GROUP_INPUT_COLUMNS
 from .formats import FORMATS, Option, condition_labels, option_named, users
 from .registry import WRITERS, Writer, writer_named
 from .slip_rates import SlipRate, pair_slip_rates, slip_rate_of
@@ -205,6 +206,11 @@ def export_simulator_input(
     if spec.speed_curve:
         chosen["speed_curve"] = speed_curve(groups, pin, disc, pressure_kPa, temperature_C)
     return writer.condition(res, source=source, **chosen)
+
+
+#: the map columns :func:`export_from_map` reads: those of the statistics (where the map
+#: stores no groups) and the measured speed of the slip rates
+MAP_COLUMNS: tuple[str, ...] = (*GROUP_INPUT_COLUMNS, "sliding_speed_mm_s")
 
 
 def export_from_map(map_path: MapSource, fmt: str, **options: Any) -> str:

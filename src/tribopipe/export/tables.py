@@ -45,7 +45,7 @@ from ..errors import ExportError
 from ..escape import csv_cell, latex_cell, markdown_cell, printable
 from ..files import write_text_atomic
 from ..frictionmap.published import FRICTIONMAP_COLUMNS
-from ..frictionmap.snapshot import MapSource, as_snapshot
+from ..frictionmap.snapshot import MapSnapshot, MapSource, as_snapshot
 from ..query import estimate_text
 from ..rounding import known_u, round_gum
 from ..stats import (
@@ -114,20 +114,24 @@ def _select(
 
 
 def group_table(
-    runs: pd.DataFrame,
+    runs: pd.DataFrame | MapSnapshot,
     *,
     pin: Sequence[str] | None = None,
     disc: Sequence[str] | None = None,
     temperature_C: Sequence[float] | None = None,
     by_speed: bool = False,
 ) -> pd.DataFrame:
-    """The group-statistics table of a map, filtered after the statistics are computed
-    (so the pooled repeatability s_r and the r flags always use the whole map)."""
-    return _select(group_statistics(runs, by_speed=by_speed), pin, disc, temperature_C)
+    """The group-statistics table of a map (its rows, or the map opened: its groups,
+    :meth:`~tribopipe.frictionmap.snapshot.MapSnapshot.groups`, stored in a map folder),
+    filtered after the statistics are computed (so the pooled repeatability s_r and the
+    r flags always use the whole map)."""
+    groups = (runs.groups(by_speed=by_speed) if isinstance(runs, MapSnapshot)
+              else group_statistics(runs, by_speed=by_speed))
+    return _select(groups, pin, disc, temperature_C)
 
 
 def abstract_table(
-    runs: pd.DataFrame,
+    runs: pd.DataFrame | MapSnapshot,
     *,
     pin: Sequence[str] | None = None,
     disc: Sequence[str] | None = None,
@@ -158,7 +162,7 @@ def _with_u(value: float, u: float, budget: bool, n: int, machine: bool) -> tupl
 
 
 def paper_table(
-    runs: pd.DataFrame,
+    runs: pd.DataFrame | MapSnapshot,
     *,
     pin: Sequence[str] | None = None,
     disc: Sequence[str] | None = None,
@@ -224,7 +228,7 @@ PAPER_NOTE = (
 )
 
 
-def paper_text(runs: pd.DataFrame) -> str:
+def paper_text(runs: pd.DataFrame | MapSnapshot) -> str:
     """The paper layout as an aligned plain-text table for a terminal (every cell one
     printable line), with :data:`PAPER_NOTE` under it."""
     table = paper_table(runs)
@@ -244,10 +248,9 @@ def map_paper_text(map_path: MapSource) -> str:
     snap = as_snapshot(map_path)
     if not snap.exists:
         return ""
-    runs = snap.runs
-    if runs.empty or runs["excluded"].astype(bool).all():
+    if snap.empty or snap.groups().empty:  # no included run
         return ""
-    return paper_text(runs)
+    return paper_text(snap)
 
 
 def round_half_up(value: float, decimals: int) -> float:
@@ -544,7 +547,7 @@ def _pm_cells(value: str, expanded: str) -> tuple[str, str, str]:
     return value, "$\\pm$", expanded
 
 
-def paper_latex(runs: pd.DataFrame, **filters: Any) -> str:
+def paper_latex(runs: pd.DataFrame | MapSnapshot, **filters: Any) -> str:
     """The paper layout as a LaTeX table that compiles as written (:func:`to_latex`'s
     header): μ_S and μ_K each as value, ±, U in three columns, the value and U aligned on
     the decimal point, and the ± U note under the table."""
@@ -586,7 +589,7 @@ def paper_latex(runs: pd.DataFrame, **filters: Any) -> str:
 
 
 def render_table(
-    runs: pd.DataFrame,
+    runs: pd.DataFrame | MapSnapshot,
     *,
     fmt: str = "csv",
     layout: str = "group",
@@ -606,7 +609,10 @@ def render_table(
     if decimal != "." and fmt != "csv":
         raise ExportError(f"a decimal comma is for --format csv, not {fmt}",
                           hint="drop --decimal")
+    if isinstance(runs, MapSnapshot) and (method or fmt == "frictionmap"):
+        runs = runs.runs  # these read the runs themselves
     if method:
+        assert not isinstance(runs, MapSnapshot)
         runs = runs_of_methods(runs, method)
     if fmt not in FORMATS:
         raise ExportError(f"unknown table format {fmt!r}; expected one of {', '.join(FORMATS)}")
@@ -619,6 +625,7 @@ def render_table(
                 "the frictionmap format has its own 7-column layout",
                 hint="drop --layout / --by-speed",
             )
+        assert not isinstance(runs, MapSnapshot)
         table = frictionmap_table(runs, **filters)
     elif layout == "abstract":
         if by_speed:
@@ -640,7 +647,8 @@ def render_table(
         given = ", ".join(f"{k}={list(v)}" for k, v in {**filters, "method": method}.items()
                           if v) or "no filter"
         raise ExportError(
-            f"no rows to tabulate ({given}; the map holds {len(runs)} runs)",
+            f"no rows to tabulate ({given}; the map holds "
+            f"{runs.n_runs if isinstance(runs, MapSnapshot) else len(runs)} runs)",
             hint="check `tribopipe map show` for the pins, discs and temperatures",
         )
     if fmt == "frictionmap":
@@ -674,7 +682,7 @@ def export_table(
     snap = as_snapshot(map_path)
     if not snap.exists:
         raise ExportError("friction map not found", path=snap.path, hint="pass --map PATH")
-    text = render_table(snap.runs, **options)
+    text = render_table(snap, **options)
     if output is not None:
 
         write_text_atomic(output, text, newline="")

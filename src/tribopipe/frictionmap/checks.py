@@ -24,7 +24,7 @@ import math
 import re
 from dataclasses import dataclass
 from datetime import datetime
-from typing import TYPE_CHECKING, Any, cast
+from typing import TYPE_CHECKING, Any
 
 from ..escape import FORMULA_TRIGGERS, printable
 from ..validate import file_name_problem, name_problem, text_problem
@@ -35,11 +35,10 @@ from .schema import (
     FILE_NAME_COLUMNS,
     IN_PACKAGES,
     IN_REDUCED_ROWS,
+    KIND,
     NAME_COLUMNS,
-    RUN_COLUMNS,
     SOURCE_REDUCED,
     Column,
-    is_missing,
 )
 
 if TYPE_CHECKING:
@@ -85,49 +84,136 @@ def validate_runs(runs: pd.DataFrame, *, require_lab: bool = False) -> list[RowP
     malformed provenance (``source_file``, a SHA-256 ``file_hash``, ``tribopipe_version``,
     an ISO 8601 ``reduced_at``; for reduced rows also ``method`` and a 16-digit
     ``config_hash``), and text with control characters or starting like a spreadsheet
-    formula. An empty list means the rows pass. ``runs`` is not modified."""
-    problems: list[RowProblem] = []
-    rows = cast("list[dict[str, Any]]", runs.loc[:, list(RUN_COLUMNS)].to_dict(orient="records"))
-    seen: dict[str, int] = {}
-    for i, row in enumerate(rows, 1):
-        mid = row["measurement_id"] if isinstance(row["measurement_id"], str) else None
+    formula. An empty list means the rows pass. ``runs`` is not modified.
 
-        def add(field: str, problem: str, i: int = i, mid: str | None = mid) -> None:
-            problems.append(RowProblem(i, mid, field, problem))
+    The checks run column by column (a text is checked once per distinct value), so the
+    cost and the memory grow with the rows' columns, not with a copy of every row; the
+    problems come out as a row-by-row reading finds them: by row, then in the order of
+    the checks (required values, the id, each column's value, the windows, provenance)."""
+    import numpy as np
 
-        for column in COLUMNS:
-            name = column.name
-            if column.required == ALWAYS and (
-                    is_missing(row[name]) or not str(row[name]).strip()):
-                add(name, "missing, expected a value in every row")
-            elif (column.required == IN_REDUCED_ROWS and row["source"] == SOURCE_REDUCED
-                  and is_missing(row[name])):
-                add(name, f"missing; only imported rows may lack {name}")
-            elif column.required == IN_PACKAGES and require_lab and (
-                    is_missing(row[name]) or not str(row[name]).strip()):
-                add(name, "missing, expected a value in every row of a data package")
-        if mid is not None:
-            if mid in seen:
-                add("measurement_id", f"duplicate id {mid} (first in row {seen[mid]})")
-            else:
-                seen[mid] = i
-        for column in COLUMNS:
-            name, value = column.name, row[column.name]
-            if is_missing(value):
-                continue
-            if column.kind == "float" and math.isinf(float(value)):
-                add(name, f"{_number(value)} is not a finite number")
+    found: list[tuple[int, int, str, str]] = []  # (position, check order, field, problem)
+    n = len(runs)
+    ids = runs["measurement_id"]
+    reduced = np.asarray(runs["source"].eq(SOURCE_REDUCED).fillna(False), dtype=bool)
+    missing = {c.name: np.asarray(runs[c.name].isna(), dtype=bool) for c in COLUMNS}
+
+    def blank(name: str) -> Any:
+        """Missing, or text that is empty or white space only."""
+        out = missing[name].copy()
+        if KIND[name] == "str":
+            out |= np.asarray(runs[name].str.strip().eq("").fillna(False), dtype=bool)
+        return out
+
+    def add_rows(rows: Any, order: int, field: str, problem: str | Any) -> None:
+        for i in np.flatnonzero(rows):
+            found.append((int(i), order, field,
+                          problem if isinstance(problem, str) else problem(int(i))))
+
+    for k, column in enumerate(COLUMNS):  # order 0…: required values
+        name = column.name
+        if column.required == ALWAYS:
+            add_rows(blank(name), k, name, "missing, expected a value in every row")
+        elif column.required == IN_REDUCED_ROWS:
+            add_rows(reduced & missing[name], k, name,
+                     f"missing; only imported rows may lack {name}")
+        elif column.required == IN_PACKAGES and require_lab:
+            add_rows(blank(name), k, name,
+                     "missing, expected a value in every row of a data package")
+    id_texts: list[Any] = ids.tolist()
+    first: dict[str, int] = {}
+    for i in np.flatnonzero(~missing["measurement_id"]):
+        mid = str(id_texts[i])
+        if mid in first:
+            found.append((int(i), 1000, "measurement_id",
+                          f"duplicate id {mid} (first in row {first[mid] + 1})"))
+        else:
+            first[mid] = int(i)
+    for k, column in enumerate(COLUMNS):  # order 2000…: each column's values
+        _check_column(runs, column, ~missing[column.name], 2000 + k, found)
+    for k, (start, end) in enumerate(WINDOWS):  # order 3000…: windows
+        a = np.asarray(runs[start], dtype=float)
+        b = np.asarray(runs[end], dtype=float)
+        with np.errstate(invalid="ignore"):
+            bad = ~np.isnan(a) & ~np.isnan(b) & (b < a)
+        add_rows(bad, 3000 + k, end,
+                 lambda i, a=a, b=b, end=end: f"{_number(float(b[i]))} ends before the "
+                 f"window's start {_number(float(a[i]))}")
+    _provenance(runs, blank, reduced, found)
+    found.sort(key=lambda p: (p[0], p[1]))
+    return [RowProblem(i + 1, id_texts[i] if isinstance(id_texts[i], str) else None, field,
+                       problem) for i, _, field, problem in found if i < n]
+
+
+def _check_column(runs: pd.DataFrame, column: Column, present: Any, order: int,
+                  found: list[tuple[int, int, str, str]]) -> None:
+    """The value checks of one column (present values only): a finite number inside its
+    bounds, a text of its kind."""
+    import numpy as np
+    import pandas as pd
+
+    name = column.name
+    if column.kind in ("float", "int"):
+        values = np.asarray(pd.to_numeric(runs[name]).astype("float64").to_numpy(
+            na_value=np.nan), dtype=float)
+        raw = runs[name].tolist()
+        for i in np.flatnonzero(present):
+            value: Any = raw[i]
+            number = values[i]
+            if column.kind == "float" and math.isinf(number):
+                found.append((int(i), order, name, f"{_number(value)} is not a finite number"))
                 continue
             if column.bounds is not None:
-                _check_range(column, value, add)
-            if column.kind == "str":
-                _check_text(name, str(value), add)
-        for start, end in WINDOWS:
-            a, b = row[start], row[end]
-            if not (is_missing(a) or is_missing(b)) and float(b) < float(a):
-                add(end, f"{_number(b)} ends before the window's start {_number(a)}")
-        _check_provenance(row, add)
-    return problems
+                _check_range(column, value,
+                             lambda f, p, i=int(i): found.append((i, order, f, p)))
+    elif column.kind == "str":
+        codes, uniques = pd.factorize(runs[name])
+        problems: dict[int, str] = {}
+        for u, text in enumerate(uniques):
+            _check_text(name, str(text), lambda f, p, u=u: problems.setdefault(u, p))
+        if problems:
+            for i in np.flatnonzero(np.isin(codes, list(problems)) & present):
+                found.append((int(i), order, name, problems[int(codes[i])]))
+
+
+def _provenance(runs: pd.DataFrame, blank: Any, reduced: Any,
+                found: list[tuple[int, int, str, str]]) -> None:
+    """The provenance checks, column-wise, in the order a row-by-row reading makes them
+    (order 4000…)."""
+    import numpy as np
+
+    def add(rows: Any, order: int, field: str, problem: Any) -> None:
+        for i in np.flatnonzero(rows):
+            found.append((int(i), 4000 + order, field,
+                          problem if isinstance(problem, str) else problem(int(i))))
+
+    def malformed(name: str, ok: Any) -> Any:
+        """Rows whose present value of ``name`` fails ``ok`` (checked once per value)."""
+        import pandas as pd
+
+        codes, uniques = pd.factorize(runs[name])
+        bad = [u for u, text in enumerate(uniques) if not ok(str(text))]
+        return np.isin(codes, bad) & (codes >= 0)
+
+    for k, name in enumerate(("source_file", "tribopipe_version")):
+        add(blank(name), k, name, "missing, expected provenance of the row")
+    absent = blank("file_hash")
+    add(absent, 2, "file_hash", "missing, expected the SHA-256 of the source file")
+    add(~absent & malformed("file_hash", lambda t: _SHA256.fullmatch(t) is not None), 2,
+        "file_hash", "expected 64 lowercase hexadecimal digits (SHA-256)")
+    absent = blank("reduced_at")
+    add(absent, 3, "reduced_at", "missing, expected the UTC time of reduction or import")
+    times = runs["reduced_at"]
+    add(~absent & malformed("reduced_at", _iso_time), 3, "reduced_at",
+        lambda i: f"{times.iat[i]!r} is not an ISO 8601 time")
+    add(reduced & blank("method"), 4, "method",
+        "missing, expected the reduction method of a reduced run")
+    absent = blank("config_hash")
+    add(reduced & absent, 5, "config_hash",
+        "missing, expected the settings hash of a reduced run")
+    add(reduced & ~absent & malformed("config_hash",
+                                      lambda t: _CONFIG_HASH.fullmatch(t) is not None),
+        5, "config_hash", "expected 16 lowercase hexadecimal digits")
 
 
 def _check_range(column: Column, value: Any, add: Any) -> None:
@@ -157,31 +243,6 @@ def _check_text(name: str, text: str, add: Any) -> None:
             + ", ".join(repr(c) for c in CHOICES[name]))
     elif text.startswith(FORMULA_START):
         add(name, f"starts with {text[0]!r}, which a spreadsheet runs as a formula")
-
-
-def _check_provenance(row: dict[str, Any], add: Any) -> None:
-    def absent(name: str) -> bool:
-        value = row[name]
-        return is_missing(value) or not str(value).strip()
-
-    for name in ("source_file", "tribopipe_version"):
-        if absent(name):
-            add(name, "missing, expected provenance of the row")
-    if absent("file_hash"):
-        add("file_hash", "missing, expected the SHA-256 of the source file")
-    elif not _SHA256.fullmatch(str(row["file_hash"])):
-        add("file_hash", "expected 64 lowercase hexadecimal digits (SHA-256)")
-    if absent("reduced_at"):
-        add("reduced_at", "missing, expected the UTC time of reduction or import")
-    elif not _iso_time(str(row["reduced_at"])):
-        add("reduced_at", f"{row['reduced_at']!r} is not an ISO 8601 time")
-    if row["source"] == SOURCE_REDUCED:
-        if absent("method"):
-            add("method", "missing, expected the reduction method of a reduced run")
-        if absent("config_hash"):
-            add("config_hash", "missing, expected the settings hash of a reduced run")
-        elif not _CONFIG_HASH.fullmatch(str(row["config_hash"])):
-            add("config_hash", "expected 16 lowercase hexadecimal digits")
 
 
 def _iso_time(text: str) -> bool:

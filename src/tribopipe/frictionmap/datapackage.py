@@ -24,6 +24,7 @@ Everything here treats a package as hostile:
 
 from __future__ import annotations
 
+import codecs
 import csv
 import hashlib
 import io
@@ -31,7 +32,7 @@ import json
 import os
 import re
 import stat
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from datetime import datetime
 from pathlib import Path
@@ -306,6 +307,91 @@ def load_descriptor(path: str | os.PathLike[str],
     return data, desc.parent
 
 
+#: bytes read at a time by the streaming readers (hash, CSV)
+BLOCK_BYTES = 1 << 20
+
+
+def _open_regular(path: Path, limit: int, what: str) -> tuple[Any, int]:
+    """An open binary handle on the regular file ``path`` and its size, refused like
+    :func:`read_bounded`."""
+    try:
+        info = os.stat(path)
+    except OSError as exc:
+        raise PackageRefused(f"{what} not found ({exc.strerror or exc})", path=path) from None
+    if not stat.S_ISREG(info.st_mode):
+        raise PackageRefused(f"{what} is not a regular file", path=path)
+    if info.st_size > limit:
+        raise PackageRefused(f"{what} is {info.st_size} bytes, more than the limit of "
+                             f"{limit}", path=path)
+    try:
+        fd = os.open(path, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0))
+    except OSError as exc:
+        raise PackageRefused(f"cannot read {what} ({exc.strerror or exc})", path=path) from None
+    return os.fdopen(fd, "rb"), info.st_size
+
+
+def file_digest(path: Path, limit: int, *, what: str = "file") -> tuple[int, str]:
+    """The size [bytes] and the descriptor's ``hash`` (``sha256:…``) of the regular file
+    ``path``, read in blocks (never whole in memory); refused (:class:`PackageRefused`) as
+    :func:`read_bounded` refuses."""
+    fh, _ = _open_regular(path, limit, what)
+    digest = hashlib.sha256()
+    size = 0
+    try:
+        with fh:
+            while block := fh.read(BLOCK_BYTES):
+                size += len(block)
+                if size > limit:
+                    raise PackageRefused(f"{what} grew beyond the limit of {limit} bytes",
+                                         path=path)
+                digest.update(block)
+    except OSError as exc:
+        raise PackageRefused(f"cannot read {what} ({exc.strerror or exc})", path=path) from None
+    return size, "sha256:" + digest.hexdigest()
+
+
+class NotUtf8(ValueError):
+    """Text that is not UTF-8: ``byte`` is the offset of the first bad byte."""
+
+    def __init__(self, byte: int) -> None:
+        super().__init__(f"not UTF-8 (byte {byte})")
+        self.byte = byte
+
+
+def text_lines(path: Path, limit: int, *, what: str = "file") -> Iterator[str]:
+    """The lines of the UTF-8 text file ``path`` (a leading BOM dropped), each with its
+    line end, split where ``io.StringIO(text, newline="")`` splits (``\n``, ``\r``,
+    ``\r\n``), read in blocks so that the file is never whole in memory. Raises
+    :class:`NotUtf8` at the first byte that is not UTF-8, :class:`PackageRefused` as
+    :func:`read_bounded` does."""
+    fh, _ = _open_regular(path, limit, what)
+    decoder = codecs.getincrementaldecoder("utf-8")()
+    pending = ""
+    consumed = 0
+    first = True
+    with fh:
+        while True:
+            block = fh.read(BLOCK_BYTES)
+            final = not block
+            buffered = len(decoder.getstate()[0])
+            try:
+                text = decoder.decode(block, final)
+            except UnicodeDecodeError as exc:
+                raise NotUtf8(consumed - buffered + exc.start) from None
+            consumed += len(block)
+            if first and text:
+                text = text.removeprefix("\ufeff")
+                first = False
+            lines = io.StringIO(pending + text, newline="").readlines()
+            # a line without its end yet (or a CR whose LF may follow) waits for the next
+            # block
+            pending = lines.pop() if lines and not final and not lines[-1].endswith(
+                "\n") else ""
+            yield from lines
+            if final:
+                return
+
+
 def read_bounded(path: Path, limit: int, *, what: str = "file") -> bytes:
     """The bytes of the regular file ``path``, refused (:class:`PackageRefused`) when it is
     absent, not a regular file (a FIFO, device or folder is never opened) or larger than
@@ -410,3 +496,158 @@ def csv_rows(data: bytes, where: str,
     finally:
         csv.field_size_limit(old)
     return rows, None
+
+
+# --------------------------------------------------------------------------- typed CSV columns
+
+#: rows parsed at a time by :func:`read_csv_columns` (their cells are Python strings only
+#: while the batch is typed)
+BATCH_ROWS = 4096
+_NUMBER_RE2 = "^" + _NUMBER.pattern + "$"
+_INTEGER_RE2 = "^" + _INTEGER.pattern + "$"
+
+
+def read_csv_columns(path: Path, fields: Sequence[Mapping[str, Any]], where: str,
+                     limits: PackageLimits, add: Any) -> dict[str, Any] | None:
+    """The rows of the UTF-8 CSV file ``path`` as typed columns, read in batches of
+    :data:`BATCH_ROWS` rows so that no row is held as text beyond its batch.
+
+    ``fields`` are the Table Schema fields the header must list, in order. Each cell is
+    parsed by its field's type exactly as :func:`parse_cell` parses it (the common cells
+    checked column-wise, any other by :func:`parse_cell` itself); every problem is handed
+    to ``add(where, problem)`` in row order, then field order: a cell that does not parse
+    (``row N, field F: …``), a required cell that is missing, a row of another number of
+    cells (left out), and what stops the reading (not UTF-8, not CSV, a cell longer than
+    ``limits.cell_chars``, a wrong header), after which ``None`` is returned.
+
+    Returns, per field name, ``number`` as float64 (NaN missing), ``integer`` as pandas
+    ``Int64``, ``boolean`` as pandas ``boolean``, other types as pandas ``str`` (missing
+    NaN); a cell that does not parse is missing."""
+    import numpy as np
+    import pandas as pd
+    import pyarrow as pa
+
+    names = [str(f["name"]) for f in fields]
+    types = [str(f["type"]) for f in fields]
+    required = [bool((f.get("constraints") or {}).get("required")) for f in fields]
+    chunks: list[list[Any]] = [[] for _ in names]
+    n = 0
+    old = csv.field_size_limit()
+    csv.field_size_limit(limits.cell_chars)  # process-wide: restored before returning
+    try:
+        reader = csv.reader(text_lines(path, limits.resource_bytes), strict=True)
+        try:
+            header = next(reader, None)
+            if header != names:
+                add(where, "line 1: header does not list the schema's fields in order "
+                    f"(expected {', '.join(names)[:200]})")
+                return None
+            batch: list[list[str]] = []
+            numbers: list[int] = []
+            short: list[tuple[int, int, str]] = []  # rows of another length, left out
+            for cells in reader:
+                n += 1
+                if len(cells) != len(names):
+                    short.append((n, -1, f"row {n}: {len(cells)} cells, expected "
+                                  f"{len(names)}"))
+                    continue
+                batch.append(cells)
+                numbers.append(n)
+                if len(batch) == BATCH_ROWS:
+                    _typed_batch(batch, numbers, short, names, types, required, chunks,
+                                 where, add)
+                    batch, numbers, short = [], [], []
+            _typed_batch(batch, numbers, short, names, types, required, chunks, where, add)
+        except csv.Error as exc:
+            add(f"{where}: line {reader.line_num}", f"not CSV ({exc})")
+            return None
+        except NotUtf8 as exc:
+            add(where, str(exc))
+            return None
+    finally:
+        csv.field_size_limit(old)
+    out: dict[str, Any] = {}
+    for name, ftype, parts in zip(names, types, chunks, strict=True):
+        if ftype == "number":
+            out[name] = np.concatenate(parts) if parts else np.zeros(0)
+        elif ftype == "integer":
+            out[name] = pd.array(np.concatenate(parts) if parts else [], dtype="Int64")
+        elif ftype == "boolean":
+            out[name] = pd.array(np.concatenate(parts) if parts else [], dtype="boolean")
+        else:
+            out[name] = pd.array(pa.chunked_array(parts, type=pa.string()), dtype="str")
+    return out
+
+
+def _typed_batch(batch: list[list[str]], numbers: list[int],
+                 short: list[tuple[int, int, str]], names: list[str], types: list[str],
+                 required: list[bool], chunks: list[list[Any]], where: str,
+                 add: Any) -> None:
+    """Type one batch of rows (each of ``len(names)`` cells, ``numbers``: their row
+    numbers among every data row) into ``chunks``; its problems, with those of the rows of
+    another length read meanwhile (``short``), to ``add`` in row, then field order."""
+    import numpy as np
+    import pyarrow as pa
+    import pyarrow.compute as pc
+
+    problems: list[tuple[int, int, str]] = list(short)
+    for j, (name, ftype, need) in enumerate(zip(names, types, required, strict=True)):
+        texts = [cells[j] for cells in batch]
+        arr = pa.array(texts, type=pa.string())
+        empty = np.asarray(pc.equal(arr, ""), dtype=bool)
+        if ftype in ("number", "integer"):
+            pattern = _NUMBER_RE2 if ftype == "number" else _INTEGER_RE2
+            fast = pc.match_substring_regex(arr, pattern)
+            if ftype == "number":
+                fast = pc.and_(fast, pc.less_equal(pc.utf8_length(arr), 64))
+            ok = np.asarray(fast, dtype=bool)
+            values: Any
+            if ftype == "number":  # Arrow reads these texts as float() does
+                values = np.asarray(pc.cast(pc.if_else(fast, arr, pa.scalar(None, pa.string())),
+                                            pa.float64()).to_numpy(zero_copy_only=False),
+                                    dtype=float).copy()
+            else:
+                values = np.asarray([int(t) if good else None for t, good in
+                                     zip(texts, ok, strict=True)], dtype=object)
+        elif ftype == "boolean":
+            true = np.asarray(pc.equal(arr, TRUE), dtype=bool)
+            ok = true | np.asarray(pc.equal(arr, FALSE), dtype=bool)
+            values = np.asarray([bool(t) if good else None for t, good in
+                                 zip(true, ok, strict=True)], dtype=object)
+        elif ftype == "datetime":
+            seen: dict[str, bool] = {}
+            ok = np.fromiter((seen.setdefault(t, _is_iso(t)) if t else True for t in texts),
+                             dtype=bool, count=len(texts))
+            values = None
+        else:
+            ok = np.ones(len(texts), dtype=bool)
+            values = None
+        # the rare cells the column-wise rules do not vouch for: parse_cell decides
+        for i in np.flatnonzero(~ok & ~empty):
+            try:
+                value = parse_cell(texts[i], ftype)
+            except ValueError as exc:
+                problems.append((int(numbers[i]), j, f"row {numbers[i]}, field {name}: {exc}, "
+                                 f"expected a {ftype}"))
+                value = None
+            if values is None:  # text: kept where it parses
+                empty[i] = value is None
+            else:
+                values[i] = np.nan if ftype == "number" and value is None else value
+        if values is None:  # text stays Arrow text: no Python string outlives its batch
+            values = pc.if_else(pa.array(empty), pa.scalar(None, pa.string()), arr)
+        if need:
+            for i in np.flatnonzero(empty):
+                problems.append((int(numbers[i]), j,
+                                 f"row {numbers[i]}, field {name}: missing, expected a value"))
+        chunks[j].append(values)
+    for _, _, problem in sorted(problems, key=lambda p: (p[0], p[1])):
+        add(where, problem)
+
+
+def _is_iso(text: str) -> bool:
+    try:
+        datetime.fromisoformat(text.replace("Z", "+00:00"))
+    except ValueError:
+        return False
+    return True

@@ -14,7 +14,7 @@ finds one repeat number used by several runs of one condition.
 from __future__ import annotations
 
 import math
-from collections.abc import Collection, Mapping, Sequence
+from collections.abc import Collection, Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
@@ -29,7 +29,16 @@ if TYPE_CHECKING:
 LABEL_COLUMNS: tuple[str, ...] = ("pin", "disc", "normal_force_N", "temperature_C", "repeat")
 
 #: {file_hash: {source_file: {measurement_id: labels}}}
-FilesByHash = dict[str, dict[str, dict[str, dict[str, Any]]]]
+FilesByHash = Mapping[str, dict[str, dict[str, dict[str, Any]]]]
+
+#: the map columns the duplicate and conflict check reads (:func:`map_files_by_hash`,
+#: :func:`repeat_clashes`): what a locked append reads of every row
+CHECK_COLUMNS: tuple[str, ...] = ("measurement_id", "file_hash", "source_file",
+                                  *LABEL_COLUMNS, "excluded")
+#: what :func:`repeat_clashes` reads besides, of the rows of the pairs it reports on (the
+#: statistics' condition groups)
+GROUP_COLUMNS: tuple[str, ...] = ("pressure_kPa", "nominal_speed_mm_s", "test_method", "lab",
+                                  "flags", "review", "mu_s", "mu_k", "u_mu_s", "u_mu_k")
 
 
 def _value(column: str, value: Any) -> Any:
@@ -112,17 +121,49 @@ def _shown(column: str, value: Any) -> str:
 
 def map_files_by_hash(runs: Any) -> FilesByHash:
     """``{file_hash: {source_file: {measurement_id: labels}}}`` of a map's reduced rows
-    (a DataFrame from :func:`tribopipe.frictionmap.read_map`): which files the map holds,
-    by content."""
-    out: FilesByHash = {}
-    columns = ["file_hash", "source_file", "measurement_id", *LABEL_COLUMNS]
-    for row in runs.loc[:, columns].itertuples(index=False, name=None):
-        sha, source, mid, *values = row
-        if not isinstance(sha, str) or not sha or not isinstance(source, str):
-            continue
-        labels = {c: _value(c, v) for c, v in zip(LABEL_COLUMNS, values, strict=True)}
-        out.setdefault(sha, {}).setdefault(source, {})[str(mid)] = labels
-    return out
+    (a DataFrame with :data:`CHECK_COLUMNS`): which files the map holds, by content. The
+    entry of one content is built when it is asked for, so a check of a few files costs
+    what they add, not what the map holds."""
+    return _FilesIndex(runs)
+
+
+class _FilesIndex(Mapping[str, dict[str, dict[str, dict[str, Any]]]]):
+    """:func:`map_files_by_hash`'s mapping: the rows of one content found through a hash
+    index of the column, its entry built on first use."""
+
+    def __init__(self, runs: Any) -> None:
+        import pandas as pd
+
+        columns = ["file_hash", "source_file", "measurement_id", *LABEL_COLUMNS]
+        rows = runs.loc[:, columns].reset_index(drop=True)
+        self._rows = rows.loc[rows["file_hash"].notna() & rows["source_file"].notna()
+                              & (rows["file_hash"].astype(str) != "")
+                              ].reset_index(drop=True)
+        self._index = pd.Index(self._rows["file_hash"].astype(str))
+        self._built: dict[str, dict[str, dict[str, dict[str, Any]]]] = {}
+
+    def __getitem__(self, sha: str) -> dict[str, dict[str, dict[str, Any]]]:
+        if sha in self._built:
+            return self._built[sha]
+        if not isinstance(sha, str):
+            raise KeyError(sha)
+        positions = self._index.get_indexer_non_unique([sha])[0]
+        positions = positions[positions >= 0]
+        if not len(positions):
+            raise KeyError(sha)
+        out: dict[str, dict[str, dict[str, Any]]] = {}
+        for row in self._rows.iloc[positions].itertuples(index=False, name=None):
+            _, source, mid, *values = row
+            labels = {c: _value(c, v) for c, v in zip(LABEL_COLUMNS, values, strict=True)}
+            out.setdefault(str(source), {})[str(mid)] = labels
+        self._built[sha] = out
+        return out
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self._index.unique())
+
+    def __len__(self) -> int:
+        return len(self._index.unique())
 
 
 class ContentOwners:
@@ -204,6 +245,10 @@ def repeat_clashes(current: pd.DataFrame, records: Sequence[MapRow],
     new_ids = {r.measurement_id for r in records}
     old = current.loc[~current["measurement_id"].isin(new_ids | set(drop_ids))
                       & ~current["excluded"].fillna(False).astype(bool)]
+    # only the map's runs of the records' pairs can share a record's condition
+    pins = {r.pin for r in records}
+    discs = {r.disc for r in records}
+    old = old.loc[old["pin"].isin(sorted(pins)) & old["disc"].isin(sorted(discs))]
     seen: dict[tuple[Any, ...], int] = {}
     for values in old.loc[:, list(columns)].itertuples(index=False, name=None):
         key = _coarse_key(*values)

@@ -27,8 +27,8 @@ from ..validate import text_problem
 from .datapackage import DESCRIPTOR
 from .package import package_runs
 from .parts import MANIFEST
-from .schema import frame_rows, is_missing
-from .store import AppendReport, append_records, read_map
+from .schema import is_missing
+from .store import AppendReport, append_frame, read_map
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -103,8 +103,7 @@ def merge_map(
             raise MapError(f"a data package names its lab ({package_lab!r}); --lab is for a "
                            "Parquet map whose rows name none", path=other)
         runs, resolved = resolve_names(runs, vocabulary, other)
-        return MergeReport(append_records(path, frame_rows(runs), replace=replace),
-                           resolved=resolved)
+        return MergeReport(append_frame(path, runs, replace=replace), resolved=resolved)
     if os.path.realpath(other) == os.path.realpath(path):
         raise MapError("cannot merge a friction map into itself", path=other)
     runs = read_map(other)  # validated: a damaged or foreign file is refused before any write
@@ -112,7 +111,7 @@ def merge_map(
     if lab is not None:
         runs.loc[unnamed, "lab"] = lab
     runs, resolved = resolve_names(runs, vocabulary, other)
-    report = append_records(path, frame_rows(runs), replace=replace)
+    report = append_frame(path, runs, replace=replace)
     n = int(unnamed.sum())
     return MergeReport(report, labelled=n if lab else 0, without_lab=0 if lab else n, lab=lab,
                        resolved=resolved)

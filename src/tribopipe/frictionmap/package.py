@@ -18,14 +18,12 @@ the way); it is not a signature: whoever can edit the files can edit the descrip
 
 from __future__ import annotations
 
-import io
 import json
 import math
 import os
-import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, TypeGuard
+from typing import TYPE_CHECKING, Any, TypeGuard, cast
 
 from ..errors import MapError
 from ..escape import printable
@@ -34,24 +32,24 @@ from .checks import validate_runs
 from .datapackage import (
     DEFAULT_LIMITS,
     DESCRIPTOR,
+    FALSE,
     FRICTIONMAP_FIELDS,
     GROUP_ID,
     GROUP_RUNS_FIELDS,
     PROFILE,
     TABLE_TYPES,
     TRIBOPIPE_KEY,
+    TRUE,
     PackageLimits,
     PackageRefused,
     Problem,
-    csv_rows,
     descriptor_path,
+    file_digest,
     load_descriptor,
-    parse_cell,
-    read_bounded,
+    read_csv_columns,
     resource_file,
     run_columns,
     runs_fields,
-    sha256_hash,
 )
 from .profile import (
     LINKED_GROUPS_VERSION,
@@ -62,13 +60,16 @@ from .profile import (
 )
 from .published import FOUNDING_PAPER
 from .schema import (
+    ADDED_IN_VERSION,
+    KIND,
+    RUN_COLUMNS,
     SCHEMA_NAME,
     SCHEMA_VERSION,
     SOURCE_PUBLISHED,
-    frame_records,
-    unvalidated_frame,
+    content_sha256,
+    is_missing,
 )
-from .store import read_map, same_value
+from .store import map_metadata, same_value
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -285,9 +286,9 @@ def _resources(check: _Checker, d: dict[str, Any]) -> dict[str, dict[str, Any]]:
     return out
 
 
-def _check_file(check: _Checker, res: dict[str, Any], base: Path) -> bytes | None:
-    """The bytes of a resource's file after its path, size and checksum checks (``None``
-    when refused)."""
+def _check_file(check: _Checker, res: dict[str, Any], base: Path) -> Path | None:
+    """The file of a resource after its path, size and checksum checks (``None`` when
+    refused); it is read in blocks for its checksum, never whole."""
     where = f"{DESCRIPTOR}: resource {res['name']!r}"
     if "data" in res:
         check.add(where, "inline 'data' is not accepted; expected a file")
@@ -298,7 +299,7 @@ def _check_file(check: _Checker, res: dict[str, Any], base: Path) -> bytes | Non
         check.add(where, exc.problem)
         return None
     try:
-        data = read_bounded(target, check.limits.resource_bytes, what="file")
+        length, digest = file_digest(target, check.limits.resource_bytes, what="file")
     except PackageRefused as exc:
         check.add(where, f"path {json.dumps(res['path'])}: {exc.problem}")
         return None
@@ -310,18 +311,18 @@ def _check_file(check: _Checker, res: dict[str, Any], base: Path) -> bytes | Non
     if not isinstance(expected, str) or not expected.startswith("sha256:"):
         check.add(shown, "checksum: expected 'hash' as 'sha256:<64 hex digits>'")
         return None
-    if sha256_hash(data) != expected.lower():
-        check.add(shown, f"checksum: SHA-256 is {sha256_hash(data)[7:19]}…, the descriptor "
+    if digest != expected.lower():
+        check.add(shown, f"checksum: SHA-256 is {digest[7:19]}…, the descriptor "
                   f"says {expected[7:19]}… (the file was changed or damaged)")
         return None
     size = res.get("bytes")
     if isinstance(size, bool) or not isinstance(size, int):
         check.add(shown, "checksum: expected 'bytes', the file's size")
         return None
-    if size != len(data):
-        check.add(shown, f"checksum: {len(data)} bytes, the descriptor says {size}")
+    if size != length:
+        check.add(shown, f"checksum: {length} bytes, the descriptor says {size}")
         return None
-    return data
+    return target
 
 
 # --------------------------------------------------------------------------- runs
@@ -366,58 +367,39 @@ def _check_fields(check: _Checker, schema: Any, expected: list[dict[str, Any]],
     return fields if usable else None
 
 
-def _table(check: _Checker, data: bytes, fields: list[dict[str, Any]],
-           shown: str) -> list[dict[str, Any]] | None:
-    """The rows of a CSV resource as dicts of typed values, every cell problem reported
-    (a bad cell is ``None``); ``None`` when the header is wrong or the text unreadable."""
-    rows, stopped = csv_rows(data, shown, check.limits)
-    if stopped is not None:
-        check.add(stopped.where, stopped.problem)
-        return None
-    names = [f["name"] for f in fields]
-    if not rows or rows[0] != names:
-        check.add(shown, "line 1: header does not list the schema's fields in order "
-                  f"(expected {', '.join(names)[:200]})")
-        return None
-    types = [f["type"] for f in fields]
-    required = [bool((f.get("constraints") or {}).get("required")) for f in fields]
-    out = []
-    for n, cells in enumerate(rows[1:], 1):
-        if len(cells) != len(names):
-            check.add(shown, f"row {n}: {len(cells)} cells, expected {len(names)}")
-            continue
-        row: dict[str, Any] = {}
-        for name, ftype, need, text in zip(names, types, required, cells, strict=True):
-            try:
-                row[name] = parse_cell(text, ftype)
-            except ValueError as exc:
-                check.add(shown, f"row {n}, field {name}: {exc}, expected a {ftype}")
-                row[name] = None
-                continue
-            if need and row[name] is None:
-                check.add(shown, f"row {n}, field {name}: missing, expected a value")
-        out.append(row)
-    return out
+def _table(check: _Checker, path: Path, fields: list[dict[str, Any]],
+           shown: str) -> dict[str, Any] | None:
+    """The rows of a CSV resource as typed columns
+    (:func:`~tribopipe.frictionmap.datapackage.read_csv_columns`), every cell problem
+    reported (a bad cell is missing); ``None`` when the header is wrong or the text
+    unreadable."""
+    return read_csv_columns(path, fields, shown, check.limits, check.add)
 
 
-def _check_runs(check: _Checker, res: dict[str, Any], data: bytes | None,
+def _records(columns: dict[str, Any]) -> list[dict[str, Any]]:
+    """Typed columns as rows of plain values (missing as ``None``): for the small tables
+    (the groups)."""
+    names = list(columns)
+    values = [[None if is_missing(v) else v for v in columns[n].tolist()] for n in names]
+    return [dict(zip(names, row, strict=True)) for row in zip(*values, strict=True)]
+
+
+def _check_runs(check: _Checker, res: dict[str, Any], path: Path | None,
                 version: int) -> pd.DataFrame | None:
     """The runs table: schema against the map's, every cell, then the row checks."""
-    if data is None:
+    if path is None:
         return None
     shown = str(res.get("path"))
     fields = _check_fields(check, res.get("schema"), runs_fields(version), shown)
     if fields is None:
         return None
-    rows = _table(check, data, fields, shown)
-    if rows is None:
+    columns = _table(check, path, fields, shown)
+    if columns is None:
         return None
-    if not set(run_columns(version)) <= {f["name"] for f in fields}:
+    if not set(run_columns(version)) <= set(columns):
         return None
-    try:
-        runs = unvalidated_frame(rows, where="row")
-    except MapError as exc:  # cannot happen after the cell checks; said in one line anyway
-        check.add(shown, exc.problem)
+    runs = _map_frame(check, columns, shown)
+    if runs is None:
         return None
     # CSV cannot tell an empty text from a missing one: flags are never missing in a map
     # ("" is a run without flags), every other text is missing rather than empty
@@ -427,15 +409,51 @@ def _check_runs(check: _Checker, res: dict[str, Any], data: bytes | None,
     return runs
 
 
-def _check_parquet_copy(check: _Checker, res: dict[str, Any], data: bytes,
+def _map_frame(check: _Checker, columns: dict[str, Any], shown: str) -> pd.DataFrame | None:
+    """Typed CSV columns as a map DataFrame (the schema's columns and dtypes; a column of
+    an older schema version missing in every row); ``None`` where a true/false column
+    misses a value (said)."""
+    import numpy as np
+    import pandas as pd
+
+    n = len(next(iter(columns.values()))) if columns else 0
+    out: dict[str, Any] = {}
+    for name in RUN_COLUMNS:
+        kind = KIND[name]
+        values = columns.get(name)
+        if kind == "float":
+            out[name] = (np.full(n, np.nan) if values is None
+                         else np.asarray(values, dtype=float))
+        elif kind == "int":
+            out[name] = pd.array([None] * n if values is None else values, dtype="Int64")
+        elif kind == "bool":
+            missing = np.ones(n, dtype=bool) if values is None else np.asarray(
+                pd.isna(values), dtype=bool)
+            if missing.any():
+                row = int(np.flatnonzero(missing)[0]) + 1
+                check.add(shown, f"row {row}, field {name}: missing, expected {TRUE} or "
+                          f"{FALSE}")
+                return None
+            out[name] = np.asarray(values, dtype=bool)
+        else:
+            out[name] = pd.array([None] * n if values is None else values, dtype="str")
+    return pd.DataFrame(out, columns=list(RUN_COLUMNS), index=pd.RangeIndex(n))
+
+
+def _check_parquet_copy(check: _Checker, res: dict[str, Any], path: Path,
                         runs: pd.DataFrame) -> None:
-    """The Parquet copy of the runs holds the same rows as the CSV."""
+    """The Parquet copy of the runs is a friction map (our metadata, the checksum of its
+    own rows) and holds the same rows as the CSV. Read one column at a time, never whole:
+    each column is compared with the CSV's (the first differing cells listed in row
+    order, the rest counted) and fed to the checksum of the copy's rows."""
+    import numpy as np
     import pyarrow as pa
     import pyarrow.parquet as pq
 
     shown = str(res.get("path"))
     try:
-        meta = pq.ParquetFile(io.BytesIO(data)).metadata
+        parquet = pq.ParquetFile(path)
+        meta = parquet.metadata
         unpacked = sum(meta.row_group(i).total_byte_size for i in range(meta.num_row_groups))
     except (pa.ArrowException, OSError, ValueError) as exc:
         check.add(shown, f"not a readable Parquet file ({str(exc)[:120]})")
@@ -444,26 +462,105 @@ def _check_parquet_copy(check: _Checker, res: dict[str, Any], data: bytes,
         check.add(shown, f"unpacks to {unpacked} bytes, more than the limit of "
                   f"{check.limits.resource_bytes}")
         return
-    with tempfile.TemporaryDirectory() as tmp:
-        copy = Path(tmp) / "runs.parquet"
-        copy.write_bytes(data)
-        try:
-            parquet = read_map(copy)
-        except MapError as exc:
-            check.add(shown, exc.problem)
-            return
-    if len(parquet) != len(runs):
-        check.add(shown, f"{len(parquet)} rows, the CSV has {len(runs)}")
+    try:
+        info = map_metadata(path)
+    except MapError as exc:
+        check.add(shown, exc.problem)
         return
-    pairs = zip(frame_records(runs), frame_records(parquet), strict=True)
-    for n, (ours, theirs) in enumerate(pairs, 1):
-        for name, value in ours.items():
-            if not same_value(value, theirs[name]):
-                check.add(shown, f"row {n}, field {name}: {theirs[name]!r} differs from "
-                          f"the CSV's {value!r}")
+    if meta.num_rows != len(runs):
+        check.add(shown, f"{meta.num_rows} rows, the CSV has {len(runs)}")
+        return
+    copy = _ParquetColumns(parquet, len(runs), int(info["schema_version"]))
+    names = list(RUN_COLUMNS)
+    differs = np.zeros((len(runs), len(names)), dtype=bool)
+    try:
+        for j, name in enumerate(names):
+            differs[:, j] = ~_same_values(runs[name], copy[name])
+        stored = info.get("content_sha256")
+        intact = stored is None or stored == content_sha256(
+            cast("pd.DataFrame", copy), int(info["schema_version"]))
+    except (pa.ArrowException, OSError, ValueError, TypeError, KeyError) as exc:
+        check.add(shown, f"not a readable friction map ({str(exc)[:120]})")
+        return
+    if not intact:
+        check.add(shown, "fails its checksum: its rows are not those tribopipe wrote "
+                  "(damaged, or changed by another program)")
+        return
+    for row, j in np.argwhere(differs)[:check.limits.problems]:
+        name = names[j]
+        ours, theirs = _plain(runs[name].iloc[row]), _plain(copy[name].iloc[row])
+        check.add(shown, f"row {row + 1}, field {name}: {theirs!r} differs from the CSV's "
+                  f"{ours!r}")
+    check.result.more += max(0, int(differs.sum()) - check.limits.problems)
 
 
-def _check_groups(check: _Checker, res: dict[str, Any], data: bytes,
+class _ParquetColumns:
+    """The columns of a friction map's Parquet file read one at a time as a map
+    DataFrame holds them (a column of a later schema version than the file's missing in
+    every row): what :func:`~tribopipe.frictionmap.schema.content_sha256` needs of a
+    frame, without the frame."""
+
+    def __init__(self, parquet: Any, n: int, version: int) -> None:
+        self.parquet, self.n, self.version = parquet, n, version
+        self.names = set(parquet.schema_arrow.names)
+
+    def __len__(self) -> int:
+        return self.n
+
+    def __getitem__(self, name: str) -> pd.Series:
+        import numpy as np
+        import pandas as pd
+        import pyarrow as pa
+
+        kind = KIND[name]
+        if name not in self.names:
+            if ADDED_IN_VERSION.get(name, 1) <= self.version:
+                raise KeyError(f"no column {name}")
+            column = pa.nulls(self.n, pa.string() if kind == "str" else pa.float64())
+        else:
+            column = self.parquet.read(columns=[name]).column(0)
+        if kind == "float":
+            return pd.Series(np.asarray(column.to_numpy(zero_copy_only=False), dtype=float))
+        if kind == "int":
+            return pd.Series(pd.array(column.to_pylist(), dtype="Int64"))
+        if kind == "bool":
+            values = column.to_pylist()
+            if not all(isinstance(v, bool) for v in values):
+                raise TypeError(f"{name}: expected true or false in every row")
+            return pd.Series(np.asarray(values, dtype=bool))
+        if not (pa.types.is_string(column.type) or pa.types.is_large_string(column.type)
+                or pa.types.is_null(column.type)):
+            raise TypeError(f"{name}: expected text, stored as {column.type}")
+        return pd.Series(pd.array(column.cast(pa.string()), dtype="str"))
+
+
+def _plain(value: Any) -> Any:
+    """A cell as a plain Python value (missing as ``None``)."""
+    if is_missing(value):
+        return None
+    return value.item() if hasattr(value, "item") else value
+
+
+def _same_values(a: pd.Series, b: pd.Series) -> Any:
+    """Per row, :func:`~tribopipe.frictionmap.store.same_value` of two columns of one
+    kind, column-wise: both missing, or equal (numbers within a relative 1e-9)."""
+    import numpy as np
+
+    missing_a = np.asarray(a.isna(), dtype=bool)
+    missing_b = np.asarray(b.isna(), dtype=bool)
+    both = missing_a & missing_b
+    present = ~missing_a & ~missing_b
+    if a.dtype.kind == "f" or b.dtype.kind == "f":
+        x = np.asarray(a, dtype=float)
+        y = np.asarray(b, dtype=float)
+        with np.errstate(invalid="ignore"):
+            equal = np.isclose(x, y, rtol=1e-9, atol=1e-12) | (x == y)
+    else:
+        equal = np.asarray((a.astype(object) == b.astype(object)).fillna(False), dtype=bool)
+    return both | (present & equal)
+
+
+def _check_groups(check: _Checker, res: dict[str, Any], path: Path,
                   runs: pd.DataFrame) -> dict[int, frozenset[str]] | None:
     """The group table parses by its own schema, and its μ_K n and mean follow from the
     runs. From package profile version 3 the groups are numbered (``group``, unique):
@@ -478,9 +575,10 @@ def _check_groups(check: _Checker, res: dict[str, Any], data: bytes,
             and f.get("type") in TABLE_TYPES.values() for f in fields):
         check.add(shown, "schema: expected 'fields' with a name and a Table Schema type each")
         return None
-    rows = _table(check, data, fields, shown)
-    if rows is None:
+    columns = _table(check, path, fields, shown)
+    if columns is None:
         return None
+    rows = _records(columns)
     keys: tuple[str, ...] = ("pin", "disc", "normal_force_N", "temperature_C")
     names = {f["name"] for f in fields}
     if not {*keys, "mu_k_n", "mu_k_mean"} <= names:
@@ -524,7 +622,7 @@ def _check_groups(check: _Checker, res: dict[str, Any], data: bytes,
     return members if linked else None
 
 
-def _check_group_runs(check: _Checker, res: dict[str, Any], data: bytes,
+def _check_group_runs(check: _Checker, res: dict[str, Any], path: Path,
                       members: dict[int, frozenset[str]], groups_shown: str) -> None:
     """The linking table lists each numbered group's runs, each included run once, and
     the runs of a group are those its conditions make in the runs table (``members``)."""
@@ -532,15 +630,15 @@ def _check_group_runs(check: _Checker, res: dict[str, Any], data: bytes,
     fields = _check_fields(check, (res.get("schema") or {}), list(GROUP_RUNS_FIELDS), shown)
     if fields is None:
         return
-    rows = _table(check, data, fields, shown)
-    if rows is None:
+    columns = _table(check, path, fields, shown)
+    if columns is None:
         return
     owner = {mid: number for number, ids in members.items() for mid in ids}
     seen: dict[str, int] = {}
     listed: dict[int, set[str]] = {number: set() for number in members}
-    for n, row in enumerate(rows, 1):
-        number, mid = row[GROUP_ID], row["measurement_id"]
-        if number is None or mid is None:
+    pairs = zip(columns[GROUP_ID].tolist(), columns["measurement_id"].tolist(), strict=True)
+    for n, (number, mid) in enumerate(pairs, 1):
+        if is_missing(number) or is_missing(mid):
             continue  # said by the cell check
         if mid in seen:
             check.add(shown, f"row {n}, field measurement_id: run {mid[:40]!r} is listed "
@@ -574,21 +672,24 @@ def _key(row: dict[str, Any], keys: tuple[str, ...]) -> tuple[Any, ...]:
     return tuple(out)
 
 
-def _check_frictionmap_table(check: _Checker, res: dict[str, Any], data: bytes,
+def _check_frictionmap_table(check: _Checker, res: dict[str, Any], path: Path,
                              runs: pd.DataFrame) -> None:
     """The 7-column table holds the included runs' μ_K in map order."""
+    import numpy as np
+    import pandas as pd
+
     shown = str(res.get("path"))
-    rows = _table(check, data, list(FRICTIONMAP_FIELDS), shown)
-    if rows is None:
+    columns = _table(check, path, list(FRICTIONMAP_FIELDS), shown)
+    if columns is None:
         return
-    included = runs.loc[~runs["excluded"].astype(bool), "mu_k"].tolist()
-    if len(rows) != len(included):
-        check.add(shown, f"{len(rows)} rows, the runs table has {len(included)} included runs")
+    included = runs.loc[~runs["excluded"].astype(bool), "mu_k"].reset_index(drop=True)
+    cof = pd.Series(columns["cof"])
+    if len(cof) != len(included):
+        check.add(shown, f"{len(cof)} rows, the runs table has {len(included)} included runs")
         return
-    for n, (row, mu_k) in enumerate(zip(rows, included, strict=True), 1):
-        if not same_value(row["cof"], mu_k):
-            check.add(shown, f"row {n}, field cof: {row['cof']!r} differs from the run's "
-                      f"mu_k {mu_k!r}")
+    for i in np.flatnonzero(~_same_values(cof, included)):
+        check.add(shown, f"row {i + 1}, field cof: {_plain(cof.iloc[i])!r} differs from the "
+                  f"run's mu_k {_plain(included.iloc[i])!r}")
 
 
 def _cites_founding_paper(d: dict[str, Any]) -> bool:

@@ -72,6 +72,23 @@ class Part:
 
 
 @dataclass(frozen=True)
+class GroupsFile:
+    """The stored condition groups of a commit (:mod:`~tribopipe.frictionmap.stored_groups`):
+    the file's name in the folder (under :data:`GROUPS_DIR`), its SHA-256 and size in
+    bytes, and how many group rows it holds."""
+
+    file: str
+    sha256: str
+    bytes: int
+    n_groups: int
+
+    def as_json(self) -> dict[str, Any]:
+        """The groups file as the manifest stores it."""
+        return {"file": self.file, "sha256": self.sha256, "bytes": self.bytes,
+                "n_groups": self.n_groups}
+
+
+@dataclass(frozen=True)
 class Manifest:
     """A committed map: its parts in row order, the commit's number (``generation``,
     counting up from 1), when and by which tribopipe it was written, and the labs'
@@ -82,6 +99,7 @@ class Manifest:
     written_at: str
     tribopipe_version: str
     sources: tuple[str, ...] = ()
+    groups: GroupsFile | None = None
 
     @property
     def n_runs(self) -> int:
@@ -94,6 +112,8 @@ class Manifest:
                 "generation": self.generation, "written_at": self.written_at,
                 "tribopipe_version": self.tribopipe_version, "n_runs": self.n_runs,
                 "sources": list(self.sources), "parts": [p.as_json() for p in self.parts]}
+        if self.groups is not None:  # a manifest without it reads as before
+            body["groups"] = self.groups.as_json()
         return {**body, "manifest_sha256": _digest(body)}
 
 
@@ -168,7 +188,8 @@ def read_manifest(folder: Path) -> Manifest:
         manifest = Manifest(generation=_count(data["generation"]), parts=parts,
                             written_at=str(data["written_at"]),
                             tribopipe_version=str(data["tribopipe_version"]),
-                            sources=tuple(str(s) for s in data.get("sources", ())))
+                            sources=tuple(str(s) for s in data.get("sources", ())),
+                            groups=_groups(data.get("groups")))
     except (KeyError, TypeError, ValueError) as exc:
         raise _refuse(folder, f"{MANIFEST} is malformed ({exc})") from None
     if manifest.n_runs != data.get("n_runs"):
@@ -200,6 +221,64 @@ def _part(entry: Any) -> Part:
     return Part(file=name, n_runs=_count(entry["n_runs"]), sha256=sha,
                 bytes=_count(entry["bytes"]),
                 schema_version=max(1, _count(entry["schema_version"])))
+
+
+#: the subfolder of the stored groups files (a leading ``_``: readers of the map folder
+#: as a Parquet dataset skip it)
+GROUPS_DIR = "_groups"
+
+
+def _groups(entry: Any) -> GroupsFile | None:
+    if entry is None:
+        return None
+    if not isinstance(entry, dict):
+        raise TypeError("the groups entry is not an object")
+    name = entry["file"]
+    base = name.removeprefix(GROUPS_DIR + "/") if isinstance(name, str) else name
+    if (not isinstance(name, str) or not name.startswith(GROUPS_DIR + "/")
+            or not base.startswith("groups-") or not base.endswith(".parquet")
+            or base != os.path.basename(base) or "\\" in base or "\x00" in base):
+        raise ValueError(f"groups file name {name!r} is not one of this folder")
+    sha = entry["sha256"]
+    if not isinstance(sha, str) or len(sha) != 64:
+        raise ValueError(f"groups file {name!r} has no checksum")
+    return GroupsFile(file=name, sha256=sha, bytes=_count(entry["bytes"]),
+                      n_groups=_count(entry["n_groups"]))
+
+
+def read_groups_bytes(folder: Path, groups: GroupsFile) -> bytes:
+    """The bytes of the stored groups file ``groups``, checked against its size and
+    SHA-256 in the manifest (a changed file is refused, as a changed part is)."""
+    path = folder / groups.file
+    try:
+        if path.is_symlink() or not path.is_file():
+            raise _refuse(folder, f"{groups.file} named by {MANIFEST} is missing or not a "
+                                  "regular file")
+        data = path.read_bytes()
+    except OSError as exc:
+        raise MapError(f"cannot read {groups.file} ({os_reason(exc)})", path=folder) from None
+    if len(data) != groups.bytes or hashlib.sha256(data).hexdigest() != groups.sha256:
+        raise _refuse(folder, f"{groups.file} fails its checksum: its bytes are not those "
+                              "tribopipe wrote (damaged on disk, or changed by another "
+                              "program); refusing to read or overwrite the map")
+    return data
+
+
+def write_groups(folder: Path, generation: int, data: bytes, n_groups: int,
+                 mode: int | None = None) -> GroupsFile:
+    """Write a new stored groups file holding ``data`` into ``folder``'s
+    :data:`GROUPS_DIR`, fsynced (with the folder), under a fresh name of commit
+    ``generation``; the map's only once a manifest naming it is committed."""
+    sub = folder / GROUPS_DIR
+    sub.mkdir(exist_ok=True)
+    for _ in range(100):
+        name = f"groups-{generation:06d}-{secrets.token_hex(4)}.parquet"
+        if not (sub / name).exists():
+            break
+    _write_new(sub, name, data, mode)
+    fsync_dir(sub)
+    return GroupsFile(file=f"{GROUPS_DIR}/{name}", sha256=hashlib.sha256(data).hexdigest(),
+                      bytes=len(data), n_groups=n_groups)
 
 
 def read_part_bytes(folder: Path, part: Part) -> bytes:
@@ -313,7 +392,8 @@ def commit(folder: Path, manifest: Manifest, previous: Manifest | None,
                               part.bytes, part.schema_version))
         _write_json(folder, MANIFEST_BACKUP,
                     Manifest(previous.generation, tuple(moved), previous.written_at,
-                             previous.tribopipe_version, previous.sources), mode)
+                             previous.tribopipe_version, previous.sources,
+                             previous.groups), mode)
     fsync_dir(folder)  # new parts and the backup are durable before the manifest names them
     _write_json(folder, MANIFEST, manifest, mode)
     fsync_dir(folder)
@@ -327,6 +407,8 @@ def kept_parts(folder: Path) -> set[str]:
         try:
             data = json.loads(path.read_bytes())
             kept |= {str(p["file"]) for p in data["parts"]}
+            if isinstance(data.get("groups"), dict):
+                kept.add(str(data["groups"]["file"]))
         except (OSError, ValueError, KeyError, TypeError, UnicodeDecodeError):
             continue
     return kept
@@ -336,7 +418,8 @@ def leftovers(folder: Path) -> Iterator[Path]:
     """Files of ``folder`` that belong to no kept commit: temporary files of a killed
     writer and parts no kept manifest names."""
     kept = kept_parts(folder)
-    for sub, prefix in ((folder, ""), (folder / PREVIOUS, PREVIOUS + "/")):
+    for sub, prefix in ((folder, ""), (folder / PREVIOUS, PREVIOUS + "/"),
+                        (folder / GROUPS_DIR, GROUPS_DIR + "/")):
         try:
             entries = list(sub.iterdir())
         except OSError:
@@ -345,7 +428,7 @@ def leftovers(folder: Path) -> Iterator[Path]:
             name = entry.name
             if name.startswith(".") and name.endswith(".tmp"):
                 yield entry
-            elif (name.startswith("part-") and name.endswith(".parquet")
+            elif (name.startswith(("part-", "groups-")) and name.endswith(".parquet")
                   and prefix + name not in kept):
                 yield entry
 

@@ -19,9 +19,9 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any, TypeVar
 
 from ..errors import MapError
-from ..stats import group_statistics
+from ..stats import GROUP_INPUT_COLUMNS, finish_groups, group_statistics, shown_columns
 from .schema import RUN_COLUMNS
-from .store import load_map
+from .store import load_map, stored_groups
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -90,11 +90,34 @@ class MapSnapshot:
             raise MapError(f"the map was opened without column(s) {', '.join(missing)}",
                            path=self.path)
 
-    def groups(self, *, by_speed: bool = False) -> pd.DataFrame:
+    def groups(self, *, by_speed: bool = False, show_speed: bool | None = None,
+               show_method: bool | None = None) -> pd.DataFrame:
         """The condition groups' repeat statistics
-        (:func:`tribopipe.stats.group_statistics`), computed once per snapshot."""
-        return self.derived(("groups", by_speed),
-                            lambda: group_statistics(self._runs, by_speed=by_speed))
+        (:func:`tribopipe.stats.group_statistics` of every run, with its ``by_speed``,
+        ``show_speed`` and ``show_method``), once per snapshot. A map folder's stored
+        groups (:mod:`~tribopipe.frictionmap.stored_groups`) are finished
+        (:func:`~tribopipe.stats.finish_groups`) instead of grouping every run; a map
+        without them (a single file, an older folder), or ``by_speed``, groups its runs
+        (the snapshot must hold :data:`~tribopipe.stats.GROUP_INPUT_COLUMNS`)."""
+        def compute() -> pd.DataFrame:
+            rows = None if by_speed else self.stored_group_rows()
+            if rows is None:
+                self.require(GROUP_INPUT_COLUMNS)
+                return group_statistics(self._runs, by_speed=by_speed,
+                                        show_speed=show_speed, show_method=show_method)
+            speed, method = shown_columns(rows)
+            return finish_groups(
+                rows, show_speed=speed if show_speed is None else show_speed,
+                show_method=method if show_method is None else show_method)
+
+        return self.derived(("groups", by_speed, show_speed, show_method), compute)
+
+    def stored_group_rows(self) -> pd.DataFrame | None:
+        """The map folder's stored group rows as this snapshot's commit holds them
+        (:func:`~tribopipe.frictionmap.store.stored_groups`), read once; ``None`` for a
+        map without them."""
+        return self.derived(("stored_group_rows",),
+                            lambda: stored_groups(self.path, self.info))
 
     def group_members(self, *, by_speed: bool = False) -> pd.DataFrame:
         """Which run belongs to which condition group: one row per (group, run), columns

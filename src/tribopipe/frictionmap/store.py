@@ -37,19 +37,23 @@ from ..config import DEFAULT_TEST_METHOD
 from ..errors import MapError, ReadError
 from ..escape import display_path
 from ..files import file_kind, fsync_dir, os_reason, regular_file
+from ..stats import GROUP_INPUT_COLUMNS, group_rows
 from ..validate import text_problem
 from .parts import (
     MANIFEST,
+    GroupsFile,
     Manifest,
     Part,
     collect_garbage,
     commit,
     file_mode,
     manifest_path,
+    read_groups_bytes,
     read_manifest,
     read_part_bytes,
     restore_hint,
     settle,
+    write_groups,
     write_part,
 )
 from .schema import (
@@ -72,6 +76,7 @@ from .schema import (
     unvalidated_frame,
     utc_now,
 )
+from .stored_groups import Key, groups_bytes, keys_of, of_keys, rows_from_bytes, updated
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -225,8 +230,44 @@ def write_map_copy(path: str | os.PathLike[str], runs: pd.DataFrame) -> Path:
     p = Path(path)
     if p.exists():
         raise MapError("exists already; a map copy is written only to a new path", path=p)
-    _write_atomic(p, records_frame(frame_records(runs), where="row"))
+    _write_atomic(p, check_runs(_schema_frame(runs), "row"))
     return p
+
+
+def _schema_frame(runs: pd.DataFrame) -> pd.DataFrame:
+    """``runs`` with the schema's columns, in order, each in its kind's dtype, converted
+    column by column (what :func:`records_frame` makes of the same rows one by one,
+    without a copy of every row); a value of another kind is a :class:`MapError` naming
+    the column."""
+    import pandas as pd
+
+    out: dict[str, Any] = {}
+    typed = {"float": "float64", "int": "Int64", "bool": "bool", "str": "str"}
+    for name in RUN_COLUMNS:
+        kind, col = KIND[name], runs[name]
+        if str(col.dtype) == typed[kind]:  # already the schema's dtype: kept, not copied
+            out[name] = col.array
+            continue
+        loose = col.dtype == object  # a column of a typed dtype holds its kind already
+        try:
+            if kind == "float":
+                if loose and col.map(lambda v: isinstance(v, bool | str)).any():
+                    raise TypeError("text or true/false is not a number")
+                out[name] = pd.to_numeric(col, errors="raise").astype("float64").to_numpy()
+            elif kind == "int":
+                out[name] = pd.array(col.to_numpy(dtype=object), dtype="Int64")
+            elif kind == "bool":
+                if col.dtype != bool and not col.map(lambda v: isinstance(v, bool)).all():
+                    raise TypeError("expected true or false")
+                out[name] = col.astype(bool).to_numpy()
+            else:
+                if loose and not col.map(lambda v: is_missing(v) or isinstance(v, str)).all():
+                    raise TypeError("expected text")
+                texts = col.astype(object).where(col.notna(), None).to_numpy()
+                out[name] = pd.array(texts, dtype="str")
+        except (TypeError, ValueError, OverflowError) as exc:
+            raise MapError(f"expected {kind} values ({exc})", column=name) from None
+    return pd.DataFrame(out, columns=list(RUN_COLUMNS), index=pd.RangeIndex(len(runs)))
 
 
 # --------------------------------------------------------------------------- appending
@@ -367,12 +408,20 @@ def _fold(
     """:func:`fold_records` of records already validated into ``new_frame``; the rows
     of ``runs`` are not checked again (:func:`update_map` has them from :func:`read_map`,
     which checked every one), nor are the rows of ``new_frame``."""
+    import numpy as np
     import pandas as pd
 
     base = runs.loc[:, list(RUN_COLUMNS)].reset_index(drop=True)
     position = {m: i for i, m in enumerate(base["measurement_id"])}
+    # a new row whose id is neither in the map nor repeated among the new rows is added
+    # as it is, column-wise; only the others are compared record by record
+    new_ids = new_frame["measurement_id"]
+    plain = np.asarray(~new_ids.isin(list(position)) & ~new_ids.duplicated(keep=False),
+                       dtype=bool)
+    new_frame = new_frame.reset_index(drop=True)
+    others = new_frame.loc[~plain]
     # map rows looked at (then replaced), by position: converted in one pass, not per record
-    hits = sorted({position[m] for m in new_frame["measurement_id"] if m in position})
+    hits = sorted({position[m] for m in others["measurement_id"] if m in position})
     touched = dict(zip(hits, frame_records(base.iloc[hits]), strict=True))
     fresh: dict[str, dict[str, Any]] = {}  # runs new to the map, in order (= the added ids)
     # ids in first-seen order (dicts as ordered sets: a repeated id keeps its place)
@@ -381,8 +430,10 @@ def _fold(
     conflicting: dict[str, None] = {}
     differences: dict[str, tuple[str, ...]] = {}
     values: dict[str, tuple[tuple[str, Any, Any], ...]] = {}
-    for rec in frame_records(new_frame):
+    first_at: dict[str, int] = {}  # where each fresh run of the others first came
+    for at, rec in zip(others.index, frame_records(others), strict=True):
         mid = rec["measurement_id"]
+        first_at.setdefault(mid, int(at))
         if mid in fresh:
             old = fresh[mid]
         elif mid in position:
@@ -408,8 +459,12 @@ def _fold(
                 replaced[mid] = None
         else:
             conflicting[mid] = None
+    # the added runs in the order they came: the plain rows and the first of the others
+    order = sorted([(int(i), None) for i in np.flatnonzero(plain)]
+                   + [(first_at[m], m) for m in fresh], key=lambda x: x[0])
+    added = [str(new_ids.iat[i]) if m is None else m for i, m in order]
     report = AppendReport(
-        added_ids=tuple(fresh),
+        added_ids=tuple(added),
         unchanged_ids=tuple(unchanged),
         replaced_ids=tuple(replaced),
         conflicting_ids=tuple(conflicting),
@@ -422,8 +477,12 @@ def _fold(
         swapped = unvalidated_frame([touched[i] for i in where], where="row")
         swapped.index = pd.Index(where)
         merged = pd.concat([merged.drop(index=where), swapped]).sort_index()
-    if fresh:
-        extra = unvalidated_frame(list(fresh.values()), where="record")
+    if order:
+        extra = new_frame.loc[plain, list(RUN_COLUMNS)]
+        if fresh:
+            others_fresh = unvalidated_frame(list(fresh.values()), where="record")
+            others_fresh.index = pd.Index([first_at[m] for m in fresh])
+            extra = pd.concat([extra, others_fresh]).sort_index()
         merged = pd.concat([merged, extra], ignore_index=True) if len(merged) else extra
     return merged.reset_index(drop=True), report
 
@@ -444,6 +503,19 @@ def append_records(
     return update_map(path, records, replace=replace)
 
 
+def append_frame(path: str | os.PathLike[str], runs: pd.DataFrame, *,
+                 replace: bool = False) -> AppendReport:
+    """:func:`append_records` of rows already in a map DataFrame (another map's or a
+    package's runs), converted and checked column by column: no row object per run, so a
+    merge of 10⁵ rows does not hold them twice over."""
+    p = Path(path)
+    new_frame = check_runs(_schema_frame(runs), "row")  # validate before touching anything
+    with _locked(p):
+        if _writes_parts(p):
+            return _update_parts(p, lambda _: (new_frame, ()), replace)[0]
+        return _fold_and_write(p, read_map(p), new_frame, replace, ())[0]
+
+
 def update_map(
     path: str | os.PathLike[str],
     records: Sequence[MapRow],
@@ -461,7 +533,9 @@ def update_map(
     new_frame = records_frame(records)  # validate before touching anything
     with _locked(p):
         if _writes_parts(p):
-            return _update_parts(p, lambda _: (new_frame, drop_ids), replace)[0]
+            # the fold reads the ids of every row, every column only of the parts
+            # holding a run it compares, replaces or drops
+            return _update_parts(p, lambda _: (new_frame, drop_ids), replace, ())[0]
         # the locked read-modify-write: the map read again under the lock
         return _fold_and_write(p, read_map(p), new_frame, replace, drop_ids)[0]
 
@@ -477,12 +551,18 @@ def update_map_with(
     decide: Callable[[pd.DataFrame], MapChange],
     *,
     replace: bool = False,
+    columns: Sequence[str] | None = None,
+    needs_all: Callable[[pd.DataFrame], bool] | None = None,
 ) -> AppendReport:
     """:func:`update_map` with the records and the ids to drop decided by
     ``decide(current)`` from the map as read under its lock, so that a check against the
     map (the same content under another name) cannot race another writer. ``decide``
-    runs once; the map is rewritten only when something changed."""
-    return change_map_with(path, decide, replace=replace)[0]
+    runs once; the map is rewritten only when something changed. ``columns``: the map
+    columns ``decide`` reads (``measurement_id`` always; all when ``None``), and
+    ``needs_all(rows)``: whether, given those columns of the map's rows, ``decide``
+    needs every column after all (:func:`change_map_with`)."""
+    return change_map_with(path, decide, replace=replace, columns=columns,
+                           needs_all=needs_all)[0]
 
 
 def change_map_with(
@@ -490,10 +570,18 @@ def change_map_with(
     decide: Callable[[pd.DataFrame], MapChange],
     *,
     replace: bool = False,
+    columns: Sequence[str] | None = None,
+    needs_all: Callable[[pd.DataFrame], bool] | None = None,
 ) -> tuple[AppendReport, pd.DataFrame]:
     """:func:`update_map_with`, returning also the rows of the map as this change left it
-    (all columns, in the map's order), so that a command that shows the map after its
-    write need not read it again."""
+    (in the map's order; the columns ``decide`` was given), so that a command that shows
+    the map after its write need not read it again.
+
+    In a map folder, an append costs what it adds: under the lock it reads ``columns`` of
+    every row (Parquet's column projection), and every column only of the parts holding a
+    run the change compares, replaces or drops; it writes the new rows as a new part and
+    rewrites only the parts where a row changed. A single-file map (the format before
+    parts) is read and rewritten whole."""
     p = Path(path)
 
     def checked(current: pd.DataFrame) -> FrameChange:
@@ -505,9 +593,11 @@ def change_map_with(
         # against the map and the write see one map, which no other writer can change
         # in between.
         if _writes_parts(p):
-            return _update_parts(p, checked, replace)
+            return _update_parts(p, checked, replace, columns, needs_all)
         new_frame, drop_ids = checked(current := read_map(p))
-        return _fold_and_write(p, current, new_frame, replace, drop_ids)
+        report, after = _fold_and_write(p, current, new_frame, replace, drop_ids)
+        return report, after if columns is None else _select(
+            after, ["measurement_id", *columns])
 
 
 def _writes_parts(p: Path) -> bool:
@@ -576,10 +666,12 @@ def set_excluded(
     if not p.exists():
         raise MapError("friction map not found", path=p, hint="pass --map PATH")
     with _locked(p):
-        # the locked read-modify-write: the map read under the lock
+        # the locked read-modify-write: the map read under the lock (a map folder: the
+        # columns the decision reads, then every column of the parts it changes only)
         parts_map = p.is_dir()
         if parts_map:
-            runs, _, manifest = _read_parts_map(p)
+            runs, _, manifest = _read_parts_map(p, (*EXCLUSION_COLUMNS,
+                                                    *GROUP_INPUT_COLUMNS))
         else:
             runs = read_map(p)
         positions = _resolve_ids(runs, ids, p)
@@ -588,21 +680,41 @@ def set_excluded(
                       if (bool(runs["excluded"].iat[i]),
                           _or_none(runs["exclusion_reason"].iat[i])) != new_state]
         changed = [str(runs["measurement_id"].iat[i]) for i in changed_at]
-        if changed:
+        if changed and parts_map:
+            assert manifest is not None
+            owner = _owner(manifest)
+            rewritten = {}
+            touched: set[Key] = set()
+            for k in sorted({int(owner[i]) for i in changed_at}):
+                rows = _read_parts(p, [manifest.parts[k]])
+                where = rows["measurement_id"].isin(changed).to_numpy()
+                touched |= keys_of(rows.loc[where])
+                _set_state(rows, where, new_state)
+                rewritten[k] = rows
+
+            def frame_of(k: int) -> pd.DataFrame:
+                assert manifest is not None
+                return rewritten[k] if k in rewritten else _read_parts(p, [manifest.parts[k]])
+
+            _change_parts(p, manifest, rewritten, None, frame_of, touched,
+                          _by_part(runs, manifest, owner))
+        elif changed:
             new = runs.copy()
-            column = list(new.columns).index("excluded")
-            reasons = list(new.columns).index("exclusion_reason")
-            for i in changed_at:
-                new.iat[i, column] = new_state[0]
-                new.iat[i, reasons] = new_state[1]
-            if parts_map:
-                owner = _owner(manifest)
-                _change_parts(p, manifest, runs, owner, owner < 0, new,
-                              {int(owner[i]) for i in changed_at}, None)
-            else:
-                # rows read (and checked) with a checked reason: not checked a second time
-                _write_atomic(p, unvalidated_frame(frame_records(new), where="row"))
+            _set_state(new, new["measurement_id"].isin(changed).to_numpy(), new_state)
+            # rows read (and checked) with a checked reason: not checked a second time
+            _write_atomic(p, unvalidated_frame(frame_records(new), where="row"))
     return changed
+
+
+#: the columns an exclusion or inclusion decides from
+EXCLUSION_COLUMNS: tuple[str, ...] = ("measurement_id", "excluded", "exclusion_reason")
+
+
+def _set_state(rows: pd.DataFrame, where: Any, state: tuple[bool, str | None]) -> None:
+    """Set the exclusion ``state`` (excluded, reason) of the rows ``where`` (a mask), in
+    place."""
+    rows.loc[where, "excluded"] = state[0]
+    rows.loc[where, "exclusion_reason"] = state[1]
 
 
 def _or_none(value: Any) -> Any:
@@ -844,6 +956,8 @@ def _from_arrow(table: Any, columns: Sequence[str] = RUN_COLUMNS, *,
                 if col.isna().any():
                     raise ValueError("missing true/false")
                 out[name] = col.astype(bool).to_numpy()
+            elif col.dtype == "str":  # Arrow text as pandas reads it: no copy
+                out[name] = col.array
             else:
                 out[name] = pd.array(col.astype(object).where(col.notna(), None), dtype="str")
         except (TypeError, ValueError, OverflowError) as exc:
@@ -930,17 +1044,42 @@ def _read_parts_map(p: Path, columns: Sequence[str] | None = None, *, full: bool
     Each part's bytes are checked against the manifest before they are parsed; ``full``
     checks more, as ``map validate`` does: every buffer, each part's rows against the
     checksum of its content in its own metadata, and every row against the row rules."""
-    import pyarrow as pa
-    import pyarrow.parquet as pq
-
     if not p.exists():
         _refuse_interrupted_upgrade(p)
     manifest = _folder_manifest(p) if p.exists() else None
     if manifest is None:
         return _select(empty_map(), columns), {**_empty_info(), "format": "parts"}, None
+    runs = _read_parts(p, manifest.parts, columns, full=full)
+    versions = [part.schema_version for part in manifest.parts]
+    info = {
+        "schema": SCHEMA_NAME,
+        "schema_version": max(versions) if versions else SCHEMA_VERSION,
+        "columns": _columns_info(),
+        "tribopipe_version": manifest.tribopipe_version,
+        "written_at": manifest.written_at,
+        "n_runs": manifest.n_runs,
+        "sources": list(manifest.sources),
+        "format": "parts",
+        "generation": manifest.generation,
+        "parts": len(manifest.parts),
+    }
+    if manifest.groups is not None:
+        info["groups"] = manifest.groups.as_json()
+    return runs, info, manifest
+
+
+def _read_parts(p: Path, parts: Iterable[Part], columns: Sequence[str] | None = None, *,
+                full: bool = False) -> pd.DataFrame:
+    """The rows (``columns`` only, all when ``None``) of ``parts`` (in that order) of the
+    map folder ``p``, each part's bytes checked against the manifest's checksum first
+    (``full``: as :func:`_read_parts_map`). Only the columns asked for are parsed
+    (Parquet's column projection)."""
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
     wanted = list(RUN_COLUMNS) if columns is None else _wanted(columns)
     tables = []
-    for part in manifest.parts:
+    for part in parts:
         data = read_part_bytes(p, part)
         try:
             table = pq.read_table(pa.BufferReader(data),
@@ -972,20 +1111,7 @@ def _read_parts_map(p: Path, columns: Sequence[str] | None = None, *, full: bool
     if "measurement_id" in wanted and runs["measurement_id"].duplicated().any():
         dup = runs.loc[runs["measurement_id"].duplicated(), "measurement_id"].iloc[0]
         raise MapError(f"duplicate measurement_id {dup}", path=p, column="measurement_id")
-    versions = [part.schema_version for part in manifest.parts]
-    info = {
-        "schema": SCHEMA_NAME,
-        "schema_version": max(versions) if versions else SCHEMA_VERSION,
-        "columns": _columns_info(),
-        "tribopipe_version": manifest.tribopipe_version,
-        "written_at": manifest.written_at,
-        "n_runs": manifest.n_runs,
-        "sources": list(manifest.sources),
-        "format": "parts",
-        "generation": manifest.generation,
-        "parts": len(manifest.parts),
-    }
-    return runs, info, manifest
+    return runs
 
 
 def _verify_part(p: Path, name: str, table: Any, info: Mapping[str, Any]) -> None:
@@ -1045,16 +1171,20 @@ def _part_bytes(runs: pd.DataFrame) -> bytes:
 MERGE_FACTOR = 4
 
 
-def _commit_parts(p: Path, manifest: Manifest | None, pieces: list[Part | pd.DataFrame]
-                  ) -> None:
+def _commit_parts(p: Path, manifest: Manifest | None, pieces: list[Part | pd.DataFrame],
+                  touched: set[Key] | None = None,
+                  read: Mapping[str, pd.DataFrame] | None = None) -> None:
     """Commit the map folder ``p`` as ``pieces`` in order: parts kept as they are, and
-    frames (checked rows) written as new parts. Trailing pieces are merged first while
-    the one before the last holds at most :data:`MERGE_FACTOR` times the last one's rows
-    (the frames of kept parts come from ``frames_of``). The caller holds the lock and has
-    read the map (the manifest ``manifest``, ``None`` for a new map)."""
+    frames (checked rows) written as new parts, with the stored condition groups brought
+    up to date in the same commit: those of the conditions ``touched`` computed again
+    (all of them when ``None``, or when the map had none stored; ``read``: the rows of
+    kept parts the caller has read already, by part file, with the statistics' columns).
+    The caller holds the lock and has read the map (the manifest ``manifest``, ``None``
+    for a new map)."""
     generation = 1 if manifest is None else manifest.generation + 1
     mode = file_mode(manifest_path(p))
     written: list[Part] = []
+    groups = _groups_after(p, manifest, pieces, touched, read or {})
     try:
         p.mkdir(exist_ok=True)
         for piece in pieces:
@@ -1063,16 +1193,79 @@ def _commit_parts(p: Path, manifest: Manifest | None, pieces: list[Part | pd.Dat
             elif len(piece):
                 written.append(write_part(p, generation, _part_bytes(piece), len(piece),
                                           SCHEMA_VERSION, mode))
+        stored = write_groups(p, generation, groups_bytes(groups), len(groups), mode)
         sources: set[str] = set(manifest.sources if manifest is not None else ())
         for piece in pieces:
             if not isinstance(piece, Part):
                 sources |= set(piece["source"].dropna().astype(str))
         commit(p, Manifest(generation=generation, parts=settle(p, tuple(written)),
                            written_at=utc_now(), tribopipe_version=__version__,
-                           sources=tuple(sorted(sources))), manifest, mode)
+                           sources=tuple(sorted(sources)), groups=stored), manifest, mode)
     except OSError as exc:  # disk full, permissions: the committed map is untouched
         raise MapError(f"cannot write the friction map ({os_reason(exc)})", path=p) from None
     collect_garbage(p)
+
+
+def _groups_after(p: Path, manifest: Manifest | None, pieces: list[Part | pd.DataFrame],
+                  touched: set[Key] | None, known: Mapping[str, pd.DataFrame]
+                  ) -> pd.DataFrame:
+    """The stored group rows of the map ``pieces`` will make: the stored ones with the
+    conditions ``touched`` computed again from their runs (those columns of every piece
+    read, :data:`~tribopipe.stats.GROUP_INPUT_COLUMNS`), or all computed when ``touched``
+    is ``None`` or the map has none stored yet. The rows of a kept part are taken from
+    ``known`` (by part file) where the caller read them, else read."""
+    import pandas as pd
+
+    old = _stored_rows(p, manifest)
+    if old is None:
+        touched = None
+    kept = [piece for piece in pieces if isinstance(piece, Part) and piece.file not in known]
+    read = dict(zip([q.file for q in kept],
+                    _split(_read_parts(p, kept, GROUP_INPUT_COLUMNS), kept), strict=True)
+                ) if kept else {}
+    frames = []
+    for piece in pieces:
+        rows = ((known[piece.file] if piece.file in known else read[piece.file])
+                if isinstance(piece, Part) else piece).loc[:, list(GROUP_INPUT_COLUMNS)]
+        frames.append(rows if touched is None else of_keys(rows, touched))
+    runs = (pd.concat(frames, ignore_index=True) if frames
+            else unvalidated_frame([], where="row").loc[:, list(GROUP_INPUT_COLUMNS)])
+    if touched is None or old is None:
+        return group_rows(runs) if len(runs) else pd.DataFrame()
+    return updated(old, touched, runs)
+
+
+def _split(rows: pd.DataFrame, parts: Sequence[Part]) -> list[pd.DataFrame]:
+    """``rows`` (those of ``parts``, in order) cut into each part's."""
+    out, start = [], 0
+    for part in parts:
+        out.append(rows.iloc[start:start + part.n_runs])
+        start += part.n_runs
+    return out
+
+
+def _stored_rows(p: Path, manifest: Manifest | None) -> pd.DataFrame | None:
+    """The stored group rows of the committed ``manifest``; ``None`` when it has none (a
+    map written before they were stored) or they are of another version."""
+    if manifest is None or manifest.groups is None:
+        return None
+    return rows_from_bytes(read_groups_bytes(p, manifest.groups), str(p))
+
+
+def stored_groups(path: str | os.PathLike[str], info: Mapping[str, Any]
+                  ) -> pd.DataFrame | None:
+    """The stored group rows (:func:`~tribopipe.stats.group_rows` of every condition) of
+    the map folder at ``path`` as ``info`` (its :func:`load_map` metadata) found it,
+    checked against their SHA-256; ``None`` for a map without them (a single file, an
+    older folder, another version of the statistics). Raises :class:`MapError` when the
+    file is changed, or gone (the map was written twice since ``info`` was read)."""
+    entry = info.get("groups")
+    if info.get("format") != "parts" or not isinstance(entry, Mapping):
+        return None
+    p = Path(path)
+    groups = GroupsFile(str(entry["file"]), str(entry["sha256"]), int(entry["bytes"]),
+                        int(entry["n_groups"]))
+    return rows_from_bytes(read_groups_bytes(p, groups), str(p))
 
 
 def _merged_tail(pieces: list[Part | pd.DataFrame], frames: Callable[[int], pd.DataFrame],
@@ -1104,22 +1297,23 @@ def _merged_tail(pieces: list[Part | pd.DataFrame], frames: Callable[[int], pd.D
     return out
 
 
-def _change_parts(p: Path, manifest: Manifest | None, current: pd.DataFrame,
-                  owner: Any, gone: Any, kept_rows: pd.DataFrame, dirty: set[int],
-                  fresh: pd.DataFrame | None) -> None:
-    """Commit a change of the map folder ``p`` read as ``current`` (all columns, part of
-    each row in ``owner``): rows ``gone`` removed, the remaining rows now ``kept_rows`` (in
-    order, same length), the parts ``dirty`` rewritten from them, ``fresh`` rows added as
-    a new part. Untouched parts are kept as they are."""
-    import numpy as np
-
-    kept_owner = np.asarray(owner)[~np.asarray(gone)]
+def _change_parts(p: Path, manifest: Manifest | None,
+                  rewritten: Mapping[int, pd.DataFrame], fresh: pd.DataFrame | None,
+                  frame_of: Callable[[int], pd.DataFrame], touched: set[Key],
+                  read: Mapping[str, pd.DataFrame] | None = None) -> None:
+    """Commit a change of the map folder ``p``: the parts ``rewritten`` (places in
+    ``manifest``) replaced by their new rows (checked rows, in order; none: the part
+    goes), ``fresh`` rows added as a new part. Untouched parts are kept as they are; a
+    kept part is read (``frame_of(k)``, all columns) only when the new part is merged
+    into it. The stored groups of the conditions ``touched`` (those of every row added,
+    changed or removed, before and after) are computed again. The caller holds the
+    lock."""
     pieces: list[Part | pd.DataFrame] = []
     origin: list[int | None] = []
     parts_ = manifest.parts if manifest is not None else ()
     for k, part in enumerate(parts_):
-        if k in dirty:
-            pieces.append(kept_rows.loc[kept_owner == k].reset_index(drop=True))
+        if k in rewritten:
+            pieces.append(rewritten[k].reset_index(drop=True))
             origin.append(None)
         else:
             pieces.append(part)
@@ -1127,13 +1321,9 @@ def _change_parts(p: Path, manifest: Manifest | None, current: pd.DataFrame,
     if fresh is not None and len(fresh):
         pieces.append(fresh.reset_index(drop=True))
         origin.append(None)
-
-    def frames(k: int) -> pd.DataFrame:
-        return current.loc[np.asarray(owner) == k].reset_index(drop=True)
-
     keep = [i for i, piece in enumerate(pieces) if isinstance(piece, Part) or len(piece)]
     pieces, origin = [pieces[i] for i in keep], [origin[i] for i in keep]
-    _commit_parts(p, manifest, _merged_tail(pieces, frames, origin))
+    _commit_parts(p, manifest, _merged_tail(pieces, frame_of, origin), touched, read)
 
 
 def _owner(manifest: Manifest | None) -> Any:
@@ -1145,31 +1335,105 @@ def _owner(manifest: Manifest | None) -> Any:
     return np.repeat(np.arange(len(manifest.parts)), [q.n_runs for q in manifest.parts])
 
 
-def _update_parts(p: Path, decide: Callable[[pd.DataFrame], FrameChange], replace: bool
+def _update_parts(p: Path, decide: Callable[[pd.DataFrame], FrameChange], replace: bool,
+                  columns: Sequence[str] | None = None,
+                  needs_all: Callable[[pd.DataFrame], bool] | None = None
                   ) -> tuple[AppendReport, pd.DataFrame]:
-    """The locked read-modify-write of a map folder: the map read (under the lock: the
-    second read of a command that appends, so that no other writer slips in between the
-    duplicate check and the write), ``decide`` asked once, the change committed as new
-    parts. The caller holds the lock."""
+    """The locked read-modify-write of a map folder, reading what the change needs: the
+    ``columns`` ``decide`` reads (with ``measurement_id``; all when ``None``, or when
+    ``needs_all`` says so of those rows) of every row, under the lock (the second read
+    of a command that appends, so that no other writer slips in between the duplicate
+    check and the write), ``decide`` asked once, then every column only of the parts
+    that hold a run the change replaces, compares or drops. The change is committed as
+    a new part, those parts rewritten when a row of theirs changed, every other part
+    kept as it is. Returns the report and the map's rows after the change (the columns
+    read). The caller holds the lock."""
     import dataclasses
 
-    current, _, manifest = _read_parts_map(p)
+    import numpy as np
+    import pandas as pd
+
+    # with the statistics' columns: the stored groups of the touched conditions are
+    # computed again from the rows read here, not read a second time
+    need = None if columns is None else ["measurement_id", *columns, *GROUP_INPUT_COLUMNS]
+    current, _, manifest = _read_parts_map(p, need)
+    if (need is not None and needs_all is not None and manifest is not None
+            and needs_all(current)):
+        current, need = _read_parts(p, manifest.parts), None
     new_frame, drop_ids = decide(current)
-    drop = set(drop_ids) - set(new_frame["measurement_id"])
-    gone = current["measurement_id"].isin(sorted(drop)).to_numpy()
-    kept = current.loc[~gone].reset_index(drop=True)
+    new_ids = set(new_frame["measurement_id"])
+    drop = set(drop_ids) - new_ids
+    ids = current["measurement_id"]
+    gone = ids.isin(sorted(drop)).to_numpy()
+    owner = _owner(manifest)
+    touched = sorted({int(k) for k in owner[gone | ids.isin(sorted(new_ids)).to_numpy()]})
+    # every column of the parts the change looks into: the rows it compares, replaces or
+    # drops live there (a run new to the map needs nothing of the map but its id)
+    rows_of = {k: (current.loc[owner == k].reset_index(drop=True) if need is None
+                   else _read_parts(p, [manifest.parts[k]])) for k in touched} \
+        if manifest is not None else {}
+    base = (pd.concat([rows_of[k] for k in touched], ignore_index=True) if touched
+            else unvalidated_frame([], where="row"))
+    base_owner = np.repeat(np.asarray(touched, dtype=int),
+                           [len(rows_of[k]) for k in touched])
+    base_gone = base["measurement_id"].isin(sorted(drop)).to_numpy()
+    kept = base.loc[~base_gone].reset_index(drop=True)
     merged, report = _fold(kept, new_frame, replace=replace)
     report = dataclasses.replace(
         report, dropped_ids=tuple(current.loc[gone, "measurement_id"].astype(str)))
     if not report.changed:
         return report, current
-    owner = _owner(manifest)
-    by_id = dict(zip(current["measurement_id"], owner, strict=True))
-    dirty = {int(by_id[m]) for m in report.replaced_ids} | {
-        int(k) for k in owner[gone]}
-    _change_parts(p, manifest, current, owner, gone, merged.iloc[:len(kept)], dirty,
-                  merged.iloc[len(kept):])
-    return report, merged
+    kept_owner = base_owner[~base_gone]
+    by_id = dict(zip(kept["measurement_id"], kept_owner, strict=True))
+    dirty = {int(by_id[m]) for m in report.replaced_ids} | {int(k) for k in owner[gone]}
+    old_rows = merged.iloc[:len(kept)]
+    rewritten = {k: old_rows.loc[kept_owner == k] for k in dirty}
+
+    def frame_of(k: int) -> pd.DataFrame:  # a kept part's rows, to merge the new ones in
+        assert manifest is not None
+        if k in rows_of:
+            return rows_of[k]
+        if need is None:  # every column read already
+            return current.loc[owner == k].reset_index(drop=True)
+        return _read_parts(p, [manifest.parts[k]])
+
+    touched_keys = keys_of(new_frame) | keys_of(
+        base.loc[base["measurement_id"].isin(sorted(new_ids | drop))])
+    _change_parts(p, manifest, rewritten, merged.iloc[len(kept):], frame_of, touched_keys,
+                  _by_part(current, manifest, owner))
+    return report, _after(current.loc[~gone].reset_index(drop=True), old_rows,
+                          merged.iloc[len(kept):], set(report.replaced_ids))
+
+
+def _by_part(rows: pd.DataFrame, manifest: Manifest | None, owner: Any
+             ) -> dict[str, pd.DataFrame]:
+    """``rows`` (every row of ``manifest``'s parts, in order; ``owner``: each row's part)
+    by part file."""
+    if manifest is None:
+        return {}
+    return {part.file: rows.loc[owner == k] for k, part in enumerate(manifest.parts)}
+
+
+def _after(kept: pd.DataFrame, changed: pd.DataFrame, fresh: pd.DataFrame,
+           replaced: set[str]) -> pd.DataFrame:
+    """The map's rows after a change (the columns of ``kept``): ``kept`` (the rows left,
+    in order) with the ``replaced`` ids' rows taken from ``changed``, then ``fresh``."""
+    import numpy as np
+    import pandas as pd
+
+    cols = list(kept.columns)
+    out = kept
+    if replaced:
+        pos = np.flatnonzero(kept["measurement_id"].isin(sorted(replaced)).to_numpy())
+        new = changed.loc[changed["measurement_id"].isin(sorted(replaced)), cols]
+        new = new.set_index(new["measurement_id"].astype(str), drop=False)
+        swapped = new.loc[list(kept["measurement_id"].iloc[pos].astype(str))]
+        swapped.index = pd.Index(pos)
+        out = pd.concat([kept.drop(index=list(pos)), swapped]).sort_index()
+    if len(fresh):
+        out = pd.concat([out, fresh.loc[:, cols]], ignore_index=True) if len(out) else \
+            fresh.loc[:, cols]
+    return out.reset_index(drop=True)
 
 
 def upgrade_map(path: str | os.PathLike[str]) -> tuple[int, Path | None]:

@@ -57,9 +57,10 @@ def map_summary(path: MapSource, *, runs_listed: bool = False) -> str:
         lines.append(f"    {_text(pin)} / {_text(disc)}: {_runs(len(sub))}, {n_cond} conditions, "
                      f"F {forces or '-'}, T {temps or '-'}")
     flag_counts: dict[str, int] = {}
-    for text in runs["flags"]:
-        for f in flag_list(text):
-            flag_counts[f] = flag_counts.get(f, 0) + 1
+    # each distinct flags text once (a map holds few), counted by its rows
+    for text, n in runs["flags"].fillna("").value_counts(sort=False).items():
+        for f in flag_list(str(text)):
+            flag_counts[f] = flag_counts.get(f, 0) + int(n)
     lines.append("")
     if flag_counts:
         lines.append("  flags: " + ", ".join(f"{k} {v}" for k, v in sorted(flag_counts.items())))

@@ -30,7 +30,10 @@ def campaign_note() -> str:
 def synthetic_mask(runs: pd.DataFrame) -> pd.Series:
     """Boolean Series over ``runs`` (map rows): True where ``flags`` holds
     :data:`FLAG_SYNTHETIC`."""
-    return runs["flags"].map(lambda text: FLAG_SYNTHETIC in flag_list(text)).astype(bool)
+    flags = runs["flags"]
+    # each distinct flags text read once (a map holds few of them)
+    synthetic = {text: FLAG_SYNTHETIC in flag_list(text) for text in flags.dropna().unique()}
+    return flags.map(synthetic).fillna(False).astype(bool)
 
 
 def synthetic_count(runs: pd.DataFrame) -> int:

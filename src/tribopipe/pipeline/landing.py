@@ -22,6 +22,8 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from ..frictionmap.duplicates import (
+    CHECK_COLUMNS,
+    GROUP_COLUMNS,
     LABEL_COLUMNS,
     ContentOwners,
     FilesByHash,
@@ -41,6 +43,12 @@ if TYPE_CHECKING:
     import pandas as pd
 
 
+#: the map columns a landing reads of every row when the runs it brings are known
+#: (:func:`land_runs`' ``arriving``): the duplicate check's, and those of the repeat
+#: numbers' condition groups
+LANDING_COLUMNS: tuple[str, ...] = (*CHECK_COLUMNS, *GROUP_COLUMNS)
+
+
 @dataclass(frozen=True)
 class Arrivals:
     """What a caller brings to the map, decided from the map as read under its lock: the
@@ -54,22 +62,16 @@ class Arrivals:
 @dataclass(frozen=True)
 class Landed:
     """What one landing did: the map's :class:`AppendReport`, the map's rows as the write
-    left them (all columns), the repeat numbers now used twice in one condition, what the
-    review did (``None`` when none applied) and the condition groups
-    (:func:`tribopipe.stats.condition_keys`) with a row added, replaced or removed."""
+    left them (the columns read: all unless ``arriving`` was given), the repeat numbers
+    now used twice in one condition, what the review did (``None`` when none applied)
+    and the condition groups (:func:`tribopipe.stats.condition_keys`) with a row added,
+    replaced or removed."""
 
     appended: AppendReport
     rows: pd.DataFrame = field(repr=False)
     repeats: tuple[str, ...] = ()
     review: ReviewOutcome | None = None
     groups: frozenset[tuple[Any, ...]] = frozenset()
-    #: the records and ids the caller brought (before the review)
-    arrivals: Arrivals = Arrivals()
-
-    @property
-    def landed_ids(self) -> set[str]:
-        """The ids of the rows added or replaced."""
-        return set(self.appended.added_ids) | set(self.appended.replaced_ids)
 
 
 def land_runs(
@@ -79,6 +81,7 @@ def land_runs(
     review: Review | None = None,
     traces_dir: Path | None = None,
     replace: bool = False,
+    arriving: Collection[str] | None = None,
 ) -> Landed:
     """Land reduced runs in the map at ``map_path``: the one landing of ``reduce`` and the
     batch, one locked atomic read-modify-write.
@@ -95,7 +98,13 @@ def land_runs(
     where this caller's traces are, for a re-read window) is applied in the same write
     (a decision that fails raises before anything is written), and the map is written
     only when something changed. ``replace``: records whose content differs from the
-    map's row replace it."""
+    map's row replace it.
+
+    ``arriving``: the ids of every run the caller may bring, when it knows them before
+    the map is read. Then a map folder is read as an append needs it
+    (:data:`LANDING_COLUMNS` of every row, every column only of the parts the change
+    touches), unless a review is given or one of those runs is reviewed in the map
+    (the review reads whole rows); without ``arriving`` every column is read."""
     found: list[tuple[Arrivals, list[str], ReviewOutcome | None, dict[str, Any]]] = []
 
     def decide(current: pd.DataFrame) -> tuple[list[MapRow], Collection[str]]:
@@ -110,14 +119,21 @@ def land_runs(
         found.append((Arrivals(folded, stale), repeats, outcome, before))
         return folded, stale
 
-    appended, rows = change_map_with(map_path, decide, replace=replace)
+    def reviewed_again(current: pd.DataFrame) -> bool:  # then the review reads whole rows
+        reviewed = current.loc[current["review"].notna(), "measurement_id"].astype(str)
+        return bool(set(arriving or ()).intersection(reviewed))
+
+    projected = arriving is not None and review is None
+    appended, rows = change_map_with(map_path, decide, replace=replace,
+                                     columns=LANDING_COLUMNS if projected else None,
+                                     needs_all=reviewed_again if projected else None)
     (arrivals, repeats, outcome, before) = found[0]
     landed = set(appended.added_ids) | set(appended.replaced_ids)
     touched = [r for r in arrivals.records if r.measurement_id in landed]
     groups = set(condition_keys(unvalidated_frame(touched)).values()) if touched else set()
     groups |= {k for mid, k in before.items() if mid in landed | set(appended.dropped_ids)}
     return Landed(appended=appended, rows=rows, repeats=tuple(repeats), review=outcome,
-                  groups=frozenset(groups), arrivals=arrivals)
+                  groups=frozenset(groups))
 
 
 def check_map_before_work(map_path: str | Path) -> None:
@@ -125,8 +141,9 @@ def check_map_before_work(map_path: str | Path) -> None:
     map folder's manifest (its digest, every part named:
     :func:`~tribopipe.frictionmap.parts.read_manifest`), a single file's Parquet schema
     and metadata (:func:`~tribopipe.frictionmap.store.map_metadata`). No map yet is
-    fine. A part damaged on disk is refused by the landing's read, before anything is
-    written. Raises :class:`~tribopipe.errors.MapError` in one line."""
+    fine. A part damaged on disk is refused by the landing's read, before the map is
+    written (the runs' traces are already written then). Raises
+    :class:`~tribopipe.errors.MapError` in one line."""
     p = Path(map_path)
     if not (p.exists() or p.is_symlink()):
         return
@@ -185,5 +202,7 @@ def store_runs(map_path: str | Path, files: Sequence[FileOutcome], *,
         return Arrivals(keep)
 
     landed = land_runs(map_path, choose, traces_dir=traces[0].parent if traces else None,
-                       replace=replace)
+                       replace=replace, arriving={
+                           r.record.measurement_id for f in files for r in f.reduced
+                           if r.record is not None})
     return StoreReport(appended=landed.appended, same=tuple(same), repeats=landed.repeats)

@@ -57,7 +57,7 @@ from .worker import (
     WorkerContext,
     crashed,
     fewer_gc_passes,
-    prepare_plots,
+    prepare_workers,
     reduce_chunk,
     worker_init,
 )
@@ -342,7 +342,7 @@ def _execute(todo: list[Job], ctx: WorkerContext, jobs: int,
         return
     from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 
-    prepare_plots(ctx)
+    prepare_workers(ctx)
     pool = ProcessPoolExecutor(max_workers=workers, initializer=worker_init)
     try:
         futures = {pool.submit(reduce_chunk, chunk, ctx): chunk

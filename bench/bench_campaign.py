@@ -175,7 +175,10 @@ def write_configs(out: Path) -> tuple[Path, Path]:
     bundles (labels from each test's name, ``test_pattern``). No glob: the batch's default
     discovery (every export suffix the readers know). Plots are chosen on the command
     line."""
-    names = '[names]\nDS30 = "Dragonskin 30"\nEF50 = "Ecoflex 00-50"\n'
+    names = ('[names]\nDS30 = "Dragonskin 30"\nEF50 = "Ecoflex 00-50"\n'
+             # the discs' short names the vocabulary does not know
+             'woodstruct = "wood (structured)"\nds30disc = "Dragonskin 30"\n'
+             'ef50disc = "Ecoflex 00-50"\n')
     single = out / "campaign.toml"
     single.write_text(
         '[campaign]\nname = "bench"\nraw_dir = "raw"\noutput_dir = "processed"\n'

@@ -167,6 +167,41 @@ def test_batch_in_a_real_process(config: Path) -> None:
     assert "0 reduced, 3 skipped (unchanged), 0 failed" in second.stdout
 
 
+def _imported(importtime_stderr: str) -> set[str]:
+    """The modules a ``python -X importtime`` process imported (from its stderr)."""
+    names = set()
+    for line in importtime_stderr.splitlines():
+        if line.startswith("import time:") and line.count("|") == 2:
+            names.add(line.rsplit("|", 1)[1].strip())
+    return names
+
+
+def test_unchanged_rerun_reads_no_map_and_imports_no_pandas(config: Path) -> None:
+    """An unchanged re-run, as a real process: it neither reads the map nor prints its
+    groups again (the batch left the map as it was), so neither pandas nor pyarrow is
+    imported; the ledger still accounts for every file."""
+    assert invoke("batch", str(config)).exit_code == 1  # the bad file fails
+    the_map = config.parent / "out" / "friction_map.parquet"
+    before = the_map.stat()
+    env = {**os.environ, "PYTHONIOENCODING": "utf-8"}
+    again = subprocess.run(
+        [sys.executable, "-X", "importtime", "-m", "tribopipe", "batch", str(config)],
+        capture_output=True, text=True, env=env, timeout=300)
+    assert again.returncode == 1, again.stderr[-2000:]
+    assert "0 reduced, 3 skipped (unchanged), 0 failed" in again.stdout
+    assert f"failed: {BAD}: " in again.stderr and "Traceback" not in again.stderr
+    assert ": unchanged" in again.stdout
+    modules = _imported(again.stderr)
+    assert "tribopipe.campaign.batch" in modules  # the probe sees the batch's imports
+    heavy = sorted(m for m in modules if m.split(".")[0] in ("pandas", "pyarrow"))
+    assert heavy == []
+    from tribopipe.export.tables import paper_text
+
+    assert paper_text(pd.read_parquet(the_map)) not in again.stdout
+    after = the_map.stat()
+    assert (after.st_size, after.st_mtime_ns) == (before.st_size, before.st_mtime_ns)
+
+
 def test_plots_only_for_runs_reduced_now(config: Path) -> None:
     plots = config.parent / "out" / "plots" / "traces"
     assert invoke("batch", str(config), "--no-plots").exit_code == 1

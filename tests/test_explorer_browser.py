@@ -1065,3 +1065,52 @@ def test_hostile_names_match_query_csv_and_snippets_as_python_does(tab, tmp_path
     assert tab.page.text_content("#tpx-group-count") == f"{len(groups)} of {len(groups)} groups"
     tab.page.fill("#tpx-group-filter", "strasse fine x")
     assert tab.page.text_content("#tpx-group-count") == f"0 of {len(groups)} groups"
+
+
+def test_a_map_of_many_groups_is_a_small_index_whose_pin_pages_load_runs_on_demand(
+        tab, reduced, tmp_path):
+    """A map of more condition groups than one page carries (2,400 here) gives an index
+    page far under 5 MB listing its pins; a pin's link opens that pin's explorer, which
+    shows μ as ``query`` gives it on the whole map and loads the shown pair's runs from
+    beside its page when it is shown."""
+    import uuid
+
+    from tribopipe import frictionmap as fm
+    from tribopipe.export.explorer import GROUPS_PAGE_LIMIT, pages_folder
+
+    map_path, _, _, _ = reduced
+    template = fm.schema.frame_records(fm.read_map(map_path))[0]
+    records = []
+    for i in range(2 * 2_400):  # 40 pins x 2 discs x 5 forces x 6 temperatures, 2 repeats
+        r = dict(template)
+        g = i // 2
+        r["measurement_id"] = uuid.UUID(int=i + 1).hex[-16:]
+        r["file_hash"] = uuid.UUID(int=(i + 1) << 64).hex * 2
+        r["source_file"] = f"many/run_{i:05d}.csv"
+        r["pin"], r["disc"] = f"Lot {g // 60:02d}", ("steel", "acrylic")[(g // 30) % 2]
+        r["normal_force_N"] = (1.0, 3.0, 5.0, 7.0, 9.0)[(g // 6) % 5]
+        r["pressure_kPa"] = 11.789 * r["normal_force_N"]
+        r["temperature_C"] = 10.0 + 5.0 * (g % 6)
+        r["repeat"] = i % 2 + 1
+        r["mu_k"] = 0.3 + 0.5 / r["normal_force_N"] ** 0.5 + 0.01 * (i % 2)
+        records.append(r)
+    many = tmp_path / "many.parquet"
+    fm.update_map(many, records)
+    groups = groups_of(read_map(many), many)
+    assert len(groups) == 2_400 > GROUPS_PAGE_LIMIT
+    index = write_explorer(many, tmp_path / "many.html")
+    assert index.stat().st_size < 5_000_000 / 20
+    pages = sorted(pages_folder(index).glob("*.html"))
+    assert len(pages) == 2 and all(p.stat().st_size < 5_000_000 for p in pages)
+    tab.page.goto(index.resolve().as_uri())  # a plain page: no explorer script of its own
+    assert tab.page.locator("#tpx-pins tbody tr").count() == 40
+    tab.page.click("#tpx-pins a:text-is('Lot 33')")
+    tab.wait_until("window.tribopipeExplorer !== undefined")
+    tab.wait_until("document.querySelectorAll('.tpx-repeat').length > 0")
+    assert tab.page.evaluate("new URLSearchParams(location.search).get('pin')") == "Lot 33"
+    assert shown(tab)["pin"] == "Lot 33"
+    # the pin's page answers as query does on the whole map (its curvature included)
+    lot = groups[groups["pin"] == "Lot 33"]
+    assert_page_equals_query(tab, groups, [c for c in grid(lot)][::7])
+    assert tab.page.locator("#tpx-pair-plot circle.tpx-run").count() == 2 * 30
+    assert any("/part-2_runs/pair-" in u for u in tab.requests)

@@ -264,3 +264,27 @@ def test_the_streamed_csv_writer_writes_each_cell_as_package_cell(big_package):
                                            strict=True)]
         for row in odd.itertuples(index=False, name=None)]
     assert list(csv.reader(io.StringIO(text))) == expected
+
+
+def test_a_package_s_explorer_runs_beside_its_page_are_resources(big_package, monkeypatch,
+                                                                 tmp_path):
+    """Above the explorer's inline limit a package's page carries groups and fits only,
+    and each pair's runs lie beside it, each file a resource with its size and SHA-256."""
+    import functools
+
+    from tribopipe.export import explorer, publish
+
+    monkeypatch.setattr(publish, "explorer_files",
+                        functools.partial(explorer.explorer_files, runs_inline_limit=0))
+    map_path, _ = big_package
+    out = tmp_path / "pkg"
+    result = invoke("map", "publish", "--map", map_path, "-o", out, "--lab", "Lab G",
+                    "--no-evidence")
+    assert result.exit_code == 0, result.output
+    d = json.loads((out / "datapackage.json").read_text(encoding="utf-8"))
+    beside = [r for r in d["resources"] if r["path"].startswith("explorer_runs/")]
+    assert [r["path"] for r in beside] == ["explorer_runs/pair-0.js"]
+    assert beside[0]["hash"] == sha256_hash((out / "explorer_runs/pair-0.js").read_bytes())
+    page = (out / "explorer.html").read_text(encoding="utf-8")
+    assert '"runs_beside":"explorer_runs"' in page and "tpx-runs-0" not in page
+    assert check_package(out).ok

@@ -48,7 +48,7 @@ from ..errors import CampaignError, ConfigError, ReadError, ValidationError
 from ..escape import csv_uncell
 from ..files import read_regular
 from ..labels import RunLabels
-from ..materials import MaterialError, Resolved
+from ..materials import MaterialError, Resolved, Vocabulary
 from ..readers.textio import decode, detect_delimiter
 from ..reporting import NAMES as REPORTING_NAMES
 from ..reporting import RunReport, from_export, parse_item
@@ -356,10 +356,31 @@ def resolve_material(campaign: Campaign, name: str, what: str, file: str) -> Res
     :class:`CampaignError` naming the file, with a did-you-mean, otherwise."""
     full = campaign.alias(name)
     try:
-        resolved = campaign.vocabulary.resolve(full, what)
+        resolved = _resolved_name(campaign, full, what)
     except (MaterialError, ValidationError) as exc:
         raise CampaignError(exc.problem, path=file, hint=exc.hint) from None
-    return Resolved(resolved.name, name.strip())
+    return Resolved(resolved, name.strip())
+
+
+#: names resolved, by (the vocabulary's id, name, what) → (that vocabulary, canonical name)
+_RESOLVED: dict[tuple[int, str, str], tuple[Vocabulary, str]] = {}
+
+
+def _resolved_name(campaign: Campaign, full: str, what: str) -> str:
+    """The canonical name of ``full`` in the campaign's vocabulary, each name resolved
+    once per vocabulary (a campaign repeats a few names over thousands of files; the
+    vocabulary is known by identity, as hashing it would walk every material); raises
+    as :meth:`~tribopipe.materials.Vocabulary.resolve` does (a refusal is not kept)."""
+    vocabulary = campaign.vocabulary
+    key = (id(vocabulary), full, what)
+    kept = _RESOLVED.get(key)
+    if kept is not None and kept[0] is vocabulary:
+        return kept[1]
+    name = vocabulary.resolve(full, what).name
+    if len(_RESOLVED) >= 4096:
+        _RESOLVED.clear()
+    _RESOLVED[key] = (vocabulary, name)
+    return name
 
 
 def material_problems(campaign: Campaign,

@@ -70,7 +70,13 @@ def write_runs_csv(campaign: Campaign, rows: Sequence[CampaignRow],
             reason = failures.get(name) or (entry.reason if kept == DUPLICATE else None)
             writer.writerow([_cell(v) for v in _values(
                 row.file, run, status, labels, reason, measured=ok or kept == DUPLICATE)])
-    write_text_atomic(campaign.runs_csv, buf.getvalue())
+    text = buf.getvalue()
+    try:  # an unchanged re-run leaves the table it would write again as it is
+        if campaign.runs_csv.read_text(encoding="utf-8") == text:
+            return
+    except (OSError, ValueError):
+        pass
+    write_text_atomic(campaign.runs_csv, text)
 
 
 def _values(file: str, run: Mapping[str, Any], status: str, labels: Mapping[str, Any],

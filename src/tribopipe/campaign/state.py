@@ -65,8 +65,11 @@ class RunEntry:
     occurrence: int = 1
 
     def as_dict(self) -> dict[str, Any]:
-        """The entry's fields as the state's JSON keys."""
-        return asdict(self)
+        """The entry's fields as the state's JSON keys (the labels a copy of their own:
+        its nested values are plain JSON values, read and never changed)."""
+        out = {k: getattr(self, k) for k in ENTRY_KEYS}
+        out["labels"] = dict(self.labels)
+        return out
 
     @classmethod
     def of(cls, run: ReducedRun, output_dir: Path) -> RunEntry:

@@ -31,7 +31,6 @@ of an unchanged file is skipped.
 from __future__ import annotations
 
 import csv
-import functools
 import hashlib
 import io
 import json
@@ -185,9 +184,24 @@ def recipe_hash(campaign: Campaign, merged: Mapping[str, Any],
     return hashlib.sha256(text.encode()).hexdigest()[:16]
 
 
-@functools.lru_cache(maxsize=8)
+#: _campaign_key's figures, by the campaign's id → (that campaign, its key)
+_KEYS: dict[int, tuple[Campaign, str]] = {}
+
+
 def _campaign_key(campaign: Campaign) -> str:
-    # the part of recipe_hash shared by every run of a campaign, computed once per campaign
+    """The part of recipe_hash shared by every run of a campaign, computed once per
+    campaign (known by identity: hashing a campaign walks its whole vocabulary)."""
+    kept = _KEYS.get(id(campaign))
+    if kept is not None and kept[0] is campaign:
+        return kept[1]
+    key = _compute_campaign_key(campaign)
+    if len(_KEYS) >= 8:
+        _KEYS.clear()
+    _KEYS[id(campaign)] = (campaign, key)
+    return key
+
+
+def _compute_campaign_key(campaign: Campaign) -> str:
     payload = {
         "config": campaign.settings.config_hash,
         "tolerances": asdict(campaign.tolerances),

@@ -78,8 +78,6 @@ def _shorten(path: Any) -> str:
 def _run(campaign: Any, jobs: int | None, plots: bool | None) -> None:
     from ..campaign import run_campaign
     from ..escape import display_path, printable
-    from ..export.tables import map_paper_text
-    from ..frictionmap.snapshot import snapshot_of
     from ..frictionmap.synthetic_rows import campaign_note
     from ..labels import flag_list
     from ..layout import OutputLayout
@@ -117,10 +115,14 @@ def _run(campaign: Any, jobs: int | None, plots: bool | None) -> None:
     click.echo(f"map {_shorten(report.map_path)}: {report.map_summary}")
     click.echo(f"outputs in {_shorten(report.output_dir)}/: runs.csv, failures.csv, traces/"
                + (", plots/traces/" if OutputLayout(report.output_dir).plots_dir.is_dir() else ""))
-    # the groups, rounded for print, of the map as the batch's last write left it
-    shown = report.map_path if report.map_after is None else snapshot_of(
-        report.map_after, report.map_path, {"format": "rows"})
-    click.echo(map_paper_text(shown), nl=False)
+    if report.map_after is not None:
+        from ..export.tables import map_paper_text
+        from ..frictionmap.snapshot import snapshot_of
+
+        # the groups, rounded for print, of the map as the batch's last write left it (a
+        # batch that did not write the map does not read it to print them again)
+        click.echo(map_paper_text(snapshot_of(report.map_after, report.map_path,
+                                              {"format": "rows"})), nl=False)
     for line in report.ledger():  # the account comes last, where a user looks
         click.echo(printable(line))
     _remember(report.map_path)

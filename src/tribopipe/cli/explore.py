@@ -30,6 +30,11 @@ def explore_cmd(map_path: str, output: str | None, title: str | None) -> None:
     filterable. The selection can be copied or downloaded as CSV or as an ABAQUS or Ansys
     snippet, and lives in the page's address (?pin=…&disc=…&pressure=…&temperature=…),
     so a link reproduces it.
+
+    A large map stays a page: above 20,000 runs each pair's runs lie beside the page
+    (in <page>_runs/, loaded when the pair is shown), and above 2,000 condition groups
+    the page is an index of the pins linking to their own pages (in <page>_pages/).
+    Keep those folders beside the page when you move it.
     """
     from pathlib import Path
 

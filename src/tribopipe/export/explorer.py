@@ -100,6 +100,9 @@ RUNS_ELEMENT_PREFIX = "tpx-runs-"
 #: a page carries its runs up to this many; a larger map's runs lie beside it, one file
 #: per pair (a run costs about 150 bytes of page: 20,000 keep a page near 3 MB)
 RUNS_INLINE_LIMIT = 20_000
+#: a page carries up to this many condition groups (about 2 kB of page each: 2,000 keep a
+#: page near 4 MB); a map of more is split into pages of whole pins beside an index page
+GROUPS_PAGE_LIMIT = 2_000
 #: the parts of the page's script (``assets/js/``), in the order they are joined
 SCRIPT_PARTS = (
     "prelude.js", "query.js", "snippets.js", "dom.js", "plots.js", "table.js", "page.js",
@@ -834,18 +837,148 @@ def runs_folder(output: str | Path) -> Path:
     return out.with_name(out.stem + "_runs")
 
 
+def pages_folder(output: str | Path) -> Path:
+    """The folder beside an explorer page ``output`` that holds the pages of a map of more
+    condition groups than one page carries: ``<name>_pages``."""
+    out = Path(output)
+    return out.with_name(out.stem + "_pages")
+
+
+def _page_files(data: dict[str, Any], name: str, runs_inline_limit: int) -> dict[str, str]:
+    """The explorer page ``name`` (a relative path) of ``data`` and, where it has more
+    runs than ``runs_inline_limit``, the files of its runs beside it (the page last)."""
+    if sum(len(chunk) for chunk in data["runs"]) <= runs_inline_limit:
+        return {name: explorer_page(data)}
+    folder = runs_folder(name)
+    files = {(folder / f).as_posix(): text for f, text in runs_files(data).items()}
+    files[name] = explorer_page(data, runs_beside=folder.name)
+    return files
+
+
+def _pin_shards(groups: pd.DataFrame, limit: int) -> list[list[str]]:
+    """The pins (casefolded keys, in the group table's order) split into pages of whole
+    pins of at most ``limit`` groups each (a pin of more groups is a page of its own)."""
+    shards: list[list[str]] = []
+    size = 0
+    for key, n in groups["pin"].map(_key).value_counts(sort=False).items():
+        if not shards or size + int(n) > limit:
+            shards.append([])
+            size = 0
+        shards[-1].append(str(key))
+        size += int(n)
+    return shards
+
+
+def explorer_files(
+    runs: pd.DataFrame,
+    name: str,
+    *,
+    title: str = "tribopipe friction-map explorer",
+    source: str | None = None,
+    groups: pd.DataFrame | None = None,
+    fits: pd.DataFrame | None = None,
+    runs_inline_limit: int = RUNS_INLINE_LIMIT,
+    groups_page_limit: int = GROUPS_PAGE_LIMIT,
+    runs_beside_pages: bool = True,
+) -> dict[str, str]:
+    """Every file of the explorer of ``runs`` whose page is ``name`` (relative paths →
+    text; the page ``name`` last), so that no page grows with the map.
+
+    Up to ``groups_page_limit`` condition groups the explorer is one page
+    (:func:`explorer_data`, ``groups`` and ``fits`` as it takes them), its runs in the page
+    up to ``runs_inline_limit`` and beside it above (:func:`runs_files`, one file per pair,
+    loaded when the pair is shown). A map of more groups gets, at ``name``, an index of its
+    pins (each pin's name, discs, groups and runs, linking to its page), and its pins'
+    explorers as pages of whole pins of at most ``groups_page_limit`` groups in
+    :func:`pages_folder`, each with its runs beside it (``runs_beside_pages``; else as
+    ``runs_inline_limit`` says); every page interpolates with the whole map's curvature,
+    so each gives what ``query`` gives on the whole map."""
+    included = runs
+    if "excluded" in runs.columns:
+        included = runs[~runs["excluded"].fillna(False).astype(bool)]
+    if groups is None:
+        groups = group_statistics(included, show_method=True)
+    if len(groups) <= groups_page_limit:
+        return _page_files(explorer_data(runs, groups=groups, fits=fits, title=title,
+                                         source=source), name, runs_inline_limit)
+    if fits is None:
+        fits = fit_power_law(runs)
+    curvature = {q: map_curvature(groups, q) for q in ("mu_k", "mu_s")}
+    shards = _pin_shards(groups, groups_page_limit)
+    folder = pages_folder(name)
+    run_pins, group_pins, fit_pins = (t["pin"].map(_key) for t in (included, groups, fits))
+    files: dict[str, str] = {}
+    rows: list[tuple[str, list[str], int, int, str]] = []
+    for k, keys in enumerate(shards, 1):
+        page = (folder / f"part-{k}.html").as_posix()
+        shard_groups = groups[group_pins.isin(keys)]
+        shard_runs = included[run_pins.isin(keys)]
+        data = explorer_data(shard_runs, groups=shard_groups, fits=fits[fit_pins.isin(keys)],
+                             title=f"{title} — page {k} of {len(shards)}", source=source)
+        data["curvature"] = curvature  # the whole map's: query's own uncertainty
+        files.update(_page_files(data, page, 0 if runs_beside_pages else runs_inline_limit))
+        for key in keys:
+            of_pin = shard_groups[shard_groups["pin"].map(_key) == key]
+            pin = str(of_pin["pin"].iloc[0])
+            discs = sorted({str(d) for d in of_pin["disc"]}, key=_key)
+            n_runs = int((shard_runs["pin"].map(_key) == key).sum())
+            rows.append((pin, discs, len(of_pin), n_runs,
+                         f"{Path(page).parent.name}/part-{k}.html"))
+    files[name] = explorer_index(rows, title=title, source=source, n_groups=len(groups),
+                                 n_runs=len(included))
+    return files
+
+
+def explorer_index(pins: list[tuple[str, list[str], int, int, str]], *, title: str,
+                   source: str | None, n_groups: int, n_runs: int) -> str:
+    """The index page of an explorer split into pages of pins: one row per pin (its name,
+    its discs, its groups and runs) linking to its page (``href``, relative to the index)
+    with the pin selected. Static HTML: every name escaped, no script."""
+    from urllib.parse import quote
+
+    css = _index_style()
+    csp = f"default-src 'none'; style-src {_sha256(css)}; base-uri 'none'; form-action 'none'"
+    body = "".join(
+        f'<tr><td><a href="{html_text(quote(href, safe="/") + "?pin=" + quote(pin, safe=""))}'
+        f'">{html_text(printable(pin))}</a></td>'
+        f"<td>{html_text(', '.join(printable(d) for d in discs))}</td>"
+        f'<td class="n">{n_groups_pin}</td><td class="n">{n_runs_pin}</td></tr>\n'
+        for pin, discs, n_groups_pin, n_runs_pin, href in pins)
+    subtitle = f"tribopipe {__version__}" + (f" · map {source}" if source else "")
+    return (
+        "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n"
+        f'<meta http-equiv="Content-Security-Policy" content="{html_text(csp)}">\n'
+        '<meta name="viewport" content="width=device-width, initial-scale=1">\n'
+        f"<title>{html_text(title)}</title>\n<style>{css}</style>\n</head>\n<body>\n"
+        f"<h1>{html_text(title)}</h1>\n<p class=\"sub\">{html_text(subtitle)}</p>\n"
+        f'<p id="tpx-index-note">{n_runs} runs in {n_groups} condition groups: more than one '
+        "page shows at once. Each pin's explorer is a page of its own (its pairs, groups, "
+        "fits and plots; the runs of a pair load when it is shown); choose a pin.</p>\n"
+        '<table id="tpx-pins"><thead><tr><th>pin</th><th>discs</th><th>groups</th>'
+        f"<th>runs</th></tr></thead>\n<tbody>\n{body}</tbody></table>\n</body>\n</html>\n")
+
+
+def _index_style() -> str:
+    return ("body{font-family:system-ui,sans-serif;margin:1.5rem;max-width:70rem}"
+            "table{border-collapse:collapse}td,th{border-bottom:1px solid #ddd;"
+            "padding:.2rem .6rem;text-align:left;vertical-align:top}"
+            "td.n{text-align:right}.sub{color:#555}")
+
+
 def write_explorer(
     map_path: MapSource,
     output: str | Path,
     *,
     title: str | None = None,
     runs_inline_limit: int = RUNS_INLINE_LIMIT,
+    groups_page_limit: int = GROUPS_PAGE_LIMIT,
 ) -> Path:
-    """Write the explorer page of the map at ``map_path`` to ``output`` (atomically).
-
-    A map of more than ``runs_inline_limit`` included runs gets its runs in
-    :func:`runs_folder` beside the page, one file per pair (written first, each
-    atomically), so the page stays small; a smaller map's page carries them and is one
+    """Write the explorer of the map at ``map_path`` to ``output`` (atomically):
+    :func:`explorer_files`, the files beside the page first (each atomically), the page
+    last. A map of more than ``runs_inline_limit`` included runs gets its runs in
+    :func:`runs_folder` beside the page, one file per pair; a map of more than
+    ``groups_page_limit`` condition groups an index page at ``output`` and its pins'
+    pages in :func:`pages_folder`; a smaller map's page carries everything and is one
     file."""
     snap = as_snapshot(map_path)
     runs = snap.runs
@@ -855,14 +988,14 @@ def write_explorer(
             path=map_path,
             hint="reduce runs first (tribopipe reduce / batch) or import the published map",
         )
+    out = Path(output)
     # the map's groups (a map folder's are stored): those of its included runs
-    data = explorer_data(
-        runs, groups=snap.groups(show_method=True),
-        title=title or "tribopipe friction-map explorer", source=str(map_path))
-    if sum(len(chunk) for chunk in data["runs"]) <= runs_inline_limit:
-        return write_text_atomic(output, explorer_page(data))
-    folder = runs_folder(output)
-    folder.mkdir(parents=True, exist_ok=True)
-    for name, text in runs_files(data).items():
-        write_text_atomic(folder / name, text)
-    return write_text_atomic(output, explorer_page(data, runs_beside=folder.name))
+    files = explorer_files(runs, out.name, title=title or "tribopipe friction-map explorer",
+                           source=str(map_path), groups=snap.groups(show_method=True),
+                           runs_inline_limit=runs_inline_limit,
+                           groups_page_limit=groups_page_limit)
+    for name, text in files.items():
+        if name != out.name:
+            (out.parent / name).parent.mkdir(parents=True, exist_ok=True)
+            write_text_atomic(out.parent / name, text)
+    return write_text_atomic(out, files[out.name])

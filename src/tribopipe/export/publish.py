@@ -33,6 +33,7 @@ import math
 import os
 import re
 import shutil
+import sys
 import tempfile
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -95,11 +96,17 @@ from .citation import (
     founding_paper_text,
     package_readme,
 )
-from .explorer import explorer_data, explorer_page
+from .explorer import explorer_files
 from .tables import frictionmap_csv, frictionmap_table
 
 if TYPE_CHECKING:
     import pandas as pd
+
+#: the explorer page's name in a package
+EXPLORER = "explorer.html"
+#: the most files of the explorer a package lists (each a resource; a package lists at
+#: most 64): beyond, the runs travel in the pages
+EXPLORER_FILES_LIMIT = 40
 
 
 @dataclass(frozen=True)
@@ -362,12 +369,29 @@ def build_package(runs: pd.DataFrame, publisher: Publisher, folder: Path, *,
         (json.dumps(profile_schema(), indent=2, ensure_ascii=False) + "\n").encode(),
         title=f"JSON Schema of this package's descriptor (package profile version "
               f"{PROFILE_VERSION})", fmt="json", mediatype="application/schema+json")
-    page = explorer_page(explorer_data(runs, groups=groups, fits=fits,
-                                       title=publisher.package_title, source=publisher.lab))
-    add("explorer", "explorer.html", page.encode(), title="Explorer page (open in a browser)",
-        fmt="html", mediatype="text/html",
-        licences=[*data_licence, {"name": CODE_LICENCE[0], "title": CODE_LICENCE[1],
-                                  "path": CODE_LICENCE[2]}])
+    page_licences = [*data_licence, {"name": CODE_LICENCE[0], "title": CODE_LICENCE[1],
+                                     "path": CODE_LICENCE[2]}]
+    page_files = explorer_files(runs, EXPLORER, groups=groups, fits=fits,
+                                title=publisher.package_title, source=publisher.lab)
+    if len(page_files) > EXPLORER_FILES_LIMIT:
+        # each file is a resource of its own (a package lists at most 64): the runs go
+        # into the pages instead
+        page_files = explorer_files(runs, EXPLORER, groups=groups, fits=fits,
+                                    title=publisher.package_title, source=publisher.lab,
+                                    runs_inline_limit=sys.maxsize, runs_beside_pages=False)
+    for path, text in page_files.items():
+        (folder / path).parent.mkdir(parents=True, exist_ok=True)
+        if path == EXPLORER:
+            add("explorer", path, text.encode(), title="Explorer page (open in a browser)",
+                fmt="html", mediatype="text/html", licences=page_licences)
+            continue
+        html = path.endswith(".html")
+        add("explorer-" + re.sub(r"[^a-z0-9]+", "-", path.lower().removesuffix(
+            ".html").removesuffix(".js")).strip("-"), path, text.encode(),
+            title="A page of the explorer (one pin's pairs)" if html
+            else "The runs of one pair of the explorer, loaded when the pair is shown",
+            fmt="html" if html else "js",
+            mediatype="text/html" if html else "text/javascript", licences=page_licences)
     pair_list = pairs(runs)
     add("citation", "CITATION.cff",
         citation_cff(publisher, date=date, n_runs=len(runs), pairs=pair_list).encode(),

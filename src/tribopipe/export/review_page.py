@@ -37,14 +37,22 @@ import numpy as np
 
 from .. import __version__
 from ..errors import ExportError
-from ..escape import html_text, script_json
+from ..escape import FORMULA_TRIGGERS, html_text, script_json
 from ..figures.decimate import minmax_decimate
 from ..files import write_text_atomic
 from ..frictionmap import read_map
 from ..frictionmap.schema import MapRow, frame_rows, is_missing
 from ..labels import flag_list, quality_flags
 from ..layout import find_trace
-from ..review import AUTO_OF, Decision, Review, decision_of_row, read_review, trace_table
+from ..review import (
+    AUTO_OF,
+    HEADER,
+    Decision,
+    Review,
+    decision_of_row,
+    read_review,
+    trace_table,
+)
 from ..stats import group_statistics, repeatability
 
 if TYPE_CHECKING:
@@ -182,7 +190,10 @@ def review_data(runs: pd.DataFrame, traces_dir: Path | None, *, review: Review |
                                 e["force_N"] or 0.0, e["temperature_C"] or 0.0, e["id"]))
     return {"format": "tribopipe-review/1", "title": title, "source": source,
             "generated": datetime.now(UTC).strftime("%Y-%m-%d %H:%M UTC"),
-            "version": __version__, "runs": entries}
+            "version": __version__, "runs": entries,
+            # review.csv's columns and the cell starts escape.csv_cell neutralises: the
+            # page writes the decisions file by these, not by copies of its own
+            "csv": {"header": list(HEADER), "formula": "".join(sorted(FORMULA_TRIGGERS))}}
 
 
 def _asset(name: str) -> str:

@@ -6,9 +6,8 @@ var data = JSON.parse(document.getElementById("tribopipe-review-data").textConte
 var runs = data.runs;
 var byId = {};
 var decisions = {};
-var HEADER = ["run", "action", "kinetic_from_mm", "kinetic_to_mm", "static_peak_mm",
-              "reason", "who", "date"];
-var FORMULA = "=+-@\t\r";
+var HEADER = data.csv.header;     // tribopipe.review.HEADER
+var FORMULA = data.csv.formula;   // tribopipe.escape.FORMULA_TRIGGERS
 
 function el(tag, cls, text) {
   var e = document.createElement(tag);

@@ -1268,6 +1268,21 @@ def _stored_rows(p: Path, manifest: Manifest | None) -> pd.DataFrame | None:
     return rows_from_bytes(read_groups_bytes(p, manifest.groups), str(p))
 
 
+def committed_groups_info(path: str | os.PathLike[str]) -> dict[str, Any]:
+    """The metadata a snapshot of rows a write just left needs to read the map folder's
+    stored groups (``format`` ``"parts"`` and the committed manifest's ``groups``), read
+    from the manifest alone (no row is read); ``{"format": "rows"}`` for a map without
+    them (a single file, no map, a folder without stored groups)."""
+    p = Path(path)
+    if not p.is_dir():
+        return {"format": "rows"}
+    manifest = read_manifest(p)
+    if manifest.groups is None:
+        return {"format": "rows"}
+    return {"format": "parts", "n_runs": manifest.n_runs,
+            "generation": manifest.generation, "groups": manifest.groups.as_json()}
+
+
 def stored_groups(path: str | os.PathLike[str], info: Mapping[str, Any]
                   ) -> pd.DataFrame | None:
     """The stored group rows (:func:`~tribopipe.stats.group_rows` of every condition) of

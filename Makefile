@@ -9,29 +9,38 @@ TEST_STAMP := $(VENV)/.installed-test
 
 # `make demo` needs only the package and its base dependencies; `make test` adds the test
 # extras (pytest, hypothesis, ruff, mujoco, playwright, frictionless), which the demo never uses.
-# The installs go through uv, from PyPI: pip puts it in .venv/.uv (a second or two), uv makes
-# the venv with pip seeded (without ensurepip's 3 s) and resolves and links the wheels
-# several times faster than pip. Where uv cannot be had or fails (offline with only pip's
-# cache, a system Python that refuses pip installs, an unusual platform), `python -m venv`
-# and pip do the same install. Neither compiles every module at install: Python compiles
-# only what a command imports.
-UV_HOME := $(VENV)/.uv
-UV := $(UV_HOME)/bin/uv
+# The installs go through uv, from PyPI. uv is the one on the PATH when there is one; else pip
+# fetches it once per user into ~/.cache/tribopipe/uv (a 17.6 MB wheel: seconds of download),
+# where a later clone finds it, as pip and uv keep their own caches there. uv makes the venv
+# with pip seeded (without ensurepip's 3 s), installs from its cache without asking the index
+# when every wheel is there (--offline; else it asks), and resolves and links the wheels several
+# times faster than pip; the package's editable install is built by uv_build (pyproject.toml)
+# in a fraction of a second. Where uv cannot be had or fails (offline with only pip's cache, a
+# system Python that refuses pip installs, an unusual platform), `python -m venv` and pip do the
+# same install. Neither compiles every module at install: Python compiles only what a command
+# imports.
+UV_CACHE := $(or $(XDG_CACHE_HOME),$(HOME)/.cache)/tribopipe/uv
+UV := $(or $(shell command -v uv 2>/dev/null),$(UV_CACHE)/bin/uv)
 PIP_INSTALL := $(PY) -m pip install --quiet --disable-pip-version-check --no-compile
-UV_INSTALL := $(UV) pip install --quiet --python $(PY)
+UV_INSTALL := "$(UV)" pip install --quiet --python $(PY)
 
 $(BASE): pyproject.toml
 	@echo "installing tribopipe and its base dependencies into $(VENV) (once)"
+	@if ! test -x "$(UV)" && mkdir -p "$(dir $(UV_CACHE))" 2>/dev/null && \
+	    tmp=$$(mktemp -d "$(UV_CACHE).XXXXXX" 2>/dev/null); then \
+	  $(PYTHON) -m pip install --quiet --disable-pip-version-check --target "$$tmp" uv \
+	    >/dev/null 2>&1 && mv -T "$$tmp" "$(UV_CACHE)" 2>/dev/null; rm -rf "$$tmp"; fi
 	@if ! test -x $(PY); then \
-	  if $(PYTHON) -m pip install --quiet --disable-pip-version-check --target $(UV_HOME) uv \
-	       >/dev/null 2>&1 && $(UV) venv --quiet --seed --allow-existing --python $(PYTHON) $(VENV); \
-	  then :; else rm -rf $(UV_HOME); $(PYTHON) -m venv $(VENV); fi; fi
-	@if test -x $(UV) && $(UV_INSTALL) -e .; then :; else $(PIP_INSTALL) -e .; fi
+	  if test -x "$(UV)" && "$(UV)" venv --quiet --seed --allow-existing --python $(PYTHON) $(VENV); \
+	  then :; else $(PYTHON) -m venv $(VENV); fi; fi
+	@if test -x "$(UV)" && { $(UV_INSTALL) --offline -e . 2>/dev/null || $(UV_INSTALL) -e .; }; \
+	then :; else $(PIP_INSTALL) -e .; fi
 	@touch $(BASE)
 
 $(TEST_STAMP): $(BASE)
 	@echo "installing the test extras into $(VENV) (once)"
-	@if test -x $(UV) && $(UV_INSTALL) -e ".[test]"; then :; else $(PIP_INSTALL) -e ".[test]"; fi
+	@if test -x "$(UV)" && { $(UV_INSTALL) --offline -e ".[test]" 2>/dev/null || \
+	    $(UV_INSTALL) -e ".[test]"; }; then :; else $(PIP_INSTALL) -e ".[test]"; fi
 	@touch $(TEST_STAMP)
 
 install: $(BASE)

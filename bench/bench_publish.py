@@ -9,8 +9,9 @@ three shapes:
 * ``grid``: the founding grid's 18 pairs and 180 condition groups (more runs are more
   repeats: a group holds N/180 runs);
 * ``one group``: every run in one condition group (a group of N runs);
-* ``own pins``: each 10 runs under a pin name of their own (groups grow with the runs:
-  N/10 pins ... the explorer's page must still stay a page).
+* ``own pins``: each 1,000 runs under a pin name of their own, as ``bench_explorer`` builds
+  them (pairs and groups grow with the runs: 18,000 groups at 10⁵ rows; the explorer must
+  still stay a page).
 
 For each map: ``map publish`` (no evidence: the runs are copies of one run), ``map
 validate`` of the package, ``map merge`` of the package into an empty map, and the sizes
@@ -58,7 +59,7 @@ def build(folder: Path, n: int, shape: str, template: dict) -> Path:
                 r["normal_force_N"], r["pressure_kPa"] = 3.0, 11.789 * 3.0
                 r["temperature_C"], r["repeat"] = 20.0, i + 1
             elif shape == "own pins":
-                r["pin"] = f"{r['pin']} lot {i // 10}"
+                r["pin"] = f"{r['pin']} lot {i // 1000}"
         update_map(path, records)
     return path
 
@@ -107,7 +108,10 @@ def measure(path: Path, folder: Path, env: dict[str, str]) -> list[dict]:
         if name == "publish" and not row["exit"]:
             page = package / "explorer.html"
             beside = [p for p in package.rglob("*") if p.is_file()
-                      and p.parent != package and p.parent.name.startswith("explorer")]
+                      and p.relative_to(package).parts[0].startswith("explorer_")]
+            pages = [p for p in beside if p.suffix == ".html"]
+            row["largest_page_MB"] = round(max([page.stat().st_size]
+                                               + [p.stat().st_size for p in pages]) / 1e6, 2)
             row["page_MB"] = round(page.stat().st_size / 1e6, 2)
             row["beside_MB"] = round(sum(p.stat().st_size for p in beside) / 1e6, 2)
             row["beside_files"] = len(beside)

@@ -212,7 +212,7 @@ def hostile_reduced(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Pat
     root = tmp_path_factory.mktemp("picture")
     export = good_export(root / "a\nb\rc\u202ed.csv")
     map_path, out = root / "m.parquet", root / "out"
-    result = invoke("reduce", str(export), "--pin", "P", "--disc", "D", "--force", "3",
+    result = invoke("reduce", str(export), "--pin", "DS30", "--disc", "steel", "--force", "3",
                     "--temperature", "20", "--plot", "--map", str(map_path),
                     "--output", str(out))
     assert result.exit_code == 0, result.output

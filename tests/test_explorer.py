@@ -20,6 +20,7 @@ import pandas as pd
 import pytest
 from click.testing import CliRunner
 
+from helpers import lab_vocabulary
 from reduced_runs import make_processed
 from tribopipe.cli import main
 from tribopipe.escape import script_json
@@ -286,7 +287,8 @@ def hostile_map(root: Path) -> Path:
                         f"{mu + 0.01 * repeat}")
     csv.write_text("\n".join(rows) + "\n", encoding="utf-8")
     map_path = root / "friction_map.parquet"
-    import_table(map_path, csv)
+    # a hostile lab's materials file names them: names are data, whatever they hold
+    import_table(map_path, csv, vocabulary=lab_vocabulary(HOSTILE_PIN, HOSTILE_DISC))
     return map_path
 
 

@@ -21,6 +21,7 @@ from urllib.parse import urlencode
 
 import pytest
 
+from helpers import lab_vocabulary
 from reduced_runs import make_processed
 from tribopipe.export.explorer import write_explorer
 from tribopipe.export.fe_decks import condition_snippet
@@ -507,7 +508,7 @@ def test_hostile_names_render_as_text(tab, tmp_path):
                         f"{mu + 0.01 * repeat}")
     csv.write_text("\n".join(rows) + "\n", encoding="utf-8")
     map_path = tmp_path / "friction_map.parquet"
-    import_table(map_path, csv)
+    import_table(map_path, csv, vocabulary=lab_vocabulary(HOSTILE_PIN, HOSTILE_DISC))
     page = write_explorer(map_path, tmp_path / "explorer.html")
     tab.open(page_url(page, pin=HOSTILE_PIN, disc=HOSTILE_DISC, pressure="20"))
     s = shown(tab)
@@ -603,7 +604,7 @@ def test_page_equals_query_where_temperatures_are_unknown(tab, tmp_path):
         encoding="utf-8",
     )
     map_path = tmp_path / "friction_map.parquet"
-    import_table(map_path, csv)
+    import_table(map_path, csv, vocabulary=lab_vocabulary("A", "b", "C", "d"))
     groups = groups_of(read_map(map_path), map_path)
     page = write_explorer(map_path, tmp_path / "explorer.html")
     tab.open(page_url(page, pin="C", disc="d", pressure="30"))
@@ -632,7 +633,7 @@ def test_copied_snippets_equal_the_python_writer_for_any_name(tab, tmp_path):
         encoding="utf-8",
     )
     map_path = tmp_path / "friction_map.parquet"
-    import_table(map_path, csv)
+    import_table(map_path, csv, vocabulary=lab_vocabulary(pin, disc))
     groups = groups_of(read_map(map_path), map_path)
     assert pairs(groups) == [(pin, disc)]
     page = write_explorer(map_path, tmp_path / "explorer.html")
@@ -1035,7 +1036,7 @@ def test_hostile_names_match_query_csv_and_snippets_as_python_does(tab, tmp_path
     table = tmp_path / "names.csv"
     table.write_text(rows.getvalue(), encoding="utf-8")
     map_path = tmp_path / "map \u202egpj.=1+1 \u200f.parquet"
-    import_table(map_path, table)
+    import_table(map_path, table, vocabulary=lab_vocabulary(pin, disc))
     groups = groups_of(read_map(map_path), map_path)
     page = write_explorer(map_path, tmp_path / "explorer.html")
     # spelt otherwise: upper case (ß → SS, ﬁ → FI), edged with white space JavaScript's

@@ -468,9 +468,12 @@ def test_reduce_a_sled_export_into_the_map(tmp_path: Path) -> None:
 
     export = _sled_csv(tmp_path / "pe_steel.csv", rest_load_N=0.45)
     map_path = tmp_path / "map.parquet"
+    lab = tmp_path / "materials.toml"  # the lab's own material, one line
+    lab.write_text('[materials]\n"PE film" = { class = "polymer" }\n', encoding="utf-8")
     done = subprocess.run(
         [sys.executable, "-m", "tribopipe", "reduce", str(export), "--pin", "PE film",
-         "--disc", "steel", "--temperature", "23", "--repeat", "1", "--instrument",
+         "--materials", str(lab), "--disc", "steel", "--temperature", "23", "--repeat", "1",
+         "--instrument",
          str(CONFIGS / "sled-d1894.toml"), "--map", str(map_path), "-o", str(tmp_path / "o"),
          "--json"], capture_output=True, text=True, check=False)
     assert done.returncode == 0, done.stderr

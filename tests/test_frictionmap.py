@@ -443,7 +443,7 @@ def test_another_labs_csv_is_labelled_with_its_file_and_has_no_speed(tmp_path):
         ),
         (
             "pin,disc,contactForce,contactPressure,temperature,measurementNo,cof\n"
-            "A,B,1,11.79,20,1,0.5\nA,B,1,11.79,20,1,0.6\n",
+            "DS30,steel,1,11.79,20,1,0.5\nDS30,steel,1,11.79,20,1,0.6\n",
             "same pin, disc, force",
             3,
             "measurementNo",

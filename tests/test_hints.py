@@ -31,7 +31,7 @@ def error_lines(output: str) -> list[str]:
 ])
 def test_an_export_that_is_no_friction_test_is_named_once_per_file(
         tmp_path: Path, name: str, what: str) -> None:
-    result = invoke("reduce", str(DATA / name), "--pin", "a", "--disc", "b", "--no-map",
+    result = invoke("reduce", str(DATA / name), "--pin", "DS30", "--disc", "steel", "--no-map",
                     "--output", str(tmp_path))
     assert result.exit_code == 1
     lines = error_lines(result.output)
@@ -58,7 +58,7 @@ def test_an_oscillation_under_normal_force_is_refused_even_with_a_low_threshold(
     export = _oscillation_csv(tmp_path / "osc.csv")
     config = tmp_path / "low.toml"
     config.write_text("[instrument]\ncontact_threshold_N = 0.001\n", encoding="utf-8")
-    result = invoke("reduce", str(export), "--pin", "a", "--disc", "b", "--no-map",
+    result = invoke("reduce", str(export), "--pin", "DS30", "--disc", "steel", "--no-map",
                     "--instrument", str(config), "--output", str(tmp_path / "out"))
     assert result.exit_code == 1
     lines = error_lines(result.output)
@@ -74,7 +74,7 @@ def test_a_one_way_slide_is_still_reduced(tmp_path: Path) -> None:
     rows += [f"{a:.3f},{12.0 + 0.01 * np.sin(a):.5f},3.0,{0.5 * a:.5f}" for a in t]
     export = tmp_path / "slide.csv"
     export.write_text("\n".join(rows) + "\n", encoding="utf-8")
-    result = invoke("reduce", str(export), "--pin", "a", "--disc", "b", "--no-map",
+    result = invoke("reduce", str(export), "--pin", "DS30", "--disc", "steel", "--no-map",
                     "--output", str(tmp_path / "out"))
     assert "not a pin-on-disc friction test" not in result.output
 
@@ -90,7 +90,7 @@ def test_a_document_image_or_archive_is_named_as_such(tmp_path: Path, head: byte
                                                        what: str) -> None:
     path = tmp_path / "run.csv"  # the suffix lies: the bytes decide
     path.write_bytes(head + b"\x00" * 64)
-    result = invoke("reduce", str(path), "--pin", "a", "--disc", "b", "--no-map",
+    result = invoke("reduce", str(path), "--pin", "DS30", "--disc", "steel", "--no-map",
                     "--output", str(tmp_path / "out"))
     assert result.exit_code == 1
     (line,) = error_lines(result.output)
@@ -151,7 +151,7 @@ def test_the_missing_column_hint_names_a_file_that_works(tmp_path: Path, monkeyp
     export = tmp_path / "run.csv"
     export.write_text("\n".join(rows) + "\n", encoding="utf-8")
     monkeypatch.chdir(tmp_path)
-    args = ("reduce", "run.csv", "--pin", "a", "--disc", "b", "--no-map", "--output", "out")
+    args = ("reduce", "run.csv", "--pin", "DS30", "--disc", "steel", "--no-map", "--output", "out")
     result = invoke(*args)
     assert result.exit_code == 1
     assert "missing: normal_force_N" in result.output

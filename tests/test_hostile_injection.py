@@ -157,8 +157,12 @@ def test_explorer_page_and_report_keep_names_as_text(campaign: Path, tmp_path: P
 def test_reduce_labels_reach_the_map_as_data(tmp_path: Path) -> None:
     export = good_export(tmp_path / "run.csv")
     map_path = tmp_path / "m.parquet"
+    lab = tmp_path / "materials.toml"  # a hostile lab's materials file names them
+    lab.write_text("[materials]\n" + "".join(f'{json.dumps(n)} = {{ class = "other" }}\n'
+                                             for n in (PIN, DISC)), encoding="utf-8")
     result = invoke("reduce", str(export), "--pin", PIN, "--disc", DISC, "--force", "3",
-                    "--temperature", "20", "--map", str(map_path), "--output", str(tmp_path / "o"))
+                    "--temperature", "20", "--materials", str(lab), "--map", str(map_path),
+                    "--output", str(tmp_path / "o"))
     assert result.exit_code == 0, result.output
     table = invoke("map", "table", "--format", "frictionmap", "--map", str(map_path)).stdout
     assert _text_cells_are_safe(table)[1][:2] == ["'" + PIN, "'" + DISC]

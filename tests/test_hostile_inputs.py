@@ -98,7 +98,7 @@ def test_every_bound_is_generous_for_real_cells() -> None:
 def test_reduce_refuses_a_bad_label_in_one_line(tmp_path: Path, option: str, value: str,
                                                 expected: str) -> None:
     export = good_export(tmp_path / "run.csv")
-    args = ["reduce", str(export), "--pin", "p", "--disc", "d", "--force", "3",
+    args = ["reduce", str(export), "--pin", "DS30", "--disc", "steel", "--force", "3",
             "--temperature", "20", option, value, "--map", str(tmp_path / "map.parquet"),
             "--output", str(tmp_path / "out")]
     stderr = assert_clean_failure(invoke(*args))

@@ -317,13 +317,21 @@ def test_map_import_checks_every_row(tmp_path: Path, row: str, column: str) -> N
     assert not ours.exists()
 
 
-def test_a_frictionmap_csv_we_wrote_reads_back_with_formula_names(tmp_path: Path) -> None:
+def test_a_frictionmap_csv_we_wrote_reads_back_with_formula_names(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
     table = tmp_path / "theirs.csv"
-    table.write_text(HEADER + "=HYPERLINK(x),-steel,3,35.37,20,1,0.5\n", encoding="utf-8")
+    table.write_text(HEADER + "=HYPERLINK(x),-cmd,3,35.37,20,1,0.5\n", encoding="utf-8")
     ours = tmp_path / "ours.parquet"
+    monkeypatch.chdir(tmp_path)  # the lab's materials file names them: they are data
+    refused = invoke("map", "import", str(table), "--map", str(ours))
+    assert refused.exit_code == 1 and "unknown pin '=HYPERLINK(x)'" in refused.output
+    Path("materials.toml").write_text(
+        '[materials]\n"=HYPERLINK(x)" = { class = "other" }\n"-cmd" = { class = "other" }\n',
+        encoding="utf-8")
     assert invoke("map", "import", str(table), "--map", str(ours)).exit_code == 0
     out = invoke("map", "table", "--format", "frictionmap", "--map", str(ours)).stdout
-    assert "'=HYPERLINK(x),'-steel," in out
+    assert "'=HYPERLINK(x),'-cmd," in out
     again = tmp_path / "again.csv"
     again.write_text(out, encoding="utf-8")
     runs = fm.read_map(ours)

@@ -406,6 +406,7 @@ def test_materials_outside_the_vocabulary_are_refused_until_the_hub_adds_them(gr
     assert len(lines) == 2, result.output
     assert "unknown pin 'Dragonskn 30'; did you mean 'Dragonskin 30'" in lines[0]
     assert "unknown pin 'Mold Star 15'" in lines[1]
+    assert 'e.g. "Mold Star 15" = { class = "CLASS" }' in lines[1]  # the line to add
     # one line in the hub's materials file (a pull request) adds the genuinely new one
     (hub / "materials.toml").write_text(
         '[materials]\n"Mold Star 15" = { class = "silicone elastomer", supplier = "Smooth-On" }\n',

@@ -95,6 +95,21 @@ def test_two_pressures_a_rounding_apart_give_no_curvature_term_and_no_crash():
     assert curvature_terms([(ps, mus)]) == [pytest.approx(0.2)]
 
 
+def test_rows_added_in_a_narrow_gap_are_written_exactly_as_computed():
+    # mu falls 8-fold between 2 and 2.00001 kPa: four digits would leave the gap, so the
+    # added rows carry the digits a simulator file carries, and a row's value is the
+    # value at the pressure the file states
+    from tribopipe.rounding import FILE_DIGITS, decimal_text
+
+    def value_at(p):
+        return 1.0 * (p / 2.0) ** (math.log(0.125) / math.log(2.00001 / 2.0))
+
+    rows = densify([2.0, 2.00001], value_at)
+    added = rows[1:-1]
+    assert added and all(2.0 < p < 2.00001 for p in added)
+    assert all(float(decimal_text(p, digits=FILE_DIGITS)) == p for p in added)
+
+
 def test_the_interpolation_u_is_zero_at_measured_points_and_grows_between(groups):
     at = query(groups, "Dragonskin 30", "steel", 35.37, 20.0).mu_k
     assert at.u_interpolation == 0.0

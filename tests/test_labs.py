@@ -216,19 +216,29 @@ def _map_with(tmp_path, name, pins):
     return path
 
 
-def test_a_merge_stores_canonical_names_and_keeps_the_given_ones(tmp_path):
+def test_a_merge_stores_canonical_names_and_keeps_the_given_ones(tmp_path, monkeypatch):
     from click.testing import CliRunner
 
     from tribopipe.cli import main
 
+    monkeypatch.chdir(tmp_path)
     other = _map_with(tmp_path, "other.parquet", [("Dragon Skin 30", "Stahl"),
                                                    ("Unobtainium", "steel")])
     target = tmp_path / "map.parquet"
+    # a material the vocabulary lacks refuses the merge whole, in one line with the fix
+    refused = CliRunner().invoke(main, ["map", "merge", str(other), "--map", str(target)])
+    assert refused.exit_code == 1
+    (line,) = [ln for ln in refused.stderr.splitlines() if ln.strip()]
+    assert "unknown pin 'Unobtainium'" in line
+    assert "`tribopipe materials add Unobtainium --class CLASS`" in line
+    assert '"Unobtainium" = { class = "CLASS" }' in line
+    assert not target.exists()
+    add = CliRunner().invoke(main, ["materials", "add", "Unobtainium", "--class", "other"])
+    assert add.exit_code == 0, add.output
     result = CliRunner().invoke(main, ["map", "merge", str(other), "--map", str(target)])
     assert result.exit_code == 0, result.output
     assert "1 row(s) of" in result.stdout and "name 'Dragon Skin 30': stored as " \
         "'Dragonskin 30'" in result.stdout
-    assert "note: unknown pin 'Unobtainium'" in result.stderr
     runs = fm.read_map(target).sort_values("measurement_id")
     assert runs["pin"].tolist() == ["Dragonskin 30", "Unobtainium"]
     assert runs["disc"].tolist() == ["steel", "steel"]

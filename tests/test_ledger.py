@@ -158,12 +158,17 @@ def test_a_relabel_kept_conflicting_exits_1_with_the_way_out(tmp_path: Path) -> 
     mapfile, out = tmp_path / "map.parquet", tmp_path / "out"
     args = [R1, "--pin", "DS30", "--force", "1", "--temperature", "10", "--repeat", "1",
             "--output", out, "--map", mapfile]
-    assert reduce_cli(*args, "--disc", "stel").exit_code == 0
+    # a typo is refused at the edge; a wrong (but known) disc, kept against the export's
+    # Test name, is what a relabel fixes
+    typo = reduce_cli(*args, "--disc", "stel")
+    assert typo.exit_code == 1 and "did you mean 'steel'" in typo.stderr
+    assert not mapfile.exists()
+    assert reduce_cli(*args, "--disc", "glass", "--keep-labels").exit_code == 0
     again = reduce_cli(*args, "--disc", "steel")
     assert again.exit_code == 1
     assert "--replace" in again.stderr.splitlines()[-1]
-    assert "disc 'stel' in the map, 'steel'" in again.stderr
-    assert list(pd.read_parquet(mapfile)["disc"]) == ["stel"]
+    assert "disc 'glass' in the map, 'steel'" in again.stderr
+    assert list(pd.read_parquet(mapfile)["disc"]) == ["glass"]
     fixed = reduce_cli(*args, "--disc", "steel", "--replace")
     assert fixed.exit_code == 0, fixed.output
     assert list(pd.read_parquet(mapfile)["disc"]) == ["steel"]

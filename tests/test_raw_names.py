@@ -21,7 +21,7 @@ NAMES = ["evil\u202etxt.csv", "two\nlines.csv", "cr\rname.csv"]
 
 
 def _reduce(export: Path, map_path: Path, out: Path, *extra: str):
-    return reduce_cli(export, "--pin", "P", "--disc", "D", "--temperature", "20",
+    return reduce_cli(export, "--pin", "DS30", "--disc", "steel", "--temperature", "20",
                       "--map", map_path, "--output", out, *extra)
 
 
@@ -83,7 +83,7 @@ def test_a_note_naming_a_file_with_a_newline_stays_one_line(tmp_path: Path) -> N
 
     raw = write_rheocompass_session(tmp_path / "two\nsteps\u202e.csv", [steps_test()],
                                     project="steps")
-    result = invoke("reduce", str(raw), "--pin", "P", "--disc", "D", "--force", "3",
+    result = invoke("reduce", str(raw), "--pin", "DS30", "--disc", "steel", "--force", "3",
                     "--keep-labels", "--no-map", "--output", str(tmp_path / "o"))
     assert result.exit_code == 0, result.output
     _lines_are_printable(result.stderr)

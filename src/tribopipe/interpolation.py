@@ -48,7 +48,7 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 from .errors import ExportError
-from .rounding import round_significant
+from .rounding import FILE_DIGITS, round_significant
 
 if TYPE_CHECKING:
     import numpy as np
@@ -310,11 +310,15 @@ def curvature(series: Iterable[tuple[Sequence[float], Sequence[float]]]) -> floa
     return math.sqrt(sum(k * k for k in terms) / len(terms))
 
 
-def _rounded_inside(p: float, a: float, b: float) -> float:
-    """``p`` to :data:`DENSIFY_DIGITS` significant digits where that stays strictly
-    between ``a`` and ``b``, else ``p`` itself."""
-    rounded = round_significant(p, DENSIFY_DIGITS)
-    return rounded if a < rounded < b else p
+def _rounded_inside(p: float, a: float, b: float, digits: int) -> float:
+    """``p`` to ``digits`` significant digits where that stays strictly between ``a``
+    and ``b``, else to :data:`~tribopipe.rounding.FILE_DIGITS` where that does, else
+    ``p`` itself."""
+    for n in (digits, FILE_DIGITS):
+        rounded = round_significant(p, n)
+        if a < rounded < b:
+            return rounded
+    return p
 
 
 def _chord_error(value_at: Callable[[float], float], a: float, b: float) -> float:
@@ -341,8 +345,10 @@ def densify(
 
     Each gap between measured values is cut into the fewest parts equal in ln x whose
     chords all pass the check; added rows are rounded to :data:`DENSIFY_DIGITS`
-    significant digits (and the check is made on the rounded rows), unless rounding would
-    merge rows of a narrow gap: then they are kept as they are.
+    significant digits (and the check is made on the rounded rows); in a gap too narrow
+    for that (a row would leave the gap, or two would merge) to the digits a simulator
+    file carries (:data:`~tribopipe.rounding.FILE_DIGITS`), so that a row's value is the
+    value at the pressure as written.
     """
     rows = sorted({float(p) for p in measured})
     out = rows[:1]
@@ -352,9 +358,9 @@ def densify(
                 inner = [a * (b / a) ** (k / parts) for k in range(1, parts)]
             else:
                 inner = [a + (b - a) * k / parts for k in range(1, parts)]
-            cuts = sorted({_rounded_inside(p, a, b) for p in inner})
-            if len(cuts) < len(inner):  # rounding merged rows of a narrow gap: keep them all
-                cuts = inner
+            cuts = sorted({_rounded_inside(p, a, b, DENSIFY_DIGITS) for p in inner})
+            if len(cuts) < len(inner):  # rounding merged rows of a narrow gap
+                cuts = sorted({_rounded_inside(p, a, b, FILE_DIGITS) for p in inner})
             edges = [a, *cuts, b]
             if all(_chord_error(value_at, lo, hi) <= target
                    for lo, hi in zip(edges, edges[1:], strict=False)):

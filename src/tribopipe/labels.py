@@ -108,28 +108,23 @@ class RunLabels:
         if self.repeat is not None:
             check_count(self.repeat, "repeat", high=MAX_REPEAT)
 
-    def resolved(self, vocabulary: Vocabulary) -> tuple[RunLabels, list[str]]:
+    def resolved(self, vocabulary: Vocabulary) -> RunLabels:
         """These labels with pin and disc resolved through ``vocabulary``
-        (:meth:`tribopipe.materials.Vocabulary.resolve`: the canonical name, the given one
-        kept in ``pin_as_given``/``disc_as_given``), and one line per name that does not
-        resolve (with a did-you-mean): such a name is kept as given (``map validate``
-        reports it); a campaign refuses it instead
-        (:func:`tribopipe.campaign.table.check_materials`)."""
-        out, problems = self, []
-        for what in ("pin", "disc"):
-            name = getattr(self, what)
-            if name is None:
-                continue
-            problem = vocabulary.problem(name, what)
-            if problem is not None:
-                problems.append(problem)
-                continue
-            found = vocabulary.resolve(name, what)
-            if what == "pin":
-                out = replace(out, pin=found.name, pin_as_given=self.pin_as_given or name)
-            else:
-                out = replace(out, disc=found.name, disc_as_given=self.disc_as_given or name)
-        return out, problems
+        (:meth:`tribopipe.materials.Vocabulary.resolve_all`: the canonical name, the given
+        one kept in ``pin_as_given``/``disc_as_given``); a name that does not resolve
+        refuses the labels, ONE :class:`~tribopipe.materials.MaterialError` naming each
+        such name with its did-you-mean and the fix."""
+        named = [(what, getattr(self, what)) for what in ("pin", "disc")
+                 if getattr(self, what) is not None]
+        found = vocabulary.resolve_all(named)
+        out = self
+        if self.pin is not None:
+            out = replace(out, pin=found[("pin", self.pin)],
+                          pin_as_given=self.pin_as_given or self.pin)
+        if self.disc is not None:
+            out = replace(out, disc=found[("disc", self.disc)],
+                          disc_as_given=self.disc_as_given or self.disc)
+        return out
 
     @property
     def complete(self) -> bool:

@@ -4,9 +4,15 @@ properties, and the resolution of every incoming pin or disc name.
 The package ships ``tribopipe/data/materials.toml`` (every material of the founding map
 and a few more); a lab extends it with a file of the same form (:func:`load_vocabulary`).
 Every name that comes in (a pattern, a manifest cell, an option, a merged map or
-package) goes through :meth:`Vocabulary.resolve` at the edge: it gives the canonical name
-(stored in the map; the name as given is kept in ``pin_as_given``/``disc_as_given``), or
-a :class:`MaterialError` of one line with a did-you-mean. Names are compared by
+package, an imported table) goes through this module at the edge, and only here is it
+decided what a name means: :meth:`Vocabulary.resolve` (one name) and
+:meth:`Vocabulary.resolve_all` (every name of a file, a package or a command at once)
+give the canonical name (stored in the map; the name as given is kept in
+``pin_as_given``/``disc_as_given``), or ONE :class:`MaterialError` of one line naming
+every name that does not resolve, each with a did-you-mean, and the fix
+(:func:`add_fix`: the ``tribopipe materials add`` command or the line for the lab's
+file). An option that filters what the map holds (``query --pin``) is resolved by
+:meth:`Vocabulary.filter_name` against the map's own names. Names are compared by
 :func:`name_key`: case, accents, spaces and punctuation ignored, so "Dragon Skin 30",
 "dragonskin-30" and "Dragonskin 30" are one name. An alias listed under two materials is
 ambiguous and refused with both (the lab says which it means).
@@ -23,6 +29,8 @@ from __future__ import annotations
 
 import difflib
 import functools
+import os
+import shlex
 import tomllib
 import unicodedata
 from collections.abc import Iterable, Mapping, Sequence
@@ -177,6 +185,69 @@ class Vocabulary:
             raise MaterialError(problem, hint=ADD_HINT)
         return Resolved(self.candidates(name)[0], name)
 
+    def resolve_all(self, named: Iterable[tuple[str, str]],
+                    where: str | os.PathLike[str] | None = None) -> dict[tuple[str, str], str]:
+        """Every ``(what, name)`` of ``named`` (``what``: "pin" or "disc") → its canonical
+        name; when any does not resolve, ONE :class:`MaterialError` naming every such
+        name (each with its did-you-mean or choices, in the order first met) and the fix
+        (:func:`add_fix`), about ``where`` (a file, a package)."""
+        out: dict[tuple[str, str], str] = {}
+        seen: set[tuple[str, str]] = set()
+        problems: list[str] = []
+        unknown: list[str] = []
+        for what, name in named:
+            if (what, name) in seen:
+                continue
+            seen.add((what, name))
+            bad = name_problem(name)
+            problem = f"{what}: {bad}" if bad is not None else self.problem(name, what)
+            if problem is None:
+                out[(what, name)] = self.candidates(name)[0]
+                continue
+            problems.append(problem)
+            if bad is None and not self.candidates(name) and name not in unknown:
+                unknown.append(name)
+        if problems:
+            head = (problems[0] if len(problems) == 1 else
+                    f"{len(problems)} material names not in the vocabulary: "
+                    + "; ".join(problems))
+            raise MaterialError(head, path=where, hint=add_fix(unknown))
+        return out
+
+    def filter_name(self, name: str, what: str, held: Iterable[str]) -> str:
+        """The name a filter option (``--pin``, ``--disc`` of a command that reads the
+        map) means, given the names the map ``held``: a held name written the same way
+        (:func:`name_key`) as ``name``; else the canonical name ``name`` resolves to, or
+        the one held name that resolves to it (a row stored before names were
+        resolved); else a :class:`MaterialError` of one line with a did-you-mean over the
+        vocabulary and the held names (an ambiguous name: its choices)."""
+        check_name(name, what)
+        held = sorted({str(h) for h in held})
+        key = name_key(name)
+        same = [h for h in held if name_key(h) == key]
+        if same:
+            return same[0]
+        found = self.candidates(name)
+        if len(found) == 1:
+            canonical = found[0]
+            if canonical in held:
+                return canonical
+            alike = [h for h in held if self.candidates(h) == (canonical,)]
+            return alike[0] if len(alike) == 1 else canonical
+        if found:
+            raise MaterialError(f"{what} {name!r} is ambiguous: "
+                                + " or ".join(repr(c) for c in found),
+                                hint="give the material's full name")
+        keys = {name_key(h): h for h in held}
+        near = list(self.suggest(name))
+        near += [keys[k] for k in difflib.get_close_matches(key, list(keys), n=3,
+                                                            cutoff=SUGGEST_CUTOFF)
+                 if keys[k] not in near]
+        hint = f"; did you mean {' or '.join(repr(n) for n in near[:3])}?" if near else ""
+        shown = ", ".join(held[:12]) + (" ..." if len(held) > 12 else "")
+        raise MaterialError(f"unknown {what} {name!r}{hint}",
+                            hint=f"the map holds: {shown}" if held else "the map is empty")
+
     @functools.cached_property
     def _phrases(self) -> dict[tuple[str, ...], tuple[str, ...]]:
         """Every name and alias as its word sequence (:func:`name_words`) → the canonical
@@ -222,6 +293,21 @@ class Vocabulary:
 ADD_HINT = (f"fix the name, map it in the campaign's [names], or add the material: one line "
             f"in {LAB_FILE} beside the campaign config, or `tribopipe materials add NAME "
             f"--class CLASS`")
+
+
+def add_fix(names: Sequence[str]) -> str:
+    """The one-line fix for names the vocabulary lacks: correct a misspelt one, or add a
+    genuinely new material with one command (or one line in the lab's
+    :data:`LAB_FILE`); the general :data:`ADD_HINT` when ``names`` is empty (ambiguous
+    names only: say which material is meant)."""
+    if not names:
+        return ADD_HINT
+    first = names[0]
+    more = f" (and the same for {', '.join(repr(n) for n in names[1:])})" if names[1:] else ""
+    line = material_line(Material(name=first, material_class="CLASS"))
+    return (f"fix a misspelt name; a new material is one command, `tribopipe materials add "
+            f"{shlex.quote(first)} --class CLASS`, or one line under [materials] in "
+            f"{LAB_FILE}: {line}{more}; CLASS is one of {', '.join(CLASSES)}")
 
 
 def _text(value: Any, where: str, key: str) -> str:

@@ -150,9 +150,11 @@ _SERIAL = re.compile(r"\bS/?N\s*[:#]?\s*([A-Za-z0-9-]+)")
 
 
 def from_export(header: Mapping[str, str]) -> dict[str, str]:
-    """The reporting items an export's header gives (a reader's ``meta.extra``): Rheoplus
-    writes ``device`` ("MCR302 SN81338249; FW3.71; …": instrument and serial),
-    ``application`` (the software and its version) and ``measuring_date_time``."""
+    """The reporting items an export's header gives (a reader's ``meta.extra``, the keys
+    of :data:`tribopipe.readers.interval.HEADER_FIELDS`): ``device`` ("MCR302 SN81338249;
+    FW3.71; …": instrument and serial), ``application`` (the software and its version)
+    and ``measuring_date_time``, as Rheoplus writes them in every data series and a
+    RheoCompass export where it holds those lines. Nothing else is inferred."""
     out: dict[str, str] = {}
     device = header.get("device")
     if device and text_problem(device, max_chars=300) is None:

@@ -46,6 +46,11 @@ def _fixed(value: Decimal) -> str:
     return text.lstrip("-") if value.is_zero() else text
 
 
+#: significant digits of a computed number in a simulator's input file (enough that a
+#: solver's interpolation between a table's rows matches tribopipe's)
+FILE_DIGITS = 10
+
+
 def decimal_text(value: float, *, digits: int | None = None, places: int | None = None) -> str:
     """``value`` as text, rounded half away from zero on its shortest decimal text (the
     rule of :func:`round_gum`): to ``digits`` significant digits laid out as ``format``'s

@@ -15,6 +15,8 @@ if TYPE_CHECKING:
     import pandas as pd
     from click.testing import Result
 
+    from tribopipe.materials import Vocabulary
+
 #: the ratio of μ_S to μ_K the simulator tests give the published groups (which hold no
 #: μ_S): a breakaway above the kinetic value, as elastomers show
 MU_S_RATIO = 1.4
@@ -51,3 +53,13 @@ def reduce_cli(*args: str | os.PathLike[str]) -> Result:
     from tribopipe.cli import main
 
     return CliRunner().invoke(main, ["reduce", *(os.fsdecode(a) for a in args)])
+
+
+def lab_vocabulary(*names: str) -> Vocabulary:
+    """The shipped materials vocabulary with ``names`` added as a lab's own materials
+    (class "other"): what a test whose made-up or hostile names must reach the map
+    passes where names are resolved at the edge (``import_table(..., vocabulary=)``)."""
+    from tribopipe.materials import Material, shipped_vocabulary
+
+    return shipped_vocabulary().with_materials(
+        Material(name=n, material_class="other") for n in names)

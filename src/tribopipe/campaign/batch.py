@@ -57,7 +57,7 @@ from .worker import (
     WorkerContext,
     crashed,
     fewer_gc_passes,
-    prepare_plots,
+    prepare_workers,
     reduce_chunk,
     worker_init,
 )
@@ -342,7 +342,7 @@ def _execute(todo: list[Job], ctx: WorkerContext, jobs: int,
         return
     from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 
-    prepare_plots(ctx)
+    prepare_workers(ctx)
     pool = ProcessPoolExecutor(max_workers=workers, initializer=worker_init)
     try:
         futures = {pool.submit(reduce_chunk, chunk, ctx): chunk
@@ -461,7 +461,9 @@ def _apply(campaign: Campaign, results: Sequence[FileOutcome], by_file: Mapping[
                 runs_failed += 1
                 runs_state.append(RunState.failed(run))
         entries[row.file] = replace(base, runs=tuple(runs_state))
-    alive = set().union(*(_run_ids(e) for e in entries.values())) if entries else set()
+    # the runs of files redone now that no file of the state still holds (none to look
+    # for when nothing was redone: an unchanged re-run)
+    alive = set().union(*(_run_ids(e) for e in entries.values())) if old_ids else set()
     return Arrivals(records, old_ids - alive), Account(
         reduced=reduced, flagged=flagged, duplicates=duplicates, outcomes=outcomes,
         runs_failed=runs_failed)

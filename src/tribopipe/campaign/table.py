@@ -145,14 +145,16 @@ def discover_files(campaign: Campaign) -> list[Path]:
                             campaign.review) if p}
     layout = campaign.layout
     inside = campaign.output_dir != root and campaign.output_dir.is_relative_to(root)
+    # the output folder's own files can only be met where it is, or holds, the raw folder
+    outputs_here = inside or root.is_relative_to(campaign.output_dir)
     files = [
         p for p in candidates
         if p.suffix.lower() != ".toml" and not p.name.endswith(".lock")
         and p not in not_runs
         and not (inside and p.is_relative_to(campaign.output_dir))
-        and not layout.written_here(p) and not _is_tool_table(p)
+        and not (outputs_here and layout.written_here(p)) and not _is_tool_table(p)
     ]
-    return sorted(files, key=lambda p: p.relative_to(root).as_posix())
+    return sorted(files, key=lambda p: _relative(p, root))
 
 
 def describe_glob(campaign: Campaign) -> str:
@@ -221,15 +223,45 @@ def _compute_campaign_key(campaign: Campaign) -> str:
 
 
 def _relative(path: Path, root: Path) -> str:
+    """``path`` relative to ``root`` (below it), as a POSIX path; by its text when it
+    starts with the root's (as every discovered file's does: a campaign has thousands)."""
+    text, prefix = str(path), str(root) + os.sep
+    if text.startswith(prefix) and root.is_absolute():
+        rel = text[len(prefix):]
+        return rel if os.sep == "/" else rel.replace(os.sep, "/")
     return path.relative_to(root).as_posix()
 
 
-def _traces_present(campaign: Campaign, entry: FileState) -> bool:
+class _Traces:
+    """Whether a trace (relative to the output folder) is a file on disk: those directly
+    in ``traces/`` from one listing of it (a campaign has thousands), any other by a
+    ``stat``."""
+
+    def __init__(self, campaign: Campaign) -> None:
+        self.output_dir = campaign.output_dir
+        self.folder = campaign.layout.traces_dir.relative_to(campaign.output_dir).as_posix()
+        self._listed: set[str] | None = None
+
+    def present(self, trace: str) -> bool:
+        """True when ``trace`` is a file (symlinks followed)."""
+        folder, _, name = trace.rpartition("/")
+        if folder != self.folder or not name:
+            return (self.output_dir / trace).is_file()
+        if self._listed is None:
+            try:
+                with os.scandir(self.output_dir / self.folder) as it:
+                    self._listed = {e.name for e in it if e.is_file()}
+            except OSError:
+                self._listed = set()
+        return name in self._listed
+
+
+def _traces_present(traces: _Traces, entry: FileState) -> bool:
     """True when every reduced run of a state entry still has its trace on disk."""
     for run in entry.runs:
         if run.status == REDUCED:
             trace = run.entry.trace if run.entry is not None else ""
-            if not trace or not (campaign.output_dir / trace).is_file():
+            if not trace or not traces.present(trace):
                 return False
     return True
 
@@ -279,6 +311,7 @@ def campaign_table(campaign: Campaign, *, state: CampaignState | None = None,
     if manifest is None and campaign.manifest is not None:
         manifest = read_manifest(campaign.manifest)
     per_test_possible = campaign.test_pattern is not None
+    traces = _Traces(campaign)
     rows = CampaignTable()
     for path in discover_files(campaign):
         rel = _relative(path, campaign.raw_dir)
@@ -312,11 +345,11 @@ def campaign_table(campaign: Campaign, *, state: CampaignState | None = None,
             else:
                 sources.append(("file name", found))
         merged: dict[str, Any] = {}
+        check_labels = False
         if problem is None:
             try:
                 merged = merge_metadata(rel, sources, campaign)
-                if not test_rows and not per_test_possible:
-                    labels_from(rel, merged, hints=hints)
+                check_labels = not test_rows and not per_test_possible
             except CampaignError as exc:
                 problem = str(exc)
         previous = entries.get(rel)
@@ -332,11 +365,18 @@ def campaign_table(campaign: Campaign, *, state: CampaignState | None = None,
             same = sha is not None and sha == previous.sha256 and \
                 previous.recipe == recipe_hash(campaign, merged, test_rows)
             if same and previous.status in (REDUCED, DUPLICATE):
-                status = previous.status if _traces_present(campaign, previous) else CHANGED
+                status = previous.status if _traces_present(traces, previous) else CHANGED
             elif same and previous.status == FAILED:
                 status, reason = FAILED, previous.reason
             else:
                 status = CHANGED
+        if check_labels and status not in (REDUCED, DUPLICATE):
+            # the labels of a file unchanged since it landed (the same labels: its recipe
+            # hash holds them) were checked when it landed
+            try:
+                labels_from(rel, merged, hints=hints)
+            except CampaignError as exc:
+                problem = str(exc)
         # content before labels: what is not an export is set aside, and an export no
         # label source describes is named for what it holds before its labels are judged
         if status in (NEW, CHANGED, FAILED) or problem is not None:

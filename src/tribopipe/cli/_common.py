@@ -154,3 +154,28 @@ def instrument_option(func: F) -> F:
         help="Instrument file (TOML, see configs/instruments/). "
         "Default: the T-PID/44 cell, 3 pins, r = 3 mm.",
     )(func)
+
+
+def material_filters(source: Any, pin: Any, disc: Any) -> tuple[Any, Any]:
+    """``--pin`` and ``--disc`` of a command that reads the map (each a name, a tuple of
+    names or ``None``) resolved through the materials vocabulary (the shipped one and
+    ./materials.toml) against the names the map ``source`` (a path or an open snapshot)
+    holds: :meth:`tribopipe.materials.Vocabulary.filter_name`, the one rule; an unknown
+    name is refused in one line with a did-you-mean."""
+    if pin is None and disc is None or pin == () and disc == ():
+        return pin, disc
+    from ..frictionmap.snapshot import as_snapshot
+    from ..materials import lab_files, load_vocabulary
+
+    vocabulary = load_vocabulary(lab_files("."))
+    runs = as_snapshot(source, ["pin", "disc"]).runs
+
+    def one(what: str, value: Any) -> Any:
+        if value is None:
+            return None
+        held = runs[what].dropna().astype(str).unique().tolist() if what in runs else []
+        if isinstance(value, tuple):
+            return tuple(vocabulary.filter_name(v, what, held) for v in value)
+        return vocabulary.filter_name(value, what, held)
+
+    return one("pin", pin), one("disc", disc)

@@ -12,7 +12,7 @@ from typing import TYPE_CHECKING, Any
 
 import click
 
-from ._common import friendly_errors, map_option, say
+from ._common import friendly_errors, map_option, material_filters, say
 
 if TYPE_CHECKING:
     from ..export.formats import Format, Option
@@ -127,8 +127,10 @@ def _command(entry: Format) -> click.Command:
             say(f"note: {text}", err=True)
 
         # the columns it reads: a map folder's groups are stored, not grouped again
-        _emit(export_from_map(open_map(map_path, MAP_COLUMNS), entry.name, on_note=note,
-                              **options), output)
+        snap = open_map(map_path, MAP_COLUMNS)
+        options["pin"], options["disc"] = material_filters(snap, options["pin"],
+                                                           options["disc"])
+        _emit(export_from_map(snap, entry.name, on_note=note, **options), output)
 
     run.__doc__ = entry.title + (f"\n\n{entry.description}" if entry.description else "")
     func: Callable[..., Any] = friendly_errors(run)

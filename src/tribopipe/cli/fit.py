@@ -7,7 +7,7 @@ import math
 
 import click
 
-from ._common import friendly_errors, map_option, say
+from ._common import friendly_errors, map_option, material_filters, say
 
 
 def _fmt(value: float | None, spec: str) -> str:
@@ -36,11 +36,13 @@ def fit_cmd(
     from ..fit import fit_map
     from ..frictionmap.snapshot import open_map
 
-    fits = fit_map(open_map(map_path))
+    snap = open_map(map_path)
+    pin, disc = material_filters(snap, pin, disc)
+    fits = fit_map(snap)
     if pin is not None:
-        fits = fits[fits["pin"].str.casefold() == pin.casefold()]
+        fits = fits[fits["pin"] == pin]
     if disc is not None:
-        fits = fits[fits["disc"].str.casefold() == disc.casefold()]
+        fits = fits[fits["disc"] == disc]
     if output:
         from ..export.tables import to_csv
         from ..files import write_text_atomic

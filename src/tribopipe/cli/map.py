@@ -10,6 +10,7 @@ from ._common import (
     instrument_option,
     lazy_map_option,
     map_option,
+    material_filters,
     say,
 )
 from .fit import fit_cmd
@@ -68,7 +69,10 @@ def import_cmd(
 
     if published == (file is not None):
         raise click.UsageError("give a FILE or --published (not both)")
-    report = import_table(map_path, file, source=source, replace=replace)
+    from ..materials import lab_files, load_vocabulary
+
+    report = import_table(map_path, file, source=source, replace=replace,
+                          vocabulary=load_vocabulary(lab_files(".")))
     say(f"map {map_path}: {report.summary()}")
 
 
@@ -315,6 +319,13 @@ def table_cmd(
       tribopipe map table --format xlsx -o friction_map.xlsx
       tribopipe map table --layout paper --decimal , -o table.csv
     """
+    from ..frictionmap.snapshot import open_map
+    from ..stats import GROUP_INPUT_COLUMNS
+
+    # the group layouts read the groups (stored in a map folder) and the columns of the
+    # statistics where none are stored; the 7-column table reads the runs themselves
+    snap = open_map(map_path, None if fmt == "frictionmap" else GROUP_INPUT_COLUMNS)
+    pin, disc = material_filters(snap, pin, disc)  # against the names the map holds
     if fmt == "xlsx":
         from ..export.workbook import export_workbook
 
@@ -332,13 +343,9 @@ def table_cmd(
         say(f"wrote {written}", err=True)
         return
     from ..export.tables import export_table
-    from ..frictionmap.snapshot import open_map
-    from ..stats import GROUP_INPUT_COLUMNS
 
-    # the group layouts read the groups (stored in a map folder) and the columns of the
-    # statistics where none are stored; the 7-column table reads the runs themselves
     text = export_table(
-        open_map(map_path, None if fmt == "frictionmap" else GROUP_INPUT_COLUMNS),
+        snap,
         output,
         fmt=fmt,
         layout=layout,

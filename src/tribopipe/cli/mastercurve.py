@@ -7,7 +7,7 @@ import json
 
 import click
 
-from ._common import friendly_errors, map_option, renamed, say
+from ._common import friendly_errors, map_option, material_filters, renamed, say
 
 
 @click.command("master-curve")
@@ -37,6 +37,7 @@ def master_curve_cmd(pin: str, disc: str, shift: str, output: str | None, as_jso
     from ..mastercurve import map_master_curve
     from ..numeric import finite_json
 
+    pin, disc = material_filters(map_path, pin, disc)
     mc = map_master_curve(map_path, pin, disc, shift=shift)
     if as_json:
         click.echo(json.dumps(finite_json(mc.to_dict()), indent=2, allow_nan=False))

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import click
 
-from ._common import friendly_errors, map_option, renamed, say
+from ._common import friendly_errors, map_option, material_filters, renamed, say
 
 _FORMAT = click.option(
     "--format",
@@ -53,6 +53,7 @@ def pairs_cmd(map_path: str, pin: str | None, disc: str | None, output: str | No
     from ..export.plots import plot_map_pairs
     from ..layout import OutputLayout
 
+    pin, disc = material_filters(map_path, pin, disc)
     out_dir = (output if output is not None
                else OutputLayout.of(Path(map_path).parent).pair_plots_dir)
     for path in plot_map_pairs(map_path, out_dir, fmt=fmt, pin=pin, disc=disc, dpi=dpi):

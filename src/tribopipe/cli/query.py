@@ -8,7 +8,7 @@ from typing import Any
 
 import click
 
-from ._common import friendly_errors, instrument_option, map_option
+from ._common import friendly_errors, instrument_option, map_option, material_filters
 
 
 @click.command("query")
@@ -84,7 +84,6 @@ def query_cmd(
     from ..config import load_settings
     from ..frictionmap.snapshot import open_map
     from ..frictionmap.synthetic_rows import map_synthetic_note
-    from ..materials import lab_files, load_vocabulary
     from ..numeric import finite_json
     from ..query import QUERY_COLUMNS, query_map, value_labs
     from ..query_text import format_result
@@ -103,13 +102,11 @@ def query_cmd(
     # the one read and check of the map: the columns the query reads (its groups are
     # stored in a map folder), all of them for the master curve
     snap = open_map(map_path, None if use_master_curve else QUERY_COLUMNS)
+    pin, disc = material_filters(snap, pin, disc)
     if use_master_curve:
         _master_curve_query(snap, pin, disc, pressure_kPa, temperature_C, speed_mm_s,
                             as_json)
         return
-    vocabulary = load_vocabulary(lab_files("."))
-    pin, disc = (vocabulary.candidates(n)[0] if len(vocabulary.candidates(n)) == 1 else n
-                 for n in (pin, disc))
     result = query_map(snap, pin, disc, pressure_kPa, temperature_C, speed_mm_s, labs,
                        method)
     origin = value_labs(snap, result, labs)

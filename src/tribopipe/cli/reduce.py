@@ -16,7 +16,6 @@ from ._common import (
     lazy_map_option,
     read_options,
     renamed,
-    say,
 )
 
 if TYPE_CHECKING:
@@ -47,7 +46,9 @@ def _with_u(value: float | None, expanded: float | None) -> tuple[str, str]:
 @click.command("reduce")
 # FILES is checked per file by the library (a bad path fails that file only), not by click
 @click.argument("files", nargs=-1, required=True, type=click.Path())
-@click.option("--pin", help="Pin material, e.g. 'Ecoflex 00-50'.")
+@click.option("--pin", help="Pin material, e.g. 'Ecoflex 00-50' (a name or alias of the "
+              "materials vocabulary, see `tribopipe materials list`; an unknown name is "
+              "refused).")
 @click.option("--disc", help="Disc material, e.g. 'steel'.")
 @click.option(
     "--force",
@@ -149,12 +150,9 @@ def reduce_cmd(
 
     vocabulary = load_vocabulary(lab_files(".", materials_files))
     check = LabelCheck(keep_labels=keep_labels, vocabulary=vocabulary)
-    labels, unknown = RunLabels(
+    labels = RunLabels(  # an unknown name refuses the command before any work
         pin=pin, disc=disc, normal_force_N=force_N, temperature_C=temperature_C, repeat=repeat
     ).resolved(vocabulary)
-    for problem in unknown:
-        say(f"note: {problem}: kept as given (add it with `tribopipe materials add`)",
-            err=True)
     if no_map and plots and output is None:
         raise click.UsageError("--plots with --no-map: give -o/--output, the folder for the "
                                "plots (--no-map alone writes nothing)")

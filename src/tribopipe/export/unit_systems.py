@@ -19,7 +19,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from ..errors import ExportError
-from ..rounding import decimal_text
+from ..rounding import FILE_DIGITS, decimal_text
 
 
 @dataclass(frozen=True)
@@ -57,11 +57,12 @@ def convert_pressure_kPa(pressure_kPa: float, units: str) -> float:
 
 
 def num(value: float) -> str:
-    """A number as the solvers read it: up to 10 significant digits, no separators.
+    """A number as the solvers read it: up to :data:`~tribopipe.rounding.FILE_DIGITS` (10)
+    significant digits, no separators.
 
     10 digits keep the grid's pressures exact enough that a solver's interpolation
     between them matches ours; short values (0.01179) stay short. Rounded by the one
     rule for computed numbers (:func:`tribopipe.rounding.decimal_text`), which the
     explorer's copied snippets share.
     """
-    return decimal_text(value, digits=10)
+    return decimal_text(value, digits=FILE_DIGITS)

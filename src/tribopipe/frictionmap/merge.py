@@ -46,16 +46,12 @@ class MergeReport:
     lab: str | None = None
     #: names the materials vocabulary resolved (given → canonical, rows)
     resolved: tuple[tuple[str, str, int], ...] = ()
-    #: names it does not know, one line each (kept as given; ``map validate`` reports them)
-    unresolved: tuple[str, ...] = ()
 
     def notes(self, other: str) -> list[str]:
         """One line per thing to know about the rows' labs and names (nothing when all
         named a lab and every name was canonical)."""
         lines = [f"{n} row(s) of {other} name {given!r}: stored as {name!r} (the given name "
                  f"kept in pin_as_given/disc_as_given)" for given, name, n in self.resolved]
-        lines += [f"note: {line}: kept as given; add it with `tribopipe materials add`"
-                  for line in self.unresolved]
         if self.labelled:
             lines.append(f"{self.labelled} row(s) of {other} named no lab: recorded as "
                          f"measured by {self.lab!r}")
@@ -90,7 +86,10 @@ def merge_map(
     the others; a missing ``other``, a map merged into itself or a ``lab`` that is not
     one line of text a :class:`MapError`. Every pin and disc name is resolved through
     the materials ``vocabulary`` (default: the shipped one) on the way in
-    (:func:`resolve_names`); a name it does not know is kept as given and said.
+    (:func:`resolve_names`); a name it does not know refuses the merge whole, the map
+    untouched, in one :class:`~tribopipe.materials.MaterialError` naming every such name
+    with the fix (``tribopipe materials add``, or a line for the lab's
+    ``materials.toml``).
     """
     if lab is not None:
         lab = _lab_name(lab)
@@ -103,50 +102,50 @@ def merge_map(
         if lab is not None:
             raise MapError(f"a data package names its lab ({package_lab!r}); --lab is for a "
                            "Parquet map whose rows name none", path=other)
-        runs, resolved, unresolved = resolve_names(runs, vocabulary)
-        return MergeReport(append_frame(path, runs, replace=replace),
-                           resolved=resolved, unresolved=unresolved)
+        runs, resolved = resolve_names(runs, vocabulary, other)
+        return MergeReport(append_frame(path, runs, replace=replace), resolved=resolved)
     if os.path.realpath(other) == os.path.realpath(path):
         raise MapError("cannot merge a friction map into itself", path=other)
     runs = read_map(other)  # validated: a damaged or foreign file is refused before any write
     unnamed = runs["lab"].map(is_missing).astype(bool)
     if lab is not None:
         runs.loc[unnamed, "lab"] = lab
-    runs, resolved, unresolved = resolve_names(runs, vocabulary)
+    runs, resolved = resolve_names(runs, vocabulary, other)
     report = append_frame(path, runs, replace=replace)
     n = int(unnamed.sum())
     return MergeReport(report, labelled=n if lab else 0, without_lab=0 if lab else n, lab=lab,
-                       resolved=resolved, unresolved=unresolved)
+                       resolved=resolved)
 
 
-def resolve_names(runs: pd.DataFrame, vocabulary: Vocabulary) -> tuple[
-        pd.DataFrame, tuple[tuple[str, str, int], ...], tuple[str, ...]]:
-    """``runs`` (a copy) with every pin and disc name the vocabulary resolves stored
-    under its canonical name, the given one kept in ``pin_as_given``/``disc_as_given``
-    (unless the row already keeps one); the names resolved (given, canonical, rows) and
-    one line per name it does not resolve (kept as given)."""
+def resolve_names(runs: pd.DataFrame, vocabulary: Vocabulary,
+                  where: str | os.PathLike[str] | None = None) -> tuple[
+        pd.DataFrame, tuple[tuple[str, str, int], ...]]:
+    """``runs`` (a copy) with every pin and disc name stored under its canonical name
+    (:meth:`~tribopipe.materials.Vocabulary.resolve_all`), the given one kept in
+    ``pin_as_given``/``disc_as_given`` (unless the row already keeps one), and the names
+    resolved (given, canonical, rows). A name the vocabulary does not resolve refuses
+    the rows: one :class:`~tribopipe.materials.MaterialError` about ``where`` naming
+    every such name, with the fix."""
     runs = runs.copy()
+    named = [(what, name) for what in ("pin", "disc")
+             for name in sorted(set(runs[what].astype(str)))]
+    canonical = vocabulary.resolve_all(named, where)
     resolved: list[tuple[str, str, int]] = []
-    unresolved: list[str] = []
     for what in ("pin", "disc"):
         given_column = f"{what}_as_given"
         if given_column not in runs.columns:  # rows of an older schema
             runs[given_column] = None
         names = runs[what].astype(str)
         for name in sorted(set(names)):
-            if name in vocabulary:
+            to = canonical[(what, name)]
+            if to == name:
                 continue
             rows = names == name
-            problem = vocabulary.problem(name, what)
-            if problem is not None:
-                unresolved.append(f"{problem} ({int(rows.sum())} row(s))")
-                continue
-            canonical = vocabulary.candidates(name)[0]
             keep = rows & runs[given_column].map(is_missing).astype(bool)
             runs.loc[keep, given_column] = name
-            runs.loc[rows, what] = canonical
-            resolved.append((name, canonical, int(rows.sum())))
-    return runs, tuple(resolved), tuple(unresolved)
+            runs.loc[rows, what] = to
+            resolved.append((name, to, int(rows.sum())))
+    return runs, tuple(resolved)
 
 
 def _lab_name(lab: str) -> str:

@@ -17,6 +17,7 @@ from .. import __version__
 from ..errors import MapError, ReadError, RowError
 from ..escape import csv_uncell
 from ..files import file_sha256, regular_file
+from ..materials import Vocabulary, shipped_vocabulary
 from ..physics import FOUNDING_SLIDING_SPEED_MM_S
 from ..validate import name_problem
 from .records import imported_id
@@ -181,7 +182,8 @@ def published_csv_path() -> Path:
 
 
 def import_records(
-    path: str | os.PathLike[str], *, source: str | None = None
+    path: str | os.PathLike[str], *, source: str | None = None,
+    vocabulary: Vocabulary | None = None,
 ) -> list[MapRow]:
     """Friction-map rows for a table in the published 7-column schema (.mat or CSV).
 
@@ -189,10 +191,16 @@ def import_records(
     every row is one of the published map's rows (whatever the file's name or format),
     else ``import:<file name>``. Ids hash the source and the conditions, so importing the
     same rows again is idempotent. μ_S and the measured values are missing; published rows
-    record the paper's sliding speed (0.007 mm/s), others leave it missing.
+    record the paper's sliding speed (0.007 mm/s), others leave it missing. Every pin and
+    disc name is resolved through the materials ``vocabulary`` (default: the shipped
+    one): stored under its canonical name, the given one kept in ``pin_as_given``/
+    ``disc_as_given``; a name it does not know refuses the table in one
+    :class:`~tribopipe.materials.MaterialError` naming every such name, with the fix.
     """
     p = Path(path)
     table = read_frictionmap_table(p)
+    canonical = (vocabulary or shipped_vocabulary()).resolve_all(
+        [(what, str(name)) for what in ("pin", "disc") for name in table[what]], p)
     if source is None:
         source = SOURCE_PUBLISHED if _is_published(table) else f"import:{p.name}"
     published = source == SOURCE_PUBLISHED
@@ -205,11 +213,15 @@ def import_records(
         repeat = int(number) if float(number).is_integer() else None
         records.append(
             MapRow(
-                measurement_id=imported_id(source, pin, disc, force, temperature, repeat),
+                measurement_id=imported_id(source, canonical[("pin", str(pin))],
+                                           canonical[("disc", str(disc))], force,
+                                           temperature, repeat),
                 source=source,
                 lab=PUBLISHED_LAB if published else None,
-                pin=pin,
-                disc=disc,
+                pin=canonical[("pin", str(pin))],
+                disc=canonical[("disc", str(disc))],
+                pin_as_given=None if canonical[("pin", str(pin))] == pin else pin,
+                disc_as_given=None if canonical[("disc", str(disc))] == disc else disc,
                 normal_force_N=force,
                 pressure_kPa=pressure,
                 temperature_C=temperature,
@@ -268,8 +280,10 @@ def import_table(
     *,
     source: str | None = None,
     replace: bool = False,
+    vocabulary: Vocabulary | None = None,
 ) -> AppendReport:
     """Import a 7-column FrictionMap table (.mat or CSV; default: the shipped published
     map) into the map at ``path``; see :func:`import_records`."""
-    records = import_records(published_csv_path() if file is None else file, source=source)
+    records = import_records(published_csv_path() if file is None else file, source=source,
+                             vocabulary=vocabulary)
     return append_records(path, records, replace=replace)

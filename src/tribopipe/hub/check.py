@@ -30,7 +30,14 @@ from ..escape import printable
 from ..evidence import Recompute, recompute_package
 from ..frictionmap.package import PackageInvalid, package_runs
 from ..frictionmap.schema import SOURCE_REDUCED
-from ..materials import LAB_FILE, Vocabulary, lab_files, load_vocabulary
+from ..materials import (
+    LAB_FILE,
+    Material,
+    Vocabulary,
+    lab_files,
+    load_vocabulary,
+    material_line,
+)
 from .folder import HubPackage, hub_packages
 
 if TYPE_CHECKING:
@@ -80,8 +87,10 @@ def material_problems(runs: pd.DataFrame, vocabulary: Vocabulary) -> list[str]:
             problem = (f"{column} {name!r} is written as an alias; the hub stores the "
                        f"canonical name {found[0]!r}" if len(found) == 1
                        else vocabulary.problem(name, column))
+            fix = f"a new material is one line in its {LAB_FILE}" + (
+                "" if found else f", e.g. {material_line(Material(name, 'CLASS'))}")
             out.append(f"data/runs.csv: {printable(str(problem))} (the hub's materials "
-                       f"vocabulary; a new material is one line in its {LAB_FILE})")
+                       f"vocabulary; {printable(fix)})")
     return out
 
 

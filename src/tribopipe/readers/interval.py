@@ -52,6 +52,23 @@ class FileInfo:
     decimal: str | None
 
 
+#: The labelled header lines of Anton Paar's software that describe the measurement, by
+#: their label's :func:`~tribopipe.readers.aliases.name_key`, and the ``meta.extra`` key
+#: each becomes (what :func:`tribopipe.reporting.from_export` reads). The labels are
+#: those Rheoplus writes in its "Data Series Information" block (``Device:``,
+#: ``Application:``, ``Measuring Date/Time:`` ...); a RheoCompass export that holds a line
+#: with one of these labels is read the same way. ``Name:`` (Rheoplus: the data series,
+#: i.e. the sample) is the format's own business and not listed here.
+HEADER_FIELDS: dict[str, str] = {
+    "numberofintervals": "number_of_intervals",
+    "application": "application",
+    "device": "device",
+    "measuringdatetime": "measuring_date_time",
+    "measuringsystem": "measuring_system",
+    "accessories": "accessories",
+}
+
+
 def label_value(cells: list[str]) -> str | None:
     """The value of a labelled line (``Test:<TAB><TAB>name``): its first non-empty cell
     after the label."""

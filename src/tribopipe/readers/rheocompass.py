@@ -12,7 +12,14 @@ Layout (labels translated in French/German exports)::
     <S>1<S>0.1<S>2.3981 ...      data rows: first cell empty
 
 Several tests, results and intervals per file; every interval repeats its own header, and
-columns and units may change between intervals. Point numbers like ``1  (invalid)`` mark
+columns and units may change between intervals. A labelled line of Anton Paar's
+measurement fields (``Device:``, ``Application:``, ``Measuring Date/Time:`` ...: the
+labels of :data:`~tribopipe.readers.interval.HEADER_FIELDS`) is kept in the metadata of
+the intervals it heads (above the first ``Test:``: every test's; below a ``Test:``: that
+test's), where the reporting items are read from it. The table export as the six real
+exports show it holds none: only ``Project:``, ``Test:`` and ``Result:``, whose texts
+are kept as they are (the project's is not taken apart: its parts are documented
+nowhere). Point numbers like ``1  (invalid)`` mark
 invalid points; rows with an empty point number are raw-waveform sub-rows. Both are
 counted in the metadata, not returned as data.
 """
@@ -23,7 +30,7 @@ from dataclasses import replace
 
 from ..errors import ReadError
 from .aliases import builtin_aliases, name_key
-from .interval import UNIT_CELL, RawInterval, label_value
+from .interval import HEADER_FIELDS, UNIT_CELL, RawInterval, label_value
 from .spec import Reader
 from .textio import DataLine, Row, Run, peel
 
@@ -78,6 +85,8 @@ def parse_intervals(rows: list[Row | Run], path: str) -> list[RawInterval]:
     numbers, and runs of data lines, see ``textio.scan_lines``) and return its header and
     rows, in file order."""
     project = test = result = None
+    shared: dict[str, str] = {}  # the measurement fields above the first test
+    fields: dict[str, str] = {}  # those of the current test
     interval: int | None = None
     declared: int | None = None
     out: list[RawInterval] = []
@@ -107,6 +116,7 @@ def parse_intervals(rows: list[Row | Run], path: str) -> list[RawInterval]:
             project = label_value(cells)
         elif key in TEST:
             test, result, interval, declared = label_value(cells), None, None, None
+            fields = dict(shared)
         elif key in RESULT:
             result, interval, declared = label_value(cells), None, None
         elif key in INTERVAL_POINTS:
@@ -122,12 +132,19 @@ def parse_intervals(rows: list[Row | Run], path: str) -> list[RawInterval]:
             raw, i = _read_table(rows, i, item, path)
             n = len(rows)  # peeling a run's first line may have added an item
             raw.project, raw.test, raw.result = project, test, result
+            raw.extra.update(fields)
             raw.interval = interval if interval is not None else len(out) + 1
             raw.n_declared = declared
             out.append(raw)
             interval, declared = None, None
             continue
-        # other labelled lines (sample, comments) carry nothing we need
+        elif first.endswith(":") and key in HEADER_FIELDS:
+            value = label_value(cells)
+            if value is not None:
+                fields[HEADER_FIELDS[key]] = value
+                if test is None:
+                    shared[HEADER_FIELDS[key]] = value
+        # other labelled lines (comments) carry nothing we need
         i += 1
     if not out:
         raise ReadError(

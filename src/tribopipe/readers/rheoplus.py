@@ -18,7 +18,7 @@ import re
 
 from ..errors import ReadError
 from .aliases import name_key
-from .interval import RawInterval, label_value
+from .interval import HEADER_FIELDS, RawInterval, label_value
 from .spec import Reader
 from .textio import DataLine, Row, Run
 
@@ -26,15 +26,8 @@ FORMAT = "rheoplus"
 
 SERIES = "dataseriesinformation"
 POINT_HEADERS = frozenset({"measpts", "measpt", "messpkt", "messpunkte", "ptsdemesure"})
-_META_KEYS = {
-    "name": "name",
-    "numberofintervals": "number_of_intervals",
-    "application": "application",
-    "device": "device",
-    "measuringdatetime": "measuring_date_time",
-    "measuringsystem": "measuring_system",
-    "accessories": "accessories",
-}
+#: the series header's labels: the sample's ``Name:`` and the shared measurement fields
+_META_KEYS = {"name": "name", **HEADER_FIELDS}
 _DIGITS = re.compile(r"^\d+$")
 
 

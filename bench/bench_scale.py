@@ -334,7 +334,9 @@ def _commands_at(folder: Path, n: int, template: dict, export: Path, raw: Path,
         shutil.rmtree(folder / "batch_out", ignore_errors=True)
         shutil.rmtree(raw)
         raw.mkdir()
-        shutil.copy(export, raw / "Benchpin_steel_3N_20C_r1.csv")
+        # a known pin (the campaign refuses a name not in the vocabulary), a new repeat
+        # of a condition the map holds
+        shutil.copy(export, raw / "DS30_steel_3N_20C_r999.csv")
 
     def batch_argv() -> list[str]:
         return ["batch", str(raw), "--pattern", "{pin}_{disc}_{force}N_{temperature}C_r{repeat}",

@@ -264,7 +264,8 @@ def test_query_and_export_in_a_real_process(map_path, tmp_path):
         capture_output=True, text=True, timeout=120,
     )
     assert proc.returncode == 1
-    assert "did you mean 'Dragonskin 30 on steel'" in proc.stderr
+    assert proc.stderr.count("\n") == 1  # one line, no traceback
+    assert "unknown disc 'steal'; did you mean 'steel'?" in proc.stderr
     assert "Traceback" not in proc.stderr
 
 

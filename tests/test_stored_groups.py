@@ -46,6 +46,7 @@ def assert_no_drift(path: Path) -> None:
         stored = snap.groups(**options)
         computed = group_statistics(runs, **options)
         pd.testing.assert_frame_equal(stored, computed, check_exact=False, rtol=1e-12)
+    store.verify_map(path)  # `map validate` compares them too
     # and what is derived from them: which runs each group holds
     members = snap.group_members()
     assert sorted(members["measurement_id"]) == sorted(
@@ -165,3 +166,25 @@ def test_a_batch_review_and_a_reduce_replace_keep_them_equal(
         catch_exceptions=False)
     assert result.exit_code == 0, result.output
     assert_no_drift(map_path)
+
+
+def test_map_validate_refuses_stored_groups_that_drifted(path: Path) -> None:
+    """Stored groups with a changed mean, committed with a valid checksum (as a bug in
+    a writer would leave them): `map validate` names the difference, `map compact`
+    computes them again."""
+    from tribopipe.frictionmap.stored_groups import groups_bytes
+
+    manifest = parts.read_manifest(path)
+    rows = open_map(path).stored_group_rows()
+    assert rows is not None
+    rows = rows.copy()
+    rows.loc[0, "mu_k_mean"] += 0.01
+    entry = parts.write_groups(path, manifest.generation + 1, groups_bytes(rows), len(rows))
+    drifted = parts.Manifest(manifest.generation + 1, manifest.parts, manifest.written_at,
+                             manifest.tribopipe_version, manifest.sources, entry)
+    parts.commit(path, drifted, manifest)
+    with pytest.raises(MapError, match="stored condition groups differ.*mu_k_mean"):
+        store.verify_map(path)
+    assert len(parts.read_manifest(path).parts) == 1
+    assert store.compact_map(path) == (1, 1)   # one part, its groups computed again
+    assert_no_drift(path)

@@ -118,11 +118,14 @@ def _run(campaign: Any, jobs: int | None, plots: bool | None) -> None:
     if report.map_after is not None:
         from ..export.tables import map_paper_text
         from ..frictionmap.snapshot import snapshot_of
+        from ..frictionmap.store import committed_groups_info
 
         # the groups, rounded for print, of the map as the batch's last write left it (a
-        # batch that did not write the map does not read it to print them again)
+        # batch that did not write the map does not read it to print them again; a map
+        # folder's are stored, named by its manifest: not grouped again)
         click.echo(map_paper_text(snapshot_of(report.map_after, report.map_path,
-                                              {"format": "rows"})), nl=False)
+                                              committed_groups_info(report.map_path))),
+                   nl=False)
     for line in report.ledger():  # the account comes last, where a user looks
         click.echo(printable(line))
     _remember(report.map_path)

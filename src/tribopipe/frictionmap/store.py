@@ -76,7 +76,15 @@ from .schema import (
     unvalidated_frame,
     utc_now,
 )
-from .stored_groups import Key, groups_bytes, keys_of, of_keys, rows_from_bytes, updated
+from .stored_groups import (
+    Key,
+    groups_bytes,
+    groups_differ,
+    keys_of,
+    of_keys,
+    rows_from_bytes,
+    updated,
+)
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -1134,11 +1142,19 @@ def _verify_part(p: Path, name: str, table: Any, info: Mapping[str, Any]) -> Non
 def verify_map(path: str | os.PathLike[str]) -> tuple[pd.DataFrame, dict[str, Any]]:
     """Read the map at ``path`` with every check there is (``map validate``): for a map
     folder, each part's bytes against the manifest, every buffer, each part's rows against
-    the checksum in its metadata, and every row against the row rules; a single-file map
-    as :func:`read_map` reads it (which checks all of that)."""
+    the checksum in its metadata, every row against the row rules, and the stored
+    groups against the groups of its rows (:func:`~tribopipe.stats.group_statistics`);
+    a single-file map as :func:`read_map` reads it (which checks all of that)."""
     p = Path(path)
     if p.is_dir():
-        runs, info, _ = _read_parts_map(p, full=True)
+        runs, info, manifest = _read_parts_map(p, full=True)
+        stored = _stored_rows(p, manifest)
+        if stored is not None:
+            problem = groups_differ(stored, runs)
+            if problem is not None:
+                raise MapError(f"the stored condition groups differ from the groups of its "
+                               f"rows ({problem})", path=p,
+                               hint="`tribopipe map compact` computes them again")
         return runs, info
     return load_map(p)
 
@@ -1250,6 +1266,21 @@ def _stored_rows(p: Path, manifest: Manifest | None) -> pd.DataFrame | None:
     if manifest is None or manifest.groups is None:
         return None
     return rows_from_bytes(read_groups_bytes(p, manifest.groups), str(p))
+
+
+def committed_groups_info(path: str | os.PathLike[str]) -> dict[str, Any]:
+    """The metadata a snapshot of rows a write just left needs to read the map folder's
+    stored groups (``format`` ``"parts"`` and the committed manifest's ``groups``), read
+    from the manifest alone (no row is read); ``{"format": "rows"}`` for a map without
+    them (a single file, no map, a folder without stored groups)."""
+    p = Path(path)
+    if not p.is_dir():
+        return {"format": "rows"}
+    manifest = read_manifest(p)
+    if manifest.groups is None:
+        return {"format": "rows"}
+    return {"format": "parts", "n_runs": manifest.n_runs,
+            "generation": manifest.generation, "groups": manifest.groups.as_json()}
 
 
 def stored_groups(path: str | os.PathLike[str], info: Mapping[str, Any]
@@ -1484,8 +1515,10 @@ def _refuse_interrupted_upgrade(p: Path) -> None:
 def compact_map(path: str | os.PathLike[str]) -> tuple[int, int]:
     """Rewrite the map folder at ``path`` as one part, under the map's lock, with the
     safety of every write (new part fsynced, the manifest swapped atomically, the previous
-    commit kept as ``_manifest.json.bak`` with its parts until the next write). Returns
-    the number of parts before and after. A single-file map is refused: convert it first
+    commit kept as ``_manifest.json.bak`` with its parts until the next write), with the
+    stored condition groups computed again from every row (also for a map of one part
+    whose stored groups are missing or differ from its rows). Returns the number of
+    parts before and after. A single-file map is refused: convert it first
     (:func:`upgrade_map`)."""
     p = Path(path)
     if not p.exists():
@@ -1496,7 +1529,10 @@ def compact_map(path: str | os.PathLike[str]) -> tuple[int, int]:
     with _locked(p):
         runs, _, manifest = _read_parts_map(p)
         before = 0 if manifest is None else len(manifest.parts)
-        if before <= 1:
+        stored = _stored_rows(p, manifest)
+        if before <= 1 and (manifest is None or stored is not None
+                            and groups_differ(stored, runs) is None):
             return before, before
+        # one part, and the stored groups all computed again from its rows
         _commit_parts(p, manifest, [runs])
         return before, 1

@@ -27,7 +27,10 @@ from ..stats import (
     CONDITION_KEY,
     GROUP_ROWS_VERSION,
     condition_keys,
+    finish_groups,
     group_rows,
+    group_statistics,
+    shown_columns,
 )
 
 if TYPE_CHECKING:
@@ -133,3 +136,27 @@ def rows_from_bytes(data: bytes, where: str) -> pd.DataFrame | None:
                              for v in frame[column]]
     return frame
 
+
+
+def groups_differ(rows: pd.DataFrame, runs: pd.DataFrame) -> str | None:
+    """Where the stored group ``rows``, finished, differ from the groups of the map's
+    ``runs`` (``map validate``'s check that the stored copy did not drift); ``None``
+    when they agree (numbers to 1e-9 relative)."""
+    import numpy as np
+
+    speed, method = shown_columns(rows)
+    stored = finish_groups(rows, show_speed=speed, show_method=method)
+    computed = group_statistics(runs)
+    if list(stored.columns) != list(computed.columns) or len(stored) != len(computed):
+        return f"{len(stored)} stored groups, {len(computed)} from the rows"
+    for column in computed.columns:
+        a, b = stored[column], computed[column]
+        if a.dtype.kind == "f" or b.dtype.kind == "f":
+            x, y = a.to_numpy(dtype=float), b.to_numpy(dtype=float)
+            same = np.isclose(x, y, rtol=1e-9, atol=0.0, equal_nan=True)
+        else:
+            same = (a.astype(str).to_numpy() == b.astype(str).to_numpy())
+        if not same.all():
+            at = int(np.flatnonzero(~same)[0])
+            return f"column {column}, group {at + 1}"
+    return None

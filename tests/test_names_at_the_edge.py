@@ -21,6 +21,7 @@ from tribopipe import frictionmap as fm
 from tribopipe.cli import main
 from tribopipe.export.citation import Publisher
 from tribopipe.export.publish import publish_map
+from tribopipe.frictionmap.records import imported_id
 
 EXAMPLE = Path(__file__).resolve().parents[1] / "raw" / "example"
 PATTERN = "{pin}_{disc}_{force}N_{temperature}C_r{repeat}"
@@ -203,6 +204,12 @@ def test_an_imported_table_is_stored_under_canonical_names_or_refused(tmp_path: 
     (row,) = fm.read_map(map_path).to_dict(orient="records")
     assert (row["pin"], row["disc"], row["pin_as_given"], row["disc_as_given"]) == (
         "Dragonskin 30", "steel", "DS30", "Stahl")
+    # the row's id is made from the names as the table writes them, as before names were
+    # resolved: a map that imported this table earlier finds the same rows again
+    assert row["measurement_id"] == imported_id("import:theirs.csv", "DS30", "Stahl", 3.0,
+                                                20.0, 1)
+    again = invoke("map", "import", table, "--map", map_path)
+    assert again.exit_code == 0 and len(fm.read_map(map_path)) == 1
     bad = tmp_path / "bad.csv"
     bad.write_text(header + "Mold Star 15,steel,3,35.37,20,1,0.5\n", encoding="utf-8")
     other = tmp_path / "other.parquet"

@@ -213,8 +213,9 @@ def import_records(
         repeat = int(number) if float(number).is_integer() else None
         records.append(
             MapRow(
-                measurement_id=imported_id(source, canonical[("pin", str(pin))],
-                                           canonical[("disc", str(disc))], force,
+                # the id from the names as the table writes them, as it always was:
+                # importing the same table again stays a no-op
+                measurement_id=imported_id(source, str(pin), str(disc), force,
                                            temperature, repeat),
                 source=source,
                 lab=PUBLISHED_LAB if published else None,

@@ -146,6 +146,30 @@ def test_a_run_listed_twice_or_unknown_or_missing_is_said_once_each(copy):
     assert len(lines) == 4
 
 
+def test_a_group_numbered_from_zero_is_refused_by_the_declared_minimum(copy):
+    for name in ("groups.csv", "group_runs.csv"):
+        path = copy / "data" / name
+        table = rows(path)
+        for row in table[1:]:
+            row[0] = str(int(row[0]) - 1)    # the one group becomes group 0
+        write_rows(path, table)
+        rehash(copy, f"data/{name}")
+    lines = check_package(copy).lines()
+    assert ("data/groups.csv: row 1, field group: 0 is not a group number (expected 1 or "
+            "more)") in lines
+
+
+def test_a_group_number_that_is_not_a_whole_number_is_named_with_what_was_expected(copy):
+    path = copy / "data" / "group_runs.csv"
+    table = rows(path)
+    table[5][0] = "one"
+    write_rows(path, table)
+    rehash(copy, "data/group_runs.csv")
+    lines = check_package(copy).lines()
+    assert any(line.startswith("data/group_runs.csv: row 5, field group: ")
+               and line.endswith("expected an integer") for line in lines), lines
+
+
 def test_a_group_table_without_its_linking_table_is_refused(copy):
     d = json.loads((copy / "datapackage.json").read_text(encoding="utf-8"))
     d["resources"] = [r for r in d["resources"] if r["name"] != "group-runs"]

@@ -628,7 +628,7 @@ def _typed_batch(batch: list[list[str]], numbers: list[int],
                 value = parse_cell(texts[i], ftype)
             except ValueError as exc:
                 problems.append((int(numbers[i]), j, f"row {numbers[i]}, field {name}: {exc}, "
-                                 f"expected a {ftype}"))
+                                 f"expected {_article(ftype)} {ftype}"))
                 value = None
             if values is None:  # text: kept where it parses
                 empty[i] = value is None
@@ -651,3 +651,8 @@ def _is_iso(text: str) -> bool:
     except ValueError:
         return False
     return True
+
+
+def _article(word: str) -> str:
+    """The indefinite article before ``word`` ("an integer", "a number")."""
+    return "an" if word[:1].lower() in "aeiou" else "a"

@@ -602,6 +602,10 @@ def _check_groups(check: _Checker, res: dict[str, Any], path: Path,
     first: dict[int, int] = {}
     for n, row in enumerate(rows, 1):
         number = row.get(GROUP_ID) if linked else None
+        if isinstance(number, int) and number < 1:
+            check.add(shown, f"row {n}, field {GROUP_ID}: {number} is not a group number "
+                      "(expected 1 or more)")
+            number = None
         if isinstance(number, int):
             if number in first:
                 check.add(shown, f"row {n}, field {GROUP_ID}: group {number} appears twice "

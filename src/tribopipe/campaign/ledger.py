@@ -207,7 +207,6 @@ def combined(a: AppendReport, b: AppendReport) -> AppendReport:
         values={**a.values, **b.values})
 
 
-
 def manifest_ledger(rows: Sequence[CampaignRow], entries: Mapping[str, FileState],
             manifest: Manifest | None) -> tuple[dict[str, int], list[str], list[str]]:
     """The tests found per file (the files whose tests are known), the manifest rows that

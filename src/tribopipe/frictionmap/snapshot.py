@@ -102,7 +102,8 @@ class MapSnapshot:
         def compute() -> pd.DataFrame:
             rows = None if by_speed else self.stored_group_rows()
             if rows is None:
-                self.require(GROUP_INPUT_COLUMNS)
+                self.require((*GROUP_INPUT_COLUMNS, "sliding_speed_mm_s") if by_speed
+                             else GROUP_INPUT_COLUMNS)
                 return group_statistics(self._runs, by_speed=by_speed,
                                         show_speed=show_speed, show_method=show_method)
             speed, method = shown_columns(rows)

@@ -137,7 +137,6 @@ def rows_from_bytes(data: bytes, where: str) -> pd.DataFrame | None:
     return frame
 
 
-
 def groups_differ(rows: pd.DataFrame, runs: pd.DataFrame) -> str | None:
     """Where the stored group ``rows``, finished, differ from the groups of the map's
     ``runs`` (``map validate``'s check that the stored copy did not drift); ``None``

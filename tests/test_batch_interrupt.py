@@ -20,7 +20,7 @@ from tribopipe.campaign import folder_campaign, run_campaign
 
 pytestmark = pytest.mark.slow  # real processes reducing dozens of exports
 
-N_FILES = 40
+N_FILES = 60
 PATTERN = "{pin}_{disc}_{force}N_{temperature}C_r{repeat}"
 
 
@@ -33,7 +33,7 @@ def exports(tmp_path_factory: pytest.TempPathFactory) -> Path:
         write_rheocompass_export(
             folder / f"DS30_steel_{force}N_20C_r{i // 3 + 1}.csv",
             SyntheticRun(mu_s=0.8, mu_k=0.5 + 0.002 * i, normal_force_N=float(force),
-                         seed=100 + i, duration_s=2400.0),  # long: a batch of many seconds
+                         seed=100 + i, duration_s=6000.0),  # long: a batch of many seconds
             project="interrupt", test="t", sample="DS30")
     return folder
 

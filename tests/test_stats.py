@@ -23,6 +23,7 @@ from tribopipe.stats import (
     group_statistics,
     group_u,
     repeatability,
+    run_ids_of,
     stated_u,
     t975,
 )
@@ -110,6 +111,9 @@ def test_groups_split_by_pair_force_and_temperature():
     main = groups[groups["mu_k_n"] == 2].iloc[0]
     assert main["mu_k_mean"] == pytest.approx(0.52)
     assert main["mu_k_values"] == "0.5;0.54" and main["run_ids"] == "r001;r002"
+    # the one reader of that cell gives the ids back, and none for an empty or missing cell
+    assert run_ids_of(main["run_ids"]) == ["r001", "r002"]
+    assert run_ids_of("") == [] and run_ids_of(float("nan")) == [] and run_ids_of(None) == []
     assert main["pressure_kPa"] == pytest.approx(35.37, abs=0.005)
     assert main["mu_s_n"] == 2 and main["mu_s_mean"] == pytest.approx(BASE["mu_s"])
 

@@ -48,7 +48,7 @@ from .labels import flag_list, quality_flags
 from .layout import OutputLayout, find_trace, read_failures
 from .query import estimate_text, pairs
 from .rounding import known_u, plus_minus
-from .stats import group_u, repeatability
+from .stats import group_u, repeatability, run_ids_of
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -287,7 +287,7 @@ def _group_table(inp: ReportInputs) -> str:
     u_k, _ = group_u(inp.groups, "mu_k")
     u_s, _ = group_u(inp.groups, "mu_s")
     for i, g in enumerate(inp.groups.to_dict(orient="records", into=dict)):
-        ids = [i for i in str(g.get("run_ids") or "").split(";") if i]
+        ids = run_ids_of(g.get("run_ids"))
         links = " ".join(
             f'<a href="#{run_anchor(i)}">{html_text(i[:8])}</a>' for i in ids
         )
@@ -567,7 +567,7 @@ def _overlay_groups(inp: ReportInputs) -> dict[str, tuple[dict[str, Any], list[s
     traces = inp.trace_paths or {}
     exceeding = inp.groups[inp.groups["range_exceeds_r"].astype(bool)]
     for g in exceeding.to_dict(orient="records", into=dict):
-        ids = [i for i in str(g.get("run_ids") or "").split(";") if i in traces]
+        ids = [i for i in run_ids_of(g.get("run_ids")) if i in traces]
         if ids:
             out[group_anchor(g)] = (g, ids)
     return out

@@ -417,6 +417,18 @@ def group_statistics(runs: pd.DataFrame, *, by_speed: bool = False,
                          by_speed=by_speed, by_lab=by_lab)
 
 
+#: what joins a group's measurement ids in its ``run_ids`` cell (:func:`run_ids_of` reads it)
+RUN_IDS_SEPARATOR = ";"
+
+
+def run_ids_of(cell: object) -> list[str]:
+    """The measurement ids a group's ``run_ids`` cell lists, in its order (none for an
+    empty or missing cell)."""
+    if not isinstance(cell, str) or not cell:
+        return []
+    return [i for i in cell.split(RUN_IDS_SEPARATOR) if i]
+
+
 #: the map columns :func:`group_rows` reads (with ``sliding_speed_mm_s`` for ``by_speed``)
 GROUP_INPUT_COLUMNS: tuple[str, ...] = (
     "measurement_id", "pin", "disc", "normal_force_N", "pressure_kPa", "temperature_C",
@@ -592,7 +604,7 @@ def _group_row(
     row["qc_flagged"] = any(quality_flags(f) for f, r in zip(data["flags"][order],
                             data["review"][order], strict=True) if r != "accept")
     row["reviewed"] = sum(1 for r in data["review"][order] if r)
-    row["run_ids"] = ";".join(data["measurement_id"][order])
+    row["run_ids"] = RUN_IDS_SEPARATOR.join(data["measurement_id"][order])
     return row
 
 

@@ -77,6 +77,7 @@ from ..stats import (
     group_statistics,
     group_u,
     nominal_speeds,
+    run_ids_of,
     test_methods,
 )
 from .coefficients import STATIC_WHY
@@ -263,12 +264,12 @@ def _points(points: pd.DataFrame, pair_groups: pd.DataFrame,
 
     p = pd.to_numeric(pair_groups["pressure_kPa"], errors="coerce").to_numpy(dtype=float)
     t = pd.to_numeric(pair_groups["temperature_C"], errors="coerce").to_numpy(dtype=float)
-    ids = pair_groups["run_ids"].astype(str).to_numpy() if "run_ids" in pair_groups else None
+    ids = pair_groups["run_ids"].to_numpy(dtype=object) if "run_ids" in pair_groups else None
     out = []
     for r in points.to_dict(orient="records"):
         at = p == r["pressure_kPa"]
         at &= (t == r["temperature_C"]) if math.isfinite(r["temperature_C"]) else (t != t)
-        run_ids = [] if ids is None else [i for cell in ids[at] for i in cell.split(";") if i]
+        run_ids = [] if ids is None else [i for cell in ids[at] for i in run_ids_of(cell)]
         temperature = _plain(r["temperature_C"])
         out.append(
             {
@@ -601,7 +602,7 @@ def explorer_data(
             row[f"{q}_U"] = u_known[q] = u if known_u(u) else None
         named = str(g.get(LABS) or "").split(";") if LABS in g else []
         row["labs"] = sorted({labs[n] for n in map(printable, named) if n in labs}) or sorted(
-            {lab_of_run[r] for r in str(g.get("run_ids") or "").split(";") if r in lab_of_run})
+            {lab_of_run[r] for r in run_ids_of(g.get("run_ids")) if r in lab_of_run})
         row[LABS_DISAGREE] = bool(g.get(LABS_DISAGREE) is True)
         row["text"] = _group_texts(g, u_known)
         group_rows.append(row)

@@ -87,7 +87,7 @@ from ..frictionmap.snapshot import MapSource, as_snapshot
 from ..frictionmap.store import write_map_copy
 from ..frictionmap.synthetic_rows import SYNTHETIC_MEANS, synthetic_count
 from ..query import pairs
-from ..stats import group_statistics
+from ..stats import group_statistics, run_ids_of
 from .citation import (
     CODE_LICENCE,
     Publisher,
@@ -248,8 +248,7 @@ def package_groups(groups: pd.DataFrame) -> tuple[pd.DataFrame, pd.DataFrame]:
 
     table = groups.drop(columns=[c for c in JOINED_COLUMNS if c in groups.columns])
     table.insert(0, GROUP_ID, np.arange(1, len(table) + 1, dtype="int64"))
-    ids = [str(cell).split(";") if isinstance(cell, str) and cell else []
-           for cell in groups["run_ids"]]
+    ids = [run_ids_of(cell) for cell in groups["run_ids"]]
     counts = np.fromiter((len(i) for i in ids), dtype="int64", count=len(ids))
     members = pd.DataFrame({
         GROUP_ID: np.repeat(np.arange(1, len(ids) + 1, dtype="int64"), counts),

@@ -53,7 +53,7 @@ from ..review import (
     read_review,
     trace_table,
 )
-from ..stats import group_statistics, repeatability
+from ..stats import group_statistics, repeatability, run_ids_of
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -114,7 +114,7 @@ def _outlying(runs: pd.DataFrame) -> dict[str, float]:
     out: dict[str, float] = {}
     for g in groups.to_dict(orient="records", into=dict):
         mean = float(g["mu_k_mean"])
-        ids = str(g["run_ids"]).split(";")
+        ids = run_ids_of(g["run_ids"])
         sub = runs[runs["measurement_id"].isin(ids)]
         for mid, mu_k in zip(sub["measurement_id"], sub["mu_k"], strict=True):
             dev = abs(float(mu_k) - mean)

@@ -18,7 +18,7 @@ from collections.abc import Collection, Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
-from ..stats import FORCE_DECIMALS, TEMPERATURE_DECIMALS, group_statistics
+from ..stats import FORCE_DECIMALS, TEMPERATURE_DECIMALS, group_statistics, run_ids_of
 from .records import stored_file_name
 from .schema import MapRow, unvalidated_frame
 
@@ -271,7 +271,7 @@ def repeat_clashes(current: pd.DataFrame, records: Sequence[MapRow],
     by_id = runs.set_index(runs["measurement_id"].astype(str))
     lines: list[str] = []
     for group in group_statistics(runs).to_dict(orient="records"):
-        ids = str(group["run_ids"]).split(";")
+        ids = run_ids_of(group["run_ids"])
         if not new_ids.intersection(ids):
             continue
         by_repeat: dict[int, list[str]] = {}

@@ -27,7 +27,7 @@ from typing import TYPE_CHECKING, Any, TypeGuard, cast
 
 from ..errors import MapError
 from ..escape import printable
-from ..stats import group_statistics
+from ..stats import group_statistics, run_ids_of
 from .checks import validate_runs
 from .datapackage import (
     DEFAULT_LIMITS,
@@ -622,7 +622,7 @@ def _check_groups(check: _Checker, res: dict[str, Any], path: Path,
                 check.add(shown, f"row {n}, field {name}: {row[name]!r} does not follow "
                           f"from the runs ({g[name]!r})")
         if isinstance(number, int):
-            members[number] = frozenset(i for i in str(g["run_ids"]).split(";") if i)
+            members[number] = frozenset(run_ids_of(g["run_ids"]))
     return members if linked else None
 
 

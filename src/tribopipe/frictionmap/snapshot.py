@@ -19,7 +19,13 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any, TypeVar
 
 from ..errors import MapError
-from ..stats import GROUP_INPUT_COLUMNS, finish_groups, group_statistics, shown_columns
+from ..stats import (
+    GROUP_INPUT_COLUMNS,
+    finish_groups,
+    group_statistics,
+    run_ids_of,
+    shown_columns,
+)
 from .schema import RUN_COLUMNS
 from .store import load_map, stored_groups
 
@@ -129,8 +135,8 @@ class MapSnapshot:
 
         def members() -> pd.DataFrame:
             groups = self.groups(by_speed=by_speed)
-            ids = [str(cell).split(";") if isinstance(cell, str) and cell else []
-                   for cell in groups["run_ids"]] if "run_ids" in groups.columns else []
+            ids = ([run_ids_of(cell) for cell in groups["run_ids"]]
+                   if "run_ids" in groups.columns else [])
             return pd.DataFrame({
                 "group": [g for g, run_ids in enumerate(ids) for _ in run_ids],
                 "measurement_id": [m for run_ids in ids for m in run_ids]})

@@ -232,6 +232,23 @@ def test_a_profile_2_group_table_that_does_not_follow_from_its_runs_is_still_ref
 # --------------------------------------------------------------------------- streamed checks
 
 
+def test_a_group_table_s_parquet_copy_with_other_values_is_named_cell_by_cell(copy):
+    """groups.parquet is the group table again: a copy whose μ_K mean was changed (and
+    re-hashed) names the cell, with the CSV's value beside it."""
+    import pandas as pd
+
+    path = copy / "data" / "groups.parquet"
+    groups = pd.read_parquet(path)
+    csv_mean = float(rows(copy / "data" / "groups.csv")[1][
+        rows(copy / "data" / "groups.csv")[0].index("mu_k_mean")])
+    groups.loc[0, "mu_k_mean"] = 0.987
+    groups.to_parquet(path, index=False)
+    rehash(copy, "data/groups.parquet")
+    lines = check_package(copy).lines()
+    assert lines == [f"data/groups.parquet: row 1, field mu_k_mean: 0.987 differs from the "
+                     f"CSV's {csv_mean!r}"]
+
+
 def test_a_parquet_copy_with_other_rows_is_named_cell_by_cell(copy, tmp_path):
     """The Parquet copy is read a column at a time: a copy written as a valid map of other
     values names each differing cell; one whose rows do not match its own checksum is

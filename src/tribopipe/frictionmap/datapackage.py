@@ -396,18 +396,9 @@ def read_bounded(path: Path, limit: int, *, what: str = "file") -> bytes:
     """The bytes of the regular file ``path``, refused (:class:`PackageRefused`) when it is
     absent, not a regular file (a FIFO, device or folder is never opened) or larger than
     ``limit`` bytes."""
+    fh, _ = _open_regular(path, limit, what)
     try:
-        info = os.stat(path)
-    except OSError as exc:
-        raise PackageRefused(f"{what} not found ({exc.strerror or exc})", path=path) from None
-    if not stat.S_ISREG(info.st_mode):
-        raise PackageRefused(f"{what} is not a regular file", path=path)
-    if info.st_size > limit:
-        raise PackageRefused(f"{what} is {info.st_size} bytes, more than the limit of "
-                             f"{limit}", path=path)
-    try:
-        fd = os.open(path, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0))
-        with os.fdopen(fd, "rb") as fh:
+        with fh:
             data = fh.read(limit + 1)
     except OSError as exc:
         raise PackageRefused(f"cannot read {what} ({exc.strerror or exc})", path=path) from None

@@ -453,20 +453,12 @@ def _check_parquet_copy(check: _Checker, res: dict[str, Any], path: Path,
     order, the rest counted) and fed to the checksum of the copy's rows."""
     import numpy as np
     import pyarrow as pa
-    import pyarrow.parquet as pq
 
     shown = str(res.get("path"))
-    try:
-        parquet = pq.ParquetFile(path)
-        meta = parquet.metadata
-        unpacked = sum(meta.row_group(i).total_byte_size for i in range(meta.num_row_groups))
-    except (pa.ArrowException, OSError, ValueError) as exc:
-        check.add(shown, f"not a readable Parquet file ({str(exc)[:120]})")
+    parquet = _open_parquet(check, path, shown)
+    if parquet is None:
         return
-    if unpacked > check.limits.resource_bytes:
-        check.add(shown, f"unpacks to {unpacked} bytes, more than the limit of "
-                  f"{check.limits.resource_bytes}")
-        return
+    meta = parquet.metadata
     try:
         info = map_metadata(path)
     except MapError as exc:
@@ -491,9 +483,39 @@ def _check_parquet_copy(check: _Checker, res: dict[str, Any], path: Path,
         check.add(shown, "fails its checksum: its rows are not those tribopipe wrote "
                   "(damaged, or changed by another program)")
         return
+    _name_differences(check, shown, differs, names, runs, copy)
+
+
+def _open_parquet(check: _Checker, path: Path, shown: str) -> Any:
+    """The Parquet file at ``path`` opened (its footer read), or ``None`` with the problem
+    said: not readable as Parquet, or unpacking to more than the resource limit."""
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    try:
+        parquet = pq.ParquetFile(path)
+        meta = parquet.metadata
+        unpacked = sum(meta.row_group(i).total_byte_size for i in range(meta.num_row_groups))
+    except (pa.ArrowException, OSError, ValueError) as exc:
+        check.add(shown, f"not a readable Parquet file ({str(exc)[:120]})")
+        return None
+    if unpacked > check.limits.resource_bytes:
+        check.add(shown, f"unpacks to {unpacked} bytes, more than the limit of "
+                  f"{check.limits.resource_bytes}")
+        return None
+    return parquet
+
+
+def _name_differences(check: _Checker, shown: str, differs: Any, names: list[str],
+                      csv: Any, copy: Any) -> None:
+    """Each cell where ``differs`` (rows × ``names``) is true, in row order, said with the
+    copy's value and the CSV's (``csv[name]`` and ``copy[name]`` are columns): the first
+    up to the problem limit, the rest counted."""
+    import numpy as np
+
     for row, j in np.argwhere(differs)[:check.limits.problems]:
         name = names[j]
-        ours, theirs = _plain(runs[name].iloc[row]), _plain(copy[name].iloc[row])
+        ours, theirs = _plain(csv[name].iloc[row]), _plain(copy[name].iloc[row])
         check.add(shown, f"row {row + 1}, field {name}: {theirs!r} differs from the CSV's "
                   f"{ours!r}")
     check.result.more += max(0, int(differs.sum()) - check.limits.problems)
@@ -507,7 +529,6 @@ def _check_groups_copy(check: _Checker, res: dict[str, Any], path: Path,
     import numpy as np
     import pandas as pd
     import pyarrow as pa
-    import pyarrow.parquet as pq
 
     shown = str(res.get("path"))
     schema = groups_res.get("schema")
@@ -516,14 +537,10 @@ def _check_groups_copy(check: _Checker, res: dict[str, Any], path: Path,
                      str(groups_res.get("path")))
     if columns is None:
         return
+    parquet = _open_parquet(check, path, shown)
+    if parquet is None:
+        return
     try:
-        parquet = pq.ParquetFile(path)
-        meta = parquet.metadata
-        unpacked = sum(meta.row_group(i).total_byte_size for i in range(meta.num_row_groups))
-        if unpacked > check.limits.resource_bytes:
-            check.add(shown, f"unpacks to {unpacked} bytes, more than the limit of "
-                      f"{check.limits.resource_bytes}")
-            return
         copy = parquet.read().to_pandas()
     except (pa.ArrowException, OSError, ValueError) as exc:
         check.add(shown, f"not a readable Parquet file ({str(exc)[:120]})")
@@ -549,12 +566,7 @@ def _check_groups_copy(check: _Checker, res: dict[str, Any], path: Path,
     except (TypeError, ValueError) as exc:
         check.add(shown, f"not comparable with the CSV ({str(exc)[:120]})")
         return
-    for row, j in np.argwhere(differs)[:check.limits.problems]:
-        name = names[j]
-        ours, theirs = _plain(csv_frame[name].iloc[row]), _plain(copy[name].iloc[row])
-        check.add(shown, f"row {row + 1}, field {name}: {theirs!r} differs from the CSV's "
-                  f"{ours!r}")
-    check.result.more += max(0, int(differs.sum()) - check.limits.problems)
+    _name_differences(check, shown, differs, names, csv_frame, copy)
 
 
 class _ParquetColumns:

@@ -107,28 +107,40 @@ CHROMIUM_ARGS = [
 ]
 
 
-def _unavailable(reason: str) -> None:
+def browser_unavailable(reason: str) -> None:
+    """Skip the calling test with ``reason``; a failure where TRIBOPIPE_REQUIRE_BROWSER=1
+    (CI, where a browser test must run)."""
     if os.environ.get("TRIBOPIPE_REQUIRE_BROWSER") == "1":
         pytest.fail(f"TRIBOPIPE_REQUIRE_BROWSER=1 but {reason}")
     pytest.skip(reason)
 
 
+def chromium_executable() -> str:
+    """The system's Chromium (or TRIBOPIPE_CHROMIUM), once Playwright is known to be
+    importable; :func:`browser_unavailable` when either is missing."""
+    executable = os.environ.get("TRIBOPIPE_CHROMIUM") or shutil.which("chromium")
+    if not executable:
+        browser_unavailable("no chromium on PATH (Debian: apt-get install chromium)")
+    try:
+        import playwright.sync_api  # noqa: F401
+    except ImportError:
+        browser_unavailable("playwright is not installed (pip install -e '.[test]')")
+    return str(executable)
+
+
 @pytest.fixture(scope="session")
 def browser():
     """A headless Chromium (the system's ``chromium``) under Playwright."""
-    executable = os.environ.get("TRIBOPIPE_CHROMIUM") or shutil.which("chromium")
-    if not executable:
-        _unavailable("no chromium on PATH (Debian: apt-get install chromium)")
-    try:
-        from playwright.sync_api import sync_playwright
-    except ImportError:
-        _unavailable("playwright is not installed (pip install -e '.[test]')")
+    executable = chromium_executable()
+    from playwright.sync_api import sync_playwright
+
     manager = sync_playwright().start()
     try:
         instance = manager.chromium.launch(executable_path=executable, args=CHROMIUM_ARGS)
     except Exception as exc:  # the browser exists but cannot start here
         manager.stop()
-        _unavailable(f"chromium at {executable} did not start: {str(exc).splitlines()[0]}")
+        browser_unavailable(f"chromium at {executable} did not start: "
+                            f"{str(exc).splitlines()[0]}")
     yield instance
     instance.close()
     manager.stop()

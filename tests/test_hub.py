@@ -29,6 +29,7 @@ import pandas as pd
 import pytest
 from click.testing import CliRunner
 
+from conftest import CHROMIUM_ARGS, browser_unavailable, chromium_executable
 from generators.synthetic import SyntheticRun
 from reduced_runs import RUNS, make_processed
 from tribopipe.cli import main
@@ -278,27 +279,13 @@ def test_comparisons_page_reads_map_compare(grown):
 # --------------------------------------------------------------------------- browser
 
 
-CHROMIUM_ARGS = ["--headless", "--no-sandbox", "--disable-gpu",
-                 "--disable-background-networking", "--no-first-run"]
-
-
-def _unavailable(reason: str) -> None:
-    if os.environ.get("TRIBOPIPE_REQUIRE_BROWSER") == "1":
-        pytest.fail(f"TRIBOPIPE_REQUIRE_BROWSER=1 but {reason}")
-    pytest.skip(reason)
-
-
 def with_browser(body) -> None:
     """Run ``body(browser)`` with a headless Chromium (the system's, under Playwright) in a
     thread of its own: Playwright's sync API allows one instance per thread, and other
     test modules keep theirs open for the session."""
-    executable = os.environ.get("TRIBOPIPE_CHROMIUM") or shutil.which("chromium")
-    if not executable:
-        _unavailable("no chromium on PATH (Debian: apt-get install chromium)")
-    try:
-        from playwright.sync_api import sync_playwright
-    except ImportError:
-        _unavailable("playwright is not installed (pip install -e '.[test]')")
+    executable = chromium_executable()
+    from playwright.sync_api import sync_playwright
+
     outcome: dict[str, BaseException] = {}
 
     def run() -> None:
@@ -308,8 +295,8 @@ def with_browser(body) -> None:
                     instance = manager.chromium.launch(executable_path=executable,
                                                        args=CHROMIUM_ARGS)
                 except Exception as exc:  # the browser exists but cannot start here
-                    _unavailable(f"chromium at {executable} did not start: "
-                                 f"{str(exc).splitlines()[0]}")
+                    browser_unavailable(f"chromium at {executable} did not start: "
+                                        f"{str(exc).splitlines()[0]}")
                 try:
                     body(instance)
                 finally:

@@ -184,11 +184,13 @@ def check_package(path: str | os.PathLike[str],
         _check_parquet_copy(check, resources[RUNS_PARQUET], parquet, runs)
     if (groups := files.get(GROUPS)) is not None:
         before_groups = len(check.result.problems) + check.result.more
-        members = _check_groups(check, resources[GROUPS], groups, runs)
+        table = _group_columns(check, resources[GROUPS], groups)
+        members = None if table is None else _check_groups(check, resources[GROUPS], table,
+                                                           runs)
         clean = len(check.result.problems) + check.result.more == before_groups
-        if clean and (groups_copy := files.get(GROUPS_PARQUET)) is not None:
-            _check_groups_copy(check, resources[GROUPS_PARQUET], groups_copy,
-                               resources[GROUPS], groups)
+        if table is not None and clean and (
+                groups_copy := files.get(GROUPS_PARQUET)) is not None:
+            _check_groups_copy(check, resources[GROUPS_PARQUET], groups_copy, table)
         linked = check.result.profile_version >= LINKED_GROUPS_VERSION
         if members is not None and (links := files.get(GROUP_RUNS)) is not None:
             _check_group_runs(check, resources[GROUP_RUNS], links, members,
@@ -522,21 +524,16 @@ def _name_differences(check: _Checker, shown: str, differs: Any, names: list[str
 
 
 def _check_groups_copy(check: _Checker, res: dict[str, Any], path: Path,
-                       groups_res: dict[str, Any], groups_path: Path) -> None:
-    """The Parquet copy of the group table holds the CSV's columns and rows (numbers
-    within a relative 1e-9): the first differing cells listed in row order, the rest
-    counted. Called on a group CSV that passed its own check."""
+                       columns: dict[str, Any]) -> None:
+    """The Parquet copy of the group table holds the CSV's columns and rows (``columns``,
+    as :func:`_group_columns` parsed them; numbers within a relative 1e-9): the first
+    differing cells listed in row order, the rest counted. Called on a group CSV that
+    passed its own check."""
     import numpy as np
     import pandas as pd
     import pyarrow as pa
 
     shown = str(res.get("path"))
-    schema = groups_res.get("schema")
-    fields = schema.get("fields") if isinstance(schema, dict) else None
-    columns = _table(check, groups_path, cast("list[dict[str, Any]]", fields),
-                     str(groups_res.get("path")))
-    if columns is None:
-        return
     parquet = _open_parquet(check, path, shown)
     if parquet is None:
         return
@@ -635,24 +632,39 @@ def _same_values(a: pd.Series, b: pd.Series) -> Any:
     return both | (present & equal)
 
 
-def _check_groups(check: _Checker, res: dict[str, Any], path: Path,
-                  runs: pd.DataFrame) -> dict[int, frozenset[str]] | None:
-    """The group table parses by its own schema, and its μ_K n and mean follow from the
-    runs. From package profile version 3 the groups are numbered (``group``, unique):
-    returns, per group number, the ids of the runs its conditions make in the runs table
-    (what ``group_runs.csv`` must list; ``None`` before version 3 or when the table cannot
-    be read)."""
-    shown = str(res.get("path"))
+def _group_fields(res: dict[str, Any]) -> list[dict[str, Any]] | None:
+    """The group table's declared fields, each with a name and a Table Schema type;
+    ``None`` when the schema does not declare them so."""
     schema = res.get("schema")
     fields = schema.get("fields") if isinstance(schema, dict) else None
     if not isinstance(fields, list) or not all(
             isinstance(f, dict) and isinstance(f.get("name"), str)
             and f.get("type") in TABLE_TYPES.values() for f in fields):
-        check.add(shown, "schema: expected 'fields' with a name and a Table Schema type each")
         return None
-    columns = _table(check, path, fields, shown)
-    if columns is None:
+    return fields
+
+
+def _group_columns(check: _Checker, res: dict[str, Any], path: Path
+                   ) -> dict[str, Any] | None:
+    """The group table parsed by its own schema (typed columns), read once for every
+    check of it; ``None``, with the problem said, when it cannot be."""
+    fields = _group_fields(res)
+    if fields is None:
+        check.add(str(res.get("path")),
+                  "schema: expected 'fields' with a name and a Table Schema type each")
         return None
+    return _table(check, path, fields, str(res.get("path")))
+
+
+def _check_groups(check: _Checker, res: dict[str, Any], columns: dict[str, Any],
+                  runs: pd.DataFrame) -> dict[int, frozenset[str]] | None:
+    """The group table (``columns``, as :func:`_group_columns` parsed it): its μ_K n and
+    mean follow from the runs. From package profile version 3 the groups are numbered
+    (``group``, unique): returns, per group number, the ids of the runs its conditions
+    make in the runs table (what ``group_runs.csv`` must list; ``None`` before version
+    3)."""
+    shown = str(res.get("path"))
+    fields = cast("list[dict[str, Any]]", _group_fields(res))
     rows = _records(columns)
     keys: tuple[str, ...] = ("pin", "disc", "normal_force_N", "temperature_C")
     names = {f["name"] for f in fields}

@@ -158,6 +158,10 @@ def test_embedded_json_round_trips(published_html):
     # the groups packed as columns and rows, their names left to their pair's
     assert len(head["groups"]["rows"]) == len(data["groups"])
     assert "pin" not in head["groups"]["columns"] and "text/qc" in head["groups"]["columns"]
+    # and each speed's interpolation points, each key once per list
+    points = head["pairs"][0]["speeds"][0]["mu_k_points"]
+    assert "text/mean" in points["columns"] and len(points["rows"]) == len(
+        data["pairs"][0]["speeds"][0]["mu_k_points"])
     # packed: each key once per pair, each run a row
     packed = [json.loads(text) for _, text in blocks[1:]]
     assert [[dict(zip(c["columns"], row, strict=True)) for row in c["rows"]]

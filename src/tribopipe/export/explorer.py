@@ -116,6 +116,8 @@ CSV_COLUMNS = (
 #: coordinate to 4 significant digits (they are drawn, never computed with)
 FIT_CURVE_POINTS = 24
 
+#: the lists of interpolation points of each speed of a pair (packed in the page)
+POINT_LISTS = ("mu_k_points", "mu_s_points")
 #: the order of a pair's runs on the page (a stable sort: ties keep the map's order)
 RUN_ORDER = ("temperature_C", "pressure_kPa", "repeat", "measurement_id")
 #: the column that carries each run's pair number while the runs are sorted
@@ -819,6 +821,10 @@ def _fragment(data: dict[str, Any], js: str, runs_beside: str | None = None) -> 
         f'\n   <option value="{html_text(s["name"])}">{html_text(s["label"])}</option>'
         for s in data["snippets"])
     head = {k: v for k, v in data.items() if k != "runs"}
+    # each speed's interpolation points packed (the page unpacks them as it opens)
+    head["pairs"] = [{**pair, "speeds": [{**sp, **{q: _packed(sp[q]) for q in POINT_LISTS}}
+                                         for sp in pair["speeds"]]}
+                     for pair in data["pairs"]]
     # the groups packed, their names left to their pair's (the page restores both)
     head["groups"] = _packed([{k: v for k, v in g.items() if k not in ("pin", "disc")}
                               for g in data["groups"]])
@@ -885,6 +891,9 @@ def read_embedded_data(html: str) -> dict[str, Any]:
     if match is None:
         raise ExportError(f"no explorer data (script element #{DATA_ELEMENT_ID}) in the page")
     data: dict[str, Any] = json.loads(match.group(1))
+    for pair in data["pairs"]:
+        for speed in pair["speeds"]:
+            speed.update({q: _unpacked(speed[q]) for q in POINT_LISTS})
     data["groups"] = [{"pin": data["pairs"][g["pair"]]["pin"],
                        "disc": data["pairs"][g["pair"]]["disc"], **g}
                       for g in _unpacked(data["groups"])]

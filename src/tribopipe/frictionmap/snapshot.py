@@ -12,7 +12,7 @@ The model is sqlite-utils' ``Database``: open once, then ask the handle.
 from __future__ import annotations
 
 import os
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from functools import cached_property
 from pathlib import Path
@@ -26,8 +26,8 @@ from ..stats import (
     run_ids_of,
     shown_columns,
 )
-from .schema import RUN_COLUMNS
-from .store import load_map, stored_groups
+from .schema import RUN_COLUMNS, empty_map
+from .store import load_map, rows_by_id, stored_groups
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -151,6 +151,21 @@ class MapSnapshot:
         members = self.group_members(by_speed=by_speed)
         ids = members.loc[members["group"] == group, "measurement_id"]
         return self._runs.iloc[[index[m] for m in ids]].copy(deep=False)
+
+    def rows_of(self, ids: Iterable[str]) -> pd.DataFrame:
+        """Every column of the runs ``ids`` (measurement ids), in the map's order: taken
+        from this snapshot when it holds every column, else read from the commit it was
+        opened at (:func:`~tribopipe.frictionmap.store.rows_by_id`: only the parts that
+        hold them are read whole). For a command that opened a few columns and shows
+        some rows whole."""
+        wanted = set(ids)
+        if set(RUN_COLUMNS) <= set(self.columns):
+            return self._runs[self._runs["measurement_id"].isin(wanted)].copy(deep=False)
+        if self.info.get("format") == "rows":
+            self.require(RUN_COLUMNS)  # rows in memory, without them: named
+        if not wanted:
+            return empty_map()
+        return rows_by_id(self.path, self.info, wanted)
 
     def derived(self, key: Any, compute: Callable[[], T]) -> T:
         """The value ``compute()`` gives for this snapshot, computed once per ``key``: the

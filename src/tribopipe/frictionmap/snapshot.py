@@ -27,7 +27,7 @@ from ..stats import (
     shown_columns,
 )
 from .schema import RUN_COLUMNS, empty_map
-from .store import load_map, rows_by_id, stored_groups
+from .store import committed_groups_info, load_map, rows_by_id, stored_groups
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -189,6 +189,22 @@ def open_map(path: str | os.PathLike[str], columns: Sequence[str] | None = None
     runs, info = load_map(path, columns)
     kept = tuple(runs.columns)
     return MapSnapshot(Path(path), runs, info, kept)
+
+
+def open_groups(path: str | os.PathLike[str]) -> MapSnapshot:
+    """The map at ``path`` opened for its condition groups (:meth:`MapSnapshot.groups`)
+    and no more: a map folder with stored groups as its manifest names them
+    (:func:`~tribopipe.frictionmap.store.committed_groups_info`), no part read (a
+    snapshot of its number of rows and none of its columns); any other map with the
+    statistics' inputs (:data:`~tribopipe.stats.GROUP_INPUT_COLUMNS`), which it
+    groups."""
+    import pandas as pd
+
+    info = committed_groups_info(path)
+    if "groups" not in info:
+        return open_map(path, GROUP_INPUT_COLUMNS)
+    rows = pd.DataFrame(index=pd.RangeIndex(int(info["n_runs"])))
+    return MapSnapshot(Path(path), rows, info, ())
 
 
 def snapshot_of(runs: pd.DataFrame, path: str | os.PathLike[str] = "<rows>",

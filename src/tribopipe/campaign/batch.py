@@ -38,6 +38,7 @@ from .ledger import CONFLICT, READ, Account, BatchReport, manifest_ledger, tally
 from .metadata import read_manifest
 from .outputs import write_failures_csv, write_runs_csv
 from .spec import Campaign
+from .stamp import inputs_stamp, keep_report, kept_report
 from .state import (
     DUPLICATE,
     FAILED,
@@ -130,6 +131,14 @@ def run_campaign(
 def _run_locked(campaign: Campaign, *, jobs: int | None, plots: bool | None,
                 progress: ProgressCallback | None) -> BatchReport:
     """:func:`run_campaign` while holding the output folder's batch lock."""
+    # taken before anything is looked at: a file changed while the batch runs is then
+    # never called unchanged by the next one
+    inputs = inputs_stamp(campaign)
+    kept = kept_report(campaign, inputs)
+    if kept is not None:  # nothing changed since a batch that found nothing to do
+        if progress:
+            progress(kept.files, kept.files)
+        return kept
     jobs = default_jobs() if jobs is None else max(1, int(jobs))
     plots = campaign.plots if plots is None else plots
     state = load_state(campaign)
@@ -231,7 +240,7 @@ def _run_locked(campaign: Campaign, *, jobs: int | None, plots: bool | None,
     tests_in, unmatched, undescribed = manifest_ledger(rows, entries, manifest)
     runs_failed = plan.runs_failed + account.runs_failed
     test_tally = tally(outcomes, tests_in)
-    return BatchReport(
+    report = BatchReport(
         interrupted=stop.name,
         map_landed=map_read,
         campaign=campaign.name,
@@ -258,6 +267,15 @@ def _run_locked(campaign: Campaign, *, jobs: int | None, plots: bool | None,
         repeats=account.repeats,
         output_errors=problems,
     )
+    # a batch that found nothing to do is kept, for the next one to report again if it
+    # finds the campaign as this one did; any other forgets the one kept
+    quiet = not plan.todo and not vanished and not problems and stop.name is None \
+        and appended is None and not account.repeats and review is None
+    try:
+        keep_report(campaign, report if quiet else None, inputs, entries)
+    except OutputError as exc:
+        problems.append(str(exc))
+    return report
 
 
 @dataclass(frozen=True)

@@ -239,12 +239,11 @@ def validate_cmd(path: str | None, map_path: str | None, recompute: bool) -> Non
         return
     if path.lower().endswith(".parquet"):
         from ..frictionmap.profile import map_upgrade_note
-        from ..frictionmap.store import map_metadata
         from ..frictionmap.summary import check_map_file
         from ..materials import lab_files, load_vocabulary
 
-        problems, verdict = check_map_file(path, load_vocabulary(lab_files(".")))
-        upgraded = map_upgrade_note(int(map_metadata(path)["schema_version"]))
+        problems, verdict, info = check_map_file(path, load_vocabulary(lab_files(".")))
+        upgraded = map_upgrade_note(int(info["schema_version"]))
         if upgraded is not None:
             say(f"note: {upgraded}")
         for line in problems:

@@ -226,19 +226,21 @@ def unresolved_names(runs: pd.DataFrame, vocabulary: Vocabulary) -> list[str]:
     return lines
 
 
-def check_map_file(path: str | os.PathLike[str],
-                   vocabulary: Vocabulary | None = None) -> tuple[list[str], str]:
+def check_map_file(path: str | os.PathLike[str], vocabulary: Vocabulary | None = None
+                   ) -> tuple[list[str], str, dict[str, Any]]:
     """Check the friction map (Parquet) at ``path`` as ``map publish`` would before
     writing a package: every row against the map's rules
     (:func:`~tribopipe.frictionmap.checks.validate_runs`), and every pin and disc name
     against the materials ``vocabulary`` (default: the shipped one,
-    :func:`unresolved_names`). Returns one line per problem and a verdict line. Raises
-    :class:`MapError` for a file that is absent or not a friction map."""
+    :func:`unresolved_names`). Returns one line per problem, a verdict line and the
+    map's metadata as the check read it (:func:`~tribopipe.frictionmap.store.verify_map`:
+    its schema version among them; nothing is read twice). Raises :class:`MapError` for
+    a file that is absent or not a friction map."""
     p = Path(path)
     if not os.path.lexists(p):  # read_map takes an absent map as empty: no file to pass
         raise MapError("file not found, expected a friction map (Parquet) or a data "
                        "package", path=p)
-    runs, _ = verify_map(p)  # every check there is: parts, checksums, every row
+    runs, info = verify_map(p)  # every check there is: parts, checksums, every row
     problems = [problem.line(display_path(p)) for problem in validate_runs(runs)]
     problems += [f"{display_path(p)}: {line}" for line in
                  unresolved_names(runs, vocabulary or shipped_vocabulary())]
@@ -246,4 +248,4 @@ def check_map_file(path: str | os.PathLike[str],
     verdict = (f"friction map {display_path(p)}: {_runs(len(runs))}, "
                + (f"{len(problems)} problem(s)" if problems else "every row passes the checks")
                + (f"; {note}" if note else ""))
-    return problems, verdict
+    return problems, verdict, info

@@ -131,8 +131,8 @@ class BatchReport:
     kept: bool = False
 
     def to_json(self) -> dict[str, Any]:
-        """What the state keeps of an unchanged batch's report (its paths and the map's
-        rows left out): every field a later unchanged batch reports again."""
+        """What the state keeps of an unchanged batch's report (its paths left out):
+        every field a later unchanged batch reports again."""
         return {
             "campaign": self.campaign, "total": self.total, "reduced": self.reduced,
             "skipped": self.skipped, "failures": self.failures,

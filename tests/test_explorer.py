@@ -158,6 +158,10 @@ def test_embedded_json_round_trips(published_html):
     # the groups packed as columns and rows, their names left to their pair's
     assert len(head["groups"]["rows"]) == len(data["groups"])
     assert "pin" not in head["groups"]["columns"] and "text/qc" in head["groups"]["columns"]
+    # and each speed's interpolation points, each key once per list
+    points = head["pairs"][0]["speeds"][0]["mu_k_points"]
+    assert "text/mean" in points["columns"] and len(points["rows"]) == len(
+        data["pairs"][0]["speeds"][0]["mu_k_points"])
     # packed: each key once per pair, each run a row
     packed = [json.loads(text) for _, text in blocks[1:]]
     assert [[dict(zip(c["columns"], row, strict=True)) for row in c["rows"]]
@@ -382,3 +386,113 @@ def test_the_snippet_notes_and_name_rule_come_laid_out_from_python(published):
     assert data["texts"]["names"] == rule
     assert all(name_key(c) == rule["fold"][c] for c in rule["fold"] if not c.isspace())
     assert "ß" in rule["fold"] and "\x1c" in rule["space"] and "A" not in rule["fold"]
+
+
+def _awkward_groups() -> pd.DataFrame:
+    """A group table with what the points' merge must handle: conditions shared by
+    several groups (two speeds, two labs), temperatures unknown beside known ones, a
+    pair of only unknown temperatures, missing means, pressures and counts, two
+    spellings of one pair."""
+    import numpy as np
+
+    rng = np.random.default_rng(7)
+    rows = []
+    for i in range(400):
+        pin = ("A", " a ", "B", "C")[i % 4]
+        rows.append({
+            "pin": pin, "disc": ("steel", "STEEL", "wood")[i % 3],
+            "pressure_kPa": (10.0, 20.0, 40.0, math.nan)[i % 7 % 4],
+            "temperature_C": math.nan if pin == "C" else (20.0, 40.0, math.nan)[i % 5 % 3],
+            "nominal_speed_mm_s": (1.0, 10.0, math.nan)[i % 11 % 3],
+            "mu_k_mean": math.nan if i % 13 == 0 else float(rng.uniform(0.2, 1.5)),
+            "mu_k_ci95_high": math.nan if i % 9 == 0 else float(rng.uniform(1.5, 2)),
+            "mu_k_n": (1.0, 3.0, math.nan, 5.0)[i % 4],
+            "mu_k_u": math.nan if i % 6 == 0 else float(rng.uniform(0.01, 0.1)),
+            "mu_k_sem": float(rng.uniform(0.01, 0.1)),
+            "mu_k_u_estimated": ("True", "False")[i % 2],
+            "mu_s_mean": math.nan if i % 3 else float(rng.uniform(0.2, 1.5)),
+        })
+    return pd.DataFrame(rows)
+
+
+def test_every_pairs_points_in_one_pass_are_each_pairs_own(published_groups):
+    """The explorer reads every pair's interpolation points in one pass
+    (``query.points_by``): for each code they are exactly (to the bit) what
+    ``query.pair_points`` gives that code's groups alone, on a table with merged
+    conditions, unknown temperatures and missing values, and on the published map."""
+    import numpy as np
+
+    from tribopipe.query import name_key, points_by
+
+    published = published_groups
+    for groups in (_awkward_groups(), published):
+        keys = list(zip(groups["pin"].map(name_key), groups["disc"].map(name_key),
+                        strict=True))
+        number = {k: i for i, k in enumerate(dict.fromkeys(keys))}
+        codes = np.array([number[k] for k in keys])
+        for q in ("mu_k", "mu_s"):
+            every = points_by(groups, codes, q)
+            for code in range(len(number)):
+                own = pair_points(groups[codes == code], q).reset_index(drop=True)
+                got = every[every["code"] == code].drop(columns="code").reset_index(drop=True)
+                if own.empty:
+                    assert got.empty
+                    continue
+                pd.testing.assert_frame_equal(got, own, check_dtype=False, check_exact=True)
+    assert points_by(published.iloc[0:0], np.zeros(0, dtype=int)).empty
+
+
+def test_each_pair_speed_and_point_on_the_page_is_selected_as_query_selects_it():
+    """Selected once for all pairs, each pair's points at each speed, its runs and its
+    points' runs are those of that pair's own groups (``select_pair``, the speeds of
+    ``pair_speeds`` and ``groups_at_speed``): two spellings of a pair are one pair."""
+    from tribopipe.query import groups_at_speed, name_key, pair_speeds, pairs
+
+    groups = _awkward_groups().assign(mu_s_n=1.0, range_exceeds_r=False, qc_flagged=False)
+    runs = pd.DataFrame({"pin": groups["pin"], "disc": groups["disc"],
+                         "measurement_id": [f"r{i}" for i in range(len(groups))],
+                         "pressure_kPa": groups["pressure_kPa"],
+                         "temperature_C": groups["temperature_C"], "repeat": 1,
+                         "mu_k": groups["mu_k_mean"], "mu_s": math.nan,
+                         "nominal_speed_mm_s": groups["nominal_speed_mm_s"]})
+    groups["run_ids"] = runs["measurement_id"]
+    fits = pd.DataFrame({"pin": ["a", "B"], "disc": ["steel", "wood"], "nominal_speed_mm_s": 1.0,
+                         **{f: math.nan for f in ("temperature_C", "k", "k_ci95_low",
+                            "k_ci95_high", "exponent", "exponent_ci95_low",
+                            "exponent_ci95_high", "r_squared", "n_points",
+                            "pressure_min_kPa", "pressure_max_kPa")}, "note": ""})
+    data = explorer_data(runs, groups=groups, fits=fits)
+    # query's pairs, one per casefolded spelling (the first in query's order), each
+    # named as its first group spells it
+    first = {}
+    for pin, disc in pairs(groups):
+        first.setdefault((name_key(pin), name_key(disc)), (pin, disc))
+    assert [tuple(p["keys"]) for p in data["pairs"]] == list(first)
+    assert ("a", "steel") in first and len(first) < len(pairs(groups))
+    for pair in data["pairs"]:
+        own = select_pair(groups, pair["pin"], pair["disc"])
+        assert (pair["pin"], pair["disc"]) == tuple(own.iloc[0][["pin", "disc"]])
+    for pair, pair_runs in zip(data["pairs"], data["runs"], strict=True):
+        own = select_pair(groups, pair["pin"], pair["disc"])
+        assert [s["speed_mm_s"] for s in pair["speeds"]] == pair_speeds(own)
+        assert [r["id"] for r in pair_runs] == runs.loc[own.index].sort_values(
+            ["temperature_C", "pressure_kPa", "repeat", "measurement_id"],
+            kind="mergesort")["measurement_id"].tolist()
+        assert len(pair["fits"]) == ((pair["keys"] == ["a", "steel"])
+                                     + (pair["keys"] == ["b", "wood"]))
+        for speed in pair["speeds"]:
+            at = groups_at_speed(own, speed["speed_mm_s"])
+            for q in ("mu_k", "mu_s"):
+                want = pair_points(at, q)
+                got = speed[f"{q}_points"]
+                assert [(p["pressure_kPa"], p["temperature_C"], p["mean"], p["n"])
+                        for p in got] == [
+                    (r.pressure_kPa, None if math.isnan(r.temperature_C) else r.temperature_C,
+                     r.mean, r.n) for r in want.itertuples()]
+                for p in got:  # the runs behind a point: its condition's groups' runs
+                    t = p["temperature_C"]
+                    behind = at[(at["pressure_kPa"] == p["pressure_kPa"])
+                                & (at["temperature_C"].isna() if t is None
+                                   else at["temperature_C"] == t)]
+                    assert [pair_runs[i]["id"] for i in p["runs"]] == behind[
+                        "run_ids"].tolist()

@@ -335,22 +335,33 @@ def _points(pair_groups: pd.DataFrame, quantity: str) -> pd.DataFrame:
     uncertainty, so nothing is dropped.
     """
     import numpy as np
+
+    merged = _merged_points(pair_groups, quantity, np.zeros(len(pair_groups), dtype=np.int64))
+    return merged.drop(columns="code") if "code" in merged.columns else merged
+
+
+def _merged_points(groups: pd.DataFrame, quantity: str, codes: np.ndarray) -> pd.DataFrame:
+    """:func:`_points` of the groups of each ``code`` (an integer per row of ``groups``)
+    in one pass: one row per (code, pressure, temperature) with a ``code`` column, sorted
+    by code, pressure, then temperature (unknown first); the frame of the finite rows
+    before merging (without ``code``) where none is finite."""
+    import numpy as np
     import pandas as pd
 
     def column(name: str, default: float) -> pd.Series:
-        """A numeric column of the pair's groups, or ``default`` when it is absent."""
-        if name not in pair_groups.columns:
-            return pd.Series(default, index=pair_groups.index, dtype=float)
-        return pd.to_numeric(pair_groups[name], errors="coerce").astype(float)
+        """A numeric column of the groups, or ``default`` when it is absent."""
+        if name not in groups.columns:
+            return pd.Series(default, index=groups.index, dtype=float)
+        return pd.to_numeric(groups[name], errors="coerce").astype(float)
 
     mean = column(f"{quantity}_mean", math.nan)
-    u, budget = group_u(pair_groups, quantity)
+    u, budget = group_u(groups, quantity)
     high = column(f"{quantity}_ci95_high", math.nan)
     n = column(f"{quantity}_n", 1.0)
     frame = pd.DataFrame(
         {
-            "pressure_kPa": pd.to_numeric(pair_groups["pressure_kPa"], errors="coerce"),
-            "temperature_C": pd.to_numeric(pair_groups["temperature_C"], errors="coerce"),
+            "pressure_kPa": pd.to_numeric(groups["pressure_kPa"], errors="coerce"),
+            "temperature_C": pd.to_numeric(groups["temperature_C"], errors="coerce"),
             "mean": mean,
             # the upper end: the lower one is bounded at 0 (stats.describe_values)
             "half": high - mean,
@@ -361,25 +372,69 @@ def _points(pair_groups: pd.DataFrame, quantity: str) -> pd.DataFrame:
             "n": n.fillna(1).clip(lower=1).astype(float),
         }
     )
-    frame = frame[np.isfinite(frame["mean"]) & np.isfinite(frame["pressure_kPa"])]
+    keep = (np.isfinite(frame["mean"]) & np.isfinite(frame["pressure_kPa"])).to_numpy()
+    frame = frame[keep]
     if frame.empty:
         return frame
-    rows = []
-    keys = frame["temperature_C"].fillna(-math.inf)
-    for (pk, _tk), grp in frame.groupby([frame["pressure_kPa"], keys], sort=True):
-        n_tot = float(grp["n"].sum())
-        rows.append(
-            {
-                "pressure_kPa": float(pk),
-                "temperature_C": float(grp["temperature_C"].iloc[0]),
-                "mean": float((grp["mean"] * grp["n"]).sum() / n_tot),
-                "half": float(grp["half"].max()) if grp["half"].notna().all() else math.nan,
-                "u": float(grp["u"].max()) if grp["u"].notna().all() else math.nan,
-                "budget": bool(grp["budget"].all()),
-                "n": int(n_tot),
-            }
-        )
-    return pd.DataFrame(rows)
+    code = np.asarray(codes)[keep]
+    p = frame["pressure_kPa"].to_numpy(dtype=float)
+    t = frame["temperature_C"].to_numpy(dtype=float)
+    tkey = np.where(np.isnan(t), -math.inf, t)
+    order = np.lexsort((tkey, p, code))  # stable: a condition's groups in table order
+    code, p, tkey = code[order], p[order], tkey[order]
+    m = frame["mean"].to_numpy(dtype=float)[order]
+    w = frame["n"].to_numpy(dtype=float)[order]
+    half = frame["half"].to_numpy(dtype=float)[order]
+    uu = frame["u"].to_numpy(dtype=float)[order]
+    ok = frame["budget"].to_numpy(dtype=bool)[order]
+    new = np.ones(len(p), dtype=bool)
+    new[1:] = (code[1:] != code[:-1]) | (p[1:] != p[:-1]) | (tkey[1:] != tkey[:-1])
+    at = np.flatnonzero(new)
+
+    def largest(values: np.ndarray) -> np.ndarray:
+        """The largest value of each point's groups, NaN where one of them is unknown."""
+        unknown = np.add.reduceat(np.isnan(values).astype(np.int64), at) > 0
+        return np.where(unknown, math.nan, np.fmax.reduceat(values, at))
+
+    def total(values: np.ndarray) -> np.ndarray:
+        """The sum of each point's groups' values, summed as ``numpy.sum`` sums (as the
+        merge always has: ``reduceat`` may round the last bit otherwise)."""
+        out = values[at].copy()
+        ends = np.append(at[1:], len(values))
+        for i in np.flatnonzero(ends - at > 1):
+            out[i] = np.sum(values[at[i]:ends[i]])
+        return out
+
+    n_tot = total(w)
+    return pd.DataFrame(
+        {
+            "pressure_kPa": p[at],
+            "temperature_C": np.where(np.isinf(tkey[at]), math.nan, tkey[at]),
+            "mean": total(m * w) / n_tot,
+            "half": largest(half),
+            "u": largest(uu),
+            "budget": np.logical_and.reduceat(ok, at),
+            "n": n_tot.astype(np.int64),
+            "code": code[at],
+        }
+    )
+
+
+def points_by(groups: pd.DataFrame, codes: np.ndarray, quantity: str = "mu_k") -> pd.DataFrame:
+    """:func:`pair_points` of the groups of each ``code`` (an integer per row of
+    ``groups``, e.g. one per pair and speed) in one pass, for pages that show every pair:
+    the rows of each code equal :func:`pair_points` of that code's groups alone, with a
+    ``code`` column, sorted by code (codes with no point have no row)."""
+    import numpy as np
+
+    merged = _merged_points(groups, quantity, codes)
+    if "code" not in merged.columns:
+        return merged.iloc[0:0].assign(code=np.zeros(0, dtype=np.int64))
+    known = merged["temperature_C"].notna().to_numpy()
+    code = merged["code"].to_numpy()
+    any_known = np.zeros(int(code.max()) + 1, dtype=bool)
+    any_known[code[known]] = True
+    return merged[known | ~any_known[code]].reset_index(drop=True)
 
 
 def _with_temperature(points: pd.DataFrame) -> pd.DataFrame:

@@ -28,6 +28,7 @@ from __future__ import annotations
 import math
 import numbers
 import os
+import re
 import unicodedata
 from dataclasses import dataclass
 from typing import Any
@@ -126,11 +127,16 @@ def file_name_problem(value: Any, max_chars: int = MAX_TEXT_CHARS) -> str | None
         return f"expected text, got {type(value).__name__}"
     if len(value) > max_chars:
         return f"expected at most {max_chars} characters, got {len(value)}"
-    for ch in value:
-        if ch == "\0" or 0xD800 <= ord(ch) <= 0xDFFF:
-            return (f"expected a file name, got the character {printable(repr(ch))} "
-                    f"(U+{ord(ch):04X})")
+    found = _NOT_IN_FILE_NAMES.search(value)
+    if found is not None:
+        ch = found.group()
+        return (f"expected a file name, got the character {printable(repr(ch))} "
+                f"(U+{ord(ch):04X})")
     return None
+
+
+#: the characters a file name as the map keeps it never holds: NUL and lone surrogates
+_NOT_IN_FILE_NAMES = re.compile("[\x00\ud800-\udfff]")
 
 
 def name_problem(value: Any) -> str | None:

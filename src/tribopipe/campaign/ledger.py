@@ -15,7 +15,7 @@ test or interval, and tests no metadata source described.
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -120,9 +120,57 @@ class BatchReport:
     #: the signal that stopped the batch (``"SIGINT"``, ``"SIGTERM"``), else ``None``:
     #: what finished landed, the rest is for the next batch
     interrupted: str | None = None
-    #: the map's rows as the batch's last write left them (``None`` when it did not read
-    #: the map): what the command shows of the map, without reading it again
-    map_after: Any = field(default=None, repr=False, compare=False)
+    #: whether a landing of the batch read the map under its lock (its rows are not
+    #: kept): then the command shows the map's condition groups afterwards, read from
+    #: the stored groups (a batch that did not touch the map does not read it again)
+    map_landed: bool = False
+
+    #: True when nothing changed since the last batch and its ledger was kept: no file
+    #: was read, no state row loaded, the map not opened
+    #: (:func:`tribopipe.campaign.stamp.kept_report`)
+    kept: bool = False
+
+    def to_json(self) -> dict[str, Any]:
+        """What the state keeps of an unchanged batch's report (its paths left out):
+        every field a later unchanged batch reports again."""
+        return {
+            "campaign": self.campaign, "total": self.total, "reduced": self.reduced,
+            "skipped": self.skipped, "failures": self.failures,
+            "groups_updated": self.groups_updated, "removed": self.removed,
+            "map_summary": self.map_summary, "notes": self.notes, "flagged": self.flagged,
+            "duplicates": self.duplicates, "files": self.files, "tests": self.tests,
+            "unmatched": self.unmatched, "undescribed": self.undescribed,
+            "file_tally": asdict(self.file_tally), "test_tally": asdict(self.test_tally),
+            "runs_failed": self.runs_failed, "conflicts": self.conflicts,
+            "repeats": self.repeats, "output_errors": self.output_errors,
+        }
+
+    @classmethod
+    def from_json(cls, data: Mapping[str, Any], map_path: Path, output_dir: Path
+                  ) -> BatchReport:
+        """The report :meth:`to_json` kept, for the map and output folder given, marked
+        :attr:`kept`. Raises ``KeyError``, ``TypeError`` or ``ValueError`` when ``data``
+        is not one :meth:`to_json` wrote."""
+        def texts(key: str) -> list[str]:
+            return [str(v) for v in data[key]]
+
+        def pairs(key: str) -> list[tuple[str, str]]:
+            return [(str(a), str(b)) for a, b in data[key]]
+
+        def counts(key: str) -> Tally:
+            return Tally(**{k: int(v) for k, v in data[key].items()})
+
+        return cls(
+            campaign=str(data["campaign"]), map_path=map_path, output_dir=output_dir,
+            total=int(data["total"]), reduced=texts("reduced"), skipped=texts("skipped"),
+            failures=pairs("failures"), groups_updated=int(data["groups_updated"]),
+            removed=int(data["removed"]), map_summary=str(data["map_summary"]),
+            notes=texts("notes"), flagged=pairs("flagged"), duplicates=pairs("duplicates"),
+            files=int(data["files"]), tests=int(data["tests"]), unmatched=texts("unmatched"),
+            undescribed=texts("undescribed"), file_tally=counts("file_tally"),
+            test_tally=counts("test_tally"), runs_failed=int(data["runs_failed"]),
+            conflicts=pairs("conflicts"), repeats=texts("repeats"),
+            output_errors=texts("output_errors"), kept=True)
 
     @property
     def ok(self) -> bool:

@@ -273,6 +273,73 @@ class CampaignState:
                        map=MapStamp.of(map_path))
 
 
+@dataclass(frozen=True)
+class KeptLedger:
+    """What the state keeps of a batch that found nothing to do, so that the next one
+    that finds the campaign as it was reports it again without reading any file or row:
+    the stamp of the campaign's inputs (``inputs``) and of the batch's own outputs
+    (``outputs``) as that batch left them
+    (:mod:`tribopipe.campaign.stamp`), the traces its reduced runs need (relative to the
+    output folder), and its report (:meth:`~tribopipe.campaign.ledger.BatchReport.to_json`).
+    """
+
+    inputs: str
+    outputs: str
+    traces: tuple[str, ...]
+    report: dict[str, Any]
+
+
+#: the state's row (in its ``meta`` table) that keeps a :class:`KeptLedger`
+KEPT_KEY = "kept_ledger"
+
+
+def load_kept(campaign: Campaign) -> KeptLedger | None:
+    """The :class:`KeptLedger` of the campaign's state (one row of it read), ``None`` when
+    there is none, the state is not one this version wrote, or it cannot be read."""
+    path = campaign.state_path
+    if not path.is_file():
+        return None
+    try:
+        con = sqlite3.connect(f"file:{path}?mode=ro", uri=True, timeout=60)
+        try:
+            meta = dict(con.execute("SELECT key, value FROM meta WHERE key IN (?, ?)",
+                                    ("version", KEPT_KEY)).fetchall())
+        finally:
+            con.close()
+        if meta.get("version") != str(STATE_VERSION) or KEPT_KEY not in meta:
+            return None
+        data = json.loads(meta[KEPT_KEY])
+        return KeptLedger(inputs=str(data["inputs"]), outputs=str(data["outputs"]),
+                          traces=tuple(str(t) for t in data["traces"]),
+                          report=dict(data["report"]))
+    except (sqlite3.Error, ValueError, TypeError, KeyError):
+        return None
+
+
+def save_kept(campaign: Campaign, kept: KeptLedger | None) -> None:
+    """Keep ``kept`` in the campaign's state (``None``: forget the one kept, when there is a
+    state). Raises :class:`~tribopipe.errors.OutputError` naming the file when it cannot
+    be written."""
+    path = campaign.state_path
+    if kept is None and not path.is_file():
+        return
+    try:
+        con = _connect(path)
+        try:
+            if kept is None:
+                con.execute("DELETE FROM meta WHERE key = ?", (KEPT_KEY,))
+            else:
+                text = json.dumps({"inputs": kept.inputs, "outputs": kept.outputs,
+                                   "traces": list(kept.traces), "report": kept.report},
+                                  separators=(",", ":"))
+                con.execute("INSERT OR REPLACE INTO meta (key, value) VALUES (?, ?)",
+                            (KEPT_KEY, text))
+        finally:
+            con.close()
+    except (OSError, sqlite3.Error) as exc:
+        raise OutputError(f"cannot write the campaign state ({exc})", path=path) from None
+
+
 def load_state(campaign: Campaign) -> CampaignState:
     """The incremental state of a campaign (empty when there is none or it is unreadable:
     a lost state only costs a full re-run). Where only the JSON state of an older version

@@ -232,7 +232,7 @@ def _relative(path: Path, root: Path) -> str:
     return path.relative_to(root).as_posix()
 
 
-class _Traces:
+class TraceListing:
     """Whether a trace (relative to the output folder) is a file on disk: those directly
     in ``traces/`` from one listing of it (a campaign has thousands), any other by a
     ``stat``."""
@@ -256,7 +256,7 @@ class _Traces:
         return name in self._listed
 
 
-def _traces_present(traces: _Traces, entry: FileState) -> bool:
+def _traces_present(traces: TraceListing, entry: FileState) -> bool:
     """True when every reduced run of a state entry still has its trace on disk."""
     for run in entry.runs:
         if run.status == REDUCED:
@@ -311,7 +311,7 @@ def campaign_table(campaign: Campaign, *, state: CampaignState | None = None,
     if manifest is None and campaign.manifest is not None:
         manifest = read_manifest(campaign.manifest)
     per_test_possible = campaign.test_pattern is not None
-    traces = _Traces(campaign)
+    traces = TraceListing(campaign)
     rows = CampaignTable()
     for path in discover_files(campaign):
         rel = _relative(path, campaign.raw_dir)

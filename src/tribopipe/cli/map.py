@@ -239,12 +239,11 @@ def validate_cmd(path: str | None, map_path: str | None, recompute: bool) -> Non
         return
     if path.lower().endswith(".parquet"):
         from ..frictionmap.profile import map_upgrade_note
-        from ..frictionmap.store import map_metadata
         from ..frictionmap.summary import check_map_file
         from ..materials import lab_files, load_vocabulary
 
-        problems, verdict = check_map_file(path, load_vocabulary(lab_files(".")))
-        upgraded = map_upgrade_note(int(map_metadata(path)["schema_version"]))
+        problems, verdict, info = check_map_file(path, load_vocabulary(lab_files(".")))
+        upgraded = map_upgrade_note(int(info["schema_version"]))
         if upgraded is not None:
             say(f"note: {upgraded}")
         for line in problems:
@@ -438,10 +437,12 @@ def show_cmd(runs_listed: bool, groups_listed: bool, map_path: str) -> None:
     from ..export.tables import map_paper_text
     from ..frictionmap import map_summary
     from ..frictionmap.snapshot import open_map
+    from ..frictionmap.summary import SUMMARY_COLUMNS
 
-    # the one read and check of the map (its excluded and reviewed runs are shown as
-    # whole rows); a map folder's groups are stored, not grouped again
-    snap = open_map(map_path)
+    # the one read and check of the map: the columns the summary uses of every run
+    # (every column with --runs); its excluded and reviewed runs are read whole apart,
+    # from the same commit; a map folder's groups are stored, not grouped again
+    snap = open_map(map_path, None if runs_listed else SUMMARY_COLUMNS)
     click.echo(map_summary(snap, runs_listed=runs_listed))
     if groups_listed:
         click.echo(map_paper_text(snap), nl=False)

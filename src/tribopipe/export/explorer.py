@@ -59,13 +59,11 @@ from ..query import (
     REQUEST_ERRORS,
     WHY_NO_U,
     estimate_text,
-    groups_at_speed,
     map_curvature,
     name_key,
-    pair_points,
-    pair_speeds,
     pairs,
-    select_pair,
+    pd_numeric,
+    points_by,
     speed_needed,
 )
 from ..rounding import known_u
@@ -117,6 +115,13 @@ CSV_COLUMNS = (
 #: points per fitted power-law curve (log-spaced over the fitted pressure range), each
 #: coordinate to 4 significant digits (they are drawn, never computed with)
 FIT_CURVE_POINTS = 24
+
+#: the lists of interpolation points of each speed of a pair (packed in the page)
+POINT_LISTS = ("mu_k_points", "mu_s_points")
+#: the order of a pair's runs on the page (a stable sort: ties keep the map's order)
+RUN_ORDER = ("temperature_C", "pressure_kPa", "repeat", "measurement_id")
+#: the column that carries each run's pair number while the runs are sorted
+_PAIR = "\0pair"
 
 _PLACEHOLDER = re.compile(r"\{\{(\w+)\}\}")
 #: the page's own words around its numbers and what a user typed or a link asked for
@@ -255,22 +260,17 @@ def _text3(value: Any) -> str:
     return "–" if not isinstance(v, int | float) else f"{v:.3f}"
 
 
-def _points(points: pd.DataFrame, pair_groups: pd.DataFrame,
+def _points(points: list[dict[str, Any]], runs_at: Mapping[tuple[float, float], list[str]],
             run_index: dict[str, int]) -> list[dict[str, Any]]:
-    """Rows of :func:`tribopipe.query.pair_points` as dicts, in their order, each with the
-    positions (in the pair's runs, :func:`_runs`) of the runs behind it and its texts as
-    the tables print them (``text``: ``p``, ``t``, ``mean``, ``half``, ``u``)."""
-    import pandas as pd
-
-    p = pd.to_numeric(pair_groups["pressure_kPa"], errors="coerce").to_numpy(dtype=float)
-    t = pd.to_numeric(pair_groups["temperature_C"], errors="coerce").to_numpy(dtype=float)
-    ids = pair_groups["run_ids"].to_numpy(dtype=object) if "run_ids" in pair_groups else None
+    """Rows of :func:`tribopipe.query.pair_points` (as records), in their order, each with
+    the positions (in the pair's runs, :func:`_runs`) of the runs behind it (``runs_at``:
+    the run ids of the groups at each (pressure [kPa], temperature [°C] or −inf where
+    unknown)) and its texts as the tables print them (``text``: ``p``, ``t``, ``mean``,
+    ``half``, ``u``)."""
     out = []
-    for r in points.to_dict(orient="records"):
-        at = p == r["pressure_kPa"]
-        at &= (t == r["temperature_C"]) if math.isfinite(r["temperature_C"]) else (t != t)
-        run_ids = [] if ids is None else [i for cell in ids[at] for i in run_ids_of(cell)]
+    for r in points:
         temperature = _plain(r["temperature_C"])
+        run_ids = runs_at.get((r["pressure_kPa"], _t_key(r["temperature_C"])), [])
         out.append(
             {
                 "pressure_kPa": _plain(r["pressure_kPa"]),
@@ -294,6 +294,19 @@ def _points(points: pd.DataFrame, pair_groups: pd.DataFrame,
     return out
 
 
+def _t_key(temperature_C: float) -> float:
+    """A temperature [°C] as a point's key: −inf where unknown (NaN)."""
+    return temperature_C if math.isfinite(temperature_C) else -math.inf
+
+
+def _by_code(points: pd.DataFrame) -> dict[int, list[dict[str, Any]]]:
+    """The records of :func:`tribopipe.query.points_by`, by their code (in their order)."""
+    out: dict[int, list[dict[str, Any]]] = {}
+    for r in points.to_dict(orient="records"):
+        out.setdefault(int(r.pop("code")), []).append({str(k): v for k, v in r.items()})
+    return out
+
+
 def _measured(points: list[dict[str, Any]], column: str, text: str) -> list[dict[str, Any]]:
     """The distinct measured values of ``column`` among ``points`` (sorted), each with its
     text as the tables print it (the page's chips)."""
@@ -304,14 +317,15 @@ def _measured(points: list[dict[str, Any]], column: str, text: str) -> list[dict
     return [{"value": v, "text": seen[v]} for v in sorted(seen)]
 
 
-def _speed_points(at_speed: pd.DataFrame, speed_mm_s: float,
+def _speed_points(mu_k_points: list[dict[str, Any]], mu_s_points: list[dict[str, Any]],
+                  runs_at: Mapping[tuple[float, float], list[str]], speed_mm_s: float,
                   run_index: dict[str, int]) -> dict[str, Any]:
-    """One measured speed [mm/s] of a pair: its μ_K and μ_S points (:func:`_points`), the
-    measured temperatures and pressures with their texts, and what a request without a
-    temperature is told (``None`` where one temperature leaves no choice)."""
-    mu_k = _points(pair_points(at_speed, "mu_k"), at_speed, run_index)
-    mu_s = (_points(pair_points(at_speed, "mu_s"), at_speed, run_index)
-            if "mu_s_mean" in at_speed.columns else [])
+    """One measured speed [mm/s] of a pair: its μ_K and μ_S points (:func:`_points` of
+    :func:`tribopipe.query.pair_points`' records), the measured temperatures and pressures
+    with their texts, and what a request without a temperature is told (``None`` where
+    one temperature leaves no choice)."""
+    mu_k = _points(mu_k_points, runs_at, run_index)
+    mu_s = _points(mu_s_points, runs_at, run_index)
     temperatures = _measured(mu_k, "temperature_C", "t")
     return {
         "speed_mm_s": float(speed_mm_s),
@@ -325,18 +339,22 @@ def _speed_points(at_speed: pd.DataFrame, speed_mm_s: float,
     }
 
 
-def _left_out(pair_groups: pd.DataFrame) -> int:
-    """How many μ_K points of a pair :func:`tribopipe.query.query` leaves out for lack of
-    a temperature (points: distinct pressures of the groups without one)."""
-    import pandas as pd
+def _left_out(groups: pd.DataFrame, codes: Any) -> dict[int, int]:
+    """How many μ_K points of each pair (``codes``: the pair's number per group row)
+    :func:`tribopipe.query.query` leaves out for lack of a temperature (points: distinct
+    pressures of the groups without one, where some of the pair's groups have one)."""
+    import numpy as np
 
-    p = pd.to_numeric(pair_groups["pressure_kPa"], errors="coerce")
-    t = pd.to_numeric(pair_groups["temperature_C"], errors="coerce")
-    m = pd.to_numeric(pair_groups["mu_k_mean"], errors="coerce")
-    finite = m.notna() & p.notna() & m.abs().ne(math.inf) & p.abs().ne(math.inf)
-    if not (finite & t.notna()).any():
-        return 0
-    return int(p[finite & t.isna()].nunique())
+    p = pd_numeric(groups["pressure_kPa"])
+    t = pd_numeric(groups["temperature_C"])
+    m = pd_numeric(groups["mu_k_mean"])
+    finite = np.isfinite(m) & np.isfinite(p)
+    with_t = {int(c) for c in codes[finite & ~np.isnan(t)]}
+    missing: dict[int, set[float]] = {}
+    for c, v in zip(codes[finite & np.isnan(t)], p[finite & np.isnan(t)], strict=True):
+        if int(c) in with_t:
+            missing.setdefault(int(c), set()).add(float(v))
+    return {c: len(v) for c, v in missing.items()}
 
 
 def _origin(r: Mapping[Any, Any]) -> str:
@@ -348,14 +366,11 @@ def _origin(r: Mapping[Any, Any]) -> str:
     return " · ".join(v for v in (file, place) if v)
 
 
-def _runs(pair_runs: pd.DataFrame, labs: dict[str, int]) -> list[dict[str, Any]]:
-    """The pair's included runs (the repeats) for the page, in a stable order: μ_K, μ_S,
-    the condition, its speed [mm/s] and lab (an index into the page's ``labs``), its flags,
-    and ``line``: its μ_K as the tables print it and the file, test and result it came
-    from."""
-    ordered = pair_runs.sort_values(
-        ["temperature_C", "pressure_kPa", "repeat", "measurement_id"], kind="mergesort"
-    )
+def _runs(ordered: pd.DataFrame, labs: dict[str, int]) -> list[dict[str, Any]]:
+    """Included runs (the repeats) for the page, in their order (:data:`RUN_ORDER` within
+    a pair): μ_K, μ_S, the condition, its speed [mm/s] and lab (an index into the page's
+    ``labs``), its flags, and ``line``: its μ_K as the tables print it and the file, test
+    and result it came from."""
     speeds = nominal_speeds(ordered)
     out = []
     for r, speed, method in zip(ordered.to_dict(orient="records"), speeds,
@@ -528,6 +543,8 @@ def explorer_data(
     °C, speeds in mm/s. Raises :class:`ExportError` when no run is left. Inputs are not
     modified.
     """
+    import numpy as np
+
     included = runs
     if "excluded" in runs.columns:
         included = runs[~runs["excluded"].fillna(False).astype(bool)]
@@ -542,27 +559,80 @@ def explorer_data(
     methods = list(dict.fromkeys(str(m) for m in run_methods))
     if fits is None:
         fits = fit_power_law(runs)
-    run_pin, run_disc = included["pin"].map(_key), included["disc"].map(_key)
-    fit_pin, fit_disc = fits["pin"].map(_key), fits["disc"].map(_key)
     lab_names = sorted({_lab_name(v) for v in included["lab"]}) if "lab" in included else []
     labs = {name: i for i, name in enumerate(lab_names or ["unknown lab"])}
+
+    # each pair's rows selected once: the pairs in query's order (one per casefolded
+    # name, query merges spellings), each group, run and fit given its pair's number
+    order: dict[tuple[str, str], int] = {}
+    for pin, disc in pairs(groups):
+        order.setdefault((_key(pin), _key(disc)), len(order))
+    group_keys = list(zip(groups["pin"].map(_key), groups["disc"].map(_key), strict=True))
+    codes = np.array([order[k] for k in group_keys], dtype=np.int64)
+    shown = set(points_by(groups, codes, "mu_k")["code"].tolist())
+    first_row: dict[int, int] = {}
+    for position, c in enumerate(codes.tolist()):
+        first_row.setdefault(c, position)
+    # each pair's measured speeds and its groups at each (query.pair_speeds and
+    # query.groups_at_speed: a group of no valid speed is at none where the table has a
+    # speed column)
+    if NOMINAL_SPEED in groups.columns:
+        speed_of = pd_numeric(groups[NOMINAL_SPEED])
+        valid = np.isfinite(speed_of) & (speed_of > 0)
+    else:
+        speed_of = np.full(len(groups), FOUNDING_SLIDING_SPEED_MM_S)
+        valid = np.ones(len(groups), dtype=bool)
+    measured_of: dict[int, set[float]] = {}
+    for c, v in zip(codes[valid].tolist(), speed_of[valid].tolist(), strict=True):
+        measured_of.setdefault(c, set()).add(float(v))
+    at_speed: dict[tuple[int, float], int] = {}
+    for c in sorted(first_row):
+        for v in sorted(measured_of.get(c, ())) or [FOUNDING_SLIDING_SPEED_MM_S]:
+            at_speed[(c, v)] = len(at_speed)
+    speed_codes = np.array([at_speed[(c, v)] if ok else -1 for c, v, ok in zip(
+        codes.tolist(), speed_of.tolist(), valid.tolist(), strict=True)], dtype=np.int64)
+    with_speed = speed_codes >= 0
+    at_groups = groups[with_speed]
+    points = {q: _by_code(points_by(at_groups, speed_codes[with_speed], q))
+              for q in ("mu_k", "mu_s") if q == "mu_k" or "mu_s_mean" in groups.columns}
+    runs_at: dict[int, dict[tuple[float, float], list[str]]] = {}
+    ids = groups["run_ids"].tolist() if "run_ids" in groups.columns else [None] * len(groups)
+    for sc, p, t, cell in zip(speed_codes.tolist(), pd_numeric(groups["pressure_kPa"]).tolist(),
+                              pd_numeric(groups["temperature_C"]).tolist(), ids, strict=True):
+        if sc >= 0:
+            runs_at.setdefault(sc, {}).setdefault((p, _t_key(t)), []).extend(run_ids_of(cell))
+    left_out = _left_out(groups, codes)
+    # the included runs in the pages' order, each pair's together (one sort, one pass)
+    run_codes = np.array([order.get(k, -1) for k in zip(
+        included["pin"].map(_key), included["disc"].map(_key), strict=True)], dtype=np.int64)
+    ordered = included.assign(**{_PAIR: run_codes})
+    ordered = ordered[run_codes >= 0].sort_values(
+        [_PAIR, *RUN_ORDER], kind="mergesort")
+    runs_of: dict[int, list[dict[str, Any]]] = {}
+    for c, r in zip(ordered[_PAIR].tolist(), _runs(ordered, labs), strict=True):
+        runs_of.setdefault(c, []).append(r)
+    fit_codes = [order.get(k, -1) for k in zip(fits["pin"].map(_key), fits["disc"].map(_key),
+                                                strict=True)]
+    fits_of: dict[int, list[dict[str, Any]]] = {}
+    for c, f in zip(fit_codes, _fits(fits), strict=True):
+        fits_of.setdefault(c, []).append(f)
 
     pair_index: dict[tuple[str, str], int] = {}
     pair_rows: list[dict[str, Any]] = []
     run_chunks: list[list[dict[str, Any]]] = []
-    for pin, disc in pairs(groups):
-        key = (_key(pin), _key(disc))
-        if key in pair_index:  # another spelling of a pair already listed (query merges them)
+    for key, c in order.items():
+        if c not in shown:  # a pair without a μ_K point (query.pair_points)
             continue
-        pair_groups = select_pair(groups, pin, disc)
-        if pair_points(pair_groups, "mu_k").empty:
-            continue
-        first = pair_groups.iloc[0]
-        pair_runs = _runs(included[(run_pin == key[0]) & (run_disc == key[1])], labs)
+        first = groups.iloc[first_row[c]]
+        pair_runs = runs_of.get(c, [])
         run_index = {r["id"]: i for i, r in enumerate(pair_runs)}
-        measured = pair_speeds(pair_groups)
-        speeds = [_speed_points(groups_at_speed(pair_groups, v), v, run_index)
-                  for v in measured]
+        measured = sorted(measured_of.get(c, ())) or [FOUNDING_SLIDING_SPEED_MM_S]
+        speeds = []
+        for v in measured:
+            sc = at_speed[(c, v)]
+            speeds.append(_speed_points(points["mu_k"].get(sc, []),
+                                        points.get("mu_s", {}).get(sc, []),
+                                        runs_at.get(sc, {}), v, run_index))
         pair_index[key] = len(pair_rows)
         run_chunks.append(pair_runs)
         pin_name, disc_name = str(first["pin"]), str(first["disc"])
@@ -573,19 +643,19 @@ def explorer_data(
                 "keys": list(key),
                 "speeds": speeds,
                 "speed_needed": speed_needed(measured) if len(measured) > 1 else None,
-                "left_out": _left_out(pair_groups),
+                "left_out": left_out.get(c, 0),
                 "labs": sorted({r["lab"] for r in pair_runs}),
-                "fits": _fits(fits[(fit_pin == key[0]) & (fit_disc == key[1])]),
+                "fits": fits_of.get(c, []),
                 "snippet": _pair_snippets(pin_name, disc_name),
                 "csv": [_csv_field(pin_name), _csv_field(disc_name)],
                 "slug": _slug(pin_name, disc_name),
             }
         )
     group_rows = []
-    expanded = {q: 2.0 * group_u(groups, q)[0] for q in ("mu_k", "mu_s")}
+    expanded = {q: 2.0 * group_u(groups, q)[0].to_numpy(dtype=float) for q in ("mu_k", "mu_s")}
     lab_of_run = {r["id"]: r["lab"] for chunk in run_chunks for r in chunk}
     for i, g in enumerate(groups.to_dict(orient="records")):
-        index = pair_index.get((_key(g["pin"]), _key(g["disc"])))
+        index = pair_index.get(group_keys[i])
         if index is None:
             continue
         row = {"pin": str(g["pin"]), "disc": str(g["disc"]), "pair": index}
@@ -598,7 +668,7 @@ def explorer_data(
             else methods[0]
         u_known: dict[str, float | None] = {}
         for q, values in expanded.items():  # U (k = 2) of the group mean, where known
-            u = float(values.iloc[i])
+            u = float(values[i])
             row[f"{q}_U"] = u_known[q] = u if known_u(u) else None
         named = str(g.get(LABS) or "").split(";") if LABS in g else []
         row["labs"] = sorted({labs[n] for n in map(printable, named) if n in labs}) or sorted(
@@ -751,6 +821,10 @@ def _fragment(data: dict[str, Any], js: str, runs_beside: str | None = None) -> 
         f'\n   <option value="{html_text(s["name"])}">{html_text(s["label"])}</option>'
         for s in data["snippets"])
     head = {k: v for k, v in data.items() if k != "runs"}
+    # each speed's interpolation points packed (the page unpacks them as it opens)
+    head["pairs"] = [{**pair, "speeds": [{**sp, **{q: _packed(sp[q]) for q in POINT_LISTS}}
+                                         for sp in pair["speeds"]]}
+                     for pair in data["pairs"]]
     # the groups packed, their names left to their pair's (the page restores both)
     head["groups"] = _packed([{k: v for k, v in g.items() if k not in ("pin", "disc")}
                               for g in data["groups"]])
@@ -817,6 +891,9 @@ def read_embedded_data(html: str) -> dict[str, Any]:
     if match is None:
         raise ExportError(f"no explorer data (script element #{DATA_ELEMENT_ID}) in the page")
     data: dict[str, Any] = json.loads(match.group(1))
+    for pair in data["pairs"]:
+        for speed in pair["speeds"]:
+            speed.update({q: _unpacked(speed[q]) for q in POINT_LISTS})
     data["groups"] = [{"pin": data["pairs"][g["pair"]]["pin"],
                        "disc": data["pairs"][g["pair"]]["disc"], **g}
                       for g in _unpacked(data["groups"])]
@@ -912,19 +989,26 @@ def explorer_files(
     rows: list[tuple[str, list[str], int, int, str]] = []
     for k, keys in enumerate(shards, 1):
         page = (folder / f"part-{k}.html").as_posix()
-        shard_groups = groups[group_pins.isin(keys)]
-        shard_runs = included[run_pins.isin(keys)]
+        in_groups, in_runs = group_pins.isin(keys), run_pins.isin(keys)
+        shard_groups, shard_runs = groups[in_groups], included[in_runs]
         data = explorer_data(shard_runs, groups=shard_groups, fits=fits[fit_pins.isin(keys)],
                              title=f"{title} — page {k} of {len(shards)}", source=source)
         data["curvature"] = curvature  # the whole map's: query's own uncertainty
         files.update(_page_files(data, page, 0 if runs_beside_pages else runs_inline_limit))
+        # each pin's name (its first group's spelling), discs, groups and runs, counted
+        # in one pass over the page's groups and runs
+        names: dict[str, str] = {}
+        discs: dict[str, set[str]] = {}
+        n_groups: dict[str, int] = {}
+        for key, pin, disc in zip(group_pins[in_groups], shard_groups["pin"],
+                                  shard_groups["disc"], strict=True):
+            names.setdefault(key, str(pin))
+            discs.setdefault(key, set()).add(str(disc))
+            n_groups[key] = n_groups.get(key, 0) + 1
+        n_runs = run_pins[in_runs].value_counts()
         for key in keys:
-            of_pin = shard_groups[shard_groups["pin"].map(_key) == key]
-            pin = str(of_pin["pin"].iloc[0])
-            discs = sorted({str(d) for d in of_pin["disc"]}, key=_key)
-            n_runs = int((shard_runs["pin"].map(_key) == key).sum())
-            rows.append((pin, discs, len(of_pin), n_runs,
-                         f"{Path(page).parent.name}/part-{k}.html"))
+            rows.append((names[key], sorted(discs[key], key=_key), n_groups[key],
+                         int(n_runs.get(key, 0)), f"{Path(page).parent.name}/part-{k}.html"))
     files[name] = explorer_index(rows, title=title, source=source, n_groups=len(groups),
                                  n_runs=len(included))
     return files

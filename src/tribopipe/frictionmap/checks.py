@@ -156,9 +156,17 @@ def _check_column(runs: pd.DataFrame, column: Column, present: Any, order: int,
     if column.kind in ("float", "int"):
         values = np.asarray(pd.to_numeric(runs[name]).astype("float64").to_numpy(
             na_value=np.nan), dtype=float)
-        raw = runs[name].tolist()
-        for i in np.flatnonzero(present):
-            value: Any = raw[i]
+        # the rows worth a look: not finite, or outside the bounds (a comparison with
+        # NaN is false, so those are looked at too); the others pass
+        with np.errstate(invalid="ignore"):
+            inside = np.isfinite(values) if column.kind == "float" else ~np.isnan(values)
+            if column.bounds is not None:
+                b = column.bounds
+                inside &= (values > b.low if b.low_open else values >= b.low)
+                inside &= values <= b.high
+        look = np.flatnonzero(present & ~inside)
+        raw = runs[name].iloc[look].tolist()
+        for i, value in zip(look.tolist(), raw, strict=True):
             number = values[i]
             if column.kind == "float" and math.isinf(number):
                 found.append((int(i), order, name, f"{_number(value)} is not a finite number"))
@@ -169,11 +177,11 @@ def _check_column(runs: pd.DataFrame, column: Column, present: Any, order: int,
     elif column.kind == "str":
         codes, uniques = pd.factorize(runs[name])
         problems: dict[int, str] = {}
-        for u, text in enumerate(uniques):
+        for u, text in enumerate(uniques.tolist()):
             _check_text(name, str(text), lambda f, p, u=u: problems.setdefault(u, p))
         if problems:
-            for i in np.flatnonzero(np.isin(codes, list(problems)) & present):
-                found.append((int(i), order, name, problems[int(codes[i])]))
+            for j in np.flatnonzero(np.isin(codes, list(problems)) & present).tolist():
+                found.append((j, order, name, problems[int(codes[j])]))
 
 
 def _provenance(runs: pd.DataFrame, blank: Any, reduced: Any,
@@ -192,7 +200,7 @@ def _provenance(runs: pd.DataFrame, blank: Any, reduced: Any,
         import pandas as pd
 
         codes, uniques = pd.factorize(runs[name])
-        bad = [u for u, text in enumerate(uniques) if not ok(str(text))]
+        bad = [u for u, text in enumerate(uniques.tolist()) if not ok(str(text))]
         return np.isin(codes, bad) & (codes >= 0)
 
     for k, name in enumerate(("source_file", "tribopipe_version")):

@@ -499,18 +499,9 @@ def check_runs(frame: pd.DataFrame, where: str = "row") -> pd.DataFrame:
     for column in COLUMNS:
         name, kind, bounds = column.name, column.kind, column.bounds
         if kind == "str":
-            checker = (name_problem if name in NAME_COLUMNS else
-                       file_name_problem if name in FILE_NAME_COLUMNS else text_problem)
-            for i, value in enumerate(frame[name].tolist()):
-                missing = value is None or (isinstance(value, float) and value != value)
-                if missing and name not in NAME_COLUMNS:
-                    continue
-                problem = "missing, expected a name" if missing else checker(value)
-                if problem is None and column.choices and value not in column.choices:
-                    problem = (f"{printable(str(value))[:60]!r} is not one of "
-                               + ", ".join(repr(c) for c in column.choices))
-                if problem is not None:
-                    raise _row_error(frame, where, i, name, f"{name}: {problem}")
+            found = _first_text_problem(frame[name], column)
+            if found is not None:
+                raise _row_error(frame, where, found[0], name, f"{name}: {found[1]}")
         elif kind == "float":
             values = frame[name].to_numpy(dtype=float)
             present = ~np.isnan(values)
@@ -540,6 +531,50 @@ def check_runs(frame: pd.DataFrame, where: str = "row") -> pd.DataFrame:
                                  f"expected a whole number from {bounds.low:.0f} to "
                                  f"{bounds.high:.0f}")
     return frame
+
+
+def _text_problem(value: Any, column: Column) -> str | None:
+    """Why the present text ``value`` breaks the rules of the text ``column`` (a name, a
+    file's own name, one line of text; one of its choices), or ``None``."""
+    name = column.name
+    checker = (name_problem if name in NAME_COLUMNS else
+               file_name_problem if name in FILE_NAME_COLUMNS else text_problem)
+    problem = checker(value)
+    if problem is None and column.choices and value not in column.choices:
+        problem = (f"{printable(str(value))[:60]!r} is not one of "
+                   + ", ".join(repr(c) for c in column.choices))
+    return problem
+
+
+def _first_text_problem(values: pd.Series, column: Column) -> tuple[int, str] | None:
+    """The first row (position) of the text column ``values`` that breaks the rules of
+    ``column``, with its problem; ``None`` when none does. A column of text (pandas'
+    ``str`` dtype: every present value a ``str``) is checked once per distinct value;
+    any other column value by value, as it comes."""
+    import numpy as np
+    import pandas as pd
+
+    is_name = column.name in NAME_COLUMNS
+    if values.dtype == "str":
+        codes, uniques = pd.factorize(values)
+        problems = {u: p for u, text in enumerate(uniques.tolist())
+                    if (p := _text_problem(text, column)) is not None}
+        bad = np.isin(codes, list(problems)) if problems else np.zeros(len(codes), bool)
+        if is_name:
+            bad |= codes < 0
+        if not bad.any():
+            return None
+        i = int(np.flatnonzero(bad)[0])
+        code = int(codes[i])
+        return i, "missing, expected a name" if code < 0 else problems[code]
+    for i, value in enumerate(values.tolist()):
+        missing = value is None or (isinstance(value, float) and value != value)
+        if missing and not is_name:
+            continue
+        problem = "missing, expected a name" if missing else _text_problem(value, column)
+        if problem is not None:
+            return i, problem
+    return None
 
 
 def content_sha256(frame: pd.DataFrame, version: int = SCHEMA_VERSION) -> str:
@@ -574,11 +609,25 @@ def content_sha256(frame: pd.DataFrame, version: int = SCHEMA_VERSION) -> str:
         elif kind == "bool":
             data = np.asarray(column, dtype=bool).astype("u1").tobytes()
         else:
-            texts = [None if is_missing(v) else str(v) for v in column.tolist()]
+            texts = _texts(column)
             data = json.dumps(texts, ensure_ascii=False).encode("utf-8", "surrogatepass")
         digest.update(f"|{name}:{kind}:{len(data)}|".encode())
         digest.update(data)
     return digest.hexdigest()
+
+
+def _texts(column: pd.Series) -> list[str | None]:
+    """The cells of a text column as :func:`content_sha256` hashes them: ``None`` where
+    missing, else the text (a column of pandas' ``str`` dtype as it is, any other value
+    by value)."""
+    import numpy as np
+
+    if column.dtype != "str":
+        return [None if is_missing(v) else str(v) for v in column.tolist()]
+    texts: list[str | None] = column.tolist()
+    for i in np.flatnonzero(np.asarray(column.isna(), dtype=bool)).tolist():
+        texts[i] = None
+    return texts
 
 
 def _ok(value: Any, kind: str) -> bool:

@@ -132,3 +132,41 @@ def test_batch_after_another_writer_reads_the_ids_then_lands(
     done = _batch(raw, mapfile, out)
     assert done.exit_code == 0, done.output
     assert held == [False, True, True]
+
+
+def test_batch_keeps_no_map_rows_and_prints_the_stored_groups(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """The batch's landings keep none of the map's rows (neither the landing's result nor
+    the batch's report holds a table); the groups it prints after are the map folder's
+    stored ones, read without reading a part, and are those of the map opened whole."""
+    import pandas as pd
+
+    from tribopipe.campaign import folder_campaign, run_campaign
+    from tribopipe.export.tables import map_paper_text
+    from tribopipe.frictionmap.snapshot import open_groups, open_map
+    from tribopipe.pipeline import landing
+
+    raw, mapfile, out = tmp_path / "raw", tmp_path / "map.parquet", tmp_path / "out"
+    raw.mkdir()
+    for source in (FIRST, SECOND):
+        shutil.copyfile(source, raw / source.name)
+    landed: list[Any] = []
+    real = landing.land_runs
+
+    def recording(*a: Any, **k: Any) -> Any:
+        landed.append(real(*a, **k))
+        return landed[-1]
+
+    monkeypatch.setattr(landing, "land_runs", recording)
+    monkeypatch.setattr("tribopipe.campaign.batch.land_runs", recording)
+    report = run_campaign(folder_campaign(raw, filename_pattern=PATTERN, output_dir=out,
+                                          map_path=mapfile), jobs=1, plots=False)
+    assert len(report.reduced) == 2 and report.map_landed and landed
+    for value in [*vars(report).values(), *(v for x in landed for v in vars(x).values())]:
+        assert not isinstance(value, pd.DataFrame)
+    held = _watch(monkeypatch, mapfile)
+    text = map_paper_text(open_groups(mapfile))
+    assert held == []  # the stored groups, no part read
+    assert text == map_paper_text(open_map(mapfile)) and "Dragonskin 30" in text
+    done = _batch(raw, mapfile, out)  # unchanged: the map is not touched, nor printed
+    assert done.exit_code == 0 and "Dragonskin 30" not in done.output, done.output

@@ -104,7 +104,7 @@ def test_the_kept_ledger_is_the_one_an_unchanged_batch_printed(root: Path) -> No
     before = _stamps(campaign)
     again = _batch(root)
     assert again.kept and not again.ok  # the failure still sets the exit code
-    assert again.map_summary == "unchanged" and again.map_after is None
+    assert again.map_summary == "unchanged" and not again.map_landed
     assert again.map_path == campaign.map_path and again.output_dir == campaign.output_dir
     assert _stamps(campaign) == before, "a kept ledger writes nothing"
 

@@ -299,3 +299,32 @@ def test_a_run_without_a_budget_carries_the_stated_estimate_never_zero():
     assert g["mu_k_n"] == 2  # the repeat statistics are still there
     u, budget = group_u(group_statistics(frame(rows)), "mu_k")
     assert u.iloc[0] == g["mu_k_u"] and not budget.iloc[0]
+
+
+def test_the_student_t_quantile_is_scipys_without_importing_scipy():
+    """``t975`` is computed without SciPy (its import costs a map write half a second of
+    CPU): held to SciPy's inverse of the t distribution from 1 to 10⁶ degrees of freedom,
+    and to printed tables."""
+    from scipy.special import stdtrit
+
+    for dof in [*range(1, 400), 555, 999, 1000, 2682, 5000, 10_000, 99_999, 100_000]:
+        expected = float(stdtrit(dof, 0.975))
+        assert t975(dof) == pytest.approx(expected, rel=1e-12 if dof < 3000 else 1e-10), dof
+    assert t975(1_000_000) == pytest.approx(float(stdtrit(1_000_000, 0.975)), rel=1e-9)
+    # Student's tables: 12.706, 4.303, 2.228, 2.042, 1.984 for 1, 2, 10, 30, 100
+    for dof, printed in ((1, 12.706), (2, 4.303), (10, 2.228), (30, 2.042), (100, 1.984)):
+        assert round(t975(dof), 3) == printed
+    with pytest.raises(ValueError, match="at least 1"):
+        t975(0)
+
+
+def test_the_group_statistics_import_no_scipy():
+    import subprocess
+    import sys
+
+    code = ("import sys\nfrom tribopipe.stats import describe_values\n"
+            "describe_values([0.5, 0.52, 0.55, 0.51])\n"
+            "print(sorted(m for m in sys.modules if m.split('.')[0] == 'scipy'))\n")
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          check=True)
+    assert done.stdout.strip() == "[]"

@@ -161,12 +161,72 @@ def describe_values(values: Sequence[float]) -> dict[str, Any]:
 
 @functools.lru_cache(maxsize=256)
 def t975(dof: int) -> float:
-    """Student-t 97.5 % quantile for ``dof`` degrees of freedom (two-sided 95 % CI)."""
-    # scipy.special's inverse of the t CDF: the value of scipy.stats.t.ppf, without
-    # importing scipy.stats (seconds on a first run)
-    from scipy.special import stdtrit
+    """Student-t 97.5 % quantile for ``dof`` degrees of freedom (two-sided 95 % CI), to
+    about 1e-14 relative (``tests/test_stats.py`` holds it to SciPy's ``stdtrit`` for
+    1 to 10⁵ degrees of freedom). Computed here, without SciPy, whose import costs a map
+    write half a second of CPU: exact for 1 and 2 degrees of freedom, else Newton's
+    method on the t distribution's upper tail (:func:`_t_upper_tail`) from the
+    Cornish–Fisher expansion."""
+    if dof < 1:
+        raise ValueError(f"degrees of freedom must be at least 1, not {dof}")
+    p = 0.975
+    if dof == 1:
+        return math.tan(math.pi * (p - 0.5))
+    if dof == 2:
+        return (2 * p - 1) / math.sqrt(2 * p * (1 - p))
+    z = 1.959963984540054  # the standard normal 97.5 % quantile
+    nu = float(dof)
+    t = (z + (z**3 + z) / (4 * nu) + (5 * z**5 + 16 * z**3 + 3 * z) / (96 * nu**2)
+         + (3 * z**7 + 19 * z**5 + 17 * z**3 - 15 * z) / (384 * nu**3))
+    log_norm = (math.lgamma((nu + 1) / 2) - math.lgamma(nu / 2)
+                - 0.5 * math.log(nu * math.pi))
+    for _ in range(50):
+        density = math.exp(log_norm - (nu + 1) / 2 * math.log1p(t * t / nu))
+        step = (_t_upper_tail(t, nu) - (1 - p)) / density
+        t += step
+        if abs(step) <= 1e-15 * t:
+            break
+    return t
 
-    return float(stdtrit(dof, 0.975))
+
+def _t_upper_tail(t: float, nu: float) -> float:
+    """P(T > t) of Student's t with ``nu`` degrees of freedom, t ≥ 0: half the
+    regularised incomplete beta function I_x(ν/2, 1/2) at x = ν/(ν + t²)."""
+    return 0.5 * _beta_inc(nu / 2, 0.5, nu / (nu + t * t))
+
+
+def _beta_inc(a: float, b: float, x: float) -> float:
+    """The regularised incomplete beta function I_x(a, b), 0 ≤ x ≤ 1: its continued
+    fraction (modified Lentz), on the side of x where it converges fast."""
+    if x <= 0.0:
+        return 0.0
+    if x >= 1.0:
+        return 1.0
+    front = math.exp(math.lgamma(a + b) - math.lgamma(a) - math.lgamma(b)
+                     + a * math.log(x) + b * math.log1p(-x))
+    if x < (a + 1) / (a + b + 2):
+        return front * _beta_fraction(a, b, x) / a
+    return 1.0 - front * _beta_fraction(b, a, 1.0 - x) / b
+
+
+def _beta_fraction(a: float, b: float, x: float) -> float:
+    """The continued fraction of the incomplete beta function (Lentz's method, to the
+    last bit of a double)."""
+    tiny = 1e-300
+    c, d = 1.0, 1.0 - (a + b) * x / (a + 1)
+    d = 1.0 / (d if abs(d) > tiny else tiny)
+    h = d
+    for m in range(1, 10_000):
+        aa = m * (b - m) * x / ((a + 2 * m - 1) * (a + 2 * m))
+        for term in (aa, -(a + m) * (a + b + m) * x / ((a + 2 * m) * (a + 2 * m + 1))):
+            d = 1.0 + term * d
+            d = 1.0 / (d if abs(d) > tiny else tiny)
+            c = 1.0 + term / c
+            c = c if abs(c) > tiny else tiny
+            h *= d * c
+        if abs(d * c - 1.0) < 1e-16:
+            break
+    return h
 
 
 @functools.lru_cache(maxsize=4096)

@@ -22,7 +22,7 @@ from collections.abc import Callable, Iterator, Mapping, Sequence
 from contextlib import contextmanager, suppress
 from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 from ..errors import CampaignError, OutputError, TribopipeError
 from ..files import file_sha256, os_reason
@@ -62,9 +62,6 @@ from .worker import (
     reduce_chunk,
     worker_init,
 )
-
-if TYPE_CHECKING:
-    import pandas as pd
 
 ProgressCallback = Callable[[int, int], None]
 
@@ -176,7 +173,7 @@ def _run_locked(campaign: Campaign, *, jobs: int | None, plots: bool | None,
     order = [job.file for job in todo]
     redone = set(order)
     account = Account()
-    after: pd.DataFrame | None = None
+    map_read = False  # a landing read the map under its lock (its rows are not kept)
     stop = StopFlag()
     # what the state file holds (the state as loaded, when it was this SQLite file's)
     saved: list[CampaignState | None] = [state if campaign.state_path.is_file() else None]
@@ -184,14 +181,13 @@ def _run_locked(campaign: Campaign, *, jobs: int | None, plots: bool | None,
     def land(results: list[FileOutcome]) -> None:
         """Fold ``results`` into the map (one locked atomic write) and the state; what
         is kept of them afterwards is their names and counts, not their rows."""
-        nonlocal account, after
-        part, rows_after = _land(
+        nonlocal account, map_read
+        part, read = _land(
             campaign, results, lambda in_map: _apply(
                 campaign, results, by_file, entries, failures, notes, vanished, in_map,
                 redone), entries, review)
         account = account.plus(part)
-        if rows_after is not None:
-            after = rows_after
+        map_read = map_read or read
         with suppress(OutputError):  # said by the batch's last save, which meets it again
             saved[0] = _save_state_with_map(campaign, entries, state, saved[0])
 
@@ -246,7 +242,7 @@ def _run_locked(campaign: Campaign, *, jobs: int | None, plots: bool | None,
     test_tally = tally(outcomes, tests_in)
     report = BatchReport(
         interrupted=stop.name,
-        map_after=after,
+        map_landed=map_read,
         campaign=campaign.name,
         total=len(account.reduced) + len(plan.skipped) + runs_failed,
         reduced=account.reduced,
@@ -561,18 +557,18 @@ def _ids_missing_from_map(campaign: Campaign, state: CampaignState) -> tuple[set
 def _land(campaign: Campaign, results: Sequence[FileOutcome],
           apply: Callable[[FilesByHash], tuple[Arrivals, Account]],
           entries: Mapping[str, FileState], review: Review | None = None
-          ) -> tuple[Account, pd.DataFrame | None]:
+          ) -> tuple[Account, bool]:
     """One landing of the batch: the results checked against the map and folded in by
     :func:`tribopipe.pipeline.landing.land_runs` (under the map's lock, in one atomic
     write: new records added or replaced, rows of runs whose raw file changed dropped,
     the review applied in the same write), the map locked and read only when a result
     brings or replaces runs or a review is given. Returns what this landing adds to the
-    batch's account and the map's rows as the write left them (``None`` when the map was
-    not read)."""
+    batch's account and whether it read (and so checked) the map under its lock; the
+    map's rows are not kept."""
     touches = review is not None or any(r.reduced for r in results) or any(
         _run_ids(entries.get(r.name)) for r in results)
     if not touches:
-        return apply({})[1], None
+        return apply({})[1], False
     brought: list[tuple[Arrivals, Account]] = []
 
     def choose(in_map: FilesByHash) -> Arrivals:
@@ -587,8 +583,8 @@ def _land(campaign: Campaign, results: Sequence[FileOutcome],
     arrivals, account = brought[0]
     account = replace(account, repeats=list(landed.repeats), review=landed.review)
     if not (arrivals.records or arrivals.stale_ids or landed.appended.changed):
-        return account, landed.rows
-    return replace(account, groups=landed.groups, appended=landed.appended), landed.rows
+        return account, True
+    return replace(account, groups=landed.groups, appended=landed.appended), True
 
 
 class StopFlag:

@@ -120,9 +120,10 @@ class BatchReport:
     #: the signal that stopped the batch (``"SIGINT"``, ``"SIGTERM"``), else ``None``:
     #: what finished landed, the rest is for the next batch
     interrupted: str | None = None
-    #: the map's rows as the batch's last write left them (``None`` when it did not read
-    #: the map): what the command shows of the map, without reading it again
-    map_after: Any = field(default=None, repr=False, compare=False)
+    #: whether a landing of the batch read the map under its lock (its rows are not
+    #: kept): then the command shows the map's condition groups afterwards, read from
+    #: the stored groups (a batch that did not touch the map does not read it again)
+    map_landed: bool = False
 
     #: True when nothing changed since the last batch and its ledger was kept: no file
     #: was read, no state row loaded, the map not opened
@@ -130,8 +131,8 @@ class BatchReport:
     kept: bool = False
 
     def to_json(self) -> dict[str, Any]:
-        """What the state keeps of an unchanged batch's report (its paths and the map's
-        rows left out): every field a later unchanged batch reports again."""
+        """What the state keeps of an unchanged batch's report (its paths left out):
+        every field a later unchanged batch reports again."""
         return {
             "campaign": self.campaign, "total": self.total, "reduced": self.reduced,
             "skipped": self.skipped, "failures": self.failures,

@@ -115,17 +115,14 @@ def _run(campaign: Any, jobs: int | None, plots: bool | None) -> None:
     click.echo(f"map {_shorten(report.map_path)}: {report.map_summary}")
     click.echo(f"outputs in {_shorten(report.output_dir)}/: runs.csv, failures.csv, traces/"
                + (", plots/traces/" if OutputLayout(report.output_dir).plots_dir.is_dir() else ""))
-    if report.map_after is not None:
+    if report.map_landed:
         from ..export.tables import map_paper_text
-        from ..frictionmap.snapshot import snapshot_of
-        from ..frictionmap.store import committed_groups_info
+        from ..frictionmap.snapshot import open_groups
 
-        # the groups, rounded for print, of the map as the batch's last write left it (a
-        # batch that did not write the map does not read it to print them again; a map
-        # folder's are stored, named by its manifest: not grouped again)
-        click.echo(map_paper_text(snapshot_of(report.map_after, report.map_path,
-                                              committed_groups_info(report.map_path))),
-                   nl=False)
+        # the groups, rounded for print, of the map as committed after the batch's last
+        # write (a batch that did not touch the map does not read it to print them
+        # again; a map folder's are stored: its ids read, not its rows grouped again)
+        click.echo(map_paper_text(open_groups(report.map_path)), nl=False)
     for line in report.ledger():  # the account comes last, where a user looks
         click.echo(printable(line))
     _remember(report.map_path)

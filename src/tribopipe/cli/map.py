@@ -436,10 +436,12 @@ def show_cmd(runs_listed: bool, groups_listed: bool, map_path: str) -> None:
     from ..export.tables import map_paper_text
     from ..frictionmap import map_summary
     from ..frictionmap.snapshot import open_map
+    from ..frictionmap.summary import SUMMARY_COLUMNS
 
-    # the one read and check of the map (its excluded and reviewed runs are shown as
-    # whole rows); a map folder's groups are stored, not grouped again
-    snap = open_map(map_path)
+    # the one read and check of the map: the columns the summary uses of every run
+    # (every column with --runs); its excluded and reviewed runs are read whole apart,
+    # from the same commit; a map folder's groups are stored, not grouped again
+    snap = open_map(map_path, None if runs_listed else SUMMARY_COLUMNS)
     click.echo(map_summary(snap, runs_listed=runs_listed))
     if groups_listed:
         click.echo(map_paper_text(snap), nl=False)

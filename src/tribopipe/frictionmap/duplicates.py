@@ -243,14 +243,18 @@ def repeat_clashes(current: pd.DataFrame, records: Sequence[MapRow],
 
     columns = ("pin", "disc", "normal_force_N", "temperature_C", "repeat")
     new_ids = {r.measurement_id for r in records}
-    old = current.loc[~current["measurement_id"].isin(new_ids | set(drop_ids))
-                      & ~current["excluded"].fillna(False).astype(bool)]
-    # only the map's runs of the records' pairs can share a record's condition
+    # only the map's runs of the records' pairs can share a record's condition (the
+    # pairs filtered first, on whole columns)
     pins = {r.pin for r in records}
     discs = {r.disc for r in records}
-    old = old.loc[old["pin"].isin(sorted(pins)) & old["disc"].isin(sorted(discs))]
+    old = current.loc[current["pin"].isin(sorted(pins)) & current["disc"].isin(sorted(discs))]
+    old = old.loc[~old["measurement_id"].isin(new_ids | set(drop_ids))
+                  & ~old["excluded"].fillna(False).astype(bool)]
+    # and only those with a record's repeat number can share its key
+    repeats = sorted({int(r.repeat) for r in records if r.repeat is not None})
     seen: dict[tuple[Any, ...], int] = {}
-    for values in old.loc[:, list(columns)].itertuples(index=False, name=None):
+    for values in old.loc[old["repeat"].isin(repeats), list(columns)].itertuples(
+            index=False, name=None):
         key = _coarse_key(*values)
         if key is not None:
             seen[key] = seen.get(key, 0) + 1

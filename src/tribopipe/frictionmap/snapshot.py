@@ -12,7 +12,7 @@ The model is sqlite-utils' ``Database``: open once, then ask the handle.
 from __future__ import annotations
 
 import os
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from functools import cached_property
 from pathlib import Path
@@ -26,8 +26,8 @@ from ..stats import (
     run_ids_of,
     shown_columns,
 )
-from .schema import RUN_COLUMNS
-from .store import load_map, stored_groups
+from .schema import RUN_COLUMNS, empty_map
+from .store import committed_groups_info, load_map, rows_by_id, stored_groups
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -152,6 +152,21 @@ class MapSnapshot:
         ids = members.loc[members["group"] == group, "measurement_id"]
         return self._runs.iloc[[index[m] for m in ids]].copy(deep=False)
 
+    def rows_of(self, ids: Iterable[str]) -> pd.DataFrame:
+        """Every column of the runs ``ids`` (measurement ids), in the map's order: taken
+        from this snapshot when it holds every column, else read from the commit it was
+        opened at (:func:`~tribopipe.frictionmap.store.rows_by_id`: only the parts that
+        hold them are read whole). For a command that opened a few columns and shows
+        some rows whole."""
+        wanted = set(ids)
+        if set(RUN_COLUMNS) <= set(self.columns):
+            return self._runs[self._runs["measurement_id"].isin(wanted)].copy(deep=False)
+        if self.info.get("format") == "rows":
+            self.require(RUN_COLUMNS)  # rows in memory, without them: named
+        if not wanted:
+            return empty_map()
+        return rows_by_id(self.path, self.info, wanted)
+
     def derived(self, key: Any, compute: Callable[[], T]) -> T:
         """The value ``compute()`` gives for this snapshot, computed once per ``key``: the
         place where rooms above the map keep what they derive from it (fits, labs …)."""
@@ -174,6 +189,22 @@ def open_map(path: str | os.PathLike[str], columns: Sequence[str] | None = None
     runs, info = load_map(path, columns)
     kept = tuple(runs.columns)
     return MapSnapshot(Path(path), runs, info, kept)
+
+
+def open_groups(path: str | os.PathLike[str]) -> MapSnapshot:
+    """The map at ``path`` opened for its condition groups (:meth:`MapSnapshot.groups`)
+    and no more: a map folder with stored groups as its manifest names them
+    (:func:`~tribopipe.frictionmap.store.committed_groups_info`), no part read (a
+    snapshot of its number of rows and none of its columns); any other map with the
+    statistics' inputs (:data:`~tribopipe.stats.GROUP_INPUT_COLUMNS`), which it
+    groups."""
+    import pandas as pd
+
+    info = committed_groups_info(path)
+    if "groups" not in info:
+        return open_map(path, GROUP_INPUT_COLUMNS)
+    rows = pd.DataFrame(index=pd.RangeIndex(int(info["n_runs"])))
+    return MapSnapshot(Path(path), rows, info, ())
 
 
 def snapshot_of(runs: pd.DataFrame, path: str | os.PathLike[str] = "<rows>",

@@ -1157,6 +1157,9 @@ def _parts_info(manifest: Manifest) -> dict[str, Any]:
         "format": "parts",
         "generation": manifest.generation,
         "parts": len(manifest.parts),
+        # the commit's parts, so that rows of this read can be read whole later
+        # (:func:`rows_by_id`) from the same parts, whatever was committed since
+        "part_list": manifest.parts,
     }
     if manifest.groups is not None:
         info["groups"] = manifest.groups.as_json()
@@ -1200,9 +1203,8 @@ def _read_parts_table(p: Path, parts: Iterable[Part], wanted: Sequence[str], *,
     for part in parts:
         data = read_part_bytes(p, part)
         try:
-            table = pq.read_table(pa.BufferReader(data),
-                                  columns=_stored(pq.read_schema(pa.BufferReader(data)),
-                                                  wanted))
+            file = pq.ParquetFile(pa.BufferReader(data))  # its footer parsed once
+            table = file.read(columns=_stored(file.schema_arrow, wanted))
             meta = table.schema.metadata or {}
         except Exception as exc:  # noqa: BLE001 - pyarrow raises many types
             raise MapError(f"part {part.file}: not a readable Parquet file "
@@ -1250,6 +1252,56 @@ def frame_of_table(table: Any, columns: Sequence[str] | None = None) -> pd.DataF
     Arrow table of checked map rows (:func:`load_map_table`, or a slice of it)."""
     wanted = list(RUN_COLUMNS) if columns is None else _wanted(columns)
     return _from_arrow(table.select(wanted), wanted, check=False)
+
+
+def rows_by_id(path: str | os.PathLike[str], info: Mapping[str, Any],
+               ids: Iterable[str]) -> pd.DataFrame:
+    """Every column of the runs ``ids`` (measurement ids) of the map folder at ``path``,
+    as the read that gave ``info`` (its :func:`load_map` metadata) found them, in the
+    map's order: only the parts that hold one of them are parsed whole (each part's bytes
+    checked against the manifest's SHA-256, as every read does); the others' ids column
+    only. For a command that opened the map with a few columns and shows some rows whole
+    (``map show``'s excluded and reviewed runs). A map that is not a folder of parts (a
+    single file) is read whole again. Raises :class:`MapError` when an id is not in the
+    map, or a part is gone (the map was written twice since ``info`` was read)."""
+    import pyarrow as pa
+    import pyarrow.compute as pc
+    import pyarrow.parquet as pq
+
+    p = Path(path)
+    wanted = set(ids)
+    parts = info.get("part_list")
+    if info.get("format") != "parts" or parts is None:
+        runs = load_map(p)[0]
+        found = runs[runs["measurement_id"].isin(wanted)]
+    else:
+        tables = []
+        for part in parts:
+            data = read_part_bytes(p, part)
+            try:
+                file = pq.ParquetFile(pa.BufferReader(data))
+                mask = pc.is_in(file.read(columns=["measurement_id"])["measurement_id"],
+                                value_set=pa.array(sorted(wanted), pa.string()))
+                if not pc.any(mask).as_py():
+                    continue
+                table = file.read()
+            except Exception as exc:  # noqa: BLE001 - pyarrow raises many types
+                raise MapError(f"part {part.file}: not a readable Parquet file "
+                               f"({_first_line(exc)})", path=p) from None
+            table = _with_added_columns(table.filter(mask), part.schema_version)
+            tables.append(table.select(list(RUN_COLUMNS)).replace_schema_metadata(None))
+        if not tables:
+            found = empty_map()
+        else:
+            try:
+                found = _from_arrow(pa.concat_tables(tables, promote_options="permissive"),
+                                    check=False)
+            except MapError as exc:
+                raise MapError(exc.problem, path=p, column=exc.column) from None
+    if len(found) != len(wanted):
+        raise MapError("the map changed while it was read (a run is gone); run the "
+                       "command again", path=p)
+    return found.reset_index(drop=True)
 
 
 def _verify_part(p: Path, name: str, table: Any, info: Mapping[str, Any]) -> None:

@@ -25,7 +25,9 @@ from typing import TYPE_CHECKING, Any
 from ..errors import MapError
 from ..stats import (
     CONDITION_KEY,
+    FORCE_DECIMALS,
     GROUP_ROWS_VERSION,
+    TEMPERATURE_DECIMALS,
     condition_keys,
     finish_groups,
     group_rows,
@@ -64,13 +66,19 @@ def rows_keys(rows: pd.DataFrame) -> list[Key]:
 
 
 def of_keys(runs: pd.DataFrame, keys: set[Key]) -> pd.DataFrame:
-    """The rows of ``runs`` whose condition key is one of ``keys`` (the pair filtered
-    first, on whole columns)."""
+    """The rows of ``runs`` whose condition key is one of ``keys`` (the pair, the force
+    and the temperature, rounded as the key rounds them, filtered first on whole
+    columns; the key of each row left computed after)."""
     if runs.empty or not keys:
         return runs.iloc[:0]
     pins = sorted({k[0] for k in keys if k[0] is not None})
     discs = sorted({k[1] for k in keys if k[1] is not None})
-    near = runs.loc[runs["pin"].isin(pins) & runs["disc"].isin(discs)]
+    close = runs["pin"].isin(pins) & runs["disc"].isin(discs)
+    for at, column, decimals in ((2, "normal_force_N", FORCE_DECIMALS),
+                                 (3, "temperature_C", TEMPERATURE_DECIMALS)):
+        if all(k[at] is not None for k in keys):  # an unknown value: not filtered on
+            close &= runs[column].round(decimals).isin({k[at] for k in keys})
+    near = runs.loc[close]
     if near.empty:
         return near
     found = condition_keys(near)

@@ -4,16 +4,16 @@ from __future__ import annotations
 
 import os
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, cast
 
 from ..errors import MapError
 from ..escape import display_path, printable
 from ..labels import flag_list
 from ..materials import Vocabulary, shipped_vocabulary
 from ..measurement import run_name
-from ..stats import repeatability
+from ..stats import GROUP_INPUT_COLUMNS, repeatability
 from .checks import validate_runs
-from .schema import MapRow, frame_rows, is_missing
+from .schema import RUN_COLUMNS, MapRow, frame_rows, is_missing
 from .snapshot import MapSource, as_snapshot
 from .store import verify_map
 from .synthetic_rows import synthetic_note
@@ -21,14 +21,21 @@ from .synthetic_rows import synthetic_note
 if TYPE_CHECKING:
     import pandas as pd
 
+#: the columns :func:`map_summary` reads of every run (the condition groups' inputs, for
+#: a map without stored groups, and the sources); the runs it shows whole (excluded and
+#: reviewed ones) are read whole apart
+SUMMARY_COLUMNS: tuple[str, ...] = tuple(
+    c for c in RUN_COLUMNS if c in {*GROUP_INPUT_COLUMNS, "source"})
+
 
 def map_summary(path: MapSource, *, runs_listed: bool = False) -> str:
     """A readable multi-line summary of the map at ``path``: runs, pairs, conditions,
     sources, flags, excluded runs (with reasons and where each came from) and the pooled
     repeatability; with ``runs_listed``, then one line per run (:func:`run_line`).
-    ``path``: the map opened (:func:`~tribopipe.frictionmap.snapshot.open_map`), or its
-    path."""
-    snap = as_snapshot(path)
+    ``path``: the map opened (:func:`~tribopipe.frictionmap.snapshot.open_map`: with
+    :data:`SUMMARY_COLUMNS` at least, every column for ``runs_listed``), or its path
+    (opened so)."""
+    snap = as_snapshot(path, None if runs_listed else SUMMARY_COLUMNS)
     p = snap.path
     if not snap.exists:
         raise MapError("friction map not found", path=p, hint="pass --map PATH")
@@ -42,7 +49,9 @@ def map_summary(path: MapSource, *, runs_listed: bool = False) -> str:
     if note is not None:
         lines.append(f"  {note}")
     groups = snap.groups()
-    pairs = runs.groupby(["pin", "disc"], sort=True)
+    # per pair, the columns it prints only (not every column of each pair's rows)
+    pairs = runs.loc[:, ["pin", "disc", "normal_force_N", "temperature_C"]].groupby(
+        ["pin", "disc"], sort=True)
     lines.append(f"  contact pairs: {pairs.ngroups}; condition groups: {len(groups)}")
     for source, n in runs["source"].value_counts().sort_index().items():
         lines.append(f"  source {source}: {_runs(n)}")
@@ -50,11 +59,19 @@ def map_summary(path: MapSource, *, runs_listed: bool = False) -> str:
         lines.append(f"  lab {_text(lab)}: {_runs(n)}")
     lines.append("")
     lines.append("  pin / disc: runs, conditions, force [N], temperature [°C]")
-    for (pin, disc), sub in pairs:
-        forces = ", ".join(f"{f:g}" for f in sorted(sub["normal_force_N"].dropna().unique()))
-        temps = ", ".join(f"{t:g}" for t in sorted(sub["temperature_C"].dropna().unique()))
-        n_cond = int(((groups["pin"] == pin) & (groups["disc"] == disc)).sum())
-        lines.append(f"    {_text(pin)} / {_text(disc)}: {_runs(len(sub))}, {n_cond} conditions, "
+    n_runs = pairs.size()
+    force_values = pairs["normal_force_N"].unique()
+    temp_values = pairs["temperature_C"].unique()
+    conditions = (groups.groupby(["pin", "disc"]).size().to_dict() if len(groups)
+                  else {})
+    for key, n, f_values, t_values in zip(
+            n_runs.index, n_runs, force_values.loc[n_runs.index],
+            temp_values.loc[n_runs.index], strict=True):
+        pin, disc = cast("tuple[Any, Any]", key)
+        forces = ", ".join(f"{f:g}" for f in _sorted_values(f_values))
+        temps = ", ".join(f"{t:g}" for t in _sorted_values(t_values))
+        n_cond = int(conditions.get((pin, disc), 0))
+        lines.append(f"    {_text(pin)} / {_text(disc)}: {_runs(int(n))}, {n_cond} conditions, "
                      f"F {forces or '-'}, T {temps or '-'}")
     flag_counts: dict[str, int] = {}
     # each distinct flags text once (a map holds few), counted by its rows
@@ -76,7 +93,12 @@ def map_summary(path: MapSource, *, runs_listed: bool = False) -> str:
                          f"{rep.n_groups} groups), r = 2.8·s_r = {rep.r:.4g}")
         else:
             lines.append(f"  repeatability {q}: no group with two or more values")
-    excluded = runs[runs["excluded"]]
+    # the excluded and reviewed runs are shown whole: every column of those rows only
+    shown = runs["excluded"]
+    if "review" in runs.columns:
+        shown = shown | runs["review"].notna()
+    whole = snap.rows_of(runs.loc[shown, "measurement_id"]) if shown.any() else None
+    excluded = whole[whole["excluded"]] if whole is not None else runs.iloc[:0]
     if len(excluded):
         lines.append("")
         lines.append("  excluded runs:")
@@ -85,8 +107,9 @@ def map_summary(path: MapSource, *, runs_listed: bool = False) -> str:
                          f"{_text(row.disc)}, {row.normal_force_N:g} N, "
                          f"{_fmt_t(row.temperature_C)}, repeat {_fmt_repeat(row.repeat)}"
                          f", from {run_origin(row)}: {_text(row.exclusion_reason)}")
-    lines += _review_lines(runs, groups)
+    lines += _review_lines(whole, groups) if whole is not None else []
     if runs_listed:
+        snap.require(RUN_COLUMNS)
         lines.append("")
         lines.append("  runs: id, from (file [test / result / interval]), pin / disc, "
                      "nominal F and T, repeat, mu_k, mu_s, flags")
@@ -94,6 +117,11 @@ def map_summary(path: MapSource, *, runs_listed: bool = False) -> str:
                                     "measurement_id"], kind="mergesort", na_position="first")
         lines += ["    " + run_line(row) for row in frame_rows(ordered)]
     return "\n".join(lines)
+
+
+def _sorted_values(values: Any) -> list[float]:
+    """The distinct numbers of one pair's column, sorted, missing ones left out."""
+    return sorted(float(v) for v in values if not is_missing(v))
 
 
 def _review_lines(runs: Any, groups: Any) -> list[str]:

@@ -17,7 +17,7 @@ reading its rows: the rows are read and checked once, by the landing, under the 
 from __future__ import annotations
 
 from collections.abc import Callable, Collection, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -61,14 +61,13 @@ class Arrivals:
 
 @dataclass(frozen=True)
 class Landed:
-    """What one landing did: the map's :class:`AppendReport`, the map's rows as the write
-    left them (the columns read: all unless ``arriving`` was given), the repeat numbers
-    now used twice in one condition, what the review did (``None`` when none applied)
-    and the condition groups (:func:`tribopipe.stats.condition_keys`) with a row added,
-    replaced or removed."""
+    """What one landing did: the map's :class:`AppendReport`, the repeat numbers now
+    used twice in one condition, what the review did (``None`` when none applied) and
+    the condition groups (:func:`tribopipe.stats.condition_keys`) with a row added,
+    replaced or removed. Not the map's rows: a landing keeps none of them (a command
+    that shows the map afterwards reads its stored groups)."""
 
     appended: AppendReport
-    rows: pd.DataFrame = field(repr=False)
     repeats: tuple[str, ...] = ()
     review: ReviewOutcome | None = None
     groups: frozenset[tuple[Any, ...]] = frozenset()
@@ -124,7 +123,7 @@ def land_runs(
         return bool(set(arriving or ()).intersection(reviewed))
 
     projected = arriving is not None and review is None
-    appended, rows = change_map_with(map_path, decide, replace=replace,
+    appended, _ = change_map_with(map_path, decide, replace=replace,
                                      columns=LANDING_COLUMNS if projected else None,
                                      needs_all=reviewed_again if projected else None)
     (arrivals, repeats, outcome, before) = found[0]
@@ -132,7 +131,7 @@ def land_runs(
     touched = [r for r in arrivals.records if r.measurement_id in landed]
     groups = set(condition_keys(unvalidated_frame(touched)).values()) if touched else set()
     groups |= {k for mid, k in before.items() if mid in landed | set(appended.dropped_ids)}
-    return Landed(appended=appended, rows=rows, repeats=tuple(repeats), review=outcome,
+    return Landed(appended=appended, repeats=tuple(repeats), review=outcome,
                   groups=frozenset(groups))
 
 

@@ -92,10 +92,18 @@ from ..frictionmap.schema import (
     columns_sha256,
 )
 from ..frictionmap.snapshot import MapSnapshot, MapSource
-from ..frictionmap.store import MapCopyWriter, frame_of_table, load_map_table
+from ..frictionmap.store import MapCopyWriter, frame_of_table, load_map_table, stored_groups
 from ..frictionmap.synthetic_rows import SYNTHETIC_MEANS, synthetic_count
 from ..query import pairs
-from ..stats import GROUP_INPUT_COLUMNS, group_statistics, run_ids_of
+from ..stats import (
+    GROUP_INPUT_COLUMNS,
+    LABS,
+    OWN_LAB,
+    finish_groups,
+    group_statistics,
+    run_ids_of,
+    shown_columns,
+)
 from .citation import (
     CODE_LICENCE,
     Publisher,
@@ -340,9 +348,10 @@ PUBLISH_BATCH_ROWS = 16_384
 
 
 def _batches(table: Any, lab: str) -> Iterator[tuple[int, pd.DataFrame]]:
-    """The rows of the Arrow ``table`` of map rows (:func:`~tribopipe.frictionmap.store.
-    load_map_table`) as the package holds them (:func:`package_runs_table`),
-    :data:`PUBLISH_BATCH_ROWS` at a time, each with the position of its first row."""
+    """The rows of the Arrow ``table`` of map rows
+    (:func:`~tribopipe.frictionmap.store.load_map_table`) as the package holds them
+    (:func:`package_runs_table`), :data:`PUBLISH_BATCH_ROWS` at a time, each with the
+    position of its first row."""
     for start in range(0, table.num_rows, PUBLISH_BATCH_ROWS):
         rows = frame_of_table(table.slice(start, PUBLISH_BATCH_ROWS))
         yield start, package_runs_table(rows, lab)
@@ -389,9 +398,6 @@ def package_group_table(source: MapSource, info: Mapping[str, Any], labs: pd.Dat
     finished instead (:func:`~tribopipe.stats.finish_groups`) where the filling of the
     labs leaves them the same (:func:`filled_group_rows`, from the map's own ``lab`` and
     ``source`` columns, ``labs``); else every row is grouped."""
-    from ..frictionmap.store import stored_groups
-    from ..stats import finish_groups, shown_columns
-
     rows = stored_groups(source, info) if info.get("format") == "parts" else None
     filled = None if rows is None else filled_group_rows(rows, labs, lab)
     if filled is None:
@@ -409,8 +415,6 @@ def filled_group_rows(rows: pd.DataFrame, labs: pd.DataFrame, lab: str) -> pd.Da
     run without a lab is filled with one same name, no run names itself ``(own lab)``
     and no group holds runs with and without a lab: then a group of runs without a lab
     is a group of that one lab, and nothing but its ``labs`` cell changes."""
-    from ..stats import LABS, OWN_LAB
-
     given = labs["lab"]
     blank = (given.isna() | (given.astype(str).str.strip() == "")).to_numpy(dtype=bool)
     if not blank.any():

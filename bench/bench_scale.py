@@ -174,7 +174,7 @@ def per_size(folder: Path, n: int, template: dict) -> dict:
     from tribopipe.campaign.state import CampaignState, load_state, save_state
     from tribopipe.fit import fit_power_law
     from tribopipe.frictionmap import read_map, update_map
-    from tribopipe.report import ReportInputs, build_report
+    from tribopipe.report import ReportInputs, report_files
     from tribopipe.stats import group_statistics
 
     base = folder / f"map_{n}.parquet"
@@ -225,8 +225,10 @@ def per_size(folder: Path, n: int, template: dict) -> dict:
     if n <= 10_000:
         inputs = ReportInputs(runs=runs, groups=group_statistics(runs),
                               fits=fit_power_law(runs))
-        row["report_s"] = cpu(lambda: build_report(inputs), 1)
-        row["report_MB"] = len(build_report(inputs).encode()) / 1e6
+        row["report_s"] = cpu(lambda: report_files(inputs), 1)
+        files = report_files(inputs)  # the page last, what lies beside it before
+        row["report_MB"] = len(files.popitem()[1].encode()) / 1e6
+        row["report_beside_MB"] = sum(len(t.encode()) for t in files.values()) / 1e6
     return row
 
 
@@ -419,22 +421,41 @@ def commands(folder: Path, sizes: list[int], template: dict, repeat: int) -> dic
     return results
 
 
-def per_group(folder: Path, groups: list[int], template: dict) -> dict:
+#: the commands over every pair :func:`per_group` times (``--per-group`` chooses)
+PER_GROUP_COMMANDS = ("export_abaqus_every_pair", "explore", "report")
+
+
+def _size_MB(page: Path) -> dict[str, float]:
+    """The size of a page [MB] and of what was written beside it (``<stem>_*``) [MB]."""
+    beside = [f for d in page.parent.glob(page.stem + "_*") for f in
+              ([d] if d.is_file() else d.rglob("*")) if f.is_file()]
+    return {"page_MB": page.stat().st_size / 1e6,
+            "beside_MB": sum(f.stat().st_size for f in beside) / 1e6}
+
+
+def per_group(folder: Path, groups: list[int], template: dict,
+              commands: tuple[str, ...] = PER_GROUP_COMMANDS) -> dict:
     """Wall and CPU seconds in all and per condition group of the commands over every
-    pair (``export abaqus`` of every pair, ``explore``, ``report``) on maps where every
-    run is a group of its own and the pairs grow with the runs (:func:`build_map`)."""
+    pair (``export abaqus`` of every pair, ``explore``, ``report``; ``commands`` of
+    :data:`PER_GROUP_COMMANDS`) on maps where every run is a group of its own and the
+    pairs grow with the runs (:func:`build_map`); the pages' sizes beside."""
     out: dict = {}
-    for n in groups:
+    for n in [100, *groups] if groups else []:  # 100: untimed, the imports compiled
         base = folder / f"groups_{n}.parquet"
         build_map(base, template, n, pairs=True)
         m = ["--map", str(base)]
-        row = {
-            "export_abaqus_every_pair": _timed(["export", "abaqus", *m,
-                                                "-o", str(folder / "all.inp")], folder),
-            "explore": _timed(["explore", *m, "-o", str(folder / "e.html")], folder),
-            "report": _timed(["report", *m, "--processed", str(folder / "none"),
-                              "-o", str(folder / "r.html")], folder),
+        argv = {
+            "export_abaqus_every_pair": ["export", "abaqus", *m, "-o", str(folder / "all.inp")],
+            "explore": ["explore", *m, "-o", str(folder / f"e{n}.html")],
+            "report": ["report", *m, "--processed", str(folder / "none"),
+                       "-o", str(folder / f"r{n}.html")],
         }
+        row = {name: _timed(argv[name], folder) for name in commands}
+        if n == 100:
+            continue
+        for name, page in (("explore", folder / f"e{n}.html"), ("report", folder / f"r{n}.html")):
+            if name in row and page.exists():
+                row[name].update(_size_MB(page))
         out[str(n)] = {k: {**v, "wall_ms_per_group": v["wall_s"] / n * 1e3,
                            "cpu_ms_per_group": v["cpu_s"] / n * 1e3}
                        for k, v in row.items()}
@@ -538,6 +559,9 @@ def main(argv: list[str] | None = None) -> dict:
     parser.add_argument("--groups", default="",
                         help="with --commands: also the per-group costs on maps of these "
                              "numbers of groups, e.g. 1000,10000")
+    parser.add_argument("--per-group", default=",".join(PER_GROUP_COMMANDS),
+                        help="with --groups: the commands to time, of "
+                             f"{', '.join(PER_GROUP_COMMANDS)} (default: all)")
     parser.add_argument("--timeout", type=float, default=TIMEOUT_S,
                         help="with --commands: seconds after which a command is stopped "
                              f"and reported as not finished ({TIMEOUT_S:g})")
@@ -570,7 +594,7 @@ def main(argv: list[str] | None = None) -> dict:
             print("commands ...", flush=True)
             timed = commands(folder, sizes, template, max(1, min(args.repeat, 3)))
             grouped = per_group(folder, [int(g) for g in args.groups.split(",") if g],
-                                template)
+                                template, tuple(c for c in args.per_group.split(",") if c))
         results = {"when_utc": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
                    "load_average_at_start": load_start, "load_average_at_end": os.getloadavg(),
                    "python": platform.python_version(), "cpus": os.cpu_count(),

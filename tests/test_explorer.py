@@ -158,6 +158,10 @@ def test_embedded_json_round_trips(published_html):
     # the groups packed as columns and rows, their names left to their pair's
     assert len(head["groups"]["rows"]) == len(data["groups"])
     assert "pin" not in head["groups"]["columns"] and "text/qc" in head["groups"]["columns"]
+    # and each speed's interpolation points, each key once per list
+    points = head["pairs"][0]["speeds"][0]["mu_k_points"]
+    assert "text/mean" in points["columns"] and len(points["rows"]) == len(
+        data["pairs"][0]["speeds"][0]["mu_k_points"])
     # packed: each key once per pair, each run a row
     packed = [json.loads(text) for _, text in blocks[1:]]
     assert [[dict(zip(c["columns"], row, strict=True)) for row in c["rows"]]
@@ -492,3 +496,52 @@ def test_each_pair_speed_and_point_on_the_page_is_selected_as_query_selects_it()
                                    else at["temperature_C"] == t)]
                     assert [pair_runs[i]["id"] for i in p["runs"]] == behind[
                         "run_ids"].tolist()
+
+
+def test_a_pin_of_more_groups_than_a_page_is_split_by_whole_pairs(published, tmp_path):
+    """No page grows with one pin either: a map split into pages of at most N groups
+    keeps each pin's pairs together while they fit, spreads a larger pin's pairs over
+    pages of its own (a pair whole), and the index lists each pin on every page it is on
+    with the discs there; every pair and group is on exactly one page, with its runs."""
+    from collections import Counter
+
+    from tribopipe.export.explorer import pages_folder
+    from tribopipe.query import name_key
+
+    map_path, runs = published
+    groups = group_statistics(runs)
+    per_pin = groups["pin"].map(name_key).value_counts()
+    per_pair = groups.groupby([groups["pin"].map(name_key), groups["disc"].map(name_key)]).size()
+    limit = int(per_pair.max())  # a pair always fits; some pin does not
+    assert per_pin.max() > limit
+    index = write_explorer(map_path, tmp_path / "e.html", groups_page_limit=limit)
+    pages = sorted(pages_folder(index).glob("part-*.html"), key=lambda p: int(p.stem[5:]))
+    seen: Counter = Counter()
+    pins_on: dict[str, list[set[str]]] = {}
+    for page in pages:
+        data = read_embedded_data(page.read_text(encoding="utf-8"))
+        assert 0 < len(data["groups"]) <= limit
+        for pair in data["pairs"]:
+            seen[tuple(pair["keys"])] += 1
+        by_pin: dict[str, set[str]] = {}
+        for pair in data["pairs"]:
+            by_pin.setdefault(pair["pin"], set()).add(pair["disc"])
+        for pin, discs in by_pin.items():
+            pins_on.setdefault(pin, []).append(discs)
+        # a page holds whole pins, or part of one pin alone
+        if len(by_pin) > 1:
+            assert all(per_pin[name_key(p)] <= limit for p in by_pin)
+    assert seen == Counter({tuple(k): 1 for k in per_pair.index})
+    assert sum(len(read_embedded_data(p.read_text(encoding="utf-8"))["groups"])
+               for p in pages) == len(groups)
+    split = [pin for pin, parts in pins_on.items() if len(parts) > 1]
+    assert split and all(per_pin[name_key(p)] > limit for p in split)
+    # the index: one row per pin and page, its discs there, linking to that page
+    html = index.read_text(encoding="utf-8")
+    rows = re.findall(r'<tr><td><a href="[^"]*?(part-\d+\.html)\?pin=[^"]*">([^<]*)</a></td>'
+                      r"<td>([^<]*)</td>", html)
+    assert len(rows) == sum(len(parts) for parts in pins_on.values())
+    for href, pin, discs in rows:
+        data = read_embedded_data((pages_folder(index) / href).read_text(encoding="utf-8"))
+        assert sorted(discs.split(", ")) == sorted(p["disc"] for p in data["pairs"]
+                                                   if p["pin"] == pin)

@@ -1115,3 +1115,85 @@ def test_a_map_of_many_groups_is_a_small_index_whose_pin_pages_load_runs_on_dema
     assert_page_equals_query(tab, groups, [c for c in grid(lot)][::7])
     assert tab.page.locator("#tpx-pair-plot circle.tpx-run").count() == 2 * 30
     assert any("/part-2_runs/pair-" in u for u in tab.requests)
+
+
+#: names that try to leave a lazily loaded file of runs (a script beside the page) or
+#: the markup they are shown in
+LAZY_PIN = '");alert(3);//</script><script>alert(4)</script>'
+LAZY_DISC = "*/alert(5)/* <img src=x onerror=alert(6)> \\u2028"
+LAZY_FILE = "</script><svg onload=alert(7)>.csv"
+LAZY_LAB = "<b onmouseover=alert(8)>lab</b>"
+
+
+def test_runs_loaded_beside_the_page_are_python_s_and_hostile_names_stay_text(tab, reduced,
+                                                                              tmp_path):
+    """A map whose runs lie beside the page (one script file per pair, loaded when the
+    pair is shown, from file://): the runs the page loads are, field by field, those
+    Python computed for the page (``explorer_data``), each repeat and each run's tip in
+    the plot says what the map holds, μ is ``query``'s, and names that try to leave the
+    file of runs or the markup (pin, disc, lab and file names) stay text: nothing is
+    injected, no dialog opens."""
+    import uuid
+
+    from tribopipe import frictionmap as fm
+    from tribopipe.export.explorer import PAGE_TEXTS, explorer_data, runs_folder
+
+    map_path, _, _, _ = reduced
+    template = fm.schema.frame_records(fm.read_map(map_path))[0]
+    records = []
+    for i in range(12):  # the hostile pair: 3 forces x 2 temperatures x 2 repeats; and a plain one
+        r = dict(template)
+        r["measurement_id"] = uuid.UUID(int=i + 1).hex[-16:]
+        r["file_hash"] = uuid.UUID(int=(i + 1) << 64).hex * 2
+        hostile = i < 8
+        r["source_file"] = f"{i}{LAZY_FILE}" if hostile else f"plain_{i}.csv"
+        r["pin"], r["disc"] = (LAZY_PIN, LAZY_DISC) if hostile else ("Plain", "steel")
+        r["lab"] = LAZY_LAB if hostile else "plain lab"
+        r["normal_force_N"] = (1.0, 3.0, 9.0)[i // 2 % 3] if hostile else 3.0
+        r["pressure_kPa"] = 11.789 * r["normal_force_N"]
+        r["temperature_C"] = (20.0, 30.0)[i // 6 % 2] if hostile else 20.0
+        r["repeat"] = i % 2 + 1
+        r["mu_k"] = 0.3 + 0.5 / r["normal_force_N"] ** 0.5 + 0.013 * i
+        records.append(r)
+    lazy = tmp_path / "lazy.parquet"
+    fm.update_map(lazy, records)
+    page = write_explorer(lazy, tmp_path / "lazy.html", runs_inline_limit=0)
+    folder = runs_folder(page)
+    html = page.read_text(encoding="utf-8")
+    assert 'id="tpx-runs-' not in html and "alert(7)" not in html  # no run in the page
+    runs = read_map(lazy)
+    data = explorer_data(runs)
+    index = next(i for i, p in enumerate(data["pairs"]) if p["pin"] == LAZY_PIN)
+    assert (folder / f"pair-{index}.js").exists()
+
+    tab.open(page_url(page, pin=LAZY_PIN, disc=LAZY_DISC, pressure="20", temperature="25"))
+    tab.wait_until("document.querySelectorAll('.tpx-repeat').length > 0")
+    assert any(u.startswith(folder.resolve().as_uri()) for u in tab.requests)
+    s = shown(tab)
+    assert (s["pin"], s["disc"]) == (LAZY_PIN, LAZY_DISC)
+    assert_shows(tab, query(groups_of(runs, lazy), LAZY_PIN, LAZY_DISC, 20.0, 25.0))
+    # the loaded runs are Python's, every field
+    assert tab.page.evaluate(f"window.tribopipeExplorer.runs({index})") == data["runs"][index]
+    # each run's tip in the plot: its repeat, lab and line, as the map holds them
+    ours = runs[runs["pin"] == LAZY_PIN]
+    tips = tab.page.evaluate("""() => Array.from(
+      document.querySelectorAll('#tpx-pair-plot circle.tpx-run title'), t => t.textContent)""")
+    assert sorted(tips) == sorted(PAGE_TEXTS["run_tip"].format(
+        repeat=r.repeat, lab=LAZY_LAB,
+        line=f"{r.mu_k:.3f} — {r.source_file} · {r.test} / {r.result}")
+        for r in ours.itertuples())
+    # the repeats behind the used points: their lines as the map holds them
+    lines = tab.page.evaluate("""() => Array.from(
+      document.querySelectorAll('#tpx-used-points .tpx-repeat'), d => d.textContent)""")
+    assert lines and set(lines) <= {f"{r.mu_k:.3f} — {r.source_file} · {r.test} / {r.result}"
+                                     for r in ours.itertuples()}
+    counts = tab.page.evaluate("""() => ({
+      code: Array.from(document.querySelectorAll('script:not([type])'),
+                       s => s.src ? 'file:' + s.src.split('/').pop() : 'inline'),
+      images: document.images.length, svgs: document.querySelectorAll('svg[onload]').length,
+      handlers: document.querySelectorAll('[onerror], [onload], [onmouseover]').length,
+      bold: document.querySelectorAll('b').length})""")
+    # the page's own script and the one file of the pair's runs: nothing injected
+    assert sorted(counts.pop("code")) == [f"file:pair-{index}.js", "inline"]
+    assert counts == {"images": 0, "svgs": 0, "handlers": 0, "bold": 0}
+    assert LAZY_LAB in tab.page.text_content("#lab")

@@ -230,3 +230,14 @@ def test_map_validate_reads_each_part_once(tmp_path: Path,
     result = CliRunner().invoke(main, ["map", "validate", str(map_path)])
     assert "169 runs" in result.output, result.output
     assert sorted(reads) == sorted(p.file for p in manifest.parts), reads
+
+
+def test_the_checksum_of_long_text_columns_is_hashed_in_pieces(rows, monkeypatch):
+    """A text column is turned into JSON a few thousand cells at a time: the pieces give
+    the digest of the whole list (cut here every 7 cells, and with a piece of one)."""
+    frame = faulty(rows, 3, n_faults=30)
+    digest = reference_sha256(frame)
+    for size in (7, len(frame) - 1, len(frame), 10**6):
+        monkeypatch.setattr(schema, "HASH_BATCH_ROWS", size)
+        assert content_sha256(frame) == digest
+    assert content_sha256(frame.iloc[:0]) == reference_sha256(frame.iloc[:0])

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import os
 
 import numpy as np
 import pandas as pd
@@ -722,3 +723,58 @@ def test_a_writer_entry_must_have_the_writers_its_format_declares():
         Writer(format_named("abaqus"), MUJOCO, condition=write_mujoco)
     with pytest.raises(TypeError, match="the writers of mujoco are not those"):
         Writer(format_named("mujoco"), MUJOCO, table=write_abaqus, condition=write_mujoco)
+
+
+# ---------------------------------------------------------------------------- every pair
+
+
+@pytest.mark.parametrize("speeds,temperature", [
+    ("one", None), ("one", 15.0), pytest.param("three", None, marks=pytest.mark.slow)])
+def test_every_pair_tables_read_each_pair_once_and_equal_the_one_pair_tables(
+        groups, monkeypatch, temperature, speeds):
+    """A table over every pair selects each pair's groups once and computes the map's κ
+    once (per speed): never a pass over the whole group table per pair, which made the
+    export of every pair grow with the square of the pairs. Each pair's table is the one
+    its own export writes (κ of the whole map in both)."""
+    from test_speed_condition import _multi_speed_runs
+    from tribopipe import query as query_module
+    from tribopipe.export import engine_tables
+    from tribopipe.query import groups_of
+
+    table = groups if speeds == "one" else groups_of(_multi_speed_runs(), "map")
+    held = pairs(table)
+    one = {pair: write_abaqus(table, pin=pair[0], disc=pair[1], temperature_C=temperature)
+           for pair in held}
+    one_ansys = {pair: write_ansys(table, pin=pair[0], disc=pair[1], material_id=k,
+                                   temperature_C=temperature)
+                 for k, pair in enumerate(held, 1)}
+    passes: list[str] = []
+    curvature, select = query_module.map_curvature, query_module.select_pair
+
+    def counted_curvature(frame, quantity="mu_k"):
+        if len(frame) == len(table):
+            passes.append(f"curvature {quantity}")
+        return curvature(frame, quantity)
+
+    def counted_select(frame, pin, disc):
+        if len(frame) == len(table):
+            passes.append("select")
+        return select(frame, pin, disc)
+
+    for module in (query_module, engine_tables):
+        monkeypatch.setattr(module, "map_curvature", counted_curvature)
+        monkeypatch.setattr(module, "select_pair", counted_select)
+    every = write_abaqus(table, temperature_C=temperature)
+    every_ansys = write_ansys(table, temperature_C=temperature)
+    # no pair selected from the whole table; κ of μ_K and μ_S once per writer (μ_S's
+    # falls back to μ_K's where it has no interior point: at most 3 passes a writer),
+    # however many pairs
+    assert "select" not in passes and len(passes) <= 6, passes
+    assert len(held) > 10
+    # the file of every pair is the files of each pair after their common header
+    for whole, single in ((every, one), (every_ansys, one_ansys)):
+        texts = [single[pair] for pair in held]
+        head = os.path.commonprefix(texts)
+        head = head[:head.rindex("\n") + 1]  # up to the blank comment line before a pair
+        head = head[:head.rindex("\n", 0, len(head) - 1) + 1]
+        assert whole == head + "".join(text[len(head):] for text in texts)

@@ -31,7 +31,7 @@ from __future__ import annotations
 
 import difflib
 import math
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -662,6 +662,8 @@ def query(
     temperature_C: float | None = None,
     speed_mm_s: float | None = None,
     method: str | None = None,
+    *,
+    curvature: Mapping[str, float] | None = None,
 ) -> QueryResult:
     """μ_K (and μ_S where measured) of a pair at a contact pressure [kPa], temperature [°C]
     and sliding speed [mm/s].
@@ -673,14 +675,23 @@ def query(
     ``temperature_C`` may be ``None`` only when the pair is measured at a single
     temperature, ``speed_mm_s`` only when it is measured at a single nominal speed.
     Only the groups of one test method are read (``method``, :func:`one_method`: needed
-    where the pair is measured by several). Raises :class:`ExportError` for an unknown
-    pair (listing the pairs held) or a bad request.
+    where the pair is measured by several). ``curvature`` (κ of ``mu_k`` and ``mu_s``,
+    :func:`map_curvature` of the whole map) lets ``groups`` be the pair's own groups of a
+    larger map, as a writer over every pair hands them (used where no ``method`` leaves
+    groups out; else κ is computed from what is left). Raises :class:`ExportError` for an
+    unknown pair (listing the pairs held) or a bad request.
     """
     if not math.isfinite(pressure_kPa) or pressure_kPa < 0:
         raise ExportError(REQUEST_ERRORS["pressure"].format(request_value(pressure_kPa)))
     if temperature_C is not None and not math.isfinite(temperature_C):
         raise ExportError(REQUEST_ERRORS["temperature"].format(request_value(temperature_C)))
-    groups, method = one_method(groups, pin, disc, method)
+    chosen, method = one_method(groups, pin, disc, method)
+    given = curvature if chosen is groups else None
+    groups = chosen
+
+    def kappa(quantity: str) -> float:
+        return map_curvature(groups, quantity) if given is None else given[quantity]
+
     pair = select_pair(groups, pin, disc)
     speeds = pair_speeds(pair)
     brackets, clamped_speed = speed_weights(speeds, speed_mm_s)
@@ -701,13 +712,13 @@ def query(
             notes += [] if note in notes else [note]
             mu_k_points = kept
         k_parts.append((weight, speeds[index], _estimate(
-            mu_k_points, pressure_kPa, temperature_C, map_curvature(groups, "mu_k"))))
+            mu_k_points, pressure_kPa, temperature_C, kappa("mu_k"))))
         mu_s_part = None
         if "mu_s_mean" in part.columns:
             mu_s_points = _with_temperature(_points(part, "mu_s"))
             if not mu_s_points.empty:
                 mu_s_part = _estimate(mu_s_points, pressure_kPa, temperature_C,
-                                      map_curvature(groups, "mu_s"))
+                                      kappa("mu_s"))
         s_parts.append((weight, speeds[index], mu_s_part))
         temps |= {float(t) for t in mu_k_points["temperature_C"] if math.isfinite(t)}
         p_range = (min(p_range[0], float(mu_k_points["pressure_kPa"].min())),
@@ -761,6 +772,7 @@ def friction_table(
     quantity: str = "mu_k",
     *,
     dense: bool = False,
+    curvature: float | None = None,
 ) -> pd.DataFrame:
     """The pair's full rectangular (pressure × temperature) table of ``quantity``.
 
@@ -774,7 +786,10 @@ def friction_table(
     :func:`tribopipe.interpolation.densify`, so that an engine reading the table linearly
     in pressure stays within :data:`~tribopipe.interpolation.ENGINE_TOLERANCE` of
     :func:`query` (the union of every temperature's rows: the grid stays rectangular).
-    ``temperature_C`` is NaN throughout when the pair has no temperature.
+    ``temperature_C`` is NaN throughout when the pair has no temperature. ``curvature``:
+    κ of ``quantity`` (:func:`map_curvature` of the whole map), which lets ``groups`` be
+    the pair's own groups of a larger map (a writer over every pair selects each pair's
+    groups and computes κ once); computed from ``groups`` when ``None``.
     """
     import pandas as pd
 
@@ -791,7 +806,7 @@ def friction_table(
         (float(p), None if math.isnan(t) else float(t))
         for p, t in zip(points["pressure_kPa"], points["temperature_C"], strict=True)
     }
-    kappa = map_curvature(groups, quantity)
+    kappa = map_curvature(groups, quantity) if curvature is None else curvature
     measured_p = set(pressures)
     if dense:
         rows_p: set[float] = set(pressures)

@@ -15,9 +15,20 @@ whose text cells cannot run as spreadsheet formulas
 file system is written with :func:`tribopipe.escape.html_text` (the explorer's data travel
 as :func:`tribopipe.escape.script_json` and reach the page as text only).
 
-:func:`build_report` turns tables into the HTML text (it renders plots but writes no
-file); :func:`write_report` and :func:`make_report` read the map, ``failures.csv`` and
-the traces of a processed folder and write the page.
+The page carries the groups and fits; its runs travel with it up to
+:data:`RUNS_INLINE_LIMIT`. A larger map's runs lie beside the page, in the folder the
+explorer's runs use (:func:`tribopipe.export.explorer.runs_folder`): one script file per
+pair, added when that pair's runs are opened or a link to one of them is followed, as the
+explorer loads its own (:func:`tribopipe.export.explorer.runs_files`, in the same folder).
+A map of more condition groups than one explorer page shows
+(:data:`~tribopipe.export.explorer.GROUPS_PAGE_LIMIT`) gets its explorer beside the report
+(:func:`~tribopipe.export.explorer.explorer_files`), linked; a map of more pairs than
+:data:`PAIR_PLOTS_LIMIT` leaves its pair plots to the explorer, and says so.
+
+:func:`report_files` turns tables into the page and the files beside it (it renders
+plots but writes no file), :func:`build_report` into the page of a report that needs no
+file beside it; :func:`write_report` and :func:`make_report` read the map,
+``failures.csv`` and the traces of a processed folder and write the page.
 """
 
 from __future__ import annotations
@@ -26,7 +37,7 @@ import base64
 import io
 import math
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from datetime import UTC, datetime
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -34,8 +45,16 @@ from typing import TYPE_CHECKING, Any
 from . import __version__
 from .campaign import load_campaign
 from .errors import ExportError, MapError
-from .escape import html_text
-from .export.explorer import explorer_data, explorer_fragment, explorer_style
+from .escape import html_text, script_json
+from .export.explorer import (
+    GROUPS_PAGE_LIMIT,
+    explorer_data,
+    explorer_files,
+    explorer_fragment,
+    explorer_style,
+    runs_files,
+    runs_folder,
+)
 from .export.plots import plot_group_overlay, plot_pair, slug
 from .export.tables import spreadsheet_csv
 from .figures.trace import plot_trace_row
@@ -56,6 +75,15 @@ if TYPE_CHECKING:
 #: resolution of embedded plots: pairs sharp, traces small (there can be hundreds)
 PAIR_DPI = 100
 TRACE_DPI = 80
+#: a report carries its runs in the page up to this many; a larger map's runs lie beside
+#: the page, one file per pair, loaded when opened (a run costs about 600 bytes of page:
+#: its row, its link in the group table and its point in the explorer)
+RUNS_INLINE_LIMIT = 5_000
+#: a report embeds the plots of a map of up to this many pairs (a PNG of 60–80 kB each,
+#: drawn in about 0.2 s); the explorer draws any pair's plot of a larger map
+PAIR_PLOTS_LIMIT = 50
+#: what a report's files beside its page are named in its runs folder: ``report-<k>.js``
+RUNS_FILE = "report-{k}.js"
 #: default titles of the two kinds of report
 CAMPAIGN_TITLE = "tribopipe campaign report"
 MAP_TITLE = "tribopipe friction-map report"
@@ -79,12 +107,37 @@ figure img{max-width:100%;height:auto;border:1px solid #e5e5e5}
 figcaption{font-size:.85em;color:#444}
 details.run{border:1px solid #d0d7de;border-radius:4px;margin:.4em 0;padding:.3em .6em}
 details.run summary{cursor:pointer}details.run div:target{outline:3px solid #0969da}
+details.runs{margin:.3em 0}details.runs>summary{cursor:pointer}
 """
 
-#: opens the run a link points to, for browsers that do not expand <details> themselves
+#: opens the run a link points to, for browsers that do not expand <details> themselves;
+#: where the runs lie beside the page (``data-runs-beside`` on the runs section), loads a
+#: pair's file (``report-<k>.js``, which calls ``tribopipeReportRuns``) when its runs are
+#: opened or a link (``data-runs="<k>"``) to one of them is followed, and puts the
+#: file's rows in place (markup the library made and escaped, parsed inert in a template)
 _OPEN_TARGET_JS = (
-    "function o(){var e=location.hash&&document.getElementById(location.hash.slice(1));"
-    "if(e){var d=e.closest('details');if(d){d.open=true;e.scrollIntoView();}}}"
+    "var S=document.getElementById('runs'),B=S&&S.getAttribute('data-runs-beside'),W={};"
+    "function L(k,f){var d=document.getElementById('runs-'+k);if(!d)return;"
+    "if(d.hasAttribute('data-loaded')){if(f)f();return;}if(f)W[k]=f;"
+    "if(document.getElementById('runs-load-'+k))return;"
+    "var s=document.createElement('script');s.id='runs-load-'+k;"
+    "s.src=B+'/report-'+k+'.js';s.onerror=function(){d.querySelector('.runs-body')"
+    ".textContent='the runs of this pair are not beside the report ('+B+'/report-'+k+"
+    "'.js)';};document.head.appendChild(s);}"
+    "window.tribopipeReportRuns=function(k,h){var d=document.getElementById('runs-'+k);"
+    "if(!d||d.hasAttribute('data-loaded'))return;var t=document.createElement('template');"
+    "t.innerHTML=h;d.querySelector('.runs-body').replaceChildren(t.content);"
+    "d.setAttribute('data-loaded','');var f=W[k];delete W[k];if(f)f();};"
+    "if(B)document.addEventListener('toggle',function(ev){var d=ev.target;"
+    "if(d.classList&&d.classList.contains('runs')&&d.open)L(d.getAttribute('data-runs'));},"
+    "true);"
+    "function o(){var i=decodeURIComponent(location.hash.slice(1)),"
+    "e=i&&document.getElementById(i);"
+    "if(!e&&B&&i.indexOf('run-')===0){var a=document.querySelector('a[data-runs][href=\"#'"
+    "+CSS.escape(i)+'\"]');if(a){var k=a.getAttribute('data-runs');"
+    "document.getElementById('runs-'+k).open=true;L(k,o);}return;}"
+    "if(e){var d=e.closest('details');while(d){d.open=true;"
+    "d=d.parentElement&&d.parentElement.closest('details');}e.scrollIntoView();}}"
     "window.addEventListener('hashchange',o);o();"
 )
 
@@ -119,6 +172,22 @@ class ReportInputs:
     def page_title(self) -> str:
         """The title shown."""
         return self.title or (MAP_TITLE if self.map_report else CAMPAIGN_TITLE)
+
+
+@dataclass(frozen=True)
+class _Layout:
+    """Where a report's parts travel: ``runs_beside`` the folder (relative to the page)
+    holding its runs, one file per pair (``None``: in the page), ``chunk_of`` the index of
+    each run's file there (by measurement id), ``explorer`` the embedded explorer's data
+    (``None`` where the explorer lies beside the page, at ``explorer_page``),
+    ``pair_plots`` whether the page embeds the pairs' plots (which the group table
+    links)."""
+
+    runs_beside: str | None = None
+    chunk_of: Mapping[str, int] = field(default_factory=dict)
+    explorer: dict[str, Any] | None = None
+    explorer_page: str | None = None
+    pair_plots: bool = True
 
 
 # ---------------------------------------------------------------------------- helpers
@@ -193,6 +262,14 @@ def run_anchor(measurement_id: str) -> str:
     return "run-" + "".join(c if c.isalnum() or c in "-_" else "_" for c in measurement_id)
 
 
+def _run_link(mid: str, layout: _Layout) -> str:
+    """A link to a run's section (its id's first 8 characters), with the index of its
+    pair's file where the runs lie beside the page."""
+    chunk = layout.chunk_of.get(mid)
+    data = "" if chunk is None else f' data-runs="{chunk}"'
+    return f'<a href="#{run_anchor(mid)}"{data}>{html_text(mid[:8])}</a>'
+
+
 def pair_anchor(pin: str, disc: str) -> str:
     """The HTML id of a pair's plot: ``pair-<pin>--<disc>`` (slugs)."""
     return f"pair-{slug(pin)}--{slug(disc)}"
@@ -228,7 +305,7 @@ def group_anchor(group: Mapping[str, Any]) -> str:
 # ---------------------------------------------------------------------------- sections
 
 
-def _summary(inp: ReportInputs) -> str:
+def _summary(inp: ReportInputs, layout: _Layout) -> str:
     """The campaign-summary section."""
     runs = inp.runs
     excluded = runs["excluded"].fillna(False).astype(bool)
@@ -270,7 +347,7 @@ def _summary(inp: ReportInputs) -> str:
     )
 
 
-def _group_table(inp: ReportInputs) -> str:
+def _group_table(inp: ReportInputs, layout: _Layout) -> str:
     """The group-table section; each group links to its pair plot and runs (and to the
     overlay of its repeats where their range exceeds r). The μ_S columns are left out when
     no group has a μ_S."""
@@ -288,9 +365,7 @@ def _group_table(inp: ReportInputs) -> str:
     u_s, _ = group_u(inp.groups, "mu_s")
     for i, g in enumerate(inp.groups.to_dict(orient="records", into=dict)):
         ids = run_ids_of(g.get("run_ids"))
-        links = " ".join(
-            f'<a href="#{run_anchor(i)}">{html_text(i[:8])}</a>' for i in ids
-        )
+        links = " ".join(_run_link(i, layout) for i in ids)
         qc = []
         if g.get("range_exceeds_r"):
             anchor = group_anchor(g)
@@ -301,7 +376,8 @@ def _group_table(inp: ReportInputs) -> str:
         if g.get("reviewed"):
             qc.append(f"{int(g['reviewed'])} reviewed")
         ci = _interval(g["mu_k_ci95_low"], g["mu_k_ci95_high"])
-        pair = f'<a href="#{pair_anchor(str(g["pin"]), str(g["disc"]))}">{_name(g["disc"])}</a>'
+        pair = (f'<a href="#{pair_anchor(str(g["pin"]), str(g["disc"]))}">{_name(g["disc"])}</a>'
+                if layout.pair_plots else _name(g["disc"]))
         cls = ' class="flag"' if qc else ""
         rows.append(
             f"<tr{cls}><td class=t>{_name(g['pin'])}</td><td class=t>{pair}</td>"
@@ -336,7 +412,7 @@ def _group_table(inp: ReportInputs) -> str:
     )
 
 
-def _fits_table(inp: ReportInputs) -> str:
+def _fits_table(inp: ReportInputs, layout: _Layout) -> str:
     """The power-law fit section."""
     head = (
         "<tr><th class=t>pin</th><th class=t>disc</th><th>T [°C]</th><th>k</th>"
@@ -364,14 +440,33 @@ def _fits_table(inp: ReportInputs) -> str:
     )
 
 
-def _pair_plots(inp: ReportInputs) -> str:
-    """The per-pair μ_K(p) plots, embedded as PNG."""
+def _pair_plots(inp: ReportInputs, layout: _Layout) -> str:
+    """The per-pair μ_K(p) plots, embedded as PNG, each drawn from its own pair's runs and
+    fits (selected once); up to :data:`PAIR_PLOTS_LIMIT` pairs, beyond which the section
+    says that the explorer draws them."""
     included = inp.runs[~inp.runs["excluded"].fillna(False).astype(bool)]
+    held = pairs(included)
+    if not layout.pair_plots:
+        return (
+            '<section id="pairs"><h2>μ_K against contact pressure, per pair</h2>'
+            f"<p class=muted>This map holds {len(held)} pairs, more than the "
+            f"{PAIR_PLOTS_LIMIT} whose plots a report embeds: the explorer draws any "
+            "pair's μ_K against contact pressure with its fits, and <code>tribopipe plot "
+            "pairs</code> writes every pair's plot as a file.</p></section>"
+        )
+
+    def by_key(table: pd.DataFrame) -> dict[tuple[str, str], pd.DataFrame]:
+        keys = [table["pin"].astype(str).str.casefold(), table["disc"].astype(str).str.casefold()]
+        return {(str(p), str(d)): part for (p, d), part in table.groupby(keys, sort=False)}
+
+    runs_of, fits_of = by_key(included), by_key(inp.fits) if len(inp.fits) else {}
     figures = []
-    for pin, disc in pairs(included):
+    for pin, disc in held:
+        key = (pin.casefold(), disc.casefold())
         uri = _png_data_uri(
-            lambda buf, pin=pin, disc=disc: plot_pair(
-                included, pin, disc, buf, fits=inp.fits, fmt="png", dpi=PAIR_DPI)
+            lambda buf, pin=pin, disc=disc, key=key: plot_pair(
+                runs_of[key], pin, disc, buf, fits=fits_of.get(key, inp.fits.iloc[:0]),
+                fmt="png", dpi=PAIR_DPI)
         )
         figures.append(
             f'<figure id="{pair_anchor(pin, disc)}">{_img(uri, f"{pin} on {disc}")}'
@@ -384,7 +479,7 @@ def _pair_plots(inp: ReportInputs) -> str:
     )
 
 
-def _flagged(inp: ReportInputs) -> str:
+def _flagged(inp: ReportInputs, layout: _Layout) -> str:
     """The flagged and excluded runs section."""
     runs = inp.runs
     # a provenance flag (synthetic) is said once, in the summary: no run is listed for it
@@ -403,7 +498,7 @@ def _flagged(inp: ReportInputs) -> str:
             reason = _e(r.exclusion_reason) if excluded else ""
             rows.append(
                 f'<tr class="{"excl" if excluded else "flag"}"><td class=t>'
-                f'<a href="#{run_anchor(mid)}">{html_text(mid[:8])}</a></td>'
+                f"{_run_link(mid, layout)}</td>"
                 f"<td class=t>{_e(r.source_file)}</td><td class=t>{_name(r.pin)}</td>"
                 f"<td class=t>{_name(r.disc)}</td><td>{_num(r.pressure_kPa, '.4g')}</td>"
                 f"<td>{_run_value(r.mu_k, r.u_mu_k)}</td>"
@@ -421,7 +516,7 @@ def _flagged(inp: ReportInputs) -> str:
     return f'<section id="flagged"><h2>Flagged and excluded runs</h2>{body}</section>'
 
 
-def _failures(inp: ReportInputs) -> str:
+def _failures(inp: ReportInputs, layout: _Layout) -> str:
     """The failures section (``failures.csv`` of the last batch)."""
     if not inp.failures_known:
         body = "<p class=muted>No failures.csv in the processed folder (no batch run).</p>"
@@ -470,92 +565,165 @@ def _review_text(r: MapRow) -> str:
     return text
 
 
-def _runs(inp: ReportInputs) -> str:
-    """Every run: a collapsible block with its embedded trace plot where its trace was
-    found, the others (imported rows, lost traces) as rows of one table."""
-    import pandas as pd
-
-    blocks = []
-    plain = []
-    ordered = inp.runs.sort_values(
+def _ordered_runs(inp: ReportInputs) -> pd.DataFrame:
+    """The runs in the order the report lists them: pin, disc, temperature, pressure,
+    repeat."""
+    return inp.runs.sort_values(
         ["pin", "disc", "temperature_C", "pressure_kPa", "repeat"], kind="mergesort"
     )
+
+
+def _run_columns(inp: ReportInputs) -> tuple[bool, bool]:
+    """Whether the runs' table shows μ_S (some run has one) and the test and result a run
+    came from (some run without a trace names one)."""
     traces = inp.trace_paths or {}
-    with_mu_s = bool(inp.runs["mu_s"].notna().any())  # else the μ_S column is left out
-    # the test and result a run came from, where any run without a trace names one
+    with_mu_s = bool(inp.runs["mu_s"].notna().any())
     plain_runs = inp.runs[~inp.runs["measurement_id"].astype(str).isin(traces)]
     with_test = bool(plain_runs[["test", "result"]].notna().any(axis=None))
-    for r in frame_rows(ordered):
-        mid = r.measurement_id
-        repeat = "" if r.repeat is None else str(r.repeat)
-        if mid not in traces:
-            plain.append(
-                f'<tr id="{run_anchor(mid)}"><td class=t>{html_text(mid[:8])}</td>'
-                f"<td class=t>{_name(r.pin)}</td><td class=t>{_e(r.disc)}</td>"
-                f"<td>{_num(r.pressure_kPa, '.4g')}</td>"
-                f"<td>{_num(r.temperature_C, 'g')}</td><td>{html_text(repeat)}</td>"
-                f"<td>{_run_value(r.mu_k, r.u_mu_k)}</td>"
-                + (f"<td>{_run_value(r.mu_s, r.u_mu_s)}</td>"
-                   if with_mu_s else "")
-                + f"<td class=t>{_e(r.source)}</td><td class=t>{_e(r.lab)}</td>"
-                + (f"<td class=t>{_e(r.test)}</td><td class=t>{_e(r.result)}</td>"
-                   if with_test else "")
-                + f"<td class=t>{html_text(', '.join(flag_list(r.flags)))}</td></tr>"
-            )
-            continue
-        trace = pd.read_parquet(traces[mid])
-        uri = _png_data_uri(
-            lambda buf, trace=trace, r=r: plot_trace_row(trace, r, buf, fmt="png",
-                                                         dpi=TRACE_DPI)
-        )
-        flags = ", ".join(flag_list(r.flags)) or "none"
-        summary = (
-            f"{html_text(mid[:8])} · {_e(r.pin)} on {_e(r.disc)} · "
-            f"{_num(r.pressure_kPa, '.4g')} kPa · {_num(r.temperature_C, 'g')} °C"
-            f"{html_text(', repeat ' + repeat if repeat else '')} · "
-            f"μ_K {_run_value(r.mu_k, r.u_mu_k)}"
-            + (f" · μ_S {_run_value(r.mu_s, r.u_mu_s)}"
-               if _num(r.mu_s, ".3f") else "")
-        )
-        facts = (
-            f"<p>file: {_e(r.source_file)}; test: {_e(r.test)}; result: "
-            f"{_e(r.result)}; interval: {_e(r.interval)}; source: "
-            f"{_e(r.source)}; "
-            f"flags: {html_text(flags)}; μ_K window: {_num(r.mu_k_window_start_mm, '.3f')}"
-            f"–{_num(r.mu_k_window_end_mm, '.3f')} mm; method: {_e(r.method)}"
-            + (f"; <strong class=reviewed>{html_text(_review_text(r))}</strong>"
-               if _review_text(r) else "")
-            + "</p>"
-        )
-        # the id sits inside the <details> so that following a link opens it
-        blocks.append(
-            f'<details class="run"><summary>{summary}</summary>'
-            f'<div id="{run_anchor(mid)}">{facts}{_img(uri, f"trace of run {mid}")}</div>'
-            "</details>"
-        )
-    parts = [f'<section id="runs"><h2>Runs ({len(ordered)}; {len(blocks)} with trace '
-             "plots)</h2>"]
+    return with_mu_s, with_test
+
+
+def _plain_row(r: MapRow, with_mu_s: bool, with_test: bool) -> str:
+    """A run without a trace as a row of the runs' table."""
+    mid = r.measurement_id
+    repeat = "" if r.repeat is None else str(r.repeat)
+    return (
+        f'<tr id="{run_anchor(mid)}"><td class=t>{html_text(mid[:8])}</td>'
+        f"<td class=t>{_name(r.pin)}</td><td class=t>{_e(r.disc)}</td>"
+        f"<td>{_num(r.pressure_kPa, '.4g')}</td>"
+        f"<td>{_num(r.temperature_C, 'g')}</td><td>{html_text(repeat)}</td>"
+        f"<td>{_run_value(r.mu_k, r.u_mu_k)}</td>"
+        + (f"<td>{_run_value(r.mu_s, r.u_mu_s)}</td>" if with_mu_s else "")
+        + f"<td class=t>{_e(r.source)}</td><td class=t>{_e(r.lab)}</td>"
+        + (f"<td class=t>{_e(r.test)}</td><td class=t>{_e(r.result)}</td>"
+           if with_test else "")
+        + f"<td class=t>{html_text(', '.join(flag_list(r.flags)))}</td></tr>"
+    )
+
+
+def _trace_block(r: MapRow, trace_path: Path) -> str:
+    """A run with a trace: a collapsible block with its facts and its trace plot."""
+    import pandas as pd
+
+    mid = r.measurement_id
+    repeat = "" if r.repeat is None else str(r.repeat)
+    trace = pd.read_parquet(trace_path)
+    uri = _png_data_uri(
+        lambda buf: plot_trace_row(trace, r, buf, fmt="png", dpi=TRACE_DPI)
+    )
+    flags = ", ".join(flag_list(r.flags)) or "none"
+    summary = (
+        f"{html_text(mid[:8])} · {_e(r.pin)} on {_e(r.disc)} · "
+        f"{_num(r.pressure_kPa, '.4g')} kPa · {_num(r.temperature_C, 'g')} °C"
+        f"{html_text(', repeat ' + repeat if repeat else '')} · "
+        f"μ_K {_run_value(r.mu_k, r.u_mu_k)}"
+        + (f" · μ_S {_run_value(r.mu_s, r.u_mu_s)}"
+           if _num(r.mu_s, ".3f") else "")
+    )
+    facts = (
+        f"<p>file: {_e(r.source_file)}; test: {_e(r.test)}; result: "
+        f"{_e(r.result)}; interval: {_e(r.interval)}; source: "
+        f"{_e(r.source)}; "
+        f"flags: {html_text(flags)}; μ_K window: {_num(r.mu_k_window_start_mm, '.3f')}"
+        f"–{_num(r.mu_k_window_end_mm, '.3f')} mm; method: {_e(r.method)}"
+        + (f"; <strong class=reviewed>{html_text(_review_text(r))}</strong>"
+           if _review_text(r) else "")
+        + "</p>"
+    )
+    # the id sits inside the <details> so that following a link opens it
+    return (
+        f'<details class="run"><summary>{summary}</summary>'
+        f'<div id="{run_anchor(mid)}">{facts}{_img(uri, f"trace of run {mid}")}</div>'
+        "</details>"
+    )
+
+
+#: what the trace plots show, above them
+_TRACE_NOTE = ("<p class=muted>μ over sliding distance with the μ_S peak (red) and the "
+               "μ_K window (blue), each ± U (k = 2); a reading at a search limit or a "
+               "window at the trace's end is marked. Click a run to open it.</p>")
+
+
+def _runs_table(rows: Sequence[str], with_mu_s: bool, with_test: bool,
+                element: str) -> str:
+    """The table of runs without a trace (``element``: its id or class attribute)."""
+    return (
+        f"<table {element}><thead><tr><th class=t>run</th><th class=t>pin</th>"
+        "<th class=t>disc</th><th>p [kPa]</th><th>T [°C]</th><th>repeat</th><th>μ_K</th>"
+        + ("<th>μ_S</th>" if with_mu_s else "")
+        + "<th class=t>source</th><th class=t>lab</th>"
+        + ("<th class=t>test</th><th class=t>result</th>" if with_test else "")
+        + "<th class=t>flags</th>"
+        f"</tr></thead><tbody>{''.join(rows)}</tbody></table>"
+    )
+
+
+def _listed(inp: ReportInputs, runs: pd.DataFrame, element: str) -> tuple[str, int, int]:
+    """``runs`` as the report lists them (their trace blocks, then the table of the runs
+    without a trace), with how many of each."""
+    traces = inp.trace_paths or {}
+    with_mu_s, with_test = _run_columns(inp)
+    blocks, plain = [], []
+    for r in frame_rows(runs):
+        if r.measurement_id in traces:
+            blocks.append(_trace_block(r, traces[r.measurement_id]))
+        else:
+            plain.append(_plain_row(r, with_mu_s, with_test))
+    html = ""
     if blocks:
-        parts.append("<p class=muted>μ over sliding distance with the μ_S peak (red) and the "
-                     "μ_K window (blue), each ± U (k = 2); a reading at a search limit or a "
-                     "window at the trace's end is marked. Click a run to open it.</p>"
-                     + "".join(blocks))
+        html += _TRACE_NOTE + "".join(blocks)
     if plain:
-        table = (
-            "<table id=runs-table><thead><tr><th class=t>run</th><th class=t>pin</th>"
-            "<th class=t>disc</th><th>p [kPa]</th><th>T [°C]</th><th>repeat</th><th>μ_K</th>"
-            + ("<th>μ_S</th>" if with_mu_s else "")
-            + "<th class=t>source</th><th class=t>lab</th>"
-            + ("<th class=t>test</th><th class=t>result</th>" if with_test else "")
-            + "<th class=t>flags</th>"
-            f"</tr></thead><tbody>{''.join(plain)}</tbody></table>"
-        )
-        heading = ("" if not blocks else
-                   f"<h3>Runs without a trace ({len(plain)}: imported rows or traces not "
-                   "found)</h3>")
-        parts.append(heading + table)
-    parts.append("</section>")
-    return "".join(parts)
+        html += ("" if not blocks else
+                 f"<h3>Runs without a trace ({len(plain)}: imported rows or traces not "
+                 "found)</h3>") + _runs_table(plain, with_mu_s, with_test, element)
+    return html, len(blocks), len(plain)
+
+
+def _pair_chunks(inp: ReportInputs) -> list[tuple[str, str, pd.DataFrame]]:
+    """The runs in the report's order, one chunk per pair (pin, disc, its runs): the
+    files of a report whose runs lie beside it."""
+    ordered = _ordered_runs(inp)
+    return [(str(pin), str(disc), part) for (pin, disc), part in
+            ordered.groupby(["pin", "disc"], sort=False)]
+
+
+def _runs(inp: ReportInputs, layout: _Layout) -> str:
+    """Every run: a collapsible block with its embedded trace plot where its trace was
+    found, the others (imported rows, lost traces) as rows of one table; where the runs
+    lie beside the page, one collapsible block per pair whose runs load when opened."""
+    traces = inp.trace_paths or {}
+    with_traces = int(inp.runs["measurement_id"].astype(str).isin(traces).sum())
+    head = f"<h2>Runs ({len(inp.runs)}; {with_traces} with trace plots)</h2>"
+    if layout.runs_beside is None:
+        html, _, _ = _listed(inp, _ordered_runs(inp), "id=runs-table")
+        return f'<section id="runs">{head}{html}</section>'
+    pairs_ = []
+    for k, (pin, disc, part) in enumerate(_pair_chunks(inp)):
+        pairs_.append(
+            f'<details class="runs" id="runs-{k}" data-runs="{k}"><summary>{_e(pin)} on '
+            f"{_e(disc)}: {len(part)} run{'s' if len(part) != 1 else ''}</summary>"
+            '<div class="runs-body"><p class=muted>loading…</p></div></details>')
+    return (
+        f'<section id="runs" data-runs-beside="{html_text(layout.runs_beside)}">{head}'
+        f"<p class=muted>{len(inp.runs)} runs are more than a report carries "
+        f"({RUNS_INLINE_LIMIT}): each pair's runs lie beside this page, in "
+        f"<code>{html_text(layout.runs_beside)}/</code>, and load when opened or when a "
+        "link to one of them is followed.</p>" + "".join(pairs_) + "</section>"
+    )
+
+
+def runs_chunk_files(inp: ReportInputs) -> tuple[dict[str, str], dict[str, int]]:
+    """The runs of each pair as a script file (:data:`RUNS_FILE` → text) for a report
+    whose runs lie beside it, and the index of each run's file (by measurement id). Each
+    file hands the pair's listing (markup made and escaped here, as in a page; JSON
+    escaped by :func:`tribopipe.escape.script_json`) to ``window.tribopipeReportRuns``."""
+    files: dict[str, str] = {}
+    chunk_of: dict[str, int] = {}
+    for k, (_, _, part) in enumerate(_pair_chunks(inp)):
+        html, _, _ = _listed(inp, part, "class=runs-table")
+        files[RUNS_FILE.format(k=k)] = f"window.tribopipeReportRuns({k}, {script_json(html)});\n"
+        chunk_of.update(dict.fromkeys(part["measurement_id"].astype(str), k))
+    return files, chunk_of
 
 
 def _overlay_groups(inp: ReportInputs) -> dict[str, tuple[dict[str, Any], list[str]]]:
@@ -573,7 +741,7 @@ def _overlay_groups(inp: ReportInputs) -> dict[str, tuple[dict[str, Any], list[s
     return out
 
 
-def _spread(inp: ReportInputs) -> str:
+def _spread(inp: ReportInputs, layout: _Layout) -> str:
     """The repeats of each group flagged "range > r", overlaid on shared axes (left out of
     a map report, which has no traces)."""
     import pandas as pd
@@ -581,7 +749,9 @@ def _spread(inp: ReportInputs) -> str:
     if inp.map_report:
         return ""
     groups = _overlay_groups(inp)
-    rows = {r.measurement_id: r for r in frame_rows(inp.runs)}
+    wanted = {i for _, ids in groups.values() for i in ids}
+    ids_column = inp.runs["measurement_id"].astype(str)
+    rows = {r.measurement_id: r for r in frame_rows(inp.runs[ids_column.isin(wanted)])}
     rep = repeatability(inp.groups, "mu_k") if len(inp.groups) else None
     limit = f"{rep.r:.4f}" if rep is not None and not math.isnan(rep.r) else "?"
     figures = []
@@ -592,7 +762,7 @@ def _spread(inp: ReportInputs) -> str:
         pairs_ = [(rows[i], pd.read_parquet(inp.trace_paths[i])) for i in ids]  # type: ignore[index]
         uri = _png_data_uri(lambda buf, t=title, p=pairs_: plot_group_overlay(
             p, buf, title=t, fmt="png", dpi=PAIR_DPI))
-        links = " ".join(f'<a href="#{run_anchor(i)}">{html_text(i[:8])}</a>' for i in ids)
+        links = " ".join(_run_link(i, layout) for i in ids)
         figures.append(f'<figure id="{anchor}">{_img(uri, f"repeats of {title}")}'
                        f"<figcaption>{html_text(title)}; runs {links}</figcaption></figure>")
     body = ("".join(figures) if figures else
@@ -605,17 +775,29 @@ def _spread(inp: ReportInputs) -> str:
     )
 
 
-def _explorer(inp: ReportInputs) -> str:
+def _explorer(inp: ReportInputs, layout: _Layout) -> str:
     """The friction-map explorer of :mod:`tribopipe.export.explorer` for the report's runs,
-    inline (its style, data and script travel with it, so the page stays one file)."""
-    data = explorer_data(inp.runs, groups=inp.groups, fits=inp.fits, title=inp.page_title,
-                         source=inp.source)
+    inline (its style, data and script travel with it; its runs too, or beside the page
+    with the report's), or, for a map of more groups than one explorer page shows, a link
+    to its pages beside the report."""
+    if layout.explorer is None:
+        from urllib.parse import quote
+
+        href = html_text(quote(layout.explorer_page or "", safe="/"))
+        return (
+            '<section id="explorer"><h2>Explorer</h2>'
+            f"<p>This map's {len(inp.groups)} condition groups are more than one explorer "
+            f"page shows ({GROUPS_PAGE_LIMIT}): its explorer lies beside this report, as "
+            f'pages of whole pins: <a id="explorer-link" href="{href}">'
+            f"{html_text(layout.explorer_page or '')}</a>.</p></section>"
+        )
     return (
         '<section id="explorer"><h2>Explorer</h2>'
         "<p class=muted>μ_K and μ_S at any pressure and temperature, interpolated as "
         "<code>tribopipe query</code> does; the selection is kept in the page's address, so "
         "a link reproduces it. The same page stands alone with <code>tribopipe explore</code>."
-        f"</p><style>{explorer_style()}</style>{explorer_fragment(data)}</section>"
+        f"</p><style>{explorer_style()}</style>"
+        f"{explorer_fragment(layout.explorer, runs_beside=layout.runs_beside)}</section>"
     )
 
 
@@ -635,20 +817,25 @@ def with_traces(inp: ReportInputs) -> ReportInputs:
         return inp
     found: dict[str, Path] = {}
     if inp.traces_dir is not None:
+        # the folder listed once (find_trace's glob per run lists it again for each run):
+        # ``<stem>_<id[:8]>.parquet`` by its last 8 characters, the first name in order
+        listed: dict[str, Path] = {}
+        for trace in sorted(Path(inp.traces_dir).glob("*_????????.parquet")):
+            listed.setdefault(trace.name[-16:-8], trace)
         for mid in inp.runs["measurement_id"].astype(str):
-            path = find_trace(inp.traces_dir, mid)
+            short = mid[:8]
+            plain = len(short) == 8 and short.isalnum() and short.isascii()
+            path = listed.get(short) if plain else find_trace(inp.traces_dir, mid)
             if path is not None:
                 found[mid] = path
     return replace(inp, trace_paths=found)
 
 
-def build_report(inp: ReportInputs) -> str:
-    """The report's HTML text (UTF-8, self-contained). Inputs are not modified; sections
-    with nothing to show in this kind of report are left out, with their links."""
-    inp = with_traces(inp)
+def _page(inp: ReportInputs, layout: _Layout) -> str:
+    """The report's page (UTF-8 HTML text) as ``layout`` places its parts."""
     stamp = datetime.now(UTC).strftime("%Y-%m-%d %H:%M UTC")
     source = f" from {html_text(inp.source)}" if inp.source else ""
-    built = [(a, t, build(inp)) for a, t, build in _SECTIONS]
+    built = [(a, t, build(inp, layout)) for a, t, build in _SECTIONS]
     shown = [(a, t, html) for a, t, html in built if html]
     nav = "".join(f'<a href="#{a}">{t}</a>' for a, t, _ in shown)
     title = html_text(inp.page_title)
@@ -663,6 +850,70 @@ def build_report(inp: ReportInputs) -> str:
         + "".join(html for _, _, html in shown)
         + f"<script>{_OPEN_TARGET_JS}</script></body></html>\n"
     )
+
+
+def report_files(
+    inp: ReportInputs,
+    name: str = "report.html",
+    *,
+    runs_inline_limit: int = RUNS_INLINE_LIMIT,
+    groups_page_limit: int = GROUPS_PAGE_LIMIT,
+) -> dict[str, str]:
+    """Every file of the report whose page is ``name`` (relative paths → text, the page
+    last). Inputs are not modified; sections with nothing to show in this kind of report
+    are left out, with their links.
+
+    Up to ``runs_inline_limit`` runs the page carries everything and is the only file.
+    Beyond, the runs lie beside it in :func:`tribopipe.export.explorer.runs_folder`
+    (``<name>_runs/``): the report's listing of each pair (:func:`runs_chunk_files`) and
+    the embedded explorer's runs (:func:`tribopipe.export.explorer.runs_files`). A map of
+    more than ``groups_page_limit`` condition groups gets its explorer beside the report
+    (``<name>_explorer.html`` and its pages, :func:`~tribopipe.export.explorer.explorer_files`)
+    instead of in it."""
+    inp = with_traces(inp)
+    files: dict[str, str] = {}
+    beside = len(inp.runs) > runs_inline_limit
+    folder = runs_folder(name)
+    chunk_of: dict[str, int] = {}
+    if beside:
+        chunks, chunk_of = runs_chunk_files(inp)
+        files.update({(folder / f).as_posix(): text for f, text in chunks.items()})
+    explorer = None
+    explorer_page = None
+    if len(inp.groups) > groups_page_limit:
+        explorer_page = Path(name).with_name(Path(name).stem + "_explorer.html").as_posix()
+        pages = explorer_files(inp.runs, explorer_page, title=f"{inp.page_title}: explorer",
+                               source=inp.source, groups=inp.groups, fits=inp.fits,
+                               groups_page_limit=groups_page_limit)
+        files.update(pages)
+        explorer_page = Path(explorer_page).name
+    else:
+        explorer = explorer_data(inp.runs, groups=inp.groups, fits=inp.fits,
+                                 title=inp.page_title, source=inp.source)
+        if beside:
+            files.update({(folder / f).as_posix(): text
+                          for f, text in runs_files(explorer).items()})
+    included = inp.runs[~inp.runs["excluded"].fillna(False).astype(bool)]
+    layout = _Layout(runs_beside=folder.name if beside else None, chunk_of=chunk_of,
+                     explorer=explorer, explorer_page=explorer_page,
+                     pair_plots=len(pairs(included)) <= PAIR_PLOTS_LIMIT)
+    files[name] = _page(inp, layout)
+    return files
+
+
+def build_report(inp: ReportInputs, *, runs_inline_limit: int = RUNS_INLINE_LIMIT,
+                 groups_page_limit: int = GROUPS_PAGE_LIMIT) -> str:
+    """The report's HTML text (UTF-8, self-contained) for a map whose report is one page
+    (:func:`report_files`, with the same limits, puts nothing beside it). Inputs are not
+    modified. Raises :class:`ExportError` for a map whose report needs files beside its
+    page (:func:`write_report` writes them)."""
+    files = report_files(inp, runs_inline_limit=runs_inline_limit,
+                         groups_page_limit=groups_page_limit)
+    if len(files) > 1:
+        raise ExportError("this map's report needs files beside its page "
+                          f"({len(inp.runs)} runs, {len(inp.groups)} groups)",
+                          hint="write it with tribopipe report")
+    return files["report.html"]
 
 
 # ---------------------------------------------------------------------------- I/O edge
@@ -697,9 +948,19 @@ def report_inputs(
     )
 
 
-def write_report(output: str | Path, inputs: ReportInputs) -> Path:
-    """Write :func:`build_report` to ``output`` (atomically) and return its path."""
-    return write_text_atomic(output, build_report(inputs))
+def write_report(output: str | Path, inputs: ReportInputs, *,
+                 runs_inline_limit: int = RUNS_INLINE_LIMIT,
+                 groups_page_limit: int = GROUPS_PAGE_LIMIT) -> Path:
+    """Write :func:`report_files` (with these limits) beside ``output`` and the page at
+    ``output`` (each atomically, the page last) and return the page's path."""
+    out = Path(output)
+    files = report_files(inputs, out.name, runs_inline_limit=runs_inline_limit,
+                         groups_page_limit=groups_page_limit)
+    for name, text in files.items():
+        if name != out.name:
+            (out.parent / name).parent.mkdir(parents=True, exist_ok=True)
+            write_text_atomic(out.parent / name, text)
+    return write_text_atomic(out, files[out.name])
 
 
 def make_report(

@@ -163,7 +163,6 @@ def publish_cmd(folder: str | None, output: str | None, lab: str, contact: str |
     from ..config import load_settings
     from ..export.citation import Publisher
     from ..export.publish import publish_map
-    from ..frictionmap.snapshot import open_map
 
     if folder is not None and output is not None:
         raise click.UsageError("give the package folder once: -o/--output FOLDER")
@@ -173,7 +172,7 @@ def publish_cmd(folder: str | None, output: str | None, lab: str, contact: str |
         output = folder
     if output is None:
         raise click.UsageError("give the folder to write the package in: -o/--output FOLDER")
-    done = publish_map(open_map(map_path), output,
+    done = publish_map(map_path, output,
                        Publisher(lab, contact, email, licence, title),
                        overwrite=overwrite, allow_synthetic=allow_synthetic,
                        evidence=not no_evidence, traces_dir=traces_dir, with_raw=with_raw,

@@ -38,7 +38,9 @@ def report_cmd(
     file (TOML), or the map alone.
 
     Summary, group table (linked to the runs), power-law fits, μ_K(p) per pair, flagged
-    and excluded runs, failures with their reasons, and every run's trace plot.
+    and excluded runs, failures with their reasons, and every run's trace plot. A map of
+    more than 5,000 runs gets its runs in <name>_runs/ beside the page (loaded by pair when
+    opened), and one of more than 2,000 condition groups its explorer beside it.
     """
     from ..report import make_report
 

@@ -1,16 +1,29 @@
 """The μ_K tables an engine reads: the pairs a selection names, a pair's table over
 pressure and temperature (or its slice at one temperature, with rows added between
 measured pressures for engines that read it linearly), and the comment lines that say
-which cells were filled and which rows added."""
+which cells were filled and which rows added.
+
+A writer over every pair reads the group table through :class:`PairGroups`: each pair's
+groups selected once and the map's curvature computed once, so that a pair costs its own
+groups, not the map's."""
 
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from typing import TYPE_CHECKING
 
 from ..errors import ExportError
 from ..interpolation import ENGINE_TOLERANCE
-from ..query import friction_table, pairs, query, select_pair
+from ..query import (
+    friction_table,
+    groups_at_speed,
+    map_curvature,
+    name_key,
+    pairs,
+    query,
+    select_pair,
+)
 from .unit_systems import UnitSystem, num
 
 if TYPE_CHECKING:
@@ -38,22 +51,60 @@ def selected_pairs(
     return chosen
 
 
+class PairGroups:
+    """A group table as a writer over every pair reads it: each pair's groups (names
+    matched as :func:`tribopipe.query.select_pair` matches them) selected in one pass, and
+    the map's curvature κ (:func:`tribopipe.query.map_curvature`, of the whole table or of
+    its groups at one nominal speed [mm/s]) computed once and kept."""
+
+    def __init__(self, groups: pd.DataFrame) -> None:
+        self.groups = groups
+        self._pairs: dict[tuple[str, str], pd.DataFrame] | None = None
+        self._curvature: dict[float | None, dict[str, float]] = {}
+
+    def pair(self, pin: str, disc: str) -> pd.DataFrame:
+        """The groups of one pair (in the table's order); :func:`~tribopipe.query.select_pair`
+        on the whole table (its message) for a pair it does not hold."""
+        if self._pairs is None:
+            keys = list(zip(self.groups["pin"].map(name_key),
+                            self.groups["disc"].map(name_key), strict=True))
+            rows: dict[tuple[str, str], list[int]] = {}
+            for i, key in enumerate(keys):
+                rows.setdefault(key, []).append(i)
+            self._pairs = {key: self.groups.iloc[at] for key, at in rows.items()}
+        found = self._pairs.get((name_key(pin), name_key(disc)))
+        return select_pair(self.groups, pin, disc) if found is None else found.copy()
+
+    def curvature(self, speed_mm_s: float | None = None) -> dict[str, float]:
+        """κ of ``mu_k`` and ``mu_s`` over the whole table, or over its groups at one
+        nominal speed [mm/s] (:func:`~tribopipe.query.groups_at_speed`)."""
+        if speed_mm_s not in self._curvature:
+            frame = (self.groups if speed_mm_s is None
+                     else groups_at_speed(self.groups, speed_mm_s))
+            self._curvature[speed_mm_s] = {q: map_curvature(frame, q)
+                                           for q in ("mu_k", "mu_s")}
+        return self._curvature[speed_mm_s]
+
+
 def table_at(
     groups: pd.DataFrame, pin: str, disc: str, temperature_C: float | None,
-    *, dense: bool = False,
+    *, dense: bool = False, curvature: Mapping[str, float] | None = None,
 ) -> pd.DataFrame:
     """The pair's μ_K table (``pressure_kPa, temperature_C, mu_k, uncertainty, u_combined,
     expanded, measured, added``), or its single-temperature slice interpolated at
     ``temperature_C`` [°C]; ``dense`` adds the pressure rows of
-    :func:`tribopipe.interpolation.densify` (for engines that read a table linearly)."""
+    :func:`tribopipe.interpolation.densify` (for engines that read a table linearly).
+    ``curvature``: the map's κ (:meth:`PairGroups.curvature`) where ``groups`` are the
+    pair's own groups (:meth:`PairGroups.pair`)."""
     import pandas as pd
 
-    table = friction_table(groups, pin, disc, "mu_k", dense=dense)
+    table = friction_table(groups, pin, disc, "mu_k", dense=dense,
+                           curvature=None if curvature is None else curvature["mu_k"])
     if temperature_C is None:
         return table
     rows = []
     for p in sorted(set(table["pressure_kPa"])):
-        res = query(groups, pin, disc, p, temperature_C)
+        res = query(groups, pin, disc, p, temperature_C, curvature=curvature)
         measured = any(
             u.weight == 1.0 and u.temperature_C == temperature_C for u in res.mu_k.used
         )

@@ -116,6 +116,8 @@ CSV_COLUMNS = (
 #: coordinate to 4 significant digits (they are drawn, never computed with)
 FIT_CURVE_POINTS = 24
 
+#: the lists of interpolation points of each speed of a pair (packed in the page)
+POINT_LISTS = ("mu_k_points", "mu_s_points")
 #: the order of a pair's runs on the page (a stable sort: ties keep the map's order)
 RUN_ORDER = ("temperature_C", "pressure_kPa", "repeat", "measurement_id")
 #: the column that carries each run's pair number while the runs are sorted
@@ -819,6 +821,10 @@ def _fragment(data: dict[str, Any], js: str, runs_beside: str | None = None) -> 
         f'\n   <option value="{html_text(s["name"])}">{html_text(s["label"])}</option>'
         for s in data["snippets"])
     head = {k: v for k, v in data.items() if k != "runs"}
+    # each speed's interpolation points packed (the page unpacks them as it opens)
+    head["pairs"] = [{**pair, "speeds": [{**sp, **{q: _packed(sp[q]) for q in POINT_LISTS}}
+                                         for sp in pair["speeds"]]}
+                     for pair in data["pairs"]]
     # the groups packed, their names left to their pair's (the page restores both)
     head["groups"] = _packed([{k: v for k, v in g.items() if k not in ("pin", "disc")}
                               for g in data["groups"]])
@@ -885,6 +891,9 @@ def read_embedded_data(html: str) -> dict[str, Any]:
     if match is None:
         raise ExportError(f"no explorer data (script element #{DATA_ELEMENT_ID}) in the page")
     data: dict[str, Any] = json.loads(match.group(1))
+    for pair in data["pairs"]:
+        for speed in pair["speeds"]:
+            speed.update({q: _unpacked(speed[q]) for q in POINT_LISTS})
     data["groups"] = [{"pin": data["pairs"][g["pair"]]["pin"],
                        "disc": data["pairs"][g["pair"]]["disc"], **g}
                       for g in _unpacked(data["groups"])]
@@ -924,17 +933,42 @@ def _page_files(data: dict[str, Any], name: str, runs_inline_limit: int) -> dict
     return files
 
 
-def _pin_shards(groups: pd.DataFrame, limit: int) -> list[list[str]]:
-    """The pins (casefolded keys, in the group table's order) split into pages of whole
-    pins of at most ``limit`` groups each (a pin of more groups is a page of its own)."""
+def _pair_key(pins: pd.Series, discs: pd.Series) -> pd.Series:
+    """Each row's pair as one text: its casefolded pin and disc names (:func:`_key`)."""
+    return pins.map(_key) + "\0" + discs.map(_key)
+
+
+def _shards(groups: pd.DataFrame, limit: int) -> list[list[str]]:
+    """The pairs (:func:`_pair_key`, in the group table's order) split into pages of at
+    most ``limit`` groups each, a pin's pairs together: whole pins to a page while they
+    fit, and a pin of more groups than ``limit`` over pages of its own, its pairs kept
+    whole (a pair of more groups is a page of its own)."""
+    pair_keys = _pair_key(groups["pin"], groups["disc"])
+    counts = pair_keys.value_counts(sort=False)
+    of_pin: dict[str, list[str]] = {}
+    for key in counts.index:
+        of_pin.setdefault(str(key).split("\0")[0], []).append(str(key))
     shards: list[list[str]] = []
     size = 0
-    for key, n in groups["pin"].map(_key).value_counts(sort=False).items():
-        if not shards or size + int(n) > limit:
-            shards.append([])
-            size = 0
-        shards[-1].append(str(key))
-        size += int(n)
+    for pin_pairs in of_pin.values():
+        n = sum(int(counts[k]) for k in pin_pairs)
+        if n <= limit:  # the pin's pairs together
+            if not shards or size + n > limit:
+                shards.append([])
+                size = 0
+            shards[-1] += pin_pairs
+            size += n
+            continue
+        first = True
+        for key in pin_pairs:  # a pin too large for one page: its pairs over pages
+            m = int(counts[key])
+            if first or size + m > limit:
+                shards.append([])
+                size = 0
+                first = False
+            shards[-1].append(key)
+            size += m
+        size = limit  # no other pin joins the last page of a split pin
     return shards
 
 
@@ -959,7 +993,9 @@ def explorer_files(
     loaded when the pair is shown). A map of more groups gets, at ``name``, an index of its
     pins (each pin's name, discs, groups and runs, linking to its page), and its pins'
     explorers as pages of whole pins of at most ``groups_page_limit`` groups in
-    :func:`pages_folder`, each with its runs beside it (``runs_beside_pages``; else as
+    :func:`pages_folder` (a pin of more groups over pages of its own, by whole pairs, one
+    index row per page: :func:`_shards`), each with its runs beside it
+    (``runs_beside_pages``; else as
     ``runs_inline_limit`` says); every page interpolates with the whole map's curvature,
     so each gives what ``query`` gives on the whole map."""
     included = runs
@@ -973,31 +1009,32 @@ def explorer_files(
     if fits is None:
         fits = fit_power_law(runs)
     curvature = {q: map_curvature(groups, q) for q in ("mu_k", "mu_s")}
-    shards = _pin_shards(groups, groups_page_limit)
+    shards = _shards(groups, groups_page_limit)
     folder = pages_folder(name)
-    run_pins, group_pins, fit_pins = (t["pin"].map(_key) for t in (included, groups, fits))
+    run_pairs, group_pairs, fit_pairs = (_pair_key(t["pin"], t["disc"])
+                                         for t in (included, groups, fits))
     files: dict[str, str] = {}
     rows: list[tuple[str, list[str], int, int, str]] = []
     for k, keys in enumerate(shards, 1):
         page = (folder / f"part-{k}.html").as_posix()
-        in_groups, in_runs = group_pins.isin(keys), run_pins.isin(keys)
+        in_groups, in_runs = group_pairs.isin(keys), run_pairs.isin(keys)
         shard_groups, shard_runs = groups[in_groups], included[in_runs]
-        data = explorer_data(shard_runs, groups=shard_groups, fits=fits[fit_pins.isin(keys)],
+        data = explorer_data(shard_runs, groups=shard_groups, fits=fits[fit_pairs.isin(keys)],
                              title=f"{title} — page {k} of {len(shards)}", source=source)
         data["curvature"] = curvature  # the whole map's: query's own uncertainty
         files.update(_page_files(data, page, 0 if runs_beside_pages else runs_inline_limit))
-        # each pin's name (its first group's spelling), discs, groups and runs, counted
-        # in one pass over the page's groups and runs
+        # each pin's name (its first group's spelling), discs, groups and runs on this
+        # page, counted in one pass over the page's groups and runs
         names: dict[str, str] = {}
         discs: dict[str, set[str]] = {}
         n_groups: dict[str, int] = {}
-        for key, pin, disc in zip(group_pins[in_groups], shard_groups["pin"],
-                                  shard_groups["disc"], strict=True):
+        for pin, disc in zip(shard_groups["pin"], shard_groups["disc"], strict=True):
+            key = _key(pin)
             names.setdefault(key, str(pin))
             discs.setdefault(key, set()).add(str(disc))
             n_groups[key] = n_groups.get(key, 0) + 1
-        n_runs = run_pins[in_runs].value_counts()
-        for key in keys:
+        n_runs = shard_runs["pin"].map(_key).value_counts()
+        for key in names:
             rows.append((names[key], sorted(discs[key], key=_key), n_groups[key],
                          int(n_runs.get(key, 0)), f"{Path(page).parent.name}/part-{k}.html"))
     files[name] = explorer_index(rows, title=title, source=source, n_groups=len(groups),

@@ -22,7 +22,7 @@ from ..fit import DecayFit, fit_decay
 from ..interpolation import ENGINE_TOLERANCE
 from ..query import QueryResult
 from .coefficients import breakaway, check_decay
-from .engine_tables import densify_lines, filled_lines, selected_pairs, table_at
+from .engine_tables import PairGroups, densify_lines, filled_lines, selected_pairs, table_at
 from .headers import Engine, comment_block, condition_lines, header_bodies
 from .slip_rates import FOUNDING_SLIP_RATE, SlipRate, default_decay_s_per_mm, slip_rate_of
 from .speed_tables import speed_rows
@@ -146,8 +146,10 @@ def write_abaqus(
         "outside the table ABAQUS holds the end values constant (as tribopipe query does)",
     ]
     lines = comment_block("**", bodies)
+    split = PairGroups(groups)  # each pair's groups selected once, κ computed once
     for pin_name, disc_name in selected:
-        table = table_at(groups, pin_name, disc_name, temperature_C, dense=True)
+        table = table_at(split.pair(pin_name, disc_name), pin_name, disc_name, temperature_C,
+                         dense=True, curvature=split.curvature())
         rate = slip_rate_of(slip_rates, pin_name, disc_name)
         pair_bodies = [
             "",
@@ -156,7 +158,7 @@ def write_abaqus(
             *filled_lines(table, u),
             *densify_lines(table, "ABAQUS"),
         ]
-        by_speed = speed_rows(groups, pin_name, disc_name, temperature_C)
+        by_speed = speed_rows(split, pin_name, disc_name, temperature_C)
         if by_speed is not None:
             pair_bodies[2] = speed_table_note(by_speed, u.speed_per_mm_s, u.speed_unit,
                                               "ABAQUS")
@@ -273,10 +275,12 @@ def write_ansys(
                            source, ansys_safe)
     bodies.append(f"units {u.name}: NPRES in {u.pressure_unit}, TEMP in C")
     lines = comment_block("!", bodies)
+    split = PairGroups(groups)  # each pair's groups selected once, κ computed once
     for offset, (pin_name, disc_name) in enumerate(selected_pairs(groups, pin, disc)):
         mat = material_id + offset
-        table = table_at(groups, pin_name, disc_name, temperature_C, dense=True)
-        by_speed = speed_rows(groups, pin_name, disc_name, temperature_C)
+        table = table_at(split.pair(pin_name, disc_name), pin_name, disc_name, temperature_C,
+                         dense=True, curvature=split.curvature())
+        by_speed = speed_rows(split, pin_name, disc_name, temperature_C)
         lines += comment_block("!", [
             "",
             f"material {mat}: pin {ansys_safe(pin_name)} on disc {ansys_safe(disc_name)}",

@@ -27,6 +27,7 @@ for why not through the ``frictionless`` library).
 from __future__ import annotations
 
 import csv
+import dataclasses
 import io
 import json
 import math
@@ -35,7 +36,7 @@ import re
 import shutil
 import sys
 import tempfile
-from collections.abc import Sequence
+from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from datetime import UTC, datetime
 from pathlib import Path
@@ -56,7 +57,7 @@ from ..evidence import (
 )
 from ..fit import fit_power_law
 from ..frictionmap import RUN_COLUMNS, check_package
-from ..frictionmap.checks import validate_runs
+from ..frictionmap.checks import RowProblem, validate_runs
 from ..frictionmap.datapackage import (
     DESCRIPTOR,
     FALSE,
@@ -79,15 +80,30 @@ from ..frictionmap.package import (
     GROUPS_PARQUET,
     RUNS,
     RUNS_PARQUET,
+    return_free_memory,
 )
 from ..frictionmap.profile import PROFILE_NAME, PROFILE_VERSION, profile_schema, schema_file
 from ..frictionmap.published import FOUNDING_PAPER, PUBLISHED_LAB
-from ..frictionmap.schema import KIND, SCHEMA_NAME, SCHEMA_VERSION, SOURCE_PUBLISHED
-from ..frictionmap.snapshot import MapSource, as_snapshot
-from ..frictionmap.store import write_map_copy
+from ..frictionmap.schema import (
+    KIND,
+    SCHEMA_NAME,
+    SCHEMA_VERSION,
+    SOURCE_PUBLISHED,
+    columns_sha256,
+)
+from ..frictionmap.snapshot import MapSnapshot, MapSource
+from ..frictionmap.store import MapCopyWriter, frame_of_table, load_map_table, stored_groups
 from ..frictionmap.synthetic_rows import SYNTHETIC_MEANS, synthetic_count
 from ..query import pairs
-from ..stats import group_statistics, run_ids_of
+from ..stats import (
+    GROUP_INPUT_COLUMNS,
+    LABS,
+    OWN_LAB,
+    finish_groups,
+    group_statistics,
+    run_ids_of,
+    shown_columns,
+)
 from .citation import (
     CODE_LICENCE,
     Publisher,
@@ -165,12 +181,16 @@ def table_csv(table: pd.DataFrame, kinds: Sequence[str]) -> str:
 CSV_BATCH_ROWS = 8192
 
 
-def write_table_csv(out: TextIO, table: pd.DataFrame, kinds: Sequence[str]) -> None:
+def write_table_csv(out: TextIO, table: pd.DataFrame, kinds: Sequence[str], *,
+                    header: bool = True) -> None:
     """Write ``table`` as CSV to the text stream ``out`` (``\\n`` line ends), each column
     of its map kind written as :func:`package_cell` writes a value, column by column and
-    :data:`CSV_BATCH_ROWS` rows at a time, so that the table is never held as text."""
+    :data:`CSV_BATCH_ROWS` rows at a time, so that the table is never held as text; with
+    ``header`` (the default) its column names first (without: the next rows of a table
+    written in batches)."""
     writer = csv.writer(out, lineterminator="\n")
-    writer.writerow([str(c) for c in table.columns])
+    if header:
+        writer.writerow([str(c) for c in table.columns])
     for start in range(0, len(table), CSV_BATCH_ROWS):
         part = table.iloc[start:start + CSV_BATCH_ROWS]
         columns = [_column_cells(part.iloc[:, j], kind) for j, kind in enumerate(kinds)]
@@ -216,25 +236,50 @@ def column_kind(series: pd.Series) -> str:
 def package_runs_table(runs: pd.DataFrame, lab: str) -> pd.DataFrame:
     """The map's runs with every missing ``lab`` filled: the founding paper's authors for
     its published rows, ``lab`` for the others; empty texts other than ``flags`` missing
-    (a new frame)."""
+    (a new frame; :func:`package_column` of each column)."""
+    return _package_frame(runs.loc[:, list(RUN_COLUMNS)], lab)
+
+
+def _package_frame(runs: pd.DataFrame, lab: str) -> pd.DataFrame:
+    """:func:`package_column` of each column of ``runs`` (map rows of any of the map's
+    columns, ``source`` among them): a new frame, the unchanged columns shared."""
     # a shallow copy: the columns not changed below stay shared (copy-on-write), so a
     # large map is not held twice
-    out = runs.loc[:, list(RUN_COLUMNS)].copy(deep=False)
-    missing = (out["lab"].isna() | (out["lab"].astype(str).str.strip() == "")).to_numpy()
-    published = (out["source"] == SOURCE_PUBLISHED).to_numpy()
-    if missing.any():
-        out.loc[missing & published, "lab"] = PUBLISHED_LAB
-        out.loc[missing & ~published, "lab"] = lab
-    # a CSV cell cannot tell an empty text from a missing one: flags are "" when there are
-    # none (never missing), every other empty text is written as missing
-    if out["flags"].isna().any():
-        out["flags"] = out["flags"].fillna("")
-    for name in RUN_COLUMNS:
-        if KIND[name] == "str" and name != "flags":
-            empty = (out[name] == "").fillna(False).to_numpy(dtype=bool)
-            if empty.any():
-                out.loc[empty, name] = None
+    out = runs.copy(deep=False)
+    source = runs["source"]
+    for name in runs.columns:
+        column = out[name]
+        filled = package_column(str(name), column, source, lab)
+        if filled is not column:
+            out[name] = filled
     return out
+
+
+def package_column(name: str, column: pd.Series, source: pd.Series, lab: str) -> pd.Series:
+    """The map column ``name`` as a package holds it: a ``lab`` missing or blank filled
+    with the founding paper's authors where ``source`` (the rows' ``source`` column) says
+    published, with ``lab`` elsewhere; ``flags`` ``""`` where missing (a CSV cell cannot
+    tell an empty text from a missing one: flags are ``""`` when there are none, never
+    missing); every other empty text missing. A new Series, or ``column`` itself when
+    nothing changes. One column at a time, so that the package's rows are made a batch
+    or a column at a time (:func:`write_runs_files`)."""
+    import numpy as np
+
+    if name == "lab":
+        missing = (column.isna() | (column.astype(str).str.strip() == "")).to_numpy()
+        if missing.any():
+            published = np.asarray(source == SOURCE_PUBLISHED, dtype=bool)
+            column = column.copy()
+            column.loc[missing & published] = PUBLISHED_LAB
+            column.loc[missing & ~published] = lab
+    if name == "flags":
+        return column.fillna("") if column.isna().any() else column
+    if KIND[name] == "str":
+        empty = (column == "").fillna(False).to_numpy(dtype=bool)
+        if empty.any():
+            column = column.copy()
+            column.loc[empty] = None
+    return column
 
 
 def package_groups(groups: pd.DataFrame) -> tuple[pd.DataFrame, pd.DataFrame]:
@@ -293,19 +338,146 @@ def _resource(name: str, path: str, size: int, digest: str, *, title: str, fmt: 
     return res
 
 
-def build_package(runs: pd.DataFrame, publisher: Publisher, folder: Path, *,
-                  date: str, evidence: Evidence | None = None) -> list[str]:
-    """Write the package of ``runs`` (labs filled) into the existing empty ``folder``,
-    with ``evidence`` (:mod:`tribopipe.evidence`) when given; returns the files written
-    (relative paths), the descriptor last."""
+#: the run columns the package's tables, its explorer, its account and the evidence read
+#: (every column travels into ``runs.csv`` and ``runs.parquet``, a batch at a time)
+TABLE_COLUMNS: tuple[str, ...] = tuple(c for c in RUN_COLUMNS if c in {
+    *GROUP_INPUT_COLUMNS, "source", "source_file", "file_hash", "config_hash", "method",
+    "test", "result"})
+#: rows of the map made into a DataFrame at a time while they are checked and written
+PUBLISH_BATCH_ROWS = 16_384
+
+
+def _batches(table: Any, lab: str) -> Iterator[tuple[int, pd.DataFrame]]:
+    """The rows of the Arrow ``table`` of map rows
+    (:func:`~tribopipe.frictionmap.store.load_map_table`) as the package holds them
+    (:func:`package_runs_table`), :data:`PUBLISH_BATCH_ROWS` at a time, each with the
+    position of its first row."""
+    for start in range(0, table.num_rows, PUBLISH_BATCH_ROWS):
+        rows = frame_of_table(table.slice(start, PUBLISH_BATCH_ROWS))
+        yield start, package_runs_table(rows, lab)
+
+
+def run_problems(table: Any, lab: str) -> list[RowProblem]:
+    """Every problem of the package's rows of the Arrow ``table`` of map rows
+    (:func:`~tribopipe.frictionmap.checks.validate_runs` with ``require_lab``), checked a
+    batch at a time, rows counted from the table's first (each id is once in the table:
+    its reader refuses a map that holds one twice)."""
+    problems: list[RowProblem] = []
+    for start, rows in _batches(table, lab):
+        problems += [dataclasses.replace(p, row=p.row + start)
+                     for p in validate_runs(rows, require_lab=True)]
+    return problems
+
+
+def write_runs_files(folder: Path, table: Any, lab: str) -> None:
+    """Write ``data/runs.csv`` and ``data/runs.parquet`` of the package in ``folder`` from
+    the Arrow ``table`` of map rows, a batch at a time (:data:`PUBLISH_BATCH_ROWS`): the
+    rows are never one DataFrame, nor the CSV one text. The Parquet copy's checksum of
+    its rows is computed a column at a time
+    (:func:`~tribopipe.frictionmap.schema.columns_sha256`)."""
+    (folder / "data").mkdir(exist_ok=True)
+    n = table.num_rows
+    source = frame_of_table(table, ["source"])["source"]
+    digest = columns_sha256(n, lambda name: package_column(
+        name, frame_of_table(table, [name])[name], source, lab))
+    run_kinds = [KIND[c] for c in RUN_COLUMNS]
+    sources = set(package_column("source", source, source, lab).dropna().astype(str))
+    with open(folder / "data/runs.csv", "w", encoding="utf-8", newline="") as out, \
+            MapCopyWriter(folder / "data/runs.parquet", n, sources, digest) as copy:
+        for start, rows in _batches(table, lab):
+            write_table_csv(out, rows, run_kinds, header=start == 0)
+            copy.write(rows)
+        copy.finish().chmod(0o644)  # a map is 0600
+
+
+def package_group_table(source: MapSource, info: Mapping[str, Any], labs: pd.DataFrame,
+                        runs: pd.DataFrame, lab: str) -> pd.DataFrame:
+    """The group table of the package of the map ``source`` (whose metadata is ``info``):
+    :func:`~tribopipe.stats.group_statistics` of its rows as the package holds them
+    (``runs``, labs filled: :func:`package_runs_table`). A map folder's stored groups are
+    finished instead (:func:`~tribopipe.stats.finish_groups`) where the filling of the
+    labs leaves them the same (:func:`filled_group_rows`, from the map's own ``lab`` and
+    ``source`` columns, ``labs``); else every row is grouped."""
+    rows = stored_groups(source, info) if info.get("format") == "parts" else None
+    filled = None if rows is None else filled_group_rows(rows, labs, lab)
+    if filled is None:
+        return group_statistics(runs)
+    speed, method = shown_columns(filled)
+    return finish_groups(filled, show_speed=speed, show_method=method)
+
+
+def filled_group_rows(rows: pd.DataFrame, labs: pd.DataFrame, lab: str) -> pd.DataFrame | None:
+    """The stored group rows ``rows`` (:func:`~tribopipe.stats.group_rows` of a map's
+    runs) as the runs give them once their missing labs are filled
+    (:func:`package_column`), or ``None`` where that is not a renaming of the stored
+    rows: ``labs`` are the map's own ``lab`` and ``source`` columns. The stored rows
+    name a run without a lab :data:`~tribopipe.stats.OWN_LAB`; they stay exact when every
+    run without a lab is filled with one same name, no run names itself ``(own lab)``
+    and no group holds runs with and without a lab: then a group of runs without a lab
+    is a group of that one lab, and nothing but its ``labs`` cell changes."""
+    given = labs["lab"]
+    blank = (given.isna() | (given.astype(str).str.strip() == "")).to_numpy(dtype=bool)
+    if not blank.any():
+        return rows
+    if (given == OWN_LAB).any():
+        return None
+    published = (labs["source"] == SOURCE_PUBLISHED).to_numpy(dtype=bool)[blank]
+    fills = {PUBLISHED_LAB if p else lab for p in published.tolist()}
+    if len(fills) != 1 or rows.empty:
+        return None if len(fills) != 1 else rows
+    cells = rows[LABS].astype(str)
+    own = (cells == OWN_LAB).to_numpy(dtype=bool)
+    with_own = cells.str.split(";").map(lambda names: OWN_LAB in names).to_numpy(dtype=bool)
+    if (with_own & ~own).any():
+        return None
+    out = rows.copy()
+    out.loc[own, LABS] = fills.pop()
+    return out
+
+
+#: the run columns the explorer page reads of each run (its groups and fits are given)
+EXPLORER_COLUMNS: tuple[str, ...] = (
+    "measurement_id", "pin", "disc", "pressure_kPa", "temperature_C", "nominal_speed_mm_s",
+    "test_method", "excluded", "repeat", "lab", "flags", "review", "mu_k", "mu_s",
+    "source_file", "test", "result")
+
+
+def explorer_runs(runs: pd.DataFrame) -> pd.DataFrame:
+    """The runs the explorer page shows of the package's rows ``runs``: the included
+    ones, the :data:`EXPLORER_COLUMNS`, each text column a column of Python texts that
+    holds each distinct text once (the page's writer makes an object of every cell: a
+    text repeated in 10⁵ rows is then one object, not 10⁵). A new frame."""
+    import numpy as np
+    import pandas as pd
+
+    included = runs.loc[~runs["excluded"].astype(bool), list(EXPLORER_COLUMNS)]
+    out = {}
+    for name in EXPLORER_COLUMNS:
+        column = included[name]
+        if KIND[name] == "str":
+            codes, uniques = pd.factorize(column)
+            texts = np.array([*uniques.tolist(), None], dtype=object)
+            out[name] = pd.Series(texts[codes], dtype=object)
+        else:
+            out[name] = column.reset_index(drop=True)
+    return pd.DataFrame(out, index=pd.RangeIndex(len(included)))
+
+
+def build_package(rows: list[pd.DataFrame], groups: pd.DataFrame, publisher: Publisher,
+                  folder: Path, *, date: str, evidence: Evidence | None = None) -> list[str]:
+    """Write the package into ``folder``, where :func:`write_runs_files` has written the
+    runs already: ``rows`` is a list that holds the package's rows (labs filled;
+    :data:`TABLE_COLUMNS` suffice), which it empties, so that it holds them alone and
+    lets them go once its tables are written (the explorer page is written from
+    :func:`explorer_runs` of them); ``groups`` their group table
+    (:func:`package_group_table`), ``evidence`` (:mod:`tribopipe.evidence`) when given.
+    Returns the files written (relative paths), the descriptor last."""
+    runs = rows.pop()
     year = int(date[:4])
-    (folder / "data").mkdir()
-    groups = group_statistics(runs)
     group_table, group_runs = package_groups(groups)
     fits = fit_power_law(runs)
     data_licence = [publisher.licence_entry()]
     sources = _sources(publisher, year)
-    run_kinds = [KIND[c] for c in RUN_COLUMNS]
     group_kinds = [column_kind(group_table[c]) for c in group_table.columns]
     files: list[str] = []
     resources = []
@@ -325,11 +497,9 @@ def build_package(runs: pd.DataFrame, publisher: Publisher, folder: Path, *,
             write_table_csv(out, table, kinds)
 
     runs_schema = table_schema(runs_fields(), primary_key="measurement_id")
-    write_csv("data/runs.csv", runs, run_kinds)
     add(RUNS, "data/runs.csv", None,
         title="Runs: one row per friction run", fmt="csv", mediatype="text/csv",
         schema=runs_schema)
-    write_map_copy(folder / "data/runs.parquet", runs).chmod(0o644)  # a map is 0600
     add(RUNS_PARQUET, "data/runs.parquet", None,
         title="Runs as a tribopipe friction map (Parquet, schema in its metadata)",
         fmt="parquet", mediatype="application/vnd.apache.parquet")
@@ -370,14 +540,24 @@ def build_package(runs: pd.DataFrame, publisher: Publisher, folder: Path, *,
               f"{PROFILE_VERSION})", fmt="json", mediatype="application/schema+json")
     page_licences = [*data_licence, {"name": CODE_LICENCE[0], "title": CODE_LICENCE[1],
                                      "path": CODE_LICENCE[2]}]
-    page_files = explorer_files(runs, EXPLORER, groups=groups, fits=fits,
+    n_runs = len(runs)
+    n_excluded = int(runs["excluded"].astype(bool).sum())
+    n_published = int((runs["source"] == SOURCE_PUBLISHED).sum())
+    pair_list = pairs(runs)
+    labs = sorted(set(runs["lab"].dropna().astype(str)))
+    shown = explorer_runs(runs)
+    del runs  # the page is written from the runs it shows
+    return_free_memory()
+    page_files = explorer_files(shown, EXPLORER, groups=groups, fits=fits,
                                 title=publisher.package_title, source=publisher.lab)
     if len(page_files) > EXPLORER_FILES_LIMIT:
         # each file is a resource of its own (a package lists at most 64): the runs go
         # into the pages instead
-        page_files = explorer_files(runs, EXPLORER, groups=groups, fits=fits,
+        del page_files
+        page_files = explorer_files(shown, EXPLORER, groups=groups, fits=fits,
                                     title=publisher.package_title, source=publisher.lab,
                                     runs_inline_limit=sys.maxsize, runs_beside_pages=False)
+    del shown
     for path, text in page_files.items():
         (folder / path).parent.mkdir(parents=True, exist_ok=True)
         if path == EXPLORER:
@@ -391,17 +571,15 @@ def build_package(runs: pd.DataFrame, publisher: Publisher, folder: Path, *,
             else "The runs of one pair of the explorer, loaded when the pair is shown",
             fmt="html" if html else "js",
             mediatype="text/html" if html else "text/javascript", licences=page_licences)
-    pair_list = pairs(runs)
+    del page_files
     add("citation", "CITATION.cff",
-        citation_cff(publisher, date=date, n_runs=len(runs), pairs=pair_list).encode(),
+        citation_cff(publisher, date=date, n_runs=n_runs, pairs=pair_list).encode(),
         title="How to cite (Citation File Format 1.2.0)", fmt="cff",
         mediatype="application/x-yaml")
     listing = [(r["path"], r["title"]) for r in resources]
     listing += [("README.md", "this account"), (DESCRIPTOR, "the Data Package descriptor")]
     readme = package_readme(
-        publisher, date=date, n_runs=len(runs),
-        n_excluded=int(runs["excluded"].astype(bool).sum()),
-        n_published=int((runs["source"] == SOURCE_PUBLISHED).sum()),
+        publisher, date=date, n_runs=n_runs, n_excluded=n_excluded, n_published=n_published,
         pairs=pair_list, files=listing, fields=runs_fields())
     add("readme", "README.md", readme.encode(), title="About this package", fmt="md",
         mediatype="text/markdown")
@@ -409,7 +587,7 @@ def build_package(runs: pd.DataFrame, publisher: Publisher, folder: Path, *,
         "profile": PROFILE,
         "name": f"{_slug(publisher.lab)}-friction-map",
         "title": publisher.package_title,
-        "description": (f"Friction map: {len(runs)} runs of {len(pair_list)} contact pairs, "
+        "description": (f"Friction map: {n_runs} runs of {len(pair_list)} contact pairs, "
                         "μ_S and μ_K by contact pressure and temperature, with repeat "
                         "statistics and provenance. Written by tribopipe."),
         "created": f"{date}T00:00:00Z" if len(date) == 10 else date,
@@ -426,8 +604,7 @@ def build_package(runs: pd.DataFrame, publisher: Publisher, folder: Path, *,
         TRIBOPIPE_KEY: {
             "profile": PROFILE_NAME, "profile_version": PROFILE_VERSION,
             "schema": SCHEMA_NAME, "schema_version": SCHEMA_VERSION, "lab": publisher.lab,
-            "tribopipe_version": __version__, "n_runs": len(runs),
-            "labs": sorted(set(runs["lab"].dropna().astype(str))),
+            "tribopipe_version": __version__, "n_runs": n_runs, "labs": labs,
         },
         "resources": resources,
     }
@@ -463,21 +640,23 @@ def publish_map(map_path: MapSource, out_dir: str | os.PathLike[str],
         raise ExportError(f"release date {date!r}, expected YYYY-MM-DD")
     target = Path(out_dir)
     _check_target(target, overwrite)
-    runs = as_snapshot(map_path).runs
-    if runs.empty:
+    table, info = _map_table(map_path)
+    n_runs = table.num_rows
+    if n_runs == 0:
         raise ExportError("the friction map is empty or absent; nothing to publish",
                           path=map_path)
+    own_labs = frame_of_table(table, ["lab", "source"])
+    runs = _package_frame(frame_of_table(table, TABLE_COLUMNS), publisher.lab)
     n_synthetic = synthetic_count(runs)
     if n_synthetic and not allow_synthetic:
         raise ExportError(
-            f"{n_synthetic} of {len(runs)} runs are {SYNTHETIC_MEANS}; they cannot be "
+            f"{n_synthetic} of {n_runs} runs are {SYNTHETIC_MEANS}; they cannot be "
             "published as a lab's measurements",
             path=map_path,
             hint="publish a map of your own runs, or pass --allow-synthetic for a "
                  "package of demo data",
         )
-    runs = package_runs_table(runs, publisher.lab)
-    problems = validate_runs(runs, require_lab=True)
+    problems = run_problems(table, publisher.lab)
     if problems:
         more = f" (and {len(problems) - 1} more)" if len(problems) > 1 else ""
         raise ExportError(f"{problems[0].line('map')}{more}; fix or exclude the run before "
@@ -492,8 +671,16 @@ def publish_map(map_path: MapSource, out_dir: str | os.PathLike[str],
     tmp = Path(tempfile.mkdtemp(prefix=f".{target.name}.", suffix=".tmp", dir=target.parent))
     try:
         tmp.chmod(0o755)  # mkdtemp's 0700 would make the published folder private
-        files = build_package(runs, publisher, tmp, date=date, evidence=found)
-        _return_free_memory()  # what writing freed, before the check reads it all again
+        write_runs_files(tmp, table, publisher.lab)
+        del table  # every column of every run is written: the tables need TABLE_COLUMNS
+        groups = package_group_table(map_path, info, own_labs, runs, publisher.lab)
+        del own_labs
+        return_free_memory()
+        rows = [runs]
+        del runs  # build_package holds them alone, and lets them go when it can
+        files = build_package(rows, groups, publisher, tmp, date=date, evidence=found)
+        del groups
+        return_free_memory()  # what writing held, before the check reads it all again
         check = check_package(tmp)
         if not check.ok:  # a package we write must validate: a bug, said plainly
             raise ExportError("the package written does not validate: "
@@ -503,28 +690,22 @@ def publish_map(map_path: MapSource, out_dir: str | os.PathLike[str],
         shutil.rmtree(tmp, ignore_errors=True)
         raise
     if found is None:
-        return PublishedPackage(target, len(runs), tuple(files))
-    return PublishedPackage(target, len(runs), tuple(files), found.notes,
+        return PublishedPackage(target, n_runs, tuple(files))
+    return PublishedPackage(target, n_runs, tuple(files), found.notes,
                             sum(f.trace is not None for f in found.files),
                             sum(f.raw is not None for f in found.files))
 
 
-def _return_free_memory() -> None:
-    """Hand the memory freed so far back to the system: Python's garbage, Arrow's pool
-    and, where the C library has it (glibc), the heap's free pages. Writing a package of
-    10⁵ runs frees some hundred MB that would otherwise stay with the process while the
-    package is checked."""
-    import ctypes
-    import gc
-
+def _map_table(source: MapSource) -> tuple[Any, Mapping[str, Any]]:
+    """The rows of the map ``source`` as one Arrow table and its metadata: a path is read
+    as :func:`~tribopipe.frictionmap.store.load_map_table` reads it (never as one
+    DataFrame); a snapshot a command opened already gives its rows (every column)."""
     import pyarrow as pa
 
-    gc.collect()
-    pa.default_memory_pool().release_unused()
-    try:
-        ctypes.CDLL("libc.so.6").malloc_trim(0)
-    except (OSError, AttributeError):  # not glibc: the pages stay until reused
-        pass
+    if isinstance(source, MapSnapshot):
+        source.require(RUN_COLUMNS)
+        return pa.Table.from_pandas(source.runs, preserve_index=False), source.info
+    return load_map_table(source)
 
 
 def _check_target(target: Path, overwrite: bool) -> None:

@@ -12,7 +12,7 @@ from typing import TYPE_CHECKING
 
 from ..interpolation import densify
 from ..query import groups_at_speed, pair_speeds, query, select_pair, speed_weights
-from .engine_tables import table_at
+from .engine_tables import PairGroups, table_at
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -49,7 +49,7 @@ def _steepest(speeds: list[float], rows: list[list[float]]) -> Callable[[float],
     return value_at
 
 
-def speed_rows(groups: pd.DataFrame, pin: str, disc: str,
+def speed_rows(groups: pd.DataFrame | PairGroups, pin: str, disc: str,
                temperature_C: float | None) -> pd.DataFrame | None:
     """A pair's μ_K table over pressure, temperature and sliding speed where it is
     measured at several nominal speeds (else ``None``): ``pressure_kPa, temperature_C,
@@ -65,10 +65,14 @@ def speed_rows(groups: pd.DataFrame, pin: str, disc: str,
     in v, so rows are added until the engine's reading of every pressure and temperature
     row stays within :data:`~tribopipe.interpolation.DENSIFY_TARGET` of it; with the
     pressure rows' own margin the engine stays within
-    :data:`~tribopipe.interpolation.ENGINE_TOLERANCE` of ``query`` over the table."""
+    :data:`~tribopipe.interpolation.ENGINE_TOLERANCE` of ``query`` over the table.
+    ``groups`` may be a :class:`~tribopipe.export.engine_tables.PairGroups` (a writer over
+    every pair): then only the pair's groups are read, with the map's κ."""
     import pandas as pd
 
-    measured_speeds = pair_speeds(select_pair(groups, pin, disc))
+    split = groups if isinstance(groups, PairGroups) else PairGroups(groups)
+    pair = split.pair(pin, disc)
+    measured_speeds = pair_speeds(pair)
     if len(measured_speeds) < 2:
         return None
     pressures: set[float] = set()
@@ -76,7 +80,8 @@ def speed_rows(groups: pd.DataFrame, pin: str, disc: str,
     measured: set[tuple[float, float, float]] = set()
     measured_p: set[float] = set()
     for v in measured_speeds:
-        part = table_at(groups_at_speed(groups, v), pin, disc, temperature_C, dense=True)
+        part = table_at(groups_at_speed(pair, v), pin, disc, temperature_C, dense=True,
+                        curvature=split.curvature(v))
         pressures |= {float(p) for p in part["pressure_kPa"]}
         temps |= {float(t) for t in part["temperature_C"]}
         for p_row, t_row, was_measured, added in zip(
@@ -91,7 +96,9 @@ def speed_rows(groups: pd.DataFrame, pin: str, disc: str,
     ordered_t = sorted(temps, key=lambda x: (math.isnan(x), x))
     cells = [(t, p) for t in ordered_t for p in sorted(pressures)]
     # μ_K of every pressure and temperature row at the measured speeds (query)
-    at_measured = [[query(groups, pin, disc, p, None if math.isnan(t) else t, v).mu_k.value
+    whole = split.curvature()
+    at_measured = [[query(pair, pin, disc, p, None if math.isnan(t) else t, v,
+                          curvature=whole).mu_k.value
                     for v in measured_speeds] for t, p in cells]
     grid = densify(measured_speeds, _steepest(measured_speeds, at_measured))
     rows = []

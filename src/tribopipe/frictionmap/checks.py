@@ -120,15 +120,17 @@ def validate_runs(runs: pd.DataFrame, *, require_lab: bool = False) -> list[RowP
         elif column.required == IN_PACKAGES and require_lab:
             add_rows(blank(name), k, name,
                      "missing, expected a value in every row of a data package")
-    id_texts: list[Any] = ids.tolist()
+    # an id seen in an earlier row: only the ids that repeat are looked at one by one
+    id_texts = ids.astype(str)
+    repeated = np.flatnonzero(np.asarray(id_texts.duplicated(keep=False), dtype=bool)
+                              & ~missing["measurement_id"])
     first: dict[str, int] = {}
-    for i in np.flatnonzero(~missing["measurement_id"]):
-        mid = str(id_texts[i])
+    for i, mid in zip(repeated.tolist(), id_texts.iloc[repeated].tolist(), strict=True):
         if mid in first:
-            found.append((int(i), 1000, "measurement_id",
+            found.append((i, 1000, "measurement_id",
                           f"duplicate id {mid} (first in row {first[mid] + 1})"))
         else:
-            first[mid] = int(i)
+            first[mid] = i
     for k, column in enumerate(COLUMNS):  # order 2000…: each column's values
         _check_column(runs, column, ~missing[column.name], 2000 + k, found)
     for k, (start, end) in enumerate(WINDOWS):  # order 3000…: windows
@@ -141,8 +143,13 @@ def validate_runs(runs: pd.DataFrame, *, require_lab: bool = False) -> list[RowP
                  f"window's start {_number(float(a[i]))}")
     _provenance(runs, blank, reduced, found)
     found.sort(key=lambda p: (p[0], p[1]))
-    return [RowProblem(i + 1, id_texts[i] if isinstance(id_texts[i], str) else None, field,
-                       problem) for i, _, field, problem in found if i < n]
+    return [RowProblem(i + 1, _id_of(ids.iat[i]), field, problem)
+            for i, _, field, problem in found if i < n]
+
+
+def _id_of(value: Any) -> str | None:
+    """A row's ``measurement_id`` as a problem names it (``None`` when it is no text)."""
+    return value if isinstance(value, str) else None
 
 
 def _check_column(runs: pd.DataFrame, column: Column, present: Any, order: int,

@@ -15,7 +15,7 @@ Parquet metadata (:mod:`tribopipe.frictionmap.store`).
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field, fields, replace
 from datetime import UTC, datetime
 from typing import TYPE_CHECKING, Any
@@ -587,17 +587,27 @@ def content_sha256(frame: pd.DataFrame, version: int = SCHEMA_VERSION) -> str:
     in (:mod:`tribopipe.frictionmap.store`), so a map still verifies after a schema
     upgrade adds columns.
     """
+    return columns_sha256(len(frame), lambda name: frame[name], version)
+
+
+def columns_sha256(n_rows: int, column_of: Callable[[str], pd.Series],
+                   version: int = SCHEMA_VERSION) -> str:
+    """:func:`content_sha256` of ``n_rows`` rows given a column at a time: ``column_of``
+    gives the column of a name (all ``n_rows`` cells), asked once per column in the
+    schema's order, so that a caller that holds the rows in another form (an Arrow
+    table) never builds them as one DataFrame."""
     import hashlib
-    import json
 
     import numpy as np
 
-    digest = hashlib.sha256(f"tribopipe.frictionmap rows={len(frame)}".encode())
+    digest = hashlib.sha256(f"tribopipe.frictionmap rows={n_rows}".encode())
     for name in RUN_COLUMNS:
         if ADDED_IN_VERSION.get(name, 1) > version:
             continue
         kind = KIND[name]
-        column = frame[name]
+        column = column_of(name)
+        if len(column) != n_rows:
+            raise ValueError(f"column {name} holds {len(column)} cells, not {n_rows}")
         if kind == "float":
             values = column.to_numpy(dtype="float64")
             data = np.where(np.isnan(values), np.nan, values).astype("<f8").tobytes()
@@ -609,11 +619,37 @@ def content_sha256(frame: pd.DataFrame, version: int = SCHEMA_VERSION) -> str:
         elif kind == "bool":
             data = np.asarray(column, dtype=bool).astype("u1").tobytes()
         else:
-            texts = _texts(column)
-            data = json.dumps(texts, ensure_ascii=False).encode("utf-8", "surrogatepass")
+            pieces = _json_pieces(column)
+            size = 2 + sum(len(p) for p in pieces) + 2 * max(0, len(pieces) - 1)
+            digest.update(f"|{name}:{kind}:{size}|[".encode())
+            for k, piece in enumerate(pieces):
+                if k:
+                    digest.update(b", ")
+                digest.update(piece)
+            digest.update(b"]")
+            continue
         digest.update(f"|{name}:{kind}:{len(data)}|".encode())
         digest.update(data)
     return digest.hexdigest()
+
+
+#: cells of a text column turned into Python texts at a time by :func:`columns_sha256`
+HASH_BATCH_ROWS = 8192
+
+
+def _json_pieces(column: pd.Series) -> list[bytes]:
+    """The JSON text (UTF-8, ``ensure_ascii=False``) of the list of a text column's cells
+    (:func:`_texts`) without its brackets, in pieces of :data:`HASH_BATCH_ROWS` cells:
+    joined by ``", "`` and bracketed they are ``json.dumps`` of the whole list, which is
+    never built (for a column of 10⁵ long texts: tens of MB twice over)."""
+    import json
+
+    pieces = []
+    for start in range(0, len(column), HASH_BATCH_ROWS):
+        texts = _texts(column.iloc[start:start + HASH_BATCH_ROWS])
+        pieces.append(json.dumps(texts, ensure_ascii=False)[1:-1].encode("utf-8",
+                                                                          "surrogatepass"))
+    return pieces
 
 
 def _texts(column: pd.Series) -> list[str | None]:

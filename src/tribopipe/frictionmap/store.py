@@ -247,6 +247,81 @@ def write_map_copy(path: str | os.PathLike[str], runs: pd.DataFrame) -> Path:
     return p
 
 
+class MapCopyWriter:
+    """A new friction-map file at ``path`` written a batch of rows at a time, without the
+    map's lock (a file in a folder no other process uses: a data package being written),
+    so that a large map is never one DataFrame: each batch (:meth:`write`) is checked
+    (:func:`~tribopipe.frictionmap.schema.check_runs`) and written as a row group of a
+    temporary file; :meth:`finish` checks that ``n_runs`` rows came, fsyncs and renames
+    it into place. The metadata (:func:`rows_info`: the rows' count, sources and
+    checksum) is the caller's, computed column by column
+    (:func:`~tribopipe.frictionmap.schema.columns_sha256`); a reader checks it against
+    the rows as for any map. Used as a context manager: a writer left without
+    :meth:`finish` (an error) removes its temporary file. Refuses (``MapError``) to
+    replace an existing file."""
+
+    def __init__(self, path: str | os.PathLike[str], n_runs: int, sources: Iterable[str],
+                 digest: str) -> None:
+        self.path = Path(path)
+        if self.path.exists():
+            raise MapError("exists already; a map copy is written only to a new path",
+                           path=self.path)
+        self._n_runs = n_runs
+        self._info = rows_info(n_runs, sources, digest)
+        self._written = 0
+        self._writer: Any = None
+        self._schema: Any = None
+        self._fh: Any = None
+        self._tmp: Path | None = None
+
+    def __enter__(self) -> MapCopyWriter:
+        fd, self._tmp = _new_temp(self.path)
+        self._fh = os.fdopen(fd, "wb")
+        return self
+
+    def write(self, runs: pd.DataFrame) -> None:
+        """Check the map rows ``runs`` and write them as the next row group."""
+        import pyarrow as pa
+        import pyarrow.parquet as pq
+
+        frame = check_runs(_schema_frame(runs), "row")
+        table = pa.Table.from_pandas(frame.loc[:, list(RUN_COLUMNS)], preserve_index=False)
+        table = table.replace_schema_metadata(None)
+        if self._writer is None:
+            self._schema = table.schema.with_metadata({META_KEY: self._info})
+            self._writer = pq.ParquetWriter(self._fh, self._schema)
+        self._writer.write_table(table.cast(self._schema))
+        self._written += len(frame)
+
+    def finish(self) -> Path:
+        """Close the file, fsync it and rename it to :attr:`path`."""
+        if self._writer is None:  # no rows: an empty map
+            self.write(empty_map())
+        if self._written != self._n_runs:
+            raise MapError(f"{self._written} rows written, {self._n_runs} announced",
+                           path=self.path)
+        assert self._tmp is not None
+        self._writer.close()
+        self._fh.flush()
+        os.fsync(self._fh.fileno())
+        self._fh.close()
+        os.replace(self._tmp, self.path)
+        self._tmp = None
+        fsync_dir(self.path.parent)
+        return self.path
+
+    def __exit__(self, *exc: object) -> None:
+        if self._tmp is not None:  # not finished: nothing is left behind
+            if self._writer is not None:
+                with suppress(Exception):
+                    self._writer.close()
+            with suppress(OSError):
+                self._fh.close()
+            with suppress(OSError):
+                self._tmp.unlink()
+            self._tmp = None
+
+
 def _schema_frame(runs: pd.DataFrame) -> pd.DataFrame:
     """``runs`` with the schema's columns, in order, each in its kind's dtype, converted
     column by column (what :func:`records_frame` makes of the same rows one by one,
@@ -1016,6 +1091,12 @@ def map_info(runs: pd.DataFrame) -> bytes:
     """The JSON our Parquet metadata key holds for ``runs``: the schema (every column's
     kind, unit and meaning), the writing version and time, the sources and the checksum
     of the rows."""
+    return rows_info(len(runs), runs["source"].dropna(), content_sha256(runs))
+
+
+def rows_info(n_runs: int, sources: Iterable[str], digest: str) -> bytes:
+    """:func:`map_info` of ``n_runs`` rows naming ``sources`` whose
+    :func:`~tribopipe.frictionmap.schema.content_sha256` is ``digest``."""
     info = {
         "schema": SCHEMA_NAME,
         "schema_version": SCHEMA_VERSION,
@@ -1025,9 +1106,9 @@ def map_info(runs: pd.DataFrame) -> bytes:
         ],
         "tribopipe_version": __version__,
         "written_at": utc_now(),
-        "n_runs": len(runs),
-        "sources": sorted(set(runs["source"].dropna())),
-        "content_sha256": content_sha256(runs),
+        "n_runs": n_runs,
+        "sources": sorted(set(sources)),
+        "content_sha256": digest,
     }
     return json.dumps(info, ensure_ascii=False).encode()
 
@@ -1064,6 +1145,12 @@ def _read_parts_map(p: Path, columns: Sequence[str] | None = None, *, full: bool
     if manifest is None:
         return _select(empty_map(), columns), {**_empty_info(), "format": "parts"}, None
     runs = _read_parts(p, manifest.parts, columns, full=full)
+    return runs, _parts_info(manifest), manifest
+
+
+def _parts_info(manifest: Manifest) -> dict[str, Any]:
+    """The metadata of a map folder committed as ``manifest`` (as :func:`load_map` gives
+    it)."""
     versions = [part.schema_version for part in manifest.parts]
     info = {
         "schema": SCHEMA_NAME,
@@ -1082,7 +1169,7 @@ def _read_parts_map(p: Path, columns: Sequence[str] | None = None, *, full: bool
     }
     if manifest.groups is not None:
         info["groups"] = manifest.groups.as_json()
-    return runs, info, manifest
+    return info
 
 
 def _read_parts(p: Path, parts: Iterable[Part], columns: Sequence[str] | None = None, *,
@@ -1091,10 +1178,33 @@ def _read_parts(p: Path, parts: Iterable[Part], columns: Sequence[str] | None = 
     map folder ``p``, each part's bytes checked against the manifest's checksum first
     (``full``: as :func:`_read_parts_map`). Only the columns asked for are parsed
     (Parquet's column projection)."""
+    wanted = list(RUN_COLUMNS) if columns is None else _wanted(columns)
+    table = _read_parts_table(p, parts, wanted, full=full)
+    try:
+        runs = _from_arrow(table, wanted, check=full)
+    except MapError as exc:
+        raise MapError(exc.problem, path=p, column=exc.column) from None
+    if "measurement_id" in wanted:
+        _refuse_duplicates(p, runs["measurement_id"])
+    return runs
+
+
+def _refuse_duplicates(p: Path, ids: pd.Series) -> None:
+    """Raise :class:`MapError` naming the first measurement id seen twice in ``ids``."""
+    if ids.duplicated().any():
+        dup = ids.loc[ids.duplicated()].iloc[0]
+        raise MapError(f"duplicate measurement_id {dup}", path=p, column="measurement_id")
+
+
+def _read_parts_table(p: Path, parts: Iterable[Part], wanted: Sequence[str], *,
+                      full: bool = False) -> Any:
+    """The columns ``wanted`` (in the map's order) of ``parts`` of the map folder ``p`` as
+    one Arrow table, each part checked as :func:`_read_parts` says (the rows themselves
+    are checked by the caller)."""
     import pyarrow as pa
     import pyarrow.parquet as pq
 
-    wanted = list(RUN_COLUMNS) if columns is None else _wanted(columns)
+    wanted = list(wanted)
     tables = []
     for part in parts:
         data = read_part_bytes(p, part)
@@ -1120,17 +1230,37 @@ def _read_parts(p: Path, parts: Iterable[Part], columns: Sequence[str] | None = 
                            column=absent[0])
         tables.append(table.select(wanted).replace_schema_metadata(None))
     if tables:
-        table = pa.concat_tables(tables, promote_options="permissive")
-    else:
-        table = pa.Table.from_pandas(empty_map().loc[:, wanted], preserve_index=False)
-    try:
-        runs = _from_arrow(table, wanted, check=full)
-    except MapError as exc:
-        raise MapError(exc.problem, path=p, column=exc.column) from None
-    if "measurement_id" in wanted and runs["measurement_id"].duplicated().any():
-        dup = runs.loc[runs["measurement_id"].duplicated(), "measurement_id"].iloc[0]
-        raise MapError(f"duplicate measurement_id {dup}", path=p, column="measurement_id")
-    return runs
+        return pa.concat_tables(tables, promote_options="permissive")
+    return pa.Table.from_pandas(empty_map().loc[:, wanted], preserve_index=False)
+
+
+def load_map_table(path: str | os.PathLike[str]) -> tuple[Any, dict[str, Any]]:
+    """The map at ``path`` as one Arrow table of every run column (as stored; the columns
+    added since a part's schema version all missing) and its metadata, checked as
+    :func:`load_map` checks it: a map folder's parts against the manifest, each id once;
+    a single-file map whole. For a command that goes through the rows a batch or a
+    column at a time (:func:`frame_of_table`) instead of holding them all as a
+    DataFrame (``map publish``). Raises :class:`MapError` in one line."""
+    import pyarrow as pa
+
+    p = Path(path)
+    if p.is_dir():
+        manifest = _folder_manifest(p)
+        if manifest is None:
+            return (pa.Table.from_pandas(empty_map(), preserve_index=False),
+                    {**_empty_info(), "format": "parts"})
+        table = _read_parts_table(p, manifest.parts, RUN_COLUMNS)
+        _refuse_duplicates(p, frame_of_table(table, ["measurement_id"])["measurement_id"])
+        return table, _parts_info(manifest)
+    runs, info = load_map(p)  # a single file (or none): read and checked whole
+    return pa.Table.from_pandas(runs, preserve_index=False), info
+
+
+def frame_of_table(table: Any, columns: Sequence[str] | None = None) -> pd.DataFrame:
+    """The map DataFrame (the schema's dtypes) of ``columns`` (all when ``None``) of an
+    Arrow table of checked map rows (:func:`load_map_table`, or a slice of it)."""
+    wanted = list(RUN_COLUMNS) if columns is None else _wanted(columns)
+    return _from_arrow(table.select(wanted), wanted, check=False)
 
 
 def rows_by_id(path: str | os.PathLike[str], info: Mapping[str, Any],

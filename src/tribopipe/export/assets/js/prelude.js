@@ -37,6 +37,13 @@ function unpack(packed) {
   });
 }
 GROUPS = unpack(DATA.groups);
+/* Each speed's interpolation points travel packed too (explorer.py's POINT_LISTS). */
+PAIRS.forEach(function (pair) {
+  pair.speeds.forEach(function (at) {
+    at.mu_k_points = unpack(at.mu_k_points);
+    at.mu_s_points = unpack(at.mu_s_points);
+  });
+});
 GROUPS.forEach(function (g) { g.pin = PAIRS[g.pair].pin; g.disc = PAIRS[g.pair].disc; });
 
 window.tribopipeRuns = function (index, packed) {

@@ -333,7 +333,7 @@ def _plan(rows: Sequence[CampaignRow], missing_ids: set[str]) -> _Plan:
             failures[row.file] = row.reason or "failed in an earlier batch"
             outcomes[row.file] = CONFLICT if previous and previous.duplicate_of else FAILED
         else:
-            todo.append(Job(file=row.file, path=str(row.path), sources=row.sources,
+            todo.append(Job(file=row.file, path=row.where, sources=row.sources,
                              hints=row.hints, test_rows=row.test_rows, sha256=row.sha256))
     return _Plan(todo=todo, skipped=skipped, failures=failures, duplicates=duplicates,
                  outcomes=outcomes, runs_failed=runs_failed)

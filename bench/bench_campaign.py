@@ -321,7 +321,7 @@ def run_measured(cmd: list[str], cwd: Path) -> dict:
     PSS summed over the process tree [MB] (sampled every 50 ms), the first output line."""
     import tempfile
 
-    peak = 0
+    peak = parent_peak = 0
     stop = threading.Event()
     out_fh, err_fh = tempfile.TemporaryFile(), tempfile.TemporaryFile()
     report = Path(tempfile.mkstemp(suffix=".json")[1])
@@ -329,9 +329,11 @@ def run_measured(cmd: list[str], cwd: Path) -> dict:
                                 cwd=cwd, stdout=out_fh, stderr=err_fh)
 
     def sample() -> None:
-        nonlocal peak
+        nonlocal peak, parent_peak
         while not stop.is_set():
             pids, todo = [], _children(launcher.pid)  # the launcher itself is not counted
+            if todo:  # the command's own process (a batch's parent), without its workers
+                parent_peak = max(parent_peak, _pss_kB(todo[0]))
             while todo:
                 pid = todo.pop()
                 pids.append(pid)
@@ -355,6 +357,7 @@ def run_measured(cmd: list[str], cwd: Path) -> dict:
             "exit_code": measured["exit_code"],
             "max_rss_MB": measured["max_rss_kB"] / 1024,  # Linux reports kB
             "peak_pss_tree_MB": peak / 1024,
+            "peak_pss_parent_MB": parent_peak / 1024,
             "said": _ledger_line(stdout),
             "stderr_tail": stderr.strip()[-300:]}
 

@@ -1,17 +1,19 @@
 """The explorer page at 10³–10⁵ runs and 10³–10⁵ condition groups: the pages' sizes, the
 runs beside them, the CPU of writing them.
 
-Three shapes of map, built from ``bench_scale``'s copies of a real reduced run: ``few
+Shapes of map, built from ``bench_scale``'s copies of a real reduced run: ``few
 pairs`` (the 18 pin–disc pairs of the founding grid, runs added as repeats), ``own pins``
 (each 1,000 runs under a pin name of their own, as when labs add their own lots: pairs
-and groups grow with the runs), and with ``--groups``, ``every run a group``
+and groups grow with the runs), with ``--shapes "own discs"`` each 1,000 runs under a
+disc name of their own (two pins of many groups each), and with ``--groups``, ``every run a group``
 (``bench_scale.build_map(pairs=True)``: every 180 runs under a pin of their own, so that
 every run is a condition group of its own), where ``tribopipe explore`` is also timed as
 a process (CPU per group, as ``bench_scale --commands --groups`` times the other
 commands over every pair). Run from the repository::
 
     PYTHONPATH=src:tests:bench python bench/bench_explorer.py [--sizes 1000 10000 100000]
-        [--groups 1000 10000 100000] [--out bench/explorer.json]
+        [--shapes "few pairs" "own pins" "own discs"] [--groups 1000 10000 100000]
+        [--out bench/explorer.json]
 
 Prints one line per map and writes the figures as JSON (``--out``).
 """
@@ -31,16 +33,23 @@ import bench_scale
 HERE = Path(__file__).parent
 
 
-def build(folder: Path, n: int, own_pins: bool, template: dict) -> Path:
-    """A map of ``n`` rows (``own_pins``: a pin name per 1,000 rows)."""
+#: the shapes of map: which name each 1,000 rows get a lot number in (None: neither)
+SHAPES = {"few pairs": None, "own pins": "pin", "own discs": "disc"}
+
+
+def build(folder: Path, n: int, shape: str, template: dict) -> Path:
+    """A map of ``n`` rows of ``shape`` (:data:`SHAPES`): ``own pins``, a pin name per
+    1,000 rows; ``own discs``, a disc name per 1,000 rows (the pairs grow under the two
+    pins of the grid: a pin of many groups)."""
     from tribopipe.frictionmap import update_map
 
-    path = folder / f"{'pins' if own_pins else 'few'}_{n}.parquet"
+    column = SHAPES[shape]
+    path = folder / f"{shape.replace(' ', '_')}_{n}.parquet"
     for k in range(0, n, 20_000):
         records = bench_scale.records(template, min(20_000, n - k), k)
-        if own_pins:
+        if column is not None:
             for j, r in enumerate(records):
-                r["pin"] = f"{r['pin']} lot {(k + j) // 1000}"
+                r[column] = f"{r[column]} lot {(k + j) // 1000}"
         update_map(path, records)
     return path
 
@@ -97,6 +106,8 @@ def per_group(folder: Path, n: int, template: dict) -> dict:
 def main(argv: list[str] | None = None) -> dict:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--sizes", type=int, nargs="*", default=[1000, 10_000, 100_000])
+    parser.add_argument("--shapes", nargs="*", default=["few pairs", "own pins"],
+                        choices=list(SHAPES))
     parser.add_argument("--groups", type=int, nargs="*", default=[])
     parser.add_argument("--out", type=Path, default=HERE / "explorer.json")
     args = parser.parse_args(argv)
@@ -105,10 +116,9 @@ def main(argv: list[str] | None = None) -> dict:
                      "load_average_at_start": os.getloadavg(), "pages": [], "per_group": []}
     try:
         template = bench_scale.template_record(folder)
-        for own_pins in (False, True):
+        for shape in args.shapes:
             for n in args.sizes:
-                row = {"shape": "own pins" if own_pins else "few pairs",
-                       **measure(build(folder, n, own_pins, template), folder)}
+                row = {"shape": shape, **measure(build(folder, n, shape, template), folder)}
                 print(json.dumps(row), flush=True)
                 results["pages"].append(row)
         for n in args.groups:

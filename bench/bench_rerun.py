@@ -10,6 +10,11 @@ the unchanged re-run of every size in turn (alternating, so each size meets the 
 load): wall time, and CPU time (user + system) from the launcher's ``RUSAGE_CHILDREN``,
 Python start-up included, with the 1-min load average after each round.
 
+The first re-run after a batch that did work is the full one: it finds nothing to do and
+keeps its ledger in the state (:mod:`tribopipe.campaign.stamp`), so the rounds after it
+report that ledger without building the campaign's table; the summary says round 1 apart.
+The batch from scratch also gives its parent's own peak PSS (without its workers).
+
 Target (issue "10⁵ runs"): an unchanged re-run of 10⁴ files under 1 s; the batch's memory
 flat in the number of exports.
 
@@ -79,6 +84,7 @@ def main(argv: list[str] | None = None) -> dict:
             entry["batch"] = first
             print(f"  batch from scratch: {first['wall_s']:.1f} s wall, "
                   f"{first['cpu_s']:.1f} s CPU, peak PSS {first['peak_pss_tree_MB']:.0f} MB"
+                  f" (its parent {first['peak_pss_parent_MB']:.0f} MB)"
                   f" ({first['said']}); load {first['load_1min']:.1f}", flush=True)
         entry["rerun"] = []
         result["sizes"][n] = entry
@@ -99,13 +105,22 @@ def main(argv: list[str] | None = None) -> dict:
     for n, entry in result["sizes"].items():
         for tree in trees:
             mine = [r for r in entry["rerun"] if r["src"] == tree]
-            walls = [r["wall_s"] for r in mine]
-            cpus = [r["cpu_s"] for r in mine]
-            if walls:
-                print(f"{n} files unchanged ({tree or 'this tribopipe'}): wall median "
-                      f"{statistics.median(walls):.2f} s ({min(walls):.2f}–{max(walls):.2f}),"
-                      f" CPU median {statistics.median(cpus):.2f} s "
-                      f"({min(cpus):.2f}–{max(cpus):.2f})")
+            if not mine:
+                continue
+            # the first re-run after a batch that did work is the full one (it keeps its
+            # ledger for the next): said apart when there are more rounds
+            first, rest = (mine[0], mine[1:]) if len(mine) > 1 else (None, mine)
+            walls = [r["wall_s"] for r in rest]
+            cpus = [r["cpu_s"] for r in rest]
+            name = tree or "this tribopipe"
+            if first is not None:
+                print(f"{n} files unchanged ({name}), round 1: {first['wall_s']:.2f} s wall,"
+                      f" {first['cpu_s']:.2f} s CPU")
+            print(f"{n} files unchanged ({name}), rounds {2 if first else 1}-{len(mine)}: "
+                  f"wall median {statistics.median(walls):.2f} s "
+                  f"({min(walls):.2f}–{max(walls):.2f}), CPU median "
+                  f"{statistics.median(cpus):.2f} s ({min(cpus):.2f}–{max(cpus):.2f}), "
+                  f"peak PSS {max(r['peak_pss_tree_MB'] for r in rest):.0f} MB")
     args.results.write_text(json.dumps(result, indent=1, default=str))
     return result
 

@@ -268,7 +268,7 @@ def _timed(argv: list[str], cwd: Path) -> dict[str, float]:
             "dt = time.perf_counter() - t\n"
             "u = resource.getrusage(resource.RUSAGE_CHILDREN)\n"
             "print(dt, u.ru_utime + u.ru_stime, u.ru_maxrss / 1024, rc)\n"
-            "sys.stderr.write(err[-400:] if rc > 1 else '')\n")
+            "sys.stderr.write(err[-400:] if rc != 0 else '')\n")
     out = subprocess.run([sys.executable, "-c", code, str(TIMEOUT_S), sys.executable, "-m",
                           "tribopipe", *argv], capture_output=True, text=True, cwd=cwd,
                          check=True, env=_env(cwd))
@@ -276,20 +276,44 @@ def _timed(argv: list[str], cwd: Path) -> dict[str, float]:
     if int(rc) > 1:
         raise SystemExit(f"tribopipe {' '.join(argv)}: exit {rc}: {out.stderr}")
     if int(rc) == -1:
-        return {"wall_s": math.inf, "cpu_s": float(cpu_s), "peak_MB": float(mb)}
-    return {"wall_s": float(dt), "cpu_s": float(cpu_s), "peak_MB": float(mb)}
+        return {"wall_s": math.inf, "cpu_s": float(cpu_s), "peak_MB": float(mb),
+                "exit_code": -1}
+    return {"wall_s": float(dt), "cpu_s": float(cpu_s), "peak_MB": float(mb),
+            "exit_code": int(rc), **({"stderr": out.stderr} if int(rc) else {})}
 
 
-def build_map(path: Path, template: dict, n: int, *, pairs: bool = False) -> None:
+def canonical_names() -> dict[str, str]:
+    """The shipped vocabulary's canonical name of each pin and disc name of
+    :func:`records` (the names a reduction resolves on the way in; ``map validate`` and
+    ``map publish`` call others problems)."""
+    from tribopipe.materials import shipped_vocabulary
+
+    vocabulary = shipped_vocabulary()
+    out = {}
+    for name in ("Dragonskin 30", "Ecoflex 00-50", "steel", "acrylic", "aluminium sheet",
+                 "aluminium lathed", "cardboard", "wood smooth", "wood structured", "DS30",
+                 "EF50"):
+        found = vocabulary.candidates({"aluminium lathed": "lathed aluminium disk"}.get(
+            name, name))
+        out[name] = found[0] if len(found) == 1 else name
+    return out
+
+
+def build_map(path: Path, template: dict, n: int, *, pairs: bool = False,
+              canonical: bool = False) -> None:
     """A map of ``n`` rows at ``path`` through the package's own API, landed in chunks of
     20,000 (as a batch lands them): relabelled copies of one real reduced run
     (:func:`records`); ``pairs``: every 180 runs (one of each condition of the grid) get
     their own pin, so that every run is a condition group of its own and the pairs grow
-    with the runs, as when labs add their own materials and lots."""
+    with the runs, as when labs add their own materials and lots; ``canonical``: the pin
+    and disc names the vocabulary's canonical ones (:func:`canonical_names`)."""
     from tribopipe.frictionmap import update_map
 
+    names = canonical_names() if canonical else {}
     for k in range(0, n, 20_000):
         chunk = records(template, min(20_000, n - k), k)
+        for r in chunk:
+            r["pin"], r["disc"] = names.get(r["pin"], r["pin"]), names.get(r["disc"], r["disc"])
         if pairs:
             for i, r in enumerate(chunk, start=k):
                 r["pin"] = f"{r['pin']} lot {i // 180}"
@@ -307,7 +331,7 @@ def _commands_at(folder: Path, n: int, template: dict, export: Path, raw: Path,
     """:func:`commands` on a map of ``n`` rows (``0``: an empty map)."""
     base = folder / f"cmd_{n}.parquet"
     if n:
-        build_map(base, template, n)
+        build_map(base, template, n, canonical=True)
     row: dict = {}
     work = folder / "work.parquet"
 
@@ -324,12 +348,19 @@ def _commands_at(folder: Path, n: int, template: dict, export: Path, raw: Path,
             if prepare is not None:
                 prepare()
             runs.append(_timed(argv_of(), folder))
+            # a refused command (exit 1: a name the vocabulary does not know, say) would
+            # time its refusal, not its work
+            if runs[-1]["exit_code"] != 0:
+                raise SystemExit(f"tribopipe {' '.join(argv_of())}: exit "
+                                 f"{runs[-1]['exit_code']}: {runs[-1].get('stderr', '')}")
         return _median(runs)
 
     def reduce_argv() -> list[str]:
-        return ["reduce", str(export), "--pin", "Bench pin", "--disc", "steel", "--force",
-                "3", "--temperature", "20", "--repeat", "1", "--map", str(work),
-                "--out", str(folder / "reduced"), "--no-plots"]
+        # a known pin (a name the vocabulary does not know is refused before any work),
+        # a new repeat of a condition the map holds, as the batch's export
+        return ["reduce", str(export), "--pin", "DS30", "--disc", "steel", "--force",
+                "3", "--temperature", "20", "--repeat", "999", "--map", str(work),
+                "--output", str(folder / "reduced"), "--no-plots"]
 
     def batch_prepare() -> None:
         fresh()

@@ -287,3 +287,16 @@ def test_a_kept_ledger_prints_what_the_batch_printed(root: Path) -> None:
     # the probe sees imports: the full batch loads the reduction (its workers' code)
     assert "tribopipe.reduction.reduce" in quiet.stderr.rsplit("LOADED", 1)[1]
     assert not {"pandas", "pyarrow"} & set(loaded.split()), loaded
+
+
+def test_a_new_reduction_method_reduces_every_file_again(root: Path,
+                                                         monkeypatch: pytest.MonkeyPatch) -> None:
+    """The method's version is in the config hash, not in the campaign's fields: a newer
+    method (the same config) is the full batch, which reduces every run again."""
+    import tribopipe.config
+
+    _settled(root)
+    monkeypatch.setattr(tribopipe.config, "REDUCTION_METHOD",
+                        tribopipe.config.REDUCTION_METHOD + "-next")
+    redone = _batch(root)
+    assert not redone.kept and sorted(redone.reduced) == sorted(f"{s}.csv" for s in GOOD)

@@ -7,7 +7,8 @@ state (:class:`~tribopipe.campaign.state.KeptLedger`) with two stamps:
 
 * :func:`inputs_stamp`, taken before the batch looked at anything: every field of the
   campaign as loaded (its config, instrument settings, names, materials vocabulary,
-  patterns, tolerances, paths), the manifest's bytes, each file of the folder by its
+  patterns, tolerances, paths), its config hash (which carries the reduction method's
+  version), the columns of ``runs.csv``, the manifest's bytes, each file of the folder by its
   name, size, ``mtime_ns``, ``ctime_ns`` and inode (stricter than the size and
   ``mtime_ns`` the table trusts a file's hash on), the map's stamp
   (:class:`~tribopipe.campaign.state.MapStamp`: a map folder's manifest) and the
@@ -31,6 +32,7 @@ from pathlib import Path
 
 from .. import __version__
 from .ledger import BatchReport
+from .outputs import RUNS_COLUMNS
 from .spec import Campaign
 from .state import DUPLICATE, REDUCED, FileState, KeptLedger, MapStamp, load_kept, save_kept
 from .table import TraceListing, discover_files
@@ -53,7 +55,10 @@ def inputs_stamp(campaign: Campaign) -> str | None:
     """The SHA-256 of everything a batch's outcome depends on besides its own outputs
     (see the module docstring); ``None`` when the raw folder cannot be listed."""
     h = hashlib.sha256()
-    h.update(f"{STAMP_VERSION}\0{__version__}\0{campaign!r}\0".encode("utf-8", "replace"))
+    # the config hash carries the reduction method's version, which the campaign's repr
+    # does not; the tables' columns, which a newer version may add to
+    h.update(f"{STAMP_VERSION}\0{__version__}\0{campaign.settings.config_hash}\0"
+             f"{RUNS_COLUMNS}\0{campaign!r}\0".encode("utf-8", "replace"))
     if campaign.manifest is not None:
         try:
             h.update(hashlib.sha256(campaign.manifest.read_bytes()).digest())

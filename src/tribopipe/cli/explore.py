@@ -33,7 +33,8 @@ def explore_cmd(map_path: str, output: str | None, title: str | None) -> None:
 
     A large map stays a page: above 20,000 runs each pair's runs lie beside the page
     (in <page>_runs/, loaded when the pair is shown), and above 2,000 condition groups
-    the page is an index of the pins linking to their own pages (in <page>_pages/).
+    the page is an index of the pins linking to their own pages (in <page>_pages/; a
+    pin of more groups spans pages of its own, by whole pairs).
     Keep those folders beside the page when you move it.
     """
     from pathlib import Path

@@ -91,6 +91,11 @@ if TYPE_CHECKING:
 
 #: Seconds to wait for another process's lock on the map before giving up.
 LOCK_TIMEOUT_S = 60.0
+#: whether Arrow decodes a map's Parquet parts and converts their rows with its thread
+#: pool: no (measured at 10⁵ rows on a loaded 2-core machine, `bench/README.md`: the
+#: pool's threads cost up to 0.15 s of kernel CPU per read, single-threaded decoding
+#: 0.03 s)
+PARQUET_THREADS = False
 
 
 # --------------------------------------------------------------------------- writing
@@ -1023,7 +1028,8 @@ def _from_arrow(table: Any, columns: Sequence[str] = RUN_COLUMNS, *,
     try:
         # our own columns only, without the pandas metadata (a damaged copy of it must
         # not decide how the rows are read)
-        frame = table.replace_schema_metadata(None).to_pandas(ignore_metadata=True)
+        frame = table.replace_schema_metadata(None).to_pandas(ignore_metadata=True,
+                                                              use_threads=PARQUET_THREADS)
     except Exception as exc:  # noqa: BLE001 - a damaged column
         raise MapError(f"cannot read the rows ({_first_line(exc)})") from None
     out: dict[str, Any] = {}
@@ -1204,7 +1210,10 @@ def _read_parts_table(p: Path, parts: Iterable[Part], wanted: Sequence[str], *,
         data = read_part_bytes(p, part)
         try:
             file = pq.ParquetFile(pa.BufferReader(data))  # its footer parsed once
-            table = file.read(columns=_stored(file.schema_arrow, wanted))
+            # one thread: a part is a few MB, and on a loaded machine Arrow's thread pool
+            # costs more CPU in the kernel than it saves (PARQUET_THREADS)
+            table = file.read(columns=_stored(file.schema_arrow, wanted),
+                              use_threads=PARQUET_THREADS)
             meta = table.schema.metadata or {}
         except Exception as exc:  # noqa: BLE001 - pyarrow raises many types
             raise MapError(f"part {part.file}: not a readable Parquet file "
@@ -1280,11 +1289,12 @@ def rows_by_id(path: str | os.PathLike[str], info: Mapping[str, Any],
             data = read_part_bytes(p, part)
             try:
                 file = pq.ParquetFile(pa.BufferReader(data))
-                mask = pc.is_in(file.read(columns=["measurement_id"])["measurement_id"],
+                in_part = file.read(columns=["measurement_id"], use_threads=PARQUET_THREADS)
+                mask = pc.is_in(in_part["measurement_id"],
                                 value_set=pa.array(sorted(wanted), pa.string()))
                 if not pc.any(mask).as_py():
                     continue
-                table = file.read()
+                table = file.read(use_threads=PARQUET_THREADS)
             except Exception as exc:  # noqa: BLE001 - pyarrow raises many types
                 raise MapError(f"part {part.file}: not a readable Parquet file "
                                f"({_first_line(exc)})", path=p) from None

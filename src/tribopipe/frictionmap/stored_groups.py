@@ -131,13 +131,14 @@ def rows_from_bytes(data: bytes, where: str) -> pd.DataFrame | None:
     import pyarrow.parquet as pq
 
     try:
-        table = pq.read_table(pa.BufferReader(data))
+        table = pq.ParquetFile(pa.BufferReader(data)).read(use_threads=False)
         info = json.loads((table.schema.metadata or {}).get(META_KEY, b"null"))
     except Exception as exc:  # noqa: BLE001 - pyarrow raises many types
         raise MapError(f"{where}: not a stored groups file ({type(exc).__name__})") from None
     if not isinstance(info, dict) or info.get("group_rows_version") != GROUP_ROWS_VERSION:
         return None
-    frame = table.replace_schema_metadata(None).to_pandas(ignore_metadata=True)
+    frame = table.replace_schema_metadata(None).to_pandas(ignore_metadata=True,
+                                                          use_threads=False)
     for column in _TUPLE_COLUMNS:
         if column in frame.columns:
             frame[column] = [tuple((float(m), int(n)) for m, n in json.loads(v))

@@ -114,7 +114,20 @@ def test_write_report_writes_the_files_beside_then_the_page(processed, tmp_path)
                        runs_inline_limit=0)
     assert out == tmp_path / "out" / "report.html"
     written = sorted(p.name for p in (tmp_path / "out" / "report_runs").iterdir())
-    assert written == ["pair-0.js", "pair-1.js", "report-0.js", "report-1.js"]
+    assert written == ["fits.csv", "groups.csv", "pair-0.js", "pair-1.js", "report-0.js",
+                       "report-1.js"]
+
+
+def test_the_tables_download_from_beside_a_page_with_files_beside(processed):
+    from tribopipe.export.tables import spreadsheet_csv
+
+    inputs = report_inputs(*processed)
+    files = report_files(inputs, "report.html", runs_inline_limit=0)
+    page = parse(files["report.html"])
+    assert {"report_runs/groups.csv", "report_runs/fits.csv"} <= set(page.external)
+    assert "data:text/csv" not in files["report.html"]
+    assert files["report_runs/groups.csv"] == spreadsheet_csv(inputs.groups)
+    assert files["report_runs/fits.csv"] == spreadsheet_csv(inputs.fits)
 
 
 # --------------------------------------------------------------------------- in a browser

@@ -41,6 +41,7 @@ from dataclasses import dataclass, field, replace
 from datetime import UTC, datetime
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
+from urllib.parse import quote
 
 from . import __version__
 from .campaign import load_campaign
@@ -181,13 +182,15 @@ class _Layout:
     each run's file there (by measurement id), ``explorer`` the embedded explorer's data
     (``None`` where the explorer lies beside the page, at ``explorer_page``),
     ``pair_plots`` whether the page embeds the pairs' plots (which the group table
-    links)."""
+    links), ``tables_beside`` the folder holding the group and fit tables' CSV downloads
+    (``None``: in the page)."""
 
     runs_beside: str | None = None
     chunk_of: Mapping[str, int] = field(default_factory=dict)
     explorer: dict[str, Any] | None = None
     explorer_page: str | None = None
     pair_plots: bool = True
+    tables_beside: str | None = None
 
 
 # ---------------------------------------------------------------------------- helpers
@@ -287,12 +290,17 @@ def _img(uri: str, alt: str) -> str:
     return f'<img src="{uri}" alt="{html_text(alt)}">'
 
 
-def _csv_link(table: pd.DataFrame, name: str, element_id: str) -> str:
-    """A link that downloads ``table`` as ``name`` (CSV in a ``data:`` URI, formula-safe)."""
-    data = base64.b64encode(spreadsheet_csv(table).encode("utf-8")).decode("ascii")
+def _csv_link(table: pd.DataFrame, name: str, element_id: str, layout: _Layout) -> str:
+    """A link that downloads ``table`` as ``name`` (CSV in a ``data:`` URI, formula-safe),
+    or the file ``name`` beside the page where the report has files beside it
+    (:func:`report_files` writes it there)."""
+    if layout.tables_beside is not None:
+        href = html_text(quote(f"{layout.tables_beside}/{name}", safe="/"))
+    else:
+        data = base64.b64encode(spreadsheet_csv(table).encode("utf-8")).decode("ascii")
+        href = f"data:text/csv;charset=utf-8;base64,{data}"
     return (f'<p><a id="{element_id}" download="{html_text(name)}" '
-            f'href="data:text/csv;charset=utf-8;base64,{data}">Download this table as CSV'
-            "</a></p>")
+            f'href="{href}">Download this table as CSV</a></p>')
 
 
 def group_anchor(group: Mapping[str, Any]) -> str:
@@ -406,7 +414,7 @@ def _group_table(inp: ReportInputs, layout: _Layout) -> str:
         "run with QC flags. Run ids link to the "
         "runs" + ("" if inp.map_report else " and their trace plots") + "."
         + ("" if with_mu_s else " The map holds no μ_S, so its columns are left out.")
-        + "</p>" + _csv_link(inp.groups, "groups.csv", "group-csv")
+        + "</p>" + _csv_link(inp.groups, "groups.csv", "group-csv", layout)
         + f"<table id=group-table><thead>{head}</thead><tbody>{''.join(rows)}</tbody></table>"
         "</section>"
     )
@@ -434,7 +442,7 @@ def _fits_table(inp: ReportInputs, layout: _Layout) -> str:
         '<section id="fits"><h2>Pressure dependence: μ_K = k·p<sup>n−1</sup></h2>'
         "<p class=muted>Least squares in log–log space on the individual runs, p in kPa "
         "(k is μ_K at 1 kPa); 95 % intervals from the t-distribution. Hertz-type contact "
-        "of an elastomer gives n−1 ≈ −1/3.</p>" + _csv_link(inp.fits, "fits.csv", "fit-csv")
+        "of an elastomer gives n−1 ≈ −1/3.</p>" + _csv_link(inp.fits, "fits.csv", "fit-csv", layout)
         + f"<table id=fit-table><thead>{head}</thead><tbody>{''.join(rows)}</tbody></table>"
         "</section>"
     )
@@ -781,8 +789,6 @@ def _explorer(inp: ReportInputs, layout: _Layout) -> str:
     with the report's), or, for a map of more groups than one explorer page shows, a link
     to its pages beside the report."""
     if layout.explorer is None:
-        from urllib.parse import quote
-
         href = html_text(quote(layout.explorer_page or "", safe="/"))
         return (
             '<section id="explorer"><h2>Explorer</h2>'
@@ -869,7 +875,8 @@ def report_files(
     the embedded explorer's runs (:func:`tribopipe.export.explorer.runs_files`). A map of
     more than ``groups_page_limit`` condition groups gets its explorer beside the report
     (``<name>_explorer.html`` and its pages, :func:`~tribopipe.export.explorer.explorer_files`)
-    instead of in it."""
+    instead of in it. A report with files beside its page has its group and fit tables'
+    CSV downloads there too (``groups.csv``, ``fits.csv``)."""
     inp = with_traces(inp)
     files: dict[str, str] = {}
     beside = len(inp.runs) > runs_inline_limit
@@ -894,9 +901,15 @@ def report_files(
             files.update({(folder / f).as_posix(): text
                           for f, text in runs_files(explorer).items()})
     included = inp.runs[~inp.runs["excluded"].fillna(False).astype(bool)]
+    tables_beside = None
+    if files:  # a report with files beside: its tables' downloads beside it too
+        tables_beside = folder.name
+        files[(folder / "groups.csv").as_posix()] = spreadsheet_csv(inp.groups)
+        files[(folder / "fits.csv").as_posix()] = spreadsheet_csv(inp.fits)
     layout = _Layout(runs_beside=folder.name if beside else None, chunk_of=chunk_of,
                      explorer=explorer, explorer_page=explorer_page,
-                     pair_plots=len(pairs(included)) <= PAIR_PLOTS_LIMIT)
+                     pair_plots=len(pairs(included)) <= PAIR_PLOTS_LIMIT,
+                     tables_beside=tables_beside)
     files[name] = _page(inp, layout)
     return files
 

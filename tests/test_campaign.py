@@ -417,6 +417,31 @@ def test_the_state_is_sqlite_updated_row_by_row_and_an_old_json_state_converts(
     assert again.reduced == [] and len(again.skipped) == len(GOOD)
 
 
+def test_the_state_read_back_shares_what_its_entries_repeat(campaign_dir: Path) -> None:
+    """The entries read back from the state are equal to those the batch wrote (the same
+    rows when saved again) while the labels' keys and repeated values are one object."""
+    import sqlite3
+
+    from tribopipe.campaign.state import load_state, save_state
+
+    campaign = load_campaign(campaign_dir / "campaign.toml")
+    run_campaign(campaign, jobs=1)
+    with sqlite3.connect(campaign.state_path) as con:
+        before = con.execute("SELECT name, state FROM files ORDER BY name").fetchall()
+    state = load_state(campaign)
+    labels = [r.entry.labels for e in state.entries.values() for r in e.runs
+              if r.entry is not None]
+    assert len(labels) >= 2 and all(isinstance(lab, dict) for lab in labels)
+    first, second = labels[0], labels[1]
+    assert [id(k) for k in first] == [id(k) for k in second]  # one copy of each key
+    assert first["report"] is second["report"]                  # equal nested values: one
+    assert not hasattr(next(iter(state.entries.values())), "__dict__")  # slotted
+    campaign.state_path.unlink()
+    save_state(campaign, state)                                 # written again, in full
+    with sqlite3.connect(campaign.state_path) as con:
+        assert con.execute("SELECT name, state FROM files ORDER BY name").fetchall() == before
+
+
 def test_the_groups_updated_are_the_statistics_groups(tmp_path: Path) -> None:
     """The batch counts condition groups as the statistics group runs: two runs of one
     pair, force and temperature at two nominal speeds are two groups, and a replaced run

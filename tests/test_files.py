@@ -34,3 +34,51 @@ def test_file_sha256_is_the_content_hash(tmp_path: Path) -> None:
     a.write_bytes(b"x" * 3_000_000)  # more than one read chunk
     b.write_bytes(a.read_bytes())
     assert file_sha256(a) == file_sha256(b) == hashlib.sha256(b"x" * 3_000_000).hexdigest()
+
+
+def test_atomic_text_writes_as_it_goes_and_keeps_an_equal_target(tmp_path: Path) -> None:
+    import os
+
+    from tribopipe.files import atomic_text
+
+    target = tmp_path / "out" / "t.csv"
+    with atomic_text(target, keep_same=True) as fh:
+        fh.write("a,b\n")
+        fh.write("1,2\n")
+    assert target.read_bytes() == b"a,b\n1,2\n"
+    os.utime(target, ns=(1_000_000_000, 1_000_000_000))
+    with atomic_text(target, keep_same=True) as fh:  # the same bytes: left as it is
+        fh.write("a,b\n1,2\n")
+    assert target.stat().st_mtime_ns == 1_000_000_000
+    with atomic_text(target, keep_same=True) as fh:  # other bytes: replaced
+        fh.write("a,b\n1,3\n")
+    assert target.read_text() == "a,b\n1,3\n"
+    assert target.stat().st_mtime_ns != 1_000_000_000
+    assert sorted(p.name for p in target.parent.iterdir()) == ["t.csv"]
+
+
+def test_atomic_text_error_in_the_block_leaves_the_target(tmp_path: Path) -> None:
+    import pytest
+
+    from tribopipe.files import atomic_text
+
+    target = tmp_path / "t.csv"
+    target.write_text("old\n")
+    with pytest.raises(RuntimeError), atomic_text(target) as fh:
+        fh.write("half")
+        raise RuntimeError("stopped")
+    assert target.read_text() == "old\n"
+    assert [p.name for p in tmp_path.iterdir()] == ["t.csv"]
+
+
+def test_atomic_text_names_the_target_it_cannot_write(tmp_path: Path) -> None:
+    import pytest
+
+    from tribopipe.errors import OutputError
+    from tribopipe.files import atomic_text
+
+    blocker = tmp_path / "file"
+    blocker.write_text("x")
+    with pytest.raises(OutputError) as err, atomic_text(blocker / "t.csv") as fh:
+        fh.write("never")
+    assert "t.csv" in str(err.value)

@@ -15,11 +15,14 @@ its own, stricter writer with fsync and a lock: :mod:`tribopipe.frictionmap`.)
 
 from __future__ import annotations
 
+import filecmp
 import hashlib
 import os
 import stat
-from contextlib import suppress
+from collections.abc import Iterator
+from contextlib import contextmanager, suppress
 from pathlib import Path
+from typing import TextIO
 
 from .errors import OutputError, ReadError
 
@@ -117,6 +120,36 @@ def _write_atomic(target: str | os.PathLike[str], content: str | bytes,
             tmp.unlink()
         raise OutputError(f"cannot write: {os_reason(exc)}", path=path) from None
     return path
+
+
+@contextmanager
+def atomic_text(target: str | os.PathLike[str], *, keep_same: bool = False,
+                newline: str | None = None) -> Iterator[TextIO]:
+    """A text handle (UTF-8; ``newline`` as for :func:`open`) whose content replaces ``target``
+    atomically when the block ends, written as it goes (a table of 10⁵ rows is never one
+    string); with ``keep_same``, a target whose bytes equal it is left as it is (its
+    ``mtime`` too). Raises :class:`OutputError` as :func:`write_text_atomic` does; an
+    error in the block leaves the target untouched and no temporary file behind."""
+    path = Path(target)
+    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        fh = open(tmp, "w", encoding="utf-8", newline=newline)
+    except OSError as exc:
+        raise OutputError(f"cannot write: {os_reason(exc)}", path=path) from None
+    try:
+        try:
+            with fh:
+                yield fh
+            if keep_same and path.is_file() and filecmp.cmp(tmp, path, shallow=False):
+                tmp.unlink()
+            else:
+                os.replace(tmp, path)
+        except OSError as exc:
+            raise OutputError(f"cannot write: {os_reason(exc)}", path=path) from None
+    finally:
+        with suppress(OSError):
+            tmp.unlink(missing_ok=True)
 
 
 def fsync_dir(directory: Path) -> None:

@@ -49,6 +49,7 @@ from .state import (
     MapStamp,
     RunEntry,
     RunState,
+    Shared,
     load_state,
     save_state,
 )
@@ -175,6 +176,7 @@ def _run_locked(campaign: Campaign, *, jobs: int | None, plots: bool | None,
     account = Account()
     map_read = False  # a landing read the map under its lock (its rows are not kept)
     stop = StopFlag()
+    shared = Shared()  # one copy of what the entries landed now repeat
     # what the state file holds (the state as loaded, when it was this SQLite file's)
     saved: list[CampaignState | None] = [state if campaign.state_path.is_file() else None]
 
@@ -185,7 +187,7 @@ def _run_locked(campaign: Campaign, *, jobs: int | None, plots: bool | None,
         part, read = _land(
             campaign, results, lambda in_map: _apply(
                 campaign, results, by_file, entries, failures, notes, vanished, in_map,
-                redone), entries, review)
+                redone, shared), entries, review)
         account = account.plus(part)
         map_read = map_read or read
         with suppress(OutputError):  # said by the batch's last save, which meets it again
@@ -331,7 +333,7 @@ def _plan(rows: Sequence[CampaignRow], missing_ids: set[str]) -> _Plan:
             failures[row.file] = row.reason or "failed in an earlier batch"
             outcomes[row.file] = CONFLICT if previous and previous.duplicate_of else FAILED
         else:
-            todo.append(Job(file=row.file, path=str(row.path), sources=row.sources,
+            todo.append(Job(file=row.file, path=row.where, sources=row.sources,
                              hints=row.hints, test_rows=row.test_rows, sha256=row.sha256))
     return _Plan(todo=todo, skipped=skipped, failures=failures, duplicates=duplicates,
                  outcomes=outcomes, runs_failed=runs_failed)
@@ -400,12 +402,14 @@ def _owners(by_file: Mapping[str, CampaignRow], redone: set[str],
 def _apply(campaign: Campaign, results: Sequence[FileOutcome], by_file: Mapping[str, CampaignRow],
            entries: dict[str, FileState], failures: dict[str, str], notes: list[str],
            vanished: Mapping[str, FileState], in_map: FilesByHash,
-           redone: set[str] | None = None) -> tuple[Arrivals, Account]:
+           redone: set[str] | None = None, shared: Shared | None = None
+           ) -> tuple[Arrivals, Account]:
     """Fold the workers' results into the state ``entries`` and ``failures`` (in file
     order, both updated in place; plot and rename notes added to ``notes``), each file
     checked against the files before it and the map (``in_map``, read under its lock).
     ``redone``: every file the batch reduces again (default: those of ``results``); the
-    state's account of them no longer holds."""
+    state's account of them no longer holds; ``shared``: what the entries share
+    (:class:`~tribopipe.campaign.state.Shared`)."""
     records: list[MapRow] = []
     old_ids: set[str] = set()
     reduced: list[str] = []
@@ -430,14 +434,15 @@ def _apply(campaign: Campaign, results: Sequence[FileOutcome], by_file: Mapping[
             size=row.size, mtime_ns=row.mtime_ns, config_hash=config_hash,
             recipe=recipe_hash(campaign, row.merged, row.test_rows),
             sha256=done.file_hash or row.sha256 or _sha256_or_none(row.path),
-            tests=tuple(done.tests), status=REDUCED,
+            tests=tuple(Shared.text(t) for t in done.tests), status=REDUCED,
         )
         if done.error is not None:
             outcomes[row.file] = FAILED
             failures[row.file] = done.error.reason
             entries[row.file] = replace(base, status=FAILED, reason=done.error.reason)
             continue
-        entry = {r.measurement_id: RunEntry.of(r, campaign.output_dir) for r in done.reduced}
+        entry = {r.measurement_id: RunEntry.of(r, campaign.output_dir, shared)
+                 for r in done.reduced}
         mine = {r.measurement_id: labels_of(r.record) for r in done.reduced}
         same, note = owners.check(done.name, done.file_hash, mine) if mine else (None, None)
         if note:

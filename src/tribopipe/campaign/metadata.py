@@ -427,7 +427,7 @@ def merge_metadata(
             if key in ("pin", "disc"):
                 given = str(value).strip()
                 value = resolve_material(campaign, given, key, file).name
-                merged.setdefault(f"{key}_as_given", given)
+                merged.setdefault(sys.intern(f"{key}_as_given"), given)
             if key in merged:
                 if not _same(key, merged[key], value, campaign):
                     raise CampaignError(

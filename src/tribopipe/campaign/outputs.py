@@ -6,13 +6,12 @@ written by :func:`tribopipe.layout.write_failures`, read back by the report)."""
 from __future__ import annotations
 
 import csv
-import io
 import math
 from collections.abc import Mapping, Sequence
 from typing import Any
 
 from ..escape import csv_cell
-from ..files import write_text_atomic
+from ..files import atomic_text
 from ..layout import write_failures
 from ..reporting import EXTRA_COLUMN, RunReport
 from ..reporting import NAMES as REPORTING_NAMES
@@ -49,8 +48,14 @@ def write_runs_csv(campaign: Campaign, rows: Sequence[CampaignRow],
     """``runs.csv``: per file of the campaign, a row per run the state knows of it (its
     status in this batch: reduced, skipped, failed or duplicate), else one row for the
     file (failed, with its reason)."""
-    buf = io.StringIO()
-    writer = csv.writer(buf, lineterminator="\n")
+    with atomic_text(campaign.runs_csv, keep_same=True) as fh:
+        # an unchanged re-run leaves the table it would write again as it is
+        _write_runs(csv.writer(fh, lineterminator="\n"), rows, entries, this_batch, failures)
+
+
+def _write_runs(writer: Any, rows: Sequence[CampaignRow], entries: Mapping[str, FileState],
+                this_batch: Mapping[str, str], failures: Mapping[str, str]) -> None:
+    """The rows of ``runs.csv`` written one by one to ``writer`` (a :func:`csv.writer`)."""
     writer.writerow(RUNS_COLUMNS)
     for row in rows:
         entry = entries.get(row.file)
@@ -70,13 +75,6 @@ def write_runs_csv(campaign: Campaign, rows: Sequence[CampaignRow],
             reason = failures.get(name) or (entry.reason if kept == DUPLICATE else None)
             writer.writerow([_cell(v) for v in _values(
                 row.file, run, status, labels, reason, measured=ok or kept == DUPLICATE)])
-    text = buf.getvalue()
-    try:  # an unchanged re-run leaves the table it would write again as it is
-        if campaign.runs_csv.read_text(encoding="utf-8") == text:
-            return
-    except (OSError, ValueError):
-        pass
-    write_text_atomic(campaign.runs_csv, text)
 
 
 def _values(file: str, run: Mapping[str, Any], status: str, labels: Mapping[str, Any],

@@ -11,6 +11,7 @@ from __future__ import annotations
 import difflib
 import functools
 import re
+import sys
 from pathlib import Path
 from typing import Any
 
@@ -99,7 +100,7 @@ def match_pattern(pattern: str, text: str) -> dict[str, Any] | None:
         elif key in ("normal_force_N", "temperature_C"):
             found[key] = parse_number(value)
         else:
-            found[key] = value.strip()
+            found[key] = sys.intern(value.strip())  # one copy of a name many files give
     return found
 
 

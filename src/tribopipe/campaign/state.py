@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import json
 import sqlite3
+import sys
 from dataclasses import asdict, dataclass, field, fields, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -40,7 +41,7 @@ DUPLICATE = "duplicate"
 SKIPPED = "skipped"
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, slots=True)
 class RunEntry:
     """What the state keeps of a reduced run (and ``runs.csv`` shows), as its worker
     found it: the labels, the id, the trace (relative to the output folder), μ_S and μ_K,
@@ -72,12 +73,14 @@ class RunEntry:
         return out
 
     @classmethod
-    def of(cls, run: ReducedRun, output_dir: Path) -> RunEntry:
+    def of(cls, run: ReducedRun, output_dir: Path, shared: Shared | None = None) -> RunEntry:
         """What the state keeps of a run reduced now (its trace relative to
-        ``output_dir``)."""
+        ``output_dir``; ``shared`` keeps one copy of what many runs repeat, see
+        :class:`Shared`)."""
         record, summary, place = run.record, run.summary, run.place
+        share = Shared() if shared is None else shared
         return cls(
-            labels=asdict(run.labels),
+            labels=share.labels(asdict(run.labels)),
             measurement_id=run.measurement_id,
             trace="" if run.trace is None else run.trace.relative_to(output_dir).as_posix(),
             mu_s=summary["mu_s"],
@@ -86,10 +89,10 @@ class RunEntry:
             pressure_measured_kPa=summary["pressure_kPa"],
             normal_force_measured_N=summary["normal_force_N"],
             temperature_measured_C=summary["temperature_C"],
-            flags=flags_text(run.flags),
+            flags=share.text(flags_text(run.flags)),
             name=run.name,
-            test=place.test,
-            result=place.result,
+            test=share.text(place.test),
+            result=share.text(place.result),
             interval=place.interval,
             occurrence=place.occurrence,
         )
@@ -99,7 +102,7 @@ class RunEntry:
 ENTRY_KEYS: tuple[str, ...] = tuple(f.name for f in fields(RunEntry))
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, slots=True)
 class RunState:
     """One run of a file as the state keeps it: ``status`` reduced or duplicate (then
     ``entry`` holds what was measured) or failed (then ``reason`` says why and
@@ -153,17 +156,62 @@ class RunState:
         return out
 
     @classmethod
-    def from_json(cls, data: dict[str, Any]) -> RunState:
-        """The run from its JSON form (:meth:`flat`)."""
-        status = str(data["status"])
+    def from_json(cls, data: dict[str, Any], shared: Shared | None = None) -> RunState:
+        """The run from its JSON form (:meth:`flat`); ``shared`` keeps one copy of the
+        labels and short strings that many runs repeat (see :class:`Shared`)."""
+        share = Shared() if shared is None else shared
+        status = sys.intern(str(data["status"]))
         if status in (REDUCED, DUPLICATE):
-            return cls.kept(status, RunEntry(**{k: data[k] for k in ENTRY_KEYS if k in data}))
-        return cls(status=status, name=str(data.get("name") or ""), test=data.get("test"),
-                   result=data.get("result"), interval=data.get("interval"),
-                   reason=data.get("reason"), undescribed=bool(data.get("undescribed")))
+            values = {k: data[k] for k in ENTRY_KEYS if k in data}
+            if isinstance(values.get("labels"), dict):
+                values["labels"] = share.labels(values["labels"])
+            for key in _REPEATED:
+                if isinstance(values.get(key), str):
+                    values[key] = sys.intern(values[key])
+            return cls.kept(status, RunEntry(**values))
+        return cls(status=status, name=str(data.get("name") or ""),
+                   test=share.text(data.get("test")), result=share.text(data.get("result")),
+                   interval=data.get("interval"), reason=data.get("reason"),
+                   undescribed=bool(data.get("undescribed")))
 
 
-@dataclass(frozen=True)
+#: the entry's string fields that repeat from run to run (interned: one copy each)
+_REPEATED = ("flags", "test", "result")
+
+
+class Shared:
+    """One copy of what many state entries repeat, for the entries of one read or one
+    batch: the labels' keys and short repeated strings interned, equal nested values of
+    the labels (a report's lists) one object (the entries' labels are read and never
+    changed; :meth:`RunEntry.as_dict` copies them). A batch holds every file's entry, and
+    a decoded entry's own copy of these was half of what it cost in memory."""
+
+    __slots__ = ("_values",)
+
+    def __init__(self) -> None:
+        self._values: dict[str, Any] = {}
+
+    def labels(self, labels: dict[str, Any]) -> dict[str, Any]:
+        """``labels`` as a new dict, its keys and string values interned and its nested
+        dicts and lists shared with their equals."""
+        return {sys.intern(k): self.value(v) for k, v in labels.items()}
+
+    def value(self, value: Any) -> Any:
+        """A label's value: a string interned, a dict or list shared with its equals."""
+        if isinstance(value, str):
+            return sys.intern(value)
+        if isinstance(value, (dict, list)):
+            return self._values.setdefault(json.dumps(value, sort_keys=True, default=str),
+                                           value)
+        return value
+
+    @staticmethod
+    def text(value: Any) -> Any:
+        """``value`` interned when it is a string, else as it is."""
+        return sys.intern(value) if isinstance(value, str) else value
+
+
+@dataclass(frozen=True, slots=True)
 class FileState:
     """What the state keeps of a file: its size, ``mtime_ns`` and SHA-256, the config and
     recipe hashes it was reduced with, its status (reduced, duplicate, failed), its Test
@@ -200,14 +248,17 @@ class FileState:
         return out
 
     @classmethod
-    def from_json(cls, data: dict[str, Any]) -> FileState:
-        """The file from its JSON form."""
+    def from_json(cls, data: dict[str, Any], shared: Shared | None = None) -> FileState:
+        """The file from its JSON form; ``shared`` keeps one copy of what many files
+        repeat (see :class:`Shared`)."""
+        share = Shared() if shared is None else shared
         tests = data.get("tests")
         return cls(size=int(data["size"]), mtime_ns=int(data["mtime_ns"]),
-                   config_hash=data.get("config_hash"), recipe=data.get("recipe"),
-                   sha256=data.get("sha256"), status=str(data["status"]),
-                   tests=None if tests is None else tuple(tests),
-                   runs=tuple(RunState.from_json(r) for r in data.get("runs") or []),
+                   config_hash=share.text(data.get("config_hash")),
+                   recipe=share.text(data.get("recipe")),
+                   sha256=data.get("sha256"), status=sys.intern(str(data["status"])),
+                   tests=None if tests is None else tuple(share.text(t) for t in tests),
+                   runs=tuple(RunState.from_json(r, share) for r in data.get("runs") or []),
                    reason=data.get("reason"), duplicate_of=data.get("duplicate_of"))
 
 
@@ -258,8 +309,9 @@ class CampaignState:
             return cls()
         try:
             stamp = data.get("map")
+            shared = Shared()
             return cls(campaign=data.get("campaign"),
-                       entries={str(f): FileState.from_json(e)
+                       entries={str(f): FileState.from_json(e, shared)
                                 for f, e in data["entries"].items()},
                        map=None if not stamp else MapStamp(int(stamp["size"]),
                                                            int(stamp["mtime_ns"])))
@@ -378,8 +430,8 @@ def _read_sqlite(path: Path) -> CampaignState:
         meta = dict(con.execute("SELECT key, value FROM meta").fetchall())
         if meta.get("version") != str(STATE_VERSION):
             return CampaignState()
-        loads = json.loads
-        entries = {loads(name): FileState.from_json(loads(text))
+        loads, shared = json.loads, Shared()
+        entries = {loads(name): FileState.from_json(loads(text), shared)
                    for name, text in con.execute("SELECT name, state FROM files")}
     finally:
         con.close()

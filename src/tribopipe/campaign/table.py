@@ -81,11 +81,13 @@ class CampaignRow:
     tests (their Test names are only checked once the file is read); ``problem`` is a
     metadata error known before reading; ``status`` is one of ``new, reduced, changed,
     failed, duplicate``; ``reason`` why the file failed (last batch or now); ``previous``
-    what the state keeps of the file; ``hints`` why a source said nothing.
+    what the state keeps of the file; ``hints`` why a source said nothing. ``where``
+    is the file's path as text (:attr:`path` the :class:`~pathlib.Path`): a campaign
+    holds a row per file, and a path object costs several times its text.
     """
 
     file: str
-    path: Path
+    where: str
     size: int
     mtime_ns: int
     sources: tuple[tuple[str, dict[str, Any]], ...]
@@ -97,6 +99,11 @@ class CampaignRow:
     previous: FileState | None = None
     hints: tuple[str, ...] = ()
     test_rows: tuple[ManifestRow, ...] = ()
+
+    @property
+    def path(self) -> Path:
+        """The file's path."""
+        return Path(self.where)
 
     @property
     def labels(self) -> RunLabels:
@@ -319,7 +326,7 @@ def campaign_table(campaign: Campaign, *, state: CampaignState | None = None,
             st = regular_file(path, what="an export file")
         except ReadError as exc:
             unreadable = f"{display_path(rel)}: {exc.problem}"
-            rows.append(CampaignRow(file=rel, path=path, size=-1, mtime_ns=-1, sources=(),
+            rows.append(CampaignRow(file=rel, where=str(path), size=-1, mtime_ns=-1, sources=(),
                                     merged={}, problem=unreadable, status=FAILED,
                                     reason=unreadable))
             continue
@@ -389,7 +396,7 @@ def campaign_table(campaign: Campaign, *, state: CampaignState | None = None,
         if problem is not None:
             status, reason = FAILED, problem
         rows.append(CampaignRow(
-            file=rel, path=path, size=st.st_size, mtime_ns=st.st_mtime_ns,
+            file=rel, where=str(path), size=st.st_size, mtime_ns=st.st_mtime_ns,
             sources=tuple(sources), merged=merged, problem=problem, status=status,
             reason=reason, sha256=sha, previous=previous, hints=tuple(hints),
             test_rows=test_rows,

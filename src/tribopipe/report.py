@@ -59,7 +59,7 @@ from .export.explorer import (
 from .export.plots import plot_group_overlay, plot_pair, slug
 from .export.tables import spreadsheet_csv
 from .figures.trace import plot_trace_row
-from .files import write_text_atomic
+from .files import write_page_and_files
 from .fit import fit_power_law
 from .frictionmap.schema import MapRow, frame_rows
 from .frictionmap.snapshot import as_snapshot
@@ -970,11 +970,7 @@ def write_report(output: str | Path, inputs: ReportInputs, *,
     out = Path(output)
     files = report_files(inputs, out.name, runs_inline_limit=runs_inline_limit,
                          groups_page_limit=groups_page_limit)
-    for name, text in files.items():
-        if name != out.name:
-            (out.parent / name).parent.mkdir(parents=True, exist_ok=True)
-            write_text_atomic(out.parent / name, text)
-    return write_text_atomic(out, files[out.name])
+    return write_page_and_files(out, files)
 
 
 def make_report(

@@ -119,6 +119,8 @@ def main() -> None:
         calls.clear()
         result = run(*argv)
         print(f"| `{name}` | {len(calls)} |" + ("" if result.exit_code == 0 else " (exit 1)"))
+        if result.exit_code and args.trace:
+            print(result.output[-600:], file=sys.__stderr__)
     store._from_arrow = real  # type: ignore[assignment]
     shutil.rmtree(work)
 

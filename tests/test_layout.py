@@ -104,3 +104,53 @@ def test_what_the_folder_writes_is_known_so_a_campaign_never_reads_it(tmp_path: 
     theirs = [out.root / "DS30_steel_1N_10C_r1.csv", out.root / "raw" / "run.txt",
               tmp_path / "runs.csv", out.root / "notes" / "runs.csv"]
     assert not any(out.written_here(p) for p in theirs)
+
+
+def _trace(path: Path, measurement_id: str | None, mu: float) -> Path:
+    """A trace Parquet as the pipeline writes one: its run's id in the footer, or none
+    (a trace written before the id was kept)."""
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    from tribopipe.layout import TRACE_ID_KEY
+
+    table = pa.table({"distance_mm": [0.0, 1.0], "mu": [mu, mu]})
+    if measurement_id is not None:
+        table = table.replace_schema_metadata({TRACE_ID_KEY: measurement_id.encode()})
+    path.parent.mkdir(parents=True, exist_ok=True)
+    pq.write_table(table, path)
+    return path
+
+
+def test_two_runs_whose_ids_share_eight_digits_each_find_their_own_trace(
+        tmp_path: Path) -> None:
+    out = OutputLayout(tmp_path)
+    first, second = MID, MID[:8] + "0000ffff"
+    a = _trace(out.trace_path("DS30_steel_1N_10C_r1.csv", first), first, 0.4)
+    b = _trace(out.trace_path("DS30_steel_1N_10C_r2.csv", second), second, 0.9)
+    assert out.find_trace(first) == a and out.find_trace(second) == b
+    # a third run of the same digits whose trace is missing gets neither of theirs
+    assert out.find_trace(MID[:8] + "11112222") is None
+
+
+def test_colliding_traces_without_their_ids_are_not_guessed(tmp_path: Path) -> None:
+    out = OutputLayout(tmp_path)
+    _trace(out.trace_path("a.csv", MID), None, 0.4)
+    _trace(out.trace_path("b.csv", MID[:8] + "0000ffff"), None, 0.9)
+    assert out.find_trace(MID) is None  # before, the first name in order: maybe another's
+
+
+def test_the_report_picks_each_run_its_own_trace_as_find_trace_does(tmp_path: Path) -> None:
+    import pandas as pd
+
+    from tribopipe.report import ReportInputs, with_traces
+
+    out = OutputLayout(tmp_path)
+    first, second, third = MID, MID[:8] + "0000ffff", "0123456789abcdef"
+    paths = {mid: _trace(out.trace_path(f"run_{k}.csv", mid), mid, 0.5)
+             for k, mid in enumerate((first, second, third))}
+    runs = pd.DataFrame({"measurement_id": [first, second, third, "fedcba9876543210"]})
+    found = with_traces(ReportInputs(runs=runs, groups=pd.DataFrame(), fits=pd.DataFrame(),
+                                     traces_dir=out.traces_dir)).trace_paths
+    assert found == paths
+    assert all(out.find_trace(mid) == path for mid, path in paths.items())

@@ -26,7 +26,7 @@ from tribopipe.export.publish import publish_map
 from tribopipe.export.tables import paper_table
 from tribopipe.frictionmap import read_map
 from tribopipe.frictionmap.summary import map_summary
-from tribopipe.layout import find_trace
+from tribopipe.layout import TRACE_ID_KEY, find_trace
 from tribopipe.reduction.manual import (
     TRACE_META_KEY,
     SlidingSamples,
@@ -94,6 +94,8 @@ def the_map(root: Path) -> pd.DataFrame:
 
 def samples_of(root: Path, mid: str) -> tuple[SlidingSamples, TraceTerms]:
     table = pq.read_table(find_trace(root / "out" / "traces", mid))
+    # the footer names the run whose trace it is (two runs may share the file's 8 digits)
+    assert table.schema.metadata[TRACE_ID_KEY] == mid.encode()
     terms = TraceTerms.from_json(table.schema.metadata[TRACE_META_KEY])
     assert terms is not None
     return SlidingSamples.of_trace(table.to_pandas()), terms

@@ -19,7 +19,7 @@ import filecmp
 import hashlib
 import os
 import stat
-from collections.abc import Iterator
+from collections.abc import Iterator, Mapping
 from contextlib import contextmanager, suppress
 from pathlib import Path
 from typing import TextIO
@@ -93,6 +93,18 @@ def write_text_atomic(
     made or written (read-only, full, a file in the way, a name too long); the target is
     then untouched and no temporary file is left behind."""
     return _write_atomic(target, text, newline)
+
+
+def write_page_and_files(page: str | os.PathLike[str], files: Mapping[str, str]) -> Path:
+    """Write a page with the files beside it: ``files`` maps names relative to the page's
+    folder to UTF-8 text and holds the page under its own name; each file is written
+    atomically (:func:`write_text_atomic`), the page last, so a page is never there before
+    what it loads. Returns the page's path."""
+    out = Path(page)
+    for name, text in files.items():
+        if name != out.name:
+            write_text_atomic(out.parent / name, text)
+    return write_text_atomic(out, files[out.name])
 
 
 def write_bytes_atomic(target: str | os.PathLike[str], data: bytes) -> Path:

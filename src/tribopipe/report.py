@@ -59,13 +59,13 @@ from .export.explorer import (
 from .export.plots import plot_group_overlay, plot_pair, slug
 from .export.tables import spreadsheet_csv
 from .figures.trace import plot_trace_row
-from .files import write_text_atomic
+from .files import write_page_and_files
 from .fit import fit_power_law
 from .frictionmap.schema import MapRow, frame_rows
 from .frictionmap.snapshot import as_snapshot
 from .frictionmap.synthetic_rows import synthetic_note
 from .labels import flag_list, quality_flags
-from .layout import OutputLayout, find_trace, read_failures
+from .layout import OutputLayout, find_trace, pick_trace, read_failures
 from .query import estimate_text, pairs
 from .rounding import known_u, plus_minus
 from .stats import group_u, repeatability, run_ids_of
@@ -824,14 +824,15 @@ def with_traces(inp: ReportInputs) -> ReportInputs:
     found: dict[str, Path] = {}
     if inp.traces_dir is not None:
         # the folder listed once (find_trace's glob per run lists it again for each run):
-        # ``<stem>_<id[:8]>.parquet`` by its last 8 characters, the first name in order
-        listed: dict[str, Path] = {}
+        # ``<stem>_<id[:8]>.parquet`` by its last 8 characters, chosen as find_trace does
+        listed: dict[str, list[Path]] = {}
         for trace in sorted(Path(inp.traces_dir).glob("*_????????.parquet")):
-            listed.setdefault(trace.name[-16:-8], trace)
+            listed.setdefault(trace.name[-16:-8], []).append(trace)
         for mid in inp.runs["measurement_id"].astype(str):
             short = mid[:8]
             plain = len(short) == 8 and short.isalnum() and short.isascii()
-            path = listed.get(short) if plain else find_trace(inp.traces_dir, mid)
+            path = (pick_trace(listed.get(short, []), mid) if plain
+                    else find_trace(inp.traces_dir, mid))
             if path is not None:
                 found[mid] = path
     return replace(inp, trace_paths=found)
@@ -969,11 +970,7 @@ def write_report(output: str | Path, inputs: ReportInputs, *,
     out = Path(output)
     files = report_files(inputs, out.name, runs_inline_limit=runs_inline_limit,
                          groups_page_limit=groups_page_limit)
-    for name, text in files.items():
-        if name != out.name:
-            (out.parent / name).parent.mkdir(parents=True, exist_ok=True)
-            write_text_atomic(out.parent / name, text)
-    return write_text_atomic(out, files[out.name])
+    return write_page_and_files(out, files)
 
 
 def make_report(

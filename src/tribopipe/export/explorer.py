@@ -48,7 +48,7 @@ from typing import TYPE_CHECKING, Any
 from .. import __version__
 from ..errors import ExportError
 from ..escape import csv_cell, html_text, printable, script_json
-from ..files import write_text_atomic
+from ..files import write_page_and_files
 from ..fit import fit_power_law, power_law
 from ..frictionmap.snapshot import MapSource, as_snapshot
 from ..interpolation import EXTRAPOLATED, temperature_needed
@@ -1107,8 +1107,4 @@ def write_explorer(
                            source=str(map_path), groups=snap.groups(show_method=True),
                            runs_inline_limit=runs_inline_limit,
                            groups_page_limit=groups_page_limit)
-    for name, text in files.items():
-        if name != out.name:
-            (out.parent / name).parent.mkdir(parents=True, exist_ok=True)
-            write_text_atomic(out.parent / name, text)
-    return write_text_atomic(out, files[out.name])
+    return write_page_and_files(out, files)

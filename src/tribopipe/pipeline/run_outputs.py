@@ -17,7 +17,7 @@ from ..errors import OutputError
 from ..escape import display_path, printable
 from ..figures import TraceConditions, plot_trace
 from ..files import os_reason, write_text_atomic
-from ..layout import OutputLayout
+from ..layout import TRACE_ID_KEY, OutputLayout
 from ..numeric import finite_json, finite_or_none
 from ..reduction.manual import TRACE_META_KEY
 from .runs import ReducedRun, RunOutcome
@@ -47,8 +47,11 @@ def write_trace(out_dir: str | Path | OutputLayout, outcome: RunOutcome) -> Path
     # what a reviewer's window is read with (tribopipe.reduction.manual); a run read over
     # cycles (reciprocating) has no window terms, so a review refuses a window over it
     terms = outcome.result.parameters.trace_terms()
+    # the run's whole id, which tells its trace from another run's of the same 8 digits
+    meta = {TRACE_ID_KEY: outcome.measurement_id.encode()}
     if terms is not None:
-        table = table.replace_schema_metadata({TRACE_META_KEY: terms.to_json()})
+        meta[TRACE_META_KEY] = terms.to_json()
+    table = table.replace_schema_metadata(meta)
     tmp = target.with_suffix(".parquet.tmp")
     try:
         pq.write_table(table, tmp, use_dictionary=False)

@@ -35,7 +35,7 @@ import os
 import secrets
 from collections.abc import Iterator, Mapping
 from contextlib import suppress
-from dataclasses import dataclass
+from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
 
@@ -66,9 +66,8 @@ class Part:
     schema_version: int
 
     def as_json(self) -> dict[str, Any]:
-        """The part as the manifest stores it."""
-        return {"file": self.file, "n_runs": self.n_runs, "sha256": self.sha256,
-                "bytes": self.bytes, "schema_version": self.schema_version}
+        """The part as the manifest stores it (its fields, in their order)."""
+        return asdict(self)
 
 
 @dataclass(frozen=True)
@@ -83,9 +82,8 @@ class GroupsFile:
     n_groups: int
 
     def as_json(self) -> dict[str, Any]:
-        """The groups file as the manifest stores it."""
-        return {"file": self.file, "sha256": self.sha256, "bytes": self.bytes,
-                "n_groups": self.n_groups}
+        """The groups file as the manifest stores it (its fields, in their order)."""
+        return asdict(self)
 
 
 @dataclass(frozen=True)

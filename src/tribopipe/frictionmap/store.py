@@ -946,9 +946,7 @@ def _read_file_map(p: Path) -> tuple[pd.DataFrame, dict[str, Any]]:
             "tribopipe wrote (damaged on disk, or changed by another program); refusing to "
             f"read or overwrite it; {_restore_hint(p)}"
         )
-    if runs["measurement_id"].duplicated().any():
-        dup = runs.loc[runs["measurement_id"].duplicated(), "measurement_id"].iloc[0]
-        raise MapError(f"duplicate measurement_id {dup}", path=p, column="measurement_id")
+    _refuse_duplicates(p, runs["measurement_id"])
     return runs, info
 
 

@@ -28,7 +28,7 @@ from __future__ import annotations
 import csv
 import io
 import re
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -95,6 +95,24 @@ def find_trace(traces_dir: str | Path, measurement_id: str) -> Path | None:
     :func:`pick_trace` chooses it among the files of its id's first 8 digits."""
     return pick_trace(sorted(Path(traces_dir).glob(f"*_{measurement_id[:8]}.parquet")),
                       measurement_id)
+
+
+def find_traces(traces_dir: str | Path, measurement_ids: Iterable[str]) -> dict[str, Path]:
+    """The trace of each run of ``measurement_ids`` found under ``traces_dir`` (id → path;
+    runs without one left out), as :func:`find_trace` finds each, the folder listed once
+    instead of once per run."""
+    listed: dict[str, list[Path]] = {}
+    for trace in sorted(Path(traces_dir).glob("*_????????.parquet")):
+        listed.setdefault(trace.name[-16:-8], []).append(trace)
+    found: dict[str, Path] = {}
+    for mid in measurement_ids:
+        short = mid[:8]
+        plain = len(short) == 8 and short.isalnum() and short.isascii()
+        # an id whose digits a glob pattern would read otherwise is found by its own glob
+        path = pick_trace(listed.get(short, []), mid) if plain else find_trace(traces_dir, mid)
+        if path is not None:
+            found[mid] = path
+    return found
 
 
 def pick_trace(candidates: Sequence[Path], measurement_id: str) -> Path | None:

@@ -65,7 +65,7 @@ from .frictionmap.schema import MapRow, frame_rows
 from .frictionmap.snapshot import as_snapshot
 from .frictionmap.synthetic_rows import synthetic_note
 from .labels import flag_list, quality_flags
-from .layout import OutputLayout, find_trace, pick_trace, read_failures
+from .layout import OutputLayout, find_traces, read_failures
 from .query import estimate_text, pairs
 from .rounding import known_u, plus_minus
 from .stats import group_u, repeatability, run_ids_of
@@ -666,11 +666,13 @@ def _runs_table(rows: Sequence[str], with_mu_s: bool, with_test: bool,
     )
 
 
-def _listed(inp: ReportInputs, runs: pd.DataFrame, element: str) -> tuple[str, int, int]:
+def _listed(inp: ReportInputs, runs: pd.DataFrame, element: str,
+            columns: tuple[bool, bool]) -> str:
     """``runs`` as the report lists them (their trace blocks, then the table of the runs
-    without a trace), with how many of each."""
+    without a trace) with the runs' table's ``columns`` (:func:`_run_columns` of every
+    run, computed once per report, not once per pair)."""
     traces = inp.trace_paths or {}
-    with_mu_s, with_test = _run_columns(inp)
+    with_mu_s, with_test = columns
     blocks, plain = [], []
     for r in frame_rows(runs):
         if r.measurement_id in traces:
@@ -684,7 +686,7 @@ def _listed(inp: ReportInputs, runs: pd.DataFrame, element: str) -> tuple[str, i
         html += ("" if not blocks else
                  f"<h3>Runs without a trace ({len(plain)}: imported rows or traces not "
                  "found)</h3>") + _runs_table(plain, with_mu_s, with_test, element)
-    return html, len(blocks), len(plain)
+    return html
 
 
 def _pair_chunks(inp: ReportInputs) -> list[tuple[str, str, pd.DataFrame]]:
@@ -703,7 +705,7 @@ def _runs(inp: ReportInputs, layout: _Layout) -> str:
     with_traces = int(inp.runs["measurement_id"].astype(str).isin(traces).sum())
     head = f"<h2>Runs ({len(inp.runs)}; {with_traces} with trace plots)</h2>"
     if layout.runs_beside is None:
-        html, _, _ = _listed(inp, _ordered_runs(inp), "id=runs-table")
+        html = _listed(inp, _ordered_runs(inp), "id=runs-table", _run_columns(inp))
         return f'<section id="runs">{head}{html}</section>'
     pairs_ = []
     for k, (pin, disc, part) in enumerate(_pair_chunks(inp)):
@@ -727,8 +729,9 @@ def runs_chunk_files(inp: ReportInputs) -> tuple[dict[str, str], dict[str, int]]
     escaped by :func:`tribopipe.escape.script_json`) to ``window.tribopipeReportRuns``."""
     files: dict[str, str] = {}
     chunk_of: dict[str, int] = {}
+    columns = _run_columns(inp)
     for k, (_, _, part) in enumerate(_pair_chunks(inp)):
-        html, _, _ = _listed(inp, part, "class=runs-table")
+        html = _listed(inp, part, "class=runs-table", columns)
         files[RUNS_FILE.format(k=k)] = f"window.tribopipeReportRuns({k}, {script_json(html)});\n"
         chunk_of.update(dict.fromkeys(part["measurement_id"].astype(str), k))
     return files, chunk_of
@@ -821,20 +824,8 @@ def with_traces(inp: ReportInputs) -> ReportInputs:
     """``inp`` with ``trace_paths`` filled from ``traces_dir`` (unchanged when given)."""
     if inp.trace_paths is not None:
         return inp
-    found: dict[str, Path] = {}
-    if inp.traces_dir is not None:
-        # the folder listed once (find_trace's glob per run lists it again for each run):
-        # ``<stem>_<id[:8]>.parquet`` by its last 8 characters, chosen as find_trace does
-        listed: dict[str, list[Path]] = {}
-        for trace in sorted(Path(inp.traces_dir).glob("*_????????.parquet")):
-            listed.setdefault(trace.name[-16:-8], []).append(trace)
-        for mid in inp.runs["measurement_id"].astype(str):
-            short = mid[:8]
-            plain = len(short) == 8 and short.isalnum() and short.isascii()
-            path = (pick_trace(listed.get(short, []), mid) if plain
-                    else find_trace(inp.traces_dir, mid))
-            if path is not None:
-                found[mid] = path
+    found = ({} if inp.traces_dir is None else
+             find_traces(inp.traces_dir, inp.runs["measurement_id"].astype(str)))
     return replace(inp, trace_paths=found)
 
 

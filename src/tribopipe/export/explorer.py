@@ -520,6 +520,7 @@ def explorer_data(
     fits: pd.DataFrame | None = None,
     title: str = "tribopipe friction-map explorer",
     source: str | None = None,
+    curvature: Mapping[str, float] | None = None,
 ) -> dict[str, Any]:
     """The explorer's JSON document for friction-map ``runs`` (excluded runs left out).
 
@@ -541,7 +542,8 @@ def explorer_data(
     lines). Every text is made here, by the library's own rules; the page's script only
     computes numbers and puts these texts around them. Pressures in kPa, temperatures in
     °C, speeds in mm/s. Raises :class:`ExportError` when no run is left. Inputs are not
-    modified.
+    modified. ``curvature`` is the map's κ per quantity (``mu_k``, ``mu_s``), computed
+    from ``groups`` when not given (a page of a split map is given the whole map's).
     """
     import numpy as np
 
@@ -693,7 +695,8 @@ def explorer_data(
         "csv": {"header": ",".join(CSV_COLUMNS),
                 "cells": [_csv_field(source or ""), _csv_field(__version__)]},
         # the map's κ for the interpolation's own uncertainty (tribopipe.interpolation)
-        "curvature": {q: map_curvature(groups, q) for q in ("mu_k", "mu_s")},
+        "curvature": dict(curvature) if curvature is not None else
+        {q: map_curvature(groups, q) for q in ("mu_k", "mu_s")},
         # the simulator formats the page copies (every registered format with a
         # snippet); the opening lines of each do not depend on the condition: rendered
         # here by the writer itself, the page adds the rest (snippets.js)
@@ -1020,8 +1023,8 @@ def explorer_files(
         in_groups, in_runs = group_pairs.isin(keys), run_pairs.isin(keys)
         shard_groups, shard_runs = groups[in_groups], included[in_runs]
         data = explorer_data(shard_runs, groups=shard_groups, fits=fits[fit_pairs.isin(keys)],
-                             title=f"{title} — page {k} of {len(shards)}", source=source)
-        data["curvature"] = curvature  # the whole map's: query's own uncertainty
+                             title=f"{title} — page {k} of {len(shards)}", source=source,
+                             curvature=curvature)  # the whole map's: query's own
         files.update(_page_files(data, page, 0 if runs_beside_pages else runs_inline_limit))
         # each pin's name (its first group's spelling), discs, groups and runs on this
         # page, counted in one pass over the page's groups and runs

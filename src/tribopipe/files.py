@@ -22,7 +22,7 @@ import stat
 from collections.abc import Iterator, Mapping
 from contextlib import contextmanager, suppress
 from pathlib import Path
-from typing import TextIO
+from typing import Any, TextIO
 
 from .errors import OutputError, ReadError
 
@@ -92,7 +92,9 @@ def write_text_atomic(
     Raises :class:`OutputError` (one line naming the target) when the folder cannot be
     made or written (read-only, full, a file in the way, a name too long); the target is
     then untouched and no temporary file is left behind."""
-    return _write_atomic(target, text, newline)
+    with _atomic(target, binary=False, newline=newline) as fh:
+        fh.write(text)
+    return Path(target)
 
 
 def write_page_and_files(page: str | os.PathLike[str], files: Mapping[str, str]) -> Path:
@@ -110,28 +112,9 @@ def write_page_and_files(page: str | os.PathLike[str], files: Mapping[str, str])
 def write_bytes_atomic(target: str | os.PathLike[str], data: bytes) -> Path:
     """Write ``data`` to ``target`` as :func:`write_text_atomic` writes text (a binary
     output: a spreadsheet)."""
-    return _write_atomic(target, data, None)
-
-
-def _write_atomic(target: str | os.PathLike[str], content: str | bytes,
-                  newline: str | None) -> Path:
-    path = Path(target)
-    # the process id keeps two processes writing the same target off each other's temp file
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    try:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        if isinstance(content, bytes):
-            with open(tmp, "wb") as fh:
-                fh.write(content)
-        else:
-            with open(tmp, "w", encoding="utf-8", newline=newline) as fh:
-                fh.write(content)
-        os.replace(tmp, path)
-    except OSError as exc:
-        with suppress(OSError):
-            tmp.unlink()
-        raise OutputError(f"cannot write: {os_reason(exc)}", path=path) from None
-    return path
+    with _atomic(target, binary=True) as fh:
+        fh.write(data)
+    return Path(target)
 
 
 @contextmanager
@@ -142,11 +125,22 @@ def atomic_text(target: str | os.PathLike[str], *, keep_same: bool = False,
     string); with ``keep_same``, a target whose bytes equal it is left as it is (its
     ``mtime`` too). Raises :class:`OutputError` as :func:`write_text_atomic` does; an
     error in the block leaves the target untouched and no temporary file behind."""
+    with _atomic(target, binary=False, keep_same=keep_same, newline=newline) as fh:
+        yield fh
+
+
+@contextmanager
+def _atomic(target: str | os.PathLike[str], *, binary: bool, keep_same: bool = False,
+            newline: str | None = None) -> Iterator[Any]:
+    """The one temp-file-and-rename writer behind :func:`atomic_text`,
+    :func:`write_text_atomic` and :func:`write_bytes_atomic`: a handle (binary, or UTF-8
+    text) on a temporary file beside ``target`` that replaces it when the block ends."""
     path = Path(target)
+    # the process id keeps two processes writing the same target off each other's temp file
     tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
-        fh = open(tmp, "w", encoding="utf-8", newline=newline)
+        fh = open(tmp, "wb") if binary else open(tmp, "w", encoding="utf-8", newline=newline)
     except OSError as exc:
         raise OutputError(f"cannot write: {os_reason(exc)}", path=path) from None
     try:

@@ -255,6 +255,13 @@ def _package_frame(runs: pd.DataFrame, lab: str) -> pd.DataFrame:
     return out
 
 
+def _blank_labs(column: pd.Series) -> Any:
+    """Where a ``lab`` column is missing or blank (a boolean array): the runs a package
+    fills with a lab's name (:func:`package_column`), and that
+    :func:`filled_group_rows` renames in the stored groups; one rule for both."""
+    return (column.isna() | (column.astype(str).str.strip() == "")).to_numpy(dtype=bool)
+
+
 def package_column(name: str, column: pd.Series, source: pd.Series, lab: str) -> pd.Series:
     """The map column ``name`` as a package holds it: a ``lab`` missing or blank filled
     with the founding paper's authors where ``source`` (the rows' ``source`` column) says
@@ -266,7 +273,7 @@ def package_column(name: str, column: pd.Series, source: pd.Series, lab: str) ->
     import numpy as np
 
     if name == "lab":
-        missing = (column.isna() | (column.astype(str).str.strip() == "")).to_numpy()
+        missing = _blank_labs(column)
         if missing.any():
             published = np.asarray(source == SOURCE_PUBLISHED, dtype=bool)
             column = column.copy()
@@ -416,7 +423,7 @@ def filled_group_rows(rows: pd.DataFrame, labs: pd.DataFrame, lab: str) -> pd.Da
     and no group holds runs with and without a lab: then a group of runs without a lab
     is a group of that one lab, and nothing but its ``labs`` cell changes."""
     given = labs["lab"]
-    blank = (given.isna() | (given.astype(str).str.strip() == "")).to_numpy(dtype=bool)
+    blank = _blank_labs(given)
     if not blank.any():
         return rows
     if (given == OWN_LAB).any():

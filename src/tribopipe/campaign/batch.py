@@ -31,7 +31,7 @@ from ..frictionmap.records import stored_file_name
 from ..frictionmap.schema import MapRow
 from ..frictionmap.snapshot import open_map
 from ..labels import flags_text, quality_flags
-from ..pipeline.landing import Arrivals, check_map_before_work, land_runs
+from ..pipeline.landing import Arrivals, arriving_ids, check_map_before_work, land_runs
 from ..pipeline.runs import FileOutcome, ReducedRun
 from ..review import Review, read_review
 from .ledger import CONFLICT, READ, Account, BatchReport, manifest_ledger, tally
@@ -583,8 +583,7 @@ def _land(campaign: Campaign, results: Sequence[FileOutcome],
     # the map read once more, under its lock: inside land_runs (change_map_with)
     landed = land_runs(campaign.map_path, choose, review=review,
                        traces_dir=campaign.layout.traces_dir, replace=True,
-                       arriving={r.record.measurement_id for f in results for r in f.reduced
-                                 if r.record is not None})
+                       arriving=arriving_ids(results))
     arrivals, account = brought[0]
     account = replace(account, repeats=list(landed.repeats), review=landed.review)
     if not (arrivals.records or arrivals.stale_ids or landed.appended.changed):

@@ -172,6 +172,11 @@ class StoreReport:
                      if set(appended.differences.get(i, ())) & set(LABEL_COLUMNS))
 
 
+def arriving_ids(files: Sequence[FileOutcome]) -> set[str]:
+    """The measurement ids of every run reduced in ``files`` (what a landing brings)."""
+    return {r.record.measurement_id for f in files for r in f.reduced if r.record is not None}
+
+
 def store_runs(map_path: str | Path, files: Sequence[FileOutcome], *,
                replace: bool = False) -> StoreReport:
     """``tribopipe reduce``'s landing (:func:`land_runs`): the records of the runs reduced
@@ -201,7 +206,5 @@ def store_runs(map_path: str | Path, files: Sequence[FileOutcome], *,
         return Arrivals(keep)
 
     landed = land_runs(map_path, choose, traces_dir=traces[0].parent if traces else None,
-                       replace=replace, arriving={
-                           r.record.measurement_id for f in files for r in f.reduced
-                           if r.record is not None})
+                       replace=replace, arriving=arriving_ids(files))
     return StoreReport(appended=landed.appended, same=tuple(same), repeats=landed.repeats)

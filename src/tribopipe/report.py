@@ -178,15 +178,16 @@ class ReportInputs:
 @dataclass(frozen=True)
 class _Layout:
     """Where a report's parts travel: ``runs_beside`` the folder (relative to the page)
-    holding its runs, one file per pair (``None``: in the page), ``chunk_of`` the index of
-    each run's file there (by measurement id), ``explorer`` the embedded explorer's data
+    holding its runs, one file per pair (``None``: in the page), ``pair_of`` the index of
+    each pair's file there (by pin and disc, as the map spells them: a run link finds its
+    file by the pair its run belongs to), ``explorer`` the embedded explorer's data
     (``None`` where the explorer lies beside the page, at ``explorer_page``),
     ``pair_plots`` whether the page embeds the pairs' plots (which the group table
     links), ``tables_beside`` the folder holding the group and fit tables' CSV downloads
     (``None``: in the page)."""
 
     runs_beside: str | None = None
-    chunk_of: Mapping[str, int] = field(default_factory=dict)
+    pair_of: Mapping[tuple[str, str], int] = field(default_factory=dict)
     explorer: dict[str, Any] | None = None
     explorer_page: str | None = None
     pair_plots: bool = True
@@ -265,10 +266,10 @@ def run_anchor(measurement_id: str) -> str:
     return "run-" + "".join(c if c.isalnum() or c in "-_" else "_" for c in measurement_id)
 
 
-def _run_link(mid: str, layout: _Layout) -> str:
+def _run_link(mid: str, pin: Any, disc: Any, layout: _Layout) -> str:
     """A link to a run's section (its id's first 8 characters), with the index of its
-    pair's file where the runs lie beside the page."""
-    chunk = layout.chunk_of.get(mid)
+    pair's file (the run's ``pin`` on ``disc``) where the runs lie beside the page."""
+    chunk = layout.pair_of.get((str(pin), str(disc)))
     data = "" if chunk is None else f' data-runs="{chunk}"'
     return f'<a href="#{run_anchor(mid)}"{data}>{html_text(mid[:8])}</a>'
 
@@ -373,7 +374,7 @@ def _group_table(inp: ReportInputs, layout: _Layout) -> str:
     u_s, _ = group_u(inp.groups, "mu_s")
     for i, g in enumerate(inp.groups.to_dict(orient="records", into=dict)):
         ids = run_ids_of(g.get("run_ids"))
-        links = " ".join(_run_link(i, layout) for i in ids)
+        links = " ".join(_run_link(i, g["pin"], g["disc"], layout) for i in ids)
         qc = []
         if g.get("range_exceeds_r"):
             anchor = group_anchor(g)
@@ -506,7 +507,7 @@ def _flagged(inp: ReportInputs, layout: _Layout) -> str:
             reason = _e(r.exclusion_reason) if excluded else ""
             rows.append(
                 f'<tr class="{"excl" if excluded else "flag"}"><td class=t>'
-                f"{_run_link(mid, layout)}</td>"
+                f"{_run_link(mid, r.pin, r.disc, layout)}</td>"
                 f"<td class=t>{_e(r.source_file)}</td><td class=t>{_name(r.pin)}</td>"
                 f"<td class=t>{_name(r.disc)}</td><td>{_num(r.pressure_kPa, '.4g')}</td>"
                 f"<td>{_run_value(r.mu_k, r.u_mu_k)}</td>"
@@ -722,19 +723,19 @@ def _runs(inp: ReportInputs, layout: _Layout) -> str:
     )
 
 
-def runs_chunk_files(inp: ReportInputs) -> tuple[dict[str, str], dict[str, int]]:
+def runs_chunk_files(inp: ReportInputs) -> tuple[dict[str, str], dict[tuple[str, str], int]]:
     """The runs of each pair as a script file (:data:`RUNS_FILE` → text) for a report
-    whose runs lie beside it, and the index of each run's file (by measurement id). Each
+    whose runs lie beside it, and the index of each pair's file (by pin and disc). Each
     file hands the pair's listing (markup made and escaped here, as in a page; JSON
     escaped by :func:`tribopipe.escape.script_json`) to ``window.tribopipeReportRuns``."""
     files: dict[str, str] = {}
-    chunk_of: dict[str, int] = {}
+    pair_of: dict[tuple[str, str], int] = {}
     columns = _run_columns(inp)
-    for k, (_, _, part) in enumerate(_pair_chunks(inp)):
+    for k, (pin, disc, part) in enumerate(_pair_chunks(inp)):
         html = _listed(inp, part, "class=runs-table", columns)
         files[RUNS_FILE.format(k=k)] = f"window.tribopipeReportRuns({k}, {script_json(html)});\n"
-        chunk_of.update(dict.fromkeys(part["measurement_id"].astype(str), k))
-    return files, chunk_of
+        pair_of[(pin, disc)] = k
+    return files, pair_of
 
 
 def _overlay_groups(inp: ReportInputs) -> dict[str, tuple[dict[str, Any], list[str]]]:
@@ -773,7 +774,7 @@ def _spread(inp: ReportInputs, layout: _Layout) -> str:
         pairs_ = [(rows[i], pd.read_parquet(inp.trace_paths[i])) for i in ids]  # type: ignore[index]
         uri = _png_data_uri(lambda buf, t=title, p=pairs_: plot_group_overlay(
             p, buf, title=t, fmt="png", dpi=PAIR_DPI))
-        links = " ".join(_run_link(i, layout) for i in ids)
+        links = " ".join(_run_link(i, g["pin"], g["disc"], layout) for i in ids)
         figures.append(f'<figure id="{anchor}">{_img(uri, f"repeats of {title}")}'
                        f"<figcaption>{html_text(title)}; runs {links}</figcaption></figure>")
     body = ("".join(figures) if figures else
@@ -873,9 +874,9 @@ def report_files(
     files: dict[str, str] = {}
     beside = len(inp.runs) > runs_inline_limit
     folder = runs_folder(name)
-    chunk_of: dict[str, int] = {}
+    pair_of: dict[tuple[str, str], int] = {}
     if beside:
-        chunks, chunk_of = runs_chunk_files(inp)
+        chunks, pair_of = runs_chunk_files(inp)
         files.update({(folder / f).as_posix(): text for f, text in chunks.items()})
     explorer = None
     explorer_page = None
@@ -898,7 +899,7 @@ def report_files(
         tables_beside = folder.name
         files[(folder / "groups.csv").as_posix()] = spreadsheet_csv(inp.groups)
         files[(folder / "fits.csv").as_posix()] = spreadsheet_csv(inp.fits)
-    layout = _Layout(runs_beside=folder.name if beside else None, chunk_of=chunk_of,
+    layout = _Layout(runs_beside=folder.name if beside else None, pair_of=pair_of,
                      explorer=explorer, explorer_page=explorer_page,
                      pair_plots=len(pairs(included)) <= PAIR_PLOTS_LIMIT,
                      tables_beside=tables_beside)

@@ -18,7 +18,8 @@ from __future__ import annotations
 import math
 import os
 import time
-from collections.abc import Callable, Iterator, Mapping, MutableMapping, Sequence
+from bisect import bisect_left
+from collections.abc import Callable, Container, Iterator, Mapping, MutableMapping, Sequence
 from contextlib import contextmanager, suppress
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -80,6 +81,18 @@ ProgressCallback = Callable[[int, int], None]
 #: what it finished
 LAND_EVERY_FILES = 256
 LAND_EVERY_S = 2.0
+
+class SortedNames(Container[str]):
+    """Whether a name is one of ``names`` (sorted), by bisection: a campaign's files
+    asked about without a set of them beside the list."""
+
+    def __init__(self, names: Sequence[str]) -> None:
+        self.names = names
+
+    def __contains__(self, name: object) -> bool:
+        at = bisect_left(self.names, name) if isinstance(name, str) else len(self.names)
+        return at < len(self.names) and self.names[at] == name
+
 
 def chunk_size(items: int, workers: int) -> int:
     """The items of a chunk when ``items`` are cut into a few chunks per worker: small
@@ -185,7 +198,7 @@ def _run_locked(campaign: Campaign, *, jobs: int | None, plots: bool | None,
     # reduced and landed in the order of their names (the order results are checked in
     # against each other), whichever worker ends first
     order = sorted(plan.todo)
-    redone = set(order)
+    redone = SortedNames(order)
     account = Account()
     map_read = False  # a landing read the map under its lock (its rows are not kept)
     stop = StopFlag()
@@ -421,7 +434,7 @@ def _execute(todo: Sequence[str], job_of: Callable[[str], Job], ctx: WorkerConte
         pool.shutdown(wait=True, cancel_futures=True)
 
 
-def _owners(rows: CampaignTable, redone: set[str],
+def _owners(rows: CampaignTable, redone: Container[str],
             vanished: Mapping[str, FileState], in_map: FilesByHash) -> ContentOwners:
     """The one duplicate check (:class:`ContentOwners`) for a batch: the contents the
     files of the state brought (those not redone now), then the map's own rows; a file
@@ -442,7 +455,7 @@ def _owners(rows: CampaignTable, redone: set[str],
 def _apply(campaign: Campaign, results: Sequence[FileOutcome], rows: CampaignTable,
            entries: MutableMapping[str, FileState], failures: dict[str, str], notes: list[str],
            vanished: Mapping[str, FileState], in_map: FilesByHash,
-           redone: set[str] | None = None, shared: Shared | None = None
+           redone: Container[str] | None = None, shared: Shared | None = None
            ) -> tuple[Arrivals, Account]:
     """Fold the workers' results into the state ``entries`` and ``failures`` (in file
     order, both updated in place; plot and rename notes added to ``notes``), each file

@@ -35,6 +35,7 @@ import hashlib
 import io
 import json
 import os
+from array import array
 from bisect import bisect_left
 from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import asdict, dataclass
@@ -274,10 +275,14 @@ def _traces_present(traces: TraceListing, entry: FileState) -> bool:
     return True
 
 
-#: a file of a :class:`CampaignTable` as the table keeps it: (name, path as text when it
-#: is not the raw folder's join with the name, size, ``mtime_ns``, status, problem, reason,
-#: SHA-256, whether its metadata was read); the rest of its row is built when asked for
-_Kept = tuple[str, str | None, int, int, str, str | None, str | None, str | None, bool]
+#: what a :class:`CampaignTable` keeps of a file besides its name, stat and status, when
+#: it has any: (path as text when it is not the raw folder's join with the name, problem,
+#: reason, SHA-256, whether its metadata was read)
+_Extra = tuple[str | None, str | None, str | None, str | None, bool]
+#: the range of the table's stat array (signed 64-bit)
+_INT64 = (-(2**63), 2**63 - 1)
+#: the statuses a table row may have, by their code in :attr:`CampaignTable._status`
+_STATUSES = (NEW, REDUCED, CHANGED, FAILED, DUPLICATE)
 
 
 class CampaignTable(Sequence[CampaignRow]):
@@ -286,9 +291,10 @@ class CampaignTable(Sequence[CampaignRow]):
     ``("notes.txt", "a text with no table …")``.
 
     A campaign holds a row per file, so the table keeps of each only what its row cannot
-    find again (its stat, status, problem and reason, SHA-256: a tuple) and builds the
-    row when it is asked for: its metadata from the file's name and the manifest, what
-    the state keeps of it from the state's entries (as loaded)."""
+    find again, in arrays (its name, size, ``mtime_ns`` and status; its problem, reason
+    and SHA-256 for the files that have them) and builds the row when it is asked for:
+    its metadata from the file's name and the manifest, what the state keeps of it from
+    the state's entries (as loaded)."""
 
     def __init__(self, campaign: Campaign, manifest: Manifest | None,
                  entries: Mapping[str, FileState],
@@ -296,31 +302,43 @@ class CampaignTable(Sequence[CampaignRow]):
         self._campaign = campaign
         self._manifest = manifest
         self._entries = entries
-        self._kept: list[_Kept] = []
+        self._names: list[str] = []
+        self._stats = array("q")  # size, mtime_ns of each file in turn
+        self._status = bytearray()  # its index in _STATUSES
+        self._extra: dict[int, _Extra] = {}
+        self._huge: dict[int, tuple[int, int]] = {}  # a stat an int64 cannot hold
         self.not_exports: list[tuple[str, str]] = list(not_exports)
 
     def _add(self, row: CampaignRow, *, read: bool = True) -> None:
         """Keep ``row`` (its metadata read from its name and the manifest: ``read``)."""
         default = str(self._campaign.raw_dir / row.file)
-        self._kept.append((row.file, None if row.where == default else row.where, row.size,
-                           row.mtime_ns, row.status, row.problem, row.reason, row.sha256,
-                           read))
+        extra = (None if row.where == default else row.where, row.problem, row.reason,
+                 row.sha256, read)
+        if extra != (None, None, None, None, True):
+            self._extra[len(self._names)] = extra
+        stat = (row.size, row.mtime_ns)
+        if not all(_INT64[0] <= v <= _INT64[1] for v in stat):  # a clock far off: kept aside
+            self._huge[len(self._names)] = stat
+            stat = (0, 0)
+        self._names.append(row.file)
+        self._stats.extend(stat)
+        self._status.append(_STATUSES.index(row.status))
 
     def __len__(self) -> int:
-        return len(self._kept)
+        return len(self._names)
 
     def __getitem__(self, index: Any) -> Any:
         if isinstance(index, slice):
-            return [self._row(k) for k in self._kept[index]]
-        return self._row(self._kept[index])
+            return [self._row(i) for i in range(len(self._names))[index]]
+        return self._row(range(len(self._names))[index])
 
     def __iter__(self) -> Iterator[CampaignRow]:
-        return (self._row(k) for k in self._kept)
+        return (self._row(i) for i in range(len(self._names)))
 
-    def _find(self, file: str) -> _Kept | None:
-        """The kept tuple of ``file`` (the files are sorted by name), else ``None``."""
-        at = bisect_left(self._kept, file, key=_name_of)
-        return self._kept[at] if at < len(self._kept) and self._kept[at][0] == file else None
+    def _find(self, file: str) -> int | None:
+        """The index of ``file`` (the files are sorted by name), else ``None``."""
+        at = bisect_left(self._names, file)
+        return at if at < len(self._names) and self._names[at] == file else None
 
     def has(self, file: str) -> bool:
         """True when ``file`` is a row of the table."""
@@ -328,20 +346,23 @@ class CampaignTable(Sequence[CampaignRow]):
 
     def row(self, file: str) -> CampaignRow:
         """The row of ``file``. Raises ``KeyError`` when it has none."""
-        kept = self._find(file)
-        if kept is None:
+        at = self._find(file)
+        if at is None:
             raise KeyError(file)
-        return self._row(kept)
+        return self._row(at)
 
     def states(self) -> Iterator[tuple[str, str | None, FileState | None]]:
         """Each file's name, SHA-256 (when known) and what the state keeps of it, without
         building its row."""
-        for kept in self._kept:
-            yield kept[0], kept[7], self._entries.get(kept[0])
+        for at, file in enumerate(self._names):
+            extra = self._extra.get(at)
+            yield file, None if extra is None else extra[3], self._entries.get(file)
 
-    def _row(self, kept: _Kept) -> CampaignRow:
-        file, where, size, mtime_ns, status, problem, reason, sha, read = kept
+    def _row(self, at: int) -> CampaignRow:
+        file = self._names[at]
+        where, problem, reason, sha, read = self._extra.get(at, (None, None, None, None, True))
         path = self._campaign.raw_dir / file if where is None else Path(where)
+        size, mtime_ns = self._huge.get(at) or (self._stats[2 * at], self._stats[2 * at + 1])
         sources: tuple[tuple[str, dict[str, Any]], ...] = ()
         hints: tuple[str, ...] = ()
         test_rows: tuple[ManifestRow, ...] = ()
@@ -351,19 +372,16 @@ class CampaignTable(Sequence[CampaignRow]):
             sources, hints, test_rows, merged = (tuple(meta.sources), tuple(meta.hints),
                                                  meta.test_rows, meta.merged)
         return CampaignRow(
-            file=file, where=str(path) if where is None else where, size=size,
-            mtime_ns=mtime_ns, sources=sources, merged=merged, problem=problem,
-            status=status, reason=reason, sha256=sha, previous=self._entries.get(file),
-            hints=hints, test_rows=test_rows)
+            file=file, where=str(path) if where is None else where,
+            size=size, mtime_ns=mtime_ns, sources=sources,
+            merged=merged, problem=problem, status=_STATUSES[self._status[at]],
+            reason=reason, sha256=sha, previous=self._entries.get(file), hints=hints,
+            test_rows=test_rows)
 
     def not_export_notes(self) -> list[str]:
         """One line per file set aside: ``not an export: skipped: notes.txt (a text …)``."""
         return [f"not an export: skipped: {display_path(f)} ({what})"
                 for f, what in self.not_exports]
-
-
-def _name_of(kept: _Kept) -> str:
-    return kept[0]
 
 
 @dataclass

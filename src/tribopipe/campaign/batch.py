@@ -144,20 +144,21 @@ def _run_locked(campaign: Campaign, *, jobs: int | None, plots: bool | None,
     plots = campaign.plots if plots is None else plots
     ended = _batch(campaign, load_state(campaign), jobs=jobs, plots=plots, progress=progress)
     assert ended is not None  # only a rehearsal ends without a report
-    report = ended.report
+    report, quiet, clean = ended.report, ended.quiet, ended.clean
+    entries = ended.entries if quiet else {}
+    del ended  # a rehearsal reads the state again: the batch's entries are let go first
     # a batch that found nothing to do is kept, for the next one to report again if it
     # finds the campaign as this one did; a batch that did its work cleanly keeps the
     # ledger of its next unchanged re-run, rehearsed, as pending; any other forgets it
     try:
-        if ended.quiet:
-            keep_report(campaign, report, inputs, ended.entries)
+        rerun = _rehearse(campaign) if clean and not quiet else None
+        if quiet:
+            keep_report(campaign, report, inputs, entries)
+        elif rerun is not None:
+            keep_report(campaign, rerun[1].report, rerun[0], rerun[1].entries,
+                        rerun[1].tables)
         else:
-            rerun = _rehearse(campaign) if ended.clean else None
-            if rerun is None:
-                keep_report(campaign, None, None, {})
-            else:
-                keep_report(campaign, rerun[1].report, rerun[0], rerun[1].entries,
-                            rerun[1].tables)
+            keep_report(campaign, None, None, {})
     except OutputError as exc:
         report.output_errors.append(str(exc))
     return report

@@ -27,6 +27,7 @@ from tribopipe.escape import script_json
 from tribopipe.export.explorer import (
     DATA_ELEMENT_ID,
     explorer_data,
+    explorer_files,
     explorer_page,
     read_embedded_data,
     write_explorer,
@@ -545,3 +546,63 @@ def test_a_pin_of_more_groups_than_a_page_is_split_by_whole_pairs(published, tmp
         data = read_embedded_data((pages_folder(index) / href).read_text(encoding="utf-8"))
         assert sorted(discs.split(", ")) == sorted(p["disc"] for p in data["pairs"]
                                                    if p["pin"] == pin)
+
+
+def _undated(files: dict[str, str]) -> dict[str, str]:
+    """The files with the minute each page was made left out (two calls may straddle
+    one)."""
+    return {name: re.sub(r"\d{4}-\d\d-\d\d \d\d:\d\d UTC", "<made>", text)
+            for name, text in files.items()}
+
+
+def test_a_bound_on_files_moves_a_pages_runs_into_it_only_when_needed(published):
+    """A package lists each file of its explorer as a resource, and lists few: with
+    ``max_files`` the explorer of one page keeps its runs beside it while the files fit,
+    and carries them in the page, one file, when they would not: the same files the
+    explorer writes without the bound, or with its runs inline."""
+    _, runs = published
+    beside = explorer_files(runs, "e.html", runs_inline_limit=0)
+    assert len(beside) > 2
+    assert _undated(explorer_files(runs, "e.html", runs_inline_limit=0,
+                                   max_files=len(beside))) == _undated(beside)
+    inline = explorer_files(runs, "e.html", runs_inline_limit=0, max_files=len(beside) - 1)
+    assert list(inline) == ["e.html"]
+    assert _undated(inline) == _undated(explorer_files(runs, "e.html",
+                                                       runs_inline_limit=sys.maxsize))
+
+
+def test_a_bound_on_files_makes_fewer_larger_pages_before_it_is_passed(published):
+    """A split explorer within the bound is what it is without one; one whose runs
+    would not fit beside its pages carries them in its pages; one whose pages alone
+    would not fit gets fewer pages of more groups each, every group and included run on
+    exactly one of them, and never more files than the bound."""
+    from collections import Counter
+
+    from tribopipe.export.explorer import pages_folder
+    from tribopipe.query import name_key
+
+    _, runs = published
+    groups = group_statistics(runs)
+    per_pair = groups.groupby([groups["pin"].map(name_key), groups["disc"].map(name_key)]).size()
+    limit = int(per_pair.max())
+    split = explorer_files(runs, "e.html", groups_page_limit=limit)
+    pages = [n for n in split if n.endswith(".html") and n != "e.html"]
+    assert len(split) > len(pages) + 1 > 2  # runs beside the pages
+    assert _undated(explorer_files(runs, "e.html", groups_page_limit=limit,
+                                   max_files=len(split))) == _undated(split)
+    assert _undated(explorer_files(runs, "e.html", groups_page_limit=limit,
+                                   max_files=len(split) - 1)) == _undated(explorer_files(
+        runs, "e.html", groups_page_limit=limit, runs_beside_pages=False,
+        runs_inline_limit=sys.maxsize))
+    bound = len(pages)  # the pages and their index would be one file too many
+    fewer = explorer_files(runs, "e.html", groups_page_limit=limit, max_files=bound)
+    assert 1 < len(fewer) <= bound
+    folder = pages_folder("e.html").as_posix()
+    datas = [read_embedded_data(text) for name, text in fewer.items()
+             if name.startswith(folder + "/")]
+    assert len(datas) == len(fewer) - 1  # every file a page: the runs are in them
+    assert sum(len(d["groups"]) for d in datas) == len(groups)
+    assert Counter(tuple(p["keys"]) for d in datas for p in d["pairs"]) == Counter(
+        {tuple(k): 1 for k in per_pair.index})
+    assert sorted(r["id"] for d in datas for chunk in d["runs"] for r in chunk) == sorted(
+        runs["measurement_id"])

@@ -39,6 +39,7 @@ import hashlib
 import json
 import math
 import re
+import sys
 from collections.abc import Mapping
 from datetime import UTC, datetime
 from importlib.resources import files
@@ -571,7 +572,7 @@ def explorer_data(
         order.setdefault((_key(pin), _key(disc)), len(order))
     group_keys = list(zip(groups["pin"].map(_key), groups["disc"].map(_key), strict=True))
     codes = np.array([order[k] for k in group_keys], dtype=np.int64)
-    shown = set(points_by(groups, codes, "mu_k")["code"].tolist())
+    shown = shown_pairs(groups, group_keys)
     first_row: dict[int, int] = {}
     for position, c in enumerate(codes.tolist()):
         first_row.setdefault(c, position)
@@ -623,7 +624,7 @@ def explorer_data(
     pair_rows: list[dict[str, Any]] = []
     run_chunks: list[list[dict[str, Any]]] = []
     for key, c in order.items():
-        if c not in shown:  # a pair without a μ_K point (query.pair_points)
+        if key not in shown:  # a pair without a μ_K point (query.pair_points)
             continue
         first = groups.iloc[first_row[c]]
         pair_runs = runs_of.get(c, [])
@@ -936,6 +937,22 @@ def _page_files(data: dict[str, Any], name: str, runs_inline_limit: int) -> dict
     return files
 
 
+def shown_pairs(groups: pd.DataFrame,
+                keys: list[tuple[str, str]] | None = None) -> set[tuple[str, str]]:
+    """The pairs of ``groups`` the explorer shows, as casefolded (pin, disc) names
+    (:func:`_key`; ``keys``: each group's, when the caller has them): those with a μ_K
+    point to interpolate (:func:`tribopipe.query.pair_points`); each is a pair of the page
+    and, where its runs lie beside the page, a file of its own."""
+    import numpy as np
+
+    if keys is None:
+        keys = list(zip(groups["pin"].map(_key), groups["disc"].map(_key), strict=True))
+    index: dict[tuple[str, str], int] = {}
+    codes = np.array([index.setdefault(k, len(index)) for k in keys], dtype=np.int64)
+    named = list(index)
+    return {named[c] for c in points_by(groups, codes, "mu_k")["code"].tolist()}
+
+
 def _pair_key(pins: pd.Series, discs: pd.Series) -> pd.Series:
     """Each row's pair as one text: its casefolded pin and disc names (:func:`_key`)."""
     return pins.map(_key) + "\0" + discs.map(_key)
@@ -986,6 +1003,7 @@ def explorer_files(
     runs_inline_limit: int = RUNS_INLINE_LIMIT,
     groups_page_limit: int = GROUPS_PAGE_LIMIT,
     runs_beside_pages: bool = True,
+    max_files: int | None = None,
 ) -> dict[str, str]:
     """Every file of the explorer of ``runs`` whose page is ``name`` (relative paths →
     text; the page ``name`` last), so that no page grows with the map.
@@ -1000,22 +1018,36 @@ def explorer_files(
     index row per page: :func:`_shards`), each with its runs beside it
     (``runs_beside_pages``; else as
     ``runs_inline_limit`` says); every page interpolates with the whole map's curvature,
-    so each gives what ``query`` gives on the whole map."""
+    so each gives what ``query`` gives on the whole map.
+
+    ``max_files`` (a package lists each file as a resource of its own, and lists few) bounds
+    the number of files, decided before any page is made: pages of more groups each
+    (``groups_page_limit`` doubled until the pages fit), then the runs in the pages
+    instead of beside them."""
     included = runs
     if "excluded" in runs.columns:
         included = runs[~runs["excluded"].fillna(False).astype(bool)]
     if groups is None:
         groups = group_statistics(included, show_method=True)
-    if len(groups) <= groups_page_limit:
-        return _page_files(explorer_data(runs, groups=groups, fits=fits, title=title,
-                                         source=source), name, runs_inline_limit)
+    limit = groups_page_limit
+    while max_files is not None and len(groups) > limit and len(
+            _shards(groups, limit)) >= max_files:
+        limit *= 2  # each page a file: fewer, larger pages
+    if len(groups) <= limit:
+        data = explorer_data(runs, groups=groups, fits=fits, title=title, source=source)
+        if max_files is not None and 1 + len(data["runs"]) > max_files:
+            runs_inline_limit = sys.maxsize
+        return _page_files(data, name, runs_inline_limit)
     if fits is None:
         fits = fit_power_law(runs)
     curvature = {q: map_curvature(groups, q) for q in ("mu_k", "mu_s")}
-    shards = _shards(groups, groups_page_limit)
+    shards = _shards(groups, limit)
     folder = pages_folder(name)
     run_pairs, group_pairs, fit_pairs = (_pair_key(t["pin"], t["disc"])
                                          for t in (included, groups, fits))
+    if max_files is not None and runs_beside_pages and 1 + len(shards) + _files_beside(
+            shards, shown_pairs(groups), run_pairs) > max_files:
+        runs_beside_pages, runs_inline_limit = False, sys.maxsize
     files: dict[str, str] = {}
     rows: list[tuple[str, list[str], int, int, str]] = []
     for k, keys in enumerate(shards, 1):
@@ -1043,6 +1075,20 @@ def explorer_files(
     files[name] = explorer_index(rows, title=title, source=source, n_groups=len(groups),
                                  n_runs=len(included))
     return files
+
+
+def _files_beside(shards: list[list[str]], shown: set[tuple[str, str]],
+                  run_pairs: pd.Series) -> int:
+    """How many files of runs lie beside the pages of ``shards`` (:func:`_shards`) when
+    each page's runs lie beside it: one per shown pair (``shown``: :func:`shown_pairs`) of
+    each page that has runs of its shown pairs (``run_pairs``: each run's
+    :func:`_pair_key`), as :func:`_page_files` writes them."""
+    n = 0
+    for keys in shards:
+        on_page = [k for k in keys if tuple(k.split("\0")) in shown]
+        if on_page and run_pairs.isin(on_page).any():
+            n += len(on_page)
+    return n
 
 
 def explorer_index(pins: list[tuple[str, list[str], int, int, str]], *, title: str,

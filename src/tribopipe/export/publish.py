@@ -34,7 +34,6 @@ import math
 import os
 import re
 import shutil
-import sys
 import tempfile
 from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass
@@ -121,7 +120,8 @@ if TYPE_CHECKING:
 #: the explorer page's name in a package
 EXPLORER = "explorer.html"
 #: the most files of the explorer a package lists (each a resource; a package lists at
-#: most 64): beyond, the runs travel in the pages
+#: most 64): beyond, its pages carry more groups each, and then the runs travel in
+#: the pages (:func:`~tribopipe.export.explorer.explorer_files` ``max_files``)
 EXPLORER_FILES_LIMIT = 40
 
 
@@ -555,15 +555,10 @@ def build_package(rows: list[pd.DataFrame], groups: pd.DataFrame, publisher: Pub
     shown = explorer_runs(runs)
     del runs  # the page is written from the runs it shows
     return_free_memory()
+    # each file is a resource of its own (a package lists at most 64)
     page_files = explorer_files(shown, EXPLORER, groups=groups, fits=fits,
-                                title=publisher.package_title, source=publisher.lab)
-    if len(page_files) > EXPLORER_FILES_LIMIT:
-        # each file is a resource of its own (a package lists at most 64): the runs go
-        # into the pages instead
-        del page_files
-        page_files = explorer_files(shown, EXPLORER, groups=groups, fits=fits,
-                                    title=publisher.package_title, source=publisher.lab,
-                                    runs_inline_limit=sys.maxsize, runs_beside_pages=False)
+                                title=publisher.package_title, source=publisher.lab,
+                                max_files=EXPLORER_FILES_LIMIT)
     del shown
     for path, text in page_files.items():
         (folder / path).parent.mkdir(parents=True, exist_ok=True)

@@ -19,7 +19,7 @@ import filecmp
 import hashlib
 import os
 import stat
-from collections.abc import Iterator, Mapping
+from collections.abc import Iterable, Iterator, Mapping
 from contextlib import contextmanager, suppress
 from pathlib import Path
 from typing import Any, TextIO
@@ -97,16 +97,23 @@ def write_text_atomic(
     return Path(target)
 
 
-def write_page_and_files(page: str | os.PathLike[str], files: Mapping[str, str]) -> Path:
+def write_page_and_files(page: str | os.PathLike[str],
+                         files: Mapping[str, str] | Iterable[tuple[str, str]]) -> Path:
     """Write a page with the files beside it: ``files`` maps names relative to the page's
-    folder to UTF-8 text and holds the page under its own name; each file is written
-    atomically (:func:`write_text_atomic`), the page last, so a page is never there before
-    what it loads. Returns the page's path."""
+    folder to UTF-8 text (a mapping, or (name, text) pairs written as they come, so that
+    no more than one is held at a time) and holds the page under its own name; each file
+    is written atomically (:func:`write_text_atomic`), the page last, so a page is never
+    there before what it loads. Returns the page's path."""
     out = Path(page)
-    for name, text in files.items():
-        if name != out.name:
+    text_of_page = None
+    for name, text in (files.items() if isinstance(files, Mapping) else files):
+        if name == out.name:
+            text_of_page = text
+        else:
             write_text_atomic(out.parent / name, text)
-    return write_text_atomic(out, files[out.name])
+    if text_of_page is None:
+        raise ValueError(f"no page {out.name!r} among the files to write")
+    return write_text_atomic(out, text_of_page)
 
 
 def write_bytes_atomic(target: str | os.PathLike[str], data: bytes) -> Path:

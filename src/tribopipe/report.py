@@ -36,8 +36,8 @@ from __future__ import annotations
 import base64
 import io
 import math
-from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field, replace
+from collections.abc import Iterator, Mapping, Sequence
+from dataclasses import dataclass, replace
 from datetime import UTC, datetime
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -83,8 +83,9 @@ RUNS_INLINE_LIMIT = 5_000
 #: a report embeds the plots of a map of up to this many pairs (a PNG of 60–80 kB each,
 #: drawn in about 0.2 s); the explorer draws any pair's plot of a larger map
 PAIR_PLOTS_LIMIT = 50
-#: what a report's files beside its page are named in its runs folder: ``report-<k>.js``
-RUNS_FILE = "report-{k}.js"
+#: what a report's files beside its page are named in its runs folder: ``report-<k>.js``,
+#: the condition groups, fits and runs of its k-th pair
+PAIR_FILE = "report-{k}.js"
 #: default titles of the two kinds of report
 CAMPAIGN_TITLE = "tribopipe campaign report"
 MAP_TITLE = "tribopipe friction-map report"
@@ -110,12 +111,18 @@ details.run{border:1px solid #d0d7de;border-radius:4px;margin:.4em 0;padding:.3e
 details.run summary{cursor:pointer}details.run div:target{outline:3px solid #0969da}
 details.runs{margin:.3em 0}details.runs>summary{cursor:pointer}
 """
+#: the style a report whose pairs lie beside its page adds: each pair a collapsible block
+#: whose wide tables scroll within it; a text cell breaks a long word (a file's path)
+#: rather than widen the page
+_PAIRS_CSS = (
+    "details.pair{margin:.3em 0}details.pair>summary{cursor:pointer}"
+    "td.t{overflow-wrap:anywhere}"
+    ".pair-body{overflow-x:auto}#pair-filter{width:16em;max-width:100%}"
+)
 
-#: opens the run a link points to, for browsers that do not expand <details> themselves;
-#: where the runs lie beside the page (``data-runs-beside`` on the runs section), loads a
-#: pair's file (``report-<k>.js``, which calls ``tribopipeReportRuns``) when its runs are
-#: opened or a link (``data-runs="<k>"``) to one of them is followed, and puts the
-#: file's rows in place (markup the library made and escaped, parsed inert in a template)
+#: the script of a one-page report: opens the run a link points to, for browsers that do
+#: not expand <details> themselves (its branch for runs beside the page, ``data-runs-beside``,
+#: finds nothing there: a report with files beside its page carries :data:`_PAIRS_JS`)
 _OPEN_TARGET_JS = (
     "var S=document.getElementById('runs'),B=S&&S.getAttribute('data-runs-beside'),W={};"
     "function L(k,f){var d=document.getElementById('runs-'+k);if(!d)return;"
@@ -138,6 +145,44 @@ _OPEN_TARGET_JS = (
     "+CSS.escape(i)+'\"]');if(a){var k=a.getAttribute('data-runs');"
     "document.getElementById('runs-'+k).open=true;L(k,o);}return;}"
     "if(e){var d=e.closest('details');while(d){d.open=true;"
+    "d=d.parentElement&&d.parentElement.closest('details');}e.scrollIntoView();}}"
+    "window.addEventListener('hashchange',o);o();"
+)
+
+#: the script of a report whose pairs lie beside its page (``data-pairs-beside`` on the
+#: list of pairs): loads a pair's file (``report-<k>.js``, which calls
+#: ``tribopipeReportPair``) when the pair is opened or a link (``data-pair="<k>"``) to one
+#: of its runs is followed, and puts the file's tables and runs in place (markup the
+#: library made and escaped, parsed inert in a template); opens the run a link points to;
+#: shows only the pairs whose pin or disc holds what is typed in the pair filter
+_PAIRS_JS = (
+    "var S=document.getElementById('groups'),B=S.getAttribute('data-pairs-beside'),W={},"
+    "N=document.querySelectorAll('details.pair').length;"
+    "function L(k,f){var d=document.getElementById('pair-'+k);if(!d)return;"
+    "if(d.hasAttribute('data-loaded')){if(f)f();return;}if(f)W[k]=f;"
+    "if(document.getElementById('pair-load-'+k))return;"
+    "var b=d.querySelector('.pair-body'),s=document.createElement('script');"
+    "b.textContent='loading…';s.id='pair-load-'+k;s.src=B+'/report-'+k+'.js';"
+    "s.onerror=function(){b.textContent='the groups, fits and runs of this pair are not "
+    "beside the report ('+B+'/report-'+k+'.js)';};document.head.appendChild(s);}"
+    "window.tribopipeReportPair=function(k,h){var d=document.getElementById('pair-'+k);"
+    "if(!d||d.hasAttribute('data-loaded'))return;var t=document.createElement('template');"
+    "t.innerHTML=h;d.querySelector('.pair-body').replaceChildren(t.content);"
+    "d.setAttribute('data-loaded','');var f=W[k];delete W[k];if(f)f();};"
+    "document.addEventListener('toggle',function(ev){var d=ev.target;"
+    "if(d.classList&&d.classList.contains('pair')&&d.open)L(d.id.slice(5));},true);"
+    "var F=document.getElementById('pair-filter');F.addEventListener('input',function(){"
+    "var q=F.value.trim().toLowerCase(),n=0;"
+    "document.querySelectorAll('details.pair').forEach(function(d){"
+    "var m=!q||d.firstElementChild.textContent.toLowerCase().indexOf(q)>=0;d.hidden=!m;"
+    "if(m)n++;});document.getElementById('pair-count').textContent=q?n+' of '+N+' pairs':"
+    "N+' pairs';});"
+    "function o(){var i=decodeURIComponent(location.hash.slice(1)),"
+    "e=i&&document.getElementById(i);"
+    "if(!e&&i.indexOf('run-')===0){var a=document.querySelector('a[data-pair][href=\"#'"
+    "+CSS.escape(i)+'\"]');if(a){var k=a.getAttribute('data-pair'),"
+    "d=document.getElementById('pair-'+k);d.hidden=false;d.open=true;L(k,o);}return;}"
+    "if(e){var d=e.closest('details');while(d){d.hidden=false;d.open=true;"
     "d=d.parentElement&&d.parentElement.closest('details');}e.scrollIntoView();}}"
     "window.addEventListener('hashchange',o);o();"
 )
@@ -176,18 +221,32 @@ class ReportInputs:
 
 
 @dataclass(frozen=True)
+class _Pairs:
+    """The pairs of a report whose pairs lie beside its page, in its order: ``names``
+    (pin, disc) as the map spells them, ``of`` the index of each (its file
+    ``report-<k>.js``), and by index the positions of its rows in the report's ordered
+    runs (``runs``), in the group table (``groups``) and in the fit table (``fits``)."""
+
+    names: tuple[tuple[str, str], ...]
+    of: Mapping[tuple[str, str], int]
+    runs: Mapping[int, Any]
+    groups: Mapping[int, Any]
+    fits: Mapping[int, Any]
+
+
+@dataclass(frozen=True)
 class _Layout:
-    """Where a report's parts travel: ``runs_beside`` the folder (relative to the page)
-    holding its runs, one file per pair (``None``: in the page), ``pair_of`` the index of
-    each pair's file there (by pin and disc, as the map spells them: a run link finds its
-    file by the pair its run belongs to), ``explorer`` the embedded explorer's data
+    """Where a report's parts travel: ``pairs_beside`` the folder (relative to the page)
+    holding each pair's condition groups, fits and runs, one file per pair (``None``: the
+    tables and runs in the page), ``pairs`` the pairs those files hold (a run link finds
+    its file by the pair its run belongs to), ``explorer`` the embedded explorer's data
     (``None`` where the explorer lies beside the page, at ``explorer_page``),
     ``pair_plots`` whether the page embeds the pairs' plots (which the group table
     links), ``tables_beside`` the folder holding the group and fit tables' CSV downloads
     (``None``: in the page)."""
 
-    runs_beside: str | None = None
-    pair_of: Mapping[tuple[str, str], int] = field(default_factory=dict)
+    pairs_beside: str | None = None
+    pairs: _Pairs | None = None
     explorer: dict[str, Any] | None = None
     explorer_page: str | None = None
     pair_plots: bool = True
@@ -269,8 +328,8 @@ def run_anchor(measurement_id: str) -> str:
 def _run_link(mid: str, pin: Any, disc: Any, layout: _Layout) -> str:
     """A link to a run's section (its id's first 8 characters), with the index of its
     pair's file (the run's ``pin`` on ``disc``) where the runs lie beside the page."""
-    chunk = layout.pair_of.get((str(pin), str(disc)))
-    data = "" if chunk is None else f' data-runs="{chunk}"'
+    chunk = None if layout.pairs is None else layout.pairs.of.get((str(pin), str(disc)))
+    data = "" if chunk is None else f' data-pair="{chunk}"'
     return f'<a href="#{run_anchor(mid)}"{data}>{html_text(mid[:8])}</a>'
 
 
@@ -356,54 +415,89 @@ def _summary(inp: ReportInputs, layout: _Layout) -> str:
     )
 
 
-def _group_table(inp: ReportInputs, layout: _Layout) -> str:
-    """The group-table section; each group links to its pair plot and runs (and to the
-    overlay of its repeats where their range exceeds r). The μ_S columns are left out when
-    no group has a μ_S."""
-    with_mu_s = bool(len(inp.groups)) and bool((inp.groups["mu_s_n"] > 0).any())
-    overlaid = set(_overlay_groups(inp))
-    head = (
+@dataclass(frozen=True)
+class _GroupCells:
+    """What every row of the group table needs from the whole table: whether it shows
+    μ_S (some group has one), the groups whose repeats are overlaid (their anchors), and
+    each group's standard uncertainty of μ_K and μ_S (by row position; the map's pooled
+    repeatability enters them, so they are computed once over every group)."""
+
+    with_mu_s: bool
+    overlaid: frozenset[str]
+    u_k: Any
+    u_s: Any
+
+
+#: the group table's columns a row reads
+_GROUP_COLUMNS = (
+    "pin", "disc", "normal_force_N", "pressure_kPa", "temperature_C", "mu_k_n", "mu_k_mean",
+    "mu_k_std", "mu_k_ci95_low", "mu_k_ci95_high", "mu_k_min", "mu_k_max", "mu_k_cv",
+    "mu_s_n", "mu_s_mean", "range_exceeds_r", "qc_flagged", "reviewed", "run_ids")
+
+
+def _group_cells(inp: ReportInputs) -> _GroupCells:
+    """:class:`_GroupCells` of the report's group table."""
+    u_k, _ = group_u(inp.groups, "mu_k")
+    u_s, _ = group_u(inp.groups, "mu_s")
+    return _GroupCells(
+        with_mu_s=bool(len(inp.groups)) and bool((inp.groups["mu_s_n"] > 0).any()),
+        overlaid=frozenset(_overlay_groups(inp)), u_k=u_k.to_numpy(), u_s=u_s.to_numpy())
+
+
+def _group_records(groups: pd.DataFrame) -> list[dict[str, Any]]:
+    """The rows of (part of) the group table as dicts of the columns a row reads."""
+    present = [c for c in _GROUP_COLUMNS if c in groups.columns]
+    return groups[present].to_dict(orient="records", into=dict)
+
+
+def _group_head(with_mu_s: bool) -> str:
+    """The group table's head row."""
+    return (
         "<tr><th class=t>pin</th><th class=t>disc</th><th>F [N]</th><th>p [kPa]</th>"
         "<th>T [°C]</th><th>n</th><th>μ_K ± U (k = 2)</th><th>μ_K SD</th>"
         "<th>μ_K 95 % CI of the repeats</th><th>μ_K min–max</th><th>μ_K CV</th>"
         + ("<th>μ_S n</th><th>μ_S ± U (k = 2)</th>" if with_mu_s else "")
         + "<th class=t>QC</th><th class=t>runs</th></tr>"
     )
-    rows = []
-    u_k, _ = group_u(inp.groups, "mu_k")
-    u_s, _ = group_u(inp.groups, "mu_s")
-    for i, g in enumerate(inp.groups.to_dict(orient="records", into=dict)):
-        ids = run_ids_of(g.get("run_ids"))
-        links = " ".join(_run_link(i, g["pin"], g["disc"], layout) for i in ids)
-        qc = []
-        if g.get("range_exceeds_r"):
-            anchor = group_anchor(g)
-            qc.append(f'<a href="#{anchor}">range &gt; r</a>' if anchor in overlaid
-                      else "range &gt; r")
-        if g.get("qc_flagged"):
-            qc.append("flagged run")
-        if g.get("reviewed"):
-            qc.append(f"{int(g['reviewed'])} reviewed")
-        ci = _interval(g["mu_k_ci95_low"], g["mu_k_ci95_high"])
-        pair = (f'<a href="#{pair_anchor(str(g["pin"]), str(g["disc"]))}">{_name(g["disc"])}</a>'
-                if layout.pair_plots else _name(g["disc"]))
-        cls = ' class="flag"' if qc else ""
-        rows.append(
-            f"<tr{cls}><td class=t>{_name(g['pin'])}</td><td class=t>{pair}</td>"
-            f"<td>{_num(g['normal_force_N'], 'g')}</td><td>{_num(g['pressure_kPa'], '.4g')}</td>"
-            f"<td>{_num(g['temperature_C'], 'g')}</td><td>{g['mu_k_n']}</td>"
-            f"<td>{_group_value(g['mu_k_mean'], u_k.iloc[i], g['mu_k_n'])}</td>"
-            f"<td>{_num(g['mu_k_std'], '.3f')}</td><td>{ci}</td>"
-            f"<td>{_span(g['mu_k_min'], g['mu_k_max'])}</td>"
-            f"<td>{_num(g['mu_k_cv'], '.3f')}</td>"
-            + (f"<td>{g['mu_s_n']}</td>"
-               f"<td>{_group_value(g['mu_s_mean'], u_s.iloc[i], g['mu_s_n'])}</td>"
-               if with_mu_s else "")
-            + f"<td class=t>{', '.join(qc)}</td>"
-            f"<td class=t>{links}</td></tr>"
-        )
+
+
+def _group_row(i: int, g: Mapping[str, Any], cells: _GroupCells, layout: _Layout) -> str:
+    """The row of the group at position ``i`` of the group table: its figures, its QC
+    (linking the overlay of its repeats where there is one) and links to its runs."""
+    ids = run_ids_of(g.get("run_ids"))
+    links = " ".join(_run_link(i, g["pin"], g["disc"], layout) for i in ids)
+    qc = []
+    if g.get("range_exceeds_r"):
+        anchor = group_anchor(g)
+        qc.append(f'<a href="#{anchor}">range &gt; r</a>' if anchor in cells.overlaid
+                  else "range &gt; r")
+    if g.get("qc_flagged"):
+        qc.append("flagged run")
+    if g.get("reviewed"):
+        qc.append(f"{int(g['reviewed'])} reviewed")
+    ci = _interval(g["mu_k_ci95_low"], g["mu_k_ci95_high"])
+    pair = (f'<a href="#{pair_anchor(str(g["pin"]), str(g["disc"]))}">{_name(g["disc"])}</a>'
+            if layout.pair_plots else _name(g["disc"]))
+    cls = ' class="flag"' if qc else ""
     return (
-        '<section id="groups"><h2>Condition groups</h2>'
+        f"<tr{cls}><td class=t>{_name(g['pin'])}</td><td class=t>{pair}</td>"
+        f"<td>{_num(g['normal_force_N'], 'g')}</td><td>{_num(g['pressure_kPa'], '.4g')}</td>"
+        f"<td>{_num(g['temperature_C'], 'g')}</td><td>{g['mu_k_n']}</td>"
+        f"<td>{_group_value(g['mu_k_mean'], cells.u_k[i], g['mu_k_n'])}</td>"
+        f"<td>{_num(g['mu_k_std'], '.3f')}</td><td>{ci}</td>"
+        f"<td>{_span(g['mu_k_min'], g['mu_k_max'])}</td>"
+        f"<td>{_num(g['mu_k_cv'], '.3f')}</td>"
+        + (f"<td>{g['mu_s_n']}</td>"
+           f"<td>{_group_value(g['mu_s_mean'], cells.u_s[i], g['mu_s_n'])}</td>"
+           if cells.with_mu_s else "")
+        + f"<td class=t>{', '.join(qc)}</td>"
+        f"<td class=t>{links}</td></tr>"
+    )
+
+
+def _group_note(inp: ReportInputs, with_mu_s: bool) -> str:
+    """What the group table shows, above it."""
+    return (
         "<p class=muted>One row per pair, nominal force and temperature; statistics over "
         "the repeats (excluded runs left out). ± U (k = 2): the expanded combined uncertainty "
         "of the group mean, from the runs' own budgets beside the repeat scatter (the repeat "
@@ -415,36 +509,69 @@ def _group_table(inp: ReportInputs, layout: _Layout) -> str:
         "run with QC flags. Run ids link to the "
         "runs" + ("" if inp.map_report else " and their trace plots") + "."
         + ("" if with_mu_s else " The map holds no μ_S, so its columns are left out.")
-        + "</p>" + _csv_link(inp.groups, "groups.csv", "group-csv", layout)
-        + f"<table id=group-table><thead>{head}</thead><tbody>{''.join(rows)}</tbody></table>"
-        "</section>"
+        + "</p>"
+    )
+
+
+def _group_table(inp: ReportInputs, layout: _Layout) -> str:
+    """The group-table section; each group links to its pair plot and runs (and to the
+    overlay of its repeats where their range exceeds r). The μ_S columns are left out when
+    no group has a μ_S. Where the report's pairs lie beside the page, the list of its
+    pairs instead (:func:`_pairs_list`)."""
+    cells = _group_cells(inp)
+    if layout.pairs_beside is not None:
+        return _pairs_list(inp, layout, cells)
+    rows = [_group_row(i, g, cells, layout) for i, g in enumerate(_group_records(inp.groups))]
+    return (
+        '<section id="groups"><h2>Condition groups</h2>'
+        + _group_note(inp, cells.with_mu_s)
+        + _csv_link(inp.groups, "groups.csv", "group-csv", layout)
+        + f"<table id=group-table><thead>{_group_head(cells.with_mu_s)}</thead>"
+        f"<tbody>{''.join(rows)}</tbody></table></section>"
+    )
+
+
+#: the fit table's head row
+_FIT_HEAD = (
+    "<tr><th class=t>pin</th><th class=t>disc</th><th>T [°C]</th><th>k</th>"
+    "<th>k 95 % CI</th><th>n−1</th><th>n−1 95 % CI</th><th>R²</th><th>runs</th>"
+    "<th class=t>note</th></tr>"
+)
+
+#: what the fit table shows, above it
+_FIT_NOTE = (
+    "<p class=muted>Least squares in log–log space on the individual runs, p in kPa "
+    "(k is μ_K at 1 kPa); 95 % intervals from the t-distribution. Hertz-type contact "
+    "of an elastomer gives n−1 ≈ −1/3.</p>")
+
+
+def _fit_row(f: Mapping[Any, Any]) -> str:
+    """One power-law fit as a row of the fit table."""
+    return (
+        f"<tr><td class=t>{_name(f['pin'])}</td><td class=t>{_name(f['disc'])}</td>"
+        f"<td>{_num(f['temperature_C'], 'g')}</td><td>{_num(f['k'], '.3f')}</td>"
+        f"<td>{_interval(f['k_ci95_low'], f['k_ci95_high'])}</td>"
+        f"<td>{_num(f['exponent'], '.3f')}</td>"
+        f"<td>{_interval(f['exponent_ci95_low'], f['exponent_ci95_high'])}</td>"
+        f"<td>{_num(f['r_squared'], '.3f')}</td><td>{f['n_points']}</td>"
+        f"<td class=t>{_e(f['note'])}</td></tr>"
     )
 
 
 def _fits_table(inp: ReportInputs, layout: _Layout) -> str:
-    """The power-law fit section."""
-    head = (
-        "<tr><th class=t>pin</th><th class=t>disc</th><th>T [°C]</th><th>k</th>"
-        "<th>k 95 % CI</th><th>n−1</th><th>n−1 95 % CI</th><th>R²</th><th>runs</th>"
-        "<th class=t>note</th></tr>"
-    )
-    rows = []
-    for f in inp.fits.to_dict(orient="records"):
-        rows.append(
-            f"<tr><td class=t>{_name(f['pin'])}</td><td class=t>{_name(f['disc'])}</td>"
-            f"<td>{_num(f['temperature_C'], 'g')}</td><td>{_num(f['k'], '.3f')}</td>"
-            f"<td>{_interval(f['k_ci95_low'], f['k_ci95_high'])}</td>"
-            f"<td>{_num(f['exponent'], '.3f')}</td>"
-            f"<td>{_interval(f['exponent_ci95_low'], f['exponent_ci95_high'])}</td>"
-            f"<td>{_num(f['r_squared'], '.3f')}</td><td>{f['n_points']}</td>"
-            f"<td class=t>{_e(f['note'])}</td></tr>"
-        )
+    """The power-law fit section; where the report's pairs lie beside the page, each
+    pair's fits are in its block of the list of pairs and this section says so."""
+    head = '<section id="fits"><h2>Pressure dependence: μ_K = k·p<sup>n−1</sup></h2>'
+    link = _csv_link(inp.fits, "fits.csv", "fit-csv", layout)
+    if layout.pairs_beside is not None:
+        return (head + _FIT_NOTE + link
+                + f"<p>The map's {len(inp.fits)} fits are listed per pair: each pair's "
+                "fits load with its condition groups and runs when it is opened in "
+                '<a href="#groups">the list of pairs</a>.</p></section>')
+    rows = [_fit_row(f) for f in inp.fits.to_dict(orient="records")]
     return (
-        '<section id="fits"><h2>Pressure dependence: μ_K = k·p<sup>n−1</sup></h2>'
-        "<p class=muted>Least squares in log–log space on the individual runs, p in kPa "
-        "(k is μ_K at 1 kPa); 95 % intervals from the t-distribution. Hertz-type contact "
-        "of an elastomer gives n−1 ≈ −1/3.</p>" + _csv_link(inp.fits, "fits.csv", "fit-csv", layout)
-        + f"<table id=fit-table><thead>{head}</thead><tbody>{''.join(rows)}</tbody></table>"
+        head + _FIT_NOTE + link
+        + f"<table id=fit-table><thead>{_FIT_HEAD}</thead><tbody>{''.join(rows)}</tbody></table>"
         "</section>"
     )
 
@@ -667,15 +794,15 @@ def _runs_table(rows: Sequence[str], with_mu_s: bool, with_test: bool,
     )
 
 
-def _listed(inp: ReportInputs, runs: pd.DataFrame, element: str,
+def _listed(inp: ReportInputs, runs: pd.DataFrame | Sequence[MapRow], element: str,
             columns: tuple[bool, bool]) -> str:
-    """``runs`` as the report lists them (their trace blocks, then the table of the runs
-    without a trace) with the runs' table's ``columns`` (:func:`_run_columns` of every
-    run, computed once per report, not once per pair)."""
+    """``runs`` (a map frame, or its rows) as the report lists them (their trace blocks,
+    then the table of the runs without a trace) with the runs' table's ``columns``
+    (:func:`_run_columns` of every run, computed once per report, not once per pair)."""
     traces = inp.trace_paths or {}
     with_mu_s, with_test = columns
     blocks, plain = [], []
-    for r in frame_rows(runs):
+    for r in (runs if isinstance(runs, Sequence) else frame_rows(runs)):
         if r.measurement_id in traces:
             blocks.append(_trace_block(r, traces[r.measurement_id]))
         else:
@@ -690,52 +817,146 @@ def _listed(inp: ReportInputs, runs: pd.DataFrame, element: str,
     return html
 
 
-def _pair_chunks(inp: ReportInputs) -> list[tuple[str, str, pd.DataFrame]]:
-    """The runs in the report's order, one chunk per pair (pin, disc, its runs): the
-    files of a report whose runs lie beside it."""
+def _pair_index(inp: ReportInputs) -> _Pairs:
+    """The report's pairs in its order (the runs' order: pin, then disc), any pair that
+    only the groups or fits name after them, with each one's runs, groups and fits."""
     ordered = _ordered_runs(inp)
-    return [(str(pin), str(disc), part) for (pin, disc), part in
-            ordered.groupby(["pin", "disc"], sort=False)]
+    of: dict[tuple[str, str], int] = {}
+
+    def positions(table: pd.DataFrame) -> dict[int, Any]:
+        """Each pair's rows of ``table`` (positions), pairs numbered as first met."""
+        if not len(table):
+            return {}
+        found = table.groupby([table["pin"].astype(str), table["disc"].astype(str)],
+                              sort=False).indices
+        out = {}
+        for key, at in sorted(found.items(), key=lambda item: int(item[1][0])):
+            names: tuple[Any, Any] = key  # type: ignore[assignment]
+            out[of.setdefault((str(names[0]), str(names[1])), len(of))] = at
+        return out
+
+    runs_at, groups_at, fits_at = (positions(t) for t in (ordered, inp.groups, inp.fits))
+    return _Pairs(names=tuple(of), of=of, runs=runs_at, groups=groups_at, fits=fits_at)
+
+
+def _counted(n: int, word: str) -> str:
+    """``n word`` with the word's plural ``s`` where n is not 1."""
+    return f"{n} {word}{'' if n == 1 else 's'}"
+
+
+def _pairs_list(inp: ReportInputs, layout: _Layout, cells: _GroupCells) -> str:
+    """The list of a report's pairs whose groups, fits and runs lie beside the page: one
+    collapsible block per pair (its names and counts) that loads its file when opened, a
+    filter by pin or disc name, and the group table's CSV download."""
+    pairs = layout.pairs
+    assert pairs is not None and layout.pairs_beside is not None
+    folder = html_text(layout.pairs_beside)
+    blocks = [
+        f'<details class="pair" id="pair-{k}"><summary>{_e(pin)} on {_e(disc)}: '
+        f"{_counted(len(pairs.groups.get(k, ())), 'group')}, "
+        f"{_counted(len(pairs.fits.get(k, ())), 'fit')}, "
+        f"{_counted(len(pairs.runs.get(k, ())), 'run')}</summary>"
+        '<div class="pair-body"></div></details>'
+        for k, (pin, disc) in enumerate(pairs.names)]
+    return (
+        f'<section id="groups" data-pairs-beside="{folder}">'
+        "<h2>Condition groups, fits and runs, per pair</h2>"
+        + _group_note(inp, cells.with_mu_s)
+        + f"<p>This map's {_counted(len(inp.groups), 'condition group')}, "
+        f"{_counted(len(inp.fits), 'fit')} and {_counted(len(inp.runs), 'run')} are more "
+        "than one page carries: each pair's lie beside this page, in "
+        f"<code>{folder}/</code>, and load when the pair is opened or when a link to one "
+        "of its runs is followed.</p>"
+        + _csv_link(inp.groups, "groups.csv", "group-csv", layout)
+        + '<p><label>Find a pair: <input id="pair-filter" type="search" '
+        'placeholder="pin or disc" autocomplete="off"></label> '
+        f'<span id="pair-count">{_counted(len(pairs.names), "pair")}</span></p>'
+        f'<div id="pair-list">{"".join(blocks)}</div></section>'
+    )
+
+
+#: how many rows of a table :func:`_rows_by_pair` turns into Python objects at a time
+_ROWS_BLOCK = 2_000
+
+
+def _rows_by_pair(table: pd.DataFrame, at: Mapping[int, Any], n_pairs: int,
+                  convert: Any) -> Iterator[list[tuple[int, Any]]]:
+    """For each pair 0 … ``n_pairs`` − 1 in turn, its rows of ``table`` (positions ``at``
+    by pair) as (position, ``convert``-ed row): ``convert`` turns a frame of rows into
+    a list, called on :data:`_ROWS_BLOCK` rows at a time (in pairs' order), so that
+    neither a frame per pair nor the whole table's Python objects are ever made."""
+    import itertools
+
+    import numpy as np
+
+    none = np.empty(0, dtype=np.intp)
+    order = [at.get(k, none) for k in range(n_pairs)]
+    flat = np.concatenate(order) if order else none
+
+    def items() -> Iterator[tuple[int, Any]]:
+        for start in range(0, len(flat), _ROWS_BLOCK):
+            block = flat[start:start + _ROWS_BLOCK]
+            yield from zip((int(i) for i in block), convert(table.take(block)), strict=True)
+
+    stream = items()
+    for positions in order:
+        yield list(itertools.islice(stream, len(positions)))
+
+
+def _pair_html(inp: ReportInputs, groups: Sequence[tuple[int, Mapping[Any, Any]]],
+               fits: Sequence[tuple[int, Mapping[Any, Any]]], runs: Sequence[MapRow],
+               cells: _GroupCells, columns: tuple[bool, bool], layout: _Layout) -> str:
+    """The markup of a pair's file: its ``groups`` (rows of the group table with their
+    positions), its ``fits`` and its ``runs`` as the report lists them (markup made and
+    escaped here, as in a page)."""
+    group_rows = [_group_row(i, g, cells, layout) for i, g in groups]
+    fit_rows = [_fit_row(f) for _, f in fits]
+    html = f"<h3>Condition groups ({len(group_rows)})</h3>" + (
+        f"<table class=group-table><thead>{_group_head(cells.with_mu_s)}</thead>"
+        f"<tbody>{''.join(group_rows)}</tbody></table>" if group_rows else
+        "<p class=muted>No condition group: every run of this pair is excluded.</p>")
+    html += f"<h3>Fits ({len(fit_rows)})</h3>" + (
+        f"<table class=fit-table><thead>{_FIT_HEAD}</thead><tbody>{''.join(fit_rows)}"
+        "</tbody></table>" if fit_rows else "<p class=muted>No power-law fit.</p>")
+    html += f"<h3>Runs ({len(runs)})</h3>" + (
+        _listed(inp, runs, "class=runs-table", columns) if runs else
+        "<p class=muted>No run.</p>")
+    return html
+
+
+def pair_files(inp: ReportInputs, layout: _Layout) -> Iterator[tuple[str, str]]:
+    """The file of each pair (:data:`PAIR_FILE` → text) of a report whose pairs lie beside
+    it, made one at a time, each table read in blocks in the pairs' order
+    (:func:`_rows_by_pair`): each hands the pair's group rows, fits and runs
+    (:func:`_pair_html`; JSON escaped by :func:`tribopipe.escape.script_json`) to
+    ``window.tribopipeReportPair``."""
+    pairs = layout.pairs
+    assert pairs is not None
+    n = len(pairs.names)
+    cells = _group_cells(inp)
+    columns = _run_columns(inp)
+    by_pair = zip(
+        _rows_by_pair(inp.groups, pairs.groups, n, _group_records),
+        _rows_by_pair(inp.fits, pairs.fits, n, lambda t: t.to_dict(orient="records")),
+        _rows_by_pair(_ordered_runs(inp), pairs.runs, n, frame_rows), strict=True)
+    for k, (groups, fits, runs) in enumerate(by_pair):
+        html = _pair_html(inp, groups, fits, [r for _, r in runs], cells, columns, layout)
+        yield PAIR_FILE.format(k=k), f"window.tribopipeReportPair({k}, {script_json(html)});\n"
 
 
 def _runs(inp: ReportInputs, layout: _Layout) -> str:
     """Every run: a collapsible block with its embedded trace plot where its trace was
-    found, the others (imported rows, lost traces) as rows of one table; where the runs
-    lie beside the page, one collapsible block per pair whose runs load when opened."""
+    found, the others (imported rows, lost traces) as rows of one table; where the pairs
+    lie beside the page, each pair's runs are in its block of the list of pairs."""
     traces = inp.trace_paths or {}
     with_traces = int(inp.runs["measurement_id"].astype(str).isin(traces).sum())
     head = f"<h2>Runs ({len(inp.runs)}; {with_traces} with trace plots)</h2>"
-    if layout.runs_beside is None:
+    if layout.pairs_beside is None:
         html = _listed(inp, _ordered_runs(inp), "id=runs-table", _run_columns(inp))
         return f'<section id="runs">{head}{html}</section>'
-    pairs_ = []
-    for k, (pin, disc, part) in enumerate(_pair_chunks(inp)):
-        pairs_.append(
-            f'<details class="runs" id="runs-{k}" data-runs="{k}"><summary>{_e(pin)} on '
-            f"{_e(disc)}: {len(part)} run{'s' if len(part) != 1 else ''}</summary>"
-            '<div class="runs-body"><p class=muted>loading…</p></div></details>')
     return (
-        f'<section id="runs" data-runs-beside="{html_text(layout.runs_beside)}">{head}'
-        f"<p class=muted>{len(inp.runs)} runs are more than a report carries "
-        f"({RUNS_INLINE_LIMIT}): each pair's runs lie beside this page, in "
-        f"<code>{html_text(layout.runs_beside)}/</code>, and load when opened or when a "
-        "link to one of them is followed.</p>" + "".join(pairs_) + "</section>"
-    )
-
-
-def runs_chunk_files(inp: ReportInputs) -> tuple[dict[str, str], dict[tuple[str, str], int]]:
-    """The runs of each pair as a script file (:data:`RUNS_FILE` → text) for a report
-    whose runs lie beside it, and the index of each pair's file (by pin and disc). Each
-    file hands the pair's listing (markup made and escaped here, as in a page; JSON
-    escaped by :func:`tribopipe.escape.script_json`) to ``window.tribopipeReportRuns``."""
-    files: dict[str, str] = {}
-    pair_of: dict[tuple[str, str], int] = {}
-    columns = _run_columns(inp)
-    for k, (pin, disc, part) in enumerate(_pair_chunks(inp)):
-        html = _listed(inp, part, "class=runs-table", columns)
-        files[RUNS_FILE.format(k=k)] = f"window.tribopipeReportRuns({k}, {script_json(html)});\n"
-        pair_of[(pin, disc)] = k
-    return files, pair_of
+        f'<section id="runs">{head}<p>Each pair\'s runs load with its condition groups and '
+        'fits when it is opened in <a href="#groups">the list of pairs</a>.</p></section>')
 
 
 def _overlay_groups(inp: ReportInputs) -> dict[str, tuple[dict[str, Any], list[str]]]:
@@ -807,7 +1028,7 @@ def _explorer(inp: ReportInputs, layout: _Layout) -> str:
         "<code>tribopipe query</code> does; the selection is kept in the page's address, so "
         "a link reproduces it. The same page stands alone with <code>tribopipe explore</code>."
         f"</p><style>{explorer_style()}</style>"
-        f"{explorer_fragment(layout.explorer, runs_beside=layout.runs_beside)}</section>"
+        f"{explorer_fragment(layout.explorer, runs_beside=layout.pairs_beside)}</section>"
     )
 
 
@@ -840,15 +1061,60 @@ def _page(inp: ReportInputs, layout: _Layout) -> str:
     title = html_text(inp.page_title)
     note = synthetic_note(inp.runs)
     banner = f'<p class="synthetic"><strong>{html_text(note)}</strong></p>' if note else ""
+    beside = layout.pairs is not None
+    css, script = (_PAIRS_CSS, _PAIRS_JS) if beside else ("", _OPEN_TARGET_JS)
     return (
         "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">"
         "<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">"
-        f"<title>{title}</title><style>{_CSS}</style></head><body>"
+        f"<title>{title}</title><style>{_CSS}{css}</style></head><body>"
         f"<header><h1>{title}</h1><p class=muted>tribopipe {html_text(__version__)}"
         f"{source}, {stamp}</p>{banner}<nav>{nav}</nav></header>"
         + "".join(html for _, _, html in shown)
-        + f"<script>{_OPEN_TARGET_JS}</script></body></html>\n"
+        + f"<script>{script}</script></body></html>\n"
     )
+
+
+def report_parts(
+    inp: ReportInputs,
+    name: str = "report.html",
+    *,
+    runs_inline_limit: int = RUNS_INLINE_LIMIT,
+    groups_page_limit: int = GROUPS_PAGE_LIMIT,
+) -> Iterator[tuple[str, str]]:
+    """Every file of the report whose page is ``name`` as (relative path, text), made one
+    at a time, the page last (:func:`report_files` says what they are). Inputs are not
+    modified."""
+    inp = with_traces(inp)
+    runs_beside = len(inp.runs) > runs_inline_limit
+    explorer_beside = len(inp.groups) > groups_page_limit
+    beside = runs_beside or explorer_beside
+    folder = runs_folder(name)
+    explorer = None
+    explorer_page = None
+    if explorer_beside:
+        explorer_page = Path(name).with_name(Path(name).stem + "_explorer.html").as_posix()
+        yield from explorer_files(inp.runs, explorer_page, title=f"{inp.page_title}: explorer",
+                                  source=inp.source, groups=inp.groups, fits=inp.fits,
+                                  groups_page_limit=groups_page_limit).items()
+        explorer_page = Path(explorer_page).name
+    else:
+        explorer = explorer_data(inp.runs, groups=inp.groups, fits=inp.fits,
+                                 title=inp.page_title, source=inp.source)
+        if runs_beside:
+            for f, text in runs_files(explorer).items():
+                yield (folder / f).as_posix(), text
+    included = inp.runs[~inp.runs["excluded"].fillna(False).astype(bool)]
+    layout = _Layout(pairs_beside=folder.name if beside else None,
+                     pairs=_pair_index(inp) if beside else None,
+                     explorer=explorer, explorer_page=explorer_page,
+                     pair_plots=len(pairs(included)) <= PAIR_PLOTS_LIMIT,
+                     tables_beside=folder.name if beside else None)
+    if beside:  # a report with files beside: its pairs and its tables' downloads there
+        yield (folder / "groups.csv").as_posix(), spreadsheet_csv(inp.groups)
+        yield (folder / "fits.csv").as_posix(), spreadsheet_csv(inp.fits)
+        for f, text in pair_files(inp, layout):
+            yield (folder / f).as_posix(), text
+    yield name, _page(inp, layout)
 
 
 def report_files(
@@ -862,49 +1128,20 @@ def report_files(
     last). Inputs are not modified; sections with nothing to show in this kind of report
     are left out, with their links.
 
-    Up to ``runs_inline_limit`` runs the page carries everything and is the only file.
-    Beyond, the runs lie beside it in :func:`tribopipe.export.explorer.runs_folder`
-    (``<name>_runs/``): the report's listing of each pair (:func:`runs_chunk_files`) and
-    the embedded explorer's runs (:func:`tribopipe.export.explorer.runs_files`). A map of
-    more than ``groups_page_limit`` condition groups gets its explorer beside the report
-    (``<name>_explorer.html`` and its pages, :func:`~tribopipe.export.explorer.explorer_files`)
-    instead of in it. A report with files beside its page has its group and fit tables'
-    CSV downloads there too (``groups.csv``, ``fits.csv``)."""
-    inp = with_traces(inp)
-    files: dict[str, str] = {}
-    beside = len(inp.runs) > runs_inline_limit
-    folder = runs_folder(name)
-    pair_of: dict[tuple[str, str], int] = {}
-    if beside:
-        chunks, pair_of = runs_chunk_files(inp)
-        files.update({(folder / f).as_posix(): text for f, text in chunks.items()})
-    explorer = None
-    explorer_page = None
-    if len(inp.groups) > groups_page_limit:
-        explorer_page = Path(name).with_name(Path(name).stem + "_explorer.html").as_posix()
-        pages = explorer_files(inp.runs, explorer_page, title=f"{inp.page_title}: explorer",
-                               source=inp.source, groups=inp.groups, fits=inp.fits,
-                               groups_page_limit=groups_page_limit)
-        files.update(pages)
-        explorer_page = Path(explorer_page).name
-    else:
-        explorer = explorer_data(inp.runs, groups=inp.groups, fits=inp.fits,
-                                 title=inp.page_title, source=inp.source)
-        if beside:
-            files.update({(folder / f).as_posix(): text
-                          for f, text in runs_files(explorer).items()})
-    included = inp.runs[~inp.runs["excluded"].fillna(False).astype(bool)]
-    tables_beside = None
-    if files:  # a report with files beside: its tables' downloads beside it too
-        tables_beside = folder.name
-        files[(folder / "groups.csv").as_posix()] = spreadsheet_csv(inp.groups)
-        files[(folder / "fits.csv").as_posix()] = spreadsheet_csv(inp.fits)
-    layout = _Layout(runs_beside=folder.name if beside else None, pair_of=pair_of,
-                     explorer=explorer, explorer_page=explorer_page,
-                     pair_plots=len(pairs(included)) <= PAIR_PLOTS_LIMIT,
-                     tables_beside=tables_beside)
-    files[name] = _page(inp, layout)
-    return files
+    Up to ``runs_inline_limit`` runs and ``groups_page_limit`` condition groups the page
+    carries everything and is the only file. Beyond either, each pair's condition groups,
+    fits and runs lie beside it in :func:`tribopipe.export.explorer.runs_folder`
+    (``<name>_runs/``), one file per pair (:func:`pair_files`) loaded when the pair is
+    opened: the page keeps the summary, the list of pairs (with their counts, and a
+    filter) and what links to runs (the flagged runs, the overlays), each link naming
+    its run's pair. The group and fit tables' CSV downloads lie there too (``groups.csv``,
+    ``fits.csv``). Above ``runs_inline_limit`` runs the embedded explorer's runs lie in the
+    same folder (:func:`tribopipe.export.explorer.runs_files`); a map of more than
+    ``groups_page_limit`` condition groups gets its explorer beside the report
+    (``<name>_explorer.html`` and its pages,
+    :func:`~tribopipe.export.explorer.explorer_files`) instead of in it."""
+    return dict(report_parts(inp, name, runs_inline_limit=runs_inline_limit,
+                             groups_page_limit=groups_page_limit))
 
 
 def build_report(inp: ReportInputs, *, runs_inline_limit: int = RUNS_INLINE_LIMIT,
@@ -958,11 +1195,12 @@ def write_report(output: str | Path, inputs: ReportInputs, *,
                  runs_inline_limit: int = RUNS_INLINE_LIMIT,
                  groups_page_limit: int = GROUPS_PAGE_LIMIT) -> Path:
     """Write :func:`report_files` (with these limits) beside ``output`` and the page at
-    ``output`` (each atomically, the page last) and return the page's path."""
+    ``output`` (each atomically as it is made, the page last: :func:`report_parts`) and
+    return the page's path."""
     out = Path(output)
-    files = report_files(inputs, out.name, runs_inline_limit=runs_inline_limit,
-                         groups_page_limit=groups_page_limit)
-    return write_page_and_files(out, files)
+    return write_page_and_files(out, report_parts(inputs, out.name,
+                                                  runs_inline_limit=runs_inline_limit,
+                                                  groups_page_limit=groups_page_limit))
 
 
 def make_report(

@@ -39,8 +39,9 @@ def report_cmd(
 
     Summary, group table (linked to the runs), power-law fits, μ_K(p) per pair, flagged
     and excluded runs, failures with their reasons, and every run's trace plot. A map of
-    more than 5,000 runs gets its runs in <name>_runs/ beside the page (loaded by pair when
-    opened), and one of more than 2,000 condition groups its explorer beside it.
+    more than 5,000 runs or 2,000 condition groups gets each pair's groups, fits and runs
+    in <name>_runs/ beside the page (loaded when the pair is opened), and one of more than
+    2,000 condition groups its explorer beside it.
     """
     from ..report import make_report
 

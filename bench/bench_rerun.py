@@ -10,15 +10,23 @@ the unchanged re-run of every size in turn (alternating, so each size meets the 
 load): wall time, and CPU time (user + system) from the launcher's ``RUSAGE_CHILDREN``,
 Python start-up included, with the 1-min load average after each round.
 
-The first re-run after a batch that did work is the full one: it finds nothing to do and
-keeps its ledger in the state (:mod:`tribopipe.campaign.stamp`), so the rounds after it
-report that ledger without building the campaign's table; the summary says round 1 apart.
-The batch from scratch also gives its parent's own peak PSS (without its workers).
+A batch that found nothing to do keeps its ledger in the state, and a batch that did its
+work cleanly keeps its next re-run's ledger as pending (:mod:`tribopipe.campaign.stamp`),
+so the rounds report a ledger without building the campaign's table; round 1, the first
+re-run after a batch that did work (with code that keeps no pending ledger, the full
+one), is said apart. ``--redo K`` makes every round's re-run such a first one: each
+round, per size and source tree, first deletes ``K`` traces and runs the batch, which
+reduces those ``K`` files again (the working batch, measured too). ``--rehearse`` then
+times, per size, the rehearsal a working batch adds at its end
+(:func:`tribopipe.campaign.batch._rehearse`, CPU of its own process, on the unchanged
+campaign: the same state and table). The batch from scratch also gives its parent's own
+peak PSS (without its workers).
 
 Target (issue "10⁵ runs"): an unchanged re-run of 10⁴ files under 1 s; the batch's memory
 flat in the number of exports.
 
     nice /work/main/.venv/bin/python bench/bench_rerun.py [--n 1000 10000] [--repeat 5]
+        [--keep] [--src TREE/src ...] [--redo K] [--rehearse]
 """
 
 from __future__ import annotations
@@ -28,6 +36,7 @@ import json
 import os
 import shutil
 import statistics
+import subprocess
 import sys
 import time
 from pathlib import Path
@@ -48,6 +57,28 @@ def prepare(out: Path, n: int, rows: tuple[int, int], jobs: int) -> tuple[Path, 
     return single, size
 
 
+#: times the rehearsal of a campaign's next re-run in this process (CPU: user + system)
+_REHEARSE = """import json, resource, sys, time
+from tribopipe.campaign import load_campaign
+from tribopipe.campaign.batch import _rehearse
+campaign = load_campaign(sys.argv[1])
+def cpu():
+    r = resource.getrusage(resource.RUSAGE_SELF)
+    return r.ru_utime + r.ru_stime
+c0, t0 = cpu(), time.perf_counter()
+rerun = _rehearse(campaign)
+print(json.dumps({"cpu_s": cpu() - c0, "wall_s": time.perf_counter() - t0,
+                  "found_nothing_to_do": rerun is not None}))
+"""
+
+
+def redo(cfg: Path, k: int) -> None:
+    """Delete the first ``k`` traces of the campaign's output folder: the next batch
+    reduces their files again."""
+    for trace in sorted((cfg.parent / "processed" / "traces").glob("*.parquet"))[:k]:
+        trace.unlink()
+
+
 def main(argv: list[str] | None = None) -> dict:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--n", type=int, nargs="+", default=[1000, 10000])
@@ -58,6 +89,12 @@ def main(argv: list[str] | None = None) -> dict:
     parser.add_argument("--keep", action="store_true",
                         help="keep the batch's outputs (re-run only, no batch from scratch)")
     parser.add_argument("--results", type=Path, default=HERE / "rerun.json")
+    parser.add_argument("--redo", type=int, default=0, metavar="K",
+                        help="before each re-run, delete K traces and run the batch (it "
+                             "reduces K files again): every re-run is the first after a "
+                             "batch that did work")
+    parser.add_argument("--rehearse", action="store_true",
+                        help="time the rehearsal a working batch adds at its end, per size")
     parser.add_argument("--src", type=Path, nargs="+", default=None,
                         help="source trees (their src/ folders) to alternate the re-runs "
                              "between, e.g. a copy of the code before a change and after; "
@@ -94,10 +131,19 @@ def main(argv: list[str] | None = None) -> dict:
             for tree in trees:
                 if tree is not None:
                     os.environ["PYTHONPATH"] = tree
+                work = None
+                if args.redo:
+                    redo(cfg, args.redo)
+                    work = bc.run_measured([*exe, "batch", str(cfg), "--jobs",
+                                            str(args.jobs), "--no-plots"], cfg.parent)
+                    print(f"  round {i + 1}: {n}, batch reducing {args.redo} file(s) "
+                          f"({tree or 'this tribopipe'}): {work['wall_s']:.2f} s wall, "
+                          f"{work['cpu_s']:.2f} s CPU", flush=True)
                 r = bc.run_measured([*exe, "batch", str(cfg), "--jobs", str(args.jobs),
                                      "--no-plots"], cfg.parent)
                 r["load_1min"] = os.getloadavg()[0]
                 r["src"] = tree
+                r["after_work"] = work
                 result["sizes"][n]["rerun"].append(r)
                 print(f"  round {i + 1}: {n} unchanged ({tree or 'this tribopipe'}): "
                       f"{r['wall_s']:.2f} s wall, {r['cpu_s']:.2f} s CPU, peak PSS "
@@ -107,20 +153,41 @@ def main(argv: list[str] | None = None) -> dict:
             mine = [r for r in entry["rerun"] if r["src"] == tree]
             if not mine:
                 continue
-            # the first re-run after a batch that did work is the full one (it keeps its
-            # ledger for the next): said apart when there are more rounds
-            first, rest = (mine[0], mine[1:]) if len(mine) > 1 else (None, mine)
+            # the first re-run after a batch that did work is said apart when there are
+            # more rounds (with --redo, every round is one)
+            first, rest = (mine[0], mine[1:]) if len(mine) > 1 and not args.redo \
+                else (None, mine)
             walls = [r["wall_s"] for r in rest]
             cpus = [r["cpu_s"] for r in rest]
             name = tree or "this tribopipe"
             if first is not None:
                 print(f"{n} files unchanged ({name}), round 1: {first['wall_s']:.2f} s wall,"
                       f" {first['cpu_s']:.2f} s CPU")
-            print(f"{n} files unchanged ({name}), rounds {2 if first else 1}-{len(mine)}: "
+            print(f"{n} files unchanged ({name}), rounds {2 if first else 1}-{len(mine)}"
+                  f"{' (each after a working batch)' if args.redo else ''}: "
                   f"wall median {statistics.median(walls):.2f} s "
                   f"({min(walls):.2f}–{max(walls):.2f}), CPU median "
                   f"{statistics.median(cpus):.2f} s ({min(cpus):.2f}–{max(cpus):.2f}), "
                   f"peak PSS {max(r['peak_pss_tree_MB'] for r in rest):.0f} MB")
+            works = [r["after_work"]["cpu_s"] for r in mine if r.get("after_work")]
+            if works:
+                print(f"{n} files, the working batches ({name}): CPU median "
+                      f"{statistics.median(works):.2f} s ({min(works):.2f}–{max(works):.2f})")
+    if args.rehearse:
+        for n, cfg in configs.items():
+            for tree in trees:
+                env = {**os.environ, **({"PYTHONPATH": tree} if tree else {})}
+                done = subprocess.run([sys.executable, "-c", _REHEARSE, str(cfg)], env=env,
+                                      capture_output=True, text=True, check=False)
+                if done.returncode != 0:  # a tree without the rehearsal
+                    print(f"{n} files, rehearsal ({tree or 'this tribopipe'}): not there")
+                    continue
+                timed = json.loads(done.stdout.strip().splitlines()[-1])
+                result["sizes"][n].setdefault("rehearsal", []).append({**timed, "src": tree})
+                name = tree or "this tribopipe"
+                print(f"{n} files, rehearsal at a working batch's end ({name}): "
+                      f"{timed['cpu_s']:.2f} s CPU, {timed['wall_s']:.2f} s wall "
+                      f"(found nothing to do: {timed['found_nothing_to_do']})")
     args.results.write_text(json.dumps(result, indent=1, default=str))
     return result
 

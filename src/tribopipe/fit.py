@@ -134,29 +134,38 @@ def fit_power_law(runs: pd.DataFrame, *, quantity: str = "mu_k") -> pd.DataFrame
     data = data[keep]
     rows = []
     t_key = data["temperature_C"].fillna(-math.inf)
-    for (pin, disc, _, speed), grp in data.groupby([data["pin"], data["disc"], t_key,
-                                                    data["v"]], sort=True):
-        t_val = float(grp["temperature_C"].iloc[0])
-        n_pressures = int(grp["p"].nunique())
+    # each set's rows in the order of its key (the groupby's sorted order), each set's
+    # own in map order: one stable sort, then plain arrays per set (never a frame per set)
+    codes = data.groupby([data["pin"], data["disc"], t_key, data["v"]],
+                         sort=True).ngroup().to_numpy(dtype=np.int64)
+    order = np.argsort(codes, kind="stable")
+    starts = np.flatnonzero(np.diff(codes[order], prepend=-1)).tolist()
+    ends = [*starts[1:], len(order)] if starts else []
+    pins, discs = (data[c].to_numpy(dtype=object)[order] for c in ("pin", "disc"))
+    t, p, mu, v = (data[c].to_numpy(dtype=float)[order]
+                   for c in ("temperature_C", "p", "mu", "v"))
+    for start, end in zip(starts, ends, strict=True):
+        p_set, n = p[start:end], end - start
+        n_pressures = len(np.unique(p_set))
         row: dict[str, Any] = {
-            "pin": pin,
-            "disc": disc,
-            "temperature_C": t_val,
-            NOMINAL_SPEED: float(speed),
-            "n_points": len(grp),
+            "pin": pins[start],
+            "disc": discs[start],
+            "temperature_C": float(t[start]),
+            NOMINAL_SPEED: float(v[start]),
+            "n_points": n,
             "n_pressures": n_pressures,
-            "pressure_min_kPa": float(grp["p"].min()),
-            "pressure_max_kPa": float(grp["p"].max()),
+            "pressure_min_kPa": float(p_set.min()),
+            "pressure_max_kPa": float(p_set.max()),
             "note": "",
         }
-        if len(grp) < MIN_POINTS or n_pressures < 2:
+        if n < MIN_POINTS or n_pressures < 2:
             row["note"] = (
-                f"not fitted: {len(grp)} run(s) at {n_pressures} pressure(s); "
+                f"not fitted: {n} run(s) at {n_pressures} pressure(s); "
                 f"need >= {MIN_POINTS} runs at >= 2 pressures"
             )
             row.update({c: math.nan for c in FIT_COLUMNS if c not in row})
         else:
-            row.update(fit_one(grp["p"].to_numpy(), grp["mu"].to_numpy()))
+            row.update(fit_one(p_set, mu[start:end]))
         rows.append(row)
     return pd.DataFrame(rows, columns=columns)
 

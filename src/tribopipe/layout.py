@@ -249,8 +249,13 @@ class OutputLayout:
 
 
 def write_failures(path: str | Path, failures: Mapping[str, str]) -> Path:
-    """Write ``failures.csv``: the header ``file,reason``, then one row per failed file,
-    sorted by file (atomically). Returns the path. Both cells are written as CSV cells
+    """Write ``failures.csv`` (:func:`failures_text`) atomically. Returns the path."""
+    return write_text_atomic(path, failures_text(failures))
+
+
+def failures_text(failures: Mapping[str, str]) -> str:
+    """The text of ``failures.csv``: the header ``file,reason``, then one row per failed
+    file, sorted by file. Both cells are written as CSV cells
     (:func:`~tribopipe.escape.csv_cell`: one printable line, and a file named ``=cmd|...``
     is no formula)."""
     buf = io.StringIO()
@@ -258,7 +263,7 @@ def write_failures(path: str | Path, failures: Mapping[str, str]) -> Path:
     writer.writerow(FAILURES_HEADER)
     for file, reason in sorted(failures.items()):
         writer.writerow((csv_cell(file), csv_cell(reason)))
-    return write_text_atomic(path, buf.getvalue())
+    return buf.getvalue()
 
 
 def read_failures(path: str | Path) -> tuple[tuple[str, str], ...] | None:

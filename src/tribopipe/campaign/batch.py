@@ -36,7 +36,7 @@ from ..pipeline.runs import FileOutcome, ReducedRun
 from ..review import Review, read_review
 from .ledger import CONFLICT, READ, Account, BatchReport, manifest_ledger, tally
 from .metadata import read_manifest
-from .outputs import write_failures_csv, write_runs_csv
+from .outputs import failures_csv_text, runs_csv_text, write_failures_csv, write_runs_csv
 from .spec import Campaign
 from .stamp import inputs_stamp, keep_report, kept_report
 from .state import (
@@ -142,7 +142,68 @@ def _run_locked(campaign: Campaign, *, jobs: int | None, plots: bool | None,
         return kept
     jobs = default_jobs() if jobs is None else max(1, int(jobs))
     plots = campaign.plots if plots is None else plots
-    state = load_state(campaign)
+    ended = _batch(campaign, load_state(campaign), jobs=jobs, plots=plots, progress=progress)
+    assert ended is not None  # only a rehearsal ends without a report
+    report, quiet, clean = ended.report, ended.quiet, ended.clean
+    entries = ended.entries if quiet else {}
+    del ended  # a rehearsal reads the state again: the batch's entries are let go first
+    # a batch that found nothing to do is kept, for the next one to report again if it
+    # finds the campaign as this one did; a batch that did its work cleanly keeps the
+    # ledger of its next unchanged re-run, rehearsed, as pending; any other forgets it
+    try:
+        rerun = _rehearse(campaign) if clean and not quiet else None
+        if quiet:
+            keep_report(campaign, report, inputs, entries)
+        elif rerun is not None:
+            keep_report(campaign, rerun[1].report, rerun[0], rerun[1].entries,
+                        rerun[1].tables)
+        else:
+            keep_report(campaign, None, None, {})
+    except OutputError as exc:
+        report.output_errors.append(str(exc))
+    return report
+
+
+@dataclass(frozen=True)
+class _Ended:
+    """How a batch ended: its ``report``; whether it found nothing to do (``quiet``: its
+    report is kept for the next batch) or did its work cleanly (``clean``: its next
+    re-run is rehearsed); its state's ``entries`` as it left them; for a rehearsal, the
+    text of the ``runs.csv`` and ``failures.csv`` it would write (``tables``)."""
+
+    report: BatchReport
+    quiet: bool
+    clean: bool
+    entries: Mapping[str, FileState]
+    tables: tuple[str, str] | None = None
+
+
+def _rehearse(campaign: Campaign) -> tuple[str, _Ended] | None:
+    """The next batch, rehearsed at the end of one that did its work cleanly (under its
+    lock, after its outputs are written): the campaign's inputs stamped as the next batch
+    will stamp them, then :func:`_batch` on the state as it reads it, writing nothing.
+    Returns the stamp and how it ends when it finds nothing to do (its report and tables
+    are then what the next unchanged batch prints and writes), else ``None``; ``None`` too
+    when anything fails or a signal comes (what the batch did is not at stake)."""
+    stop = StopFlag()
+    ended: _Ended | None = None
+    with _stop_on_signals(stop):
+        inputs = inputs_stamp(campaign)
+        with suppress(TribopipeError, OSError):
+            ended = None if inputs is None else _batch(
+                campaign, load_state(campaign), jobs=1, plots=False, progress=None,
+                rehearse=True)
+    if inputs is None or ended is None or not ended.quiet or stop.raised:
+        return None
+    return inputs, ended
+
+
+def _batch(campaign: Campaign, state: CampaignState, *, jobs: int, plots: bool,
+           progress: ProgressCallback | None, rehearse: bool = False) -> _Ended | None:
+    """The batch itself, from the campaign's ``state``. ``rehearse``: the next batch
+    rehearsed (:func:`_rehearse`): nothing is written, and it ends (``None``) as soon as
+    it finds work to do, a decisions file, a file gone, or a state it would write;
+    else its tables are kept as text."""
     # a decisions file is checked before any work (its runs only under the map's lock)
     review = read_review(campaign.review) if campaign.review is not None and (
         campaign.review.exists() or campaign.review.is_symlink()) else None
@@ -157,6 +218,8 @@ def _run_locked(campaign: Campaign, *, jobs: int | None, plots: bool | None,
     if progress:
         progress(done, files)
 
+    if rehearse and (plan.todo or review is not None):
+        return None  # not a re-run that finds nothing to do
     if plan.todo and not map_checked:
         # refuse a foreign or corrupt map before any work, reading none of its rows (they
         # are read once, under the map's lock, by each landing)
@@ -167,6 +230,8 @@ def _run_locked(campaign: Campaign, *, jobs: int | None, plots: bool | None,
         notes.append(f"no file matches {describe_glob(campaign)} in {campaign.raw_dir}")
     by_file = {row.file: row for row in rows}
     vanished = {f: e for f, e in entries.items() if f not in by_file}
+    if rehearse and vanished:
+        return None
     failures = plan.failures
     # reduced and landed in the order of their names (the order results are checked in
     # against each other), whichever worker ends first
@@ -190,6 +255,8 @@ def _run_locked(campaign: Campaign, *, jobs: int | None, plots: bool | None,
                 redone, shared), entries, review)
         account = account.plus(part)
         map_read = map_read or read
+        if rehearse:
+            return  # its state is compared, never saved (see the end)
         with suppress(OutputError):  # said by the batch's last save, which meets it again
             saved[0] = _save_state_with_map(campaign, entries, state, saved[0])
 
@@ -232,13 +299,23 @@ def _run_locked(campaign: Campaign, *, jobs: int | None, plots: bool | None,
     # each output is tried even when one fails (a full disk may free up); those that
     # fail are in the report, beside every run's outcome
     problems: list[str] = []
-    for write in (lambda: _save_state_with_map(campaign, entries, state, saved[0]),
-                  lambda: write_runs_csv(campaign, rows, entries, this_batch, failures),
-                  lambda: write_failures_csv(campaign, failures)):
-        try:
-            write()
-        except OutputError as exc:
-            problems.append(str(exc))
+    tables: tuple[str, str] | None = None
+    if rehearse:
+        # the tables it would write, as text; a re-run that would write the state is not
+        # rehearsed (a clean batch leaves none to write)
+        if _state_differs(campaign, state.with_entries(campaign.name, entries,
+                                                       campaign.map_path), saved[0]):
+            return None
+        tables = (runs_csv_text(rows, entries, this_batch, failures),
+                  failures_csv_text(failures))
+    else:
+        for write in (lambda: _save_state_with_map(campaign, entries, state, saved[0]),
+                      lambda: write_runs_csv(campaign, rows, entries, this_batch, failures),
+                      lambda: write_failures_csv(campaign, failures)):
+            try:
+                write()
+            except OutputError as exc:
+                problems.append(str(exc))
     tests_in, unmatched, undescribed = manifest_ledger(rows, entries, manifest)
     runs_failed = plan.runs_failed + account.runs_failed
     test_tally = tally(outcomes, tests_in)
@@ -269,15 +346,12 @@ def _run_locked(campaign: Campaign, *, jobs: int | None, plots: bool | None,
         repeats=account.repeats,
         output_errors=problems,
     )
-    # a batch that found nothing to do is kept, for the next one to report again if it
-    # finds the campaign as this one did; any other forgets the one kept
+    # found nothing to do: its report is the one the next unchanged batch prints
     quiet = not plan.todo and not vanished and not problems and stop.name is None \
         and appended is None and not account.repeats and review is None
-    try:
-        keep_report(campaign, report if quiet else None, inputs, entries)
-    except OutputError as exc:
-        problems.append(str(exc))
-    return report
+    # did its work and wrote every output: the next unchanged batch can be rehearsed
+    clean = not problems and stop.name is None and campaign.review is None
+    return _Ended(report=report, quiet=quiet, clean=clean, entries=entries, tables=tables)
 
 
 @dataclass(frozen=True)
@@ -533,9 +607,16 @@ def _save_state_with_map(campaign: Campaign, entries: dict[str, FileState],
     entry differs from ``saved`` (what the state file holds; ``None``: all); nothing is
     written when it equals ``saved``. Returns the state now saved."""
     new_state = before.with_entries(campaign.name, entries, campaign.map_path)
-    if new_state != saved or not campaign.state_path.exists():
+    if _state_differs(campaign, new_state, saved):
         save_state(campaign, new_state, saved if campaign.state_path.is_file() else None)
     return new_state
+
+
+def _state_differs(campaign: Campaign, new_state: CampaignState,
+                   saved: CampaignState | None) -> bool:
+    """Whether :func:`_save_state_with_map` writes ``new_state``: it is not ``saved``
+    (what the state file holds), or there is no state file."""
+    return new_state != saved or not campaign.state_path.exists()
 
 
 def _ids_missing_from_map(campaign: Campaign, state: CampaignState) -> tuple[set[str], bool]:

@@ -6,13 +6,14 @@ written by :func:`tribopipe.layout.write_failures`, read back by the report)."""
 from __future__ import annotations
 
 import csv
+import io
 import math
 from collections.abc import Mapping, Sequence
 from typing import Any
 
 from ..escape import csv_cell
-from ..files import atomic_text
-from ..layout import write_failures
+from ..files import atomic_text, write_text_atomic
+from ..layout import failures_text, write_failures
 from ..reporting import EXTRA_COLUMN, RunReport
 from ..reporting import NAMES as REPORTING_NAMES
 from .patterns import LABEL_FIELDS
@@ -51,6 +52,25 @@ def write_runs_csv(campaign: Campaign, rows: Sequence[CampaignRow],
     with atomic_text(campaign.runs_csv, keep_same=True) as fh:
         # an unchanged re-run leaves the table it would write again as it is
         _write_runs(csv.writer(fh, lineterminator="\n"), rows, entries, this_batch, failures)
+
+
+def runs_csv_text(rows: Sequence[CampaignRow], entries: Mapping[str, FileState],
+                  this_batch: Mapping[str, str], failures: Mapping[str, str]) -> str:
+    """The text :func:`write_runs_csv` writes, as one string (a re-run rehearsed:
+    :mod:`tribopipe.campaign.stamp`)."""
+    buf = io.StringIO()
+    _write_runs(csv.writer(buf, lineterminator="\n"), rows, entries, this_batch, failures)
+    return buf.getvalue()
+
+
+def write_tables_text(campaign: Campaign, runs: str, failures: str) -> None:
+    """Write ``runs.csv`` and ``failures.csv`` from their text (:func:`runs_csv_text`,
+    :func:`failures_csv_text`) as :func:`write_runs_csv` and :func:`write_failures_csv`
+    write them: atomically, ``runs.csv`` left as it is when its bytes are those. Raises
+    :class:`~tribopipe.errors.OutputError` naming the table that cannot be written."""
+    with atomic_text(campaign.runs_csv, keep_same=True) as fh:
+        fh.write(runs)
+    write_text_atomic(campaign.failures_csv, failures)
 
 
 def _write_runs(writer: Any, rows: Sequence[CampaignRow], entries: Mapping[str, FileState],
@@ -105,4 +125,10 @@ def _report_cells(labels: Mapping[str, Any]) -> dict[str, Any]:
 
 
 def write_failures_csv(campaign: Campaign, failures: Mapping[str, str]) -> None:
+    """``failures.csv`` (:func:`~tribopipe.layout.write_failures`)."""
     write_failures(campaign.failures_csv, failures)
+
+
+def failures_csv_text(failures: Mapping[str, str]) -> str:
+    """The text :func:`write_failures_csv` writes."""
+    return failures_text(failures)

@@ -21,6 +21,15 @@ on disk and which has no decisions file to apply (a review is applied on every b
 reports the kept ledger again (:func:`kept_report`) and writes nothing. Anything else
 (a file touched, added, removed; the config, the vocabulary, the manifest or the map
 changed; a trace or an output gone) is the full batch.
+
+A batch that did work keeps no ledger of its own (the next one says its runs were
+skipped, and writes ``runs.csv`` with those statuses), but when it ends cleanly it
+rehearses its next unchanged re-run, by the batch's own code on the state it saved
+(:func:`tribopipe.campaign.batch.run_campaign`), and keeps that re-run's ledger as
+*pending*: its report, the ``runs.csv`` and ``failures.csv`` it would write
+(:attr:`~tribopipe.campaign.state.KeptLedger.tables`), stamped with the inputs as the next
+batch will find them and the tables as this batch wrote them. The next batch that finds
+both stamps so writes those tables, reports that ledger and keeps it as the kept one.
 """
 
 from __future__ import annotations
@@ -31,8 +40,9 @@ from collections.abc import Iterable, Mapping
 from pathlib import Path
 
 from .. import __version__
+from ..errors import OutputError
 from .ledger import BatchReport
-from .outputs import RUNS_COLUMNS
+from .outputs import RUNS_COLUMNS, write_tables_text
 from .spec import Campaign
 from .state import DUPLICATE, REDUCED, FileState, KeptLedger, MapStamp, load_kept, save_kept
 from .table import TraceListing, discover_files
@@ -105,7 +115,9 @@ def kept_report(campaign: Campaign, inputs: str | None) -> BatchReport | None:
     """The ledger the last batch kept (:attr:`BatchReport.kept` true), when the campaign
     is as that batch found it: ``inputs`` (:func:`inputs_stamp`, taken now) and the
     outputs' stamp are those kept, its traces are all on disk and no decisions file is to
-    be applied; else ``None`` (the full batch)."""
+    be applied; else ``None`` (the full batch). A pending ledger's tables are written
+    first (as the full batch writes them) and the ledger then kept as the kept one; when
+    they or the state cannot be written, ``None``: the full batch, which says so."""
     if inputs is None or campaign.review is not None:
         return None
     kept = load_kept(campaign)
@@ -113,19 +125,31 @@ def kept_report(campaign: Campaign, inputs: str | None) -> BatchReport | None:
             or not _all_present(campaign, kept.traces):
         return None
     try:
-        return BatchReport.from_json(kept.report, campaign.map_path, campaign.output_dir)
+        report = BatchReport.from_json(kept.report, campaign.map_path, campaign.output_dir)
     except (KeyError, TypeError, ValueError, AttributeError):
         return None
+    if kept.tables is not None:
+        try:
+            write_tables_text(campaign, *kept.tables)
+            save_kept(campaign, KeptLedger(inputs=inputs, outputs=outputs_stamp(campaign),
+                                           traces=kept.traces, report=kept.report))
+        except OutputError:
+            return None
+    return report
 
 
 def keep_report(campaign: Campaign, report: BatchReport | None, inputs: str | None,
-                entries: Mapping[str, FileState]) -> None:
+                entries: Mapping[str, FileState],
+                tables: tuple[str, str] | None = None) -> None:
     """Keep ``report`` (of a batch that found nothing to do, the campaign's inputs
-    stamped ``inputs`` before it began) for the next batch; ``None`` forgets the one
-    kept. Raises :class:`~tribopipe.errors.OutputError` when the state cannot be
-    written."""
+    stamped ``inputs`` before it began; its state's ``entries``) for the next batch, with
+    ``tables`` (the text of ``runs.csv`` and ``failures.csv``) as a pending ledger: the
+    report of a re-run rehearsed, whose tables are not written yet (the outputs' stamp
+    is then of the tables the batch that did work wrote); ``None`` forgets the one kept.
+    Raises :class:`~tribopipe.errors.OutputError` when the state cannot be written."""
     if report is None or inputs is None:
         save_kept(campaign, None)
         return
     save_kept(campaign, KeptLedger(inputs=inputs, outputs=outputs_stamp(campaign),
-                                   traces=needed_traces(entries), report=report.to_json()))
+                                   traces=needed_traces(entries), report=report.to_json(),
+                                   tables=tables))

@@ -339,10 +339,18 @@ class KeptLedger:
     outputs: str
     traces: tuple[str, ...]
     report: dict[str, Any]
+    #: a pending ledger's tables: the text of ``runs.csv`` and ``failures.csv`` the next
+    #: unchanged batch writes before it reports (rehearsed by a batch that did work, whose
+    #: own tables ``outputs`` stamps); ``None`` for a ledger kept by a batch that found
+    #: nothing to do
+    tables: tuple[str, str] | None = None
 
 
 #: the state's row (in its ``meta`` table) that keeps a :class:`KeptLedger`
 KEPT_KEY = "kept_ledger"
+#: the row that keeps a pending one (with its tables): a version that does not know it
+#: never reads it
+PENDING_KEY = "pending_ledger"
 
 
 def load_kept(campaign: Campaign) -> KeptLedger | None:
@@ -354,22 +362,26 @@ def load_kept(campaign: Campaign) -> KeptLedger | None:
     try:
         con = sqlite3.connect(f"file:{path}?mode=ro", uri=True, timeout=60)
         try:
-            meta = dict(con.execute("SELECT key, value FROM meta WHERE key IN (?, ?)",
-                                    ("version", KEPT_KEY)).fetchall())
+            meta = dict(con.execute("SELECT key, value FROM meta WHERE key IN (?, ?, ?)",
+                                    ("version", KEPT_KEY, PENDING_KEY)).fetchall())
         finally:
             con.close()
-        if meta.get("version") != str(STATE_VERSION) or KEPT_KEY not in meta:
+        text = meta.get(KEPT_KEY, meta.get(PENDING_KEY))
+        if meta.get("version") != str(STATE_VERSION) or not isinstance(text, str):
             return None
-        data = json.loads(meta[KEPT_KEY])
+        data = json.loads(text)
+        tables = None if KEPT_KEY in meta else (str(data["runs_csv"]),
+                                                 str(data["failures_csv"]))
         return KeptLedger(inputs=str(data["inputs"]), outputs=str(data["outputs"]),
                           traces=tuple(str(t) for t in data["traces"]),
-                          report=dict(data["report"]))
+                          report=dict(data["report"]), tables=tables)
     except (sqlite3.Error, ValueError, TypeError, KeyError):
         return None
 
 
 def save_kept(campaign: Campaign, kept: KeptLedger | None) -> None:
-    """Keep ``kept`` in the campaign's state (``None``: forget the one kept, when there is a
+    """Keep ``kept`` in the campaign's state, as the kept ledger or, with its tables, the
+    pending one, in place of any other (``None``: forget the one kept, when there is a
     state). Raises :class:`~tribopipe.errors.OutputError` naming the file when it cannot
     be written."""
     path = campaign.state_path
@@ -378,14 +390,17 @@ def save_kept(campaign: Campaign, kept: KeptLedger | None) -> None:
     try:
         con = _connect(path)
         try:
-            if kept is None:
-                con.execute("DELETE FROM meta WHERE key = ?", (KEPT_KEY,))
-            else:
-                text = json.dumps({"inputs": kept.inputs, "outputs": kept.outputs,
-                                   "traces": list(kept.traces), "report": kept.report},
-                                  separators=(",", ":"))
-                con.execute("INSERT OR REPLACE INTO meta (key, value) VALUES (?, ?)",
-                            (KEPT_KEY, text))
+            con.execute("BEGIN IMMEDIATE")
+            con.execute("DELETE FROM meta WHERE key IN (?, ?)", (KEPT_KEY, PENDING_KEY))
+            if kept is not None:
+                data: dict[str, Any] = {"inputs": kept.inputs, "outputs": kept.outputs,
+                                        "traces": list(kept.traces), "report": kept.report}
+                if kept.tables is not None:
+                    data["runs_csv"], data["failures_csv"] = kept.tables
+                con.execute("INSERT INTO meta (key, value) VALUES (?, ?)",
+                            (KEPT_KEY if kept.tables is None else PENDING_KEY,
+                             json.dumps(data, separators=(",", ":"))))
+            con.execute("COMMIT")
         finally:
             con.close()
     except (OSError, sqlite3.Error) as exc:

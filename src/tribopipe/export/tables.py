@@ -37,7 +37,7 @@ from __future__ import annotations
 import math
 import os
 import re
-from collections.abc import Hashable, Mapping, Sequence
+from collections.abc import Mapping, Sequence
 from typing import TYPE_CHECKING, Any
 
 from ..config import TEST_METHODS
@@ -276,23 +276,25 @@ def frictionmap_table(
     ``measurementNo`` is the run's repeat number; runs without one are numbered after the
     highest repeat of their condition, in map order.
     """
+    import numpy as np
     import pandas as pd
 
     included = runs.loc[~runs["excluded"].astype(bool)].reset_index(drop=True)
     included = _select(included, pin, disc, temperature_C)
     keys = group_keys(included, by_speed=False)
-    numbers: list[float] = []
-    next_free: dict[Hashable, int] = {}
-    for key, idx in keys.groupby(list(keys.columns), dropna=False, sort=False).groups.items():
-        repeats = included.loc[idx, "repeat"]
-        next_free[key] = int(repeats.max()) if repeats.notna().any() else 0
-    for i, key in enumerate(keys.itertuples(index=False, name=None)):
-        repeat = included["repeat"].iloc[i]
-        if pd.isna(repeat):
-            next_free[key] += 1
-            numbers.append(float(next_free[key]))
-        else:
-            numbers.append(float(repeat))
+    # each run's condition (numbered in map order) and repeat (NaN where it has none),
+    # as arrays: one pass over the runs, never a frame per condition
+    codes = keys.groupby(list(keys.columns), dropna=False, sort=False).ngroup().to_numpy()
+    numbers = pd.to_numeric(included["repeat"], errors="coerce").to_numpy(
+        dtype=float, na_value=np.nan)
+    known = ~np.isnan(numbers)
+    highest = np.full(int(codes.max()) + 1 if len(codes) else 0, -np.inf)
+    np.maximum.at(highest, codes[known], numbers[known])
+    next_free = [int(v) if math.isfinite(v) else 0 for v in highest.tolist()]
+    for i in np.flatnonzero(~known).tolist():
+        c = int(codes[i])
+        next_free[c] += 1
+        numbers[i] = float(next_free[c])
     table = pd.DataFrame(
         {
             "pin": included["pin"].to_numpy(dtype=object),

@@ -40,7 +40,7 @@ import json
 import math
 import re
 import sys
-from collections.abc import Mapping
+from collections.abc import Iterator, Mapping
 from datetime import UTC, datetime
 from importlib.resources import files
 from pathlib import Path
@@ -1005,8 +1005,30 @@ def explorer_files(
     runs_beside_pages: bool = True,
     max_files: int | None = None,
 ) -> dict[str, str]:
-    """Every file of the explorer of ``runs`` whose page is ``name`` (relative paths →
-    text; the page ``name`` last), so that no page grows with the map.
+    """Every file of :func:`explorer_parts` (same arguments) as relative path → text, the
+    page ``name`` last."""
+    return dict(explorer_parts(runs, name, title=title, source=source, groups=groups,
+                               fits=fits, runs_inline_limit=runs_inline_limit,
+                               groups_page_limit=groups_page_limit,
+                               runs_beside_pages=runs_beside_pages, max_files=max_files))
+
+
+def explorer_parts(
+    runs: pd.DataFrame,
+    name: str,
+    *,
+    title: str = "tribopipe friction-map explorer",
+    source: str | None = None,
+    groups: pd.DataFrame | None = None,
+    fits: pd.DataFrame | None = None,
+    runs_inline_limit: int = RUNS_INLINE_LIMIT,
+    groups_page_limit: int = GROUPS_PAGE_LIMIT,
+    runs_beside_pages: bool = True,
+    max_files: int | None = None,
+) -> Iterator[tuple[str, str]]:
+    """Every file of the explorer of ``runs`` whose page is ``name`` as (relative path,
+    text), made one page at a time, the page ``name`` last, so that no page grows with
+    the map and no more than one page's files are held at once.
 
     Up to ``groups_page_limit`` condition groups the explorer is one page
     (:func:`explorer_data`, ``groups`` and ``fits`` as it takes them), its runs in the page
@@ -1037,7 +1059,8 @@ def explorer_files(
         data = explorer_data(runs, groups=groups, fits=fits, title=title, source=source)
         if max_files is not None and 1 + len(data["runs"]) > max_files:
             runs_inline_limit = sys.maxsize
-        return _page_files(data, name, runs_inline_limit)
+        yield from _page_files(data, name, runs_inline_limit).items()
+        return
     if fits is None:
         fits = fit_power_law(runs)
     curvature = {q: map_curvature(groups, q) for q in ("mu_k", "mu_s")}
@@ -1048,7 +1071,6 @@ def explorer_files(
     if max_files is not None and runs_beside_pages and 1 + len(shards) + _files_beside(
             shards, shown_pairs(groups), run_pairs) > max_files:
         runs_beside_pages, runs_inline_limit = False, sys.maxsize
-    files: dict[str, str] = {}
     rows: list[tuple[str, list[str], int, int, str]] = []
     for k, keys in enumerate(shards, 1):
         page = (folder / f"part-{k}.html").as_posix()
@@ -1057,7 +1079,8 @@ def explorer_files(
         data = explorer_data(shard_runs, groups=shard_groups, fits=fits[fit_pairs.isin(keys)],
                              title=f"{title} — page {k} of {len(shards)}", source=source,
                              curvature=curvature)  # the whole map's: query's own
-        files.update(_page_files(data, page, 0 if runs_beside_pages else runs_inline_limit))
+        yield from _page_files(data, page,
+                               0 if runs_beside_pages else runs_inline_limit).items()
         # each pin's name (its first group's spelling), discs, groups and runs on this
         # page, counted in one pass over the page's groups and runs
         names: dict[str, str] = {}
@@ -1072,9 +1095,8 @@ def explorer_files(
         for key in names:
             rows.append((names[key], sorted(discs[key], key=_key), n_groups[key],
                          int(n_runs.get(key, 0)), f"{Path(page).parent.name}/part-{k}.html"))
-    files[name] = explorer_index(rows, title=title, source=source, n_groups=len(groups),
-                                 n_runs=len(included))
-    return files
+    yield name, explorer_index(rows, title=title, source=source, n_groups=len(groups),
+                               n_runs=len(included))
 
 
 def _files_beside(shards: list[list[str]], shown: set[tuple[str, str]],
@@ -1136,8 +1158,8 @@ def write_explorer(
     groups_page_limit: int = GROUPS_PAGE_LIMIT,
 ) -> Path:
     """Write the explorer of the map at ``map_path`` to ``output`` (atomically):
-    :func:`explorer_files`, the files beside the page first (each atomically), the page
-    last. A map of more than ``runs_inline_limit`` included runs gets its runs in
+    :func:`explorer_parts`, the files beside the page first (each atomically, as it is
+    made), the page last. A map of more than ``runs_inline_limit`` included runs gets its runs in
     :func:`runs_folder` beside the page, one file per pair; a map of more than
     ``groups_page_limit`` condition groups an index page at ``output`` and its pins'
     pages in :func:`pages_folder`; a smaller map's page carries everything and is one
@@ -1152,7 +1174,7 @@ def write_explorer(
         )
     out = Path(output)
     # the map's groups (a map folder's are stored): those of its included runs
-    files = explorer_files(runs, out.name, title=title or "tribopipe friction-map explorer",
+    files = explorer_parts(runs, out.name, title=title or "tribopipe friction-map explorer",
                            source=str(map_path), groups=snap.groups(show_method=True),
                            runs_inline_limit=runs_inline_limit,
                            groups_page_limit=groups_page_limit)

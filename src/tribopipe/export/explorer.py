@@ -40,7 +40,7 @@ import json
 import math
 import re
 import sys
-from collections.abc import Mapping
+from collections.abc import Iterator, Mapping
 from datetime import UTC, datetime
 from importlib.resources import files
 from pathlib import Path
@@ -119,6 +119,12 @@ FIT_CURVE_POINTS = 24
 
 #: the lists of interpolation points of each speed of a pair (packed in the page)
 POINT_LISTS = ("mu_k_points", "mu_s_points")
+#: the run columns the explorer reads of each run (its groups and fits given; with them,
+#: the fits too): a map's other columns are left behind before its runs are made pages
+EXPLORER_COLUMNS: tuple[str, ...] = (
+    "measurement_id", "pin", "disc", "pressure_kPa", "temperature_C", "nominal_speed_mm_s",
+    "test_method", "excluded", "repeat", "lab", "flags", "review", "mu_k", "mu_s",
+    "source_file", "test", "result")
 #: the order of a pair's runs on the page (a stable sort: ties keep the map's order)
 RUN_ORDER = ("temperature_C", "pressure_kPa", "repeat", "measurement_id")
 #: the column that carries each run's pair number while the runs are sorted
@@ -608,7 +614,8 @@ def explorer_data(
     # the included runs in the pages' order, each pair's together (one sort, one pass)
     run_codes = np.array([order.get(k, -1) for k in zip(
         included["pin"].map(_key), included["disc"].map(_key), strict=True)], dtype=np.int64)
-    ordered = included.assign(**{_PAIR: run_codes})
+    ordered = included[[c for c in EXPLORER_COLUMNS if c in included.columns]].assign(
+        **{_PAIR: run_codes})  # what the page reads of a run (_runs), no more
     ordered = ordered[run_codes >= 0].sort_values(
         [_PAIR, *RUN_ORDER], kind="mergesort")
     runs_of: dict[int, list[dict[str, Any]]] = {}
@@ -623,10 +630,10 @@ def explorer_data(
     pair_index: dict[tuple[str, str], int] = {}
     pair_rows: list[dict[str, Any]] = []
     run_chunks: list[list[dict[str, Any]]] = []
+    group_pins, group_discs = groups["pin"].tolist(), groups["disc"].tolist()
     for key, c in order.items():
         if key not in shown:  # a pair without a μ_K point (query.pair_points)
             continue
-        first = groups.iloc[first_row[c]]
         pair_runs = runs_of.get(c, [])
         run_index = {r["id"]: i for i, r in enumerate(pair_runs)}
         measured = sorted(measured_of.get(c, ())) or [FOUNDING_SLIDING_SPEED_MM_S]
@@ -638,7 +645,8 @@ def explorer_data(
                                         runs_at.get(sc, {}), v, run_index))
         pair_index[key] = len(pair_rows)
         run_chunks.append(pair_runs)
-        pin_name, disc_name = str(first["pin"]), str(first["disc"])
+        # the names as the pair's first group spells them
+        pin_name, disc_name = str(group_pins[first_row[c]]), str(group_discs[first_row[c]])
         pair_rows.append(
             {
                 "pin": pin_name,
@@ -810,8 +818,12 @@ def runs_files(data: dict[str, Any]) -> dict[str, str]:
     runs lie beside it (:func:`explorer_page` ``runs_beside``): the page loads a pair's
     file when it shows that pair. Each file hands its data, JSON escaped as inside a page
     (:func:`tribopipe.escape.script_json`), to ``window.tribopipeRuns``."""
-    return {f"pair-{i}.js": f"window.tribopipeRuns({i}, {script_json(_packed(chunk))});\n"
-            for i, chunk in enumerate(data.get("runs", []))}
+    return {f"pair-{i}.js": _runs_file(i, chunk) for i, chunk in enumerate(data.get("runs", []))}
+
+
+def _runs_file(i: int, chunk: list[dict[str, Any]]) -> str:
+    """The text of :func:`runs_files`' file of pair ``i`` of the page, its runs ``chunk``."""
+    return f"window.tribopipeRuns({i}, {script_json(_packed(chunk))});\n"
 
 
 def _fragment(data: dict[str, Any], js: str, runs_beside: str | None = None) -> str:
@@ -926,15 +938,18 @@ def pages_folder(output: str | Path) -> Path:
     return out.with_name(out.stem + "_pages")
 
 
-def _page_files(data: dict[str, Any], name: str, runs_inline_limit: int) -> dict[str, str]:
+def _page_files(data: dict[str, Any], name: str,
+                runs_inline_limit: int) -> Iterator[tuple[str, str]]:
     """The explorer page ``name`` (a relative path) of ``data`` and, where it has more
-    runs than ``runs_inline_limit``, the files of its runs beside it (the page last)."""
+    runs than ``runs_inline_limit``, the files of its runs beside it (the page last), one
+    (name, text) at a time."""
     if sum(len(chunk) for chunk in data["runs"]) <= runs_inline_limit:
-        return {name: explorer_page(data)}
+        yield name, explorer_page(data)
+        return
     folder = runs_folder(name)
-    files = {(folder / f).as_posix(): text for f, text in runs_files(data).items()}
-    files[name] = explorer_page(data, runs_beside=folder.name)
-    return files
+    for i, chunk in enumerate(data["runs"]):
+        yield (folder / f"pair-{i}.js").as_posix(), _runs_file(i, chunk)
+    yield name, explorer_page(data, runs_beside=folder.name)
 
 
 def shown_pairs(groups: pd.DataFrame,
@@ -992,7 +1007,7 @@ def _shards(groups: pd.DataFrame, limit: int) -> list[list[str]]:
     return shards
 
 
-def explorer_files(
+def iter_explorer_files(
     runs: pd.DataFrame,
     name: str,
     *,
@@ -1004,9 +1019,10 @@ def explorer_files(
     groups_page_limit: int = GROUPS_PAGE_LIMIT,
     runs_beside_pages: bool = True,
     max_files: int | None = None,
-) -> dict[str, str]:
-    """Every file of the explorer of ``runs`` whose page is ``name`` (relative paths →
-    text; the page ``name`` last), so that no page grows with the map.
+) -> Iterator[tuple[str, str]]:
+    """Every file of the explorer of ``runs`` whose page is ``name``, one (relative path,
+    text) at a time as it is made (the page ``name`` last), so that no page grows with the
+    map and no more than one page is held at a time.
 
     Up to ``groups_page_limit`` condition groups the explorer is one page
     (:func:`explorer_data`, ``groups`` and ``fits`` as it takes them), its runs in the page
@@ -1037,7 +1053,8 @@ def explorer_files(
         data = explorer_data(runs, groups=groups, fits=fits, title=title, source=source)
         if max_files is not None and 1 + len(data["runs"]) > max_files:
             runs_inline_limit = sys.maxsize
-        return _page_files(data, name, runs_inline_limit)
+        yield from _page_files(data, name, runs_inline_limit)
+        return
     if fits is None:
         fits = fit_power_law(runs)
     curvature = {q: map_curvature(groups, q) for q in ("mu_k", "mu_s")}
@@ -1048,7 +1065,6 @@ def explorer_files(
     if max_files is not None and runs_beside_pages and 1 + len(shards) + _files_beside(
             shards, shown_pairs(groups), run_pairs) > max_files:
         runs_beside_pages, runs_inline_limit = False, sys.maxsize
-    files: dict[str, str] = {}
     rows: list[tuple[str, list[str], int, int, str]] = []
     for k, keys in enumerate(shards, 1):
         page = (folder / f"part-{k}.html").as_posix()
@@ -1057,7 +1073,8 @@ def explorer_files(
         data = explorer_data(shard_runs, groups=shard_groups, fits=fits[fit_pairs.isin(keys)],
                              title=f"{title} — page {k} of {len(shards)}", source=source,
                              curvature=curvature)  # the whole map's: query's own
-        files.update(_page_files(data, page, 0 if runs_beside_pages else runs_inline_limit))
+        yield from _page_files(data, page, 0 if runs_beside_pages else runs_inline_limit)
+        del data
         # each pin's name (its first group's spelling), discs, groups and runs on this
         # page, counted in one pass over the page's groups and runs
         names: dict[str, str] = {}
@@ -1072,9 +1089,29 @@ def explorer_files(
         for key in names:
             rows.append((names[key], sorted(discs[key], key=_key), n_groups[key],
                          int(n_runs.get(key, 0)), f"{Path(page).parent.name}/part-{k}.html"))
-    files[name] = explorer_index(rows, title=title, source=source, n_groups=len(groups),
-                                 n_runs=len(included))
-    return files
+    yield name, explorer_index(rows, title=title, source=source, n_groups=len(groups),
+                               n_runs=len(included))
+
+
+def explorer_files(
+    runs: pd.DataFrame,
+    name: str,
+    *,
+    title: str = "tribopipe friction-map explorer",
+    source: str | None = None,
+    groups: pd.DataFrame | None = None,
+    fits: pd.DataFrame | None = None,
+    runs_inline_limit: int = RUNS_INLINE_LIMIT,
+    groups_page_limit: int = GROUPS_PAGE_LIMIT,
+    runs_beside_pages: bool = True,
+    max_files: int | None = None,
+) -> dict[str, str]:
+    """Every file of :func:`iter_explorer_files` (same arguments) at once: relative paths
+    → text, the page ``name`` last."""
+    return dict(iter_explorer_files(
+        runs, name, title=title, source=source, groups=groups, fits=fits,
+        runs_inline_limit=runs_inline_limit, groups_page_limit=groups_page_limit,
+        runs_beside_pages=runs_beside_pages, max_files=max_files))
 
 
 def _files_beside(shards: list[list[str]], shown: set[tuple[str, str]],
@@ -1136,7 +1173,7 @@ def write_explorer(
     groups_page_limit: int = GROUPS_PAGE_LIMIT,
 ) -> Path:
     """Write the explorer of the map at ``map_path`` to ``output`` (atomically):
-    :func:`explorer_files`, the files beside the page first (each atomically), the page
+    :func:`iter_explorer_files`, each file written as it is made (atomically), the page
     last. A map of more than ``runs_inline_limit`` included runs gets its runs in
     :func:`runs_folder` beside the page, one file per pair; a map of more than
     ``groups_page_limit`` condition groups an index page at ``output`` and its pins'
@@ -1151,9 +1188,13 @@ def write_explorer(
             hint="reduce runs first (tribopipe reduce / batch) or import the published map",
         )
     out = Path(output)
-    # the map's groups (a map folder's are stored): those of its included runs
-    files = explorer_files(runs, out.name, title=title or "tribopipe friction-map explorer",
-                           source=str(map_path), groups=snap.groups(show_method=True),
-                           runs_inline_limit=runs_inline_limit,
-                           groups_page_limit=groups_page_limit)
-    return write_page_and_files(out, files)
+    groups = snap.groups(show_method=True)  # those of its included runs (stored in a folder)
+    # the run columns the pages and the fits read, the others left behind
+    shown = runs[[c for c in EXPLORER_COLUMNS if c in runs.columns]]
+    del runs
+    files = iter_explorer_files(shown, out.name,
+                                title=title or "tribopipe friction-map explorer",
+                                source=str(map_path), groups=groups,
+                                runs_inline_limit=runs_inline_limit,
+                                groups_page_limit=groups_page_limit)
+    return write_page_and_files(out, files)  # each written as it is made

@@ -139,3 +139,25 @@ def test_the_power_law_fits_are_as_before(published):
     assert fit_power_law(published.iloc[:0]).empty
     none_kept = published.assign(mu_k=-1.0)  # no run with a positive μ: no set
     pd.testing.assert_frame_equal(fit_power_law(none_kept), _fit_power_law_before(none_kept))
+
+
+def test_script_json_escapes_as_one_translation_did(published):
+    """The page's JSON escaped by replacing each character in turn equals the one
+    ``str.translate`` it replaces, on hostile names and on a real explorer's data."""
+    import json
+
+    from tribopipe.escape import script_json
+    from tribopipe.export.explorer import explorer_data
+
+    table = str.maketrans({"<": "\\u003c", ">": "\\u003e", "&": "\\u0026",
+                           "\u2028": "\\u2028", "\u2029": "\\u2029"})
+
+    def before(data: Any) -> str:
+        return json.dumps(data, ensure_ascii=False, allow_nan=False,
+                          separators=(",", ":")).translate(table)
+
+    hostile = ["</script><!--&amp;", "\u2028\u2029<>&", "μ_K ± 0.1 → ", "", "\\u003c<"]
+    for value in (hostile, {"x": hostile, "<": [1.5, None, True]}):
+        assert script_json(value) == before(value)
+    data = explorer_data(published.assign(pin=published["pin"] + " <&>\u2028"))
+    assert script_json(data) == before(data)

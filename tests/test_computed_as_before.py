@@ -161,3 +161,29 @@ def test_script_json_escapes_as_one_translation_did(published):
         assert script_json(value) == before(value)
     data = explorer_data(published.assign(pin=published["pin"] + " <&>\u2028"))
     assert script_json(data) == before(data)
+
+
+def test_the_group_rows_gathered_as_columns_are_the_frame_of_the_rows(published, monkeypatch):
+    """group_rows gathers each group's figures into columns as they come; the frame is
+    the one ``pd.DataFrame`` made of the list of its rows (kept here), column for column,
+    on the map's variants and with two labs, by speed and by lab."""
+    from tribopipe import stats
+
+    labs = published.assign(lab=np.where(np.arange(len(published)) % 3 == 0, "Lab A", "Lab B"))
+    maps = {**_variants(published), "two labs": labs}
+    args = [{}, {"by_speed": True}, {"by_lab": True}]
+    new = {(name, i): stats.group_rows(runs, **a) for name, runs in maps.items()
+           for i, a in enumerate(args)}
+
+    class Rows(list):  # the code replaced: a dict per row, then one frame
+        def frame(self) -> pd.DataFrame:
+            return pd.DataFrame(list(self))
+
+    monkeypatch.setattr(stats, "_Columns", Rows)
+    for (name, i), frame in new.items():
+        pd.testing.assert_frame_equal(frame, stats.group_rows(maps[name], **args[i]),
+                                      check_exact=True, obj=f"{name}, {args[i]}")
+    assert {"_mu_k_lab_means", "mu_k_s_L"} <= set(new[("two labs", 0)].columns)
+    empty = published.assign(excluded=True)
+    monkeypatch.undo()
+    pd.testing.assert_frame_equal(stats.group_rows(empty), pd.DataFrame([]))

@@ -217,8 +217,11 @@ FIT_FIELDS = (
 def _plain(value: Any) -> Any:
     """``value`` as a JSON-ready Python value: NaN/inf and missing → ``None``, numpy
     scalars → ``int``/``float``/``bool``."""
-    if value is None:
-        return None
+    kind = value.__class__
+    if kind is float:  # the common cases first (10⁶ cells of a map of 10⁵ groups)
+        return value if math.isfinite(value) else None
+    if value is None or kind is str or kind is int or kind is bool:
+        return value
     if isinstance(value, bool | str):
         return value
     if hasattr(value, "item"):  # numpy scalar
@@ -437,6 +440,14 @@ def _fits(pair_fits: pd.DataFrame) -> list[dict[str, Any]]:
     return out
 
 
+#: the fields of a group row :func:`tribopipe.export.tables.group_flags` reads
+_FLAG_FIELDS = ("reviewed", "range_exceeds_r", LABS_DISAGREE, "qc_flagged")
+#: the group-table columns the page reads (its fields, cells, flags, labs and runs)
+_GROUP_READ = frozenset((
+    "pin", "disc", *GROUP_FIELDS, *_FLAG_FIELDS, NOMINAL_SPEED, TEST_METHOD, LABS,
+    "run_ids"))
+
+
 def _group_texts(g: Mapping[Any, Any], expanded: dict[str, float | None]) -> dict[str, str]:
     """A group row's cells as the page's group table shows them (the tables' rounding:
     :func:`tribopipe.export.tables.condition_text`, GUM ``value ± U``, three decimals)."""
@@ -455,7 +466,7 @@ def _group_texts(g: Mapping[Any, Any], expanded: dict[str, float | None]) -> dic
         v = _plain(g.get(name))
         return "" if v is None else f"{v:.3f}"
 
-    qc = ", ".join(group_flags({k: _plain(v) for k, v in g.items()}))
+    qc = ", ".join(group_flags({k: _plain(g[k]) for k in _FLAG_FIELDS if k in g}))
     return {
         "normal_force_N": _cell_g(g.get("normal_force_N")),
         "pressure_kPa": condition_text("pressure_kPa", _plain(g.get("pressure_kPa"))),
@@ -665,7 +676,8 @@ def explorer_data(
     group_rows = []
     expanded = {q: 2.0 * group_u(groups, q)[0].to_numpy(dtype=float) for q in ("mu_k", "mu_s")}
     lab_of_run = {r["id"]: r["lab"] for chunk in run_chunks for r in chunk}
-    for i, g in enumerate(groups.to_dict(orient="records")):
+    read = [c for c in groups.columns if c in _GROUP_READ]  # the others are not read
+    for i, g in enumerate(groups.loc[:, read].to_dict(orient="records")):
         index = pair_index.get(group_keys[i])
         if index is None:
             continue
@@ -788,14 +800,12 @@ def _packed(rows: list[dict[str, Any]]) -> dict[str, Any]:
     """Rows (a pair's runs, the groups) as columns and rows: each key written once, not
     once per row; a dict value's keys become columns ``name/key``."""
     columns: list[str] = []
+    cells: list[tuple[str, str]] = []  # each column's key and, in a dict value, its key
     for name, value in (rows[0].items() if rows else ()):
         columns += [f"{name}/{k}" for k in value] if isinstance(value, dict) else [name]
-
-    def cell(row: dict[str, Any], column: str) -> Any:
-        name, _, key = column.partition("/")
-        return row[name][key] if key else row[name]
-
-    return {"columns": columns, "rows": [[cell(r, c) for c in columns] for r in rows]}
+        cells += [(name, k) for k in value] if isinstance(value, dict) else [(name, "")]
+    return {"columns": columns,
+            "rows": [[r[name][key] if key else r[name] for name, key in cells] for r in rows]}
 
 
 def _unpacked(packed: dict[str, Any]) -> list[dict[str, Any]]:

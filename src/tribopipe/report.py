@@ -50,8 +50,8 @@ from .escape import html_text, script_json
 from .export.explorer import (
     GROUPS_PAGE_LIMIT,
     explorer_data,
-    explorer_files,
     explorer_fragment,
+    explorer_parts,
     explorer_style,
     runs_files,
     runs_folder,
@@ -224,8 +224,9 @@ class ReportInputs:
 class _Pairs:
     """The pairs of a report whose pairs lie beside its page, in its order: ``names``
     (pin, disc) as the map spells them, ``of`` the index of each (its file
-    ``report-<k>.js``), and by index the positions of its rows in the report's ordered
-    runs (``runs``), in the group table (``groups``) and in the fit table (``fits``)."""
+    ``report-<k>.js``), and by index the positions of its rows among the runs (``runs``,
+    in the order the report lists them), in the group table (``groups``) and in the fit
+    table (``fits``)."""
 
     names: tuple[tuple[str, str], ...]
     of: Mapping[tuple[str, str], int]
@@ -580,8 +581,8 @@ def _pair_plots(inp: ReportInputs, layout: _Layout) -> str:
     """The per-pair μ_K(p) plots, embedded as PNG, each drawn from its own pair's runs and
     fits (selected once); up to :data:`PAIR_PLOTS_LIMIT` pairs, beyond which the section
     says that the explorer draws them."""
-    included = inp.runs[~inp.runs["excluded"].fillna(False).astype(bool)]
-    held = pairs(included)
+    kept = ~inp.runs["excluded"].fillna(False).astype(bool)
+    held = pairs(inp.runs.loc[kept, ["pin", "disc"]])
     if not layout.pair_plots:
         return (
             '<section id="pairs"><h2>μ_K against contact pressure, per pair</h2>'
@@ -595,7 +596,7 @@ def _pair_plots(inp: ReportInputs, layout: _Layout) -> str:
         keys = [table["pin"].astype(str).str.casefold(), table["disc"].astype(str).str.casefold()]
         return {(str(p), str(d)): part for (p, d), part in table.groupby(keys, sort=False)}
 
-    runs_of, fits_of = by_key(included), by_key(inp.fits) if len(inp.fits) else {}
+    runs_of, fits_of = by_key(inp.runs[kept]), by_key(inp.fits) if len(inp.fits) else {}
     figures = []
     for pin, disc in held:
         key = (pin.casefold(), disc.casefold())
@@ -701,12 +702,21 @@ def _review_text(r: MapRow) -> str:
     return text
 
 
+#: the order the report lists runs in
+_RUN_ORDER = ["pin", "disc", "temperature_C", "pressure_kPa", "repeat"]
+
+
 def _ordered_runs(inp: ReportInputs) -> pd.DataFrame:
     """The runs in the order the report lists them: pin, disc, temperature, pressure,
     repeat."""
-    return inp.runs.sort_values(
-        ["pin", "disc", "temperature_C", "pressure_kPa", "repeat"], kind="mergesort"
-    )
+    return inp.runs.sort_values(_RUN_ORDER, kind="mergesort")
+
+
+def _run_order(inp: ReportInputs) -> Any:
+    """The positions of the runs in the order :func:`_ordered_runs` lists them (the same
+    stable sort on the sorting columns alone: no copy of the runs)."""
+    keys = inp.runs[_RUN_ORDER].reset_index(drop=True)
+    return keys.sort_values(_RUN_ORDER, kind="mergesort").index.to_numpy()
 
 
 def _run_columns(inp: ReportInputs) -> tuple[bool, bool]:
@@ -820,7 +830,8 @@ def _listed(inp: ReportInputs, runs: pd.DataFrame | Sequence[MapRow], element: s
 def _pair_index(inp: ReportInputs) -> _Pairs:
     """The report's pairs in its order (the runs' order: pin, then disc), any pair that
     only the groups or fits name after them, with each one's runs, groups and fits."""
-    ordered = _ordered_runs(inp)
+    order = _run_order(inp)
+    names_in_order = inp.runs[["pin", "disc"]].take(order)
     of: dict[tuple[str, str], int] = {}
 
     def positions(table: pd.DataFrame) -> dict[int, Any]:
@@ -835,7 +846,8 @@ def _pair_index(inp: ReportInputs) -> _Pairs:
             out[of.setdefault((str(names[0]), str(names[1])), len(of))] = at
         return out
 
-    runs_at, groups_at, fits_at = (positions(t) for t in (ordered, inp.groups, inp.fits))
+    runs_at = {k: order[at] for k, at in positions(names_in_order).items()}
+    groups_at, fits_at = positions(inp.groups), positions(inp.fits)
     return _Pairs(names=tuple(of), of=of, runs=runs_at, groups=groups_at, fits=fits_at)
 
 
@@ -938,7 +950,7 @@ def pair_files(inp: ReportInputs, layout: _Layout) -> Iterator[tuple[str, str]]:
     by_pair = zip(
         _rows_by_pair(inp.groups, pairs.groups, n, _group_records),
         _rows_by_pair(inp.fits, pairs.fits, n, lambda t: t.to_dict(orient="records")),
-        _rows_by_pair(_ordered_runs(inp), pairs.runs, n, frame_rows), strict=True)
+        _rows_by_pair(inp.runs, pairs.runs, n, frame_rows), strict=True)
     for k, (groups, fits, runs) in enumerate(by_pair):
         html = _pair_html(inp, groups, fits, [r for _, r in runs], cells, columns, layout)
         yield PAIR_FILE.format(k=k), f"window.tribopipeReportPair({k}, {script_json(html)});\n"
@@ -1093,9 +1105,9 @@ def report_parts(
     explorer_page = None
     if explorer_beside:
         explorer_page = Path(name).with_name(Path(name).stem + "_explorer.html").as_posix()
-        yield from explorer_files(inp.runs, explorer_page, title=f"{inp.page_title}: explorer",
+        yield from explorer_parts(inp.runs, explorer_page, title=f"{inp.page_title}: explorer",
                                   source=inp.source, groups=inp.groups, fits=inp.fits,
-                                  groups_page_limit=groups_page_limit).items()
+                                  groups_page_limit=groups_page_limit)
         explorer_page = Path(explorer_page).name
     else:
         explorer = explorer_data(inp.runs, groups=inp.groups, fits=inp.fits,
@@ -1103,11 +1115,12 @@ def report_parts(
         if runs_beside:
             for f, text in runs_files(explorer).items():
                 yield (folder / f).as_posix(), text
-    included = inp.runs[~inp.runs["excluded"].fillna(False).astype(bool)]
+    kept = ~inp.runs["excluded"].fillna(False).astype(bool)
     layout = _Layout(pairs_beside=folder.name if beside else None,
                      pairs=_pair_index(inp) if beside else None,
                      explorer=explorer, explorer_page=explorer_page,
-                     pair_plots=len(pairs(included)) <= PAIR_PLOTS_LIMIT,
+                     pair_plots=len(pairs(inp.runs.loc[kept, ["pin", "disc"]]))
+                     <= PAIR_PLOTS_LIMIT,
                      tables_beside=folder.name if beside else None)
     if beside:  # a report with files beside: its pairs and its tables' downloads there
         yield (folder / "groups.csv").as_posix(), spreadsheet_csv(inp.groups)

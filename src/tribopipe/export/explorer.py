@@ -1017,7 +1017,7 @@ def _shards(groups: pd.DataFrame, limit: int) -> list[list[str]]:
     return shards
 
 
-def iter_explorer_files(
+def explorer_parts(
     runs: pd.DataFrame,
     name: str,
     *,
@@ -1116,9 +1116,9 @@ def explorer_files(
     runs_beside_pages: bool = True,
     max_files: int | None = None,
 ) -> dict[str, str]:
-    """Every file of :func:`iter_explorer_files` (same arguments) at once: relative paths
+    """Every file of :func:`explorer_parts` (same arguments) at once: relative paths
     → text, the page ``name`` last."""
-    return dict(iter_explorer_files(
+    return dict(explorer_parts(
         runs, name, title=title, source=source, groups=groups, fits=fits,
         runs_inline_limit=runs_inline_limit, groups_page_limit=groups_page_limit,
         runs_beside_pages=runs_beside_pages, max_files=max_files))
@@ -1183,7 +1183,7 @@ def write_explorer(
     groups_page_limit: int = GROUPS_PAGE_LIMIT,
 ) -> Path:
     """Write the explorer of the map at ``map_path`` to ``output`` (atomically):
-    :func:`iter_explorer_files`, each file written as it is made (atomically), the page
+    :func:`explorer_parts`, each file written as it is made (atomically), the page
     last. A map of more than ``runs_inline_limit`` included runs gets its runs in
     :func:`runs_folder` beside the page, one file per pair; a map of more than
     ``groups_page_limit`` condition groups an index page at ``output`` and its pins'
@@ -1202,7 +1202,7 @@ def write_explorer(
     # the run columns the pages and the fits read, the others left behind
     shown = runs[[c for c in EXPLORER_COLUMNS if c in runs.columns]]
     del runs
-    files = iter_explorer_files(shown, out.name,
+    files = explorer_parts(shown, out.name,
                                 title=title or "tribopipe friction-map explorer",
                                 source=str(map_path), groups=groups,
                                 runs_inline_limit=runs_inline_limit,

@@ -111,7 +111,7 @@ from .citation import (
     founding_paper_text,
     package_readme,
 )
-from .explorer import EXPLORER_COLUMNS, iter_explorer_files
+from .explorer import EXPLORER_COLUMNS, explorer_parts
 from .tables import frictionmap_csv, frictionmap_table
 
 if TYPE_CHECKING:
@@ -121,7 +121,7 @@ if TYPE_CHECKING:
 EXPLORER = "explorer.html"
 #: the most files of the explorer a package lists (each a resource; a package lists at
 #: most 64): beyond, its pages carry more groups each, and then the runs travel in
-#: the pages (:func:`~tribopipe.export.explorer.iter_explorer_files` ``max_files``)
+#: the pages (:func:`~tribopipe.export.explorer.explorer_parts` ``max_files``)
 EXPLORER_FILES_LIMIT = 40
 
 
@@ -550,7 +550,7 @@ def build_package(rows: list[pd.DataFrame], groups: pd.DataFrame, publisher: Pub
     return_free_memory()
     # each file is a resource of its own (a package lists at most 64), written as it is
     # made: one page held at a time
-    page_files = iter_explorer_files(shown, EXPLORER, groups=groups, fits=fits,
+    page_files = explorer_parts(shown, EXPLORER, groups=groups, fits=fits,
                                      title=publisher.package_title, source=publisher.lab,
                                      max_files=EXPLORER_FILES_LIMIT)
     for path, text in page_files:

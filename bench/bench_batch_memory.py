@@ -2,10 +2,10 @@
 before any work, and what it keeps at the end of a real batch from scratch, by owner.
 
 Planning (a config given): over a campaign a batch already ran (e.g. ``bench_rerun.py``'s
-``n10000`` folder), the state is read, the table built and the plan made as ``tribopipe
-batch`` does, and the bytes each keeps after a garbage collection are divided by the
-number of files. Read-only (the state is opened read-only, no export is read: their size
-and ``mtime_ns`` match).
+``n10000`` folder), the state is read (row by row, its names kept), the table built and
+the plan made as ``tribopipe batch`` does, and the bytes each keeps after a garbage
+collection are divided by the number of files. Read-only (the state is opened
+read-only, no export is read: their size and ``mtime_ns`` match).
 
     nice python bench/bench_batch_memory.py bench/out/rerun/n10000/campaign.toml
 
@@ -17,7 +17,8 @@ on in the parent only (one frame; its forked workers stop it). When the batch wr
 frame reaches are summed (``sys.getsizeof`` over ``gc.get_referents``, each object
 counted once, for the first local that reaches it; the campaign and constant locals for
 none). Printed per owner: the bytes kept at each size and the growth per file between
-the sizes; and the parent's traced memory, its RSS (``VmRSS``) and peak (``VmHWM``).
+the sizes; and the parent's traced memory, its RSS (``VmRSS``) and peak (``VmHWM``), then
+and after the batch (``end_``: its rehearsal of the next re-run included).
 
     nice python bench/bench_batch_memory.py --batch 2000 6000
 """
@@ -47,7 +48,10 @@ def planning(config: Path) -> dict[str, float]:
     gc.collect()
     tracemalloc.start()
     cpu = time.process_time()
-    kept = state.load_state(campaign)
+    try:  # as the batch reads it: each row checked, the names kept
+        kept = state.load_state(campaign, lazy=True)
+    except TypeError:  # a tree from before the lazy read (``--src``-style comparisons)
+        kept = state.load_state(campaign)
     gc.collect()
     after_state = tracemalloc.get_traced_memory()[0]
     rows = table.campaign_table(campaign, state=kept)
@@ -155,6 +159,9 @@ def one_batch(out: Path, n: int, jobs: int) -> dict:
     tracemalloc.start(1)
     cpu, wall = time.process_time(), time.perf_counter()
     report = batch.run_campaign(campaign, jobs=jobs, plots=False)
+    # after the batch and what follows its outputs (the rehearsal of its next re-run)
+    found.update(end_traced_peak_B=tracemalloc.get_traced_memory()[1],
+                 end_VmHWM=_rss_kB()["VmHWM"])
     found.update(files=report.files, reduced=len(report.reduced), failures=len(report.failures),
                  parent_cpu_s=round(time.process_time() - cpu, 1),
                  wall_s=round(time.perf_counter() - wall, 1))
@@ -191,7 +198,10 @@ def batches(sizes: list[int], out: Path, jobs: int) -> dict:
     summary = {"traced_B_per_file": (b["traced_B"] - a["traced_B"]) / per,
                "traced_peak_B_per_file": (b["traced_peak_B"] - a["traced_peak_B"]) / per,
                "rss_B_per_file": (b["VmRSS"] - a["VmRSS"]) * 1e3 / per,
-               "rss_peak_B_per_file": (b["VmHWM"] - a["VmHWM"]) * 1e3 / per}
+               "rss_peak_B_per_file": (b["VmHWM"] - a["VmHWM"]) * 1e3 / per,
+               "end_traced_peak_B_per_file":
+                   (b["end_traced_peak_B"] - a["end_traced_peak_B"]) / per,
+               "end_rss_peak_B_per_file": (b["end_VmHWM"] - a["end_VmHWM"]) * 1e3 / per}
     print(json.dumps({k: round(v) for k, v in summary.items()}))
     return {"sizes": results, "growth_B_per_file": growth, **summary}
 

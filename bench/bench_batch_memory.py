@@ -146,10 +146,12 @@ def one_batch(out: Path, n: int, jobs: int) -> dict:
         gc.collect()
         current, peak = tracemalloc.get_traced_memory()
         frame = sys._getframe(1)
-        while frame.f_code.co_name != "_run_locked":
+        while not {"rows", "entries"} <= frame.f_locals.keys():  # the batch's own frame
             frame = frame.f_back  # type: ignore[assignment]
+        sites = {f"{st.traceback[0].filename.rsplit('/', 2)[-1]}:{st.traceback[0].lineno}":
+                 st.size for st in tracemalloc.take_snapshot().statistics("lineno")[:400]}
         found.update(traced_B=current, traced_peak_B=peak, owners=owners_of(frame),
-                     **_rss_kB())
+                     sites=sites, **_rss_kB())
         del frame
         write(*args, **kwargs)  # type: ignore[arg-type]
 
@@ -195,6 +197,12 @@ def batches(sizes: list[int], out: Path, jobs: int) -> dict:
         if abs(growth[key]) > 10:
             print(f"  {growth[key]:8.0f}  {key}  ({a['owners'].get(key, 0) / 1e3:.0f} → "
                   f"{b['owners'].get(key, 0) / 1e3:.0f} kB)")
+    sites = set(a["sites"]) | set(b["sites"])
+    by_site = {k: (b["sites"].get(k, 0) - a["sites"].get(k, 0)) / per for k in sites}
+    print("traced, by the line that allocated it (B/file; lines of more than 20 B/file):")
+    for key in sorted(by_site, key=lambda k: -abs(by_site[k])):
+        if abs(by_site[key]) > 20:
+            print(f"  {by_site[key]:8.0f}  {key}")
     summary = {"traced_B_per_file": (b["traced_B"] - a["traced_B"]) / per,
                "traced_peak_B_per_file": (b["traced_peak_B"] - a["traced_peak_B"]) / per,
                "rss_B_per_file": (b["VmRSS"] - a["VmRSS"]) * 1e3 / per,

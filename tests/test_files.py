@@ -82,3 +82,28 @@ def test_atomic_text_names_the_target_it_cannot_write(tmp_path: Path) -> None:
     with pytest.raises(OutputError) as err, atomic_text(blocker / "t.csv") as fh:
         fh.write("never")
     assert "t.csv" in str(err.value)
+
+
+def test_a_page_and_its_files_are_written_as_they_come_the_page_last(tmp_path: Path) -> None:
+    import pytest
+
+    from tribopipe.files import write_page_and_files
+
+    seen: list[list[str]] = []
+
+    def parts():  # what is on disk when each part is handed over
+        for name, text in (("p_runs/a.js", "a"), ("page.html", "<p>"), ("p_runs/b.js", "b")):
+            seen.append(sorted(str(p.relative_to(tmp_path)) for p in tmp_path.rglob("*.*")))
+            yield name, text
+
+    assert write_page_and_files(tmp_path / "page.html", parts()) == tmp_path / "page.html"
+    # each file is on disk before the next is made; the page only after every other one
+    assert seen == [[], ["p_runs/a.js"], ["p_runs/a.js"]]
+    assert (tmp_path / "page.html").read_text(encoding="utf-8") == "<p>"
+    assert (tmp_path / "p_runs" / "b.js").read_text(encoding="utf-8") == "b"
+    # a mapping as before; no page among the files: refused, and no page written
+    write_page_and_files(tmp_path / "m.html", {"m.html": "m", "m_runs/c.js": "c"})
+    assert (tmp_path / "m.html").read_text(encoding="utf-8") == "m"
+    with pytest.raises(ValueError, match="no page 'x.html'"):
+        write_page_and_files(tmp_path / "x.html", [("x_runs/d.js", "d")])
+    assert not (tmp_path / "x.html").exists()

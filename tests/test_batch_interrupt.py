@@ -17,6 +17,7 @@ import pytest
 from generators.synthetic import SyntheticRun, write_rheocompass_export
 from tribopipe import frictionmap as fm
 from tribopipe.campaign import folder_campaign, run_campaign
+from tribopipe.campaign.state import load_kept
 
 pytestmark = pytest.mark.slow  # real processes reducing dozens of exports
 
@@ -91,10 +92,17 @@ def test_a_stopped_batch_keeps_what_landed_and_the_next_reduces_the_rest(
     # its locks are gone or block nothing: the next batch runs and reduces only the rest
     campaign = folder_campaign(raw, filename_pattern=PATTERN, map_path=map_path,
                                output_dir=out)
+    # a stopped batch rehearses no re-run: it keeps no ledger, kept or pending
+    assert load_kept(campaign) is None
     report = run_campaign(campaign, jobs=1, plots=False)
     assert len(report.skipped) == landed and len(report.reduced) == N_FILES - landed
     assert report.ok and report.interrupted is None
     assert len(fm.read_map(map_path)) == N_FILES
+    # that one did its work cleanly: the next is its rehearsed re-run, which reads nothing
+    pending = load_kept(campaign)
+    assert pending is not None and pending.tables is not None
+    again = run_campaign(campaign, jobs=1, plots=False)
+    assert again.kept and len(again.skipped) == N_FILES and again.reduced == []
 
 
 def test_a_killed_batch_leaves_a_readable_map_and_no_lock_that_blocks(

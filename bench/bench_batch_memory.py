@@ -1,12 +1,25 @@
 """The batch's parent memory per file, by ``tracemalloc``: what it keeps of a campaign
-before any work (the state's entries decoded, the campaign table, the plan).
+before any work, and what it keeps at the end of a real batch from scratch, by owner.
 
-Over a campaign a batch already ran (e.g. ``bench_rerun.py``'s ``n10000`` folder): the
-state is read, the table built and the plan made as ``tribopipe batch`` does, and the
-bytes each keeps after a garbage collection are divided by the number of files. Read-only
-(the state is opened read-only, no export is read: their size and ``mtime_ns`` match).
+Planning (a config given): over a campaign a batch already ran (e.g. ``bench_rerun.py``'s
+``n10000`` folder), the state is read, the table built and the plan made as ``tribopipe
+batch`` does, and the bytes each keeps after a garbage collection are divided by the
+number of files. Read-only (the state is opened read-only, no export is read: their size
+and ``mtime_ns`` match).
 
     nice python bench/bench_batch_memory.py bench/out/rerun/n10000/campaign.toml
+
+A batch from scratch (``--batch N1 N2``): per size, a fresh process generates ``N``
+short exports (``bench_rerun.py``'s, 300–1,000 rows of friction interval), then runs
+``run_campaign(…, jobs=2, plots=False)`` from an empty output folder with ``tracemalloc``
+on in the parent only (one frame; its forked workers stop it). When the batch writes
+``runs.csv`` (everything it keeps is alive then) the bytes each local of the batch's
+frame reaches are summed (``sys.getsizeof`` over ``gc.get_referents``, each object
+counted once, for the first local that reaches it; the campaign and constant locals for
+none). Printed per owner: the bytes kept at each size and the growth per file between
+the sizes; and the parent's traced memory, its RSS (``VmRSS``) and peak (``VmHWM``).
+
+    nice python bench/bench_batch_memory.py --batch 2000 6000
 """
 
 from __future__ import annotations
@@ -14,19 +27,23 @@ from __future__ import annotations
 import argparse
 import gc
 import json
+import shutil
+import subprocess
+import sys
 import time
 import tracemalloc
 from pathlib import Path
+from types import CodeType, FrameType, FunctionType, ModuleType
+
+HERE = Path(__file__).resolve().parent
 
 
-def main(argv: list[str] | None = None) -> dict[str, float]:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("config", type=Path)
-    args = parser.parse_args(argv)
+def planning(config: Path) -> dict[str, float]:
+    """What the parent keeps of a campaign before any work, per file."""
     from tribopipe.campaign import batch, state, table
     from tribopipe.campaign.spec import load_campaign
 
-    campaign = load_campaign(args.config)
+    campaign = load_campaign(config)
     gc.collect()
     tracemalloc.start()
     cpu = time.process_time()
@@ -49,6 +66,155 @@ def main(argv: list[str] | None = None) -> dict[str, float]:
     print(json.dumps({k: round(v) if k != "cpu_s" else round(v, 2)
                       for k, v in result.items()}))
     return result
+
+
+#: kept by the batch whatever the number of files (not owners to size)
+_CONSTANT = ("campaign", "progress", "stop", "review", "manifest", "jobs", "plots")
+
+
+#: the batch's locals in the order they are given what they share
+_FIRST = ("state", "entries", "rows", "by_file", "plan", "todo", "order", "redone", "account",
+          "failures", "this_batch", "outcomes", "duplicates", "notes", "vanished")
+
+
+def deep_size(obj: object, seen: set[int]) -> int:
+    """The bytes of ``obj`` and of every object it reaches that ``seen`` does not hold
+    yet (added to it): types, modules and functions are not followed."""
+    size, stack = 0, [obj]
+    while stack:
+        o = stack.pop()
+        if id(o) in seen or isinstance(o, (type, ModuleType, FunctionType, CodeType)):
+            continue
+        seen.add(id(o))
+        size += sys.getsizeof(o)
+        stack.extend(gc.get_referents(o))
+    return size
+
+
+def owners_of(frame: FrameType) -> dict[str, int]:
+    """The bytes each local of the batch's frame keeps, each object counted once (for
+    the first local that reaches it, in the frame's order of locals; what the campaign
+    and the constant locals reach is counted for none)."""
+    seen: set[int] = set()
+    local = dict(frame.f_locals)
+    for name in _CONSTANT:
+        if name in local:
+            deep_size(local.pop(name), seen)
+    first = [n for n in _FIRST if n in local]
+    return {name: deep_size(local[name], seen)
+            for name in [*first, *(n for n in local if n not in first)]
+            if not callable(local[name])}
+
+
+def _rss_kB() -> dict[str, int]:
+    out = {}
+    for line in Path("/proc/self/status").read_text().splitlines():
+        key, _, value = line.partition(":")
+        if key in ("VmRSS", "VmHWM"):
+            out[key] = int(value.split()[0])
+    return out
+
+
+def one_batch(out: Path, n: int, jobs: int) -> dict:
+    """Generate ``n`` exports under ``out`` and run a batch from scratch over them,
+    measuring the parent when it writes ``runs.csv``; returns the figures."""
+    sys.path.insert(0, str(HERE))
+    import bench_campaign as bc
+    import bench_rerun
+
+    from tribopipe.campaign import batch
+    from tribopipe.campaign.spec import load_campaign
+
+    config, _ = bench_rerun.prepare(out, n, (300, 1000), jobs)
+    shutil.rmtree(out / "processed", ignore_errors=True)
+    del bc
+    campaign = load_campaign(config)
+    found: dict = {}
+    start_worker = batch.worker_init
+
+    def worker_init() -> None:  # the workers are forked: they stop tracing
+        tracemalloc.stop()
+        start_worker()
+
+    write = batch.write_runs_csv
+
+    def write_runs_csv(*args: object, **kwargs: object) -> None:
+        gc.collect()
+        current, peak = tracemalloc.get_traced_memory()
+        frame = sys._getframe(1)
+        while frame.f_code.co_name != "_run_locked":
+            frame = frame.f_back  # type: ignore[assignment]
+        found.update(traced_B=current, traced_peak_B=peak, owners=owners_of(frame),
+                     **_rss_kB())
+        del frame
+        write(*args, **kwargs)  # type: ignore[arg-type]
+
+    batch.worker_init = worker_init  # type: ignore[assignment]
+    batch.write_runs_csv = write_runs_csv  # type: ignore[assignment]
+    gc.collect()
+    tracemalloc.start(1)
+    cpu, wall = time.process_time(), time.perf_counter()
+    report = batch.run_campaign(campaign, jobs=jobs, plots=False)
+    found.update(files=report.files, reduced=len(report.reduced), failures=len(report.failures),
+                 parent_cpu_s=round(time.process_time() - cpu, 1),
+                 wall_s=round(time.perf_counter() - wall, 1))
+    tracemalloc.stop()
+    return found
+
+
+def batches(sizes: list[int], out: Path, jobs: int) -> dict:
+    """A batch from scratch per size, each in a fresh process; prints what the parent
+    keeps per owner and its growth per file between the first and last size."""
+    results = {}
+    for n in sizes:
+        done = subprocess.run([sys.executable, __file__, "--one", str(n), "--out", str(out),
+                               "--jobs", str(jobs)], check=True, capture_output=True,
+                              text=True)
+        results[n] = json.loads(done.stdout.strip().splitlines()[-1])
+        r = results[n]
+        print(f"{n} exports: {r['files']} files, {r['reduced']} runs reduced, "
+              f"{r['failures']} failures; {r['wall_s']} s wall, parent {r['parent_cpu_s']} s "
+              f"CPU; traced {r['traced_B'] / 1e6:.1f} MB (peak {r['traced_peak_B'] / 1e6:.1f}"
+              f" MB), RSS {r['VmRSS'] / 1e3:.0f} MB (peak {r['VmHWM'] / 1e3:.0f} MB)",
+              flush=True)
+    small, large = min(sizes), max(sizes)
+    a, b = results[small], results[large]
+    per = large - small
+    owners = set(a["owners"]) | set(b["owners"])
+    growth = {k: (b["owners"].get(k, 0) - a["owners"].get(k, 0)) / per for k in owners}
+    print(f"kept by the parent when it writes runs.csv, growth per file from {small} to "
+          f"{large} exports (B/file; owners of more than 10 B/file):")
+    for key in sorted(growth, key=lambda k: -abs(growth[k])):
+        if abs(growth[key]) > 10:
+            print(f"  {growth[key]:8.0f}  {key}  ({a['owners'].get(key, 0) / 1e3:.0f} → "
+                  f"{b['owners'].get(key, 0) / 1e3:.0f} kB)")
+    summary = {"traced_B_per_file": (b["traced_B"] - a["traced_B"]) / per,
+               "traced_peak_B_per_file": (b["traced_peak_B"] - a["traced_peak_B"]) / per,
+               "rss_B_per_file": (b["VmRSS"] - a["VmRSS"]) * 1e3 / per,
+               "rss_peak_B_per_file": (b["VmHWM"] - a["VmHWM"]) * 1e3 / per}
+    print(json.dumps({k: round(v) for k, v in summary.items()}))
+    return {"sizes": results, "growth_B_per_file": growth, **summary}
+
+
+def main(argv: list[str] | None = None) -> dict:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("config", type=Path, nargs="?",
+                        help="a campaign a batch already ran: what planning keeps")
+    parser.add_argument("--batch", type=int, nargs="+", metavar="N",
+                        help="batches from scratch of these numbers of exports")
+    parser.add_argument("--one", type=int, help=argparse.SUPPRESS)
+    parser.add_argument("--jobs", type=int, default=2)
+    parser.add_argument("--out", type=Path, default=HERE / "out" / "batch_memory")
+    args = parser.parse_args(argv)
+    if args.one is not None:
+        found = one_batch(args.out.resolve() / f"n{args.one}", args.one, args.jobs)
+        print(json.dumps(found))
+        return found
+    if args.batch:
+        return batches(sorted(args.batch), args.out, args.jobs)
+    if args.config is None:
+        parser.error("give a campaign config or --batch N1 N2")
+    return planning(args.config)
 
 
 if __name__ == "__main__":

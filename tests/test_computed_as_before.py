@@ -139,3 +139,51 @@ def test_the_power_law_fits_are_as_before(published):
     assert fit_power_law(published.iloc[:0]).empty
     none_kept = published.assign(mu_k=-1.0)  # no run with a positive μ: no set
     pd.testing.assert_frame_equal(fit_power_law(none_kept), _fit_power_law_before(none_kept))
+
+
+def test_script_json_escapes_as_one_translation_did(published):
+    """The page's JSON escaped by replacing each character in turn equals the one
+    ``str.translate`` it replaces, on hostile names and on a real explorer's data."""
+    import json
+
+    from tribopipe.escape import script_json
+    from tribopipe.export.explorer import explorer_data
+
+    table = str.maketrans({"<": "\\u003c", ">": "\\u003e", "&": "\\u0026",
+                           "\u2028": "\\u2028", "\u2029": "\\u2029"})
+
+    def before(data: Any) -> str:
+        return json.dumps(data, ensure_ascii=False, allow_nan=False,
+                          separators=(",", ":")).translate(table)
+
+    hostile = ["</script><!--&amp;", "\u2028\u2029<>&", "μ_K ± 0.1 → ", "", "\\u003c<"]
+    for value in (hostile, {"x": hostile, "<": [1.5, None, True]}):
+        assert script_json(value) == before(value)
+    data = explorer_data(published.assign(pin=published["pin"] + " <&>\u2028"))
+    assert script_json(data) == before(data)
+
+
+def test_the_group_rows_gathered_as_columns_are_the_frame_of_the_rows(published, monkeypatch):
+    """group_rows gathers each group's figures into columns as they come; the frame is
+    the one ``pd.DataFrame`` made of the list of its rows (kept here), column for column,
+    on the map's variants and with two labs, by speed and by lab."""
+    from tribopipe import stats
+
+    labs = published.assign(lab=np.where(np.arange(len(published)) % 3 == 0, "Lab A", "Lab B"))
+    maps = {**_variants(published), "two labs": labs}
+    args = [{}, {"by_speed": True}, {"by_lab": True}]
+    new = {(name, i): stats.group_rows(runs, **a) for name, runs in maps.items()
+           for i, a in enumerate(args)}
+
+    class Rows(list):  # the code replaced: a dict per row, then one frame
+        def frame(self) -> pd.DataFrame:
+            return pd.DataFrame(list(self))
+
+    monkeypatch.setattr(stats, "_Columns", Rows)
+    for (name, i), frame in new.items():
+        pd.testing.assert_frame_equal(frame, stats.group_rows(maps[name], **args[i]),
+                                      check_exact=True, obj=f"{name}, {args[i]}")
+    assert {"_mu_k_lab_means", "mu_k_s_L"} <= set(new[("two labs", 0)].columns)
+    empty = published.assign(excluded=True)
+    monkeypatch.undo()
+    pd.testing.assert_frame_equal(stats.group_rows(empty), pd.DataFrame([]))

@@ -315,8 +315,8 @@ def test_a_package_s_explorer_runs_beside_its_page_are_resources(big_package, mo
 
     from tribopipe.export import explorer, publish
 
-    monkeypatch.setattr(publish, "explorer_files",
-                        functools.partial(explorer.explorer_files, runs_inline_limit=0))
+    monkeypatch.setattr(publish, "explorer_parts",
+                        functools.partial(explorer.explorer_parts, runs_inline_limit=0))
     map_path, _ = big_package
     out = tmp_path / "pkg"
     result = invoke("map", "publish", "--map", map_path, "-o", out, "--lab", "Lab G",

@@ -58,7 +58,7 @@ from __future__ import annotations
 
 import functools
 import math
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
@@ -513,7 +513,6 @@ def group_rows(runs: pd.DataFrame, *, by_speed: bool = False,
     ``_q_lab_means`` (each lab's range and (mean, n)) that :func:`finish_groups` compares
     across groups. A row depends only on the runs of its own condition."""
     import numpy as np
-    import pandas as pd
 
     included = runs.loc[~runs["excluded"].astype(bool)]
     keys = group_keys(included, by_speed, by_lab)
@@ -533,7 +532,7 @@ def group_rows(runs: pd.DataFrame, *, by_speed: bool = False,
         data[q] = included[q].to_numpy(dtype=float)
         data[f"u_{q}"] = (included[f"u_{q}"].to_numpy(dtype=float) if f"u_{q}" in included
                           else np.full(len(included), np.nan))
-    rows: list[dict[str, Any]] = []
+    rows = _Columns()
     if len(included):
         grouped = keys.groupby(key_cols, dropna=False, sort=False).indices
         for key, positions in grouped.items():
@@ -543,7 +542,36 @@ def group_rows(runs: pd.DataFrame, *, by_speed: bool = False,
                 # .indices holds integer arrays (typed as array, Index or list)
                 members = np.asarray(positions)[[i for i, k in enumerate(clusters) if k == c]]
                 rows.append(_group_row(dict(zip(key_cols, key, strict=True)), members, data))
-    return pd.DataFrame(rows)
+    return rows.frame()
+
+
+class _Columns:
+    """Rows (dicts) gathered as columns as they come: ``pd.DataFrame`` of the list of
+    rows (a key a row lacks is NaN there, the columns in the order their keys first
+    appear), without holding a dict per row (10⁵ groups of some 60 figures each)."""
+
+    def __init__(self) -> None:
+        self.columns: dict[str, list[Any]] = {}
+        self.n = 0
+
+    def append(self, row: Mapping[str, Any]) -> None:
+        for name, value in row.items():
+            column = self.columns.get(name)
+            if column is None:
+                column = self.columns[name] = [math.nan] * self.n
+            column.append(value)
+        self.n += 1
+        if len(row) != len(self.columns):
+            for column in self.columns.values():
+                if len(column) < self.n:
+                    column.append(math.nan)
+
+    def frame(self) -> pd.DataFrame:
+        import pandas as pd
+
+        if not self.n:
+            return pd.DataFrame([])
+        return pd.DataFrame(self.columns, index=pd.RangeIndex(self.n))
 
 
 def shown_columns(rows: pd.DataFrame) -> tuple[bool, bool]:

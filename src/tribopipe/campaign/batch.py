@@ -18,7 +18,8 @@ from __future__ import annotations
 import math
 import os
 import time
-from collections.abc import Callable, Iterator, Mapping, Sequence
+from bisect import bisect_left
+from collections.abc import Callable, Container, Iterator, Mapping, MutableMapping, Sequence
 from contextlib import contextmanager, suppress
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -44,6 +45,7 @@ from .state import (
     FAILED,
     REDUCED,
     SKIPPED,
+    BatchEntries,
     CampaignState,
     FileState,
     MapStamp,
@@ -51,9 +53,15 @@ from .state import (
     RunState,
     Shared,
     load_state,
-    save_state,
 )
-from .table import CampaignRow, campaign_table, check_materials, describe_glob, recipe_hash
+from .table import (
+    CampaignRow,
+    CampaignTable,
+    campaign_table,
+    check_materials,
+    describe_glob,
+    recipe_hash,
+)
 from .worker import (
     Job,
     WorkerContext,
@@ -74,10 +82,28 @@ ProgressCallback = Callable[[int, int], None]
 LAND_EVERY_FILES = 256
 LAND_EVERY_S = 2.0
 
+class SortedNames(Container[str]):
+    """Whether a name is one of ``names`` (sorted), by bisection: a campaign's files
+    asked about without a set of them beside the list."""
+
+    def __init__(self, names: Sequence[str]) -> None:
+        self.names = names
+
+    def __contains__(self, name: object) -> bool:
+        at = bisect_left(self.names, name) if isinstance(name, str) else len(self.names)
+        return at < len(self.names) and self.names[at] == name
+
+
+def chunk_size(items: int, workers: int) -> int:
+    """The items of a chunk when ``items`` are cut into a few chunks per worker: small
+    enough to balance, large enough to amortise pickling."""
+    return max(1, min(16, math.ceil(items / (workers * 4))))
+
+
 def chunk_jobs(items: Sequence[Any], workers: int) -> list[list[Any]]:
-    """``items`` cut into a few chunks per worker: small enough to balance, large enough to
-    amortise pickling (the benchmark's parse-only pool uses the same cut)."""
-    size = max(1, min(16, math.ceil(len(items) / (workers * 4))))
+    """``items`` cut into chunks of :func:`chunk_size` (the benchmark's parse-only pool
+    uses the same cut)."""
+    size = chunk_size(len(items), workers)
     return [list(items[i : i + size]) for i in range(0, len(items), size)]
 
 
@@ -142,7 +168,9 @@ def _run_locked(campaign: Campaign, *, jobs: int | None, plots: bool | None,
         return kept
     jobs = default_jobs() if jobs is None else max(1, int(jobs))
     plots = campaign.plots if plots is None else plots
-    ended = _batch(campaign, load_state(campaign), jobs=jobs, plots=plots, progress=progress)
+    # the state's entries are read from their rows as they are needed, never all held
+    ended = _batch(campaign, load_state(campaign, lazy=True), jobs=jobs, plots=plots,
+                   progress=progress)
     assert ended is not None  # only a rehearsal ends without a report
     report, quiet, clean = ended.report, ended.quiet, ended.clean
     entries = ended.entries if quiet else {}
@@ -191,7 +219,7 @@ def _rehearse(campaign: Campaign) -> tuple[str, _Ended] | None:
         inputs = inputs_stamp(campaign)
         with suppress(TribopipeError, OSError):
             ended = None if inputs is None else _batch(
-                campaign, load_state(campaign), jobs=1, plots=False, progress=None,
+                campaign, load_state(campaign, lazy=True), jobs=1, plots=False, progress=None,
                 rehearse=True)
     if inputs is None or ended is None or not ended.quiet or stop.raised:
         return None
@@ -207,11 +235,13 @@ def _batch(campaign: Campaign, state: CampaignState, *, jobs: int, plots: bool,
     # a decisions file is checked before any work (its runs only under the map's lock)
     review = read_review(campaign.review) if campaign.review is not None and (
         campaign.review.exists() or campaign.review.is_symlink()) else None
-    entries: dict[str, FileState] = dict(state.entries)
+    # the entries of the files landed now are let go once saved (read again from the
+    # state file when asked for): the batch's memory stays flat in what it lands
+    entries = BatchEntries(campaign, state, fresh=not campaign.state_path.is_file())
     missing_ids, map_checked = _ids_missing_from_map(campaign, state)
     manifest = read_manifest(campaign.manifest) if campaign.manifest is not None else None
     rows = campaign_table(campaign, state=state, manifest=manifest)
-    check_materials(campaign, rows)  # an unknown name refuses the campaign before any work
+    check_materials(campaign, rows.plain())  # an unknown name refuses the campaign first
     plan = _plan(rows, missing_ids)
     files = len(rows)
     done = files - len(plan.todo)
@@ -228,22 +258,18 @@ def _batch(campaign: Campaign, state: CampaignState, *, jobs: int, plots: bool,
     notes: list[str] = rows.not_export_notes()  # content before labels: never a failure
     if not rows and not rows.not_exports:
         notes.append(f"no file matches {describe_glob(campaign)} in {campaign.raw_dir}")
-    by_file = {row.file: row for row in rows}
-    vanished = {f: e for f, e in entries.items() if f not in by_file}
+    vanished = {f: entries[f] for f in entries if not rows.has(f)}
     if rehearse and vanished:
         return None
     failures = plan.failures
     # reduced and landed in the order of their names (the order results are checked in
     # against each other), whichever worker ends first
-    todo = sorted(plan.todo, key=lambda job: job.file)
-    order = [job.file for job in todo]
-    redone = set(order)
+    order = sorted(plan.todo)
+    redone = SortedNames(order)
     account = Account()
     map_read = False  # a landing read the map under its lock (its rows are not kept)
     stop = StopFlag()
     shared = Shared()  # one copy of what the entries landed now repeat
-    # what the state file holds (the state as loaded, when it was this SQLite file's)
-    saved: list[CampaignState | None] = [state if campaign.state_path.is_file() else None]
 
     def land(results: list[FileOutcome]) -> None:
         """Fold ``results`` into the map (one locked atomic write) and the state; what
@@ -251,20 +277,21 @@ def _batch(campaign: Campaign, state: CampaignState, *, jobs: int, plots: bool,
         nonlocal account, map_read
         part, read = _land(
             campaign, results, lambda in_map: _apply(
-                campaign, results, by_file, entries, failures, notes, vanished, in_map,
+                campaign, results, rows, entries, failures, notes, vanished, in_map,
                 redone, shared), entries, review)
         account = account.plus(part)
         map_read = map_read or read
         if rehearse:
             return  # its state is compared, never saved (see the end)
         with suppress(OutputError):  # said by the batch's last save, which meets it again
-            saved[0] = _save_state_with_map(campaign, entries, state, saved[0])
+            entries.save()
 
     pending: dict[str, FileOutcome] = {}
     ready: list[FileOutcome] = []
     landed_files, at, last, cost = 0, 0, time.monotonic(), 0.0
     with _stop_on_signals(stop):
-        for part in _execute(todo, WorkerContext(campaign=campaign, plots=plots), jobs, stop):
+        for part in _execute(order, _job_of(rows), WorkerContext(campaign=campaign, plots=plots),
+                             jobs, stop):
             pending.update((r.name, r) for r in part)
             while at < len(order) and order[at] in pending:
                 ready.append(pending.pop(order[at]))
@@ -285,9 +312,11 @@ def _batch(campaign: Campaign, state: CampaignState, *, jobs: int, plots: bool,
             landed_files += len(ready)
             if progress:
                 progress(done + landed_files, files)
+        part = []  # the results landed are let go: what is kept is their names and counts
+        ready = []
     if account.review is not None:
         notes.append(account.review.line(campaign.review))
-    _forget_vanished(campaign, entries, set(by_file), notes)
+    _forget_vanished(campaign, entries, rows, notes)
     appended = account.appended
     map_summary = "unchanged" if appended is None else appended.summary()
 
@@ -303,20 +332,20 @@ def _batch(campaign: Campaign, state: CampaignState, *, jobs: int, plots: bool,
     if rehearse:
         # the tables it would write, as text; a re-run that would write the state is not
         # rehearsed (a clean batch leaves none to write)
-        if _state_differs(campaign, state.with_entries(campaign.name, entries,
-                                                       campaign.map_path), saved[0]):
+        if entries.would_write():
             return None
-        tables = (runs_csv_text(rows, entries, this_batch, failures),
+        tables = (runs_csv_text(rows.plain(), entries, this_batch, failures),
                   failures_csv_text(failures))
     else:
-        for write in (lambda: _save_state_with_map(campaign, entries, state, saved[0]),
-                      lambda: write_runs_csv(campaign, rows, entries, this_batch, failures),
+        for write in (entries.save,
+                      lambda: write_runs_csv(campaign, rows.plain(), entries, this_batch,
+                                             failures),
                       lambda: write_failures_csv(campaign, failures)):
             try:
                 write()
             except OutputError as exc:
                 problems.append(str(exc))
-    tests_in, unmatched, undescribed = manifest_ledger(rows, entries, manifest)
+    tests_in, unmatched, undescribed = manifest_ledger(rows.plain(), entries, manifest)
     runs_failed = plan.runs_failed + account.runs_failed
     test_tally = tally(outcomes, tests_in)
     report = BatchReport(
@@ -351,18 +380,19 @@ def _batch(campaign: Campaign, state: CampaignState, *, jobs: int, plots: bool,
         and appended is None and not account.repeats and review is None
     # did its work and wrote every output: the next unchanged batch can be rehearsed
     clean = not problems and stop.name is None and campaign.review is None
+    entries.close()  # opened again if read again
     return _Ended(report=report, quiet=quiet, clean=clean, entries=entries, tables=tables)
 
 
 @dataclass(frozen=True)
 class _Plan:
-    """What a batch does with each file: reduce it (``todo``), skip its runs (unchanged
+    """What a batch does with each file: reduce it (``todo``: its name), skip its runs (unchanged
     since they were reduced: ``skipped`` run names), list it or its runs as failed without
     reading it (``failures``: name → reason), or as a duplicate (file → reason); the
     outcome of each file not reduced now (file → one of :data:`FILE_OUTCOMES`) and the
     runs of unchanged files that failed before (``runs_failed``)."""
 
-    todo: list[Job]
+    todo: list[str]
     skipped: list[str]
     failures: dict[str, str]
     duplicates: dict[str, str]
@@ -378,7 +408,7 @@ def _run_ids(entry: FileState | None, statuses: tuple[str, ...] = (REDUCED,)) ->
 def _plan(rows: Sequence[CampaignRow], missing_ids: set[str]) -> _Plan:
     """Sort the campaign's files into work, skips and known failures; a file with a run
     whose map row went missing (``missing_ids``) is reduced again."""
-    todo: list[Job] = []
+    todo: list[str] = []
     skipped: list[str] = []
     failures: dict[str, str] = {}
     duplicates: dict[str, str] = {}
@@ -407,36 +437,60 @@ def _plan(rows: Sequence[CampaignRow], missing_ids: set[str]) -> _Plan:
             failures[row.file] = row.reason or "failed in an earlier batch"
             outcomes[row.file] = CONFLICT if previous and previous.duplicate_of else FAILED
         else:
-            todo.append(Job(file=row.file, path=row.where, sources=row.sources,
-                             hints=row.hints, test_rows=row.test_rows, sha256=row.sha256))
+            todo.append(row.file)
     return _Plan(todo=todo, skipped=skipped, failures=failures, duplicates=duplicates,
                  outcomes=outcomes, runs_failed=runs_failed)
 
 
-def _execute(todo: list[Job], ctx: WorkerContext, jobs: int,
-             stop: StopFlag) -> Iterator[list[FileOutcome]]:
-    """Reduce the jobs, yielding the results as they finish: in this process, file by
-    file, for one worker, else in a pool of ``jobs`` processes, chunk by chunk. A crashed
-    worker's files come back as transient failures. Once ``stop`` is raised (a signal),
-    nothing new starts: the pool's workers are ended and the jobs not finished are not
-    yielded (the next batch reduces them)."""
+def _job_of(rows: CampaignTable) -> Callable[[str], Job]:
+    """The job of a file of ``rows``, made when it is sent to a worker."""
+    def job(file: str) -> Job:
+        row = rows.row(file)
+        return Job(file=row.file, path=row.where, sources=row.sources, hints=row.hints,
+                   test_rows=row.test_rows, sha256=row.sha256)
+    return job
+
+
+#: chunks of jobs a batch's pool holds per worker at a time: enough to keep each busy,
+#: few enough that the jobs waiting are not the campaign's
+IN_FLIGHT_PER_WORKER = 4
+
+
+def _execute(todo: Sequence[str], job_of: Callable[[str], Job], ctx: WorkerContext,
+             jobs: int, stop: StopFlag) -> Iterator[list[FileOutcome]]:
+    """Reduce the files ``todo`` (each sent as ``job_of(file)``), yielding the results
+    as they finish: in this process, file by file, for one worker, else in a pool of
+    ``jobs`` processes, chunk by chunk, a few chunks per worker sent at a time (their
+    jobs made as they are sent). A crashed worker's files come back as transient
+    failures. Once ``stop`` is raised (a signal), nothing new starts: the pool's workers
+    are ended and the jobs not finished are not yielded (the next batch reduces them)."""
     if not todo:
         return
     workers = min(jobs, len(todo))
     if workers == 1:
         with fewer_gc_passes():
-            for job in todo:
+            for file in todo:
                 if stop.raised:
                     return
-                yield reduce_chunk([job], ctx)
+                yield reduce_chunk([job_of(file)], ctx)
         return
-    from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
+    from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
 
+    size = chunk_size(len(todo), workers)
+    starts = iter(range(0, len(todo), size))
     prepare_workers(ctx)
     pool = ProcessPoolExecutor(max_workers=workers, initializer=worker_init)
+    futures: dict[Future[list[FileOutcome]], list[Job]] = {}
+
+    def send() -> None:
+        for start in starts:
+            chunk = [job_of(file) for file in todo[start : start + size]]
+            futures[pool.submit(reduce_chunk, chunk, ctx)] = chunk
+            if len(futures) >= workers * IN_FLIGHT_PER_WORKER:
+                return
+
     try:
-        futures = {pool.submit(reduce_chunk, chunk, ctx): chunk
-                   for chunk in chunk_jobs(todo, workers)}
+        send()
         while futures and not stop.raised:
             finished, _ = wait(futures, timeout=0.5, return_when=FIRST_COMPLETED)
             for future in finished:
@@ -446,6 +500,8 @@ def _execute(todo: list[Job], ctx: WorkerContext, jobs: int,
                 except Exception as exc:  # noqa: BLE001 - e.g. a worker killed (OOM)
                     part = crashed(chunk, exc)
                 yield part
+            if not stop.raised:
+                send()
     finally:
         if futures:  # stopped: what did not finish is left for the next batch
             for process in list(getattr(pool, "_processes", {}).values()):
@@ -454,29 +510,31 @@ def _execute(todo: list[Job], ctx: WorkerContext, jobs: int,
         pool.shutdown(wait=True, cancel_futures=True)
 
 
-def _owners(by_file: Mapping[str, CampaignRow], redone: set[str],
+def _owners(rows: CampaignTable, redone: Container[str],
             vanished: Mapping[str, FileState], in_map: FilesByHash) -> ContentOwners:
     """The one duplicate check (:class:`ContentOwners`) for a batch: the contents the
     files of the state brought (those not redone now), then the map's own rows; a file
     that left the folder with a content the map holds is the one renamed."""
     known: dict[str, tuple[str, dict[str, dict[str, Any]]]] = {}
-    for file, row in by_file.items():
-        entry = row.previous
-        if file in redone or entry is None or entry.status != REDUCED or not row.sha256:
+    for file, sha256 in rows.hashes():
+        if file in redone or not sha256:
+            continue
+        entry = rows.previous(file)
+        if entry is None or entry.status != REDUCED:
             continue
         runs = {r.entry.measurement_id: labels_of(r.entry.labels)
                 for r in entry.runs if r.status == REDUCED and r.entry is not None}
         if runs:
-            known.setdefault(row.sha256, (file, runs))
+            known.setdefault(sha256, (file, runs))
     renamed = {stored_file_name(f): (f, e.sha256) for f, e in vanished.items()
                if e.status == REDUCED}
     return ContentOwners(in_map, known, renamed)
 
 
-def _apply(campaign: Campaign, results: Sequence[FileOutcome], by_file: Mapping[str, CampaignRow],
-           entries: dict[str, FileState], failures: dict[str, str], notes: list[str],
+def _apply(campaign: Campaign, results: Sequence[FileOutcome], rows: CampaignTable,
+           entries: MutableMapping[str, FileState], failures: dict[str, str], notes: list[str],
            vanished: Mapping[str, FileState], in_map: FilesByHash,
-           redone: set[str] | None = None, shared: Shared | None = None
+           redone: Container[str] | None = None, shared: Shared | None = None
            ) -> tuple[Arrivals, Account]:
     """Fold the workers' results into the state ``entries`` and ``failures`` (in file
     order, both updated in place; plot and rename notes added to ``notes``), each file
@@ -492,10 +550,13 @@ def _apply(campaign: Campaign, results: Sequence[FileOutcome], by_file: Mapping[
     outcomes: dict[str, str] = {}
     runs_failed = 0
     config_hash = campaign.settings.config_hash  # hashes the settings: once, not per run
-    owners = _owners(by_file, redone if redone is not None else {r.name for r in results},
-                     vanished, in_map)
+    # the contents known before (each reduced file of the state read): only when a
+    # result brings runs to check against them
+    owners = _owners(rows, redone if redone is not None else {r.name for r in results},
+                     vanished, in_map) if any(r.reduced for r in results) else \
+        ContentOwners(in_map)
     for done in sorted(results, key=lambda r: r.name):
-        row = by_file[done.name]
+        row = rows.row(done.name)
         old = entries.get(row.file)
         if done.transient:
             # not the file's fault: listed now, retried next time (the state is left as is)
@@ -590,33 +651,14 @@ def _sha256_or_none(path: Path) -> str | None:
         return None
 
 
-def _forget_vanished(campaign: Campaign, entries: dict[str, FileState], present: set[str],
-                     notes: list[str]) -> None:
-    """Files that vanished from the folder leave the state (their map rows stay)."""
-    for gone in sorted(set(entries) - present):
+def _forget_vanished(campaign: Campaign, entries: MutableMapping[str, FileState],
+                     rows: CampaignTable, notes: list[str]) -> None:
+    """Files that vanished from the folder (no row of ``rows``) leave the state (their map
+    rows stay)."""
+    for gone in sorted(f for f in entries if not rows.has(f)):
         if entries[gone].status == REDUCED and _run_ids(entries[gone]):
             notes.append(f"{gone}: no longer in {campaign.raw_dir}; its map row(s) are kept")
         del entries[gone]
-
-
-def _save_state_with_map(campaign: Campaign, entries: dict[str, FileState],
-                         before: CampaignState, saved: CampaignState | None
-                         ) -> CampaignState:
-    """Save the state with the map's size and ``mtime_ns`` as this batch leaves it (so the
-    next batch trusts an untouched map without reading it), writing only the files whose
-    entry differs from ``saved`` (what the state file holds; ``None``: all); nothing is
-    written when it equals ``saved``. Returns the state now saved."""
-    new_state = before.with_entries(campaign.name, entries, campaign.map_path)
-    if _state_differs(campaign, new_state, saved):
-        save_state(campaign, new_state, saved if campaign.state_path.is_file() else None)
-    return new_state
-
-
-def _state_differs(campaign: Campaign, new_state: CampaignState,
-                   saved: CampaignState | None) -> bool:
-    """Whether :func:`_save_state_with_map` writes ``new_state``: it is not ``saved``
-    (what the state file holds), or there is no state file."""
-    return new_state != saved or not campaign.state_path.exists()
 
 
 def _ids_missing_from_map(campaign: Campaign, state: CampaignState) -> tuple[set[str], bool]:
@@ -627,6 +669,9 @@ def _ids_missing_from_map(campaign: Campaign, state: CampaignState) -> tuple[set
     A map whose size and ``mtime_ns`` are those the last batch left is trusted without
     reading it; a missing map misses every run.
     """
+    if state.map is not None and campaign.map_path.exists() and \
+            state.map == MapStamp.of(campaign.map_path):
+        return set(), False  # the ids are not gathered: each entry would be read
     ids: set[str] = set()
     for e in state.entries.values():
         ids |= _run_ids(e, (REDUCED, DUPLICATE))
@@ -634,8 +679,6 @@ def _ids_missing_from_map(campaign: Campaign, state: CampaignState) -> tuple[set
         return set(), False
     if not campaign.map_path.exists():
         return ids, False
-    if state.map is not None and state.map == MapStamp.of(campaign.map_path):
-        return set(), False
     present = open_map(campaign.map_path, ["measurement_id"]).ids  # the ids only
     return ids - present, True
 

@@ -35,7 +35,9 @@ import hashlib
 import io
 import json
 import os
-from collections.abc import Mapping, Sequence
+from array import array
+from bisect import bisect_left
+from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
@@ -273,20 +275,193 @@ def _traces_present(traces: TraceListing, entry: FileState) -> bool:
     return True
 
 
-class CampaignTable(list[CampaignRow]):
-    """The rows of :func:`campaign_table`, and the files set aside as not an export:
-    ``not_exports`` holds ``(file, what it is)``, e.g. ``("notes.txt", "a text with no
-    table …")``."""
+#: what a :class:`CampaignTable` keeps of a file besides its name, stat and status, when
+#: it has any: (path as text when it is not the raw folder's join with the name, problem,
+#: reason, SHA-256, whether its metadata was read)
+_Extra = tuple[str | None, str | None, str | None, str | None, bool]
+#: the range of the table's stat array (signed 64-bit)
+_INT64 = (-(2**63), 2**63 - 1)
+#: the statuses a table row may have, by their code in :attr:`CampaignTable._status`
+_STATUSES = (NEW, REDUCED, CHANGED, FAILED, DUPLICATE)
 
-    def __init__(self, rows: Sequence[CampaignRow] = (),
+
+class CampaignTable(Sequence[CampaignRow]):
+    """The rows of :func:`campaign_table`, in the order of the files' names, and the files
+    set aside as not an export: ``not_exports`` holds ``(file, what it is)``, e.g.
+    ``("notes.txt", "a text with no table …")``.
+
+    A campaign holds a row per file, so the table keeps of each only what its row cannot
+    find again, in arrays (its name, size, ``mtime_ns`` and status; its problem, reason
+    and SHA-256 for the files that have them) and builds the row when it is asked for:
+    its metadata from the file's name and the manifest, what the state keeps of it from
+    the state's entries (as loaded)."""
+
+    def __init__(self, campaign: Campaign, manifest: Manifest | None,
+                 entries: Mapping[str, FileState],
                  not_exports: Sequence[tuple[str, str]] = ()) -> None:
-        super().__init__(rows)
+        self._campaign = campaign
+        self._manifest = manifest
+        self._entries = entries
+        self._names: list[str] = []
+        self._stats = array("q")  # size, mtime_ns of each file in turn
+        self._status = bytearray()  # its index in _STATUSES
+        self._extra: dict[int, _Extra] = {}
+        self._huge: dict[int, tuple[int, int]] = {}  # a stat an int64 cannot hold
         self.not_exports: list[tuple[str, str]] = list(not_exports)
+
+    def _add(self, row: CampaignRow, *, read: bool = True) -> None:
+        """Keep ``row`` (its metadata read from its name and the manifest: ``read``)."""
+        default = str(self._campaign.raw_dir / row.file)
+        extra = (None if row.where == default else row.where, row.problem, row.reason,
+                 row.sha256, read)
+        if extra != (None, None, None, None, True):
+            self._extra[len(self._names)] = extra
+        stat = (row.size, row.mtime_ns)
+        if not all(_INT64[0] <= v <= _INT64[1] for v in stat):  # a clock far off: kept aside
+            self._huge[len(self._names)] = stat
+            stat = (0, 0)
+        self._names.append(row.file)
+        self._stats.extend(stat)
+        self._status.append(_STATUSES.index(row.status))
+
+    def __len__(self) -> int:
+        return len(self._names)
+
+    def __getitem__(self, index: Any) -> Any:
+        if isinstance(index, slice):
+            return [self._row(i) for i in range(len(self._names))[index]]
+        return self._row(range(len(self._names))[index])
+
+    def __iter__(self) -> Iterator[CampaignRow]:
+        return (self._row(i) for i in range(len(self._names)))
+
+    def _find(self, file: str) -> int | None:
+        """The index of ``file`` (the files are sorted by name), else ``None``."""
+        at = bisect_left(self._names, file)
+        return at if at < len(self._names) and self._names[at] == file else None
+
+    def has(self, file: str) -> bool:
+        """True when ``file`` is a row of the table."""
+        return self._find(file) is not None
+
+    def row(self, file: str) -> CampaignRow:
+        """The row of ``file``. Raises ``KeyError`` when it has none."""
+        at = self._find(file)
+        if at is None:
+            raise KeyError(file)
+        return self._row(at)
+
+    def hashes(self) -> Iterator[tuple[str, str | None]]:
+        """Each file's name and SHA-256 (when known), without building its row."""
+        for at, file in enumerate(self._names):
+            extra = self._extra.get(at)
+            yield file, None if extra is None else extra[3]
+
+    def previous(self, file: str) -> FileState | None:
+        """What the state keeps of ``file`` (:attr:`CampaignRow.previous`), without
+        building its row."""
+        return self._entries.get(file)
+
+    def plain(self) -> Sequence[CampaignRow]:
+        """The rows without what the state keeps of each (``previous`` is ``None``): for
+        what reads only their metadata (the materials named, ``runs.csv``, the ledger),
+        so that no state entry is read for them."""
+        return _PlainRows(self)
+
+    def _row(self, at: int, *, previous: bool = True) -> CampaignRow:
+        file = self._names[at]
+        where, problem, reason, sha, read = self._extra.get(at, (None, None, None, None, True))
+        path = self._campaign.raw_dir / file if where is None else Path(where)
+        size, mtime_ns = self._huge.get(at) or (self._stats[2 * at], self._stats[2 * at + 1])
+        sources: tuple[tuple[str, dict[str, Any]], ...] = ()
+        hints: tuple[str, ...] = ()
+        test_rows: tuple[ManifestRow, ...] = ()
+        merged: dict[str, Any] = {}
+        if read:
+            meta = _file_metadata(self._campaign, self._manifest, file, path)
+            sources, hints, test_rows, merged = (tuple(meta.sources), tuple(meta.hints),
+                                                 meta.test_rows, meta.merged)
+        return CampaignRow(
+            file=file, where=str(path) if where is None else where,
+            size=size, mtime_ns=mtime_ns, sources=sources,
+            merged=merged, problem=problem, status=_STATUSES[self._status[at]],
+            reason=reason, sha256=sha, previous=self._entries.get(file) if previous else None,
+            hints=hints, test_rows=test_rows)
 
     def not_export_notes(self) -> list[str]:
         """One line per file set aside: ``not an export: skipped: notes.txt (a text …)``."""
         return [f"not an export: skipped: {display_path(f)} ({what})"
                 for f, what in self.not_exports]
+
+
+class _PlainRows(Sequence[CampaignRow]):
+    """:meth:`CampaignTable.plain`."""
+
+    def __init__(self, table: CampaignTable) -> None:
+        self._table = table
+
+    def __len__(self) -> int:
+        return len(self._table)
+
+    def __getitem__(self, index: Any) -> Any:
+        at = range(len(self._table))[index]
+        if isinstance(at, range):
+            return [self._table._row(i, previous=False) for i in at]
+        return self._table._row(at, previous=False)
+
+    def __iter__(self) -> Iterator[CampaignRow]:
+        return (self._table._row(i, previous=False) for i in range(len(self._table)))
+
+
+@dataclass
+class _Metadata:
+    """What a file's name and the manifest say of it before it is read: the file-level
+    sources (name, fields) in priority order, why a source said nothing (``hints``), the
+    manifest rows of its tests, the merged labels (empty when they could not be merged)
+    and the problem known so far; ``check_labels``: its labels can be judged before it
+    is read (no per-test source may complete them)."""
+
+    sources: list[tuple[str, dict[str, Any]]]
+    hints: list[str]
+    test_rows: tuple[ManifestRow, ...]
+    merged: dict[str, Any]
+    problem: str | None
+    check_labels: bool
+
+
+def _file_metadata(campaign: Campaign, manifest: Manifest | None, rel: str,
+                   path: Path) -> _Metadata:
+    """What the manifest and the file's name (``rel``, at ``path``) say of a file."""
+    sources: list[tuple[str, dict[str, Any]]] = []
+    hints: list[str] = []
+    problem: str | None = None
+    test_rows: tuple[ManifestRow, ...] = ()
+    if manifest is not None:
+        whole, test_rows = manifest.for_file(rel, path.name)
+        if whole is not None:
+            sources.append((f"manifest line {whole.line}", dict(whole.fields)))
+            problem = whole.problem
+        elif not test_rows:
+            near = manifest.near_miss(path.name)
+            hints.append(f"no row for it in manifest {manifest.name}" + (
+                f" (did you mean its row {near!r}? name the file as it is, "
+                f"{path.name!r})" if near else ""))
+    if campaign.filename_pattern is not None:
+        found = match_pattern(campaign.filename_pattern, path.stem)
+        if found is None:
+            hints.append(f"name does not match pattern {campaign.filename_pattern!r}: "
+                         + pattern_break(campaign.filename_pattern, path.stem))
+        else:
+            sources.append(("file name", found))
+    merged: dict[str, Any] = {}
+    check_labels = False
+    if problem is None:
+        try:
+            merged = merge_metadata(rel, sources, campaign)
+            check_labels = not test_rows and campaign.test_pattern is None
+        except CampaignError as exc:
+            problem = str(exc)
+    return _Metadata(sources, hints, test_rows, merged, problem, check_labels)
 
 
 def _content_problem(campaign: Campaign, path: Path, rel: str) -> str | None:
@@ -317,48 +492,21 @@ def campaign_table(campaign: Campaign, *, state: CampaignState | None = None,
     entries = (state if state is not None else load_state(campaign)).entries
     if manifest is None and campaign.manifest is not None:
         manifest = read_manifest(campaign.manifest)
-    per_test_possible = campaign.test_pattern is not None
     traces = TraceListing(campaign)
-    rows = CampaignTable()
+    rows = CampaignTable(campaign, manifest, entries)
     for path in discover_files(campaign):
         rel = _relative(path, campaign.raw_dir)
         try:
             st = regular_file(path, what="an export file")
         except ReadError as exc:
             unreadable = f"{display_path(rel)}: {exc.problem}"
-            rows.append(CampaignRow(file=rel, where=str(path), size=-1, mtime_ns=-1, sources=(),
-                                    merged={}, problem=unreadable, status=FAILED,
-                                    reason=unreadable))
+            rows._add(CampaignRow(file=rel, where=str(path), size=-1, mtime_ns=-1, sources=(),
+                                  merged={}, problem=unreadable, status=FAILED,
+                                  reason=unreadable), read=False)
             continue
-        sources: list[tuple[str, dict[str, Any]]] = []
-        hints: list[str] = []
-        problem: str | None = None
-        test_rows: tuple[ManifestRow, ...] = ()
-        if manifest is not None:
-            whole, test_rows = manifest.for_file(rel, path.name)
-            if whole is not None:
-                sources.append((f"manifest line {whole.line}", dict(whole.fields)))
-                problem = whole.problem
-            elif not test_rows:
-                near = manifest.near_miss(path.name)
-                hints.append(f"no row for it in manifest {manifest.name}" + (
-                    f" (did you mean its row {near!r}? name the file as it is, "
-                    f"{path.name!r})" if near else ""))
-        if campaign.filename_pattern is not None:
-            found = match_pattern(campaign.filename_pattern, path.stem)
-            if found is None:
-                hints.append(f"name does not match pattern {campaign.filename_pattern!r}: "
-                             + pattern_break(campaign.filename_pattern, path.stem))
-            else:
-                sources.append(("file name", found))
-        merged: dict[str, Any] = {}
-        check_labels = False
-        if problem is None:
-            try:
-                merged = merge_metadata(rel, sources, campaign)
-                check_labels = not test_rows and not per_test_possible
-            except CampaignError as exc:
-                problem = str(exc)
+        meta = _file_metadata(campaign, manifest, rel, path)
+        sources, hints, test_rows, merged = meta.sources, meta.hints, meta.test_rows, meta.merged
+        problem, check_labels = meta.problem, meta.check_labels
         previous = entries.get(rel)
         sha = None
         status = NEW
@@ -395,7 +543,7 @@ def campaign_table(campaign: Campaign, *, state: CampaignState | None = None,
                 problem = _content_problem(campaign, path, rel) or problem
         if problem is not None:
             status, reason = FAILED, problem
-        rows.append(CampaignRow(
+        rows._add(CampaignRow(
             file=rel, where=str(path), size=st.st_size, mtime_ns=st.st_mtime_ns,
             sources=tuple(sources), merged=merged, problem=problem, status=status,
             reason=reason, sha256=sha, previous=previous, hints=tuple(hints),

@@ -119,6 +119,12 @@ FIT_CURVE_POINTS = 24
 
 #: the lists of interpolation points of each speed of a pair (packed in the page)
 POINT_LISTS = ("mu_k_points", "mu_s_points")
+#: the run columns the explorer reads of each run (its groups and fits given; with them,
+#: the fits too): a map's other columns are left behind before its runs are made pages
+EXPLORER_COLUMNS: tuple[str, ...] = (
+    "measurement_id", "pin", "disc", "pressure_kPa", "temperature_C", "nominal_speed_mm_s",
+    "test_method", "excluded", "repeat", "lab", "flags", "review", "mu_k", "mu_s",
+    "source_file", "test", "result")
 #: the order of a pair's runs on the page (a stable sort: ties keep the map's order)
 RUN_ORDER = ("temperature_C", "pressure_kPa", "repeat", "measurement_id")
 #: the column that carries each run's pair number while the runs are sorted
@@ -211,8 +217,11 @@ FIT_FIELDS = (
 def _plain(value: Any) -> Any:
     """``value`` as a JSON-ready Python value: NaN/inf and missing → ``None``, numpy
     scalars → ``int``/``float``/``bool``."""
-    if value is None:
-        return None
+    kind = value.__class__
+    if kind is float:  # the common cases first (10⁶ cells of a map of 10⁵ groups)
+        return value if math.isfinite(value) else None
+    if value is None or kind is str or kind is int or kind is bool:
+        return value
     if isinstance(value, bool | str):
         return value
     if hasattr(value, "item"):  # numpy scalar
@@ -431,6 +440,14 @@ def _fits(pair_fits: pd.DataFrame) -> list[dict[str, Any]]:
     return out
 
 
+#: the fields of a group row :func:`tribopipe.export.tables.group_flags` reads
+_FLAG_FIELDS = ("reviewed", "range_exceeds_r", LABS_DISAGREE, "qc_flagged")
+#: the group-table columns the page reads (its fields, cells, flags, labs and runs)
+_GROUP_READ = frozenset((
+    "pin", "disc", *GROUP_FIELDS, *_FLAG_FIELDS, NOMINAL_SPEED, TEST_METHOD, LABS,
+    "run_ids"))
+
+
 def _group_texts(g: Mapping[Any, Any], expanded: dict[str, float | None]) -> dict[str, str]:
     """A group row's cells as the page's group table shows them (the tables' rounding:
     :func:`tribopipe.export.tables.condition_text`, GUM ``value ± U``, three decimals)."""
@@ -449,7 +466,7 @@ def _group_texts(g: Mapping[Any, Any], expanded: dict[str, float | None]) -> dic
         v = _plain(g.get(name))
         return "" if v is None else f"{v:.3f}"
 
-    qc = ", ".join(group_flags({k: _plain(v) for k, v in g.items()}))
+    qc = ", ".join(group_flags({k: _plain(g[k]) for k in _FLAG_FIELDS if k in g}))
     return {
         "normal_force_N": _cell_g(g.get("normal_force_N")),
         "pressure_kPa": condition_text("pressure_kPa", _plain(g.get("pressure_kPa"))),
@@ -608,7 +625,8 @@ def explorer_data(
     # the included runs in the pages' order, each pair's together (one sort, one pass)
     run_codes = np.array([order.get(k, -1) for k in zip(
         included["pin"].map(_key), included["disc"].map(_key), strict=True)], dtype=np.int64)
-    ordered = included.assign(**{_PAIR: run_codes})
+    ordered = included[[c for c in EXPLORER_COLUMNS if c in included.columns]].assign(
+        **{_PAIR: run_codes})  # what the page reads of a run (_runs), no more
     ordered = ordered[run_codes >= 0].sort_values(
         [_PAIR, *RUN_ORDER], kind="mergesort")
     runs_of: dict[int, list[dict[str, Any]]] = {}
@@ -623,10 +641,10 @@ def explorer_data(
     pair_index: dict[tuple[str, str], int] = {}
     pair_rows: list[dict[str, Any]] = []
     run_chunks: list[list[dict[str, Any]]] = []
+    group_pins, group_discs = groups["pin"].tolist(), groups["disc"].tolist()
     for key, c in order.items():
         if key not in shown:  # a pair without a μ_K point (query.pair_points)
             continue
-        first = groups.iloc[first_row[c]]
         pair_runs = runs_of.get(c, [])
         run_index = {r["id"]: i for i, r in enumerate(pair_runs)}
         measured = sorted(measured_of.get(c, ())) or [FOUNDING_SLIDING_SPEED_MM_S]
@@ -638,7 +656,8 @@ def explorer_data(
                                         runs_at.get(sc, {}), v, run_index))
         pair_index[key] = len(pair_rows)
         run_chunks.append(pair_runs)
-        pin_name, disc_name = str(first["pin"]), str(first["disc"])
+        # the names as the pair's first group spells them
+        pin_name, disc_name = str(group_pins[first_row[c]]), str(group_discs[first_row[c]])
         pair_rows.append(
             {
                 "pin": pin_name,
@@ -657,7 +676,8 @@ def explorer_data(
     group_rows = []
     expanded = {q: 2.0 * group_u(groups, q)[0].to_numpy(dtype=float) for q in ("mu_k", "mu_s")}
     lab_of_run = {r["id"]: r["lab"] for chunk in run_chunks for r in chunk}
-    for i, g in enumerate(groups.to_dict(orient="records")):
+    read = [c for c in groups.columns if c in _GROUP_READ]  # the others are not read
+    for i, g in enumerate(groups.loc[:, read].to_dict(orient="records")):
         index = pair_index.get(group_keys[i])
         if index is None:
             continue
@@ -780,14 +800,12 @@ def _packed(rows: list[dict[str, Any]]) -> dict[str, Any]:
     """Rows (a pair's runs, the groups) as columns and rows: each key written once, not
     once per row; a dict value's keys become columns ``name/key``."""
     columns: list[str] = []
+    cells: list[tuple[str, str]] = []  # each column's key and, in a dict value, its key
     for name, value in (rows[0].items() if rows else ()):
         columns += [f"{name}/{k}" for k in value] if isinstance(value, dict) else [name]
-
-    def cell(row: dict[str, Any], column: str) -> Any:
-        name, _, key = column.partition("/")
-        return row[name][key] if key else row[name]
-
-    return {"columns": columns, "rows": [[cell(r, c) for c in columns] for r in rows]}
+        cells += [(name, k) for k in value] if isinstance(value, dict) else [(name, "")]
+    return {"columns": columns,
+            "rows": [[r[name][key] if key else r[name] for name, key in cells] for r in rows]}
 
 
 def _unpacked(packed: dict[str, Any]) -> list[dict[str, Any]]:
@@ -810,8 +828,12 @@ def runs_files(data: dict[str, Any]) -> dict[str, str]:
     runs lie beside it (:func:`explorer_page` ``runs_beside``): the page loads a pair's
     file when it shows that pair. Each file hands its data, JSON escaped as inside a page
     (:func:`tribopipe.escape.script_json`), to ``window.tribopipeRuns``."""
-    return {f"pair-{i}.js": f"window.tribopipeRuns({i}, {script_json(_packed(chunk))});\n"
-            for i, chunk in enumerate(data.get("runs", []))}
+    return {f"pair-{i}.js": _runs_file(i, chunk) for i, chunk in enumerate(data.get("runs", []))}
+
+
+def _runs_file(i: int, chunk: list[dict[str, Any]]) -> str:
+    """The text of :func:`runs_files`' file of pair ``i`` of the page, its runs ``chunk``."""
+    return f"window.tribopipeRuns({i}, {script_json(_packed(chunk))});\n"
 
 
 def _fragment(data: dict[str, Any], js: str, runs_beside: str | None = None) -> str:
@@ -926,15 +948,18 @@ def pages_folder(output: str | Path) -> Path:
     return out.with_name(out.stem + "_pages")
 
 
-def _page_files(data: dict[str, Any], name: str, runs_inline_limit: int) -> dict[str, str]:
+def _page_files(data: dict[str, Any], name: str,
+                runs_inline_limit: int) -> Iterator[tuple[str, str]]:
     """The explorer page ``name`` (a relative path) of ``data`` and, where it has more
-    runs than ``runs_inline_limit``, the files of its runs beside it (the page last)."""
+    runs than ``runs_inline_limit``, the files of its runs beside it (the page last), one
+    (name, text) at a time."""
     if sum(len(chunk) for chunk in data["runs"]) <= runs_inline_limit:
-        return {name: explorer_page(data)}
+        yield name, explorer_page(data)
+        return
     folder = runs_folder(name)
-    files = {(folder / f).as_posix(): text for f, text in runs_files(data).items()}
-    files[name] = explorer_page(data, runs_beside=folder.name)
-    return files
+    for i, chunk in enumerate(data["runs"]):
+        yield (folder / f"pair-{i}.js").as_posix(), _runs_file(i, chunk)
+    yield name, explorer_page(data, runs_beside=folder.name)
 
 
 def shown_pairs(groups: pd.DataFrame,
@@ -992,27 +1017,6 @@ def _shards(groups: pd.DataFrame, limit: int) -> list[list[str]]:
     return shards
 
 
-def explorer_files(
-    runs: pd.DataFrame,
-    name: str,
-    *,
-    title: str = "tribopipe friction-map explorer",
-    source: str | None = None,
-    groups: pd.DataFrame | None = None,
-    fits: pd.DataFrame | None = None,
-    runs_inline_limit: int = RUNS_INLINE_LIMIT,
-    groups_page_limit: int = GROUPS_PAGE_LIMIT,
-    runs_beside_pages: bool = True,
-    max_files: int | None = None,
-) -> dict[str, str]:
-    """Every file of :func:`explorer_parts` (same arguments) as relative path → text, the
-    page ``name`` last."""
-    return dict(explorer_parts(runs, name, title=title, source=source, groups=groups,
-                               fits=fits, runs_inline_limit=runs_inline_limit,
-                               groups_page_limit=groups_page_limit,
-                               runs_beside_pages=runs_beside_pages, max_files=max_files))
-
-
 def explorer_parts(
     runs: pd.DataFrame,
     name: str,
@@ -1026,9 +1030,9 @@ def explorer_parts(
     runs_beside_pages: bool = True,
     max_files: int | None = None,
 ) -> Iterator[tuple[str, str]]:
-    """Every file of the explorer of ``runs`` whose page is ``name`` as (relative path,
-    text), made one page at a time, the page ``name`` last, so that no page grows with
-    the map and no more than one page's files are held at once.
+    """Every file of the explorer of ``runs`` whose page is ``name``, one (relative path,
+    text) at a time as it is made (the page ``name`` last), so that no page grows with the
+    map and no more than one page is held at a time.
 
     Up to ``groups_page_limit`` condition groups the explorer is one page
     (:func:`explorer_data`, ``groups`` and ``fits`` as it takes them), its runs in the page
@@ -1059,7 +1063,7 @@ def explorer_parts(
         data = explorer_data(runs, groups=groups, fits=fits, title=title, source=source)
         if max_files is not None and 1 + len(data["runs"]) > max_files:
             runs_inline_limit = sys.maxsize
-        yield from _page_files(data, name, runs_inline_limit).items()
+        yield from _page_files(data, name, runs_inline_limit)
         return
     if fits is None:
         fits = fit_power_law(runs)
@@ -1079,8 +1083,8 @@ def explorer_parts(
         data = explorer_data(shard_runs, groups=shard_groups, fits=fits[fit_pairs.isin(keys)],
                              title=f"{title} — page {k} of {len(shards)}", source=source,
                              curvature=curvature)  # the whole map's: query's own
-        yield from _page_files(data, page,
-                               0 if runs_beside_pages else runs_inline_limit).items()
+        yield from _page_files(data, page, 0 if runs_beside_pages else runs_inline_limit)
+        del data
         # each pin's name (its first group's spelling), discs, groups and runs on this
         # page, counted in one pass over the page's groups and runs
         names: dict[str, str] = {}
@@ -1097,6 +1101,27 @@ def explorer_parts(
                          int(n_runs.get(key, 0)), f"{Path(page).parent.name}/part-{k}.html"))
     yield name, explorer_index(rows, title=title, source=source, n_groups=len(groups),
                                n_runs=len(included))
+
+
+def explorer_files(
+    runs: pd.DataFrame,
+    name: str,
+    *,
+    title: str = "tribopipe friction-map explorer",
+    source: str | None = None,
+    groups: pd.DataFrame | None = None,
+    fits: pd.DataFrame | None = None,
+    runs_inline_limit: int = RUNS_INLINE_LIMIT,
+    groups_page_limit: int = GROUPS_PAGE_LIMIT,
+    runs_beside_pages: bool = True,
+    max_files: int | None = None,
+) -> dict[str, str]:
+    """Every file of :func:`explorer_parts` (same arguments) at once: relative paths
+    → text, the page ``name`` last."""
+    return dict(explorer_parts(
+        runs, name, title=title, source=source, groups=groups, fits=fits,
+        runs_inline_limit=runs_inline_limit, groups_page_limit=groups_page_limit,
+        runs_beside_pages=runs_beside_pages, max_files=max_files))
 
 
 def _files_beside(shards: list[list[str]], shown: set[tuple[str, str]],
@@ -1158,8 +1183,8 @@ def write_explorer(
     groups_page_limit: int = GROUPS_PAGE_LIMIT,
 ) -> Path:
     """Write the explorer of the map at ``map_path`` to ``output`` (atomically):
-    :func:`explorer_parts`, the files beside the page first (each atomically, as it is
-    made), the page last. A map of more than ``runs_inline_limit`` included runs gets its runs in
+    :func:`explorer_parts`, each file written as it is made (atomically), the page
+    last. A map of more than ``runs_inline_limit`` included runs gets its runs in
     :func:`runs_folder` beside the page, one file per pair; a map of more than
     ``groups_page_limit`` condition groups an index page at ``output`` and its pins'
     pages in :func:`pages_folder`; a smaller map's page carries everything and is one
@@ -1173,9 +1198,13 @@ def write_explorer(
             hint="reduce runs first (tribopipe reduce / batch) or import the published map",
         )
     out = Path(output)
-    # the map's groups (a map folder's are stored): those of its included runs
-    files = explorer_parts(runs, out.name, title=title or "tribopipe friction-map explorer",
-                           source=str(map_path), groups=snap.groups(show_method=True),
-                           runs_inline_limit=runs_inline_limit,
-                           groups_page_limit=groups_page_limit)
-    return write_page_and_files(out, files)
+    groups = snap.groups(show_method=True)  # those of its included runs (stored in a folder)
+    # the run columns the pages and the fits read, the others left behind
+    shown = runs[[c for c in EXPLORER_COLUMNS if c in runs.columns]]
+    del runs
+    files = explorer_parts(shown, out.name,
+                                title=title or "tribopipe friction-map explorer",
+                                source=str(map_path), groups=groups,
+                                runs_inline_limit=runs_inline_limit,
+                                groups_page_limit=groups_page_limit)
+    return write_page_and_files(out, files)  # each written as it is made

@@ -111,7 +111,7 @@ from .citation import (
     founding_paper_text,
     package_readme,
 )
-from .explorer import explorer_files
+from .explorer import EXPLORER_COLUMNS, explorer_parts
 from .tables import frictionmap_csv, frictionmap_table
 
 if TYPE_CHECKING:
@@ -121,7 +121,7 @@ if TYPE_CHECKING:
 EXPLORER = "explorer.html"
 #: the most files of the explorer a package lists (each a resource; a package lists at
 #: most 64): beyond, its pages carry more groups each, and then the runs travel in
-#: the pages (:func:`~tribopipe.export.explorer.explorer_files` ``max_files``)
+#: the pages (:func:`~tribopipe.export.explorer.explorer_parts` ``max_files``)
 EXPLORER_FILES_LIMIT = 40
 
 
@@ -442,13 +442,6 @@ def filled_group_rows(rows: pd.DataFrame, labs: pd.DataFrame, lab: str) -> pd.Da
     return out
 
 
-#: the run columns the explorer page reads of each run (its groups and fits are given)
-EXPLORER_COLUMNS: tuple[str, ...] = (
-    "measurement_id", "pin", "disc", "pressure_kPa", "temperature_C", "nominal_speed_mm_s",
-    "test_method", "excluded", "repeat", "lab", "flags", "review", "mu_k", "mu_s",
-    "source_file", "test", "result")
-
-
 def explorer_runs(runs: pd.DataFrame) -> pd.DataFrame:
     """The runs the explorer page shows of the package's rows ``runs``: the included
     ones, the :data:`EXPLORER_COLUMNS`, each text column a column of Python texts that
@@ -555,12 +548,12 @@ def build_package(rows: list[pd.DataFrame], groups: pd.DataFrame, publisher: Pub
     shown = explorer_runs(runs)
     del runs  # the page is written from the runs it shows
     return_free_memory()
-    # each file is a resource of its own (a package lists at most 64)
-    page_files = explorer_files(shown, EXPLORER, groups=groups, fits=fits,
-                                title=publisher.package_title, source=publisher.lab,
-                                max_files=EXPLORER_FILES_LIMIT)
-    del shown
-    for path, text in page_files.items():
+    # each file is a resource of its own (a package lists at most 64), written as it is
+    # made: one page held at a time
+    page_files = explorer_parts(shown, EXPLORER, groups=groups, fits=fits,
+                                     title=publisher.package_title, source=publisher.lab,
+                                     max_files=EXPLORER_FILES_LIMIT)
+    for path, text in page_files:
         (folder / path).parent.mkdir(parents=True, exist_ok=True)
         if path == EXPLORER:
             add("explorer", path, text.encode(), title="Explorer page (open in a browser)",
@@ -573,7 +566,7 @@ def build_package(rows: list[pd.DataFrame], groups: pd.DataFrame, publisher: Pub
             else "The runs of one pair of the explorer, loaded when the pair is shown",
             fmt="html" if html else "js",
             mediatype="text/html" if html else "text/javascript", licences=page_licences)
-    del page_files
+    del page_files, shown
     add("citation", "CITATION.cff",
         citation_cff(publisher, date=date, n_runs=n_runs, pairs=pair_list).encode(),
         title="How to cite (Citation File Format 1.2.0)", fmt="cff",

@@ -101,18 +101,42 @@ def write_page_and_files(page: str | os.PathLike[str],
                          files: Mapping[str, str] | Iterable[tuple[str, str]]) -> Path:
     """Write a page with the files beside it: ``files`` maps names relative to the page's
     folder to UTF-8 text (a mapping, or (name, text) pairs written as they come, so that
-    no more than one is held at a time) and holds the page under its own name; each file
-    is written atomically (:func:`write_text_atomic`), the page last, so a page is never
-    there before what it loads. Returns the page's path."""
+    no more than one is held at a time) and holds the page under its own name. Each file
+    is written, as it comes, into a hidden staging folder beside the page; only when
+    every one is made are they renamed into place (each atomically), the page last, so a
+    page is never there before what it loads, and an error while they are made (raised
+    on) leaves the page and its files as they were, with no staging folder behind.
+    Returns the page's path."""
+    import shutil
+    import tempfile
+
     out = Path(page)
     text_of_page = None
-    for name, text in (files.items() if isinstance(files, Mapping) else files):
-        if name == out.name:
-            text_of_page = text
-        else:
-            write_text_atomic(out.parent / name, text)
-    if text_of_page is None:
-        raise ValueError(f"no page {out.name!r} among the files to write")
+    staged: list[str] = []
+    try:
+        out.parent.mkdir(parents=True, exist_ok=True)
+        stage = Path(tempfile.mkdtemp(prefix=f".{out.name}.", suffix=".staging",
+                                      dir=out.parent))
+    except OSError as exc:
+        raise OutputError(f"cannot write: {os_reason(exc)}", path=out) from None
+    try:
+        for name, text in (files.items() if isinstance(files, Mapping) else files):
+            if name == out.name:
+                text_of_page = text
+            else:
+                write_text_atomic(stage / name, text)
+                staged.append(name)
+        if text_of_page is None:
+            raise ValueError(f"no page {out.name!r} among the files to write")
+        for name in staged:
+            target = out.parent / name
+            try:
+                target.parent.mkdir(parents=True, exist_ok=True)
+                os.replace(stage / name, target)
+            except OSError as exc:
+                raise OutputError(f"cannot write: {os_reason(exc)}", path=target) from None
+    finally:
+        shutil.rmtree(stage, ignore_errors=True)
     return write_text_atomic(out, text_of_page)
 
 

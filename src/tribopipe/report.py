@@ -15,20 +15,25 @@ whose text cells cannot run as spreadsheet formulas
 file system is written with :func:`tribopipe.escape.html_text` (the explorer's data travel
 as :func:`tribopipe.escape.script_json` and reach the page as text only).
 
-The page carries the groups and fits; its runs travel with it up to
-:data:`RUNS_INLINE_LIMIT`. A larger map's runs lie beside the page, in the folder the
-explorer's runs use (:func:`tribopipe.export.explorer.runs_folder`): one script file per
-pair, added when that pair's runs are opened or a link to one of them is followed, as the
-explorer loads its own (:func:`tribopipe.export.explorer.runs_files`, in the same folder).
-A map of more condition groups than one explorer page shows
-(:data:`~tribopipe.export.explorer.GROUPS_PAGE_LIMIT`) gets its explorer beside the report
-(:func:`~tribopipe.export.explorer.explorer_files`), linked; a map of more pairs than
+A map of up to :data:`RUNS_INLINE_LIMIT` runs and
+:data:`~tribopipe.export.explorer.GROUPS_PAGE_LIMIT` condition groups gets one page that
+carries everything. A larger map's page keeps the summary, the list of its pairs (their
+counts, a filter by name), the flagged runs and the failures; each pair's group rows, fits
+and runs lie beside the page, in the folder the explorer's runs use
+(:func:`tribopipe.export.explorer.runs_folder`): one script file per pair
+(:func:`pair_files`), added when the pair is opened or a link to one of its runs is
+followed (a run link names its pair's file), as the explorer loads its own runs
+(:func:`tribopipe.export.explorer.runs_files`, in the same folder). A map of more
+condition groups than one explorer page shows gets its explorer beside the report
+(:func:`~tribopipe.export.explorer.explorer_parts`), linked; a map of more pairs than
 :data:`PAIR_PLOTS_LIMIT` leaves its pair plots to the explorer, and says so.
 
-:func:`report_files` turns tables into the page and the files beside it (it renders
-plots but writes no file), :func:`build_report` into the page of a report that needs no
-file beside it; :func:`write_report` and :func:`make_report` read the map,
-``failures.csv`` and the traces of a processed folder and write the page.
+:func:`report_parts` turns tables into the page and the files beside it, one at a time
+(it renders plots but writes no file; :func:`report_files` collects them),
+:func:`build_report` into the page of a report that needs no file beside it;
+:func:`write_report` (each file written as it is made, the page last) and
+:func:`make_report` read the map, ``failures.csv`` and the traces of a processed folder
+and write the page.
 """
 
 from __future__ import annotations

@@ -359,7 +359,7 @@ def test_a_new_reduction_method_reduces_every_file_again(root: Path, after: str,
 PROBE = """import runpy, sys
 import tribopipe.campaign.batch as batch
 reads, load_state = [], batch.load_state
-batch.load_state = lambda campaign, **how: reads.append(1) or load_state(campaign, **how)
+batch.load_state = lambda campaign: reads.append(1) or load_state(campaign)
 sys.argv = ['tribopipe', 'batch', 'campaign.toml']
 try:
     runpy.run_module('tribopipe', run_name='__main__')

@@ -168,9 +168,7 @@ def _run_locked(campaign: Campaign, *, jobs: int | None, plots: bool | None,
         return kept
     jobs = default_jobs() if jobs is None else max(1, int(jobs))
     plots = campaign.plots if plots is None else plots
-    # the state's entries are read from their rows as they are needed, never all held
-    ended = _batch(campaign, load_state(campaign, lazy=True), jobs=jobs, plots=plots,
-                   progress=progress)
+    ended = _batch(campaign, load_state(campaign), jobs=jobs, plots=plots, progress=progress)
     assert ended is not None  # only a rehearsal ends without a report
     report, quiet, clean = ended.report, ended.quiet, ended.clean
     entries = ended.entries if quiet else {}
@@ -219,7 +217,7 @@ def _rehearse(campaign: Campaign) -> tuple[str, _Ended] | None:
         inputs = inputs_stamp(campaign)
         with suppress(TribopipeError, OSError):
             ended = None if inputs is None else _batch(
-                campaign, load_state(campaign, lazy=True), jobs=1, plots=False, progress=None,
+                campaign, load_state(campaign), jobs=1, plots=False, progress=None,
                 rehearse=True)
     if inputs is None or ended is None or not ended.quiet or stop.raised:
         return None
@@ -241,7 +239,7 @@ def _batch(campaign: Campaign, state: CampaignState, *, jobs: int, plots: bool,
     missing_ids, map_checked = _ids_missing_from_map(campaign, state)
     manifest = read_manifest(campaign.manifest) if campaign.manifest is not None else None
     rows = campaign_table(campaign, state=state, manifest=manifest)
-    check_materials(campaign, rows.plain())  # an unknown name refuses the campaign first
+    check_materials(campaign, rows)  # an unknown name refuses the campaign before any work
     plan = _plan(rows, missing_ids)
     files = len(rows)
     done = files - len(plan.todo)
@@ -258,7 +256,7 @@ def _batch(campaign: Campaign, state: CampaignState, *, jobs: int, plots: bool,
     notes: list[str] = rows.not_export_notes()  # content before labels: never a failure
     if not rows and not rows.not_exports:
         notes.append(f"no file matches {describe_glob(campaign)} in {campaign.raw_dir}")
-    vanished = {f: entries[f] for f in entries if not rows.has(f)}
+    vanished = {f: e for f, e in entries.items() if not rows.has(f)}
     if rehearse and vanished:
         return None
     failures = plan.failures
@@ -334,18 +332,17 @@ def _batch(campaign: Campaign, state: CampaignState, *, jobs: int, plots: bool,
         # rehearsed (a clean batch leaves none to write)
         if entries.would_write():
             return None
-        tables = (runs_csv_text(rows.plain(), entries, this_batch, failures),
+        tables = (runs_csv_text(rows, entries, this_batch, failures),
                   failures_csv_text(failures))
     else:
         for write in (entries.save,
-                      lambda: write_runs_csv(campaign, rows.plain(), entries, this_batch,
-                                             failures),
+                      lambda: write_runs_csv(campaign, rows, entries, this_batch, failures),
                       lambda: write_failures_csv(campaign, failures)):
             try:
                 write()
             except OutputError as exc:
                 problems.append(str(exc))
-    tests_in, unmatched, undescribed = manifest_ledger(rows.plain(), entries, manifest)
+    tests_in, unmatched, undescribed = manifest_ledger(rows, entries, manifest)
     runs_failed = plan.runs_failed + account.runs_failed
     test_tally = tally(outcomes, tests_in)
     report = BatchReport(
@@ -516,11 +513,8 @@ def _owners(rows: CampaignTable, redone: Container[str],
     files of the state brought (those not redone now), then the map's own rows; a file
     that left the folder with a content the map holds is the one renamed."""
     known: dict[str, tuple[str, dict[str, dict[str, Any]]]] = {}
-    for file, sha256 in rows.hashes():
-        if file in redone or not sha256:
-            continue
-        entry = rows.previous(file)
-        if entry is None or entry.status != REDUCED:
+    for file, sha256, entry in rows.states():
+        if file in redone or entry is None or entry.status != REDUCED or not sha256:
             continue
         runs = {r.entry.measurement_id: labels_of(r.entry.labels)
                 for r in entry.runs if r.status == REDUCED and r.entry is not None}
@@ -550,11 +544,8 @@ def _apply(campaign: Campaign, results: Sequence[FileOutcome], rows: CampaignTab
     outcomes: dict[str, str] = {}
     runs_failed = 0
     config_hash = campaign.settings.config_hash  # hashes the settings: once, not per run
-    # the contents known before (each reduced file of the state read): only when a
-    # result brings runs to check against them
     owners = _owners(rows, redone if redone is not None else {r.name for r in results},
-                     vanished, in_map) if any(r.reduced for r in results) else \
-        ContentOwners(in_map)
+                     vanished, in_map)
     for done in sorted(results, key=lambda r: r.name):
         row = rows.row(done.name)
         old = entries.get(row.file)
@@ -669,9 +660,6 @@ def _ids_missing_from_map(campaign: Campaign, state: CampaignState) -> tuple[set
     A map whose size and ``mtime_ns`` are those the last batch left is trusted without
     reading it; a missing map misses every run.
     """
-    if state.map is not None and campaign.map_path.exists() and \
-            state.map == MapStamp.of(campaign.map_path):
-        return set(), False  # the ids are not gathered: each entry would be read
     ids: set[str] = set()
     for e in state.entries.values():
         ids |= _run_ids(e, (REDUCED, DUPLICATE))
@@ -679,6 +667,8 @@ def _ids_missing_from_map(campaign: Campaign, state: CampaignState) -> tuple[set
         return set(), False
     if not campaign.map_path.exists():
         return ids, False
+    if state.map is not None and state.map == MapStamp.of(campaign.map_path):
+        return set(), False
     present = open_map(campaign.map_path, ["measurement_id"]).ids  # the ids only
     return ids - present, True
 

@@ -18,7 +18,7 @@ from __future__ import annotations
 import json
 import sqlite3
 import sys
-from collections.abc import Iterator, Mapping, MutableMapping
+from collections.abc import Iterator, MutableMapping
 from dataclasses import asdict, dataclass, field, fields, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -212,19 +212,6 @@ class Shared:
         return sys.intern(value) if isinstance(value, str) else value
 
 
-class _Unshared(Shared):
-    """No sharing: for an entry read to be used and let go (its labels' nested values
-    are not looked up among others')."""
-
-    __slots__ = ()
-
-    def value(self, value: Any) -> Any:
-        return sys.intern(value) if isinstance(value, str) else value
-
-
-_UNSHARED = _Unshared()
-
-
 @dataclass(frozen=True, slots=True)
 class FileState:
     """What the state keeps of a file: its size, ``mtime_ns`` and SHA-256, the config and
@@ -303,7 +290,7 @@ class CampaignState:
     campaign-relative name) and the map's :class:`MapStamp`."""
 
     campaign: str | None = None
-    entries: Mapping[str, FileState] = field(default_factory=dict)
+    entries: dict[str, FileState] = field(default_factory=dict)
     map: MapStamp | None = None
 
     def to_json(self) -> dict[str, Any]:
@@ -332,7 +319,7 @@ class CampaignState:
         except (KeyError, TypeError, ValueError, AttributeError):
             return cls()
 
-    def with_entries(self, campaign: str, entries: Mapping[str, FileState],
+    def with_entries(self, campaign: str, entries: dict[str, FileState],
                      map_path: Path) -> CampaignState:
         """This state with new entries and the map's stamp as it is now."""
         return replace(self, campaign=campaign, entries=dict(entries),
@@ -421,16 +408,15 @@ def save_kept(campaign: Campaign, kept: KeptLedger | None) -> None:
         raise OutputError(f"cannot write the campaign state ({exc})", path=path) from None
 
 
-def load_state(campaign: Campaign, *, lazy: bool = False) -> CampaignState:
+def load_state(campaign: Campaign) -> CampaignState:
     """The incremental state of a campaign (empty when there is none or it is unreadable:
     a lost state only costs a full re-run). Where only the JSON state of an older version
     exists, it is read and converted: written into the SQLite state, which is read from
-    then on. ``lazy``: its entries are a :class:`StoredEntries` (each row checked as it is
-    read, then let go: an entry is read again from its row when asked for)."""
+    then on."""
     path = campaign.state_path
     if path.is_file():
         try:
-            return _read_sqlite(path, lazy=lazy)
+            return _read_sqlite(path)
         except (sqlite3.Error, ValueError, TypeError, KeyError):
             return CampaignState()
     try:
@@ -454,24 +440,15 @@ def _connect(path: Path) -> sqlite3.Connection:
     return con
 
 
-def _read_sqlite(path: Path, *, lazy: bool = False) -> CampaignState:
+def _read_sqlite(path: Path) -> CampaignState:
     con = sqlite3.connect(f"file:{path}?mode=ro", uri=True, timeout=60)
     try:
         meta = dict(con.execute("SELECT key, value FROM meta").fetchall())
         if meta.get("version") != str(STATE_VERSION):
             return CampaignState()
         loads, shared = json.loads, Shared()
-        rows = con.execute("SELECT name, state FROM files")
-        entries: Mapping[str, FileState]
-        if lazy:  # each row decoded (a row that does not decode loses the state), let go
-            names: dict[str, None] = {}
-            for name, text in rows:
-                FileState.from_json(loads(text), _UNSHARED)
-                names[loads(name)] = None
-            entries = StoredEntries(path, names)
-        else:
-            entries = {loads(name): FileState.from_json(loads(text), shared)
-                       for name, text in rows}
+        entries = {loads(name): FileState.from_json(loads(text), shared)
+                   for name, text in con.execute("SELECT name, state FROM files")}
     finally:
         con.close()
     stamp = json.loads(meta.get("map", "null"))
@@ -533,60 +510,13 @@ def _entry_text(entry: FileState) -> str:
                           allow_nan=False)
 
 
-def _read_entry(con: sqlite3.Connection, name: str) -> FileState:
-    """The entry of ``name`` from its row of the state file (``con``). Raises
-    ``KeyError`` when it has none."""
-    # every row fetched: no statement left open to hold the file against a write
-    rows = con.execute("SELECT state FROM files WHERE name = ?",
-                       (json.dumps(name),)).fetchall()
-    if not rows:  # the state file was changed under the batch
-        raise KeyError(name)
-    return FileState.from_json(json.loads(rows[0][0]), _UNSHARED)
-
-
-def _reader(path: Path) -> sqlite3.Connection:
-    return sqlite3.connect(f"file:{path}?mode=ro", uri=True, timeout=60,
-                           isolation_level=None)
-
-
-class StoredEntries(Mapping[str, FileState]):
-    """The entries of a state file by name, each read from its row (and decoded) when
-    asked for: what is held is the names (:func:`load_state` with ``lazy``). A batch
-    reads the state this way, so that its memory stays flat in the number of files."""
-
-    def __init__(self, path: Path, names: dict[str, None]) -> None:
-        self.path = path
-        self.names = names
-        self._con: sqlite3.Connection | None = None
-
-    def __len__(self) -> int:
-        return len(self.names)
-
-    def __iter__(self) -> Iterator[str]:
-        return iter(self.names)
-
-    def __contains__(self, name: object) -> bool:
-        return name in self.names
-
-    def __getitem__(self, name: str) -> FileState:
-        if name not in self.names:
-            raise KeyError(name)
-        if self._con is None:
-            self._con = _reader(self.path)
-        return _read_entry(self._con, name)
-
-    def __del__(self) -> None:
-        if self._con is not None:
-            self._con.close()
-
-
 class BatchEntries(MutableMapping[str, FileState]):
     """A campaign's file entries while a batch runs, in the order a dict of them would
-    keep (the state's, then the files landed): those set since the last :meth:`save` are
-    held (and the state's, when it was loaded decoded, not as :class:`StoredEntries`);
-    any other is read from its SQLite row (decoded then) when asked for, an entry
-    :meth:`save` wrote let go. So what the batch holds of its files is their names, not
-    their entries: its memory stays flat in the number of files.
+    keep (the state's, then the files landed): the entries as loaded, and those set since
+    the last :meth:`save`, are held; an entry :meth:`save` wrote is let go and read again
+    from its SQLite row (decoded then) when asked for. So what the batch holds of the
+    files it landed is their names, not their entries: its memory stays flat in the
+    number of files it lands.
 
     ``loaded``: the state as :func:`load_state` read it; ``fresh``: the state file held
     nothing of it (none, or the JSON of an older version just converted is not counted:
@@ -598,8 +528,7 @@ class BatchEntries(MutableMapping[str, FileState]):
         self._name = campaign.name
         self._map_path = campaign.map_path
         #: file → its entry when held, else ``None`` (in the state file only)
-        self._index: dict[str, FileState | None] = dict.fromkeys(loaded.entries) if \
-            isinstance(loaded.entries, StoredEntries) else dict(loaded.entries)
+        self._index: dict[str, FileState | None] = dict(loaded.entries)
         self._dirty: set[str] = set()
         self._gone: set[str] = set()
         self._fresh = fresh
@@ -633,8 +562,14 @@ class BatchEntries(MutableMapping[str, FileState]):
     def _read(self, name: str) -> FileState:
         """The entry of ``name`` from its row of the state file."""
         if self._reader is None:
-            self._reader = _reader(self._path)
-        return _read_entry(self._reader, name)
+            self._reader = sqlite3.connect(f"file:{self._path}?mode=ro", uri=True,
+                                           timeout=60, isolation_level=None)
+        # every row fetched: no statement left open to hold the file against a write
+        rows = self._reader.execute("SELECT state FROM files WHERE name = ?",
+                                    (json.dumps(name),)).fetchall()
+        if not rows:  # the state file was changed under the batch
+            raise KeyError(name)
+        return FileState.from_json(json.loads(rows[0][0]))
 
     def _held(self, name: str) -> FileState | None:
         """The entry of ``name``, ``None`` when the state file no longer holds it."""

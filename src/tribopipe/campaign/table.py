@@ -351,24 +351,14 @@ class CampaignTable(Sequence[CampaignRow]):
             raise KeyError(file)
         return self._row(at)
 
-    def hashes(self) -> Iterator[tuple[str, str | None]]:
-        """Each file's name and SHA-256 (when known), without building its row."""
+    def states(self) -> Iterator[tuple[str, str | None, FileState | None]]:
+        """Each file's name, SHA-256 (when known) and what the state keeps of it, without
+        building its row."""
         for at, file in enumerate(self._names):
             extra = self._extra.get(at)
-            yield file, None if extra is None else extra[3]
+            yield file, None if extra is None else extra[3], self._entries.get(file)
 
-    def previous(self, file: str) -> FileState | None:
-        """What the state keeps of ``file`` (:attr:`CampaignRow.previous`), without
-        building its row."""
-        return self._entries.get(file)
-
-    def plain(self) -> Sequence[CampaignRow]:
-        """The rows without what the state keeps of each (``previous`` is ``None``): for
-        what reads only their metadata (the materials named, ``runs.csv``, the ledger),
-        so that no state entry is read for them."""
-        return _PlainRows(self)
-
-    def _row(self, at: int, *, previous: bool = True) -> CampaignRow:
+    def _row(self, at: int) -> CampaignRow:
         file = self._names[at]
         where, problem, reason, sha, read = self._extra.get(at, (None, None, None, None, True))
         path = self._campaign.raw_dir / file if where is None else Path(where)
@@ -385,32 +375,13 @@ class CampaignTable(Sequence[CampaignRow]):
             file=file, where=str(path) if where is None else where,
             size=size, mtime_ns=mtime_ns, sources=sources,
             merged=merged, problem=problem, status=_STATUSES[self._status[at]],
-            reason=reason, sha256=sha, previous=self._entries.get(file) if previous else None,
-            hints=hints, test_rows=test_rows)
+            reason=reason, sha256=sha, previous=self._entries.get(file), hints=hints,
+            test_rows=test_rows)
 
     def not_export_notes(self) -> list[str]:
         """One line per file set aside: ``not an export: skipped: notes.txt (a text …)``."""
         return [f"not an export: skipped: {display_path(f)} ({what})"
                 for f, what in self.not_exports]
-
-
-class _PlainRows(Sequence[CampaignRow]):
-    """:meth:`CampaignTable.plain`."""
-
-    def __init__(self, table: CampaignTable) -> None:
-        self._table = table
-
-    def __len__(self) -> int:
-        return len(self._table)
-
-    def __getitem__(self, index: Any) -> Any:
-        at = range(len(self._table))[index]
-        if isinstance(at, range):
-            return [self._table._row(i, previous=False) for i in at]
-        return self._table._row(at, previous=False)
-
-    def __iter__(self) -> Iterator[CampaignRow]:
-        return (self._table._row(i, previous=False) for i in range(len(self._table)))
 
 
 @dataclass

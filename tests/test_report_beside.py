@@ -335,6 +335,33 @@ def test_a_pair_beside_loads_in_chromium_as_python_made_it(browser, processed, t
     tab.close()
 
 
+def test_a_page_named_with_url_characters_loads_its_pairs_in_chromium(
+        browser, processed, tmp_path):
+    """A report saved as ``r#1 ?%.html`` keeps its pairs in ``r#1 ?%_runs``: the page loads
+    them from there (the folder's name a path, not a fragment or a query), and a run link
+    whose pair file holds no such run leaves the page still (no endless reloading)."""
+    from test_explorer_browser import Tab, page_url
+
+    map_path, _ = processed
+    inputs = hostile_inputs(map_path)
+    page = write_report(tmp_path / "r#1 ?%.html", inputs, runs_inline_limit=0)
+    assert (tmp_path / "r#1 ?%_runs" / "report-0.js").is_file()
+    tab = Tab(browser, viewport={"width": 800, "height": 900})
+    tab.page.goto(page_url(page))
+    tab.page.click("#pair-0 > summary")
+    tab.wait_until("document.getElementById('pair-0').hasAttribute('data-loaded')")
+    assert tab.page.evaluate("document.querySelectorAll('#pair-0 [id^=\"run-\"]').length") > 0
+    # a link to a run its pair's file does not hold: followed once, then left
+    tab.page.evaluate("""() => {const a = document.createElement('a');
+      a.href = '#run-0000000000000000'; a.setAttribute('data-pair', '0');
+      a.textContent = 'gone'; document.body.append(a);
+      location.hash = 'run-0000000000000000';}""")
+    tab.page.wait_for_timeout(300)
+    assert tab.page.evaluate("document.querySelectorAll('script[id^=\"pair-load-\"]').length") == 1
+    tab.check_clean()
+    tab.close()
+
+
 def test_the_runs_beside_load_in_chromium_as_the_inline_page_shows_them(
         browser, processed, tmp_path):
     """A campaign's pairs beside its page: a link to a flagged run loads its pair and

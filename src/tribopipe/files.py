@@ -102,11 +102,12 @@ def write_page_and_files(page: str | os.PathLike[str],
     """Write a page with the files beside it: ``files`` maps names relative to the page's
     folder to UTF-8 text (a mapping, or (name, text) pairs written as they come, so that
     no more than one is held at a time) and holds the page under its own name. Each file
-    is written, as it comes, into a hidden staging folder beside the page; only when
-    every one is made are they renamed into place (each atomically), the page last, so a
-    page is never there before what it loads, and an error while they are made (raised
-    on) leaves the page and its files as they were, with no staging folder behind.
-    Returns the page's path."""
+    is written, as it comes, into a hidden staging folder beside the page, the page too;
+    only when every one is written are they renamed into place (each atomically, and a
+    rename needs no space), the page last, so a page is never there before what it loads,
+    and an error while they are made or written (raised on: a full disk too) leaves the
+    page and its files as they were, with no staging folder behind. Returns the page's
+    path."""
     import shutil
     import tempfile
 
@@ -128,7 +129,8 @@ def write_page_and_files(page: str | os.PathLike[str],
                 staged.append(name)
         if text_of_page is None:
             raise ValueError(f"no page {out.name!r} among the files to write")
-        for name in staged:
+        write_text_atomic(stage / out.name, text_of_page)  # no file beside has its name
+        for name in [*staged, out.name]:
             target = out.parent / name
             try:
                 target.parent.mkdir(parents=True, exist_ok=True)
@@ -137,7 +139,7 @@ def write_page_and_files(page: str | os.PathLike[str],
                 raise OutputError(f"cannot write: {os_reason(exc)}", path=target) from None
     finally:
         shutil.rmtree(stage, ignore_errors=True)
-    return write_text_atomic(out, text_of_page)
+    return out
 
 
 def write_bytes_atomic(target: str | os.PathLike[str], data: bytes) -> Path:

@@ -158,7 +158,8 @@ _OPEN_TARGET_JS = (
 #: list of pairs): loads a pair's file (``report-<k>.js``, which calls
 #: ``tribopipeReportPair``) when the pair is opened or a link (``data-pair="<k>"``) to one
 #: of its runs is followed, and puts the file's tables and runs in place (markup the
-#: library made and escaped, parsed inert in a template); opens the run a link points to;
+#: library made and escaped, parsed inert in a template); opens the run a link points to
+#: (once its pair is loaded; a run its pair's file does not hold is left unopened);
 #: shows only the pairs whose pin or disc holds what is typed in the pair filter
 _PAIRS_JS = (
     "var S=document.getElementById('groups'),B=S.getAttribute('data-pairs-beside'),W={},"
@@ -167,7 +168,8 @@ _PAIRS_JS = (
     "if(d.hasAttribute('data-loaded')){if(f)f();return;}if(f)W[k]=f;"
     "if(document.getElementById('pair-load-'+k))return;"
     "var b=d.querySelector('.pair-body'),s=document.createElement('script');"
-    "b.textContent='loading…';s.id='pair-load-'+k;s.src=B+'/report-'+k+'.js';"
+    "b.textContent='loading…';s.id='pair-load-'+k;"
+    "s.src=encodeURIComponent(B)+'/report-'+k+'.js';"
     "s.onerror=function(){b.textContent='the groups, fits and runs of this pair are not "
     "beside the report ('+B+'/report-'+k+'.js)';};document.head.appendChild(s);}"
     "window.tribopipeReportPair=function(k,h){var d=document.getElementById('pair-'+k);"
@@ -186,7 +188,8 @@ _PAIRS_JS = (
     "e=i&&document.getElementById(i);"
     "if(!e&&i.indexOf('run-')===0){var a=document.querySelector('a[data-pair][href=\"#'"
     "+CSS.escape(i)+'\"]');if(a){var k=a.getAttribute('data-pair'),"
-    "d=document.getElementById('pair-'+k);d.hidden=false;d.open=true;L(k,o);}return;}"
+    "d=document.getElementById('pair-'+k);d.hidden=false;d.open=true;"
+    "if(!d.hasAttribute('data-loaded'))L(k,o);}return;}"
     "if(e){var d=e.closest('details');while(d){d.hidden=false;d.open=true;"
     "d=d.parentElement&&d.parentElement.closest('details');}e.scrollIntoView();}}"
     "window.addEventListener('hashchange',o);o();"

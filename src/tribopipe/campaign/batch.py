@@ -215,7 +215,8 @@ def _rehearse(campaign: Campaign) -> tuple[str, _Ended] | None:
     ended: _Ended | None = None
     with _stop_on_signals(stop):
         inputs = inputs_stamp(campaign)
-        with suppress(TribopipeError, OSError):
+        # whatever fails here, the batch's own work is done and reported: no ledger
+        with suppress(Exception):
             ended = None if inputs is None else _batch(
                 campaign, load_state(campaign), jobs=1, plots=False, progress=None,
                 rehearse=True)
@@ -472,23 +473,35 @@ def _execute(todo: Sequence[str], job_of: Callable[[str], Job], ctx: WorkerConte
                 yield reduce_chunk([job_of(file)], ctx)
         return
     from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
+    from concurrent.futures.process import BrokenProcessPool
 
     size = chunk_size(len(todo), workers)
     starts = iter(range(0, len(todo), size))
     prepare_workers(ctx)
     pool = ProcessPoolExecutor(max_workers=workers, initializer=worker_init)
     futures: dict[Future[list[FileOutcome]], list[Job]] = {}
+    unsent: list[list[FileOutcome]] = []  # chunks a broken pool refused
 
     def send() -> None:
         for start in starts:
             chunk = [job_of(file) for file in todo[start : start + size]]
-            futures[pool.submit(reduce_chunk, chunk, ctx)] = chunk
+            try:
+                futures[pool.submit(reduce_chunk, chunk, ctx)] = chunk
+            except (BrokenProcessPool, RuntimeError) as exc:
+                # a worker died (e.g. killed for memory) and the pool takes no more: this
+                # chunk and every one after it come back as transient failures
+                unsent.append(crashed(chunk, exc))
+                continue
             if len(futures) >= workers * IN_FLIGHT_PER_WORKER:
                 return
 
     try:
         send()
-        while futures and not stop.raised:
+        while (futures or unsent) and not stop.raised:
+            while unsent:
+                yield unsent.pop(0)
+            if not futures:
+                break
             finished, _ = wait(futures, timeout=0.5, return_when=FIRST_COMPLETED)
             for future in finished:
                 chunk = futures.pop(future)

@@ -60,7 +60,8 @@ function runsOf(index) {
   if (DATA.runs_beside && !RUNS_MISSING[index] && !document.getElementById("tpx-load-" + index)) {
     var s = document.createElement("script");
     s.id = "tpx-load-" + index;
-    s.src = DATA.runs_beside + "/pair-" + index + ".js";
+    // the folder is one name beside the page; "#", "?" or "%" in it are not a URL's own
+    s.src = encodeURIComponent(DATA.runs_beside) + "/pair-" + index + ".js";
     s.onerror = function () { RUNS_MISSING[index] = true; runsArrived(index); };
     document.head.appendChild(s);
   }

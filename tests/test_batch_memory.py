@@ -152,6 +152,34 @@ def test_the_entries_a_batch_landed_are_let_go_once_saved(
     assert _growth(kept) < 150, kept
 
 
+def test_the_ids_the_state_holds_are_known_without_reading_every_entry(
+        many: Path, landed: dict[str, Any], tmp_path: Path) -> None:
+    """Which of a redone file's old run ids some entry still holds (its runs are dropped
+    from the map otherwise) is counted as entries are set, replaced, removed and let go,
+    equal to a scan of every entry, each landing, which would read them all back."""
+    from tribopipe.campaign.state import BatchEntries
+
+    campaign = _campaign(_first(many, 1, tmp_path / "raw"), tmp_path / "c")
+    entries = BatchEntries(campaign, CampaignState(), fresh=True)
+
+    def scan(ids: set[str]) -> set[str]:
+        return ids & set().union(*(entries[n].run_ids() for n in entries))
+
+    ids = {mid for i in range(40) for mid in _entry(i, landed).run_ids()}
+    for i in range(30):
+        entries[f"f{i}"] = _entry(i, landed)
+    entries["twin"] = _entry(3, landed)  # a second file of the same runs
+    entries.save()  # let go: read back from their rows when asked
+    entries["f3"] = _entry(35, landed)  # redone: its old runs live on in its twin
+    entries["f4"] = _entry(36, landed)  # redone: its old runs are gone
+    del entries["f5"]
+    held = entries.held_ids(ids)
+    assert held == scan(ids)
+    assert _entry(3, landed).run_ids() <= held and not _entry(4, landed).run_ids() & held
+    assert not _entry(5, landed).run_ids() & held and _entry(36, landed).run_ids() <= held
+    entries.close()
+
+
 @pytest.mark.slow  # real batches of hundreds of exports, reduced in this process
 def test_a_batch_from_scratch_keeps_a_few_hundred_bytes_per_file(
         many: Path, tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:

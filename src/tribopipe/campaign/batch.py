@@ -621,7 +621,8 @@ def _apply(campaign: Campaign, results: Sequence[FileOutcome], rows: CampaignTab
         entries[row.file] = replace(base, runs=tuple(runs_state))
     # the runs of files redone now that no file of the state still holds (none to look
     # for when nothing was redone: an unchanged re-run)
-    alive = set().union(*(_run_ids(e) for e in entries.values())) if old_ids else set()
+    alive = (entries.held_ids(old_ids) if isinstance(entries, BatchEntries)
+             else set().union(*(_run_ids(e) for e in entries.values()))) if old_ids else set()
     return Arrivals(records, old_ids - alive), Account(
         reduced=reduced, flagged=flagged, duplicates=duplicates, outcomes=outcomes,
         runs_failed=runs_failed)

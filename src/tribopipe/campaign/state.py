@@ -535,6 +535,32 @@ class BatchEntries(MutableMapping[str, FileState]):
         self._written: tuple[str | None, MapStamp | None] | None = \
             None if fresh else (loaded.campaign, loaded.map)
         self._reader: sqlite3.Connection | None = None
+        #: how many entries hold each reduced run's id: which ids the state still holds
+        #: is asked on every landing of files redone (a changed config redoes them all),
+        #: and reading every entry back each time would grow as n²
+        self._holders: dict[str, int] = {}
+        for entry in loaded.entries.values():
+            self._count(entry, 1)
+
+    def _count(self, entry: FileState | None, step: int) -> None:
+        """Count ``entry``'s reduced runs' ids once more (``step`` 1) or once less (-1)."""
+        for mid in entry.run_ids() if entry is not None else ():
+            n = self._holders.get(mid, 0) + step
+            if n > 0:
+                self._holders[mid] = n
+            else:
+                self._holders.pop(mid, None)
+
+    def _hold(self, name: str, entry: FileState | None) -> None:
+        """Count ``entry``'s ids as held by ``name`` (``None``: none) in place of those
+        of the entry it held (read back from its row when it was let go)."""
+        if name in self._index:
+            self._count(self._held(name), -1)
+        self._count(entry, 1)
+
+    def held_ids(self, ids: set[str]) -> set[str]:
+        """Those of ``ids`` some entry holds as a reduced run's id (read from no row)."""
+        return {mid for mid in ids if mid in self._holders}
 
     def __len__(self) -> int:
         return len(self._index)
@@ -550,11 +576,13 @@ class BatchEntries(MutableMapping[str, FileState]):
         return entry if entry is not None else self._read(name)
 
     def __setitem__(self, name: str, entry: FileState) -> None:
+        self._hold(name, entry)
         self._index[name] = entry
         self._dirty.add(name)
         self._gone.discard(name)
 
     def __delitem__(self, name: str) -> None:
+        self._hold(name, None)
         del self._index[name]
         self._dirty.discard(name)
         self._gone.add(name)

@@ -1160,7 +1160,7 @@ def report_files(
     same folder (:func:`tribopipe.export.explorer.runs_files`); a map of more than
     ``groups_page_limit`` condition groups gets its explorer beside the report
     (``<name>_explorer.html`` and its pages,
-    :func:`~tribopipe.export.explorer.explorer_files`) instead of in it."""
+    :func:`~tribopipe.export.explorer.explorer_parts`) instead of in it."""
     return dict(report_parts(inp, name, runs_inline_limit=runs_inline_limit,
                              groups_page_limit=groups_page_limit))
 

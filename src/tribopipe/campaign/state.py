@@ -8,9 +8,11 @@ before reading + QC tolerances), the file's status, its tests and, per run
 the map's size and ``mtime_ns`` as the last batch left it (:class:`MapStamp`). One state
 per campaign name, so campaigns may share an output folder and a map.
 :meth:`FileState.to_json` and :meth:`FileState.from_json` are the only translation
-between these types and a row; :func:`load_state` and :func:`save_state` the only reads
-and writes. The JSON state file older versions wrote (``.tribopipe-state.<name>.json``,
-:meth:`CampaignState.from_json`) is read once and converted.
+between these types and a row; :func:`load_state` and :func:`save_state` read and write
+a whole state, and a batch's :class:`BatchEntries` reads an entry back from its row and
+writes what its landings changed, row by row. The JSON state file older versions wrote
+(``.tribopipe-state.<name>.json``, :meth:`CampaignState.from_json`) is read once and
+converted.
 """
 
 from __future__ import annotations
@@ -19,7 +21,7 @@ import json
 import sqlite3
 import sys
 from collections.abc import Iterator, MutableMapping
-from dataclasses import asdict, dataclass, field, fields, replace
+from dataclasses import asdict, dataclass, field, fields
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -319,12 +321,6 @@ class CampaignState:
         except (KeyError, TypeError, ValueError, AttributeError):
             return cls()
 
-    def with_entries(self, campaign: str, entries: dict[str, FileState],
-                     map_path: Path) -> CampaignState:
-        """This state with new entries and the map's stamp as it is now."""
-        return replace(self, campaign=campaign, entries=dict(entries),
-                       map=MapStamp.of(map_path))
-
 
 @dataclass(frozen=True)
 class KeptLedger:
@@ -462,7 +458,7 @@ def save_state(campaign: Campaign, state: CampaignState,
     """Write the incremental state into its SQLite file, in one transaction: the files
     whose entry differs from ``saved`` (what the file holds already; ``None``: every
     file) row by row, the files gone from it removed, and the campaign's name and the
-    map's stamp. A batch saves after each landing, so its cost is what changed. Raises
+    map's stamp (a batch saves through :class:`BatchEntries`, row by row, instead). Raises
     :class:`~tribopipe.errors.OutputError` naming the file when it cannot be written."""
     path = campaign.state_path
     before = {} if saved is None else saved.entries

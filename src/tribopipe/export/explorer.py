@@ -84,7 +84,7 @@ from .fe_decks import CONSTANT_NOTE, MATERIAL_LINE, abaqus_name, ansys_safe, dec
 from .formats import ENTRIES
 from .headers import HELD_LINE, MU_S_UNKNOWN, PAIR_LINE, comment_block
 from .simulators import snippet_header
-from .tables import condition_text, group_flags
+from .tables import GROUP_FLAG_FIELDS, condition_text, group_flags
 from .usd import comment as usd_comment
 from .xml_text import xml_comment
 
@@ -440,11 +440,9 @@ def _fits(pair_fits: pd.DataFrame) -> list[dict[str, Any]]:
     return out
 
 
-#: the fields of a group row :func:`tribopipe.export.tables.group_flags` reads
-_FLAG_FIELDS = ("reviewed", "range_exceeds_r", LABS_DISAGREE, "qc_flagged")
 #: the group-table columns the page reads (its fields, cells, flags, labs and runs)
 _GROUP_READ = frozenset((
-    "pin", "disc", *GROUP_FIELDS, *_FLAG_FIELDS, NOMINAL_SPEED, TEST_METHOD, LABS,
+    "pin", "disc", *GROUP_FIELDS, *GROUP_FLAG_FIELDS, NOMINAL_SPEED, TEST_METHOD, LABS,
     "run_ids"))
 
 
@@ -466,7 +464,7 @@ def _group_texts(g: Mapping[Any, Any], expanded: dict[str, float | None]) -> dic
         v = _plain(g.get(name))
         return "" if v is None else f"{v:.3f}"
 
-    qc = ", ".join(group_flags({k: _plain(g[k]) for k in _FLAG_FIELDS if k in g}))
+    qc = ", ".join(group_flags({k: _plain(g[k]) for k in GROUP_FLAG_FIELDS if k in g}))
     return {
         "normal_force_N": _cell_g(g.get("normal_force_N")),
         "pressure_kPa": condition_text("pressure_kPa", _plain(g.get("pressure_kPa"))),

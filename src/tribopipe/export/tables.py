@@ -79,6 +79,10 @@ def condition_text(column: str, value: Any) -> str:
     return _cell(value, CONDITION_SPECS[column])
 
 
+#: the group-table columns :func:`group_flags` reads
+GROUP_FLAG_FIELDS = ("reviewed", "range_exceeds_r", LABS_DISAGREE, "qc_flagged")
+
+
 def group_flags(group: Mapping[Any, Any], middle: Sequence[str] = ()) -> list[str]:
     """A group row's flags as every table (and the explorer's QC column) writes them:
     ``range > r``, ``labs disagree``, ``flagged run``, then ``middle`` (the paper layout's

@@ -27,8 +27,8 @@ from tribopipe.escape import script_json
 from tribopipe.export.explorer import (
     DATA_ELEMENT_ID,
     explorer_data,
-    explorer_files,
     explorer_page,
+    explorer_parts,
     read_embedded_data,
     write_explorer,
 )
@@ -561,14 +561,14 @@ def test_a_bound_on_files_moves_a_pages_runs_into_it_only_when_needed(published)
     and carries them in the page, one file, when they would not: the same files the
     explorer writes without the bound, or with its runs inline."""
     _, runs = published
-    beside = explorer_files(runs, "e.html", runs_inline_limit=0)
+    beside = dict(explorer_parts(runs, "e.html", runs_inline_limit=0))
     assert len(beside) > 2
-    assert _undated(explorer_files(runs, "e.html", runs_inline_limit=0,
-                                   max_files=len(beside))) == _undated(beside)
-    inline = explorer_files(runs, "e.html", runs_inline_limit=0, max_files=len(beside) - 1)
+    assert _undated(dict(explorer_parts(runs, "e.html", runs_inline_limit=0,
+                                   max_files=len(beside)))) == _undated(beside)
+    inline = dict(explorer_parts(runs, "e.html", runs_inline_limit=0, max_files=len(beside) - 1))
     assert list(inline) == ["e.html"]
-    assert _undated(inline) == _undated(explorer_files(runs, "e.html",
-                                                       runs_inline_limit=sys.maxsize))
+    assert _undated(inline) == _undated(dict(explorer_parts(runs, "e.html",
+                                                       runs_inline_limit=sys.maxsize)))
 
 
 def test_a_bound_on_files_makes_fewer_larger_pages_before_it_is_passed(published):
@@ -585,17 +585,17 @@ def test_a_bound_on_files_makes_fewer_larger_pages_before_it_is_passed(published
     groups = group_statistics(runs)
     per_pair = groups.groupby([groups["pin"].map(name_key), groups["disc"].map(name_key)]).size()
     limit = int(per_pair.max())
-    split = explorer_files(runs, "e.html", groups_page_limit=limit)
+    split = dict(explorer_parts(runs, "e.html", groups_page_limit=limit))
     pages = [n for n in split if n.endswith(".html") and n != "e.html"]
     assert len(split) > len(pages) + 1 > 2  # runs beside the pages
-    assert _undated(explorer_files(runs, "e.html", groups_page_limit=limit,
-                                   max_files=len(split))) == _undated(split)
-    assert _undated(explorer_files(runs, "e.html", groups_page_limit=limit,
-                                   max_files=len(split) - 1)) == _undated(explorer_files(
+    assert _undated(dict(explorer_parts(runs, "e.html", groups_page_limit=limit,
+                                   max_files=len(split)))) == _undated(split)
+    assert _undated(dict(explorer_parts(runs, "e.html", groups_page_limit=limit,
+                                   max_files=len(split) - 1))) == _undated(dict(explorer_parts(
         runs, "e.html", groups_page_limit=limit, runs_beside_pages=False,
-        runs_inline_limit=sys.maxsize))
+        runs_inline_limit=sys.maxsize)))
     bound = len(pages)  # the pages and their index would be one file too many
-    fewer = explorer_files(runs, "e.html", groups_page_limit=limit, max_files=bound)
+    fewer = dict(explorer_parts(runs, "e.html", groups_page_limit=limit, max_files=bound))
     assert 1 < len(fewer) <= bound
     folder = pages_folder("e.html").as_posix()
     datas = [read_embedded_data(text) for name, text in fewer.items()

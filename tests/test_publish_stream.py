@@ -26,7 +26,7 @@ from tribopipe import frictionmap as fm
 from tribopipe.errors import MapError
 from tribopipe.export import publish
 from tribopipe.export.citation import Publisher
-from tribopipe.export.explorer import explorer_files, read_embedded_data
+from tribopipe.export.explorer import explorer_parts, read_embedded_data
 from tribopipe.export.tables import frictionmap_csv, frictionmap_table
 from tribopipe.fit import fit_power_law
 from tribopipe.frictionmap import schema
@@ -134,9 +134,9 @@ def test_the_published_files_equal_the_whole_frame_ones(own_map, tmp_path):
         table, [publish.column_kind(table[c]) for c in table.columns])
     assert len(pd.read_csv(data / "group_runs.csv")) == len(members)
     page = read_embedded_data((done.path / "explorer.html").read_text(encoding="utf-8"))
-    reference = read_embedded_data(explorer_files(
+    reference = read_embedded_data(dict(explorer_parts(
         whole, "explorer.html", groups=groups, fits=fit_power_law(whole), title=(
-            Publisher(LAB).package_title), source=LAB)["explorer.html"])
+            Publisher(LAB).package_title), source=LAB))["explorer.html"])
     for data_ in (page, reference):
         data_.pop("generated")
     assert page == reference
@@ -203,7 +203,7 @@ def test_the_runs_of_the_explorer_give_the_page_of_every_run(own_map):
     groups, fits = group_statistics(runs), fit_power_law(runs)
 
     def page(frame: pd.DataFrame) -> dict[str, Any]:
-        data = read_embedded_data(explorer_files(frame, "e.html", groups=groups, fits=fits)[
+        data = read_embedded_data(dict(explorer_parts(frame, "e.html", groups=groups, fits=fits))[
             "e.html"])
         data.pop("generated")
         return data

@@ -1101,27 +1101,6 @@ def explorer_parts(
                                n_runs=len(included))
 
 
-def explorer_files(
-    runs: pd.DataFrame,
-    name: str,
-    *,
-    title: str = "tribopipe friction-map explorer",
-    source: str | None = None,
-    groups: pd.DataFrame | None = None,
-    fits: pd.DataFrame | None = None,
-    runs_inline_limit: int = RUNS_INLINE_LIMIT,
-    groups_page_limit: int = GROUPS_PAGE_LIMIT,
-    runs_beside_pages: bool = True,
-    max_files: int | None = None,
-) -> dict[str, str]:
-    """Every file of :func:`explorer_parts` (same arguments) at once: relative paths
-    → text, the page ``name`` last."""
-    return dict(explorer_parts(
-        runs, name, title=title, source=source, groups=groups, fits=fits,
-        runs_inline_limit=runs_inline_limit, groups_page_limit=groups_page_limit,
-        runs_beside_pages=runs_beside_pages, max_files=max_files))
-
-
 def _files_beside(shards: list[list[str]], shown: set[tuple[str, str]],
                   run_pairs: pd.Series) -> int:
     """How many files of runs lie beside the pages of ``shards`` (:func:`_shards`) when

@@ -79,11 +79,10 @@ def _write_runs(writer: Any, rows: Sequence[CampaignRow], entries: Mapping[str, 
     writer.writerow(RUNS_COLUMNS)
     for row in rows:
         entry = entries.get(row.file)
-        file_labels = {k: row.merged.get(k) for k in LABEL_FIELDS}
         runs = [] if entry is None else [r.flat() for r in entry.runs]
         if entry is None or row.file in failures or not runs:
             status = this_batch.get(row.file, FAILED)
-            writer.writerow([_cell(v) for v in _values(row.file, {}, status, file_labels,
+            writer.writerow([_cell(v) for v in _values(row.file, {}, status, _file_labels(row),
                                                        failures.get(row.file))])
             continue
         for run in runs:
@@ -91,10 +90,19 @@ def _write_runs(writer: Any, rows: Sequence[CampaignRow], entries: Mapping[str, 
             kept = run.get("status")
             status = DUPLICATE if kept == DUPLICATE else this_batch.get(name, FAILED)
             ok = kept == REDUCED and status != FAILED
-            labels = (run.get("labels") if ok or kept == DUPLICATE else None) or file_labels
+            # the file's own labels only where the run has none (its metadata is then
+            # found: a reduced run's row needs none)
+            labels = (run.get("labels") if ok or kept == DUPLICATE else None) or \
+                _file_labels(row)
             reason = failures.get(name) or (entry.reason if kept == DUPLICATE else None)
             writer.writerow([_cell(v) for v in _values(
                 row.file, run, status, labels, reason, measured=ok or kept == DUPLICATE)])
+
+
+def _file_labels(row: CampaignRow) -> dict[str, Any]:
+    """The label fields of a file as its metadata gives them before it is read."""
+    merged = row.merged
+    return {k: merged.get(k) for k in LABEL_FIELDS}
 
 
 def _values(file: str, run: Mapping[str, Any], status: str, labels: Mapping[str, Any],

@@ -27,7 +27,7 @@ from typing import TYPE_CHECKING, Any, TypeGuard, cast
 
 from ..errors import MapError
 from ..escape import printable
-from ..stats import group_statistics, run_ids_of
+from ..stats import group_mu_k, run_ids_of
 from .checks import validate_runs
 from .datapackage import (
     DEFAULT_LIMITS,
@@ -403,14 +403,6 @@ def _table(check: _Checker, path: Path, fields: list[dict[str, Any]],
     return read_csv_columns(path, fields, shown, check.limits, check.add)
 
 
-def _records(columns: dict[str, Any]) -> list[dict[str, Any]]:
-    """Typed columns as rows of plain values (missing as ``None``): for the small tables
-    (the groups)."""
-    names = list(columns)
-    values = [[None if is_missing(v) else v for v in columns[n].tolist()] for n in names]
-    return [dict(zip(names, row, strict=True)) for row in zip(*values, strict=True)]
-
-
 def _check_runs(check: _Checker, res: dict[str, Any], path: Path | None,
                 version: int) -> pd.DataFrame | None:
     """The runs table: schema against the map's, every cell, then the row checks."""
@@ -715,20 +707,24 @@ def _check_groups(check: _Checker, res: dict[str, Any], columns: dict[str, Any],
         return None
     if "nominal_speed_mm_s" in names:
         keys += ("nominal_speed_mm_s",)  # a map of several speeds: groups split by speed
-    # the columns compared only, as rows (a group table of 10⁴ groups has some 70 more)
-    used = (*keys, "mu_k_n", "mu_k_mean", GROUP_ID)
-    rows = _records({name: columns[name] for name in columns if name in used})
-    groups = group_statistics(runs, show_speed=True)
-    computed = {_key(g, keys): g for g in groups.loc[:, [
-        c for c in groups.columns if c in (*keys, "mu_k_n", "mu_k_mean", "run_ids")]].to_dict(
-        orient="records", into=dict)}
+    # the columns compared only, a row at a time as plain values (a group table of 10⁵
+    # groups has some 70 more); the runs' groups as columns, each found by its key
+    used = [name for name in columns if name in (*keys, "mu_k_n", "mu_k_mean", GROUP_ID)]
+    groups = group_mu_k(runs)  # group_statistics(runs, show_speed=True)'s columns
+    computed = {_key_of(key): j for j, key in enumerate(
+        zip(*(groups[k].tolist() for k in keys), strict=True))}
+    figures = {name: groups[name].tolist() for name in ("mu_k_n", "mu_k_mean", "run_ids")}
     del groups
-    if len(rows) != len(computed):
-        check.add(shown, f"{len(rows)} groups, the runs make {len(computed)}")
+    n_rows = len(columns[used[0]])
+    if n_rows != len(computed):
+        check.add(shown, f"{n_rows} groups, the runs make {len(computed)}")
     members: dict[int, frozenset[str]] = {}
     first: dict[int, int] = {}
-    for n, row in enumerate(rows, 1):
-        number = row.get(GROUP_ID) if linked else None
+    at = {name: i for i, name in enumerate(used)}
+    plain = zip(*([None if is_missing(v) else v for v in columns[name].tolist()]
+                  for name in used), strict=True)
+    for n, values in enumerate(plain, 1):
+        number = values[at[GROUP_ID]] if linked else None
         if isinstance(number, int) and number < 1:
             check.add(shown, f"row {n}, field {GROUP_ID}: {number} is not a group number "
                       "(expected 1 or more)")
@@ -740,16 +736,17 @@ def _check_groups(check: _Checker, res: dict[str, Any], columns: dict[str, Any],
                 number = None
             else:
                 first[number] = n
-        g = computed.get(_key(row, keys))
-        if g is None:
+        j = computed.get(_key_of(tuple(values[at[k]] for k in keys)))
+        if j is None:
             check.add(shown, f"row {n}: no runs of this group in the runs table")
             continue
         for name in ("mu_k_n", "mu_k_mean"):
-            if not same_value(row[name], g[name]):
-                check.add(shown, f"row {n}, field {name}: {row[name]!r} does not follow "
-                          f"from the runs ({g[name]!r})")
+            theirs, ours = values[at[name]], figures[name][j]
+            if not same_value(theirs, ours):
+                check.add(shown, f"row {n}, field {name}: {theirs!r} does not follow "
+                          f"from the runs ({ours!r})")
         if isinstance(number, int):
-            members[number] = frozenset(run_ids_of(g["run_ids"]))
+            members[number] = frozenset(run_ids_of(figures["run_ids"][j]))
     return members if linked else None
 
 
@@ -793,10 +790,11 @@ def _check_group_runs(check: _Checker, res: dict[str, Any], path: Path,
                       "listed that belong to another group)")
 
 
-def _key(row: dict[str, Any], keys: tuple[str, ...]) -> tuple[Any, ...]:
+def _key_of(values: tuple[Any, ...]) -> tuple[Any, ...]:
+    """A group's key (its values of the key fields, in order) as the group table and the
+    runs' groups are matched on: missing as ``None``, numbers rounded to 1e-9."""
     out = []
-    for k in keys:
-        v = row[k]
+    for v in values:
         if isinstance(v, float) and math.isnan(v):
             v = None
         out.append(round(float(v), 9) if isinstance(v, int | float) and v is not None else v)

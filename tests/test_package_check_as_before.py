@@ -1,0 +1,269 @@
+"""The package check made lighter for packages of 10⁵ condition groups says what it said
+before: each changed step is held equal to the code it replaced (kept here, as it was),
+run on the same real package, clean and broken in each way the step compares (a changed
+cell of ``groups.csv``, a missing group, an extra group, a group differing in one figure,
+a group number twice, ``runs.csv`` against ``runs.parquet``, the linking table, the
+7-column table): the same problems, the same lines, in the same order."""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+import math
+import shutil
+from pathlib import Path
+from typing import Any, cast
+
+import numpy as np
+import pandas as pd
+import pytest
+from click.testing import CliRunner
+
+from reduced_runs import make_processed
+from tribopipe import frictionmap as fm
+from tribopipe.cli import main
+from tribopipe.frictionmap import package as P
+from tribopipe.frictionmap.datapackage import GROUP_ID, sha256_hash
+from tribopipe.frictionmap.profile import LINKED_GROUPS_VERSION
+from tribopipe.frictionmap.published import published_csv_path
+from tribopipe.frictionmap.schema import is_missing
+from tribopipe.frictionmap.store import same_value
+from tribopipe.stats import (
+    GROUP_MU_K_COLUMNS,
+    NOMINAL_SPEED,
+    group_mu_k,
+    group_statistics,
+    run_ids_of,
+)
+
+# --------------------------------------------------------------------------- as it was
+
+
+def _records_before(columns: dict[str, Any]) -> list[dict[str, Any]]:
+    names = list(columns)
+    values = [[None if is_missing(v) else v for v in columns[n].tolist()] for n in names]
+    return [dict(zip(names, row, strict=True)) for row in zip(*values, strict=True)]
+
+
+def _key_before(row: dict[str, Any], keys: tuple[str, ...]) -> tuple[Any, ...]:
+    out = []
+    for k in keys:
+        v = row[k]
+        if isinstance(v, float) and math.isnan(v):
+            v = None
+        out.append(round(float(v), 9) if isinstance(v, int | float) and v is not None else v)
+    return tuple(out)
+
+
+def _check_groups_before(check: Any, res: dict[str, Any], columns: dict[str, Any],
+                         runs: pd.DataFrame) -> dict[int, frozenset[str]] | None:
+    """package._check_groups as it was: every group's statistics, rows as dicts."""
+    shown = str(res.get("path"))
+    fields = cast("list[dict[str, Any]]", P._group_fields(res))
+    keys: tuple[str, ...] = ("pin", "disc", "normal_force_N", "temperature_C")
+    names = {f["name"] for f in fields}
+    if not {*keys, "mu_k_n", "mu_k_mean"} <= names:
+        check.add(shown, "schema: expected the fields pin, disc, normal_force_N, "
+                  "temperature_C, mu_k_n and mu_k_mean")
+        return None
+    linked = check.result.profile_version >= LINKED_GROUPS_VERSION
+    if linked and not any(f["name"] == GROUP_ID and f.get("type") == "integer"
+                          for f in fields):
+        check.add(shown, f"schema: expected the field {GROUP_ID!r} (integer), the group's "
+                  f"number, which package profile version {check.result.profile_version} "
+                  "requires")
+        return None
+    if "nominal_speed_mm_s" in names:
+        keys += ("nominal_speed_mm_s",)
+    used = (*keys, "mu_k_n", "mu_k_mean", GROUP_ID)
+    rows = _records_before({name: columns[name] for name in columns if name in used})
+    groups = group_statistics(runs, show_speed=True)
+    computed = {_key_before(g, keys): g for g in groups.loc[:, [
+        c for c in groups.columns if c in (*keys, "mu_k_n", "mu_k_mean", "run_ids")]].to_dict(
+        orient="records", into=dict)}
+    del groups
+    if len(rows) != len(computed):
+        check.add(shown, f"{len(rows)} groups, the runs make {len(computed)}")
+    members: dict[int, frozenset[str]] = {}
+    first: dict[int, int] = {}
+    for n, row in enumerate(rows, 1):
+        number = row.get(GROUP_ID) if linked else None
+        if isinstance(number, int) and number < 1:
+            check.add(shown, f"row {n}, field {GROUP_ID}: {number} is not a group number "
+                      "(expected 1 or more)")
+            number = None
+        if isinstance(number, int):
+            if number in first:
+                check.add(shown, f"row {n}, field {GROUP_ID}: group {number} appears twice "
+                          f"(first in row {first[number]})")
+                number = None
+            else:
+                first[number] = n
+        g = computed.get(_key_before(row, keys))
+        if g is None:
+            check.add(shown, f"row {n}: no runs of this group in the runs table")
+            continue
+        for name in ("mu_k_n", "mu_k_mean"):
+            if not same_value(row[name], g[name]):
+                check.add(shown, f"row {n}, field {name}: {row[name]!r} does not follow "
+                          f"from the runs ({g[name]!r})")
+        if isinstance(number, int):
+            members[number] = frozenset(run_ids_of(g["run_ids"]))
+    return members if linked else None
+
+
+# --------------------------------------------------------------------------- inputs
+
+
+def _variants(runs: pd.DataFrame) -> dict[str, pd.DataFrame]:
+    """The runs as they are and changed where the grouping branches."""
+    out = {"as they are": runs}
+    blank = runs.copy()
+    blank.loc[blank.index[::3], "repeat"] = pd.NA
+    blank.loc[blank.index[1::7], "excluded"] = True
+    blank.loc[blank.index[2::11], "mu_k"] = math.nan  # a run without μ_K is not counted
+    out["repeats missing, runs excluded, μ_K missing"] = blank
+    no_t = runs.copy()
+    no_t.loc[no_t.index[::5], "temperature_C"] = math.nan
+    out["temperatures missing"] = no_t
+    speeds = runs.copy()
+    speeds[NOMINAL_SPEED] = np.where(np.arange(len(runs)) % 2 == 0, 5.0, 10.0)
+    out["two speeds"] = speeds
+    out["a run in four"] = runs.iloc[::4]
+    out["all excluded"] = runs.assign(excluded=True)
+    return out
+
+
+VARIANTS = ["as they are", "repeats missing, runs excluded, μ_K missing",
+            "temperatures missing", "two speeds", "a run in four", "all excluded"]
+
+
+@pytest.fixture(scope="module")
+def package(tmp_path_factory) -> Path:
+    """A real package: six reduced runs (with traces) and the 169 published rows, whose
+    condition groups hold one to several runs at several pressures."""
+    root = tmp_path_factory.mktemp("asbefore")
+    map_path, _ = make_processed(root / "lab")
+    fm.import_table(map_path)
+    out = root / "pkg"
+    result = CliRunner().invoke(main, ["map", "publish", "-o", str(out), "--lab", "Lab A",
+                                       "--map", str(map_path)], catch_exceptions=False)
+    assert result.exit_code == 0, result.output
+    return out
+
+
+def _rows(path: Path) -> list[list[str]]:
+    return list(csv.reader(io.StringIO(path.read_text(encoding="utf-8"))))
+
+
+def _write_rows(path: Path, table: list[list[str]]) -> None:
+    buf = io.StringIO()
+    csv.writer(buf, lineterminator="\n").writerows(table)
+    path.write_text(buf.getvalue(), encoding="utf-8")
+
+
+def _rehash(pkg: Path, path: str) -> None:
+    data = json.loads((pkg / "datapackage.json").read_text(encoding="utf-8"))
+    raw = (pkg / path).read_bytes()
+    for res in data["resources"]:
+        if res["path"] == path:
+            res["bytes"], res["hash"] = len(raw), sha256_hash(raw)
+    (pkg / "datapackage.json").write_text(json.dumps(data, indent=1), encoding="utf-8")
+
+
+def _edit(pkg: Path, path: str, change: Any) -> None:
+    """``change(table)`` on the CSV rows of ``path`` (header first), written back and
+    re-hashed in the descriptor."""
+    table = _rows(pkg / path)
+    change(table)
+    _write_rows(pkg / path, table)
+    _rehash(pkg, path)
+
+
+def _cell(table: list[list[str]], row: int, name: str, value: str) -> None:
+    table[row][table[0].index(name)] = value
+
+
+def _reverse_rows(table: list[list[str]]) -> None:
+    table[1:] = table[:0:-1]
+
+
+GROUPS_CSV, RUNS_CSV = "data/groups.csv", "data/runs.csv"
+BREAKS: dict[str, tuple[str, Any]] = {
+    "a μ_K mean changed": (GROUPS_CSV, lambda t: _cell(t, 3, "mu_k_mean", "0.123")),
+    "a μ_K n changed": (GROUPS_CSV, lambda t: _cell(t, 5, "mu_k_n", "7")),
+    "a key cell changed": (GROUPS_CSV, lambda t: _cell(t, 2, "normal_force_N", "99.5")),
+    "a group missing": (GROUPS_CSV, lambda t: t.pop(4)),
+    "an extra group": (GROUPS_CSV, lambda t: t.append(
+        [*t[1][:t[0].index("pin")], "Ecoflex 00-30", *t[1][t[0].index("pin") + 1:]])),
+    "a group number twice": (GROUPS_CSV, lambda t: _cell(t, 6, GROUP_ID, t[2][
+        t[0].index(GROUP_ID)])),
+    "a group number zero": (GROUPS_CSV, lambda t: _cell(t, 7, GROUP_ID, "0")),
+    "the groups reversed": (GROUPS_CSV, lambda t: _reverse_rows(t)),
+    "a run's μ_K changed in runs.csv": (RUNS_CSV, lambda t: _cell(t, 9, "mu_k", "0.4321")),
+    "a run's force changed in runs.csv": (RUNS_CSV, lambda t: _cell(t, 12, "normal_force_N",
+                                                                    "2.5")),
+    "a link missing": ("data/group_runs.csv", lambda t: t.pop(3)),
+    "a cof changed": ("data/frictionmap.csv", lambda t: _cell(t, 2, "cof", "0.77")),
+}
+
+
+# --------------------------------------------------------------------------- tests
+
+
+@pytest.mark.parametrize("variant", VARIANTS)
+def test_group_mu_k_is_group_statistics_columns(package, variant):
+    """``stats.group_mu_k`` gives the columns of ``group_statistics(show_speed=True)`` it
+    names, value for value, dtype for dtype, row for row."""
+    runs = _variants(fm.read_map(package / "data" / "runs.parquet"))[variant]
+    before = group_statistics(runs, show_speed=True)
+    after = group_mu_k(runs)
+    assert list(after.columns) == list(GROUP_MU_K_COLUMNS)
+    pd.testing.assert_frame_equal(after, before.loc[:, list(GROUP_MU_K_COLUMNS)],
+                                  check_exact=True)
+    for a, b in zip(after.to_dict(orient="records"),
+                    before.loc[:, list(GROUP_MU_K_COLUMNS)].to_dict(orient="records"),
+                    strict=True):  # the same plain values, as the check prints them
+        assert [repr(v) for v in a.values()] == [repr(v) for v in b.values()]
+
+
+def test_group_mu_k_of_the_published_map_is_as_before(tmp_path):
+    """The same on the founding paper's published map (many runs per group)."""
+    map_path = tmp_path / "published.parquet"
+    fm.import_table(map_path, published_csv_path())
+    for runs in _variants(fm.read_map(map_path)).values():
+        pd.testing.assert_frame_equal(
+            group_mu_k(runs),
+            group_statistics(runs, show_speed=True).loc[:, list(GROUP_MU_K_COLUMNS)],
+            check_exact=True)
+
+
+def _both(pkg: Path, monkeypatch: pytest.MonkeyPatch) -> tuple[list[str], list[str], str]:
+    """The check's lines (and verdict) by today's code and with the replaced steps as
+    they were."""
+    after = P.check_package(pkg)
+    with monkeypatch.context() as m:
+        m.setattr(P, "_check_groups", _check_groups_before)
+        before = P.check_package(pkg)
+    assert after.ok == before.ok and after.more == before.more
+    assert after.verdict() == before.verdict()
+    return after.lines(), before.lines(), after.verdict()
+
+
+def test_a_clean_package_checks_as_before(package, monkeypatch):
+    after, before, verdict = _both(package, monkeypatch)
+    assert after == before == []
+    assert "valid friction-map package from Lab A, 175 runs" in verdict
+
+
+@pytest.mark.parametrize("broken", list(BREAKS))
+def test_a_broken_package_is_said_as_before(package, tmp_path, monkeypatch, broken):
+    """Each way of breaking the package gives the lines it gave before, and some."""
+    pkg = tmp_path / "pkg"
+    shutil.copytree(package, pkg)
+    path, change = BREAKS[broken]
+    _edit(pkg, path, change)
+    after, before, _ = _both(pkg, monkeypatch)
+    assert after == before
+    assert after, f"{broken}: no problem found"

@@ -15,15 +15,22 @@ not decoded from rows) it reads the state back.
 The campaign table finds a file's metadata (its name matched, its labels merged) when a
 row is asked for it: the plan and ``runs.csv`` of reduced files find none; the materials
 check reads the names the table kept as it was built. Their rows, names and refusals
-are those found from each row's own metadata.
+are those found from each row's own metadata. ``runs.csv`` is written from the state's
+entries without copying each run into a dict first: every table written or rehearsed in
+this module's batches is compared, byte for byte, with the code it replaced (kept here,
+as it was).
 """
 
 from __future__ import annotations
 
+import csv
+import io
 import json
+import math
 import shutil
 import sqlite3
 from collections import Counter
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -33,6 +40,7 @@ from generators.synthetic import SyntheticRun, write_rheocompass_export
 from helpers import write_campaign_config
 from tribopipe.campaign import batch as batch_module
 from tribopipe.campaign import load_campaign, run_campaign
+from tribopipe.campaign import outputs as outputs_module
 from tribopipe.campaign import table as table_module
 from tribopipe.campaign.ledger import BatchReport
 from tribopipe.campaign.metadata import material_problems, read_manifest
@@ -91,6 +99,87 @@ def root(exports: Path, tmp_path: Path) -> Path:
     (tmp_path / "materials.toml").write_text(LAB_MATERIALS.format(name="Lab silicone A"))
     _config(tmp_path)
     return tmp_path
+
+
+# --------------------------------------------------------------------------- as it was
+def _old_cell(value: Any) -> str:
+    if value is None:
+        return ""
+    if isinstance(value, float):
+        return "" if not math.isfinite(value) else repr(round(value, 6))
+    if isinstance(value, int):
+        return str(value)
+    return outputs_module.csv_cell(str(value))
+
+
+def _old_values(file: str, run: Mapping[str, Any], status: str, labels: Mapping[str, Any],
+                reason: str | None, *, measured: bool = False) -> list[Any]:
+    keys = tuple(k for k in outputs_module.ENTRY_KEYS if k not in ("labels", "name"))
+    values: dict[str, Any] = {
+        "file": file, "status": status, **labels, **_old_report_cells(labels),
+        "test": run.get("test"), "result": run.get("result"), "interval": run.get("interval"),
+        **({k: run.get(k) for k in keys if k not in ("test", "result", "interval")}
+           if measured else {}),
+        "reason": reason,
+    }
+    return [values.get(c) for c in outputs_module.RUNS_COLUMNS]
+
+
+def _old_report_cells(labels: Mapping[str, Any]) -> dict[str, Any]:
+    report = labels.get("report")
+    if not isinstance(report, Mapping):
+        return {}
+    try:
+        values = {str(k): v for k, v in report.get("values") or []}
+        extra = {str(k): str(v) for k, v in report.get("extra") or []}
+        return outputs_module.RunReport.of(values, extra).columns()
+    except (TypeError, ValueError):
+        return {}
+
+
+def _old_write_runs(writer: Any, rows: Sequence[Any], entries: Mapping[str, Any],
+                    this_batch: Mapping[str, str], failures: Mapping[str, str]) -> None:
+    writer.writerow(outputs_module.RUNS_COLUMNS)
+    for row in rows:
+        entry = entries.get(row.file)
+        file_labels = {k: row.merged.get(k) for k in outputs_module.LABEL_FIELDS}
+        runs = [] if entry is None else [r.flat() for r in entry.runs]
+        if entry is None or row.file in failures or not runs:
+            status = this_batch.get(row.file, "failed")
+            writer.writerow([_old_cell(v) for v in _old_values(
+                row.file, {}, status, file_labels, failures.get(row.file))])
+            continue
+        for run in runs:
+            name = run.get("name") or row.file
+            kept = run.get("status")
+            status = "duplicate" if kept == "duplicate" else this_batch.get(name, "failed")
+            ok = kept == "reduced" and status != "failed"
+            labels = (run.get("labels") if ok or kept == "duplicate" else None) or file_labels
+            reason = failures.get(name) or (entry.reason if kept == "duplicate" else None)
+            writer.writerow([_old_cell(v) for v in _old_values(
+                row.file, run, status, labels, reason, measured=ok or kept == "duplicate")])
+# ---------------------------------------------------------------------------
+
+
+@pytest.fixture(autouse=True)
+def runs_csv_as_before(monkeypatch: pytest.MonkeyPatch) -> list[str]:
+    """Every ``runs.csv`` written or rehearsed here is also made by the code it replaced,
+    on the same rows and entries, and must be the same text (returned: each one)."""
+    made: list[str] = []
+    new = outputs_module._write_runs
+
+    def both(writer: Any, rows: Sequence[Any], entries: Mapping[str, Any],
+             this_batch: Mapping[str, str], failures: Mapping[str, str]) -> None:
+        mine, old = io.StringIO(), io.StringIO()
+        new(csv.writer(mine, lineterminator="\n"), rows, entries, this_batch, failures)
+        _old_write_runs(csv.writer(old, lineterminator="\n"), rows, entries, this_batch,
+                        failures)
+        assert mine.getvalue() == old.getvalue()
+        made.append(mine.getvalue())
+        new(writer, rows, entries, this_batch, failures)
+
+    monkeypatch.setattr(outputs_module, "_write_runs", both)
+    return made
 
 
 class Spy:
@@ -199,16 +288,17 @@ def test_a_changed_config_and_material(root: Path, monkeypatch: pytest.MonkeyPat
     _same_as_read_back(spy, root)
 
 
-def test_duplicates_a_manifest_and_a_conflict(root: Path,
-                                              monkeypatch: pytest.MonkeyPatch) -> None:
+def test_duplicates_a_manifest_and_a_conflict(root: Path, monkeypatch: pytest.MonkeyPatch,
+                                              runs_csv_as_before: list[str]) -> None:
     raw = root / "raw"
     (raw / "unnamed.csv").unlink()
     shutil.copy(raw / "DS30_steel_1N_20C_r1.csv", raw / "copy of r1.csv")
     shutil.copy(raw / "DS30_steel_1N_20C_r1.csv", raw / "DS30_steel_1N_20C_r7.csv")
     (raw / "manifest.csv").write_text(
-        "file,pin,disc,normal_force_N,temperature_C,repeat\n"
-        "copy of r1.csv,DS30,steel,1,20,1\n"
-        "DS30_steel_3N_20C_r1.csv,DS30,steel,3,20,1\n", encoding="utf-8")
+        "file,pin,disc,normal_force_N,temperature_C,repeat,humidity_pct,operator,lab_note\n"
+        "copy of r1.csv,DS30,steel,1,20,1,,,\n"
+        "DS30_steel_5N_20C_r1.csv,DS30,steel,5,20,1,45,Ann,=cut on Monday\n"
+        "DS30_steel_3N_20C_r1.csv,DS30,steel,3,20,1,,,\n", encoding="utf-8")
     _config(root, ('manifest = "raw/manifest.csv"',))
     spy = Spy(monkeypatch)
     first = spy.batch(root)
@@ -216,6 +306,11 @@ def test_duplicates_a_manifest_and_a_conflict(root: Path,
     assert [f for f, _ in first.conflicts] == ["DS30_steel_1N_20C_r7.csv"]
     kept = _same_as_read_back(spy, root)
     assert kept.report["unmatched"]
+    # the reporting items and the extra metadata of the manifest, in the run's row
+    (row,) = [r for r in csv.DictReader(io.StringIO(kept.tables[0]))
+              if r["file"] == "DS30_steel_5N_20C_r1.csv"]
+    assert (row["humidity_pct"], row["operator"], row["status"]) == ("45.0", "Ann", "skipped")
+    assert "lab_note" in row["extra_metadata"] and len(runs_csv_as_before) == 3
 
 
 def _entries(campaign: Campaign) -> BatchEntries:

@@ -563,8 +563,10 @@ def _apply(campaign: Campaign, results: Sequence[FileOutcome], rows: CampaignTab
     outcomes: dict[str, str] = {}
     runs_failed = 0
     config_hash = campaign.settings.config_hash  # hashes the settings: once, not per run
+    # the contents the campaign's files own, only when there are results to check (a
+    # landing of none, as a re-run's, looks at no file's runs)
     owners = _owners(rows, redone if redone is not None else {r.name for r in results},
-                     vanished, in_map)
+                     vanished, in_map) if results else ContentOwners({})
     for done in sorted(results, key=lambda r: r.name):
         row = rows.row(done.name)
         old = entries.get(row.file)

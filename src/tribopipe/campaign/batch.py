@@ -172,12 +172,15 @@ def _run_locked(campaign: Campaign, *, jobs: int | None, plots: bool | None,
     assert ended is not None  # only a rehearsal ends without a report
     report, quiet, clean = ended.report, ended.quiet, ended.clean
     entries = ended.entries if quiet else {}
-    del ended  # a rehearsal reads the state again: the batch's entries are let go first
+    # the state the rehearsal starts from: the one the batch holds, when it is provably
+    # what reading the state file back would give (else it is read back)
+    saved = ended.entries.as_read_back() if clean and not quiet else None
+    del ended  # the batch's table and what it holds of the entries are let go first
     # a batch that found nothing to do is kept, for the next one to report again if it
     # finds the campaign as this one did; a batch that did its work cleanly keeps the
     # ledger of its next unchanged re-run, rehearsed, as pending; any other forgets it
     try:
-        rerun = _rehearse(campaign) if clean and not quiet else None
+        rerun = _rehearse(campaign, saved) if clean and not quiet else None
         if quiet:
             keep_report(campaign, report, inputs, entries)
         elif rerun is not None:
@@ -200,14 +203,17 @@ class _Ended:
     report: BatchReport
     quiet: bool
     clean: bool
-    entries: Mapping[str, FileState]
+    entries: BatchEntries
     tables: tuple[str, str] | None = None
 
 
-def _rehearse(campaign: Campaign) -> tuple[str, _Ended] | None:
+def _rehearse(campaign: Campaign, state: CampaignState | None = None
+              ) -> tuple[str, _Ended] | None:
     """The next batch, rehearsed at the end of one that did its work cleanly (under its
     lock, after its outputs are written): the campaign's inputs stamped as the next batch
-    will stamp them, then :func:`_batch` on the state as it reads it, writing nothing.
+    will stamp them, then :func:`_batch` on the state as it reads it (``state``: as the
+    batch holds it, :meth:`~tribopipe.campaign.state.BatchEntries.as_read_back`; else
+    read back), writing nothing.
     Returns the stamp and how it ends when it finds nothing to do (its report and tables
     are then what the next unchanged batch prints and writes), else ``None``; ``None`` too
     when anything fails or a signal comes (what the batch did is not at stake)."""
@@ -218,8 +224,8 @@ def _rehearse(campaign: Campaign) -> tuple[str, _Ended] | None:
         # whatever fails here, the batch's own work is done and reported: no ledger
         with suppress(Exception):
             ended = None if inputs is None else _batch(
-                campaign, load_state(campaign), jobs=1, plots=False, progress=None,
-                rehearse=True)
+                campaign, load_state(campaign) if state is None else state, jobs=1,
+                plots=False, progress=None, rehearse=True)
     if inputs is None or ended is None or not ended.quiet or stop.raised:
         return None
     return inputs, ended
@@ -557,8 +563,10 @@ def _apply(campaign: Campaign, results: Sequence[FileOutcome], rows: CampaignTab
     outcomes: dict[str, str] = {}
     runs_failed = 0
     config_hash = campaign.settings.config_hash  # hashes the settings: once, not per run
+    # the contents the campaign's files own, only when there are results to check (a
+    # landing of none, as a re-run's, looks at no file's runs)
     owners = _owners(rows, redone if redone is not None else {r.name for r in results},
-                     vanished, in_map)
+                     vanished, in_map) if results else ContentOwners({})
     for done in sorted(results, key=lambda r: r.name):
         row = rows.row(done.name)
         old = entries.get(row.file)

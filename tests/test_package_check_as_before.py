@@ -354,3 +354,20 @@ def test_a_broken_group_copy_is_said_as_before(package, tmp_path, monkeypatch, b
     assert after == before
     assert after and all(line.startswith(GROUPS_PARQUET) or "more problem(s)" in line
                          for line in after), after
+
+
+@pytest.mark.parametrize("broken", [None, "a μ_K mean changed", "a run's μ_K changed in runs.csv"])
+def test_map_validate_prints_what_the_full_check_says(package, tmp_path, broken):
+    """``map validate`` (which keeps no runs but the labs) prints the notes, the lines and
+    the verdict of the check that keeps every run, and fails where it fails."""
+    pkg = tmp_path / "pkg"
+    shutil.copytree(package, pkg)
+    if broken is not None:
+        _edit(pkg, *BREAKS[broken])
+    full = P.check_package(pkg)
+    result = CliRunner().invoke(main, ["map", "validate", str(pkg)], catch_exceptions=False)
+    expected = [f"note: {n}" for n in full.notes] + full.lines()
+    if full.ok:
+        expected.append(full.verdict())
+    assert result.output.splitlines() == expected
+    assert result.exit_code == (0 if full.ok else 1)

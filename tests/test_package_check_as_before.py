@@ -113,6 +113,44 @@ def _check_groups_before(check: Any, res: dict[str, Any], columns: dict[str, Any
     return members if linked else None
 
 
+def _check_groups_copy_before(check: Any, res: dict[str, Any], path: Path,
+                              columns: dict[str, Any]) -> None:
+    """package._check_groups_copy as it was: a frame of the CSV's columns."""
+    import pyarrow as pa
+
+    shown = str(res.get("path"))
+    parquet = P._open_parquet(check, path, shown)
+    if parquet is None:
+        return
+    try:
+        copy = parquet.read().to_pandas()
+    except (pa.ArrowException, OSError, ValueError) as exc:
+        check.add(shown, f"not a readable Parquet file ({str(exc)[:120]})")
+        return
+    names = list(columns)
+    if list(copy.columns) != names:
+        check.add(shown, f"columns {list(map(str, copy.columns))} differ from the CSV's "
+                  f"{names}")
+        return
+    n = len(next(iter(columns.values()))) if columns else 0
+    if len(copy) != n:
+        check.add(shown, f"{len(copy)} rows, the CSV has {n}")
+        return
+    csv_frame = pd.DataFrame({name: pd.Series(columns[name]) for name in names})
+    # a CSV cannot tell an empty text from a missing one: neither can the comparison
+    for frame in (csv_frame, copy):
+        for name in names:
+            if frame[name].dtype.kind in "OUT" or str(frame[name].dtype) == "str":
+                frame[name] = frame[name].mask(frame[name].astype(object) == "")
+    try:
+        differs = np.column_stack([~P._same_values(csv_frame[name], copy[name])
+                                   for name in names]) if names else np.zeros((n, 0), bool)
+    except (TypeError, ValueError) as exc:
+        check.add(shown, f"not comparable with the CSV ({str(exc)[:120]})")
+        return
+    P._name_differences(check, shown, differs, names, csv_frame, copy)
+
+
 # --------------------------------------------------------------------------- inputs
 
 
@@ -209,6 +247,35 @@ BREAKS: dict[str, tuple[str, Any]] = {
 }
 
 
+def _edit_copy(pkg: Path, change: Any) -> None:
+    """``change(frame)`` on the group table's Parquet copy, written back and re-hashed."""
+    path = pkg / GROUPS_PARQUET
+    frame = pd.read_parquet(path)
+    frame = change(frame)
+    frame.to_parquet(path, index=False)
+    _rehash(pkg, GROUPS_PARQUET)
+
+
+def _set(frame: pd.DataFrame, row: int, name: str, value: Any) -> pd.DataFrame:
+    frame.loc[row, name] = value
+    return frame
+
+
+GROUPS_PARQUET = "data/groups.parquet"
+COPY_BREAKS: dict[str, Any] = {
+    "a mean changed": lambda f: _set(f, 0, "mu_k_mean", 0.987),
+    "two cells changed": lambda f: _set(_set(f, 3, "pin", "Ecoflex 00-30"), 9, "mu_k_n", 9),
+    "a text emptied": lambda f: _set(f, 2, "labs", ""),
+    "a text missing": lambda f: _set(f, 2, "labs", None),
+    "a row dropped": lambda f: f.iloc[1:],
+    "a column dropped": lambda f: f.drop(columns=["mu_k_mean"]),
+    "columns swapped": lambda f: f[[*f.columns[1:], f.columns[0]]],
+    "every number a text": lambda f: f.astype(str),
+    "every mean changed": lambda f: f.assign(mu_k_mean=f["mu_k_mean"] + 0.5),
+    "rows reversed": lambda f: f.iloc[::-1].reset_index(drop=True),
+}
+
+
 # --------------------------------------------------------------------------- tests
 
 
@@ -240,14 +307,21 @@ def test_group_mu_k_of_the_published_map_is_as_before(tmp_path):
 
 
 def _both(pkg: Path, monkeypatch: pytest.MonkeyPatch) -> tuple[list[str], list[str], str]:
-    """The check's lines (and verdict) by today's code and with the replaced steps as
-    they were."""
+    """The check's lines (and verdict) by today's code, keeping the runs or not (as
+    publish checks), and with the replaced steps as they were."""
     after = P.check_package(pkg)
+    lean = P.check_package(pkg, keep_runs=False)
     with monkeypatch.context() as m:
         m.setattr(P, "_check_groups", _check_groups_before)
+        m.setattr(P, "_check_groups_copy", _check_groups_copy_before)
         before = P.check_package(pkg)
-    assert after.ok == before.ok and after.more == before.more
-    assert after.verdict() == before.verdict()
+    for other in (lean, before):
+        assert (after.ok, after.more, after.verdict(), after.notes, after.lines()) == (
+            other.ok, other.more, other.verdict(), other.notes, other.lines())
+    if after.runs is not None:
+        assert before.runs is not None and lean.runs is not None
+        pd.testing.assert_frame_equal(after.runs, before.runs)
+        pd.testing.assert_frame_equal(lean.runs, after.runs.loc[:, ["lab"]])
     return after.lines(), before.lines(), after.verdict()
 
 
@@ -267,3 +341,16 @@ def test_a_broken_package_is_said_as_before(package, tmp_path, monkeypatch, brok
     after, before, _ = _both(pkg, monkeypatch)
     assert after == before
     assert after, f"{broken}: no problem found"
+
+
+@pytest.mark.parametrize("broken", list(COPY_BREAKS))
+def test_a_broken_group_copy_is_said_as_before(package, tmp_path, monkeypatch, broken):
+    """The group table's Parquet copy, compared a column at a time, is said as it was
+    when compared as one frame beside a frame of the CSV's columns."""
+    pkg = tmp_path / "pkg"
+    shutil.copytree(package, pkg)
+    _edit_copy(pkg, COPY_BREAKS[broken])
+    after, before, _ = _both(pkg, monkeypatch)
+    assert after == before
+    assert after and all(line.startswith(GROUPS_PARQUET) or "more problem(s)" in line
+                         for line in after), after

@@ -27,7 +27,7 @@ from typing import TYPE_CHECKING, Any, TypeGuard, cast
 
 from ..errors import MapError
 from ..escape import printable
-from ..stats import group_mu_k, run_ids_of
+from ..stats import GROUP_MU_K_INPUT, group_mu_k, run_ids_of
 from .checks import validate_runs
 from .datapackage import (
     DEFAULT_LIMITS,
@@ -155,10 +155,14 @@ class _Checker:
 
 
 def check_package(path: str | os.PathLike[str],
-                  limits: PackageLimits = DEFAULT_LIMITS) -> PackageCheck:
+                  limits: PackageLimits = DEFAULT_LIMITS, *,
+                  keep_runs: bool = True) -> PackageCheck:
     """Check the package at ``path`` (its folder or its ``datapackage.json``); see the
     module docstring for what is checked. Never raises for a bad package: every problem is
-    in the result."""
+    in the result. With ``keep_runs`` false the result's runs hold the ``lab`` column only
+    (what :meth:`PackageCheck.verdict` reads): each step after the Parquet copy's keeps
+    only the columns it compares, and the others are let go early (a caller that wants
+    the verdict, not the runs: 10⁵ runs of every column are some 100 MB)."""
     desc = descriptor_path(path)
     check = _Checker(desc, limits)
     try:
@@ -183,15 +187,22 @@ def check_package(path: str | os.PathLike[str],
     return_free_memory()  # what parsing and checking the rows freed, before the copies
     if (parquet := files.get(RUNS_PARQUET)) is not None:
         _check_parquet_copy(check, resources[RUNS_PARQUET], parquet, runs)
+    if not keep_runs:  # the columns the later steps read
+        check.result.runs = runs.loc[:, ["lab"]]
+        runs = runs.loc[:, list(dict.fromkeys((*GROUP_MU_K_INPUT, "mu_k", "source")))]
+        return_free_memory()
     if (groups := files.get(GROUPS)) is not None:
         before_groups = len(check.result.problems) + check.result.more
         table = _group_columns(check, resources[GROUPS], groups)
         members = None if table is None else _check_groups(check, resources[GROUPS], table,
                                                            runs)
         clean = len(check.result.problems) + check.result.more == before_groups
+        return_free_memory()
         if table is not None and clean and (
                 groups_copy := files.get(GROUPS_PARQUET)) is not None:
             _check_groups_copy(check, resources[GROUPS_PARQUET], groups_copy, table)
+        del table
+        return_free_memory()
         linked = check.result.profile_version >= LINKED_GROUPS_VERSION
         if members is not None and (links := files.get(GROUP_RUNS)) is not None:
             _check_group_runs(check, resources[GROUP_RUNS], links, members,
@@ -575,19 +586,30 @@ def _check_groups_copy(check: _Checker, res: dict[str, Any], path: Path,
     if len(copy) != n:
         check.add(shown, f"{len(copy)} rows, the CSV has {n}")
         return
-    csv_frame = pd.DataFrame({name: pd.Series(columns[name]) for name in names})
-    # a CSV cannot tell an empty text from a missing one: neither can the comparison
-    for frame in (csv_frame, copy):
-        for name in names:
-            if frame[name].dtype.kind in "OUT" or str(frame[name].dtype) == "str":
-                frame[name] = frame[name].mask(frame[name].astype(object) == "")
+    # a column at a time, as a Series of its own (no frame of the CSV's columns beside
+    # the copy); a CSV cannot tell an empty text from a missing one: neither can the
+    # comparison
+    csv_frame = {name: _empty_as_missing(pd.Series(columns[name])) for name in names}
+    for name in names:
+        if _is_text(copy[name]):
+            copy[name] = _empty_as_missing(copy[name])
+    differs = np.zeros((n, len(names)), dtype=bool)
     try:
-        differs = np.column_stack([~_same_values(csv_frame[name], copy[name])
-                                   for name in names]) if names else np.zeros((n, 0), bool)
+        for j, name in enumerate(names):
+            differs[:, j] = ~_same_values(csv_frame[name], copy[name])
     except (TypeError, ValueError) as exc:
         check.add(shown, f"not comparable with the CSV ({str(exc)[:120]})")
         return
     _name_differences(check, shown, differs, names, csv_frame, copy)
+
+
+def _is_text(column: pd.Series) -> bool:
+    return column.dtype.kind in "OUT" or str(column.dtype) == "str"
+
+
+def _empty_as_missing(column: pd.Series) -> pd.Series:
+    """A text column with its empty texts missing (other columns as they are)."""
+    return column.mask(column.astype(object) == "") if _is_text(column) else column
 
 
 class _ParquetColumns:

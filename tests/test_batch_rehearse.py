@@ -10,7 +10,10 @@ the same campaign after the batch, the pending ledger it kept with the one the
 rehearsal from the state read back gives (stamps, report, tables, traces), and the
 state it started from with :func:`~tribopipe.campaign.state.load_state`'s, entry by
 entry and in order. Where it is not provable (a state written under the batch, entries
-not decoded from rows) it reads the state back.
+not decoded from rows) it reads the state back. Its campaign table takes the batch's
+rows of the files whose entry the batch left as it was (reduced, same stat, traces
+still there, the same campaign and manifest): it is the table built from nothing, row by
+row, and finds the metadata of every other file.
 
 The campaign table finds a file's metadata (its name matched, its labels merged) when a
 row is asked for it: the plan and ``runs.csv`` of reduced files find none; the materials
@@ -188,16 +191,17 @@ class Spy:
 
     def __init__(self, monkeypatch: pytest.MonkeyPatch) -> None:
         self.reads = 0
-        self.rehearsals: list[tuple[CampaignState | None, Any]] = []
+        self.rehearsals: list[tuple[CampaignState | None, Any, Any, Campaign]] = []
         load, rehearse = batch_module.load_state, batch_module._rehearse
 
         def counted_load(campaign: Campaign) -> CampaignState:
             self.reads += 1
             return load(campaign)
 
-        def watched(campaign: Campaign, state: CampaignState | None = None) -> Any:
-            out = rehearse(campaign, state)
-            self.rehearsals.append((state, out))
+        def watched(campaign: Campaign, state: CampaignState | None = None,
+                    known: Any = None) -> Any:
+            out = rehearse(campaign, state, known)
+            self.rehearsals.append((state, out, known, campaign))
             return out
 
         monkeypatch.setattr(batch_module, "load_state", counted_load)
@@ -220,15 +224,20 @@ def _ledger_of(campaign: Campaign, rerun: Any) -> KeptLedger:
                       tables=ended.tables)
 
 
-def _same_as_read_back(spy: Spy, root: Path) -> KeptLedger:
+def _same_as_read_back(spy: Spy, root: Path) -> tuple[KeptLedger, int]:
     """After a working batch (watched by ``spy``): the rehearsal started from the state
     the batch held (the state file was read once, by the batch), that state is the one
     read back now (entry by entry, in order), and the pending ledger it kept is the one
-    the rehearsal from the state read back gives, on the same campaign, now."""
+    the rehearsal from the state read back gives, on the same campaign, now; its table
+    is the one built from nothing (:func:`_same_table`). Returns that ledger and how
+    many rows the rehearsal's table took from the batch's."""
     campaign = load_campaign(root / "campaign.toml")
-    ((held, mine),) = spy.rehearsals
+    ((held, mine, known, batched),) = spy.rehearsals
     assert spy.reads == 1, "the rehearsal read the state back"
-    assert held is not None and mine is not None
+    assert held is not None and mine is not None and known is not None
+    taken = _same_table(batched, held, known)
+    # a table of the campaign loaded again (another object) takes no row
+    assert _same_table(campaign, held, known) == 0
     back = load_state(campaign)
     assert list(held.entries.items()) == list(back.entries.items())
     assert (held.campaign, held.map) == (back.campaign, back.map)
@@ -239,7 +248,43 @@ def _same_as_read_back(spy: Spy, root: Path) -> KeptLedger:
     assert read_back is not None
     assert kept == _ledger_of(campaign, read_back)
     assert read_back[1].quiet and read_back[1].report.to_json() == mine[1].report.to_json()
-    return kept
+    return kept, taken
+
+
+def _rows_of(table: Any) -> list[tuple[Any, ...]]:
+    return [(r.file, r.where, r.size, r.mtime_ns, r.status, r.problem, r.reason, r.sha256,
+             r.previous, r.sources, r.merged, r.hints, r.test_rows) for r in table]
+
+
+def _same_table(campaign: Campaign, state: CampaignState, known: Any) -> int:
+    """The rehearsal's table, with the rows it took from the batch's (``known``), is the
+    table built from nothing: row by row, metadata, names and files set aside; it found
+    the metadata of every file but those it took, which are the reduced files (or
+    duplicates) whose state entry the batch left as it was. Returns how many it took."""
+    manifest = read_manifest(campaign.manifest) if campaign.manifest else None
+    found: list[str] = []
+    real = table_module._file_metadata
+
+    def counted(*args: Any) -> Any:
+        found.append(args[2])
+        return real(*args)
+
+    table_module._file_metadata = counted
+    try:
+        taken = campaign_table(campaign, state=state, manifest=manifest, known=known)
+    finally:
+        table_module._file_metadata = real
+    built = campaign_table(campaign, state=state, manifest=manifest)
+    assert _rows_of(taken) == _rows_of(built)
+    assert taken.names_given() == built.names_given()
+    assert taken.not_exports == built.not_exports
+    kept = {r.file for r in built if r.status in ("reduced", "duplicate")
+            and r.previous is not None and known._entries.get(r.file) is r.previous}
+    every = {r.file for r in built} | {f for f, _ in built.not_exports}
+    if not known.built_for(campaign, manifest):
+        kept = set()
+    assert sorted(found) == sorted(every - kept)
+    return len(kept)
 
 
 def test_every_file_new_with_failures_and_a_note(root: Path,
@@ -247,7 +292,8 @@ def test_every_file_new_with_failures_and_a_note(root: Path,
     spy = Spy(monkeypatch)
     first = spy.batch(root)
     assert len(first.reduced) == len(GOOD) and len(first.failures) == 2
-    kept = _same_as_read_back(spy, root)
+    kept, taken = _same_as_read_back(spy, root)
+    assert taken == 0  # every entry new
     assert "unnamed.csv" in kept.tables[1] and "notes.txt" in " ".join(kept.report["notes"])
 
 
@@ -263,7 +309,8 @@ def test_files_added_removed_and_changed(root: Path, monkeypatch: pytest.MonkeyP
     work = spy.batch(root)
     assert sorted(work.reduced) == ["DS30_steel_1N_20C_r2.csv", "DS30_steel_5N_20C_r1.csv"]
     assert [n for n in work.notes if "LS1_steel_5N_20C_r1.csv: no longer in" in n]
-    _same_as_read_back(spy, root)
+    _, taken = _same_as_read_back(spy, root)
+    assert taken == 2  # DS30_glass, DS30_steel_1N_20C_r1
 
 
 def test_a_file_that_fails_now(root: Path, monkeypatch: pytest.MonkeyPatch) -> None:
@@ -274,7 +321,8 @@ def test_a_file_that_fails_now(root: Path, monkeypatch: pytest.MonkeyPatch) -> N
     path.write_bytes(whole[: len(whole) // 3])
     work = spy.batch(root)
     assert "DS30_glass_5N_20C_r1.csv" in dict(work.failures) and work.reduced == []
-    kept = _same_as_read_back(spy, root)
+    kept, taken = _same_as_read_back(spy, root)
+    assert taken == len(GOOD) - 1
     assert "DS30_glass_5N_20C_r1.csv" in kept.tables[1]
 
 
@@ -285,7 +333,8 @@ def test_a_changed_config_and_material(root: Path, monkeypatch: pytest.MonkeyPat
     (root / "materials.toml").write_text(LAB_MATERIALS.format(name="Lab silicone B"))
     work = spy.batch(root)
     assert sorted(work.reduced) == sorted(f"{s}.csv" for s in GOOD)
-    _same_as_read_back(spy, root)
+    _, taken = _same_as_read_back(spy, root)
+    assert taken == 0
 
 
 def test_duplicates_a_manifest_and_a_conflict(root: Path, monkeypatch: pytest.MonkeyPatch,
@@ -304,13 +353,20 @@ def test_duplicates_a_manifest_and_a_conflict(root: Path, monkeypatch: pytest.Mo
     first = spy.batch(root)
     assert [f for f, _ in first.duplicates] == ["copy of r1.csv"]
     assert [f for f, _ in first.conflicts] == ["DS30_steel_1N_20C_r7.csv"]
-    kept = _same_as_read_back(spy, root)
+    kept, taken = _same_as_read_back(spy, root)
+    assert taken == 0
     assert kept.report["unmatched"]
     # the reporting items and the extra metadata of the manifest, in the run's row
     (row,) = [r for r in csv.DictReader(io.StringIO(kept.tables[0]))
               if r["file"] == "DS30_steel_5N_20C_r1.csv"]
     assert (row["humidity_pct"], row["operator"], row["status"]) == ("45.0", "Ann", "skipped")
     assert "lab_note" in row["extra_metadata"] and len(runs_csv_as_before) == 3
+    # a file changed under the manifest (read again: an equal one): the others are taken
+    assert spy.batch(root).kept
+    _write(raw / "DS30_glass_5N_20C_r1.csv", 0.60, 0.45, 5.0, seed=11)
+    assert spy.batch(root).reduced == ["DS30_glass_5N_20C_r1.csv"]
+    _, taken = _same_as_read_back(spy, root)
+    assert taken == 4  # the three reduced others and the duplicate
 
 
 def _entries(campaign: Campaign) -> BatchEntries:

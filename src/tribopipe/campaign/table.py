@@ -358,30 +358,38 @@ class CampaignTable(Sequence[CampaignRow]):
         self._status = bytearray()  # its index in _STATUSES
         self._extra: dict[int, _Extra] = {}
         self._huge: dict[int, tuple[int, int]] = {}  # a stat an int64 cannot hold
-        #: (what, name as given) → [where first given, how many times], in the order met
-        self._named: dict[tuple[str, str], list[Any]] = {}
+        #: the pin and disc names each file's metadata gives, ``(what, name)`` in order:
+        #: one tuple per distinct list of them (a campaign repeats a few), by its index
+        self._given: dict[tuple[tuple[str, str], ...], int] = {(): 0}
+        self._given_list: list[tuple[tuple[str, str], ...]] = [()]  # by index
+        self._given_of = array("I")  # each file's index
         self.not_exports: list[tuple[str, str]] = list(not_exports)
 
     def _add(self, row: CampaignRow, *, read: bool = True) -> None:
         """Keep ``row`` (its metadata read from its name and the manifest: ``read``)."""
-        extra = (None if row.where == self._root + row.file else row.where, row.problem,
-                 row.reason, row.sha256, read)
+        self._append(row.file, row.where, (row.size, row.mtime_ns), row.status, row.problem,
+                     row.reason, row.sha256, read,
+                     tuple(_row_materials(row)) if read else ())
+
+    def _append(self, file: str, where: str, stat: tuple[int, int], status: str,
+                problem: str | None, reason: str | None, sha: str | None, read: bool,
+                given: tuple[tuple[str, str], ...]) -> None:
+        """Keep a file: its name, path, size and ``mtime_ns``, status, problem, reason,
+        SHA-256, whether its metadata was read and the material names it gives."""
+        extra = (None if where == self._root + file else where, problem, reason, sha, read)
         if extra != (None, None, None, None, True):
             self._extra[len(self._names)] = extra
-        stat = (row.size, row.mtime_ns)
         if not all(_INT64[0] <= v <= _INT64[1] for v in stat):  # a clock far off: kept aside
             self._huge[len(self._names)] = stat
             stat = (0, 0)
-        self._names.append(row.file)
+        self._names.append(file)
         self._stats.extend(stat)
-        self._status.append(_STATUSES.index(row.status))
-        if read:
-            for what, name in _row_materials(row):
-                seen = self._named.get((what, name))
-                if seen is None:
-                    self._named[(what, name)] = [display_path(row.file), 1]
-                else:
-                    seen[1] += 1
+        self._status.append(_STATUSES.index(status))
+        index = self._given.get(given)
+        if index is None:
+            index = self._given[given] = len(self._given_list)
+            self._given_list.append(given)
+        self._given_of.append(index)
 
     def names_given(self) -> list[tuple[str, str, str]]:
         """The pin and disc names of :func:`named_materials`, from those kept as the
@@ -390,8 +398,50 @@ class CampaignTable(Sequence[CampaignRow]):
         :func:`~tribopipe.campaign.metadata.material_problems` says of it is what it says
         of :func:`named_materials` (it names the first place of a name and how many
         more)."""
-        return [(what, name, seen[0]) for (what, name), seen in self._named.items()
-                for _ in range(seen[1])]
+        seen: dict[tuple[str, str], list[Any]] = {}
+        for at, index in enumerate(self._given_of):
+            for pair in self._given_list[index]:
+                first = seen.get(pair)
+                if first is None:
+                    seen[pair] = [display_path(self._names[at]), 1]
+                else:
+                    first[1] += 1
+        return [(what, name, first[0]) for (what, name), first in seen.items()
+                for _ in range(first[1])]
+
+    def built_for(self, campaign: Campaign, manifest: Manifest | None) -> bool:
+        """Whether this table was built for ``campaign`` (the same object) and the same
+        ``manifest`` (that object, or one read from the same file with the same rows,
+        values of the same types: their ``repr``): its files' metadata and recipes are
+        those found now."""
+        mine = self._manifest
+        return campaign is self._campaign and (manifest is mine or (
+            manifest is not None and mine is not None and manifest.path == mine.path
+            and repr(manifest.rows) == repr(mine.rows)))
+
+    def unchanged(self, file: str, stat: tuple[int, int],
+                  previous: FileState | None) -> int | None:
+        """Where ``file`` is in this table (:meth:`built_for` the campaign and manifest
+        of a table built now) when its row here is the row that table would give it,
+        but for the check that its traces are still on disk: reduced or a duplicate,
+        with this size and ``mtime_ns`` and, from the state, this very ``previous``
+        entry (so the same hash and status). Else ``None``."""
+        if previous is None or self._entries.get(file) is not previous:
+            return None
+        at = self._find(file)
+        if at is None or _STATUSES[self._status[at]] not in (REDUCED, DUPLICATE):
+            return None
+        kept = self._huge.get(at) or (self._stats[2 * at], self._stats[2 * at + 1])
+        return at if kept == stat else None
+
+    def _append_from(self, known: CampaignTable, at: int, where: str) -> None:
+        """Keep the row ``at`` of ``known`` as it is there (:meth:`unchanged`), at
+        ``where``."""
+        _, problem, reason, sha, read = known._extra.get(at, (None, None, None, None, True))
+        self._append(known._names[at], where,
+                     known._huge.get(at) or (known._stats[2 * at], known._stats[2 * at + 1]),
+                     _STATUSES[known._status[at]], problem, reason, sha, read,
+                     known._given_list[known._given_of[at]])
 
     def __len__(self) -> int:
         return len(self._names)
@@ -511,7 +561,8 @@ def _content_problem(campaign: Campaign, path: Path, rel: str) -> str | None:
 
 
 def campaign_table(campaign: Campaign, *, state: CampaignState | None = None,
-                   manifest: Manifest | None = None) -> CampaignTable:
+                   manifest: Manifest | None = None,
+                   known: CampaignTable | None = None) -> CampaignTable:
     """The campaign as a table, before anything runs: one row per file with its metadata
     and status (``new, reduced, changed, failed, duplicate``).
 
@@ -520,12 +571,17 @@ def campaign_table(campaign: Campaign, *, state: CampaignState | None = None,
     the last batch and the traces of its reduced runs still exist; ``failed`` when the
     same holds for a file that failed or its metadata is already known to be wrong.
     ``state`` defaults to the campaign's state file, ``manifest`` to its manifest.
+    ``known``: a table built before (a batch's, for its rehearsal), whose rows are taken
+    where they are provably those this one would find (:meth:`CampaignTable.unchanged`)
+    and the file's traces are still on disk: its labels are not matched and merged again.
     """
     entries = (state if state is not None else load_state(campaign)).entries
     if manifest is None and campaign.manifest is not None:
         manifest = read_manifest(campaign.manifest)
     traces = TraceListing(campaign)
     rows = CampaignTable(campaign, manifest, entries)
+    if known is not None and not known.built_for(campaign, manifest):
+        known = None
     for path in discover_files(campaign):
         rel = _relative(path, campaign.raw_dir)
         try:
@@ -536,10 +592,16 @@ def campaign_table(campaign: Campaign, *, state: CampaignState | None = None,
                                   problem=unreadable, status=FAILED, reason=unreadable),
                       read=False)
             continue
+        previous = entries.get(rel)
+        at = None if known is None else known.unchanged(
+            rel, (st.st_size, st.st_mtime_ns), previous)
+        if known is not None and at is not None and previous is not None \
+                and _traces_present(traces, previous):
+            rows._append_from(known, at, str(path))
+            continue
         meta = _file_metadata(campaign, manifest, rel, path)
         hints, test_rows, merged = meta.hints, meta.test_rows, meta.merged
         problem, check_labels = meta.problem, meta.check_labels
-        previous = entries.get(rel)
         sha = None
         status = NEW
         reason = None

@@ -517,8 +517,10 @@ def table(results: dict) -> str:
     and wall seconds at each size, the ratio of CPU seconds at 10⁵ rows to the command
     on an empty map (``reduce``, ``batch``) or on the 10³-row map, and whether the
     target holds (in CPU time, and in wall time)."""
-    timed = results["commands_wall_s_peak_MB"]
+    timed = results.get("commands_wall_s_peak_MB") or {}
     sizes = [k for k in timed if k != "0"]
+    if not sizes:
+        return per_group_table(results)
     largest = sizes[-1]
     head = ("| command | " + " | ".join(f"{int(n):,} rows: CPU / wall [s]" for n in
                                       ["0", *sizes])
@@ -542,6 +544,23 @@ def table(results: dict) -> str:
                    f"{'met' if r_cpu <= limit else 'not met'} in CPU, "
                    f"{'met' if r_wall <= limit else 'not met'} in wall")
         lines.append(f"| `{name}` | " + " | ".join(cells) + f" | {ratio} | {met} |")
+    grouped = per_group_table(results)
+    return "\n".join(lines) + (f"\n\n{grouped}" if grouped else "")
+
+
+def per_group_table(results: dict) -> str:
+    """The Markdown table of ``--groups`` results: per command and number of groups, CPU
+    and wall seconds, milliseconds of CPU per group and peak memory; empty where the
+    results hold none."""
+    grouped = results.get("per_group") or {}
+    if not grouped:
+        return ""
+    lines = ["| command | groups | CPU / wall [s] | CPU per group [ms] | peak [MB] |",
+             "|---|---:|---:|---:|---:|"]
+    for n, row in grouped.items():
+        for name, v in row.items():
+            lines.append(f"| `{name}` | {int(n):,} | {v['cpu_s']:.2f} / {v['wall_s']:.2f} | "
+                         f"{v['cpu_ms_per_group']:.2f} | {v['peak_MB']:.0f} |")
     return "\n".join(lines)
 
 

@@ -284,6 +284,10 @@ def test_a_pair_beside_loads_in_chromium_as_python_made_it(browser, processed, t
     tab.wait_until("document.getElementById('pair-0').hasAttribute('data-loaded')")
     assert tab.page.evaluate(ROW_TEXTS, "#pair-0 .group-table tbody tr") == want_groups
     assert tab.page.evaluate(ROW_TEXTS, "#pair-0 .fit-table tbody tr") == want_fits
+    # a run's link in a narrow column stays on one line (its id is not cut in two)
+    lines = tab.page.evaluate("""() => Array.from(document.querySelectorAll(
+      '#pair-0 .group-table a[href^="#run-"]'), a => a.getClientRects().length)""")
+    assert lines and set(lines) == {1}
     mine = runs[runs["pin"] == HOSTILE_PIN]
     loaded = tab.page.evaluate("""() => Object.fromEntries(Array.from(
       document.querySelectorAll('#pair-0 [id^="run-"]'), e => [e.id, e.textContent]))""")

@@ -255,6 +255,32 @@ def test_abaqus_and_ansys_tables_carry_the_measured_slip_rates():
     assert lines[first - 1].startswith("TBFIELD,NPRES") and lines[first + 1].startswith("TBDATA")
 
 
+def test_a_pair_of_several_speeds_exports_at_one_temperature():
+    """A deck restricted to one temperature (``--temperature``) of a pair measured at
+    several speeds is its table over pressure and slip rate at that temperature, each
+    cell query's value there; its comment names the cells filled, with their speed."""
+    from tribopipe.export.fe_decks import write_abaqus, write_ansys
+    from tribopipe.query import groups_of, query
+
+    groups = groups_of(_multi_speed_runs(), "map")
+    pin, disc = "Dragonskin 30", "acrylic glass"
+    pair = groups[(groups["pin"] == pin) & (groups["disc"] == disc)]
+    t = float(pair["temperature_C"].min()) + 3.0  # between measured temperatures
+    deck = write_abaqus(groups, pin=pin, disc=disc, temperature_C=t)
+    rows = [[float(x) for x in line.split(", ")] for line in deck.splitlines()
+            if line and line[0].isdigit()]
+    assert rows and {r[3] for r in rows} == {t}
+    assert len({r[1] for r in rows}) > 3  # the three measured slip rates and rows between
+    for mu, v, p_MPa, _ in rows[:: max(1, len(rows) // 25)]:  # units mm-N-s
+        assert mu == pytest.approx(query(groups, pin, disc, p_MPa * 1e3, t, v).mu_k.value,
+                                   rel=1e-6)
+    filled = [line for line in deck.splitlines() if line.startswith("**   p = ")]
+    assert filled and all(f"T = {t:g} C, v = " in line for line in filled)
+    mapdl = write_ansys(groups, pin=pin, disc=disc, temperature_C=t)
+    assert mapdl.count("TBFIELD,SLRV,") == len(rows)
+    assert mapdl.count("TBFIELD,TEMP,") == 1
+
+
 @pytest.fixture(scope="module")
 def speed_grid_query():
     """The multi-speed map's groups, one pair, and query's μ_K on a grid of pressure x

@@ -118,10 +118,10 @@ details.runs{margin:.3em 0}details.runs>summary{cursor:pointer}
 """
 #: the style a report whose pairs lie beside its page adds: each pair a collapsible block
 #: whose wide tables scroll within it; a text cell breaks a long word (a file's path)
-#: rather than widen the page
+#: rather than widen the page, where a link to a run (8 characters of its id) stays whole
 _PAIRS_CSS = (
     "details.pair{margin:.3em 0}details.pair>summary{cursor:pointer}"
-    "td.t{overflow-wrap:anywhere}"
+    "td.t{overflow-wrap:anywhere}td.t a{white-space:nowrap}"
     ".pair-body{overflow-x:auto}#pair-filter{width:16em;max-width:100%}"
 )
 

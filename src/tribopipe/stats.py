@@ -58,7 +58,7 @@ from __future__ import annotations
 
 import functools
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
@@ -533,16 +533,95 @@ def group_rows(runs: pd.DataFrame, *, by_speed: bool = False,
         data[f"u_{q}"] = (included[f"u_{q}"].to_numpy(dtype=float) if f"u_{q}" in included
                           else np.full(len(included), np.nan))
     rows = _Columns()
-    if len(included):
-        grouped = keys.groupby(key_cols, dropna=False, sort=False).indices
-        for key, positions in grouped.items():
-            key = key if isinstance(key, tuple) else (key,)
-            clusters = _pressure_clusters([float(p) for p in data["pressure_kPa"][positions]])
-            for c in sorted(set(clusters)):
-                # .indices holds integer arrays (typed as array, Index or list)
-                members = np.asarray(positions)[[i for i, k in enumerate(clusters) if k == c]]
-                rows.append(_group_row(dict(zip(key_cols, key, strict=True)), members, data))
+    for key, members in _condition_members(keys, data["pressure_kPa"]):
+        rows.append(_group_row(dict(zip(key_cols, key, strict=True)), members, data))
     return rows.frame()
+
+
+def _condition_members(keys: pd.DataFrame, pressures: Any
+                       ) -> Iterator[tuple[tuple[Any, ...], Any]]:
+    """The condition groups of the runs whose grouping keys are the rows of ``keys``
+    (:func:`group_keys`) and nominal pressures [kPa] ``pressures``: per group its key (a
+    value per column of ``keys``) and its members (positions into ``keys``, an integer
+    array), one group per pressure cluster of a key, in the order :func:`group_rows`
+    makes its rows."""
+    import numpy as np
+
+    if not len(keys):
+        return
+    grouped = keys.groupby(list(keys.columns), dropna=False, sort=False).indices
+    for key, positions in grouped.items():
+        key = key if isinstance(key, tuple) else (key,)
+        if len(positions) == 1:  # one run, one cluster
+            yield key, np.asarray(positions)
+            continue
+        clusters = _pressure_clusters([float(p) for p in pressures[positions]])
+        for c in sorted(set(clusters)):
+            # .indices holds integer arrays (typed as array, Index or list)
+            yield key, np.asarray(positions)[[i for i, k in enumerate(clusters) if k == c]]
+
+
+#: the columns of :func:`group_mu_k`'s table
+GROUP_MU_K_COLUMNS: tuple[str, ...] = (
+    "pin", "disc", "normal_force_N", "pressure_kPa", "temperature_C", NOMINAL_SPEED,
+    "mu_k_n", "mu_k_mean", "run_ids")
+#: the run columns :func:`group_mu_k` reads
+GROUP_MU_K_INPUT: tuple[str, ...] = (
+    "measurement_id", "pin", "disc", "normal_force_N", "pressure_kPa", "temperature_C",
+    NOMINAL_SPEED, TEST_METHOD, "excluded", "repeat", "mu_k")
+
+
+def group_mu_k(runs: pd.DataFrame) -> pd.DataFrame:
+    """The columns :data:`GROUP_MU_K_COLUMNS` of :func:`group_statistics` (``show_speed``,
+    every lab): per condition group of the included runs its key, median nominal pressure
+    [kPa], μ_K count and mean, and its runs' ids, in the same row order, dtypes and values
+    (each computed as :func:`group_rows` and :func:`finish_groups` compute it), without the
+    other statistics (what a package's group table is checked against; some ten times
+    less work at 10⁵ groups). ``runs`` needs the columns :data:`GROUP_MU_K_INPUT` only
+    (``nominal_speed_mm_s`` and ``test_method`` may be absent)."""
+    import numpy as np
+
+    included = runs.loc[~runs["excluded"].astype(bool),
+                        [c for c in GROUP_MU_K_INPUT if c in runs.columns]]
+    keys = group_keys(included, by_speed=False)
+    key_cols = list(keys.columns)
+    pressures = included["pressure_kPa"].to_numpy(dtype=float)
+    repeats: Any = included["repeat"].astype("Float64").to_numpy(dtype=float,
+                                                                 na_value=np.nan)
+    ids = included["measurement_id"].astype(str).to_numpy(dtype=object)
+    mu_k = included["mu_k"].to_numpy(dtype=float)
+    rows = _Columns()
+    for key, members in _condition_members(keys, pressures):
+        row: dict[str, Any] = dict(zip(key_cols, key, strict=True))
+        if len(members) == 1:  # the median and mean of one value are the value
+            i = int(members[0])
+            row["pressure_kPa"] = float(pressures[i])
+            finite = bool(np.isfinite(mu_k[i]))
+            row["mu_k_n"] = int(finite)
+            row["mu_k_mean"] = float(mu_k[i]) if finite else math.nan
+            row["run_ids"] = str(ids[i])
+        else:  # as _group_row and describe_values compute them
+            order = sorted(members, key=lambda i: (_repeat_key(repeats[i]), ids[i]))
+            row["pressure_kPa"] = float(np.median(pressures[order]))
+            values = mu_k[order]
+            values = values[np.isfinite(values)]
+            row["mu_k_n"] = int(values.size)
+            row["mu_k_mean"] = float(np.mean(values)) if values.size else math.nan
+            row["run_ids"] = RUN_IDS_SEPARATOR.join(ids[order])
+        rows.append(row)
+    if not rows.n:
+        return _empty_groups(GROUP_MU_K_COLUMNS)
+    groups = _sorted_groups(rows.frame(), by_speed=False, by_lab=False)
+    columns = list(GROUP_MU_K_COLUMNS)
+    non_float = {c: _dtype(c) for c in columns if _dtype(c) != "float64"}
+    return groups.astype(non_float).loc[:, columns]
+
+
+def _empty_groups(columns: Sequence[str]) -> pd.DataFrame:
+    """An empty group table of ``columns``, each of its group-table dtype."""
+    import pandas as pd
+
+    return pd.DataFrame({c: pd.Series(dtype=_dtype(c)) for c in columns})
 
 
 class _Columns:
@@ -592,7 +671,6 @@ def finish_groups(rows: pd.DataFrame, *, show_speed: bool, show_method: bool,
     (any order): sorted, ``range_exceeds_r`` and ``labs_disagree`` decided from every
     group (the map's pooled r, the labs' critical difference), the columns shown."""
     import numpy as np
-    import pandas as pd
 
     condition_cols = ["pin", "disc", "normal_force_N", "pressure_kPa", "temperature_C"]
     if show_speed:
@@ -607,13 +685,8 @@ def finish_groups(rows: pd.DataFrame, *, show_speed: bool, show_method: bool,
     columns = condition_cols + stat_cols + [LABS, "range_exceeds_r", LABS_DISAGREE,
                                             "qc_flagged", "reviewed", "run_ids"]
     if rows.empty:
-        return pd.DataFrame({c: pd.Series(dtype=_dtype(c)) for c in columns})
-    groups = rows.sort_values(
-        ["pin", "disc", "temperature_C", "pressure_kPa", "normal_force_N", NOMINAL_SPEED,
-         TEST_METHOD] + (["sliding_speed_mm_s"] if by_speed else []) + ([LAB] if by_lab else []),
-        na_position="last",
-        kind="mergesort",
-    ).reset_index(drop=True)
+        return _empty_groups(columns)
+    groups = _sorted_groups(rows, by_speed=by_speed, by_lab=by_lab)
     flagged = np.zeros(len(groups), dtype=bool)
     disagree = np.zeros(len(groups), dtype=bool)
     for q in QUANTITIES:
@@ -627,6 +700,18 @@ def finish_groups(rows: pd.DataFrame, *, show_speed: bool, show_method: bool,
     # the types of _dtype, as for an empty table; numeric columns are left as computed
     non_float = {c: _dtype(c) for c in columns if _dtype(c) != "float64"}
     return groups.astype(non_float).loc[:, columns]
+
+
+def _sorted_groups(rows: pd.DataFrame, *, by_speed: bool, by_lab: bool) -> pd.DataFrame:
+    """Group rows in the group table's order: by pin, disc, temperature, pressure, force,
+    nominal speed, test method (measured speed, lab), missing values last, ties as
+    given; a new frame, indexed from 0."""
+    return rows.sort_values(
+        ["pin", "disc", "temperature_C", "pressure_kPa", "normal_force_N", NOMINAL_SPEED,
+         TEST_METHOD] + (["sliding_speed_mm_s"] if by_speed else []) + ([LAB] if by_lab else []),
+        na_position="last",
+        kind="mergesort",
+    ).reset_index(drop=True)
 
 
 def _labs_disagree(groups: pd.DataFrame, q: str, rep: Reproducibility) -> Any:

@@ -172,12 +172,18 @@ def _run_locked(campaign: Campaign, *, jobs: int | None, plots: bool | None,
     assert ended is not None  # only a rehearsal ends without a report
     report, quiet, clean = ended.report, ended.quiet, ended.clean
     entries = ended.entries if quiet else {}
-    del ended  # a rehearsal reads the state again: the batch's entries are let go first
+    # the state the rehearsal starts from: the one the batch holds, when it is provably
+    # what reading the state file back would give (else it is read back)
+    saved = ended.entries.as_read_back() if clean and not quiet else None
+    # and the batch's table, whose rows the rehearsal's takes where they are provably its
+    known = ended.rows if saved is not None else None
+    del ended  # what the batch holds of the entries is let go first
     # a batch that found nothing to do is kept, for the next one to report again if it
     # finds the campaign as this one did; a batch that did its work cleanly keeps the
     # ledger of its next unchanged re-run, rehearsed, as pending; any other forgets it
     try:
-        rerun = _rehearse(campaign) if clean and not quiet else None
+        rerun = _rehearse(campaign, saved, known) if clean and not quiet else None
+        del known
         if quiet:
             keep_report(campaign, report, inputs, entries)
         elif rerun is not None:
@@ -194,20 +200,27 @@ def _run_locked(campaign: Campaign, *, jobs: int | None, plots: bool | None,
 class _Ended:
     """How a batch ended: its ``report``; whether it found nothing to do (``quiet``: its
     report is kept for the next batch) or did its work cleanly (``clean``: its next
-    re-run is rehearsed); its state's ``entries`` as it left them; for a rehearsal, the
-    text of the ``runs.csv`` and ``failures.csv`` it would write (``tables``)."""
+    re-run is rehearsed); its state's ``entries`` as it left them and its campaign table
+    (``rows``); for a rehearsal, the text of the ``runs.csv`` and ``failures.csv`` it
+    would write (``tables``)."""
 
     report: BatchReport
     quiet: bool
     clean: bool
-    entries: Mapping[str, FileState]
+    entries: BatchEntries
+    rows: CampaignTable
     tables: tuple[str, str] | None = None
 
 
-def _rehearse(campaign: Campaign) -> tuple[str, _Ended] | None:
+def _rehearse(campaign: Campaign, state: CampaignState | None = None,
+              known: CampaignTable | None = None) -> tuple[str, _Ended] | None:
     """The next batch, rehearsed at the end of one that did its work cleanly (under its
     lock, after its outputs are written): the campaign's inputs stamped as the next batch
-    will stamp them, then :func:`_batch` on the state as it reads it, writing nothing.
+    will stamp them, then :func:`_batch` on the state as it reads it (``state``: as the
+    batch holds it, :meth:`~tribopipe.campaign.state.BatchEntries.as_read_back`; else
+    read back; ``known``: the batch's table, whose rows its table takes where they are
+    provably its own, :func:`~tribopipe.campaign.table.campaign_table`), writing
+    nothing.
     Returns the stamp and how it ends when it finds nothing to do (its report and tables
     are then what the next unchanged batch prints and writes), else ``None``; ``None`` too
     when anything fails or a signal comes (what the batch did is not at stake)."""
@@ -218,19 +231,21 @@ def _rehearse(campaign: Campaign) -> tuple[str, _Ended] | None:
         # whatever fails here, the batch's own work is done and reported: no ledger
         with suppress(Exception):
             ended = None if inputs is None else _batch(
-                campaign, load_state(campaign), jobs=1, plots=False, progress=None,
-                rehearse=True)
+                campaign, load_state(campaign) if state is None else state, jobs=1,
+                plots=False, progress=None, rehearse=True, known=known)
     if inputs is None or ended is None or not ended.quiet or stop.raised:
         return None
     return inputs, ended
 
 
 def _batch(campaign: Campaign, state: CampaignState, *, jobs: int, plots: bool,
-           progress: ProgressCallback | None, rehearse: bool = False) -> _Ended | None:
+           progress: ProgressCallback | None, rehearse: bool = False,
+           known: CampaignTable | None = None) -> _Ended | None:
     """The batch itself, from the campaign's ``state``. ``rehearse``: the next batch
     rehearsed (:func:`_rehearse`): nothing is written, and it ends (``None``) as soon as
     it finds work to do, a decisions file, a file gone, or a state it would write;
-    else its tables are kept as text."""
+    else its tables are kept as text. ``known``: a table built before, its rows taken
+    where they are provably this batch's (:func:`campaign_table`)."""
     # a decisions file is checked before any work (its runs only under the map's lock)
     review = read_review(campaign.review) if campaign.review is not None and (
         campaign.review.exists() or campaign.review.is_symlink()) else None
@@ -239,7 +254,7 @@ def _batch(campaign: Campaign, state: CampaignState, *, jobs: int, plots: bool,
     entries = BatchEntries(campaign, state, fresh=not campaign.state_path.is_file())
     missing_ids, map_checked = _ids_missing_from_map(campaign, state)
     manifest = read_manifest(campaign.manifest) if campaign.manifest is not None else None
-    rows = campaign_table(campaign, state=state, manifest=manifest)
+    rows = campaign_table(campaign, state=state, manifest=manifest, known=known)
     check_materials(campaign, rows)  # an unknown name refuses the campaign before any work
     plan = _plan(rows, missing_ids)
     files = len(rows)
@@ -379,7 +394,8 @@ def _batch(campaign: Campaign, state: CampaignState, *, jobs: int, plots: bool,
     # did its work and wrote every output: the next unchanged batch can be rehearsed
     clean = not problems and stop.name is None and campaign.review is None
     entries.close()  # opened again if read again
-    return _Ended(report=report, quiet=quiet, clean=clean, entries=entries, tables=tables)
+    return _Ended(report=report, quiet=quiet, clean=clean, entries=entries, rows=rows,
+                  tables=tables)
 
 
 @dataclass(frozen=True)
@@ -557,8 +573,10 @@ def _apply(campaign: Campaign, results: Sequence[FileOutcome], rows: CampaignTab
     outcomes: dict[str, str] = {}
     runs_failed = 0
     config_hash = campaign.settings.config_hash  # hashes the settings: once, not per run
+    # the contents the campaign's files own, only when there are results to check (a
+    # landing of none, as a re-run's, looks at no file's runs)
     owners = _owners(rows, redone if redone is not None else {r.name for r in results},
-                     vanished, in_map)
+                     vanished, in_map) if results else ContentOwners({})
     for done in sorted(results, key=lambda r: r.name):
         row = rows.row(done.name)
         old = entries.get(row.file)

@@ -9,6 +9,7 @@ import csv
 import io
 import math
 from collections.abc import Mapping, Sequence
+from operator import attrgetter
 from typing import Any
 
 from ..escape import csv_cell
@@ -18,7 +19,7 @@ from ..reporting import EXTRA_COLUMN, RunReport
 from ..reporting import NAMES as REPORTING_NAMES
 from .patterns import LABEL_FIELDS
 from .spec import Campaign
-from .state import DUPLICATE, ENTRY_KEYS, FAILED, REDUCED, FileState
+from .state import DUPLICATE, ENTRY_KEYS, FAILED, REDUCED, FileState, RunEntry
 from .table import CampaignRow
 
 RUNS_COLUMNS: tuple[str, ...] = (
@@ -77,24 +78,82 @@ def _write_runs(writer: Any, rows: Sequence[CampaignRow], entries: Mapping[str, 
                 this_batch: Mapping[str, str], failures: Mapping[str, str]) -> None:
     """The rows of ``runs.csv`` written one by one to ``writer`` (a :func:`csv.writer`)."""
     writer.writerow(RUNS_COLUMNS)
+    report_cells = _ReportCells()
     for row in rows:
         entry = entries.get(row.file)
-        file_labels = {k: row.merged.get(k) for k in LABEL_FIELDS}
-        runs = [] if entry is None else [r.flat() for r in entry.runs]
-        if entry is None or row.file in failures or not runs:
+        if entry is None or row.file in failures or not entry.runs:
             status = this_batch.get(row.file, FAILED)
-            writer.writerow([_cell(v) for v in _values(row.file, {}, status, file_labels,
-                                                       failures.get(row.file))])
+            writer.writerow(_cells(_values(row.file, {}, status, _file_labels(row),
+                                           failures.get(row.file))))
             continue
-        for run in runs:
-            name = run.get("name") or row.file
-            kept = run.get("status")
+        for run in entry.runs:
+            measured_run = run.entry
+            name = (run.name if measured_run is None else measured_run.name) or row.file
+            kept = run.status
             status = DUPLICATE if kept == DUPLICATE else this_batch.get(name, FAILED)
             ok = kept == REDUCED and status != FAILED
-            labels = (run.get("labels") if ok or kept == DUPLICATE else None) or file_labels
+            measured = ok or kept == DUPLICATE
             reason = failures.get(name) or (entry.reason if kept == DUPLICATE else None)
-            writer.writerow([_cell(v) for v in _values(
-                row.file, run, status, labels, reason, measured=ok or kept == DUPLICATE)])
+            if measured and measured_run is not None:
+                # what it measured, read from its entry (not copied into a dict first)
+                labels = measured_run.labels or _file_labels(row)
+                writer.writerow(_cells(_measured_values(row.file, measured_run, status,
+                                                        labels, reason, report_cells)))
+                continue
+            # the file's own labels only where the run has none (its metadata is then
+            # found: a reduced run's row needs none)
+            flat = run.flat()
+            labels = (flat.get("labels") if measured else None) or _file_labels(row)
+            writer.writerow(_cells(_values(row.file, flat, status, labels, reason,
+                                           measured=measured)))
+
+
+def _cells(values: Sequence[Any]) -> list[str]:
+    """A row's values as ``runs.csv`` cells (:func:`_cell`; a missing value is empty)."""
+    return ["" if v is None else _cell(v) for v in values]
+
+
+#: the values a measured run's row takes from its entry besides where it sits
+_MEASURED_KEYS: tuple[str, ...] = tuple(k for k in _RUN_KEYS
+                                        if k not in ("test", "result", "interval"))
+_measured_of = attrgetter(*_MEASURED_KEYS)
+
+
+class _ReportCells:
+    """:func:`_report_cells` of each labels' ``report`` once per ``runs.csv`` (the
+    entries read in one go share one object per report that repeats; known by identity,
+    each kept alive beside its cells)."""
+
+    def __init__(self) -> None:
+        self._cells: dict[int, tuple[Any, dict[str, Any]]] = {}
+
+    def __call__(self, labels: Mapping[str, Any]) -> dict[str, Any]:
+        report = labels.get("report")
+        if not isinstance(report, Mapping):
+            return {}
+        kept = self._cells.get(id(report))
+        if kept is None or kept[0] is not report:
+            kept = (report, _report_cells(labels))
+            self._cells[id(report)] = kept
+        return kept[1]
+
+
+def _measured_values(file: str, run: RunEntry, status: str, labels: Mapping[str, Any],
+                     reason: str | None, report_cells: _ReportCells) -> list[Any]:
+    """:func:`_values` of a measured run (``measured=True``) from its state entry."""
+    values: dict[str, Any] = {
+        "file": file, "status": status, **labels, **report_cells(labels),
+        "test": run.test, "result": run.result, "interval": run.interval,
+        **dict(zip(_MEASURED_KEYS, _measured_of(run), strict=True)),
+        "reason": reason,
+    }
+    return [values.get(c) for c in RUNS_COLUMNS]
+
+
+def _file_labels(row: CampaignRow) -> dict[str, Any]:
+    """The label fields of a file as its metadata gives them before it is read."""
+    merged = row.merged
+    return {k: merged.get(k) for k in LABEL_FIELDS}
 
 
 def _values(file: str, run: Mapping[str, Any], status: str, labels: Mapping[str, Any],

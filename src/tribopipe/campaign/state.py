@@ -286,14 +286,30 @@ class MapStamp:
         return cls(size=st.st_size, mtime_ns=st.st_mtime_ns)
 
 
+#: a state file's inode, size, ``mtime_ns`` and ``ctime_ns``: every write changes it
+FileStamp = tuple[int, int, int, int]
+
+
+def _file_stamp(path: Path) -> FileStamp | None:
+    """The :data:`FileStamp` of ``path``, ``None`` when it cannot be stat'ed."""
+    try:
+        st = path.stat()
+    except OSError:
+        return None
+    return (st.st_ino, st.st_size, st.st_mtime_ns, st.st_ctime_ns)
+
+
 @dataclass(frozen=True)
 class CampaignState:
     """A campaign's incremental state: its name, each file's :class:`FileState` (by
-    campaign-relative name) and the map's :class:`MapStamp`."""
+    campaign-relative name) and the map's :class:`MapStamp`. ``rows_of``: the state
+    file's :data:`FileStamp` as it was when its entries were decoded from its rows
+    (``None``: they were not, e.g. an empty state or the JSON of an older version)."""
 
     campaign: str | None = None
     entries: dict[str, FileState] = field(default_factory=dict)
     map: MapStamp | None = None
+    rows_of: FileStamp | None = field(default=None, compare=False, repr=False)
 
     def to_json(self) -> dict[str, Any]:
         """The state file's JSON."""
@@ -437,6 +453,8 @@ def _connect(path: Path) -> sqlite3.Connection:
 
 
 def _read_sqlite(path: Path) -> CampaignState:
+    # stamped before it is read: a write after this is seen by any later comparison
+    stamp = _file_stamp(path)
     con = sqlite3.connect(f"file:{path}?mode=ro", uri=True, timeout=60)
     try:
         meta = dict(con.execute("SELECT key, value FROM meta").fetchall())
@@ -447,10 +465,11 @@ def _read_sqlite(path: Path) -> CampaignState:
                    for name, text in con.execute("SELECT name, state FROM files")}
     finally:
         con.close()
-    stamp = json.loads(meta.get("map", "null"))
+    kept = json.loads(meta.get("map", "null"))
     return CampaignState(campaign=json.loads(meta.get("campaign", "null")), entries=entries,
-                         map=None if not stamp else MapStamp(int(stamp["size"]),
-                                                             int(stamp["mtime_ns"])))
+                         map=None if not kept else MapStamp(int(kept["size"]),
+                                                            int(kept["mtime_ns"])),
+                         rows_of=stamp)
 
 
 def save_state(campaign: Campaign, state: CampaignState,
@@ -531,6 +550,11 @@ class BatchEntries(MutableMapping[str, FileState]):
         self._written: tuple[str | None, MapStamp | None] | None = \
             None if fresh else (loaded.campaign, loaded.map)
         self._reader: sqlite3.Connection | None = None
+        #: the state file's stamp when what it holds was last known (its rows decoded by
+        #: load_state, or this batch's last save); ``None``: not known
+        self._known: FileStamp | None = None if fresh else loaded.rows_of
+        #: every entry held is one decoded from its row (as load_state reads it back)
+        self._decoded = loaded.rows_of is not None or not loaded.entries
         #: how many entries hold each reduced run's id: which ids the state still holds
         #: is asked on every landing of files redone (a changed config redoes them all),
         #: and reading every entry back each time would grow as n²
@@ -646,5 +670,47 @@ class BatchEntries(MutableMapping[str, FileState]):
                 self._index[name] = None
         self._dirty.clear()
         self._gone.clear()
+        if fresh:  # every entry was written and let go: each is read back when asked for
+            self._decoded = True
         self._fresh = False
         self._written = (self._name, stamp)
+        self._known = _file_stamp(self._path)
+
+    def as_read_back(self) -> CampaignState | None:
+        """The state :func:`load_state` would read from the state file now, from what
+        the batch holds, when that is provably it; else ``None`` (read it).
+
+        Provably: everything set or removed is saved; the file is as the batch last knew
+        it (its :data:`FileStamp` that of its last save, or of load_state's read: no one
+        wrote it since); its rows are those of the entries held (by name, in the file's
+        order, which is load_state's); each entry held was decoded from its row and
+        never set since (a row the batch wrote, it let go: that entry is read back from
+        its row, as load_state would). Costs a listing of the rows' names and a row read
+        per entry let go, not the decoding of the whole state."""
+        if self._dirty or self._gone or not self._decoded or self._known is None \
+                or self._written is None:
+            return None
+        try:
+            if _file_stamp(self._path) != self._known:
+                return None
+            con = sqlite3.connect(f"file:{self._path}?mode=ro", uri=True, timeout=60)
+            try:
+                meta = dict(con.execute("SELECT key, value FROM meta WHERE key IN (?, ?, ?)",
+                                        ("version", "campaign", "map")).fetchall())
+                # a table scan's order: that of load_state's read
+                names = [json.loads(n) for (n,) in
+                         con.execute("SELECT name FROM files ORDER BY rowid")]
+            finally:
+                con.close()
+            name, stamp = self._written
+            if meta != {"version": str(STATE_VERSION), "campaign": json.dumps(name),
+                        "map": json.dumps(None if stamp is None else asdict(stamp))} \
+                    or len(names) != len(self._index) \
+                    or not all(n in self._index for n in names):
+                return None
+            entries = {n: self[n] for n in names}
+        except (KeyError, sqlite3.Error, ValueError, TypeError):
+            return None
+        finally:
+            self.close()
+        return CampaignState(campaign=name, entries=entries, map=stamp, rows_of=self._known)

@@ -38,7 +38,7 @@ import os
 from array import array
 from bisect import bisect_left
 from collections.abc import Iterator, Mapping, Sequence
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -86,21 +86,62 @@ class CampaignRow:
     what the state keeps of the file; ``hints`` why a source said nothing. ``where``
     is the file's path as text (:attr:`path` the :class:`~pathlib.Path`): a campaign
     holds a row per file, and a path object costs several times its text.
+
+    The metadata (``sources``, ``merged``, ``hints``, ``test_rows``) is found from the
+    file's name and the manifest when first asked for (``metadata``, when given, is
+    it): a pass over the table that reads only names, stats and statuses (the plan,
+    ``runs.csv`` of reduced files) matches and merges no labels.
     """
 
     file: str
     where: str
     size: int
     mtime_ns: int
-    sources: tuple[tuple[str, dict[str, Any]], ...]
-    merged: dict[str, Any]
     problem: str | None
     status: str
     reason: str | None = None
     sha256: str | None = None
     previous: FileState | None = None
-    hints: tuple[str, ...] = ()
-    test_rows: tuple[ManifestRow, ...] = ()
+    metadata: _Metadata | None = field(default=None, repr=False, compare=False)
+    #: the campaign and manifest the metadata is found from when first asked for
+    origin: tuple[Campaign, Manifest | None] | None = field(default=None, repr=False,
+                                                            compare=False)
+
+    def _meta(self) -> _Metadata:
+        """The file's metadata, found once (:func:`_file_metadata`)."""
+        meta = self.metadata
+        if meta is None:
+            if self.origin is None:  # not read: a file that is not a regular one
+                meta = _Metadata([], [], (), {}, None, False)
+            else:
+                meta = _file_metadata(*self.origin, self.file, self.path)
+            object.__setattr__(self, "metadata", meta)
+        return meta
+
+    @property
+    def sources(self) -> tuple[tuple[str, dict[str, Any]], ...]:
+        """The file-level metadata sources (name, fields), in priority order."""
+        return tuple(self._meta().sources)
+
+    @property
+    def merged(self) -> dict[str, Any]:
+        """The labels merged from :attr:`sources` (empty when they could not be)."""
+        return self._meta().merged
+
+    @property
+    def hints(self) -> tuple[str, ...]:
+        """Why a metadata source said nothing of the file."""
+        return tuple(self._meta().hints)
+
+    @property
+    def test_rows(self) -> tuple[ManifestRow, ...]:
+        """The manifest rows of its tests (read from the manifest alone: no labels are
+        merged to find them)."""
+        if self.metadata is None and self.origin is not None:
+            manifest = self.origin[1]
+            return () if manifest is None else manifest.for_file(self.file,
+                                                                 self.path.name)[1]
+        return self._meta().test_rows
 
     @property
     def path(self) -> Path:
@@ -191,8 +232,13 @@ def recipe_hash(campaign: Campaign, merged: Mapping[str, Any],
             # a row without an interval hashes as before the interval column existed
             [r.test or "", r.line, sorted(r.fields.items()), r.problem]
             + ([r.interval] if r.interval is not None else []) for r in test_rows)
-    text = json.dumps(payload, sort_keys=True, default=str)
+    text = _RECIPE_JSON.encode(payload)
     return hashlib.sha256(text.encode()).hexdigest()[:16]
+
+
+#: the JSON of :func:`recipe_hash` (``json.dumps(payload, sort_keys=True, default=str)``),
+#: its encoder made once rather than per file
+_RECIPE_JSON = json.JSONEncoder(sort_keys=True, default=str)
 
 
 #: _campaign_key's figures, by the campaign's id → (that campaign, its key)
@@ -293,36 +339,109 @@ class CampaignTable(Sequence[CampaignRow]):
     A campaign holds a row per file, so the table keeps of each only what its row cannot
     find again, in arrays (its name, size, ``mtime_ns`` and status; its problem, reason
     and SHA-256 for the files that have them) and builds the row when it is asked for:
-    its metadata from the file's name and the manifest, what the state keeps of it from
-    the state's entries (as loaded)."""
+    its metadata from the file's name and the manifest when that row is asked for it,
+    what the state keeps of it from the state's entries (as loaded). The pin and disc
+    names the metadata gives are kept as the table is built (:meth:`names_given`), once
+    per name: the materials check finds no row's metadata again."""
 
     def __init__(self, campaign: Campaign, manifest: Manifest | None,
                  entries: Mapping[str, FileState],
                  not_exports: Sequence[tuple[str, str]] = ()) -> None:
         self._campaign = campaign
         self._manifest = manifest
+        #: a file's path as text is kept only when it is not this and its name (as it is
+        #: for every file listed in the raw folder): joined as text, not as a path
+        self._root = str(campaign.raw_dir) + os.sep
         self._entries = entries
         self._names: list[str] = []
         self._stats = array("q")  # size, mtime_ns of each file in turn
         self._status = bytearray()  # its index in _STATUSES
         self._extra: dict[int, _Extra] = {}
         self._huge: dict[int, tuple[int, int]] = {}  # a stat an int64 cannot hold
+        #: the pin and disc names each file's metadata gives, ``(what, name)`` in order:
+        #: one tuple per distinct list of them (a campaign repeats a few), by its index
+        self._given: dict[tuple[tuple[str, str], ...], int] = {(): 0}
+        self._given_list: list[tuple[tuple[str, str], ...]] = [()]  # by index
+        self._given_of = array("I")  # each file's index
         self.not_exports: list[tuple[str, str]] = list(not_exports)
 
     def _add(self, row: CampaignRow, *, read: bool = True) -> None:
         """Keep ``row`` (its metadata read from its name and the manifest: ``read``)."""
-        default = str(self._campaign.raw_dir / row.file)
-        extra = (None if row.where == default else row.where, row.problem, row.reason,
-                 row.sha256, read)
+        self._append(row.file, row.where, (row.size, row.mtime_ns), row.status, row.problem,
+                     row.reason, row.sha256, read,
+                     tuple(_row_materials(row)) if read else ())
+
+    def _append(self, file: str, where: str, stat: tuple[int, int], status: str,
+                problem: str | None, reason: str | None, sha: str | None, read: bool,
+                given: tuple[tuple[str, str], ...]) -> None:
+        """Keep a file: its name, path, size and ``mtime_ns``, status, problem, reason,
+        SHA-256, whether its metadata was read and the material names it gives."""
+        extra = (None if where == self._root + file else where, problem, reason, sha, read)
         if extra != (None, None, None, None, True):
             self._extra[len(self._names)] = extra
-        stat = (row.size, row.mtime_ns)
         if not all(_INT64[0] <= v <= _INT64[1] for v in stat):  # a clock far off: kept aside
             self._huge[len(self._names)] = stat
             stat = (0, 0)
-        self._names.append(row.file)
+        self._names.append(file)
         self._stats.extend(stat)
-        self._status.append(_STATUSES.index(row.status))
+        self._status.append(_STATUSES.index(status))
+        index = self._given.get(given)
+        if index is None:
+            index = self._given[given] = len(self._given_list)
+            self._given_list.append(given)
+        self._given_of.append(index)
+
+    def names_given(self) -> list[tuple[str, str, str]]:
+        """The pin and disc names of :func:`named_materials`, from those kept as the
+        table was built: each ``(what, name, where first given)`` as many times as it is
+        given, each name's in a row, the names in the order first met. What
+        :func:`~tribopipe.campaign.metadata.material_problems` says of it is what it says
+        of :func:`named_materials` (it names the first place of a name and how many
+        more)."""
+        seen: dict[tuple[str, str], list[Any]] = {}
+        for at, index in enumerate(self._given_of):
+            for pair in self._given_list[index]:
+                first = seen.get(pair)
+                if first is None:
+                    seen[pair] = [display_path(self._names[at]), 1]
+                else:
+                    first[1] += 1
+        return [(what, name, first[0]) for (what, name), first in seen.items()
+                for _ in range(first[1])]
+
+    def built_for(self, campaign: Campaign, manifest: Manifest | None) -> bool:
+        """Whether this table was built for ``campaign`` (the same object) and the same
+        ``manifest`` (that object, or one read from the same file with the same rows,
+        values of the same types: their ``repr``): its files' metadata and recipes are
+        those found now."""
+        mine = self._manifest
+        return campaign is self._campaign and (manifest is mine or (
+            manifest is not None and mine is not None and manifest.path == mine.path
+            and repr(manifest.rows) == repr(mine.rows)))
+
+    def unchanged(self, file: str, stat: tuple[int, int],
+                  previous: FileState | None) -> int | None:
+        """Where ``file`` is in this table (:meth:`built_for` the campaign and manifest
+        of a table built now) when its row here is the row that table would give it,
+        but for the check that its traces are still on disk: reduced or a duplicate,
+        with this size and ``mtime_ns`` and, from the state, this very ``previous``
+        entry (so the same hash and status). Else ``None``."""
+        if previous is None or self._entries.get(file) is not previous:
+            return None
+        at = self._find(file)
+        if at is None or _STATUSES[self._status[at]] not in (REDUCED, DUPLICATE):
+            return None
+        kept = self._huge.get(at) or (self._stats[2 * at], self._stats[2 * at + 1])
+        return at if kept == stat else None
+
+    def _append_from(self, known: CampaignTable, at: int, where: str) -> None:
+        """Keep the row ``at`` of ``known`` as it is there (:meth:`unchanged`), at
+        ``where``."""
+        _, problem, reason, sha, read = known._extra.get(at, (None, None, None, None, True))
+        self._append(known._names[at], where,
+                     known._huge.get(at) or (known._stats[2 * at], known._stats[2 * at + 1]),
+                     _STATUSES[known._status[at]], problem, reason, sha, read,
+                     known._given_list[known._given_of[at]])
 
     def __len__(self) -> int:
         return len(self._names)
@@ -361,22 +480,14 @@ class CampaignTable(Sequence[CampaignRow]):
     def _row(self, at: int) -> CampaignRow:
         file = self._names[at]
         where, problem, reason, sha, read = self._extra.get(at, (None, None, None, None, True))
-        path = self._campaign.raw_dir / file if where is None else Path(where)
         size, mtime_ns = self._huge.get(at) or (self._stats[2 * at], self._stats[2 * at + 1])
-        sources: tuple[tuple[str, dict[str, Any]], ...] = ()
-        hints: tuple[str, ...] = ()
-        test_rows: tuple[ManifestRow, ...] = ()
-        merged: dict[str, Any] = {}
-        if read:
-            meta = _file_metadata(self._campaign, self._manifest, file, path)
-            sources, hints, test_rows, merged = (tuple(meta.sources), tuple(meta.hints),
-                                                 meta.test_rows, meta.merged)
+        # its metadata is found when asked for (not read: a file that is not a regular one)
         return CampaignRow(
-            file=file, where=str(path) if where is None else where,
-            size=size, mtime_ns=mtime_ns, sources=sources,
-            merged=merged, problem=problem, status=_STATUSES[self._status[at]],
-            reason=reason, sha256=sha, previous=self._entries.get(file), hints=hints,
-            test_rows=test_rows)
+            file=file, where=self._root + file if where is None else where,
+            size=size, mtime_ns=mtime_ns, problem=problem,
+            status=_STATUSES[self._status[at]], reason=reason, sha256=sha,
+            previous=self._entries.get(file),
+            origin=(self._campaign, self._manifest) if read else None)
 
     def not_export_notes(self) -> list[str]:
         """One line per file set aside: ``not an export: skipped: notes.txt (a text …)``."""
@@ -450,7 +561,8 @@ def _content_problem(campaign: Campaign, path: Path, rel: str) -> str | None:
 
 
 def campaign_table(campaign: Campaign, *, state: CampaignState | None = None,
-                   manifest: Manifest | None = None) -> CampaignTable:
+                   manifest: Manifest | None = None,
+                   known: CampaignTable | None = None) -> CampaignTable:
     """The campaign as a table, before anything runs: one row per file with its metadata
     and status (``new, reduced, changed, failed, duplicate``).
 
@@ -459,26 +571,37 @@ def campaign_table(campaign: Campaign, *, state: CampaignState | None = None,
     the last batch and the traces of its reduced runs still exist; ``failed`` when the
     same holds for a file that failed or its metadata is already known to be wrong.
     ``state`` defaults to the campaign's state file, ``manifest`` to its manifest.
+    ``known``: a table built before (a batch's, for its rehearsal), whose rows are taken
+    where they are provably those this one would find (:meth:`CampaignTable.unchanged`)
+    and the file's traces are still on disk: its labels are not matched and merged again.
     """
     entries = (state if state is not None else load_state(campaign)).entries
     if manifest is None and campaign.manifest is not None:
         manifest = read_manifest(campaign.manifest)
     traces = TraceListing(campaign)
     rows = CampaignTable(campaign, manifest, entries)
+    if known is not None and not known.built_for(campaign, manifest):
+        known = None
     for path in discover_files(campaign):
         rel = _relative(path, campaign.raw_dir)
         try:
             st = regular_file(path, what="an export file")
         except ReadError as exc:
             unreadable = f"{display_path(rel)}: {exc.problem}"
-            rows._add(CampaignRow(file=rel, where=str(path), size=-1, mtime_ns=-1, sources=(),
-                                  merged={}, problem=unreadable, status=FAILED,
-                                  reason=unreadable), read=False)
+            rows._add(CampaignRow(file=rel, where=str(path), size=-1, mtime_ns=-1,
+                                  problem=unreadable, status=FAILED, reason=unreadable),
+                      read=False)
+            continue
+        previous = entries.get(rel)
+        at = None if known is None else known.unchanged(
+            rel, (st.st_size, st.st_mtime_ns), previous)
+        if known is not None and at is not None and previous is not None \
+                and _traces_present(traces, previous):
+            rows._append_from(known, at, str(path))
             continue
         meta = _file_metadata(campaign, manifest, rel, path)
-        sources, hints, test_rows, merged = meta.sources, meta.hints, meta.test_rows, meta.merged
+        hints, test_rows, merged = meta.hints, meta.test_rows, meta.merged
         problem, check_labels = meta.problem, meta.check_labels
-        previous = entries.get(rel)
         sha = None
         status = NEW
         reason = None
@@ -516,25 +639,28 @@ def campaign_table(campaign: Campaign, *, state: CampaignState | None = None,
             status, reason = FAILED, problem
         rows._add(CampaignRow(
             file=rel, where=str(path), size=st.st_size, mtime_ns=st.st_mtime_ns,
-            sources=tuple(sources), merged=merged, problem=problem, status=status,
-            reason=reason, sha256=sha, previous=previous, hints=tuple(hints),
-            test_rows=test_rows,
+            problem=problem, status=status, reason=reason, sha256=sha, previous=previous,
+            metadata=meta,
         ))
     return rows
 
 
+def _row_materials(row: CampaignRow) -> Iterator[tuple[str, str]]:
+    """Each pin and disc name a row's metadata gives (its sources, then the manifest
+    rows of its tests), as ``(what, name)``."""
+    fields = [f for _, f in row.sources] + [r.fields for r in row.test_rows]
+    for given in fields:
+        for what in ("pin", "disc"):
+            value = given.get(what)
+            if isinstance(value, str):
+                yield what, value
+
+
 def named_materials(rows: Sequence[CampaignRow]) -> list[tuple[str, str, str]]:
     """Every pin and disc name the campaign's metadata gives before any export is read
-    (the manifest's rows, the file names), as ``(what, name, file)``."""
-    out = []
-    for row in rows:
-        fields = [f for _, f in row.sources] + [r.fields for r in row.test_rows]
-        for given in fields:
-            for what in ("pin", "disc"):
-                value = given.get(what)
-                if isinstance(value, str):
-                    out.append((what, value, display_path(row.file)))
-    return out
+    (the manifest's rows, the file names), as ``(what, name, file)``, row by row."""
+    return [(what, name, display_path(row.file)) for row in rows
+            for what, name in _row_materials(row)]
 
 
 def check_materials(campaign: Campaign, rows: Sequence[CampaignRow]) -> None:
@@ -543,7 +669,8 @@ def check_materials(campaign: Campaign, rows: Sequence[CampaignRow]) -> None:
     name, with a did-you-mean and a file that uses it
     (:func:`~tribopipe.campaign.metadata.material_problems`). Names read from Test names
     are checked as each export is read (that run fails alone)."""
-    problems = material_problems(campaign, named_materials(rows))
+    named = rows.names_given() if isinstance(rows, CampaignTable) else named_materials(rows)
+    problems = material_problems(campaign, named)
     if problems:
         raise CampaignError(
             f"{len(problems)} material name(s) not in the vocabulary, nothing reduced: "

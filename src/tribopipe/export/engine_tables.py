@@ -125,8 +125,13 @@ def table_at(
 
 def filled_lines(table: pd.DataFrame, units: UnitSystem) -> list[str]:
     """Comment bodies listing the table cells filled by interpolation (the rows added by
-    :func:`densify_lines` aside)."""
-    filled = table[~table["measured"] & ~table["added"]]
+    :func:`densify_lines` aside, and in a table over sliding speed the speed rows added
+    between measured speeds: each cell then names its speed)."""
+    over_speed = "speed_mm_s" in table.columns
+    keep = ~table["measured"] & ~table["added"]
+    if over_speed:
+        keep &= ~table["speed_added"]
+    filled = table[keep]
     if filled.empty:
         return ["every cell of this table was measured"]
     lines = [
@@ -136,10 +141,14 @@ def filled_lines(table: pd.DataFrame, units: UnitSystem) -> list[str]:
     for _, row in filled.iterrows():
         t = row["temperature_C"]
         t_text = "" if math.isnan(t) else f", T = {t:g} C"
+        v_text = ""
+        if over_speed:
+            v = float(row["speed_mm_s"])
+            v_text = f", v = {v:g} mm/s ({num(v * units.speed_per_mm_s)} {units.speed_unit})"
         lines.append(
             f"  p = {row['pressure_kPa']:g} kPa "
             f"({num(row['pressure_kPa'] * units.pressure_per_kPa)} {units.pressure_unit})"
-            f"{t_text}: mu = {num(row['mu_k'])}"
+            f"{t_text}{v_text}: mu = {num(row['mu_k'])}"
         )
     return lines
 

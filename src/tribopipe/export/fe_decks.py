@@ -148,8 +148,7 @@ def write_abaqus(
     lines = comment_block("**", bodies)
     split = PairGroups(groups)  # each pair's groups selected once, κ computed once
     for pin_name, disc_name in selected:
-        table = table_at(split.pair(pin_name, disc_name), pin_name, disc_name, temperature_C,
-                         dense=True, curvature=split.curvature())
+        table, by_speed = pair_table(split, pin_name, disc_name, temperature_C)
         rate = slip_rate_of(slip_rates, pin_name, disc_name)
         pair_bodies = [
             "",
@@ -158,7 +157,6 @@ def write_abaqus(
             *filled_lines(table, u),
             *densify_lines(table, "ABAQUS"),
         ]
-        by_speed = speed_rows(split, pin_name, disc_name, temperature_C)
         if by_speed is not None:
             pair_bodies[2] = speed_table_note(by_speed, u.speed_per_mm_s, u.speed_unit,
                                               "ABAQUS")
@@ -179,6 +177,21 @@ def write_abaqus(
                 fields.append(num(row["temperature_C"]))
             lines.append(", ".join(fields))
     return "\n".join(lines) + "\n"
+
+
+def pair_table(
+    split: PairGroups, pin: str, disc: str, temperature_C: float | None
+) -> tuple[pd.DataFrame, pd.DataFrame | None]:
+    """The μ_K table a deck writes for one pair, and the same table where it runs over
+    sliding speed (else ``None``): over pressure, temperature and slip rate where the pair
+    is measured at several nominal speeds (:func:`speed_rows`, each speed's groups read
+    apart), else over pressure and temperature (:func:`table_at`). ``temperature_C`` [°C]
+    slices either at one interpolated temperature."""
+    by_speed = speed_rows(split, pin, disc, temperature_C)
+    if by_speed is not None:
+        return by_speed, by_speed
+    return table_at(split.pair(pin, disc), pin, disc, temperature_C, dense=True,
+                    curvature=split.curvature()), None
 
 
 def speed_table_note(rows: pd.DataFrame, per_mm_s: float, unit: str, engine: str) -> str:
@@ -278,9 +291,7 @@ def write_ansys(
     split = PairGroups(groups)  # each pair's groups selected once, κ computed once
     for offset, (pin_name, disc_name) in enumerate(selected_pairs(groups, pin, disc)):
         mat = material_id + offset
-        table = table_at(split.pair(pin_name, disc_name), pin_name, disc_name, temperature_C,
-                         dense=True, curvature=split.curvature())
-        by_speed = speed_rows(split, pin_name, disc_name, temperature_C)
+        table, by_speed = pair_table(split, pin_name, disc_name, temperature_C)
         lines += comment_block("!", [
             "",
             f"material {mat}: pin {ansys_safe(pin_name)} on disc {ansys_safe(disc_name)}",

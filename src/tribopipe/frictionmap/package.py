@@ -27,7 +27,7 @@ from typing import TYPE_CHECKING, Any, TypeGuard, cast
 
 from ..errors import MapError
 from ..escape import printable
-from ..stats import group_statistics, run_ids_of
+from ..stats import GROUP_MU_K_INPUT, group_mu_k, run_ids_of
 from .checks import validate_runs
 from .datapackage import (
     DEFAULT_LIMITS,
@@ -72,6 +72,8 @@ from .schema import (
 from .store import map_metadata, same_value
 
 if TYPE_CHECKING:
+    from collections.abc import Iterator
+
     import pandas as pd
 
 #: names of the resources tribopipe publishes (``runs`` is the one a package must have)
@@ -155,10 +157,14 @@ class _Checker:
 
 
 def check_package(path: str | os.PathLike[str],
-                  limits: PackageLimits = DEFAULT_LIMITS) -> PackageCheck:
+                  limits: PackageLimits = DEFAULT_LIMITS, *,
+                  keep_runs: bool = True) -> PackageCheck:
     """Check the package at ``path`` (its folder or its ``datapackage.json``); see the
     module docstring for what is checked. Never raises for a bad package: every problem is
-    in the result."""
+    in the result. With ``keep_runs`` false the result's runs hold the ``lab`` column only
+    (what :meth:`PackageCheck.verdict` reads): each step after the Parquet copy's keeps
+    only the columns it compares, and the others are let go early (a caller that wants
+    the verdict, not the runs: 10⁵ runs of every column are some 100 MB)."""
     desc = descriptor_path(path)
     check = _Checker(desc, limits)
     try:
@@ -183,15 +189,22 @@ def check_package(path: str | os.PathLike[str],
     return_free_memory()  # what parsing and checking the rows freed, before the copies
     if (parquet := files.get(RUNS_PARQUET)) is not None:
         _check_parquet_copy(check, resources[RUNS_PARQUET], parquet, runs)
+    if not keep_runs:  # the columns the later steps read
+        check.result.runs = runs.loc[:, ["lab"]]
+        runs = runs.loc[:, list(dict.fromkeys((*GROUP_MU_K_INPUT, "mu_k", "source")))]
+        return_free_memory()
     if (groups := files.get(GROUPS)) is not None:
         before_groups = len(check.result.problems) + check.result.more
         table = _group_columns(check, resources[GROUPS], groups)
         members = None if table is None else _check_groups(check, resources[GROUPS], table,
                                                            runs)
         clean = len(check.result.problems) + check.result.more == before_groups
+        return_free_memory()
         if table is not None and clean and (
                 groups_copy := files.get(GROUPS_PARQUET)) is not None:
             _check_groups_copy(check, resources[GROUPS_PARQUET], groups_copy, table)
+        del table
+        return_free_memory()
         linked = check.result.profile_version >= LINKED_GROUPS_VERSION
         if members is not None and (links := files.get(GROUP_RUNS)) is not None:
             _check_group_runs(check, resources[GROUP_RUNS], links, members,
@@ -403,14 +416,6 @@ def _table(check: _Checker, path: Path, fields: list[dict[str, Any]],
     return read_csv_columns(path, fields, shown, check.limits, check.add)
 
 
-def _records(columns: dict[str, Any]) -> list[dict[str, Any]]:
-    """Typed columns as rows of plain values (missing as ``None``): for the small tables
-    (the groups)."""
-    names = list(columns)
-    values = [[None if is_missing(v) else v for v in columns[n].tolist()] for n in names]
-    return [dict(zip(names, row, strict=True)) for row in zip(*values, strict=True)]
-
-
 def _check_runs(check: _Checker, res: dict[str, Any], path: Path | None,
                 version: int) -> pd.DataFrame | None:
     """The runs table: schema against the map's, every cell, then the row checks."""
@@ -583,19 +588,30 @@ def _check_groups_copy(check: _Checker, res: dict[str, Any], path: Path,
     if len(copy) != n:
         check.add(shown, f"{len(copy)} rows, the CSV has {n}")
         return
-    csv_frame = pd.DataFrame({name: pd.Series(columns[name]) for name in names})
-    # a CSV cannot tell an empty text from a missing one: neither can the comparison
-    for frame in (csv_frame, copy):
-        for name in names:
-            if frame[name].dtype.kind in "OUT" or str(frame[name].dtype) == "str":
-                frame[name] = frame[name].mask(frame[name].astype(object) == "")
+    # a column at a time, as a Series of its own (no frame of the CSV's columns beside
+    # the copy); a CSV cannot tell an empty text from a missing one: neither can the
+    # comparison
+    csv_frame = {name: _empty_as_missing(pd.Series(columns[name])) for name in names}
+    for name in names:
+        if _is_text(copy[name]):
+            copy[name] = _empty_as_missing(copy[name])
+    differs = np.zeros((n, len(names)), dtype=bool)
     try:
-        differs = np.column_stack([~_same_values(csv_frame[name], copy[name])
-                                   for name in names]) if names else np.zeros((n, 0), bool)
+        for j, name in enumerate(names):
+            differs[:, j] = ~_same_values(csv_frame[name], copy[name])
     except (TypeError, ValueError) as exc:
         check.add(shown, f"not comparable with the CSV ({str(exc)[:120]})")
         return
     _name_differences(check, shown, differs, names, csv_frame, copy)
+
+
+def _is_text(column: pd.Series) -> bool:
+    return column.dtype.kind in "OUT" or str(column.dtype) == "str"
+
+
+def _empty_as_missing(column: pd.Series) -> pd.Series:
+    """A text column with its empty texts missing (other columns as they are)."""
+    return column.mask(column.astype(object) == "") if _is_text(column) else column
 
 
 class _ParquetColumns:
@@ -692,12 +708,13 @@ def _group_columns(check: _Checker, res: dict[str, Any], path: Path
 
 
 def _check_groups(check: _Checker, res: dict[str, Any], columns: dict[str, Any],
-                  runs: pd.DataFrame) -> dict[int, frozenset[str]] | None:
+                  runs: pd.DataFrame) -> dict[int, str] | None:
     """The group table (``columns``, as :func:`_group_columns` parsed it): its μ_K n and
     mean follow from the runs. From package profile version 3 the groups are numbered
     (``group``, unique): returns, per group number, the ids of the runs its conditions
-    make in the runs table (what ``group_runs.csv`` must list; ``None`` before version
-    3)."""
+    make in the runs table (what ``group_runs.csv`` must list), as the group's
+    ``run_ids`` cell (:func:`~tribopipe.stats.run_ids_of` reads it; one text per group,
+    not a set of 10⁵ texts); ``None`` before version 3."""
     shown = str(res.get("path"))
     fields = cast("list[dict[str, Any]]", _group_fields(res))
     keys: tuple[str, ...] = ("pin", "disc", "normal_force_N", "temperature_C")
@@ -715,20 +732,22 @@ def _check_groups(check: _Checker, res: dict[str, Any], columns: dict[str, Any],
         return None
     if "nominal_speed_mm_s" in names:
         keys += ("nominal_speed_mm_s",)  # a map of several speeds: groups split by speed
-    # the columns compared only, as rows (a group table of 10⁴ groups has some 70 more)
-    used = (*keys, "mu_k_n", "mu_k_mean", GROUP_ID)
-    rows = _records({name: columns[name] for name in columns if name in used})
-    groups = group_statistics(runs, show_speed=True)
-    computed = {_key(g, keys): g for g in groups.loc[:, [
-        c for c in groups.columns if c in (*keys, "mu_k_n", "mu_k_mean", "run_ids")]].to_dict(
-        orient="records", into=dict)}
+    # the columns compared only, a row at a time as plain values (a group table of 10⁵
+    # groups has some 70 more); the runs' groups as columns, each found by its key
+    used = [name for name in columns if name in (*keys, "mu_k_n", "mu_k_mean", GROUP_ID)]
+    groups = group_mu_k(runs)  # group_statistics(runs, show_speed=True)'s columns
+    computed = {_key_of(key): j for j, key in enumerate(
+        zip(*(groups[k].tolist() for k in keys), strict=True))}
+    figures = {name: groups[name].tolist() for name in ("mu_k_n", "mu_k_mean", "run_ids")}
     del groups
-    if len(rows) != len(computed):
-        check.add(shown, f"{len(rows)} groups, the runs make {len(computed)}")
-    members: dict[int, frozenset[str]] = {}
+    n_rows = len(columns[used[0]])
+    if n_rows != len(computed):
+        check.add(shown, f"{n_rows} groups, the runs make {len(computed)}")
+    members: dict[int, str] = {}
     first: dict[int, int] = {}
-    for n, row in enumerate(rows, 1):
-        number = row.get(GROUP_ID) if linked else None
+    at = {name: i for i, name in enumerate(used)}
+    for n, values in enumerate(_plain_rows([columns[name] for name in used]), 1):
+        number = values[at[GROUP_ID]] if linked else None
         if isinstance(number, int) and number < 1:
             check.add(shown, f"row {n}, field {GROUP_ID}: {number} is not a group number "
                       "(expected 1 or more)")
@@ -740,23 +759,49 @@ def _check_groups(check: _Checker, res: dict[str, Any], columns: dict[str, Any],
                 number = None
             else:
                 first[number] = n
-        g = computed.get(_key(row, keys))
-        if g is None:
+        j = computed.get(_key_of(tuple(values[at[k]] for k in keys)))
+        if j is None:
             check.add(shown, f"row {n}: no runs of this group in the runs table")
             continue
         for name in ("mu_k_n", "mu_k_mean"):
-            if not same_value(row[name], g[name]):
-                check.add(shown, f"row {n}, field {name}: {row[name]!r} does not follow "
-                          f"from the runs ({g[name]!r})")
+            theirs, ours = values[at[name]], figures[name][j]
+            if not same_value(theirs, ours):
+                check.add(shown, f"row {n}, field {name}: {theirs!r} does not follow "
+                          f"from the runs ({ours!r})")
         if isinstance(number, int):
-            members[number] = frozenset(run_ids_of(g["run_ids"]))
+            members[number] = figures["run_ids"][j]
     return members if linked else None
 
 
+#: rows of a table made plain at a time by :func:`_plain_rows`
+PLAIN_ROWS = 8192
+
+
+def _plain_rows(columns: list[Any]) -> Iterator[tuple[Any, ...]]:
+    """The rows of equally long typed columns (NumPy or pandas arrays) as tuples of plain
+    Python values, missing as ``None``, made :data:`PLAIN_ROWS` rows at a time (never a
+    list of every cell)."""
+    import numpy as np
+    import pandas as pd
+
+    n = len(columns[0]) if columns else 0
+    for start in range(0, n, PLAIN_ROWS):
+        parts = []
+        for column in columns:
+            part = column[start:start + PLAIN_ROWS]
+            values = part.tolist()
+            for i in np.flatnonzero(np.asarray(pd.isna(part), dtype=bool)).tolist():
+                values[i] = None
+            parts.append(values)
+        yield from zip(*parts, strict=True)
+
+
 def _check_group_runs(check: _Checker, res: dict[str, Any], path: Path,
-                      members: dict[int, frozenset[str]], groups_shown: str) -> None:
+                      members: dict[int, str], groups_shown: str) -> None:
     """The linking table lists each numbered group's runs, each included run once, and
-    the runs of a group are those its conditions make in the runs table (``members``)."""
+    the runs of a group are those its conditions make in the runs table (``members``: by
+    group number, the ids :func:`~tribopipe.stats.run_ids_of` reads in the group's
+    ``run_ids`` cell)."""
     shown = str(res.get("path"))
     fields = _check_fields(check, (res.get("schema") or {}), list(GROUP_RUNS_FIELDS), shown)
     if fields is None:
@@ -764,12 +809,12 @@ def _check_group_runs(check: _Checker, res: dict[str, Any], path: Path,
     columns = _table(check, path, fields, shown)
     if columns is None:
         return
-    owner = {mid: number for number, ids in members.items() for mid in ids}
+    owner = {mid: number for number, ids in members.items() for mid in run_ids_of(ids)}
     seen: dict[str, int] = {}
     listed: dict[int, set[str]] = {number: set() for number in members}
-    pairs = zip(columns[GROUP_ID].tolist(), columns["measurement_id"].tolist(), strict=True)
-    for n, (number, mid) in enumerate(pairs, 1):
-        if is_missing(number) or is_missing(mid):
+    for n, (number, mid) in enumerate(_plain_rows([columns[GROUP_ID],
+                                                   columns["measurement_id"]]), 1):
+        if number is None or mid is None:
             continue  # said by the cell check
         if mid in seen:
             check.add(shown, f"row {n}, field measurement_id: run {mid[:40]!r} is listed "
@@ -785,7 +830,7 @@ def _check_group_runs(check: _Checker, res: dict[str, Any], path: Path,
         else:
             listed[number].add(mid)
     for number in sorted(members):
-        got, expected = listed[number], members[number]
+        got, expected = listed[number], frozenset(run_ids_of(members[number]))
         if got != expected:
             check.add(shown, f"group {number}: lists {len(got)} run(s), the group's "
                       f"conditions in the runs table make {len(expected)} "
@@ -793,10 +838,11 @@ def _check_group_runs(check: _Checker, res: dict[str, Any], path: Path,
                       "listed that belong to another group)")
 
 
-def _key(row: dict[str, Any], keys: tuple[str, ...]) -> tuple[Any, ...]:
+def _key_of(values: tuple[Any, ...]) -> tuple[Any, ...]:
+    """A group's key (its values of the key fields, in order) as the group table and the
+    runs' groups are matched on: missing as ``None``, numbers rounded to 1e-9."""
     out = []
-    for k in keys:
-        v = row[k]
+    for v in values:
         if isinstance(v, float) and math.isnan(v):
             v = None
         out.append(round(float(v), 9) if isinstance(v, int | float) and v is not None else v)

@@ -459,6 +459,10 @@ class CampaignTable(Sequence[CampaignRow]):
         at = bisect_left(self._names, file)
         return at if at < len(self._names) and self._names[at] == file else None
 
+    def files(self) -> list[str]:
+        """The files' names, in the order of the rows (without building them)."""
+        return list(self._names)
+
     def has(self, file: str) -> bool:
         """True when ``file`` is a row of the table."""
         return self._find(file) is not None

@@ -151,6 +151,46 @@ def _check_groups_copy_before(check: Any, res: dict[str, Any], path: Path,
     P._name_differences(check, shown, differs, names, csv_frame, copy)
 
 
+def _check_group_runs_before(check: Any, res: dict[str, Any], path: Path,
+                             members: dict[int, frozenset[str]], groups_shown: str) -> None:
+    """package._check_group_runs as it was: each group's runs a frozenset."""
+    shown = str(res.get("path"))
+    fields = P._check_fields(check, (res.get("schema") or {}), list(P.GROUP_RUNS_FIELDS),
+                             shown)
+    if fields is None:
+        return
+    columns = P._table(check, path, fields, shown)
+    if columns is None:
+        return
+    owner = {mid: number for number, ids in members.items() for mid in ids}
+    seen: dict[str, int] = {}
+    listed: dict[int, set[str]] = {number: set() for number in members}
+    pairs = zip(columns[GROUP_ID].tolist(), columns["measurement_id"].tolist(), strict=True)
+    for n, (number, mid) in enumerate(pairs, 1):
+        if is_missing(number) or is_missing(mid):
+            continue  # said by the cell check
+        if mid in seen:
+            check.add(shown, f"row {n}, field measurement_id: run {mid[:40]!r} is listed "
+                      f"twice (first in row {seen[mid]})")
+            continue
+        seen[mid] = n
+        if number not in members:
+            check.add(shown, f"row {n}, field {GROUP_ID}: {number} is not a group of "
+                      f"{groups_shown}")
+        elif mid not in owner:
+            check.add(shown, f"row {n}, field measurement_id: {mid[:40]!r} is not an "
+                      "included run of the runs table")
+        else:
+            listed[number].add(mid)
+    for number in sorted(members):
+        got, expected = listed[number], members[number]
+        if got != expected:
+            check.add(shown, f"group {number}: lists {len(got)} run(s), the group's "
+                      f"conditions in the runs table make {len(expected)} "
+                      f"({len(expected - got)} of them not listed, {len(got - expected)} "
+                      "listed that belong to another group)")
+
+
 # --------------------------------------------------------------------------- inputs
 
 
@@ -228,6 +268,7 @@ def _reverse_rows(table: list[list[str]]) -> None:
 
 
 GROUPS_CSV, RUNS_CSV = "data/groups.csv", "data/runs.csv"
+GROUP_RUNS_CSV = "data/group_runs.csv"
 BREAKS: dict[str, tuple[str, Any]] = {
     "a μ_K mean changed": (GROUPS_CSV, lambda t: _cell(t, 3, "mu_k_mean", "0.123")),
     "a μ_K n changed": (GROUPS_CSV, lambda t: _cell(t, 5, "mu_k_n", "7")),
@@ -242,7 +283,12 @@ BREAKS: dict[str, tuple[str, Any]] = {
     "a run's μ_K changed in runs.csv": (RUNS_CSV, lambda t: _cell(t, 9, "mu_k", "0.4321")),
     "a run's force changed in runs.csv": (RUNS_CSV, lambda t: _cell(t, 12, "normal_force_N",
                                                                     "2.5")),
-    "a link missing": ("data/group_runs.csv", lambda t: t.pop(3)),
+    "a link missing": (GROUP_RUNS_CSV, lambda t: t.pop(3)),
+    "a link twice": (GROUP_RUNS_CSV, lambda t: t.append(t[5])),
+    "a link to another group": (GROUP_RUNS_CSV, lambda t: _cell(t, 4, GROUP_ID, "9")),
+    "a link to no group": (GROUP_RUNS_CSV, lambda t: _cell(t, 4, GROUP_ID, "9999")),
+    "a link to an unknown run": (GROUP_RUNS_CSV, lambda t: _cell(t, 6, "measurement_id",
+                                                                 "0123456789abcdef")),
     "a cof changed": ("data/frictionmap.csv", lambda t: _cell(t, 2, "cof", "0.77")),
 }
 
@@ -314,6 +360,7 @@ def _both(pkg: Path, monkeypatch: pytest.MonkeyPatch) -> tuple[list[str], list[s
     with monkeypatch.context() as m:
         m.setattr(P, "_check_groups", _check_groups_before)
         m.setattr(P, "_check_groups_copy", _check_groups_copy_before)
+        m.setattr(P, "_check_group_runs", _check_group_runs_before)
         before = P.check_package(pkg)
     for other in (lean, before):
         assert (after.ok, after.more, after.verdict(), after.notes, after.lines()) == (
@@ -354,3 +401,20 @@ def test_a_broken_group_copy_is_said_as_before(package, tmp_path, monkeypatch, b
     assert after == before
     assert after and all(line.startswith(GROUPS_PARQUET) or "more problem(s)" in line
                          for line in after), after
+
+
+@pytest.mark.parametrize("broken", [None, "a μ_K mean changed", "a run's μ_K changed in runs.csv"])
+def test_map_validate_prints_what_the_full_check_says(package, tmp_path, broken):
+    """``map validate`` (which keeps no runs but the labs) prints the notes, the lines and
+    the verdict of the check that keeps every run, and fails where it fails."""
+    pkg = tmp_path / "pkg"
+    shutil.copytree(package, pkg)
+    if broken is not None:
+        _edit(pkg, *BREAKS[broken])
+    full = P.check_package(pkg)
+    result = CliRunner().invoke(main, ["map", "validate", str(pkg)], catch_exceptions=False)
+    expected = [f"note: {n}" for n in full.notes] + full.lines()
+    if full.ok:
+        expected.append(full.verdict())
+    assert result.output.splitlines() == expected
+    assert result.exit_code == (0 if full.ok else 1)

@@ -552,6 +552,9 @@ def _condition_members(keys: pd.DataFrame, pressures: Any
     grouped = keys.groupby(list(keys.columns), dropna=False, sort=False).indices
     for key, positions in grouped.items():
         key = key if isinstance(key, tuple) else (key,)
+        if len(positions) == 1:  # one run, one cluster
+            yield key, np.asarray(positions)
+            continue
         clusters = _pressure_clusters([float(p) for p in pressures[positions]])
         for c in sorted(set(clusters)):
             # .indices holds integer arrays (typed as array, Index or list)

@@ -72,6 +72,8 @@ from .schema import (
 from .store import map_metadata, same_value
 
 if TYPE_CHECKING:
+    from collections.abc import Iterator
+
     import pandas as pd
 
 #: names of the resources tribopipe publishes (``runs`` is the one a package must have)
@@ -706,12 +708,13 @@ def _group_columns(check: _Checker, res: dict[str, Any], path: Path
 
 
 def _check_groups(check: _Checker, res: dict[str, Any], columns: dict[str, Any],
-                  runs: pd.DataFrame) -> dict[int, frozenset[str]] | None:
+                  runs: pd.DataFrame) -> dict[int, str] | None:
     """The group table (``columns``, as :func:`_group_columns` parsed it): its μ_K n and
     mean follow from the runs. From package profile version 3 the groups are numbered
     (``group``, unique): returns, per group number, the ids of the runs its conditions
-    make in the runs table (what ``group_runs.csv`` must list; ``None`` before version
-    3)."""
+    make in the runs table (what ``group_runs.csv`` must list), as the group's
+    ``run_ids`` cell (:func:`~tribopipe.stats.run_ids_of` reads it; one text per group,
+    not a set of 10⁵ texts); ``None`` before version 3."""
     shown = str(res.get("path"))
     fields = cast("list[dict[str, Any]]", _group_fields(res))
     keys: tuple[str, ...] = ("pin", "disc", "normal_force_N", "temperature_C")
@@ -740,12 +743,10 @@ def _check_groups(check: _Checker, res: dict[str, Any], columns: dict[str, Any],
     n_rows = len(columns[used[0]])
     if n_rows != len(computed):
         check.add(shown, f"{n_rows} groups, the runs make {len(computed)}")
-    members: dict[int, frozenset[str]] = {}
+    members: dict[int, str] = {}
     first: dict[int, int] = {}
     at = {name: i for i, name in enumerate(used)}
-    plain = zip(*([None if is_missing(v) else v for v in columns[name].tolist()]
-                  for name in used), strict=True)
-    for n, values in enumerate(plain, 1):
+    for n, values in enumerate(_plain_rows([columns[name] for name in used]), 1):
         number = values[at[GROUP_ID]] if linked else None
         if isinstance(number, int) and number < 1:
             check.add(shown, f"row {n}, field {GROUP_ID}: {number} is not a group number "
@@ -768,14 +769,39 @@ def _check_groups(check: _Checker, res: dict[str, Any], columns: dict[str, Any],
                 check.add(shown, f"row {n}, field {name}: {theirs!r} does not follow "
                           f"from the runs ({ours!r})")
         if isinstance(number, int):
-            members[number] = frozenset(run_ids_of(figures["run_ids"][j]))
+            members[number] = figures["run_ids"][j]
     return members if linked else None
 
 
+#: rows of a table made plain at a time by :func:`_plain_rows`
+PLAIN_ROWS = 8192
+
+
+def _plain_rows(columns: list[Any]) -> Iterator[tuple[Any, ...]]:
+    """The rows of equally long typed columns (NumPy or pandas arrays) as tuples of plain
+    Python values, missing as ``None``, made :data:`PLAIN_ROWS` rows at a time (never a
+    list of every cell)."""
+    import numpy as np
+    import pandas as pd
+
+    n = len(columns[0]) if columns else 0
+    for start in range(0, n, PLAIN_ROWS):
+        parts = []
+        for column in columns:
+            part = column[start:start + PLAIN_ROWS]
+            values = part.tolist()
+            for i in np.flatnonzero(np.asarray(pd.isna(part), dtype=bool)).tolist():
+                values[i] = None
+            parts.append(values)
+        yield from zip(*parts, strict=True)
+
+
 def _check_group_runs(check: _Checker, res: dict[str, Any], path: Path,
-                      members: dict[int, frozenset[str]], groups_shown: str) -> None:
+                      members: dict[int, str], groups_shown: str) -> None:
     """The linking table lists each numbered group's runs, each included run once, and
-    the runs of a group are those its conditions make in the runs table (``members``)."""
+    the runs of a group are those its conditions make in the runs table (``members``: by
+    group number, the ids :func:`~tribopipe.stats.run_ids_of` reads in the group's
+    ``run_ids`` cell)."""
     shown = str(res.get("path"))
     fields = _check_fields(check, (res.get("schema") or {}), list(GROUP_RUNS_FIELDS), shown)
     if fields is None:
@@ -783,12 +809,12 @@ def _check_group_runs(check: _Checker, res: dict[str, Any], path: Path,
     columns = _table(check, path, fields, shown)
     if columns is None:
         return
-    owner = {mid: number for number, ids in members.items() for mid in ids}
+    owner = {mid: number for number, ids in members.items() for mid in run_ids_of(ids)}
     seen: dict[str, int] = {}
     listed: dict[int, set[str]] = {number: set() for number in members}
-    pairs = zip(columns[GROUP_ID].tolist(), columns["measurement_id"].tolist(), strict=True)
-    for n, (number, mid) in enumerate(pairs, 1):
-        if is_missing(number) or is_missing(mid):
+    for n, (number, mid) in enumerate(_plain_rows([columns[GROUP_ID],
+                                                   columns["measurement_id"]]), 1):
+        if number is None or mid is None:
             continue  # said by the cell check
         if mid in seen:
             check.add(shown, f"row {n}, field measurement_id: run {mid[:40]!r} is listed "
@@ -804,7 +830,7 @@ def _check_group_runs(check: _Checker, res: dict[str, Any], path: Path,
         else:
             listed[number].add(mid)
     for number in sorted(members):
-        got, expected = listed[number], members[number]
+        got, expected = listed[number], frozenset(run_ids_of(members[number]))
         if got != expected:
             check.add(shown, f"group {number}: lists {len(got)} run(s), the group's "
                       f"conditions in the runs table make {len(expected)} "

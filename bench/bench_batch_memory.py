@@ -246,9 +246,10 @@ def phases(config: Path, jobs: int, depth: int) -> dict:
             status = _rss_kB()
             stack = _stack(sys._current_frames().get(main_id))
             if time.perf_counter() - t0 >= when:
-                arrow = sys.modules.get("pyarrow")  # not loaded here before the batch does
+                # not loaded here before the batch does (nor asked while it is loading)
+                allocated = getattr(sys.modules.get("pyarrow"), "total_allocated_bytes", None)
                 timeline.append((round(time.perf_counter() - t0, 1), status["VmRSS"],
-                                 arrow.total_allocated_bytes() // 1000 if arrow else 0,
+                                 allocated() // 1000 if callable(allocated) else 0,
                                  " > ".join(stack[2:5])))
                 when += 0.5
             if status["VmRSS"] > by_stack.get(stack, 0):

@@ -21,6 +21,15 @@ the sizes; and the parent's traced memory, its RSS (``VmRSS``) and peak (``VmHWM
 and after the batch (``end_``: its rehearsal of the next re-run included).
 
     nice python bench/bench_batch_memory.py --batch 2000 6000
+
+Where the parent's peak is reached (``--phases CONFIG``): a batch of a campaign as
+``tribopipe batch --no-plots`` runs it (in this process, no ``tracemalloc``), while a
+thread samples the parent's RSS and peak (``VmRSS``, ``VmHWM``) every 10 ms with the
+stack of tribopipe functions the batch is in. Printed: the peak and the stack where it
+was reached, and the largest RSS seen in each phase (the stack cut at ``--depth``
+functions below the batch). Run it from an empty output folder (a batch from scratch).
+
+    nice python bench/bench_batch_memory.py --phases /tmp/c/n10000/campaign.toml
 """
 
 from __future__ import annotations
@@ -171,6 +180,96 @@ def one_batch(out: Path, n: int, jobs: int) -> dict:
     return found
 
 
+def _stack(frame: FrameType | None) -> tuple[str, ...]:
+    """The tribopipe functions of ``frame``'s stack, outermost first (``module.function``)."""
+    names: list[str] = []
+    while frame is not None:
+        code = frame.f_code
+        if "/tribopipe/" in code.co_filename:
+            names.append(f"{Path(code.co_filename).stem}.{code.co_name}")
+        frame = frame.f_back
+    return tuple(reversed(names))
+
+
+def phases(config: Path, jobs: int, depth: int) -> dict:
+    """A batch of ``config`` in this process with the parent's RSS sampled by phase."""
+    import threading
+
+    from tribopipe.campaign import batch
+    from tribopipe.campaign.spec import load_campaign
+
+    campaign = load_campaign(config)
+    main_id = threading.main_thread().ident
+    assert main_id is not None
+    by_stack: dict[tuple[str, ...], int] = {}  # the largest RSS [kB] seen in each stack
+    rises: list[tuple[int, tuple[str, ...]]] = []  # each new peak [kB] and its stack
+    done = threading.Event()
+
+    timeline: list[tuple[float, int, str]] = []  # every 0.5 s: time [s], RSS [kB], phase
+    t0 = time.perf_counter()
+
+    def sample() -> None:
+        last, when = 0, 0.0
+        while not done.wait(0.01):
+            status = _rss_kB()
+            stack = _stack(sys._current_frames().get(main_id))
+            if time.perf_counter() - t0 >= when:
+                timeline.append((round(time.perf_counter() - t0, 1), status["VmRSS"],
+                                 " > ".join(stack[2:5])))
+                when += 0.5
+            if status["VmRSS"] > by_stack.get(stack, 0):
+                by_stack[stack] = status["VmRSS"]
+            if status["VmHWM"] > last:
+                last = status["VmHWM"]
+                rises.append((last, stack))
+
+    start = _rss_kB()
+    sampler = threading.Thread(target=sample, daemon=True)
+    cpu, wall = time.process_time(), time.perf_counter()
+    sampler.start()
+    try:
+        report = batch.run_campaign(campaign, jobs=jobs, plots=False)
+    finally:
+        done.set()
+        sampler.join()
+    end = _rss_kB()
+    cut: dict[str, int] = {}
+    for stack, rss in by_stack.items():
+        key = " > ".join(stack[:depth]) or "(outside tribopipe)"
+        cut[key] = max(cut.get(key, 0), rss)
+    rose: dict[str, int] = {}  # how much the peak rose [kB] while in each phase
+    below = start["VmHWM"]
+    for kb, stack in rises:
+        key = " > ".join(stack[:depth]) or "(outside tribopipe)"
+        rose[key] = rose.get(key, 0) + kb - below
+        below = kb
+    peak_stack = rises[-1][1] if rises else ()
+    result = {"files": report.files, "reduced": len(report.reduced),
+              "failures": len(report.failures), "start_kB": start["VmRSS"],
+              "peak_kB": end["VmHWM"], "end_kB": end["VmRSS"],
+              "parent_cpu_s": round(time.process_time() - cpu, 1),
+              "wall_s": round(time.perf_counter() - wall, 1),
+              "peak_stack": " > ".join(peak_stack),
+              "phases_kB": dict(sorted(cut.items(), key=lambda kv: -kv[1])),
+              "rose_kB": dict(sorted(rose.items(), key=lambda kv: -kv[1])),
+              "timeline": timeline,
+              "rises": [(kb, " > ".join(st)) for kb, st in rises[-8:]]}
+    print(f"{result['files']} files, {result['reduced']} runs reduced; parent "
+          f"{result['parent_cpu_s']} s CPU, {result['wall_s']} s wall; RSS "
+          f"{start['VmRSS'] / 1e3:.0f} MB at start, peak {end['VmHWM'] / 1e3:.0f} MB, "
+          f"{end['VmRSS'] / 1e3:.0f} MB at end")
+    print(f"peak reached in: {result['peak_stack']}")
+    print("how much the peak rose while in each phase [MB] (sampled every 10 ms):")
+    for key, kb in list(result["rose_kB"].items())[:25]:
+        print(f"  {kb / 1e3:7.1f}  {key}")
+    print("RSS over the batch [MB] (time [s], phase):")
+    for k in range(0, len(timeline), max(1, len(timeline) // 24)):
+        at, kb, where = timeline[k]
+        print(f"  {at:7.1f} s  {kb / 1e3:6.1f}  {where}")
+    print(json.dumps(result))
+    return result
+
+
 def batches(sizes: list[int], out: Path, jobs: int) -> dict:
     """A batch from scratch per size, each in a fresh process; prints what the parent
     keeps per owner and its growth per file between the first and last size."""
@@ -223,11 +322,17 @@ def main(argv: list[str] | None = None) -> dict:
     parser.add_argument("--one", type=int, help=argparse.SUPPRESS)
     parser.add_argument("--jobs", type=int, default=2)
     parser.add_argument("--out", type=Path, default=HERE / "out" / "batch_memory")
+    parser.add_argument("--phases", type=Path, metavar="CONFIG",
+                        help="a campaign to batch with the parent's RSS sampled by phase")
+    parser.add_argument("--depth", type=int, default=9,
+                        help="with --phases: functions of the stack a phase is cut at")
     args = parser.parse_args(argv)
     if args.one is not None:
         found = one_batch(args.out.resolve() / f"n{args.one}", args.one, args.jobs)
         print(json.dumps(found))
         return found
+    if args.phases is not None:
+        return phases(args.phases, args.jobs, args.depth)
     if args.batch:
         return batches(sorted(args.batch), args.out, args.jobs)
     if args.config is None:

@@ -30,10 +30,12 @@ import csv
 import io
 import json
 import math
+import os
 import shutil
 import sqlite3
 from collections import Counter
 from collections.abc import Mapping, Sequence
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -42,7 +44,7 @@ import pytest
 from generators.synthetic import SyntheticRun, write_rheocompass_export
 from helpers import write_campaign_config
 from tribopipe.campaign import batch as batch_module
-from tribopipe.campaign import load_campaign, run_campaign
+from tribopipe.campaign import folder_campaign, load_campaign, run_campaign
 from tribopipe.campaign import outputs as outputs_module
 from tribopipe.campaign import table as table_module
 from tribopipe.campaign.ledger import BatchReport
@@ -56,7 +58,13 @@ from tribopipe.campaign.state import (
     load_kept,
     load_state,
 )
-from tribopipe.campaign.table import campaign_table, check_materials, named_materials
+from tribopipe.campaign.table import (
+    campaign_table,
+    check_materials,
+    discover_files,
+    discover_paths,
+    named_materials,
+)
 from tribopipe.errors import CampaignError
 
 PATTERN = "{pin}_{disc}_{force}N_{temperature}C_r{repeat}"
@@ -483,3 +491,43 @@ def test_the_names_kept_are_those_each_row_gives(labelled: Campaign) -> None:
     with pytest.raises(CampaignError) as each_refused:
         check_materials(labelled, list(rows))
     assert str(refused.value) == str(each_refused.value)
+
+
+def test_the_paths_listed_as_text_are_the_files_listed(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """The inputs' stamp lists the raw folder as text: the same paths, in the same order,
+    as :func:`discover_files` finds, among names that are hidden, not exports, the
+    tool's own tables (and a table of the same name that is not), the manifest, a
+    folder, a symlink loop, spaces, accents and bytes that are not UTF-8; listed by
+    :func:`discover_files` itself where a glob, a relative folder or an output folder
+    inside it could make them differ."""
+    raw = tmp_path / "raw"
+    raw.mkdir()
+    for name in ("a.csv", "B.CSV", "c.txt", "d.TSV", "e.xlsx", "f.xls", ".hidden.csv",
+                 "g.lock", "h.toml", "notes.md", "with space é.csv", "manifest.csv",
+                 "x.", "y.csv.lock", "z.lock.csv"):
+        (raw / name).write_text("x\n", encoding="utf-8")
+    (raw / "runs.csv").write_text("file,test\n", encoding="utf-8")  # the tool's
+    (raw / "failures.csv").write_text("name,why\n", encoding="utf-8")  # a user's
+    (raw / "sub.csv").mkdir()
+    (raw / "loop.csv").symlink_to(raw / "loop.csv")
+    with open(os.path.join(os.fsencode(raw), b"bad\xff.csv"), "wb") as fh:
+        fh.write(b"x\n")
+    campaign = folder_campaign(raw, manifest=raw / "manifest.csv", output_dir=tmp_path / "out")
+
+    def listed(c: Campaign) -> list[str]:
+        return [str(p) for p in discover_files(c)]
+
+    as_text = discover_paths(campaign)
+    assert as_text == listed(campaign) and len(as_text) == 12
+    assert str(raw / "manifest.csv") not in as_text and str(raw / "runs.csv") not in as_text
+    with monkeypatch.context() as m:  # listed as text, not by discover_files
+        m.setattr(table_module, "discover_files", lambda c: pytest.fail("not as text"))
+        assert discover_paths(campaign) == as_text
+    for other in (replace(campaign, glob="*.csv"),
+                  replace(campaign, output_dir=raw / "out"),
+                  replace(campaign, output_dir=raw)):
+        assert discover_paths(other) == listed(other)
+    monkeypatch.chdir(tmp_path)
+    relative = replace(campaign, raw_dir=Path("raw"))
+    assert discover_paths(relative) == listed(relative)

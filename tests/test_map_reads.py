@@ -1,8 +1,10 @@
 """How many times `reduce` and `batch` read the map's rows: once, under the map's lock.
 
 Every read of a map's rows passes once through the store's row conversion
-(``frictionmap.store._from_arrow``: a single-file map, or a map folder's parts together);
-the tests count its calls, and whether the map's lock was held at each, while the real
+(``frictionmap.store._from_arrow``: a single-file map, or a map folder's parts together),
+and every merge of parts through ``frictionmap.store._merged_bytes`` (which copies the
+merged parts' rows a batch at a time); the tests count their calls, and whether the map's
+lock was held at each, while the real
 commands run (``click.testing``). Before any work both commands refuse a foreign or
 damaged map without reading its rows (``pipeline.landing.check_map_before_work``); the
 rows are read by the one landing (``pipeline.landing.land_runs``) inside the locked
@@ -41,15 +43,18 @@ def _locked(map_path: Path) -> bool:
 
 
 def _watch(monkeypatch: pytest.MonkeyPatch, map_path: Path) -> list[bool]:
-    """For each read of the map's rows while the test runs: was the map's lock held?"""
+    """For each read of the map's rows while the test runs (and each merge of parts,
+    which copies the rows of the parts it merges, a batch at a time): was the map's lock
+    held?"""
     held: list[bool] = []
-    real = store._from_arrow
+    for name in ("_from_arrow", "_merged_bytes"):
+        real = getattr(store, name)
 
-    def watched(*a: Any, **k: Any) -> Any:
-        held.append(_locked(map_path))
-        return real(*a, **k)
+        def watched(*a: Any, real: Any = real, **k: Any) -> Any:
+            held.append(_locked(map_path))
+            return real(*a, **k)
 
-    monkeypatch.setattr(store, "_from_arrow", watched)
+        monkeypatch.setattr(store, name, watched)
     return held
 
 

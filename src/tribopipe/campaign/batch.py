@@ -726,7 +726,7 @@ def _land(campaign: Campaign, results: Sequence[FileOutcome],
         brought.append(apply(in_map))
         return brought[0][0]
 
-    # the map read once more, under its lock: inside land_runs (change_map_with)
+    # the map read once more, under its lock: inside land_runs (update_map_with)
     landed = land_runs(campaign.map_path, choose, review=review,
                        traces_dir=campaign.layout.traces_dir, replace=True,
                        arriving=arriving_ids(results))

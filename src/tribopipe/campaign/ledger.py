@@ -24,7 +24,7 @@ from ..measurement import run_name
 from ..review import ReviewOutcome
 from .metadata import Manifest
 from .state import DUPLICATE, FAILED, FileState
-from .table import CampaignRow
+from .table import CampaignRow, CampaignTable
 
 #: what became of a file found, as the ledger counts it: its runs were reduced, skipped or
 #: failed one by one (read); its content came under another name with the same labels
@@ -264,15 +264,20 @@ def manifest_ledger(rows: Sequence[CampaignRow], entries: Mapping[str, FileState
     undescribed: list[str] = []
     known: dict[str, set[str | None]] = {}
     places: dict[str, set[tuple[str | None, int | None]]] = {}
-    for row in rows:
-        entry = entries.get(row.file)
+    # the files' names, not their rows (a row finds its metadata), unless a manifest's
+    # rows are matched against them
+    files = rows.files() if manifest is None and isinstance(rows, CampaignTable) else \
+        [row.file for row in rows]
+    for file in files:
+        entry = entries.get(file)
         found = None if entry is None else entry.tests
         if entry is None or found is None:
             continue
-        known[row.file] = set(found)
-        places[row.file] = {(r.test, r.interval) for r in entry.runs}
-        tests[row.file] = len(found)
-        undescribed += [run_name(row.file, r.test) for r in entry.runs if r.undescribed]
+        if manifest is not None:  # what its rows are matched against
+            known[file] = set(found)
+            places[file] = {(r.test, r.interval) for r in entry.runs}
+        tests[file] = len(found)
+        undescribed += [run_name(file, r.test) for r in entry.runs if r.undescribed]
     unmatched: list[str] = []
     if manifest is not None:
         names = {row.file for row in rows} | {row.path.name for row in rows}

@@ -45,13 +45,13 @@ from .ledger import BatchReport
 from .outputs import RUNS_COLUMNS, write_tables_text
 from .spec import Campaign
 from .state import DUPLICATE, REDUCED, FileState, KeptLedger, MapStamp, load_kept, save_kept
-from .table import TraceListing, discover_files
+from .table import TraceListing, discover_paths
 
 #: bumped when what a stamp covers changes (an old stamp then never matches)
 STAMP_VERSION = 1
 
 
-def _stat_text(path: Path) -> str:
+def _stat_text(path: str | Path) -> str:
     """A file's size, ``mtime_ns``, ``ctime_ns`` and inode (symlinks followed), or why it
     cannot be stat'ed."""
     try:
@@ -77,7 +77,7 @@ def inputs_stamp(campaign: Campaign) -> str | None:
     stamp = MapStamp.of(campaign.map_path)
     h.update(f"\0map {stamp}\0".encode())
     try:
-        files = discover_files(campaign)
+        files = discover_paths(campaign)
     except OSError:
         return None
     root = str(campaign.raw_dir)

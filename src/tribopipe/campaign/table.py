@@ -207,6 +207,39 @@ def discover_files(campaign: Campaign) -> list[Path]:
     return sorted(files, key=lambda p: _relative(p, root))
 
 
+def discover_paths(campaign: Campaign) -> list[str]:
+    """:func:`discover_files` as text (``str`` of each path, in its order), listed as
+    text where that is the same: a raw folder given as an absolute path on POSIX, no
+    glob, and no output folder in or around it (the usual campaign: thousands of files,
+    a path object costs several times its text); else from :func:`discover_files`.
+
+    There, an entry's path is the folder's text joined with its name (as
+    :func:`os.scandir` makes it and a path object writes it), two paths are the same
+    file name when their texts are, and the order by relative path is the order of the
+    names."""
+    root = campaign.raw_dir
+    if campaign.glob is not None or os.name != "posix" or not root.is_absolute() \
+            or root.is_relative_to(campaign.output_dir) \
+            or campaign.output_dir.is_relative_to(root):
+        return [str(p) for p in discover_files(campaign)]
+    not_runs = {str(p) for p in (campaign.manifest, campaign.source, campaign.map_path,
+                                 campaign.review) if p}
+    base = str(root)
+    with os.scandir(base) as it:
+        names = [e.name for e in it
+                 if os.path.splitext(e.name)[1].lower() in EXPORT_SUFFIXES
+                 and not e.name.startswith(".")]
+    paths = []
+    for name in sorted(names):
+        path = os.path.join(base, name)
+        if name.lower().endswith(".toml") or name.endswith(".lock") or path in not_runs:
+            continue
+        if name in (RUNS_CSV, FAILURES_CSV) and _is_tool_table(Path(path)):
+            continue
+        paths.append(path)
+    return paths
+
+
 def describe_glob(campaign: Campaign) -> str:
     """The files a campaign takes, in words: its glob, or the export suffixes."""
     if campaign.glob is not None:
@@ -458,6 +491,10 @@ class CampaignTable(Sequence[CampaignRow]):
         """The index of ``file`` (the files are sorted by name), else ``None``."""
         at = bisect_left(self._names, file)
         return at if at < len(self._names) and self._names[at] == file else None
+
+    def files(self) -> list[str]:
+        """The files' names, in the order of the rows (without building them)."""
+        return list(self._names)
 
     def has(self, file: str) -> bool:
         """True when ``file`` is a row of the table."""

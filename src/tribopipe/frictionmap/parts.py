@@ -37,7 +37,7 @@ from collections.abc import Iterator, Mapping
 from contextlib import suppress
 from dataclasses import asdict, dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, BinaryIO
 
 from ..errors import MapError
 from ..files import fsync_dir, os_reason
@@ -149,6 +149,20 @@ def _refuse(folder: Path, problem: str) -> MapError:
                     "; nothing in the folder is ever overwritten, or pass another --map")
 
 
+def _read_at_most(fh: BinaryIO, limit: int) -> bytes:
+    """The first ``limit`` bytes of ``fh`` (all of it when shorter), read a MiB at a time:
+    a buffer of ``limit`` bytes is never made for a file of a few kB."""
+    chunks: list[bytes] = []
+    size = 0
+    while size < limit:
+        chunk = fh.read(min(1 << 20, limit - size))
+        if not chunk:
+            break
+        chunks.append(chunk)
+        size += len(chunk)
+    return b"".join(chunks)
+
+
 def read_manifest(folder: Path) -> Manifest:
     """The committed manifest of ``folder``, checked: its JSON, its own digest, every part
     named as a plain file name of this folder with a checksum, a size and a row count.
@@ -156,7 +170,7 @@ def read_manifest(folder: Path) -> Manifest:
     path = manifest_path(folder)
     try:
         with open(path, "rb") as fh:
-            raw = fh.read(MAX_MANIFEST_BYTES + 1)
+            raw = _read_at_most(fh, MAX_MANIFEST_BYTES + 1)
     except FileNotFoundError:
         raise _refuse(folder, f"a folder without {MANIFEST}: not a tribopipe friction map "
                               "of parts (or its manifest is lost)") from None
@@ -298,7 +312,7 @@ def read_part_bytes(folder: Path, part: Part) -> bytes:
     return data
 
 
-def _write_new(folder: Path, final: str, data: bytes, mode: int | None) -> None:
+def _write_new(folder: Path, final: str, data: bytes | memoryview, mode: int | None) -> None:
     """Write ``data`` to ``folder/final`` through a fsynced temporary file and a rename
     (a part's ``final`` does not exist yet: parts are never overwritten; a manifest's
     rename replaces the one before it)."""
@@ -319,7 +333,7 @@ def _write_new(folder: Path, final: str, data: bytes, mode: int | None) -> None:
         raise
 
 
-def write_part(folder: Path, generation: int, data: bytes, n_runs: int,
+def write_part(folder: Path, generation: int, data: bytes | memoryview, n_runs: int,
                schema_version: int, mode: int | None = None) -> Part:
     """Write a new part holding ``data`` (a friction-map Parquet file of ``n_runs`` rows)
     into ``folder``, fsynced, under a fresh name of commit ``generation``; it is part of

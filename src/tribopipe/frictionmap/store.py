@@ -68,6 +68,7 @@ from .schema import (
     SCHEMA_VERSION,
     MapRow,
     check_runs,
+    columns_sha256,
     content_sha256,
     empty_map,
     frame_records,
@@ -648,9 +649,10 @@ def update_map_with(
     runs once; the map is rewritten only when something changed. ``columns``: the map
     columns ``decide`` reads (``measurement_id`` always; all when ``None``), and
     ``needs_all(rows)``: whether, given those columns of the map's rows, ``decide``
-    needs every column after all (:func:`change_map_with`)."""
-    return change_map_with(path, decide, replace=replace, columns=columns,
-                           needs_all=needs_all)[0]
+    needs every column after all (:func:`change_map_with`). The map's rows after the
+    change are not made: the landing of ``reduce`` and the batch
+    (:func:`~tribopipe.pipeline.landing.land_runs`) shows none."""
+    return _change_map_with(path, decide, replace, columns, needs_all, after=False)[0]
 
 
 def change_map_with(
@@ -670,6 +672,16 @@ def change_map_with(
     run the change compares, replaces or drops; it writes the new rows as a new part and
     rewrites only the parts where a row changed. A single-file map (the format before
     parts) is read and rewritten whole."""
+    report, rows = _change_map_with(path, decide, replace, columns, needs_all, after=True)
+    assert rows is not None
+    return report, rows
+
+
+def _change_map_with(path: str | os.PathLike[str], decide: Callable[[pd.DataFrame], MapChange],
+                     replace: bool, columns: Sequence[str] | None,
+                     needs_all: Callable[[pd.DataFrame], bool] | None, *, after: bool
+                     ) -> tuple[AppendReport, pd.DataFrame | None]:
+    """:func:`change_map_with`; the rows after the change only when ``after``."""
     p = Path(path)
 
     def checked(current: pd.DataFrame) -> FrameChange:
@@ -681,11 +693,11 @@ def change_map_with(
         # against the map and the write see one map, which no other writer can change
         # in between.
         if _writes_parts(p):
-            return _update_parts(p, checked, replace, columns, needs_all)
+            return _update_parts(p, checked, replace, columns, needs_all, after)
         new_frame, drop_ids = checked(current := read_map(p))
-        report, after = _fold_and_write(p, current, new_frame, replace, drop_ids)
-        return report, after if columns is None else _select(
-            after, ["measurement_id", *columns])
+        report, rows = _fold_and_write(p, current, new_frame, replace, drop_ids)
+        return report, rows if columns is None else _select(
+            rows, ["measurement_id", *columns])
 
 
 def _writes_parts(p: Path) -> bool:
@@ -1030,27 +1042,31 @@ def _from_arrow(table: Any, columns: Sequence[str] = RUN_COLUMNS, *,
                                                               use_threads=PARQUET_THREADS)
     except Exception as exc:  # noqa: BLE001 - a damaged column
         raise MapError(f"cannot read the rows ({_first_line(exc)})") from None
-    out: dict[str, Any] = {}
-    for name in columns:
-        kind = KIND[name]
-        col = frame[name]
-        try:
-            if kind == "float":
-                out[name] = pd.to_numeric(col, errors="raise").astype("float64").to_numpy()
-            elif kind == "int":
-                out[name] = pd.array(col, dtype="Int64")
-            elif kind == "bool":
-                if col.isna().any():
-                    raise ValueError("missing true/false")
-                out[name] = col.astype(bool).to_numpy()
-            elif col.dtype == "str":  # Arrow text as pandas reads it: no copy
-                out[name] = col.array
-            else:
-                out[name] = pd.array(col.astype(object).where(col.notna(), None), dtype="str")
-        except (TypeError, ValueError, OverflowError) as exc:
-            raise MapError(f"expected {kind} values ({exc})", column=name) from None
+    out = {name: _typed_cells(name, frame[name]) for name in columns}
     runs = pd.DataFrame(out, columns=list(columns), index=pd.RangeIndex(len(frame)))
     return check_runs(runs, "row") if check else runs
+
+
+def _typed_cells(name: str, col: Any) -> Any:
+    """The cells of the map column ``name`` as pandas read them from Arrow (``col``), in
+    the dtype of its kind (:func:`_from_arrow`, a column at a time)."""
+    import pandas as pd
+
+    kind = KIND[name]
+    try:
+        if kind == "float":
+            return pd.to_numeric(col, errors="raise").astype("float64").to_numpy()
+        if kind == "int":
+            return pd.array(col, dtype="Int64")
+        if kind == "bool":
+            if col.isna().any():
+                raise ValueError("missing true/false")
+            return col.astype(bool).to_numpy()
+        if col.dtype == "str":  # Arrow text as pandas reads it: no copy
+            return col.array
+        return pd.array(col.astype(object).where(col.notna(), None), dtype="str")
+    except (TypeError, ValueError, OverflowError) as exc:
+        raise MapError(f"expected {kind} values ({exc})", column=name) from None
 
 
 def _check_metadata(metadata: Mapping[bytes, bytes], path: Path) -> dict[str, Any]:
@@ -1359,6 +1375,82 @@ def _columns_info() -> list[dict[str, str]]:
             for c in COLUMNS]
 
 
+@dataclass(frozen=True)
+class _Merged:
+    """Pieces merged into one new part (:func:`_merged_tail`), in order: kept parts, read
+    from their checked bytes a batch of rows at a time as the new part is written, and
+    checked frames (new or rewritten rows). Its rows are never held as one frame."""
+
+    pieces: tuple[Part | pd.DataFrame, ...]
+
+    @property
+    def n_runs(self) -> int:
+        """The rows of the merged part."""
+        return sum(q.n_runs if isinstance(q, Part) else len(q) for q in self.pieces)
+
+
+#: a merge of parts copies a kept part's rows this many at a time (each a row group of
+#: the new part): what a merge holds of them, whatever the map's size
+MERGE_BATCH_ROWS = 1024
+
+
+def _merged_bytes(p: Path, merged: _Merged) -> memoryview:
+    """The part ``merged`` makes, as one friction-map Parquet file in memory: the same
+    rows, columns, Arrow types and row checksum as :func:`_part_bytes` of their
+    concatenation, written without holding them: the content checksum is taken a column
+    at a time (:func:`~tribopipe.frictionmap.schema.columns_sha256`), then the rows are
+    copied a batch at a time (:data:`MERGE_BATCH_ROWS`), each kept part from its bytes
+    checked against the manifest. Kept parts are of :data:`SCHEMA_VERSION` (an older one
+    comes as a frame, read with its added columns)."""
+    import pandas as pd
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    # each kept part's bytes checked against the manifest, its footer parsed once
+    files = {q.file: pq.ParquetFile(pa.BufferReader(read_part_bytes(p, q)))
+             for q in merged.pieces if isinstance(q, Part)}
+
+    def file(part: Part) -> Any:
+        return files[part.file]
+
+    def cells(part: Part, name: str) -> pd.Series:  # as a read of the part gives them
+        table = file(part).read(columns=[name], use_threads=PARQUET_THREADS)
+        stored = table.replace_schema_metadata(None).to_pandas(
+            ignore_metadata=True, use_threads=PARQUET_THREADS)[name]
+        return pd.Series(_typed_cells(name, stored), name=name)
+
+    def column_of(name: str) -> pd.Series:
+        column = [cells(q, name) if isinstance(q, Part) else q[name]
+                  for q in merged.pieces]
+        return pd.concat(column, ignore_index=True) if len(column) > 1 else column[0]
+
+    n_runs = merged.n_runs
+    digest = columns_sha256(n_runs, column_of)
+    sources = column_of("source").dropna()
+    frames = [q for q in merged.pieces if not isinstance(q, Part)]
+    # the Arrow schema a frame of the schema's dtypes is written with (:func:`_part_bytes`)
+    schema = pa.Table.from_pandas(frames[0].iloc[:0].loc[:, list(RUN_COLUMNS)],
+                                  preserve_index=False).schema
+    meta = dict(schema.metadata or {})
+    meta[META_KEY] = rows_info(n_runs, sources, digest)
+    schema = schema.with_metadata(meta)
+    del sources
+    sink = pa.BufferOutputStream()
+    with pq.ParquetWriter(sink, schema) as writer:
+        for q in merged.pieces:
+            if isinstance(q, Part):
+                for batch in file(q).iter_batches(batch_size=MERGE_BATCH_ROWS,
+                                                  columns=list(RUN_COLUMNS),
+                                                  use_threads=PARQUET_THREADS):
+                    writer.write_table(pa.Table.from_batches([batch]).cast(schema))
+            else:
+                for start in range(0, len(q), MERGE_BATCH_ROWS):
+                    rows = q.iloc[start:start + MERGE_BATCH_ROWS].loc[:, list(RUN_COLUMNS)]
+                    writer.write_table(pa.Table.from_pandas(rows, preserve_index=False)
+                                       .cast(schema))
+    return memoryview(sink.getvalue())
+
+
 def _part_bytes(runs: pd.DataFrame) -> bytes:
     """``runs`` (checked rows) as one friction-map Parquet file, in memory."""
     import pyarrow as pa
@@ -1377,7 +1469,20 @@ def _part_bytes(runs: pd.DataFrame) -> bytes:
 MERGE_FACTOR = 4
 
 
-def _commit_parts(p: Path, manifest: Manifest | None, pieces: list[Part | pd.DataFrame],
+def _flat(pieces: Iterable[Part | pd.DataFrame | _Merged]) -> list[Part | pd.DataFrame]:
+    """``pieces`` with each merged one replaced by its own pieces (the same rows, in
+    order)."""
+    return [q for piece in pieces
+            for q in (piece.pieces if isinstance(piece, _Merged) else (piece,))]
+
+
+def _frames(pieces: Iterable[Part | pd.DataFrame | _Merged]) -> list[pd.DataFrame]:
+    """The frames (new or rewritten rows) among ``pieces``, merged ones' included."""
+    return [q for q in _flat(pieces) if not isinstance(q, Part)]
+
+
+def _commit_parts(p: Path, manifest: Manifest | None,
+                  pieces: Sequence[Part | pd.DataFrame | _Merged],
                   touched: set[Key] | None = None,
                   read: Mapping[str, pd.DataFrame] | None = None) -> None:
     """Commit the map folder ``p`` as ``pieces`` in order: parts kept as they are, and
@@ -1396,14 +1501,16 @@ def _commit_parts(p: Path, manifest: Manifest | None, pieces: list[Part | pd.Dat
         for piece in pieces:
             if isinstance(piece, Part):
                 written.append(piece)
+            elif isinstance(piece, _Merged):
+                written.append(write_part(p, generation, _merged_bytes(p, piece),
+                                          piece.n_runs, SCHEMA_VERSION, mode))
             elif len(piece):
                 written.append(write_part(p, generation, _part_bytes(piece), len(piece),
                                           SCHEMA_VERSION, mode))
         stored = write_groups(p, generation, groups_bytes(groups), len(groups), mode)
         sources: set[str] = set(manifest.sources if manifest is not None else ())
-        for piece in pieces:
-            if not isinstance(piece, Part):
-                sources |= set(piece["source"].dropna().astype(str))
+        for frame in _frames(pieces):
+            sources |= set(frame["source"].dropna().astype(str))
         commit(p, Manifest(generation=generation, parts=settle(p, tuple(written)),
                            written_at=utc_now(), tribopipe_version=__version__,
                            sources=tuple(sorted(sources)), groups=stored), manifest, mode)
@@ -1412,7 +1519,8 @@ def _commit_parts(p: Path, manifest: Manifest | None, pieces: list[Part | pd.Dat
     collect_garbage(p)
 
 
-def _groups_after(p: Path, manifest: Manifest | None, pieces: list[Part | pd.DataFrame],
+def _groups_after(p: Path, manifest: Manifest | None,
+                  pieces: Sequence[Part | pd.DataFrame | _Merged],
                   touched: set[Key] | None, known: Mapping[str, pd.DataFrame]
                   ) -> pd.DataFrame:
     """The stored group rows of the map ``pieces`` will make: the stored ones with the
@@ -1425,15 +1533,22 @@ def _groups_after(p: Path, manifest: Manifest | None, pieces: list[Part | pd.Dat
     old = _stored_rows(p, manifest)
     if old is None:
         touched = None
+    pieces = _flat(pieces)
     kept = [piece for piece in pieces if isinstance(piece, Part) and piece.file not in known]
     read = dict(zip([q.file for q in kept],
                     _split(_read_parts(p, kept, GROUP_INPUT_COLUMNS), kept), strict=True)
                 ) if kept else {}
     frames = []
     for piece in pieces:
-        rows = ((known[piece.file] if piece.file in known else read[piece.file])
-                if isinstance(piece, Part) else piece).loc[:, list(GROUP_INPUT_COLUMNS)]
-        frames.append(rows if touched is None else of_keys(rows, touched))
+        # the touched conditions' rows picked before their columns are copied
+        if (isinstance(piece, Part) and touched is not None and piece.file in known
+                and isinstance(known, _PartRows)):
+            rows = known.of_keys(piece.file, touched)
+        else:
+            rows = ((known[piece.file] if piece.file in known else read[piece.file])
+                    if isinstance(piece, Part) else piece)
+            rows = rows if touched is None else of_keys(rows, touched)
+        frames.append(rows.loc[:, list(GROUP_INPUT_COLUMNS)])
     runs = (pd.concat(frames, ignore_index=True) if frames
             else unvalidated_frame([], where="row").loc[:, list(GROUP_INPUT_COLUMNS)])
     if touched is None or old is None:
@@ -1490,30 +1605,30 @@ def stored_groups(path: str | os.PathLike[str], info: Mapping[str, Any]
 
 
 def _merged_tail(pieces: list[Part | pd.DataFrame], frames: Callable[[int], pd.DataFrame],
-                 origin: list[int | None]) -> list[Part | pd.DataFrame]:
+                 origin: list[int | None]) -> list[Part | pd.DataFrame | _Merged]:
     """``pieces`` with trailing pieces merged while the one before the last holds at most
-    :data:`MERGE_FACTOR` times the last one's rows; a kept part's rows come from
-    ``frames(k)``, ``k`` its place in the manifest (``origin``)."""
-    import pandas as pd
-
-    out = list(pieces)
+    :data:`MERGE_FACTOR` times the last one's rows, into a :class:`_Merged` (its rows are
+    copied as the new part is written, not held); a kept part of an older schema version
+    comes as its rows, ``frames(k)`` (``k`` its place in the manifest: ``origin``)."""
+    out: list[Part | pd.DataFrame | _Merged] = list(pieces)
     where = list(origin)
 
     def rows(i: int) -> int:
         piece = out[i]
-        return piece.n_runs if isinstance(piece, Part) else len(piece)
+        return piece.n_runs if isinstance(piece, Part | _Merged) else len(piece)
 
-    def frame(i: int) -> pd.DataFrame:
+    def merged(i: int) -> tuple[Part | pd.DataFrame, ...]:
         piece = out[i]
-        if isinstance(piece, Part):
+        if isinstance(piece, _Merged):
+            return piece.pieces
+        if isinstance(piece, Part) and piece.schema_version != SCHEMA_VERSION:
             k = where[i]
             assert k is not None
-            return frames(k)
-        return piece
+            return (frames(k),)
+        return (piece,)
 
     while len(out) >= 2 and not isinstance(out[-1], Part) and rows(-2) <= MERGE_FACTOR * rows(-1):
-        both = pd.concat([frame(-2), frame(-1)], ignore_index=True)
-        out[-2:] = [both]
+        out[-2:] = [_Merged((*merged(-2), *merged(-1)))]
         where[-2:] = [None]
     return out
 
@@ -1558,8 +1673,8 @@ def _owner(manifest: Manifest | None) -> Any:
 
 def _update_parts(p: Path, decide: Callable[[pd.DataFrame], FrameChange], replace: bool,
                   columns: Sequence[str] | None = None,
-                  needs_all: Callable[[pd.DataFrame], bool] | None = None
-                  ) -> tuple[AppendReport, pd.DataFrame]:
+                  needs_all: Callable[[pd.DataFrame], bool] | None = None,
+                  after: bool = True) -> tuple[AppendReport, pd.DataFrame | None]:
     """The locked read-modify-write of a map folder, reading what the change needs: the
     ``columns`` ``decide`` reads (with ``measurement_id``; all when ``None``, or when
     ``needs_all`` says so of those rows) of every row, under the lock (the second read
@@ -1568,7 +1683,7 @@ def _update_parts(p: Path, decide: Callable[[pd.DataFrame], FrameChange], replac
     that hold a run the change replaces, compares or drops. The change is committed as
     a new part, those parts rewritten when a row of theirs changed, every other part
     kept as it is. Returns the report and the map's rows after the change (the columns
-    read). The caller holds the lock."""
+    read; ``None`` unless ``after``). The caller holds the lock."""
     import dataclasses
 
     import numpy as np
@@ -1622,17 +1737,51 @@ def _update_parts(p: Path, decide: Callable[[pd.DataFrame], FrameChange], replac
         base.loc[base["measurement_id"].isin(sorted(new_ids | drop))])
     _change_parts(p, manifest, rewritten, merged.iloc[len(kept):], frame_of, touched_keys,
                   _by_part(current, manifest, owner))
+    if not after:  # a second copy of the rows read, for a caller that shows none
+        return report, None
     return report, _after(current.loc[~gone].reset_index(drop=True), old_rows,
                           merged.iloc[len(kept):], set(report.replaced_ids))
 
 
 def _by_part(rows: pd.DataFrame, manifest: Manifest | None, owner: Any
-             ) -> dict[str, pd.DataFrame]:
+             ) -> Mapping[str, pd.DataFrame]:
     """``rows`` (every row of ``manifest``'s parts, in order; ``owner``: each row's part)
-    by part file."""
-    if manifest is None:
-        return {}
-    return {part.file: rows.loc[owner == k] for k, part in enumerate(manifest.parts)}
+    by part file, each part's rows cut out when asked for (not a second copy of every
+    row held beside ``rows``)."""
+    return _PartRows(rows, manifest, owner)
+
+
+class _PartRows(Mapping[str, "pd.DataFrame"]):
+    """:func:`_by_part`'s mapping."""
+
+    def __init__(self, rows: pd.DataFrame, manifest: Manifest | None, owner: Any) -> None:
+        self._rows, self._owner = rows, owner
+        self._near: pd.DataFrame | None = None
+        self._keys: set[Key] = set()
+        self._near_owner: Any = None
+        self._at = {} if manifest is None else {
+            part.file: k for k, part in enumerate(manifest.parts)}
+
+    def __getitem__(self, file: str) -> pd.DataFrame:
+        return self._rows.loc[self._owner == self._at[file]]
+
+    def of_keys(self, file: str, keys: set[Key]) -> pd.DataFrame:
+        """The rows of the part ``file`` whose condition is one of ``keys``
+        (:func:`~tribopipe.frictionmap.stored_groups.of_keys`, picked from every row
+        once for all parts)."""
+        if self._near is None or self._keys != keys:
+            self._near, self._keys = of_keys(self._rows, keys), set(keys)
+            self._near_owner = self._owner[self._rows.index.get_indexer(self._near.index)]
+        return self._near.loc[self._near_owner == self._at[file]]
+
+    def __contains__(self, file: object) -> bool:
+        return file in self._at
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self._at)
+
+    def __len__(self) -> int:
+        return len(self._at)
 
 
 def _after(kept: pd.DataFrame, changed: pd.DataFrame, fresh: pd.DataFrame,

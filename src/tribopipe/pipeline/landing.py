@@ -2,7 +2,7 @@
 the batch.
 
 :func:`land_runs` is that landing. Under the map's lock it reads the map once more
-(:func:`tribopipe.frictionmap.store.change_map_with`, the locked read-modify-write), lets
+(:func:`tribopipe.frictionmap.store.update_map_with`, the locked read-modify-write), lets
 the caller decide from the files the map holds what lands (the one duplicate and conflict
 check, :class:`~tribopipe.frictionmap.duplicates.ContentOwners`), finds the repeat numbers
 used twice, applies the review (:func:`tribopipe.review.landing_records`: a review file,
@@ -34,7 +34,7 @@ from ..frictionmap.duplicates import (
 )
 from ..frictionmap.parts import read_manifest
 from ..frictionmap.schema import MapRow, unvalidated_frame
-from ..frictionmap.store import AppendReport, change_map_with, map_metadata
+from ..frictionmap.store import AppendReport, map_metadata, update_map_with
 from ..review import Review, ReviewOutcome, landing_records
 from ..stats import condition_keys
 from .runs import FileOutcome
@@ -86,7 +86,7 @@ def land_runs(
     batch, one locked atomic read-modify-write.
 
     **The map is read once more here, under its lock**: inside
-    :func:`~tribopipe.frictionmap.store.change_map_with`, which reads the map while it
+    :func:`~tribopipe.frictionmap.store.update_map_with`, which reads the map while it
     holds ``<map>.lock``, so that the duplicate check, the review and the write see one
     map that no other writer can change in between. That is the one read a command makes
     besides its own (``reduce`` makes none before: :func:`check_map_before_work` reads no
@@ -123,9 +123,9 @@ def land_runs(
         return bool(set(arriving or ()).intersection(reviewed))
 
     projected = arriving is not None and review is None
-    appended, _ = change_map_with(map_path, decide, replace=replace,
-                                     columns=LANDING_COLUMNS if projected else None,
-                                     needs_all=reviewed_again if projected else None)
+    appended = update_map_with(map_path, decide, replace=replace,
+                               columns=LANDING_COLUMNS if projected else None,
+                               needs_all=reviewed_again if projected else None)
     (arrivals, repeats, outcome, before) = found[0]
     landed = set(appended.added_ids) | set(appended.replaced_ids)
     touched = [r for r in arrivals.records if r.measurement_id in landed]

@@ -26,8 +26,12 @@ Where the parent's peak is reached (``--phases CONFIG``): a batch of a campaign 
 ``tribopipe batch --no-plots`` runs it (in this process, no ``tracemalloc``), while a
 thread samples the parent's RSS and peak (``VmRSS``, ``VmHWM``) every 10 ms with the
 stack of tribopipe functions the batch is in. Printed: the peak and the stack where it
-was reached, and the largest RSS seen in each phase (the stack cut at ``--depth``
-functions below the batch). Run it from an empty output folder (a batch from scratch).
+was reached, how much the peak rose while in each phase (the stack cut at ``--depth``
+functions), the RSS over the batch (with Arrow's allocated bytes), and after the batch
+what its allocators keep of what was freed: the RSS after a garbage collection, after
+glibc's ``malloc_trim`` and after Arrow's pool released its unused memory, and the bytes
+of Python's small-object arenas against those in use. Run it from an empty output
+folder (a batch from scratch).
 
     nice python bench/bench_batch_memory.py --phases /tmp/c/n10000/campaign.toml
 """
@@ -191,6 +195,33 @@ def _stack(frame: FrameType | None) -> tuple[str, ...]:
     return tuple(reversed(names))
 
 
+def _pymalloc() -> dict[str, int]:
+    """Python's small-object allocator: the bytes its arenas hold and those in use
+    (``sys._debugmallocstats``, read from the C stderr it prints to)."""
+    import os
+    import re
+    import tempfile
+
+    with tempfile.TemporaryFile() as tmp:
+        saved = os.dup(2)
+        try:
+            sys.stderr.flush()
+            os.dup2(tmp.fileno(), 2)
+            sys._debugmallocstats()
+        finally:
+            os.dup2(saved, 2)
+            os.close(saved)
+        tmp.seek(0)
+        text = tmp.read().decode(errors="replace")
+    out = {}
+    for key, pattern in (("pymalloc_arenas_kB", r"arenas \* \d+ bytes/arena\s*=\s*([\d,]+)"),
+                         ("pymalloc_in_use_kB", r"bytes in allocated blocks\s*=\s*([\d,]+)")):
+        found = re.search(pattern, text)
+        if found:
+            out[key] = int(found.group(1).replace(",", "")) // 1000
+    return out
+
+
 def phases(config: Path, jobs: int, depth: int) -> dict:
     """A batch of ``config`` in this process with the parent's RSS sampled by phase."""
     import threading
@@ -205,7 +236,8 @@ def phases(config: Path, jobs: int, depth: int) -> dict:
     rises: list[tuple[int, tuple[str, ...]]] = []  # each new peak [kB] and its stack
     done = threading.Event()
 
-    timeline: list[tuple[float, int, str]] = []  # every 0.5 s: time [s], RSS [kB], phase
+    # every 0.5 s: time [s], RSS [kB], Arrow's allocated bytes [kB], phase
+    timeline: list[tuple[float, int, int, str]] = []
     t0 = time.perf_counter()
 
     def sample() -> None:
@@ -214,7 +246,9 @@ def phases(config: Path, jobs: int, depth: int) -> dict:
             status = _rss_kB()
             stack = _stack(sys._current_frames().get(main_id))
             if time.perf_counter() - t0 >= when:
+                arrow = sys.modules.get("pyarrow")  # not loaded here before the batch does
                 timeline.append((round(time.perf_counter() - t0, 1), status["VmRSS"],
+                                 arrow.total_allocated_bytes() // 1000 if arrow else 0,
                                  " > ".join(stack[2:5])))
                 when += 0.5
             if status["VmRSS"] > by_stack.get(stack, 0):
@@ -233,6 +267,22 @@ def phases(config: Path, jobs: int, depth: int) -> dict:
         done.set()
         sampler.join()
     end = _rss_kB()
+    import pyarrow as pa
+
+    gc.collect()
+    after: dict[str, int] = {"RSS_kB": _rss_kB()["VmRSS"],
+                             "arrow_kB": pa.total_allocated_bytes() // 1000}
+    try:  # what the C heap keeps of what was freed
+        import ctypes
+
+        ctypes.CDLL("libc.so.6").malloc_trim(0)
+        after["RSS_after_malloc_trim_kB"] = _rss_kB()["VmRSS"]
+        pa.default_memory_pool().release_unused()
+        after["RSS_after_arrow_release_kB"] = _rss_kB()["VmRSS"]
+    except (OSError, AttributeError):
+        pass
+    after.update(_pymalloc())
+    print(f"after the batch: {after}")
     cut: dict[str, int] = {}
     for stack, rss in by_stack.items():
         key = " > ".join(stack[:depth]) or "(outside tribopipe)"
@@ -252,7 +302,7 @@ def phases(config: Path, jobs: int, depth: int) -> dict:
               "peak_stack": " > ".join(peak_stack),
               "phases_kB": dict(sorted(cut.items(), key=lambda kv: -kv[1])),
               "rose_kB": dict(sorted(rose.items(), key=lambda kv: -kv[1])),
-              "timeline": timeline,
+              "timeline": timeline, "after": after,
               "rises": [(kb, " > ".join(st)) for kb, st in rises[-8:]]}
     print(f"{result['files']} files, {result['reduced']} runs reduced; parent "
           f"{result['parent_cpu_s']} s CPU, {result['wall_s']} s wall; RSS "
@@ -262,10 +312,10 @@ def phases(config: Path, jobs: int, depth: int) -> dict:
     print("how much the peak rose while in each phase [MB] (sampled every 10 ms):")
     for key, kb in list(result["rose_kB"].items())[:25]:
         print(f"  {kb / 1e3:7.1f}  {key}")
-    print("RSS over the batch [MB] (time [s], phase):")
+    print("RSS over the batch [MB] (time [s], RSS, of it Arrow's, phase):")
     for k in range(0, len(timeline), max(1, len(timeline) // 24)):
-        at, kb, where = timeline[k]
-        print(f"  {at:7.1f} s  {kb / 1e3:6.1f}  {where}")
+        at, kb, arrow, where = timeline[k]
+        print(f"  {at:7.1f} s  {kb / 1e3:6.1f}  {arrow / 1e3:6.1f}  {where}")
     print(json.dumps(result))
     return result
 

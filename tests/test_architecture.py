@@ -40,7 +40,7 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("tribopipe", "tribopipe.errors", "tribopipe.escape", "tribopipe.validate",
      "tribopipe.files", "tribopipe.numeric", "tribopipe.units", "tribopipe.layout",
      "tribopipe.rounding", "tribopipe.project", "tribopipe.materials",
-     "tribopipe.reporting"),
+     "tribopipe.reporting", "tribopipe.memory"),
     ("tribopipe.measurement",),
     ("tribopipe.physics",),
     ("tribopipe.config",),

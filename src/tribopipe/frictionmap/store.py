@@ -37,6 +37,7 @@ from ..config import DEFAULT_TEST_METHOD
 from ..errors import MapError, ReadError
 from ..escape import display_path
 from ..files import file_kind, fsync_dir, os_reason, regular_file
+from ..memory import return_free_memory
 from ..stats import GROUP_INPUT_COLUMNS, group_rows
 from ..validate import text_problem
 from .parts import (
@@ -681,23 +682,30 @@ def _change_map_with(path: str | os.PathLike[str], decide: Callable[[pd.DataFram
                      replace: bool, columns: Sequence[str] | None,
                      needs_all: Callable[[pd.DataFrame], bool] | None, *, after: bool
                      ) -> tuple[AppendReport, pd.DataFrame | None]:
-    """:func:`change_map_with`; the rows after the change only when ``after``."""
+    """:func:`change_map_with`; the rows after the change only when ``after``. What the
+    change read and wrote is handed back to the system once it is done
+    (:func:`~tribopipe.memory.return_free_memory`): a batch lands again and again, and
+    each landing's Arrow buffers and C heap would otherwise stay with the process beside
+    the next one's."""
     p = Path(path)
 
     def checked(current: pd.DataFrame) -> FrameChange:
         records, drop_ids = decide(current)
         return records_frame(records), drop_ids
 
-    with _locked(p):
-        # A command that appends reads the map once more here, under the lock: the check
-        # against the map and the write see one map, which no other writer can change
-        # in between.
-        if _writes_parts(p):
-            return _update_parts(p, checked, replace, columns, needs_all, after)
-        new_frame, drop_ids = checked(current := read_map(p))
-        report, rows = _fold_and_write(p, current, new_frame, replace, drop_ids)
-        return report, rows if columns is None else _select(
-            rows, ["measurement_id", *columns])
+    try:
+        with _locked(p):
+            # A command that appends reads the map once more here, under the lock: the
+            # check against the map and the write see one map, which no other writer can
+            # change in between.
+            if _writes_parts(p):
+                return _update_parts(p, checked, replace, columns, needs_all, after)
+            new_frame, drop_ids = checked(current := read_map(p))
+            report, rows = _fold_and_write(p, current, new_frame, replace, drop_ids)
+            return report, rows if columns is None else _select(
+                rows, ["measurement_id", *columns])
+    finally:
+        return_free_memory(collect=False)
 
 
 def _writes_parts(p: Path) -> bool:

@@ -3,7 +3,9 @@ before: each changed step is held equal to the code it replaced (kept here, as i
 run on the same real package, clean and broken in each way the step compares (a changed
 cell of ``groups.csv``, a missing group, an extra group, a group differing in one figure,
 a group number twice, ``runs.csv`` against ``runs.parquet``, the linking table, the
-7-column table): the same problems, the same lines, in the same order."""
+7-column table, the group table's Parquet copy): the same problems, the same lines, in the
+same order, the same verdict; and so does the check that keeps no runs but their labs
+(``check_package(keep_runs=False)``, what ``map publish`` and ``map validate`` call)."""
 
 from __future__ import annotations
 

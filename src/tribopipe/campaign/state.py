@@ -18,7 +18,9 @@ converted.
 from __future__ import annotations
 
 import json
+import os
 import sqlite3
+import stat
 import sys
 from collections.abc import Iterator, MutableMapping
 from dataclasses import asdict, dataclass, field, fields
@@ -286,17 +288,24 @@ class MapStamp:
         return cls(size=st.st_size, mtime_ns=st.st_mtime_ns)
 
 
-#: a state file's inode, size, ``mtime_ns`` and ``ctime_ns``: every write changes it
-FileStamp = tuple[int, int, int, int]
+#: a state file's inode, size, ``mtime_ns``, ``ctime_ns`` and SQLite's file change
+#: counter (the 4 bytes at offset 24 of its header, which every write transaction of a
+#: rollback-journal database, as this one is, increments): every write changes it
+FileStamp = tuple[int, int, int, int, bytes]
 
 
 def _file_stamp(path: Path) -> FileStamp | None:
-    """The :data:`FileStamp` of ``path``, ``None`` when it cannot be stat'ed."""
+    """The :data:`FileStamp` of ``path``, ``None`` when it cannot be read (or is not a
+    regular file: never opened then)."""
     try:
-        st = path.stat()
+        if not stat.S_ISREG(path.stat().st_mode):
+            return None
+        with path.open("rb") as fh:
+            st = os.fstat(fh.fileno())
+            header = fh.read(28)
     except OSError:
         return None
-    return (st.st_ino, st.st_size, st.st_mtime_ns, st.st_ctime_ns)
+    return (st.st_ino, st.st_size, st.st_mtime_ns, st.st_ctime_ns, header[24:28])
 
 
 @dataclass(frozen=True)
@@ -709,6 +718,8 @@ class BatchEntries(MutableMapping[str, FileState]):
                     or not all(n in self._index for n in names):
                 return None
             entries = {n: self[n] for n in names}
+            if _file_stamp(self._path) != self._known:  # written while it was read
+                return None
         except (KeyError, sqlite3.Error, ValueError, TypeError):
             return None
         finally:

@@ -79,7 +79,6 @@ from ..frictionmap.package import (
     GROUPS_PARQUET,
     RUNS,
     RUNS_PARQUET,
-    return_free_memory,
 )
 from ..frictionmap.profile import PROFILE_NAME, PROFILE_VERSION, profile_schema, schema_file
 from ..frictionmap.published import FOUNDING_PAPER, PUBLISHED_LAB
@@ -93,6 +92,7 @@ from ..frictionmap.schema import (
 from ..frictionmap.snapshot import MapSnapshot, MapSource
 from ..frictionmap.store import MapCopyWriter, frame_of_table, load_map_table, stored_groups
 from ..frictionmap.synthetic_rows import SYNTHETIC_MEANS, synthetic_count
+from ..memory import return_free_memory
 from ..query import pairs
 from ..stats import (
     GROUP_INPUT_COLUMNS,

@@ -27,6 +27,7 @@ from typing import TYPE_CHECKING, Any, TypeGuard, cast
 
 from ..errors import MapError
 from ..escape import printable
+from ..memory import return_free_memory
 from ..stats import GROUP_MU_K_INPUT, group_mu_k, run_ids_of
 from .checks import validate_runs
 from .datapackage import (
@@ -219,25 +220,6 @@ def check_package(path: str | os.PathLike[str],
         check.add(DESCRIPTOR, "holds the founding paper's published rows but does not cite "
                   f"it in 'sources' (expected {FOUNDING_PAPER['title']!r})")
     return check.result
-
-
-def return_free_memory() -> None:
-    """Hand the memory freed so far back to the system: Python's garbage, Arrow's pool
-    and, where the C library has it (glibc), the heap's free pages. Reading and checking
-    10⁵ rows frees some ten to a hundred MB that would otherwise stay with the process
-    while the next step allocates its own (a process's peak memory is what it holds, not
-    what it uses)."""
-    import ctypes
-    import gc
-
-    import pyarrow as pa
-
-    gc.collect()
-    pa.default_memory_pool().release_unused()
-    try:
-        ctypes.CDLL("libc.so.6").malloc_trim(0)
-    except (OSError, AttributeError):  # not glibc: the pages stay until reused
-        pass
 
 
 def package_runs(path: str | os.PathLike[str],

@@ -405,6 +405,43 @@ def test_a_state_written_under_the_batch_is_read_back(root: Path) -> None:
     assert entries.as_read_back() is None
 
 
+def test_a_row_changed_under_the_batch_before_its_save_is_read_back(root: Path) -> None:
+    """Another writer changes a row the batch holds (its name stays: only the file shows
+    it), then the batch saves another entry: what the batch holds no longer stands for
+    the file, then or after, and the rehearsal reads the state back."""
+    assert run_campaign(load_campaign(root / "campaign.toml"), jobs=1).reduced
+    campaign = load_campaign(root / "campaign.toml")
+    entries = _entries(campaign)
+    x, y = list(entries)[:2]
+    with sqlite3.connect(campaign.state_path) as con:
+        ((text,),) = con.execute("SELECT state FROM files WHERE name = ?",
+                                 (json.dumps(x),)).fetchall()
+        changed = {**json.loads(text), "sha256": "0" * 64}
+        con.execute("UPDATE files SET state = ? WHERE name = ?",
+                    (json.dumps(changed), json.dumps(x)))
+    assert entries.as_read_back() is None
+    entries[y] = entries[y]
+    entries.save()
+    assert load_state(campaign).entries[x].sha256 == "0" * 64
+    assert entries.as_read_back() is None
+    entries[y] = entries[y]
+    entries.save()  # a later save of the batch's own does not make it provable again
+    assert entries.as_read_back() is None
+
+
+def test_a_state_file_in_wal_mode_is_read_back(root: Path) -> None:
+    """A state file someone switched to WAL mode writes beside itself, where the batch's
+    stamp of it cannot look: what the batch holds never stands for it."""
+    assert run_campaign(load_campaign(root / "campaign.toml"), jobs=1).reduced
+    campaign = load_campaign(root / "campaign.toml")
+    with sqlite3.connect(campaign.state_path) as con:
+        assert con.execute("PRAGMA journal_mode=WAL").fetchone() == ("wal",)
+    entries = _entries(campaign)
+    assert entries.as_read_back() is None
+    again = run_campaign(load_campaign(root / "campaign.toml"), jobs=1)  # still runs
+    assert again.skipped and not again.reduced and not again.output_errors
+
+
 def test_entries_not_decoded_from_rows_are_read_back(root: Path) -> None:
     """A state converted from an older version's JSON: its entries as the batch holds
     them were decoded from the JSON, not from the rows; they stand for the state only

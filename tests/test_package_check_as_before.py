@@ -212,11 +212,27 @@ def _variants(runs: pd.DataFrame) -> dict[str, pd.DataFrame]:
     out["two speeds"] = speeds
     out["a run in four"] = runs.iloc[::4]
     out["all excluded"] = runs.assign(excluded=True)
+    every = np.arange(len(runs))
+    out["two test methods"] = runs.assign(
+        test_method=np.where(every % 3 == 0, "pin-on-disc", "rheometer"))
+    out["two labs"] = runs.assign(lab=np.where(every % 2 == 0, "Lab B", "Lab A"))
+    odd = runs.copy()
+    odd.loc[odd.index[::4], "pressure_kPa"] = math.nan
+    odd.loc[odd.index[1::6], "normal_force_N"] = math.nan
+    odd.loc[odd.index[::3], "repeat"] = 1  # ties in the members' order
+    odd.loc[odd.index[2::5], "mu_k"] = math.inf
+    out["pressures and forces missing, repeats tied, μ_K infinite"] = odd
+    reordered = runs.iloc[::-1].copy()
+    reordered.index = np.arange(len(runs)) * 2 + 7
+    out["rows reversed, indexed from 7 by 2"] = reordered
     return out
 
 
 VARIANTS = ["as they are", "repeats missing, runs excluded, μ_K missing",
-            "temperatures missing", "two speeds", "a run in four", "all excluded"]
+            "temperatures missing", "two speeds", "a run in four", "all excluded",
+            "two test methods", "two labs",
+            "pressures and forces missing, repeats tied, μ_K infinite",
+            "rows reversed, indexed from 7 by 2"]
 
 
 @pytest.fixture(scope="module")

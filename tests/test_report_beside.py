@@ -288,6 +288,10 @@ def test_a_pair_beside_loads_in_chromium_as_python_made_it(browser, processed, t
     lines = tab.page.evaluate("""() => Array.from(document.querySelectorAll(
       '#pair-0 .group-table a[href^="#run-"]'), a => a.getClientRects().length)""")
     assert lines and set(lines) == {1}
+    # ... while a name's link in a text cell still breaks (a long name widens nothing)
+    assert set(tab.page.evaluate("""() => Array.from(document.querySelectorAll(
+      '#pair-0 td.t a:not([href^="#run-"])'), a => getComputedStyle(a).whiteSpace)""")) \
+        == {"normal"}
     mine = runs[runs["pin"] == HOSTILE_PIN]
     loaded = tab.page.evaluate("""() => Object.fromEntries(Array.from(
       document.querySelectorAll('#pair-0 [id^="run-"]'), e => [e.id, e.textContent]))""")

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import json
 import math
+import re
 from pathlib import Path
 
 import numpy as np
@@ -279,6 +280,20 @@ def test_a_pair_of_several_speeds_exports_at_one_temperature():
     mapdl = write_ansys(groups, pin=pin, disc=disc, temperature_C=t)
     assert mapdl.count("TBFIELD,SLRV,") == len(rows)
     assert mapdl.count("TBFIELD,TEMP,") == 1
+    # every temperature: the comment names the pressure rows added that the deck holds,
+    # those of every speed's table (not of the pair's groups read as one speed)
+    whole = write_abaqus(groups, pin=pin, disc=disc)
+    text = " ".join(line[2:].strip() for line in whole.splitlines() if line.startswith("**"))
+    said = re.search(r"(\d+) pressure row\(s\) added .*? Added at \(kPa\): "
+                     r"([\d.]+(?:, [\d.]+)*)", text)
+    assert said is not None
+    added = [float(x) for x in said.group(2).split(", ")]
+    held = {float(line.split(", ")[2]) * 1e3 for line in whole.splitlines()
+            if line and line[0].isdigit()}
+    measured = {float(v) for v in pair["pressure_kPa"]}
+    extra = [p for p in held if not any(abs(p - q) <= 1e-6 * q for q in measured)]
+    assert int(said.group(1)) == len(added) == len(extra) > 0
+    assert all(any(abs(a - p) <= 5e-4 * p for p in extra) for a in added)
 
 
 @pytest.fixture(scope="module")

@@ -121,7 +121,7 @@ details.runs{margin:.3em 0}details.runs>summary{cursor:pointer}
 #: rather than widen the page, where a link to a run (8 characters of its id) stays whole
 _PAIRS_CSS = (
     "details.pair{margin:.3em 0}details.pair>summary{cursor:pointer}"
-    "td.t{overflow-wrap:anywhere}td.t a{white-space:nowrap}"
+    "td.t{overflow-wrap:anywhere}td.t a[href^=\"#run-\"]{white-space:nowrap}"
     ".pair-body{overflow-x:auto}#pair-filter{width:16em;max-width:100%}"
 )
 

@@ -296,7 +296,8 @@ FileStamp = tuple[int, int, int, int, bytes]
 
 def _file_stamp(path: Path) -> FileStamp | None:
     """The :data:`FileStamp` of ``path``, ``None`` when it cannot be read (or is not a
-    regular file: never opened then)."""
+    regular file: never opened then), or is a database in WAL mode (its header's write
+    version, byte 18, is not 1): its writes go to another file, unseen here."""
     try:
         if not stat.S_ISREG(path.stat().st_mode):
             return None
@@ -304,6 +305,8 @@ def _file_stamp(path: Path) -> FileStamp | None:
             st = os.fstat(fh.fileno())
             header = fh.read(28)
     except OSError:
+        return None
+    if len(header) < 28 or header[18] != 1:
         return None
     return (st.st_ino, st.st_size, st.st_mtime_ns, st.st_ctime_ns, header[24:28])
 
@@ -671,6 +674,9 @@ class BatchEntries(MutableMapping[str, FileState]):
         gone = [(json.dumps(n),) for n in self._gone]
         meta = [("version", str(STATE_VERSION)), ("campaign", json.dumps(self._name)),
                 ("map", json.dumps(None if stamp is None else asdict(stamp)))]
+        # the file as the batch last knew it, just before this write: else another writer
+        # changed it since, and what the batch holds is no longer provably what it holds
+        untouched = _file_stamp(self._path) == self._known
         _write_rows(self._path, changed, gone, meta, clear=fresh)
         for name, entry in held.items():
             if entry is None:
@@ -683,7 +689,7 @@ class BatchEntries(MutableMapping[str, FileState]):
             self._decoded = True
         self._fresh = False
         self._written = (self._name, stamp)
-        self._known = _file_stamp(self._path)
+        self._known = _file_stamp(self._path) if untouched or fresh else None
 
     def as_read_back(self) -> CampaignState | None:
         """The state :func:`load_state` would read from the state file now, from what

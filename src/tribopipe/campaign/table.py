@@ -90,7 +90,8 @@ class CampaignRow:
     The metadata (``sources``, ``merged``, ``hints``, ``test_rows``) is found from the
     file's name and the manifest when first asked for (``metadata``, when given, is
     it): a pass over the table that reads only names, stats and statuses (the plan,
-    ``runs.csv`` of reduced files) matches and merges no labels.
+    ``runs.csv`` of reduced files) matches and merges no labels. Once found it is kept
+    on the (frozen) row; two rows are equal by their fields, not by what they found.
     """
 
     file: str

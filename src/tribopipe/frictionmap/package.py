@@ -588,6 +588,7 @@ def _check_groups_copy(check: _Checker, res: dict[str, Any], path: Path,
 
 
 def _is_text(column: pd.Series) -> bool:
+    """Whether ``column`` holds text (object, NumPy string or pandas string dtype)."""
     return column.dtype.kind in "OUT" or str(column.dtype) == "str"
 
 

@@ -53,7 +53,9 @@ def _table_and_info(data: bytes | memoryview) -> tuple[pa.Table, dict[str, Any]]
     return table, info
 
 
-def test_a_merged_part_is_the_part_its_rows_make_as_one_frame(tmp_path: Path) -> None:
+def test_a_merged_part_is_the_part_its_rows_make_as_one_frame(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr(store, "MERGE_BATCH_ROWS", 1024)  # batches smaller than a part
     path = tmp_path / "friction_map.parquet"
     fm.append_records(path, _rows(0, 2500))
     (kept,) = fm.parts.read_manifest(path).parts
@@ -111,10 +113,11 @@ def test_a_landing_that_merges_holds_a_batch_of_the_kept_rows_not_the_part(
 
     monkeypatch.setattr(store, "_from_arrow", counted_from_arrow)
     monkeypatch.setattr(store, "_part_bytes", counted_part_bytes)
+    monkeypatch.setattr(store, "MERGE_BATCH_ROWS", 1024)  # batches smaller than the part
     brought = 1000
     fm.append_records(path, _rows(10_000, brought))  # 4,000 <= 4 x 1,000: merged
     assert [p.n_runs for p in fm.parts.read_manifest(path).parts] == [5000]
     columns = len(RUN_COLUMNS)
     print(f"largest block {max(blocks)} cells, {max(blocks) / columns:.0f} rows of "
           f"{columns} columns")
-    assert max(blocks) <= max(brought, store.MERGE_BATCH_ROWS) * columns, max(blocks)
+    assert max(blocks) <= max(brought, 1024) * columns, max(blocks)

@@ -151,3 +151,28 @@ def test_publish_says_which_evidence_it_could_not_find(tmp_path):
         in result.output
     again = recompute_package(tmp_path / "pkg")
     assert again.ok and [r.basis for r in again.rows] == ["raw export"] * 2
+
+
+def test_publish_lists_the_traces_folder_once_and_finds_each_runs_trace(tmp_path, monkeypatch):
+    """Each run's trace is the one :func:`~tribopipe.layout.find_trace` finds, from one
+    listing of the folder (a listing per run would grow as the square of the runs)."""
+    from tribopipe import frictionmap as fm
+    from tribopipe.evidence import gather_evidence
+    from tribopipe.layout import find_trace
+
+    map_path, processed = make_processed(tmp_path, RUNS[:3])
+    runs = fm.read_map(map_path)
+    traces = processed / "traces"
+    want = {str(m): find_trace(traces, str(m)) for m in runs["measurement_id"]}
+    assert len(want) == 3 and all(p is not None for p in want.values())
+    listings: list[str] = []
+    glob = Path.glob
+
+    def counted(self: Path, pattern: str, *args, **kwargs):
+        listings.append(pattern)
+        return glob(self, pattern, *args, **kwargs)
+
+    monkeypatch.setattr(Path, "glob", counted)
+    evidence = gather_evidence(runs, traces_dir=traces)
+    assert {f.measurement_id: f.trace for f in evidence.files} == want
+    assert len(listings) == 1, listings

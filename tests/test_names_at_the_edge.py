@@ -244,3 +244,20 @@ def test_a_package_with_a_material_the_vocabulary_lacks_is_refused_with_the_fix(
     again = invoke("map", "merge", package, "--map", ours)
     assert again.exit_code == 0, again.output
     assert set(fm.read_map(ours)["pin"]) == {"Mold Star 15"}
+
+
+def test_a_refusal_of_many_names_stays_a_readable_line():
+    """A package of a thousand lots' own pin names is refused in one line that names the
+    first ten, each with its fix, and counts the rest (not a line of some 100 kB)."""
+    from tribopipe.materials import NAMES_SHOWN, MaterialError, load_vocabulary
+
+    names = [("pin", f"Sample lot {k}") for k in range(1000)] + [("disc", "steel")]
+    with pytest.raises(MaterialError) as caught:
+        load_vocabulary().resolve_all(names, where="pkg")
+    text = str(caught.value)
+    assert text.count("unknown pin 'Sample lot ") == NAMES_SHOWN
+    assert "1000 material names not in the vocabulary" in text
+    assert f"; and {1000 - NAMES_SHOWN} more" in text
+    assert f"and {1000 - NAMES_SHOWN} more)" in caught.value.hint
+    assert "'Sample lot 0'" in caught.value.hint and "'Sample lot 999'" not in text
+    assert len(text) + len(caught.value.hint) < 3000

@@ -210,7 +210,7 @@ class Vocabulary:
         if problems:
             head = (problems[0] if len(problems) == 1 else
                     f"{len(problems)} material names not in the vocabulary: "
-                    + "; ".join(problems))
+                    + joined_problems(problems))
             raise MaterialError(head, path=where, hint=add_fix(unknown))
         return out
 
@@ -295,6 +295,18 @@ ADD_HINT = (f"fix the name, map it in the campaign's [names], or add the materia
             f"--class CLASS`")
 
 
+#: how many names a refusal of several names lists (a package of 10³ lots' own names
+#: would otherwise be refused in one line of some 100 kB); the rest are counted
+NAMES_SHOWN = 10
+
+
+def joined_problems(problems: Sequence[str]) -> str:
+    """The problems of a refusal of several names in one line: the first
+    :data:`NAMES_SHOWN`, then how many more."""
+    more = len(problems) - NAMES_SHOWN
+    return "; ".join(problems[:NAMES_SHOWN]) + (f"; and {more} more" if more > 0 else "")
+
+
 def add_fix(names: Sequence[str]) -> str:
     """The one-line fix for names the vocabulary lacks: correct a misspelt one, or add a
     genuinely new material with one command (or one line in the lab's
@@ -303,7 +315,9 @@ def add_fix(names: Sequence[str]) -> str:
     if not names:
         return ADD_HINT
     first = names[0]
-    more = f" (and the same for {', '.join(repr(n) for n in names[1:])})" if names[1:] else ""
+    rest = ", ".join(repr(n) for n in names[1:NAMES_SHOWN]) + (
+        f" and {len(names) - NAMES_SHOWN} more" if len(names) > NAMES_SHOWN else "")
+    more = f" (and the same for {rest})" if names[1:] else ""
     line = material_line(Material(name=first, material_class="CLASS"))
     return (f"fix a misspelt name; a new material is one command, `tribopipe materials add "
             f"{shlex.quote(first)} --class CLASS`, or one line under [materials] in "

@@ -47,7 +47,7 @@ from ..escape import csv_cell, display_path
 from ..files import file_sha256, regular_file
 from ..labels import LABEL_FORCE_REL, RunLabels
 from ..layout import FAILURES_CSV, RUNS_CSV
-from ..materials import ADD_HINT
+from ..materials import ADD_HINT, joined_problems
 from ..pipeline.route import read_runs
 from ..readers import EXPORT_SUFFIXES, export_kind
 from .metadata import (
@@ -712,7 +712,7 @@ def check_materials(campaign: Campaign, rows: Sequence[CampaignRow]) -> None:
     if problems:
         raise CampaignError(
             f"{len(problems)} material name(s) not in the vocabulary, nothing reduced: "
-            + "; ".join(problems),
+            + joined_problems(problems),
             path=campaign.source or campaign.raw_dir, hint=ADD_HINT)
 
 

@@ -498,9 +498,15 @@ def save_state(campaign: Campaign, state: CampaignState,
     changed = [(json.dumps(name), _entry_text(entry)) for name, entry in state.entries.items()
                if before.get(name) is not entry and before.get(name) != entry]
     gone = [(json.dumps(name),) for name in before if name not in state.entries]
-    meta = [("version", str(STATE_VERSION)), ("campaign", json.dumps(state.campaign)),
-            ("map", json.dumps(None if state.map is None else asdict(state.map)))]
-    _write_rows(path, changed, gone, meta, clear=saved is None)
+    _write_rows(path, changed, gone, _meta_rows(state.campaign, state.map),
+                clear=saved is None)
+
+
+def _meta_rows(campaign: str | None, stamp: MapStamp | None) -> list[tuple[str, str]]:
+    """The state file's ``meta`` rows (key, value): its version, the campaign's name and
+    the map's :class:`MapStamp`."""
+    return [("version", str(STATE_VERSION)), ("campaign", json.dumps(campaign)),
+            ("map", json.dumps(None if stamp is None else asdict(stamp)))]
 
 
 def _write_rows(path: Path, changed: list[tuple[str, str]], gone: list[tuple[str]],
@@ -672,8 +678,7 @@ class BatchEntries(MutableMapping[str, FileState]):
         held = {n: self._held(n) for n in names} if fresh else {n: self[n] for n in names}
         changed = [(json.dumps(n), _entry_text(e)) for n, e in held.items() if e is not None]
         gone = [(json.dumps(n),) for n in self._gone]
-        meta = [("version", str(STATE_VERSION)), ("campaign", json.dumps(self._name)),
-                ("map", json.dumps(None if stamp is None else asdict(stamp)))]
+        meta = _meta_rows(self._name, stamp)
         # the file as the batch last knew it, just before this write: else another writer
         # changed it since, and what the batch holds is no longer provably what it holds
         untouched = _file_stamp(self._path) == self._known
@@ -718,8 +723,7 @@ class BatchEntries(MutableMapping[str, FileState]):
             finally:
                 con.close()
             name, stamp = self._written
-            if meta != {"version": str(STATE_VERSION), "campaign": json.dumps(name),
-                        "map": json.dumps(None if stamp is None else asdict(stamp))} \
+            if meta != dict(_meta_rows(name, stamp)) \
                     or len(names) != len(self._index) \
                     or not all(n in self._index for n in names):
                 return None

@@ -148,13 +148,9 @@ class _ReportCells:
 def _measured_values(file: str, run: RunEntry, status: str, labels: Mapping[str, Any],
                      reason: str | None, report_cells: _ReportCells) -> list[Any]:
     """:func:`_values` of a measured run (``measured=True``) from its state entry."""
-    values: dict[str, Any] = {
-        "file": file, "status": status, **labels, **report_cells(labels),
-        "test": run.test, "result": run.result, "interval": run.interval,
-        **dict(zip(_MEASURED_KEYS, _measured_of(run), strict=True)),
-        "reason": reason,
-    }
-    return list(map(values.get, RUNS_COLUMNS))
+    return _row_values(file, status, labels, report_cells(labels),
+                       (run.test, run.result, run.interval),
+                       dict(zip(_MEASURED_KEYS, _measured_of(run), strict=True)), reason)
 
 
 def _file_labels(row: CampaignRow) -> dict[str, Any]:
@@ -166,14 +162,24 @@ def _file_labels(row: CampaignRow) -> dict[str, Any]:
 def _values(file: str, run: Mapping[str, Any], status: str, labels: Mapping[str, Any],
             reason: str | None, *, measured: bool = False) -> list[Any]:
     """One ``runs.csv`` row, in :data:`RUNS_COLUMNS` order."""
+    return _row_values(file, status, labels, _report_cells(labels),
+                       (run.get("test"), run.get("result"), run.get("interval")),
+                       {k: run.get(k) for k in _MEASURED_KEYS} if measured else {}, reason)
+
+
+def _row_values(file: str, status: str, labels: Mapping[str, Any],
+                report: Mapping[str, Any], where: tuple[Any, Any, Any],
+                measured: Mapping[str, Any], reason: str | None) -> list[Any]:
+    """One ``runs.csv`` row, in :data:`RUNS_COLUMNS` order, from its parts: the file's
+    or run's ``labels`` and their ``report`` cells, where the run sits (its test, result
+    and interval), what it measured (by :data:`_MEASURED_KEYS`; empty where that is not
+    shown) and the ``reason`` it failed."""
     values: dict[str, Any] = {
-        "file": file, "status": status, **labels, **_report_cells(labels),
-        "test": run.get("test"), "result": run.get("result"), "interval": run.get("interval"),
-        **({k: run.get(k) for k in _RUN_KEYS if k not in ("test", "result", "interval")}
-           if measured else {}),
-        "reason": reason,
+        "file": file, "status": status, **labels, **report,
+        "test": where[0], "result": where[1], "interval": where[2],
+        **measured, "reason": reason,
     }
-    return [values.get(c) for c in RUNS_COLUMNS]
+    return list(map(values.get, RUNS_COLUMNS))
 
 
 def _report_cells(labels: Mapping[str, Any]) -> dict[str, Any]:

@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import csv
 import io
-import json
 import math
 import shutil
 from pathlib import Path
@@ -23,10 +22,11 @@ import pytest
 from click.testing import CliRunner
 
 from reduced_runs import make_processed
+from test_package_groups import rehash
 from tribopipe import frictionmap as fm
 from tribopipe.cli import main
 from tribopipe.frictionmap import package as P
-from tribopipe.frictionmap.datapackage import GROUP_ID, sha256_hash
+from tribopipe.frictionmap.datapackage import GROUP_ID
 from tribopipe.frictionmap.profile import LINKED_GROUPS_VERSION
 from tribopipe.frictionmap.published import published_csv_path
 from tribopipe.frictionmap.schema import is_missing
@@ -259,22 +259,13 @@ def _write_rows(path: Path, table: list[list[str]]) -> None:
     path.write_text(buf.getvalue(), encoding="utf-8")
 
 
-def _rehash(pkg: Path, path: str) -> None:
-    data = json.loads((pkg / "datapackage.json").read_text(encoding="utf-8"))
-    raw = (pkg / path).read_bytes()
-    for res in data["resources"]:
-        if res["path"] == path:
-            res["bytes"], res["hash"] = len(raw), sha256_hash(raw)
-    (pkg / "datapackage.json").write_text(json.dumps(data, indent=1), encoding="utf-8")
-
-
 def _edit(pkg: Path, path: str, change: Any) -> None:
     """``change(table)`` on the CSV rows of ``path`` (header first), written back and
     re-hashed in the descriptor."""
     table = _rows(pkg / path)
     change(table)
     _write_rows(pkg / path, table)
-    _rehash(pkg, path)
+    rehash(pkg, path)
 
 
 def _cell(table: list[list[str]], row: int, name: str, value: str) -> None:
@@ -317,7 +308,7 @@ def _edit_copy(pkg: Path, change: Any) -> None:
     frame = pd.read_parquet(path)
     frame = change(frame)
     frame.to_parquet(path, index=False)
-    _rehash(pkg, GROUPS_PARQUET)
+    rehash(pkg, GROUPS_PARQUET)
 
 
 def _set(frame: pd.DataFrame, row: int, name: str, value: Any) -> pd.DataFrame:
